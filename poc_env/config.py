@@ -1,0 +1,635 @@
+"""Typed, validated, immutable scenario configuration.
+
+A scenario is one YAML file in ``configs/`` (or any path). YAML is only the serialisation of the
+frozen dataclasses below: every key is known (an unknown key is an error that lists the allowed
+ones), every value is checked when the object is built, and every error names the dotted field,
+the value and what is allowed.
+
+Units: SI inside (metres, seconds, radians, metres per second). Where a YAML key is in another
+unit, the unit is in its name (``width_km``, ``search_speed_kmh``, ``endurance_h``,
+``max_turn_deg``) and it is converted once, here, at load. ``Scenario.to_dict()`` writes the same
+keys back, so a resolved config can be saved beside a run and loaded again.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import os
+import tempfile
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from poc_env.errors import ConfigError, check_positive, check_range
+
+KM = 1000.0
+KMH = 1000.0 / 3600.0
+HOUR = 3600.0
+DEG = math.pi / 180.0
+
+#: Folder of the built-in scenarios (``configs/`` at the top of the repository).
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+
+
+def _f(key: str | None = None, scale: float = 1.0, default: Any = dataclasses.MISSING, **kw: Any):
+    """A dataclass field whose YAML key is ``key`` and whose YAML value times ``scale`` is SI."""
+    meta = {"key": key, "scale": scale}
+    if default is dataclasses.MISSING and "default_factory" not in kw:
+        return field(metadata=meta, **kw)
+    if default is dataclasses.MISSING:
+        return field(metadata=meta, **kw)
+    return field(default=default, metadata=meta, **kw)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _vec2(name: str, value: Any) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ConfigError(name, value, "a pair of finite numbers [x, y]") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ConfigError(name, value, "a pair of finite numbers [x, y]")
+    return (x, y)
+
+
+def _polygon(name: str, value: Any) -> tuple[tuple[float, float], ...]:
+    from poc_env.geometry import validate_polygon
+
+    if not isinstance(value, (list, tuple)) or len(value) < 3:
+        raise ConfigError(name, value, "a list of at least 3 [x, y] vertices")
+    pts = tuple(_vec2(f"{name}[{i}]", v) for i, v in enumerate(value))
+    validate_polygon(pts, name)
+    return pts
+
+
+def _choice(name: str, value: Any, allowed: tuple[str, ...]) -> str:
+    if value not in allowed:
+        raise ConfigError(name, value, "one of " + ", ".join(repr(a) for a in allowed))
+    return str(value)
+
+
+def _int(name: str, value: Any, lo: int, hi: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
+        raise ConfigError(name, value, f"an integer >= {lo}" + (f" and <= {hi}" if hi else ""))
+    v = int(value)
+    if v < lo or (hi is not None and v > hi):
+        raise ConfigError(name, value, f"an integer >= {lo}" + (f" and <= {hi}" if hi else ""))
+    return v
+
+
+# --------------------------------------------------------------------------- sections
+
+
+@dataclass(frozen=True)
+class GaussianComponent:
+    """One component of a Gaussian-mixture prior (axes rotated by ``rotation``)."""
+
+    mean_m: tuple[float, float] = _f("mean_km", KM)
+    sigma_m: tuple[float, float] = _f("sigma_km", KM)
+    weight: float = _f(default=1.0)
+    rotation_rad: float = _f("rotation_deg", DEG, default=0.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "mean_m", _vec2("mean_km", self.mean_m))
+        sx, sy = _vec2("sigma_km", self.sigma_m)
+        check_positive("sigma_km", sx)
+        check_positive("sigma_km", sy)
+        object.__setattr__(self, "sigma_m", (sx, sy))
+        object.__setattr__(self, "weight", check_positive("weight", self.weight))
+        object.__setattr__(self, "rotation_rad", float(self.rotation_rad))
+
+
+@dataclass(frozen=True)
+class PriorConfig:
+    """Where the prior POC map comes from.
+
+    ``kind: gaussian_mixture`` builds it from ``components`` plus a uniform ``background`` share
+    (the fraction of the mass spread evenly over the map); ``kind: file`` reads ``file`` (.npy or
+    .csv, shape ``(ny, nx)``, row 0 at the south edge).
+    """
+
+    kind: str = _f(default="gaussian_mixture")
+    components: tuple[GaussianComponent, ...] = _f(default=())
+    background: float = _f(default=0.02)
+    file: str | None = _f(default=None)
+
+    def __post_init__(self) -> None:
+        _choice("kind", self.kind, ("gaussian_mixture", "file"))
+        check_range("background", self.background, 0.0, 1.0)
+        if self.kind == "gaussian_mixture" and not self.components and self.background <= 0:
+            raise ConfigError("components", [], "at least one component, or background > 0")
+        if self.kind == "file" and not self.file:
+            raise ConfigError("file", self.file, "a path to a .npy or .csv map when kind is file")
+
+
+@dataclass(frozen=True)
+class ThreatPeak:
+    """A terrain threat peak of eq. 22: f = exp(-lambda * ((x - x_p)^2 + (y - y_p)^2))."""
+
+    center_m: tuple[float, float] = _f("center_km", KM)
+    #: decay rate lambda in 1/m^2 (YAML: ``lambda_per_km2``).
+    lambda_per_m2: float = _f("lambda_per_km2", 1e-6)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center_m", _vec2("center_km", self.center_m))
+        check_positive("lambda_per_km2", self.lambda_per_m2)
+
+
+@dataclass(frozen=True)
+class MapConfig:
+    """The search area: a ``width x height`` rectangle from ``origin`` cut into square cells."""
+
+    width_m: float = _f("width_km", KM)
+    height_m: float = _f("height_km", KM)
+    cell_m: float = _f("cell_km", KM)
+    origin_m: tuple[float, float] = _f("origin_km", KM, default=(0.0, 0.0))
+    prior: PriorConfig = _f(default_factory=PriorConfig)
+    no_fly_zones_m: tuple[tuple[tuple[float, float], ...], ...] = _f(
+        "no_fly_zones_km", KM, default=()
+    )
+    threat_peaks: tuple[ThreatPeak, ...] = _f(default=())
+    #: eq. 23 threshold Th_s on the peak threat f.
+    threat_threshold: float = _f(default=0.5)
+
+    def __post_init__(self) -> None:
+        for name in ("width_m", "height_m", "cell_m"):
+            check_positive(_yaml_key(MapConfig, name), getattr(self, name))
+        object.__setattr__(self, "origin_m", _vec2("origin_km", self.origin_m))
+        for name, size in (("width_km", self.width_m), ("height_km", self.height_m)):
+            n = size / self.cell_m
+            if abs(n - round(n)) > 1e-6 or round(n) < 1:
+                raise ConfigError(
+                    name, size / KM, f"a whole multiple of cell_km = {self.cell_m / KM:g}"
+                )
+        zones = tuple(
+            _polygon(f"no_fly_zones_km[{i}]", z) for i, z in enumerate(self.no_fly_zones_m)
+        )
+        object.__setattr__(self, "no_fly_zones_m", zones)
+        check_range("threat_threshold", self.threat_threshold, 0.0, 1.0)
+
+    @property
+    def nx(self) -> int:
+        return round(self.width_m / self.cell_m)
+
+    @property
+    def ny(self) -> int:
+        return round(self.height_m / self.cell_m)
+
+
+@dataclass(frozen=True)
+class UAVConfig:
+    """One UAV type (the swarm is homogeneous). Defaults are the paper's §6 values."""
+
+    #: maximum endurance T (eq. 18).
+    endurance_s: float = _f("endurance_h", HOUR, default=3 * HOUR)
+    #: share of T usable for the plan: t_i <= 0.85 T (eq. 18).
+    usable_fraction: float = _f(default=0.85)
+    #: cruise (transit) speed v_b (eq. 17).
+    cruise_speed_mps: float = _f("cruise_speed_kmh", KMH, default=220 * KMH)
+    #: search speed v_s (eq. 17).
+    search_speed_mps: float = _f("search_speed_kmh", KMH, default=180 * KMH)
+    #: speed bounds of the eq. 19 point mass.
+    min_speed_mps: float = _f("min_speed_kmh", KMH, default=100 * KMH)
+    max_speed_mps: float = _f("max_speed_kmh", KMH, default=240 * KMH)
+    #: per-step limits of the eq. 19 increments (dv, d alpha, d beta).
+    max_accel_mps2: float = _f("max_accel_mps2", 1.0, default=0.5)
+    max_turn_rate_rad_s: float = _f("max_turn_rate_deg_s", DEG, default=3.0 * DEG)
+    max_pitch_rate_rad_s: float = _f("max_pitch_rate_deg_s", DEG, default=1.0 * DEG)
+    max_pitch_rad: float = _f("max_pitch_deg", DEG, default=15.0 * DEG)
+    #: search altitude (z of eq. 19) and the ceiling.
+    cruise_altitude_m: float = _f("cruise_altitude_m", 1.0, default=1000.0)
+    max_altitude_m: float = _f("max_altitude_m", 1.0, default=4000.0)
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            if f.name == "usable_fraction":
+                check_range("usable_fraction", self.usable_fraction, 0.01, 1.0)
+            else:
+                check_positive(_yaml_key(UAVConfig, f.name), getattr(self, f.name))
+        if self.min_speed_mps > self.max_speed_mps:
+            raise ConfigError("min_speed_kmh", self.min_speed_mps / KMH, "at most max_speed_kmh")
+        for name in ("cruise_speed_mps", "search_speed_mps"):
+            v = getattr(self, name)
+            if not (self.min_speed_mps - 1e-9 <= v <= self.max_speed_mps + 1e-9):
+                raise ConfigError(
+                    _yaml_key(UAVConfig, name),
+                    v / KMH,
+                    f"within [min_speed_kmh, max_speed_kmh] = [{self.min_speed_mps / KMH:g}, "
+                    f"{self.max_speed_mps / KMH:g}]",
+                )
+        if self.cruise_altitude_m > self.max_altitude_m:
+            raise ConfigError("cruise_altitude_m", self.cruise_altitude_m, "<= max_altitude_m")
+
+    @property
+    def usable_endurance_s(self) -> float:
+        """0.85 T of eq. 18 (with the configured fraction)."""
+        return self.usable_fraction * self.endurance_s
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """The downward sensor: sweep width W and the detection law (DESIGN.md §3)."""
+
+    sweep_width_m: float = _f("sweep_width_km", KM, default=5 * KM)
+    #: ``inverse_cube`` (Koopman, composes to eq. 10), ``exponential`` (random search) or
+    #: ``definite_range`` (cookie cutter).
+    law: str = _f(default="inverse_cube")
+    #: target positions sampled per cell side (s x s points per cell) for cell averages.
+    samples_per_cell: int = _f(default=4)
+    #: lateral cut-off of the inverse-cube tail, in sweep widths (see sensing.cutoff_error).
+    cutoff_sweep_widths: float = _f(default=4.0)
+
+    def __post_init__(self) -> None:
+        check_positive("sweep_width_km", self.sweep_width_m)
+        _choice("law", self.law, ("inverse_cube", "exponential", "definite_range"))
+        _int("samples_per_cell", self.samples_per_cell, 1, 16)
+        check_range("cutoff_sweep_widths", self.cutoff_sweep_widths, 0.5, 100.0)
+
+
+@dataclass(frozen=True)
+class Airfield:
+    """A take-off / landing field, in map coordinates (it may lie outside the search area)."""
+
+    name: str = _f()
+    position_m: tuple[float, float] = _f("position_km", KM)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ConfigError("name", self.name, "a non-empty string")
+        object.__setattr__(self, "position_m", _vec2("position_km", self.position_m))
+
+
+@dataclass(frozen=True)
+class FleetGroup:
+    """``count`` UAVs that take off from ``takeoff`` and land at ``landing`` (default: same)."""
+
+    takeoff: str = _f()
+    count: int = _f(default=1)
+    landing: str | None = _f(default=None)
+
+    def __post_init__(self) -> None:
+        _int("count", self.count, 0, 64)
+        if self.landing is None:
+            object.__setattr__(self, "landing", self.takeoff)
+
+
+@dataclass(frozen=True)
+class CommsConfig:
+    """Communication constraint (eq. 24) and topology switching (§3.2.5)."""
+
+    range_m: float = _f("range_km", KM, default=150 * KM)
+    #: every UAV needs at least this many others within range (the paper: two).
+    min_neighbours: int = _f(default=2)
+    #: ``table2`` (the paper's five-UAV switching table) or ``auto`` (any N).
+    topology: str = _f(default="auto")
+    #: probability per step that a link in range drops anyway.
+    link_failure_prob: float = _f(default=0.0)
+    #: ``global`` (the paper: one shared belief) or ``comms`` (merge only through links).
+    belief_sharing: str = _f(default="global")
+
+    def __post_init__(self) -> None:
+        check_positive("range_km", self.range_m)
+        _int("min_neighbours", self.min_neighbours, 0, 63)
+        _choice("topology", self.topology, ("auto", "table2"))
+        check_range("link_failure_prob", self.link_failure_prob, 0.0, 1.0)
+        _choice("belief_sharing", self.belief_sharing, ("global", "comms"))
+
+
+@dataclass(frozen=True)
+class ConstraintsConfig:
+    """Safety constraints (§3.2.3) and how a violation is handled."""
+
+    #: minimum separation d_s between UAVs (eq. 21).
+    safety_distance_m: float = _f("safety_distance_km", KM, default=1 * KM)
+    #: ``penalize`` (report and subtract a penalty), ``terminate`` (the agent ends) or
+    #: ``shield`` (the action is modified to stay safe).
+    violation: str = _f(default="penalize")
+
+    def __post_init__(self) -> None:
+        check_positive("safety_distance_km", self.safety_distance_m)
+        _choice("violation", self.violation, ("penalize", "terminate", "shield"))
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Weights of the reward: alpha * POS - beta * time share (eq. 25) - penalties."""
+
+    alpha: float = _f(default=1.0)
+    beta: float = _f(default=0.0)
+    #: ``team`` (every agent gets the swarm's POS) or ``individual`` (own POS only).
+    credit: str = _f(default="team")
+    violation_penalty: float = _f(default=0.01)
+    overtime_penalty: float = _f(default=0.01)
+
+    def __post_init__(self) -> None:
+        check_positive("alpha", self.alpha, allow_zero=True)
+        check_positive("beta", self.beta, allow_zero=True)
+        _choice("credit", self.credit, ("team", "individual"))
+        check_positive("violation_penalty", self.violation_penalty, allow_zero=True)
+        check_positive("overtime_penalty", self.overtime_penalty, allow_zero=True)
+
+
+@dataclass(frozen=True)
+class EpisodeConfig:
+    """Time stepping of the environment."""
+
+    dt_s: float = _f("dt_s", 1.0, default=60.0)
+    #: truncation horizon in steps (default: endurance T / dt).
+    horizon_steps: int | None = _f(default=None)
+    detection_ends_episode: bool = _f(default=False)
+
+    def __post_init__(self) -> None:
+        check_positive("dt_s", self.dt_s)
+        if self.horizon_steps is not None:
+            _int("horizon_steps", self.horizon_steps, 1)
+        if not isinstance(self.detection_ends_episode, bool):
+            raise ConfigError("detection_ends_episode", self.detection_ends_episode, "true/false")
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Adaptive DE settings (§6: NP = 100, G = 300, F0 = 0.2, CR = 0.1) and the eq. 26 M."""
+
+    population: int = _f(default=100)
+    generations: int = _f(default=300)
+    f0: float = _f(default=0.2)
+    cr: float = _f(default=0.1)
+    penalty_m: float = _f(default=1000.0)
+
+    def __post_init__(self) -> None:
+        _int("population", self.population, 4)
+        _int("generations", self.generations, 1)
+        check_range("f0", self.f0, 0.0, 2.0)
+        check_range("cr", self.cr, 0.0, 1.0)
+        check_positive("penalty_m", self.penalty_m, allow_zero=True)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A whole scenario: map, UAVs, sensor, airfields, fleet, comms, constraints, reward."""
+
+    name: str = _f()
+    map: MapConfig = _f()
+    description: str = _f(default="")
+    uav: UAVConfig = _f(default_factory=UAVConfig)
+    sensor: SensorConfig = _f(default_factory=SensorConfig)
+    airfields: tuple[Airfield, ...] = _f(default=())
+    fleet: tuple[FleetGroup, ...] = _f(default=())
+    comms: CommsConfig = _f(default_factory=CommsConfig)
+    constraints: ConstraintsConfig = _f(default_factory=ConstraintsConfig)
+    reward: RewardConfig = _f(default_factory=RewardConfig)
+    episode: EpisodeConfig = _f(default_factory=EpisodeConfig)
+    planner: PlannerConfig = _f(default_factory=PlannerConfig)
+
+    def __post_init__(self) -> None:
+        if not self.airfields:
+            raise ConfigError("airfields", [], "at least one airfield")
+        names = [a.name for a in self.airfields]
+        if len(set(names)) != len(names):
+            raise ConfigError("airfields", names, "distinct airfield names")
+        for i, g in enumerate(self.fleet):
+            for key in ("takeoff", "landing"):
+                if getattr(g, key) not in names:
+                    raise ConfigError(f"fleet[{i}].{key}", getattr(g, key), f"one of {names}")
+        if self.n_uavs < 1:
+            raise ConfigError("fleet", [dataclasses.asdict(g) for g in self.fleet], ">= 1 UAV")
+        from poc_env.geometry import point_in_polygon
+
+        for a in self.airfields:
+            for k, zone in enumerate(self.map.no_fly_zones_m):
+                if point_in_polygon(a.position_m, zone):
+                    raise ConfigError(
+                        f"airfields[{a.name}].position_km",
+                        [c / KM for c in a.position_m],
+                        f"a point outside no-fly zone {k}",
+                    )
+
+    # -- derived ---------------------------------------------------------------------------
+    @property
+    def n_uavs(self) -> int:
+        return sum(g.count for g in self.fleet)
+
+    def airfield(self, name: str) -> Airfield:
+        for a in self.airfields:
+            if a.name == name:
+                return a
+        raise ConfigError("airfield", name, f"one of {[a.name for a in self.airfields]}")
+
+    @property
+    def takeoff_m(self) -> tuple[tuple[float, float], ...]:
+        """Take-off position of each UAV, in fleet order."""
+        return tuple(
+            self.airfield(g.takeoff).position_m for g in self.fleet for _ in range(g.count)
+        )
+
+    @property
+    def landing_m(self) -> tuple[tuple[float, float], ...]:
+        """Landing position of each UAV, in fleet order."""
+        return tuple(
+            self.airfield(g.landing).position_m  # type: ignore[arg-type]
+            for g in self.fleet
+            for _ in range(g.count)
+        )
+
+    def with_uavs(self, n: int) -> Scenario:
+        """The same scenario with ``n`` UAVs spread over the airfields round-robin."""
+        _int("uavs", n, 1, 64)
+        counts = [0] * len(self.airfields)
+        for i in range(n):
+            counts[i % len(self.airfields)] += 1
+        fleet = tuple(
+            FleetGroup(takeoff=a.name, count=c) for a, c in zip(self.airfields, counts) if c
+        )
+        return dataclasses.replace(self, fleet=fleet)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The YAML mapping (keys with units) that loads back to this scenario."""
+        return _to_mapping(self)
+
+
+# --------------------------------------------------------------------------- (de)serialise
+
+
+def _yaml_key(cls: type, name: str) -> str:
+    for f in dataclasses.fields(cls):
+        if f.name == name:
+            return f.metadata.get("key") or f.name
+    return name
+
+
+def _resolve_hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def _strip_optional(tp: Any) -> Any:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if len(args) == 1:
+            return args[0]
+    return tp
+
+
+def _scale_value(value: Any, scale: float) -> Any:
+    if scale == 1.0 or value is None:
+        return value
+    if isinstance(value, (list, tuple)):
+        return tuple(_scale_value(v, scale) for v in value)
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, (int, float)):
+        return float(value) * scale
+    return value  # leave it to validation to complain
+
+
+def _from_mapping(cls: type, data: Any, where: str) -> Any:
+    """Build dataclass ``cls`` from a YAML mapping, rejecting unknown keys."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(where or cls.__name__, data, f"a mapping of {cls.__name__} keys")
+    hints = _resolve_hints(cls)
+    fields = {(f.metadata.get("key") or f.name): f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        name = f"{where}.{unknown[0]}" if where else str(unknown[0])
+        raise ConfigError(name, data[unknown[0]], "one of the keys " + ", ".join(sorted(fields)))
+    kwargs: dict[str, Any] = {}
+    for key, f in fields.items():
+        if key not in data:
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+                raise ConfigError(f"{where}.{key}" if where else key, None, "a value (required)")
+            continue
+        value = data[key]
+        sub = f"{where}.{key}" if where else key
+        tp = _strip_optional(hints[f.name])
+        if dataclasses.is_dataclass(tp):
+            kwargs[f.name] = _from_mapping(tp, value if value is not None else {}, sub)
+            continue
+        args = typing.get_args(tp)
+        if typing.get_origin(tp) is tuple and args and dataclasses.is_dataclass(args[0]):
+            if not isinstance(value, (list, tuple)):
+                raise ConfigError(sub, value, f"a list of {args[0].__name__} mappings")
+            kwargs[f.name] = tuple(
+                _from_mapping(args[0], v, f"{sub}[{i}]") for i, v in enumerate(value)
+            )
+            continue
+        if isinstance(value, str) and f.metadata.get("scale", 1.0) != 1.0:
+            raise ConfigError(sub, value, "a number")
+        kwargs[f.name] = _scale_value(value, f.metadata.get("scale", 1.0))
+    try:
+        return cls(**kwargs)
+    except ConfigError as err:
+        raise err.with_prefix(where) from None
+    except TypeError as err:  # e.g. a list where a number belongs
+        raise ConfigError(where or cls.__name__, dict(data), str(err)) from None
+
+
+def _to_mapping(obj: Any) -> Any:
+    if dataclasses.is_dataclass(obj):
+        out = {}
+        for f in dataclasses.fields(obj):
+            key = f.metadata.get("key") or f.name
+            value = getattr(obj, f.name)
+            scale = f.metadata.get("scale", 1.0)
+            out[key] = _to_mapping(_scale_value(value, 1.0 / scale) if scale != 1.0 else value)
+        return out
+    if isinstance(obj, (list, tuple)):
+        return [_to_mapping(v) for v in obj]
+    if isinstance(obj, float):
+        return float(f"{obj:.12g}")
+    return obj
+
+
+def _set_dotted(data: dict[str, Any], dotted: str, value: Any) -> None:
+    parts = dotted.split(".")
+    node = data
+    for p in parts[:-1]:
+        nxt = node.get(p)
+        if nxt is None:
+            nxt = node[p] = {}
+        if not isinstance(nxt, dict):
+            raise ConfigError(dotted, value, f"a key inside the mapping {p!r}")
+        node = nxt
+    node[parts[-1]] = value
+
+
+def builtin_scenarios() -> list[str]:
+    """Names of the scenarios shipped in ``configs/``."""
+    return sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
+
+
+def read_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read a YAML mapping with ``yaml.safe_load``; clear errors for missing or corrupt files."""
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError("scenario", str(p), "an existing YAML file or a built-in scenario name")
+    try:
+        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as err:
+        raise ConfigError("scenario", str(p), f"valid YAML ({err})") from None
+    if not isinstance(data, dict):
+        raise ConfigError("scenario", str(p), "a YAML mapping at the top level")
+    return data
+
+
+def load_scenario(
+    scenario: str | os.PathLike[str] | Mapping[str, Any] | Scenario = "paper_6_2",
+    overrides: Mapping[str, Any] | None = None,
+) -> Scenario:
+    """Load a scenario by built-in name, YAML path, mapping, or pass a Scenario through.
+
+    ``overrides`` maps dotted YAML keys to values, e.g. ``{"sensor.sweep_width_km": 4}``; they
+    are validated like the file itself (an unknown key is an error).
+    """
+    if isinstance(scenario, Scenario) and not overrides:
+        return scenario
+    if isinstance(scenario, Scenario):
+        data = scenario.to_dict()
+    elif isinstance(scenario, Mapping):
+        data = copy.deepcopy(dict(scenario))
+    else:
+        text = str(scenario)
+        if text in builtin_scenarios():
+            path = CONFIG_DIR / f"{text}.yaml"
+        elif text.endswith((".yaml", ".yml")) or os.sep in text:
+            path = Path(text)
+        else:
+            raise ConfigError(
+                "scenario",
+                text,
+                "a built-in name (" + ", ".join(builtin_scenarios()) + ") or a path to a YAML file",
+            )
+        data = read_yaml(path)
+        data.setdefault("name", Path(path).stem)
+    for key, value in (overrides or {}).items():
+        _set_dotted(data, key, value)
+    return _from_mapping(Scenario, data, "")
+
+
+def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
+    """Write ``text`` to ``path`` via a temporary file in the same folder, then rename."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", dir=p.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, p)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return p
+
+
+def save_scenario(scenario: Scenario, path: str | os.PathLike[str]) -> Path:
+    """Write the resolved scenario as YAML (atomically)."""
+    return write_text_atomic(path, yaml.safe_dump(scenario.to_dict(), sort_keys=False))

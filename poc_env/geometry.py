@@ -1,0 +1,108 @@
+"""Plane geometry shared by regions, patterns, constraints and the planner.
+
+One rotation (eq. 5 and its inverse eq. 6), one polygon validator, one rectangle builder.
+Coordinates are metres, angles radians unless a name says ``_deg``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import shapely
+from shapely.geometry import Point, Polygon
+from shapely.validation import explain_validity
+
+from poc_env.errors import GeometryError
+
+ArrayLike = np.ndarray | Sequence[Sequence[float]]
+
+
+def rotate_ccw(points: ArrayLike, theta: float) -> np.ndarray:
+    """Rotate ``points`` (..., 2) counter-clockwise by ``theta`` about the origin (eq. 5).
+
+    ``p_hat = [[cos, -sin], [sin, cos]] p``.
+    """
+    p = np.asarray(points, dtype=float)
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([c * p[..., 0] - s * p[..., 1], s * p[..., 0] + c * p[..., 1]], axis=-1)
+
+
+def rotate_cw(points: ArrayLike, theta: float) -> np.ndarray:
+    """Rotate ``points`` clockwise by ``theta`` (eq. 6), the inverse of :func:`rotate_ccw`.
+
+    ``q = [[cos, sin], [-sin, cos]] q_hat``.
+    """
+    return rotate_ccw(points, -theta)
+
+
+def validate_polygon(
+    vertices: ArrayLike, name: str = "polygon", holes: Sequence[ArrayLike] = ()
+) -> Polygon:
+    """Return a valid shapely polygon or raise :class:`GeometryError` naming ``name``.
+
+    Rejects fewer than three vertices, non-finite coordinates, zero area and self-intersection.
+    """
+    try:
+        pts = np.asarray(vertices, dtype=float)
+    except (TypeError, ValueError):
+        raise GeometryError(f"{name}: vertices must be [x, y] number pairs") from None
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 3:
+        raise GeometryError(f"{name}: need at least 3 [x, y] vertices, got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise GeometryError(f"{name}: vertices must be finite numbers")
+    hole_arrays = [np.asarray(h, dtype=float) for h in holes]
+    poly = Polygon(pts, hole_arrays)
+    if poly.area <= 0:
+        raise GeometryError(f"{name}: degenerate polygon (zero area)")
+    if not poly.is_valid:
+        raise GeometryError(f"{name}: invalid polygon ({explain_validity(poly)})")
+    return poly
+
+
+def as_polygon(region: Polygon | ArrayLike, name: str = "polygon") -> Polygon:
+    """A shapely polygon from a polygon or a vertex array, validated."""
+    if isinstance(region, Polygon):
+        if region.is_empty or region.area <= 0:
+            raise GeometryError(f"{name}: degenerate polygon (zero area)")
+        if not region.is_valid:
+            raise GeometryError(f"{name}: invalid polygon ({explain_validity(region)})")
+        return region
+    return validate_polygon(region, name)
+
+
+def point_in_polygon(point: Sequence[float], vertices: ArrayLike) -> bool:
+    """True when ``point`` lies inside or on the polygon ``vertices``."""
+    poly = Polygon(np.asarray(vertices, dtype=float))
+    return bool(poly.covers(Point(float(point[0]), float(point[1]))))
+
+
+def rectangle_corners(
+    center: Sequence[float], length: float, width: float, theta: float
+) -> np.ndarray:
+    """Corners (4, 2) of the rectangle Q(x_c, y_c, l, w, theta) of §3.1.6.
+
+    ``length`` runs along direction ``theta`` (radians from the x axis), ``width`` across it.
+    """
+    hl, hw = 0.5 * length, 0.5 * width
+    local = np.array([[-hl, -hw], [hl, -hw], [hl, hw], [-hl, hw]])
+    return rotate_ccw(local, theta) + np.asarray(center, dtype=float)
+
+
+def rectangle_polygon(center: Sequence[float], length: float, width: float, theta: float):
+    """The rectangle Q as a shapely polygon."""
+    return Polygon(rectangle_corners(center, length, width, theta))
+
+
+def polyline_length(waypoints: ArrayLike) -> float:
+    """Length of the polyline through ``waypoints`` (k, 2)."""
+    w = np.asarray(waypoints, dtype=float)
+    if len(w) < 2:
+        return 0.0
+    return float(np.sum(np.hypot(*np.diff(w, axis=0).T)))
+
+
+def covers_points(geom, points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """Boolean mask: which of ``points`` (k, 2) lie in ``geom`` buffered by ``tol`` metres."""
+    g = geom.buffer(tol) if tol > 0 else geom
+    return shapely.covers(g, shapely.points(np.asarray(points, dtype=float)))

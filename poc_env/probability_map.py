@@ -1,0 +1,250 @@
+"""The grid and the prior probability-of-containment (POC) map.
+
+Array convention: a map is ``(ny, nx)``; row ``j`` is the ``j``-th cell from the south edge,
+column ``i`` the ``i``-th from the west edge; cell ``(j, i)`` covers
+``[x0 + i c, x0 + (i + 1) c] x [y0 + j c, y0 + (j + 1) c]``.
+
+The paper's maps (Figs. 15 and 20) are not published. The built-in scenarios build seeded,
+documented Gaussian-mixture priors that resemble them (a few elongated high-POC clusters over a
+low background); :func:`random_gaussian_mixture` draws fresh ones for RL generalisation; a
+user's map is read by :func:`load_map` from ``.npy`` or ``.csv``.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+from shapely.geometry import box
+
+from poc_env.config import GaussianComponent, MapConfig, PriorConfig
+from poc_env.errors import MapFileError
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A regular grid of square cells of side ``cell_m`` with its south-west corner at origin."""
+
+    nx: int
+    ny: int
+    cell_m: float
+    origin_m: tuple[float, float] = (0.0, 0.0)
+
+    @classmethod
+    def from_config(cls, cfg: MapConfig) -> Grid:
+        return cls(cfg.nx, cfg.ny, cfg.cell_m, tuple(cfg.origin_m))  # type: ignore[arg-type]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.ny, self.nx)
+
+    @property
+    def width_m(self) -> float:
+        return self.nx * self.cell_m
+
+    @property
+    def height_m(self) -> float:
+        return self.ny * self.cell_m
+
+    @property
+    def cell_area_m2(self) -> float:
+        return self.cell_m**2
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of the whole grid."""
+        x0, y0 = self.origin_m
+        return (x0, y0, x0 + self.width_m, y0 + self.height_m)
+
+    def polygon(self):
+        """The grid's outline as a shapely box."""
+        return box(*self.bounds)
+
+    @cached_property
+    def centers(self) -> np.ndarray:
+        """Cell centres, shape ``(ny, nx, 2)``."""
+        return self.sample_points(1)
+
+    def sample_points(self, s: int) -> np.ndarray:
+        """Centres of the ``s x s`` sub-cells of every cell, shape ``(ny * s, nx * s, 2)``.
+
+        Sub-cell ``(J, I)`` belongs to cell ``(J // s, I // s)``: a fine grid of pitch ``c / s``.
+        """
+        x0, y0 = self.origin_m
+        h = self.cell_m / s
+        xs = x0 + (np.arange(self.nx * s) + 0.5) * h
+        ys = y0 + (np.arange(self.ny * s) + 0.5) * h
+        gx, gy = np.meshgrid(xs, ys)
+        return np.stack([gx, gy], axis=-1)
+
+    def cell_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Row and column of the cell holding each point (clipped to the grid)."""
+        p = np.asarray(xy, dtype=float)
+        i = np.floor((p[..., 0] - self.origin_m[0]) / self.cell_m).astype(int)
+        j = np.floor((p[..., 1] - self.origin_m[1]) / self.cell_m).astype(int)
+        return np.clip(j, 0, self.ny - 1), np.clip(i, 0, self.nx - 1)
+
+    def contains(self, xy: np.ndarray) -> np.ndarray:
+        """Boolean mask of points inside the grid's rectangle (boundary included)."""
+        p = np.asarray(xy, dtype=float)
+        x0, y0, x1, y1 = self.bounds
+        return (p[..., 0] >= x0) & (p[..., 0] <= x1) & (p[..., 1] >= y0) & (p[..., 1] <= y1)
+
+    def cell_boxes(self) -> list:
+        """Shapely boxes of all cells in row-major order (``j * nx + i``)."""
+        x0, y0 = self.origin_m
+        c = self.cell_m
+        return [
+            box(x0 + i * c, y0 + j * c, x0 + (i + 1) * c, y0 + (j + 1) * c)
+            for j in range(self.ny)
+            for i in range(self.nx)
+        ]
+
+    def refine(self, values: np.ndarray, s: int) -> np.ndarray:
+        """Spread each cell's mass evenly over its ``s x s`` sub-cells: ``(ny s, nx s)``."""
+        v = np.asarray(values, dtype=float)
+        return np.repeat(np.repeat(v, s, axis=0), s, axis=1) / (s * s)
+
+    def coarsen(self, fine: np.ndarray, s: int) -> np.ndarray:
+        """Sum sub-cell mass back into cells: ``(..., ny s, nx s) -> (..., ny, nx)``."""
+        f = np.asarray(fine)
+        lead = f.shape[:-2]
+        return f.reshape(*lead, self.ny, s, self.nx, s).sum(axis=(-3, -1))
+
+
+# --------------------------------------------------------------------------- priors
+
+
+def gaussian_mixture(
+    grid: Grid,
+    components: tuple[GaussianComponent, ...] | list[GaussianComponent],
+    background: float = 0.0,
+    oversample: int = 6,
+) -> np.ndarray:
+    """Cell masses of a Gaussian mixture plus a uniform background, summing to 1.
+
+    Each component's density is averaged over every cell on an ``oversample x oversample``
+    sub-grid (the target is uniform within a cell, so a cell's POC is the integral of the
+    density over the cell, not its value at the centre). Mass falling outside the grid is
+    dropped and the rest renormalised. ``background`` is the share of mass spread uniformly.
+    """
+    pts = grid.sample_points(oversample)
+    dens = np.zeros(pts.shape[:2])
+    weights = np.array([c.weight for c in components], dtype=float)
+    if len(components):
+        weights = weights / weights.sum()
+    for w, comp in zip(weights, components):
+        d = pts - np.asarray(comp.mean_m)
+        c, s = np.cos(comp.rotation_rad), np.sin(comp.rotation_rad)
+        u = (c * d[..., 0] + s * d[..., 1]) / comp.sigma_m[0]
+        v = (-s * d[..., 0] + c * d[..., 1]) / comp.sigma_m[1]
+        dens += w * np.exp(-0.5 * (u * u + v * v)) / (2 * np.pi * comp.sigma_m[0] * comp.sigma_m[1])
+    mass = grid.coarsen(dens, oversample)
+    total = mass.sum()
+    if total > 0:
+        mass = mass / total * (1.0 - background)
+    elif background <= 0:
+        raise MapFileError("gaussian mixture has no mass on the grid and no background")
+    else:
+        background = 1.0
+    mass = mass + background / (grid.nx * grid.ny)
+    return mass / mass.sum()
+
+
+def random_gaussian_mixture(
+    grid: Grid,
+    rng: np.random.Generator,
+    n_components: tuple[int, int] = (1, 6),
+    sigma_fraction: tuple[float, float] = (0.05, 0.25),
+    background: tuple[float, float] = (0.0, 0.05),
+) -> np.ndarray:
+    """A random prior for generalisation: a seeded Gaussian mixture of varying count and shape.
+
+    Component count is drawn from ``n_components`` (inclusive), means uniformly over the grid,
+    standard deviations as a fraction of the grid's smaller side from ``sigma_fraction``, a random
+    orientation, Dirichlet weights, and a uniform background share from ``background``.
+    """
+    k = int(rng.integers(n_components[0], n_components[1] + 1))
+    side = min(grid.width_m, grid.height_m)
+    x0, y0, x1, y1 = grid.bounds
+    comps = []
+    weights = rng.dirichlet(np.ones(k))
+    for w in weights:
+        mean = (rng.uniform(x0, x1), rng.uniform(y0, y1))
+        sig = tuple(rng.uniform(*sigma_fraction, size=2) * side)
+        comps.append(
+            GaussianComponent(
+                mean_m=mean,
+                sigma_m=sig,
+                weight=float(max(w, 1e-6)),
+                rotation_rad=float(rng.uniform(0, np.pi)),
+            )
+        )
+    return gaussian_mixture(grid, comps, background=float(rng.uniform(*background)))
+
+
+def validate_map(values: np.ndarray, grid: Grid, source: str = "map") -> np.ndarray:
+    """Check and normalise a prior; raise :class:`MapFileError` naming what is wrong.
+
+    Requires shape ``(ny, nx)``, finite, non-negative values with a positive sum. A map that
+    does not sum to 1 is normalised with a warning.
+    """
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise MapFileError(f"{source}: values must be numbers") from None
+    if arr.shape != grid.shape:
+        raise MapFileError(
+            f"{source}: shape {arr.shape} does not match the grid; allowed: (ny, nx) = "
+            f"{grid.shape} for {grid.nx} x {grid.ny} cells of {grid.cell_m / 1000:g} km"
+        )
+    if not np.all(np.isfinite(arr)):
+        n = int(np.sum(~np.isfinite(arr)))
+        raise MapFileError(f"{source}: {n} value(s) are NaN or infinite; allowed: finite >= 0")
+    if np.any(arr < 0):
+        raise MapFileError(
+            f"{source}: {int(np.sum(arr < 0))} negative value(s) (min {arr.min():g}); "
+            "allowed: probabilities >= 0"
+        )
+    total = float(arr.sum())
+    if total <= 0:
+        raise MapFileError(f"{source}: all values are zero; allowed: a map with positive mass")
+    if abs(total - 1.0) > 1e-6:
+        warnings.warn(f"{source}: map sums to {total:.6g}, normalised to 1", stacklevel=2)
+        arr = arr / total
+    return arr
+
+
+def load_map(path: str | os.PathLike[str], grid: Grid) -> np.ndarray:
+    """Read a prior from ``.npy`` (no pickles) or ``.csv`` (rows from south to north)."""
+    p = Path(path)
+    if not p.is_file():
+        raise MapFileError(f"map file {str(p)!r} does not exist")
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".npy":
+            arr = np.load(p, allow_pickle=False)
+        elif suffix == ".csv":
+            arr = np.loadtxt(p, delimiter=",", ndmin=2)
+        else:
+            raise MapFileError(f"map file {str(p)!r}: suffix {suffix!r}; allowed: .npy or .csv")
+    except MapFileError:
+        raise
+    except (ValueError, OSError, EOFError) as err:
+        raise MapFileError(f"map file {str(p)!r} is corrupt or unreadable: {err}") from None
+    return validate_map(arr, grid, source=f"map file {str(p)!r}")
+
+
+def build_prior(cfg: MapConfig, map_file: str | os.PathLike[str] | None = None) -> np.ndarray:
+    """The prior POC of a map config: a user's file when given, else the configured prior."""
+    grid = Grid.from_config(cfg)
+    if map_file is not None:
+        return load_map(map_file, grid)
+    prior: PriorConfig = cfg.prior
+    if prior.kind == "file":
+        return load_map(prior.file, grid)  # type: ignore[arg-type]
+    return gaussian_mixture(grid, prior.components, prior.background)
