@@ -527,6 +527,8 @@ def _from_mapping(cls: type, data: Any, where: str) -> Any:
     try:
         return cls(**kwargs)
     except ConfigError as err:
+        if err.field in data and err.field in fields:  # show the value as the user wrote it
+            err = ConfigError(err.field, data[err.field], err.allowed)
         raise err.with_prefix(where) from None
     except TypeError as err:  # e.g. a list where a number belongs
         raise ConfigError(where or cls.__name__, dict(data), str(err)) from None

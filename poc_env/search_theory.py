@@ -27,6 +27,7 @@ so ``POSC + sum(POC)`` stays equal to the initial total.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -331,7 +332,7 @@ def sweep_track(
     if len(w) < 2:
         return 0.0
     starts, ends = [], []
-    for p, q in zip(w[:-1], w[1:]):
+    for p, q in itertools.pairwise(w):
         n = 1 if not step_m else max(1, int(np.ceil(np.hypot(*(q - p)) / step_m)))
         t = np.linspace(0.0, 1.0, n + 1)
         pts = p + t[:, None] * (q - p)

@@ -148,6 +148,7 @@ class SurveyRow:
     spacing_km: float
     direction_deg: float
     track_length_km: float
+    search_length_km: float
     pod: float
     poc: float
     pos: float
@@ -172,14 +173,15 @@ class SurveyResult:
     def table(self) -> str:
         """The report as fixed-width text."""
         head = (
-            f"{'No.':>3} {'pattern':<16} {'S/km':>6} {'dir/deg':>7} {'track/km':>9} {'POD':>7} "
+            f"{'No.':>3} {'pattern':<16} {'S/km':>6} {'dir/deg':>7} {'track/km':>9} {'legs/km':>8} "
+            f"{'POD':>7} "
             f"{'POC':>7} {'POS':>7} {'POS flown':>9} {'time/h':>7} {'ok':>3}"
         )
         lines = [head, "-" * len(head)]
         for r in self.rows:
             lines.append(
                 f"{r.id:>3} {r.pattern:<16} {r.spacing_km:>6.1f} {r.direction_deg:>7.1f} "
-                f"{r.track_length_km:>9.1f} {r.pod:>7.4f} {r.poc:>7.4f} {r.pos:>7.4f} "
+                f"{r.track_length_km:>9.1f} {r.search_length_km:>8.1f} {r.pod:>7.4f} {r.poc:>7.4f} {r.pos:>7.4f} "
                 f"{r.pos_flown:>9.4f} {r.flight_time_h:>7.2f} {'yes' if r.feasible else 'NO':>3}"
             )
         lines.append("-" * len(head))
@@ -224,12 +226,13 @@ def run_survey(
     from poc_env.regions import cell_overlap
 
     takeoffs, landings = _airfields_for(sc, plan)
-    tracks, pods, members, lengths = [], [], [], []
+    tracks, pods, members, lengths, legs = [], [], [], [], []
     for spec, start in zip(plan.regions, takeoffs):
         region = spec.region()
         tr = spec.track(start=start)
         tracks.append(tr.waypoints)
         lengths.append(tr.length_m)
+        legs.append(tr.search_length_m)
         members.append(cell_overlap(region, grid))
         if spec.pattern == "parallel":
             pods.append(
@@ -257,6 +260,7 @@ def run_survey(
                 spacing_km=spec.spacing_m / KM,
                 direction_deg=float(np.degrees(spec.direction_rad)),
                 track_length_km=lengths[k] / KM,
+                search_length_km=legs[k] / KM,
                 pod=pods[k],
                 poc=float(poc_i[k]),
                 pos=float(pos_i[k]),

@@ -1,0 +1,156 @@
+"""Configs and maps: built-ins load, round-trip, and every bad input names what is wrong."""
+
+import numpy as np
+import pytest
+import yaml
+
+from poc_env.config import KM, builtin_scenarios, load_scenario, save_scenario
+from poc_env.errors import ConfigError, GeometryError, MapFileError
+from poc_env.probability_map import Grid, build_prior, load_map, validate_map
+
+
+def test_builtin_scenarios_match_the_paper():
+    assert {"paper_6_1", "paper_6_2", "small"} <= set(builtin_scenarios())
+    s61 = load_scenario("paper_6_1")
+    assert (s61.map.nx, s61.map.ny, s61.map.cell_m) == (60, 40, 6 * KM)
+    assert s61.n_uavs == 6 and len(s61.airfields) == 2
+    s62 = load_scenario("paper_6_2")
+    assert (s62.map.nx, s62.map.ny, s62.map.cell_m) == (40, 30, 5 * KM)
+    assert sorted({a.position_m for a in s62.airfields}) == [
+        (20 * KM, -60 * KM),
+        (120 * KM, -60 * KM),
+    ]
+    assert s62.n_uavs == 6
+    u = s62.uav
+    assert u.endurance_s == pytest.approx(3 * 3600)
+    assert u.usable_endurance_s == pytest.approx(0.85 * 3 * 3600)
+    assert u.cruise_speed_mps == pytest.approx(220 / 3.6)
+    assert u.search_speed_mps == pytest.approx(180 / 3.6)
+    assert s62.sensor.sweep_width_m == pytest.approx(5 * KM)
+
+
+@pytest.mark.parametrize("name", ["paper_6_1", "paper_6_2", "small"])
+def test_round_trip_through_yaml(name, tmp_path):
+    sc = load_scenario(name)
+    path = save_scenario(sc, tmp_path / "resolved.yaml")
+    assert load_scenario(str(path)) == sc
+    prior = build_prior(sc.map)
+    assert prior.shape == (sc.map.ny, sc.map.nx)
+    assert prior.sum() == pytest.approx(1.0) and prior.min() > 0
+
+
+def test_config_objects_are_immutable():
+    sc = load_scenario("small")
+    with pytest.raises(AttributeError):
+        sc.uav.endurance_s = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "field"),
+    [
+        ("uav.search_speed_kmh", 0, "uav.search_speed_kmh"),
+        ("uav.cruise_speed_kmh", -5, "uav.cruise_speed_kmh"),
+        ("uav.endurance_h", 0, "uav.endurance_h"),
+        ("sensor.sweep_width_km", -1, "sensor.sweep_width_km"),
+        ("map.cell_km", 0, "map.cell_km"),
+        ("map.width_km", 41, "map.width_km"),
+        ("sensor.law", "magic", "sensor.law"),
+        ("uav.endurance_h", "three", "uav.endurance_h"),
+        ("sensor.colour", "red", "sensor.colour"),
+        ("reward.credit", "mine", "reward.credit"),
+    ],
+)
+def test_bad_values_name_field_value_and_allowed(key, value, field):
+    with pytest.raises(ConfigError) as info:
+        load_scenario("small", {key: value})
+    err = info.value
+    assert err.field == field
+    assert repr(value) in str(err) and "allowed" in str(err)
+
+
+def test_unknown_top_level_key_and_scenario():
+    with pytest.raises(ConfigError, match="one of the keys"):
+        load_scenario("small", {"weather": "fine"})
+    with pytest.raises(ConfigError, match="built-in name"):
+        load_scenario("no_such_scenario")
+
+
+def test_self_intersecting_no_fly_zone_is_rejected():
+    bowtie = [[0, 0], [10, 10], [10, 0], [0, 10]]
+    with pytest.raises(GeometryError, match="no_fly_zones_km"):
+        load_scenario("small", {"map.no_fly_zones_km": [bowtie]})
+    with pytest.raises(GeometryError, match="degenerate"):
+        load_scenario("small", {"map.no_fly_zones_km": [[[0, 0], [1, 1], [2, 2]]]})
+
+
+def test_airfield_inside_no_fly_zone_is_rejected():
+    zone = [[15, -10], [25, -10], [25, 0], [15, 0]]  # around small's airfield (20, -5)
+    with pytest.raises(ConfigError, match="airfields"):
+        load_scenario("small", {"map.no_fly_zones_km": [zone]})
+
+
+def test_yaml_is_read_safely(tmp_path):
+    bad = tmp_path / "evil.yaml"
+    bad.write_text("name: !!python/object/apply:os.system ['echo hi']\n")
+    with pytest.raises(ConfigError, match="valid YAML"):
+        load_scenario(str(bad))
+    corrupt = tmp_path / "corrupt.yaml"
+    corrupt.write_text("map: [unclosed\n")
+    with pytest.raises(ConfigError, match="valid YAML"):
+        load_scenario(str(corrupt))
+
+
+GRID = Grid(4, 3, 1000.0)
+
+
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        (np.full((3, 4), np.nan), "NaN"),
+        (-np.ones((3, 4)), "negative"),
+        (np.zeros((3, 4)), "all values are zero"),
+        (np.ones((4, 3)), "shape"),
+    ],
+)
+def test_bad_maps(values, match):
+    with pytest.raises(MapFileError, match=match):
+        validate_map(values, GRID)
+
+
+def test_unnormalised_map_warns_and_normalises():
+    with pytest.warns(UserWarning, match="normalised"):
+        out = validate_map(np.ones((3, 4)), GRID)
+    assert out.sum() == pytest.approx(1.0)
+
+
+def test_map_files(tmp_path):
+    arr = np.arange(12, dtype=float).reshape(3, 4) + 1
+    np.save(tmp_path / "m.npy", arr / arr.sum())
+    np.savetxt(tmp_path / "m.csv", arr / arr.sum(), delimiter=",")
+    np.testing.assert_allclose(load_map(tmp_path / "m.npy", GRID), arr / arr.sum())
+    np.testing.assert_allclose(load_map(tmp_path / "m.csv", GRID), arr / arr.sum())
+    with pytest.raises(MapFileError, match="does not exist"):
+        load_map(tmp_path / "missing.npy", GRID)
+    (tmp_path / "c.npy").write_bytes(b"not a numpy file")
+    with pytest.raises(MapFileError, match="corrupt"):
+        load_map(tmp_path / "c.npy", GRID)
+    np.save(tmp_path / "obj.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(MapFileError, match="corrupt"):
+        load_map(tmp_path / "obj.npy", GRID)
+    (tmp_path / "m.txt").write_text("1")
+    with pytest.raises(MapFileError, match="suffix"):
+        load_map(tmp_path / "m.txt", GRID)
+
+
+def test_overrides_and_with_uavs():
+    sc = load_scenario("paper_6_2", {"sensor.sweep_width_km": 4})
+    assert sc.sensor.sweep_width_m == pytest.approx(4000)
+    s8 = sc.with_uavs(8)
+    assert s8.n_uavs == 8 and len(s8.takeoff_m) == 8
+    with pytest.raises(ConfigError, match="uavs"):
+        sc.with_uavs(0)
+
+
+def test_resolved_config_is_plain_yaml():
+    text = yaml.safe_dump(load_scenario("paper_6_2").to_dict())
+    assert "sweep_width_km: 5.0" in text
