@@ -181,7 +181,8 @@ class SurveyResult:
         for r in self.rows:
             lines.append(
                 f"{r.id:>3} {r.pattern:<16} {r.spacing_km:>6.1f} {r.direction_deg:>7.1f} "
-                f"{r.track_length_km:>9.1f} {r.search_length_km:>8.1f} {r.pod:>7.4f} {r.poc:>7.4f} {r.pos:>7.4f} "
+                f"{r.track_length_km:>9.1f} {r.search_length_km:>8.1f} {r.pod:>7.4f} "
+                f"{r.poc:>7.4f} {r.pos:>7.4f} "
                 f"{r.pos_flown:>9.4f} {r.flight_time_h:>7.2f} {'yes' if r.feasible else 'NO':>3}"
             )
         lines.append("-" * len(head))
