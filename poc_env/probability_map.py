@@ -129,11 +129,12 @@ def gaussian_mixture(
 
     Each component's density is averaged over every cell on an ``oversample x oversample``
     sub-grid (the target is uniform within a cell, so a cell's POC is the integral of the
-    density over the cell, not its value at the centre). Mass falling outside the grid is
-    dropped and the rest renormalised. ``background`` is the share of mass spread uniformly.
+    density over the cell, not its value at the centre) and normalised on the grid, so a
+    component's ``weight`` (relative to the others) is exactly its share of the mass on the map.
+    ``background`` is the share of mass spread uniformly.
     """
     pts = grid.sample_points(oversample)
-    dens = np.zeros(pts.shape[:2])
+    mass = np.zeros(grid.shape)
     weights = np.array([c.weight for c in components], dtype=float)
     if len(components):
         weights = weights / weights.sum()
@@ -142,8 +143,9 @@ def gaussian_mixture(
         c, s = np.cos(comp.rotation_rad), np.sin(comp.rotation_rad)
         u = (c * d[..., 0] + s * d[..., 1]) / comp.sigma_m[0]
         v = (-s * d[..., 0] + c * d[..., 1]) / comp.sigma_m[1]
-        dens += w * np.exp(-0.5 * (u * u + v * v)) / (2 * np.pi * comp.sigma_m[0] * comp.sigma_m[1])
-    mass = grid.coarsen(dens, oversample)
+        part = grid.coarsen(np.exp(-0.5 * (u * u + v * v)), oversample)
+        if part.sum() > 0:  # a component wholly off the grid contributes nothing
+            mass += w * part / part.sum()
     total = mass.sum()
     if total > 0:
         mass = mass / total * (1.0 - background)

@@ -10,6 +10,11 @@ POD is eq. 10 with the region's spacing for parallel search (as in the paper's T
 circle patterns, which have no single spacing, POD is the law's POD of the coverage factor
 C = W L / A (eq. 7-8) of the track over the circle. POC_i is the area-weighted POC of the
 region with the overlap rule of §3.1.6 (a cell already allocated to an earlier UAV counts 0).
+The ``bound`` is the optimal allocation of the same effort under the scenario's law (no plan
+scored by eq. 10 can beat it); the ``ceiling`` is the optimum under the definite-range law,
+``POD = min(C, 1)``, which no sensor of sweep width W can beat in any cell -- the step-wise
+inverse-cube law can exceed the erf allocation by a hair at low coverage (erf(sqrt(pi)/2 C) =
+C - pi C^3 / 12 + ...), never the ceiling.
 The ``pos_flown`` column is what the step-wise detection law actually finds when the tracks are
 flown over the belief, UAV after UAV (eq. 14) -- the environment's number, not a formula.
 """
@@ -165,6 +170,7 @@ class SurveyResult:
     posc: float
     posc_flown: float
     bound: float
+    ceiling: float
     effort_km2: float
     tracks: tuple[np.ndarray, ...]
     takeoff_m: tuple[tuple[float, float], ...]
@@ -189,18 +195,20 @@ class SurveyResult:
         lines.append(
             f"POS_C = {self.posc:.4f} (eq. 10 x POC)   flown: {self.posc_flown:.4f}   "
             f"physical optimum for the same effort ({self.effort_km2:,.0f} km^2): "
-            f"{self.bound:.4f}"
+            f"{self.bound:.4f}\n(ceiling for any sensor of this sweep width: {self.ceiling:.4f})"
         )
         return "\n".join(lines)
 
     def to_csv(self) -> str:
         buf = io.StringIO()
         fields = list(SurveyRow.__dataclass_fields__)
-        w = csv.DictWriter(buf, fieldnames=[*fields, "posc", "posc_flown", "bound"])
+        w = csv.DictWriter(buf, fieldnames=[*fields, "posc", "posc_flown", "bound", "ceiling"])
         w.writeheader()
         for r in self.rows:
             row: dict[str, Any] = {k: getattr(r, k) for k in fields}
-            row.update(posc=self.posc, posc_flown=self.posc_flown, bound=self.bound)
+            row.update(
+                posc=self.posc, posc_flown=self.posc_flown, bound=self.bound, ceiling=self.ceiling
+            )
             w.writerow(row)
         return buf.getvalue()
 
@@ -279,6 +287,7 @@ def run_survey(
         posc=float(j),
         posc_flown=float(np.sum(flown)),
         bound=bound,
+        ceiling=physical_optimum(prior, grid.cell_area_m2, effort, "definite_range").pos,
         effort_km2=effort / KM**2,
         tracks=tuple(tracks),
         takeoff_m=tuple(takeoffs),
