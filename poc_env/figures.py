@@ -76,10 +76,7 @@ def pattern_gallery(out_dir: str | pathlib.Path, *, dpi: int = 110) -> list[path
     W/2, round caps, light blue), the track (red) and an arrow at its start. Example
     parameters are fixed and printed in the titles.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # no pyplot: no global backend switch needed
 
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -147,13 +144,13 @@ def pattern_gallery(out_dir: str | pathlib.Path, *, dpi: int = 110) -> list[path
             f"one turn each, W = {w_c:g} m",
         ),
     ]
+    from poc_env.plots import save_figure_atomic
+
     paths = []
     for kind, region, track, w, title in cases:
         fig = Figure(figsize=(5.5, 5.0))
         ax = fig.add_subplot(1, 1, 1)
         _draw(ax, region, track, w, title)
         fig.tight_layout()
-        path = out / f"pattern_{kind}.png"
-        fig.savefig(path, dpi=dpi)
-        paths.append(path)
+        paths.append(save_figure_atomic(fig, out / f"pattern_{kind}.png", dpi=dpi))
     return paths

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from poc_env.config import publish_atomic
+
 
 def _figure(figsize=(8.0, 6.0)):
     from matplotlib.figure import Figure
@@ -27,7 +29,7 @@ def save_figure_atomic(fig, path: str | os.PathLike[str], dpi: int = 110) -> Pat
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=dpi, format="png")
-        os.replace(tmp, p)
+        publish_atomic(tmp, p)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

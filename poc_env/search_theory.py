@@ -378,17 +378,22 @@ def swarm_pos(memberships, pods, prior):
 
     ``memberships`` (..., n, ny, nx) is the area fraction of each cell inside UAV i's region,
     ``pods`` (..., n) each UAV's POD_i (eq. 15), ``prior`` (ny, nx) the POC map. UAVs are taken in
-    order; once a cell is allocated its POC counts as 0 for later UAVs (a fractionally covered
-    cell keeps the uncovered fraction). Returns ``(poc_i, pos_i, J)`` with shapes (..., n),
-    (..., n) and (...). Loops only over UAVs, never over individuals or cells.
+    order; the part of a cell already allocated to earlier UAVs counts 0 for later ones (the
+    paper sets its POC to 0): UAV i is credited with ``min(m_i, 1 - allocated)`` of each cell.
+    This is exact for 0/1 memberships (sample points) and for regions that do not overlap inside
+    a cell; for regions overlapping inside a cell it assumes the least overlap the fractions
+    allow (pass exclusive memberships, e.g. region minus earlier regions, to be exact).
+    Returns ``(poc_i, pos_i, J)`` with shapes (..., n), (..., n) and (...). Loops only over UAVs,
+    never over individuals or cells.
     """
     m = np.asarray(memberships, dtype=float)
     pods = np.asarray(pods, dtype=float)
-    remaining = np.broadcast_to(np.asarray(prior, dtype=float), m.shape[:-3] + m.shape[-2:])
+    p = np.asarray(prior, dtype=float)
+    allocated = np.zeros(m.shape[:-3] + m.shape[-2:])
     poc_i = np.empty(m.shape[:-2])
     for i in range(m.shape[-3]):
-        mi = m[..., i, :, :]
-        poc_i[..., i] = np.sum(mi * remaining, axis=(-2, -1))
-        remaining = remaining * (1.0 - mi)
+        take = np.clip(np.minimum(m[..., i, :, :], 1.0 - allocated), 0.0, None)
+        poc_i[..., i] = np.sum(take * p, axis=(-2, -1))
+        allocated = allocated + take
     pos_i = pos(poc_i, pods)
     return poc_i, pos_i, posc(pos_i, axis=-1)

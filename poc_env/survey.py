@@ -236,13 +236,16 @@ def run_survey(
 
     takeoffs, landings = _airfields_for(sc, plan)
     tracks, pods, members, lengths, legs = [], [], [], [], []
+    taken = None
     for spec, start in zip(plan.regions, takeoffs):
         region = spec.region()
         tr = spec.track(start=start)
         tracks.append(tr.waypoints)
         lengths.append(tr.length_m)
         legs.append(tr.search_length_m)
-        members.append(cell_overlap(region, grid))
+        geom = region.geometry  # exclusive part: what earlier UAVs' regions do not hold
+        members.append(cell_overlap(geom.difference(taken) if taken is not None else geom, grid))
+        taken = geom if taken is None else taken.union(geom)
         if spec.pattern == "parallel":
             pods.append(
                 float(pod_parallel(w, spec.spacing_m))

@@ -112,6 +112,10 @@ def test_swarm_pos_overlap_rule():
     np.testing.assert_allclose(poc_i, [0.5, 0.5])  # the shared cell counts once
     np.testing.assert_allclose(pos_i, [0.4, 0.25])
     assert j == pytest.approx(0.65)
+    # regions splitting a cell between them are each credited with their own share
+    split = np.array([[[0.3, 0.0]], [[0.7, 1.0]]])
+    poc_s, _, _ = swarm_pos(split, np.array([1.0, 1.0]), prior)
+    np.testing.assert_allclose(poc_s, [0.15, 0.85])
     # batched over a population axis
     poc_b, _, j_b = swarm_pos(np.stack([m, m[::-1]]), np.array([[0.8, 0.5], [0.5, 0.8]]), prior)
     np.testing.assert_allclose(poc_b, [[0.5, 0.5], [1.0, 0.0]])

@@ -42,7 +42,8 @@ def test_table4_analog(survey):
 
 def test_paper_6_1_prior_reproduces_table4_poc(survey):
     for r in survey.rows:
-        assert r.poc == pytest.approx(TABLE4[r.id][2], abs=2e-3)
+        assert r.poc == pytest.approx(TABLE4[r.id][2], abs=2e-4)
+    assert survey.posc == pytest.approx(0.9404, abs=5e-4)  # Table 4's POS_C
 
 
 def test_flown_pos_conserves_mass(survey):
