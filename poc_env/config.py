@@ -343,12 +343,22 @@ class EpisodeConfig:
     """Time stepping of the environment."""
 
     dt_s: float = _f("dt_s", 1.0, default=60.0)
-    #: truncation horizon in steps (default: endurance T / dt).
+    #: truncation horizon in steps (default: endurance T / dt, rounded up).
     horizon_steps: int | None = _f(default=None)
     detection_ends_episode: bool = _f(default=False)
+    #: landing rule: within this horizontal distance of the landing field ...
+    landing_radius_m: float = _f("landing_radius_km", KM, default=3 * KM)
+    #: ... at or below this altitude (default above the cruise altitude: no descent needed).
+    landing_max_altitude_m: float = _f("landing_max_altitude_m", 1.0, default=1500.0)
+    #: the operating area (eq. 20's boundary) is the bounding box of the grid and the
+    #: airfields, grown by this margin on every side.
+    boundary_margin_m: float = _f("boundary_margin_km", KM, default=20 * KM)
 
     def __post_init__(self) -> None:
         check_positive("dt_s", self.dt_s)
+        check_positive("landing_radius_km", self.landing_radius_m)
+        check_positive("landing_max_altitude_m", self.landing_max_altitude_m)
+        check_positive("boundary_margin_km", self.boundary_margin_m, allow_zero=True)
         if self.horizon_steps is not None:
             _int("horizon_steps", self.horizon_steps, 1)
         if not isinstance(self.detection_ends_episode, bool):

@@ -1,0 +1,432 @@
+"""The functional core of the environment, batched over ``n_envs`` x ``n_agents``.
+
+``make_params(scenario)`` turns a scenario into the constants of the dynamics;
+``initial(params, rngs)`` draws a fresh :class:`State` for each env from its own generator;
+``step(params, state, actions, rngs)`` advances every env by one time step (in place, for
+speed) and returns the step's :class:`Events`. The PettingZoo env is the ``n_envs == 1`` case;
+the SB3 vector env is this module with many envs. Nothing here imports gymnasium or matplotlib.
+
+One step, for each flying UAV (eq. numbers are the paper's):
+
+1. actions in [-1, 1]^3 scale to the increments (dv, d alpha, d beta) within the per-step
+   limits ``max_accel * dt``, ``max_turn_rate * dt``, ``max_pitch_rate * dt``; in ``shield``
+   mode the heading change is replaced by the closest safe one (:func:`constraints.shield_heading`);
+2. eq. 19: alpha' = alpha + d alpha, beta' = clip(beta + d beta), the position moves by
+   ``v dt (cos alpha' cos beta', sin alpha' cos beta', sin beta')`` with the *old* speed, then
+   v' = clip(v + dv, v_min, v_max);
+3. the sensor sweeps the horizontal segment flown (:func:`search_theory.sweep_windows`) and the
+   belief is updated by eq. 14, UAV after UAV so that overlaps are credited once (§3.1.6); the
+   step's POS is what was found (eq. 12), POSC its running sum (eq. 13);
+4. the hidden target is detected with the probability the belief uses at its location: at reset
+   each env draws ``u ~ U(0, 1)`` and the target is found at the first step at which the
+   cumulative detection exponent at the target reaches ``-ln(1 - u)`` -- the same distribution
+   as a Bernoulli draw per step, without a random draw per step;
+5. constraints (eq. 20-24) are evaluated and flagged; the time model advances (eq. 17-18);
+   agents land, crash or run out of endurance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from poc_env import comms as comms_mod
+from poc_env import constraints as cons
+from poc_env.config import Scenario
+from poc_env.probability_map import Grid, build_prior
+from poc_env.search_theory import segment_pod, sweep_windows, window_size
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class Params:
+    """Constants of one scenario's dynamics (derived once from the config)."""
+
+    scenario: Scenario
+    grid: Grid
+    s: int  # sample points per cell side
+    n_agents: int
+    dt: float
+    prior: np.ndarray  # (ny, nx) default prior
+    takeoff: np.ndarray  # (n, 2)
+    landing: np.ndarray  # (n, 2)
+    bounds: tuple[float, float, float, float]  # operating area (eq. 20)
+    zones: cons.NoFlyZones
+    threat_centers: np.ndarray
+    threat_lambdas: np.ndarray
+    window: int  # side of the sensing window in fine cells
+    cutoff_m: float
+    horizon: int
+    switcher: comms_mod.Table2Switcher | None = field(default=None, compare=False)
+
+    @property
+    def fine_shape(self) -> tuple[int, int]:
+        return (self.grid.ny * self.s, self.grid.nx * self.s)
+
+
+def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
+    """Derive the constants of :func:`step` from a scenario (and an optional prior)."""
+    sc = scenario
+    grid = Grid.from_config(sc.map)
+    s = sc.sensor.samples_per_cell
+    u = sc.uav
+    dt = sc.episode.dt_s
+    cutoff = sc.sensor.cutoff_sweep_widths * sc.sensor.sweep_width_m
+    win = window_size(grid, s, u.max_speed_mps * dt, cutoff)
+    pts = np.vstack([np.asarray(sc.takeoff_m), np.asarray(sc.landing_m)])
+    x0, y0, x1, y1 = grid.bounds
+    m = sc.episode.boundary_margin_m
+    bounds = (
+        min(x0, pts[:, 0].min()) - m,
+        min(y0, pts[:, 1].min()) - m,
+        max(x1, pts[:, 0].max()) + m,
+        max(y1, pts[:, 1].max()) + m,
+    )
+    centers, lambdas = cons.threat_arrays(sc.map.threat_peaks)
+    horizon = sc.episode.horizon_steps or int(np.ceil(u.endurance_s / dt))
+    switcher = None
+    if sc.comms.topology == "table2":
+        switcher = comms_mod.Table2Switcher(
+            n_agents=sc.n_uavs, min_neighbours=sc.comms.min_neighbours
+        )
+    return Params(
+        scenario=sc,
+        grid=grid,
+        s=s,
+        n_agents=sc.n_uavs,
+        dt=dt,
+        prior=build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float),
+        takeoff=np.asarray(sc.takeoff_m, dtype=float),
+        landing=np.asarray(sc.landing_m, dtype=float),
+        bounds=bounds,
+        zones=cons.NoFlyZones.from_config(sc.map),
+        threat_centers=centers,
+        threat_lambdas=lambdas,
+        window=win,
+        cutoff_m=cutoff,
+        horizon=horizon,
+        switcher=switcher,
+    )
+
+
+@dataclass
+class State:
+    """Mutable state of ``E`` envs with ``N`` UAVs each (arrays lead with (E, N))."""
+
+    pos: np.ndarray  # (E, N, 3) x, y, z in metres
+    speed: np.ndarray  # (E, N) m/s
+    heading: np.ndarray  # (E, N) alpha, rad, from the x axis
+    pitch: np.ndarray  # (E, N) beta, rad
+    elapsed: np.ndarray  # (E, N) flight time in s (eq. 17)
+    flying: np.ndarray  # (E, N) bool
+    landed: np.ndarray  # (E, N) bool
+    crashed: np.ndarray  # (E, N) bool
+    left_home: np.ndarray  # (E, N) bool: has been farther than the landing radius
+    belief: np.ndarray  # (E, NY, NX) POC on the fine grid (eq. 14)
+    initial_mass: np.ndarray  # (E,)
+    posc: np.ndarray  # (E,) cumulative POS (eq. 13)
+    agent_pos: np.ndarray  # (E, N) POS credited to each UAV
+    target: np.ndarray  # (E, 2) hidden target
+    target_threshold: np.ndarray  # (E,) -ln(1 - u)
+    target_exponent: np.ndarray  # (E,) cumulative detection exponent at the target
+    detected: np.ndarray  # (E,) bool
+    detect_step: np.ndarray  # (E,) int, -1 until detected
+    step: np.ndarray  # (E,) int
+    links: np.ndarray  # (E, N, N) bool, active communication topology
+    topology: np.ndarray  # (E,) int topology code (Table 2) or -1 (auto)
+    violations: np.ndarray  # (E, N) int, cumulative constraint violations
+
+    @property
+    def n_envs(self) -> int:
+        return self.pos.shape[0]
+
+
+@dataclass
+class Events:
+    """What happened in one step (all arrays lead with (E,) or (E, N))."""
+
+    pos_agent: np.ndarray  # (E, N) POS found by each UAV this step
+    pos_team: np.ndarray  # (E,)
+    time_term: np.ndarray  # (E, N) eq. 25 time share dt / (0.85 T) of each flying UAV
+    overtime: np.ndarray  # (E, N) bool: flying beyond 0.85 T (eq. 18)
+    out_of_bounds: np.ndarray  # (E, N) bool (eq. 20, boundary)
+    no_fly: np.ndarray  # (E, N) bool (eq. 20, no-fly zones)
+    collision: np.ndarray  # (E, N) bool (eq. 21)
+    threat: np.ndarray  # (E, N) bool (eq. 23)
+    comms_ok: np.ndarray  # (E, N) bool (eq. 24, two-neighbour rule)
+    shielded: np.ndarray  # (E, N) bool
+    landed_now: np.ndarray  # (E, N) bool
+    crashed_now: np.ndarray  # (E, N) bool
+    detected_now: np.ndarray  # (E,) bool
+    connected: np.ndarray  # (E,) bool: swarm connected through relays
+
+    @property
+    def violation(self) -> np.ndarray:
+        """(E, N) bool: any safety or communication constraint violated this step."""
+        return self.out_of_bounds | self.no_fly | self.collision | self.threat | ~self.comms_ok
+
+
+def _draw_target(prior_fine: np.ndarray, h: float, origin, rng: np.random.Generator):
+    """A target position drawn from the fine prior: a sub-cell by mass, uniform inside it."""
+    flat = prior_fine.ravel()
+    k = int(rng.choice(flat.size, p=flat / flat.sum()))
+    j, i = divmod(k, prior_fine.shape[1])
+    du, dv = rng.random(2)
+    return (origin[0] + (i + du) * h, origin[1] + (j + dv) * h)
+
+
+def initial(
+    params: Params,
+    rngs: list[np.random.Generator],
+    priors: np.ndarray | None = None,
+) -> State:
+    """A fresh state for ``len(rngs)`` envs: UAVs airborne over their airfields.
+
+    Take-off is instantaneous: each UAV starts at its take-off field at cruise altitude and
+    cruise speed, level, heading for the centre of the grid. ``priors`` (E, ny, nx) overrides
+    the scenario's prior per env (randomised priors); each env's hidden target and detection
+    threshold come from that env's generator, in that order.
+    """
+    e, n = len(rngs), params.n_agents
+    u = params.scenario.uav
+    s = params.s
+    if priors is None:
+        priors = np.broadcast_to(params.prior, (e, *params.prior.shape))
+    belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, axis=1), s, axis=2) / (s * s)
+    pos = np.zeros((e, n, 3))
+    pos[:, :, :2] = params.takeoff[None]
+    pos[:, :, 2] = u.cruise_altitude_m
+    cx, cy = np.mean(np.reshape(params.grid.bounds, (2, 2)), axis=0)
+    heading = np.arctan2(cy - params.takeoff[:, 1], cx - params.takeoff[:, 0])
+    h = params.grid.cell_m / s
+    target = np.zeros((e, 2))
+    threshold = np.zeros(e)
+    for k, rng in enumerate(rngs):
+        target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng)
+        threshold[k] = -np.log1p(-rng.random())
+    links = np.zeros((e, n, n), dtype=bool)
+    topology = np.full(e, -1, dtype=int)
+    state = State(
+        pos=pos,
+        speed=np.full((e, n), u.cruise_speed_mps),
+        heading=np.broadcast_to(heading, (e, n)).copy(),
+        pitch=np.zeros((e, n)),
+        elapsed=np.zeros((e, n)),
+        flying=np.ones((e, n), dtype=bool),
+        landed=np.zeros((e, n), dtype=bool),
+        crashed=np.zeros((e, n), dtype=bool),
+        left_home=np.zeros((e, n), dtype=bool),
+        belief=belief,
+        initial_mass=belief.sum(axis=(1, 2)),
+        posc=np.zeros(e),
+        agent_pos=np.zeros((e, n)),
+        target=target,
+        target_threshold=threshold,
+        target_exponent=np.zeros(e),
+        detected=np.zeros(e, dtype=bool),
+        detect_step=np.full(e, -1, dtype=int),
+        step=np.zeros(e, dtype=int),
+        links=links,
+        topology=topology,
+        violations=np.zeros((e, n), dtype=int),
+    )
+    _update_topology(params, state, rngs)
+    return state
+
+
+def _update_topology(params: Params, state: State, rngs) -> comms_mod.CommsTopology:
+    """Eq. 24 adjacency (with the failure model) and the active topology (§3.2.5)."""
+    cc = params.scenario.comms
+    xy = state.pos[:, :, :2]
+    adj = comms_mod.in_range(xy, cc.range_m, state.flying)
+    if cc.link_failure_prob > 0:
+        adj = np.stack(
+            [comms_mod.link_failures(adj[k], cc.link_failure_prob, r) for k, r in enumerate(rngs)]
+        )
+    if params.switcher is not None:
+        topo = params.switcher.switch(state.topology, adj, xy, state.flying)
+        state.topology = np.asarray(topo.topology)
+    else:
+        topo = comms_mod.auto_topology(adj, xy, state.flying, cc.min_neighbours)
+    state.links = topo.links
+    return topo
+
+
+def scale_actions(params: Params, actions: np.ndarray):
+    """Normalised actions (E, N, 3) in [-1, 1] -> increments (dv, d alpha, d beta)."""
+    u = params.scenario.uav
+    a = np.clip(actions, -1.0, 1.0)
+    dt = params.dt
+    return (
+        a[..., 0] * u.max_accel_mps2 * dt,
+        a[..., 1] * u.max_turn_rate_rad_s * dt,
+        a[..., 2] * u.max_pitch_rate_rad_s * dt,
+    )
+
+
+def kinematics(params: Params, state: State, dv, dalpha, dbeta, moving):
+    """Eq. 19 for the ``moving`` UAVs; returns the new position array (E, N, 3)."""
+    u = params.scenario.uav
+    alpha = np.where(moving, state.heading + dalpha, state.heading)
+    alpha = (alpha + np.pi) % TWO_PI - np.pi
+    beta = np.where(moving, np.clip(state.pitch + dbeta, -u.max_pitch_rad, u.max_pitch_rad), 0.0)
+    step = np.where(moving, state.speed * params.dt, 0.0)
+    new = state.pos.copy()
+    new[..., 0] += step * np.cos(alpha) * np.cos(beta)
+    new[..., 1] += step * np.sin(alpha) * np.cos(beta)
+    new[..., 2] = np.minimum(new[..., 2] + step * np.sin(beta), u.max_altitude_m)
+    state.heading = alpha
+    state.pitch = beta
+    state.speed = np.where(
+        moving, np.clip(state.speed + dv, u.min_speed_mps, u.max_speed_mps), state.speed
+    )
+    return new
+
+
+def sense(params: Params, state: State, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Sweep every UAV's segment a -> b (E, N, 2) over its env's belief; return POS (E, N).
+
+    UAVs are applied one after another (a loop over agents only), each vectorised over envs,
+    so a point two UAVs sweep in the same step is credited once, to the first.
+    """
+    sc = params.scenario
+    e, n = a.shape[:2]
+    found = np.zeros((e, n))
+    k = params.window
+    env = np.arange(e)[:, None, None]
+    dj = np.arange(min(k, params.fine_shape[0]))[None, :, None]
+    di = np.arange(min(k, params.fine_shape[1]))[None, None, :]
+    for i in range(n):
+        win = sweep_windows(
+            params.grid,
+            params.s,
+            a[:, i],
+            b[:, i],
+            sc.sensor.sweep_width_m,
+            sc.sensor.law,
+            params.cutoff_m,
+            size=k,
+        )
+        rows = win.j0[:, None, None] + dj
+        cols = win.i0[:, None, None] + di
+        view = state.belief[env, rows, cols]
+        hit = view * win.pod
+        found[:, i] = hit.sum(axis=(1, 2))
+        state.belief[env, rows, cols] = view - hit
+    return found
+
+
+def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
+    """Advance every env by ``dt`` (in place); see the module docstring for the order."""
+    sc = params.scenario
+    u = sc.uav
+    ep = sc.episode
+    moving = state.flying.copy()
+    dv, dalpha, dbeta = scale_actions(params, np.asarray(actions, dtype=float))
+    shielded = np.zeros_like(moving)
+    if sc.constraints.violation == "shield":
+        res = cons.shield_heading(
+            state.pos[..., :2],
+            state.heading,
+            state.speed * np.cos(state.pitch),
+            params.dt,
+            dalpha,
+            u.max_turn_rate_rad_s * params.dt,
+            zones=params.zones if len(params.zones) else None,
+            bounds=params.bounds,
+            d_s=sc.constraints.safety_distance_m,
+            active=moving,
+            threat=(params.threat_centers, params.threat_lambdas, sc.map.threat_threshold)
+            if len(params.threat_lambdas)
+            else None,
+        )
+        shielded = res.shielded & moving
+        dalpha = np.where(moving, res.turn, dalpha)
+    a2 = state.pos[..., :2].copy()
+    new = kinematics(params, state, dv, dalpha, dbeta, moving)
+    b2 = new[..., :2]
+    found = sense(params, state, a2, b2)
+    state.pos = new
+    state.agent_pos += found
+    team = found.sum(axis=1)
+    state.posc += team
+
+    # hidden target (same law and cut-off as the belief, at its exact position)
+    p_t = segment_pod(
+        state.target[:, None, :],
+        a2,
+        b2,
+        sc.sensor.sweep_width_m,
+        sc.sensor.law,
+        params.cutoff_m,
+        params.grid.cell_m,
+    )
+    p_t = np.where(moving, np.minimum(p_t, 1.0), 0.0)
+    with np.errstate(divide="ignore"):
+        state.target_exponent += -np.log1p(-p_t).sum(axis=1)
+    detected_now = ~state.detected & (state.target_exponent >= state.target_threshold)
+    state.detected |= detected_now
+    state.detect_step = np.where(detected_now, state.step + 1, state.detect_step)
+
+    # time model (eq. 17-18)
+    state.elapsed += np.where(moving, params.dt, 0.0)
+    usable = u.usable_endurance_s
+    overtime = moving & (state.elapsed > usable)
+    time_term = np.where(moving, params.dt / usable, 0.0)
+
+    # constraints (eq. 20-24)
+    xy = state.pos[..., :2]
+    oob = moving & cons.outside_boundary(xy, params.bounds)
+    nofly = moving & params.zones.segment_crosses(a2, b2) if len(params.zones) else oob & False
+    collision, _ = cons.separation_violations(xy, sc.constraints.safety_distance_m, moving)
+    collision &= moving
+    if len(params.threat_lambdas):
+        threat = moving & cons.threat_violation(
+            xy, params.threat_centers, params.threat_lambdas, sc.map.threat_threshold
+        )
+    else:
+        threat = np.zeros_like(moving)
+    topo = _update_topology(params, state, rngs)
+    adj = comms_mod.in_range(xy, sc.comms.range_m, moving)
+    comms_ok = comms_mod.two_neighbour_ok(adj, sc.comms.min_neighbours, moving) | ~moving
+    events = Events(
+        pos_agent=found,
+        pos_team=team,
+        time_term=time_term,
+        overtime=overtime,
+        out_of_bounds=oob,
+        no_fly=nofly,
+        collision=collision,
+        threat=threat,
+        comms_ok=comms_ok,
+        shielded=shielded,
+        landed_now=np.zeros_like(moving),
+        crashed_now=np.zeros_like(moving),
+        detected_now=detected_now,
+        connected=np.asarray(topo.connected),
+    )
+    state.violations += events.violation & moving
+
+    # landing, crashes, endurance
+    dist = np.hypot(*(xy - params.landing[None]).transpose(2, 0, 1))
+    state.left_home |= moving & (dist > ep.landing_radius_m)
+    landed_now = (
+        moving
+        & state.left_home
+        & (dist <= ep.landing_radius_m)
+        & (state.pos[..., 2] <= ep.landing_max_altitude_m)
+    )
+    crashed_now = (
+        moving & ~landed_now & ((state.pos[..., 2] <= 0.0) | (state.elapsed >= u.endurance_s))
+    )
+    if sc.constraints.violation == "terminate":
+        crashed_now |= moving & ~landed_now & (oob | nofly | collision | threat)
+    state.landed |= landed_now
+    state.crashed |= crashed_now
+    state.flying &= ~(landed_now | crashed_now)
+    events.landed_now = landed_now
+    events.crashed_now = crashed_now
+    state.step += 1
+    return events
