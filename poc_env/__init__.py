@@ -4,4 +4,38 @@ from poc_env.config import Scenario, load_scenario
 
 __version__ = "0.1.0"
 
-__all__ = ["Scenario", "__version__", "load_scenario"]
+ENV_ID = "poc_env/UAVSearch-v0"
+
+
+def parallel_env(scenario="paper_6_2", render_mode=None, **overrides):
+    """The PettingZoo parallel environment (see :class:`poc_env.uav_env.UAVSearchParallelEnv`)."""
+    from poc_env.uav_env import UAVSearchParallelEnv
+
+    return UAVSearchParallelEnv(scenario=scenario, render_mode=render_mode, **overrides)
+
+
+def env(scenario="paper_6_2", render_mode=None, **overrides):
+    """The PettingZoo AEC environment (the parallel env through ``parallel_to_aec``)."""
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    return parallel_to_aec(parallel_env(scenario, render_mode, **overrides))
+
+
+def _register() -> None:
+    """Register ``poc_env/UAVSearch-v0`` with gymnasium and PettingZoo (when available)."""
+    import gymnasium
+
+    if ENV_ID not in gymnasium.registry:
+        gymnasium.register(ENV_ID, entry_point="poc_env.gym_env:UAVSearchGym")
+    try:
+        from pettingzoo.env_registry.registration import _get_registry, register
+    except ImportError:  # PettingZoo < 1.27 has no registry
+        return
+    for kind, entry in (("parallel", "parallel_env"), ("aec", "env")):
+        if ENV_ID not in _get_registry(kind):
+            register(kind, ENV_ID, entry_point=f"poc_env.uav_search_v0:{entry}")
+
+
+_register()
+
+__all__ = ["ENV_ID", "Scenario", "__version__", "env", "load_scenario", "parallel_env"]

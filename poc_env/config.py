@@ -327,8 +327,12 @@ class RewardConfig:
     beta: float = _f(default=0.0)
     #: ``team`` (every agent gets the swarm's POS) or ``individual`` (own POS only).
     credit: str = _f(default="team")
+    #: per step and agent, for each step with a safety or communication violation.
     violation_penalty: float = _f(default=0.01)
+    #: per step and agent flying beyond 0.85 T (eq. 18).
     overtime_penalty: float = _f(default=0.01)
+    #: once, when an agent crashes (ground, endurance, or a violation in ``terminate`` mode).
+    crash_penalty: float = _f(default=0.1)
 
     def __post_init__(self) -> None:
         check_positive("alpha", self.alpha, allow_zero=True)
@@ -336,6 +340,7 @@ class RewardConfig:
         _choice("credit", self.credit, ("team", "individual"))
         check_positive("violation_penalty", self.violation_penalty, allow_zero=True)
         check_positive("overtime_penalty", self.overtime_penalty, allow_zero=True)
+        check_positive("crash_penalty", self.crash_penalty, allow_zero=True)
 
 
 @dataclass(frozen=True)
