@@ -119,3 +119,19 @@ def vectors(params: Params, state: State) -> np.ndarray:
     v[..., 12] = state.flying
     v[..., 13] = (state.step / params.horizon)[:, None]
     return np.clip(v, VECTOR_LOW, VECTOR_HIGH).astype(np.float32)
+
+
+def decode_vector(params: Params, vec: np.ndarray) -> dict[str, np.ndarray]:
+    """Physical quantities back from state vectors (..., VECTOR_SIZE): the inverse of
+    :func:`vectors` for position (m), altitude (m), speed (m/s), heading and pitch (rad)."""
+    u = params.scenario.uav
+    bx0, by0, bx1, by1 = params.bounds
+    v = np.asarray(vec, dtype=float)
+    return {
+        "xy": np.stack([bx0 + v[..., 0] * (bx1 - bx0), by0 + v[..., 1] * (by1 - by0)], -1),
+        "z": v[..., 2] * u.max_altitude_m,
+        "speed": u.min_speed_mps + v[..., 3] * (u.max_speed_mps - u.min_speed_mps),
+        "heading": np.arctan2(v[..., 4], v[..., 5]),
+        "pitch": v[..., 6] * u.max_pitch_rad,
+        "flying": v[..., 12] > 0.5,
+    }
