@@ -35,7 +35,7 @@ from poc_env import comms as comms_mod
 from poc_env import constraints as cons
 from poc_env.config import Scenario
 from poc_env.probability_map import Grid, build_prior
-from poc_env.search_theory import segment_pod, sweep_windows, window_size
+from poc_env.search_theory import segment_pod, sweep_segments, window_size
 
 TWO_PI = 2.0 * np.pi
 
@@ -288,34 +288,20 @@ def kinematics(params: Params, state: State, dv, dalpha, dbeta, moving):
 def sense(params: Params, state: State, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Sweep every UAV's segment a -> b (E, N, 2) over its env's belief; return POS (E, N).
 
-    UAVs are applied one after another (a loop over agents only), each vectorised over envs,
-    so a point two UAVs sweep in the same step is credited once, to the first.
+    One call of the fused kernel :func:`search_theory.sweep_segments`: UAVs of an env are applied
+    one after another, so a point two UAVs sweep in the same step is credited once, to the first.
     """
-    sc = params.scenario
-    e, n = a.shape[:2]
-    found = np.zeros((e, n))
-    k = params.window
-    env = np.arange(e)[:, None, None]
-    dj = np.arange(min(k, params.fine_shape[0]))[None, :, None]
-    di = np.arange(min(k, params.fine_shape[1]))[None, None, :]
-    for i in range(n):
-        win = sweep_windows(
-            params.grid,
-            params.s,
-            a[:, i],
-            b[:, i],
-            sc.sensor.sweep_width_m,
-            sc.sensor.law,
-            params.cutoff_m,
-            size=k,
-        )
-        rows = win.j0[:, None, None] + dj
-        cols = win.i0[:, None, None] + di
-        view = state.belief[env, rows, cols]
-        hit = view * win.pod
-        found[:, i] = hit.sum(axis=(1, 2))
-        state.belief[env, rows, cols] = view - hit
-    return found
+    sensor = params.scenario.sensor
+    return sweep_segments(
+        state.belief,
+        params.grid,
+        params.s,
+        a,
+        b,
+        sensor.sweep_width_m,
+        sensor.law,
+        params.cutoff_m,
+    )
 
 
 def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
