@@ -53,6 +53,27 @@ def cmd_survey(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_render(args: argparse.Namespace) -> int:
+    from poc_env.config import load_scenario
+    from poc_env.errors import ConfigError
+    from poc_env.rendering import random_policy, render_episode
+
+    policies = {"random": random_policy}
+    if args.policy not in policies:
+        raise ConfigError("policy", args.policy, "one of " + ", ".join(policies))
+    sc = load_scenario(args.scenario)
+    path = render_episode(
+        sc,
+        policies[args.policy],
+        args.out,
+        seed=args.seed,
+        max_steps=args.max_steps,
+        every=args.every,
+    )
+    print(f"wrote {path}")
+    return 0
+
+
 def cmd_figures(args: argparse.Namespace) -> int:
     from poc_env.figures import pattern_gallery
 
@@ -86,6 +107,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--regions", default=None, help="region plan: built-in name or YAML path")
     p.add_argument("--out", default=None, help="folder for survey.csv / .txt / .png")
     p.set_defaults(func=cmd_survey)
+
+    p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")
+    p.add_argument("--scenario", default="small", help="built-in name or YAML path")
+    p.add_argument("--policy", default="random", help="random")
+    p.add_argument("--out", default="out/episode.gif")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-steps", type=int, default=None)
+    p.add_argument("--every", type=int, default=1, help="draw a frame every N steps")
+    p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("figures", help="regenerate the README's figures")
     p.add_argument("--out", default="docs/img")

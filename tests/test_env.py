@@ -30,8 +30,10 @@ def test_gymnasium_view_passes_checkers():
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gymnasium.make(poc_env.ENV_ID, scenario="small")
-    check_env(env.unwrapped, skip_render_check=True)
+    env = gymnasium.make(poc_env.ENV_ID, scenario="small", render_mode="rgb_array")
+    check_env(env.unwrapped)
+    frame = env.unwrapped.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3
     sb3_check_env(gymnasium.make(poc_env.ENV_ID, scenario="small").unwrapped)
 
 
@@ -152,6 +154,18 @@ def test_bad_overrides():
         poc_env.parallel_env("small", uav__endurance_h=-1)
     with pytest.raises(ConfigError, match="obs_type"):
         poc_env.parallel_env("small", obs_type="pixels")
+
+
+def test_cli_render_writes_a_gif(tmp_path):
+    from PIL import Image
+
+    from poc_env.cli import main
+
+    out = tmp_path / "ep.gif"
+    assert main(["render", "--scenario", "small", "--max-steps", "6", "--out", str(out)]) == 0
+    with Image.open(out) as im:
+        assert im.n_frames == 7
+    assert main(["render", "--policy", "genius", "--out", str(out)]) == 2
 
 
 def test_pickling_round_trip():
