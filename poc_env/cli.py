@@ -13,6 +13,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from poc_env.errors import PocEnvError
 
 
@@ -53,15 +55,42 @@ def cmd_survey(args: argparse.Namespace) -> int:
     return 0
 
 
+def _state_policy(scenario, name: str):
+    """Wrap an observation-based policy of ``agents`` as ``policy_fn(state, rng)`` for render."""
+    from poc_env import simulator as sim
+    from poc_env.observations import vectors
+
+    params = sim.make_params(scenario)
+    agents = [f"uav_{i}" for i in range(params.n_agents)]
+    holder: dict = {}
+
+    def policy_fn(state, rng):
+        if "pol" not in holder or int(state.step[0]) == 0:
+            from agents.baselines import lawnmower_policy
+
+            holder["pol"] = lawnmower_policy(params, agents)
+        vec = vectors(params, state)[0]
+        obs = {a: {"vector": vec[i]} for i, a in enumerate(agents) if state.flying[0, i]}
+        acts, _ = holder["pol"].predict(obs)
+        out = np.zeros((1, params.n_agents, 3))
+        for i, a in enumerate(agents):
+            if a in acts:
+                out[0, i] = acts[a]
+        return out
+
+    del name
+    return policy_fn
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     from poc_env.config import load_scenario
     from poc_env.errors import ConfigError
     from poc_env.rendering import random_policy, render_episode
 
-    policies = {"random": random_policy}
+    sc = load_scenario(args.scenario)
+    policies = {"random": random_policy, "lawnmower": _state_policy(sc, "lawnmower")}
     if args.policy not in policies:
         raise ConfigError("policy", args.policy, "one of " + ", ".join(policies))
-    sc = load_scenario(args.scenario)
     path = render_episode(
         sc,
         policies[args.policy],
@@ -110,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")
     p.add_argument("--scenario", default="small", help="built-in name or YAML path")
-    p.add_argument("--policy", default="random", help="random")
+    p.add_argument("--policy", default="lawnmower", help="lawnmower or random")
     p.add_argument("--out", default="out/episode.gif")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-steps", type=int, default=None)
