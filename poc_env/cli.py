@@ -103,6 +103,17 @@ def cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Run a benchmark in a fresh interpreter, so one-thread settings precede numpy's import."""
+    import os
+    import subprocess
+
+    modules = {"env": "poc_env.bench_env"}
+    env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    cmd = [sys.executable, "-m", modules[args.what], *args.rest]
+    return subprocess.call(cmd, env=env)
+
+
 def cmd_figures(args: argparse.Namespace) -> int:
     from poc_env.figures import pattern_gallery
 
@@ -145,6 +156,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=int, default=None)
     p.add_argument("--every", type=int, default=1, help="draw a frame every N steps")
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
+    p.add_argument("what", choices=["env"], help="env: agent-steps/s of the core and the env")
+    p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
+    p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("figures", help="regenerate the README's figures")
     p.add_argument("--out", default="docs/img")

@@ -392,15 +392,19 @@ def clip_length(a, b, lo, hi):
     return _clip_length_ufunc(*_xy(a), *_xy(b), *_xy(lo), *_xy(hi))
 
 
-def segment_pod(points, a, b, sweep_width_m, law="inverse_cube", cutoff_m=np.inf, cell_m=None):
+def segment_pod(
+    points, a, b, sweep_width_m, law="inverse_cube", cutoff_m=np.inf, cell_m=None, origin=(0, 0)
+):
     """Detection probability of each point for one step flown straight from ``a`` to ``b``.
 
     ``points`` (..., 2) broadcast against ``a`` and ``b``. Points farther than ``cutoff_m`` from
     the segment get 0 (the documented tail cut-off of the inverse-cube law, see
     :func:`cutoff_error`). For the ``exponential`` law ``cell_m`` is needed: the effort ``W L``
     the segment spends in a point's grid cell (cells aligned on multiples of ``cell_m`` from the
-    origin) is spread over that cell. ``definite_range`` returns a boolean array.
+    grid's ``origin``) is spread over that cell. ``definite_range`` returns a boolean array.
     """
+    o = np.asarray(origin, dtype=float)
+    points, a, b = (np.asarray(v, dtype=float) - o for v in (points, a, b))
     code = _LAW_CODE[_check_law(law)]
     if code == _EXPONENTIAL and cell_m is None:
         raise ConfigError("cell_m", cell_m, "the cell size when law is exponential")
@@ -494,7 +498,14 @@ def sweep_windows(
     ys = y0 + (j0[:, None] + np.arange(ky) + 0.5) * h  # (B, ky)
     pts = np.stack(np.broadcast_arrays(xs[:, None, :], ys[:, :, None]), axis=-1)
     pod = segment_pod(
-        pts, a[:, None, None, :], b[:, None, None, :], sweep_width_m, law, cutoff_m, grid.cell_m
+        pts,
+        a[:, None, None, :],
+        b[:, None, None, :],
+        sweep_width_m,
+        law,
+        cutoff_m,
+        grid.cell_m,
+        grid.origin_m,
     )
     return SearchWindow(j0=j0, i0=i0, pod=np.asarray(pod, dtype=float))
 
@@ -702,10 +713,12 @@ def sweep_segments(
         raise ValueError(
             f"belief_fine has shape {belief.shape}, grid needs {grid.ny * s, grid.nx * s}"
         )
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    b = np.ascontiguousarray(b, dtype=np.float64)
+    # grid-relative coordinates: exponential-law cells are aligned on the grid's origin
+    origin = np.asarray(grid.origin_m, dtype=np.float64)
+    a = np.ascontiguousarray(np.asarray(a, dtype=np.float64) - origin)
+    b = np.ascontiguousarray(np.asarray(b, dtype=np.float64) - origin)
     found = np.empty(a.shape[:2])
-    x0, y0 = grid.origin_m
+    x0, y0 = 0.0, 0.0
     _sweep_kernel(
         belief,
         a,

@@ -14,7 +14,7 @@ One step, for each flying UAV (eq. numbers are the paper's):
 2. eq. 19: alpha' = alpha + d alpha, beta' = clip(beta + d beta), the position moves by
    ``v dt (cos alpha' cos beta', sin alpha' cos beta', sin beta')`` with the *old* speed, then
    v' = clip(v + dv, v_min, v_max);
-3. the sensor sweeps the horizontal segment flown (:func:`search_theory.sweep_windows`) and the
+3. the sensor sweeps the horizontal segment flown (:func:`search_theory.sweep_segments`) and the
    belief is updated by eq. 14, UAV after UAV so that overlaps are credited once (§3.1.6); the
    step's POS is what was found (eq. 12), POSC its running sum (eq. 13);
 4. the hidden target is detected with the probability the belief uses at its location: at reset
@@ -348,6 +348,7 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         sc.sensor.law,
         params.cutoff_m,
         params.grid.cell_m,
+        params.grid.origin_m,
     )
     p_t = np.where(moving, np.minimum(p_t, 1.0), 0.0)
     with np.errstate(divide="ignore"):

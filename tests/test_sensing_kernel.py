@@ -164,3 +164,19 @@ def test_one_minus_exp_neg_is_expm1_to_two_ulp():
     assert np.all(np.abs(got - ref) <= 2 * np.spacing(ref))
     assert _one_minus_exp_neg(math.inf) == 1.0
     assert _one_minus_exp_neg(0.0) == 0.0
+
+
+def test_exponential_cells_are_aligned_on_the_grid_origin():
+    """Random search spreads a step's effort over the grid cell it is in, wherever the grid is."""
+    from poc_env.probability_map import Grid
+    from poc_env.search_theory import sweep_segments
+
+    grid = Grid(4, 4, 1000.0, origin_m=(1300.0, 700.0))
+    s = 2
+    belief = np.ones((1, 8, 8))
+    a = np.array([[[2400.0, 2200.0]]])  # inside cell (row 1, col 1) of this grid
+    b = np.array([[[2600.0, 2200.0]]])
+    sweep_segments(belief, grid, s, a, b, 500.0, "exponential", np.inf)
+    hit = belief[0] < 1.0
+    assert hit[2:4, 2:4].all() and hit.sum() == 4  # exactly that cell's 2 x 2 samples
+    np.testing.assert_allclose(belief[0][2:4, 2:4], np.exp(-500.0 * 200.0 / 1e6))

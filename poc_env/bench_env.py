@@ -1,6 +1,6 @@
 """Agent-steps per second of the batched core (1, 64, 256 envs) and of MPE2 simple_spread.
 
-    python benchmarks/bench_env.py [--scenario paper_6_2] [--envs 1 64 256] [--runs 5]
+    poc-env bench env [--scenario paper_6_2] [--envs 1 64 256] [--runs 5]
 
 One line per figure, each the median of ``--runs`` timed runs, on one core
 (``OMP_NUM_THREADS=1``, ``NUMBA_NUM_THREADS=1``, set before numpy is imported). A warm-up run
