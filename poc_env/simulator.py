@@ -34,6 +34,7 @@ import numpy as np
 from poc_env import comms as comms_mod
 from poc_env import constraints as cons
 from poc_env.config import Scenario
+from poc_env.errors import ConfigError
 from poc_env.probability_map import Grid, build_prior
 from poc_env.search_theory import segment_pod, sweep_segments, window_size
 
@@ -86,6 +87,13 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
     )
     centers, lambdas = cons.threat_arrays(sc.map.threat_peaks)
     horizon = sc.episode.horizon_steps or int(np.ceil(u.endurance_s / dt))
+    if sc.comms.belief_sharing != "global":
+        raise ConfigError(
+            "comms.belief_sharing",
+            sc.comms.belief_sharing,
+            "'global' (per-UAV beliefs merged "
+            "through the topology, 'comms', are not implemented yet)",
+        )
     switcher = None
     if sc.comms.topology == "table2":
         switcher = comms_mod.Table2Switcher(
@@ -375,7 +383,6 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         )
     else:
         threat = np.zeros_like(moving)
-    topo = _update_topology(params, state, rngs)
     adj = comms_mod.in_range(xy, sc.comms.range_m, moving)
     comms_ok = comms_mod.two_neighbour_ok(adj, sc.comms.min_neighbours, moving) | ~moving
     events = Events(
@@ -392,7 +399,7 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         landed_now=np.zeros_like(moving),
         crashed_now=np.zeros_like(moving),
         detected_now=detected_now,
-        connected=np.asarray(topo.connected),
+        connected=np.ones(moving.shape[0], dtype=bool),
     )
     state.violations += events.violation & moving
 
@@ -415,5 +422,7 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     state.flying &= ~(landed_now | crashed_now)
     events.landed_now = landed_now
     events.crashed_now = crashed_now
+    # the topology among the UAVs still flying after this step (§3.2.5)
+    events.connected = np.asarray(_update_topology(params, state, rngs).connected)
     state.step += 1
     return events

@@ -70,3 +70,19 @@ def test_eq19_kinematics_one_step():
         st.pos[0, 0, :2], x0[:2] + v0 * p.dt * np.array([np.cos(alpha), np.sin(alpha)])
     )  # eq. 19 uses the old speed with the new heading
     assert st.speed[0, 0] == pytest.approx(min(v0 + u.max_accel_mps2 * p.dt, u.max_speed_mps))
+
+
+def test_topology_excludes_uavs_that_finished_this_step():
+    p = sim.make_params(load_scenario("small", {"episode.horizon_steps": 3}))
+    rngs = [np.random.default_rng(0)]
+    st = sim.initial(p, rngs)
+    st.left_home[:] = True  # over the airfield after a flight: lands on the next step
+    sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
+    assert st.landed.all() and not st.links.any()
+
+
+def test_unimplemented_belief_sharing_is_a_clear_error():
+    from poc_env.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="belief_sharing"):
+        sim.make_params(load_scenario("small", {"comms.belief_sharing": "comms"}))
