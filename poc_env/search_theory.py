@@ -770,24 +770,37 @@ def sweep_track(
     return float(found.sum())
 
 
-def cutoff_error(cutoff_sweep_widths: float, coverage: float = 1.0, n: int = 4001) -> float:
+def cutoff_error(
+    cutoff_sweep_widths: float,
+    coverage: float = 1.0,
+    step_sweep_widths: float = 0.0,
+    n: int = 4001,
+) -> float:
     """Relative error of eq. 10 when the inverse-cube tail is cut at ``cutoff x W``.
 
-    Parallel infinite tracks at spacing S = W / coverage; the mean POD over one spacing with the
-    lateral range exponents of all tracks within the cut-off, against erf(sqrt(pi)/2 C). The
-    cut-off drops about ``W^2 / (2 pi S c)`` of detection exponent per point.
+    Parallel infinite tracks at spacing S = W / coverage, flown in steps of ``step x W``: a point
+    keeps every step within ``c`` of it, i.e. of a track at lateral distance ``d <= c`` the part
+    ``+- sqrt(c^2 - d^2)`` inside the disc of radius ``c`` plus, on average, half a step on each
+    side (steps reaching into the disc count whole); tracks farther than ``c`` give nothing.
+    Returns the relative shortfall of the mean POD at ``n`` evenly spaced points across one
+    spacing against the uncut tracks at the same points -- for large ``n`` that is
+    erf(sqrt(pi)/2 C) (eq. 10); ``n = s`` gives the shortfall at the environment's sample
+    points when a cell is one spacing wide. With ``step = 0`` it is the disc alone.
     """
     check_positive("cutoff_sweep_widths", cutoff_sweep_widths)
+    check_positive("step_sweep_widths", step_sweep_widths, allow_zero=True)
     w = 1.0
     s = w / coverage
     c = cutoff_sweep_widths * w
     x = (np.arange(n) + 0.5) / n * s
     k = np.arange(-int(c / s) - 2, int(c / s) + 3)
     d = x[:, None] - k[None, :] * s
-    f = np.where(np.abs(d) <= c, w * w / (4 * np.pi * d * d), 0.0)
+    half = np.sqrt(np.maximum(c * c - d * d, 0.0)) + 0.5 * step_sweep_widths * w
+    f = np.where(np.abs(d) <= c, segment_exponent(d, -half, half, w), 0.0)
     cut = np.mean(-np.expm1(-f.sum(axis=1)))
-    exact = float(pod_parallel(w, s))
-    return float((exact - cut) / exact)
+    # all tracks, uncut: sum_k 1 / (x - kS)^2 = (pi / S)^2 / sin^2(pi x / S)
+    full = np.mean(-np.expm1(-w * w * np.pi / (4 * s * s * np.sin(np.pi * x / s) ** 2)))
+    return float((full - cut) / full)
 
 
 # --------------------------------------------------------------------------- eq. 15-16

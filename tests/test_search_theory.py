@@ -148,21 +148,29 @@ def test_composition_identity_segments_reproduce_eq10(ratio):
 def test_cutoff_error_is_small_and_shrinks():
     errs = [cutoff_error(c, 1.0) for c in (2, 4, 8)]
     assert errs[0] > errs[1] > errs[2] > 0
-    assert errs[1] < 0.012  # the default 4 W cut-off costs about 1 % of eq. 10 at S = W
+    # the default 4 W cut-off with the env's 3 km steps at W = 5 km: ~1.6 % of eq. 10 at S = W
+    assert cutoff_error(4.0, 1.0, 0.6) < 0.017
+    assert cutoff_error(4.0, 1.0, 0.6) < cutoff_error(4.0, 1.0, 0.0)  # longer steps keep more
 
 
 def test_cutoff_error_matches_a_stepwise_sweep():
     """The documented cut-off error is what the step-wise sweep actually loses."""
     w, s = 5000.0, 4
-    grid = Grid(20, 20, 5000.0)
-    track = _lawnmower(w, 0.0, 100_000.0, -40_000.0, 140_000.0)
+    grid = Grid(40, 40, 5000.0)  # 200 km: the measured middle is 75 km from the pattern's edges
+    track = _lawnmower(w, 0.0, 200_000.0, -40_000.0, 240_000.0)
     pods = []
     for cut in (np.inf, 4 * w):
-        fine = np.full((20 * s, 20 * s), 1.0)
+        fine = np.full((40 * s, 40 * s), 1.0)
         sweep_track(fine, grid, s, track, w, "inverse_cube", cutoff_m=cut, step_m=4000.0)
-        pods.append(1.0 - fine[20:60, 20:60].mean())
-    loss = (pods[0] - pods[1]) / pods[0]
-    assert loss == pytest.approx(cutoff_error(4.0, 1.0), abs=0.004)
+        pods.append(1.0 - fine[60:100, 60:100].mean())
+    # infinitely many uncut tracks at the 4 x 4 sample points (1/8, 3/8, 5/8, 7/8 of S):
+    # sum_k 1 / (x - kS)^2 = (pi / S)^2 / sin^2(pi x / S)
+    phase = (np.arange(4) + 0.5) / 4
+    uncut = np.mean(1 - np.exp(-np.pi / (4 * np.sin(np.pi * phase) ** 2)))
+    assert pods[0] == pytest.approx(uncut, rel=0.01)  # (the pattern is 200 km, not infinite)
+    # with the cut-off no track farther than 4 W counts, so the finite pattern is exact here
+    expected = uncut * (1 - cutoff_error(4.0, 1.0, step_sweep_widths=0.8, n=4))
+    assert pods[1] == pytest.approx(expected, rel=5e-4)
 
 
 @settings(max_examples=25, deadline=None)
