@@ -114,6 +114,37 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return subprocess.call(cmd, env=env)
 
 
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from agents.evaluate import evaluate, plot_curves
+    from poc_env.config import load_scenario, write_text_atomic
+
+    sc = load_scenario(args.scenario)
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    ev = evaluate(
+        sc,
+        names,
+        episodes=args.episodes,
+        seed0=args.seed,
+        workers=args.workers,
+        map_file=args.map_file,
+        progress=not args.quiet,
+    )
+    print(
+        f"{sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
+        f"{args.seed + args.episodes - 1}"
+    )
+    print(ev.table())
+    if args.out:
+        out = Path(args.out)
+        for p in (
+            write_text_atomic(out / "evaluate.csv", ev.to_csv()),
+            write_text_atomic(out / "evaluate.txt", ev.table() + "\n"),
+            plot_curves(ev, out / "posc_over_time.png", sc.episode.dt_s),
+        ):
+            print(f"wrote {p}")
+    return 0
+
+
 def cmd_figures(args: argparse.Namespace) -> int:
     from poc_env.figures import pattern_gallery
 
@@ -156,6 +187,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=int, default=None)
     p.add_argument("--every", type=int, default=1, help="draw a frame every N steps")
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("evaluate", help="score policies on the same episodes")
+    _add_scenario(p, "paper_6_2")
+    p.add_argument("--policies", default="lawnmower,random", help="comma-separated names")
+    p.add_argument("--episodes", type=int, default=10)
+    p.add_argument("--seed", type=int, default=1000, help="first episode seed")
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_evaluate)
 
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument("what", choices=["env"], help="env: agent-steps/s of the core and the env")

@@ -1,0 +1,214 @@
+"""Score policies on the same episodes: mean POSC with 95 % intervals, detection, violations.
+
+Every policy runs the same ``episodes`` seeds (``seed0 .. seed0 + episodes - 1``); each episode
+creates a fresh environment reset with its seed, so results do not depend on ``workers`` or on
+the order in which episodes run. Besides POSC (eq. 13) the table reports the hidden target's
+detection rate and mean time to detection, constraint-violation steps, crashes, and the
+physical optimum for the swarm's largest possible effort (every UAV searching for the whole
+usable endurance 0.85 T at v_s), an upper bound no policy can exceed.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.base import LawnmowerPolicy, Policy, RandomPolicy
+from poc_env.errors import ConfigError
+
+POLICIES: dict[str, Callable[[], Policy]] = {
+    "random": RandomPolicy,
+    "lawnmower": LawnmowerPolicy,
+}
+
+
+def make_policy(name: str) -> Policy:
+    """A fresh policy by name (see :data:`POLICIES`)."""
+    if name not in POLICIES:
+        raise ConfigError("policies", name, "one of " + ", ".join(sorted(POLICIES)))
+    return POLICIES[name]()
+
+
+@dataclass(frozen=True)
+class Episode:
+    policy: str
+    seed: int
+    posc: float
+    detected: bool
+    time_to_detection_s: float | None
+    violation_steps: int
+    crashed: int
+    landed: int
+    steps: int
+    posc_curve: tuple[float, ...] = field(repr=False)
+
+
+def run_episode(scenario: Any, policy: str, seed: int, map_file: str | None = None) -> Episode:
+    """One episode of ``policy`` on a fresh env reset with ``seed``."""
+    from poc_env.uav_env import UAVSearchParallelEnv
+
+    env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
+    pol = make_policy(policy)
+    obs, _ = env.reset(seed=seed)
+    pol.reset(env, seed)
+    curve = []
+    while env.agents:
+        actions, _ = pol.predict(obs)
+        obs, *_ = env.step(actions)
+        curve.append(float(env.sim_state.posc[0]))
+    st = env.sim_state
+    return Episode(
+        policy=policy,
+        seed=seed,
+        posc=float(st.posc[0]),
+        detected=bool(st.detected[0]),
+        time_to_detection_s=float(st.detect_step[0] * env.params.dt) if st.detected[0] else None,
+        violation_steps=int(st.violations[0].sum()),
+        crashed=int(st.crashed[0].sum()),
+        landed=int(st.landed[0].sum()),
+        steps=int(st.step[0]),
+        posc_curve=tuple(curve),
+    )
+
+
+def _run(args):
+    return run_episode(*args)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    scenario: str
+    episodes: tuple[Episode, ...]
+    bound: float
+    policies: tuple[str, ...]
+
+    def rows(self) -> list[dict[str, Any]]:
+        out = []
+        for p in self.policies:
+            eps = [e for e in self.episodes if e.policy == p]
+            x = np.array([e.posc for e in eps])
+            half = 1.96 * x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else 0.0
+            ttd = [e.time_to_detection_s for e in eps if e.time_to_detection_s is not None]
+            out.append(
+                {
+                    "policy": p,
+                    "episodes": len(eps),
+                    "posc_mean": float(x.mean()),
+                    "posc_ci95": float(half),
+                    "detection_rate": float(np.mean([e.detected for e in eps])),
+                    "time_to_detection_min": float(np.mean(ttd) / 60) if ttd else None,
+                    "violation_steps": float(np.mean([e.violation_steps for e in eps])),
+                    "crashed": float(np.mean([e.crashed for e in eps])),
+                    "landed": float(np.mean([e.landed for e in eps])),
+                    "bound": self.bound,
+                }
+            )
+        return out
+
+    def table(self) -> str:
+        head = (
+            f"{'policy':<14} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
+            f"{'viol.steps':>10} {'crashed':>8} {'landed':>7}"
+        )
+        lines = [head, "-" * len(head)]
+        for r in self.rows():
+            t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
+            lines.append(
+                f"{r['policy']:<14} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
+                f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
+                f"{r['crashed']:>8.2f} {r['landed']:>7.2f}"
+            )
+        lines.append("-" * len(head))
+        lines.append(
+            f"physical optimum for the swarm's largest effort (all UAVs searching 0.85 T): "
+            f"{self.bound:.4f}"
+        )
+        return "\n".join(lines)
+
+    def to_csv(self) -> str:
+        buf = io.StringIO()
+        rows = self.rows()
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+        return buf.getvalue()
+
+
+def effort_bound(scenario: Any, map_file: str | None = None) -> float:
+    """Physical optimum for every UAV searching its whole usable endurance at v_s."""
+    from poc_env.bound import physical_optimum
+    from poc_env.config import load_scenario
+    from poc_env.probability_map import Grid, build_prior
+
+    sc = load_scenario(scenario)
+    prior = build_prior(sc.map, map_file)
+    u = sc.uav
+    effort = sc.n_uavs * u.usable_endurance_s * u.search_speed_mps * sc.sensor.sweep_width_m
+    grid = Grid.from_config(sc.map)
+    return physical_optimum(prior, grid.cell_area_m2, effort, sc.sensor.law).pos
+
+
+def evaluate(
+    scenario: Any,
+    policies: Sequence[str],
+    episodes: int = 10,
+    seed0: int = 1000,
+    workers: int = 1,
+    map_file: str | None = None,
+    progress: bool = False,
+) -> Evaluation:
+    """Run every policy on the same seeds; see the module docstring."""
+    from poc_env.config import load_scenario
+
+    if episodes < 1:
+        raise ConfigError("episodes", episodes, "an integer >= 1")
+    if workers < 1:
+        raise ConfigError("workers", workers, "an integer >= 1")
+    for p in policies:
+        make_policy(p)
+    sc = load_scenario(scenario)
+    jobs = [(sc, p, seed0 + k, map_file) for p in policies for k in range(episodes)]
+    if workers == 1:
+        it = map(_run, jobs)
+    else:
+        pool = ProcessPoolExecutor(max_workers=workers)
+        it = pool.map(_run, jobs)
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(it, total=len(jobs), desc="episodes", unit="ep")
+    results = tuple(it)
+    if workers > 1:
+        pool.shutdown()
+    return Evaluation(sc.name, results, effort_bound(sc, map_file), tuple(policies))
+
+
+def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Path:
+    """POSC over time per policy (mean over episodes, shaded 95 % band)."""
+    from poc_env.plots import _figure, save_figure_atomic
+
+    fig = _figure((7.0, 4.5))
+    ax = fig.add_subplot()
+    for p in ev.policies:
+        curves = [e.posc_curve for e in ev.episodes if e.policy == p]
+        n = max(len(c) for c in curves)
+        arr = np.array([list(c) + [c[-1]] * (n - len(c)) for c in curves])
+        t = (np.arange(n) + 1) * dt_s / 60
+        m = arr.mean(axis=0)
+        h = 1.96 * arr.std(axis=0, ddof=1) / np.sqrt(len(arr)) if len(arr) > 1 else 0 * m
+        ax.plot(t, m, label=p)
+        ax.fill_between(t, m - h, m + h, alpha=0.2)
+    ax.axhline(ev.bound, color="k", ls="--", lw=0.8, label="physical optimum")
+    ax.set_xlabel("time / min")
+    ax.set_ylabel("POSC")
+    ax.set_title(f"{ev.scenario}: POSC over time ({len(ev.episodes)} episodes)")
+    ax.legend()
+    return save_figure_atomic(fig, path)
