@@ -4,7 +4,8 @@ The follower is how planned routes (the DE plan, lawnmowers, patterns) fly in th
 environment: each step it turns towards the current waypoint as far as the turn limit allows,
 holds the search speed on the pattern and the cruise speed in transit, and levels the pitch to
 hold the cruise altitude. A waypoint counts as reached when it is within half a step. After the
-last waypoint the UAV heads for its landing field.
+last waypoint -- or as soon as the remaining usable endurance (0.85 T, eq. 18) only just covers
+the flight home at cruise speed plus two steps -- the UAV heads for its landing field.
 """
 
 from __future__ import annotations
@@ -80,6 +81,11 @@ class WaypointFollower:
             reach = 0.5 * q["speed"] * self.params.dt
             while self.index[k] < len(wps) and np.hypot(*(wps[self.index[k]] - q["xy"])) <= reach:
                 self.index[k] += 1
+            # go home when the usable endurance (0.85 T, eq. 18) only just covers the way back
+            home = float(np.hypot(*(self.params.landing[k] - q["xy"])))
+            left = q["usable"] * u.usable_endurance_s
+            if left <= home / u.cruise_speed_mps + 2 * self.params.dt:
+                self.index[k] = len(wps)
             on_pattern = 0 < self.index[k] < len(wps)
             if on_pattern:  # pure pursuit along the leg: back onto the line, then along it
                 goal = _lookahead(wps[self.index[k] - 1], wps[self.index[k]], q["xy"], 2 * reach)

@@ -134,4 +134,5 @@ def decode_vector(params: Params, vec: np.ndarray) -> dict[str, np.ndarray]:
         "heading": np.arctan2(v[..., 4], v[..., 5]),
         "pitch": v[..., 6] * u.max_pitch_rad,
         "flying": v[..., 12] > 0.5,
+        "usable": v[..., 8],
     }

@@ -37,3 +37,15 @@ def test_lawnmower_flies_and_finds_more_than_random():
         return lambda obs: {a: rng.uniform(-1, 1, 3) * [1, 1, 0] for a in obs}
 
     assert run(lawn) > run(rand) > 0
+
+
+def test_lawnmower_returns_to_land_within_the_usable_endurance():
+    """The strips are too long for 3 h: the follower breaks off in time and every UAV lands."""
+    env = poc_env.parallel_env("paper_6_2")
+    obs, _ = env.reset(seed=0)
+    pol = lawnmower_policy(env.params, env.possible_agents)
+    while env.agents:
+        obs, *_ = env.step(pol.predict(obs)[0])
+    st = env.sim_state
+    assert st.landed.all() and not st.crashed.any()
+    assert st.elapsed.max() <= env.scenario.uav.usable_endurance_s + env.params.dt
