@@ -94,6 +94,8 @@ class WaypointFollower:
             else:
                 goal = self.params.landing[k]
             v = u.search_speed_mps if on_pattern else u.cruise_speed_mps
+            if self.index[k] >= len(wps) and home < 2 * u.cruise_speed_mps * self.params.dt:
+                v = u.min_speed_mps  # approach: slow down to land
             actions[agent] = steer(
                 self.params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v
             ).astype(np.float32)

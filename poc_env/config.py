@@ -355,8 +355,10 @@ class EpisodeConfig:
     detection_ends_episode: bool = _f(default=False)
     #: landing rule: within this horizontal distance of the landing field ...
     landing_radius_m: float = _f("landing_radius_km", KM, default=3 * KM)
-    #: ... at or below this altitude (default above the cruise altitude: no descent needed).
+    #: ... at or below this altitude (default above the cruise altitude: no descent needed) ...
     landing_max_altitude_m: float = _f("landing_max_altitude_m", 1.0, default=1500.0)
+    #: ... and at or below this speed (an approach: the UAV must slow down to land).
+    landing_max_speed_mps: float = _f("landing_max_speed_kmh", KMH, default=130 * KMH)
     #: the operating area (eq. 20's boundary) is the bounding box of the grid and the
     #: airfields, grown by this margin on every side.
     boundary_margin_m: float = _f("boundary_margin_km", KM, default=20 * KM)
@@ -365,6 +367,7 @@ class EpisodeConfig:
         check_positive("dt_s", self.dt_s)
         check_positive("landing_radius_km", self.landing_radius_m)
         check_positive("landing_max_altitude_m", self.landing_max_altitude_m)
+        check_positive("landing_max_speed_kmh", self.landing_max_speed_mps)
         check_positive("boundary_margin_km", self.boundary_margin_m, allow_zero=True)
         if self.horizon_steps is not None:
             _int("horizon_steps", self.horizon_steps, 1)

@@ -411,6 +411,7 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         & state.left_home
         & (dist <= ep.landing_radius_m)
         & (state.pos[..., 2] <= ep.landing_max_altitude_m)
+        & (state.speed <= ep.landing_max_speed_mps)
     )
     crashed_now = (
         moving & ~landed_now & ((state.pos[..., 2] <= 0.0) | (state.elapsed >= u.endurance_s))

@@ -103,9 +103,10 @@ class UAVSearchParallelEnv(ParallelEnv):
 
     An agent *terminates* when it lands (it has left the landing radius once and is back
     within ``episode.landing_radius_km`` of its landing field at or below
-    ``episode.landing_max_altitude_m``), crashes (altitude <= 0, endurance T exhausted, or
-    any violation in ``terminate`` mode), or, with ``episode.detection_ends_episode``, when
-    the target is detected. All remaining agents are *truncated* after
+    ``episode.landing_max_altitude_m`` and ``episode.landing_max_speed_kmh``: an approach),
+    crashes (altitude <= 0, endurance T exhausted, or any violation in ``terminate`` mode),
+    or, with ``episode.detection_ends_episode``, when the target is detected. All remaining
+    agents are *truncated* after
     ``episode.horizon_steps`` (default ``ceil(T / dt)``).
 
     ## Arguments

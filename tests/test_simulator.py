@@ -76,7 +76,8 @@ def test_topology_excludes_uavs_that_finished_this_step():
     p = sim.make_params(load_scenario("small", {"episode.horizon_steps": 3}))
     rngs = [np.random.default_rng(0)]
     st = sim.initial(p, rngs)
-    st.left_home[:] = True  # over the airfield after a flight: lands on the next step
+    st.left_home[:] = True  # over the airfield after a flight, slow: lands on the next step
+    st.speed[:] = p.scenario.uav.min_speed_mps
     sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
     assert st.landed.all() and not st.links.any()
 
@@ -86,3 +87,12 @@ def test_unimplemented_belief_sharing_is_a_clear_error():
 
     with pytest.raises(ConfigError, match="belief_sharing"):
         sim.make_params(load_scenario("small", {"comms.belief_sharing": "comms"}))
+
+
+def test_landing_needs_an_approach_speed():
+    p = sim.make_params(load_scenario("small"))
+    rngs = [np.random.default_rng(0)]
+    st = sim.initial(p, rngs)
+    st.left_home[:] = True  # back over the field at cruise speed: a fly-over, not a landing
+    sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
+    assert not st.landed.any() and st.flying.all()
