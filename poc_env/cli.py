@@ -145,6 +145,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_export(args: argparse.Namespace) -> int:
+    from poc_env.export import export_plan
+
+    for p in export_plan(args.plan, args.format, args.origin, args.out):
+        print(f"wrote {p}")
+    return 0
+
+
 def cmd_figures(args: argparse.Namespace) -> int:
     from poc_env.figures import pattern_gallery
 
@@ -197,6 +205,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("export", help="a plan.json as GeoJSON, KML or QGroundControl missions")
+    p.add_argument("plan", help="plan.json (schema 1)")
+    p.add_argument("--format", required=True, help="geojson, kml or qgc")
+    p.add_argument("--origin", required=True, help="LAT,LON of the map's (0, 0), degrees")
+    p.add_argument("--out", default=None, help="folder (default: beside the plan)")
+    p.set_defaults(func=cmd_export)
 
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument("what", choices=["env"], help="env: agent-steps/s of the core and the env")
