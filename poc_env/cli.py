@@ -108,7 +108,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     import os
     import subprocess
 
-    modules = {"env": "poc_env.bench_env"}
+    modules = {"env": "poc_env.bench_env", "plan": "agents.bench_plan"}
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
     return subprocess.call(cmd, env=env)
@@ -214,7 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_export)
 
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
-    p.add_argument("what", choices=["env"], help="env: agent-steps/s of the core and the env")
+    p.add_argument(
+        "what", choices=["env", "plan"], help="env: agent-steps/s; plan: DE plan wall time"
+    )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)
 
