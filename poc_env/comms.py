@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from poc_env.config import CONFIG_DIR, read_yaml
 from poc_env.constraints import pairwise_distances
@@ -57,6 +58,119 @@ AUTO = -1
 Link = tuple[int, int]
 
 
+# --------------------------------------------------------------------------- compiled kernels
+# Each rule is written once, as a loop over ``(batch, n, n)`` arrays: the numpy-facing functions
+# below call these kernels, and so does the simulator's step kernel (no Python per call).
+_jit = njit(cache=True, error_model="numpy")
+
+
+@_jit
+def _in_range_kernel(dist, range_m, act, out):
+    """Eq. 24 adjacency ``out (B, n, n)``: distinct active UAVs with ``dist <= range_m``."""
+    n_b, n = out.shape[0], out.shape[1]
+    for b in range(n_b):
+        for i in range(n):
+            ai = act[b, i]
+            for j in range(n):
+                out[b, i, j] = ai and act[b, j] and i != j and dist[b, i, j] <= range_m
+
+
+@_jit
+def _two_neighbour_kernel(adj, min_neighbours, act, use_act, out):
+    """The §3.2.4 rule per UAV into ``out (B, n)``, see :func:`two_neighbour_ok`."""
+    n_b, n = adj.shape[0], adj.shape[1]
+    for b in range(n_b):
+        need = min_neighbours
+        if use_act:
+            n_act = 0
+            for i in range(n):
+                if act[b, i]:
+                    n_act += 1
+            need = min(min_neighbours, n_act - 1)
+        for i in range(n):
+            count = 0
+            for j in range(n):
+                if adj[b, i, j]:
+                    count += 1
+            out[b, i] = (use_act and not act[b, i]) or count >= need
+
+
+@_jit
+def _auto_topology_kernel(av, dist, use_dist, act, k_nearest, links, n_comp):
+    """:func:`auto_topology` of each env into ``links (E, n, n)`` and ``n_comp (E,)``.
+
+    A pair is available when ``av`` says so, both UAVs are active and they are distinct; it
+    weighs ``dist`` (or 1 without ``use_dist``), an unavailable pair ``inf``. Prim's algorithm
+    as in the docstring of :func:`auto_topology`: each round takes the unvisited UAV of
+    smallest key (the first on ties), or starts a new component at the first unvisited UAV
+    when no key is finite; then every UAV's ``k_nearest`` lightest available links (the first
+    on ties).
+    """
+    n_env, n = av.shape[0], av.shape[1]
+    w = np.empty((n, n))
+    key = np.empty(n)
+    parent = np.zeros(n, dtype=np.intp)
+    visited = np.empty(n, dtype=np.bool_)
+    chosen = np.empty(n, dtype=np.bool_)
+    for e in range(n_env):
+        for i in range(n):
+            for j in range(n):
+                links[e, i, j] = False
+                if av[e, i, j] and act[e, i] and act[e, j] and i != j:
+                    w[i, j] = dist[e, i, j] if use_dist else 1.0
+                else:
+                    w[i, j] = np.inf
+            visited[i] = not act[e, i]
+            key[i] = np.inf
+            parent[i] = 0
+        comps = 0
+        for _ in range(n):
+            j = -1
+            best = np.inf
+            remaining = False
+            for i in range(n):
+                if not visited[i]:
+                    remaining = True
+                    if key[i] < best:
+                        best = key[i]
+                        j = i
+            if not remaining:
+                break
+            if j >= 0:  # grow the current tree along its lightest edge
+                links[e, parent[j], j] = True
+            else:  # no finite key: a new component at the first unvisited UAV
+                comps += 1
+                for i in range(n):
+                    if not visited[i]:
+                        j = i
+                        break
+            visited[j] = True
+            for i in range(n):
+                if not visited[i] and w[j, i] < key[i]:
+                    key[i] = w[j, i]
+                    parent[i] = j
+        n_comp[e] = comps
+        for i in range(n):
+            for j in range(n):
+                chosen[j] = False
+            for _ in range(k_nearest):
+                m = -1
+                best = np.inf
+                for j in range(n):
+                    if not chosen[j] and w[i, j] < best:
+                        best = w[i, j]
+                        m = j
+                if m < 0:
+                    break
+                chosen[m] = True
+                links[e, i, m] = True
+        for i in range(n):
+            for j in range(i + 1, n):
+                v = links[e, i, j] or links[e, j, i]
+                links[e, i, j] = v
+                links[e, j, i] = v
+
+
 # --------------------------------------------------------------------------- graph basics
 
 
@@ -74,24 +188,37 @@ def adjacency_to_links(adj: np.ndarray) -> list[Link]:
     return [(int(a), int(b)) for a, b in zip(i, j)]
 
 
-def _active(active: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
+def _active(active: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
     if active is None:
         return np.ones(shape, dtype=bool)
-    return np.broadcast_to(np.asarray(active, dtype=bool), shape)
+    return _shaped(active, shape, bool)
 
 
-def in_range(xy: np.ndarray, range_m: float, active: np.ndarray | None = None) -> np.ndarray:
+def _shaped(a: Any, shape: tuple[int, ...], dtype: Any) -> np.ndarray:
+    """``a`` as a C-contiguous array of ``shape`` (broadcast if needed) and ``dtype``."""
+    a = np.asarray(a, dtype=dtype)
+    if a.shape != shape:
+        a = np.broadcast_to(a, shape)
+    return np.ascontiguousarray(a)
+
+
+def in_range(
+    xy: np.ndarray,
+    range_m: float,
+    active: np.ndarray | None = None,
+    dist: np.ndarray | None = None,
+) -> np.ndarray:
     """Adjacency ``(n_envs, n, n)``: pairs within communication range, ``D_ij <= RC_max`` (eq. 24).
 
     ``D_ij`` is the Euclidean distance over the given coordinates (2-D or 3-D). No self loops;
-    an inactive UAV (``active (n_envs, n)`` False: landed or crashed) has no links.
+    an inactive UAV (``active (n_envs, n)`` False: landed or crashed) has no links. ``dist``
+    optionally passes the already computed ``pairwise_distances(xy)``.
     """
-    p = np.asarray(xy, dtype=float)
-    n_envs, n = p.shape[0], p.shape[1]
-    adj = pairwise_distances(p) <= float(range_m)
-    adj &= ~np.eye(n, dtype=bool)
-    act = _active(active, (n_envs, n))
-    return adj & act[:, :, None] & act[:, None, :]
+    d = pairwise_distances(xy) if dist is None else np.asarray(dist, dtype=float)
+    n_envs, n = d.shape[0], d.shape[-1]
+    out = np.empty((n_envs, n, n), dtype=bool)
+    _in_range_kernel(np.ascontiguousarray(d), float(range_m), _active(active, (n_envs, n)), out)
+    return out
 
 
 def two_neighbour_ok(
@@ -106,12 +233,18 @@ def two_neighbour_ok(
     or two flying UAVs is not reported in violation of a rule it cannot meet.
     """
     a = np.asarray(adj, dtype=bool)
-    count = a.sum(axis=-1)
-    if active is None:
-        return count >= int(min_neighbours)
-    act = _active(active, count.shape)
-    need = np.minimum(int(min_neighbours), act.sum(axis=-1, keepdims=True) - 1)
-    return ~act | (count >= need)
+    n = a.shape[-1]
+    shape = a.shape[:-1]
+    act = np.ones((1, n), dtype=bool) if active is None else _active(active, shape)
+    out = np.empty(shape, dtype=bool)
+    _two_neighbour_kernel(
+        np.ascontiguousarray(a).reshape(-1, n, n),
+        int(min_neighbours),
+        act.reshape(-1, n),
+        active is not None,
+        out.reshape(-1, n),
+    )
+    return out
 
 
 def link_failures(adj: np.ndarray, prob: float, rng: np.random.Generator) -> np.ndarray:
@@ -186,6 +319,7 @@ def auto_topology(
     xy: np.ndarray | None = None,
     active: np.ndarray | None = None,
     min_neighbours: int = 2,
+    dist: np.ndarray | None = None,
 ) -> CommsTopology:
     """General topology rule for any number of UAVs (``comms.topology: auto``).
 
@@ -200,8 +334,8 @@ def auto_topology(
        rule of §3.2.4 then holds on the topology wherever it holds on the in-range graph, and
        losing any one link of a UAV does not isolate it.
 
-    Without ``xy`` all links weigh the same (any spanning forest). Vectorised over envs: the
-    Prim loop runs ``n`` times over ``(n_envs, n)`` arrays, no Python loop over envs.
+    Without ``xy`` all links weigh the same (any spanning forest). Ties go to the lower UAV
+    index. Compiled (:func:`_auto_topology_kernel`): a loop over envs and the small graph.
 
     Parameters
     ----------
@@ -211,45 +345,28 @@ def auto_topology(
         ``(n_envs, n, 2)`` positions in metres, for the link weights.
     active:
         ``(n_envs, n)`` bool; inactive UAVs get no links and are not counted as components.
+    dist:
+        optional ``pairwise_distances(xy)``, when the caller already has it.
     """
     av = np.asarray(available, dtype=bool)
     n_envs, n = av.shape[0], av.shape[-1]
     act = _active(active, (n_envs, n))
-    av = av & act[:, :, None] & act[:, None, :] & ~np.eye(n, dtype=bool)
-    dist = pairwise_distances(xy) if xy is not None else np.ones((n_envs, n, n))
-    w = np.where(av, dist, np.inf)
-    envs = np.arange(n_envs)
-
-    links = np.zeros((n_envs, n, n), dtype=bool)
-    visited = ~act.copy()
-    key = np.full((n_envs, n), np.inf)
-    parent = np.zeros((n_envs, n), dtype=np.intp)
-    n_comp = np.zeros(n_envs, dtype=np.int64)
-    for _ in range(n):
-        remaining = np.asarray(~visited.all(axis=-1))
-        k = np.where(visited, np.inf, key)
-        j = np.argmin(k, axis=-1)
-        grow = remaining & np.isfinite(k[envs, j])
-        new_root = remaining & ~grow
-        j = np.where(new_root, np.argmax(~visited, axis=-1), j)
-        n_comp += new_root
-        pj = parent[envs, j]
-        links[envs[grow], pj[grow], j[grow]] = True
-        visited[envs[remaining], j[remaining]] = True
-        wj = w[envs, j, :]
-        better = (wj < key) & ~visited & remaining[:, None]
-        key = np.where(better, wj, key)
-        parent = np.where(better, j[:, None], parent)
-
-    kk = min(int(min_neighbours), n - 1)
-    if kk > 0:
-        nearest = np.argsort(w, axis=-1, kind="stable")[..., :kk]  # (n_envs, n, kk)
-        ok = np.isfinite(np.take_along_axis(w, nearest, axis=-1))
-        e_idx = np.broadcast_to(envs[:, None, None], nearest.shape)
-        i_idx = np.broadcast_to(np.arange(n)[None, :, None], nearest.shape)
-        links[e_idx[ok], i_idx[ok], nearest[ok]] = True
-    links |= np.swapaxes(links, -1, -2)
+    if dist is None and xy is not None:
+        dist = pairwise_distances(xy)
+    use_dist = dist is not None
+    d = np.zeros((1, 1, 1)) if dist is None else _shaped(dist, (n_envs, n, n), float)
+    links = np.empty((n_envs, n, n), dtype=bool)
+    n_comp = np.empty(n_envs, dtype=np.int64)
+    k_nearest = nearest_count(min_neighbours, n)
+    av = _shaped(av, (n_envs, n, n), bool)
+    _auto_topology_kernel(av, d, use_dist, act, k_nearest, links, n_comp)
     return CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
+
+
+def nearest_count(min_neighbours: int, n: int) -> int:
+    """How many shortest links per UAV :func:`auto_topology` adds: ``min_neighbours``, at most
+    ``n - 1``, at least 0."""
+    return max(min(int(min_neighbours), n - 1), 0)
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,20 +23,37 @@ One step, for each flying UAV (eq. numbers are the paper's):
    as a Bernoulli draw per step, without a random draw per step;
 5. constraints (eq. 20-24) are evaluated and flagged; the time model advances (eq. 17-18);
    agents land, crash or run out of endurance.
+
+Speed: after the sweep, the bookkeeping of steps 3-5 and the topology update run as a few
+compiled passes (``_step_kernel``, ``_auto_links``) over the same kernels the numpy-facing
+functions of :mod:`constraints` and :mod:`comms` use, with the pairwise distances computed once
+per step; no-fly zones and threat peaks stay in numpy (only when the map has them).
 """
 
 from __future__ import annotations
 
+import hashlib
+import math
 from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
 
 import numpy as np
+from numba import njit
 
 from poc_env import comms as comms_mod
 from poc_env import constraints as cons
+from poc_env import search_theory
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
 from poc_env.probability_map import Grid, build_prior
-from poc_env.search_theory import segment_pod, sweep_segments, window_size
+from poc_env.search_theory import (
+    _DEFINITE_RANGE,
+    _LAW_CODE,
+    _point_pod,
+    sweep_segments,
+    window_size,
+)
 
 TWO_PI = 2.0 * np.pi
 
@@ -244,11 +261,27 @@ def initial(
     return state
 
 
-def _update_topology(params: Params, state: State, rngs) -> comms_mod.CommsTopology:
-    """Eq. 24 adjacency (with the failure model) and the active topology (§3.2.5)."""
+def _update_topology(
+    params: Params, state: State, rngs, dist: np.ndarray | None = None
+) -> comms_mod.CommsTopology:
+    """Eq. 24 adjacency (with the failure model) and the active topology (§3.2.5).
+
+    ``dist`` optionally passes the pairwise distances of the UAVs' current positions.
+    """
     cc = params.scenario.comms
     xy = state.pos[:, :, :2]
-    adj = comms_mod.in_range(xy, cc.range_m, state.flying)
+    if dist is None:
+        dist = cons.pairwise_distances(xy)
+    if cc.link_failure_prob <= 0 and params.switcher is None:
+        # the common case, in one compiled call: the in-range graph, then the auto rule on it
+        e, n = state.flying.shape
+        links = np.empty((e, n, n), dtype=bool)
+        n_comp = np.empty(e, dtype=np.int64)
+        k_nearest = comms_mod.nearest_count(cc.min_neighbours, n)
+        _auto_links(dist, float(cc.range_m), state.flying, k_nearest, links, n_comp)
+        state.links = links
+        return comms_mod.CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
+    adj = comms_mod.in_range(xy, cc.range_m, state.flying, dist)
     if cc.link_failure_prob > 0:
         adj = np.stack(
             [comms_mod.link_failures(adj[k], cc.link_failure_prob, r) for k, r in enumerate(rngs)]
@@ -257,7 +290,7 @@ def _update_topology(params: Params, state: State, rngs) -> comms_mod.CommsTopol
         topo = params.switcher.switch(state.topology, adj, xy, state.flying)
         state.topology = np.asarray(topo.topology)
     else:
-        topo = comms_mod.auto_topology(adj, xy, state.flying, cc.min_neighbours)
+        topo = comms_mod.auto_topology(adj, xy, state.flying, cc.min_neighbours, dist)
     state.links = topo.links
     return topo
 
@@ -318,8 +351,9 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     u = sc.uav
     ep = sc.episode
     moving = state.flying.copy()
+    e, n = moving.shape
     dv, dalpha, dbeta = scale_actions(params, np.asarray(actions, dtype=float))
-    shielded = np.zeros_like(moving)
+    shielded = np.zeros((e, n), dtype=bool)
     if sc.constraints.violation == "shield":
         res = cons.shield_heading(
             state.pos[..., :2],
@@ -343,87 +377,310 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     b2 = new[..., :2]
     found = sense(params, state, a2, b2)
     state.pos = new
-    state.agent_pos += found
-    team = found.sum(axis=1)
-    state.posc += team
 
     # hidden target (same law and cut-off as the belief, at its exact position)
-    p_t = segment_pod(
-        state.target[:, None, :],
+    p_t = np.empty(moving.shape)
+    ox, oy = params.grid.origin_m
+    if _target_pod(
+        state.target,
         a2,
         b2,
-        sc.sensor.sweep_width_m,
-        sc.sensor.law,
-        params.cutoff_m,
-        params.grid.cell_m,
-        params.grid.origin_m,
-    )
-    p_t = np.where(moving, np.minimum(p_t, 1.0), 0.0)
-    with np.errstate(divide="ignore"):
-        state.target_exponent += -np.log1p(-p_t).sum(axis=1)
-    detected_now = ~state.detected & (state.target_exponent >= state.target_threshold)
-    state.detected |= detected_now
-    state.detect_step = np.where(detected_now, state.step + 1, state.detect_step)
+        moving,
+        float(ox),
+        float(oy),
+        _LAW_CODE[sc.sensor.law],
+        float(sc.sensor.sweep_width_m),
+        float(params.cutoff_m),
+        float(params.grid.cell_m),
+        p_t,
+    ):  # log1p(-0) = -0 adds nothing: numpy's log1p only when some UAV may detect
+        with np.errstate(divide="ignore"):
+            state.target_exponent += -np.log1p(-p_t).sum(axis=1)
 
-    # time model (eq. 17-18)
-    state.elapsed += np.where(moving, params.dt, 0.0)
-    usable = u.usable_endurance_s
-    overtime = moving & (state.elapsed > usable)
-    time_term = np.where(moving, params.dt / usable, 0.0)
-
-    # constraints (eq. 20-24)
-    xy = state.pos[..., :2]
-    oob = moving & cons.outside_boundary(xy, params.bounds)
-    nofly = moving & params.zones.segment_crosses(a2, b2) if len(params.zones) else oob & False
-    collision, _ = cons.separation_violations(xy, sc.constraints.safety_distance_m, moving)
-    collision &= moving
+    # no-fly zones and threat peaks (eq. 20, 23): numpy, only when the map has them
+    if len(params.zones):
+        nofly = moving & params.zones.segment_crosses(a2, b2)
+    else:
+        nofly = np.zeros((e, n), dtype=bool)
     if len(params.threat_lambdas):
         threat = moving & cons.threat_violation(
-            xy, params.threat_centers, params.threat_lambdas, sc.map.threat_threshold
+            new[..., :2], params.threat_centers, params.threat_lambdas, sc.map.threat_threshold
         )
     else:
-        threat = np.zeros_like(moving)
-    adj = comms_mod.in_range(xy, sc.comms.range_m, moving)
-    comms_ok = comms_mod.two_neighbour_ok(adj, sc.comms.min_neighbours, moving) | ~moving
-    events = Events(
+        threat = np.zeros((e, n), dtype=bool)
+
+    # POS bookkeeping (eq. 12-13), detection, time model (eq. 17-18), constraints (eq. 20-24),
+    # landing, the step counter: one compiled pass
+    team = np.empty(e) if n <= 128 else found.sum(axis=1)
+    flags = np.empty((_N_FLAGS, e, n), dtype=bool)
+    time_term = np.empty((e, n))
+    detected_now = np.empty(e, dtype=bool)
+    dist = np.empty((e, n, n))
+    detect_step = state.detect_step.copy()
+    x0, y0, x1, y1 = params.bounds
+    _step_kernel(
+        found,
+        state.agent_pos,
+        state.posc,
+        team,
+        new,
+        state.speed,
+        moving,
+        nofly,
+        threat,
+        state.target_exponent,
+        state.target_threshold,
+        state.step,
+        state.detected,
+        detect_step,
+        state.elapsed,
+        state.left_home,
+        state.landed,
+        state.crashed,
+        state.flying,
+        state.violations,
+        params.landing,
+        float(params.dt),
+        float(u.usable_endurance_s),
+        float(params.dt / u.usable_endurance_s),
+        float(u.endurance_s),
+        float(x0),
+        float(y0),
+        float(x1),
+        float(y1),
+        float(sc.constraints.safety_distance_m),
+        float(sc.comms.range_m),
+        int(sc.comms.min_neighbours),
+        float(ep.landing_radius_m),
+        float(ep.landing_max_altitude_m),
+        float(ep.landing_max_speed_mps),
+        sc.constraints.violation == "terminate",
+        detected_now,
+        time_term,
+        flags,
+        dist,
+    )
+    state.detect_step = detect_step
+    # the topology among the UAVs still flying after this step (§3.2.5)
+    connected = np.asarray(_update_topology(params, state, rngs, dist).connected)
+    return Events(
         pos_agent=found,
         pos_team=team,
         time_term=time_term,
-        overtime=overtime,
-        out_of_bounds=oob,
+        overtime=flags[_OVERTIME],
+        out_of_bounds=flags[_OOB],
         no_fly=nofly,
-        collision=collision,
+        collision=flags[_COLLISION],
         threat=threat,
-        comms_ok=comms_ok,
+        comms_ok=flags[_COMMS_OK],
         shielded=shielded,
-        landed_now=np.zeros_like(moving),
-        crashed_now=np.zeros_like(moving),
+        landed_now=flags[_LANDED],
+        crashed_now=flags[_CRASHED],
         detected_now=detected_now,
-        connected=np.ones(moving.shape[0], dtype=bool),
+        connected=connected,
     )
-    state.violations += events.violation & moving
 
-    # landing, crashes, endurance
-    dist = np.hypot(*(xy - params.landing[None]).transpose(2, 0, 1))
-    state.left_home |= moving & (dist > ep.landing_radius_m)
-    landed_now = (
-        moving
-        & state.left_home
-        & (dist <= ep.landing_radius_m)
-        & (state.pos[..., 2] <= ep.landing_max_altitude_m)
-        & (state.speed <= ep.landing_max_speed_mps)
-    )
-    crashed_now = (
-        moving & ~landed_now & ((state.pos[..., 2] <= 0.0) | (state.elapsed >= u.endurance_s))
-    )
-    if sc.constraints.violation == "terminate":
-        crashed_now |= moving & ~landed_now & (oob | nofly | collision | threat)
-    state.landed |= landed_now
-    state.crashed |= crashed_now
-    state.flying &= ~(landed_now | crashed_now)
-    events.landed_now = landed_now
-    events.crashed_now = crashed_now
-    # the topology among the UAVs still flying after this step (§3.2.5)
-    events.connected = np.asarray(_update_topology(params, state, rngs).connected)
-    state.step += 1
-    return events
+
+# --------------------------------------------------------------------------- compiled helpers
+
+# Rows of the bool ``flags`` array that :func:`_step_kernel` fills (one array: fewer arguments).
+_OVERTIME, _OOB, _COLLISION, _COMMS_OK, _LANDED, _CRASHED = range(6)
+_N_FLAGS = 6
+
+
+@njit(cache=True, error_model="numpy")
+def _numpy_sum(x):
+    """``x.sum()`` of a 1-D float64 array of at most 128 values in the order of numpy's
+    ``add.reduce`` along a row: 0.0 + the pairwise sum (started from -0.0, blocks of 8
+    accumulators from 8 values on)."""
+    n = x.size
+    if n < 8:
+        res = -0.0
+        for k in range(n):
+            res += x[k]
+        return 0.0 + res
+    r0, r1, r2, r3, r4, r5, r6, r7 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+    k = 8
+    while k < n - n % 8:
+        r0 += x[k]
+        r1 += x[k + 1]
+        r2 += x[k + 2]
+        r3 += x[k + 3]
+        r4 += x[k + 4]
+        r5 += x[k + 5]
+        r6 += x[k + 6]
+        r7 += x[k + 7]
+        k += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while k < n:
+        res += x[k]
+        k += 1
+    return 0.0 + res
+
+
+def _source_hash(*modules: ModuleType) -> str:
+    """SHA-256 of the source files of ``modules`` (see :func:`_build_kernels`)."""
+    h = hashlib.sha256()
+    for m in modules:
+        try:
+            h.update(Path(str(m.__file__)).read_bytes())
+        except OSError:  # no readable source (e.g. a zipped install): numba's own rule only
+            h.update(m.__name__.encode())
+    return h.hexdigest()
+
+
+def _build_kernels(deps: str):
+    """The kernels of :func:`step` that call compiled functions of other modules.
+
+    Numba's on-disk cache of a kernel is only invalidated when the kernel's own file changes,
+    yet it holds compiled copies of the functions the kernel calls: after an edit of
+    :mod:`constraints`, :mod:`comms` or :mod:`search_theory`, a module-level kernel here would
+    keep running their old code. These close over ``deps``, the :func:`_source_hash` of those
+    modules, and numba puts closure values in the cache key, so an edit recompiles them.
+    """
+
+    @njit(cache=True, error_model="numpy")
+    def target_pod(target, a, b, moving, ox, oy, law, w, cutoff, cell, out):
+        """Detection probability ``out (E, N)`` of each env's hidden target for each moving UAV's
+        step a -> b (0 for the others): :func:`search_theory.segment_pod`'s compiled scalar, on
+        grid-relative coordinates, capped at 1 (definite range: 1 or 0). True if any is not 0."""
+        deps  # noqa: B018 -- the cache key, see _build_kernels
+        hit = False
+        for e in range(out.shape[0]):
+            px = target[e, 0] - ox
+            py = target[e, 1] - oy
+            for i in range(out.shape[1]):
+                p = 0.0
+                if moving[e, i]:
+                    ax, ay = a[e, i, 0] - ox, a[e, i, 1] - oy
+                    bx, by = b[e, i, 0] - ox, b[e, i, 1] - oy
+                    pod = _point_pod(law, px, py, ax, ay, bx, by, w, cutoff, cell)
+                    if law == _DEFINITE_RANGE:
+                        p = 1.0 if pod > 0.0 else 0.0
+                    else:
+                        p = 1.0 if pod > 1.0 else pod  # np.minimum(pod, 1): NaN stays NaN
+                out[e, i] = p
+                hit = hit or p != 0.0
+        return hit
+
+    @njit(cache=True, error_model="numpy")
+    def auto_links(dist, range_m, flying, k_nearest, links, n_comp):
+        """:func:`comms.auto_topology` on :func:`comms.in_range` of ``dist`` among the flying."""
+        deps  # noqa: B018 -- the cache key, see _build_kernels
+        adj = np.empty(links.shape, dtype=np.bool_)
+        comms_mod._in_range_kernel(dist, range_m, flying, adj)
+        comms_mod._auto_topology_kernel(adj, dist, True, flying, k_nearest, links, n_comp)
+
+    @njit(cache=True, error_model="numpy")
+    def step_kernel(
+        found,
+        agent_pos,
+        posc,
+        team,
+        pos,
+        speed,
+        moving,
+        nofly,
+        threat,
+        exponent,
+        threshold,
+        step_count,
+        detected,
+        detect_step,
+        elapsed,
+        left_home,
+        landed,
+        crashed,
+        flying,
+        violations,
+        landing,
+        dt,
+        usable,
+        time_share,
+        endurance,
+        x0,
+        y0,
+        x1,
+        y1,
+        d_s,
+        range_m,
+        min_neighbours,
+        landing_radius,
+        landing_max_alt,
+        landing_max_speed,
+        terminate,
+        detected_now,
+        time_term,
+        flags,
+        dist,
+    ):
+        """Steps 3-5 of :func:`step` after sensing, in place on the state arrays.
+
+        What each UAV found (``agent_pos``), the team's POS (``team``, numpy's row sum) and POSC;
+        detection of the hidden target; the time model (eq. 17-18); the boundary (eq. 20),
+        separation (eq. 21) and two-neighbour (eq. 24) checks through the kernels of
+        :mod:`constraints` and :mod:`comms`; violation counts; landing and crashes; the step
+        counter. ``dist`` receives the pairwise distances of the new positions (for the topology
+        update).
+        """
+        deps  # noqa: B018 -- the cache key, see _build_kernels
+        n_env, n = moving.shape
+        cons._pairwise_kernel(pos[:, :, :2], dist)
+        pairs = np.empty((n_env, n, n), dtype=np.bool_)
+        cons._separation_kernel(dist, d_s, moving, True, pairs, flags[_COLLISION])
+        comms_mod._in_range_kernel(dist, range_m, moving, pairs)
+        comms_mod._two_neighbour_kernel(pairs, min_neighbours, moving, True, flags[_COMMS_OK])
+        for e in range(n_env):
+            if n <= 128:  # else the caller has summed with numpy
+                team[e] = _numpy_sum(found[e])  # found.sum(axis=1)
+            posc[e] += team[e]
+            now = not detected[e] and exponent[e] >= threshold[e]
+            detected_now[e] = now
+            if now:
+                detected[e] = True
+                detect_step[e] = step_count[e] + 1
+            step_count[e] += 1
+            for i in range(n):
+                agent_pos[e, i] += found[e, i]
+                mv = moving[e, i]
+                elapsed[e, i] = elapsed[e, i] + (dt if mv else 0.0)
+                flags[_OVERTIME, e, i] = mv and elapsed[e, i] > usable
+                time_term[e, i] = time_share if mv else 0.0
+                x, y, z = pos[e, i, 0], pos[e, i, 1], pos[e, i, 2]
+                oob = mv and cons._outside(x, y, x0, y0, x1, y1)
+                flags[_OOB, e, i] = oob
+                collision = mv and flags[_COLLISION, e, i]
+                flags[_COLLISION, e, i] = collision
+                comms_ok = flags[_COMMS_OK, e, i] or not mv
+                flags[_COMMS_OK, e, i] = comms_ok
+                unsafe = oob or nofly[e, i] or collision or threat[e, i]
+                if mv and (unsafe or not comms_ok):
+                    violations[e, i] += 1
+                home = math.hypot(x - landing[i, 0], y - landing[i, 1])
+                if mv and home > landing_radius:
+                    left_home[e, i] = True
+                land = (
+                    mv
+                    and left_home[e, i]
+                    and home <= landing_radius
+                    and z <= landing_max_alt
+                    and speed[e, i] <= landing_max_speed
+                )
+                crash = mv and not land and (z <= 0.0 or elapsed[e, i] >= endurance)
+                if terminate:
+                    crash = crash or (mv and not land and unsafe)
+                flags[_LANDED, e, i] = land
+                flags[_CRASHED, e, i] = crash
+                if land:
+                    landed[e, i] = True
+                if crash:
+                    crashed[e, i] = True
+                if land or crash:
+                    flying[e, i] = False
+
+    return target_pod, auto_links, step_kernel
+
+
+_target_pod, _auto_links, _step_kernel = _build_kernels(
+    _source_hash(cons, comms_mod, search_theory)
+)

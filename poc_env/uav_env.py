@@ -153,6 +153,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         self.possible_agents = [f"uav_{i}" for i in range(n)]
         self.agents: list[str] = []
         self._index = {a: i for i, a in enumerate(self.possible_agents)}
+        self._upper = np.triu(np.ones((n, n), dtype=bool))  # links (i, j) with i <= j
         self._hazard = obs_mod.hazard_mask(self.params)
         g = self.params.grid
         raster = spaces.Box(0.0, 1.0, (obs_mod.RASTER_CHANNELS, g.ny, g.nx), np.float32)
@@ -219,16 +220,32 @@ class UAVSearchParallelEnv(ParallelEnv):
         st = self.sim_state
         vec = obs_mod.vectors(self.params, st)[0]
         ras = obs_mod.rasters(self.params, st, self._poc_scale, self._hazard)[0]
-        out = {}
-        for a in self.agents:
-            i = self._index[a]
-            if self.obs_type == "dict":
-                out[a] = {"raster": ras[i], "vector": vec[i]}
-            else:
-                out[a] = np.concatenate([ras[i].ravel(), vec[i]])
-        return out
+        index = self._index
+        if self.obs_type == "dict":
+            return {a: {"raster": ras[index[a]], "vector": vec[index[a]]} for a in self.agents}
+        n = len(vec)
+        flat = np.empty((n, ras[0].size + vec.shape[1]), dtype=np.float32)
+        flat[:, : ras[0].size] = ras.reshape(n, -1)
+        flat[:, ras[0].size :] = vec
+        return {a: flat[index[a]] for a in self.agents}
 
     def _actions_array(self, actions: Mapping[str, Any]) -> np.ndarray:
+        agents = self.agents
+        if len(actions) == len(agents):  # fast path: one well-formed action per live agent
+            try:
+                arr = np.array([actions[a] for a in agents], dtype=float)
+            except (KeyError, ValueError, TypeError):
+                arr = None
+            if arr is not None and arr.shape == (len(agents), 3) and np.isfinite(arr).all():
+                if len(agents) == self.params.n_agents:
+                    return arr[None]
+                out = np.zeros((1, self.params.n_agents, 3))
+                out[0, [self._index[a] for a in agents]] = arr
+                return out
+        return self._actions_array_checked(actions)
+
+    def _actions_array_checked(self, actions: Mapping[str, Any]) -> np.ndarray:
+        """Agent by agent, raising a precise error for the first bad entry."""
         n = self.params.n_agents
         arr = np.zeros((1, n, 3))
         for agent, act in actions.items():
@@ -255,39 +272,55 @@ class UAVSearchParallelEnv(ParallelEnv):
         st = self.sim_state
         ev = sim.step(self.params, st, arr, [self._rng])
         terms = reward_terms(self.scenario.reward, ev)
-        reward = total_reward(terms)[0]
+        reward = np.asarray(total_reward(terms)[0], dtype=float).tolist()
         live = list(self.agents)
         truncated = bool(st.step[0] >= self.params.horizon)
-        detected_end = bool(self.scenario.episode.detection_ends_episode and st.detected[0])
+        detected = bool(st.detected[0])
+        detected_end = bool(self.scenario.episode.detection_ends_episode and detected)
         rewards, terminations, truncations, infos = {}, {}, {}, {}
         topo = self._topology_info(bool(ev.connected[0]))
+        # per-agent values as Python lists, converted once per step
+        term_names = list(terms)
+        term_rows = list(zip(*(np.asarray(v[0], dtype=float).tolist() for v in terms.values())))
+        pos = ev.pos_agent[0].tolist()
+        oob = ev.out_of_bounds[0].tolist()
+        no_fly = ev.no_fly[0].tolist()
+        collision = ev.collision[0].tolist()
+        threat = ev.threat[0].tolist()
+        comms = (~ev.comms_ok[0]).tolist()
+        overtime = ev.overtime[0].tolist()
+        shielded = ev.shielded[0].tolist()
+        landed = st.landed[0].tolist()
+        crashed = st.crashed[0].tolist()
+        elapsed = st.elapsed[0].tolist()
+        pos_team = float(ev.pos_team[0])
+        posc = float(st.posc[0])
+        detect_time = float(st.detect_step[0] * self.params.dt) if detected else None
         for a in live:
             i = self._index[a]
-            done = bool(st.landed[0, i] or st.crashed[0, i]) or detected_end
-            rewards[a] = float(reward[i])
+            done = landed[i] or crashed[i] or detected_end
+            rewards[a] = reward[i]
             terminations[a] = done
             truncations[a] = truncated and not done
             infos[a] = {
-                "pos": float(ev.pos_agent[0, i]),
-                "pos_team": float(ev.pos_team[0]),
-                "posc": float(st.posc[0]),
-                "reward_terms": {k: float(v[0, i]) for k, v in terms.items()},
+                "pos": float(pos[i]),
+                "pos_team": pos_team,
+                "posc": posc,
+                "reward_terms": dict(zip(term_names, term_rows[i])),
                 "violations": {
-                    "out_of_bounds": bool(ev.out_of_bounds[0, i]),
-                    "no_fly": bool(ev.no_fly[0, i]),
-                    "collision": bool(ev.collision[0, i]),
-                    "threat": bool(ev.threat[0, i]),
-                    "comms": not bool(ev.comms_ok[0, i]),
-                    "overtime": bool(ev.overtime[0, i]),
+                    "out_of_bounds": oob[i],
+                    "no_fly": no_fly[i],
+                    "collision": collision[i],
+                    "threat": threat[i],
+                    "comms": comms[i],
+                    "overtime": overtime[i],
                 },
-                "shielded": bool(ev.shielded[0, i]),
-                "landed": bool(st.landed[0, i]),
-                "crashed": bool(st.crashed[0, i]),
-                "flight_time_s": float(st.elapsed[0, i]),
-                "target_detected": bool(st.detected[0]),
-                "time_to_detection_s": float(st.detect_step[0] * self.params.dt)
-                if st.detected[0]
-                else None,
+                "shielded": shielded[i],
+                "landed": landed[i],
+                "crashed": crashed[i],
+                "flight_time_s": float(elapsed[i]),
+                "target_detected": detected,
+                "time_to_detection_s": detect_time,
                 **topo,
             }
         observations = self._observations_for(live)  # agents finishing now get a last obs
@@ -308,13 +341,13 @@ class UAVSearchParallelEnv(ParallelEnv):
 
     def _topology_info(self, connected: bool) -> dict[str, Any]:
         st = self.sim_state
-        links = np.argwhere(np.triu(st.links[0]))
+        rows, cols = np.nonzero(st.links[0] & self._upper)
         name = None
         if self.params.switcher is not None:
             name = self.params.switcher.name(int(st.topology[0]))
         return {
             "topology": name or "auto",
-            "links": [(int(i), int(j)) for i, j in links],
+            "links": list(zip(rows.tolist(), cols.tolist())),
             "connected": connected,
         }
 
