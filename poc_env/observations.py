@@ -101,6 +101,9 @@ def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndar
         float(g.cell_m),
         out,
     )
+    if state.known is not None:  # belief_sharing "comms": each UAV sees its own belief
+        own = g.coarsen(state.agent_beliefs(), s) / np.asarray(poc_scale)[:, None, None, None]
+        out[:, :, 0] = np.clip(own, 0.0, 1.0)
     return out
 
 

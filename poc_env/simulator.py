@@ -45,7 +45,6 @@ from poc_env import comms as comms_mod
 from poc_env import constraints as cons
 from poc_env import search_theory
 from poc_env.config import Scenario
-from poc_env.errors import ConfigError
 from poc_env.probability_map import Grid, build_prior
 from poc_env.search_theory import (
     _DEFINITE_RANGE,
@@ -104,13 +103,6 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
     )
     centers, lambdas = cons.threat_arrays(sc.map.threat_peaks)
     horizon = sc.episode.horizon_steps or int(np.ceil(u.endurance_s / dt))
-    if sc.comms.belief_sharing != "global":
-        raise ConfigError(
-            "comms.belief_sharing",
-            sc.comms.belief_sharing,
-            "'global' (per-UAV beliefs merged "
-            "through the topology, 'comms', are not implemented yet)",
-        )
     switcher = None
     if sc.comms.topology == "table2":
         switcher = comms_mod.Table2Switcher(
@@ -162,10 +154,23 @@ class State:
     links: np.ndarray  # (E, N, N) bool, active communication topology
     topology: np.ndarray  # (E,) int topology code (Table 2) or -1 (auto)
     violations: np.ndarray  # (E, N) int, cumulative constraint violations
+    # belief_sharing "comms" only (None otherwise): what each UAV knows
+    prior_fine: np.ndarray | None = None  # (E, NY, NX) the episode's prior on the fine grid
+    own_survival: np.ndarray | None = None  # (E, N, NY, NX) prod (1 - p) of UAV j's own sweeps
+    known: np.ndarray | None = None  # (E, N, N, NY, NX) UAV i's latest copy of j's own_survival
 
     @property
     def n_envs(self) -> int:
         return self.pos.shape[0]
+
+    def agent_beliefs(self) -> np.ndarray:
+        """(E, N, NY, NX) each UAV's own belief: the global one in ``global`` mode, else the prior
+        times the survival of every sweep it knows of (its own and its last copies of others')."""
+        if self.known is None:
+            return np.broadcast_to(
+                self.belief[:, None], (*self.flying.shape, *self.belief.shape[1:])
+            )
+        return self.prior_fine[:, None] * np.prod(self.known, axis=2)
 
 
 @dataclass
@@ -257,8 +262,37 @@ def initial(
         topology=topology,
         violations=np.zeros((e, n), dtype=int),
     )
+    if params.scenario.comms.belief_sharing == "comms":
+        fine = belief.shape[1:]
+        state.prior_fine = belief.copy()
+        state.own_survival = np.ones((e, n, *fine))
+        state.known = np.ones((e, n, n, *fine))
     _update_topology(params, state, rngs)
     return state
+
+
+def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) -> None:
+    """``belief_sharing: comms``: each UAV keeps the survival of its own sweeps (eq. 14 on its own
+    map) and, whenever the active topology connects it to another UAV, possibly through relays,
+    copies that UAV's latest own survival. A UAV's belief is the prior times the product of what
+    it knows (:meth:`State.agent_beliefs`): exact, no sweep counted twice, and equal to the
+    global belief while the swarm stays connected. Memory: E x N x N fine maps.
+    """
+    e, n = state.flying.shape
+    own = state.own_survival
+    sensor = params.scenario.sensor
+    sweep_segments(
+        own.reshape(e * n, *own.shape[2:]),
+        params.grid,
+        params.s,
+        a.reshape(e * n, 1, 2),
+        b.reshape(e * n, 1, 2),
+        sensor.sweep_width_m,
+        sensor.law,
+        params.cutoff_m,
+    )
+    reach = comms_mod.reachable(state.links) | np.eye(n, dtype=bool)[None]
+    state.known[reach] = np.broadcast_to(own[:, None], state.known.shape)[reach]
 
 
 def _update_topology(
@@ -463,6 +497,8 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     state.detect_step = detect_step
     # the topology among the UAVs still flying after this step (§3.2.5)
     connected = np.asarray(_update_topology(params, state, rngs, dist).connected)
+    if state.known is not None:
+        share_beliefs(params, state, a2, b2)
     return Events(
         pos_agent=found,
         pos_team=team,

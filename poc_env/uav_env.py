@@ -45,6 +45,9 @@ class UAVSearchParallelEnv(ParallelEnv):
     found (eq. 12). A hidden target drawn from the prior is detected with the same
     probability. Safety (eq. 20-23) and communication (eq. 24, §3.2.5 topologies)
     constraints are flagged, penalised, terminal or shielded (``constraints.violation``).
+    Beliefs are ``global`` (the paper's assumption: one shared map) or, with
+    ``comms.belief_sharing: comms``, one per UAV, merged only with the UAVs the active topology
+    connects it to (through relays); rewards always use the true (global) belief.
 
     ## Action Space
 

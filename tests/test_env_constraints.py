@@ -122,8 +122,9 @@ def test_table2_switch_inside_an_episode(far_pair, expected):
     w=st.floats(1.0, 6.0),
     mode=st.sampled_from(["penalize", "terminate", "shield"]),
     credit=st.sampled_from(["team", "individual"]),
+    sharing=st.sampled_from(["global", "comms"]),
 )
-def test_invariants_under_random_configs_and_actions(seed, law, s, dt, w, mode, credit):
+def test_invariants_under_random_configs_and_actions(seed, law, s, dt, w, mode, credit, sharing):
     env = poc_env.parallel_env(
         "small",
         overrides={
@@ -134,6 +135,7 @@ def test_invariants_under_random_configs_and_actions(seed, law, s, dt, w, mode, 
             "episode.horizon_steps": 25,
             "constraints.violation": mode,
             "reward.credit": credit,
+            "comms.belief_sharing": sharing,
         },
     )
     env.reset(seed=seed)
@@ -146,3 +148,5 @@ def test_invariants_under_random_configs_and_actions(seed, law, s, dt, w, mode, 
         np.testing.assert_allclose(
             st_.posc + st_.belief.sum(axis=(1, 2)), st_.initial_mass, atol=1e-9
         )
+        beliefs = st_.agent_beliefs()
+        assert np.all(beliefs >= st_.belief[:, None] - 1e-15)  # nobody knows more than all

@@ -82,11 +82,49 @@ def test_topology_excludes_uavs_that_finished_this_step():
     assert st.landed.all() and not st.links.any()
 
 
-def test_unimplemented_belief_sharing_is_a_clear_error():
-    from poc_env.errors import ConfigError
+def _comms_run(range_km, steps=6):
+    over = {"comms.belief_sharing": "comms", "comms.range_km": range_km}
+    p = sim.make_params(load_scenario("small", over))
+    rngs = [np.random.default_rng(0)]
+    st = sim.initial(p, rngs)
+    st.pos[0, :, :2] = [(8e3, 10e3), (32e3, 30e3), (20e3, 20e3)]  # over the area, apart
+    for _ in range(steps):
+        sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
+    return p, st
 
-    with pytest.raises(ConfigError, match="belief_sharing"):
-        sim.make_params(load_scenario("small", {"comms.belief_sharing": "comms"}))
+
+def test_comms_belief_sharing_connected_swarm_knows_everything():
+    _, st = _comms_run(range_km=200)
+    beliefs = st.agent_beliefs()[0]
+    for i in range(3):
+        np.testing.assert_allclose(beliefs[i], st.belief[0], rtol=1e-12, atol=1e-15)
+
+
+def test_comms_belief_sharing_isolated_uavs_know_only_their_own_sweeps():
+    _, st = _comms_run(range_km=1)
+    beliefs = st.agent_beliefs()[0]
+    prior = st.prior_fine[0]
+    for i in range(3):
+        own = prior * st.own_survival[0, i]
+        np.testing.assert_allclose(beliefs[i], own, rtol=1e-12, atol=1e-15)
+        assert not np.allclose(beliefs[i], st.belief[0])  # others' sweeps are unknown to it
+    # the global belief (the reward's) is still the product of everyone's sweeps
+    np.testing.assert_allclose(
+        st.belief[0], prior * st.own_survival[0].prod(axis=0), rtol=1e-9, atol=1e-15
+    )
+
+
+def test_comms_belief_observations_are_per_agent():
+    import poc_env
+
+    env = poc_env.parallel_env("small", comms__belief_sharing="comms", comms__range_km=1)
+    env.reset(seed=0)
+    s = env.sim_state
+    s.pos[0, :, :2] = [(8e3, 10e3), (32e3, 30e3), (20e3, 20e3)]
+    for _ in range(4):
+        obs, *_ = env.step({a: np.zeros(3) for a in env.agents})
+    r0, r1 = obs["uav_0"]["raster"][0], obs["uav_1"]["raster"][0]
+    assert not np.allclose(r0, r1)
 
 
 def test_landing_needs_an_approach_speed():
