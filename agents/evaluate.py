@@ -24,9 +24,17 @@ import numpy as np
 from agents.base import LawnmowerPolicy, Policy, RandomPolicy
 from poc_env.errors import ConfigError
 
+
+def _de_plan() -> Policy:
+    from agents.planner import DEPlanPolicy
+
+    return DEPlanPolicy()
+
+
 POLICIES: dict[str, Callable[[], Policy]] = {
     "random": RandomPolicy,
     "lawnmower": LawnmowerPolicy,
+    "de_plan": _de_plan,
 }
 
 

@@ -145,6 +145,32 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_plan(args: argparse.Namespace) -> int:
+    from agents.planner import make_plan, plan_table, plot_plan, write_plan
+    from poc_env.config import load_scenario
+    from poc_env.probability_map import build_prior
+
+    sc = load_scenario(args.scenario)
+    if args.uavs is not None:
+        sc = sc.with_uavs(args.uavs)
+    prior = build_prior(sc.map, args.map_file)
+    plan = make_plan(
+        sc,
+        prior=prior,
+        map_source=args.map_file or "builtin",
+        optimizer=args.optimizer,
+        seed=args.seed,
+        popsize=args.popsize,
+        maxiter=args.maxiter,
+        progress=not args.quiet,
+    )
+    print(plan_table(plan))
+    print(f"wrote {write_plan(plan, args.out)}")
+    if args.plot:
+        print(f"wrote {plot_plan(plan, sc, prior, args.plot)}")
+    return 0
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     from poc_env.export import export_plan
 
@@ -205,6 +231,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("plan", help="the §6.2 time-limited plan (Table 6 analog) as plan.json")
+    _add_scenario(p, "paper_6_2")
+    p.add_argument("--uavs", type=int, default=None, help="number of UAVs (default: fleet)")
+    p.add_argument(
+        "--optimizer",
+        default="adaptive_de",
+        help="adaptive_de, classic_de, chaotic_abc, grouped_pso, scipy_de, cmaes",
+    )
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--popsize", type=int, default=None, help="default: scenario planner NP")
+    p.add_argument("--maxiter", type=int, default=None, help="default: scenario planner G")
+    p.add_argument("--out", default="plan.json")
+    p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_plan)
 
     p = sub.add_parser("export", help="a plan.json as GeoJSON, KML or QGroundControl missions")
     p.add_argument("plan", help="plan.json (schema 1)")
