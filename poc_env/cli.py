@@ -192,9 +192,38 @@ def cmd_figures(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """The main job on the default scenario: today the §6.1.1 polygon survey."""
-    ns = argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None, out=args.out)
-    return cmd_survey(ns)
+    """The main job on the built-in scenarios: survey, plan, and policies flown and scored."""
+    out = Path(args.out)
+    print("== §6.1.1 polygon survey (Table 4 analog) ==")
+    cmd_survey(argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None, out=out))
+    print("\n== §6.2 time-limited plan with adaptive DE (Table 6 analog) ==")
+    cmd_plan(
+        argparse.Namespace(
+            scenario="paper_6_2",
+            map_file=None,
+            uavs=None,
+            optimizer="adaptive_de",
+            seed=0,
+            popsize=None,
+            maxiter=None,
+            out=str(out / "plan.json"),
+            plot=str(out / "plan.png"),
+            quiet=True,
+        )
+    )
+    print("\n== policies flown in the environment, same seeds ==")
+    return cmd_evaluate(
+        argparse.Namespace(
+            scenario="paper_6_2",
+            map_file=None,
+            policies="de_plan,lawnmower,random",
+            episodes=args.episodes,
+            seed=1000,
+            workers=args.workers,
+            out=str(out),
+            quiet=True,
+        )
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -266,8 +295,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="docs/img")
     p.set_defaults(func=cmd_figures)
 
-    p = sub.add_parser("demo", help="run the main job on the default scenario")
+    p = sub.add_parser("demo", help="run the main job on the built-in scenarios")
     p.add_argument("--out", default="out/demo")
+    p.add_argument("--episodes", type=int, default=5)
+    p.add_argument("--workers", type=int, default=2)
     p.set_defaults(func=cmd_demo)
     return parser
 
