@@ -31,10 +31,24 @@ def _de_plan() -> Policy:
     return DEPlanPolicy()
 
 
+def _greedy() -> Policy:
+    from agents.greedy import GreedyBayesPolicy
+
+    return GreedyBayesPolicy()
+
+
+def _game() -> Policy:
+    from agents.greedy import PotentialGamePolicy
+
+    return PotentialGamePolicy()
+
+
 POLICIES: dict[str, Callable[[], Policy]] = {
     "random": RandomPolicy,
     "lawnmower": LawnmowerPolicy,
     "de_plan": _de_plan,
+    "greedy_bayes": _greedy,
+    "potential_game": _game,
 }
 
 

@@ -36,6 +36,24 @@ def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> n
     return np.stack([a_speed, a_turn, a_pitch], axis=-1)
 
 
+def must_return(params: Params, q: dict, k: int) -> bool:
+    """True when the usable endurance (0.85 T, eq. 18) only just covers the flight home at
+    cruise speed plus two steps (``q`` is :func:`decode_vector` of UAV ``k``'s observation)."""
+    u = params.scenario.uav
+    home = float(np.hypot(*(params.landing[k] - q["xy"])))
+    return q["usable"] * u.usable_endurance_s <= home / u.cruise_speed_mps + 2 * params.dt
+
+
+def go_home(params: Params, q: dict, k: int) -> np.ndarray:
+    """Actions flying UAV ``k`` to its landing field at cruise speed, slowing down to land."""
+    u = params.scenario.uav
+    home = float(np.hypot(*(params.landing[k] - q["xy"])))
+    v = u.min_speed_mps if home < 2 * u.cruise_speed_mps * params.dt else u.cruise_speed_mps
+    return steer(
+        params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], params.landing[k], v
+    ).astype(np.float32)
+
+
 def _lookahead(p, q, xy, ahead: float) -> np.ndarray:
     """The point ``ahead`` metres beyond the projection of ``xy`` on the leg p -> q (<= q)."""
     d = q - p
@@ -81,10 +99,7 @@ class WaypointFollower:
             reach = 0.5 * q["speed"] * self.params.dt
             while self.index[k] < len(wps) and np.hypot(*(wps[self.index[k]] - q["xy"])) <= reach:
                 self.index[k] += 1
-            # go home when the usable endurance (0.85 T, eq. 18) only just covers the way back
-            home = float(np.hypot(*(self.params.landing[k] - q["xy"])))
-            left = q["usable"] * u.usable_endurance_s
-            if left <= home / u.cruise_speed_mps + 2 * self.params.dt:
+            if must_return(self.params, q, k):
                 self.index[k] = len(wps)
             on_pattern = 0 < self.index[k] < len(wps)
             if on_pattern:  # pure pursuit along the leg: back onto the line, then along it
@@ -93,9 +108,10 @@ class WaypointFollower:
                 goal = wps[self.index[k]]
             else:
                 goal = self.params.landing[k]
+            if self.index[k] >= len(wps):
+                actions[agent] = go_home(self.params, q, k)
+                continue
             v = u.search_speed_mps if on_pattern else u.cruise_speed_mps
-            if self.index[k] >= len(wps) and home < 2 * u.cruise_speed_mps * self.params.dt:
-                v = u.min_speed_mps  # approach: slow down to land
             actions[agent] = steer(
                 self.params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v
             ).astype(np.float32)
