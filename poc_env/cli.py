@@ -43,6 +43,16 @@ def cmd_survey(args: argparse.Namespace) -> int:
     sc = load_scenario(args.scenario)
     plan = load_regions(args.regions or f"{sc.name}_polygons")
     prior = build_prior(sc.map, args.map_file)
+    if getattr(args, "optimise", False):
+        from agents.region_planner import optimise_regions
+
+        plan = optimise_regions(sc, plan)
+        print("Spacing and direction optimised per region (Table 3 analog):")
+        for r in plan.regions:
+            print(
+                f"  {r.id}: {r.pattern:<16} S = {r.spacing_m / 1e3:6.2f} km, "
+                f"direction {np.degrees(r.direction_rad):5.1f} deg"
+            )
     result = run_survey(sc, plan, prior=prior)
     print(
         f"Survey of {plan.name} on {sc.name} (W = {sc.sensor.sweep_width_m / 1e3:g} km, "
@@ -240,6 +250,11 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scenario(p, "paper_6_1")
     p.add_argument("--regions", default=None, help="region plan: built-in name or YAML path")
     p.add_argument("--out", default=None, help="folder for survey.csv / .txt / .png")
+    p.add_argument(
+        "--optimise",
+        action="store_true",
+        help="choose each region's spacing and direction for the most POS within 0.85 T",
+    )
     p.set_defaults(func=cmd_survey)
 
     p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")

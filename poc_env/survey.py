@@ -65,6 +65,8 @@ class RegionSpec:
     direction_rad: float = _f("direction_deg", DEG, default=0.0)
     airfield: str | None = _f(default=None)
     landing: str | None = _f(default=None)
+    #: expanding square only: fly the second, 45-degree-rotated search too (Fig. 6).
+    second_search: bool = _f(default=True)
 
     def __post_init__(self) -> None:
         from poc_env.regions import CircleRegion, PolygonRegion
@@ -112,7 +114,9 @@ class RegionSpec:
                 rotation_rad=self.direction_rad,
             )
         if self.pattern == "expanding_square":
-            return patterns.expanding_square(self.center_m, self.spacing_m, self.radius_m)
+            return patterns.expanding_square(
+                self.center_m, self.spacing_m, self.radius_m, second_rotated=self.second_search
+            )
         return patterns.spiral_search(self.center_m, self.radius_m)
 
 
