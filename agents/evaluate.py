@@ -43,7 +43,14 @@ def _game() -> Policy:
     return PotentialGamePolicy()
 
 
+def _receding() -> Policy:
+    from agents.receding import DERecedingPolicy
+
+    return DERecedingPolicy()
+
+
 POLICIES: dict[str, Callable[[], Policy]] = {
+    "de_receding": _receding,
     "random": RandomPolicy,
     "lawnmower": LawnmowerPolicy,
     "de_plan": _de_plan,
