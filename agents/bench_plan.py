@@ -36,6 +36,7 @@ import argparse  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -67,7 +68,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     npop = args.popsize or sc.planner.population
     gens = args.maxiter or sc.planner.generations
     f0, cr = sc.planner.f0, sc.planner.cr
-    budget = dict(popsize=npop, maxiter=gens)
+    budget: dict[str, Any] = dict(popsize=npop, maxiter=gens)
     print(
         f"# {sc.name}: {obj.n} UAVs, {obj.grid.ny} x {obj.grid.nx} cells, NP {npop}, G {gens}, "
         f"F0 {f0}, CR {cr}; one core; medians of {args.runs} runs",

@@ -205,6 +205,7 @@ def evaluate(
         make_policy(p)
     sc = load_scenario(scenario)
     jobs = [(sc, p, seed0 + k, map_file) for p in policies for k in range(episodes)]
+    it: Any
     if workers == 1:
         it = map(_run, jobs)
     else:

@@ -103,7 +103,9 @@ class WaypointFollower:
                 self.index[k] = len(wps)
             on_pattern = 0 < self.index[k] < len(wps)
             if on_pattern:  # pure pursuit along the leg: back onto the line, then along it
-                goal = _lookahead(wps[self.index[k] - 1], wps[self.index[k]], q["xy"], 2 * reach)
+                goal = _lookahead(
+                    wps[self.index[k] - 1], wps[self.index[k]], q["xy"], float(2 * reach)
+                )
             elif self.index[k] < len(wps):
                 goal = wps[self.index[k]]
             else:

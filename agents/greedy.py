@@ -167,10 +167,11 @@ class PotentialGamePolicy(Policy):
             prob = np.exp(z)
             self.choice[k] = int(self.rng.choice(self.choices, p=prob / prob.sum()))
         centers = self.centers.reshape(-1, 2)
+        assert poc is not None or not players
         for k in players:
             q = qs[k]
             if not np.any(poc * pods[k][self.choice[k]] > 0):  # nothing in sight: go find it
-                goal = centers[best_cell(p, poc, q, k)]
+                goal = centers[best_cell(p, poc, q, k)]  # type: ignore[arg-type]
                 actions[self.agents[k]] = steer(
                     p,
                     q["xy"],

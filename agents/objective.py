@@ -788,7 +788,10 @@ class PlanObjective:
             raise ConfigError("x", arr.shape, f"one individual, shape ({self.dim},)")
         boxes = np.array(self.grid.cell_boxes(), dtype=object)
         w_sweep = self.sweep_width_m
-        members, pods, times, earlier = [], [], [], []
+        members: list[Any] = []
+        pods: list[float] = []
+        times: list[float] = []
+        earlier: list[Any] = []
         for i in range(self.n):
             xc, yc, ln, wd, th, d = arr[PARAMS_PER_UAV * i : PARAMS_PER_UAV * (i + 1)]
             track = parallel_line_search((xc, yc), ln, wd, th, d, start=self.takeoff_m[i])

@@ -819,7 +819,7 @@ def scipy_de(
         state["nit"],
         evaluate.nfev,
         history,
-        state["stopped"],
+        bool(state["stopped"]),
         population=getattr(res, "population", None),
         population_energies=getattr(res, "population_energies", None),
     )

@@ -45,7 +45,7 @@ def make_plan(
         prior = build_prior(sc.map)
     obj = PlanObjective(sc, prior, uavs=uavs)
     pl = sc.planner
-    settings = {
+    settings: dict[str, Any] = {
         "popsize": int(popsize or pl.population),
         "maxiter": int(maxiter or pl.generations),
     }

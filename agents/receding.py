@@ -127,7 +127,7 @@ class DERecedingPolicy(Policy):
                 )
                 a[1] = res.x[j]
                 if not p.grid.contains(q["xy"]):  # transit from the airfield to the area
-                    goal = p.grid.centers.reshape(-1, 2)[best_cell(p, poc, q, k)]
+                    goal = p.grid.centers.reshape(-1, 2)[best_cell(p, poc, q, k)]  # type: ignore[arg-type]
                     a = steer(
                         p,
                         q["xy"],

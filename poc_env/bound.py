@@ -71,10 +71,10 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
         k = int(full.sum())
         if k < m.size:
             cov[order[k]] = (effort - (filled[k - 1] if k else 0.0)) / a[k]
-        cov = cov.reshape(m.shape)
+        cov_map = cov.reshape(m.shape)
         return Bound(
-            float(np.sum(m * cov)),
-            cov,
+            float(np.sum(m * cov_map)),
+            cov_map,
             float(density.ravel()[order[min(k, m.size - 1)]]),
             effort,
             law,

@@ -530,11 +530,16 @@ def _from_mapping(cls: type, data: Any, where: str) -> Any:
         value = data[key]
         sub = f"{where}.{key}" if where else key
         tp = _strip_optional(hints[f.name])
-        if dataclasses.is_dataclass(tp):
+        if isinstance(tp, type) and dataclasses.is_dataclass(tp):
             kwargs[f.name] = _from_mapping(tp, value if value is not None else {}, sub)
             continue
         args = typing.get_args(tp)
-        if typing.get_origin(tp) is tuple and args and dataclasses.is_dataclass(args[0]):
+        if (
+            typing.get_origin(tp) is tuple
+            and args
+            and isinstance(args[0], type)
+            and dataclasses.is_dataclass(args[0])
+        ):
             if not isinstance(value, (list, tuple)):
                 raise ConfigError(sub, value, f"a list of {args[0].__name__} mappings")
             kwargs[f.name] = tuple(

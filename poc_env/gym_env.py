@@ -30,6 +30,7 @@ class UAVSearchGym(gym.Env):
         self.render_mode = render_mode
         agents = self.par.possible_agents
         one = self.par.observation_space(agents[0])
+        assert isinstance(one, spaces.Box)
         n = len(agents)
         self.observation_space = spaces.Box(
             np.tile(one.low, n), np.tile(one.high, n), dtype=np.float32

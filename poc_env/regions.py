@@ -22,7 +22,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 import shapely
@@ -150,7 +150,7 @@ class CircleRegion:
         return Point(self.center_m).buffer(r, quad_segs=CIRCLE_QUAD_SEGS)
 
 
-Region = PolygonRegion | CircleRegion | shapely.Geometry
+Region: TypeAlias = PolygonRegion | CircleRegion | shapely.Geometry
 
 
 def _geometry_of(region: Any, name: str = "region") -> shapely.Geometry:

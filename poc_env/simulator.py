@@ -170,6 +170,7 @@ class State:
             return np.broadcast_to(
                 self.belief[:, None], (*self.flying.shape, *self.belief.shape[1:])
             )
+        assert self.prior_fine is not None
         return self.prior_fine[:, None] * np.prod(self.known, axis=2)
 
 
@@ -280,6 +281,8 @@ def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) ->
     """
     e, n = state.flying.shape
     own = state.own_survival
+    known = state.known
+    assert own is not None and known is not None
     sensor = params.scenario.sensor
     sweep_segments(
         own.reshape(e * n, *own.shape[2:]),
@@ -292,7 +295,7 @@ def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) ->
         params.cutoff_m,
     )
     reach = comms_mod.reachable(state.links) | np.eye(n, dtype=bool)[None]
-    state.known[reach] = np.broadcast_to(own[:, None], state.known.shape)[reach]
+    known[reach] = np.broadcast_to(own[:, None], known.shape)[reach]
 
 
 def _update_topology(

@@ -142,7 +142,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         overrides: Mapping[str, Any] | None = None,
         **kwargs: Any,
     ) -> None:
-        if render_mode not in (None, *self.metadata["render_modes"]):
+        if render_mode not in (None, "rgb_array", "human"):
             raise ConfigError("render_mode", render_mode, "None, 'rgb_array' or 'human'")
         if obs_type not in OBS_TYPES:
             raise ConfigError("obs_type", obs_type, "'dict' or 'flat'")
