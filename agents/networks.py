@@ -63,24 +63,24 @@ class SwarmExtractor(BaseFeaturesExtractor):
                 "Dict(raster=..., vector=...) (the env's obs_type='dict')",
             )
         super().__init__(observation_space, features_dim=raster_features + vector_features)
-        raster = observation_space["raster"]
-        vector = observation_space["vector"]
-        if len(raster.shape) != 3 or len(vector.shape) != 1:
+        raster_shape = tuple(observation_space["raster"].shape or ())
+        vector_shape = tuple(observation_space["vector"].shape or ())
+        if len(raster_shape) != 3 or len(vector_shape) != 1:
             raise ConfigError(
                 "observation_space", observation_space, "raster (C, ny, nx) and vector (D,)"
             )
         c1, c2 = channels
         self.cnn = nn.Sequential(
-            nn.Conv2d(raster.shape[0], c1, kernel_size=3, stride=2, padding=1),
+            nn.Conv2d(raster_shape[0], c1, kernel_size=3, stride=2, padding=1),
             nn.ReLU(),
             nn.Conv2d(c1, c2, kernel_size=3, stride=2, padding=1),
             nn.ReLU(),
             nn.Flatten(),
         )
         with th.no_grad():
-            n_flat = self.cnn(th.zeros(1, *raster.shape)).shape[1]
+            n_flat = self.cnn(th.zeros(1, *raster_shape)).shape[1]
         self.raster_head = nn.Sequential(nn.Linear(n_flat, raster_features), nn.ReLU())
-        self.vector_mlp = nn.Sequential(nn.Linear(vector.shape[0], vector_features), nn.ReLU())
+        self.vector_mlp = nn.Sequential(nn.Linear(vector_shape[0], vector_features), nn.ReLU())
 
     def forward(self, observations: dict[str, th.Tensor]) -> th.Tensor:
         r = self.raster_head(self.cnn(observations["raster"]))
