@@ -59,10 +59,29 @@ POLICIES: dict[str, Callable[[], Policy]] = {
 }
 
 
+def _ppo(path: str) -> Policy:
+    from agents.train import PPOPolicy
+
+    return PPOPolicy(path, name=f"ppo:{path}")
+
+
+#: Policies named by a prefix and an argument: ``ppo:PATH`` is a PPO checkpoint (a ``.zip`` or
+#: a run folder), :class:`agents.train.PPOPolicy`. Model files are pickle-based: load only
+#: trusted files.
+POLICY_PATTERNS: dict[str, Callable[[str], Policy]] = {"ppo": _ppo}
+
+
 def make_policy(name: str) -> Policy:
-    """A fresh policy by name (see :data:`POLICIES`)."""
+    """A fresh policy by name (see :data:`POLICIES`) or pattern (``ppo:PATH``, see
+    :data:`POLICY_PATTERNS`)."""
+    prefix, sep, arg = name.partition(":")
+    if sep and prefix in POLICY_PATTERNS:
+        if not arg:
+            raise ConfigError("policies", name, f"{prefix}:PATH with a checkpoint path")
+        return POLICY_PATTERNS[prefix](arg)
     if name not in POLICIES:
-        raise ConfigError("policies", name, "one of " + ", ".join(sorted(POLICIES)))
+        allowed = sorted(POLICIES) + [f"{p}:PATH" for p in sorted(POLICY_PATTERNS)]
+        raise ConfigError("policies", name, "one of " + ", ".join(allowed))
     return POLICIES[name]()
 
 

@@ -2,8 +2,9 @@
 
 Subcommands: ``scenarios`` (list the built-ins), ``survey`` (Table 4 / 5 analog of a region
 plan), ``figures`` (regenerate the README's pictures), ``demo`` (the main job on the default
-scenario). Bad input ends with ``error: ...`` naming the field, the value and what is allowed,
-and exit status 2 -- never a traceback.
+scenario), ``train`` (PPO; options generated from ``agents.train.TrainArgs``). Bad input ends
+with ``error: ...`` naming the field, the value and what is allowed, and exit status 2 -- never
+a traceback.
 """
 
 from __future__ import annotations
@@ -118,7 +119,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     import os
     import subprocess
 
-    modules = {"env": "poc_env.bench_env", "plan": "agents.bench_plan"}
+    modules = {"env": "poc_env.bench_env", "plan": "agents.bench_plan", "train": "agents.train"}
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
     return subprocess.call(cmd, env=env)
@@ -152,6 +153,19 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             plot_curves(ev, out / "posc_over_time.png", sc.episode.dt_s),
         ):
             print(f"wrote {p}")
+    return 0
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    """Train (or resume) an RL policy; every option comes from ``agents.train.TrainArgs``."""
+    from agents.train import args_from_namespace, train
+
+    targs = args_from_namespace(args)
+    try:
+        run = train(targs)
+    except KeyboardInterrupt:
+        return 130
+    print(f"wrote {run / 'model.zip'} (run folder {run})")
     return 0
 
 
@@ -276,6 +290,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_evaluate)
 
+    from agents.train import add_train_arguments
+
+    p = sub.add_parser(
+        "train",
+        help="train an RL policy (PPO) into a run folder, or --resume one",
+        description="Train PPO on a scenario; the run folder gets config.json, scenario.yaml, "
+        "TensorBoard logs (tb/), atomic checkpoints and model.zip. Model files are "
+        "pickle-based: load only trusted files.",
+    )
+    add_train_arguments(p)
+    p.set_defaults(func=cmd_train)
+
     p = sub.add_parser("plan", help="the §6.2 time-limited plan (Table 6 analog) as plan.json")
     _add_scenario(p, "paper_6_2")
     p.add_argument("--uavs", type=int, default=None, help="number of UAVs (default: fleet)")
@@ -301,7 +327,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument(
-        "what", choices=["env", "plan"], help="env: agent-steps/s; plan: DE plan wall time"
+        "what",
+        choices=["env", "plan", "train"],
+        help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s",
     )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)
