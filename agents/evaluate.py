@@ -162,15 +162,16 @@ class Evaluation:
         return out
 
     def table(self) -> str:
+        width = max(14, *(len(p) for p in self.policies))
         head = (
-            f"{'policy':<14} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
+            f"{'policy':<{width}} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
             f"{'viol.steps':>10} {'crashed':>8} {'landed':>7}"
         )
         lines = [head, "-" * len(head)]
         for r in self.rows():
             t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
             lines.append(
-                f"{r['policy']:<14} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
+                f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
                 f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
                 f"{r['crashed']:>8.2f} {r['landed']:>7.2f}"
             )

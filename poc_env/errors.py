@@ -35,6 +35,10 @@ class ConfigError(PocEnvError, ValueError):
             shown = shown[:117] + "..."
         super().__init__(f"{field}: got {shown}; allowed: {allowed}")
 
+    def __reduce__(self):
+        # rebuilt from its three fields, so it survives pickling (process pools)
+        return (type(self), (self.field, self.value, self.allowed))
+
     def with_prefix(self, prefix: str) -> ConfigError:
         """The same error with ``prefix.`` put in front of the field name."""
         name = f"{prefix}.{self.field}" if prefix else self.field

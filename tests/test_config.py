@@ -154,3 +154,12 @@ def test_overrides_and_with_uavs():
 def test_resolved_config_is_plain_yaml():
     text = yaml.safe_dump(load_scenario("paper_6_2").to_dict())
     assert "sweep_width_km: 5.0" in text
+
+
+def test_config_error_survives_pickling():
+    """Errors raised in worker processes reach the user with their message intact."""
+    import pickle
+
+    err = ConfigError("uav.endurance_h", -1, "a number > 0")
+    back = pickle.loads(pickle.dumps(err))
+    assert isinstance(back, ConfigError) and str(back) == str(err) and back.field == err.field
