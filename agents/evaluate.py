@@ -97,15 +97,41 @@ class Episode:
     landed: int
     steps: int
     posc_curve: tuple[float, ...] = field(repr=False)
+    #: physical optimum of this episode's prior for the swarm's largest effort
+    bound: float = float("nan")
 
 
-def run_episode(scenario: Any, policy: str, seed: int, map_file: str | None = None) -> Episode:
-    """One episode of ``policy`` on a fresh env reset with ``seed``."""
+#: Second entropy word of the evaluation priors' generators: ``default_rng([seed, STREAM])``.
+#: Training draws its priors from ``SeedSequence(train_seed).spawn(n_envs)`` (spawned, so
+#: with a non-empty spawn key), which never yields this generator.
+EVAL_PRIOR_STREAM = 0x5EA7C4
+
+
+def episode_prior(scenario: Any, seed: int) -> np.ndarray:
+    """The random Gaussian-mixture prior of evaluation episode ``seed`` (``--random-priors``)."""
+    from poc_env.config import load_scenario
+    from poc_env.probability_map import Grid, random_gaussian_mixture
+
+    grid = Grid.from_config(load_scenario(scenario).map)
+    return random_gaussian_mixture(grid, np.random.default_rng([seed, EVAL_PRIOR_STREAM]))
+
+
+def run_episode(
+    scenario: Any,
+    policy: str,
+    seed: int,
+    map_file: str | None = None,
+    random_priors: bool = False,
+) -> Episode:
+    """One episode of ``policy`` on a fresh env reset with ``seed`` (and, with
+    ``random_priors``, the prior :func:`episode_prior` of ``seed``)."""
     from poc_env.uav_env import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
     pol = make_policy(policy)
-    obs, _ = env.reset(seed=seed)
+    prior = episode_prior(env.scenario, seed) if random_priors else None
+    options = None if prior is None else {"prior": prior}
+    obs, _ = env.reset(seed=seed, options=options)
     pol.reset(env, seed)
     curve = []
     while env.agents:
@@ -124,6 +150,7 @@ def run_episode(scenario: Any, policy: str, seed: int, map_file: str | None = No
         landed=int(st.landed[0].sum()),
         steps=int(st.step[0]),
         posc_curve=tuple(curve),
+        bound=effort_bound(env.scenario, map_file, prior),
     )
 
 
@@ -137,6 +164,7 @@ class Evaluation:
     episodes: tuple[Episode, ...]
     bound: float
     policies: tuple[str, ...]
+    random_priors: bool = False
 
     def rows(self) -> list[dict[str, Any]]:
         out = []
@@ -176,9 +204,10 @@ class Evaluation:
                 f"{r['crashed']:>8.2f} {r['landed']:>7.2f}"
             )
         lines.append("-" * len(head))
+        mean = "mean over the episodes' random priors of the " if self.random_priors else ""
         lines.append(
-            f"physical optimum for the swarm's largest effort (all UAVs searching 0.85 T): "
-            f"{self.bound:.4f}"
+            f"{mean}physical optimum for the swarm's largest effort (all UAVs searching "
+            f"0.85 T): {self.bound:.4f}"
         )
         return "\n".join(lines)
 
@@ -191,14 +220,18 @@ class Evaluation:
         return buf.getvalue()
 
 
-def effort_bound(scenario: Any, map_file: str | None = None) -> float:
-    """Physical optimum for every UAV searching its whole usable endurance at v_s."""
+def effort_bound(
+    scenario: Any, map_file: str | None = None, prior: np.ndarray | None = None
+) -> float:
+    """Physical optimum for every UAV searching its whole usable endurance at v_s, on
+    ``prior`` (default: the scenario's prior or ``map_file``)."""
     from poc_env.bound import physical_optimum
     from poc_env.config import load_scenario
     from poc_env.probability_map import Grid, build_prior
 
     sc = load_scenario(scenario)
-    prior = build_prior(sc.map, map_file)
+    if prior is None:
+        prior = build_prior(sc.map, map_file)
     u = sc.uav
     effort = sc.n_uavs * u.usable_endurance_s * u.search_speed_mps * sc.sensor.sweep_width_m
     grid = Grid.from_config(sc.map)
@@ -213,6 +246,7 @@ def evaluate(
     workers: int = 1,
     map_file: str | None = None,
     progress: bool = False,
+    random_priors: bool = False,
 ) -> Evaluation:
     """Run every policy on the same seeds; see the module docstring."""
     from poc_env.config import load_scenario
@@ -224,7 +258,9 @@ def evaluate(
     for p in policies:
         make_policy(p)
     sc = load_scenario(scenario)
-    jobs = [(sc, p, seed0 + k, map_file) for p in policies for k in range(episodes)]
+    if random_priors and map_file is not None:
+        raise ConfigError("map", map_file, "no map file with --random-priors (one or the other)")
+    jobs = [(sc, p, seed0 + k, map_file, random_priors) for p in policies for k in range(episodes)]
     it: Any
     if workers == 1:
         it = map(_run, jobs)
@@ -238,7 +274,8 @@ def evaluate(
     results = tuple(it)
     if workers > 1:
         pool.shutdown()
-    return Evaluation(sc.name, results, effort_bound(sc, map_file), tuple(policies))
+    bound = float(np.mean([e.bound for e in results[:episodes]]))
+    return Evaluation(sc.name, results, bound, tuple(policies), random_priors)
 
 
 def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Path:

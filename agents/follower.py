@@ -36,22 +36,36 @@ def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> n
     return np.stack([a_speed, a_turn, a_pitch], axis=-1)
 
 
+def returning(params: Params, xy, usable, k) -> np.ndarray:
+    """Vectorised :func:`must_return`: ``xy (..., 2)`` positions, ``usable (...)`` remaining
+    usable-endurance shares (observation entry ``usable``), ``k (...)`` UAV indices."""
+    u = params.scenario.uav
+    d = params.landing[np.asarray(k)] - np.asarray(xy, dtype=float)
+    home = np.hypot(d[..., 0], d[..., 1])
+    return np.asarray(usable) * u.usable_endurance_s <= home / u.cruise_speed_mps + 2 * params.dt
+
+
+def homing(params: Params, q: dict, k) -> np.ndarray:
+    """Vectorised :func:`go_home` over ``q`` entries shaped (...) and indices ``k (...)``."""
+    u = params.scenario.uav
+    goal = params.landing[np.asarray(k)]
+    d = goal - np.asarray(q["xy"], dtype=float)
+    home = np.hypot(d[..., 0], d[..., 1])
+    v = np.where(home < 2 * u.cruise_speed_mps * params.dt, u.min_speed_mps, u.cruise_speed_mps)
+    return steer(params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v).astype(
+        np.float32
+    )
+
+
 def must_return(params: Params, q: dict, k: int) -> bool:
     """True when the usable endurance (0.85 T, eq. 18) only just covers the flight home at
     cruise speed plus two steps (``q`` is :func:`decode_vector` of UAV ``k``'s observation)."""
-    u = params.scenario.uav
-    home = float(np.hypot(*(params.landing[k] - q["xy"])))
-    return q["usable"] * u.usable_endurance_s <= home / u.cruise_speed_mps + 2 * params.dt
+    return bool(returning(params, q["xy"], q["usable"], k))
 
 
 def go_home(params: Params, q: dict, k: int) -> np.ndarray:
     """Actions flying UAV ``k`` to its landing field at cruise speed, slowing down to land."""
-    u = params.scenario.uav
-    home = float(np.hypot(*(params.landing[k] - q["xy"])))
-    v = u.min_speed_mps if home < 2 * u.cruise_speed_mps * params.dt else u.cruise_speed_mps
-    return steer(
-        params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], params.landing[k], v
-    ).astype(np.float32)
+    return homing(params, q, k)
 
 
 def _lookahead(p, q, xy, ahead: float) -> np.ndarray:

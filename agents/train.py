@@ -107,7 +107,7 @@ if TYPE_CHECKING:
     from poc_env.config import Scenario
 
 ALGOS = ("ppo",)
-RECIPES = ("shared", "central")
+RECIPES = ("shared", "central", "pilot")
 
 
 @dataclass
@@ -125,6 +125,11 @@ class TrainArgs:
     """shared: one policy for every UAV (parameter sharing over SwarmVecEnv, CNN+MLP
     SwarmExtractor); central: one agent over the joint observation and joint action
     (poc_env/UAVSearch-v0, MlpPolicy)."""
+    approach_shaping: float = 0.0
+    """pilot recipe: coefficient of the potential-based approach term c (gamma Phi(s') -
+    Phi(s)), Phi = -(km from the UAV to the grid) (agents.pilot)."""
+    net_arch: list[int] = field(default_factory=lambda: [128, 128])
+    """pilot and central recipes: hidden layers of the policy and value MLPs."""
     total_timesteps: int = 1_000_000
     """Timesteps to train for: agent transitions (shared) or joint steps (central), summed over
     envs; rounded up to whole rollouts of n_steps x slots."""
@@ -191,6 +196,16 @@ class TrainArgs:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | float) or not low <= v <= high:
                 raise ConfigError(name, v, f"a number in [{low}, {high}]")
+        if (
+            isinstance(self.approach_shaping, bool)
+            or not isinstance(self.approach_shaping, int | float)
+            or not np.isfinite(self.approach_shaping)
+        ):
+            raise ConfigError("approach_shaping", self.approach_shaping, "a finite number")
+        if not isinstance(self.net_arch, list | tuple) or not all(
+            isinstance(w, int) and not isinstance(w, bool) and w >= 1 for w in self.net_arch
+        ):
+            raise ConfigError("net_arch", self.net_arch, "a list of layer widths (integers >= 1)")
         if self.learning_rate == 0:
             raise ConfigError("learning_rate", self.learning_rate, "a number > 0")
         for name in ("scenario",):
@@ -293,7 +308,9 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
         if base is bool:
             parser.add_argument(flag, action=argparse.BooleanOptionalAction, **kw)
         elif typing.get_origin(base) is list:
-            parser.add_argument(flag, nargs="*", metavar="KEY=VALUE", **kw)
+            item = typing.get_args(base)[0]
+            meta = "N" if item is int else "KEY=VALUE"
+            parser.add_argument(flag, nargs="*", type=item, metavar=meta, **kw)
         else:
             metavar = _METAVARS.get(f.name) or {int: "N", float: "X"}.get(base, "VALUE")
             parser.add_argument(flag, type=base, metavar=metavar, **kw)
@@ -426,6 +443,17 @@ def _central_env(scenario: Scenario, random_priors: bool, seed_seq: np.random.Se
 def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
     """The training VecEnv of ``args.recipe``; env ``e``'s generators come from
     ``SeedSequence(args.seed).spawn(args.n_envs)[e]``."""
+    if args.recipe == "pilot":
+        from agents.pilot import PilotVecEnv
+
+        return PilotVecEnv(
+            scenario,
+            n_envs=args.n_envs,
+            seed=args.seed,
+            random_priors=args.random_priors,
+            approach_shaping=args.approach_shaping,
+            gamma=args.gamma,
+        )
     if args.recipe == "shared":
         from agents.vec_env import SwarmVecEnv
 
@@ -507,6 +535,7 @@ def make_model(args: TrainArgs, env: VecEnv, tb_dir: Path | None) -> PPO:
         policy, policy_kwargs = "MultiInputPolicy", {"features_extractor_class": SwarmExtractor}
     else:
         policy = "MlpPolicy"
+        policy_kwargs = {"net_arch": list(args.net_arch)}
     return PPO(
         policy,
         env,
@@ -967,6 +996,17 @@ def _flat_space(space: Any) -> Any:
     return space
 
 
+def _split(env: Any, obs: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(raster, vector) of one agent's ``dict`` or ``flat`` observation."""
+    from poc_env.observations import RASTER_CHANNELS, VECTOR_SIZE
+
+    if isinstance(obs, dict):
+        return np.asarray(obs["raster"]), np.asarray(obs["vector"])
+    flat = np.asarray(obs)
+    g = env.params.grid
+    return flat[:-VECTOR_SIZE].reshape(RASTER_CHANNELS, g.ny, g.nx), flat[-VECTOR_SIZE:]
+
+
 class PPOPolicy(Policy):
     """A PPO checkpoint flying through the :class:`agents.base.Policy` interface.
 
@@ -1005,7 +1045,12 @@ class PPOPolicy(Policy):
         m_obs, m_act = self.model.observation_space, self.model.action_space
         one_act = spaces.Box(-1.0, 1.0, (3,), np.float32)
         joint_act = spaces.Box(-1.0, 1.0, (3 * len(agents),), np.float32)
-        if m_obs == agent_space and m_act == one_act:
+        from agents import pilot
+
+        if m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
+            self.mode = "pilot"
+            self._features = pilot.PilotFeatures(env.params)
+        elif m_obs == agent_space and m_act == one_act:
             self.mode = "shared"
         elif m_obs == _flat_space(agent_space) and m_act == one_act:
             self.mode = "shared_flat"
@@ -1034,6 +1079,15 @@ class PPOPolicy(Policy):
             act = np.asarray(act, dtype=np.float32).reshape(len(self._agents), 3)
             return {a: act[self._agents.index(a)] for a in live}, state
         batch: Any
+        if self.mode == "pilot":
+            from agents.pilot import pilot_actions
+
+            ras, vec = zip(*(_split(self.env, observations[a]) for a in live), strict=True)
+            k = np.array([self._agents.index(a) for a in live])
+            feats = self._features(np.stack(ras), np.stack(vec), k)
+            act, _ = self.model.predict(feats, deterministic=deterministic)
+            inc = pilot_actions(self.env.params, np.stack(vec), np.asarray(act), k)
+            return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "shared":
             batch = {
                 k: np.stack([np.asarray(observations[a][k]) for a in live])
@@ -1100,7 +1154,7 @@ def bench_train(
     finally:
         th.set_num_threads(threads)
     n = iterations * rollout
-    per_step = 1 if recipe == "shared" else load_scenario(scenario).n_uavs
+    per_step = 1 if recipe in ("shared", "pilot") else load_scenario(scenario).n_uavs
     return {
         "transitions_per_s": n * per_step / wall,
         "env_share": clock["env"] / wall,

@@ -248,12 +248,27 @@ class SwarmVecEnv(VecEnv):
     # -- stepping --------------------------------------------------------------------------------
     def step_async(self, actions: np.ndarray) -> None:
         a = np.asarray(actions, dtype=float)
-        if a.size != self.num_envs * 3:
-            raise ConfigError("actions", a.shape, f"shape ({self.num_envs}, 3)")
-        a = a.reshape(self.n_envs, self.n_agents, 3)
+        width = int(np.prod(self.action_space.shape or (1,)))
+        if a.size != self.num_envs * width:
+            raise ConfigError("actions", a.shape, f"shape ({self.num_envs}, {width})")
+        a = a.reshape(self.n_envs, self.n_agents, width)
         if not np.isfinite(a).all():
             raise ConfigError("actions", "non-finite values", "finite numbers in [-1, 1]")
-        self._actions = np.where(self._active[..., None], a, 0.0)
+        self._actions = self._sim_actions(a)
+
+    # -- hooks for subclasses (agents.pilot.PilotVecEnv) ----------------------------------------
+    def _sim_actions(self, a: np.ndarray) -> np.ndarray:
+        """The simulator's eq. 19 actions (E, N, 3) for the slots' actions ``a (E, N, ...)``;
+        finished agents get 0."""
+        return np.where(self._active[..., None], a, 0.0)
+
+    def _reward(self, ev: sim.Events, state: sim.State) -> np.ndarray:
+        """Reward (E, N) of the step that produced ``ev`` and ``state``."""
+        return total_reward(reward_terms(self.scenario.reward, ev))
+
+    def _rl_done(self, state: sim.State) -> np.ndarray | bool:
+        """Agents whose RL episode ends although they still fly (E, N), or False."""
+        return False
 
     def step_wait(self):
         if self.state is None:
@@ -262,11 +277,11 @@ class SwarmVecEnv(VecEnv):
         n = self.n_agents
         active = self._active
         ev = sim.step(p, st, self._actions, self.rngs)
-        reward = np.where(active, total_reward(reward_terms(self.scenario.reward, ev)), 0.0)
+        reward = np.where(active, self._reward(ev, st), 0.0)
         self._returns += reward
         self._lengths += active
         detected_end = st.detected & self.scenario.episode.detection_ends_episode
-        finished = active & (st.landed | st.crashed | detected_end[:, None])
+        finished = active & (st.landed | st.crashed | detected_end[:, None] | self._rl_done(st))
         still = active & ~finished
         truncated_env = st.step >= p.horizon
         env_end = truncated_env | ~still.any(axis=1)

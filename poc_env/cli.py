@@ -139,10 +139,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         workers=args.workers,
         map_file=args.map_file,
         progress=not args.quiet,
+        random_priors=args.random_priors,
     )
+    priors = ", a fresh random prior per seed" if args.random_priors else ""
     print(
         f"{sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
-        f"{args.seed + args.episodes - 1}"
+        f"{args.seed + args.episodes - 1}{priors}"
     )
     print(ev.table())
     if args.out:
@@ -245,6 +247,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             seed=1000,
             workers=args.workers,
             out=str(out),
+            random_priors=False,
             quiet=True,
         )
     )
@@ -286,6 +289,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--seed", type=int, default=1000, help="first episode seed")
     p.add_argument("--workers", type=int, default=1)
+    p.add_argument(
+        "--random-priors",
+        action="store_true",
+        help="every seed flies a fresh random Gaussian-mixture prior (agents.evaluate."
+        "episode_prior; a generator stream training never draws from)",
+    )
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_evaluate)

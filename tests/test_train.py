@@ -28,7 +28,7 @@ from poc_env.errors import ConfigError
 
 # small: 3 UAVs, so one shared-recipe rollout with 2 envs and 16 steps is 96 transitions; the
 # central recipe's is 32 (one slot per env). Horizon 12 < 16: every rollout ends episodes.
-ROLLOUT = {"shared": 96, "central": 32}
+ROLLOUT = {"shared": 96, "central": 32, "pilot": 96}
 
 
 def _args(recipe: str, run_dir: Path, **kw) -> TrainArgs:
@@ -88,11 +88,11 @@ def one_thread():
 def runs(tmp_path_factory) -> dict[str, Path]:
     """One complete tiny run per recipe."""
     root = tmp_path_factory.mktemp("runs")
-    return {r: train(_args(r, root / r)) for r in ("shared", "central")}
+    return {r: train(_args(r, root / r)) for r in ("shared", "central", "pilot")}
 
 
 # -- run folder -------------------------------------------------------------------------------
-@pytest.mark.parametrize("recipe", ["shared", "central"])
+@pytest.mark.parametrize("recipe", ["shared", "central", "pilot"])
 def test_train_writes_the_run_folder(runs, recipe):
     run = runs[recipe]
     total = 3 * ROLLOUT[recipe]
@@ -109,7 +109,7 @@ def test_train_writes_the_run_folder(runs, recipe):
     assert step == total and model_zip == run / "checkpoints" / f"step_{total}.zip"
     saved = json.loads(state.read_text())
     assert saved["step"] == total and len(saved["env_generators"]) == 2
-    assert (env_npz is not None) == (recipe == "shared")  # episodes in flight: shared only
+    assert (env_npz is not None) == (recipe != "central")  # episodes in flight: shared only
     assert not list(run.rglob("*.tmp"))  # atomic writes leave no temporary files
     model = load_policy(run / "model.zip")
     assert model.num_timesteps == total
@@ -150,7 +150,7 @@ def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
 
 
 # -- determinism ------------------------------------------------------------------------------
-@pytest.mark.parametrize("recipe", ["shared", "central"])
+@pytest.mark.parametrize("recipe", ["shared", "central", "pilot"])
 def test_save_load_gives_identical_deterministic_actions(tmp_path, recipe):
     args = _args(recipe, tmp_path)
     env = make_env(args, load_scenario("small", {"episode.horizon_steps": 12}))
@@ -176,24 +176,25 @@ def test_same_seed_same_parameters_other_seed_others(runs, tmp_path):
 
 
 # -- resume -----------------------------------------------------------------------------------
-def test_resume_continues_bit_identically_shared(runs, tmp_path):
+@pytest.mark.parametrize("recipe", ["shared", "pilot"])
+def test_resume_continues_bit_identically(runs, tmp_path, recipe):
     run = tmp_path / "killed"
     with pytest.raises(Interrupt):  # killed in the middle of the second rollout
-        train(_args("shared", run), callback=_killer(ROLLOUT["shared"] + 54))
-    assert checkpoint_steps(run) == [ROLLOUT["shared"]]
+        train(_args(recipe, run), callback=_killer(ROLLOUT[recipe] + 54))
+    assert checkpoint_steps(run) == [ROLLOUT[recipe]]
     assert not (run / "model.zip").exists()
     out = train(TrainArgs(resume=str(run), progress=False))
     assert out == run
-    assert load_policy(run / "model.zip").num_timesteps == 3 * ROLLOUT["shared"]
+    assert load_policy(run / "model.zip").num_timesteps == 3 * ROLLOUT[recipe]
     # the step count continued from the checkpoint (96 -> 192 -> 288), not from 0
-    assert checkpoint_steps(run) == [2 * ROLLOUT["shared"], 3 * ROLLOUT["shared"]]
+    assert checkpoint_steps(run) == [2 * ROLLOUT[recipe], 3 * ROLLOUT[recipe]]
     assert [p.name for p in (run / "tb").iterdir()] == ["ppo_1"]  # the same TensorBoard run
     # model, optimiser, env state and generators restored: the uninterrupted run's parameters
-    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
     # resuming a finished run changes nothing
     before = (run / "model.zip").read_bytes()
     train(TrainArgs(resume=str(run), progress=False))
-    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
     assert len(before) > 0
 
 
@@ -271,7 +272,11 @@ def test_checkpoint_for_another_number_of_uavs_or_grid(runs, tmp_path):
 def test_ppo_path_evaluates_through_evaluate(runs):
     from agents.evaluate import evaluate, make_policy
 
-    names = [f"ppo:{runs['shared'] / 'model.zip'}", f"ppo:{runs['central']}"]
+    names = [
+        f"ppo:{runs['shared'] / 'model.zip'}",
+        f"ppo:{runs['central']}",
+        f"ppo:{runs['pilot']}",
+    ]
     ev = evaluate("small", names, episodes=1, seed0=1000)
     rows = ev.rows()
     assert [r["policy"] for r in rows] == names
