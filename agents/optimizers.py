@@ -239,6 +239,7 @@ def _de(
     staged,
     vectorized: bool,
     adaptive: bool,
+    init=None,
 ) -> OptimizeResult:
     lo, hi = _check_bounds(bounds)
     npop = _check_int("popsize", popsize, 4)
@@ -251,6 +252,13 @@ def _de(
     stages = _stages(staged, dim, maxiter) if maxiter else []
 
     pop = _uniform(gen, lo, hi, npop)  # eq. 27-28
+    if init is not None:  # given individuals replace the first rows (scipy's init=array)
+        given = np.atleast_2d(np.asarray(init, dtype=float))
+        if given.ndim != 2 or given.shape[1] != dim or not 1 <= len(given) <= npop:
+            raise ConfigError("init", given.shape, f"an array (k, {dim}) with 1 <= k <= {npop}")
+        if not np.all((given >= lo) & (given <= hi)):
+            raise ConfigError("init", "individuals outside the bounds", "rows within the bounds")
+        pop[: len(given)] = given
     energy = evaluate(pop)
     best = int(np.argmin(energy))
     history = [energy[best]]
@@ -317,6 +325,7 @@ def adaptive_de(
     callback=None,
     staged: bool | Sequence[Sequence[int]] = False,
     vectorized: bool = True,
+    init=None,
 ) -> OptimizeResult:
     """Minimise ``func`` with the paper's adaptive differential evolution (eq. 27-32).
 
@@ -351,6 +360,9 @@ def adaptive_de(
         broad search and ends with a fine one. The budget is the same as unstaged.
     vectorized : bool, default True
         Whether ``func`` takes the whole population at once.
+    init : array (k, D), optional
+        Individuals that replace the first ``k`` of the uniformly drawn initial population
+        (a warm start, as scipy's ``init=`` array); they must lie within the bounds.
 
     Returns
     -------
@@ -403,6 +415,7 @@ def adaptive_de(
         staged=staged,
         vectorized=vectorized,
         adaptive=True,
+        init=init,
     )
 
 
@@ -418,6 +431,7 @@ def classic_de(
     callback=None,
     staged: bool | Sequence[Sequence[int]] = False,
     vectorized: bool = True,
+    init=None,
 ) -> OptimizeResult:
     """Classic DE/rand/1/bin with a constant mutation factor ``F = f0`` (the paper's Fig. 22).
 
@@ -438,6 +452,7 @@ def classic_de(
         staged=staged,
         vectorized=vectorized,
         adaptive=False,
+        init=init,
     )
 
 

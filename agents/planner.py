@@ -22,6 +22,7 @@ from agents.base import Policy
 from agents.objective import PlanObjective
 from agents.optimizers import get_optimizer
 from poc_env.config import Scenario, load_scenario, write_text_atomic
+from poc_env.errors import ConfigError
 from poc_env.export import SCHEMA
 from poc_env.probability_map import build_prior
 
@@ -37,8 +38,13 @@ def make_plan(
     popsize: int | None = None,
     maxiter: int | None = None,
     progress: bool = False,
+    init: np.ndarray | None = None,
 ) -> dict[str, Any]:
-    """Optimise the plan and return it as a schema-1 dict (see the module docstring)."""
+    """Optimise the plan and return it as a schema-1 dict (see the module docstring).
+
+    ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
+    population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
+    """
     sc = load_scenario(scenario)
     opt = get_optimizer(optimizer)
     if prior is None:
@@ -53,6 +59,11 @@ def make_plan(
     if optimizer in ("adaptive_de", "classic_de"):
         kwargs.update(f0=pl.f0, cr=pl.cr)
         settings.update(f0=pl.f0, cr=pl.cr)
+        if init is not None:
+            kwargs["init"] = init
+            settings["warm_start"] = int(np.atleast_2d(init).shape[0])
+    elif init is not None:
+        raise ConfigError("init", optimizer, "adaptive_de or classic_de (warm starts)")
     bar = None
     if progress:
         from tqdm import tqdm
@@ -106,6 +117,7 @@ def make_plan(
         "upper_bound": float(obj.upper_bound(x)),
         "objective": float(res.fun),
         "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
+        "x": [float(v) for v in x],
         "uavs": uav_out,
     }
 

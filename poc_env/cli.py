@@ -158,6 +158,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_experiment(args: argparse.Namespace) -> int:
+    from agents.experiments import cmd
+
+    return cmd(args)
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     """Train (or resume) an RL policy; every option comes from ``agents.train.TrainArgs``."""
     from agents.train import args_from_namespace, train
@@ -333,6 +339,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--origin", required=True, help="LAT,LON of the map's (0, 0), degrees")
     p.add_argument("--out", default=None, help="folder (default: beside the plan)")
     p.set_defaults(func=cmd_export)
+
+    p = sub.add_parser("experiment", help="reproduce a §6 experiment of the paper (or all)")
+    from agents.experiments import add_arguments as add_experiment_arguments
+
+    add_experiment_arguments(p)
+    p.set_defaults(func=cmd_experiment)
 
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument(
