@@ -158,6 +158,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_curve(args: argparse.Namespace) -> int:
+    from agents.train import plot_training_curve
+
+    print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
+    return 0
+
+
 def cmd_experiment(args: argparse.Namespace) -> int:
     from agents.experiments import cmd
 
@@ -339,6 +346,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--origin", required=True, help="LAT,LON of the map's (0, 0), degrees")
     p.add_argument("--out", default=None, help="folder (default: beside the plan)")
     p.set_defaults(func=cmd_export)
+
+    p = sub.add_parser("curve", help="plot a training run's POSC curve (TensorBoard logs) as PNG")
+    p.add_argument("run_dir", help="run folder of poc-env train")
+    p.add_argument("--out", default="training_curve.png")
+    p.add_argument("--until", type=int, default=None, help="last timestep to plot")
+    p.set_defaults(func=cmd_curve)
 
     p = sub.add_parser("experiment", help="reproduce a §6 experiment of the paper (or all)")
     from agents.experiments import add_arguments as add_experiment_arguments
