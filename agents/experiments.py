@@ -587,7 +587,7 @@ def exp_table8(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     jobs = [(sc, {"popsize": popsize, "maxiter": maxiter, "seed": seed + k}, sizes)
             for k in range(budget.seeds)]  # fmt: skip
     chains = runner.map(_fleet_job, jobs, "table8")
-    settings = [(n, sc, {}) for n in sizes]
+    settings: list[tuple[Any, Scenario, dict[str, Any]]] = [(n, sc, {}) for n in sizes]
     by = {n: [chain[i] for chain in chains] for i, n in enumerate(sizes)}
     res = _sweep(
         "table8", budget, runner, out, seed, settings, "uavs", "number of UAVs", PAPER_TABLE8,
