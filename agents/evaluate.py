@@ -97,8 +97,9 @@ class Episode:
     landed: int
     steps: int
     posc_curve: tuple[float, ...] = field(repr=False)
-    #: physical optimum of this episode's prior for the swarm's largest effort
-    bound: float = float("nan")
+    #: physical optimum of this episode's random prior for the swarm's largest effort (None
+    #: without ``random_priors``: the scenario's bound is computed once by :func:`evaluate`)
+    bound: float | None = None
 
 
 #: Second entropy word of the evaluation priors' generators: ``default_rng([seed, STREAM])``.
@@ -150,7 +151,7 @@ def run_episode(
         landed=int(st.landed[0].sum()),
         steps=int(st.step[0]),
         posc_curve=tuple(curve),
-        bound=effort_bound(env.scenario, map_file, prior),
+        bound=effort_bound(env.scenario, map_file, prior) if random_priors else None,
     )
 
 
@@ -274,7 +275,10 @@ def evaluate(
     results = tuple(it)
     if workers > 1:
         pool.shutdown()
-    bound = float(np.mean([e.bound for e in results[:episodes]]))
+    if random_priors:  # each episode's own prior; the same seeds for every policy
+        bound = float(np.mean([float(e.bound or 0.0) for e in results[:episodes]]))
+    else:
+        bound = effort_bound(sc, map_file)
     return Evaluation(sc.name, results, bound, tuple(policies), random_priors)
 
 

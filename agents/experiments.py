@@ -347,13 +347,13 @@ def exp_table6(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
 
 
 def exp_table7(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
-    from agents.evaluate import Evaluation, effort_bound, plot_curves
+    from agents.evaluate import Evaluation, _run, effort_bound, plot_curves
 
     popsize, maxiter = budget.np_g(load_scenario("paper_6_2"))
     sc = load_scenario("paper_6_2", {"planner.population": popsize, "planner.generations": maxiter})
     policies = ("de_plan", "greedy_bayes", "potential_game")
     jobs = [(sc, p, 1000 + seed + k) for p in policies for k in range(budget.episodes)]
-    episodes = runner.map(_episode_job, jobs, "table7")
+    episodes = runner.map(_run, jobs, "table7")
     ev = Evaluation(sc.name, tuple(episodes), effort_bound(sc), policies)
     rows = []
     for r in ev.rows():
@@ -369,13 +369,6 @@ def exp_table7(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
         )
     )
     return Result("table7", rows, table, [fig])
-
-
-def _episode_job(job):
-    from agents.evaluate import run_episode
-
-    sc, policy, seed = job
-    return run_episode(sc, policy, seed)
 
 
 # -- §6.3-6.4: optimisers and parameters ------------------------------------------------------
