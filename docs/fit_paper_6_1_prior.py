@@ -13,10 +13,10 @@ and copy the printed weights into configs/paper_6_1.yaml.
 import numpy as np
 from scipy.optimize import nnls
 
+from agents.planning.survey import load_regions
 from poc_env.config import GaussianComponent, load_scenario
-from poc_env.probability_map import Grid, gaussian_mixture
-from poc_env.regions import cell_overlap
-from poc_env.survey import load_regions
+from poc_env.theory.probability_map import Grid, gaussian_mixture
+from poc_env.theory.regions import cell_overlap
 
 TABLE4_POC = np.array([0.1611, 0.1600, 0.1233, 0.2146, 0.1288, 0.1805])
 SIGMA = 0.2  # component sigma as a fraction of sqrt(polygon area)

@@ -8,8 +8,8 @@ ENV_ID = "poc_env/UAVSearch-v0"
 
 
 def parallel_env(scenario="paper_6_2", render_mode=None, **overrides):
-    """The PettingZoo parallel environment (see :class:`poc_env.uav_env.UAVSearchParallelEnv`)."""
-    from poc_env.uav_env import UAVSearchParallelEnv
+    """The PettingZoo parallel environment (``poc_env.envs.parallel.UAVSearchParallelEnv``)."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
 
     return UAVSearchParallelEnv(scenario=scenario, render_mode=render_mode, **overrides)
 
@@ -26,7 +26,7 @@ def _register() -> None:
     import gymnasium
 
     if ENV_ID not in gymnasium.registry:
-        gymnasium.register(ENV_ID, entry_point="poc_env.gym_env:UAVSearchGym")
+        gymnasium.register(ENV_ID, entry_point="poc_env.envs.gymnasium_env:UAVSearchGym")
     try:
         from pettingzoo.env_registry.registration import _get_registry, register
     except ImportError:  # PettingZoo < 1.27 has no registry

@@ -2,7 +2,7 @@
 
 Subcommands: ``scenarios`` (list the built-ins), ``survey`` (Table 4 / 5 analog of a region
 plan), ``figures`` (regenerate the README's pictures), ``demo`` (the main job on the default
-scenario), ``train`` (PPO; options generated from ``agents.train.TrainArgs``). Bad input ends
+scenario), ``train`` (PPO; options generated from ``agents.rl.train.TrainArgs``). Bad input ends
 with ``error: ...`` naming the field, the value and what is allowed, and exit status 2 -- never
 a traceback.
 """
@@ -37,15 +37,15 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 def cmd_survey(args: argparse.Namespace) -> int:
+    from agents.planning.survey import load_regions, run_survey, write_survey
     from poc_env.config import load_scenario
-    from poc_env.probability_map import build_prior
-    from poc_env.survey import load_regions, run_survey, write_survey
+    from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario(args.scenario)
     plan = load_regions(args.regions or f"{sc.name}_polygons")
     prior = build_prior(sc.map, args.map_file)
     if getattr(args, "optimise", False):
-        from agents.region_planner import optimise_regions
+        from agents.planning.region_planner import optimise_regions
 
         plan = optimise_regions(sc, plan)
         print("Spacing and direction optimised per region (Table 3 analog):")
@@ -68,8 +68,8 @@ def cmd_survey(args: argparse.Namespace) -> int:
 
 def _state_policy(scenario, name: str):
     """Wrap an observation-based policy of ``agents`` as ``policy_fn(state, rng)`` for render."""
-    from poc_env import simulator as sim
-    from poc_env.observations import vectors
+    from poc_env.sim import core as sim
+    from poc_env.sim.observations import vectors
 
     params = sim.make_params(scenario)
     agents = [f"uav_{i}" for i in range(params.n_agents)]
@@ -77,7 +77,7 @@ def _state_policy(scenario, name: str):
 
     def policy_fn(state, rng):
         if "pol" not in holder or int(state.step[0]) == 0:
-            from agents.baselines import lawnmower_policy
+            from agents.policies.baselines import lawnmower_policy
 
             holder["pol"] = lawnmower_policy(params, agents)
         vec = vectors(params, state)[0]
@@ -96,7 +96,7 @@ def _state_policy(scenario, name: str):
 def cmd_render(args: argparse.Namespace) -> int:
     from poc_env.config import load_scenario
     from poc_env.errors import ConfigError
-    from poc_env.rendering import random_policy, render_episode
+    from poc_env.viz.rendering import random_policy, render_episode
 
     sc = load_scenario(args.scenario)
     policies = {"random": random_policy, "lawnmower": _state_policy(sc, "lawnmower")}
@@ -119,14 +119,18 @@ def cmd_bench(args: argparse.Namespace) -> int:
     import os
     import subprocess
 
-    modules = {"env": "poc_env.bench_env", "plan": "agents.bench_plan", "train": "agents.train"}
+    modules = {
+        "env": "agents.benchmarks.env",
+        "plan": "agents.benchmarks.plan",
+        "train": "agents.rl.train",
+    }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
     return subprocess.call(cmd, env=env)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from agents.evaluate import evaluate, plot_curves
+    from agents.experiments.evaluate import evaluate, plot_curves
     from poc_env.config import load_scenario, write_text_atomic
 
     sc = load_scenario(args.scenario)
@@ -159,21 +163,21 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def cmd_curve(args: argparse.Namespace) -> int:
-    from agents.train import plot_training_curve
+    from agents.rl.train import plot_training_curve
 
     print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
     return 0
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from agents.experiments import cmd
+    from agents.experiments.paper import cmd
 
     return cmd(args)
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    """Train (or resume) an RL policy; every option comes from ``agents.train.TrainArgs``."""
-    from agents.train import args_from_namespace, train
+    """Train (or resume) an RL policy; every option comes from ``agents.rl.train.TrainArgs``."""
+    from agents.rl.train import args_from_namespace, train
 
     targs = args_from_namespace(args)
     try:
@@ -185,9 +189,9 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from agents.planner import make_plan, plan_table, plot_plan, write_plan
+    from agents.planning.planner import make_plan, plan_table, plot_plan, write_plan
     from poc_env.config import load_scenario
-    from poc_env.probability_map import build_prior
+    from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario(args.scenario)
     if args.uavs is not None:
@@ -211,7 +215,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from poc_env.export import export_plan
+    from agents.planning.export import export_plan
 
     for p in export_plan(args.plan, args.format, args.origin, args.out):
         print(f"wrote {p}")
@@ -219,7 +223,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def cmd_figures(args: argparse.Namespace) -> int:
-    from poc_env.figures import pattern_gallery
+    from poc_env.viz.figures import pattern_gallery
 
     out = Path(args.out)
     for p in pattern_gallery(out):
@@ -305,14 +309,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--random-priors",
         action="store_true",
-        help="every seed flies a fresh random Gaussian-mixture prior (agents.evaluate."
+        help="every seed flies a fresh random Gaussian-mixture prior (agents.experiments.evaluate."
         "episode_prior; a generator stream training never draws from)",
     )
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_evaluate)
 
-    from agents.train import add_train_arguments
+    from agents.rl.train import add_train_arguments
 
     p = sub.add_parser(
         "train",
@@ -354,7 +358,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_curve)
 
     p = sub.add_parser("experiment", help="reproduce a §6 experiment of the paper (or all)")
-    from agents.experiments import add_arguments as add_experiment_arguments
+    from agents.experiments.paper import add_arguments as add_experiment_arguments
 
     add_experiment_arguments(p)
     p.set_defaults(func=cmd_experiment)

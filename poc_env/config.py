@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import importlib.resources
 import math
 import os
 import tempfile
@@ -34,8 +35,10 @@ KMH = 1000.0 / 3600.0
 HOUR = 3600.0
 DEG = math.pi / 180.0
 
-#: Folder of the built-in scenarios (``configs/`` at the top of the repository).
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+#: Folder of the built-in scenarios, region plans and topologies: package data, read through
+#: ``importlib.resources`` so that a wheel, an editable install and a Ray worker all find it.
+#: In the source tree ``poc_env/configs`` is a link to the top-level ``configs/`` (the one copy).
+CONFIG_DIR = Path(str(importlib.resources.files("poc_env").joinpath("configs")))
 
 
 def _f(key: str | None = None, scale: float = 1.0, default: Any = dataclasses.MISSING, **kw: Any):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pettingzoo.utils.conversions import parallel_to_aec
 
-from poc_env.uav_env import UAVSearchParallelEnv
+from poc_env.envs.parallel import UAVSearchParallelEnv
 
 raw_env = UAVSearchParallelEnv
 

@@ -6,7 +6,7 @@ import yaml
 
 from poc_env.config import KM, builtin_scenarios, load_scenario, save_scenario
 from poc_env.errors import ConfigError, GeometryError, MapFileError
-from poc_env.probability_map import Grid, build_prior, load_map, validate_map
+from poc_env.theory.probability_map import Grid, build_prior, load_map, validate_map
 
 
 def test_builtin_scenarios_match_the_paper():

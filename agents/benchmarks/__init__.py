@@ -1,0 +1,1 @@
+"""Speed and quality benchmarks run by ``poc-env bench env|plan|train`` (one line per figure)."""

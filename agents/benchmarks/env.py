@@ -1,0 +1,214 @@
+"""Agent-steps per second of the batched core (1, 64, 256 envs) and of MPE2 simple_spread.
+
+    poc-env bench env [--scenario paper_6_2] [--envs 1 64 256] [--runs 5]
+
+One line per figure, each the median of ``--runs`` timed runs, on one core
+(``OMP_NUM_THREADS=1``, ``NUMBA_NUM_THREADS=1``, set before numpy is imported). A warm-up run
+per configuration keeps JIT compilation out of the figures.
+
+The core (:func:`poc_env.sim.core.step`) is timed with seeded random actions in level flight
+(pitch action 0). Each timed stretch starts from :func:`simulator.initial` with the UAVs moved
+to seeded random positions over the search area: flown from their airfields with random turns
+(up to 180 degrees per step) they would stay near the airfields, outside the grid, where sensing
+costs nothing -- the figures would flatter the core. Steps per stretch stay below the endurance
+horizon, so every UAV flies in every timed step. ``initial`` and the state copies are
+not timed.
+
+The single-env figures are the core with ``n_envs = 1`` and, when ``poc_env.parallel_env``
+exists, the PettingZoo parallel env over the same core (its dicts, observations and rewards
+included; same start over the search area). When ``mpe2`` is importable
+(``pip install -e .[bench]``), ``simple_spread_v3.parallel_env(N=6)`` is timed in the same run
+with seeded random discrete actions (episodes of ``max_cycles`` steps, resets not timed), and
+the ratios of the single-env figures to it are printed.
+
+``main(argv)`` returns ``{figure: agent-steps/s, ...}``; ``--set KEY=VALUE`` applies scenario
+overrides (e.g. ``sensor.samples_per_cell=2``).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import copy  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+
+from poc_env.config import load_scenario  # noqa: E402
+from poc_env.sim import core as sim  # noqa: E402
+
+STEPS = 100  # steps per timed stretch (below paper_6_2's 180-step endurance)
+AGENT_STEPS_PER_RUN = 40_000  # each timed run repeats stretches until it has about this many
+
+
+def _start_state(params: sim.Params, n_envs: int, seed: int) -> tuple[sim.State, list]:
+    rngs = [np.random.default_rng(seed + k) for k in range(n_envs)]
+    state = sim.initial(params, rngs)
+    x0, y0, x1, y1 = params.grid.bounds
+    place = np.random.default_rng(seed)
+    state.pos[..., 0] = place.uniform(x0, x1, state.pos.shape[:2])
+    state.pos[..., 1] = place.uniform(y0, y1, state.pos.shape[:2])
+    state.heading = place.uniform(-np.pi, np.pi, state.heading.shape)
+    return state, rngs
+
+
+def _actions(params: sim.Params, n_envs: int, seed: int) -> np.ndarray:
+    acts = np.random.default_rng(seed).uniform(-1.0, 1.0, (STEPS, n_envs, params.n_agents, 3))
+    acts[..., 2] = 0.0  # level flight
+    return acts
+
+
+def bench_core(params: sim.Params, n_envs: int, runs: int, seed: int = 0) -> float:
+    """Median agent-steps/s of ``simulator.step`` over ``runs`` timed runs."""
+    state0, rngs0 = _start_state(params, n_envs, seed)
+    acts = _actions(params, n_envs, seed + 1)
+    stretches = max(1, round(AGENT_STEPS_PER_RUN / (STEPS * n_envs * params.n_agents)))
+
+    def one_run(n_stretches: int) -> float:
+        elapsed = 0.0
+        for _ in range(n_stretches):
+            state, rngs = copy.deepcopy((state0, rngs0))
+            t = time.perf_counter()
+            for k in range(STEPS):
+                sim.step(params, state, acts[k], rngs)
+            elapsed += time.perf_counter() - t
+        return n_stretches * STEPS * n_envs * params.n_agents / elapsed
+
+    one_run(1)  # warm-up: JIT compilation (or cache load) and caches
+    return statistics.median(one_run(stretches) for _ in range(runs))
+
+
+def bench_pettingzoo(scenario: str, overrides: dict, runs: int, seed: int = 0) -> float | None:
+    """Median agent-steps/s of our PettingZoo parallel env (``poc_env.parallel_env``), or None.
+
+    Same start as the core (UAVs moved over the search area after ``reset``), so the figure
+    adds the env's dict conversions, observations and rewards to the core with n_envs = 1.
+    """
+    try:
+        import poc_env
+    except ImportError:
+        return None
+    if not hasattr(poc_env, "parallel_env"):
+        return None
+    env = poc_env.parallel_env(scenario, **overrides)
+    rng = np.random.default_rng(seed)
+    n = len(env.possible_agents)
+    stretches = max(1, round(AGENT_STEPS_PER_RUN / (4 * STEPS * n)))
+
+    def one_run(n_stretches: int) -> float:
+        elapsed, count = 0.0, 0
+        for _ in range(n_stretches):
+            env.reset(seed=int(rng.integers(2**31)))
+            st = env.sim_state
+            x0, y0, x1, y1 = env.params.grid.bounds
+            st.pos[..., 0] = rng.uniform(x0, x1, st.pos.shape[:2])
+            st.pos[..., 1] = rng.uniform(y0, y1, st.pos.shape[:2])
+            st.heading = rng.uniform(-np.pi, np.pi, st.heading.shape)
+            acts = rng.uniform(-1.0, 1.0, (STEPS, n, 3))
+            acts[..., 2] = 0.0
+            plan = [dict(zip(env.possible_agents, row)) for row in acts]
+            t = time.perf_counter()
+            for actions in plan:
+                if not env.agents:
+                    break
+                env.step({a: actions[a] for a in env.agents})
+                count += len(env.agents)
+            elapsed += time.perf_counter() - t
+        return count / elapsed
+
+    one_run(1)
+    return statistics.median(one_run(stretches) for _ in range(runs))
+
+
+def bench_mpe(n_agents: int, runs: int, seed: int = 0, max_cycles: int = 100) -> float | None:
+    """Median agent-steps/s of MPE2 ``simple_spread_v3.parallel_env(N=n_agents)``, or None."""
+    try:
+        from mpe2 import simple_spread_v3
+    except ImportError:
+        return None
+    env = simple_spread_v3.parallel_env(N=n_agents, max_cycles=max_cycles)
+    env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    n_actions = env.action_space(env.agents[0]).n
+    episodes = max(1, round(AGENT_STEPS_PER_RUN / (4 * max_cycles * n_agents)))
+
+    def one_run(n_episodes: int) -> float:
+        elapsed, count = 0.0, 0
+        for _ in range(n_episodes):
+            env.reset(seed=int(rng.integers(2**31)))
+            plan = [
+                {a: int(x) for a, x in zip(env.agents, row)}
+                for row in rng.integers(0, n_actions, (max_cycles, len(env.agents)))
+            ]
+            t = time.perf_counter()
+            for actions in plan:
+                if not env.agents:
+                    break
+                env.step(actions)
+                count += len(actions)
+            elapsed += time.perf_counter() - t
+        return count / elapsed
+
+    one_run(1)
+    return statistics.median(one_run(episodes) for _ in range(runs))
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenario", default="paper_6_2")
+    ap.add_argument("--envs", type=int, nargs="+", default=[1, 64, 256])
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--no-mpe", action="store_true", help="skip MPE2 simple_spread")
+    ap.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="scenario overrides, e.g. sensor.samples_per_cell=2 sensor.cutoff_sweep_widths=3",
+    )
+    args = ap.parse_args(argv)
+
+    overrides = {}
+    for item in args.set:
+        key, _, value = item.partition("=")
+        overrides[key] = yaml.safe_load(value)
+    params = sim.make_params(load_scenario(args.scenario, overrides))
+    n = params.n_agents
+    out: dict[str, float] = {}
+    for e in args.envs:
+        rate = bench_core(params, e, args.runs)
+        out[f"core_{e}env"] = rate
+        label = " ".join([args.scenario, *args.set])
+        print(f"core {label} n_envs={e:<4d} N={n}: {rate:12,.0f} agent-steps/s", flush=True)
+    if 1 in args.envs:
+        pz = bench_pettingzoo(args.scenario, overrides, args.runs)
+        if pz is not None:
+            out["pettingzoo_1env"] = pz
+            label = " ".join([args.scenario, *args.set])
+            print(f"pettingzoo parallel_env {label} N={n}: {pz:12,.0f} agent-steps/s", flush=True)
+    if not args.no_mpe:
+        mpe = bench_mpe(n, args.runs)
+        if mpe is None:
+            print("mpe2 simple_spread_v3: not installed (pip install -e .[bench])")
+        else:
+            out["mpe2_simple_spread"] = mpe
+            print(f"mpe2 simple_spread_v3 parallel N={n}:   {mpe:12,.0f} agent-steps/s")
+            if "core_1env" in out:
+                out["ratio_core_1env_to_mpe2"] = out["core_1env"] / mpe
+                print(f"ratio core n_envs=1 / mpe2: {out['ratio_core_1env_to_mpe2']:.2f}")
+            if "pettingzoo_1env" in out:
+                out["ratio_pettingzoo_to_mpe2"] = out["pettingzoo_1env"] / mpe
+                print(f"ratio pettingzoo / mpe2: {out['ratio_pettingzoo_to_mpe2']:.2f}")
+    return out
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

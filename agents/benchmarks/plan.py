@@ -1,0 +1,147 @@
+"""Speed (and optionally quality) of the paper-budget plan: adaptive DE on eq. 26.
+
+    python -m agents.benchmarks.plan [--scenario paper_6_2] [--uavs 6] [--runs 3] [--quality]
+
+One line per figure, on one core (``OMP_NUM_THREADS=1``, ``NUMBA_NUM_THREADS=1``, set before
+numpy is imported), medians of ``--runs`` timed runs after a warm-up that keeps JIT compilation
+out of the figures:
+
+* ``plan_s``: wall time of one plan, :func:`agents.planning.optimizers.adaptive_de` with the paper's
+  budget (NP = 100, G = 300, F0 = 0.2, CR = 0.1, from the scenario's ``planner`` section) on
+  ``PlanObjective`` (6 UAVs, the 30 x 40 map of ``paper_6_2``); target
+  0.5 s;
+* ``evals_per_s``: objective evaluations per second inside that plan (``nfev / plan_s``), and
+  ``objective_evals_per_s``: the objective alone, one population call of NP individuals;
+* ``scipy_plan_s`` and ``ratio_to_scipy``: :func:`scipy.optimize.differential_evolution` on
+  the same objective with the same budget (via :func:`agents.planning.optimizers.scipy_de`:
+  ``popsize`` individuals, ``maxiter`` generations, vectorised, no polish) and our time over
+  its time.
+
+``--quality`` adds the paper's Fig. 22 claim: the final objective of adaptive DE and of classic
+DE (constant F = F0) on seeds ``0 .. --seeds - 1`` (default 10), their means, how often
+adaptive DE wins, and the adaptive plans' mean POSC against the physical optimum for their
+effort (:func:`poc_env.theory.bound.physical_optimum`). It takes a few seconds per seed.
+
+``main(argv)`` returns ``{figure: value, ...}``.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from agents.planning.objective import PlanObjective  # noqa: E402
+from agents.planning.optimizers import adaptive_de, classic_de, scipy_de  # noqa: E402
+from poc_env.config import load_scenario  # noqa: E402
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="poc-env bench plan", description=__doc__.split("\n")[0])
+    p.add_argument("--scenario", default="paper_6_2", help="built-in name or YAML path")
+    p.add_argument("--uavs", type=int, default=6, help="number of UAVs (paper: 6)")
+    p.add_argument("--popsize", type=int, default=None, help="NP (default: the scenario's)")
+    p.add_argument("--maxiter", type=int, default=None, help="G (default: the scenario's)")
+    p.add_argument("--runs", type=int, default=3, help="timed runs per figure (median)")
+    p.add_argument("--quality", action="store_true", help="adaptive vs classic DE (slow)")
+    p.add_argument("--seeds", type=int, default=10, help="seeds for --quality")
+    return p
+
+
+def _line(name: str, value: float, note: str = "") -> None:
+    print(f"{name:26s} {value:12.4g}  {note}".rstrip(), flush=True)
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    args = _parser().parse_args(argv)
+    sc = load_scenario(args.scenario)
+    obj = PlanObjective(sc, uavs=args.uavs)
+    npop = args.popsize or sc.planner.population
+    gens = args.maxiter or sc.planner.generations
+    f0, cr = sc.planner.f0, sc.planner.cr
+    budget: dict[str, Any] = dict(popsize=npop, maxiter=gens)
+    print(
+        f"# {sc.name}: {obj.n} UAVs, {obj.grid.ny} x {obj.grid.nx} cells, NP {npop}, G {gens}, "
+        f"F0 {f0}, CR {cr}; one core; medians of {args.runs} runs",
+        flush=True,
+    )
+    # warm-up: compile (or load) the kernels
+    adaptive_de(obj, obj.bounds, popsize=npop, maxiter=2, rng=0)
+    scipy_de(obj, obj.bounds, popsize=npop, maxiter=2, rng=0)
+
+    out: dict[str, float] = {}
+    times, nfev = [], 0
+    for k in range(args.runs):
+        t0 = time.perf_counter()
+        res = adaptive_de(obj, obj.bounds, f0=f0, cr=cr, rng=k, **budget)
+        times.append(time.perf_counter() - t0)
+        nfev = res.nfev
+    out["plan_s"] = statistics.median(times)
+    _line("plan_s", out["plan_s"], f"adaptive_de, {nfev} evaluations (target <= 0.5 s)")
+    out["evals_per_s"] = nfev / out["plan_s"]
+    _line("evals_per_s", out["evals_per_s"], "inside the plan (DE overhead included)")
+
+    rng = np.random.default_rng(0)
+    lo, hi = obj.bounds.T
+    pops = [lo + rng.random((npop, obj.dim)) * (hi - lo), res.population]
+    call_times = []
+    for _ in range(max(args.runs, 5)):
+        for pop in pops:
+            t0 = time.perf_counter()
+            obj(pop)
+            call_times.append(time.perf_counter() - t0)
+    out["objective_evals_per_s"] = npop / statistics.median(call_times)
+    _line(
+        "objective_evals_per_s",
+        out["objective_evals_per_s"],
+        "one population call (random and converged populations)",
+    )
+
+    s_times = []
+    for k in range(args.runs):
+        t0 = time.perf_counter()
+        scipy_de(obj, obj.bounds, rng=k, **budget)
+        s_times.append(time.perf_counter() - t0)
+    out["scipy_plan_s"] = statistics.median(s_times)
+    _line("scipy_plan_s", out["scipy_plan_s"], "scipy.optimize.differential_evolution, same budget")
+    out["ratio_to_scipy"] = out["plan_s"] / out["scipy_plan_s"]
+    _line("ratio_to_scipy", out["ratio_to_scipy"], "plan_s / scipy_plan_s (< 1: faster)")
+
+    if args.quality:
+        ada, cla, posc, bound = [], [], [], []
+        for seed in range(args.seeds):
+            a = adaptive_de(obj, obj.bounds, f0=f0, cr=cr, rng=seed, **budget)
+            c = classic_de(obj, obj.bounds, f0=f0, cr=cr, rng=seed, **budget)
+            ada.append(a.fun)
+            cla.append(c.fun)
+            posc.append(float(obj.evaluate(a.x[None]).posc[0]))
+            bound.append(obj.upper_bound(a.x))
+        out["adaptive_de_mean_f"] = float(np.mean(ada))
+        out["classic_de_mean_f"] = float(np.mean(cla))
+        out["adaptive_wins"] = float(np.sum(np.array(ada) < np.array(cla)))
+        out["adaptive_posc_mean"] = float(np.mean(posc))
+        out["adaptive_posc_over_bound"] = float(np.mean(np.array(posc) / np.array(bound)))
+        n = args.seeds
+        _line("adaptive_de_mean_f", out["adaptive_de_mean_f"], f"eq. 26, mean of {n} seeds")
+        _line("classic_de_mean_f", out["classic_de_mean_f"], f"eq. 26, mean of {n} seeds")
+        _line("adaptive_wins", out["adaptive_wins"], f"of {n} seeds (lower eq. 26 than classic)")
+        _line("adaptive_posc_mean", out["adaptive_posc_mean"], "POSC of the adaptive plans")
+        _line(
+            "adaptive_posc_over_bound",
+            out["adaptive_posc_over_bound"],
+            "POSC / physical optimum for the plan's effort (objective's model)",
+        )
+    return out
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,305 @@
+"""Score policies on the same episodes: mean POSC with 95 % intervals, detection, violations.
+
+Every policy runs the same ``episodes`` seeds (``seed0 .. seed0 + episodes - 1``); each episode
+creates a fresh environment reset with its seed, so results do not depend on ``workers`` or on
+the order in which episodes run. Besides POSC (eq. 13) the table reports the hidden target's
+detection rate and mean time to detection, constraint-violation steps, crashes, and the
+physical optimum for the swarm's largest possible effort (every UAV searching for the whole
+usable endurance 0.85 T at v_s), an upper bound no policy can exceed.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.policies.base import LawnmowerPolicy, Policy, RandomPolicy
+from poc_env.errors import ConfigError
+
+
+def _de_plan() -> Policy:
+    from agents.planning.planner import DEPlanPolicy
+
+    return DEPlanPolicy()
+
+
+def _greedy() -> Policy:
+    from agents.policies.greedy import GreedyBayesPolicy
+
+    return GreedyBayesPolicy()
+
+
+def _game() -> Policy:
+    from agents.policies.greedy import PotentialGamePolicy
+
+    return PotentialGamePolicy()
+
+
+def _receding() -> Policy:
+    from agents.policies.receding import DERecedingPolicy
+
+    return DERecedingPolicy()
+
+
+POLICIES: dict[str, Callable[[], Policy]] = {
+    "de_receding": _receding,
+    "random": RandomPolicy,
+    "lawnmower": LawnmowerPolicy,
+    "de_plan": _de_plan,
+    "greedy_bayes": _greedy,
+    "potential_game": _game,
+}
+
+
+def _ppo(path: str) -> Policy:
+    from agents.rl.train import PPOPolicy
+
+    return PPOPolicy(path, name=f"ppo:{path}")
+
+
+#: Policies named by a prefix and an argument: ``ppo:PATH`` is a PPO checkpoint (a ``.zip`` or
+#: a run folder), :class:`agents.rl.train.PPOPolicy`. Model files are pickle-based: load only
+#: trusted files.
+POLICY_PATTERNS: dict[str, Callable[[str], Policy]] = {"ppo": _ppo}
+
+
+def make_policy(name: str) -> Policy:
+    """A fresh policy by name (see :data:`POLICIES`) or pattern (``ppo:PATH``, see
+    :data:`POLICY_PATTERNS`)."""
+    prefix, sep, arg = name.partition(":")
+    if sep and prefix in POLICY_PATTERNS:
+        if not arg:
+            raise ConfigError("policies", name, f"{prefix}:PATH with a checkpoint path")
+        return POLICY_PATTERNS[prefix](arg)
+    if name not in POLICIES:
+        allowed = sorted(POLICIES) + [f"{p}:PATH" for p in sorted(POLICY_PATTERNS)]
+        raise ConfigError("policies", name, "one of " + ", ".join(allowed))
+    return POLICIES[name]()
+
+
+@dataclass(frozen=True)
+class Episode:
+    policy: str
+    seed: int
+    posc: float
+    detected: bool
+    time_to_detection_s: float | None
+    violation_steps: int
+    crashed: int
+    landed: int
+    steps: int
+    posc_curve: tuple[float, ...] = field(repr=False)
+    #: physical optimum of this episode's random prior for the swarm's largest effort (None
+    #: without ``random_priors``: the scenario's bound is computed once by :func:`evaluate`)
+    bound: float | None = None
+
+
+#: Second entropy word of the evaluation priors' generators: ``default_rng([seed, STREAM])``.
+#: Training draws its priors from ``SeedSequence(train_seed).spawn(n_envs)`` (spawned, so
+#: with a non-empty spawn key), which never yields this generator.
+EVAL_PRIOR_STREAM = 0x5EA7C4
+
+
+def episode_prior(scenario: Any, seed: int) -> np.ndarray:
+    """The random Gaussian-mixture prior of evaluation episode ``seed`` (``--random-priors``)."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import Grid, random_gaussian_mixture
+
+    grid = Grid.from_config(load_scenario(scenario).map)
+    return random_gaussian_mixture(grid, np.random.default_rng([seed, EVAL_PRIOR_STREAM]))
+
+
+def run_episode(
+    scenario: Any,
+    policy: str,
+    seed: int,
+    map_file: str | None = None,
+    random_priors: bool = False,
+) -> Episode:
+    """One episode of ``policy`` on a fresh env reset with ``seed`` (and, with
+    ``random_priors``, the prior :func:`episode_prior` of ``seed``)."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
+    pol = make_policy(policy)
+    prior = episode_prior(env.scenario, seed) if random_priors else None
+    options = None if prior is None else {"prior": prior}
+    obs, _ = env.reset(seed=seed, options=options)
+    pol.reset(env, seed)
+    curve = []
+    while env.agents:
+        actions, _ = pol.predict(obs)
+        obs, *_ = env.step(actions)
+        curve.append(float(env.sim_state.posc[0]))
+    st = env.sim_state
+    return Episode(
+        policy=policy,
+        seed=seed,
+        posc=float(st.posc[0]),
+        detected=bool(st.detected[0]),
+        time_to_detection_s=float(st.detect_step[0] * env.params.dt) if st.detected[0] else None,
+        violation_steps=int(st.violations[0].sum()),
+        crashed=int(st.crashed[0].sum()),
+        landed=int(st.landed[0].sum()),
+        steps=int(st.step[0]),
+        posc_curve=tuple(curve),
+        bound=effort_bound(env.scenario, map_file, prior) if random_priors else None,
+    )
+
+
+def _run(args):
+    return run_episode(*args)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    scenario: str
+    episodes: tuple[Episode, ...]
+    bound: float
+    policies: tuple[str, ...]
+    random_priors: bool = False
+
+    def rows(self) -> list[dict[str, Any]]:
+        out = []
+        for p in self.policies:
+            eps = [e for e in self.episodes if e.policy == p]
+            x = np.array([e.posc for e in eps])
+            half = 1.96 * x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else 0.0
+            ttd = [e.time_to_detection_s for e in eps if e.time_to_detection_s is not None]
+            out.append(
+                {
+                    "policy": p,
+                    "episodes": len(eps),
+                    "posc_mean": float(x.mean()),
+                    "posc_ci95": float(half),
+                    "detection_rate": float(np.mean([e.detected for e in eps])),
+                    "time_to_detection_min": float(np.mean(ttd) / 60) if ttd else None,
+                    "violation_steps": float(np.mean([e.violation_steps for e in eps])),
+                    "crashed": float(np.mean([e.crashed for e in eps])),
+                    "landed": float(np.mean([e.landed for e in eps])),
+                    "bound": self.bound,
+                }
+            )
+        return out
+
+    def table(self) -> str:
+        width = max(14, *(len(p) for p in self.policies))
+        head = (
+            f"{'policy':<{width}} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
+            f"{'viol.steps':>10} {'crashed':>8} {'landed':>7}"
+        )
+        lines = [head, "-" * len(head)]
+        for r in self.rows():
+            t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
+            lines.append(
+                f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
+                f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
+                f"{r['crashed']:>8.2f} {r['landed']:>7.2f}"
+            )
+        lines.append("-" * len(head))
+        mean = "mean over the episodes' random priors of the " if self.random_priors else ""
+        lines.append(
+            f"{mean}physical optimum for the swarm's largest effort (all UAVs searching "
+            f"0.85 T): {self.bound:.4f}"
+        )
+        return "\n".join(lines)
+
+    def to_csv(self) -> str:
+        buf = io.StringIO()
+        rows = self.rows()
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+        return buf.getvalue()
+
+
+def effort_bound(
+    scenario: Any, map_file: str | None = None, prior: np.ndarray | None = None
+) -> float:
+    """Physical optimum for every UAV searching its whole usable endurance at v_s, on
+    ``prior`` (default: the scenario's prior or ``map_file``)."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import physical_optimum
+    from poc_env.theory.probability_map import Grid, build_prior
+
+    sc = load_scenario(scenario)
+    if prior is None:
+        prior = build_prior(sc.map, map_file)
+    u = sc.uav
+    effort = sc.n_uavs * u.usable_endurance_s * u.search_speed_mps * sc.sensor.sweep_width_m
+    grid = Grid.from_config(sc.map)
+    return physical_optimum(prior, grid.cell_area_m2, effort, sc.sensor.law).pos
+
+
+def evaluate(
+    scenario: Any,
+    policies: Sequence[str],
+    episodes: int = 10,
+    seed0: int = 1000,
+    workers: int = 1,
+    map_file: str | None = None,
+    progress: bool = False,
+    random_priors: bool = False,
+) -> Evaluation:
+    """Run every policy on the same seeds; see the module docstring."""
+    from poc_env.config import load_scenario
+
+    if episodes < 1:
+        raise ConfigError("episodes", episodes, "an integer >= 1")
+    if workers < 1:
+        raise ConfigError("workers", workers, "an integer >= 1")
+    for p in policies:
+        make_policy(p)
+    sc = load_scenario(scenario)
+    if random_priors and map_file is not None:
+        raise ConfigError("map", map_file, "no map file with --random-priors (one or the other)")
+    jobs = [(sc, p, seed0 + k, map_file, random_priors) for p in policies for k in range(episodes)]
+    it: Any
+    if workers == 1:
+        it = map(_run, jobs)
+    else:
+        pool = ProcessPoolExecutor(max_workers=workers)
+        it = pool.map(_run, jobs)
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(it, total=len(jobs), desc="episodes", unit="ep")
+    results = tuple(it)
+    if workers > 1:
+        pool.shutdown()
+    if random_priors:  # each episode's own prior; the same seeds for every policy
+        bound = float(np.mean([float(e.bound or 0.0) for e in results[:episodes]]))
+    else:
+        bound = effort_bound(sc, map_file)
+    return Evaluation(sc.name, results, bound, tuple(policies), random_priors)
+
+
+def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Path:
+    """POSC over time per policy (mean over episodes, shaded 95 % band)."""
+    from poc_env.viz.plots import _figure, save_figure_atomic
+
+    fig = _figure((7.0, 4.5))
+    ax = fig.add_subplot()
+    for p in ev.policies:
+        curves = [e.posc_curve for e in ev.episodes if e.policy == p]
+        n = max(len(c) for c in curves)
+        arr = np.array([list(c) + [c[-1]] * (n - len(c)) for c in curves])
+        t = (np.arange(n) + 1) * dt_s / 60
+        m = arr.mean(axis=0)
+        h = 1.96 * arr.std(axis=0, ddof=1) / np.sqrt(len(arr)) if len(arr) > 1 else 0 * m
+        ax.plot(t, m, label=p)
+        ax.fill_between(t, m - h, m + h, alpha=0.2)
+    ax.axhline(ev.bound, color="k", ls="--", lw=0.8, label="physical optimum")
+    ax.set_xlabel("time / min")
+    ax.set_ylabel("POSC")
+    ax.set_title(f"{ev.scenario}: POSC over time ({len(ev.episodes)} episodes)")
+    ax.legend()
+    return save_figure_atomic(fig, path)

@@ -1,0 +1,819 @@
+"""The planner's objective: eq. 25-26 of the paper, vectorised over a whole DE population.
+
+Encoding (§4.3)
+---------------
+Each UAV ``i`` is six numbers, ``x[6 i : 6 i + 6] = (x_c, y_c, l, w, theta, d)``: the search
+rectangle ``Q_i(x_c, y_c, l, w, theta)`` of §3.1.6 (centre, the side ``l`` along direction
+``theta`` from the x axis, the side ``w`` across it) and the spacing ``d`` of its parallel
+(lawnmower) lines. ``PlanObjective.bounds`` gives, per UAV, in metres and radians:
+
+========  ==============================  ==================================================
+ x_c      ``[x_min, x_max]`` of the grid   the centre lies over the map
+ y_c      ``[y_min, y_max]`` of the grid
+ l, w     ``[W / 2, max(width, height)]``  no thinner than the smallest spacing (one pass of
+                                           a strip narrower than W/2 wastes the sweep); no
+                                           longer than the map's longer side
+ theta    ``[0, pi]``                      a rectangle is symmetric: theta and theta + pi
+                                           are the same rectangle
+ d        ``[W / 2, 4 W]``                 eq. 10 saturates: at d = W/2 POD = 0.988, denser
+                                           gains at most 1.2 %; at d = 4 W POD = 0.25, and
+                                           Table 6's d/W lie in [1.2, 1.9]
+========  ==============================  ==================================================
+
+``l < w`` is allowed: the lines then run along ``w`` (the long side), as in
+:func:`poc_env.theory.patterns.parallel_line_search`; ``(l, w, theta)`` and ``(w, l, theta + pi/2)``
+encode the same rectangle.
+
+Honest scoring
+--------------
+The paper's closed-form scoring has loopholes an optimiser exploits; all are closed here.
+
+1. *Area-weighted membership.* ``POC_i`` is the prior mass inside ``Q_i`` weighted by the exact
+   area fraction of every cell that ``Q_i`` covers (closed form for cells crossed by one pair
+   of sides, a rotated rectangle clipped against the square cell near corners; a compiled
+   kernel that visits only the cells the rectangle reaches), never "cell centre inside the
+   rectangle". POC is therefore continuous in the rectangle's parameters: a rectangle whose
+   edges sit on cell centres gains nothing over the same rectangle shifted by a hair.
+   The overlap rule of §3.1.6 (a cell already allocated to an earlier UAV adds nothing) is
+   applied to every *part* of a cell: UAV ``i``'s fraction of a cell is the exact area of
+   ``cell ∩ Q_i`` minus ``Q_0 ∪ ... ∪ Q_{i-1}`` (:func:`exclusive_fractions`), and these
+   exclusive memberships go through :func:`poc_env.theory.search_theory.swarm_pos` (whose capacity
+   form ``min(m_i, 1 - allocated)`` is exact for them). With plain fractions the capacity form
+   would credit a copy of a rectangle with half its boundary cells again -- a third loophole.
+2. *Detection the flown track supports.* The lawnmower of ``Q_i`` is the one
+   :func:`~poc_env.theory.patterns.parallel_line_search` flies: lines along the long side ``L``, the
+   first ``d/2`` inside the far edge (from the centre, across the lines, on the ``+e_E`` side,
+   see :func:`lawnmower`), one every ``d`` while inside; a rectangle narrower than ``d`` across
+   the lines gets one line through its middle. Its line count over the short side ``E`` is
+
+       n = max(1, ceil(E / d - 1/2)),
+
+   the search legs total ``n L`` and the turns ``(n - 1) d``. The credited coverage is the
+   effort the lines spend over the rectangle, never more than eq. 10's:
+
+       C_i = W min(n / E, 1 / d),     POD_i = pod_from_coverage(C_i, law),
+
+   so a rectangle wider than ``d`` but flown with a single pass (``d < E < 3 d / 2``) gets
+   ``pod(W / E) < erf(sqrt(pi)/2 W/d)``, not eq. 10's POD. For the inverse-cube law
+   ``pod_from_coverage`` is eq. 10 itself, so with ``n d >= E`` this is exactly eq. 15. A
+   rectangle narrower than ``d`` (one line through its middle, effort ``W / E > W / d``) is
+   capped at eq. 10's POD for ``d``.
+
+Time (eq. 17): transit from the take-off to the first waypoint and from the last waypoint to
+the landing field at the cruise speed; every leg between waypoints (lines and turns) at the
+search speed. The first waypoint is the lawnmower corner nearest the take-off (the rule of
+:func:`~poc_env.theory.patterns.parallel_search` with ``start=takeoff``); the last follows from the
+line count. The closed form equals the generated track's ``length_m`` (tested).
+
+Objective (eq. 25-26), to minimise:
+
+    f = -J + M sum_i phi(t_i),   J = alpha sum_i POC_i POD_i - beta (1/n) sum_i t_i / (0.85 T),
+
+with ``phi(t) = max(0, t - 0.85 T)`` in seconds (:func:`poc_env.theory.timing.overtime_s`) and ``M``
+the scenario's ``planner.penalty_m``. With ``M = 1000`` and ``alpha = 1`` a millisecond of
+overtime outweighs any POS difference, so every feasible plan beats every infeasible one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import shapely
+from numba import njit
+
+from poc_env.config import Scenario, load_scenario
+from poc_env.errors import ConfigError
+from poc_env.geometry import rectangle_polygon
+from poc_env.theory.bound import physical_optimum
+from poc_env.theory.patterns import parallel_line_search
+from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.search_theory import pod_from_coverage, swarm_pos
+from poc_env.theory.timing import flight_lengths, flight_time_from_lengths, is_feasible, overtime_s
+
+__all__ = [
+    "PARAMS_PER_UAV",
+    "PlanObjective",
+    "PlanScores",
+    "area_fractions",
+    "exclusive_fractions",
+    "lawnmower",
+]
+
+#: Numbers per UAV in the encoding: (x_c, y_c, l, w, theta, d).
+PARAMS_PER_UAV = 6
+PARAM_NAMES = ("x_c", "y_c", "l", "w", "theta", "d")
+
+
+# --------------------------------------------------------------------------- exact areas
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _clip(px, py, n, qx, qy, nx_, ny_, t):
+    """Clip the convex polygon ``p[:n]`` by the half-plane ``nx_ x + ny_ y <= t`` into ``q``."""
+    m = 0
+    for k in range(n):
+        ax, ay = px[k], py[k]
+        bx, by = px[(k + 1) % n], py[(k + 1) % n]
+        sa = nx_ * ax + ny_ * ay - t
+        sb = nx_ * bx + ny_ * by - t
+        if sa <= 0.0:
+            qx[m] = ax
+            qy[m] = ay
+            m += 1
+        if (sa < 0.0 < sb) or (sb < 0.0 < sa):
+            r = sa / (sa - sb)
+            qx[m] = ax + r * (bx - ax)
+            qy[m] = ay + r * (by - ay)
+            m += 1
+    return m
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _area(px, py, n):
+    """Area of the convex polygon ``p[:n]`` (shoelace)."""
+    area = 0.0
+    for m in range(n):
+        mm = (m + 1) % n
+        area += px[m] * py[mm] - px[mm] * py[m]
+    return abs(0.5 * area)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _slab_cdf(t, big, small):
+    """P(U + V <= t) for independent U ~ U(-big, big), V ~ U(-small, small), big >= small.
+
+    The area fraction of a square cell on one side of a line: the cell's offsets projected on
+    the line's normal are such a sum (``big``, ``small`` = half the side times the larger and
+    the smaller of ``|cos|``, ``|sin|``). Piecewise quadratic, exact.
+    """
+    if t <= -big - small:
+        return 0.0
+    if t >= big + small:
+        return 1.0
+    if t < small - big:
+        r = t + big + small
+        return r * r / (8.0 * big * small)
+    if t <= big - small:
+        return 0.5 + 0.5 * t / big
+    r = big + small - t
+    return 1.0 - r * r / (8.0 * big * small)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _cell_square(h, qx, qy):
+    """The cell ``[-h/2, h/2]^2`` (cell-centred coordinates) into ``q``; returns 4."""
+    half = 0.5 * h
+    qx[0], qy[0] = -half, -half
+    qx[1], qy[1] = half, -half
+    qx[2], qy[2] = half, half
+    qx[3], qy[3] = -half, half
+    return 4
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _clip_rect(px, py, n, qx, qy, rx, ry, c, s, a, b):
+    """``p[:n]`` clipped to the rectangle centred at ``(rx, ry)`` (axes ``(c, s)``, half sides
+    ``a``, ``b``), both in the same coordinates; the result in ``q`` (``p`` is overwritten)."""
+    eo = c * rx + s * ry  # u of the rectangle's centre along e = (c, s)
+    fo = -s * rx + c * ry  # v along f = (-s, c)
+    n = _clip(px, py, n, qx, qy, c, s, eo + a)  # u <= a
+    n = _clip(qx, qy, n, px, py, -c, -s, a - eo)  # u >= -a
+    n = _clip(px, py, n, qx, qy, -s, c, fo + b)  # v <= b
+    return _clip(qx, qy, n, px, py, s, -c, b - fo)  # v >= -b, the result in p
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _minus_rects(
+    n0, earlier, n_earlier, rx, ry, cos_t, sin_t, half_l, half_w, sx, sy, sn, sp, sk, tx, ty, tiny
+):
+    """Area of the convex polygon ``sx[0, :n0]`` minus the union of the rectangles ``earlier``.
+
+    ``rx, ry`` are the rectangles' centres in the polygon's coordinates. Depth first: a
+    polygon minus one rectangle is the union of at most four disjoint convex pieces (beyond
+    ``u >= a``; beyond ``u <= -a``; within ``|u| <= a`` with ``v >= b``; with ``v <= -b``), and
+    the leaves left after the last rectangle are disjoint, so their areas add up. A polygon
+    inside the rectangle ends its branch, one clear of it passes on whole, and only the pieces
+    its extent reaches are cut; pieces under ``tiny`` are dropped. ``sx, sy, sn, sp, sk`` are
+    the per-level stack (polygon, size, next piece, pieces to cut); ``tx, ty`` scratch.
+    """
+    total = 0.0
+    level = 0
+    sn[0] = n0
+    sp[0] = -1
+    while level >= 0:
+        if level == n_earlier:
+            total += _area(sx[level], sy[level], sn[level])
+            level -= 1
+            continue
+        r = earlier[level]
+        c, s, a, b = cos_t[r], sin_t[r], half_l[r], half_w[r]
+        eo = c * rx[level] + s * ry[level]
+        fo = -s * rx[level] + c * ry[level]
+        src_x, src_y, m = sx[level], sy[level], sn[level]
+        dst_x, dst_y = sx[level + 1], sy[level + 1]
+        if sp[level] < 0:  # first visit: where is the polygon relative to the rectangle?
+            u_lo = v_lo = math.inf
+            u_hi = v_hi = -math.inf
+            for q in range(m):
+                u = c * src_x[q] + s * src_y[q] - eo
+                v = c * src_y[q] - s * src_x[q] - fo
+                u_lo, u_hi = min(u_lo, u), max(u_hi, u)
+                v_lo, v_hi = min(v_lo, v), max(v_hi, v)
+            if u_lo >= -a and u_hi <= a and v_lo >= -b and v_hi <= b:
+                level -= 1  # wholly inside: nothing of it is left
+                continue
+            if u_lo >= a or u_hi <= -a or v_lo >= b or v_hi <= -b:
+                for q in range(m):  # clear of the rectangle: passes on whole
+                    dst_x[q] = src_x[q]
+                    dst_y[q] = src_y[q]
+                sp[level] = 4
+                level += 1
+                sn[level] = m
+                sp[level] = -1
+                continue
+            sk[level] = (u_hi > a) | ((u_lo < -a) << 1) | ((v_hi > b) << 2) | ((v_lo < -b) << 3)
+            sp[level] = 0
+        piece = sp[level]
+        while piece < 4 and not (sk[level] >> piece) & 1:
+            piece += 1
+        if piece >= 4:
+            level -= 1
+            continue
+        sp[level] = piece + 1
+        if piece == 0:  # u >= a
+            m = _clip(src_x, src_y, m, dst_x, dst_y, -c, -s, -a - eo)
+        elif piece == 1:  # u <= -a
+            m = _clip(src_x, src_y, m, dst_x, dst_y, c, s, eo - a)
+        else:  # |u| <= a and v >= b (2) or v <= -b (3)
+            m = _clip(src_x, src_y, m, tx, ty, c, s, eo + a)
+            m = _clip(tx, ty, m, dst_x, dst_y, -c, -s, a - eo)
+            for q in range(m):
+                tx[q] = dst_x[q]
+                ty[q] = dst_y[q]
+            if piece == 2:
+                m = _clip(tx, ty, m, dst_x, dst_y, s, -c, -b - fo)
+            else:
+                m = _clip(tx, ty, m, dst_x, dst_y, -s, c, fo - b)
+        if m >= 3 and _area(dst_x, dst_y, m) > tiny:
+            level += 1
+            sn[level] = m
+            sp[level] = -1
+    return total
+
+
+@njit(cache=True, error_model="numpy")
+def _membership_kernel(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, exclusive, out):
+    """Area fractions of every ``h x h`` cell inside every rectangle; ``out`` (P, n, ny, nx) = 0.
+
+    Rectangle ``p * n + k`` (flat inputs) is UAV ``k`` of individual ``p``: centre
+    ``(cx, cy)``, half side ``half_l`` along ``(cos_t, sin_t)``, ``half_w`` across. Per row,
+    only the columns of the rectangle clipped to the row's band are visited. A cell is 1 when its
+    projections on both rectangle axes lie inside, 0 when one lies outside; a cell crossed only
+    by the two sides of one axis gets the exact fraction of that slab (:func:`_slab_cdf`); a
+    cell near a corner is clipped by the rectangle (Sutherland-Hodgman).
+
+    With ``exclusive``, UAV ``k``'s fraction excludes what the UAVs before it cover (§3.1.6,
+    exactly): a cell wholly inside an earlier rectangle gives 0; in a cell that earlier
+    rectangles cover in part, the cell clipped to rectangle ``k`` minus those rectangles
+    (:func:`_minus_rects`).
+    """
+    n_ind, n_uav, ny, nx = out.shape
+    full = np.zeros((ny, nx), np.bool_)
+    count = np.zeros((ny, nx), np.int64)
+    parts = np.empty((ny, nx, max(n_uav, 1)), np.int64)
+    part_frac = np.empty((ny, nx))  # the (plain) fraction of a cell's first partial rectangle
+    size = 16 + 3 * n_uav
+    px = np.empty(size)
+    py = np.empty(size)
+    qx = np.empty(size)
+    qy = np.empty(size)
+    sx = np.empty((n_uav + 1, size))
+    sy = np.empty((n_uav + 1, size))
+    sn = np.empty(n_uav + 1, np.int64)
+    sp = np.empty(n_uav + 1, np.int64)
+    sk = np.empty(n_uav + 1, np.int64)
+    rx = np.empty(n_uav)
+    ry = np.empty(n_uav)
+    half = 0.5 * h
+    inv_area = 1.0 / (h * h)
+    tiny = 1e-14 * h * h
+    for p in range(n_ind):
+        if exclusive:
+            full[:, :] = False
+            count[:, :] = 0
+        for k in range(n_uav):
+            r = p * n_uav + k
+            c = cos_t[r]
+            s = sin_t[r]
+            a = half_l[r]
+            b = half_w[r]
+            ac = abs(c)
+            as_ = abs(s)
+            ey = a * as_ + b * ac
+            j0 = max(math.floor((cy[r] - ey - y0) / h), 0)
+            j1 = min(math.ceil((cy[r] + ey - y0) / h), ny)
+            hp = half * (ac + as_)  # half extent of a cell projected on either rectangle axis
+            big = half * max(ac, as_)
+            small = half * min(ac, as_)
+            for j in range(j0, j1):
+                dy = y0 + (j + 0.5) * h - cy[r]
+                # the rectangle (relative to its centre) clipped to this row's band -> columns
+                for m in range(4):
+                    su = -a if (m == 0 or m == 3) else a
+                    sv = -b if m < 2 else b
+                    px[m] = su * c - sv * s
+                    py[m] = su * s + sv * c
+                n = _clip(px, py, 4, qx, qy, 0.0, 1.0, dy + half)
+                n = _clip(qx, qy, n, px, py, 0.0, -1.0, half - dy)
+                if n == 0:
+                    continue
+                lo_x = px[0]
+                hi_x = px[0]
+                for m in range(1, n):
+                    lo_x = min(lo_x, px[m])
+                    hi_x = max(hi_x, px[m])
+                i0 = max(math.floor((cx[r] + lo_x - x0) / h), 0)
+                i1 = min(math.ceil((cx[r] + hi_x - x0) / h), nx)
+                for i in range(i0, i1):
+                    if exclusive and full[j, i]:
+                        continue
+                    dx = x0 + (i + 0.5) * h - cx[r]
+                    u = dx * c + dy * s
+                    v = dy * c - dx * s
+                    au = abs(u)
+                    av = abs(v)
+                    if au >= a + hp or av >= b + hp:
+                        continue
+                    in_u = au + hp <= a
+                    in_v = av + hp <= b
+                    own_full = in_u and in_v
+                    earlier = count[j, i] if exclusive else 0
+                    if own_full:
+                        m_own = 1.0
+                    elif in_v:  # only the sides u = +-a cross the cell
+                        m_own = _slab_cdf(a - u, big, small) - _slab_cdf(-a - u, big, small)
+                    elif in_u:  # only the sides v = +-b
+                        m_own = _slab_cdf(b - v, big, small) - _slab_cdf(-b - v, big, small)
+                    else:  # near a corner: clip the cell by the rectangle
+                        n = _cell_square(h, px, py)
+                        n = _clip_rect(px, py, n, qx, qy, -dx, -dy, c, s, a, b)
+                        m_own = _area(px, py, n) * inv_area
+                    plain = m_own
+                    if earlier == 1 and own_full:  # the cell minus one rectangle
+                        m_own = 1.0 - part_frac[j, i]
+                    elif earlier == 1:  # (cell ∩ Q_k) minus (cell ∩ Q_k ∩ Q_e)
+                        e = parts[j, i, 0]
+                        n = _cell_square(h, px, py)
+                        n = _clip_rect(px, py, n, qx, qy, -dx, -dy, c, s, a, b)
+                        ex = cx[e] - (cx[r] + dx)
+                        ey_ = cy[e] - (cy[r] + dy)
+                        n = _clip_rect(
+                            px, py, n, qx, qy, ex, ey_, cos_t[e], sin_t[e], half_l[e], half_w[e]
+                        )
+                        m_own = m_own - _area(px, py, n) * inv_area
+                    elif earlier:
+                        n = _cell_square(h, sx[0], sy[0])
+                        if not own_full:
+                            n = _clip_rect(sx[0], sy[0], n, qx, qy, -dx, -dy, c, s, a, b)
+                        for q in range(earlier):
+                            e = parts[j, i, q]
+                            rx[q] = cx[e] - (cx[r] + dx)
+                            ry[q] = cy[e] - (cy[r] + dy)
+                        area = _minus_rects(
+                            n,
+                            parts[j, i],
+                            earlier,
+                            rx,
+                            ry,
+                            cos_t,
+                            sin_t,
+                            half_l,
+                            half_w,
+                            sx,
+                            sy,
+                            sn,
+                            sp,
+                            sk,
+                            qx,
+                            qy,
+                            tiny,
+                        )
+                        m_own = min(area * inv_area, m_own)
+                    if m_own <= 1e-14:  # rounding residue of an exact 0
+                        continue
+                    out[p, k, j, i] = min(m_own, 1.0)
+                    if exclusive:
+                        if own_full:
+                            full[j, i] = True
+                        else:
+                            parts[j, i, earlier] = r
+                            if earlier == 0:
+                                part_frac[j, i] = plain
+                            count[j, i] = earlier + 1
+
+
+def _memberships(grid: Grid, center, length, width, theta, exclusive: bool) -> np.ndarray:
+    c = np.asarray(center, dtype=float)
+    lead = c.shape[:-1]
+    th = np.broadcast_to(np.asarray(theta, dtype=float), lead)
+
+    def flat(v):
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), lead).ravel())
+
+    out = np.zeros((*lead, grid.ny, grid.nx))
+    shaped = out.reshape(-1, lead[-1] if exclusive and lead else 1, grid.ny, grid.nx)
+    _membership_kernel(
+        flat(c[..., 0]),
+        flat(c[..., 1]),
+        flat(0.5 * np.asarray(length, dtype=float)),
+        flat(0.5 * np.asarray(width, dtype=float)),
+        flat(np.cos(th)),
+        flat(np.sin(th)),
+        float(grid.origin_m[0]),
+        float(grid.origin_m[1]),
+        float(grid.cell_m),
+        bool(exclusive),
+        shaped,
+    )
+    return out
+
+
+def area_fractions(grid: Grid, center, length, width, theta) -> np.ndarray:
+    """Exact area fraction of every cell inside each rectangle ``Q(center, l, w, theta)``.
+
+    ``center`` (..., 2), ``length``/``width``/``theta`` (...); returns (..., ny, nx) in [0, 1].
+    The map ends at the grid: a rectangle reaching beyond it covers only its part over the map.
+    """
+    return _memberships(grid, center, length, width, theta, exclusive=False)
+
+
+def exclusive_fractions(grid: Grid, center, length, width, theta) -> np.ndarray:
+    """Area fractions of each UAV's rectangle *not covered by the UAVs before it* (§3.1.6).
+
+    ``center`` (..., n, 2), the others (..., n); returns (..., n, ny, nx). UAV ``i`` gets the
+    exact area of ``cell ∩ Q_i \\ (Q_0 ∪ ... ∪ Q_{i-1})``: the overlap rule "a cell already
+    allocated to an earlier UAV adds nothing", applied to every part of a cell, so the
+    fractions of one cell add up to at most 1 and a copy of another UAV's rectangle -- or any
+    overlap, down to a sliver of a cell -- is credited nothing.
+    """
+    c = np.asarray(center, dtype=float)
+    if c.ndim < 2:
+        raise ConfigError("center", c.shape, "shape (..., n, 2)")
+    return _memberships(grid, center, length, width, theta, exclusive=True)
+
+
+# --------------------------------------------------------------------------- lawnmower
+
+
+@dataclass(frozen=True)
+class Lawnmower:
+    """Closed-form lawnmower of rectangles (arrays broadcast over the leading axes).
+
+    ``n_lines`` lines of ``line_length_m`` (the long side) at ``spacing_m``; ``search_m`` the
+    search legs (``n L``), ``track_m`` every leg between the first and last waypoint
+    (``n L + (n - 1) d``), ``first_m``/``last_m`` (..., 2) the first and last waypoints.
+    """
+
+    n_lines: np.ndarray
+    line_length_m: np.ndarray
+    search_m: np.ndarray
+    track_m: np.ndarray
+    first_m: np.ndarray
+    last_m: np.ndarray
+
+
+def lawnmower(center, length, width, theta, spacing, start) -> Lawnmower:
+    """The lawnmower :func:`~poc_env.theory.patterns.parallel_line_search` flies, in closed form.
+
+    Long side ``L = max(l, w)`` along ``e_L`` (direction ``theta``, or ``theta + pi/2`` when
+    ``w > l``), short side ``E = min(l, w)`` across, ``e_E = e_L`` turned +90 degrees. The
+    generator rotates the rectangle counter-clockwise by the lines' bearing ``pi/2 - alpha``,
+    which sends ``e_L`` to +y and ``-e_E`` to +x, and puts its lines ``d/2, 3d/2, ...`` from the
+    rotated minimum x: at offsets ``v_k = E/2 - d/2 - k d`` along ``e_E``, ``k < n`` with
+    ``n = max(1, ceil(E/d - 1/2))`` (one line at ``v = 0`` when ``E < d``). Of the four starts
+    (first or last line, either end) the one nearest ``start`` is flown (ties: the generator's
+    order); the track ends on the other outer line, at the far end for odd ``n``.
+    """
+    c = np.asarray(center, dtype=float)
+    l_ = np.asarray(length, dtype=float)
+    w_ = np.asarray(width, dtype=float)
+    d = np.asarray(spacing, dtype=float)
+    alpha = np.where(l_ >= w_, theta, np.asarray(theta, dtype=float) + 0.5 * np.pi)
+    long_ = np.maximum(l_, w_)
+    short = np.minimum(l_, w_)
+    n = np.maximum(1.0, np.ceil(short / d - 0.5))
+    e_l = np.stack([np.cos(alpha), np.sin(alpha)], axis=-1)
+    e_e = np.stack([-np.sin(alpha), np.cos(alpha)], axis=-1)
+    v_first = np.where(short < d, 0.0, 0.5 * (short - d))
+    v_last = v_first - (n - 1.0) * d
+    # candidates in parallel_search's order: (reverse, first_up) = FT, FF, TT, TF
+    vs = np.stack([v_first, v_first, v_last, v_last], axis=-1)
+    us = np.stack([-0.5 * long_, 0.5 * long_, -0.5 * long_, 0.5 * long_], axis=-1)
+    corners = (
+        c[..., None, :] + vs[..., None] * e_e[..., None, :] + us[..., None] * e_l[..., None, :]
+    )
+    dist = np.linalg.norm(corners - np.asarray(start, dtype=float)[..., None, :], axis=-1)
+    k = np.argmin(dist, axis=-1)
+    v_s = np.take_along_axis(vs, k[..., None], axis=-1)[..., 0]
+    u_s = np.take_along_axis(us, k[..., None], axis=-1)[..., 0]
+    v_e = np.where(k < 2, v_last, v_first)
+    u_e = np.where(n % 2 == 1, -u_s, u_s)
+    first = c + v_s[..., None] * e_e + u_s[..., None] * e_l
+    last = c + v_e[..., None] * e_e + u_e[..., None] * e_l
+    search = n * long_
+    return Lawnmower(n, long_, search, search + (n - 1.0) * d, first, last)
+
+
+# --------------------------------------------------------------------------- objective
+
+
+@dataclass(frozen=True)
+class PlanScores:
+    """Every term of eq. 25-26 for a population: shapes (P,) or (P, n)."""
+
+    objective: np.ndarray  # (P,) eq. 26, to minimise
+    j: np.ndarray  # (P,) eq. 25's J
+    posc: np.ndarray  # (P,) sum_i POC_i POD_i (eq. 16 with the overlap rule)
+    poc: np.ndarray  # (P, n) credited POC_i
+    pod: np.ndarray  # (P, n)
+    pos: np.ndarray  # (P, n)
+    time_s: np.ndarray  # (P, n) eq. 17
+    overtime_s: np.ndarray  # (P, n) phi(t_i)
+    n_lines: np.ndarray  # (P, n)
+    search_length_m: np.ndarray  # (P, n) search legs
+    track_length_m: np.ndarray  # (P, n) all legs between first and last waypoint
+    transit_length_m: np.ndarray  # (P, n) take-off -> first, last -> landing
+
+
+class PlanObjective:
+    """Eq. 26 of the paper for a scenario and a prior, evaluated for a whole population at once.
+
+    Parameters
+    ----------
+    scenario:
+        A :class:`~poc_env.config.Scenario` or a built-in name / YAML path.
+    prior:
+        POC map (ny, nx); default: the scenario's own prior (:func:`build_prior`).
+    uavs:
+        Number of UAVs (default: the scenario's fleet; else spread over the airfields,
+        :meth:`Scenario.with_uavs`).
+    alpha, beta, penalty_m:
+        Weights of eq. 25 and the penalty factor M of eq. 26 (default: the scenario's
+        ``reward.alpha``, ``reward.beta`` and ``planner.penalty_m``).
+
+    Raises
+    ------
+    ConfigError
+        Zero UAVs, a prior of the wrong shape, negative weights, or a scenario in which no
+        UAV can reach the search area and return within 0.85 T.
+
+    Notes
+    -----
+    ``obj.bounds`` (6n, 2) is the box of the encoding (module docstring), ``obj.dim = 6n``.
+    ``obj(X)`` with X (P, 6n) returns the (P,) objective values; with X (6n,) a float.
+    :meth:`evaluate` returns every term (:class:`PlanScores`), :meth:`decode` the per-UAV plan,
+    :meth:`scalar_score` an independent slow reference (generated tracks, shapely areas).
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario | str = "paper_6_2",
+        prior: np.ndarray | None = None,
+        *,
+        uavs: int | None = None,
+        alpha: float | None = None,
+        beta: float | None = None,
+        penalty_m: float | None = None,
+    ) -> None:
+        sc = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
+        if uavs is not None:
+            if isinstance(uavs, bool) or not isinstance(uavs, (int, np.integer)) or uavs < 1:
+                raise ConfigError("uavs", uavs, "an integer >= 1 (at least one UAV)")
+            sc = sc.with_uavs(int(uavs))
+        if sc.n_uavs < 1:
+            raise ConfigError("uavs", sc.n_uavs, "an integer >= 1 (at least one UAV)")
+        self.scenario = sc
+        self.grid = Grid.from_config(sc.map)
+        p = build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float)
+        if p.shape != self.grid.shape or not np.all(np.isfinite(p)) or np.any(p < 0):
+            raise ConfigError(
+                "prior", getattr(p, "shape", p), f"finite values >= 0 of shape {self.grid.shape}"
+            )
+        self.prior = p
+        self.n = sc.n_uavs
+        self.dim = PARAMS_PER_UAV * self.n
+        self.sweep_width_m = sc.sensor.sweep_width_m
+        self.law = sc.sensor.law
+        u = sc.uav
+        self.cruise_speed_mps = u.cruise_speed_mps
+        self.search_speed_mps = u.search_speed_mps
+        self.endurance_s = u.endurance_s
+        self.usable_fraction = u.usable_fraction
+        self.takeoff_m = np.asarray(sc.takeoff_m, dtype=float)
+        self.landing_m = np.asarray(sc.landing_m, dtype=float)
+        self.alpha = float(sc.reward.alpha if alpha is None else alpha)
+        self.beta = float(sc.reward.beta if beta is None else beta)
+        self.penalty_m = float(sc.planner.penalty_m if penalty_m is None else penalty_m)
+        for name in ("alpha", "beta", "penalty_m"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ConfigError(name, v, "a finite number >= 0")
+        self.bounds = self._bounds()
+        self._check_reachable()
+
+    # -- encoding ----------------------------------------------------------------------------
+    def _bounds(self) -> np.ndarray:
+        x0, y0, x1, y1 = self.grid.bounds
+        w = self.sweep_width_m
+        side = max(self.grid.width_m, self.grid.height_m)
+        lo_side = 0.5 * w
+        if lo_side >= side:
+            raise ConfigError(
+                "sensor.sweep_width_km", w / 1000, "less than twice the map's longer side"
+            )
+        one = np.array(
+            [[x0, x1], [y0, y1], [lo_side, side], [lo_side, side], [0.0, np.pi], [0.5 * w, 4 * w]]
+        )
+        return np.tile(one, (self.n, 1))
+
+    def _check_reachable(self) -> None:
+        """ConfigError when no UAV can even touch the map and come back within 0.85 T."""
+        x0, y0, x1, y1 = self.grid.bounds
+
+        def to_box(p):
+            dx = np.maximum(np.maximum(x0 - p[:, 0], p[:, 0] - x1), 0.0)
+            dy = np.maximum(np.maximum(y0 - p[:, 1], p[:, 1] - y1), 0.0)
+            return np.hypot(dx, dy)
+
+        direct = np.linalg.norm(self.landing_m - self.takeoff_m, axis=1)
+        least = np.maximum(direct, to_box(self.takeoff_m) + to_box(self.landing_m))
+        need_s = least / self.cruise_speed_mps
+        usable = self.usable_fraction * self.endurance_s
+        if np.all(need_s > usable):
+            need_h = need_s.min() / self.usable_fraction / 3600
+            raise ConfigError(
+                "uav.endurance_h",
+                self.endurance_s / 3600,
+                f"enough for a UAV to reach the search area and return within "
+                f"{self.usable_fraction:g} T: at least {need_h:.3g} h at the cruise speed",
+            )
+
+    def as_population(self, x) -> np.ndarray:
+        """X as a (P, 6n) float array; ConfigError for another width."""
+        arr = np.asarray(x, dtype=float)
+        if arr.ndim not in (1, 2) or arr.shape[-1] != self.dim:
+            raise ConfigError("x", arr.shape, f"shape (6n,) or (P, 6n) with 6n = {self.dim}")
+        return arr.reshape(-1, self.dim)
+
+    def split(self, x) -> dict[str, np.ndarray]:
+        """The encoding's fields, each (P, n): ``x_c, y_c, l, w, theta, d``."""
+        v = self.as_population(x).reshape(-1, self.n, PARAMS_PER_UAV)
+        return {name: v[..., k] for k, name in enumerate(PARAM_NAMES)}
+
+    # -- vectorised evaluation ---------------------------------------------------------------
+    def memberships(self, x) -> np.ndarray:
+        """Exclusive exact area fractions (P, n, ny, nx) of the UAVs' rectangles (§3.1.6)."""
+        f = self.split(x)
+        center = np.stack([f["x_c"], f["y_c"]], axis=-1)
+        return exclusive_fractions(self.grid, center, f["l"], f["w"], f["theta"])
+
+    def evaluate(self, x) -> PlanScores:
+        """Every term of eq. 25-26 for the population X (P, 6n), in one vectorised pass."""
+        f = self.split(x)
+        center = np.stack([f["x_c"], f["y_c"]], axis=-1)
+        mower = lawnmower(center, f["l"], f["w"], f["theta"], f["d"], self.takeoff_m[None, :, :])
+        transit = np.linalg.norm(mower.first_m - self.takeoff_m, axis=-1) + np.linalg.norm(
+            self.landing_m - mower.last_m, axis=-1
+        )
+        t = flight_time_from_lengths(
+            transit, mower.track_m, self.cruise_speed_mps, self.search_speed_mps
+        )
+        short = np.minimum(f["l"], f["w"])
+        coverage = self.sweep_width_m * np.minimum(mower.n_lines / short, 1.0 / f["d"])
+        pod = pod_from_coverage(coverage, self.law)
+        m = exclusive_fractions(self.grid, center, f["l"], f["w"], f["theta"])
+        poc, pos, posc = swarm_pos(m, pod, self.prior)
+        return self._combine(poc, pod, pos, posc, t, mower, transit)
+
+    def _combine(self, poc, pod, pos, posc, t, mower, transit) -> PlanScores:
+        phi = overtime_s(t, self.endurance_s, self.usable_fraction)
+        usable = self.usable_fraction * self.endurance_s
+        j = self.alpha * posc - self.beta * np.mean(t / usable, axis=-1)
+        obj = -j + self.penalty_m * np.sum(phi, axis=-1)
+        return PlanScores(
+            objective=obj,
+            j=j,
+            posc=posc,
+            poc=poc,
+            pod=pod,
+            pos=pos,
+            time_s=t,
+            overtime_s=phi,
+            n_lines=mower.n_lines,
+            search_length_m=mower.search_m,
+            track_length_m=mower.track_m,
+            transit_length_m=transit,
+        )
+
+    def __call__(self, x):
+        """Eq. 26 (to minimise): (P,) values for X (P, 6n); a float for one x (6n,)."""
+        arr = np.asarray(x, dtype=float)
+        values = self.evaluate(arr).objective
+        return float(values[0]) if arr.ndim == 1 else values
+
+    # -- reporting ---------------------------------------------------------------------------
+    def decode(self, x) -> list[dict[str, Any]]:
+        """The plan of one individual x (6n,): one dict per UAV, with the generated track."""
+        arr = np.asarray(x, dtype=float)
+        if arr.ndim != 1:
+            raise ConfigError("x", arr.shape, f"one individual, shape ({self.dim},)")
+        sc = self.evaluate(arr[None])
+        f = {k: v[0] for k, v in self.split(arr).items()}
+        out = []
+        for i in range(self.n):
+            track = parallel_line_search(
+                (f["x_c"][i], f["y_c"][i]),
+                f["l"][i],
+                f["w"][i],
+                f["theta"][i],
+                f["d"][i],
+                start=self.takeoff_m[i],
+            )
+            out.append(
+                {
+                    "id": i,
+                    "center_m": [float(f["x_c"][i]), float(f["y_c"][i])],
+                    "length_m": float(f["l"][i]),
+                    "width_m": float(f["w"][i]),
+                    "theta_rad": float(f["theta"][i]),
+                    "theta_deg": float(np.degrees(f["theta"][i])),
+                    "spacing_m": float(f["d"][i]),
+                    "takeoff_m": self.takeoff_m[i].tolist(),
+                    "landing_m": self.landing_m[i].tolist(),
+                    "n_lines": int(sc.n_lines[0, i]),
+                    "waypoints_m": track.waypoints.tolist(),
+                    "track_length_m": float(sc.track_length_m[0, i]),
+                    "search_length_m": float(sc.search_length_m[0, i]),
+                    "flight_time_s": float(sc.time_s[0, i]),
+                    "feasible": bool(
+                        is_feasible(sc.time_s[0, i], self.endurance_s, self.usable_fraction)
+                    ),
+                    "pod": float(sc.pod[0, i]),
+                    "poc": float(sc.poc[0, i]),
+                    "pos": float(sc.pos[0, i]),
+                }
+            )
+        return out
+
+    def upper_bound(self, x) -> float:
+        """The physical optimum (:func:`physical_optimum`) for the plan's total effort."""
+        sc = self.evaluate(np.asarray(x, dtype=float).reshape(1, -1))
+        effort = float(self.sweep_width_m * np.sum(sc.search_length_m))
+        return physical_optimum(self.prior, self.grid.cell_area_m2, effort, self.law).pos
+
+    def scalar_score(self, x) -> float:
+        """Eq. 26 for one individual, the slow obviously-correct way (the tests' reference).
+
+        Per UAV: the track generated by :func:`parallel_line_search` (start nearest the
+        take-off) gives the lengths (:func:`poc_env.theory.timing.flight_lengths`, eq. 17) and the
+        search length; shapely gives the exact area of every cell inside the UAV's rectangle
+        minus the union of the earlier UAVs' rectangles (§3.1.6); then :func:`swarm_pos`, the
+        eq. 10 cap and eq. 25-26 as in the module docstring.
+        """
+        arr = np.asarray(x, dtype=float)
+        if arr.shape != (self.dim,):
+            raise ConfigError("x", arr.shape, f"one individual, shape ({self.dim},)")
+        boxes = np.array(self.grid.cell_boxes(), dtype=object)
+        w_sweep = self.sweep_width_m
+        members: list[Any] = []
+        pods: list[float] = []
+        times: list[float] = []
+        earlier: list[Any] = []
+        for i in range(self.n):
+            xc, yc, ln, wd, th, d = arr[PARAMS_PER_UAV * i : PARAMS_PER_UAV * (i + 1)]
+            track = parallel_line_search((xc, yc), ln, wd, th, d, start=self.takeoff_m[i])
+            transit, search = flight_lengths(self.takeoff_m[i], track.waypoints, self.landing_m[i])
+            times.append(
+                float(
+                    flight_time_from_lengths(
+                        transit, search, self.cruise_speed_mps, self.search_speed_mps
+                    )
+                )
+            )
+            # effort over the rectangle, never more than eq. 10's W/d
+            coverage = min(w_sweep * track.search_length_m / (ln * wd), w_sweep / d)
+            pods.append(float(pod_from_coverage(coverage, self.law)))
+            rect = rectangle_polygon((xc, yc), ln, wd, th)
+            own = rect.difference(shapely.union_all(earlier)) if earlier else rect
+            earlier.append(rect)
+            area = shapely.area(shapely.intersection(own, boxes)) / self.grid.cell_area_m2
+            members.append(area.reshape(self.grid.shape))
+        _, _, posc = swarm_pos(np.array(members), np.array(pods), self.prior)
+        t = np.array(times)
+        usable = self.usable_fraction * self.endurance_s
+        j = self.alpha * float(posc) - self.beta * float(np.mean(t / usable))
+        phi = overtime_s(t, self.endurance_s, self.usable_fraction)
+        return -j + self.penalty_m * float(np.sum(phi))

@@ -1,0 +1,210 @@
+"""The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 1) and a figure.
+
+:func:`make_plan` runs an optimiser of :mod:`~agents.planning.optimizers` (default the paper's
+adaptive
+DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section) on
+:class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-1 dict
+documented
+in :mod:`agents.planning.export` (every field there, plus a few extras such as the convergence
+history). :class:`DEPlanPolicy` plans at the start of every episode on the environment's prior
+and flies the plan with the waypoint follower.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.planning.export import SCHEMA
+from agents.planning.objective import PlanObjective
+from agents.planning.optimizers import get_optimizer
+from agents.policies.base import Policy
+from poc_env.config import Scenario, load_scenario, write_text_atomic
+from poc_env.errors import ConfigError
+from poc_env.theory.probability_map import build_prior
+
+
+def make_plan(
+    scenario: Scenario | str = "paper_6_2",
+    *,
+    prior: np.ndarray | None = None,
+    map_source: str = "builtin",
+    uavs: int | None = None,
+    optimizer: str = "adaptive_de",
+    seed: int = 0,
+    popsize: int | None = None,
+    maxiter: int | None = None,
+    progress: bool = False,
+    init: np.ndarray | None = None,
+) -> dict[str, Any]:
+    """Optimise the plan and return it as a schema-1 dict (see the module docstring).
+
+    ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
+    population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
+    """
+    sc = load_scenario(scenario)
+    opt = get_optimizer(optimizer)
+    if prior is None:
+        prior = build_prior(sc.map)
+    obj = PlanObjective(sc, prior, uavs=uavs)
+    pl = sc.planner
+    settings: dict[str, Any] = {
+        "popsize": int(popsize or pl.population),
+        "maxiter": int(maxiter or pl.generations),
+    }
+    kwargs: dict[str, Any] = dict(settings)
+    if optimizer in ("adaptive_de", "classic_de"):
+        kwargs.update(f0=pl.f0, cr=pl.cr)
+        settings.update(f0=pl.f0, cr=pl.cr)
+        if init is not None:
+            kwargs["init"] = init
+            settings["warm_start"] = int(np.atleast_2d(init).shape[0])
+    elif init is not None:
+        raise ConfigError("init", optimizer, "adaptive_de or classic_de (warm starts)")
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=settings["maxiter"], desc=optimizer, unit="gen")
+
+    def callback(res):
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix(objective=f"{res.fun:.4f}")
+        return False
+
+    t0 = time.perf_counter()
+    res = opt(obj, obj.bounds, rng=seed, callback=callback, **kwargs)
+    runtime = time.perf_counter() - t0
+    if bar is not None:
+        bar.close()
+    x = np.asarray(res.x, dtype=float)
+    per_uav = obj.decode(x)
+    uav_out = []
+    for u in per_uav:
+        uav_out.append(
+            {
+                "id": u["id"] + 1,
+                "rectangle": {
+                    "center_m": u["center_m"],
+                    "length_m": u["length_m"],
+                    "width_m": u["width_m"],
+                    "theta_deg": u["theta_deg"],
+                },
+                "spacing_m": u["spacing_m"],
+                "takeoff_m": u["takeoff_m"],
+                "landing_m": u["landing_m"],
+                "waypoints_m": u["waypoints_m"],
+                "track_length_m": u["track_length_m"],
+                "flight_time_s": u["flight_time_s"],
+                "pod": u["pod"],
+                "poc": u["poc"],
+                "pos": u["pos"],
+                "feasible": u["feasible"],
+            }
+        )
+    return {
+        "schema": SCHEMA,
+        "scenario": sc.name,
+        "seed": int(seed),
+        "map_source": map_source,
+        "optimizer": {"name": optimizer, "settings": settings},
+        "runtime_s": runtime,
+        "posc": float(sum(u["pos"] for u in uav_out)),
+        "upper_bound": float(obj.upper_bound(x)),
+        "objective": float(res.fun),
+        "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
+        "x": [float(v) for v in x],
+        "uavs": uav_out,
+    }
+
+
+def plan_table(plan: dict[str, Any]) -> str:
+    """Table 6 analog: rectangles, spacing and angle per UAV, with POD, POC, POS and time."""
+    head = (
+        f"{'No.':>3} {'(x_c, y_c)/km':>16} {'(l, w)/km':>14} {'theta/deg':>9} {'d/km':>6} "
+        f"{'POD':>6} {'POC':>6} {'POS':>6} {'time/h':>6} {'ok':>3}"
+    )
+    lines = [head, "-" * len(head)]
+    for u in plan["uavs"]:
+        r = u["rectangle"]
+        c = f"({r['center_m'][0] / 1e3:.1f}, {r['center_m'][1] / 1e3:.1f})"
+        lw = f"({r['length_m'] / 1e3:.1f}, {r['width_m'] / 1e3:.1f})"
+        lines.append(
+            f"{u['id']:>3} {c:>16} {lw:>14} {r['theta_deg']:>9.1f} {u['spacing_m'] / 1e3:>6.2f} "
+            f"{u['pod']:>6.3f} {u['poc']:>6.3f} {u['pos']:>6.3f} "
+            f"{u['flight_time_s'] / 3600:>6.2f} {'yes' if u['feasible'] else 'NO':>3}"
+        )
+    lines.append("-" * len(head))
+    lines.append(
+        f"POS_C = {plan['posc']:.4f}   physical optimum for the same effort: "
+        f"{plan['upper_bound']:.4f}   ({plan['optimizer']['name']}, seed {plan['seed']}, "
+        f"{plan['runtime_s']:.2f} s)"
+    )
+    return "\n".join(lines)
+
+
+def write_plan(plan: dict[str, Any], path: str | os.PathLike[str]) -> Path:
+    """Write plan.json atomically."""
+    return write_text_atomic(path, json.dumps(plan, indent=1))
+
+
+def plot_plan(plan: dict[str, Any], scenario: Scenario, prior, path) -> Path:
+    """Fig. 21 analog: prior, search rectangles, tracks and airfields."""
+    from poc_env.geometry import rectangle_corners
+    from poc_env.theory.probability_map import Grid
+    from poc_env.viz.plots import _figure, draw_airfields, draw_prior, save_figure_atomic
+
+    grid = Grid.from_config(scenario.map)
+    fig = _figure((9.0, 6.5))
+    ax = fig.add_subplot()
+    draw_prior(ax, grid, prior)
+    for k, u in enumerate(plan["uavs"]):
+        r = u["rectangle"]
+        corners = rectangle_corners(
+            r["center_m"], r["length_m"], r["width_m"], np.radians(r["theta_deg"])
+        )
+        ring = np.vstack([corners, corners[:1]]) / 1e3
+        ax.plot(ring[:, 0], ring[:, 1], color="w", lw=1.4)
+        route = np.array([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]]) / 1e3
+        ax.plot(route[:, 0], route[:, 1], color=f"C{k % 10}", lw=0.8, label=f"UAV {u['id']}")
+    pts = np.unique(np.array([u["takeoff_m"] for u in plan["uavs"]]), axis=0)
+    draw_airfields(ax, pts)
+    x0, y0, x1, y1 = grid.bounds
+    ax.set_xlim(min(x0, pts[:, 0].min()) / 1e3 - 10, x1 / 1e3 + 10)
+    ax.set_ylim(min(y0, pts[:, 1].min()) / 1e3 - 10, y1 / 1e3 + 5)
+    ax.set_title(
+        f"{plan['scenario']}: POS_C {plan['posc']:.4f} (bound {plan['upper_bound']:.4f}), "
+        f"{plan['optimizer']['name']}"
+    )
+    ax.legend(loc="upper right", fontsize=7, ncols=2)
+    return save_figure_atomic(fig, path)
+
+
+class DEPlanPolicy(Policy):
+    """``de_plan``: plan with adaptive DE on the episode's prior, then fly it (follower)."""
+
+    name = "de_plan"
+
+    def __init__(self, popsize: int | None = None, maxiter: int | None = None) -> None:
+        self.popsize = popsize
+        self.maxiter = maxiter
+
+    def reset(self, env: Any, seed: int) -> None:
+        from poc_env.sim.autopilot import WaypointFollower
+
+        super().reset(env, seed)
+        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
+        self.plan = make_plan(
+            env.scenario, prior=prior, seed=seed, popsize=self.popsize, maxiter=self.maxiter
+        )
+        wps = [np.asarray(u["waypoints_m"]) for u in self.plan["uavs"]]
+        self.follower = WaypointFollower(env.params, wps, env.possible_agents)
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        return self.follower.predict(observations, state)

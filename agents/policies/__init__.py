@@ -1,0 +1,1 @@
+"""Policies that fly in the environment behind one interface (:class:`base.Policy`)."""

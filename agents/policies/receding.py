@@ -1,0 +1,142 @@
+"""``de_receding``: the paper's §5 / Fig. 14 loop -- every step, adaptive DE picks the next
+moves of all UAVs under the motion, safety and communication constraints.
+
+Each step the decision is the vector of normalised heading changes of the UAVs still searching
+(eq. 19: within +-max_turn_rate x dt; speed is held at v_s, flight level). A candidate is scored
+by the expected POS of flying its headings straight for ``lookahead`` steps over the current
+belief (the POC raster of the observations; the UAVs' detections combined as
+``1 - prod(1 - p_i)``, eq. 12-14, with the environment's detection law at cell centres), minus
+an exterior penalty (eq. 26 style) for predicted separation below d_s (eq. 21), UAVs with fewer
+than the required neighbours in communication range (eq. 24) and positions outside the
+operating area (eq. 20). The optimiser is :func:`agents.planning.optimizers.adaptive_de` (eq. 27-32)
+with a small budget (``popsize`` x ``maxiter`` per step), seeded from the episode's seed. Outside
+the search area (on the way from the airfield) a UAV flies towards ``greedy_bayes``'s cell;
+UAVs return to land with the follower's rule.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from agents.planning.optimizers import adaptive_de
+from agents.policies.base import Policy
+from agents.policies.greedy import _split, best_cell
+from poc_env.sim.autopilot import go_home, must_return, steer
+from poc_env.sim.observations import decode_vector
+from poc_env.theory.search_theory import segment_pod
+
+
+class DERecedingPolicy(Policy):
+    """``de_receding`` (module docstring)."""
+
+    name = "de_receding"
+
+    def __init__(
+        self, popsize: int = 16, maxiter: int = 12, lookahead: int = 3, penalty: float = 10.0
+    ):
+        self.popsize = popsize
+        self.maxiter = maxiter
+        self.lookahead = lookahead
+        self.penalty = penalty
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        self.params = env.params
+        self.agents = env.possible_agents
+        self.rng = np.random.default_rng([seed, 13])
+
+    def _objective(self, poc, qs, ks):
+        p = self.params
+        sc = p.scenario
+        u = sc.uav
+        xy = np.array([qs[k]["xy"] for k in ks])  # (m, 2)
+        heading = np.array([qs[k]["heading"] for k in ks])
+        step = u.search_speed_mps * p.dt
+        centers = p.grid.centers
+        bx0, by0, bx1, by1 = p.bounds
+        d_s = sc.constraints.safety_distance_m
+        rc = sc.comms.range_m
+        need = min(sc.comms.min_neighbours, len(self.agents) - 1)
+        others = np.array([qs[k]["xy"] for k in qs if k not in ks], dtype=float).reshape(-1, 2)
+
+        def f(pop: np.ndarray) -> np.ndarray:
+            h = heading[None] + pop * u.max_turn_rate_rad_s * p.dt  # (P, m)
+            d = np.stack([np.cos(h), np.sin(h)], axis=-1)
+            nxt = xy[None] + step * d  # (P, m, 2)
+            end = xy[None] + step * self.lookahead * d
+            pod = segment_pod(
+                centers[None, None],
+                xy[None, :, None, None],
+                end[:, :, None, None],
+                sc.sensor.sweep_width_m,
+                sc.sensor.law,
+                p.cutoff_m,
+                p.grid.cell_m,
+                p.grid.origin_m,
+            )  # (P, m, ny, nx)
+            gain = np.sum(poc * (1.0 - np.prod(1.0 - pod, axis=1)), axis=(1, 2))
+            pts = np.concatenate([nxt, np.broadcast_to(others, (len(pop), *others.shape))], 1)
+            dist = np.hypot(*(pts[:, :, None] - pts[:, None]).transpose(3, 0, 1, 2))
+            eye = np.eye(pts.shape[1], dtype=bool)[None]
+            close = np.sum((dist < d_s) & ~eye, axis=(1, 2)) / 2
+            lonely = np.sum(np.sum((dist <= rc) & ~eye, axis=2) < need, axis=1)
+            outside = np.sum(
+                (nxt[..., 0] < bx0)
+                | (nxt[..., 0] > bx1)
+                | (nxt[..., 1] < by0)
+                | (nxt[..., 1] > by1),
+                axis=1,
+            )
+            scale = max(float(poc.sum()), 1e-12)
+            return -gain / scale + self.penalty * (close + 0.1 * lonely + outside)
+
+        return f
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        p = self.params
+        u = p.scenario.uav
+        actions, qs, poc, searching = {}, {}, None, []
+        for k, agent in enumerate(self.agents):
+            if agent not in observations:
+                continue
+            raster, vec = _split(p, observations[agent])
+            q = qs[k] = decode_vector(p, vec)
+            poc = raster if poc is None else poc
+            if must_return(p, q, k):
+                actions[agent] = go_home(p, q, k)
+            else:
+                searching.append(k)
+        if searching:
+            f = self._objective(poc, qs, searching)
+            bounds = [(-1.0, 1.0)] * len(searching)
+            seed = int(self.rng.integers(2**31))
+            res = adaptive_de(f, bounds, popsize=self.popsize, maxiter=self.maxiter, rng=seed)
+            for j, k in enumerate(searching):
+                q = qs[k]
+                a = steer(
+                    p,
+                    q["xy"],
+                    q["heading"],
+                    q["speed"],
+                    q["pitch"],
+                    q["z"],
+                    q["xy"],
+                    u.search_speed_mps,
+                )
+                a[1] = res.x[j]
+                if not p.grid.contains(q["xy"]):  # transit from the airfield to the area
+                    goal = p.grid.centers.reshape(-1, 2)[best_cell(p, poc, q, k)]  # type: ignore[arg-type]
+                    a = steer(
+                        p,
+                        q["xy"],
+                        q["heading"],
+                        q["speed"],
+                        q["pitch"],
+                        q["z"],
+                        goal,
+                        u.cruise_speed_mps,
+                    )
+                actions[self.agents[k]] = a.astype(np.float32)
+        return actions, state

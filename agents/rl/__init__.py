@@ -1,0 +1,1 @@
+"""Reinforcement learning: PPO training with parameter sharing, networks, recipes, checkpoints."""

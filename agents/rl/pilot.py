@@ -1,0 +1,208 @@
+"""The ``pilot`` recipe: PPO chooses where each UAV heads, an autopilot flies eq. 19.
+
+Learning eq. 19 increments end to end (the ``shared`` recipe) asks PPO to discover, from a
+random walk, four things at once: flying 60 km to the area, holding altitude, spreading over
+the probability mass, and coming back to land within 0.85 T with the speed low enough to land.
+The ``pilot`` recipe keeps the decision that matters -- where to search next -- for the
+policy and hands the rest to the same flight layer the planned baselines use
+(:mod:`poc_env.sim.autopilot`), so PPO and ``de_plan`` are compared on equal terms:
+
+* **Action** ``Box(-1, 1, (2,))`` per UAV: a direction ``(a_x, a_y)`` in the map frame. The
+  autopilot (:func:`pilot_actions`) turns towards the point 10 km along it with eq. 19
+  increments within their limits (:func:`poc_env.sim.autopilot.steer`), at the search speed over
+  the grid and the cruise speed outside it, level at the cruise altitude. A zero direction
+  keeps the heading. As soon as the remaining usable endurance only covers the flight home
+  (:func:`poc_env.sim.autopilot.returning`, eq. 18) the autopilot flies home and lands
+  (:func:`poc_env.sim.autopilot.homing`); the policy's action is then ignored.
+* **Observation** ``Box((FEATURES,))`` per UAV, computed from the env's own observation
+  (raster + vector) by :class:`PilotFeatures`, so a checkpoint acts on
+  :class:`~poc_env.envs.parallel.UAVSearchParallelEnv` observations through
+  :class:`agents.rl.train.PPOPolicy`:
+
+  ========  ===================================================================================
+  0-13      the env's state vector (:data:`poc_env.sim.observations.VECTOR_NAMES`)
+  14-45     belief compass: the share of the remaining POC (raster channel 0) in each of 8
+            map-frame sectors (east first, counter-clockwise) x 4 distance rings around the
+            UAV (0-10, 10-30, 30-70, > 70 km), index ``14 + 4 * sector + ring``
+  46-53     other UAVs (raster channel 2) within 30 km in each sector / (N - 1)
+  54        mean of raster channel 0 (remaining POC relative to the prior's peak cell)
+  55-62     the UAV's index k as a one-hot of ``k mod 8``
+  ========  ===================================================================================
+
+  The index matters: with parameter sharing, UAVs taking off together from one airfield see
+  identical observations, so a deterministic policy without it flies them as one stacked
+  pack (every step a separation violation). Knowing its index lets each UAV break the
+  symmetry (agent indication, Gupta et al. 2017; Terry et al. 2020).
+
+* **RL episode of a UAV** ends when the autopilot takes it home (:class:`PilotVecEnv`); the
+  env resets once every UAV is home-bound or finished, so no rollout rows are spent on
+  flights the policy cannot influence. Logged episode POSC is therefore the POSC at that
+  moment (what the return legs still find is not included).
+* **Reward**: the scenario's (alpha x team POS - penalties), plus an optional
+  potential-based approach term (Ng et al., 1999) ``c (gamma Phi(s') - Phi(s))`` with
+  ``Phi = -(distance from the UAV to the grid in km)``, which pays for closing the 60 km
+  transit without changing which policies are optimal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from poc_env.config import Scenario
+from poc_env.envs.vector import SwarmVecEnv
+from poc_env.sim import core as sim
+from poc_env.sim import observations as obs_mod
+from poc_env.sim.autopilot import homing, returning, steer
+from poc_env.sim.core import Params
+from poc_env.sim.observations import VECTOR_HIGH, VECTOR_LOW, VECTOR_SIZE, decode_vector
+
+N_SECTORS = 8
+RING_EDGES_M = (10e3, 30e3, 70e3)
+N_RINGS = len(RING_EDGES_M) + 1
+OTHERS_RADIUS_M = 30e3
+LOOKAHEAD_M = 10e3
+N_IDS = 8
+FEATURES = VECTOR_SIZE + N_SECTORS * N_RINGS + N_SECTORS + 1 + N_IDS
+FEATURE_LOW = np.concatenate([VECTOR_LOW, np.zeros(FEATURES - VECTOR_SIZE, np.float32)])
+FEATURE_HIGH = np.concatenate([VECTOR_HIGH, np.ones(FEATURES - VECTOR_SIZE, np.float32)])
+OBSERVATION_SPACE = spaces.Box(FEATURE_LOW, FEATURE_HIGH, dtype=np.float32)
+ACTION_SPACE = spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+class PilotFeatures:
+    """Map the env's per-agent observations to the pilot features (module docstring)."""
+
+    def __init__(self, params: Params) -> None:
+        self.params = params
+        self.centers = params.grid.centers.reshape(-1, 2).astype(float)
+        self.others = max(params.n_agents - 1, 1)
+
+    def __call__(self, raster: np.ndarray, vector: np.ndarray, k) -> np.ndarray:
+        """``raster (B, C, ny, nx)``, ``vector (B, VECTOR_SIZE)`` of UAVs ``k (B,)`` ->
+        ``(B, FEATURES)``."""
+        raster = np.asarray(raster, dtype=np.float32)
+        vector = np.asarray(vector, dtype=np.float32)
+        b = vector.shape[0]
+        out = np.zeros((b, FEATURES), dtype=np.float32)
+        out[:, :VECTOR_SIZE] = vector
+        if b == 0:
+            return out
+        xy = decode_vector(self.params, vector)["xy"]
+        d = self.centers[None, :, :] - xy[:, None, :]
+        dist = np.hypot(d[..., 0], d[..., 1])
+        ang = np.arctan2(d[..., 1], d[..., 0])
+        sector = np.floor((ang + np.pi) / (2 * np.pi) * N_SECTORS).astype(np.int64) % N_SECTORS
+        # sector 0 should point east: shift by half a turn (arctan2 + pi starts at west)
+        sector = (sector + N_SECTORS // 2) % N_SECTORS
+        ring = np.searchsorted(np.asarray(RING_EDGES_M), dist, side="right")
+        rows = np.arange(b)[:, None]
+        poc = raster[:, 0].reshape(b, -1).astype(float)
+        total = poc.sum(axis=1)
+        mass = np.bincount(
+            (rows * (N_SECTORS * N_RINGS) + sector * N_RINGS + ring).ravel(),
+            weights=poc.ravel(),
+            minlength=b * N_SECTORS * N_RINGS,
+        ).reshape(b, -1)
+        share = np.divide(mass, total[:, None], out=np.zeros_like(mass), where=total[:, None] > 0)
+        out[:, VECTOR_SIZE : VECTOR_SIZE + N_SECTORS * N_RINGS] = share
+        others = raster[:, 2].reshape(b, -1).astype(float) * (dist <= OTHERS_RADIUS_M)
+        count = np.bincount(
+            (rows * N_SECTORS + sector).ravel(), weights=others.ravel(), minlength=b * N_SECTORS
+        ).reshape(b, -1)
+        k0 = VECTOR_SIZE + N_SECTORS * N_RINGS
+        out[:, k0 : k0 + N_SECTORS] = np.minimum(count / self.others, 1.0)
+        out[:, k0 + N_SECTORS] = poc.mean(axis=1)
+        out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
+        return out
+
+
+def pilot_actions(params: Params, vector: np.ndarray, action: np.ndarray, k) -> np.ndarray:
+    """Eq. 19 actions ``(B, 3)`` flying the pilot ``action (B, 2)`` (module docstring) for UAVs
+    ``k (B,)`` whose observation vectors are ``vector (B, VECTOR_SIZE)``."""
+    u = params.scenario.uav
+    q = decode_vector(params, np.asarray(vector, dtype=np.float32))
+    xy = q["xy"]
+    a = np.asarray(action, dtype=float).reshape(-1, 2)
+    norm = np.hypot(a[:, 0], a[:, 1])
+    keep = norm < 1e-6
+    ux = np.where(keep, np.cos(q["heading"]), a[:, 0] / np.where(keep, 1.0, norm))
+    uy = np.where(keep, np.sin(q["heading"]), a[:, 1] / np.where(keep, 1.0, norm))
+    goal = xy + LOOKAHEAD_M * np.stack([ux, uy], axis=-1)
+    inside = params.grid.contains(xy)
+    speed = np.where(inside, u.search_speed_mps, u.cruise_speed_mps)
+    out = steer(params, xy, q["heading"], q["speed"], q["pitch"], q["z"], goal, speed)
+    home = returning(params, xy, q["usable"], k)
+    if home.any():
+        out[home] = homing(params, {key: v[home] for key, v in q.items()}, np.asarray(k)[home])
+    return out.astype(np.float32)
+
+
+def grid_distance(params: Params, xy: np.ndarray) -> np.ndarray:
+    """Distance (m) from positions ``(..., 2)`` to the grid rectangle (0 inside)."""
+    x0, y0, x1, y1 = params.grid.bounds
+    dx = np.maximum(np.maximum(x0 - xy[..., 0], xy[..., 0] - x1), 0.0)
+    dy = np.maximum(np.maximum(y0 - xy[..., 1], xy[..., 1] - y1), 0.0)
+    return np.hypot(dx, dy)
+
+
+class PilotVecEnv(SwarmVecEnv):
+    """:class:`~poc_env.envs.vector.SwarmVecEnv` with the pilot's features, actions and RL episodes.
+
+    Parameters are those of :class:`~poc_env.envs.vector.SwarmVecEnv` (``obs_type`` is fixed to
+    ``"dict"`` underneath) plus ``approach_shaping`` (the coefficient ``c`` of the approach
+    potential, per km) and ``gamma`` (the discount the shaping is built for)."""
+
+    def __init__(
+        self,
+        scenario: str | Scenario = "paper_6_2",
+        n_envs: int = 8,
+        seed: int | None = 0,
+        random_priors: bool = False,
+        overrides: Mapping[str, Any] | None = None,
+        approach_shaping: float = 0.0,
+        gamma: float = 0.99,
+    ) -> None:
+        super().__init__(scenario, n_envs, seed, "dict", random_priors, overrides)
+        self.observation_space = OBSERVATION_SPACE
+        self.action_space = ACTION_SPACE
+        self.features = PilotFeatures(self.params)
+        self.approach_shaping = float(approach_shaping)
+        self.gamma = float(gamma)
+        self._agent_index = np.tile(np.arange(self.n_agents), self.n_envs)
+        self._phi = np.zeros((self.n_envs, self.n_agents))
+
+    def _observe(self, state: sim.State, poc_scale: np.ndarray):
+        ras = obs_mod.rasters(self.params, state, poc_scale, self._hazard)
+        vec = obs_mod.vectors(self.params, state)
+        m = ras.shape[0] * ras.shape[1]
+        k = np.tile(np.arange(self.n_agents), ras.shape[0])
+        return self.features(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), k)
+
+    def _potential(self, state: sim.State) -> np.ndarray:
+        return -grid_distance(self.params, state.pos[..., :2]) / 1e3
+
+    def _sim_actions(self, a: np.ndarray) -> np.ndarray:
+        assert self.state is not None
+        st = self.state
+        vec = obs_mod.vectors(self.params, st).reshape(-1, VECTOR_SIZE)
+        inc = pilot_actions(self.params, vec, a.reshape(-1, 2), self._agent_index)
+        inc = inc.reshape(self.n_envs, self.n_agents, 3).astype(float)
+        self._phi = self._potential(st)
+        return np.where(st.flying[..., None], inc, 0.0)
+
+    def _reward(self, ev: sim.Events, state: sim.State) -> np.ndarray:
+        r = super()._reward(ev, state)
+        if self.approach_shaping:
+            phi = np.where(state.flying, self._potential(state), 0.0)
+            r = r + self.approach_shaping * (self.gamma * phi - self._phi)
+        return r
+
+    def _rl_done(self, state: sim.State) -> np.ndarray:
+        vec = obs_mod.vectors(self.params, state)
+        q = decode_vector(self.params, vec)
+        k = np.broadcast_to(np.arange(self.n_agents), state.flying.shape)
+        return state.flying & returning(self.params, q["xy"], q["usable"], k)

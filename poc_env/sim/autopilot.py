@@ -1,0 +1,134 @@
+"""Fly waypoints with eq. 19 increments only (within their per-step limits), then land.
+
+The follower is how planned routes (the DE plan, lawnmowers, patterns) fly in the
+environment: each step it turns towards the current waypoint as far as the turn limit allows,
+holds the search speed on the pattern and the cruise speed in transit, and levels the pitch to
+hold the cruise altitude. A waypoint counts as reached when it is within half a step. After the
+last waypoint -- or as soon as the remaining usable endurance (0.85 T, eq. 18) only just covers
+the flight home at cruise speed plus two steps -- the UAV heads for its landing field.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from poc_env.sim.core import Params
+from poc_env.sim.observations import decode_vector
+
+
+def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> np.ndarray:
+    """Normalised actions (..., 3) that turn towards ``goal`` at ``target_speed``, level."""
+    u = params.scenario.uav
+    dt = params.dt
+    d = np.asarray(goal, dtype=float) - xy
+    want = np.arctan2(d[..., 1], d[..., 0])
+    turn = (want - heading + np.pi) % (2 * np.pi) - np.pi
+    a_turn = np.clip(turn / (u.max_turn_rate_rad_s * dt), -1.0, 1.0)
+    a_speed = np.clip((target_speed - speed) / (u.max_accel_mps2 * dt), -1.0, 1.0)
+    # pitch towards the cruise altitude, at most the angle that closes the gap in one step
+    dz = u.cruise_altitude_m - z
+    want_pitch = np.clip(
+        np.arctan2(dz, np.maximum(speed * dt, 1.0)), -u.max_pitch_rad, u.max_pitch_rad
+    )
+    a_pitch = np.clip((want_pitch - pitch) / (u.max_pitch_rate_rad_s * dt), -1.0, 1.0)
+    return np.stack([a_speed, a_turn, a_pitch], axis=-1)
+
+
+def returning(params: Params, xy, usable, k) -> np.ndarray:
+    """Vectorised :func:`must_return`: ``xy (..., 2)`` positions, ``usable (...)`` remaining
+    usable-endurance shares (observation entry ``usable``), ``k (...)`` UAV indices."""
+    u = params.scenario.uav
+    d = params.landing[np.asarray(k)] - np.asarray(xy, dtype=float)
+    home = np.hypot(d[..., 0], d[..., 1])
+    return np.asarray(usable) * u.usable_endurance_s <= home / u.cruise_speed_mps + 2 * params.dt
+
+
+def homing(params: Params, q: dict, k) -> np.ndarray:
+    """Vectorised :func:`go_home` over ``q`` entries shaped (...) and indices ``k (...)``."""
+    u = params.scenario.uav
+    goal = params.landing[np.asarray(k)]
+    d = goal - np.asarray(q["xy"], dtype=float)
+    home = np.hypot(d[..., 0], d[..., 1])
+    v = np.where(home < 2 * u.cruise_speed_mps * params.dt, u.min_speed_mps, u.cruise_speed_mps)
+    return steer(params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v).astype(
+        np.float32
+    )
+
+
+def must_return(params: Params, q: dict, k: int) -> bool:
+    """True when the usable endurance (0.85 T, eq. 18) only just covers the flight home at
+    cruise speed plus two steps (``q`` is :func:`decode_vector` of UAV ``k``'s observation)."""
+    return bool(returning(params, q["xy"], q["usable"], k))
+
+
+def go_home(params: Params, q: dict, k: int) -> np.ndarray:
+    """Actions flying UAV ``k`` to its landing field at cruise speed, slowing down to land."""
+    return homing(params, q, k)
+
+
+def _lookahead(p, q, xy, ahead: float) -> np.ndarray:
+    """The point ``ahead`` metres beyond the projection of ``xy`` on the leg p -> q (<= q)."""
+    d = q - p
+    length = float(np.hypot(*d))
+    if length == 0:
+        return q
+    t = float(np.dot(xy - p, d)) / length + ahead
+    return p + d * min(max(t, 0.0), length) / length
+
+
+class WaypointFollower:
+    """Policy that flies each agent's waypoint list (metres), then returns to land.
+
+    ``predict(observations)`` takes the env's per-agent observation dict (``dict`` or ``flat``
+    observations) and returns an action dict; the interface mirrors SB3's ``predict``.
+    """
+
+    def __init__(self, params: Params, waypoints: Sequence[np.ndarray], agents: Sequence[str]):
+        self.params = params
+        self.agents = list(agents)
+        self.waypoints = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
+        self.index = np.zeros(len(self.agents), dtype=int)
+        self._n_raster = None
+
+    def reset(self) -> None:
+        self.index[:] = 0
+
+    def _vector(self, obs) -> np.ndarray:
+        if isinstance(obs, dict):
+            return np.asarray(obs["vector"])
+        from poc_env.sim.observations import VECTOR_SIZE
+
+        return np.asarray(obs)[-VECTOR_SIZE:]
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        u = self.params.scenario.uav
+        actions = {}
+        for k, agent in enumerate(self.agents):
+            if agent not in observations:
+                continue
+            q = decode_vector(self.params, self._vector(observations[agent]))
+            wps = self.waypoints[k]
+            reach = 0.5 * q["speed"] * self.params.dt
+            while self.index[k] < len(wps) and np.hypot(*(wps[self.index[k]] - q["xy"])) <= reach:
+                self.index[k] += 1
+            if must_return(self.params, q, k):
+                self.index[k] = len(wps)
+            on_pattern = 0 < self.index[k] < len(wps)
+            if on_pattern:  # pure pursuit along the leg: back onto the line, then along it
+                goal = _lookahead(
+                    wps[self.index[k] - 1], wps[self.index[k]], q["xy"], float(2 * reach)
+                )
+            elif self.index[k] < len(wps):
+                goal = wps[self.index[k]]
+            else:
+                goal = self.params.landing[k]
+            if self.index[k] >= len(wps):
+                actions[agent] = go_home(self.params, q, k)
+                continue
+            v = u.search_speed_mps if on_pattern else u.cruise_speed_mps
+            actions[agent] = steer(
+                self.params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v
+            ).astype(np.float32)
+        return actions, state

@@ -1,0 +1,725 @@
+"""The functional core of the environment, batched over ``n_envs`` x ``n_agents``.
+
+``make_params(scenario)`` turns a scenario into the constants of the dynamics;
+``initial(params, rngs)`` draws a fresh :class:`State` for each env from its own generator;
+``step(params, state, actions, rngs)`` advances every env by one time step (in place, for
+speed) and returns the step's :class:`Events`. The PettingZoo env is the ``n_envs == 1`` case;
+the SB3 vector env is this module with many envs. Nothing here imports gymnasium or matplotlib.
+
+One step, for each flying UAV (eq. numbers are the paper's):
+
+1. actions in [-1, 1]^3 scale to the increments (dv, d alpha, d beta) within the per-step
+   limits ``max_accel * dt``, ``max_turn_rate * dt``, ``max_pitch_rate * dt``; in ``shield``
+   mode the heading change is replaced by the closest safe one (:func:`constraints.shield_heading`);
+2. eq. 19: alpha' = alpha + d alpha, beta' = clip(beta + d beta), the position moves by
+   ``v dt (cos alpha' cos beta', sin alpha' cos beta', sin beta')`` with the *old* speed, then
+   v' = clip(v + dv, v_min, v_max);
+3. the sensor sweeps the horizontal segment flown (:func:`search_theory.sweep_segments`) and the
+   belief is updated by eq. 14, UAV after UAV so that overlaps are credited once (§3.1.6); the
+   step's POS is what was found (eq. 12), POSC its running sum (eq. 13);
+4. the hidden target is detected with the probability the belief uses at its location: at reset
+   each env draws ``u ~ U(0, 1)`` and the target is found at the first step at which the
+   cumulative detection exponent at the target reaches ``-ln(1 - u)`` -- the same distribution
+   as a Bernoulli draw per step, without a random draw per step;
+5. constraints (eq. 20-24) are evaluated and flagged; the time model advances (eq. 17-18);
+   agents land, crash or run out of endurance.
+
+Speed: after the sweep, the bookkeeping of steps 3-5 and the topology update run as a few
+compiled passes (``_step_kernel``, ``_auto_links``) over the same kernels the numpy-facing
+functions of :mod:`constraints` and :mod:`comms` use, with the pairwise distances computed once
+per step; no-fly zones and threat peaks stay in numpy (only when the map has them).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+from numba import njit
+
+from poc_env.config import Scenario
+from poc_env.sim import comms as comms_mod
+from poc_env.sim import constraints as cons
+from poc_env.theory import search_theory
+from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.search_theory import (
+    _DEFINITE_RANGE,
+    _LAW_CODE,
+    _point_pod,
+    sweep_segments,
+    window_size,
+)
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class Params:
+    """Constants of one scenario's dynamics (derived once from the config)."""
+
+    scenario: Scenario
+    grid: Grid
+    s: int  # sample points per cell side
+    n_agents: int
+    dt: float
+    prior: np.ndarray  # (ny, nx) default prior
+    takeoff: np.ndarray  # (n, 2)
+    landing: np.ndarray  # (n, 2)
+    bounds: tuple[float, float, float, float]  # operating area (eq. 20)
+    zones: cons.NoFlyZones
+    threat_centers: np.ndarray
+    threat_lambdas: np.ndarray
+    window: int  # side of the sensing window in fine cells
+    cutoff_m: float
+    horizon: int
+    switcher: comms_mod.Table2Switcher | None = field(default=None, compare=False)
+
+    @property
+    def fine_shape(self) -> tuple[int, int]:
+        return (self.grid.ny * self.s, self.grid.nx * self.s)
+
+
+def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
+    """Derive the constants of :func:`step` from a scenario (and an optional prior)."""
+    sc = scenario
+    grid = Grid.from_config(sc.map)
+    s = sc.sensor.samples_per_cell
+    u = sc.uav
+    dt = sc.episode.dt_s
+    cutoff = sc.sensor.cutoff_sweep_widths * sc.sensor.sweep_width_m
+    win = window_size(grid, s, u.max_speed_mps * dt, cutoff)
+    pts = np.vstack([np.asarray(sc.takeoff_m), np.asarray(sc.landing_m)])
+    x0, y0, x1, y1 = grid.bounds
+    m = sc.episode.boundary_margin_m
+    bounds = (
+        min(x0, pts[:, 0].min()) - m,
+        min(y0, pts[:, 1].min()) - m,
+        max(x1, pts[:, 0].max()) + m,
+        max(y1, pts[:, 1].max()) + m,
+    )
+    centers, lambdas = cons.threat_arrays(sc.map.threat_peaks)
+    horizon = sc.episode.horizon_steps or int(np.ceil(u.endurance_s / dt))
+    switcher = None
+    if sc.comms.topology == "table2":
+        switcher = comms_mod.Table2Switcher(
+            n_agents=sc.n_uavs, min_neighbours=sc.comms.min_neighbours
+        )
+    return Params(
+        scenario=sc,
+        grid=grid,
+        s=s,
+        n_agents=sc.n_uavs,
+        dt=dt,
+        prior=build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float),
+        takeoff=np.asarray(sc.takeoff_m, dtype=float),
+        landing=np.asarray(sc.landing_m, dtype=float),
+        bounds=bounds,
+        zones=cons.NoFlyZones.from_config(sc.map),
+        threat_centers=centers,
+        threat_lambdas=lambdas,
+        window=win,
+        cutoff_m=cutoff,
+        horizon=horizon,
+        switcher=switcher,
+    )
+
+
+@dataclass
+class State:
+    """Mutable state of ``E`` envs with ``N`` UAVs each (arrays lead with (E, N))."""
+
+    pos: np.ndarray  # (E, N, 3) x, y, z in metres
+    speed: np.ndarray  # (E, N) m/s
+    heading: np.ndarray  # (E, N) alpha, rad, from the x axis
+    pitch: np.ndarray  # (E, N) beta, rad
+    elapsed: np.ndarray  # (E, N) flight time in s (eq. 17)
+    flying: np.ndarray  # (E, N) bool
+    landed: np.ndarray  # (E, N) bool
+    crashed: np.ndarray  # (E, N) bool
+    left_home: np.ndarray  # (E, N) bool: has been farther than the landing radius
+    belief: np.ndarray  # (E, NY, NX) POC on the fine grid (eq. 14)
+    initial_mass: np.ndarray  # (E,)
+    posc: np.ndarray  # (E,) cumulative POS (eq. 13)
+    agent_pos: np.ndarray  # (E, N) POS credited to each UAV
+    target: np.ndarray  # (E, 2) hidden target
+    target_threshold: np.ndarray  # (E,) -ln(1 - u)
+    target_exponent: np.ndarray  # (E,) cumulative detection exponent at the target
+    detected: np.ndarray  # (E,) bool
+    detect_step: np.ndarray  # (E,) int, -1 until detected
+    step: np.ndarray  # (E,) int
+    links: np.ndarray  # (E, N, N) bool, active communication topology
+    topology: np.ndarray  # (E,) int topology code (Table 2) or -1 (auto)
+    violations: np.ndarray  # (E, N) int, cumulative constraint violations
+    # belief_sharing "comms" only (None otherwise): what each UAV knows
+    prior_fine: np.ndarray | None = None  # (E, NY, NX) the episode's prior on the fine grid
+    own_survival: np.ndarray | None = None  # (E, N, NY, NX) prod (1 - p) of UAV j's own sweeps
+    known: np.ndarray | None = None  # (E, N, N, NY, NX) UAV i's latest copy of j's own_survival
+
+    @property
+    def n_envs(self) -> int:
+        return self.pos.shape[0]
+
+    def agent_beliefs(self) -> np.ndarray:
+        """(E, N, NY, NX) each UAV's own belief: the global one in ``global`` mode, else the prior
+        times the survival of every sweep it knows of (its own and its last copies of others')."""
+        if self.known is None:
+            return np.broadcast_to(
+                self.belief[:, None], (*self.flying.shape, *self.belief.shape[1:])
+            )
+        assert self.prior_fine is not None
+        return self.prior_fine[:, None] * np.prod(self.known, axis=2)
+
+
+@dataclass
+class Events:
+    """What happened in one step (all arrays lead with (E,) or (E, N))."""
+
+    pos_agent: np.ndarray  # (E, N) POS found by each UAV this step
+    pos_team: np.ndarray  # (E,)
+    time_term: np.ndarray  # (E, N) eq. 25 time share dt / (0.85 T) of each flying UAV
+    overtime: np.ndarray  # (E, N) bool: flying beyond 0.85 T (eq. 18)
+    out_of_bounds: np.ndarray  # (E, N) bool (eq. 20, boundary)
+    no_fly: np.ndarray  # (E, N) bool (eq. 20, no-fly zones)
+    collision: np.ndarray  # (E, N) bool (eq. 21)
+    threat: np.ndarray  # (E, N) bool (eq. 23)
+    comms_ok: np.ndarray  # (E, N) bool (eq. 24, two-neighbour rule)
+    shielded: np.ndarray  # (E, N) bool
+    landed_now: np.ndarray  # (E, N) bool
+    crashed_now: np.ndarray  # (E, N) bool
+    detected_now: np.ndarray  # (E,) bool
+    connected: np.ndarray  # (E,) bool: swarm connected through relays
+
+    @property
+    def violation(self) -> np.ndarray:
+        """(E, N) bool: any safety or communication constraint violated this step."""
+        return self.out_of_bounds | self.no_fly | self.collision | self.threat | ~self.comms_ok
+
+
+def _draw_target(prior_fine: np.ndarray, h: float, origin, rng: np.random.Generator):
+    """A target position drawn from the fine prior: a sub-cell by mass, uniform inside it."""
+    flat = prior_fine.ravel()
+    k = int(rng.choice(flat.size, p=flat / flat.sum()))
+    j, i = divmod(k, prior_fine.shape[1])
+    du, dv = rng.random(2)
+    return (origin[0] + (i + du) * h, origin[1] + (j + dv) * h)
+
+
+def initial(
+    params: Params,
+    rngs: list[np.random.Generator],
+    priors: np.ndarray | None = None,
+) -> State:
+    """A fresh state for ``len(rngs)`` envs: UAVs airborne over their airfields.
+
+    Take-off is instantaneous: each UAV starts at its take-off field at cruise altitude and
+    cruise speed, level, heading for the centre of the grid. ``priors`` (E, ny, nx) overrides
+    the scenario's prior per env (randomised priors); each env's hidden target and detection
+    threshold come from that env's generator, in that order.
+    """
+    e, n = len(rngs), params.n_agents
+    u = params.scenario.uav
+    s = params.s
+    if priors is None:
+        priors = np.broadcast_to(params.prior, (e, *params.prior.shape))
+    belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, axis=1), s, axis=2) / (s * s)
+    pos = np.zeros((e, n, 3))
+    pos[:, :, :2] = params.takeoff[None]
+    pos[:, :, 2] = u.cruise_altitude_m
+    cx, cy = np.mean(np.reshape(params.grid.bounds, (2, 2)), axis=0)
+    heading = np.arctan2(cy - params.takeoff[:, 1], cx - params.takeoff[:, 0])
+    h = params.grid.cell_m / s
+    target = np.zeros((e, 2))
+    threshold = np.zeros(e)
+    for k, rng in enumerate(rngs):
+        target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng)
+        threshold[k] = -np.log1p(-rng.random())
+    links = np.zeros((e, n, n), dtype=bool)
+    topology = np.full(e, -1, dtype=int)
+    state = State(
+        pos=pos,
+        speed=np.full((e, n), u.cruise_speed_mps),
+        heading=np.broadcast_to(heading, (e, n)).copy(),
+        pitch=np.zeros((e, n)),
+        elapsed=np.zeros((e, n)),
+        flying=np.ones((e, n), dtype=bool),
+        landed=np.zeros((e, n), dtype=bool),
+        crashed=np.zeros((e, n), dtype=bool),
+        left_home=np.zeros((e, n), dtype=bool),
+        belief=belief,
+        initial_mass=belief.sum(axis=(1, 2)),
+        posc=np.zeros(e),
+        agent_pos=np.zeros((e, n)),
+        target=target,
+        target_threshold=threshold,
+        target_exponent=np.zeros(e),
+        detected=np.zeros(e, dtype=bool),
+        detect_step=np.full(e, -1, dtype=int),
+        step=np.zeros(e, dtype=int),
+        links=links,
+        topology=topology,
+        violations=np.zeros((e, n), dtype=int),
+    )
+    if params.scenario.comms.belief_sharing == "comms":
+        fine = belief.shape[1:]
+        state.prior_fine = belief.copy()
+        state.own_survival = np.ones((e, n, *fine))
+        state.known = np.ones((e, n, n, *fine))
+    _update_topology(params, state, rngs)
+    return state
+
+
+def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) -> None:
+    """``belief_sharing: comms``: each UAV keeps the survival of its own sweeps (eq. 14 on its own
+    map) and, whenever the active topology connects it to another UAV, possibly through relays,
+    copies that UAV's latest own survival. A UAV's belief is the prior times the product of what
+    it knows (:meth:`State.agent_beliefs`): exact, no sweep counted twice, and equal to the
+    global belief while the swarm stays connected. Memory: E x N x N fine maps.
+    """
+    e, n = state.flying.shape
+    own = state.own_survival
+    known = state.known
+    assert own is not None and known is not None
+    sensor = params.scenario.sensor
+    sweep_segments(
+        own.reshape(e * n, *own.shape[2:]),
+        params.grid,
+        params.s,
+        a.reshape(e * n, 1, 2),
+        b.reshape(e * n, 1, 2),
+        sensor.sweep_width_m,
+        sensor.law,
+        params.cutoff_m,
+    )
+    reach = comms_mod.reachable(state.links) | np.eye(n, dtype=bool)[None]
+    known[reach] = np.broadcast_to(own[:, None], known.shape)[reach]
+
+
+def _update_topology(
+    params: Params, state: State, rngs, dist: np.ndarray | None = None
+) -> comms_mod.CommsTopology:
+    """Eq. 24 adjacency (with the failure model) and the active topology (§3.2.5).
+
+    ``dist`` optionally passes the pairwise distances of the UAVs' current positions.
+    """
+    cc = params.scenario.comms
+    xy = state.pos[:, :, :2]
+    if dist is None:
+        dist = cons.pairwise_distances(xy)
+    if cc.link_failure_prob <= 0 and params.switcher is None:
+        # the common case, in one compiled call: the in-range graph, then the auto rule on it
+        e, n = state.flying.shape
+        links = np.empty((e, n, n), dtype=bool)
+        n_comp = np.empty(e, dtype=np.int64)
+        k_nearest = comms_mod.nearest_count(cc.min_neighbours, n)
+        _auto_links(dist, float(cc.range_m), state.flying, k_nearest, links, n_comp)
+        state.links = links
+        return comms_mod.CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
+    adj = comms_mod.in_range(xy, cc.range_m, state.flying, dist)
+    if cc.link_failure_prob > 0:
+        adj = np.stack(
+            [comms_mod.link_failures(adj[k], cc.link_failure_prob, r) for k, r in enumerate(rngs)]
+        )
+    if params.switcher is not None:
+        topo = params.switcher.switch(state.topology, adj, xy, state.flying)
+        state.topology = np.asarray(topo.topology)
+    else:
+        topo = comms_mod.auto_topology(adj, xy, state.flying, cc.min_neighbours, dist)
+    state.links = topo.links
+    return topo
+
+
+def scale_actions(params: Params, actions: np.ndarray):
+    """Normalised actions (E, N, 3) in [-1, 1] -> increments (dv, d alpha, d beta)."""
+    u = params.scenario.uav
+    a = np.clip(actions, -1.0, 1.0)
+    dt = params.dt
+    return (
+        a[..., 0] * u.max_accel_mps2 * dt,
+        a[..., 1] * u.max_turn_rate_rad_s * dt,
+        a[..., 2] * u.max_pitch_rate_rad_s * dt,
+    )
+
+
+def kinematics(params: Params, state: State, dv, dalpha, dbeta, moving):
+    """Eq. 19 for the ``moving`` UAVs; returns the new position array (E, N, 3)."""
+    u = params.scenario.uav
+    alpha = np.where(moving, state.heading + dalpha, state.heading)
+    alpha = (alpha + np.pi) % TWO_PI - np.pi
+    beta = np.where(moving, np.clip(state.pitch + dbeta, -u.max_pitch_rad, u.max_pitch_rad), 0.0)
+    step = np.where(moving, state.speed * params.dt, 0.0)
+    new = state.pos.copy()
+    new[..., 0] += step * np.cos(alpha) * np.cos(beta)
+    new[..., 1] += step * np.sin(alpha) * np.cos(beta)
+    new[..., 2] = np.minimum(new[..., 2] + step * np.sin(beta), u.max_altitude_m)
+    state.heading = alpha
+    state.pitch = beta
+    state.speed = np.where(
+        moving, np.clip(state.speed + dv, u.min_speed_mps, u.max_speed_mps), state.speed
+    )
+    return new
+
+
+def sense(params: Params, state: State, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Sweep every UAV's segment a -> b (E, N, 2) over its env's belief; return POS (E, N).
+
+    One call of the fused kernel :func:`search_theory.sweep_segments`: UAVs of an env are applied
+    one after another, so a point two UAVs sweep in the same step is credited once, to the first.
+    """
+    sensor = params.scenario.sensor
+    return sweep_segments(
+        state.belief,
+        params.grid,
+        params.s,
+        a,
+        b,
+        sensor.sweep_width_m,
+        sensor.law,
+        params.cutoff_m,
+    )
+
+
+def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
+    """Advance every env by ``dt`` (in place); see the module docstring for the order."""
+    sc = params.scenario
+    u = sc.uav
+    ep = sc.episode
+    moving = state.flying.copy()
+    e, n = moving.shape
+    dv, dalpha, dbeta = scale_actions(params, np.asarray(actions, dtype=float))
+    shielded = np.zeros((e, n), dtype=bool)
+    if sc.constraints.violation == "shield":
+        res = cons.shield_heading(
+            state.pos[..., :2],
+            state.heading,
+            state.speed * np.cos(state.pitch),
+            params.dt,
+            dalpha,
+            u.max_turn_rate_rad_s * params.dt,
+            zones=params.zones if len(params.zones) else None,
+            bounds=params.bounds,
+            d_s=sc.constraints.safety_distance_m,
+            active=moving,
+            threat=(params.threat_centers, params.threat_lambdas, sc.map.threat_threshold)
+            if len(params.threat_lambdas)
+            else None,
+        )
+        shielded = res.shielded & moving
+        dalpha = np.where(moving, res.turn, dalpha)
+    a2 = state.pos[..., :2].copy()
+    new = kinematics(params, state, dv, dalpha, dbeta, moving)
+    b2 = new[..., :2]
+    found = sense(params, state, a2, b2)
+    state.pos = new
+
+    # hidden target (same law and cut-off as the belief, at its exact position)
+    p_t = np.empty(moving.shape)
+    ox, oy = params.grid.origin_m
+    if _target_pod(
+        state.target,
+        a2,
+        b2,
+        moving,
+        float(ox),
+        float(oy),
+        _LAW_CODE[sc.sensor.law],
+        float(sc.sensor.sweep_width_m),
+        float(params.cutoff_m),
+        float(params.grid.cell_m),
+        p_t,
+    ):  # log1p(-0) = -0 adds nothing: numpy's log1p only when some UAV may detect
+        with np.errstate(divide="ignore"):
+            state.target_exponent += -np.log1p(-p_t).sum(axis=1)
+
+    # no-fly zones and threat peaks (eq. 20, 23): numpy, only when the map has them
+    if len(params.zones):
+        nofly = moving & params.zones.segment_crosses(a2, b2)
+    else:
+        nofly = np.zeros((e, n), dtype=bool)
+    if len(params.threat_lambdas):
+        threat = moving & cons.threat_violation(
+            new[..., :2], params.threat_centers, params.threat_lambdas, sc.map.threat_threshold
+        )
+    else:
+        threat = np.zeros((e, n), dtype=bool)
+
+    # POS bookkeeping (eq. 12-13), detection, time model (eq. 17-18), constraints (eq. 20-24),
+    # landing, the step counter: one compiled pass
+    team = np.empty(e) if n <= 128 else found.sum(axis=1)
+    flags = np.empty((_N_FLAGS, e, n), dtype=bool)
+    time_term = np.empty((e, n))
+    detected_now = np.empty(e, dtype=bool)
+    dist = np.empty((e, n, n))
+    detect_step = state.detect_step.copy()
+    x0, y0, x1, y1 = params.bounds
+    _step_kernel(
+        found,
+        state.agent_pos,
+        state.posc,
+        team,
+        new,
+        state.speed,
+        moving,
+        nofly,
+        threat,
+        state.target_exponent,
+        state.target_threshold,
+        state.step,
+        state.detected,
+        detect_step,
+        state.elapsed,
+        state.left_home,
+        state.landed,
+        state.crashed,
+        state.flying,
+        state.violations,
+        params.landing,
+        float(params.dt),
+        float(u.usable_endurance_s),
+        float(params.dt / u.usable_endurance_s),
+        float(u.endurance_s),
+        float(x0),
+        float(y0),
+        float(x1),
+        float(y1),
+        float(sc.constraints.safety_distance_m),
+        float(sc.comms.range_m),
+        int(sc.comms.min_neighbours),
+        float(ep.landing_radius_m),
+        float(ep.landing_max_altitude_m),
+        float(ep.landing_max_speed_mps),
+        sc.constraints.violation == "terminate",
+        detected_now,
+        time_term,
+        flags,
+        dist,
+    )
+    state.detect_step = detect_step
+    # the topology among the UAVs still flying after this step (§3.2.5)
+    connected = np.asarray(_update_topology(params, state, rngs, dist).connected)
+    if state.known is not None:
+        share_beliefs(params, state, a2, b2)
+    return Events(
+        pos_agent=found,
+        pos_team=team,
+        time_term=time_term,
+        overtime=flags[_OVERTIME],
+        out_of_bounds=flags[_OOB],
+        no_fly=nofly,
+        collision=flags[_COLLISION],
+        threat=threat,
+        comms_ok=flags[_COMMS_OK],
+        shielded=shielded,
+        landed_now=flags[_LANDED],
+        crashed_now=flags[_CRASHED],
+        detected_now=detected_now,
+        connected=connected,
+    )
+
+
+# --------------------------------------------------------------------------- compiled helpers
+
+# Rows of the bool ``flags`` array that :func:`_step_kernel` fills (one array: fewer arguments).
+_OVERTIME, _OOB, _COLLISION, _COMMS_OK, _LANDED, _CRASHED = range(6)
+_N_FLAGS = 6
+
+
+@njit(cache=True, error_model="numpy")
+def _numpy_sum(x):
+    """``x.sum()`` of a 1-D float64 array of at most 128 values in the order of numpy's
+    ``add.reduce`` along a row: 0.0 + the pairwise sum (started from -0.0, blocks of 8
+    accumulators from 8 values on)."""
+    n = x.size
+    if n < 8:
+        res = -0.0
+        for k in range(n):
+            res += x[k]
+        return 0.0 + res
+    r0, r1, r2, r3, r4, r5, r6, r7 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+    k = 8
+    while k < n - n % 8:
+        r0 += x[k]
+        r1 += x[k + 1]
+        r2 += x[k + 2]
+        r3 += x[k + 3]
+        r4 += x[k + 4]
+        r5 += x[k + 5]
+        r6 += x[k + 6]
+        r7 += x[k + 7]
+        k += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while k < n:
+        res += x[k]
+        k += 1
+    return 0.0 + res
+
+
+def _source_hash(*modules: ModuleType) -> str:
+    """SHA-256 of the source files of ``modules`` (see :func:`_build_kernels`)."""
+    h = hashlib.sha256()
+    for m in modules:
+        try:
+            h.update(Path(str(m.__file__)).read_bytes())
+        except OSError:  # no readable source (e.g. a zipped install): numba's own rule only
+            h.update(m.__name__.encode())
+    return h.hexdigest()
+
+
+def _build_kernels(deps: str):
+    """The kernels of :func:`step` that call compiled functions of other modules.
+
+    Numba's on-disk cache of a kernel is only invalidated when the kernel's own file changes,
+    yet it holds compiled copies of the functions the kernel calls: after an edit of
+    :mod:`constraints`, :mod:`comms` or :mod:`search_theory`, a module-level kernel here would
+    keep running their old code. These close over ``deps``, the :func:`_source_hash` of those
+    modules, and numba puts closure values in the cache key, so an edit recompiles them.
+    """
+
+    @njit(cache=True, error_model="numpy")
+    def target_pod(target, a, b, moving, ox, oy, law, w, cutoff, cell, out):
+        """Detection probability ``out (E, N)`` of each env's hidden target for each moving UAV's
+        step a -> b (0 for the others): :func:`search_theory.segment_pod`'s compiled scalar, on
+        grid-relative coordinates, capped at 1 (definite range: 1 or 0). True if any is not 0."""
+        deps  # noqa: B018 -- the cache key, see _build_kernels
+        hit = False
+        for e in range(out.shape[0]):
+            px = target[e, 0] - ox
+            py = target[e, 1] - oy
+            for i in range(out.shape[1]):
+                p = 0.0
+                if moving[e, i]:
+                    ax, ay = a[e, i, 0] - ox, a[e, i, 1] - oy
+                    bx, by = b[e, i, 0] - ox, b[e, i, 1] - oy
+                    pod = _point_pod(law, px, py, ax, ay, bx, by, w, cutoff, cell)
+                    if law == _DEFINITE_RANGE:
+                        p = 1.0 if pod > 0.0 else 0.0
+                    else:
+                        p = 1.0 if pod > 1.0 else pod  # np.minimum(pod, 1): NaN stays NaN
+                out[e, i] = p
+                hit = hit or p != 0.0
+        return hit
+
+    @njit(cache=True, error_model="numpy")
+    def auto_links(dist, range_m, flying, k_nearest, links, n_comp):
+        """:func:`comms.auto_topology` on :func:`comms.in_range` of ``dist`` among the flying."""
+        deps  # noqa: B018 -- the cache key, see _build_kernels
+        adj = np.empty(links.shape, dtype=np.bool_)
+        comms_mod._in_range_kernel(dist, range_m, flying, adj)
+        comms_mod._auto_topology_kernel(adj, dist, True, flying, k_nearest, links, n_comp)
+
+    @njit(cache=True, error_model="numpy")
+    def step_kernel(
+        found,
+        agent_pos,
+        posc,
+        team,
+        pos,
+        speed,
+        moving,
+        nofly,
+        threat,
+        exponent,
+        threshold,
+        step_count,
+        detected,
+        detect_step,
+        elapsed,
+        left_home,
+        landed,
+        crashed,
+        flying,
+        violations,
+        landing,
+        dt,
+        usable,
+        time_share,
+        endurance,
+        x0,
+        y0,
+        x1,
+        y1,
+        d_s,
+        range_m,
+        min_neighbours,
+        landing_radius,
+        landing_max_alt,
+        landing_max_speed,
+        terminate,
+        detected_now,
+        time_term,
+        flags,
+        dist,
+    ):
+        """Steps 3-5 of :func:`step` after sensing, in place on the state arrays.
+
+        What each UAV found (``agent_pos``), the team's POS (``team``, numpy's row sum) and POSC;
+        detection of the hidden target; the time model (eq. 17-18); the boundary (eq. 20),
+        separation (eq. 21) and two-neighbour (eq. 24) checks through the kernels of
+        :mod:`constraints` and :mod:`comms`; violation counts; landing and crashes; the step
+        counter. ``dist`` receives the pairwise distances of the new positions (for the topology
+        update).
+        """
+        deps  # noqa: B018 -- the cache key, see _build_kernels
+        n_env, n = moving.shape
+        cons._pairwise_kernel(pos[:, :, :2], dist)
+        pairs = np.empty((n_env, n, n), dtype=np.bool_)
+        cons._separation_kernel(dist, d_s, moving, True, pairs, flags[_COLLISION])
+        comms_mod._in_range_kernel(dist, range_m, moving, pairs)
+        comms_mod._two_neighbour_kernel(pairs, min_neighbours, moving, True, flags[_COMMS_OK])
+        for e in range(n_env):
+            if n <= 128:  # else the caller has summed with numpy
+                team[e] = _numpy_sum(found[e])  # found.sum(axis=1)
+            posc[e] += team[e]
+            now = not detected[e] and exponent[e] >= threshold[e]
+            detected_now[e] = now
+            if now:
+                detected[e] = True
+                detect_step[e] = step_count[e] + 1
+            step_count[e] += 1
+            for i in range(n):
+                agent_pos[e, i] += found[e, i]
+                mv = moving[e, i]
+                elapsed[e, i] = elapsed[e, i] + (dt if mv else 0.0)
+                flags[_OVERTIME, e, i] = mv and elapsed[e, i] > usable
+                time_term[e, i] = time_share if mv else 0.0
+                x, y, z = pos[e, i, 0], pos[e, i, 1], pos[e, i, 2]
+                oob = mv and cons._outside(x, y, x0, y0, x1, y1)
+                flags[_OOB, e, i] = oob
+                collision = mv and flags[_COLLISION, e, i]
+                flags[_COLLISION, e, i] = collision
+                comms_ok = flags[_COMMS_OK, e, i] or not mv
+                flags[_COMMS_OK, e, i] = comms_ok
+                unsafe = oob or nofly[e, i] or collision or threat[e, i]
+                if mv and (unsafe or not comms_ok):
+                    violations[e, i] += 1
+                home = math.hypot(x - landing[i, 0], y - landing[i, 1])
+                if mv and home > landing_radius:
+                    left_home[e, i] = True
+                land = (
+                    mv
+                    and left_home[e, i]
+                    and home <= landing_radius
+                    and z <= landing_max_alt
+                    and speed[e, i] <= landing_max_speed
+                )
+                crash = mv and not land and (z <= 0.0 or elapsed[e, i] >= endurance)
+                if terminate:
+                    crash = crash or (mv and not land and unsafe)
+                flags[_LANDED, e, i] = land
+                flags[_CRASHED, e, i] = crash
+                if land:
+                    landed[e, i] = True
+                if crash:
+                    crashed[e, i] = True
+                if land or crash:
+                    flying[e, i] = False
+
+    return target_pod, auto_links, step_kernel
+
+
+_target_pod, _auto_links, _step_kernel = _build_kernels(
+    _source_hash(cons, comms_mod, search_theory)
+)

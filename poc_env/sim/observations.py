@@ -1,0 +1,316 @@
+"""Per-agent observations and the global state, batched over envs and agents.
+
+Raster (``RASTER_CHANNELS`` x ny x nx, float32 in [0, 1], one pixel per grid cell):
+
+===  ================  ========================================================================
+ch   name              meaning
+===  ================  ========================================================================
+0    ``poc``           current POC of the cell / the largest cell POC of the episode's prior
+1    ``self``          1 in the cell holding this UAV (all 0 while it is outside the grid)
+2    ``others``        1 in cells holding another flying UAV
+3    ``hazard``        1 where the cell centre is in a no-fly zone or above the threat threshold
+===  ================  ========================================================================
+
+Vector (``VECTOR_SIZE`` float32 values, bounds in ``VECTOR_LOW`` / ``VECTOR_HIGH``):
+
+===  =====================  ==================================================  ===========
+idx  name                   meaning                                             bounds
+===  =====================  ==================================================  ===========
+0-1  ``x``, ``y``           position in the operating area, 0 .. 1 per axis     [-1, 2]
+2    ``z``                  altitude / ceiling                                  [0, 1]
+3    ``speed``              (v - v_min) / (v_max - v_min)                       [0, 1]
+4-5  ``sin``, ``cos``       heading alpha                                       [-1, 1]
+6    ``pitch``              beta / beta_max                                     [-1, 1]
+7    ``endurance``          remaining endurance 1 - t / T                       [0, 1]
+8    ``usable``             remaining usable time 1 - t / (0.85 T), clipped     [-1, 1]
+9-10 ``to_landing``         vector to the landing field / area diagonal         [-1, 1]
+11   ``neighbours``         UAVs in communication range / (N - 1)               [0, 1]
+12   ``flying``             1 while the UAV flies, 0 after landing or a crash   [0, 1]
+13   ``time``               step / horizon                                      [0, 1]
+===  =====================  ==================================================  ===========
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from numba import njit
+
+from poc_env.sim import comms as comms_mod
+from poc_env.sim import constraints as cons
+from poc_env.sim.comms import _shaped
+from poc_env.sim.core import Params, State, _source_hash
+
+RASTER_CHANNELS = 4
+VECTOR_NAMES = (
+    "x", "y", "z", "speed", "sin", "cos", "pitch", "endurance", "usable",
+    "to_landing_x", "to_landing_y", "neighbours", "flying", "time",
+)  # fmt: skip
+VECTOR_SIZE = len(VECTOR_NAMES)
+VECTOR_LOW = np.array([-1, -1, 0, 0, -1, -1, -1, 0, -1, -1, -1, 0, 0, 0], dtype=np.float32)
+VECTOR_HIGH = np.array([2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1], dtype=np.float32)
+
+
+def hazard_mask(params: Params) -> np.ndarray:
+    """(ny, nx) float32: 1 where a cell centre is in a no-fly zone or above the threat limit."""
+    c = params.grid.centers
+    mask = np.zeros(params.grid.shape, dtype=bool)
+    if len(params.zones):
+        mask |= params.zones.inside(c)
+    if len(params.threat_lambdas):
+        mask |= cons.threat_violation(
+            c, params.threat_centers, params.threat_lambdas, params.scenario.map.threat_threshold
+        )
+    return mask.astype(np.float32)
+
+
+def cell_pixels(params: Params, xy: np.ndarray):
+    """Row, column and inside-grid mask of positions (..., 2)."""
+    g = params.grid
+    inside = g.contains(xy)
+    j, i = g.cell_of(xy)
+    return j, i, inside
+
+
+def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndarray):
+    """(E, N, C, ny, nx) float32 raster observations of every agent (``hazard`` is (ny, nx))."""
+    e, n = state.flying.shape
+    g = params.grid
+    s = params.s
+    out = np.empty((e, n, RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
+    x0, y0, x1, y1 = g.bounds
+    # the kernel sums sub-cells in numpy's order for rows of s < 8 points over several columns;
+    # otherwise numpy's own sum (Grid.coarsen) is passed in
+    own_sum = g.nx > 1 and s < 8
+    coarse = _NO_COARSE if own_sum else g.coarsen(state.belief, s)
+    _raster_kernel(
+        state.belief,
+        s,
+        coarse,
+        own_sum,
+        np.asarray(poc_scale, dtype=float),
+        _shaped(hazard, (g.ny, g.nx), np.float32),
+        state.pos,
+        state.flying,
+        float(x0),
+        float(y0),
+        float(x1),
+        float(y1),
+        float(g.cell_m),
+        out,
+    )
+    if state.known is not None:  # belief_sharing "comms": each UAV sees its own belief
+        own = g.coarsen(state.agent_beliefs(), s) / np.asarray(poc_scale)[:, None, None, None]
+        out[:, :, 0] = np.clip(own, 0.0, 1.0)
+    return out
+
+
+_NO_COARSE = np.zeros((1, 1, 1))
+
+
+@njit(cache=True, error_model="numpy")
+def _raster_kernel(
+    belief, s, coarse, own_sum, scale, hazard, pos, flying, x0, y0, x1, y1, cell, out
+):
+    """Fill ``out (E, N, C, ny, nx)``: channel 0 the coarse POC / ``scale`` clipped to [0, 1]
+    (cells summed as ``Grid.coarsen`` does with numpy, or taken from ``coarse``), 1 the own
+    cell, 2 the cells of the other present UAVs, 3 ``hazard``. A UAV is present when flying
+    inside the grid ``[x0, x1] x [y0, y1]`` (``Grid.contains``); its cell is
+    ``Grid.cell_of``'s, ``floor((x - x0) / cell)`` clipped to the grid."""
+    n_env, n, _, ny, nx = out.shape
+    poc = np.empty((ny, nx), dtype=np.float32)
+    poc_sum = np.empty((ny, nx))
+    rows = np.empty(n, dtype=np.intp)
+    cols = np.empty(n, dtype=np.intp)
+    present = np.empty(n, dtype=np.bool_)
+    for e in range(n_env):
+        for k in range(n):
+            x, y = pos[e, k, 0], pos[e, k, 1]
+            present[k] = flying[e, k] and x >= x0 and x <= x1 and y >= y0 and y <= y1
+            if present[k]:
+                rows[k] = min(max(math.floor((y - y0) / cell), 0), ny - 1)
+                cols[k] = min(max(math.floor((x - x0) / cell), 0), nx - 1)
+        if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
+            for j in range(ny):
+                acc = poc_sum[j]
+                acc[:] = 0.0
+                for a in range(s):
+                    row = belief[e, j * s + a]
+                    if s == 2:
+                        for i in range(nx):
+                            acc[i] += row[2 * i] + row[2 * i + 1]
+                    else:
+                        for i in range(nx):
+                            r = -0.0
+                            for b in range(s):
+                                r += row[i * s + b]
+                            acc[i] += r
+        else:
+            poc_sum[:] = coarse[e]
+        for j in range(ny):
+            for i in range(nx):
+                q = poc_sum[j, i] / scale[e]
+                if q < 0.0:  # np.clip(q, 0.0, 1.0) with scalar bounds; NaN stays NaN
+                    q = 0.0
+                elif q > 1.0:
+                    q = 1.0
+                poc[j, i] = q
+        for k in range(n):
+            out[e, k, 0] = poc
+            out[e, k, 1] = 0.0
+            out[e, k, 2] = 0.0
+            out[e, k, 3] = hazard
+        for k in range(n):
+            if present[k]:
+                rj, ci = rows[k], cols[k]
+                out[e, k, 1, rj, ci] = 1.0
+                for m in range(n):
+                    if m != k:
+                        out[e, m, 2, rj, ci] = 1.0
+
+
+def vectors(params: Params, state: State) -> np.ndarray:
+    """(E, N, VECTOR_SIZE) float32 state vectors of every agent."""
+    sc = params.scenario
+    u = sc.uav
+    bx0, by0, bx1, by1 = params.bounds
+    w, h = bx1 - bx0, by1 - by0
+    n = state.flying.shape[1]
+    out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
+    _vector_kernel(
+        state.pos,
+        state.speed,
+        np.sin(state.heading),
+        np.cos(state.heading),
+        state.pitch,
+        state.elapsed,
+        state.flying,
+        state.step,
+        params.landing,
+        float(bx0),
+        float(by0),
+        float(w),
+        float(h),
+        _diagonal(w, h),
+        float(u.max_altitude_m),
+        float(u.min_speed_mps),
+        float(u.max_speed_mps - u.min_speed_mps),
+        float(u.max_pitch_rad),
+        float(u.endurance_s),
+        float(u.usable_endurance_s),
+        float(params.horizon),
+        float(sc.comms.range_m),
+        float(max(n - 1, 1)),
+        _LOW,
+        _HIGH,
+        out,
+    )
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _diagonal(w: float, h: float) -> float:
+    """Diagonal of the operating area (``np.hypot``), once per scenario."""
+    return float(np.hypot(w, h))
+
+
+_LOW = VECTOR_LOW.astype(np.float64)
+_HIGH = VECTOR_HIGH.astype(np.float64)
+
+
+def _build_kernels(deps: str):
+    """:func:`_vector_kernel`, closing over the source hash of the modules whose compiled
+    functions it calls (numba's cache would otherwise miss their edits; see
+    :func:`simulator._build_kernels`)."""
+
+    @njit(cache=True, error_model="numpy")
+    def vector_kernel(
+        pos,
+        speed,
+        sin_h,
+        cos_h,
+        pitch,
+        elapsed,
+        flying,
+        step,
+        landing,
+        bx0,
+        by0,
+        w,
+        h,
+        diag,
+        max_alt,
+        min_speed,
+        speed_span,
+        max_pitch,
+        endurance,
+        usable,
+        horizon,
+        range_m,
+        others,
+        low,
+        high,
+        out,
+    ):
+        """The vector table of the module docstring into ``out (E, N, VECTOR_SIZE)``, float64
+        values clipped to [low, high] as numpy clips them, then rounded to float32. Neighbours
+        are counted on :func:`comms.in_range`'s kernel."""
+        deps  # noqa: B018 -- the cache key, see simulator._build_kernels
+        n_env, n = flying.shape
+        dist = np.empty((n_env, n, n))
+        adj = np.empty((n_env, n, n), dtype=np.bool_)
+        cons._pairwise_kernel(pos[:, :, :2], dist)
+        comms_mod._in_range_kernel(dist, range_m, flying, adj)
+        v = np.empty(out.shape[2])
+        for e in range(n_env):
+            t = step[e] / horizon
+            for i in range(n):
+                x, y = pos[e, i, 0], pos[e, i, 1]
+                v[0] = (x - bx0) / w
+                v[1] = (y - by0) / h
+                v[2] = pos[e, i, 2] / max_alt
+                v[3] = (speed[e, i] - min_speed) / speed_span
+                v[4] = sin_h[e, i]
+                v[5] = cos_h[e, i]
+                v[6] = pitch[e, i] / max_pitch
+                v[7] = 1.0 - elapsed[e, i] / endurance
+                v[8] = 1.0 - elapsed[e, i] / usable
+                v[9] = (landing[i, 0] - x) / diag
+                v[10] = (landing[i, 1] - y) / diag
+                count = 0
+                for j in range(n):
+                    if adj[e, i, j]:
+                        count += 1
+                v[11] = count / others
+                v[12] = 1.0 if flying[e, i] else 0.0
+                v[13] = t
+                for k in range(v.size):
+                    q = v[k]
+                    if not np.isnan(q):  # np.clip with array bounds: ties go to the bound
+                        q = q if q > low[k] else low[k]
+                        q = q if q < high[k] else high[k]
+                    out[e, i, k] = q
+
+    return vector_kernel
+
+
+_vector_kernel = _build_kernels(_source_hash(cons, comms_mod))
+
+
+def decode_vector(params: Params, vec: np.ndarray) -> dict[str, np.ndarray]:
+    """Physical quantities back from state vectors (..., VECTOR_SIZE): the inverse of
+    :func:`vectors` for position (m), altitude (m), speed (m/s), heading and pitch (rad)."""
+    u = params.scenario.uav
+    bx0, by0, bx1, by1 = params.bounds
+    v = np.asarray(vec, dtype=float)
+    return {
+        "xy": np.stack([bx0 + v[..., 0] * (bx1 - bx0), by0 + v[..., 1] * (by1 - by0)], -1),
+        "z": v[..., 2] * u.max_altitude_m,
+        "speed": u.min_speed_mps + v[..., 3] * (u.max_speed_mps - u.min_speed_mps),
+        "heading": np.arctan2(v[..., 4], v[..., 5]),
+        "pitch": v[..., 6] * u.max_pitch_rad,
+        "flying": v[..., 12] > 0.5,
+        "usable": v[..., 8],
+    }

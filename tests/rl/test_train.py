@@ -1,0 +1,321 @@
+"""``poc-env train`` (agents.rl.train): run folders, checkpoints, resume, determinism, ppo:PATH."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch as th
+
+from agents.rl.train import (
+    PPOPolicy,
+    TrainArgs,
+    add_train_arguments,
+    args_from_namespace,
+    checkpoint_steps,
+    field_docs,
+    latest_checkpoint,
+    load_policy,
+    make_env,
+    make_model,
+    train,
+    write_atomic,
+)
+from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
+
+# small: 3 UAVs, so one shared-recipe rollout with 2 envs and 16 steps is 96 transitions; the
+# central recipe's is 32 (one slot per env). Horizon 12 < 16: every rollout ends episodes.
+ROLLOUT = {"shared": 96, "central": 32, "pilot": 96}
+
+
+def _args(recipe: str, run_dir: Path, **kw) -> TrainArgs:
+    base = dict(
+        scenario="small",
+        overrides=["episode.horizon_steps=12"],
+        recipe=recipe,
+        total_timesteps=3 * ROLLOUT[recipe],
+        seed=0,
+        n_envs=2,
+        n_steps=16,
+        batch_size=32,
+        n_epochs=2,
+        checkpoint_every=1,  # one checkpoint per rollout
+        keep_checkpoints=2,
+        progress=False,
+        run_dir=str(run_dir),
+    )
+    base.update(kw)
+    return TrainArgs(**base)
+
+
+def _params(path: Path) -> list[np.ndarray]:
+    model = load_policy(path)
+    return [p.detach().numpy().copy() for p in model.policy.parameters()]
+
+
+def _same(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
+    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
+
+
+class Interrupt(Exception):
+    """Stands in for a kill in the middle of a rollout."""
+
+
+def _killer(at: int):
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Kill(BaseCallback):
+        def _on_step(self) -> bool:
+            if self.model.num_timesteps >= at:
+                raise Interrupt
+            return True
+
+    return Kill()
+
+
+@pytest.fixture(scope="module", autouse=True)
+def one_thread():
+    threads = th.get_num_threads()
+    th.set_num_threads(1)
+    yield
+    th.set_num_threads(threads)
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory) -> dict[str, Path]:
+    """One complete tiny run per recipe."""
+    root = tmp_path_factory.mktemp("runs")
+    return {r: train(_args(r, root / r)) for r in ("shared", "central", "pilot")}
+
+
+# -- run folder -------------------------------------------------------------------------------
+@pytest.mark.parametrize("recipe", ["shared", "central", "pilot"])
+def test_train_writes_the_run_folder(runs, recipe):
+    run = runs[recipe]
+    total = 3 * ROLLOUT[recipe]
+    cfg = json.loads((run / "config.json").read_text())
+    args = TrainArgs.from_dict(cfg)
+    assert args == _args(recipe, run)  # the resolved args, round-tripping
+    sc = load_scenario(run / "scenario.yaml")
+    assert sc.name == "small" and sc.episode.horizon_steps == 12  # overrides resolved
+    events = list((run / "tb").glob("ppo_1/events.out.tfevents.*"))
+    assert len(events) == 1 and b"rollout/posc_mean" in events[0].read_bytes()
+    # one checkpoint per rollout, the newest two kept, latest.json -> the final one
+    assert checkpoint_steps(run) == [2 * ROLLOUT[recipe], total]
+    step, model_zip, state, env_npz = latest_checkpoint(run)
+    assert step == total and model_zip == run / "checkpoints" / f"step_{total}.zip"
+    saved = json.loads(state.read_text())
+    assert saved["step"] == total and len(saved["env_generators"]) == 2
+    assert (env_npz is not None) == (recipe != "central")  # episodes in flight: shared only
+    assert not list(run.rglob("*.tmp"))  # atomic writes leave no temporary files
+    model = load_policy(run / "model.zip")
+    assert model.num_timesteps == total
+    assert _same(_params(run / "model.zip"), _params(model_zip))
+
+
+def test_every_run_file_is_published_by_rename(tmp_path, monkeypatch):
+    import os
+
+    renamed = []
+    real = os.replace
+
+    def spy(src, dst):
+        renamed.append(Path(dst))
+        real(src, dst)
+
+    monkeypatch.setattr(os, "replace", spy)
+    run = train(_args("shared", tmp_path / "run", keep_checkpoints=0))
+    files = {p for p in run.rglob("*") if p.is_file() and "tb" not in p.relative_to(run).parts}
+    assert len(files) == 3 + 3 * 3 + 1  # config, scenario, model; 3 checkpoints; latest
+    assert files <= set(renamed)
+    assert renamed[-1] == run / "model.zip"
+    assert renamed.count(run / "latest.json") == 3
+
+
+def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
+    target = tmp_path / "model.zip"
+    target.write_text("old")
+
+    def broken(tmp: str) -> None:
+        Path(tmp).write_text("half")
+        raise RuntimeError("killed")
+
+    with pytest.raises(RuntimeError):
+        write_atomic(target, broken)
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["model.zip"]
+
+
+# -- determinism ------------------------------------------------------------------------------
+@pytest.mark.parametrize("recipe", ["shared", "central", "pilot"])
+def test_save_load_gives_identical_deterministic_actions(tmp_path, recipe):
+    args = _args(recipe, tmp_path)
+    env = make_env(args, load_scenario("small", {"episode.horizon_steps": 12}))
+    model = make_model(args, env, None)
+    model.learn(ROLLOUT[recipe])
+    obs = env.reset()
+    for _ in range(5):  # a few different observations
+        obs, *_ = env.step(np.stack([env.action_space.sample() for _ in range(env.num_envs)]))
+    write_atomic(tmp_path / "m.zip", model.save)
+    loaded = load_policy(tmp_path / "m.zip", env)
+    a, _ = model.predict(obs, deterministic=True)
+    b, _ = loaded.predict(obs, deterministic=True)
+    np.testing.assert_array_equal(a, b)
+    assert np.unique(a.round(6), axis=0).shape[0] > 1  # not a degenerate constant policy
+
+
+def test_same_seed_same_parameters_other_seed_others(runs, tmp_path):
+    again = train(_args("shared", tmp_path / "again"))
+    other = train(_args("shared", tmp_path / "other", seed=1))
+    ref = _params(runs["shared"] / "model.zip")
+    assert _same(_params(again / "model.zip"), ref)
+    assert not _same(_params(other / "model.zip"), ref)
+
+
+# -- resume -----------------------------------------------------------------------------------
+@pytest.mark.parametrize("recipe", ["shared", "pilot"])
+def test_resume_continues_bit_identically(runs, tmp_path, recipe):
+    run = tmp_path / "killed"
+    with pytest.raises(Interrupt):  # killed in the middle of the second rollout
+        train(_args(recipe, run), callback=_killer(ROLLOUT[recipe] + 54))
+    assert checkpoint_steps(run) == [ROLLOUT[recipe]]
+    assert not (run / "model.zip").exists()
+    out = train(TrainArgs(resume=str(run), progress=False))
+    assert out == run
+    assert load_policy(run / "model.zip").num_timesteps == 3 * ROLLOUT[recipe]
+    # the step count continued from the checkpoint (96 -> 192 -> 288), not from 0
+    assert checkpoint_steps(run) == [2 * ROLLOUT[recipe], 3 * ROLLOUT[recipe]]
+    assert [p.name for p in (run / "tb").iterdir()] == ["ppo_1"]  # the same TensorBoard run
+    # model, optimiser, env state and generators restored: the uninterrupted run's parameters
+    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
+    # resuming a finished run changes nothing
+    before = (run / "model.zip").read_bytes()
+    train(TrainArgs(resume=str(run), progress=False))
+    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
+    assert len(before) > 0
+
+
+def test_resume_continues_the_step_count_central(tmp_path):
+    run = tmp_path / "killed"
+    with pytest.raises(Interrupt):
+        train(_args("central", run), callback=_killer(ROLLOUT["central"] + 10))
+    assert checkpoint_steps(run) == [ROLLOUT["central"]]
+    saved = json.loads((run / "checkpoints" / "step_32.state.json").read_text())
+    train(TrainArgs(resume=str(run), progress=False))
+    model = load_policy(run / "model.zip")
+    assert model.num_timesteps == 3 * ROLLOUT["central"]
+    assert checkpoint_steps(run) == [2 * ROLLOUT["central"], 3 * ROLLOUT["central"]]
+    # the env generators were restored from the checkpoint, then drawn from further
+    after = json.loads((run / "checkpoints" / "step_64.state.json").read_text())
+    assert after["env_generators"] != saved["env_generators"]
+
+
+# -- bad input --------------------------------------------------------------------------------
+def test_unknown_algo_and_recipe():
+    with pytest.raises(ConfigError, match="ppo") as err:
+        TrainArgs(algo="dqn")
+    assert err.value.field == "algo" and err.value.value == "dqn"
+    with pytest.raises(ConfigError) as err:
+        TrainArgs(recipe="decentralised")
+    assert err.value.field == "recipe" and "shared" in err.value.allowed
+    with pytest.raises(ConfigError) as err:
+        TrainArgs(batch_size=1)
+    assert err.value.field == "batch_size"
+    with pytest.raises(ConfigError) as err:
+        TrainArgs(overrides=["episode.horizon_steps"])
+    assert err.value.field == "overrides"
+
+
+def test_resume_on_a_folder_that_is_not_a_run(tmp_path):
+    with pytest.raises(ConfigError, match=r"config\.json") as err:
+        train(TrainArgs(resume=str(tmp_path / "nowhere")))
+    assert err.value.field == "resume"
+    (tmp_path / "config.json").write_text(json.dumps({"scenario": "small"}))
+    with pytest.raises(ConfigError, match="checkpoint") as err:  # a run with no checkpoint
+        train(TrainArgs(resume=str(tmp_path)))
+    assert err.value.field == "resume"
+    (tmp_path / "config.json").write_text(json.dumps({"scenario": "small", "lr": 1}))
+    with pytest.raises(ConfigError, match="lr"):
+        train(TrainArgs(resume=str(tmp_path)))
+
+
+def test_checkpoint_for_another_number_of_uavs_or_grid(runs, tmp_path):
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.envs.vector import SwarmVecEnv
+
+    two = load_scenario("small").with_uavs(2)
+    central = runs["central"] / "model.zip"
+    args = _args("central", tmp_path, n_envs=1)
+    with pytest.raises(ConfigError, match=r"Box\(540,\).*Box\(810,\)") as err:
+        load_policy(central, make_env(args, two))
+    assert err.value.field == "checkpoint"
+    pol = PPOPolicy(central)
+    with pytest.raises(ConfigError, match="2 UAVs"):
+        pol.reset(UAVSearchParallelEnv(two), seed=0)
+    # the shared policy flies any number of UAVs on its grid, but not another grid
+    PPOPolicy(runs["shared"]).reset(UAVSearchParallelEnv(two), seed=0)
+    with pytest.raises(ConfigError, match=r"Box\(4, 30, 40\).*Box\(4, 8, 8\)"):
+        load_policy(runs["shared"] / "model.zip", SwarmVecEnv("paper_6_2", n_envs=1))
+    # missing and corrupt files
+    with pytest.raises(ConfigError, match="existing"):
+        load_policy(tmp_path / "missing.zip")
+    (tmp_path / "bad.zip").write_bytes(b"not a zip")
+    with pytest.raises(ConfigError, match="readable") as err:
+        PPOPolicy(tmp_path / "bad.zip")
+    assert err.value.field == "checkpoint"
+
+
+# -- evaluation through ppo:PATH --------------------------------------------------------------
+def test_ppo_path_evaluates_through_evaluate(runs):
+    from agents.experiments.evaluate import evaluate, make_policy
+
+    names = [
+        f"ppo:{runs['shared'] / 'model.zip'}",
+        f"ppo:{runs['central']}",
+        f"ppo:{runs['pilot']}",
+    ]
+    ev = evaluate("small", names, episodes=1, seed0=1000)
+    rows = ev.rows()
+    assert [r["policy"] for r in rows] == names
+    assert all(r["episodes"] == 1 and 0.0 <= r["posc_mean"] <= 1.0 for r in rows)
+    again = evaluate("small", names[:1], episodes=1, seed0=1000)  # deterministic actions
+    assert again.episodes[0].posc_curve == ev.episodes[0].posc_curve
+    with pytest.raises(ConfigError, match="ppo:PATH"):
+        make_policy("ppo_v2")
+    with pytest.raises(ConfigError):
+        make_policy("ppo:")
+
+
+# -- command line -----------------------------------------------------------------------------
+def test_cli_options_come_from_trainargs(tmp_path, capsys):
+    import argparse
+
+    from poc_env.cli import build_parser, main
+
+    docs = field_docs(TrainArgs)
+    assert set(docs) == set(TrainArgs.__dataclass_fields__)  # a docstring under every field
+    p = argparse.ArgumentParser()
+    add_train_arguments(p)
+    assert args_from_namespace(p.parse_args([])) == TrainArgs()  # one place for the defaults
+    ns = build_parser().parse_args(
+        ["train", "--total-timesteps", "5", "--no-random-priors", "--overrides", "a.b=1"]
+    )
+    got = args_from_namespace(ns)
+    assert (got.total_timesteps, got.random_priors, got.overrides) == (5, False, ["a.b=1"])
+    assert main(["train", "--algo", "dqn"]) == 2
+    assert main(["train", "--resume", str(tmp_path), "--n-envs", "3"]) == 2
+    err = capsys.readouterr().err
+    assert "algo: got 'dqn'" in err and "--n-envs" in err
+
+
+def test_bench_train_smoke():
+    from agents.rl.train import bench_train
+
+    r = bench_train("small", n_envs=2, iterations=1)
+    assert r["transitions_per_s"] > 0 and r["transitions"] == 256 * 6
+    shares = r["env_share"] + r["rollout_net_share"] + r["update_share"]
+    assert all(0 < r[k] < 1 for k in ("env_share", "rollout_net_share", "update_share"))
+    assert 0.5 < shares <= 1.0

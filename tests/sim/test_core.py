@@ -1,0 +1,136 @@
+"""The batched simulator core: mass conservation, determinism, batched == single env."""
+
+import numpy as np
+import pytest
+
+from poc_env.config import load_scenario
+from poc_env.sim import core as sim
+
+
+def _run(name, seeds, steps, action_seed=0, overrides=None):
+    p = sim.make_params(load_scenario(name, overrides))
+    rngs = [np.random.default_rng(s) for s in seeds]
+    st = sim.initial(p, rngs)
+    arng = np.random.default_rng(action_seed)
+    acts = arng.uniform(-1, 1, (steps, len(seeds), p.n_agents, 3))
+    acts[..., 1] *= 0.2  # gentle turns: the UAVs reach the area from their airfields
+    acts[..., 2] = 0.0  # level flight
+    for k in range(steps):
+        sim.step(p, st, acts[k], rngs)
+    return p, st
+
+
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_mass_is_conserved(name):
+    _, st = _run(name, [1, 2], 45)
+    np.testing.assert_allclose(st.posc + st.belief.sum(axis=(1, 2)), st.initial_mass, atol=1e-9)
+    assert np.all(st.belief >= 0) and st.posc.max() > 0
+    np.testing.assert_allclose(st.agent_pos.sum(axis=1), st.posc, atol=1e-12)
+
+
+def test_same_seed_same_episode():
+    _, a = _run("small", [5], 30)
+    _, b = _run("small", [5], 30)
+    for f in ("pos", "belief", "posc", "target", "detect_step", "links"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+
+
+def test_batched_core_equals_single_envs():
+    p = sim.make_params(load_scenario("small"))
+    seeds = [11, 12, 13]
+    arng = np.random.default_rng(4)
+    acts = arng.uniform(-1, 1, (20, 3, p.n_agents, 3))
+    acts[..., 2] = 0.0
+    rngs = [np.random.default_rng(s) for s in seeds]
+    batch = sim.initial(p, rngs)
+    singles = []
+    for s in seeds:
+        r = [np.random.default_rng(s)]
+        singles.append((sim.initial(p, r), r))
+    for k in range(20):
+        sim.step(p, batch, acts[k], rngs)
+        for e, (st, r) in enumerate(singles):
+            sim.step(p, st, acts[k, e : e + 1], r)
+    for e, (st, _) in enumerate(singles):
+        np.testing.assert_array_equal(batch.pos[e], st.pos[0])
+        np.testing.assert_array_equal(batch.belief[e], st.belief[0])
+        assert batch.posc[e] == st.posc[0]
+
+
+def test_eq19_kinematics_one_step():
+    p = sim.make_params(load_scenario("small"))
+    st = sim.initial(p, [np.random.default_rng(0)])
+    x0, v0, a0 = st.pos[0, 0].copy(), st.speed[0, 0], st.heading[0, 0]
+    act = np.zeros((1, p.n_agents, 3))
+    act[0, 0] = [1.0, 0.5, 0.0]
+    sim.step(p, st, act, [np.random.default_rng(0)])
+    u = p.scenario.uav
+    alpha = a0 + 0.5 * u.max_turn_rate_rad_s * p.dt
+    np.testing.assert_allclose(
+        st.pos[0, 0, :2], x0[:2] + v0 * p.dt * np.array([np.cos(alpha), np.sin(alpha)])
+    )  # eq. 19 uses the old speed with the new heading
+    assert st.speed[0, 0] == pytest.approx(min(v0 + u.max_accel_mps2 * p.dt, u.max_speed_mps))
+
+
+def test_topology_excludes_uavs_that_finished_this_step():
+    p = sim.make_params(load_scenario("small", {"episode.horizon_steps": 3}))
+    rngs = [np.random.default_rng(0)]
+    st = sim.initial(p, rngs)
+    st.left_home[:] = True  # over the airfield after a flight, slow: lands on the next step
+    st.speed[:] = p.scenario.uav.min_speed_mps
+    sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
+    assert st.landed.all() and not st.links.any()
+
+
+def _comms_run(range_km, steps=6):
+    over = {"comms.belief_sharing": "comms", "comms.range_km": range_km}
+    p = sim.make_params(load_scenario("small", over))
+    rngs = [np.random.default_rng(0)]
+    st = sim.initial(p, rngs)
+    st.pos[0, :, :2] = [(8e3, 10e3), (32e3, 30e3), (20e3, 20e3)]  # over the area, apart
+    for _ in range(steps):
+        sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
+    return p, st
+
+
+def test_comms_belief_sharing_connected_swarm_knows_everything():
+    _, st = _comms_run(range_km=200)
+    beliefs = st.agent_beliefs()[0]
+    for i in range(3):
+        np.testing.assert_allclose(beliefs[i], st.belief[0], rtol=1e-12, atol=1e-15)
+
+
+def test_comms_belief_sharing_isolated_uavs_know_only_their_own_sweeps():
+    _, st = _comms_run(range_km=1)
+    beliefs = st.agent_beliefs()[0]
+    prior = st.prior_fine[0]
+    for i in range(3):
+        own = prior * st.own_survival[0, i]
+        np.testing.assert_allclose(beliefs[i], own, rtol=1e-12, atol=1e-15)
+        assert not np.allclose(beliefs[i], st.belief[0])  # others' sweeps are unknown to it
+    # the global belief (the reward's) is still the product of everyone's sweeps
+    np.testing.assert_allclose(
+        st.belief[0], prior * st.own_survival[0].prod(axis=0), rtol=1e-9, atol=1e-15
+    )
+
+
+def test_comms_belief_observations_are_per_agent():
+    import poc_env
+
+    env = poc_env.parallel_env("small", comms__belief_sharing="comms", comms__range_km=1)
+    env.reset(seed=0)
+    s = env.sim_state
+    s.pos[0, :, :2] = [(8e3, 10e3), (32e3, 30e3), (20e3, 20e3)]
+    for _ in range(4):
+        obs, *_ = env.step({a: np.zeros(3) for a in env.agents})
+    r0, r1 = obs["uav_0"]["raster"][0], obs["uav_1"]["raster"][0]
+    assert not np.allclose(r0, r1)
+
+
+def test_landing_needs_an_approach_speed():
+    p = sim.make_params(load_scenario("small"))
+    rngs = [np.random.default_rng(0)]
+    st = sim.initial(p, rngs)
+    st.left_home[:] = True  # back over the field at cruise speed: a fly-over, not a landing
+    sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
+    assert not st.landed.any() and st.flying.all()

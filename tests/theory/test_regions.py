@@ -1,0 +1,350 @@
+"""Tests of poc_env.theory.regions: regions (eq. 1-2), area-weighted POC, eq. 3-4, rectangle cut."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import box
+
+from poc_env.config import GaussianComponent
+from poc_env.errors import ConfigError, GeometryError
+from poc_env.geometry import rectangle_polygon
+from poc_env.theory.probability_map import Grid, gaussian_mixture
+from poc_env.theory.regions import (
+    Allocation,
+    CircleRegion,
+    PolygonRegion,
+    average_poc,
+    cell_overlap,
+    rectangle_cut_allocation,
+    region_poc,
+    region_pocs,
+)
+
+SMALL = Grid(4, 3, 10.0)  # cells of 10 m; x in [0, 40], y in [0, 30]
+
+
+def square(x0, y0, x1, y1, name="square"):
+    return PolygonRegion(((x0, y0), (x1, y0), (x1, y1), (x0, y1)), name=name)
+
+
+# --------------------------------------------------------------------------- regions
+
+
+def test_polygon_region_stores_floats_area_and_holes():
+    r = PolygonRegion([[0, 0], [4, 0], [4, 4], [0, 4]], holes=[[[1, 1], [2, 1], [2, 2], [1, 2]]])
+    assert r.vertices == ((0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0))
+    assert isinstance(r.vertices[0][0], float)
+    assert r.area_m2 == pytest.approx(15.0)
+    assert r.geometry.area == pytest.approx(15.0)
+    back = PolygonRegion.from_geometry(r.geometry)
+    assert back.area_m2 == pytest.approx(15.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.vertices = ()  # type: ignore[misc]
+
+
+def test_circle_region_area_and_geometry():
+    c = CircleRegion((3.0, -2.0), 50.0)
+    assert c.area_m2 == pytest.approx(math.pi * 2500.0, rel=1e-15)
+    assert c.geometry.area == pytest.approx(math.pi * 2500.0, rel=1e-3)
+    assert c.geometry.centroid.x == pytest.approx(3.0, abs=1e-9)
+    # the polygon hugs the circle: every vertex within 0.1 % of r of the circle
+    xy = np.asarray(c.geometry.exterior.coords)
+    r = np.hypot(xy[:, 0] - 3.0, xy[:, 1] + 2.0)
+    assert np.all(np.abs(r - 50.0) < 0.05)
+
+
+@pytest.mark.parametrize(
+    ("vertices", "match"),
+    [
+        ([(0, 0), (2, 2), (2, 0), (0, 1)], "Self-intersection"),  # lopsided bow-tie
+        ([(0, 0), (1, 1), (1, 0), (0, 1)], "zero area|invalid"),  # symmetric bow-tie
+        ([(0, 0), (1, 1)], "at least 3"),
+        ([(0, 0), (1, 1), (2, 2)], "zero area"),
+        ([(0, 0), (1, 0), (1, 1), (0, 0), (1, 0), (1, 1)], "zero area|invalid"),
+    ],
+)
+def test_bad_polygons_raise_geometry_error_naming_the_region(vertices, match):
+    with pytest.raises(GeometryError, match=match) as err:
+        PolygonRegion(vertices, name="zone A")
+    assert "zone A" in str(err.value)
+
+
+@pytest.mark.parametrize("radius", [0.0, -1.0, float("nan"), float("inf")])
+def test_bad_circle_radius_raises_geometry_error(radius):
+    with pytest.raises(GeometryError, match="radius_m") as err:
+        CircleRegion((0.0, 0.0), radius)
+    assert repr(float(radius)) in str(err.value) or str(radius) in str(err.value)
+
+
+def test_bad_circle_center_raises():
+    with pytest.raises(GeometryError, match="center_m"):
+        CircleRegion((0.0, float("nan")), 1.0)
+    with pytest.raises(GeometryError, match="center_m"):
+        CircleRegion("ab", 1.0)  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------- cell overlap
+
+
+def test_overlap_of_one_cell_is_one_there_and_zero_elsewhere():
+    ov = cell_overlap(square(20, 10, 30, 20), SMALL)
+    want = np.zeros((3, 4))
+    want[1, 2] = 1.0  # row 1 from the south, column 2 from the west
+    np.testing.assert_allclose(ov, want, atol=1e-12)
+
+
+def test_overlap_respects_grid_origin():
+    grid = Grid(3, 2, 10.0, origin_m=(100.0, -50.0))
+    ov = cell_overlap(box(110, -40, 120, -30), grid)  # shapely input, cell (j=1, i=1)
+    want = np.zeros((2, 3))
+    want[1, 1] = 1.0
+    np.testing.assert_allclose(ov, want, atol=1e-12)
+
+
+def test_overlap_of_half_cell_triangle_is_half():
+    ov = cell_overlap(PolygonRegion([(20, 10), (30, 10), (30, 20)]), SMALL)
+    want = np.zeros((3, 4))
+    want[1, 2] = 0.5
+    np.testing.assert_allclose(ov, want, atol=1e-12)
+
+
+def test_overlap_of_whole_grid_is_all_ones_and_outside_part_is_ignored():
+    np.testing.assert_allclose(cell_overlap(square(0, 0, 40, 30), SMALL), 1.0, atol=1e-12)
+    # a square sticking out of the south-west corner covers a quarter of cell (0, 0)
+    ov = cell_overlap(square(-20, -20, 5, 5), SMALL)
+    want = np.zeros((3, 4))
+    want[0, 0] = 0.25
+    np.testing.assert_allclose(ov, want, atol=1e-12)
+    # a region entirely off the grid overlaps nothing
+    assert not np.any(cell_overlap(square(100, 100, 110, 110), SMALL))
+
+
+def test_circle_overlap_sums_to_its_area():
+    grid = Grid(20, 20, 10.0)
+    c = CircleRegion((101.3, 97.2), 63.0)  # off-centre so that cells are cut unevenly
+    ov = cell_overlap(c, grid)
+    assert ov.min() >= 0.0 and ov.max() <= 1.0
+    assert ov[9, 10] == 1.0  # a cell well inside
+    assert ov.sum() * grid.cell_area_m2 == pytest.approx(math.pi * 63.0**2, rel=2e-3)
+    # some cells are cut: overlap is not just 0 / 1
+    assert np.sum((ov > 0.01) & (ov < 0.99)) > 10
+
+
+# --------------------------------------------------------------------------- POC
+
+
+@pytest.fixture
+def hot_prior():
+    p = np.zeros(SMALL.shape)
+    p[1, 2] = 0.6  # the hot cell [20, 30] x [10, 20], centre (25, 15)
+    p[0, 0] = 0.4  # cell [0, 10] x [0, 10]
+    return p
+
+
+def test_region_poc_is_area_weighted_not_centre_tested(hot_prior):
+    # bottom quarter of the hot cell: its centre is outside, a centre test would give 0
+    assert region_poc(square(20, 10, 30, 12.5), SMALL, hot_prior) == pytest.approx(0.15)
+    # bottom three quarters: its centre is inside, a centre test would give 0.6
+    assert region_poc(square(20, 10, 30, 17.5), SMALL, hot_prior) == pytest.approx(0.45)
+    # a quarter of each of the two hot cells: 0.25 * 0.4 + 0.25 * 0.6
+    assert region_poc(square(5, 5, 25, 15), SMALL, hot_prior) == pytest.approx(0.25)
+    # a circle of radius 2 m inside the hot cell: pi * 4 / 100 of it
+    c = CircleRegion((24.0, 16.0), 2.0)
+    assert region_poc(c, SMALL, hot_prior) == pytest.approx(0.6 * math.pi * 4 / 100, rel=1e-3)
+
+
+def test_region_poc_of_whole_grid_is_one():
+    grid = Grid(12, 9, 100.0)
+    prior = gaussian_mixture(
+        grid, [GaussianComponent(mean_m=(400.0, 300.0), sigma_m=(200.0, 150.0))], background=0.1
+    )
+    assert region_poc(grid.polygon(), grid, prior) == pytest.approx(1.0, abs=1e-12)
+    assert region_poc(square(0, 0, 600, 900), grid, prior) < 1.0
+
+
+def test_region_pocs_counts_each_region(hot_prior):
+    pocs = region_pocs([square(20, 10, 30, 20), square(20, 10, 25, 20)], SMALL, hot_prior)
+    np.testing.assert_allclose(pocs, [0.6, 0.3])
+
+
+def test_prior_of_wrong_shape_is_a_config_error():
+    with pytest.raises(ConfigError, match="prior") as err:
+        region_poc(square(0, 0, 10, 10), SMALL, np.ones((4, 3)) / 12)
+    assert err.value.field == "prior"
+
+
+# --------------------------------------------------------------------------- eq. 3 and eq. 4
+
+
+def test_average_poc_eq4_counts_overlap_once_in_poc_and_twice_in_area():
+    grid = Grid(10, 10, 10.0)
+    prior = np.full(grid.shape, 0.01)  # uniform: 1e-4 per square metre
+    a = square(0, 0, 40, 40)  # 1600 m^2
+    b = square(20, 20, 60, 60)  # 1600 m^2, overlap [20, 40]^2 = 400 m^2
+    # union 2800 m^2 -> POC 0.28; denominator 1600 + 1600 = 3200 m^2
+    assert average_poc([a, b], grid, prior) == pytest.approx(0.28 / 3200, rel=1e-12)
+    # the two wrong readings of eq. 4 differ from it
+    assert not math.isclose(average_poc([a, b], grid, prior), 0.32 / 3200, rel_tol=1e-6)
+    assert not math.isclose(average_poc([a, b], grid, prior), 0.28 / 2800, rel_tol=1e-6)
+    # disjoint regions: plain sums
+    c = square(60, 60, 80, 70)  # 200 m^2
+    assert average_poc([a, c], grid, prior) == pytest.approx(0.18 / 1800, rel=1e-12)
+
+
+def test_average_poc_of_one_region_is_eq3(hot_prior):
+    r = square(5, 5, 25, 15)  # 200 m^2 holding 0.25
+    assert average_poc(r, SMALL, hot_prior) == pytest.approx(0.25 / 200, rel=1e-12)
+    assert average_poc([r], SMALL, hot_prior) == pytest.approx(0.25 / 200, rel=1e-12)
+    c = CircleRegion((24.0, 16.0), 2.0)
+    assert average_poc(c, SMALL, hot_prior) == pytest.approx(0.6 / 100, rel=1e-3)
+
+
+def test_average_poc_rejects_no_regions(hot_prior):
+    with pytest.raises(ConfigError, match="regions"):
+        average_poc([], SMALL, hot_prior)
+
+
+# --------------------------------------------------------------------------- rectangle cut
+
+BLOB_GRID = Grid(24, 24, 1000.0)  # 24 km x 24 km
+BLOBS = ((5000.0, 5000.0), (18000.0, 8000.0), (9000.0, 19000.0))
+S_U = 12e6  # 12 km^2 per UAV; rectangles of 15.6 km^2
+
+
+@pytest.fixture(scope="module")
+def blob_prior():
+    comps = [
+        GaussianComponent(mean_m=m, sigma_m=(1500.0, 900.0), rotation_rad=r)
+        for m, r in zip(BLOBS, (0.3, 1.2, 2.5), strict=True)
+    ]
+    return gaussian_mixture(BLOB_GRID, comps, background=0.01)
+
+
+@pytest.fixture(scope="module")
+def allocation(blob_prior) -> Allocation:
+    return rectangle_cut_allocation(BLOB_GRID, blob_prior, 3, S_U, np.random.default_rng(11))
+
+
+def test_rectangles_have_area_factor_times_usable(allocation):
+    assert len(allocation.rectangles) == len(allocation.rectangle_polygons) == 3
+    assert allocation.rectangle_area_m2 == pytest.approx(1.3 * S_U, rel=1e-12)
+    x0, y0, x1, y1 = BLOB_GRID.bounds
+    for (center, length, width, theta), poly in zip(
+        allocation.rectangles, allocation.rectangle_polygons, strict=True
+    ):
+        assert length * width == pytest.approx(1.3 * S_U, rel=1e-9)
+        assert poly.area == pytest.approx(1.3 * S_U, rel=1e-9)
+        assert 1.0 - 1e-12 <= length / width <= 3.0 + 1e-9
+        assert 0.0 <= theta < math.pi
+        assert x0 <= center[0] <= x1 and y0 <= center[1] <= y1
+        assert poly.equals_exact(rectangle_polygon(center, length, width, theta), 1e-6)
+
+
+def test_reported_values_are_exact_eq4(allocation, blob_prior):
+    union = shapely.union_all(list(allocation.rectangle_polygons))
+    assert allocation.union_poc == pytest.approx(region_poc(union, BLOB_GRID, blob_prior))
+    assert allocation.average_poc == pytest.approx(
+        average_poc(list(allocation.rectangle_polygons), BLOB_GRID, blob_prior), rel=1e-9
+    )
+    assert allocation.average_poc == pytest.approx(allocation.union_poc / (3 * 1.3 * S_U))
+    assert allocation.polygon_average_poc == pytest.approx(
+        average_poc(list(allocation.polygons), BLOB_GRID, blob_prior), rel=1e-9
+    )
+
+
+def test_allocation_beats_best_of_50_random_placements(allocation, blob_prior):
+    rng = np.random.default_rng(2024)
+    area = 1.3 * S_U
+    x0, y0, x1, y1 = BLOB_GRID.bounds
+    best = 0.0
+    for _ in range(50):
+        rects = []
+        for _ in range(3):
+            aspect = rng.uniform(1.0, 3.0)
+            center = (rng.uniform(x0, x1), rng.uniform(y0, y1))
+            length, width = math.sqrt(area * aspect), math.sqrt(area / aspect)
+            rects.append(rectangle_polygon(center, length, width, rng.uniform(0, math.pi)))
+        best = max(best, region_poc(shapely.union_all(rects), BLOB_GRID, blob_prior))
+    assert best > 0.2  # the random baseline is not a straw man
+    assert allocation.union_poc > best
+    # each blob's centre lies in some rectangle: one rectangle per cluster
+    for m in BLOBS:
+        assert any(p.contains(shapely.Point(m)) for p in allocation.rectangle_polygons)
+
+
+def test_same_seed_gives_identical_allocation(allocation, blob_prior):
+    again = rectangle_cut_allocation(BLOB_GRID, blob_prior, 3, S_U, np.random.default_rng(11))
+    assert again.rectangles == allocation.rectangles
+    assert [p.vertices for p in again.polygons] == [p.vertices for p in allocation.polygons]
+    assert again.union_poc == allocation.union_poc
+    assert again.evaluations == allocation.evaluations > 0
+
+
+def test_derived_polygons_lie_in_rectangles_with_area_near_su(allocation):
+    assert len(allocation.polygons) == 3
+    for poly, rect in zip(allocation.polygons, allocation.rectangle_polygons, strict=True):
+        assert isinstance(poly, PolygonRegion)
+        assert poly.geometry.is_valid
+        assert not poly.holes
+        assert poly.geometry.difference(rect).area <= 1e-6 * S_U
+        assert poly.area_m2 == pytest.approx(S_U, rel=0.10)
+    assert allocation.polygon_average_poc >= allocation.average_poc
+
+
+def test_allocation_at_paper_scale():
+    """30 x 40 cells of 5 km (the paper's second case), six UAVs, five clusters."""
+    grid = Grid(30, 40, 5000.0)
+    comps = [
+        GaussianComponent(mean_m=(30e3, 40e3), sigma_m=(8e3, 15e3), rotation_rad=0.5),
+        GaussianComponent(mean_m=(110e3, 60e3), sigma_m=(10e3, 6e3)),
+        GaussianComponent(mean_m=(70e3, 150e3), sigma_m=(12e3, 12e3)),
+        GaussianComponent(mean_m=(120e3, 170e3), sigma_m=(6e3, 14e3)),
+        GaussianComponent(mean_m=(40e3, 110e3), sigma_m=(9e3, 9e3), weight=0.5),
+    ]
+    prior = gaussian_mixture(grid, comps, background=0.02)
+    s_u = 1500e6
+    alloc = rectangle_cut_allocation(grid, prior, 6, s_u, np.random.default_rng(0))
+    assert len(alloc.rectangles) == 6
+    # 6 x 1.3 x 1500 km^2 is 39 % of the map; the rectangles hold far more than 39 % of the POC
+    assert alloc.union_poc > 0.85
+    for poly, rect in zip(alloc.polygons, alloc.rectangle_polygons, strict=True):
+        assert poly.geometry.difference(rect).area <= 1e-6 * s_u
+        assert poly.area_m2 == pytest.approx(s_u, rel=0.10)
+    assert alloc.polygon_average_poc >= alloc.average_poc
+    # differential evolution earns its budget: one generation (about the greedy start) is worse
+    quick = rectangle_cut_allocation(grid, prior, 6, s_u, np.random.default_rng(0), max_iter=1)
+    assert alloc.union_poc > quick.union_poc + 0.01
+    assert alloc.evaluations > quick.evaluations
+
+
+def test_aspect_range_is_respected(blob_prior):
+    alloc = rectangle_cut_allocation(
+        BLOB_GRID, blob_prior, 2, S_U, np.random.default_rng(3), aspect_range=(2.0, 2.0), max_iter=5
+    )
+    for _, length, width, _ in alloc.rectangles:
+        assert length / width == pytest.approx(2.0, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"n": 0}, "n"),
+        ({"n": 2.5}, "n"),
+        ({"usable_area_m2": 0.0}, "usable_area_m2"),
+        ({"usable_area_m2": -5.0}, "usable_area_m2"),
+        ({"usable_area_m2": 576e6 / 1.3 * 1.01}, "usable_area_m2"),  # rectangle > whole grid
+        ({"aspect_range": (0.5, 2.0)}, "aspect_range"),
+        ({"rng": None}, "rng"),
+        ({"max_iter": 0}, "max_iter"),
+    ],
+)
+def test_bad_allocation_arguments_raise_config_error(blob_prior, kwargs, field):
+    args = {"n": 3, "usable_area_m2": S_U, "rng": np.random.default_rng(0)} | kwargs
+    with pytest.raises(ConfigError) as err:
+        rectangle_cut_allocation(BLOB_GRID, blob_prior, **args)
+    assert err.value.field == field
