@@ -131,7 +131,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from agents.experiments.evaluate import evaluate, plot_curves
-    from poc_env.config import load_scenario, write_text_atomic
+    from poc_env.config import load_scenario
+    from poc_env.io import write_text_atomic
 
     sc = load_scenario(args.scenario)
     names = [p.strip() for p in args.policies.split(",") if p.strip()]

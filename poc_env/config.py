@@ -18,7 +18,6 @@ import dataclasses
 import importlib.resources
 import math
 import os
-import tempfile
 import types
 import typing
 from collections.abc import Mapping
@@ -29,6 +28,7 @@ from typing import Any
 import yaml
 
 from poc_env.errors import ConfigError, check_positive, check_range
+from poc_env.io import write_text_atomic
 
 KM = 1000.0
 KMH = 1000.0 / 3600.0
@@ -642,30 +642,6 @@ def load_scenario(
     for key, value in (overrides or {}).items():
         _set_dotted(data, key, value)
     return _from_mapping(Scenario, data, "")
-
-
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` to ``path`` via a temporary file in the same folder, then rename."""
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", dir=p.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        publish_atomic(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return p
-
-
-def publish_atomic(tmp: str | os.PathLike[str], path: str | os.PathLike[str]) -> None:
-    """Give a finished temporary file the usual permissions and rename it over ``path``."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, path)
 
 
 def save_scenario(scenario: Scenario, path: str | os.PathLike[str]) -> Path:

@@ -48,8 +48,9 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.config import Scenario, load_scenario, write_text_atomic
+from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
+from poc_env.io import write_text_atomic
 
 #: Table 4 / 5 of the paper: (track km, POD, POC, POS) per UAV, and POS_C.
 PAPER_TABLE4 = (

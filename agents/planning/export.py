@@ -24,8 +24,8 @@ from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import escape
 
-from poc_env.config import write_text_atomic
 from poc_env.errors import ConfigError
+from poc_env.io import write_text_atomic
 
 SCHEMA = 1
 FORMATS = ("geojson", "kml", "qgc")

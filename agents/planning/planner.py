@@ -24,8 +24,9 @@ from agents.planning.export import SCHEMA
 from agents.planning.objective import PlanObjective
 from agents.planning.optimizers import get_optimizer
 from agents.policies.base import Policy
-from poc_env.config import Scenario, load_scenario, write_text_atomic
+from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
+from poc_env.io import write_text_atomic
 from poc_env.theory.probability_map import build_prior
 
 

@@ -39,9 +39,9 @@ from poc_env.config import (
     _from_mapping,
     load_scenario,
     read_yaml,
-    write_text_atomic,
 )
 from poc_env.errors import ConfigError
+from poc_env.io import write_text_atomic
 from poc_env.theory.bound import physical_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, pod_parallel, swarm_pos, sweep_track

@@ -95,8 +95,8 @@ import gymnasium as gym
 import numpy as np
 
 from agents.policies.base import Policy
-from poc_env.config import publish_atomic, write_text_atomic
 from poc_env.errors import ConfigError
+from poc_env.io import publish_atomic, write_text_atomic
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO

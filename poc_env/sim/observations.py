@@ -43,14 +43,38 @@ from poc_env.sim import constraints as cons
 from poc_env.sim.comms import _shaped
 from poc_env.sim.core import Params, State, _source_hash
 
-RASTER_CHANNELS = 4
+#: Raster channels in order (the table above); read them by name: ``RASTER_INDEX["poc"]``.
+RASTER_NAMES = ("poc", "self", "others", "hazard")
+RASTER_INDEX = {name: c for c, name in enumerate(RASTER_NAMES)}
+RASTER_CHANNELS = len(RASTER_NAMES)
 VECTOR_NAMES = (
     "x", "y", "z", "speed", "sin", "cos", "pitch", "endurance", "usable",
     "to_landing_x", "to_landing_y", "neighbours", "flying", "time",
 )  # fmt: skip
 VECTOR_SIZE = len(VECTOR_NAMES)
+#: Vector entries by name (the table above): ``vec[..., VECTOR_INDEX["flying"]]``.
+VECTOR_INDEX = {name: i for i, name in enumerate(VECTOR_NAMES)}
 VECTOR_LOW = np.array([-1, -1, 0, 0, -1, -1, -1, 0, -1, -1, -1, 0, 0, 0], dtype=np.float32)
 VECTOR_HIGH = np.array([2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1], dtype=np.float32)
+
+
+def split_observation(obs, grid_shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """(raster (RASTER_CHANNELS, ny, nx), vector (VECTOR_SIZE,)) of one agent's observation.
+
+    ``obs`` is a ``dict`` observation (``obs_type="dict"``) or a flat one (``obs_type="flat"``:
+    the raster raveled in C order, then the vector); ``grid_shape`` is ``(ny, nx)``. The arrays
+    are views where possible.
+    """
+    if isinstance(obs, dict):
+        return np.asarray(obs["raster"]), np.asarray(obs["vector"])
+    flat = np.asarray(obs)
+    ny, nx = grid_shape
+    if flat.shape != (RASTER_CHANNELS * ny * nx + VECTOR_SIZE,):
+        raise ValueError(
+            f"flat observation of shape {flat.shape} does not match a {ny} x {nx} grid "
+            f"({RASTER_CHANNELS * ny * nx + VECTOR_SIZE} values expected)"
+        )
+    return flat[:-VECTOR_SIZE].reshape(RASTER_CHANNELS, ny, nx), flat[-VECTOR_SIZE:]
 
 
 def hazard_mask(params: Params) -> np.ndarray:
@@ -305,12 +329,15 @@ def decode_vector(params: Params, vec: np.ndarray) -> dict[str, np.ndarray]:
     u = params.scenario.uav
     bx0, by0, bx1, by1 = params.bounds
     v = np.asarray(vec, dtype=float)
+    i = VECTOR_INDEX
     return {
-        "xy": np.stack([bx0 + v[..., 0] * (bx1 - bx0), by0 + v[..., 1] * (by1 - by0)], -1),
-        "z": v[..., 2] * u.max_altitude_m,
-        "speed": u.min_speed_mps + v[..., 3] * (u.max_speed_mps - u.min_speed_mps),
-        "heading": np.arctan2(v[..., 4], v[..., 5]),
-        "pitch": v[..., 6] * u.max_pitch_rad,
-        "flying": v[..., 12] > 0.5,
-        "usable": v[..., 8],
+        "xy": np.stack(
+            [bx0 + v[..., i["x"]] * (bx1 - bx0), by0 + v[..., i["y"]] * (by1 - by0)], -1
+        ),
+        "z": v[..., i["z"]] * u.max_altitude_m,
+        "speed": u.min_speed_mps + v[..., i["speed"]] * (u.max_speed_mps - u.min_speed_mps),
+        "heading": np.arctan2(v[..., i["sin"]], v[..., i["cos"]]),
+        "pitch": v[..., i["pitch"]] * u.max_pitch_rad,
+        "flying": v[..., i["flying"]] > 0.5,
+        "usable": v[..., i["usable"]],
     }

@@ -7,12 +7,11 @@ matplotlib loaded.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from poc_env.config import publish_atomic
+from poc_env.io import atomic_path
 
 
 def _figure(figsize=(8.0, 6.0)):
@@ -22,18 +21,10 @@ def _figure(figsize=(8.0, 6.0)):
 
 
 def save_figure_atomic(fig, path: str | os.PathLike[str], dpi: int = 110) -> Path:
-    """Save a matplotlib figure as PNG via a temporary file in the same folder, then rename."""
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=".png", dir=p.parent)
-    os.close(fd)
-    try:
+    """Save a matplotlib figure as PNG atomically (:func:`poc_env.io.atomic_path`)."""
+    with atomic_path(path, suffix=".png") as tmp:
         fig.savefig(tmp, dpi=dpi, format="png")
-        publish_atomic(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return p
+    return Path(path)
 
 
 def draw_prior(ax, grid, prior, label: str = "prior POC per cell"):

@@ -30,15 +30,14 @@ Typical use (the environment does the same)::
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from poc_env.config import publish_atomic
 from poc_env.errors import ConfigError
+from poc_env.io import atomic_path
 
 __all__ = ["RENDER_MODES", "Renderer", "random_policy", "render_episode", "write_gif"]
 
@@ -502,10 +501,7 @@ def write_gif(frames: Iterable[np.ndarray], path: str | os.PathLike[str], fps: f
         Image.fromarray(np.ascontiguousarray(f)).quantize(palette=palette, dither=Image.Dither.NONE)
         for f in arrays
     ]
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=".gif", dir=p.parent)
-    os.close(fd)
-    try:
+    with atomic_path(p, suffix=".gif") as tmp:
         images[0].save(
             tmp,
             format="GIF",
@@ -514,10 +510,6 @@ def write_gif(frames: Iterable[np.ndarray], path: str | os.PathLike[str], fps: f
             duration=max(1, round(1000.0 / float(fps))),
             loop=0,
         )
-        publish_atomic(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return p
 
 
