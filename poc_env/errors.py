@@ -45,6 +45,36 @@ class ConfigError(PocEnvError, ValueError):
         return ConfigError(name, self.value, self.allowed)
 
 
+class MissingExtraError(PocEnvError, ImportError):
+    """A feature needs an optional dependency group (``pip install 'poc-env[EXTRA]'``).
+
+    Parameters
+    ----------
+    extra:
+        The extra that provides it: ``"rl"`` (torch, stable-baselines3, tensorboard) or
+        ``"plot"`` (matplotlib, pillow).
+    what:
+        The feature, e.g. ``"poc-env train"``.
+    """
+
+    def __init__(self, extra: str, what: str) -> None:
+        self.extra = extra
+        self.what = what
+        super().__init__(f"{what} needs the '{extra}' extra: pip install 'poc-env[{extra}]'")
+
+    def __reduce__(self):
+        return (type(self), (self.extra, self.what))
+
+
+def require_extra(extra: str, what: str, *modules: str) -> None:
+    """Raise :class:`MissingExtraError` unless every module in ``modules`` can be imported."""
+    import importlib.util
+
+    for m in modules:
+        if importlib.util.find_spec(m) is None:
+            raise MissingExtraError(extra, what)
+
+
 class MapFileError(PocEnvError, ValueError):
     """A probability-map file is missing, unreadable or holds an invalid map."""
 
