@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 OUT ?= out
 
-.PHONY: demo test test-slow lint format bench figures clean
+.PHONY: demo test test-slow wheel-check lint format bench figures clean
 
 $(STAMP): pyproject.toml constraints.txt
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -23,6 +23,11 @@ test: $(STAMP)
 	$(VENV)/bin/ruff format --check .
 	$(VENV)/bin/mypy
 	OMP_NUM_THREADS=1 $(PY) -m pytest -q -n 2 -m "not slow"
+	PYTHON=$(PY) .ci/wheel-check
+
+# the wheel, installed without extras in a fresh venv outside the checkout (part of `make test`)
+wheel-check: $(STAMP)
+	PYTHON=$(PY) .ci/wheel-check
 
 test-slow: $(STAMP)
 	OMP_NUM_THREADS=1 $(PY) -m pytest -q -m slow

@@ -16,7 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
-from poc_env.errors import PocEnvError
+from poc_env.errors import MissingExtraError, PocEnvError
+
+#: Optional dependencies and the extra that installs each (pyproject.toml).
+_EXTRA_OF = {
+    "torch": "rl",
+    "stable_baselines3": "rl",
+    "tensorboard": "rl",
+    "matplotlib": "plot",
+    "PIL": "plot",
+}
 
 
 def _add_scenario(p: argparse.ArgumentParser, default: str) -> None:
@@ -389,7 +398,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        try:
+            return int(args.func(args) or 0)
+        except ModuleNotFoundError as err:
+            extra = _EXTRA_OF.get((err.name or "").split(".")[0])
+            if extra is None:
+                raise
+            raise MissingExtraError(extra, f"poc-env {args.command}") from err
     except PocEnvError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
