@@ -3,7 +3,8 @@
 ``make_params(scenario)`` turns a scenario into the constants of the dynamics;
 ``initial(params, rngs)`` draws a fresh :class:`State` for each env from its own generator;
 ``step(params, state, actions, rngs)`` advances every env by one time step (in place, for
-speed) and returns the step's :class:`Events`. The PettingZoo env is the ``n_envs == 1`` case;
+speed) and returns the step's :class:`Events`; :func:`terminal`, :func:`truncated` and
+:func:`episode_over` say whose episode has ended. The PettingZoo env is the ``n_envs == 1`` case;
 the SB3 vector env is this module with many envs. Nothing here imports gymnasium or matplotlib.
 
 One step, for each flying UAV (eq. numbers are the paper's):
@@ -518,6 +519,63 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         detected_now=detected_now,
         connected=connected,
     )
+
+
+# --------------------------------------------------------------------------- episode end
+# The rule of when a UAV's or an env's episode ends, written once (in the style of Gymnasium's
+# ``FuncEnv.terminal``): functions of the state alone, used by every adapter.
+
+
+def terminal(params: Params, state: State) -> np.ndarray:
+    """(E, N) bool: the UAVs whose episode has ended for good (Gymnasium's ``terminated``).
+
+    A UAV terminates when it
+
+    * lands: after having been farther than ``episode.landing_radius_m`` from its landing field,
+      it is back within that radius at or below ``episode.landing_max_altitude_m`` and
+      ``episode.landing_max_speed_mps`` (an approach, not a fly-over);
+    * crashes: altitude <= 0, flight time reaching the endurance T (eq. 17; the 0.85 T of eq. 18
+      is a reserve whose overrun is only penalised), or, with ``constraints.violation:
+      terminate``, a safety violation (eq. 20-23; the communication rule of eq. 24 never ends a
+      flight);
+    * or, with ``episode.detection_ends_episode``, its env's hidden target has been detected
+      (then every UAV of that env terminates).
+
+    :func:`step` records landings, crashes and detection in the state and they stay true until
+    the next :func:`initial`, so a UAV that is terminal stays terminal.
+    """
+    done = state.landed | state.crashed
+    if params.scenario.episode.detection_ends_episode:
+        done = done | state.detected[:, None]
+    return done
+
+
+def horizon_reached(params: Params, state: State) -> np.ndarray:
+    """(E,) bool: the env has run ``params.horizon`` steps (``episode.horizon_steps``, by default
+    the endurance T / dt rounded up: eq. 17's T)."""
+    return state.step >= params.horizon
+
+
+def truncated(params: Params, state: State) -> np.ndarray:
+    """(E, N) bool: the UAVs cut off by the time limit (Gymnasium's ``truncated``).
+
+    Once an env reaches the horizon (:func:`horizon_reached`), each of its UAVs that is not
+    :func:`terminal` is truncated. A UAV that lands or crashes in the horizon step is terminal,
+    not truncated: the two are never both true.
+    """
+    return horizon_reached(params, state)[:, None] & ~terminal(params, state)
+
+
+def episode_over(params: Params, state: State, finished: np.ndarray | None = None) -> np.ndarray:
+    """(E,) bool: the env's episode is over: it reached the horizon, or every UAV is finished.
+
+    ``finished`` (E, N) says which UAVs are finished; by default :func:`terminal`. An adapter
+    that ends a UAV's episode for reasons of its own as well (the ``pilot`` VecEnv ends it when
+    the autopilot takes the UAV home) passes ``terminal`` or'ed with those.
+    """
+    if finished is None:
+        finished = terminal(params, state)
+    return horizon_reached(params, state) | np.all(finished, axis=1)
 
 
 # --------------------------------------------------------------------------- compiled helpers
