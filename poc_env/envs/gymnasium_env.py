@@ -3,8 +3,10 @@
 ``gymnasium.make("poc_env/UAVSearch-v0", scenario=...)``. The observation is every agent's
 flat observation stacked, ``(N * D,)``; the action is every agent's action stacked, ``(N * 3,)``;
 the reward is the mean of the agents' rewards (with team credit: the team reward). Agents that
-finished keep their last observation and ignore their action. The episode terminates when
-every agent has terminated and truncates at the horizon.
+finished keep their last observation and ignore their action. The episode ends when the
+swarm's does (:func:`poc_env.sim.core.episode_over`): it is *truncated* if some agent was cut
+off by the horizon (:func:`poc_env.sim.core.truncated`), else *terminated* (every agent
+terminated, :func:`poc_env.sim.core.terminal`).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 from gymnasium import spaces
 
 from poc_env.envs.parallel import UAVSearchParallelEnv
+from poc_env.sim import core as sim
 
 
 class UAVSearchGym(gym.Env):
@@ -51,12 +54,13 @@ class UAVSearchGym(gym.Env):
     def step(self, action):
         a = np.asarray(action, dtype=float).reshape(len(self.par.possible_agents), 3)
         acts = {ag: a[k] for k, ag in enumerate(self.par.possible_agents) if ag in self.par.agents}
-        obs, rew, _term, trunc, infos = self.par.step(acts)
+        obs, rew, _term, _trunc, infos = self.par.step(acts)
         reward = float(np.mean(list(rew.values()))) if rew else 0.0
-        done = not self.par.agents
-        truncated = done and any(trunc.values())
+        p, st = self.par.params, self.par.sim_state
+        done = bool(sim.episode_over(p, st)[0])
+        truncated = done and bool(sim.truncated(p, st)[0].any())
         terminated = done and not truncated
-        info = {"agents": infos, "posc": float(self.par.sim_state.posc[0])}
+        info = {"agents": infos, "posc": float(st.posc[0])}
         return self._joint(obs), reward, terminated, truncated, info
 
     def render(self):

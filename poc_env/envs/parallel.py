@@ -104,13 +104,13 @@ class UAVSearchParallelEnv(ParallelEnv):
 
     ## Episode End
 
+    The rule is the core's (:func:`poc_env.sim.core.terminal`, :func:`~poc_env.sim.core.truncated`).
     An agent *terminates* when it lands (it has left the landing radius once and is back
     within ``episode.landing_radius_km`` of its landing field at or below
     ``episode.landing_max_altitude_m`` and ``episode.landing_max_speed_kmh``: an approach),
-    crashes (altitude <= 0, endurance T exhausted, or any violation in ``terminate`` mode),
-    or, with ``episode.detection_ends_episode``, when the target is detected. All remaining
-    agents are *truncated* after
-    ``episode.horizon_steps`` (default ``ceil(T / dt)``).
+    crashes (altitude <= 0, endurance T exhausted, or a safety violation in ``terminate``
+    mode), or, with ``episode.detection_ends_episode``, when the target is detected. All
+    remaining agents are *truncated* after ``episode.horizon_steps`` (default ``ceil(T / dt)``).
 
     ## Arguments
 
@@ -277,9 +277,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         terms = reward_terms(self.scenario.reward, ev)
         reward = np.asarray(total_reward(terms)[0], dtype=float).tolist()
         live = list(self.agents)
-        truncated = bool(st.step[0] >= self.params.horizon)
         detected = bool(st.detected[0])
-        detected_end = bool(self.scenario.episode.detection_ends_episode and detected)
         rewards, terminations, truncations, infos = {}, {}, {}, {}
         topo = self._topology_info(bool(ev.connected[0]))
         # per-agent values as Python lists, converted once per step
@@ -296,15 +294,16 @@ class UAVSearchParallelEnv(ParallelEnv):
         landed = st.landed[0].tolist()
         crashed = st.crashed[0].tolist()
         elapsed = st.elapsed[0].tolist()
+        terminal = sim.terminal(self.params, st)[0].tolist()
+        truncated = sim.truncated(self.params, st)[0].tolist()
         pos_team = float(ev.pos_team[0])
         posc = float(st.posc[0])
         detect_time = float(st.detect_step[0] * self.params.dt) if detected else None
         for a in live:
             i = self._index[a]
-            done = landed[i] or crashed[i] or detected_end
             rewards[a] = reward[i]
-            terminations[a] = done
-            truncations[a] = truncated and not done
+            terminations[a] = terminal[i]
+            truncations[a] = truncated[i]
             infos[a] = {
                 "pos": float(pos[i]),
                 "pos_team": pos_team,

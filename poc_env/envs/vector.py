@@ -6,10 +6,11 @@ them) and shows every *(env, agent)* pair to SB3 as one environment, a **slot**:
 n_envs * N``, slot ``e * N + i`` is agent ``uav_i`` of env ``e``. All slots share one policy
 (parameter sharing). Observation space: the per-agent space of
 :class:`~poc_env.envs.parallel.UAVSearchParallelEnv` (``obs_type="dict"`` or ``"flat"``); action
-space
-``Box(-1, 1, (3,))``. Observations, rewards and terminations come from the same functions the
-PettingZoo env uses (:mod:`poc_env.sim.observations`, :mod:`poc_env.sim.rewards`); nothing is
-re-implemented here.
+space ``Box(-1, 1, (3,))``. Observations, rewards and terminations come from the same functions
+the PettingZoo env uses (:mod:`poc_env.sim.observations`, :mod:`poc_env.sim.rewards`,
+:func:`poc_env.sim.core.terminal` and :func:`~poc_env.sim.core.truncated`); nothing is
+re-implemented here. This module needs the ``rl`` extra (stable-baselines3): without it,
+importing it raises :class:`~poc_env.errors.MissingExtraError`.
 
 Slots of finished agents
 ------------------------
@@ -48,8 +49,9 @@ buffer. Why that is harmless, and what it costs:
 
 Episode ends and Monitor statistics
 -----------------------------------
-An env's episode ends when every agent has terminated (landed, crashed, or the target was
-detected with ``episode.detection_ends_episode``) or at the horizon (``step >= horizon``):
+An env's episode ends (:func:`poc_env.sim.core.episode_over`) when every agent has terminated
+(landed, crashed, or the target was detected with ``episode.detection_ends_episode``) or at the
+horizon (``step >= horizon``):
 all its slots return ``done=True`` with ``terminal_observation`` (the agent's last real
 observation, or zeros for an agent that finished earlier), agents cut off by the horizon get
 ``"TimeLimit.truncated": True`` (others False), and the env resets at once (auto-reset): the
@@ -82,16 +84,22 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
-from stable_baselines3.common.monitor import Monitor
-from stable_baselines3.common.vec_env import VecEnv
 
 from poc_env.config import Scenario
 from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError, UAVSearchParallelEnv
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, MissingExtraError
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
 from poc_env.sim.rewards import reward_terms, total_reward
 from poc_env.theory.probability_map import random_gaussian_mixture, validate_map
+
+try:
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env import VecEnv
+except ModuleNotFoundError as exc:  # the environment alone does not need the 'rl' extra
+    if (exc.name or "").partition(".")[0] not in ("stable_baselines3", "torch"):
+        raise
+    raise MissingExtraError("rl", "poc_env.envs.vector (the stable-baselines3 VecEnv)") from exc
 
 
 def env_seed_sequences(seed: int | None, n_envs: int) -> list[np.random.SeedSequence]:
@@ -281,13 +289,11 @@ class SwarmVecEnv(VecEnv):
         reward = np.where(active, self._reward(ev, st), 0.0)
         self._returns += reward
         self._lengths += active
-        detected_end = st.detected & self.scenario.episode.detection_ends_episode
-        finished = active & (st.landed | st.crashed | detected_end[:, None] | self._rl_done(st))
+        finished = active & (sim.terminal(p, st) | self._rl_done(st))
         still = active & ~finished
-        truncated_env = st.step >= p.horizon
-        env_end = truncated_env | ~still.any(axis=1)
+        env_end = sim.episode_over(p, st, ~still)
         done = (finished | env_end[:, None]).ravel()
-        truncated = (still & truncated_env[:, None]).ravel()
+        truncated = (still & sim.truncated(p, st)).ravel()
         was_active = active.ravel()
 
         obs = self._observe(st, self._poc_scale)
