@@ -75,45 +75,58 @@ def cmd_survey(args: argparse.Namespace) -> int:
     return 0
 
 
-def _state_policy(scenario, name: str):
-    """Wrap an observation-based policy of ``agents`` as ``policy_fn(state, rng)`` for render."""
-    from poc_env.sim import core as sim
-    from poc_env.sim.observations import vectors
+def _state_policy(scenario, name: str, seed: int):
+    """A registered policy (``agents.policies.registry``) as ``policy_fn(state, rng)`` for
+    :func:`~poc_env.viz.rendering.render_episode`.
 
-    params = sim.make_params(scenario)
-    agents = [f"uav_{i}" for i in range(params.n_agents)]
-    holder: dict = {}
+    The policy is reset with an environment reset by ``seed``, whose state is the rendered
+    episode's first state (both start from ``default_rng(seed)``); then each step it gets the
+    rendered state's observations of the flying UAVs, built as the environment builds them.
+    Its own generators come from ``seed``: ``rng`` is not used.
+    """
+    from agents.policies.registry import make_policy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.sim.observations import hazard_mask, rasters, vectors
+
+    policy = make_policy(name)
+    env = UAVSearchParallelEnv(scenario)
+    params = env.params
+    agents = env.possible_agents
+    hazard = hazard_mask(params)
+    poc_scale = np.array([float(params.prior.max())])
+    started = False
 
     def policy_fn(state, rng):
-        if "pol" not in holder or int(state.step[0]) == 0:
-            from agents.policies.baselines import lawnmower_policy
-
-            holder["pol"] = lawnmower_policy(params, agents)
+        nonlocal started
+        if not started or int(state.step[0]) == 0:
+            env.reset(seed=seed)
+            policy.reset(env, seed)
+            started = True
         vec = vectors(params, state)[0]
-        obs = {a: {"vector": vec[i]} for i, a in enumerate(agents) if state.flying[0, i]}
-        acts, _ = holder["pol"].predict(obs)
+        ras = rasters(params, state, poc_scale, hazard)[0]
+        obs = {
+            a: {"raster": ras[i], "vector": vec[i]}
+            for i, a in enumerate(agents)
+            if state.flying[0, i]
+        }
+        acts, _ = policy.predict(obs)
         out = np.zeros((1, params.n_agents, 3))
         for i, a in enumerate(agents):
             if a in acts:
                 out[0, i] = acts[a]
         return out
 
-    del name
     return policy_fn
 
 
 def cmd_render(args: argparse.Namespace) -> int:
     from poc_env.config import load_scenario
-    from poc_env.errors import ConfigError
-    from poc_env.viz.rendering import random_policy, render_episode
+    from poc_env.viz.rendering import render_episode
 
     sc = load_scenario(args.scenario)
-    policies = {"random": random_policy, "lawnmower": _state_policy(sc, "lawnmower")}
-    if args.policy not in policies:
-        raise ConfigError("policy", args.policy, "one of " + ", ".join(policies))
     path = render_episode(
         sc,
-        policies[args.policy],
+        _state_policy(sc, args.policy, args.seed),
         args.out,
         seed=args.seed,
         max_steps=args.max_steps,
@@ -303,7 +316,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")
     p.add_argument("--scenario", default="small", help="built-in name or YAML path")
-    p.add_argument("--policy", default="lawnmower", help="lawnmower or random")
+    p.add_argument(
+        "--policy",
+        default="lawnmower",
+        help="a registered policy (the names poc-env evaluate takes, ppo:PATH included)",
+    )
     p.add_argument("--out", default="out/episode.gif")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-steps", type=int, default=None)

@@ -5,7 +5,8 @@ creates a fresh environment reset with its seed, so results do not depend on ``w
 the order in which episodes run. Besides POSC (eq. 13) the table reports the hidden target's
 detection rate and mean time to detection, constraint-violation steps, crashes, and the
 physical optimum for the swarm's largest possible effort (every UAV searching for the whole
-usable endurance 0.85 T at v_s), an upper bound no policy can exceed.
+usable endurance 0.85 T at v_s), an upper bound no policy can exceed. Policies are named as
+in :mod:`agents.policies.registry` (``ppo:PATH`` included).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from __future__ import annotations
 import csv
 import io
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,68 +22,25 @@ from typing import Any
 
 import numpy as np
 
-from agents.policies.base import LawnmowerPolicy, Policy, RandomPolicy
+from agents.policies.registry import make_policy
 from poc_env.errors import ConfigError
 
 
-def _de_plan() -> Policy:
-    from agents.planning.planner import DEPlanPolicy
+def check_policies(policies: Sequence[str]) -> None:
+    """Make every policy once, so that a bad name fails before any episode runs.
 
-    return DEPlanPolicy()
-
-
-def _greedy() -> Policy:
-    from agents.policies.greedy import GreedyBayesPolicy
-
-    return GreedyBayesPolicy()
-
-
-def _game() -> Policy:
-    from agents.policies.greedy import PotentialGamePolicy
-
-    return PotentialGamePolicy()
-
-
-def _receding() -> Policy:
-    from agents.policies.receding import DERecedingPolicy
-
-    return DERecedingPolicy()
-
-
-POLICIES: dict[str, Callable[[], Policy]] = {
-    "de_receding": _receding,
-    "random": RandomPolicy,
-    "lawnmower": LawnmowerPolicy,
-    "de_plan": _de_plan,
-    "greedy_bayes": _greedy,
-    "potential_game": _game,
-}
-
-
-def _ppo(path: str) -> Policy:
-    from agents.rl.train import PPOPolicy
-
-    return PPOPolicy(path, name=f"ppo:{path}")
-
-
-#: Policies named by a prefix and an argument: ``ppo:PATH`` is a PPO checkpoint (a ``.zip`` or
-#: a run folder), :class:`agents.rl.train.PPOPolicy`. Model files are pickle-based: load only
-#: trusted files.
-POLICY_PATTERNS: dict[str, Callable[[str], Policy]] = {"ppo": _ppo}
-
-
-def make_policy(name: str) -> Policy:
-    """A fresh policy by name (see :data:`POLICIES`) or pattern (``ppo:PATH``, see
-    :data:`POLICY_PATTERNS`)."""
-    prefix, sep, arg = name.partition(":")
-    if sep and prefix in POLICY_PATTERNS:
-        if not arg:
-            raise ConfigError("policies", name, f"{prefix}:PATH with a checkpoint path")
-        return POLICY_PATTERNS[prefix](arg)
-    if name not in POLICIES:
-        allowed = sorted(POLICIES) + [f"{p}:PATH" for p in sorted(POLICY_PATTERNS)]
-        raise ConfigError("policies", name, "one of " + ", ".join(allowed))
-    return POLICIES[name]()
+    Raises
+    ------
+    ConfigError
+        Field ``policies`` for a name the registry does not know (listing the registered ones).
+    """
+    for p in policies:
+        try:
+            make_policy(p)
+        except ConfigError as err:
+            if err.field != "policy":
+                raise
+            raise ConfigError("policies", err.value, err.allowed) from None
 
 
 @dataclass(frozen=True)
@@ -124,8 +82,9 @@ def run_episode(
     map_file: str | None = None,
     random_priors: bool = False,
 ) -> Episode:
-    """One episode of ``policy`` on a fresh env reset with ``seed`` (and, with
-    ``random_priors``, the prior :func:`episode_prior` of ``seed``)."""
+    """One episode of ``policy`` (a name of :func:`agents.policies.registry.registered`) on a
+    fresh env reset with ``seed`` (and, with ``random_priors``, the prior :func:`episode_prior`
+    of ``seed``)."""
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
@@ -256,8 +215,7 @@ def evaluate(
         raise ConfigError("episodes", episodes, "an integer >= 1")
     if workers < 1:
         raise ConfigError("workers", workers, "an integer >= 1")
-    for p in policies:
-        make_policy(p)
+    check_policies(policies)
     sc = load_scenario(scenario)
     if random_priors and map_file is not None:
         raise ConfigError("map", map_file, "no map file with --random-priors (one or the other)")

@@ -1,13 +1,11 @@
 """The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 1) and a figure.
 
 :func:`make_plan` runs an optimiser of :mod:`~agents.planning.optimizers` (default the paper's
-adaptive
-DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section) on
-:class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-1 dict
-documented
-in :mod:`agents.planning.export` (every field there, plus a few extras such as the convergence
-history). :class:`DEPlanPolicy` plans at the start of every episode on the environment's prior
-and flies the plan with the waypoint follower.
+adaptive DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section)
+on :class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-1 dict
+documented in :mod:`agents.planning.export` (every field there, plus a few extras such as the
+convergence history). The ``de_plan`` policy (:mod:`agents.policies.de_plan`) makes such a plan
+at the start of every episode and flies it.
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ import numpy as np
 from agents.planning.export import SCHEMA
 from agents.planning.objective import PlanObjective
 from agents.planning.optimizers import get_optimizer
-from agents.policies.base import Policy
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.io import write_text_atomic
@@ -185,27 +182,3 @@ def plot_plan(plan: dict[str, Any], scenario: Scenario, prior, path) -> Path:
     )
     ax.legend(loc="upper right", fontsize=7, ncols=2)
     return save_figure_atomic(fig, path)
-
-
-class DEPlanPolicy(Policy):
-    """``de_plan``: plan with adaptive DE on the episode's prior, then fly it (follower)."""
-
-    name = "de_plan"
-
-    def __init__(self, popsize: int | None = None, maxiter: int | None = None) -> None:
-        self.popsize = popsize
-        self.maxiter = maxiter
-
-    def reset(self, env: Any, seed: int) -> None:
-        from poc_env.sim.autopilot import WaypointFollower
-
-        super().reset(env, seed)
-        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
-        self.plan = make_plan(
-            env.scenario, prior=prior, seed=seed, popsize=self.popsize, maxiter=self.maxiter
-        )
-        wps = [np.asarray(u["waypoints_m"]) for u in self.plan["uavs"]]
-        self.follower = WaypointFollower(env.params, wps, env.possible_agents)
-
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
-        return self.follower.predict(observations, state)

@@ -1,24 +1,11 @@
-"""Belief-driven online baselines: ``greedy_bayes`` and ``potential_game``.
+"""``greedy_bayes``: a belief-driven online baseline (in the spirit of the paper's [38]).
 
-Both act from the observations alone (the POC raster, which the environment keeps up to date by
-eq. 14, and the state vector), re-decide every step, return to land with the follower's rule
-(:func:`poc_env.sim.autopilot.must_return`), and plan with the same detection law as the environment
-(:func:`poc_env.theory.search_theory.segment_pod`, evaluated at cell centres: a planning
-approximation of the cell average).
-
-``greedy_bayes`` (in the spirit of the paper's [38]): each UAV heads for the cell with the most
+It acts from the observations alone (the POC raster, which the environment keeps up to date by
+eq. 14, and the state vector), re-decides every step and returns to land with the follower's
+rule (:func:`poc_env.sim.autopilot.must_return`). Each UAV heads for the cell with the most
 expected POS per unit of time, ``POC_cell * exp(-distance / L)`` with ``L`` = one hour of search
 flight; UAVs choose in turn and a cell already chosen this step is not chosen again.
-
-``potential_game`` (in the spirit of [39]): each UAV chooses among ``K`` heading changes
-(while no choice would sweep any POC, e.g. on the way from the airfield, it flies towards
-``greedy_bayes``'s cell); its
-utility is its marginal expected POS over a ``lookahead``-step straight flight, the POS of the
-swarm's choices minus the POS without its own (a "wonderful life" utility, so the game is a
-potential game whose potential is the swarm's expected POS). Log-linear learning: in each of
-``rounds`` rounds one UAV drawn by the policy's seeded generator re-chooses with probability
-proportional to ``exp((utility - best) / (tau * best))``: a choice ``tau`` (5 %) worse than the
-best is ``e`` times rarer.
+:func:`best_cell` is also the way into the area of ``potential_game`` and ``de_receding``.
 """
 
 from __future__ import annotations
@@ -29,17 +16,7 @@ import numpy as np
 
 from agents.policies.base import Policy
 from poc_env.sim.autopilot import go_home, must_return, steer
-from poc_env.sim.observations import VECTOR_SIZE, decode_vector
-from poc_env.theory.search_theory import segment_pod
-
-
-def _split(params, obs) -> tuple[np.ndarray, np.ndarray]:
-    """(raster POC channel (ny, nx), state vector) from a dict or flat observation."""
-    g = params.grid
-    if isinstance(obs, dict):
-        return np.asarray(obs["raster"][0], dtype=float), np.asarray(obs["vector"])
-    flat = np.asarray(obs)
-    return flat[: g.ny * g.nx].reshape(g.ny, g.nx).astype(float), flat[-VECTOR_SIZE:]
+from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
 
 
 def best_cell(params, poc: np.ndarray, q: dict, k: int, taken=()) -> int:
@@ -76,7 +53,8 @@ class GreedyBayesPolicy(Policy):
         for k, agent in enumerate(self.agents):
             if agent not in observations:
                 continue
-            poc, vec = _split(p, observations[agent])
+            ras, vec = split_observation(observations[agent], p.grid.shape)
+            poc = np.asarray(ras[RASTER_INDEX["poc"]], dtype=float)
             q = decode_vector(p, vec)
             if must_return(p, q, k):
                 actions[agent] = go_home(p, q, k)
@@ -93,107 +71,4 @@ class GreedyBayesPolicy(Policy):
                 self.centers[best],
                 u.search_speed_mps,
             ).astype(np.float32)
-        return actions, state
-
-
-class PotentialGamePolicy(Policy):
-    """``potential_game``: log-linear learning over heading changes (module docstring)."""
-
-    name = "potential_game"
-
-    def __init__(self, choices: int = 7, lookahead: int = 3, rounds: int = 12, tau: float = 0.05):
-        self.choices = choices
-        self.lookahead = lookahead
-        self.rounds = rounds
-        self.tau = tau
-
-    def reset(self, env: Any, seed: int) -> None:
-        super().reset(env, seed)
-        self.params = env.params
-        self.agents = env.possible_agents
-        self.rng = np.random.default_rng([seed, 11])
-        self.centers = env.params.grid.centers
-        self.turns = np.linspace(-1.0, 1.0, self.choices)
-        self.choice = np.full(len(self.agents), self.choices // 2)
-
-    def _pods(self, q: dict) -> np.ndarray:
-        """(K, ny, nx) detection probability of each candidate straight flight."""
-        p = self.params
-        u = p.scenario.uav
-        dt = p.dt
-        heading = q["heading"] + self.turns * u.max_turn_rate_rad_s * dt
-        length = q["speed"] * dt * self.lookahead
-        a = np.broadcast_to(q["xy"], (self.choices, 2))
-        b = a + length * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-        sensor = p.scenario.sensor
-        return segment_pod(
-            self.centers[None],
-            a[:, None, None],
-            b[:, None, None],
-            sensor.sweep_width_m,
-            sensor.law,
-            p.cutoff_m,
-            p.grid.cell_m,
-            p.grid.origin_m,
-        )
-
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
-        p = self.params
-        u = p.scenario.uav
-        actions = {}
-        players, pods, qs, poc = [], {}, {}, None
-        for k, agent in enumerate(self.agents):
-            if agent not in observations:
-                continue
-            raster, vec = _split(p, observations[agent])
-            q = decode_vector(p, vec)
-            qs[k] = q
-            if must_return(p, q, k):
-                actions[agent] = go_home(p, q, k)
-                continue
-            poc = raster if poc is None else poc
-            players.append(k)
-            pods[k] = self._pods(q)
-        for _ in range(self.rounds if players else 0):
-            k = players[int(self.rng.integers(len(players)))]
-            others = np.ones_like(poc)
-            for j in players:
-                if j != k:
-                    others = others * (1.0 - pods[j][self.choice[j]])
-            # marginal expected POS of each of k's choices given the others' (wonderful life)
-            utility = np.sum(poc * others * pods[k], axis=(1, 2))
-            # temperature relative to the best utility: a choice tau worse is e times rarer
-            z = (utility - utility.max()) / (self.tau * max(float(utility.max()), 1e-300))
-            prob = np.exp(z)
-            self.choice[k] = int(self.rng.choice(self.choices, p=prob / prob.sum()))
-        centers = self.centers.reshape(-1, 2)
-        assert poc is not None or not players
-        for k in players:
-            q = qs[k]
-            if not np.any(poc * pods[k][self.choice[k]] > 0):  # nothing in sight: go find it
-                goal = centers[best_cell(p, poc, q, k)]  # type: ignore[arg-type]
-                actions[self.agents[k]] = steer(
-                    p,
-                    q["xy"],
-                    q["heading"],
-                    q["speed"],
-                    q["pitch"],
-                    q["z"],
-                    goal,
-                    u.cruise_speed_mps,
-                ).astype(np.float32)
-                continue
-            # speed and altitude as the follower holds them; the heading change is the choice
-            a = steer(
-                p,
-                q["xy"],
-                q["heading"],
-                q["speed"],
-                q["pitch"],
-                q["z"],
-                q["xy"],
-                u.search_speed_mps,
-            )
-            a[1] = self.turns[self.choice[k]]
-            actions[self.agents[k]] = a.astype(np.float32)
         return actions, state

@@ -22,9 +22,9 @@ import numpy as np
 
 from agents.planning.optimizers import adaptive_de
 from agents.policies.base import Policy
-from agents.policies.greedy import _split, best_cell
+from agents.policies.greedy import best_cell
 from poc_env.sim.autopilot import go_home, must_return, steer
-from poc_env.sim.observations import decode_vector
+from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
 from poc_env.theory.search_theory import segment_pod
 
 
@@ -101,7 +101,8 @@ class DERecedingPolicy(Policy):
         for k, agent in enumerate(self.agents):
             if agent not in observations:
                 continue
-            raster, vec = _split(p, observations[agent])
+            ras, vec = split_observation(observations[agent], p.grid.shape)
+            raster = np.asarray(ras[RASTER_INDEX["poc"]], dtype=float)
             q = qs[k] = decode_vector(p, vec)
             poc = raster if poc is None else poc
             if must_return(p, q, k):

@@ -7,7 +7,7 @@ import pytest
 from shapely.geometry import Point
 
 from agents.planning.export import export_plan, load_plan
-from agents.planning.planner import DEPlanPolicy, make_plan
+from agents.planning.planner import make_plan
 from poc_env.cli import main
 from poc_env.geometry import rectangle_polygon
 
@@ -65,17 +65,3 @@ def test_cli_plan_writes_a_plan_that_exports(tmp_path, capsys):
         main(["plan", "--scenario", "small", "--optimizer", "magic", "--quiet", "--out", str(out)])
         == 2
     )
-
-
-def test_de_plan_policy_flies_its_plan():
-    import poc_env
-
-    env = poc_env.parallel_env("small")
-    obs, _ = env.reset(seed=0)
-    pol = DEPlanPolicy(popsize=16, maxiter=20)
-    pol.reset(env, 0)
-    while env.agents:
-        obs, *_ = env.step(pol.predict(obs)[0])
-    st = env.sim_state
-    assert st.posc[0] > 0.5 * pol.plan["posc"]  # the flown plan finds what it promised, roughly
-    assert st.landed.all()

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from agents.experiments.evaluate import evaluate
-from agents.policies.greedy import PotentialGamePolicy, best_cell
+from agents.policies.game import PotentialGamePolicy
+from agents.policies.greedy import best_cell
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.sim.observations import decode_vector
 

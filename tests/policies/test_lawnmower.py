@@ -1,10 +1,10 @@
-"""Classical baselines flown through the environment."""
+"""The lawnmower baseline flown through the environment."""
 
 import numpy as np
 from shapely.geometry import Point, box
 
 import poc_env
-from agents.policies.baselines import lawnmower_policy, lawnmower_waypoints
+from agents.policies.lawnmower import lawnmower_policy, lawnmower_waypoints
 from poc_env.sim.core import make_params
 
 

@@ -1,16 +1,19 @@
-"""Classical baselines that fly in the environment through the waypoint follower.
+"""``lawnmower``: the classical baseline, flown through the waypoint follower.
 
-``lawnmower``: the area's north-south lines at spacing S = W are split into N contiguous
-blocks (one strip per UAV, in take-off order from west to east); each UAV flies the parallel
-search (§2.2, eq. 5-6) of its strip, starting at the corner nearest its airfield, then returns
-to land. It ignores the prior: the reference every prior-aware method must beat.
+The area's north-south lines at spacing S = W are split into N contiguous blocks (one strip per
+UAV, in take-off order from west to east); each UAV flies the parallel search (§2.2, eq. 5-6)
+of its strip, starting at the corner nearest its airfield, then returns to land. It ignores the
+prior: the reference every prior-aware method must beat.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from shapely.geometry import box
 
+from agents.policies.base import Policy
 from poc_env.sim.autopilot import WaypointFollower
 from poc_env.sim.core import Params
 from poc_env.theory.patterns import parallel_search
@@ -33,5 +36,18 @@ def lawnmower_waypoints(params: Params, spacing_m: float | None = None) -> list[
 
 
 def lawnmower_policy(params: Params, agents) -> WaypointFollower:
-    """The lawnmower baseline as a policy (observations in, actions out)."""
+    """The lawnmower's waypoints in a follower (observations in, actions out)."""
     return WaypointFollower(params, lawnmower_waypoints(params), agents)
+
+
+class LawnmowerPolicy(Policy):
+    """``lawnmower`` (module docstring): a fresh follower of its strips every episode."""
+
+    name = "lawnmower"
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        self.follower = lawnmower_policy(env.params, env.possible_agents)
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        return self.follower.predict(observations, state)

@@ -1,0 +1,39 @@
+"""``de_plan``: the paper's §6.2 plan (eq. 26, adaptive DE) made for each episode, then flown.
+
+At the start of every episode the policy plans with :func:`agents.planning.planner.make_plan`
+on the environment's prior (the fine belief summed to the grid's cells) with the episode's seed,
+and flies each UAV's waypoints with the waypoint follower, which also brings it home to land.
+``popsize`` and ``maxiter`` default to the scenario's ``planner`` section (NP = 100, G = 300).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from agents.planning.planner import make_plan
+from agents.policies.base import Policy
+from poc_env.sim.autopilot import WaypointFollower
+
+
+class DEPlanPolicy(Policy):
+    """``de_plan``: plan with adaptive DE on the episode's prior, then fly it (follower)."""
+
+    name = "de_plan"
+
+    def __init__(self, popsize: int | None = None, maxiter: int | None = None) -> None:
+        self.popsize = popsize
+        self.maxiter = maxiter
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
+        self.plan = make_plan(
+            env.scenario, prior=prior, seed=seed, popsize=self.popsize, maxiter=self.maxiter
+        )
+        wps = [np.asarray(u["waypoints_m"]) for u in self.plan["uavs"]]
+        self.follower = WaypointFollower(env.params, wps, env.possible_agents)
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        return self.follower.predict(observations, state)

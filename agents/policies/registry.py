@@ -1,0 +1,184 @@
+"""Every policy of poc-env by name, in one place: ``make_policy("lawnmower")``.
+
+The registry works as Gymnasium's environment registry does: a name maps to an entry point, a
+``"module:attribute"`` string naming a factory (usually the policy class) that is imported only
+when a policy of that name is made. So this module imports no policy module, and the policies
+layer never imports the RL layer: ``ppo`` points at a class of :mod:`agents.rl` by name only.
+
+A policy registered with an ``argument`` is spelled ``name:VALUE``, and ``VALUE`` is passed to
+the factory as that keyword: ``ppo:PATH`` makes ``PPOPolicy(path=PATH)`` (a ``.zip`` or a run
+folder; model files are pickle-based, load only trusted files).
+
+Adding a policy touches two files: its module (a :class:`~agents.policies.base.Policy`
+subclass) and the :func:`register` call at the end of this one. ``poc-env evaluate``,
+``poc-env render --policy`` and the Python API all make their policies here::
+
+    from agents.policies import make_policy, registered
+    registered()                      # ('de_plan', ..., 'random', 'ppo:PATH')
+    policy = make_policy("de_plan", popsize=16, maxiter=20)
+    policy.reset(env, seed=0)
+    actions, _ = policy.predict(observations)
+"""
+
+from __future__ import annotations
+
+import importlib
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from agents.policies.base import Policy
+from poc_env.errors import ConfigError
+
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*$")
+_ENTRY_POINT = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """One registered policy: how to make it and how to spell it.
+
+    Parameters
+    ----------
+    name:
+        The registry name (``"lawnmower"``, ``"ppo"``).
+    entry_point:
+        ``"module:attribute"`` of the factory, imported lazily by :meth:`make`.
+    kwargs:
+        Keyword arguments every policy of this name gets (a call's own keywords win).
+    argument:
+        Keyword filled from the ``name:VALUE`` spelling (``"path"`` for ``ppo:PATH``), or None
+        for a policy spelled by its name alone.
+    argument_help:
+        What ``VALUE`` is, for error messages (``"a checkpoint path"``).
+    """
+
+    name: str
+    entry_point: str
+    kwargs: Mapping[str, Any] = field(default_factory=dict)
+    argument: str | None = None
+    argument_help: str = ""
+
+    @property
+    def spelling(self) -> str:
+        """How users write this policy: ``"lawnmower"`` or ``"ppo:PATH"``."""
+        return self.name if self.argument is None else f"{self.name}:{self.argument.upper()}"
+
+    def load(self) -> Callable[..., Policy]:
+        """The factory named by :attr:`entry_point` (imported now)."""
+        module, _, attr = self.entry_point.partition(":")
+        try:
+            return getattr(importlib.import_module(module), attr)
+        except (ModuleNotFoundError, AttributeError) as err:
+            if isinstance(err, ModuleNotFoundError) and err.name not in _parents(module):
+                raise  # a dependency of the module is missing, not the module itself
+            raise ConfigError(
+                f"policies[{self.name}].entry_point", self.entry_point, "an importable module:attr"
+            ) from None
+
+    def make(self, value: str | None = None, **kwargs: Any) -> Policy:
+        """A fresh policy: the factory called with :attr:`kwargs`, ``kwargs`` and ``value``."""
+        args = {**self.kwargs, **kwargs}
+        if self.argument is not None:
+            args[self.argument] = value
+        policy = self.load()(**args)
+        if not isinstance(policy, Policy):
+            raise ConfigError(
+                f"policies[{self.name}].entry_point",
+                self.entry_point,
+                "a factory returning an agents.policies.base.Policy",
+            )
+        return policy
+
+
+def _parents(module: str) -> set[str]:
+    parts = module.split(".")
+    return {".".join(parts[: i + 1]) for i in range(len(parts))}
+
+
+_REGISTRY: dict[str, PolicySpec] = {}
+
+
+def register(
+    name: str,
+    entry_point: str,
+    *,
+    kwargs: Mapping[str, Any] | None = None,
+    argument: str | None = None,
+    argument_help: str = "",
+) -> PolicySpec:
+    """Register a policy factory under ``name`` (see :class:`PolicySpec` for the parameters).
+
+    Raises
+    ------
+    ConfigError
+        A malformed name or entry point, or a name already registered with another entry.
+    """
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ConfigError("name", name, "letters, digits, '_', '.', '-' (no ':')")
+    if not isinstance(entry_point, str) or not _ENTRY_POINT.match(entry_point):
+        raise ConfigError(f"policies[{name}].entry_point", entry_point, "'package.module:attr'")
+    if argument is not None and not argument.isidentifier():
+        raise ConfigError(f"policies[{name}].argument", argument, "a keyword argument name")
+    frozen = MappingProxyType(dict(kwargs or {}))
+    spec = PolicySpec(name, entry_point, frozen, argument, argument_help)
+    old = _REGISTRY.get(name)
+    if old is not None and old != spec:
+        raise ConfigError("name", name, f"a name not registered yet (taken by {old.entry_point})")
+    _REGISTRY[name] = spec
+    return spec
+
+
+def registered() -> tuple[str, ...]:
+    """Every policy as users spell it: plain names sorted, then ``name:ARG`` ones sorted."""
+    plain = sorted(s.spelling for s in _REGISTRY.values() if s.argument is None)
+    valued = sorted(s.spelling for s in _REGISTRY.values() if s.argument is not None)
+    return (*plain, *valued)
+
+
+def spec(name: str) -> PolicySpec:
+    """The :class:`PolicySpec` of a spelling (``"lawnmower"``, ``"ppo:runs/a"`` or ``"ppo"``)."""
+    s = _REGISTRY.get(name.partition(":")[0]) if isinstance(name, str) else None
+    if s is None:
+        raise ConfigError("policy", name, "one of " + ", ".join(registered()))
+    return s
+
+
+def make_policy(name: str, **kwargs: Any) -> Policy:
+    """A fresh policy by its spelling (:func:`registered`); ``kwargs`` go to its factory.
+
+    Raises
+    ------
+    ConfigError
+        An unknown name (the message lists the registered ones), or a ``name:VALUE`` policy
+        spelled without its value (or a plain one spelled with one).
+    """
+    s = spec(name)
+    _, sep, value = name.partition(":")
+    if s.argument is None:
+        if sep:
+            raise ConfigError("policy", name, "one of " + ", ".join(registered()))
+        return s.make(**kwargs)
+    if not value:
+        raise ConfigError("policy", name, f"{s.spelling} with {s.argument_help or s.argument}")
+    return s.make(value, **kwargs)
+
+
+#: Read-only view of the registry: name -> :class:`PolicySpec`.
+REGISTRY: Mapping[str, PolicySpec] = MappingProxyType(_REGISTRY)
+
+# -- the policies of poc-env -----------------------------------------------------------------
+register("random", "agents.policies.random:RandomPolicy")
+register("lawnmower", "agents.policies.lawnmower:LawnmowerPolicy")
+register("greedy_bayes", "agents.policies.greedy:GreedyBayesPolicy")
+register("potential_game", "agents.policies.game:PotentialGamePolicy")
+register("de_receding", "agents.policies.receding:DERecedingPolicy")
+register("de_plan", "agents.policies.de_plan:DEPlanPolicy")
+register(
+    "ppo",
+    "agents.rl.train:PPOPolicy",
+    argument="path",
+    argument_help="a checkpoint path (a .zip or a run folder)",
+)
