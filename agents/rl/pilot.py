@@ -21,11 +21,11 @@ policy and hands the rest to the same flight layer the planned baselines use
 
   ========  ===================================================================================
   0-13      the env's state vector (:data:`poc_env.sim.observations.VECTOR_NAMES`)
-  14-45     belief compass: the share of the remaining POC (raster channel 0) in each of 8
+  14-45     belief compass: the share of the remaining POC (raster channel ``poc``) in each of 8
             map-frame sectors (east first, counter-clockwise) x 4 distance rings around the
             UAV (0-10, 10-30, 30-70, > 70 km), index ``14 + 4 * sector + ring``
-  46-53     other UAVs (raster channel 2) within 30 km in each sector / (N - 1)
-  54        mean of raster channel 0 (remaining POC relative to the prior's peak cell)
+  46-53     other UAVs (raster channel ``others``) within 30 km in each sector / (N - 1)
+  54        mean of raster channel ``poc`` (remaining POC relative to the prior's peak cell)
   55-62     the UAV's index k as a one-hot of ``k mod 8``
   ========  ===================================================================================
 
@@ -34,7 +34,8 @@ policy and hands the rest to the same flight layer the planned baselines use
   pack (every step a separation violation). Knowing its index lets each UAV break the
   symmetry (agent indication, Gupta et al. 2017; Terry et al. 2020).
 
-* **RL episode of a UAV** ends when the autopilot takes it home (:class:`PilotVecEnv`); the
+* **RL episode of a UAV** ends when the autopilot takes it home (:class:`PilotVecEnv`), besides
+  the core's rule (:func:`poc_env.sim.core.terminal`, :func:`~poc_env.sim.core.truncated`); the
   env resets once every UAV is home-bound or finished, so no rollout rows are spent on
   flights the policy cannot influence. Logged episode POSC is therefore the POSC at that
   moment (what the return legs still find is not included).
@@ -58,7 +59,13 @@ from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
 from poc_env.sim.autopilot import homing, returning, steer
 from poc_env.sim.core import Params
-from poc_env.sim.observations import VECTOR_HIGH, VECTOR_LOW, VECTOR_SIZE, decode_vector
+from poc_env.sim.observations import (
+    RASTER_INDEX,
+    VECTOR_HIGH,
+    VECTOR_LOW,
+    VECTOR_SIZE,
+    decode_vector,
+)
 
 N_SECTORS = 8
 RING_EDGES_M = (10e3, 30e3, 70e3)
@@ -100,7 +107,7 @@ class PilotFeatures:
         sector = (sector + N_SECTORS // 2) % N_SECTORS
         ring = np.searchsorted(np.asarray(RING_EDGES_M), dist, side="right")
         rows = np.arange(b)[:, None]
-        poc = raster[:, 0].reshape(b, -1).astype(float)
+        poc = raster[:, RASTER_INDEX["poc"]].reshape(b, -1).astype(float)
         total = poc.sum(axis=1)
         mass = np.bincount(
             (rows * (N_SECTORS * N_RINGS) + sector * N_RINGS + ring).ravel(),
@@ -109,7 +116,8 @@ class PilotFeatures:
         ).reshape(b, -1)
         share = np.divide(mass, total[:, None], out=np.zeros_like(mass), where=total[:, None] > 0)
         out[:, VECTOR_SIZE : VECTOR_SIZE + N_SECTORS * N_RINGS] = share
-        others = raster[:, 2].reshape(b, -1).astype(float) * (dist <= OTHERS_RADIUS_M)
+        others = raster[:, RASTER_INDEX["others"]].reshape(b, -1).astype(float)
+        others *= dist <= OTHERS_RADIUS_M
         count = np.bincount(
             (rows * N_SECTORS + sector).ravel(), weights=others.ravel(), minlength=b * N_SECTORS
         ).reshape(b, -1)
@@ -202,6 +210,8 @@ class PilotVecEnv(SwarmVecEnv):
         return r
 
     def _rl_done(self, state: sim.State) -> np.ndarray:
+        """The flying UAVs the autopilot takes home (:func:`~poc_env.sim.autopilot.returning`):
+        their RL episode ends; the env's ends once every UAV is home-bound or terminal."""
         vec = obs_mod.vectors(self.params, state)
         q = decode_vector(self.params, vec)
         k = np.broadcast_to(np.arange(self.n_agents), state.flying.shape)

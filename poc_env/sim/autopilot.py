@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from poc_env.sim.core import Params
-from poc_env.sim.observations import decode_vector
+from poc_env.sim.observations import decode_vector, split_observation
 
 
 def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> np.ndarray:
@@ -90,17 +90,16 @@ class WaypointFollower:
         self.agents = list(agents)
         self.waypoints = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
         self.index = np.zeros(len(self.agents), dtype=int)
-        self._n_raster = None
 
     def reset(self) -> None:
         self.index[:] = 0
 
     def _vector(self, obs) -> np.ndarray:
+        """The state vector of one agent's ``dict`` or ``flat`` observation (a ``dict`` may
+        hold the vector alone: the follower reads nothing else)."""
         if isinstance(obs, dict):
             return np.asarray(obs["vector"])
-        from poc_env.sim.observations import VECTOR_SIZE
-
-        return np.asarray(obs)[-VECTOR_SIZE:]
+        return split_observation(obs, self.params.grid.shape)[1]
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         u = self.params.scenario.uav

@@ -8,6 +8,9 @@ import pytest
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.envs.vector import SwarmVecEnv, env_seed_sequences
 from poc_env.errors import ConfigError
+from poc_env.sim.observations import RASTER_INDEX, VECTOR_INDEX
+
+TIME, FLYING, ENDURANCE = VECTOR_INDEX["time"], VECTOR_INDEX["flying"], VECTOR_INDEX["endurance"]
 
 
 def _slot(obs, k):
@@ -91,7 +94,7 @@ def _compare_with_parallel_env(n_envs: int, k: int, seed: int, action_seed: int)
             if ended:  # auto-reset: the new episode's first observation
                 assert done_v[s]
                 v = _vector(obs_v, s)
-                assert v[13] == 0.0 and v[12] == 1.0 and v[7] == 1.0
+                assert v[TIME] == 0.0 and v[FLYING] == 1.0 and v[ENDURANCE] == 1.0
                 assert "episode" in info
     assert steps >= 2
     return early
@@ -125,7 +128,7 @@ def test_finished_agent_emits_one_done_then_inactive_placeholders_until_reset():
     assert done.tolist() == [True, False, False, False, False, False]
     assert vec.state.landed[0, 0]
     term = infos[0]["terminal_observation"]
-    assert term["vector"][12] == 0.0 and not _is_zero(term)  # its real last observation
+    assert term["vector"][FLYING] == 0.0 and not _is_zero(term)  # its real last observation
     assert infos[0]["TimeLimit.truncated"] is False
     assert "inactive" not in infos[0] and "episode" not in infos[0]
     assert _is_zero(_slot(obs, 0))
@@ -147,7 +150,7 @@ def test_finished_agent_emits_one_done_then_inactive_placeholders_until_reset():
     assert infos[0]["episode"]["l"] == 1 and infos[0]["landed"] is True
     for s in range(1, vec.num_envs):
         assert infos[s]["TimeLimit.truncated"] is True
-        assert infos[s]["terminal_observation"]["vector"][13] == 1.0
+        assert infos[s]["terminal_observation"]["vector"][TIME] == 1.0
         assert infos[s]["episode"]["l"] == horizon
     for s in range(vec.num_envs):
         ep = infos[s]["episode"]
@@ -155,7 +158,7 @@ def test_finished_agent_emits_one_done_then_inactive_placeholders_until_reset():
         assert ep["r"] == pytest.approx(returns[s], abs=1e-5)
         assert ep["posc"] == infos[s]["posc"] == infos[(s // 3) * 3]["posc"] > 0  # the env's
         v = _vector(obs, s)
-        assert v[13] == 0.0 and v[12] == 1.0  # first observation of the new episode
+        assert v[TIME] == 0.0 and v[FLYING] == 1.0  # first observation of the new episode
     assert (vec.state.step == 0).all() and vec.state.flying.all()
     returns[:] = 0.0
     for _t in range(horizon):  # the next episode: the slot is live again, returns start at 0
@@ -179,13 +182,13 @@ def test_env_whose_agents_all_finish_resets_alone():
     assert done.tolist() == [True, True, True, False, False, False]
     for s in range(3):
         assert infos[s]["TimeLimit.truncated"] is False
-        assert infos[s]["terminal_observation"]["vector"][12] == 0.0  # landed
+        assert infos[s]["terminal_observation"]["vector"][FLYING] == 0.0  # landed
         assert infos[s]["episode"]["l"] == 4 and infos[s]["landed"] is True
         assert "inactive" not in infos[s]
-        assert obs["vector"][s][13] == 0.0 and obs["vector"][s][12] == 1.0
+        assert obs["vector"][s][TIME] == 0.0 and obs["vector"][s][FLYING] == 1.0
     for s in range(3, 6):
         assert infos[s] == {}
-        assert obs["vector"][s][13] == pytest.approx(4 / vec.params.horizon)
+        assert obs["vector"][s][TIME] == pytest.approx(4 / vec.params.horizon)
     assert vec.state.step.tolist() == [0, 4]
 
 
@@ -201,7 +204,7 @@ def test_detection_ends_the_episode_when_configured():
     assert done.tolist() == [False] * 3 + [True] * 3
     for s in range(3, 6):
         assert infos[s]["TimeLimit.truncated"] is False and infos[s]["episode"]["l"] == 2
-        assert obs["vector"][s][13] == 0.0
+        assert obs["vector"][s][TIME] == 0.0
 
 
 def test_posc_in_episode_info_is_the_envs():
@@ -224,7 +227,7 @@ def test_random_priors_differ_between_resets_and_are_reproducible():
         out = []
         for _ in range(2):
             obs = vec.reset()
-            assert obs["raster"][:, 0].max(axis=(1, 2)) == pytest.approx(1.0)
+            assert obs["raster"][:, RASTER_INDEX["poc"]].max(axis=(1, 2)) == pytest.approx(1.0)
             coarse = vec.params.grid.coarsen(vec.state.belief, vec.params.s)
             np.testing.assert_allclose(coarse, vec.priors, rtol=1e-12, atol=1e-15)
             out.append(vec.priors.copy())

@@ -5,6 +5,7 @@ import pytest
 
 from poc_env.config import load_scenario
 from poc_env.sim import core as sim
+from poc_env.sim.observations import RASTER_INDEX
 
 
 def _run(name, seeds, steps, action_seed=0, overrides=None):
@@ -123,7 +124,8 @@ def test_comms_belief_observations_are_per_agent():
     s.pos[0, :, :2] = [(8e3, 10e3), (32e3, 30e3), (20e3, 20e3)]
     for _ in range(4):
         obs, *_ = env.step({a: np.zeros(3) for a in env.agents})
-    r0, r1 = obs["uav_0"]["raster"][0], obs["uav_1"]["raster"][0]
+    poc = RASTER_INDEX["poc"]
+    r0, r1 = obs["uav_0"]["raster"][poc], obs["uav_1"]["raster"][poc]
     assert not np.allclose(r0, r1)
 
 
@@ -134,3 +136,112 @@ def test_landing_needs_an_approach_speed():
     st.left_home[:] = True  # back over the field at cruise speed: a fly-over, not a landing
     sim.step(p, st, np.zeros((1, p.n_agents, 3)), rngs)
     assert not st.landed.any() and st.flying.all()
+
+
+# ---------------------------------------------------------------------- episode end
+
+
+def _fresh(overrides=None, seeds=(0,)):
+    p = sim.make_params(load_scenario("small", overrides))
+    rngs = [np.random.default_rng(s) for s in seeds]
+    return p, sim.initial(p, rngs), rngs
+
+
+def _zero(p, st):
+    return np.zeros((st.n_envs, p.n_agents, 3))
+
+
+def test_no_episode_end_mid_flight():
+    p, st, rngs = _fresh()
+    for _ in range(5):
+        sim.step(p, st, _zero(p, st), rngs)
+        assert st.flying.all() and 0 < st.step[0] < p.horizon
+        assert sim.terminal(p, st).shape == sim.truncated(p, st).shape == (1, p.n_agents)
+        assert not sim.terminal(p, st).any()
+        assert not sim.truncated(p, st).any()
+        assert not sim.horizon_reached(p, st).any() and not sim.episode_over(p, st).any()
+
+
+def test_terminal_at_landing_and_at_crash_and_stays_terminal():
+    p, st, rngs = _fresh()
+    u = p.scenario.uav
+    sim.step(p, st, _zero(p, st), rngs)
+    st.pos[0, 0, :2] = p.landing[0]  # UAV 0: back over its field after a flight, slow
+    st.left_home[0, 0] = True
+    st.speed[0, 0] = u.min_speed_mps
+    st.elapsed[0, 1] = u.endurance_s - p.dt / 2  # UAV 1: endurance T runs out in this step
+    sim.step(p, st, _zero(p, st), rngs)
+    assert st.landed[0].tolist() == [True, False, False]
+    assert st.crashed[0].tolist() == [False, True, False]
+    assert sim.terminal(p, st)[0].tolist() == [True, True, False]
+    assert not sim.truncated(p, st).any() and not sim.episode_over(p, st).any()
+    st.pos[0, 2, 2] = 0.0  # UAV 2: on the ground (altitude <= 0) is a crash
+    sim.step(p, st, _zero(p, st), rngs)
+    assert st.crashed[0, 2]
+    assert sim.terminal(p, st)[0].tolist() == [True, True, True]
+    assert sim.episode_over(p, st).tolist() == [True]  # every UAV finished before the horizon
+    assert not sim.horizon_reached(p, st).any() and not sim.truncated(p, st).any()
+
+
+def test_overtime_beyond_085_T_is_not_terminal():
+    p, st, rngs = _fresh()
+    u = p.scenario.uav
+    st.elapsed[0, 0] = u.usable_endurance_s  # beyond 0.85 T (eq. 18), well before T
+    ev = sim.step(p, st, _zero(p, st), rngs)
+    assert ev.overtime[0, 0] and not sim.terminal(p, st).any()
+
+
+def test_safety_violation_is_terminal_only_in_terminate_mode():
+    for mode, expect in (("penalize", False), ("terminate", True)):
+        p, st, rngs = _fresh({"constraints.violation": mode})
+        st.pos[0, :, 0] = [10e3, 20e3, 30e3]  # apart: no collision (eq. 21) at the start
+        sim.step(p, st, _zero(p, st), rngs)
+        assert not sim.terminal(p, st).any()
+        st.pos[0, 0, 0] = p.bounds[0] - 10e3  # far outside the operating area (eq. 20)
+        ev = sim.step(p, st, _zero(p, st), rngs)
+        assert ev.out_of_bounds[0].tolist() == [True, False, False]
+        assert not ev.comms_ok[0].any()  # eq. 24 broken for all: never terminal by itself
+        assert sim.terminal(p, st)[0].tolist() == [expect, False, False]
+
+
+def test_detection_is_terminal_for_the_whole_env_only_when_configured():
+    for ends in (False, True):
+        p, st, rngs = _fresh({"episode.detection_ends_episode": ends}, seeds=(0, 1))
+        sim.step(p, st, _zero(p, st), rngs)
+        st.target[1] = st.pos[1, 0, :2]  # under UAV 0 of env 1: detected in the next step
+        st.target_threshold[1] = 1e-9
+        sim.step(p, st, _zero(p, st), rngs)
+        assert st.detected.tolist() == [False, True] and st.flying.all()
+        assert sim.terminal(p, st).tolist() == [[False] * 3, [ends] * 3]
+        assert sim.episode_over(p, st).tolist() == [False, ends]
+
+
+def test_truncated_at_the_horizon_except_who_terminates_there():
+    horizon = 4
+    p, st, rngs = _fresh({"episode.horizon_steps": horizon})
+    assert p.horizon == horizon
+    for _ in range(horizon - 1):
+        sim.step(p, st, _zero(p, st), rngs)
+        assert not sim.truncated(p, st).any() and not sim.episode_over(p, st).any()
+    st.pos[0, 0, :2] = p.landing[0]  # UAV 0 lands in the horizon step
+    st.left_home[0, 0] = True
+    st.speed[0, 0] = p.scenario.uav.min_speed_mps
+    sim.step(p, st, _zero(p, st), rngs)
+    assert st.step[0] == horizon and sim.horizon_reached(p, st).tolist() == [True]
+    assert sim.terminal(p, st)[0].tolist() == [True, False, False]
+    assert sim.truncated(p, st)[0].tolist() == [False, True, True]  # never both
+    assert sim.episode_over(p, st).tolist() == [True]
+
+
+def test_default_horizon_is_the_endurance_in_steps():
+    p = sim.make_params(load_scenario("small"))
+    u = p.scenario.uav
+    assert p.horizon == int(np.ceil(u.endurance_s / p.dt))
+
+
+def test_episode_over_with_an_adapters_own_finished_mask():
+    p, st, rngs = _fresh(seeds=(0, 1))
+    sim.step(p, st, _zero(p, st), rngs)
+    finished = np.array([[True, True, True], [True, False, True]])
+    assert sim.episode_over(p, st, finished).tolist() == [True, False]
+    assert sim.episode_over(p, st).tolist() == [False, False]  # default: terminal()
