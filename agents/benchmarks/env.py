@@ -7,12 +7,12 @@ One line per figure, each the median of ``--runs`` timed runs, on one core
 per configuration keeps JIT compilation out of the figures.
 
 The core (:func:`poc_env.sim.core.step`) is timed with seeded random actions in level flight
-(pitch action 0). Each timed stretch starts from :func:`simulator.initial` with the UAVs moved
-to seeded random positions over the search area: flown from their airfields with random turns
-(up to 180 degrees per step) they would stay near the airfields, outside the grid, where sensing
-costs nothing -- the figures would flatter the core. Steps per stretch stay below the endurance
-horizon, so every UAV flies in every timed step. ``initial`` and the state copies are
-not timed.
+(pitch action 0). Each timed stretch starts from :func:`~poc_env.sim.core.initial` with the
+UAVs moved to seeded random positions over the search area: flown from their airfields with
+random turns (up to 180 degrees per step) they would stay near the airfields, outside the grid,
+where sensing costs nothing -- the figures would flatter the core. Steps per stretch stay below
+the endurance horizon, so every UAV flies in every timed step. ``initial`` and the state copies
+are not timed.
 
 The single-env figures are the core with ``n_envs = 1`` and, when ``poc_env.parallel_env``
 exists, the PettingZoo parallel env over the same core (its dicts, observations and rewards
@@ -66,7 +66,7 @@ def _actions(params: sim.Params, n_envs: int, seed: int) -> np.ndarray:
 
 
 def bench_core(params: sim.Params, n_envs: int, runs: int, seed: int = 0) -> float:
-    """Median agent-steps/s of ``simulator.step`` over ``runs`` timed runs."""
+    """Median agent-steps/s of :func:`poc_env.sim.core.step` over ``runs`` timed runs."""
     state0, rngs0 = _start_state(params, n_envs, seed)
     acts = _actions(params, n_envs, seed + 1)
     stretches = max(1, round(AGENT_STEPS_PER_RUN / (STEPS * n_envs * params.n_agents)))

@@ -16,12 +16,14 @@ loads neither. ``rgb_array`` frames come from a ``matplotlib.figure.Figure`` on 
 
 Typical use (the environment does the same)::
 
+    from poc_env.sim import core as sim
+
     r = Renderer(params, "rgb_array")
-    state = simulator.initial(params, rngs)
+    state = sim.initial(params, rngs)
     r.record(state)                  # after reset ...
     frames = [r.frame(state)]
-    while state.flying.any():
-        simulator.step(params, state, actions, rngs)
+    while not sim.episode_over(params, state).all():
+        sim.step(params, state, actions, rngs)
         r.record(state)              # ... and after every step
         frames.append(r.frame(state))
     write_gif(frames, "episode.gif")
