@@ -380,13 +380,24 @@ class EpisodeConfig:
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """Adaptive DE settings (§6: NP = 100, G = 300, F0 = 0.2, CR = 0.1) and the eq. 26 M."""
+    """The §6.2 planner: adaptive DE settings (§6: NP = 100, G = 300, F0 = 0.2, CR = 0.1), the
+    weights of eq. 25 and the penalty factor M of eq. 26.
+
+    ``alpha`` and ``beta`` are the planner's own, apart from ``reward.alpha`` / ``reward.beta``
+    of the RL reward, so that a training override (``reward.alpha=100``) never changes a plan.
+    Their defaults, POS only and time free, are the time-limited search of §6.2: as much POS as
+    the usable endurance allows.
+    """
 
     population: int = _f(default=100)
     generations: int = _f(default=300)
     f0: float = _f(default=0.2)
     cr: float = _f(default=0.1)
     penalty_m: float = _f(default=1000.0)
+    #: eq. 25 weight of the plan's cumulative POS (POS_C).
+    alpha: float = _f(default=1.0)
+    #: eq. 25 weight of the UAVs' mean flight-time share t_i / (0.85 T) (a cost).
+    beta: float = _f(default=0.0)
 
     def __post_init__(self) -> None:
         _int("population", self.population, 4)
@@ -394,6 +405,8 @@ class PlannerConfig:
         check_range("f0", self.f0, 0.0, 2.0)
         check_range("cr", self.cr, 0.0, 1.0)
         check_positive("penalty_m", self.penalty_m, allow_zero=True)
+        check_positive("alpha", self.alpha, allow_zero=True)
+        check_positive("beta", self.beta, allow_zero=True)
 
 
 @dataclass(frozen=True)

@@ -70,8 +70,10 @@ Objective (eq. 25-26), to minimise:
     f = -J + M sum_i phi(t_i),   J = alpha sum_i POC_i POD_i - beta (1/n) sum_i t_i / (0.85 T),
 
 with ``phi(t) = max(0, t - 0.85 T)`` in seconds (:func:`poc_env.theory.timing.overtime_s`) and ``M``
-the scenario's ``planner.penalty_m``. With ``M = 1000`` and ``alpha = 1`` a millisecond of
-overtime outweighs any POS difference, so every feasible plan beats every infeasible one.
+the scenario's ``planner.penalty_m``; ``alpha`` and ``beta`` are the scenario's ``planner.alpha``
+and ``planner.beta`` (the planner's own, not the RL reward's). With ``M = 1000`` and ``alpha = 1``
+a millisecond of overtime outweighs any POS difference, so every feasible plan beats every
+infeasible one.
 """
 
 from __future__ import annotations
@@ -562,7 +564,7 @@ class PlanObjective:
         :meth:`Scenario.with_uavs`).
     alpha, beta, penalty_m:
         Weights of eq. 25 and the penalty factor M of eq. 26 (default: the scenario's
-        ``reward.alpha``, ``reward.beta`` and ``planner.penalty_m``).
+        ``planner.alpha``, ``planner.beta`` and ``planner.penalty_m``; never the RL reward's).
 
     Raises
     ------
@@ -614,8 +616,8 @@ class PlanObjective:
         self.usable_fraction = u.usable_fraction
         self.takeoff_m = np.asarray(sc.takeoff_m, dtype=float)
         self.landing_m = np.asarray(sc.landing_m, dtype=float)
-        self.alpha = float(sc.reward.alpha if alpha is None else alpha)
-        self.beta = float(sc.reward.beta if beta is None else beta)
+        self.alpha = float(sc.planner.alpha if alpha is None else alpha)
+        self.beta = float(sc.planner.beta if beta is None else beta)
         self.penalty_m = float(sc.planner.penalty_m if penalty_m is None else penalty_m)
         for name in ("alpha", "beta", "penalty_m"):
             v = getattr(self, name)

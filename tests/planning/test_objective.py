@@ -275,3 +275,25 @@ def test_unreachable_area_is_a_clear_error():
     far = dataclasses.replace(sc.airfields[0], position_m=(20000.0, -400000.0))
     with pytest.raises(ConfigError, match="endurance"):
         PlanObjective(dataclasses.replace(sc, airfields=(far,)))
+
+
+def test_planner_weights_are_its_own_not_the_rl_rewards(small):
+    """A training override of the RL reward leaves every plan's objective as it was; the
+    scenario's ``planner.alpha`` / ``planner.beta`` are eq. 25's weights."""
+    x = np.vstack([_population(small, 6, 9), _population(small, 2, 10, compact=False)])
+    rl = PlanObjective(load_scenario("small", {"reward.alpha": 100.0, "reward.beta": 5.0}))
+    assert (rl.alpha, rl.beta) == (small.alpha, small.beta) == (1.0, 0.0)
+    np.testing.assert_array_equal(rl(x), small(x))
+    sc = load_scenario("small", {"planner.alpha": 2.0, "planner.beta": 0.5})
+    weighted = PlanObjective(sc)
+    assert (weighted.alpha, weighted.beta) == (2.0, 0.5)
+    s = small.evaluate(x)
+    share = np.mean(s.time_s / (0.85 * small.endurance_s), axis=1)
+    phi = small.penalty_m * np.maximum(0.0, s.time_s - 0.85 * small.endurance_s).sum(axis=1)
+    posc = np.sum(s.poc * s.pod, axis=1)
+    np.testing.assert_allclose(weighted(x), -(2.0 * posc - 0.5 * share) + phi, rtol=1e-12)
+    assert np.all(weighted(x) != small(x))
+    assert PlanObjective(sc, alpha=1.0, beta=0.0)(x[0]) == small(x[0])  # arguments win
+    for key, bad in (("planner.alpha", -1.0), ("planner.beta", float("nan"))):
+        with pytest.raises(ConfigError, match=key):
+            load_scenario("small", {key: bad})
