@@ -12,7 +12,8 @@ from poc_env.sim.observations import decode_vector
 
 @pytest.fixture(scope="module")
 def scores():
-    ev = evaluate("small", ["greedy_bayes", "potential_game", "random"], episodes=2)
+    policies = ["greedy_bayes", "potential_game", "random", "lawnmower"]
+    ev = evaluate("small", policies, episodes=6)
     return {r["policy"]: r for r in ev.rows()}, ev
 
 
@@ -21,6 +22,18 @@ def test_belief_policies_beat_random_and_land(scores):
     for name in ("greedy_bayes", "potential_game"):
         assert rows[name]["posc_mean"] > 2 * rows["random"]["posc_mean"] > 0
         assert rows[name]["crashed"] == 0 and rows[name]["landed"] == 3
+
+
+def test_belief_policies_beat_the_lawnmower_on_the_same_seeds(scores):
+    """Reading the belief must pay: both find more than the prior-blind lawnmower flying the
+    same episodes. Measured on seeds 1000-1005: lawnmower 0.411, greedy_bayes 0.503 (every
+    seed), potential_game 0.493 on average (its log-linear learning draws its choices, so one
+    episode may fall short, seed 1000: 0.346; hence the mean over six seeds)."""
+    rows, ev = scores
+    lawn = rows["lawnmower"]["posc_mean"]
+    greedy = [e.posc for e in ev.episodes if e.policy == "greedy_bayes"]
+    assert min(greedy) > lawn
+    assert rows["potential_game"]["posc_mean"] > lawn
 
 
 def test_same_seed_same_episode():

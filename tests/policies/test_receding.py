@@ -7,10 +7,14 @@ from agents.policies.receding import DERecedingPolicy
 from poc_env.envs.parallel import UAVSearchParallelEnv
 
 
-def test_de_receding_beats_random_and_lands():
-    ev = evaluate("small", ["de_receding", "random"], episodes=1)
+def test_de_receding_beats_random_and_the_lawnmower_and_lands():
+    """Planning every step over the belief must pay: on the same seeds (1000-1003) de_receding
+    finds more than the prior-blind lawnmower. Measured: 0.491 on average against 0.411 (single
+    episodes vary with the DE's draws, 0.455 to 0.521 on these seeds; hence the mean)."""
+    ev = evaluate("small", ["de_receding", "random", "lawnmower"], episodes=4)
     rows = {r["policy"]: r for r in ev.rows()}
     assert rows["de_receding"]["posc_mean"] > 2 * rows["random"]["posc_mean"]
+    assert rows["de_receding"]["posc_mean"] > rows["lawnmower"]["posc_mean"]
     assert rows["de_receding"]["landed"] == 3
     again = evaluate("small", ["de_receding"], episodes=1).episodes
     assert again[0] == next(e for e in ev.episodes if e.policy == "de_receding")
