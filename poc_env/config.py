@@ -27,6 +27,7 @@ from typing import Any
 
 import yaml
 
+from poc_env._kernels import LAW_CODES
 from poc_env.errors import ConfigError, check_positive, check_range
 from poc_env.io import write_text_atomic
 
@@ -240,7 +241,12 @@ class UAVConfig:
 
 @dataclass(frozen=True)
 class SensorConfig:
-    """The downward sensor: sweep width W and the detection law (DESIGN.md §3)."""
+    """The downward sensor: sweep width W and the detection law.
+
+    ``law`` is a name of the table of laws (:mod:`poc_env.theory.detection`), validated against
+    the names of their compiled branches (:data:`poc_env._kernels.LAW_CODES`), which the table
+    checks it covers.
+    """
 
     sweep_width_m: float = _f("sweep_width_km", KM, default=5 * KM)
     #: ``inverse_cube`` (Koopman, composes to eq. 10), ``exponential`` (random search) or
@@ -255,7 +261,7 @@ class SensorConfig:
 
     def __post_init__(self) -> None:
         check_positive("sweep_width_km", self.sweep_width_m)
-        _choice("law", self.law, ("inverse_cube", "exponential", "definite_range"))
+        _choice("law", self.law, tuple(LAW_CODES))
         _int("samples_per_cell", self.samples_per_cell, 1, 16)
         check_range("cutoff_sweep_widths", self.cutoff_sweep_widths, 0.5, 100.0)
 

@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+import poc_env._kernels as _kernels
 from poc_env.config import CONFIG_DIR, read_yaml
 from poc_env.errors import ConfigError
 from poc_env.sim.constraints import pairwise_distances
@@ -56,119 +56,6 @@ TABLE2_PATH = CONFIG_DIR / "topologies" / "table2.yaml"
 AUTO = -1
 
 Link = tuple[int, int]
-
-
-# --------------------------------------------------------------------------- compiled kernels
-# Each rule is written once, as a loop over ``(batch, n, n)`` arrays: the numpy-facing functions
-# below call these kernels, and so does the simulator's step kernel (no Python per call).
-_jit = njit(cache=True, error_model="numpy")
-
-
-@_jit
-def _in_range_kernel(dist, range_m, act, out):
-    """Eq. 24 adjacency ``out (B, n, n)``: distinct active UAVs with ``dist <= range_m``."""
-    n_b, n = out.shape[0], out.shape[1]
-    for b in range(n_b):
-        for i in range(n):
-            ai = act[b, i]
-            for j in range(n):
-                out[b, i, j] = ai and act[b, j] and i != j and dist[b, i, j] <= range_m
-
-
-@_jit
-def _two_neighbour_kernel(adj, min_neighbours, act, use_act, out):
-    """The §3.2.4 rule per UAV into ``out (B, n)``, see :func:`two_neighbour_ok`."""
-    n_b, n = adj.shape[0], adj.shape[1]
-    for b in range(n_b):
-        need = min_neighbours
-        if use_act:
-            n_act = 0
-            for i in range(n):
-                if act[b, i]:
-                    n_act += 1
-            need = min(min_neighbours, n_act - 1)
-        for i in range(n):
-            count = 0
-            for j in range(n):
-                if adj[b, i, j]:
-                    count += 1
-            out[b, i] = (use_act and not act[b, i]) or count >= need
-
-
-@_jit
-def _auto_topology_kernel(av, dist, use_dist, act, k_nearest, links, n_comp):
-    """:func:`auto_topology` of each env into ``links (E, n, n)`` and ``n_comp (E,)``.
-
-    A pair is available when ``av`` says so, both UAVs are active and they are distinct; it
-    weighs ``dist`` (or 1 without ``use_dist``), an unavailable pair ``inf``. Prim's algorithm
-    as in the docstring of :func:`auto_topology`: each round takes the unvisited UAV of
-    smallest key (the first on ties), or starts a new component at the first unvisited UAV
-    when no key is finite; then every UAV's ``k_nearest`` lightest available links (the first
-    on ties).
-    """
-    n_env, n = av.shape[0], av.shape[1]
-    w = np.empty((n, n))
-    key = np.empty(n)
-    parent = np.zeros(n, dtype=np.intp)
-    visited = np.empty(n, dtype=np.bool_)
-    chosen = np.empty(n, dtype=np.bool_)
-    for e in range(n_env):
-        for i in range(n):
-            for j in range(n):
-                links[e, i, j] = False
-                if av[e, i, j] and act[e, i] and act[e, j] and i != j:
-                    w[i, j] = dist[e, i, j] if use_dist else 1.0
-                else:
-                    w[i, j] = np.inf
-            visited[i] = not act[e, i]
-            key[i] = np.inf
-            parent[i] = 0
-        comps = 0
-        for _ in range(n):
-            j = -1
-            best = np.inf
-            remaining = False
-            for i in range(n):
-                if not visited[i]:
-                    remaining = True
-                    if key[i] < best:
-                        best = key[i]
-                        j = i
-            if not remaining:
-                break
-            if j >= 0:  # grow the current tree along its lightest edge
-                links[e, parent[j], j] = True
-            else:  # no finite key: a new component at the first unvisited UAV
-                comps += 1
-                for i in range(n):
-                    if not visited[i]:
-                        j = i
-                        break
-            visited[j] = True
-            for i in range(n):
-                if not visited[i] and w[j, i] < key[i]:
-                    key[i] = w[j, i]
-                    parent[i] = j
-        n_comp[e] = comps
-        for i in range(n):
-            for j in range(n):
-                chosen[j] = False
-            for _ in range(k_nearest):
-                m = -1
-                best = np.inf
-                for j in range(n):
-                    if not chosen[j] and w[i, j] < best:
-                        best = w[i, j]
-                        m = j
-                if m < 0:
-                    break
-                chosen[m] = True
-                links[e, i, m] = True
-        for i in range(n):
-            for j in range(i + 1, n):
-                v = links[e, i, j] or links[e, j, i]
-                links[e, i, j] = v
-                links[e, j, i] = v
 
 
 # --------------------------------------------------------------------------- graph basics
@@ -217,7 +104,7 @@ def in_range(
     d = pairwise_distances(xy) if dist is None else np.asarray(dist, dtype=float)
     n_envs, n = d.shape[0], d.shape[-1]
     out = np.empty((n_envs, n, n), dtype=bool)
-    _in_range_kernel(np.ascontiguousarray(d), float(range_m), _active(active, (n_envs, n)), out)
+    _kernels.in_range(np.ascontiguousarray(d), float(range_m), _active(active, (n_envs, n)), out)
     return out
 
 
@@ -237,7 +124,7 @@ def two_neighbour_ok(
     shape = a.shape[:-1]
     act = np.ones((1, n), dtype=bool) if active is None else _active(active, shape)
     out = np.empty(shape, dtype=bool)
-    _two_neighbour_kernel(
+    _kernels.two_neighbour(
         np.ascontiguousarray(a).reshape(-1, n, n),
         int(min_neighbours),
         act.reshape(-1, n),
@@ -335,7 +222,7 @@ def auto_topology(
        losing any one link of a UAV does not isolate it.
 
     Without ``xy`` all links weigh the same (any spanning forest). Ties go to the lower UAV
-    index. Compiled (:func:`_auto_topology_kernel`): a loop over envs and the small graph.
+    index. Compiled (:func:`poc_env._kernels.auto_topology`): a loop over envs and the small graph.
 
     Parameters
     ----------
@@ -359,7 +246,7 @@ def auto_topology(
     n_comp = np.empty(n_envs, dtype=np.int64)
     k_nearest = nearest_count(min_neighbours, n)
     av = _shaped(av, (n_envs, n, n), bool)
-    _auto_topology_kernel(av, d, use_dist, act, k_nearest, links, n_comp)
+    _kernels.auto_topology(av, d, use_dist, act, k_nearest, links, n_comp)
     return CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
 
 

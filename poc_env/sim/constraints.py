@@ -14,15 +14,14 @@ leading shape ``(..., 2)`` where a function says so); headings and turns are rad
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 from shapely.geometry import Polygon
 
+import poc_env._kernels as _kernels
 from poc_env.errors import ConfigError
 from poc_env.geometry import as_polygon
 
@@ -37,57 +36,6 @@ __all__ = [
     "threat_arrays",
     "threat_violation",
 ]
-
-
-# Compiled kernels. Each check is written once, here; the numpy functions below reshape their
-# input to ``(batch, n, ...)`` and call them, and the simulator's step kernel calls them directly
-# (no temporaries, no Python per call). Plain IEEE arithmetic, no fastmath: the results are those
-# of the equivalent numpy expressions, bit for bit.
-_jit = njit(cache=True, error_model="numpy")
-
-
-@_jit
-def _outside(x, y, x0, y0, x1, y1):
-    """Point (x, y) lies outside the rectangle [x0, x1] x [y0, y1] (eq. 20, ``Omega_b``)."""
-    return x < x0 or x > x1 or y < y0 or y > y1
-
-
-@_jit
-def _outside_kernel(p, x0, y0, x1, y1, out):
-    """:func:`_outside` of every point ``p (P, 2)`` into ``out (P,)``."""
-    for k in range(p.shape[0]):
-        out[k] = _outside(p[k, 0], p[k, 1], x0, y0, x1, y1)
-
-
-@_jit
-def _pairwise_kernel(p, out):
-    """Distances ``out (B, n, n)`` of the points ``p (B, n, d)``: sqrt(0 + dx0^2 + dx1^2 ...)."""
-    n_b, n, d = p.shape
-    for b in range(n_b):
-        for i in range(n):
-            for j in range(n):
-                d2 = 0.0
-                for k in range(d):
-                    c = p[b, i, k] - p[b, j, k]
-                    d2 += c * c
-                out[b, i, j] = math.sqrt(d2)
-
-
-@_jit
-def _separation_kernel(dist, d_s, act, use_act, pairs, per_agent):
-    """Eq. 21 on distances ``dist (B, n, n)``: ``pairs`` closer than ``d_s`` between distinct
-    (and, with ``use_act``, active) UAVs; ``per_agent (B, n)`` has at least one such pair."""
-    n_b, n = dist.shape[0], dist.shape[1]
-    for b in range(n_b):
-        for i in range(n):
-            hit = False
-            for j in range(n):
-                v = i != j and dist[b, i, j] < d_s
-                if use_act:
-                    v = v and act[b, i] and act[b, j]
-                pairs[b, i, j] = v
-                hit = hit or v
-            per_agent[b, i] = hit
 
 
 def _cross(ax, ay, bx, by):
@@ -258,7 +206,7 @@ def outside_boundary(xy: np.ndarray, bounds: Sequence[float]) -> np.ndarray:
     x0, y0, x1, y1 = (float(v) for v in bounds)
     out = np.empty(p.shape[:-1], dtype=bool)
     flat = np.ascontiguousarray(p[..., :2]).reshape(-1, 2)
-    _outside_kernel(flat, x0, y0, x1, y1, out.reshape(-1))
+    _kernels.outside_boundary(flat, x0, y0, x1, y1, out.reshape(-1))
     return out
 
 
@@ -267,7 +215,7 @@ def pairwise_distances(xy: np.ndarray) -> np.ndarray:
     p = np.asarray(xy, dtype=float)
     n, d = p.shape[-2], p.shape[-1]
     out = np.empty((*p.shape[:-1], n))
-    _pairwise_kernel(np.ascontiguousarray(p).reshape(-1, n, d), out.reshape(-1, n, n))
+    _kernels.pairwise_distances(np.ascontiguousarray(p).reshape(-1, n, d), out.reshape(-1, n, n))
     return out
 
 

@@ -26,34 +26,25 @@ One step, for each flying UAV (eq. numbers are the paper's):
    agents land, crash or run out of endurance.
 
 Speed: after the sweep, the bookkeeping of steps 3-5 and the topology update run as a few
-compiled passes (``_step_kernel``, ``_auto_links``) over the same kernels the numpy-facing
-functions of :mod:`constraints` and :mod:`comms` use, with the pairwise distances computed once
-per step; no-fly zones and threat peaks stay in numpy (only when the map has them).
+compiled passes (:mod:`poc_env._kernels`: ``step``, ``target_pod``, ``auto_links``) over the
+same kernels the numpy-facing functions of :mod:`constraints` and :mod:`comms` use, with the
+pairwise distances computed once per step; no-fly zones and threat peaks stay in numpy (only
+when the map has them).
 """
 
 from __future__ import annotations
 
-import hashlib
-import math
 from dataclasses import dataclass, field
-from pathlib import Path
-from types import ModuleType
 
 import numpy as np
-from numba import njit
 
+import poc_env._kernels as _kernels
 from poc_env.config import Scenario
 from poc_env.sim import comms as comms_mod
 from poc_env.sim import constraints as cons
-from poc_env.theory import search_theory
+from poc_env.theory.detection import detection_law
 from poc_env.theory.probability_map import Grid, build_prior
-from poc_env.theory.search_theory import (
-    _DEFINITE_RANGE,
-    _LAW_CODE,
-    _point_pod,
-    sweep_segments,
-    window_size,
-)
+from poc_env.theory.search_theory import sweep_segments, window_size
 
 TWO_PI = 2.0 * np.pi
 
@@ -316,7 +307,7 @@ def _update_topology(
         links = np.empty((e, n, n), dtype=bool)
         n_comp = np.empty(e, dtype=np.int64)
         k_nearest = comms_mod.nearest_count(cc.min_neighbours, n)
-        _auto_links(dist, float(cc.range_m), state.flying, k_nearest, links, n_comp)
+        _kernels.auto_links(dist, float(cc.range_m), state.flying, k_nearest, links, n_comp)
         state.links = links
         return comms_mod.CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
     adj = comms_mod.in_range(xy, cc.range_m, state.flying, dist)
@@ -419,14 +410,14 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     # hidden target (same law and cut-off as the belief, at its exact position)
     p_t = np.empty(moving.shape)
     ox, oy = params.grid.origin_m
-    if _target_pod(
+    if _kernels.target_pod(
         state.target,
         a2,
         b2,
         moving,
         float(ox),
         float(oy),
-        _LAW_CODE[sc.sensor.law],
+        detection_law(sc.sensor.law).code,
         float(sc.sensor.sweep_width_m),
         float(params.cutoff_m),
         float(params.grid.cell_m),
@@ -449,14 +440,14 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
 
     # POS bookkeeping (eq. 12-13), detection, time model (eq. 17-18), constraints (eq. 20-24),
     # landing, the step counter: one compiled pass
-    team = np.empty(e) if n <= 128 else found.sum(axis=1)
-    flags = np.empty((_N_FLAGS, e, n), dtype=bool)
+    team = np.empty(e)
+    flags = np.empty((_kernels.N_FLAGS, e, n), dtype=bool)
     time_term = np.empty((e, n))
     detected_now = np.empty(e, dtype=bool)
     dist = np.empty((e, n, n))
     detect_step = state.detect_step.copy()
     x0, y0, x1, y1 = params.bounds
-    _step_kernel(
+    _kernels.step(
         found,
         state.agent_pos,
         state.posc,
@@ -507,15 +498,15 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         pos_agent=found,
         pos_team=team,
         time_term=time_term,
-        overtime=flags[_OVERTIME],
-        out_of_bounds=flags[_OOB],
+        overtime=flags[_kernels.OVERTIME],
+        out_of_bounds=flags[_kernels.OOB],
         no_fly=nofly,
-        collision=flags[_COLLISION],
+        collision=flags[_kernels.COLLISION],
         threat=threat,
-        comms_ok=flags[_COMMS_OK],
+        comms_ok=flags[_kernels.COMMS_OK],
         shielded=shielded,
-        landed_now=flags[_LANDED],
-        crashed_now=flags[_CRASHED],
+        landed_now=flags[_kernels.LANDED],
+        crashed_now=flags[_kernels.CRASHED],
         detected_now=detected_now,
         connected=connected,
     )
@@ -576,208 +567,3 @@ def episode_over(params: Params, state: State, finished: np.ndarray | None = Non
     if finished is None:
         finished = terminal(params, state)
     return horizon_reached(params, state) | np.all(finished, axis=1)
-
-
-# --------------------------------------------------------------------------- compiled helpers
-
-# Rows of the bool ``flags`` array that :func:`_step_kernel` fills (one array: fewer arguments).
-_OVERTIME, _OOB, _COLLISION, _COMMS_OK, _LANDED, _CRASHED = range(6)
-_N_FLAGS = 6
-
-
-@njit(cache=True, error_model="numpy")
-def _numpy_sum(x):
-    """``x.sum()`` of a 1-D float64 array of at most 128 values in the order of numpy's
-    ``add.reduce`` along a row: 0.0 + the pairwise sum (started from -0.0, blocks of 8
-    accumulators from 8 values on)."""
-    n = x.size
-    if n < 8:
-        res = -0.0
-        for k in range(n):
-            res += x[k]
-        return 0.0 + res
-    r0, r1, r2, r3, r4, r5, r6, r7 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
-    k = 8
-    while k < n - n % 8:
-        r0 += x[k]
-        r1 += x[k + 1]
-        r2 += x[k + 2]
-        r3 += x[k + 3]
-        r4 += x[k + 4]
-        r5 += x[k + 5]
-        r6 += x[k + 6]
-        r7 += x[k + 7]
-        k += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while k < n:
-        res += x[k]
-        k += 1
-    return 0.0 + res
-
-
-def _source_hash(*modules: ModuleType) -> str:
-    """SHA-256 of the source files of ``modules`` (see :func:`_build_kernels`)."""
-    h = hashlib.sha256()
-    for m in modules:
-        try:
-            h.update(Path(str(m.__file__)).read_bytes())
-        except OSError:  # no readable source (e.g. a zipped install): numba's own rule only
-            h.update(m.__name__.encode())
-    return h.hexdigest()
-
-
-def _build_kernels(deps: str):
-    """The kernels of :func:`step` that call compiled functions of other modules.
-
-    Numba's on-disk cache of a kernel is only invalidated when the kernel's own file changes,
-    yet it holds compiled copies of the functions the kernel calls: after an edit of
-    :mod:`constraints`, :mod:`comms` or :mod:`search_theory`, a module-level kernel here would
-    keep running their old code. These close over ``deps``, the :func:`_source_hash` of those
-    modules, and numba puts closure values in the cache key, so an edit recompiles them.
-    """
-
-    @njit(cache=True, error_model="numpy")
-    def target_pod(target, a, b, moving, ox, oy, law, w, cutoff, cell, out):
-        """Detection probability ``out (E, N)`` of each env's hidden target for each moving UAV's
-        step a -> b (0 for the others): :func:`search_theory.segment_pod`'s compiled scalar, on
-        grid-relative coordinates, capped at 1 (definite range: 1 or 0). True if any is not 0."""
-        deps  # noqa: B018 -- the cache key, see _build_kernels
-        hit = False
-        for e in range(out.shape[0]):
-            px = target[e, 0] - ox
-            py = target[e, 1] - oy
-            for i in range(out.shape[1]):
-                p = 0.0
-                if moving[e, i]:
-                    ax, ay = a[e, i, 0] - ox, a[e, i, 1] - oy
-                    bx, by = b[e, i, 0] - ox, b[e, i, 1] - oy
-                    pod = _point_pod(law, px, py, ax, ay, bx, by, w, cutoff, cell)
-                    if law == _DEFINITE_RANGE:
-                        p = 1.0 if pod > 0.0 else 0.0
-                    else:
-                        p = 1.0 if pod > 1.0 else pod  # np.minimum(pod, 1): NaN stays NaN
-                out[e, i] = p
-                hit = hit or p != 0.0
-        return hit
-
-    @njit(cache=True, error_model="numpy")
-    def auto_links(dist, range_m, flying, k_nearest, links, n_comp):
-        """:func:`comms.auto_topology` on :func:`comms.in_range` of ``dist`` among the flying."""
-        deps  # noqa: B018 -- the cache key, see _build_kernels
-        adj = np.empty(links.shape, dtype=np.bool_)
-        comms_mod._in_range_kernel(dist, range_m, flying, adj)
-        comms_mod._auto_topology_kernel(adj, dist, True, flying, k_nearest, links, n_comp)
-
-    @njit(cache=True, error_model="numpy")
-    def step_kernel(
-        found,
-        agent_pos,
-        posc,
-        team,
-        pos,
-        speed,
-        moving,
-        nofly,
-        threat,
-        exponent,
-        threshold,
-        step_count,
-        detected,
-        detect_step,
-        elapsed,
-        left_home,
-        landed,
-        crashed,
-        flying,
-        violations,
-        landing,
-        dt,
-        usable,
-        time_share,
-        endurance,
-        x0,
-        y0,
-        x1,
-        y1,
-        d_s,
-        range_m,
-        min_neighbours,
-        landing_radius,
-        landing_max_alt,
-        landing_max_speed,
-        terminate,
-        detected_now,
-        time_term,
-        flags,
-        dist,
-    ):
-        """Steps 3-5 of :func:`step` after sensing, in place on the state arrays.
-
-        What each UAV found (``agent_pos``), the team's POS (``team``, numpy's row sum) and POSC;
-        detection of the hidden target; the time model (eq. 17-18); the boundary (eq. 20),
-        separation (eq. 21) and two-neighbour (eq. 24) checks through the kernels of
-        :mod:`constraints` and :mod:`comms`; violation counts; landing and crashes; the step
-        counter. ``dist`` receives the pairwise distances of the new positions (for the topology
-        update).
-        """
-        deps  # noqa: B018 -- the cache key, see _build_kernels
-        n_env, n = moving.shape
-        cons._pairwise_kernel(pos[:, :, :2], dist)
-        pairs = np.empty((n_env, n, n), dtype=np.bool_)
-        cons._separation_kernel(dist, d_s, moving, True, pairs, flags[_COLLISION])
-        comms_mod._in_range_kernel(dist, range_m, moving, pairs)
-        comms_mod._two_neighbour_kernel(pairs, min_neighbours, moving, True, flags[_COMMS_OK])
-        for e in range(n_env):
-            if n <= 128:  # else the caller has summed with numpy
-                team[e] = _numpy_sum(found[e])  # found.sum(axis=1)
-            posc[e] += team[e]
-            now = not detected[e] and exponent[e] >= threshold[e]
-            detected_now[e] = now
-            if now:
-                detected[e] = True
-                detect_step[e] = step_count[e] + 1
-            step_count[e] += 1
-            for i in range(n):
-                agent_pos[e, i] += found[e, i]
-                mv = moving[e, i]
-                elapsed[e, i] = elapsed[e, i] + (dt if mv else 0.0)
-                flags[_OVERTIME, e, i] = mv and elapsed[e, i] > usable
-                time_term[e, i] = time_share if mv else 0.0
-                x, y, z = pos[e, i, 0], pos[e, i, 1], pos[e, i, 2]
-                oob = mv and cons._outside(x, y, x0, y0, x1, y1)
-                flags[_OOB, e, i] = oob
-                collision = mv and flags[_COLLISION, e, i]
-                flags[_COLLISION, e, i] = collision
-                comms_ok = flags[_COMMS_OK, e, i] or not mv
-                flags[_COMMS_OK, e, i] = comms_ok
-                unsafe = oob or nofly[e, i] or collision or threat[e, i]
-                if mv and (unsafe or not comms_ok):
-                    violations[e, i] += 1
-                home = math.hypot(x - landing[i, 0], y - landing[i, 1])
-                if mv and home > landing_radius:
-                    left_home[e, i] = True
-                land = (
-                    mv
-                    and left_home[e, i]
-                    and home <= landing_radius
-                    and z <= landing_max_alt
-                    and speed[e, i] <= landing_max_speed
-                )
-                crash = mv and not land and (z <= 0.0 or elapsed[e, i] >= endurance)
-                if terminate:
-                    crash = crash or (mv and not land and unsafe)
-                flags[_LANDED, e, i] = land
-                flags[_CRASHED, e, i] = crash
-                if land:
-                    landed[e, i] = True
-                if crash:
-                    crashed[e, i] = True
-                if land or crash:
-                    flying[e, i] = False
-
-    return target_pod, auto_links, step_kernel
-
-
-_target_pod, _auto_links, _step_kernel = _build_kernels(
-    _source_hash(cons, comms_mod, search_theory)
-)

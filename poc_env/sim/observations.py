@@ -33,15 +33,13 @@ idx  name                   meaning                                             
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
-from numba import njit
 
-from poc_env.sim import comms as comms_mod
+import poc_env._kernels as _kernels
 from poc_env.sim import constraints as cons
 from poc_env.sim.comms import _shaped
-from poc_env.sim.core import Params, State, _source_hash
+from poc_env.sim.core import Params, State
 
 #: Raster channels in order (the table above); read them by name: ``RASTER_INDEX["poc"]``.
 RASTER_NAMES = ("poc", "self", "others", "hazard")
@@ -109,7 +107,7 @@ def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndar
     # otherwise numpy's own sum (Grid.coarsen) is passed in
     own_sum = g.nx > 1 and s < 8
     coarse = _NO_COARSE if own_sum else g.coarsen(state.belief, s)
-    _raster_kernel(
+    _kernels.rasters(
         state.belief,
         s,
         coarse,
@@ -134,67 +132,6 @@ def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndar
 _NO_COARSE = np.zeros((1, 1, 1))
 
 
-@njit(cache=True, error_model="numpy")
-def _raster_kernel(
-    belief, s, coarse, own_sum, scale, hazard, pos, flying, x0, y0, x1, y1, cell, out
-):
-    """Fill ``out (E, N, C, ny, nx)``: channel 0 the coarse POC / ``scale`` clipped to [0, 1]
-    (cells summed as ``Grid.coarsen`` does with numpy, or taken from ``coarse``), 1 the own
-    cell, 2 the cells of the other present UAVs, 3 ``hazard``. A UAV is present when flying
-    inside the grid ``[x0, x1] x [y0, y1]`` (``Grid.contains``); its cell is
-    ``Grid.cell_of``'s, ``floor((x - x0) / cell)`` clipped to the grid."""
-    n_env, n, _, ny, nx = out.shape
-    poc = np.empty((ny, nx), dtype=np.float32)
-    poc_sum = np.empty((ny, nx))
-    rows = np.empty(n, dtype=np.intp)
-    cols = np.empty(n, dtype=np.intp)
-    present = np.empty(n, dtype=np.bool_)
-    for e in range(n_env):
-        for k in range(n):
-            x, y = pos[e, k, 0], pos[e, k, 1]
-            present[k] = flying[e, k] and x >= x0 and x <= x1 and y >= y0 and y <= y1
-            if present[k]:
-                rows[k] = min(max(math.floor((y - y0) / cell), 0), ny - 1)
-                cols[k] = min(max(math.floor((x - x0) / cell), 0), nx - 1)
-        if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
-            for j in range(ny):
-                acc = poc_sum[j]
-                acc[:] = 0.0
-                for a in range(s):
-                    row = belief[e, j * s + a]
-                    if s == 2:
-                        for i in range(nx):
-                            acc[i] += row[2 * i] + row[2 * i + 1]
-                    else:
-                        for i in range(nx):
-                            r = -0.0
-                            for b in range(s):
-                                r += row[i * s + b]
-                            acc[i] += r
-        else:
-            poc_sum[:] = coarse[e]
-        for j in range(ny):
-            for i in range(nx):
-                q = poc_sum[j, i] / scale[e]
-                if q < 0.0:  # np.clip(q, 0.0, 1.0) with scalar bounds; NaN stays NaN
-                    q = 0.0
-                elif q > 1.0:
-                    q = 1.0
-                poc[j, i] = q
-        for k in range(n):
-            out[e, k, 0] = poc
-            out[e, k, 1] = 0.0
-            out[e, k, 2] = 0.0
-            out[e, k, 3] = hazard
-        for k in range(n):
-            if present[k]:
-                rj, ci = rows[k], cols[k]
-                out[e, k, 1, rj, ci] = 1.0
-                for m in range(n):
-                    if m != k:
-                        out[e, m, 2, rj, ci] = 1.0
-
-
 def vectors(params: Params, state: State) -> np.ndarray:
     """(E, N, VECTOR_SIZE) float32 state vectors of every agent."""
     sc = params.scenario
@@ -203,7 +140,7 @@ def vectors(params: Params, state: State) -> np.ndarray:
     w, h = bx1 - bx0, by1 - by0
     n = state.flying.shape[1]
     out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
-    _vector_kernel(
+    _kernels.vectors(
         state.pos,
         state.speed,
         np.sin(state.heading),
@@ -242,85 +179,6 @@ def _diagonal(w: float, h: float) -> float:
 
 _LOW = VECTOR_LOW.astype(np.float64)
 _HIGH = VECTOR_HIGH.astype(np.float64)
-
-
-def _build_kernels(deps: str):
-    """:func:`_vector_kernel`, closing over the source hash of the modules whose compiled
-    functions it calls (numba's cache would otherwise miss their edits; see
-    :func:`simulator._build_kernels`)."""
-
-    @njit(cache=True, error_model="numpy")
-    def vector_kernel(
-        pos,
-        speed,
-        sin_h,
-        cos_h,
-        pitch,
-        elapsed,
-        flying,
-        step,
-        landing,
-        bx0,
-        by0,
-        w,
-        h,
-        diag,
-        max_alt,
-        min_speed,
-        speed_span,
-        max_pitch,
-        endurance,
-        usable,
-        horizon,
-        range_m,
-        others,
-        low,
-        high,
-        out,
-    ):
-        """The vector table of the module docstring into ``out (E, N, VECTOR_SIZE)``, float64
-        values clipped to [low, high] as numpy clips them, then rounded to float32. Neighbours
-        are counted on :func:`comms.in_range`'s kernel."""
-        deps  # noqa: B018 -- the cache key, see simulator._build_kernels
-        n_env, n = flying.shape
-        dist = np.empty((n_env, n, n))
-        adj = np.empty((n_env, n, n), dtype=np.bool_)
-        cons._pairwise_kernel(pos[:, :, :2], dist)
-        comms_mod._in_range_kernel(dist, range_m, flying, adj)
-        v = np.empty(out.shape[2])
-        for e in range(n_env):
-            t = step[e] / horizon
-            for i in range(n):
-                x, y = pos[e, i, 0], pos[e, i, 1]
-                v[0] = (x - bx0) / w
-                v[1] = (y - by0) / h
-                v[2] = pos[e, i, 2] / max_alt
-                v[3] = (speed[e, i] - min_speed) / speed_span
-                v[4] = sin_h[e, i]
-                v[5] = cos_h[e, i]
-                v[6] = pitch[e, i] / max_pitch
-                v[7] = 1.0 - elapsed[e, i] / endurance
-                v[8] = 1.0 - elapsed[e, i] / usable
-                v[9] = (landing[i, 0] - x) / diag
-                v[10] = (landing[i, 1] - y) / diag
-                count = 0
-                for j in range(n):
-                    if adj[e, i, j]:
-                        count += 1
-                v[11] = count / others
-                v[12] = 1.0 if flying[e, i] else 0.0
-                v[13] = t
-                for k in range(v.size):
-                    q = v[k]
-                    if not np.isnan(q):  # np.clip with array bounds: ties go to the bound
-                        q = q if q > low[k] else low[k]
-                        q = q if q < high[k] else high[k]
-                    out[e, i, k] = q
-
-    return vector_kernel
-
-
-_vector_kernel = _build_kernels(_source_hash(cons, comms_mod))
 
 
 def decode_vector(params: Params, vec: np.ndarray) -> dict[str, np.ndarray]:

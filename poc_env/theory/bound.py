@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from poc_env.errors import ConfigError, check_positive
-from poc_env.theory.search_theory import _check_law, pod_from_coverage
+from poc_env.theory.detection import DetectionLaw, detection_law
+from poc_env.theory.search_theory import pod_from_coverage
 
 
 @dataclass(frozen=True)
@@ -36,13 +37,12 @@ class Bound:
     law: str
 
 
-def _coverage_at(lam: float, density: np.ndarray, law: str) -> np.ndarray:
+def _coverage_at(lam: float, density: np.ndarray, law: DetectionLaw) -> np.ndarray:
+    """The KKT coverage of every cell for the multiplier ``lam`` (the law's table entry)."""
+    assert law.optimal_coverage is not None
     with np.errstate(divide="ignore"):
         g = np.log(np.where(density > 0, density, 1e-300) / lam)
-    g = np.maximum(g, 0.0)
-    if law == "inverse_cube":
-        return np.sqrt(4.0 / np.pi * g)
-    return g
+    return law.optimal_coverage(np.maximum(g, 0.0))
 
 
 def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_cube") -> Bound:
@@ -50,7 +50,8 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
 
     ``prior`` is any array of cell masses; ``cell_area_m2`` a scalar or an array of its shape.
     """
-    law = _check_law(law)
+    entry = detection_law(law)
+    law = entry.name
     m = np.asarray(prior, dtype=float)
     if m.size == 0 or not np.all(np.isfinite(m)) or np.any(m < 0):
         raise ConfigError("prior", "array", "finite cell masses >= 0")
@@ -61,7 +62,7 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
     density = m / area
     if effort == 0 or not np.any(m > 0):
         return Bound(0.0, np.zeros_like(m), float(density.max(initial=0)), effort, law)
-    if law == "definite_range":
+    if entry.optimal_coverage is None:  # POD linear up to saturation: densest cells first
         order = np.argsort(-density, axis=None, kind="stable")
         a = area.ravel()[order]
         filled = np.cumsum(a)
@@ -84,7 +85,7 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
     hi = np.log(density.max())
     for _ in range(200):
         mid = 0.5 * (lo + hi)
-        spent = float(np.sum(area * _coverage_at(np.exp(mid), density, law)))
+        spent = float(np.sum(area * _coverage_at(np.exp(mid), density, entry)))
         if spent > effort:
             lo = mid
         else:
@@ -92,7 +93,7 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
         if hi - lo < 1e-15:
             break
     lam = np.exp(0.5 * (lo + hi))
-    cov = _coverage_at(lam, density, law)
+    cov = _coverage_at(lam, density, entry)
     spent = float(np.sum(area * cov))
     if spent > 0:  # spend exactly the effort (removes the last bisection rounding)
         cov = cov * (effort / spent)

@@ -31,6 +31,7 @@ from scipy.optimize import differential_evolution
 from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.validation import explain_validity, make_valid
 
+import poc_env._kernels as _kernels
 from poc_env.errors import ConfigError, GeometryError, check_positive, check_range
 from poc_env.geometry import rectangle_polygon, validate_polygon
 from poc_env.theory.probability_map import Grid
@@ -39,8 +40,10 @@ __all__ = [
     "Allocation",
     "CircleRegion",
     "PolygonRegion",
+    "area_fractions",
     "average_poc",
     "cell_overlap",
+    "exclusive_fractions",
     "rectangle_cut_allocation",
     "region_poc",
     "region_pocs",
@@ -244,6 +247,65 @@ def cell_overlap(region: Region | Sequence[Sequence[float]], grid: Grid) -> np.n
     """
     geom = _geometry_of(region)
     return _lattice_overlap(geom, grid.origin_m, grid.cell_m, grid.nx, grid.ny)
+
+
+def _rectangle_fractions(
+    grid: Grid, center, length, width, theta, *, exclusive: bool
+) -> np.ndarray:
+    """The one rectangle-mass kernel (:func:`poc_env._kernels.rectangle_fractions`) on arrays.
+
+    ``center`` (..., 2), the others (...); returns (..., ny, nx). With ``exclusive`` the last
+    leading axis holds the UAVs of one individual and each excludes the ones before it.
+    """
+    c = np.asarray(center, dtype=float)
+    lead = c.shape[:-1]
+    th = np.broadcast_to(np.asarray(theta, dtype=float), lead)
+
+    def flat(v):
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), lead).ravel())
+
+    out = np.zeros((*lead, grid.ny, grid.nx))
+    shaped = out.reshape(-1, lead[-1] if exclusive and lead else 1, grid.ny, grid.nx)
+    _kernels.rectangle_fractions(
+        flat(c[..., 0]),
+        flat(c[..., 1]),
+        flat(0.5 * np.asarray(length, dtype=float)),
+        flat(0.5 * np.asarray(width, dtype=float)),
+        flat(np.cos(th)),
+        flat(np.sin(th)),
+        float(grid.origin_m[0]),
+        float(grid.origin_m[1]),
+        float(grid.cell_m),
+        bool(exclusive),
+        shaped,
+    )
+    return out
+
+
+def area_fractions(grid: Grid, center, length, width, theta) -> np.ndarray:
+    """Exact area fraction of every cell inside each rectangle ``Q(center, l, w, theta)``.
+
+    ``center`` (..., 2), ``length``/``width``/``theta`` (...); returns (..., ny, nx) in [0, 1].
+    The map ends at the grid: a rectangle reaching beyond it covers only its part over the map.
+    The rectangle case of :func:`cell_overlap` (same numbers, to rounding), compiled: a closed
+    form for cells crossed by one pair of sides, polygon clipping near corners.
+    """
+    return _rectangle_fractions(grid, center, length, width, theta, exclusive=False)
+
+
+def exclusive_fractions(grid: Grid, center, length, width, theta) -> np.ndarray:
+    """Area fractions of each UAV's rectangle *not covered by the UAVs before it* (§3.1.6).
+
+    ``center`` (..., n, 2), the others (..., n); returns (..., n, ny, nx). UAV ``i`` gets the
+    exact area of ``cell ∩ Q_i \\ (Q_0 ∪ ... ∪ Q_{i-1})``: the overlap rule "a cell already
+    allocated to an earlier UAV adds nothing", applied to every part of a cell, so the
+    fractions of one cell add up to at most 1 and a copy of another UAV's rectangle -- or any
+    overlap, down to a sliver of a cell -- is credited nothing.
+    """
+    c = np.asarray(center, dtype=float)
+    if c.ndim < 2:
+        raise ConfigError("center", c.shape, "shape (..., n, 2)")
+    return _rectangle_fractions(grid, center, length, width, theta, exclusive=True)
 
 
 def region_poc(region: Region | Sequence[Sequence[float]], grid: Grid, prior: np.ndarray) -> float:

@@ -11,9 +11,10 @@ import math
 import numpy as np
 import pytest
 
+from poc_env._kernels import one_minus_exp_neg
+from poc_env.theory.detection import LAW_NAMES
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import (
-    _one_minus_exp_neg,
     apply_windows,
     segment_exponent,
     segment_pod,
@@ -21,7 +22,7 @@ from poc_env.theory.search_theory import (
     sweep_windows,
 )
 
-LAWS = ["inverse_cube", "exponential", "definite_range"]
+LAWS = list(LAW_NAMES)  # every law of the table
 GRID = Grid(9, 7, 1000.0, origin_m=(-2500.0, 1300.0))  # an origin off the cell lattice
 S = 3
 
@@ -139,7 +140,7 @@ def test_kernel_is_deterministic_and_batched_equals_single():
 
 
 def test_shared_exponent_matches_the_design_formula():
-    """segment_exponent (the kernel's scalar) against DESIGN.md §3's formula written plainly."""
+    """segment_exponent (the kernel's scalar) against the segment formula written plainly."""
     rng = np.random.default_rng(0)
     w = 5000.0
     x = rng.uniform(50.0, 20_000.0, 5000) * rng.choice([-1, 1], 5000)
@@ -155,15 +156,15 @@ def test_shared_exponent_matches_the_design_formula():
     np.testing.assert_allclose(pod, -np.expm1(-segment_exponent(x, y1, y2, w)), rtol=1e-12)
 
 
-def test_one_minus_exp_neg_is_expm1_to_two_ulp():
+def testone_minus_exp_neg_is_expm1_to_two_ulp():
     f = np.concatenate(
         [np.geomspace(1e-300, 1e-3, 400), np.linspace(0.0, 60.0, 4001), [0.3466, 0.3467, 1e300]]
     )
-    got = np.array([_one_minus_exp_neg(v) for v in f])
+    got = np.array([one_minus_exp_neg(v) for v in f])
     ref = -np.expm1(-f)
     assert np.all(np.abs(got - ref) <= 2 * np.spacing(ref))
-    assert _one_minus_exp_neg(math.inf) == 1.0
-    assert _one_minus_exp_neg(0.0) == 0.0
+    assert one_minus_exp_neg(math.inf) == 1.0
+    assert one_minus_exp_neg(0.0) == 0.0
 
 
 def test_exponential_cells_are_aligned_on_the_grid_origin():
