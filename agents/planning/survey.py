@@ -44,7 +44,12 @@ from poc_env.errors import ConfigError
 from poc_env.io import write_text_atomic
 from poc_env.theory.bound import physical_optimum
 from poc_env.theory.probability_map import Grid, build_prior
-from poc_env.theory.search_theory import pod_from_coverage, pod_parallel, swarm_pos, sweep_track
+from poc_env.theory.search_theory import (
+    parallel_coverage,
+    pod_from_coverage,
+    swarm_pos,
+    sweep_track,
+)
 from poc_env.theory.timing import flight_time_s, is_feasible
 
 PATTERNS = ("parallel", "sector", "expanding_square", "spiral")
@@ -250,12 +255,8 @@ def run_survey(
         geom = region.geometry  # exclusive part: what earlier UAVs' regions do not hold
         members.append(cell_overlap(geom.difference(taken) if taken is not None else geom, grid))
         taken = geom if taken is None else taken.union(geom)
-        if spec.pattern == "parallel":
-            pods.append(
-                float(pod_parallel(w, spec.spacing_m))
-                if law == "inverse_cube"
-                else float(pod_from_coverage(w / spec.spacing_m, law))
-            )
+        if spec.pattern == "parallel":  # C = W / S (eq. 9): eq. 10 for the inverse-cube law
+            pods.append(float(pod_from_coverage(parallel_coverage(w, spec.spacing_m), law)))
         else:
             pods.append(float(pod_from_coverage(w * tr.length_m / region.area_m2, law)))
     poc_i, pos_i, j = swarm_pos(np.array(members), np.array(pods), prior)
