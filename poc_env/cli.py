@@ -299,6 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="UAV-swarm search over a probability-of-containment map (Fan et al. 2024).",
     )
     sub = parser.add_subparsers(dest="command", required=True)
+    from agents.policies.registry import registered
 
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
@@ -319,7 +320,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--policy",
         default="lawnmower",
-        help="a registered policy (the names poc-env evaluate takes, ppo:PATH included)",
+        help="a registered policy: " + ", ".join(registered()),
     )
     p.add_argument("--out", default="out/episode.gif")
     p.add_argument("--seed", type=int, default=0)
@@ -329,7 +330,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("evaluate", help="score policies on the same episodes")
     _add_scenario(p, "paper_6_2")
-    p.add_argument("--policies", default="lawnmower,random", help="comma-separated names")
+    p.add_argument(
+        "--policies",
+        default="lawnmower,random",
+        help="comma-separated registered policies: " + ", ".join(registered()),
+    )
     p.add_argument("--episodes", type=int, default=10)
     p.add_argument("--seed", type=int, default=1000, help="first episode seed")
     p.add_argument("--workers", type=int, default=1)
