@@ -52,3 +52,16 @@ def test_cli_evaluate(tmp_path, capsys):
     assert [r["policy"] for r in rows] == ["lawnmower", "random"]
     assert (tmp_path / "posc_over_time.png").read_bytes()[:4] == b"\x89PNG"
     assert main(["evaluate", "--scenario", "small", "--policies", "nope", "--quiet"]) == 2
+
+
+def test_policies_come_from_the_registry():
+    """evaluate makes its policies by name from agents.policies.registry: an unknown name is
+    refused before any episode runs, with every registered name in the message."""
+    from agents.policies.registry import registered
+
+    with pytest.raises(ConfigError) as err:
+        evaluate("small", ["lawnmower", "telepathy"], episodes=1)
+    assert err.value.field == "policies" and err.value.value == "telepathy"
+    assert err.value.allowed == "one of " + ", ".join(registered())
+    with pytest.raises(ConfigError, match="checkpoint path"):
+        evaluate("small", ["ppo:"], episodes=1)
