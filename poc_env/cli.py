@@ -2,7 +2,7 @@
 
 Subcommands: ``scenarios`` (list the built-ins), ``survey`` (Table 4 / 5 analog of a region
 plan), ``figures`` (regenerate the README's pictures), ``demo`` (the main job on the default
-scenario), ``train`` (PPO; options generated from ``agents.rl.train.TrainArgs``). Bad input ends
+scenario), ``train`` (PPO; options generated from ``agents.rl.args.TrainArgs``). Bad input ends
 with ``error: ...`` naming the field, the value and what is allowed, and exit status 2 -- never
 a traceback.
 """
@@ -144,7 +144,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     modules = {
         "env": "agents.benchmarks.env",
         "plan": "agents.benchmarks.plan",
-        "train": "agents.rl.train",
+        "train": "agents.benchmarks.train",
     }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
@@ -186,7 +186,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def cmd_curve(args: argparse.Namespace) -> int:
-    from agents.rl.train import plot_training_curve
+    from agents.rl.curve import plot_training_curve
 
     print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
     return 0
@@ -199,10 +199,11 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    """Train (or resume) an RL policy; every option comes from ``agents.rl.train.TrainArgs``."""
-    from agents.rl.train import args_from_namespace, train
+    """Train (or resume) an RL policy; every option comes from ``agents.rl.args.TrainArgs``."""
+    from agents.rl.args import parse_train_args
+    from agents.rl.train import train
 
-    targs = args_from_namespace(args)
+    targs = parse_train_args(args.train_options)
     try:
         run = train(targs)
     except KeyboardInterrupt:
@@ -348,16 +349,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_evaluate)
 
-    from agents.rl.train import add_train_arguments
-
+    # train's options (and its --help) come from the TrainArgs dataclass: main() hands them to
+    # agents.rl.args.parse_train_args
     p = sub.add_parser(
-        "train",
-        help="train an RL policy (PPO) into a run folder, or --resume one",
-        description="Train PPO on a scenario; the run folder gets config.json, scenario.yaml, "
-        "TensorBoard logs (tb/), atomic checkpoints and model.zip. Model files are "
-        "pickle-based: load only trusted files.",
+        "train", help="train an RL policy (PPO) into a run folder, or --resume one", add_help=False
     )
-    add_train_arguments(p)
     p.set_defaults(func=cmd_train)
 
     p = sub.add_parser("plan", help="the §6.2 time-limited plan (Table 6 analog) as plan.json")
@@ -418,7 +414,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, rest = parser.parse_known_args(argv)
+    if args.command == "train":
+        args.train_options = rest
+    elif rest:
+        parser.error(f"unrecognized arguments: {' '.join(rest)}")
     try:
         try:
             return int(args.func(args) or 0)

@@ -178,7 +178,7 @@ register("de_receding", "agents.policies.receding:DERecedingPolicy")
 register("de_plan", "agents.policies.de_plan:DEPlanPolicy")
 register(
     "ppo",
-    "agents.rl.train:PPOPolicy",
+    "agents.rl.policy:PPOPolicy",
     argument="path",
     argument_help="a checkpoint path (a .zip or a run folder)",
 )

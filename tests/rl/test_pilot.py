@@ -139,13 +139,15 @@ def test_approach_shaping_is_potential_based():
 
 
 def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
-    from agents.rl.train import PPOPolicy, TrainArgs, make_env, make_model, write_atomic
+    from agents.rl.args import TrainArgs
+    from agents.rl.policy import PPOPolicy
+    from agents.rl.train import make_env, make_model
     from poc_env.config import load_scenario
 
     args = TrainArgs(scenario="small", recipe="pilot", n_envs=1, n_steps=8, batch_size=8)
     env = make_env(args, load_scenario("small"))
     model = make_model(args, env, None)
-    write_atomic(tmp_path / "m.zip", model.save)
+    model.save(tmp_path / "m.zip")
     pol = PPOPolicy(tmp_path / "m.zip")
     penv, obs = _env("small")
     pol.reset(penv, 0)
@@ -165,21 +167,19 @@ def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
     np.testing.assert_array_equal(seen, trained_on)
 
 
-SHIPPED = "agents/checkpoints/ppo_pilot_paper_6_2.zip"
-
-
 def test_shipped_checkpoint_loads_and_flies_a_whole_episode():
-    from pathlib import Path
+    from importlib.resources import as_file, files
 
     from agents.experiments.evaluate import episode_prior
-    from agents.rl.train import PPOPolicy
+    from agents.rl.policy import PPOPolicy
 
-    path = Path(__file__).resolve().parents[2] / SHIPPED
-    assert path.stat().st_size <= 5 * 2**20  # the 5 MB limit
+    shipped = files("agents") / "checkpoints" / "ppo_pilot_paper_6_2.zip"  # package data
     env = UAVSearchParallelEnv("paper_6_2")
     seed = 987_654  # far from the evaluation seeds, and priors training never drew
     obs, _ = env.reset(seed=seed, options={"prior": episode_prior(env.scenario, seed)})
-    policy = PPOPolicy(path)
+    with as_file(shipped) as path:
+        assert path.stat().st_size <= 5 * 2**20  # the 5 MB limit
+        policy = PPOPolicy(path)
     policy.reset(env, seed)
     assert policy.mode == "pilot"
     while env.agents:

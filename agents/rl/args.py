@@ -1,0 +1,227 @@
+"""What a training run depends on (:class:`TrainArgs`) and the ``poc-env train`` command line.
+
+Recipes (``--recipe``): ``shared`` flies every UAV with one policy (parameter sharing over
+:class:`poc_env.envs.vector.SwarmVecEnv`, CNN+MLP :class:`agents.rl.networks.SwarmExtractor`);
+``central`` is one agent over the joint observation and action (``poc_env/UAVSearch-v0``,
+``MlpPolicy``); ``pilot`` lets PPO pick headings and an autopilot fly eq. 19
+(:mod:`agents.rl.pilot`).
+
+Every option of ``poc-env train`` is a field of :class:`TrainArgs` (``--total-timesteps`` for
+``total_timesteps``), with the docstring under the field as its help; :func:`parse_train_args`
+builds the parser from the dataclass with `tyro <https://brentyi.github.io/tyro/>`_. The
+resolved arguments are saved as ``config.json`` in the run folder, and ``--resume`` reads them
+back with :meth:`TrainArgs.from_dict`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Annotated, Any
+
+from tyro.conf import arg as _arg
+
+from poc_env.errors import ConfigError
+
+ALGOS = ("ppo",)
+RECIPES = ("shared", "central", "pilot")
+
+
+@dataclass(frozen=True)
+class TrainArgs:
+    """Everything a training run depends on; saved as ``config.json`` in the run folder."""
+
+    scenario: Annotated[str, _arg(metavar="NAME")] = "paper_6_2"
+    """Built-in scenario name or YAML path; the resolved scenario is saved as scenario.yaml."""
+    overrides: Annotated[list[str], _arg(metavar="KEY=VALUE")] = field(default_factory=list)
+    """Scenario overrides, dotted KEY=VALUE (VALUE is YAML), e.g. episode.horizon_steps=20."""
+    algo: Annotated[str, _arg(metavar="|".join(ALGOS))] = "ppo"
+    """RL algorithm: ppo (stable-baselines3 PPO)."""
+    recipe: Annotated[str, _arg(metavar="|".join(RECIPES))] = "shared"
+    """shared: one policy flies every UAV; central: one joint agent; pilot: headings + autopilot."""
+    approach_shaping: Annotated[float, _arg(metavar="X")] = 0.0
+    """pilot: c of the approach term c (gamma Phi(s') - Phi(s)), Phi = -(km to the grid)."""
+    net_arch: Annotated[list[int], _arg(metavar="N")] = field(default_factory=lambda: [128, 128])
+    """pilot and central recipes: hidden layers of the policy and value MLPs."""
+    total_timesteps: Annotated[int, _arg(metavar="N")] = 1_000_000
+    """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts."""
+    seed: Annotated[int, _arg(metavar="N")] = 0
+    """Root seed of the env generators (SeedSequence) and the torch, numpy, python ones."""
+    n_envs: Annotated[int, _arg(metavar="N")] = 4
+    """Independent swarms simulated side by side (shared, pilot: n_envs x UAVs slots)."""
+    random_priors: bool = True
+    """A fresh random Gaussian-mixture prior every episode instead of the scenario's."""
+    run_dir: Annotated[str | None, _arg(metavar="DIR")] = None
+    """Run folder; default runs/<scenario>-<algo>-s<seed>-<timestamp>."""
+    resume: Annotated[str | None, _arg(metavar="RUN_DIR")] = None
+    """Continue this run folder from its latest checkpoint and config (no other options)."""
+    checkpoint_every: Annotated[int, _arg(metavar="N")] = 50_000
+    """Timesteps between checkpoints (taken at the next rollout boundary)."""
+    keep_checkpoints: Annotated[int, _arg(metavar="N")] = 5
+    """Newest checkpoints to keep (0: keep all)."""
+    n_steps: Annotated[int, _arg(metavar="N")] = 256
+    """PPO: steps per slot per rollout (rollout = n_steps x slots transitions)."""
+    batch_size: Annotated[int, _arg(metavar="N")] = 512
+    """PPO: minibatch size."""
+    n_epochs: Annotated[int, _arg(metavar="N")] = 5
+    """PPO: passes over each rollout."""
+    learning_rate: Annotated[float, _arg(metavar="X")] = 3e-4
+    """PPO: Adam learning rate (constant)."""
+    gamma: Annotated[float, _arg(metavar="X")] = 0.99
+    """PPO: discount factor."""
+    gae_lambda: Annotated[float, _arg(metavar="X")] = 0.95
+    """PPO: GAE lambda."""
+    ent_coef: Annotated[float, _arg(metavar="X")] = 0.0
+    """PPO: entropy bonus coefficient."""
+    torch_threads: Annotated[int, _arg(metavar="N")] = 1
+    """torch intra-op threads (small networks run fastest and reproducibly on one)."""
+    progress: bool = True
+    """Show a progress bar with the mean POSC of recent episodes."""
+
+    def __post_init__(self) -> None:
+        if self.algo not in ALGOS:
+            raise ConfigError("algo", self.algo, "one of " + ", ".join(ALGOS))
+        if self.recipe not in RECIPES:
+            raise ConfigError("recipe", self.recipe, "one of " + ", ".join(RECIPES))
+        for name, lo in (
+            ("total_timesteps", 1),
+            ("seed", 0),
+            ("n_envs", 1),
+            ("checkpoint_every", 1),
+            ("keep_checkpoints", 0),
+            ("n_steps", 1),
+            ("batch_size", 2),
+            ("n_epochs", 1),
+            ("torch_threads", 1),
+        ):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+                raise ConfigError(name, v, f"an integer >= {lo}")
+        for name, low, high in (
+            ("learning_rate", 0.0, math.inf),
+            ("gamma", 0.0, 1.0),
+            ("gae_lambda", 0.0, 1.0),
+            ("ent_coef", 0.0, math.inf),
+        ):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not low <= v <= high:
+                raise ConfigError(name, v, f"a number in [{low}, {high}]")
+        if self.learning_rate == 0:
+            raise ConfigError("learning_rate", self.learning_rate, "a number > 0")
+        shaping = self.approach_shaping
+        if isinstance(shaping, bool) or not isinstance(shaping, int | float):
+            raise ConfigError("approach_shaping", shaping, "a finite number")
+        if not math.isfinite(shaping):
+            raise ConfigError("approach_shaping", shaping, "a finite number")
+        if not isinstance(self.net_arch, list | tuple) or not all(
+            isinstance(w, int) and not isinstance(w, bool) and w >= 1 for w in self.net_arch
+        ):
+            raise ConfigError("net_arch", self.net_arch, "a list of layer widths (integers >= 1)")
+        if not isinstance(self.scenario, str):
+            raise ConfigError("scenario", self.scenario, "a string")
+        for name in ("run_dir", "resume"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, str | os.PathLike):
+                raise ConfigError(name, v, "a folder path or None")
+        for name in ("random_priors", "progress"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(name, getattr(self, name), "true or false")
+        parse_overrides(self.overrides)
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "config") -> TrainArgs:
+        """TrainArgs from a mapping (``config.json``); unknown keys are an error."""
+        if not isinstance(data, dict):
+            raise ConfigError(where, data, "a JSON object of TrainArgs fields")
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - names)
+        if unknown:
+            raise ConfigError(f"{where}.{unknown[0]}", data[unknown[0]], "a TrainArgs field")
+        return cls(**data)
+
+
+def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
+    """``["a.b=1", ...]`` -> ``{"a.b": 1}`` (values parsed as YAML)."""
+    import yaml
+
+    if isinstance(items, str) or not isinstance(items, list | tuple):
+        raise ConfigError("overrides", items, "a list of KEY=VALUE strings")
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = str(item).partition("=")
+        if not sep or not key.strip():
+            raise ConfigError("overrides", item, "KEY=VALUE, e.g. episode.horizon_steps=20")
+        try:
+            out[key.strip()] = yaml.safe_load(value)
+        except yaml.YAMLError as err:
+            raise ConfigError("overrides", item, f"a YAML value after '=' ({err})") from None
+    return out
+
+
+# -- the command line --------------------------------------------------------------------------
+PROG = "poc-env train"
+DESCRIPTION = (
+    "Train PPO on a scenario; the run folder gets config.json, scenario.yaml, TensorBoard logs "
+    "(tb/), atomic checkpoints and model.zip. Model files are pickle-based: load only trusted "
+    "files."
+)
+
+
+@dataclass(frozen=True)
+class _Parsed(TrainArgs):
+    """TrainArgs as typed on the command line, not yet validated.
+
+    tyro reports a ``ValueError`` raised while it builds the dataclass in its own format; the
+    values are validated by building :class:`TrainArgs` afterwards instead, so that a bad value
+    ends like every other poc-env input error (``error: FIELD: got VALUE; allowed: ...``)."""
+
+    def __post_init__(self) -> None:
+        pass
+
+
+def given_options(argv: Sequence[str]) -> list[str]:
+    """The TrainArgs fields whose option appears in ``argv`` (``--n-envs 3``, ``--n-envs=3``,
+    ``--no-progress``), in order of appearance."""
+    names = {f.name for f in dataclasses.fields(TrainArgs)}
+    out: list[str] = []
+    for token in argv:
+        if token == "--":
+            break
+        if not token.startswith("--"):
+            continue
+        name = token[2:].partition("=")[0].replace("-", "_")
+        if name not in names and name.startswith("no_"):
+            name = name[3:]
+        if name in names and name not in out:
+            out.append(name)
+    return out
+
+
+def parse_train_args(argv: Sequence[str] | None = None) -> TrainArgs:
+    """TrainArgs from ``poc-env train`` options (the rest: the dataclass defaults).
+
+    ``--help`` prints every option with its field's docstring and exits. Bad values raise
+    :class:`~poc_env.errors.ConfigError`; malformed ones (``--n-envs two``, unknown options)
+    end with tyro's message and exit status 2. With ``--resume`` the run's saved config is used,
+    so other options (except ``--progress/--no-progress``) are an error rather than silently
+    ignored."""
+    import sys
+
+    import tyro
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parsed = tyro.cli(_Parsed, args=argv, prog=PROG, description=DESCRIPTION)
+    values = {f.name: getattr(parsed, f.name) for f in dataclasses.fields(TrainArgs)}
+    if values["resume"] is not None:
+        extra = [k for k in given_options(argv) if k not in ("resume", "progress")]
+        if extra:
+            flags = ", ".join("--" + k.replace("_", "-") for k in extra)
+            raise ConfigError(
+                "resume",
+                values["resume"],
+                f"no other training options (a resumed run keeps its config.json); got {flags}",
+            )
+    return TrainArgs(**values)

@@ -1,0 +1,149 @@
+"""A PPO checkpoint flying through the :class:`agents.policies.base.Policy` interface.
+
+``ppo:PATH`` in ``poc-env evaluate --policies`` and the policy registry name
+:class:`PPOPolicy`. Model files are pickle-based: load only trusted files.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from agents.policies.base import Policy
+from agents.rl.checkpoint import describe_space, load_policy, model_path
+from poc_env.errors import ConfigError
+from poc_env.sim.observations import split_observation
+
+if TYPE_CHECKING:
+    from stable_baselines3 import PPO
+
+_MODELS: dict[tuple[str, int, int], Any] = {}
+
+
+def _cached_model(path: Path) -> PPO:
+    """The model in ``path``, loaded once per file version (evaluations make many policies)."""
+    st = path.stat()
+    key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
+    if key not in _MODELS:
+        if len(_MODELS) >= 8:
+            _MODELS.clear()
+        _MODELS[key] = load_policy(path)
+    return _MODELS[key]
+
+
+def _flat(obs: Any) -> np.ndarray:
+    """One agent's flat observation (raster then vector, as ``obs_type="flat"``)."""
+    if isinstance(obs, dict):
+        return np.concatenate([np.ravel(obs["raster"]), np.ravel(obs["vector"])]).astype(np.float32)
+    return np.asarray(obs, dtype=np.float32)
+
+
+def _flat_space(space: Any) -> Any:
+    """The ``flat`` counterpart of a per-agent ``Dict`` observation space."""
+    from gymnasium import spaces
+
+    if isinstance(space, spaces.Dict):
+        ras, vec = space["raster"], space["vector"]
+        assert isinstance(ras, spaces.Box) and isinstance(vec, spaces.Box)
+        low = np.concatenate([ras.low.ravel(), vec.low])
+        high = np.concatenate([ras.high.ravel(), vec.high])
+        return spaces.Box(low, high, dtype=np.float32)
+    return space
+
+
+class PPOPolicy(Policy):
+    """A PPO checkpoint flying through the :class:`agents.policies.base.Policy` interface.
+
+    ``PPOPolicy(path)`` loads ``path`` (a ``.zip``, or a run folder: its ``model.zip`` or latest
+    checkpoint) on the CPU; :meth:`reset` checks it against the env and picks the recipe from
+    the model's spaces: ``pilot`` (the pilot features and autopilot of :mod:`agents.rl.pilot`),
+    ``shared`` (the per-agent space: the live agents' observations go through
+    ``model.predict`` as one batch), ``shared_flat``, or ``central`` (the joint flat space:
+    finished agents keep their last observation, as in ``UAVSearch-v0``). Actions are
+    deterministic by default::
+
+        from agents.rl.policy import PPOPolicy
+        policy = PPOPolicy("runs/.../model.zip"); policy.reset(env, seed=0)
+        actions, _ = policy.predict(observations)
+
+    Model files are pickle-based: load only trusted files.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], name: str | None = None) -> None:
+        self.path = model_path(path)
+        self.name = name or f"ppo:{path}"
+        self.model = _cached_model(self.path)
+        self.mode = ""
+        self._last: dict[str, np.ndarray] = {}
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        from gymnasium import spaces
+
+        from agents.rl import pilot
+
+        agents = list(env.possible_agents)
+        agent_space = env.observation_space(agents[0])
+        joint = _flat_space(agent_space)
+        assert isinstance(joint, spaces.Box)
+        joint = spaces.Box(
+            np.tile(joint.low, len(agents)), np.tile(joint.high, len(agents)), dtype=np.float32
+        )
+        m_obs, m_act = self.model.observation_space, self.model.action_space
+        one_act = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        joint_act = spaces.Box(-1.0, 1.0, (3 * len(agents),), np.float32)
+        if m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
+            self.mode = "pilot"
+            self._features = pilot.PilotFeatures(env.params)
+        elif m_obs == agent_space and m_act == one_act:
+            self.mode = "shared"
+        elif m_obs == _flat_space(agent_space) and m_act == one_act:
+            self.mode = "shared_flat"
+        elif m_obs == joint and m_act == joint_act:
+            self.mode = "central"
+        else:
+            raise ConfigError(
+                "checkpoint",
+                str(self.path),
+                f"a model for this env ({len(agents)} UAVs; per-agent observation "
+                f"{describe_space(agent_space)}, joint {describe_space(joint)}), but the file "
+                f"was trained for observation {describe_space(m_obs)} and action "
+                f"{describe_space(m_act)} (another grid, number of UAVs or recipe?)",
+            )
+        self._agents = agents
+        self._last = {}
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        if not observations:
+            return {}, state
+        live = [a for a in self._agents if a in observations]
+        if self.mode == "central":
+            self._last.update({a: _flat(observations[a]) for a in live})
+            joint = np.concatenate([self._last[a] for a in self._agents])
+            act, _ = self.model.predict(joint, deterministic=deterministic)
+            act = np.asarray(act, dtype=np.float32).reshape(len(self._agents), 3)
+            return {a: act[self._agents.index(a)] for a in live}, state
+        batch: Any
+        if self.mode == "pilot":
+            from agents.rl.pilot import pilot_actions
+
+            shape = self.env.params.grid.shape
+            ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
+            k = np.array([self._agents.index(a) for a in live])
+            feats = self._features(np.stack(ras), np.stack(vec), k)
+            act, _ = self.model.predict(feats, deterministic=deterministic)
+            inc = pilot_actions(self.env.params, np.stack(vec), np.asarray(act), k)
+            return {a: inc[j] for j, a in enumerate(live)}, state
+        if self.mode == "shared":
+            batch = {
+                k: np.stack([np.asarray(observations[a][k]) for a in live])
+                for k in ("raster", "vector")
+            }
+        else:
+            batch = np.stack([_flat(observations[a]) for a in live])
+        act, _ = self.model.predict(batch, deterministic=deterministic)
+        act = np.asarray(act, dtype=np.float32).reshape(len(live), 3)
+        return {a: act[k] for k, a in enumerate(live)}, state
