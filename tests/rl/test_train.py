@@ -258,6 +258,36 @@ def test_checkpoint_for_another_number_of_uavs_or_grid(runs, tmp_path):
     assert err.value.field == "checkpoint"
 
 
+def test_a_shared_checkpoint_from_before_the_layout_by_role_loads(tmp_path, monkeypatch):
+    """Shared-recipe files pickle the extractor's class by module path; those written before
+    the layout by role name ``agents.networks`` (now ``agents.rl.networks``)."""
+    import sys
+    import types
+
+    from stable_baselines3 import PPO
+
+    from agents.rl.networks import SwarmExtractor
+
+    old = types.ModuleType("agents.networks")
+    Old = type("SwarmExtractor", (SwarmExtractor,), {"__module__": "agents.networks"})
+    old.SwarmExtractor = Old  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "agents.networks", old)
+    env = make_env(_args("shared", tmp_path), load_scenario("small"))
+    model = PPO(
+        "MultiInputPolicy", env, policy_kwargs={"features_extractor_class": Old}, device="cpu"
+    )
+    model.save(tmp_path / "old.zip")
+    monkeypatch.delitem(sys.modules, "agents.networks")
+    with pytest.raises(ModuleNotFoundError, match=r"agents\.networks"):
+        PPO.load(tmp_path / "old.zip", device="cpu")  # the file names the old module
+    loaded = load_policy(tmp_path / "old.zip", env)
+    assert loaded.policy_kwargs["features_extractor_class"] is SwarmExtractor
+    assert _same(
+        [p.detach().numpy() for p in loaded.policy.parameters()],
+        [p.detach().numpy() for p in model.policy.parameters()],
+    )
+
+
 # -- evaluation through ppo:PATH --------------------------------------------------------------
 def test_ppo_path_evaluates_through_evaluate(runs):
     from agents.experiments.evaluate import evaluate, make_policy
