@@ -66,7 +66,7 @@ from agents.rl.checkpoint import (
     restore_checkpoint,
     write_json,
 )
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, require_extra
 from poc_env.io import atomic_path
 
 if TYPE_CHECKING:
@@ -273,7 +273,9 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
 def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
     """Train according to ``args`` (or resume ``args.resume``); return the run folder.
 
-    ``callback``: an extra SB3 callback, called after the checkpointer and the progress bar."""
+    ``callback``: an extra SB3 callback, called after the checkpointer and the progress bar.
+    Needs the ``rl`` extra (checked before anything is written)."""
+    require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
     if args.resume is not None:
         return _resume(Path(args.resume), args.progress, callback)
     from poc_env.config import load_scenario, save_scenario
