@@ -1032,8 +1032,18 @@ def _minus_rects(
 
 
 @_jit
-def rectangle_fractions(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, exclusive, out):
-    """Area fractions of every ``h x h`` cell inside every rectangle; ``out`` (P, n, ny, nx) = 0.
+def rectangle_fractions(
+    cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, ny, nx, exclusive, centres, weights, out, mass
+):
+    """Prior mass in rotated rectangles: the fraction of every ``h x h`` cell of an ``ny x nx``
+    grid (origin ``(x0, y0)``) inside every rectangle.
+
+    Two rules for a cell's fraction. ``centres=False``: the exact area fraction (below).
+    ``centres=True``: 1 when the cell's centre lies in the rectangle (``|u| <= a`` and
+    ``|v| <= b`` in its frame, eq. 6), else 0 -- a quadrature on the cell centres, used on a
+    fine lattice of sample points. Results: ``out (P, n, ny, nx)``, zeros on entry, gets the
+    fractions unless it is empty; ``mass (P, n)``, zeros on entry, gets
+    ``sum fraction * weights`` over the cells unless ``weights`` is empty.
 
     Rectangle ``p * n + k`` (flat inputs) is UAV ``k`` of individual ``p``: centre
     ``(cx, cy)``, half side ``half_l`` along ``(cos_t, sin_t)``, ``half_w`` across. Per row,
@@ -1045,9 +1055,13 @@ def rectangle_fractions(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, exclusi
     With ``exclusive``, UAV ``k``'s fraction excludes what the UAVs before it cover (§3.1.6,
     exactly): a cell wholly inside an earlier rectangle gives 0; in a cell that earlier
     rectangles cover in part, the cell clipped to rectangle ``k`` minus those rectangles
-    (:func:`_minus_rects`).
+    (:func:`_minus_rects`). Under the centre rule, a cell counts for the first rectangle
+    holding its centre only, so the masses of an individual's rectangles add up to the mass
+    of their union.
     """
-    n_ind, n_uav, ny, nx = out.shape
+    n_ind, n_uav = mass.shape
+    write = out.size > 0
+    weigh = weights.size > 0
     full = np.zeros((ny, nx), np.bool_)
     count = np.zeros((ny, nx), np.int64)
     parts = np.empty((ny, nx, max(n_uav, 1)), np.int64)
@@ -1112,6 +1126,14 @@ def rectangle_fractions(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, exclusi
                     v = dy * c - dx * s
                     au = abs(u)
                     av = abs(v)
+                    if centres:
+                        if au <= a and av <= b:
+                            if write:
+                                out[p, k, j, i] = 1.0
+                            if weigh:
+                                mass[p, k] += weights[j, i]
+                            full[j, i] = exclusive
+                        continue
                     if au >= a + hp or av >= b + hp:
                         continue
                     in_u = au + hp <= a
@@ -1171,7 +1193,11 @@ def rectangle_fractions(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, exclusi
                         m_own = min(area * inv_area, m_own)
                     if m_own <= 1e-14:  # rounding residue of an exact 0
                         continue
-                    out[p, k, j, i] = min(m_own, 1.0)
+                    m_own = min(m_own, 1.0)
+                    if write:
+                        out[p, k, j, i] = m_own
+                    if weigh:
+                        mass[p, k] += m_own * weights[j, i]
                     if exclusive:
                         if own_full:
                             full[j, i] = True
