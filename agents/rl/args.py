@@ -42,15 +42,15 @@ class TrainArgs:
     """RL algorithm: ppo (stable-baselines3 PPO)."""
     recipe: Annotated[str, _arg(metavar="|".join(RECIPES))] = "shared"
     """shared: one policy flies every UAV; central: one joint agent; pilot: headings + autopilot."""
-    approach_shaping: Annotated[float, _arg(metavar="X")] = 0.0
+    approach_shaping: float = 0.0
     """pilot: c of the approach term c (gamma Phi(s') - Phi(s)), Phi = -(km to the grid)."""
-    net_arch: Annotated[list[int], _arg(metavar="N")] = field(default_factory=lambda: [128, 128])
+    net_arch: list[int] = field(default_factory=lambda: [128, 128])
     """pilot and central recipes: hidden layers of the policy and value MLPs."""
-    total_timesteps: Annotated[int, _arg(metavar="N")] = 1_000_000
+    total_timesteps: int = 1_000_000
     """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts."""
-    seed: Annotated[int, _arg(metavar="N")] = 0
+    seed: int = 0
     """Root seed of the env generators (SeedSequence) and the torch, numpy, python ones."""
-    n_envs: Annotated[int, _arg(metavar="N")] = 4
+    n_envs: int = 4
     """Independent swarms simulated side by side (shared, pilot: n_envs x UAVs slots)."""
     random_priors: bool = True
     """A fresh random Gaussian-mixture prior every episode instead of the scenario's."""
@@ -58,25 +58,25 @@ class TrainArgs:
     """Run folder; default runs/<scenario>-<algo>-s<seed>-<timestamp>."""
     resume: Annotated[str | None, _arg(metavar="RUN_DIR")] = None
     """Continue this run folder from its latest checkpoint and config (no other options)."""
-    checkpoint_every: Annotated[int, _arg(metavar="N")] = 50_000
+    checkpoint_every: int = 50_000
     """Timesteps between checkpoints (taken at the next rollout boundary)."""
-    keep_checkpoints: Annotated[int, _arg(metavar="N")] = 5
+    keep_checkpoints: int = 5
     """Newest checkpoints to keep (0: keep all)."""
-    n_steps: Annotated[int, _arg(metavar="N")] = 256
+    n_steps: int = 256
     """PPO: steps per slot per rollout (rollout = n_steps x slots transitions)."""
-    batch_size: Annotated[int, _arg(metavar="N")] = 512
+    batch_size: int = 512
     """PPO: minibatch size."""
-    n_epochs: Annotated[int, _arg(metavar="N")] = 5
+    n_epochs: int = 5
     """PPO: passes over each rollout."""
-    learning_rate: Annotated[float, _arg(metavar="X")] = 3e-4
+    learning_rate: float = 3e-4
     """PPO: Adam learning rate (constant)."""
-    gamma: Annotated[float, _arg(metavar="X")] = 0.99
+    gamma: float = 0.99
     """PPO: discount factor."""
-    gae_lambda: Annotated[float, _arg(metavar="X")] = 0.95
+    gae_lambda: float = 0.95
     """PPO: GAE lambda."""
-    ent_coef: Annotated[float, _arg(metavar="X")] = 0.0
+    ent_coef: float = 0.0
     """PPO: entropy bonus coefficient."""
-    torch_threads: Annotated[int, _arg(metavar="N")] = 1
+    torch_threads: int = 1
     """torch intra-op threads (small networks run fastest and reproducibly on one)."""
     progress: bool = True
     """Show a progress bar with the mean POSC of recent episodes."""
