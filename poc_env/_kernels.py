@@ -212,7 +212,7 @@ def _exp_pod(px, py, ax, ay, bx, by, w, cell):
 
 @_jit
 def _point_pod(law, px, py, ax, ay, bx, by, w, cutoff, cell):
-    """Detection probability of point p for the step a -> b under ``law`` (a _LAW_CODE)."""
+    """Detection probability of point p for the step a -> b under ``law`` (a LAW_CODES value)."""
     if law == EXPONENTIAL:
         return _exp_pod(px, py, ax, ay, bx, by, w, cell)
     ux, uy, length = _seg_axis(ax, ay, bx, by)

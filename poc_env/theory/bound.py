@@ -7,12 +7,13 @@ of the coverage ``C`` (:func:`poc_env.theory.search_theory.pod_from_coverage`) a
     maximise  sum_j m_j POD(C_j)   subject to   sum_j a_j C_j = Z,  C_j >= 0.
 
 The objective is concave, so the KKT conditions are sufficient: every searched cell has the same
-marginal return ``(m_j / a_j) POD'(C_j) = lambda``. For the inverse-cube law
-(POD' = exp(-pi C^2 / 4)) this gives ``C_j = sqrt(4/pi ln(m_j / (a_j lambda)))``, for the
-exponential law ``C_j = ln(m_j / (a_j lambda))``, both for ``m_j / a_j > lambda`` and 0 elsewhere;
-``lambda`` is found by bisection so that the effort is spent exactly. The definite-range law is
-linear up to C = 1, so the densest cells are filled first. No plan with the same effort and law
-can beat this value: every plan report prints it beside its POS.
+marginal return ``(m_j / a_j) POD'(C_j) = lambda``. Each law's entry in the table
+(:mod:`poc_env.theory.detection`) gives that coverage as ``optimal_coverage(g)`` with
+``g = ln(m_j / (a_j lambda))`` for ``m_j / a_j > lambda`` (0 elsewhere): for the inverse-cube law
+(POD' = exp(-pi C^2 / 4)) ``C_j = sqrt(4/pi g)``, for the exponential law ``C_j = g``;
+``lambda`` is found by bisection so that the effort is spent exactly. A law without one (the
+definite-range law, linear up to C = 1) fills the densest cells first. No plan with the same
+effort and law can beat this value: every plan report prints it beside its POS.
 """
 
 from __future__ import annotations

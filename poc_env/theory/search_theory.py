@@ -100,7 +100,7 @@ def _xy(v):
 
 
 def segment_exponent(x_m, y1_m, y2_m, sweep_width_m):
-    """Inverse-cube detection exponent F of one straight segment for a point (DESIGN.md §3).
+    """Inverse-cube detection exponent F of one straight segment for a point.
 
     The point is at lateral distance ``x`` from the segment's line; the segment's ends are at
     along-track coordinates ``y1 <= y2`` measured from the foot of the perpendicular:
