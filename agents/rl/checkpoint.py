@@ -38,6 +38,7 @@ pickle-free (JSON, ``np.load(allow_pickle=False)``).
 from __future__ import annotations
 
 import dataclasses
+import importlib.resources
 import json
 import os
 import random
@@ -182,10 +183,20 @@ def describe_space(space: Any) -> str:
     return repr(space)
 
 
+def shipped_checkpoints() -> list[str]:
+    """Names of the PPO checkpoints shipped inside the package (``agents/checkpoints``)."""
+    folder = importlib.resources.files("agents").joinpath("checkpoints")
+    return sorted(f.name[:-4] for f in folder.iterdir() if f.name.endswith(".zip"))
+
+
 def model_path(path: str | os.PathLike[str]) -> Path:
-    """A model file: ``path`` itself, or in a run folder its ``model.zip`` or else its latest
-    checkpoint."""
+    """A model file: ``path`` itself, in a run folder its ``model.zip`` or else its latest
+    checkpoint, or the name of a shipped checkpoint (:func:`shipped_checkpoints`, e.g.
+    ``ppo_pilot_paper_6_2``), read from the installed package."""
     p = Path(path)
+    if not p.exists() and str(path) in shipped_checkpoints():
+        ref = importlib.resources.files("agents").joinpath("checkpoints", f"{path}.zip")
+        return Path(str(ref))
     if p.is_dir():
         if (p / "model.zip").is_file():
             return p / "model.zip"
@@ -196,7 +207,12 @@ def model_path(path: str | os.PathLike[str]) -> Path:
             "checkpoint", str(p), "a model .zip file or a run folder with model.zip or checkpoints"
         )
     if not p.is_file():
-        raise ConfigError("checkpoint", str(p), "an existing PPO model file (.zip)")
+        raise ConfigError(
+            "checkpoint",
+            str(p),
+            "an existing PPO model file (.zip), a run folder, or a shipped checkpoint: "
+            + ", ".join(shipped_checkpoints()),
+        )
     return p
 
 

@@ -190,3 +190,19 @@ def test_shipped_checkpoint_loads_and_flies_a_whole_episode():
     assert st.landed[0].all() and not st.crashed[0].any()  # the autopilot brings all home
     # a trained policy, not a fresh one: it searches (a random policy finds ~0.001 here)
     assert st.posc[0] > 0.2
+
+
+def test_shipped_checkpoint_by_name(tmp_path, monkeypatch):
+    """``ppo:ppo_pilot_paper_6_2`` finds the package's file from any folder; unknown names
+    list the shipped ones."""
+    from importlib.resources import files
+
+    from agents.rl.checkpoint import model_path, shipped_checkpoints
+    from poc_env.errors import ConfigError
+
+    monkeypatch.chdir(tmp_path)
+    assert "ppo_pilot_paper_6_2" in shipped_checkpoints()
+    found = model_path("ppo_pilot_paper_6_2")
+    assert found.samefile(str(files("agents") / "checkpoints" / "ppo_pilot_paper_6_2.zip"))
+    with pytest.raises(ConfigError, match="ppo_pilot_paper_6_2"):
+        model_path("ppo_pilot_nowhere")
