@@ -10,13 +10,16 @@ a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
-from collections.abc import Sequence
+import tempfile
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from poc_env.errors import MissingExtraError, PocEnvError
+from poc_env.errors import ConfigError, MissingExtraError, PocEnvError
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
 _EXTRA_OF = {
@@ -26,6 +29,95 @@ _EXTRA_OF = {
     "matplotlib": "plot",
     "PIL": "plot",
 }
+
+#: Largest ``plan --popsize``: the planner keeps a few (popsize, 6 N) arrays and evaluates the
+#: population in one batch, so memory and time grow with it; the paper uses 100.
+POPSIZE_MAX = 10_000
+#: Largest ``plan --maxiter`` (generations); the paper uses 300.
+MAXITER_MAX = 100_000
+#: Largest ``train --n-envs``: every env holds a fine belief map, observations and a rollout
+#: buffer share, so 10^9 of them would need terabytes; the paper's runs use 4 to 16.
+N_ENVS_MAX = 1024
+#: Option values that may start with ``-`` (``--origin -45,7``: a negative latitude).
+_NEGATIVE_VALUE_OPTIONS = ("--origin",)
+
+
+def _check_int(field: str, value: int | None, lo: int, hi: int | None = None) -> None:
+    """Raise ConfigError unless ``value`` (None: the default) is an integer in [lo, hi]."""
+    if value is None:
+        return
+    if value < lo or (hi is not None and value > hi):
+        allowed = f"an integer >= {lo}" if hi is None else f"an integer in [{lo}, {hi}]"
+        raise ConfigError(field, value, allowed)
+
+
+def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
+    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
+
+    Refused: an empty path, a file where a folder is expected (or the reverse), a path under a
+    file, and a path whose nearest existing folder poc-env cannot write into (tried by
+    creating and removing a temporary folder there).
+    """
+    if value is None:
+        return
+    text = os.fspath(value)
+    what = "a file path (not a folder)" if kind == "file" else "a folder path (not a file)"
+    allowed = f"{what} that poc-env can create or write"
+    if not text or "\0" in text:
+        raise ConfigError(field, text, allowed)
+    path = Path(text)
+    try:
+        if kind == "file":
+            if path.is_dir() or text.endswith(("/", os.sep)):
+                raise ConfigError(field, text, f"{what}; it is a folder")
+            start = path.parent
+        else:
+            if path.exists() and not path.is_dir():
+                raise ConfigError(field, text, f"{what}; it is an existing file")
+            start = path
+        nearest = start
+        while not nearest.exists() and nearest != nearest.parent:
+            nearest = nearest.parent
+        if not nearest.is_dir():
+            raise ConfigError(field, text, f"{what}; {nearest} is a file, not a folder")
+        probe = tempfile.mkdtemp(prefix=".poc-env-probe-", dir=nearest)
+        os.rmdir(probe)
+    except OSError as err:
+        raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
+
+
+@contextlib.contextmanager
+def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
+    """:func:`poc_env.io.atomic_dir` with file-system errors reported as ``field`` errors."""
+    from poc_env.io import atomic_dir
+
+    try:
+        stage_cm = atomic_dir(path)
+        stage = stage_cm.__enter__()
+    except OSError as err:
+        raise ConfigError(
+            field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
+        ) from None
+    try:
+        yield stage
+    except BaseException:
+        if not stage_cm.__exit__(*sys.exc_info()):
+            raise
+    else:
+        try:
+            stage_cm.__exit__(None, None, None)
+        except OSError as err:
+            raise ConfigError(
+                field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
+            ) from None
+
+
+def _wrote(paths, stage: Path | None = None, dest: Path | None = None) -> None:
+    """Print ``wrote PATH`` for each path, as it will be named once ``stage`` is ``dest``."""
+    for p in paths:
+        if stage is not None and dest is not None:
+            p = dest / Path(p).relative_to(stage)
+        print(f"wrote {p}")
 
 
 def _add_scenario(p: argparse.ArgumentParser, default: str) -> None:
@@ -46,6 +138,15 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 def cmd_survey(args: argparse.Namespace) -> int:
+    _check_out("out", args.out, "folder")
+    if not args.out:
+        return _survey(args, None, None)
+    with _output_folder("out", args.out) as stage:
+        return _survey(args, stage, Path(args.out))
+
+
+def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> int:
+    """The survey of ``cmd_survey``, its files written into ``stage`` (shown as ``dest``)."""
     from agents.planning.survey import load_regions, run_survey, write_survey
     from poc_env.config import load_scenario
     from poc_env.theory.probability_map import build_prior
@@ -69,9 +170,8 @@ def cmd_survey(args: argparse.Namespace) -> int:
         f"law {sc.sensor.law}, usable endurance {sc.uav.usable_endurance_s / 3600:.2f} h)"
     )
     print(result.table())
-    if args.out:
-        for p in write_survey(result, args.out, prior=prior, scenario=sc, plan=plan):
-            print(f"wrote {p}")
+    if stage is not None:
+        _wrote(write_survey(result, stage, prior=prior, scenario=sc, plan=plan), stage, dest)
     return 0
 
 
@@ -123,6 +223,10 @@ def cmd_render(args: argparse.Namespace) -> int:
     from poc_env.config import load_scenario
     from poc_env.viz.rendering import render_episode
 
+    _check_int("seed", args.seed, 0)
+    _check_int("max_steps", args.max_steps, 1)
+    _check_int("every", args.every, 1)
+    _check_out("out", args.out, "file")
     sc = load_scenario(args.scenario)
     path = render_episode(
         sc,
@@ -152,12 +256,31 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    _check_int("seed", args.seed, 0)
+    _check_int("episodes", args.episodes, 1)
+    _check_int("workers", args.workers, 1)
+    names = [p.strip() for p in args.policies.split(",") if p.strip()]
+    if not names:
+        from agents.policies.registry import registered
+
+        allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
+        raise ConfigError("policies", args.policies, allowed)
+    _check_out("out", args.out, "folder")
+    if not args.out:
+        return _evaluate(args, names, None, None)
+    with _output_folder("out", args.out) as stage:
+        return _evaluate(args, names, stage, Path(args.out))
+
+
+def _evaluate(
+    args: argparse.Namespace, names: list[str], stage: Path | None, dest: Path | None
+) -> int:
+    """The evaluation of ``cmd_evaluate``, its files written into ``stage`` (shown as ``dest``)."""
     from agents.experiments.evaluate import evaluate, plot_curves
     from poc_env.config import load_scenario
     from poc_env.io import write_text_atomic
 
     sc = load_scenario(args.scenario)
-    names = [p.strip() for p in args.policies.split(",") if p.strip()]
     ev = evaluate(
         sc,
         names,
@@ -174,20 +297,21 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         f"{args.seed + args.episodes - 1}{priors}"
     )
     print(ev.table())
-    if args.out:
-        out = Path(args.out)
-        for p in (
-            write_text_atomic(out / "evaluate.csv", ev.to_csv()),
-            write_text_atomic(out / "evaluate.txt", ev.table() + "\n"),
-            plot_curves(ev, out / "posc_over_time.png", sc.episode.dt_s),
-        ):
-            print(f"wrote {p}")
+    if stage is not None:
+        files = (
+            write_text_atomic(stage / "evaluate.csv", ev.to_csv()),
+            write_text_atomic(stage / "evaluate.txt", ev.table() + "\n"),
+            plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s),
+        )
+        _wrote(files, stage, dest)
     return 0
 
 
 def cmd_curve(args: argparse.Namespace) -> int:
     from agents.rl.curve import plot_training_curve
 
+    _check_int("until", args.until, 1)
+    _check_out("out", args.out, "file")
     print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
     return 0
 
@@ -195,6 +319,8 @@ def cmd_curve(args: argparse.Namespace) -> int:
 def cmd_experiment(args: argparse.Namespace) -> int:
     from agents.experiments.paper import cmd
 
+    _check_int("workers", args.workers, 1)
+    _check_out("out", args.out, "folder")
     return cmd(args)
 
 
@@ -204,6 +330,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from agents.rl.train import train
 
     targs = parse_train_args(args.train_options)
+    _check_int("n_envs", targs.n_envs, 1, N_ENVS_MAX)
+    _check_out("run_dir", targs.run_dir, "folder")
     try:
         run = train(targs)
     except KeyboardInterrupt:
@@ -213,6 +341,36 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    """The plan as plan.json (and ``--plot`` PNG): both written, or neither."""
+    from poc_env.io import atomic_path
+
+    _check_plan_args(args)
+    if not args.plot:
+        return _plan(args, Path(args.out), None)
+    with atomic_path(args.plot) as plot_tmp:  # published after plan.json, or not at all
+        code = _plan(args, Path(args.out), plot_tmp, shown=(Path(args.out), Path(args.plot)))
+    return code
+
+
+def _check_plan_args(args: argparse.Namespace) -> None:
+    _check_int("seed", args.seed, 0)
+    _check_int("uavs", args.uavs, 1)
+    _check_int("popsize", args.popsize, 4, POPSIZE_MAX)
+    _check_int("maxiter", args.maxiter, 1, MAXITER_MAX)
+    _check_out("out", args.out, "file")
+    _check_out("plot", args.plot, "file")
+
+
+def _plan(
+    args: argparse.Namespace,
+    out: Path,
+    plot: Path | None,
+    shown: tuple[Path, Path | None] | None = None,
+) -> int:
+    """Optimise the plan; draw it to ``plot`` (if any), then write plan.json to ``out``.
+
+    ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
+    """
     from agents.planning.planner import make_plan, plan_table, plot_plan, write_plan
     from poc_env.config import load_scenario
     from poc_env.theory.probability_map import build_prior
@@ -232,40 +390,57 @@ def cmd_plan(args: argparse.Namespace) -> int:
         progress=not args.quiet,
     )
     print(plan_table(plan))
-    print(f"wrote {write_plan(plan, args.out)}")
-    if args.plot:
-        print(f"wrote {plot_plan(plan, sc, prior, args.plot)}")
+    if plot is not None:
+        plot_plan(plan, sc, prior, plot)
+    write_plan(plan, out)
+    shown_out, shown_plot = shown or (out, plot)
+    print(f"wrote {shown_out}")
+    if plot is not None:
+        print(f"wrote {shown_plot}")
     return 0
 
 
 def cmd_export(args: argparse.Namespace) -> int:
     from agents.planning.export import export_plan
 
-    for p in export_plan(args.plan, args.format, args.origin, args.out):
-        print(f"wrote {p}")
+    if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
+        _wrote(export_plan(args.plan, args.format, args.origin, args.out))
+        return 0
+    dest = Path(args.out) if args.out else Path(args.plan).parent
+    _check_out("out", dest, "folder")
+    with _output_folder("out", dest) as stage:
+        _wrote(export_plan(args.plan, args.format, args.origin, stage), stage, dest)
     return 0
 
 
 def cmd_figures(args: argparse.Namespace) -> int:
     from poc_env.viz.figures import pattern_gallery
 
+    _check_out("out", args.out, "folder")
     out = Path(args.out)
-    for p in pattern_gallery(out):
-        print(f"wrote {p}")
-    survey_args = argparse.Namespace(
-        scenario="paper_6_1", regions=None, map_file=None, out=str(out / "survey_paper_6_1")
-    )
-    return cmd_survey(survey_args)
+    with _output_folder("out", out) as stage:
+        _wrote(pattern_gallery(stage), stage, out)
+        survey_args = argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None)
+        name = "survey_paper_6_1"
+        return _survey(survey_args, _mkdir(stage / name), out / name)
+
+
+def _mkdir(path: Path) -> Path:
+    path.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
     """The main job on the built-in scenarios: survey, plan, and policies flown and scored."""
+    _check_int("episodes", args.episodes, 1)
+    _check_int("workers", args.workers, 1)
+    _check_out("out", args.out, "folder")
     out = Path(args.out)
-    print("== §6.1.1 polygon survey (Table 4 analog) ==")
-    cmd_survey(argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None, out=out))
-    print("\n== §6.2 time-limited plan with adaptive DE (Table 6 analog) ==")
-    cmd_plan(
-        argparse.Namespace(
+    with _output_folder("out", out) as stage:
+        print("== §6.1.1 polygon survey (Table 4 analog) ==")
+        _survey(argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None), stage, out)
+        print("\n== §6.2 time-limited plan with adaptive DE (Table 6 analog) ==")
+        plan_args = argparse.Namespace(
             scenario="paper_6_2",
             map_file=None,
             uavs=None,
@@ -273,25 +448,25 @@ def cmd_demo(args: argparse.Namespace) -> int:
             seed=0,
             popsize=None,
             maxiter=None,
-            out=str(out / "plan.json"),
-            plot=str(out / "plan.png"),
             quiet=True,
         )
-    )
-    print("\n== policies flown in the environment, same seeds ==")
-    return cmd_evaluate(
-        argparse.Namespace(
+        _plan(
+            plan_args,
+            stage / "plan.json",
+            stage / "plan.png",
+            (out / "plan.json", out / "plan.png"),
+        )
+        print("\n== policies flown in the environment, same seeds ==")
+        eval_args = argparse.Namespace(
             scenario="paper_6_2",
             map_file=None,
-            policies="de_plan,lawnmower,random",
             episodes=args.episodes,
             seed=1000,
             workers=args.workers,
-            out=str(out),
             random_priors=False,
             quiet=True,
         )
-    )
+        return _evaluate(eval_args, ["de_plan", "lawnmower", "random"], stage, out)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -414,6 +589,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    for opt in _NEGATIVE_VALUE_OPTIONS:  # "--origin -45,7" -> "--origin=-45,7"
+        while opt in argv[:-1]:
+            i = argv.index(opt)
+            argv[i : i + 2] = [f"{opt}={argv[i + 1]}"]
     args, rest = parser.parse_known_args(argv)
     if args.command == "train":
         args.train_options = rest

@@ -56,3 +56,89 @@ def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:
 def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically and return ``path``."""
     return write_bytes_atomic(path, text.encode("utf-8"))
+
+
+#: Prefix of a command's staging folder beside its output folder: ``.NAME.partial-PID-XXXX``.
+_STAGING = ".partial-"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def _clean_stale_staging(dest: Path) -> None:
+    """Remove staging folders of ``dest`` left by runs that were killed (their PID is gone)."""
+    import shutil
+
+    prefix = f".{dest.name}{_STAGING}"
+    try:
+        siblings = list(dest.parent.iterdir())
+    except OSError:
+        return
+    for p in siblings:
+        if not p.name.startswith(prefix) or not p.is_dir() or p.is_symlink():
+            continue
+        pid = p.name[len(prefix) :].split("-", 1)[0]
+        if pid.isdigit() and not _pid_alive(int(pid)):
+            shutil.rmtree(p, ignore_errors=True)
+
+
+def _merge_into(src: Path, dest: Path) -> None:
+    """Move every file of ``src`` into ``dest`` (same file system), replacing same-named files."""
+    for entry in sorted(src.iterdir()):
+        target = dest / entry.name
+        if entry.is_dir() and not entry.is_symlink() and target.is_dir():
+            _merge_into(entry, target)
+        else:
+            if target.is_dir() and not target.is_symlink():
+                import shutil
+
+                shutil.rmtree(target)
+            os.replace(entry, target)
+
+
+@contextlib.contextmanager
+def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a staging folder beside ``path``; put its files in place if the block succeeds.
+
+    A command writes its whole output into the staging folder (a hidden sibling
+    ``.NAME.partial-PID-XXXX`` on the same file system), so a kill or an error during the run
+    leaves the destination as it was. When the block succeeds:
+
+    * ``path`` absent or an empty folder: the staging folder is renamed to ``path`` -- the
+      output appears complete, in one step, or not at all;
+    * ``path`` an existing folder with files (a previous run, or a folder the user keeps other
+      files in, such as ``--out .``): each new file replaces its namesake with an atomic
+      rename, at the very end; files the command does not write are left alone.
+
+    On an exception the staging folder is removed and the exception propagates. Staging
+    folders of killed runs (whose process is gone) are removed by the next run into ``path``.
+    """
+    import shutil
+
+    dest = Path(path)
+    if dest.is_symlink() and dest.is_dir():  # stage beside the real folder (same file system)
+        dest = dest.resolve()
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    _clean_stale_staging(dest)
+    stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=dest.parent))
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(stage, 0o777 & ~umask)  # mkdtemp makes it 0o700; a plain mkdir would not
+        yield stage
+        if dest.is_dir() and not dest.is_symlink() and not any(dest.iterdir()):
+            dest.rmdir()
+        if not dest.exists():
+            os.rename(stage, dest)
+        else:
+            _merge_into(stage, dest)
+    finally:
+        if stage.exists():
+            shutil.rmtree(stage, ignore_errors=True)

@@ -50,7 +50,7 @@ import numpy as np
 
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
-from poc_env.io import write_text_atomic
+from poc_env.io import atomic_dir, write_text_atomic
 
 #: Table 4 / 5 of the paper: (track km, POD, POC, POS) per UAV, and POS_C.
 PAPER_TABLE4 = (
@@ -723,14 +723,16 @@ def run_experiment(
     results = []
     try:
         for n in names:
-            folder = Path(out) / n
+            final = Path(out) / n
             t0 = time.perf_counter()
-            res = EXPERIMENTS[n](budget, runner, folder, seed)
-            wall = time.perf_counter() - t0
-            res.files[:0] = [
-                write_text_atomic(folder / f"{n}.csv", res.csv()),
-                write_text_atomic(folder / f"{n}.txt", res.table + "\n"),
-            ]
+            with atomic_dir(final) as folder:  # each experiment's folder: complete or absent
+                res = EXPERIMENTS[n](budget, runner, folder, seed)
+                wall = time.perf_counter() - t0
+                res.files[:0] = [
+                    write_text_atomic(folder / f"{n}.csv", res.csv()),
+                    write_text_atomic(folder / f"{n}.txt", res.table + "\n"),
+                ]
+            res.files = [final / Path(p).relative_to(folder) for p in res.files]
             results.append(res)
             if echo is not None:
                 echo(f"\n== {n} ({'quick' if quick else 'paper budget'}, {wall:.1f} s) ==")

@@ -17,7 +17,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from poc_env.envs.parallel import UAVSearchParallelEnv
+from poc_env.envs.parallel import UAVSearchParallelEnv, check_seed
+from poc_env.errors import ConfigError
 from poc_env.sim import core as sim
 
 
@@ -46,13 +47,14 @@ class UAVSearchGym(gym.Env):
         return np.concatenate([self._last[a] for a in self.par.possible_agents])
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        check_seed(seed)
         super().reset(seed=seed)
         self._last = {}
         obs, infos = self.par.reset(seed=seed, options=options)
         return self._joint(obs), {"agents": infos}
 
     def step(self, action):
-        a = np.asarray(action, dtype=float).reshape(len(self.par.possible_agents), 3)
+        a = self._action_array(action)
         acts = {ag: a[k] for k, ag in enumerate(self.par.possible_agents) if ag in self.par.agents}
         obs, rew, _term, _trunc, infos = self.par.step(acts)
         reward = float(np.mean(list(rew.values()))) if rew else 0.0
@@ -62,6 +64,18 @@ class UAVSearchGym(gym.Env):
         terminated = done and not truncated
         info = {"agents": infos, "posc": float(st.posc[0])}
         return self._joint(obs), reward, terminated, truncated, info
+
+    def _action_array(self, action) -> np.ndarray:
+        """The joint action as an (N, 3) float array; ConfigError naming ``action`` otherwise."""
+        n = len(self.par.possible_agents)
+        allowed = f"{3 * n} finite real numbers in [-1, 1] (shape ({3 * n},))"
+        try:
+            a = np.asarray(action)
+        except (ValueError, TypeError):  # ragged nesting
+            raise ConfigError("action", action, allowed) from None
+        if a.dtype.kind not in "biuf" or a.size != 3 * n or not np.isfinite(a).all():
+            raise ConfigError("action", action, allowed)
+        return a.astype(float, copy=False).reshape(n, 3)
 
     def render(self):
         return self.par.render()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from typing import Any
 
@@ -17,6 +18,18 @@ from poc_env.sim.rewards import reward_terms, total_reward
 from poc_env.theory.probability_map import Grid, load_map, validate_map
 
 OBS_TYPES = ("dict", "flat")
+#: Array kinds an action may have: bool, signed and unsigned integer, real float.
+_NUMERIC_KINDS = "biuf"
+_ACTION_ALLOWED = "3 finite real numbers in [-1, 1] (a list or array, not strings or complex)"
+
+
+def check_seed(seed: Any, field: str = "seed") -> Any:
+    """Return ``seed`` if it is None, an integer >= 0 or a ``numpy.random.SeedSequence``."""
+    if seed is None or isinstance(seed, np.random.SeedSequence):
+        return seed
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ConfigError(field, seed, "None, an integer >= 0 or a numpy SeedSequence")
+    return seed
 
 
 class EpisodeOverError(PocEnvError, RuntimeError):
@@ -146,6 +159,8 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise ConfigError("render_mode", render_mode, "None, 'rgb_array' or 'human'")
         if obs_type not in OBS_TYPES:
             raise ConfigError("obs_type", obs_type, "'dict' or 'flat'")
+        if map_file is not None and not isinstance(map_file, str | os.PathLike):
+            raise ConfigError("map_file", map_file, "None or a path to a .npy or .csv prior map")
         self.scenario = load_scenario(scenario, resolve_overrides(overrides, kwargs))
         grid = Grid.from_config(self.scenario.map)
         prior = load_map(map_file, grid) if map_file is not None else None
@@ -202,6 +217,9 @@ class UAVSearchParallelEnv(ParallelEnv):
         return self._state
 
     def reset(self, seed: int | None = None, options: dict | None = None):
+        check_seed(seed)
+        if options is not None and not isinstance(options, Mapping):
+            raise ConfigError("options", options, "None or a dict (key 'prior': a map)")
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         prior = None
@@ -233,15 +251,24 @@ class UAVSearchParallelEnv(ParallelEnv):
         return {a: flat[index[a]] for a in self.agents}
 
     def _actions_array(self, actions: Mapping[str, Any]) -> np.ndarray:
+        if not isinstance(actions, Mapping):
+            raise ConfigError(
+                "actions", actions, f"a dict {{agent: action}} of the live agents {self.agents}"
+            )
         agents = self.agents
         if len(actions) == len(agents):  # fast path: one well-formed action per live agent
             try:
-                arr = np.array([actions[a] for a in agents], dtype=float)
+                arr = np.array([actions[a] for a in agents])
             except (KeyError, ValueError, TypeError):
                 arr = None
-            if arr is not None and arr.shape == (len(agents), 3) and np.isfinite(arr).all():
+            if (
+                arr is not None
+                and arr.dtype.kind in _NUMERIC_KINDS
+                and arr.shape == (len(agents), 3)
+                and np.isfinite(arr).all()
+            ):
                 if len(agents) == self.params.n_agents:
-                    return arr[None]
+                    return arr.astype(float, copy=False)[None]
                 out = np.zeros((1, self.params.n_agents, 3))
                 out[0, [self._index[a] for a in agents]] = arr
                 return out
@@ -255,11 +282,17 @@ class UAVSearchParallelEnv(ParallelEnv):
             i = self._check_agent(agent)
             if agent not in self.agents:
                 continue  # an action for a finished agent is ignored
-            a = np.asarray(act, dtype=float)
+            field = f"actions[{agent}]"
+            try:
+                a = np.asarray(act)
+            except (ValueError, TypeError):  # ragged nesting
+                raise ConfigError(field, act, _ACTION_ALLOWED) from None
+            if a.dtype.kind not in _NUMERIC_KINDS:
+                raise ConfigError(field, act, _ACTION_ALLOWED)
             if a.shape != (3,):
-                raise ConfigError(f"actions[{agent!r}]", a.shape, "shape (3,)")
+                raise ConfigError(field, act, f"shape (3,): {_ACTION_ALLOWED}")
             if not np.all(np.isfinite(a)):
-                raise ConfigError(f"actions[{agent!r}]", a.tolist(), "finite numbers in [-1, 1]")
+                raise ConfigError(field, a.tolist(), _ACTION_ALLOWED)
             arr[0, i] = a
         missing = [a for a in self.agents if a not in actions]
         if missing:
@@ -374,6 +407,12 @@ class UAVSearchParallelEnv(ParallelEnv):
             self._renderer.record(self.sim_state)
         frame = self._renderer.frame(self.sim_state)
         return frame if self.render_mode == "rgb_array" else None
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle without the renderer (a matplotlib figure); a copy draws afresh."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
 
     def close(self) -> None:
         if self._renderer is not None:

@@ -1,0 +1,86 @@
+"""Bad command-line arguments end in ``error: <field>: ...`` with exit 2, before any output.
+
+Every case checks the exit status, the message naming the field, the absence of a traceback,
+and that the working folder holds exactly what it held before (no partial result).
+"""
+
+import os
+import sys
+
+import pytest
+
+from poc_env.cli import main
+
+
+def _tree(root):
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
+
+
+# (argv with {d}: a folder, {f}: a file, {p}: a stand-in plan.json; the field in the error)
+CASES = [
+    (["survey", "--out", "{f}"], "out"),
+    (["survey", "--out", "{f}/sub"], "out"),
+    (["evaluate", "--episodes", "1", "--out", "{f}"], "out"),
+    (["evaluate", "--episodes", "1", "--out", "{f}/sub/deeper"], "out"),
+    (["render", "--max-steps", "2", "--out", "{d}"], "out"),
+    (["render", "--max-steps", "2", "--out", "{f}/ep.gif"], "out"),
+    (["plan", "--scenario", "small", "--out", "{d}"], "out"),
+    (["plan", "--scenario", "small", "--out", "{f}/plan.json"], "out"),
+    (["plan", "--scenario", "small", "--out", "{d}/plan.json", "--plot", "{d}"], "plot"),
+    (["plan", "--scenario", "small", "--out", "{d}/plan.json", "--plot", "{f}/p.png"], "plot"),
+    (["figures", "--out", "{f}"], "out"),
+    (["demo", "--out", "{f}/demo"], "out"),
+    (["experiment", "table4", "--quick", "--out", "{f}"], "out"),
+    (["export", "{p}", "--format", "geojson", "--origin", "45,7", "--out", "{f}"], "out"),
+    (["curve", "{d}", "--out", "{d}"], "out"),
+    (["train", "--scenario", "small", "--run-dir", "{f}"], "run_dir"),
+    (["train", "--scenario", "small", "--run-dir", "{f}/run"], "run_dir"),
+    (["train", "--scenario", "small", "--n-envs", "1000000000"], "n_envs"),
+    (["render", "--seed", "-1", "--out", "{d}/ep.gif"], "seed"),
+    (["evaluate", "--seed", "-1", "--episodes", "1"], "seed"),
+    (["plan", "--scenario", "small", "--seed", "-1", "--out", "{d}/plan.json"], "seed"),
+    (["evaluate", "--policies", "", "--episodes", "1"], "policies"),
+    (["evaluate", "--policies", " , ", "--episodes", "1"], "policies"),
+    (["plan", "--scenario", "small", "--popsize", "0", "--out", "{d}/plan.json"], "popsize"),
+    (["plan", "--popsize", str(10**12), "--out", "{d}/plan.json"], "popsize"),
+    (["plan", "--scenario", "small", "--maxiter", "0", "--out", "{d}/plan.json"], "maxiter"),
+    (["evaluate", "--episodes", "0"], "episodes"),
+    (["render", "--every", "0", "--out", "{d}/ep.gif"], "every"),
+]
+if sys.platform.startswith("linux") and os.path.isdir("/proc/1"):
+    # a folder nobody can create entries in, even root
+    CASES.append((["survey", "--out", "/proc/1/poc-env-out"], "out"))
+
+
+@pytest.mark.parametrize("argv, field", CASES, ids=[" ".join(c[0]) for c in CASES])
+def test_bad_argument_is_a_clear_error(tmp_path, monkeypatch, capsys, argv, field):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "d").mkdir()
+    (tmp_path / "f").write_text("a file")
+    (tmp_path / "plan.json").write_text("{}")
+    names = {"d": str(tmp_path / "d"), "f": str(tmp_path / "f"), "p": str(tmp_path / "plan.json")}
+    before = _tree(tmp_path)
+    code = main([a.format(**names) for a in argv])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert f"error: {field}: got " in err and "allowed:" in err
+    assert "Traceback" not in err
+    assert _tree(tmp_path) == before
+    assert (tmp_path / "f").read_text() == "a file"
+
+
+def test_origin_may_start_with_a_minus(tmp_path, capsys):
+    plan = tmp_path / "plan.json"
+    args = ["--scenario", "small", "--popsize", "8", "--maxiter", "1", "--quiet"]
+    assert main(["plan", *args, "--out", str(plan)]) == 0
+    out = tmp_path / "export"
+    assert (
+        main(["export", str(plan), "--format", "geojson", "--origin", "-45,7", "--out", str(out)])
+        == 0
+    )
+    text = (out / "plan.geojson").read_text()
+    assert '"type"' in text
+    assert (
+        main(["export", str(plan), "--format", "kml", "--origin=-45.5,-7", "--out", str(out)]) == 0
+    )
+    assert "error" not in capsys.readouterr().err
