@@ -1,0 +1,117 @@
+"""A command's output folder is complete or absent: a failed run leaves the old one intact."""
+
+import subprocess
+import sys
+
+import pytest
+
+from poc_env.cli import main
+from poc_env.io import atomic_dir
+
+
+def _leftovers(root):
+    return [p.name for p in root.rglob(".*partial-*")]
+
+
+def test_atomic_dir_new_folder_appears_complete_or_not_at_all(tmp_path):
+    dest = tmp_path / "out"
+    with pytest.raises(RuntimeError), atomic_dir(dest) as stage:
+        (stage / "a.txt").write_text("first")
+        raise RuntimeError("killed")
+    assert not dest.exists() and not _leftovers(tmp_path)
+    with atomic_dir(dest) as stage:
+        (stage / "a.txt").write_text("first")
+        (stage / "sub").mkdir()
+        (stage / "sub" / "b.txt").write_text("second")
+        assert not dest.exists()
+    assert (dest / "a.txt").read_text() == "first"
+    assert (dest / "sub" / "b.txt").read_text() == "second"
+    assert not _leftovers(tmp_path)
+
+
+def test_atomic_dir_existing_folder_keeps_other_files(tmp_path):
+    dest = tmp_path / "mine"
+    dest.mkdir()
+    (dest / "notes.txt").write_text("the user's")
+    (dest / "a.txt").write_text("old")
+    with pytest.raises(RuntimeError), atomic_dir(dest) as stage:
+        (stage / "a.txt").write_text("new")
+        raise RuntimeError("killed")
+    assert (dest / "a.txt").read_text() == "old"
+    with atomic_dir(dest) as stage:
+        (stage / "a.txt").write_text("new")
+        (stage / "b.txt").write_text("new too")
+        assert (dest / "a.txt").read_text() == "old"
+    assert (dest / "a.txt").read_text() == "new"
+    assert (dest / "b.txt").read_text() == "new too"
+    assert (dest / "notes.txt").read_text() == "the user's"
+    assert not _leftovers(tmp_path)
+
+
+def test_staging_of_a_killed_run_is_removed(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    dead = int(proc.stdout)
+    stale = tmp_path / f".out.partial-{dead}-abc"
+    stale.mkdir()
+    (stale / "half.csv").write_text("x")
+    with atomic_dir(tmp_path / "out") as stage:
+        (stage / "a.txt").write_text("a")
+    assert not stale.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_failed_survey_leaves_the_previous_output(tmp_path, monkeypatch):
+    import poc_env.viz.plots as plots
+
+    out = tmp_path / "s"
+    assert main(["survey", "--scenario", "paper_6_1", "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(before) == ["survey.csv", "survey.png", "survey.txt"]
+    (out / "survey.csv").write_text("previous run")
+    before["survey.csv"] = b"previous run"
+
+    def broken(*args, **kwargs):
+        raise KeyboardInterrupt  # a kill while the figure is drawn, after the CSV was written
+
+    monkeypatch.setattr(plots, "plot_survey", broken)
+    with pytest.raises(KeyboardInterrupt):
+        main(["survey", "--scenario", "paper_6_1", "--out", str(out)])
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert not _leftovers(tmp_path)
+
+
+def test_failed_evaluate_writes_nothing(tmp_path, monkeypatch):
+    import agents.experiments.evaluate as evaluate
+
+    def broken(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(evaluate, "plot_curves", broken)
+    out = tmp_path / "ev"
+    argv = ["evaluate", "--scenario", "small", "--episodes", "1", "--quiet", "--out", str(out)]
+    with pytest.raises(KeyboardInterrupt):
+        main(argv)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_plan_and_its_plot_are_written_together(tmp_path, monkeypatch):
+    import agents.planning.planner as planner
+
+    def broken(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(planner, "plot_plan", broken)
+    plan, plot = tmp_path / "plan.json", tmp_path / "plan.png"
+    argv = ["plan", "--scenario", "small", "--popsize", "8", "--maxiter", "1", "--quiet"]
+    with pytest.raises(KeyboardInterrupt):
+        main([*argv, "--out", str(plan), "--plot", str(plot)])
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    assert main([*argv, "--out", str(plan), "--plot", str(plot)]) == 0
+    assert plan.stat().st_size > 0 and plot.stat().st_size > 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.json", "plan.png"]
