@@ -540,8 +540,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="adaptive_de, classic_de, chaotic_abc, grouped_pso, scipy_de, cmaes",
     )
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--popsize", type=int, default=None, help="default: scenario planner NP")
-    p.add_argument("--maxiter", type=int, default=None, help="default: scenario planner G")
+    p.add_argument(
+        "--popsize",
+        type=int,
+        default=None,
+        help=f"default: scenario planner NP; 4 to {POPSIZE_MAX}",
+    )
+    p.add_argument(
+        "--maxiter", type=int, default=None, help=f"default: scenario planner G; 1 to {MAXITER_MAX}"
+    )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -550,7 +557,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("export", help="a plan.json as GeoJSON, KML or QGroundControl missions")
     p.add_argument("plan", help="plan.json (schema 1)")
     p.add_argument("--format", required=True, help="geojson, kml or qgc")
-    p.add_argument("--origin", required=True, help="LAT,LON of the map's (0, 0), degrees")
+    p.add_argument(
+        "--origin", required=True, help="LAT,LON of the map's (0, 0), degrees (e.g. -45.5,126.6)"
+    )
     p.add_argument("--out", default=None, help="folder (default: beside the plan)")
     p.set_defaults(func=cmd_export)
 
