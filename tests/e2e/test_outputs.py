@@ -115,3 +115,36 @@ def test_plan_and_its_plot_are_written_together(tmp_path, monkeypatch):
     assert main([*argv, "--out", str(plan), "--plot", str(plot)]) == 0
     assert plan.stat().st_size > 0 and plot.stat().st_size > 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.json", "plan.png"]
+
+
+def test_kill_during_writing_leaves_old_or_new_output(tmp_path):
+    """SIGKILL once a new run has started writing: the folder is the old run's or the new one's."""
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "s"
+    out.mkdir()
+    old = {"survey.csv": b"old csv", "survey.txt": b"old txt", "survey.png": b"old png"}
+    for name, data in old.items():
+        (out / name).write_bytes(data)
+    argv = [sys.executable, "-m", "poc_env.cli", "survey", "--scenario", "paper_6_1"]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen([*argv, "--out", str(out)], env=env, stdout=subprocess.DEVNULL)
+    try:
+        while proc.poll() is None and not (
+            list(tmp_path.glob(".s.partial-*/survey.csv"))
+            or (out / "survey.csv").read_bytes() != old["survey.csv"]
+        ):
+            time.sleep(0.01)  # until the new run has written its first file
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    files = {p.name: p.read_bytes() for p in out.iterdir()}
+    killed_before_the_end = files == old
+    if not killed_before_the_end:  # the run finished first: the new output, complete
+        assert sorted(files) == sorted(old) and all(files[n] != old[n] for n in old)
+    # the next run cleans the killed run's staging folder
+    subprocess.run([*argv, "--out", str(out)], env=env, check=True, stdout=subprocess.DEVNULL)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s"]
+    assert (out / "survey.csv").read_bytes() != old["survey.csv"]
