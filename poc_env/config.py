@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
 from poc_env._kernels import LAW_CODES
@@ -521,6 +522,18 @@ def _strip_optional(tp: Any) -> Any:
     return tp
 
 
+def _plain(value: Any) -> Any:
+    """numpy scalars and arrays as the Python numbers and lists they hold (``np.int64(1)`` ->
+    ``1``), so that unit scaling and validation treat them exactly like YAML values."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return type(value)(_plain(v) for v in value)
+    return value
+
+
 def _scale_value(value: Any, scale: float) -> Any:
     if scale == 1.0 or value is None:
         return value
@@ -549,7 +562,7 @@ def _from_mapping(cls: type, data: Any, where: str) -> Any:
             if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
                 raise ConfigError(f"{where}.{key}" if where else key, None, "a value (required)")
             continue
-        value = data[key]
+        value = _plain(data[key])
         sub = f"{where}.{key}" if where else key
         tp = _strip_optional(hints[f.name])
         if isinstance(tp, type) and dataclasses.is_dataclass(tp):

@@ -163,3 +163,23 @@ def test_config_error_survives_pickling():
     err = ConfigError("uav.endurance_h", -1, "a number > 0")
     back = pickle.loads(pickle.dumps(err))
     assert isinstance(back, ConfigError) and str(back) == str(err) and back.field == err.field
+
+
+@pytest.mark.parametrize(
+    "key,value,attr,expected",
+    [
+        ("uav.endurance_h", np.int64(1), ("uav", "endurance_s"), 3600.0),
+        ("uav.endurance_h", np.float32(0.5), ("uav", "endurance_s"), 1800.0),
+        ("sensor.sweep_width_km", np.int64(2), ("sensor", "sweep_width_m"), 2000.0),
+        ("map.cell_km", np.int64(5), ("map", "cell_m"), 5000.0),
+        ("uav.max_speed_kmh", np.float64(250.0), ("uav", "max_speed_mps"), 250 / 3.6),
+    ],
+)
+def test_numpy_scalars_get_the_same_units_as_python_numbers(key, value, attr, expected):
+    """A numpy scalar is converted once, like the Python number it holds (np.int64(1) hours
+    was once taken as 1 second)."""
+    sc = load_scenario("small", overrides={key: value})
+    plain = load_scenario("small", overrides={key: value.item()})
+    got = getattr(getattr(sc, attr[0]), attr[1])
+    assert got == pytest.approx(expected)
+    assert got == getattr(getattr(plain, attr[0]), attr[1])
