@@ -125,9 +125,11 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
     dest = Path(path)
     if dest.is_symlink() and dest.is_dir():  # stage beside the real folder (same file system)
         dest = dest.resolve()
+    created = [p for p in (dest.parent, *dest.parent.parents) if not p.exists()]
     dest.parent.mkdir(parents=True, exist_ok=True)
     _clean_stale_staging(dest)
     stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=dest.parent))
+    done = False
     try:
         umask = os.umask(0)
         os.umask(umask)
@@ -139,6 +141,11 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
             os.rename(stage, dest)
         else:
             _merge_into(stage, dest)
+        done = True
     finally:
         if stage.exists():
             shutil.rmtree(stage, ignore_errors=True)
+        if not done:  # a failed command leaves no folders behind either
+            for folder in created:  # deepest first
+                with contextlib.suppress(OSError):
+                    folder.rmdir()

@@ -13,6 +13,11 @@ equidistant) before exporting.
 ``uavs``: a list of {``id``, ``rectangle`` {``center_m`` [x, y], ``length_m``, ``width_m``,
 ``theta_deg``}, ``spacing_m``, ``takeoff_m``, ``landing_m``, ``waypoints_m`` [[x, y], ...],
 ``track_length_m``, ``flight_time_s``, ``pod``, ``poc``, ``pos``, ``feasible``}.
+
+:func:`load_plan` checks every field an export reads before anything is written: finite numbers
+in documented ranges (points within :data:`MAX_EXTENT_M` of the origin, probabilities in
+[0, 1]), the right shapes, and UAV ids of 1-64 ``A-Z a-z 0-9 _ -`` (they become file names), so
+no NaN, no out-of-range latitude and no path outside ``--out`` can reach a mission file.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import escape
@@ -65,7 +71,18 @@ def to_geographic(xy, origin: tuple[float, float]) -> list[tuple[float, float]]:
     lat0, lon0 = origin
     m, n = _radii(lat0)
     c = math.cos(math.radians(lat0))
-    return [(lat0 + math.degrees(y / m), lon0 + math.degrees(x / (n * c))) for x, y in xy]
+    out = []
+    for x, y in xy:
+        lat = lat0 + math.degrees(y / m)
+        lon = lon0 + math.degrees(x / (n * c))
+        if not -180.0 <= lon <= 180.0:  # across the antimeridian
+            lon = (lon + 180.0) % 360.0 - 180.0
+        if not (math.isfinite(lat) and math.isfinite(lon) and -90.0 <= lat <= 90.0):
+            raise ConfigError(
+                "waypoints", [x, y], f"points whose latitude from origin {origin} is within +-90"
+            )
+        out.append((lat, lon))
+    return out
 
 
 def to_local(latlon, origin: tuple[float, float]) -> list[tuple[float, float]]:
@@ -94,17 +111,71 @@ def load_plan(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError(f"plan.{missing[0]}", None, "present (schema 1 field)")
     if not isinstance(plan["uavs"], list) or not plan["uavs"]:
         raise ConfigError("plan.uavs", plan["uavs"], "a non-empty list of UAV plans")
+    _number("plan.posc", plan["posc"], 0.0, 1.0)
+    ids: set[str] = set()
     for k, u in enumerate(plan["uavs"]):
+        where = f"plan.uavs[{k}]"
         miss = sorted(UAV_KEYS - set(u)) if isinstance(u, dict) else ["id"]
         if miss:
-            raise ConfigError(f"plan.uavs[{k}].{miss[0]}", None, "present (schema 1 field)")
-        wps = u["waypoints_m"]
-        if not isinstance(wps, list) or not all(
-            isinstance(w, list) and len(w) == 2 and all(isinstance(v, (int, float)) for v in w)
-            for w in wps
+            raise ConfigError(f"{where}.{miss[0]}", None, "present (schema 1 field)")
+        uid = u["id"]
+        if (
+            isinstance(uid, bool)
+            or not isinstance(uid, (int, str))
+            or not _SAFE_ID.fullmatch(str(uid))
         ):
-            raise ConfigError(f"plan.uavs[{k}].waypoints_m", "...", "a list of [x, y] numbers")
+            raise ConfigError(f"{where}.id", uid, "an integer >= 0 or 1-64 of A-Z a-z 0-9 _ -")
+        if str(uid) in ids:
+            raise ConfigError(f"{where}.id", uid, "unique among the plan's UAVs")
+        ids.add(str(uid))
+        _point(f"{where}.takeoff_m", u["takeoff_m"])
+        _point(f"{where}.landing_m", u["landing_m"])
+        wps = u["waypoints_m"]
+        if not isinstance(wps, list):
+            raise ConfigError(f"{where}.waypoints_m", wps, "a list of [x, y] points in metres")
+        for i, w in enumerate(wps):
+            _point(f"{where}.waypoints_m[{i}]", w)
+        r = u["rectangle"]
+        if not isinstance(r, dict) or sorted(r) != ["center_m", "length_m", "theta_deg", "width_m"]:
+            raise ConfigError(
+                f"{where}.rectangle", r, "a mapping of center_m, length_m, width_m, theta_deg"
+            )
+        _point(f"{where}.rectangle.center_m", r["center_m"])
+        for key in ("length_m", "width_m"):
+            _number(f"{where}.rectangle.{key}", r[key], 0.0, MAX_EXTENT_M)
+        _number(f"{where}.rectangle.theta_deg", r["theta_deg"], -360.0, 360.0)
+        for key in ("spacing_m", "track_length_m"):
+            _number(f"{where}.{key}", u[key], 0.0, 100 * MAX_EXTENT_M)
+        _number(f"{where}.flight_time_s", u["flight_time_s"], 0.0, 1e7)
+        for key in ("pod", "poc", "pos"):
+            _number(f"{where}.{key}", u[key], 0.0, 1.0)
+        if not isinstance(u["feasible"], bool):
+            raise ConfigError(f"{where}.feasible", u["feasible"], "true or false")
     return plan
+
+
+#: Largest |x| or |y| of a plan point, metres: 2,000 km from the map origin, far beyond a
+#: regional search (the projection is accurate to about 0.1 % within 200 km).
+MAX_EXTENT_M = 2.0e6
+_SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
+
+
+def _number(field: str, value: Any, lo: float, hi: float) -> float:
+    """``value`` as a float if it is a finite JSON number in [lo, hi], else ConfigError."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(field, value, f"a number in [{lo:g}, {hi:g}]")
+    x = float(value)
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise ConfigError(field, value, f"a finite number in [{lo:g}, {hi:g}]")
+    return x
+
+
+def _point(field: str, value: Any) -> None:
+    """An [x, y] point in metres within :data:`MAX_EXTENT_M` of the origin."""
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ConfigError(field, value, "[x, y] in metres")
+    for v in value:
+        _number(field, v, -MAX_EXTENT_M, MAX_EXTENT_M)
 
 
 def _route(u: dict) -> list[list[float]]:
@@ -213,11 +284,16 @@ def export_plan(
     stem = Path(plan_path).stem
     if fmt == "geojson":
         return [
-            write_text_atomic(out / f"{stem}.geojson", json.dumps(geojson(plan, org), indent=1))
+            write_text_atomic(
+                out / f"{stem}.geojson", json.dumps(geojson(plan, org), indent=1, allow_nan=False)
+            )
         ]
     if fmt == "kml":
         return [write_text_atomic(out / f"{stem}.kml", kml(plan, org))]
     return [
-        write_text_atomic(out / f"{stem}_uav{u['id']}.plan", json.dumps(qgc_plan(u, org), indent=1))
+        write_text_atomic(
+            out / f"{stem}_uav{u['id']}.plan",
+            json.dumps(qgc_plan(u, org), indent=1, allow_nan=False),
+        )
         for u in plan["uavs"]
     ]

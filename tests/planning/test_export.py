@@ -1,6 +1,7 @@
 """Mission export: GeoJSON, KML and QGroundControl files parse back to the same waypoints."""
 
 import json
+import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -112,3 +113,72 @@ def test_cli_export(tmp_path, capsys):
     assert (tmp_path / "plan.kml").is_file()
     assert main(["export", str(path), "--format", "shp", "--origin", "45,126"]) == 2
     assert "format" in capsys.readouterr().err
+
+
+def _set(plan, dotted, value):
+    """Set ``uavs[0].waypoints_m[0]``-style paths in a plan dict."""
+    import re
+
+    obj = plan
+    parts = re.findall(r"[^.\[\]]+", dotted)
+    for p in parts[:-1]:
+        obj = obj[int(p)] if p.isdigit() else obj[p]
+    last = parts[-1]
+    obj[int(last) if last.isdigit() else last] = value
+
+
+HOSTILE = [
+    ("uavs.0.waypoints_m.0", [float("nan"), 0.0], r"uavs\[0\]\.waypoints_m\[0\]"),
+    ("uavs.0.waypoints_m.0", [1e300, 1e300], r"uavs\[0\]\.waypoints_m\[0\]"),
+    ("uavs.0.waypoints_m.0", [float("inf"), 0.0], r"uavs\[0\]\.waypoints_m\[0\]"),
+    ("uavs.0.takeoff_m", [1], r"uavs\[0\]\.takeoff_m"),
+    ("uavs.0.landing_m", [float("nan"), 0.0], r"uavs\[0\]\.landing_m"),
+    ("uavs.0.rectangle.theta_deg", "north", r"rectangle\.theta_deg"),
+    ("uavs.0.rectangle", None, r"uavs\[0\]\.rectangle"),
+    ("uavs.0.pos", "high", r"uavs\[0\]\.pos"),
+    ("uavs.0.pod", float("nan"), r"uavs\[0\]\.pod"),
+    ("uavs.0.id", "../../../escaped", r"uavs\[0\]\.id"),
+    ("uavs.0.id", "a/b", r"uavs\[0\]\.id"),
+    ("uavs.1.id", 1, r"uavs\[1\]\.id"),  # the same id twice
+    ("posc", float("inf"), r"plan\.posc"),
+]
+
+
+@pytest.mark.parametrize("fmt", ["qgc", "geojson", "kml"])
+@pytest.mark.parametrize(
+    "dotted,value,field", HOSTILE, ids=[h[0] + "=" + repr(h[1]) for h in HOSTILE]
+)
+def test_hostile_plan_fields_are_refused_before_writing(
+    tmp_path, capsys, fmt, dotted, value, field
+):
+    """NaN or huge coordinates, malformed fields and unsafe ids end with a clear error naming
+    the field, exit status 2, and no file written anywhere (not even outside --out)."""
+    _, plan = _plan(tmp_path)
+    _set(plan, dotted, value)
+    src = tmp_path / "in" / "plan.json"
+    src.parent.mkdir()
+    src.write_text(json.dumps(plan))  # NaN/inf become the non-standard tokens Python reads back
+    out = tmp_path / "a" / "b" / "out"
+    before = sorted(p for p in tmp_path.rglob("*"))
+    code = main(["export", str(src), "--format", fmt, "--origin", "45.5,126.6", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert re.search(field, err), err
+    assert "Traceback" not in err
+    assert sorted(p for p in tmp_path.rglob("*")) == before
+
+
+def test_exports_hold_only_finite_coordinates(tmp_path):
+    """A valid plan near the antimeridian exports strict JSON with longitudes in [-180, 180]."""
+    path, _ = _plan(tmp_path)
+    for fmt in ("geojson", "qgc"):
+        for f in export_plan(path, fmt, (10.0, 179.5), tmp_path / fmt):
+            text = f.read_text()
+            assert "NaN" not in text and "Infinity" not in text, f.name
+            data = json.loads(text)
+            coords = (
+                [c for feat in data["features"] for c in np.ravel(feat["geometry"]["coordinates"])]
+                if fmt == "geojson"
+                else [v for it in data["mission"]["items"] for v in it["params"][4:6]]
+            )
+            assert np.all(np.isfinite(coords)) and np.all(np.abs(coords) <= 180.0)
