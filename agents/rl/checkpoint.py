@@ -293,18 +293,19 @@ def save_checkpoint(model: BaseAlgorithm, env: VecEnv, run_dir: Path, keep: int 
     step = int(model.num_timesteps)
     folder = run_dir / "checkpoints"
     zpath, spath, epath = _files(folder, step)
-    with atomic_path(zpath, suffix=".zip") as tmp:
-        model.save(tmp)
     state = {
         "step": step,
         "rng": global_rng_states(),
         "env_generators": [[g.bit_generator.state for g in gs] for gs in env_generators(env)],
     }
-    write_json(spath, state)
+    with atomic_path(zpath, suffix=".zip") as tmp:
+        model.save(tmp)
     has_env = isinstance(env, SwarmVecEnv) and env.state is not None
     if has_env:
         with atomic_path(epath, suffix=".npz") as tmp, open(tmp, "wb") as fh:
             np.savez(fh, allow_pickle=False, **env_snapshot(env))
+    # the state file is written last: its presence marks the checkpoint complete
+    write_json(spath, {**state, "env": has_env})
     latest = {
         "step": step,
         "model": zpath.relative_to(run_dir).as_posix(),
@@ -331,30 +332,60 @@ def checkpoint_steps(run_dir: Path) -> list[int]:
     return sorted(out)
 
 
+def _complete(run_dir: Path, step: int) -> Checkpoint | None:
+    """Checkpoint ``step`` if all its files are there, else None. The state file is written last
+    (:func:`save_checkpoint`), so a model without it is a checkpoint interrupted mid-way."""
+    zpath, spath, epath = _files(run_dir / "checkpoints", step)
+    if not (zpath.is_file() and spath.is_file()):
+        return None
+    try:
+        wants_env = bool(json.loads(spath.read_text(encoding="utf-8")).get("env", False))
+    except (OSError, ValueError, AttributeError):
+        return None
+    if wants_env and not epath.is_file():
+        return None
+    return Checkpoint(step, zpath, spath, epath if epath.is_file() else None)
+
+
 def latest_checkpoint(run_dir: Path) -> Checkpoint | None:
-    """The newest checkpoint: the one ``latest.json`` names, else the highest-numbered one on
-    disk; None if there is none."""
+    """The newest complete checkpoint (model, state and env snapshot all present); None if there
+    is none.
+
+    ``latest.json`` names the newest one; it must point inside ``run_dir/checkpoints``. A
+    checkpoint cut off by a kill (a model file without its state) is skipped with a warning:
+    resuming from it would restore the weights without the generators and silently diverge.
+    """
     pointer = run_dir / "latest.json"
+    folder = (run_dir / "checkpoints").resolve()
     if pointer.is_file():
         data = read_json(pointer, "latest.json")
         try:
             step = int(data["step"])
-            model = run_dir / data["model"]
-            state = run_dir / data["state"]
-            env = run_dir / data["env"] if data.get("env") else None
+            named = [(run_dir / data[k]).resolve() for k in ("model", "state")]
         except (KeyError, TypeError, ValueError):
             raise ConfigError(
                 "latest.json", str(pointer), "a checkpoint pointer written by poc-env train"
             ) from None
-        if model.is_file():
-            return Checkpoint(step, model, state if state.is_file() else None, env)
+        if any(p.parent != folder for p in named) or named[0] != _files(folder, step)[0]:
+            raise ConfigError(
+                "latest.json",
+                {k: data.get(k) for k in ("model", "state")},
+                f"paths of checkpoints/step_{step}.* inside the run folder {run_dir}",
+            )
+        found = _complete(run_dir, step)
+        if found is not None and all(found.step >= s for s in checkpoint_steps(run_dir)):
+            return found
     steps = checkpoint_steps(run_dir)
-    if not steps:
-        return None
-    zpath, spath, epath = _files(run_dir / "checkpoints", steps[-1])
-    return Checkpoint(
-        steps[-1], zpath, spath if spath.is_file() else None, epath if epath.is_file() else None
-    )
+    for step in reversed(steps):
+        found = _complete(run_dir, step)
+        if found is not None:
+            return found
+        warnings.warn(
+            f"{run_dir}/checkpoints/step_{step}: incomplete (interrupted while being written); "
+            "skipped",
+            stacklevel=2,
+        )
+    return None
 
 
 def restore_checkpoint(checkpoint: Checkpoint, env: VecEnv, run_dir: Path) -> PPO:

@@ -51,6 +51,7 @@ import functools
 import sys
 import time
 import typing
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -302,13 +303,18 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
         )
     args = TrainArgs.from_dict(read_json(run_dir / "config.json", "config.json"), "config.json")
     args = dataclasses.replace(args, run_dir=str(run_dir), resume=None, progress=progress)
-    ck = latest_checkpoint(run_dir)
-    if ck is None:
+    if not (run_dir / "scenario.yaml").is_file():
         raise ConfigError(
             "resume",
             str(run_dir),
-            "a run with at least one checkpoint in checkpoints/ (this one has none: it stopped "
-            "before its first checkpoint; start it again)",
+            "a run folder written by poc-env train (with config.json, scenario.yaml and "
+            "checkpoints/)",
+        )
+    ck = latest_checkpoint(run_dir)
+    if ck is None:  # killed before its first checkpoint: the same run again, from step 0
+        warnings.warn(
+            f"{run_dir}: no complete checkpoint; training again from step 0 with its config",
+            stacklevel=2,
         )
     sc = load_scenario(run_dir / "scenario.yaml")
     return _run(args, sc, run_dir, callback, checkpoint=ck)

@@ -433,3 +433,56 @@ def test_cli_options_come_from_trainargs(tmp_path, capsys, monkeypatch):
             main(["train", *bad])
         assert stop.value.code == 2
     assert seen == [seen[0]]  # nothing else was trained
+
+
+def test_resume_skips_a_checkpoint_killed_between_model_and_state(runs, tmp_path, monkeypatch):
+    """A kill after step_192.zip but before its state file: resume takes the last complete
+    checkpoint (step_96, with its generators) and ends bit-identical to the uninterrupted run,
+    instead of restoring the weights without the generators."""
+    import agents.rl.checkpoint as ckpt
+
+    recipe = "shared"
+    run = tmp_path / "killed"
+    real = ckpt.write_json
+    second = f"step_{2 * ROLLOUT[recipe]}.state.json"
+
+    def killed(path, data):
+        if Path(path).name == second:
+            raise Interrupt
+        return real(path, data)
+
+    monkeypatch.setattr(ckpt, "write_json", killed)
+    with pytest.raises(Interrupt):
+        train(_args(recipe, run))
+    monkeypatch.setattr(ckpt, "write_json", real)
+    assert (run / "checkpoints" / f"step_{2 * ROLLOUT[recipe]}.zip").is_file()
+    with pytest.warns(UserWarning, match="incomplete"):
+        ck = latest_checkpoint(run)
+    assert ck is not None and ck.step == ROLLOUT[recipe]
+    with pytest.warns(UserWarning, match="incomplete"):
+        train(TrainArgs(resume=str(run), progress=False))
+    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
+
+
+def test_latest_json_cannot_point_outside_the_run(runs, tmp_path):
+    import shutil
+
+    run = tmp_path / "copy"
+    shutil.copytree(runs["shared"], run)
+    pointer = json.loads((run / "latest.json").read_text())
+    pointer["model"] = "../../elsewhere/evil.zip"
+    (run / "latest.json").write_text(json.dumps(pointer))
+    with pytest.raises(ConfigError, match=r"latest\.json"):
+        latest_checkpoint(run)
+
+
+def test_a_run_killed_before_its_first_checkpoint_can_be_resumed(runs, tmp_path):
+    """--resume on a run with config but no checkpoint trains it again from step 0 and ends
+    where the uninterrupted run ends (it used to refuse, pointing at --run-dir, which refused)."""
+    run = tmp_path / "early"
+    with pytest.raises(Interrupt):
+        train(_args("shared", run), callback=_killer(40))
+    assert checkpoint_steps(run) == [] and (run / "config.json").is_file()
+    with pytest.warns(UserWarning, match="no complete checkpoint"):
+        train(TrainArgs(resume=str(run), progress=False))
+    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
