@@ -26,6 +26,19 @@ from agents.policies.registry import make_policy
 from poc_env.errors import ConfigError
 
 
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes started by a fork server, never by forking this process:
+    a process that has started torch's (or OpenMP's) thread pool and then forks can leave the
+    children waiting forever on a lock the pool held. Workers import what they run afresh, so
+    only policies registered at import time (every built-in) reach them, and a script that
+    calls ``evaluate(workers > 1)`` needs the usual ``if __name__ == "__main__":`` guard."""
+    import multiprocessing
+
+    return ProcessPoolExecutor(
+        max_workers=workers, mp_context=multiprocessing.get_context("forkserver")
+    )
+
+
 def check_policies(policies: Sequence[str]) -> None:
     """Make every policy once, so that a bad name fails before any episode runs.
 
@@ -224,7 +237,7 @@ def evaluate(
     if workers == 1:
         it = map(_run, jobs)
     else:
-        pool = ProcessPoolExecutor(max_workers=workers)
+        pool = process_pool(workers)
         it = pool.map(_run, jobs)
     if progress:
         from tqdm import tqdm

@@ -149,7 +149,9 @@ class Runner:
             it = map(fn, jobs)
         else:
             if self._pool is None:
-                self._pool = ProcessPoolExecutor(max_workers=self.workers)
+                from agents.experiments.evaluate import process_pool
+
+                self._pool = process_pool(self.workers)
             it = self._pool.map(fn, jobs)
         if self.progress:
             from tqdm import tqdm
