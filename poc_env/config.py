@@ -628,13 +628,61 @@ def builtin_scenarios() -> list[str]:
     return sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
 
 
+#: Most nodes a YAML document may expand to, with every alias (``*name``) counted as a copy of
+#: what it names. The built-in scenarios have a few hundred; a "billion laughs" document of
+#: under 1 kB nests aliases to expand to 10^9 nodes.
+MAX_YAML_NODES = 100_000
+#: Largest YAML file read, bytes (the built-in scenarios are about 2 kB).
+MAX_YAML_BYTES = 4 * 2**20
+
+
+class _LimitedLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses documents expanding to more than MAX_YAML_NODES nodes
+    (counted on the composed graph, before anything is built)."""
+
+    def compose_document(self) -> Any:
+        node = super().compose_document()
+        sizes: dict[int, int] = {}
+
+        def expanded(n: Any) -> int:
+            if id(n) not in sizes:
+                sizes[id(n)] = 0  # a recursive alias counts its cycle once
+                kids: list[Any] = []
+                if isinstance(n, yaml.SequenceNode):
+                    kids = list(n.value)
+                elif isinstance(n, yaml.MappingNode):
+                    kids = [x for pair in n.value for x in pair]
+                total = 1
+                for k in kids:
+                    total += expanded(k)
+                    if total > MAX_YAML_NODES:
+                        raise yaml.YAMLError(
+                            f"the document expands to more than {MAX_YAML_NODES} nodes "
+                            "through its aliases (*name)"
+                        )
+                sizes[id(n)] = total
+            return sizes[id(n)]
+
+        if node is not None:
+            expanded(node)
+        return node
+
+
+def load_yaml_text(text: str) -> Any:
+    """``yaml.safe_load`` that refuses alias bombs (raises ``yaml.YAMLError``)."""
+    return yaml.load(text, Loader=_LimitedLoader)  # a SafeLoader subclass: safe types only
+
+
 def read_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """Read a YAML mapping with ``yaml.safe_load``; clear errors for missing or corrupt files."""
+    """Read a YAML mapping safely (:func:`load_yaml_text`: safe types only, no alias bombs, at
+    most :data:`MAX_YAML_BYTES`); clear errors for missing, oversized or corrupt files."""
     p = Path(path)
     if not p.is_file():
         raise ConfigError("scenario", str(p), "an existing YAML file or a built-in scenario name")
+    if p.stat().st_size > MAX_YAML_BYTES:
+        raise ConfigError("scenario", str(p), f"a YAML file of at most {MAX_YAML_BYTES} bytes")
     try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+        data = load_yaml_text(p.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as err:
         raise ConfigError("scenario", str(p), f"valid YAML ({err})") from None
     if not isinstance(data, dict):

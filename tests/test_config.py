@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import yaml
 
-from poc_env.config import KM, builtin_scenarios, load_scenario, save_scenario
+from poc_env.config import CONFIG_DIR, KM, builtin_scenarios, load_scenario, save_scenario
 from poc_env.errors import ConfigError, GeometryError, MapFileError
 from poc_env.theory.probability_map import Grid, build_prior, load_map, validate_map
 
@@ -183,3 +183,20 @@ def test_numpy_scalars_get_the_same_units_as_python_numbers(key, value, attr, ex
     got = getattr(getattr(sc, attr[0]), attr[1])
     assert got == pytest.approx(expected)
     assert got == getattr(getattr(plain, attr[0]), attr[1])
+
+
+def test_yaml_alias_bomb_is_refused_quickly(tmp_path):
+    """A 'billion laughs' document (nine levels of nine aliases, under 1 kB) is refused while
+    it is parsed, before anything expands it; a file with a few aliases still loads."""
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
+    for k in range(1, 10):
+        lines.append(f"a{k}: &a{k} [" + ", ".join([f"*a{k - 1}"] * 9) + "]")
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text("\n".join(lines) + "\n")
+    assert bomb.stat().st_size < 1024
+    with pytest.raises(ConfigError, match="expands to more than"):
+        load_scenario(bomb)
+    from poc_env.config import load_yaml_text
+
+    assert load_yaml_text("a: &a [1, 2]\nb: *a\n") == {"a": [1, 2], "b": [1, 2]}
+    assert load_scenario("small") == load_scenario(CONFIG_DIR / "small.yaml")

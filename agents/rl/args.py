@@ -147,6 +147,8 @@ def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
     """``["a.b=1", ...]`` -> ``{"a.b": 1}`` (values parsed as YAML)."""
     import yaml
 
+    from poc_env.config import load_yaml_text
+
     if isinstance(items, str) or not isinstance(items, list | tuple):
         raise ConfigError("overrides", items, "a list of KEY=VALUE strings")
     out: dict[str, Any] = {}
@@ -155,7 +157,7 @@ def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
         if not sep or not key.strip():
             raise ConfigError("overrides", item, "KEY=VALUE, e.g. episode.horizon_steps=20")
         try:
-            out[key.strip()] = yaml.safe_load(value)
+            out[key.strip()] = load_yaml_text(value)
         except yaml.YAMLError as err:
             raise ConfigError("overrides", item, f"a YAML value after '=' ({err})") from None
     return out
