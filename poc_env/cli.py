@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from poc_env.errors import ConfigError, MissingExtraError, PocEnvError
+import poc_env.limits as limits
+from poc_env.errors import ConfigError, MissingExtraError, PocEnvError, as_int
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
 _EXTRA_OF = {
@@ -30,25 +31,14 @@ _EXTRA_OF = {
     "PIL": "plot",
 }
 
-#: Largest ``plan --popsize``: the planner keeps a few (popsize, 6 N) arrays and evaluates the
-#: population in one batch, so memory and time grow with it; the paper uses 100.
-POPSIZE_MAX = 10_000
-#: Largest ``plan --maxiter`` (generations); the paper uses 300.
-MAXITER_MAX = 100_000
-#: Largest ``train --n-envs``: every env holds a fine belief map, observations and a rollout
-#: buffer share, so 10^9 of them would need terabytes; the paper's runs use 4 to 16.
-N_ENVS_MAX = 1024
 #: Option values that may start with ``-`` (``--origin -45,7``: a negative latitude).
 _NEGATIVE_VALUE_OPTIONS = ("--origin",)
 
 
 def _check_int(field: str, value: int | None, lo: int, hi: int | None = None) -> None:
     """Raise ConfigError unless ``value`` (None: the default) is an integer in [lo, hi]."""
-    if value is None:
-        return
-    if value < lo or (hi is not None and value > hi):
-        allowed = f"an integer >= {lo}" if hi is None else f"an integer in [{lo}, {hi}]"
-        raise ConfigError(field, value, allowed)
+    if value is not None:
+        as_int(field, value, lo, hi)
 
 
 def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
@@ -330,7 +320,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from agents.rl.train import train
 
     targs = parse_train_args(args.train_options)
-    _check_int("n_envs", targs.n_envs, 1, N_ENVS_MAX)
+    _check_int("n_envs", targs.n_envs, 1, limits.N_ENVS_MAX)
     _check_out("run_dir", targs.run_dir, "folder")
     try:
         run = train(targs)
@@ -355,8 +345,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
 def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("seed", args.seed, 0)
     _check_int("uavs", args.uavs, 1)
-    _check_int("popsize", args.popsize, 4, POPSIZE_MAX)
-    _check_int("maxiter", args.maxiter, 1, MAXITER_MAX)
+    _check_int("popsize", args.popsize, 4, limits.POPSIZE_MAX)
+    _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
     _check_out("out", args.out, "file")
     _check_out("plot", args.plot, "file")
 
@@ -474,6 +464,13 @@ def build_parser() -> argparse.ArgumentParser:
         prog="poc-env",
         description="UAV-swarm search over a probability-of-containment map (Fan et al. 2024).",
     )
+    parser.add_argument(
+        "--max-memory-gb",
+        type=float,
+        default=None,
+        help=f"memory guard: refuse maps, env batches and planner populations estimated above "
+        f"this many GiB (default {limits.DEFAULT_MEMORY_GB:g}, or POC_ENV_MAX_MEMORY_GB)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     from agents.policies.registry import registered
 
@@ -544,10 +541,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--popsize",
         type=int,
         default=None,
-        help=f"default: scenario planner NP; 4 to {POPSIZE_MAX}",
+        help=f"default: scenario planner NP; 4 to {limits.POPSIZE_MAX}",
     )
     p.add_argument(
-        "--maxiter", type=int, default=None, help=f"default: scenario planner G; 1 to {MAXITER_MAX}"
+        "--maxiter",
+        type=int,
+        default=None,
+        help=f"default: scenario planner G; 1 to {limits.MAXITER_MAX}",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
@@ -610,6 +610,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
     try:
         try:
+            if args.max_memory_gb is not None:
+                limits.set_memory_limit_gb(args.max_memory_gb)
             return int(args.func(args) or 0)
         except ModuleNotFoundError as err:
             extra = _EXTRA_OF.get((err.name or "").split(".")[0])

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import importlib.resources
 import math
 import os
@@ -28,14 +29,20 @@ from typing import Any
 import numpy as np
 import yaml
 
+import poc_env.limits as limits
 from poc_env._kernels import LAW_CODES
-from poc_env.errors import ConfigError, check_positive, check_range
+from poc_env.errors import ConfigError, as_bool, as_int, as_number, describe_range
 from poc_env.io import write_text_atomic
 
 KM = 1000.0
 KMH = 1000.0 / 3600.0
 HOUR = 3600.0
 DEG = math.pi / 180.0
+#: Largest distance of any configured point (origin, airfields, zones, peaks, means) from the
+#: map origin, in metres (:data:`poc_env.limits.MAX_COORD_KM`).
+MAX_COORD_M = limits.MAX_COORD_KM * KM
+#: Largest swarm.
+MAX_UAVS = 64
 
 #: Folder of the built-in scenarios, region plans and topologies: package data, read through
 #: ``importlib.resources`` so that a wheel, an editable install and a Ray worker all find it.
@@ -43,11 +50,22 @@ DEG = math.pi / 180.0
 CONFIG_DIR = Path(str(importlib.resources.files("poc_env").joinpath("configs")))
 
 
-def _f(key: str | None = None, scale: float = 1.0, default: Any = dataclasses.MISSING, **kw: Any):
-    """A dataclass field whose YAML key is ``key`` and whose YAML value times ``scale`` is SI."""
-    meta = {"key": key, "scale": scale}
-    if default is dataclasses.MISSING and "default_factory" not in kw:
-        return field(metadata=meta, **kw)
+def _f(
+    key: str | None = None,
+    scale: float = 1.0,
+    default: Any = dataclasses.MISSING,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    lo_open: bool = False,
+    **kw: Any,
+):
+    """A dataclass field whose YAML key is ``key`` and whose YAML value times ``scale`` is SI.
+
+    ``lo``/``hi`` (``lo_open``: ``lo`` excluded) bound a number or integer field, in the YAML
+    key's unit; :func:`_coerce` applies them, with the type, to every section when it is built.
+    """
+    meta = {"key": key, "scale": scale, "lo": lo, "hi": hi, "lo_open": lo_open}
     if default is dataclasses.MISSING:
         return field(metadata=meta, **kw)
     return field(default=default, metadata=meta, **kw)
@@ -56,13 +74,58 @@ def _f(key: str | None = None, scale: float = 1.0, default: Any = dataclasses.MI
 # --------------------------------------------------------------------------- helpers
 
 
-def _vec2(name: str, value: Any) -> tuple[float, float]:
-    try:
-        x, y = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ConfigError(name, value, "a pair of finite numbers [x, y]") from None
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ConfigError(name, value, "a pair of finite numbers [x, y]")
+@functools.cache
+def _field_types(cls: type) -> tuple[tuple[dataclasses.Field, Any, bool], ...]:
+    """(field, type without Optional, optional?) of a section, resolved once."""
+    hints = typing.get_type_hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        tp = hints[f.name]
+        out.append((f, _strip_optional(tp), _strip_optional(tp) is not tp))
+    return tuple(out)
+
+
+def _coerce(obj: Any) -> None:
+    """The one type-and-range check of every scalar field of a section, by its annotation.
+
+    Numbers (``float``) become finite floats, integers (``int``) ints (integral floats and numpy
+    integers accepted), flags (``bool``) must be true/false, text (``str``) a string; each within
+    its field's ``lo``/``hi`` in YAML units. Errors name the YAML key and show the value in the
+    key's unit. Vectors and polygons are checked by the section itself.
+    """
+    for f, tp, optional in _field_types(type(obj)):  # type: ignore[arg-type]
+        value = getattr(obj, f.name)
+        if value is None and optional:
+            continue
+        meta = f.metadata
+        key = meta.get("key") or f.name
+        scale = meta.get("scale", 1.0)
+        lo, hi, lo_open = meta.get("lo"), meta.get("hi"), meta.get("lo_open", False)
+        if tp is bool:
+            object.__setattr__(obj, f.name, as_bool(key, value))
+        elif tp is int:
+            object.__setattr__(obj, f.name, as_int(key, value, _int_or(lo), _int_or(hi)))
+        elif tp is float:
+            allowed = describe_range(lo, hi, lo_open=lo_open)
+            si = as_number(key, value, allowed=allowed)
+            as_number(key, si / scale, lo, hi, lo_open=lo_open)  # the range, in YAML units
+            object.__setattr__(obj, f.name, si)
+        elif tp is str and not isinstance(value, str):
+            raise ConfigError(key, value, "a string")
+
+
+def _int_or(x: float | None) -> int | None:
+    return None if x is None else int(x)
+
+
+def _vec2(name: str, value: Any, bound: float = MAX_COORD_M) -> tuple[float, float]:
+    """A pair of finite numbers, each within ``bound`` in magnitude."""
+    allowed = "a pair of finite numbers [x, y]"
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ConfigError(name, value, allowed)
+    x, y = (as_number(name, v, allowed=allowed) for v in value)
+    if max(abs(x), abs(y)) > bound:
+        raise ConfigError(name, value, f"{allowed}, each within +-{bound:g} in magnitude")
     return (x, y)
 
 
@@ -77,21 +140,15 @@ def _polygon(name: str, value: Any) -> tuple[tuple[float, float], ...]:
 
 
 def _choice(name: str, value: Any, allowed: tuple[str, ...]) -> str:
-    if value not in allowed:
+    if not isinstance(value, str) or value not in allowed:
         raise ConfigError(name, value, "one of " + ", ".join(repr(a) for a in allowed))
     return str(value)
 
 
-def _int(name: str, value: Any, lo: int, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
-        raise ConfigError(name, value, f"an integer >= {lo}" + (f" and <= {hi}" if hi else ""))
-    v = int(value)
-    if v < lo or (hi is not None and v > hi):
-        raise ConfigError(name, value, f"an integer >= {lo}" + (f" and <= {hi}" if hi else ""))
-    return v
-
-
 # --------------------------------------------------------------------------- sections
+
+_KM_MAX = limits.MAX_EXTENT_KM
+_RANGE_MAX = limits.MAX_RANGE_KM
 
 
 @dataclass(frozen=True)
@@ -100,17 +157,17 @@ class GaussianComponent:
 
     mean_m: tuple[float, float] = _f("mean_km", KM)
     sigma_m: tuple[float, float] = _f("sigma_km", KM)
-    weight: float = _f(default=1.0)
-    rotation_rad: float = _f("rotation_deg", DEG, default=0.0)
+    #: relative weight (the mixture is normalised; any positive scale will do).
+    weight: float = _f(default=1.0, lo=0.0, lo_open=True)
+    rotation_rad: float = _f("rotation_deg", DEG, default=0.0, lo=-3600.0, hi=3600.0)
 
     def __post_init__(self) -> None:
+        _coerce(self)
         object.__setattr__(self, "mean_m", _vec2("mean_km", self.mean_m))
         sx, sy = _vec2("sigma_km", self.sigma_m)
-        check_positive("sigma_km", sx)
-        check_positive("sigma_km", sy)
+        for sig in (sx, sy):
+            as_number("sigma_km", sig / KM, 0.0, _KM_MAX, lo_open=True)
         object.__setattr__(self, "sigma_m", (sx, sy))
-        object.__setattr__(self, "weight", check_positive("weight", self.weight))
-        object.__setattr__(self, "rotation_rad", float(self.rotation_rad))
 
 
 @dataclass(frozen=True)
@@ -124,12 +181,12 @@ class PriorConfig:
 
     kind: str = _f(default="gaussian_mixture")
     components: tuple[GaussianComponent, ...] = _f(default=())
-    background: float = _f(default=0.02)
+    background: float = _f(default=0.02, lo=0.0, hi=1.0)
     file: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
+        _coerce(self)
         _choice("kind", self.kind, ("gaussian_mixture", "file"))
-        check_range("background", self.background, 0.0, 1.0)
         if self.kind == "gaussian_mixture" and not self.components and self.background <= 0:
             raise ConfigError("components", [], "at least one component, or background > 0")
         if self.kind == "file" and not self.file:
@@ -142,20 +199,24 @@ class ThreatPeak:
 
     center_m: tuple[float, float] = _f("center_km", KM)
     #: decay rate lambda in 1/m^2 (YAML: ``lambda_per_km2``).
-    lambda_per_m2: float = _f("lambda_per_km2", 1e-6)
+    lambda_per_m2: float = _f("lambda_per_km2", 1e-6, lo=0.0, lo_open=True, hi=1e6)
 
     def __post_init__(self) -> None:
+        _coerce(self)
         object.__setattr__(self, "center_m", _vec2("center_km", self.center_m))
-        check_positive("lambda_per_km2", self.lambda_per_m2)
 
 
 @dataclass(frozen=True)
 class MapConfig:
-    """The search area: a ``width x height`` rectangle from ``origin`` cut into square cells."""
+    """The search area: a ``width x height`` rectangle from ``origin`` cut into square cells.
 
-    width_m: float = _f("width_km", KM)
-    height_m: float = _f("height_km", KM)
-    cell_m: float = _f("cell_km", KM)
+    Sides up to :data:`poc_env.limits.MAX_EXTENT_KM`, cells down to
+    :data:`poc_env.limits.MIN_CELL_KM`, and no more cells than the memory guard allows.
+    """
+
+    width_m: float = _f("width_km", KM, lo=0.0, lo_open=True, hi=_KM_MAX)
+    height_m: float = _f("height_km", KM, lo=0.0, lo_open=True, hi=_KM_MAX)
+    cell_m: float = _f("cell_km", KM, lo=limits.MIN_CELL_KM, hi=_KM_MAX)
     origin_m: tuple[float, float] = _f("origin_km", KM, default=(0.0, 0.0))
     prior: PriorConfig = _f(default_factory=PriorConfig)
     no_fly_zones_m: tuple[tuple[tuple[float, float], ...], ...] = _f(
@@ -163,11 +224,10 @@ class MapConfig:
     )
     threat_peaks: tuple[ThreatPeak, ...] = _f(default=())
     #: eq. 23 threshold Th_s on the peak threat f.
-    threat_threshold: float = _f(default=0.5)
+    threat_threshold: float = _f(default=0.5, lo=0.0, hi=1.0)
 
     def __post_init__(self) -> None:
-        for name in ("width_m", "height_m", "cell_m"):
-            check_positive(_yaml_key(MapConfig, name), getattr(self, name))
+        _coerce(self)
         object.__setattr__(self, "origin_m", _vec2("origin_km", self.origin_m))
         for name, size in (("width_km", self.width_m), ("height_km", self.height_m)):
             n = size / self.cell_m
@@ -175,11 +235,18 @@ class MapConfig:
                 raise ConfigError(
                     name, size / KM, f"a whole multiple of cell_km = {self.cell_m / KM:g}"
                 )
+        limits.check_memory(
+            "map.cell_km",
+            self.cell_m / KM,
+            limits.map_bytes(self.nx * self.ny),
+            f"{self.nx} x {self.ny} cell map",
+        )
+        if not isinstance(self.no_fly_zones_m, (list, tuple)):
+            raise ConfigError("no_fly_zones_km", self.no_fly_zones_m, "a list of polygons")
         zones = tuple(
             _polygon(f"no_fly_zones_km[{i}]", z) for i, z in enumerate(self.no_fly_zones_m)
         )
         object.__setattr__(self, "no_fly_zones_m", zones)
-        check_range("threat_threshold", self.threat_threshold, 0.0, 1.0)
 
     @property
     def nx(self) -> int:
@@ -190,36 +257,43 @@ class MapConfig:
         return round(self.height_m / self.cell_m)
 
 
+_SPEED: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_SPEED_KMH}
+_RATE: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_RATE_DEG_S}
+_ALT: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_ALTITUDE_M}
+
+
 @dataclass(frozen=True)
 class UAVConfig:
     """One UAV type (the swarm is homogeneous). Defaults are the paper's §6 values."""
 
     #: maximum endurance T (eq. 18).
-    endurance_s: float = _f("endurance_h", HOUR, default=3 * HOUR)
+    endurance_s: float = _f(
+        "endurance_h", HOUR, default=3 * HOUR, lo=0.0, lo_open=True, hi=limits.MAX_ENDURANCE_H
+    )
     #: share of T usable for the plan: t_i <= 0.85 T (eq. 18).
-    usable_fraction: float = _f(default=0.85)
+    usable_fraction: float = _f(default=0.85, lo=0.01, hi=1.0)
     #: cruise (transit) speed v_b (eq. 17).
-    cruise_speed_mps: float = _f("cruise_speed_kmh", KMH, default=220 * KMH)
+    cruise_speed_mps: float = _f("cruise_speed_kmh", KMH, default=220 * KMH, **_SPEED)
     #: search speed v_s (eq. 17).
-    search_speed_mps: float = _f("search_speed_kmh", KMH, default=180 * KMH)
+    search_speed_mps: float = _f("search_speed_kmh", KMH, default=180 * KMH, **_SPEED)
     #: speed bounds of the eq. 19 point mass.
-    min_speed_mps: float = _f("min_speed_kmh", KMH, default=100 * KMH)
-    max_speed_mps: float = _f("max_speed_kmh", KMH, default=240 * KMH)
+    min_speed_mps: float = _f("min_speed_kmh", KMH, default=100 * KMH, **_SPEED)
+    max_speed_mps: float = _f("max_speed_kmh", KMH, default=240 * KMH, **_SPEED)
     #: per-step limits of the eq. 19 increments (dv, d alpha, d beta).
-    max_accel_mps2: float = _f("max_accel_mps2", 1.0, default=0.5)
-    max_turn_rate_rad_s: float = _f("max_turn_rate_deg_s", DEG, default=3.0 * DEG)
-    max_pitch_rate_rad_s: float = _f("max_pitch_rate_deg_s", DEG, default=1.0 * DEG)
-    max_pitch_rad: float = _f("max_pitch_deg", DEG, default=15.0 * DEG)
+    max_accel_mps2: float = _f(
+        "max_accel_mps2", 1.0, default=0.5, lo=0.0, lo_open=True, hi=limits.MAX_ACCEL_MPS2
+    )
+    max_turn_rate_rad_s: float = _f("max_turn_rate_deg_s", DEG, default=3.0 * DEG, **_RATE)
+    max_pitch_rate_rad_s: float = _f("max_pitch_rate_deg_s", DEG, default=1.0 * DEG, **_RATE)
+    max_pitch_rad: float = _f(
+        "max_pitch_deg", DEG, default=15.0 * DEG, lo=0.0, lo_open=True, hi=limits.MAX_PITCH_DEG
+    )
     #: search altitude (z of eq. 19) and the ceiling.
-    cruise_altitude_m: float = _f("cruise_altitude_m", 1.0, default=1000.0)
-    max_altitude_m: float = _f("max_altitude_m", 1.0, default=4000.0)
+    cruise_altitude_m: float = _f("cruise_altitude_m", 1.0, default=1000.0, **_ALT)
+    max_altitude_m: float = _f("max_altitude_m", 1.0, default=4000.0, **_ALT)
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            if f.name == "usable_fraction":
-                check_range("usable_fraction", self.usable_fraction, 0.01, 1.0)
-            else:
-                check_positive(_yaml_key(UAVConfig, f.name), getattr(self, f.name))
+        _coerce(self)
         if self.min_speed_mps > self.max_speed_mps:
             raise ConfigError("min_speed_kmh", self.min_speed_mps / KMH, "at most max_speed_kmh")
         for name in ("cruise_speed_mps", "search_speed_mps"):
@@ -249,22 +323,22 @@ class SensorConfig:
     checks it covers.
     """
 
-    sweep_width_m: float = _f("sweep_width_km", KM, default=5 * KM)
+    sweep_width_m: float = _f(
+        "sweep_width_km", KM, default=5 * KM, lo=0.0, lo_open=True, hi=limits.MAX_SWEEP_WIDTH_KM
+    )
     #: ``inverse_cube`` (Koopman, composes to eq. 10), ``exponential`` (random search) or
     #: ``definite_range`` (cookie cutter).
     law: str = _f(default="inverse_cube")
     #: target positions sampled per cell side (s x s points per cell) for cell averages. The
     #: default 2 keeps a lawnmower at S = W within 1.4 % of eq. 10 through step() at twice the
     #: speed of 4 (measured by `poc-env bench env`; see the README).
-    samples_per_cell: int = _f(default=2)
+    samples_per_cell: int = _f(default=2, lo=1, hi=16)
     #: lateral cut-off of the inverse-cube tail, in sweep widths (see sensing.cutoff_error).
-    cutoff_sweep_widths: float = _f(default=4.0)
+    cutoff_sweep_widths: float = _f(default=4.0, lo=0.5, hi=100.0)
 
     def __post_init__(self) -> None:
-        check_positive("sweep_width_km", self.sweep_width_m)
+        _coerce(self)
         _choice("law", self.law, tuple(LAW_CODES))
-        _int("samples_per_cell", self.samples_per_cell, 1, 16)
-        check_range("cutoff_sweep_widths", self.cutoff_sweep_widths, 0.5, 100.0)
 
 
 @dataclass(frozen=True)
@@ -285,11 +359,11 @@ class FleetGroup:
     """``count`` UAVs that take off from ``takeoff`` and land at ``landing`` (default: same)."""
 
     takeoff: str = _f()
-    count: int = _f(default=1)
+    count: int = _f(default=1, lo=0, hi=64)
     landing: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
-        _int("count", self.count, 0, 64)
+        _coerce(self)
         if self.landing is None:
             object.__setattr__(self, "landing", self.takeoff)
 
@@ -298,21 +372,19 @@ class FleetGroup:
 class CommsConfig:
     """Communication constraint (eq. 24) and topology switching (§3.2.5)."""
 
-    range_m: float = _f("range_km", KM, default=150 * KM)
+    range_m: float = _f("range_km", KM, default=150 * KM, lo=0.0, lo_open=True, hi=_RANGE_MAX)
     #: every UAV needs at least this many others within range (the paper: two).
-    min_neighbours: int = _f(default=2)
+    min_neighbours: int = _f(default=2, lo=0, hi=63)
     #: ``table2`` (the paper's five-UAV switching table) or ``auto`` (any N).
     topology: str = _f(default="auto")
     #: probability per step that a link in range drops anyway.
-    link_failure_prob: float = _f(default=0.0)
+    link_failure_prob: float = _f(default=0.0, lo=0.0, hi=1.0)
     #: ``global`` (the paper: one shared belief) or ``comms`` (merge only through links).
     belief_sharing: str = _f(default="global")
 
     def __post_init__(self) -> None:
-        check_positive("range_km", self.range_m)
-        _int("min_neighbours", self.min_neighbours, 0, 63)
+        _coerce(self)
         _choice("topology", self.topology, ("auto", "table2"))
-        check_range("link_failure_prob", self.link_failure_prob, 0.0, 1.0)
         _choice("belief_sharing", self.belief_sharing, ("global", "comms"))
 
 
@@ -321,68 +393,63 @@ class ConstraintsConfig:
     """Safety constraints (§3.2.3) and how a violation is handled."""
 
     #: minimum separation d_s between UAVs (eq. 21).
-    safety_distance_m: float = _f("safety_distance_km", KM, default=1 * KM)
+    safety_distance_m: float = _f(
+        "safety_distance_km", KM, default=1 * KM, lo=0.0, lo_open=True, hi=_RANGE_MAX
+    )
     #: ``penalize`` (report and subtract a penalty), ``terminate`` (the agent ends) or
     #: ``shield`` (the action is modified to stay safe).
     violation: str = _f(default="penalize")
 
     def __post_init__(self) -> None:
-        check_positive("safety_distance_km", self.safety_distance_m)
+        _coerce(self)
         _choice("violation", self.violation, ("penalize", "terminate", "shield"))
+
+
+_WEIGHT: dict[str, Any] = {"lo": 0.0, "hi": limits.MAX_WEIGHT}
 
 
 @dataclass(frozen=True)
 class RewardConfig:
     """Weights of the reward: alpha * POS - beta * time share (eq. 25) - penalties."""
 
-    alpha: float = _f(default=1.0)
-    beta: float = _f(default=0.0)
+    alpha: float = _f(default=1.0, **_WEIGHT)
+    beta: float = _f(default=0.0, **_WEIGHT)
     #: ``team`` (every agent gets the swarm's POS) or ``individual`` (own POS only).
     credit: str = _f(default="team")
     #: per step and agent, for each step with a safety or communication violation.
-    violation_penalty: float = _f(default=0.01)
+    violation_penalty: float = _f(default=0.01, **_WEIGHT)
     #: per step and agent flying beyond 0.85 T (eq. 18).
-    overtime_penalty: float = _f(default=0.01)
+    overtime_penalty: float = _f(default=0.01, **_WEIGHT)
     #: once, when an agent crashes (ground, endurance, or a violation in ``terminate`` mode).
-    crash_penalty: float = _f(default=0.1)
+    crash_penalty: float = _f(default=0.1, **_WEIGHT)
 
     def __post_init__(self) -> None:
-        check_positive("alpha", self.alpha, allow_zero=True)
-        check_positive("beta", self.beta, allow_zero=True)
+        _coerce(self)
         _choice("credit", self.credit, ("team", "individual"))
-        check_positive("violation_penalty", self.violation_penalty, allow_zero=True)
-        check_positive("overtime_penalty", self.overtime_penalty, allow_zero=True)
-        check_positive("crash_penalty", self.crash_penalty, allow_zero=True)
 
 
 @dataclass(frozen=True)
 class EpisodeConfig:
     """Time stepping of the environment."""
 
-    dt_s: float = _f("dt_s", 1.0, default=60.0)
+    dt_s: float = _f("dt_s", 1.0, default=60.0, lo=0.0, lo_open=True, hi=limits.MAX_DT_S)
     #: truncation horizon in steps (default: endurance T / dt, rounded up).
-    horizon_steps: int | None = _f(default=None)
+    horizon_steps: int | None = _f(default=None, lo=1, hi=limits.MAX_STEPS)
     detection_ends_episode: bool = _f(default=False)
     #: landing rule: within this horizontal distance of the landing field ...
-    landing_radius_m: float = _f("landing_radius_km", KM, default=3 * KM)
+    landing_radius_m: float = _f(
+        "landing_radius_km", KM, default=3 * KM, lo=0.0, lo_open=True, hi=_KM_MAX
+    )
     #: ... at or below this altitude (default above the cruise altitude: no descent needed) ...
-    landing_max_altitude_m: float = _f("landing_max_altitude_m", 1.0, default=1500.0)
+    landing_max_altitude_m: float = _f("landing_max_altitude_m", 1.0, default=1500.0, **_ALT)
     #: ... and at or below this speed (an approach: the UAV must slow down to land).
-    landing_max_speed_mps: float = _f("landing_max_speed_kmh", KMH, default=130 * KMH)
+    landing_max_speed_mps: float = _f("landing_max_speed_kmh", KMH, default=130 * KMH, **_SPEED)
     #: the operating area (eq. 20's boundary) is the bounding box of the grid and the
     #: airfields, grown by this margin on every side.
-    boundary_margin_m: float = _f("boundary_margin_km", KM, default=20 * KM)
+    boundary_margin_m: float = _f("boundary_margin_km", KM, default=20 * KM, lo=0.0, hi=_KM_MAX)
 
     def __post_init__(self) -> None:
-        check_positive("dt_s", self.dt_s)
-        check_positive("landing_radius_km", self.landing_radius_m)
-        check_positive("landing_max_altitude_m", self.landing_max_altitude_m)
-        check_positive("landing_max_speed_kmh", self.landing_max_speed_mps)
-        check_positive("boundary_margin_km", self.boundary_margin_m, allow_zero=True)
-        if self.horizon_steps is not None:
-            _int("horizon_steps", self.horizon_steps, 1)
-        if not isinstance(self.detection_ends_episode, bool):
-            raise ConfigError("detection_ends_episode", self.detection_ends_episode, "true/false")
+        _coerce(self)
 
 
 @dataclass(frozen=True)
@@ -396,24 +463,18 @@ class PlannerConfig:
     the usable endurance allows.
     """
 
-    population: int = _f(default=100)
-    generations: int = _f(default=300)
-    f0: float = _f(default=0.2)
-    cr: float = _f(default=0.1)
-    penalty_m: float = _f(default=1000.0)
+    population: int = _f(default=100, lo=4, hi=limits.POPSIZE_MAX)
+    generations: int = _f(default=300, lo=1, hi=limits.MAXITER_MAX)
+    f0: float = _f(default=0.2, lo=0.0, hi=2.0)
+    cr: float = _f(default=0.1, lo=0.0, hi=1.0)
+    penalty_m: float = _f(default=1000.0, **_WEIGHT)
     #: eq. 25 weight of the plan's cumulative POS (POS_C).
-    alpha: float = _f(default=1.0)
+    alpha: float = _f(default=1.0, **_WEIGHT)
     #: eq. 25 weight of the UAVs' mean flight-time share t_i / (0.85 T) (a cost).
-    beta: float = _f(default=0.0)
+    beta: float = _f(default=0.0, **_WEIGHT)
 
     def __post_init__(self) -> None:
-        _int("population", self.population, 4)
-        _int("generations", self.generations, 1)
-        check_range("f0", self.f0, 0.0, 2.0)
-        check_range("cr", self.cr, 0.0, 1.0)
-        check_positive("penalty_m", self.penalty_m, allow_zero=True)
-        check_positive("alpha", self.alpha, allow_zero=True)
-        check_positive("beta", self.beta, allow_zero=True)
+        _coerce(self)
 
 
 @dataclass(frozen=True)
@@ -434,6 +495,7 @@ class Scenario:
     planner: PlannerConfig = _f(default_factory=PlannerConfig)
 
     def __post_init__(self) -> None:
+        _coerce(self)
         if not self.airfields:
             raise ConfigError("airfields", [], "at least one airfield")
         names = [a.name for a in self.airfields]
@@ -443,8 +505,18 @@ class Scenario:
             for key in ("takeoff", "landing"):
                 if getattr(g, key) not in names:
                     raise ConfigError(f"fleet[{i}].{key}", getattr(g, key), f"one of {names}")
-        if self.n_uavs < 1:
-            raise ConfigError("fleet", [dataclasses.asdict(g) for g in self.fleet], ">= 1 UAV")
+        if not 1 <= self.n_uavs <= MAX_UAVS:
+            raise ConfigError(
+                "fleet", [dataclasses.asdict(g) for g in self.fleet], f"1 to {MAX_UAVS} UAVs"
+            )
+        steps = self.horizon_steps
+        if steps > limits.MAX_STEPS:
+            raise ConfigError(
+                "episode.dt_s",
+                self.episode.dt_s,
+                f"a step for which endurance_h / dt_s is at most {limits.MAX_STEPS} steps "
+                f"(it gives {steps:.3g})",
+            )
         from poc_env.geometry import point_in_polygon
 
         for a in self.airfields:
@@ -457,6 +529,11 @@ class Scenario:
                     )
 
     # -- derived ---------------------------------------------------------------------------
+    @property
+    def horizon_steps(self) -> int:
+        """Steps of an episode: ``episode.horizon_steps``, else endurance T / dt rounded up."""
+        return self.episode.horizon_steps or math.ceil(self.uav.endurance_s / self.episode.dt_s)
+
     @property
     def n_uavs(self) -> int:
         return sum(g.count for g in self.fleet)
@@ -485,7 +562,7 @@ class Scenario:
 
     def with_uavs(self, n: int) -> Scenario:
         """The same scenario with ``n`` UAVs spread over the airfields round-robin."""
-        _int("uavs", n, 1, 64)
+        n = as_int("uavs", n, 1, MAX_UAVS)
         counts = [0] * len(self.airfields)
         for i in range(n):
             counts[i % len(self.airfields)] += 1
@@ -542,7 +619,10 @@ def _scale_value(value: Any, scale: float) -> Any:
     if isinstance(value, bool):
         return value
     if isinstance(value, (int, float)):
-        return float(value) * scale
+        try:
+            return float(value) * scale
+        except OverflowError:  # an int beyond the float range: validation names it
+            return value
     return value  # leave it to validation to complain
 
 
@@ -581,8 +661,6 @@ def _from_mapping(cls: type, data: Any, where: str) -> Any:
                 _from_mapping(args[0], v, f"{sub}[{i}]") for i, v in enumerate(value)
             )
             continue
-        if isinstance(value, str) and f.metadata.get("scale", 1.0) != 1.0:
-            raise ConfigError(sub, value, "a number")
         kwargs[f.name] = _scale_value(value, f.metadata.get("scale", 1.0))
     try:
         return cls(**kwargs)

@@ -6,6 +6,7 @@ user can fix a YAML file or a call without reading a traceback from deep inside 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 
@@ -83,25 +84,100 @@ class GeometryError(PocEnvError, ValueError):
     """A polygon, circle or rectangle is degenerate, self-intersecting or out of range."""
 
 
-def check_positive(field: str, value: Any, *, allow_zero: bool = False) -> float:
-    """Return ``value`` as a float if it is a finite number > 0 (>= 0 with ``allow_zero``)."""
+# --------------------------------------------------------------------------- the one coercion
+# Every external number, integer and flag (YAML, overrides, keyword arguments, plan.json, region
+# files, CLI values) goes through these three functions, so the same input is accepted or refused
+# the same way everywhere: numpy scalars count as the numbers they hold; strings, bools (as
+# numbers), complex values and None are refused; integers accept integral floats (3.0 -> 3).
+
+#: The largest magnitude an integer input may have (a float holds every integer up to 2^53
+#: exactly; larger ones would silently round or overflow a C integer).
+MAX_INT = 2**53
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, str):
+        return "a string (write the number without quotes)"
+    if isinstance(value, bool):
+        return "a true/false flag"
+    if value is None:
+        return "null (a missing value)"
+    return f"a {type(value).__name__}"
+
+
+def describe_range(lo: float | None, hi: float | None, *, lo_open: bool = False) -> str:
+    """``"a number in [lo, hi]"`` and its one-sided forms, as error messages say it."""
+    if lo is None and hi is None:
+        return "a finite number"
+    if hi is None:
+        return f"a number {'>' if lo_open else '>='} {lo:g}"
+    if lo is None:
+        return f"a number <= {hi:g}"
+    return f"a number in {'(' if lo_open else '['}{lo:g}, {hi:g}]"
+
+
+def as_number(
+    field: str,
+    value: Any,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    allowed: str | None = None,
+) -> float:
+    """``value`` as a finite float in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), else
+    :class:`ConfigError` naming ``field``, the value and what is allowed."""
+    if allowed is None:
+        allowed = describe_range(lo, hi, lo_open=lo_open)
+    if hasattr(value, "item") and getattr(value, "shape", None) == ():  # numpy scalars, 0-d
+        value = value.item()
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(field, value, f"{allowed}, not {_kind(value)}")
     try:
         x = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(field, value, "a number >= 0" if allow_zero else "a number > 0") from None
-    if isinstance(value, bool) or not (x == x) or x in (float("inf"), float("-inf")):
-        raise ConfigError(field, value, "a finite number")
-    if x < 0 or (x == 0 and not allow_zero):
-        raise ConfigError(field, value, "a number >= 0" if allow_zero else "a number > 0")
+    except OverflowError:  # an int beyond the float range
+        raise ConfigError(field, value, allowed) from None
+    if not math.isfinite(x):
+        raise ConfigError(field, value, allowed + (" (finite)" if "finite" not in allowed else ""))
+    if (lo is not None and (x < lo or (lo_open and x == lo))) or (hi is not None and x > hi):
+        raise ConfigError(field, value, allowed)
     return x
+
+
+def as_int(field: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an int in ``[lo, hi]``; integral floats (``3.0``) and numpy integers are
+    accepted, fractions, NaN, infinities, strings and bools refused."""
+    lo_ = -MAX_INT if lo is None else lo
+    hi_ = MAX_INT if hi is None else min(hi, MAX_INT)
+    allowed = (
+        f"an integer >= {lo_}" if hi is None and lo is not None else f"an integer in [{lo_}, {hi_}]"
+    )
+    if hasattr(value, "item") and getattr(value, "shape", None) == ():
+        value = value.item()
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(field, value, f"{allowed}, not {_kind(value)}")
+    if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+        raise ConfigError(field, value, allowed)
+    v = int(value)
+    if not lo_ <= v <= hi_:
+        raise ConfigError(field, value, allowed)
+    return v
+
+
+def as_bool(field: str, value: Any) -> bool:
+    """``value`` if it is a true/false flag (numpy bools included); ``"no"``, 0 or 1 refused."""
+    if hasattr(value, "item") and getattr(value, "shape", None) == ():
+        value = value.item()
+    if not isinstance(value, bool):
+        raise ConfigError(field, value, "true or false")
+    return value
+
+
+def check_positive(field: str, value: Any, *, allow_zero: bool = False) -> float:
+    """Return ``value`` as a float if it is a finite number > 0 (>= 0 with ``allow_zero``)."""
+    return as_number(field, value, 0.0, None, lo_open=not allow_zero)
 
 
 def check_range(field: str, value: Any, lo: float, hi: float) -> float:
     """Return ``value`` as a float if it is a finite number in ``[lo, hi]``."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(field, value, f"a number in [{lo}, {hi}]") from None
-    if isinstance(value, bool) or not (lo <= x <= hi):
-        raise ConfigError(field, value, f"a number in [{lo}, {hi}]")
-    return x
+    return as_number(field, value, lo, hi)

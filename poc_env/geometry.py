@@ -36,27 +36,53 @@ def rotate_cw(points: ArrayLike, theta: float) -> np.ndarray:
     return rotate_ccw(points, -theta)
 
 
+#: What :func:`validate_polygon` accepts, as its errors say it.
+POLYGON_ALLOWED = (
+    "at least 3 finite [x, y] vertices forming a simple ring (no self-intersection) with "
+    "positive area; each hole likewise, inside it"
+)
+
+
+def _ring(vertices: ArrayLike, name: str) -> np.ndarray:
+    try:
+        pts = np.asarray(vertices, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise GeometryError(
+            f"{name}: vertices that are not [x, y] number pairs; allowed: {POLYGON_ALLOWED}"
+        ) from None
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 3:
+        raise GeometryError(
+            f"{name}: {len(pts) if pts.ndim else 0} vertices of shape {pts.shape}; "
+            f"allowed: {POLYGON_ALLOWED}"
+        )
+    if not np.all(np.isfinite(pts)):
+        raise GeometryError(
+            f"{name}: vertices that are NaN or infinite; allowed: {POLYGON_ALLOWED}"
+        )
+    return pts
+
+
 def validate_polygon(
     vertices: ArrayLike, name: str = "polygon", holes: Sequence[ArrayLike] = ()
 ) -> Polygon:
     """Return a valid shapely polygon or raise :class:`GeometryError` naming ``name``.
 
-    Rejects fewer than three vertices, non-finite coordinates, zero area and self-intersection.
+    Rejects fewer than three vertices (in the outer ring or a hole), non-finite coordinates,
+    self-intersection (a "bow-tie", reported as such) and zero area.
     """
-    try:
-        pts = np.asarray(vertices, dtype=float)
-    except (TypeError, ValueError):
-        raise GeometryError(f"{name}: vertices must be [x, y] number pairs") from None
-    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 3:
-        raise GeometryError(f"{name}: need at least 3 [x, y] vertices, got shape {pts.shape}")
-    if not np.all(np.isfinite(pts)):
-        raise GeometryError(f"{name}: vertices must be finite numbers")
-    hole_arrays = [np.asarray(h, dtype=float) for h in holes]
+    pts = _ring(vertices, name)
+    hole_arrays = [_ring(h, f"{name} hole {k}") for k, h in enumerate(holes)]
     poly = Polygon(pts, hole_arrays)
-    if poly.area <= 0:
-        raise GeometryError(f"{name}: degenerate polygon (zero area)")
+    if Polygon(pts).convex_hull.area <= 0:
+        raise GeometryError(
+            f"{name}: zero area (the vertices lie on a line); allowed: {POLYGON_ALLOWED}"
+        )
     if not poly.is_valid:
-        raise GeometryError(f"{name}: invalid polygon ({explain_validity(poly)})")
+        raise GeometryError(
+            f"{name}: invalid polygon ({explain_validity(poly)}); allowed: {POLYGON_ALLOWED}"
+        )
+    if poly.area <= 0:
+        raise GeometryError(f"{name}: zero area; allowed: {POLYGON_ALLOWED}")
     return poly
 
 

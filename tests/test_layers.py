@@ -1,6 +1,6 @@
 """The dependency rule of the layout, read from the source (imports inside functions included).
 
-    base (errors, io, geometry, config, _kernels) <- theory <- sim <- viz <- envs
+    base (errors, limits, io, geometry, config, _kernels) <- theory <- sim <- viz <- envs
     <- agents.planning <- agents.policies <- agents.rl <- agents.experiments / benchmarks <- cli
 
 A module may import its own layer and the layers below it, never one above. The layers are
@@ -22,6 +22,7 @@ LAYERS = (
     ("poc_env.io", 0),
     ("poc_env.geometry", 0),
     ("poc_env.config", 0),
+    ("poc_env.limits", 0),
     ("poc_env._kernels", 0),
     ("poc_env.theory", 1),
     ("poc_env.sim", 2),

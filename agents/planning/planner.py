@@ -18,11 +18,12 @@ from typing import Any
 
 import numpy as np
 
+import poc_env.limits as limits
 from agents.planning.export import SCHEMA
 from agents.planning.objective import PlanObjective
 from agents.planning.optimizers import get_optimizer
 from poc_env.config import Scenario, load_scenario
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, as_int
 from poc_env.io import write_text_atomic
 from poc_env.theory.probability_map import build_prior
 
@@ -52,9 +53,19 @@ def make_plan(
     obj = PlanObjective(sc, prior, uavs=uavs)
     pl = sc.planner
     settings: dict[str, Any] = {
-        "popsize": int(popsize or pl.population),
-        "maxiter": int(maxiter or pl.generations),
+        "popsize": pl.population
+        if popsize is None
+        else as_int("popsize", popsize, 4, limits.POPSIZE_MAX),
+        "maxiter": pl.generations
+        if maxiter is None
+        else as_int("maxiter", maxiter, 1, limits.MAXITER_MAX),
     }
+    limits.check_memory(
+        "popsize",
+        settings["popsize"],
+        limits.plan_bytes(settings["popsize"], obj.n, prior.size),
+        f"population of {settings['popsize']} plans of {obj.n} UAVs over {prior.size} cells",
+    )
     kwargs: dict[str, Any] = dict(settings)
     if optimizer in ("adaptive_de", "classic_de"):
         kwargs.update(f0=pl.f0, cr=pl.cr)

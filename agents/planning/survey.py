@@ -35,8 +35,12 @@ from poc_env.config import (
     DEG,
     KM,
     Scenario,
+    _choice,
+    _coerce,
     _f,
     _from_mapping,
+    _vec2,
+    _yaml_key,
     load_scenario,
     read_yaml,
 )
@@ -53,21 +57,30 @@ from poc_env.theory.search_theory import (
 from poc_env.theory.timing import flight_time_s, is_feasible
 
 PATTERNS = ("parallel", "sector", "expanding_square", "spiral")
+#: Most lines (region extent / spacing) a region's pattern may fly: 10^4 lines of a 200 km
+#: region are 2 million km of track, far beyond any endurance.
+MAX_LINES = 10_000
 
 
 @dataclass(frozen=True)
 class RegionSpec:
-    """One UAV's region and search pattern in a region plan (YAML keys with units)."""
+    """One UAV's region and search pattern in a region plan (YAML keys with units).
 
-    id: int = _f()
+    Every field is checked by the scenario's validation layer (:func:`poc_env.config._coerce`):
+    ``id`` an integer, ``spacing_km`` and ``radius_km`` in (0, 2000], ``second_search`` true or
+    false; a pattern may fly at most :data:`MAX_LINES` lines (its extent over its spacing).
+    Geometry errors name the region's id.
+    """
+
+    id: int = _f(lo=0, hi=1_000_000)
     kind: str = _f(default="polygon")
     vertices_m: tuple[tuple[float, float], ...] = _f("vertices_km", KM, default=())
     holes_m: tuple[tuple[tuple[float, float], ...], ...] = _f("holes_km", KM, default=())
     center_m: tuple[float, float] | None = _f("center_km", KM, default=None)
-    radius_m: float | None = _f("radius_km", KM, default=None)
+    radius_m: float | None = _f("radius_km", KM, default=None, lo=0, lo_open=True, hi=2000.0)
     pattern: str | None = _f(default=None)
-    spacing_m: float = _f("spacing_km", KM, default=5 * KM)
-    direction_rad: float = _f("direction_deg", DEG, default=0.0)
+    spacing_m: float = _f("spacing_km", KM, default=5 * KM, lo=0, lo_open=True, hi=2000.0)
+    direction_rad: float = _f("direction_deg", DEG, default=0.0, lo=-3600.0, hi=3600.0)
     airfield: str | None = _f(default=None)
     landing: str | None = _f(default=None)
     #: expanding square only: fly the second, 45-degree-rotated search too (Fig. 6).
@@ -76,24 +89,36 @@ class RegionSpec:
     def __post_init__(self) -> None:
         from poc_env.theory.regions import CircleRegion, PolygonRegion
 
-        if self.kind not in ("polygon", "circle"):
-            raise ConfigError("kind", self.kind, "'polygon' or 'circle'")
+        _coerce(self)
+        _choice("kind", self.kind, ("polygon", "circle"))
         pattern = self.pattern or ("parallel" if self.kind == "polygon" else "sector")
-        if pattern not in PATTERNS:
-            raise ConfigError("pattern", pattern, "one of " + ", ".join(PATTERNS))
+        _choice("pattern", pattern, PATTERNS)
         if self.kind == "polygon" and pattern != "parallel":
             raise ConfigError("pattern", pattern, "'parallel' for a polygon region")
         object.__setattr__(self, "pattern", pattern)
-        if not (isinstance(self.spacing_m, float) and self.spacing_m > 0):
-            raise ConfigError("spacing_km", self.spacing_m, "a number > 0")
+        name = f"region {self.id}"
         if self.kind == "polygon":
-            PolygonRegion(self.vertices_m, self.holes_m)  # validates, GeometryError otherwise
+            for key in ("vertices_m", "holes_m"):
+                if not isinstance(getattr(self, key), (list, tuple)):
+                    raise ConfigError(_yaml_key(RegionSpec, key), getattr(self, key), "a list")
+            geom = PolygonRegion(self.vertices_m, self.holes_m, name=name).geometry
+            x0, y0, x1, y1 = geom.bounds
+            extent = max(x1 - x0, y1 - y0)
         else:
             if self.center_m is None:
                 raise ConfigError("center_km", None, "[x, y] of the circle's centre")
-            if self.radius_m is None or not self.radius_m > 0:
-                raise ConfigError("radius_km", self.radius_m, "a number > 0")
-            CircleRegion(self.center_m, self.radius_m)
+            object.__setattr__(self, "center_m", _vec2("center_km", self.center_m))
+            if self.radius_m is None:
+                raise ConfigError("radius_km", None, "a number in (0, 2000] for a circle")
+            CircleRegion(self.center_m, self.radius_m, name=name)
+            extent = 2 * self.radius_m
+        if extent / self.spacing_m > MAX_LINES:
+            raise ConfigError(
+                "spacing_km",
+                self.spacing_m / KM,
+                f"a spacing of at least {extent / MAX_LINES / KM:.3g} km for {name} "
+                f"(at most {MAX_LINES} lines across its {extent / KM:.4g} km)",
+            )
 
     def region(self):
         """The region object (``PolygonRegion`` or ``CircleRegion``)."""
@@ -135,8 +160,12 @@ class RegionPlan:
     description: str = _f(default="")
 
     def __post_init__(self) -> None:
-        if not self.regions:
-            raise ConfigError("regions", [], "at least one region")
+        _coerce(self)
+        if not isinstance(self.regions, (list, tuple)) or not self.regions:
+            raise ConfigError("regions", self.regions, "a list of at least one region")
+        ids = [r.id for r in self.regions]
+        if len(set(ids)) != len(ids):
+            raise ConfigError("regions", ids, "regions with distinct ids")
 
 
 def load_regions(source: str | os.PathLike[str]) -> RegionPlan:

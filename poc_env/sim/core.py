@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import poc_env._kernels as _kernels
+import poc_env.limits as limits
 from poc_env.config import Scenario
 from poc_env.sim import comms as comms_mod
 from poc_env.sim import constraints as cons
@@ -94,7 +95,7 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
         max(y1, pts[:, 1].max()) + m,
     )
     centers, lambdas = cons.threat_arrays(sc.map.threat_peaks)
-    horizon = sc.episode.horizon_steps or int(np.ceil(u.endurance_s / dt))
+    horizon = sc.horizon_steps
     switcher = None
     if sc.comms.topology == "table2":
         switcher = comms_mod.Table2Switcher(
@@ -215,6 +216,11 @@ def initial(
     e, n = len(rngs), params.n_agents
     u = params.scenario.uav
     s = params.s
+    cells = params.prior.size
+    comms = params.scenario.comms.belief_sharing == "comms"
+    limits.check_memory(
+        "n_envs", e, limits.env_bytes(cells, s, n, e, comms), f"{e} envs x {cells} cells"
+    )
     if priors is None:
         priors = np.broadcast_to(params.prior, (e, *params.prior.shape))
     belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, axis=1), s, axis=2) / (s * s)

@@ -137,6 +137,7 @@ def gaussian_mixture(
     mass = np.zeros(grid.shape)
     weights = np.array([c.weight for c in components], dtype=float)
     if len(components):
+        weights = weights / weights.max()  # first: a sum of weights near 1e308 overflows
         weights = weights / weights.sum()
     for w, comp in zip(weights, components):
         d = pts - np.asarray(comp.mean_m)
@@ -189,56 +190,85 @@ def random_gaussian_mixture(
     return gaussian_mixture(grid, comps, background=float(rng.uniform(*background)))
 
 
+def _shape_error(source: str, shape: tuple[int, ...], grid: Grid) -> MapFileError:
+    return MapFileError(
+        f"{source}: shape {shape} does not match the grid; allowed: (ny, nx) = "
+        f"{grid.shape} for {grid.nx} x {grid.ny} cells of {grid.cell_m / 1000:g} km "
+        f"(row 0 at the south edge). A map of another extent needs a scenario whose "
+        f"map.width_km / cell_km = nx and map.height_km / cell_km = ny; do not transpose "
+        f"the array, which would move the mass relative to the airfields"
+    )
+
+
 def validate_map(values: np.ndarray, grid: Grid, source: str = "map") -> np.ndarray:
     """Check and normalise a prior; raise :class:`MapFileError` naming what is wrong.
 
-    Requires shape ``(ny, nx)``, finite, non-negative values with a positive sum. A map that
-    does not sum to 1 is normalised with a warning.
+    Requires real numbers of shape ``(ny, nx)``, finite and non-negative, with positive mass.
+    The map is always divided by its sum (computed after scaling by the largest value, so
+    values near the float limit cannot overflow it), so the result sums to 1 to rounding; a
+    map whose sum was off by more than 1e-6 is reported with a warning.
     """
+    allowed = "real, finite probabilities >= 0 with a positive sum"
+    if np.iscomplexobj(values):
+        raise MapFileError(f"{source}: complex values; allowed: {allowed}")
     try:
-        arr = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise MapFileError(f"{source}: values must be numbers") from None
+        arr = np.array(values, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise MapFileError(f"{source}: values that are not numbers; allowed: {allowed}") from None
     if arr.shape != grid.shape:
-        raise MapFileError(
-            f"{source}: shape {arr.shape} does not match the grid; allowed: (ny, nx) = "
-            f"{grid.shape} for {grid.nx} x {grid.ny} cells of {grid.cell_m / 1000:g} km"
-        )
+        raise _shape_error(source, arr.shape, grid)
     if not np.all(np.isfinite(arr)):
         n = int(np.sum(~np.isfinite(arr)))
-        raise MapFileError(f"{source}: {n} value(s) are NaN or infinite; allowed: finite >= 0")
+        raise MapFileError(f"{source}: {n} value(s) are NaN or infinite; allowed: {allowed}")
     if np.any(arr < 0):
         raise MapFileError(
             f"{source}: {int(np.sum(arr < 0))} negative value(s) (min {arr.min():g}); "
-            "allowed: probabilities >= 0"
+            f"allowed: {allowed}"
         )
-    total = float(arr.sum())
-    if total <= 0:
-        raise MapFileError(f"{source}: all values are zero; allowed: a map with positive mass")
-    if abs(total - 1.0) > 1e-6:
-        warnings.warn(f"{source}: map sums to {total:.6g}, normalised to 1", stacklevel=2)
-        arr = arr / total
-    return arr
+    peak = float(arr.max())
+    if peak <= 0:
+        raise MapFileError(f"{source}: all values are zero; allowed: {allowed}")
+    scaled = arr / peak  # in [0, 1]: the sum cannot overflow
+    total = float(scaled.sum())
+    true_total = total * peak  # may be inf; only used for the message
+    if not abs(true_total - 1.0) <= 1e-6:
+        warnings.warn(f"{source}: map sums to {true_total:.6g}, normalised to 1", stacklevel=2)
+    return scaled / total
 
 
 def load_map(path: str | os.PathLike[str], grid: Grid) -> np.ndarray:
-    """Read a prior from ``.npy`` (no pickles) or ``.csv`` (rows from south to north)."""
+    """Read a prior from ``.npy`` (no pickles) or ``.csv`` (rows from south to north).
+
+    The file must be a regular file; a ``.npy`` header's shape is checked before its data are
+    read, and a ``.csv`` may not exceed 64 bytes a cell (a few MB for the paper's maps).
+    """
     p = Path(path)
+    name = f"map file {str(p)!r}"
+    allowed = f"a .npy or .csv file of shape (ny, nx) = {grid.shape}"
+    if not p.exists():
+        raise MapFileError(f"{name} does not exist; allowed: {allowed}")
     if not p.is_file():
-        raise MapFileError(f"map file {str(p)!r} does not exist")
+        kind = "a folder" if p.is_dir() else "not a regular file"
+        raise MapFileError(f"{name} is {kind}; allowed: {allowed}")
     suffix = p.suffix.lower()
+    if suffix not in (".npy", ".csv"):
+        raise MapFileError(f"{name}: suffix {suffix!r}; allowed: {allowed}")
     try:
         if suffix == ".npy":
-            arr = np.load(p, allow_pickle=False)
-        elif suffix == ".csv":
-            arr = np.loadtxt(p, delimiter=",", ndmin=2)
+            mm = np.load(p, allow_pickle=False, mmap_mode="r")
+            if mm.shape != grid.shape:  # before reading the data
+                raise _shape_error(name, mm.shape, grid)
+            arr = np.array(mm)
         else:
-            raise MapFileError(f"map file {str(p)!r}: suffix {suffix!r}; allowed: .npy or .csv")
+            limit = max(2**20, 64 * grid.nx * grid.ny)
+            if p.stat().st_size > limit:
+                raise MapFileError(f"{name} is larger than {limit} bytes; allowed: {allowed}")
+            arr = np.loadtxt(p, delimiter=",", ndmin=2)
     except MapFileError:
         raise
-    except (ValueError, OSError, EOFError) as err:
-        raise MapFileError(f"map file {str(p)!r} is corrupt or unreadable: {err}") from None
-    return validate_map(arr, grid, source=f"map file {str(p)!r}")
+    except (ValueError, OSError, EOFError, TypeError) as err:
+        raise MapFileError(f"{name} is corrupt or unreadable ({err}); allowed: {allowed}") from None
+    return validate_map(arr, grid, source=name)
 
 
 def build_prior(cfg: MapConfig, map_file: str | os.PathLike[str] | None = None) -> np.ndarray:

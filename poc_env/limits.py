@@ -1,0 +1,119 @@
+"""Documented limits on inputs, and the memory guard.
+
+Physical plausibility: a scenario outside these ranges is almost surely a typo (a speed in m/s
+written under ``_kmh``, metres under ``_km``) or hostile input, and values far outside them make
+numpy overflow or allocate without end. Each limit is generous against real aircraft and search
+areas; raise one here if a real use needs it.
+
+Memory: before a large allocation (a map's cells, a batch of environments, a planner
+population) its size is estimated and compared with :func:`memory_limit_bytes`, 4 GiB unless the
+environment variable ``POC_ENV_MAX_MEMORY_GB`` or the CLI flag ``--max-memory-gb`` says
+otherwise, so that a mistyped size ends in a clear error naming the field instead of the kernel
+killing the process.
+"""
+
+from __future__ import annotations
+
+import os
+
+from poc_env.errors import ConfigError, as_number
+
+# --------------------------------------------------------------------------- physical ranges
+#: Largest side of the search area, and largest distance of any point (origin, airfields,
+#: zones, peaks) from the map origin: 2,000 km (a continental search; the paper's is 200 km).
+MAX_EXTENT_KM = 2000.0
+#: Largest distance of any configured point (origin, airfields, zones, peaks) from the map
+#: origin, km.
+MAX_COORD_KM = 10_000.0
+#: Smallest cell side: 10 m (a search cell narrower than any sensor footprint is meaningless).
+MIN_CELL_KM = 0.01
+#: Fastest UAV: 1,500 km/h (beyond any search aircraft; the paper's fly 100-240 km/h).
+MAX_SPEED_KMH = 1500.0
+#: Longest endurance: 240 h (ten days; the paper's UAVs fly 3 h).
+MAX_ENDURANCE_H = 240.0
+#: Largest acceleration (m/s^2), turn and pitch rates (deg/s), pitch (deg), altitude (m).
+MAX_ACCEL_MPS2 = 100.0
+MAX_RATE_DEG_S = 360.0
+MAX_PITCH_DEG = 89.0
+MAX_ALTITUDE_M = 30_000.0
+#: Widest sensor sweep and longest comms range / separation, km.
+MAX_SWEEP_WIDTH_KM = 200.0
+MAX_RANGE_KM = 20_000.0
+#: Longest time step: one hour; most steps per episode: 10^7.
+MAX_DT_S = 3600.0
+MAX_STEPS = 10_000_000
+#: Largest reward weight or penalty (keeps sums of rewards far from float overflow).
+MAX_WEIGHT = 1e9
+#: Largest planner population (``planner.population``, ``plan --popsize``; the paper: 100),
+#: generations (the paper: 300), and batch of environments (``train --n-envs``).
+POPSIZE_MAX = 10_000
+MAXITER_MAX = 100_000
+N_ENVS_MAX = 1024
+
+# --------------------------------------------------------------------------- memory guard
+DEFAULT_MEMORY_GB = 4.0
+_ENV_VAR = "POC_ENV_MAX_MEMORY_GB"
+
+
+def set_memory_limit_gb(gb: float | None) -> None:
+    """Set the memory guard's limit for this process and its workers (None: back to default)."""
+    if gb is None:
+        os.environ.pop(_ENV_VAR, None)
+        return
+    os.environ[_ENV_VAR] = repr(as_number("max_memory_gb", gb, 0.0, 1e6, lo_open=True))
+
+
+def memory_limit_bytes() -> float:
+    """The guard's limit: ``POC_ENV_MAX_MEMORY_GB`` GiB (default 4)."""
+    text = os.environ.get(_ENV_VAR)
+    if text is None:
+        return DEFAULT_MEMORY_GB * 2**30
+    try:
+        gb = float(text)
+    except ValueError:
+        raise ConfigError(_ENV_VAR, text, "a number of GiB > 0") from None
+    return as_number(_ENV_VAR, gb, 0.0, 1e6, lo_open=True) * 2**30
+
+
+def check_memory(field: str, value: object, nbytes: float, what: str) -> None:
+    """Raise :class:`ConfigError` on ``field`` if ``what`` would need more than the limit."""
+    limit = memory_limit_bytes()
+    if nbytes > limit:
+        raise ConfigError(
+            field,
+            value,
+            f"a size whose {what} fits the memory limit: it needs about {_gib(nbytes)}, the "
+            f"limit is {_gib(limit)} (raise it with --max-memory-gb or {_ENV_VAR})",
+        )
+
+
+def _gib(n: float) -> str:
+    return f"{n / 2**30:.3g} GiB"
+
+
+#: Bytes per map cell of the largest structure built from a map: the prior is integrated on a
+#: 6 x 6 sub-grid per cell (coordinates, densities and temporaries), measured with tracemalloc
+#: on 10^4 to 6.4 x 10^5 cells: 2,330 B a cell (tests/test_limits.py keeps it an upper bound).
+MAP_BYTES_PER_CELL = 4096
+
+
+def map_bytes(cells: int) -> float:
+    """Estimated peak bytes of building and holding a map of ``cells`` cells."""
+    return float(cells) * MAP_BYTES_PER_CELL
+
+
+def env_bytes(cells: int, samples_per_cell: int, n_agents: int, n_envs: int, comms: bool) -> float:
+    """Estimated peak bytes of ``n_envs`` environments over a map of ``cells`` cells: the map
+    (:func:`map_bytes`) plus, per env, the fine belief (``samples_per_cell``^2 points a cell,
+    one copy per agent under ``belief_sharing: comms``) and its temporaries. Calibrated like
+    :data:`MAP_BYTES_PER_CELL` (measured about a quarter of it: 290 B a cell and env with one
+    shared belief, 2,960 with three agents' beliefs, s = 4)."""
+    per_cell = 256 + 64 * samples_per_cell**2 * (n_agents if comms else 1)
+    return map_bytes(cells) + float(n_envs) * cells * per_cell
+
+
+def plan_bytes(popsize: int, n_uavs: int, cells: int) -> float:
+    """Estimated peak bytes of a planner population: the objective scores the whole population
+    at once, about 22 B per member, UAV and cell (measured with tracemalloc on paper_6_2 at
+    popsize 1,000 and 4,000); 48 B keeps it an upper bound."""
+    return map_bytes(cells) + 48.0 * popsize * n_uavs * cells
