@@ -30,11 +30,15 @@ def atomic_path(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path
 
     ``suffix`` keeps an extension that writers infer the format from (``".png"``, ``".zip"``).
     Creates the destination folder. On an exception the temporary file is deleted and the
-    exception propagates.
+    exception propagates. The temporary file is named ``.NAME.tmp-PID-XXXX``: one left by a
+    killed process (its PID gone) is removed by the next atomic write into the same folder.
     """
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=suffix, dir=p.parent)
+    clean_stale_temp_files(p.parent)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{p.name}{_TEMP}{os.getpid()}-", suffix=suffix, dir=p.parent
+    )
     os.close(fd)
     try:
         yield Path(tmp)
@@ -58,6 +62,8 @@ def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
     return write_bytes_atomic(path, text.encode("utf-8"))
 
 
+#: Marker of an atomic write's temporary file: ``.NAME.tmp-PID-XXXX``.
+_TEMP = ".tmp-"
 #: Prefix of a command's staging folder beside its output folder: ``.NAME.partial-PID-XXXX``.
 _STAGING = ".partial-"
 
@@ -70,6 +76,22 @@ def _pid_alive(pid: int) -> bool:
     except OSError:  # exists, owned by someone else
         return True
     return True
+
+
+def clean_stale_temp_files(folder: Path) -> None:
+    """Remove the temporary files of :func:`atomic_path` in ``folder`` whose process is gone
+    (left by a kill between creating and publishing them)."""
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for e in entries:
+        if not e.name.startswith(".") or _TEMP not in e.name:
+            continue
+        pid = e.name.rsplit(_TEMP, 1)[1].split("-", 1)[0]
+        if pid.isdigit() and not _pid_alive(int(pid)) and e.is_file(follow_symlinks=False):
+            with contextlib.suppress(OSError):
+                os.unlink(e.path)
 
 
 def _clean_stale_staging(dest: Path) -> None:

@@ -15,28 +15,15 @@ import csv
 import io
 import os
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from agents.experiments.pool import process_pool, run_jobs  # noqa: F401 (process_pool: API)
 from agents.policies.registry import make_policy
 from poc_env.errors import ConfigError
-
-
-def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A pool of ``workers`` processes started by a fork server, never by forking this process:
-    a process that has started torch's (or OpenMP's) thread pool and then forks can leave the
-    children waiting forever on a lock the pool held. Workers import what they run afresh, so
-    only policies registered at import time (every built-in) reach them, and a script that
-    calls ``evaluate(workers > 1)`` needs the usual ``if __name__ == "__main__":`` guard."""
-    import multiprocessing
-
-    return ProcessPoolExecutor(
-        max_workers=workers, mp_context=multiprocessing.get_context("forkserver")
-    )
 
 
 def check_policies(policies: Sequence[str]) -> None:
@@ -233,19 +220,7 @@ def evaluate(
     if random_priors and map_file is not None:
         raise ConfigError("map", map_file, "no map file with --random-priors (one or the other)")
     jobs = [(sc, p, seed0 + k, map_file, random_priors) for p in policies for k in range(episodes)]
-    it: Any
-    if workers == 1:
-        it = map(_run, jobs)
-    else:
-        pool = process_pool(workers)
-        it = pool.map(_run, jobs)
-    if progress:
-        from tqdm import tqdm
-
-        it = tqdm(it, total=len(jobs), desc="episodes", unit="ep")
-    results = tuple(it)
-    if workers > 1:
-        pool.shutdown()
+    results = tuple(run_jobs(_run, jobs, workers, desc="episodes" if progress else None))
     if random_priors:  # each episode's own prior; the same seeds for every policy
         bound = float(np.mean([float(e.bound or 0.0) for e in results[:episodes]]))
     else:

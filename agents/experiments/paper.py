@@ -144,20 +144,17 @@ class Runner:
         self._pool: ProcessPoolExecutor | None = None
 
     def map(self, fn: Callable[[Any], Any], jobs: Sequence[Any], desc: str) -> list[Any]:
-        it: Any
-        if self.workers == 1 or len(jobs) < 2:
-            it = map(fn, jobs)
-        else:
-            if self._pool is None:
-                from agents.experiments.evaluate import process_pool
+        from agents.experiments.pool import process_pool, run_jobs
 
-                self._pool = process_pool(self.workers)
-            it = self._pool.map(fn, jobs)
-        if self.progress:
-            from tqdm import tqdm
-
-            it = tqdm(it, total=len(jobs), desc=desc, unit="job", leave=False)
-        return list(it)
+        if self.workers > 1 and len(jobs) > 1 and self._pool is None:
+            self._pool = process_pool(self.workers)
+        try:
+            return run_jobs(
+                fn, jobs, self.workers, pool=self._pool, desc=desc if self.progress else None
+            )
+        except BaseException:
+            self._pool = None  # run_jobs stopped it
+            raise
 
     def close(self) -> None:
         if self._pool is not None:

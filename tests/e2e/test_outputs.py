@@ -148,3 +148,27 @@ def test_kill_during_writing_leaves_old_or_new_output(tmp_path):
     subprocess.run([*argv, "--out", str(out)], env=env, check=True, stdout=subprocess.DEVNULL)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s"]
     assert (out / "survey.csv").read_bytes() != old["survey.csv"]
+
+
+def test_temp_files_of_killed_writers_are_cleaned(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from poc_env.io import write_text_atomic
+
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    dead_pid = int(dead.stdout)
+    stale = tmp_path / f".step_8.zip.tmp-{dead_pid}-abcd1234.zip"
+    live = tmp_path / f".other.json.tmp-{os.getpid()}-abcd1234"
+    stale.write_bytes(b"half a model")
+    live.write_bytes(b"being written by a live process")
+    write_text_atomic(tmp_path / "latest.json", "{}")
+    assert not stale.exists()  # its writer is gone
+    assert live.exists()  # its writer (this process) is alive: never touched
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "latest.json"])

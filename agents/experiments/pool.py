@@ -1,0 +1,122 @@
+"""Worker processes for independent jobs (episodes, plans): safe to start, never waited on
+forever.
+
+Pools are started by a fork server, never by forking this process: a process that has started
+torch's (or OpenMP's) thread pool and then forks can leave the children waiting forever on a
+lock the pool held. Workers import what they run afresh, so only policies registered at import
+time (every built-in) reach them, and a script that runs jobs on workers needs the usual
+``if __name__ == "__main__":`` guard.
+
+Every wait for a result has a timeout, :func:`worker_timeout_s` seconds per job (30 minutes
+unless ``POC_ENV_WORKER_TIMEOUT_S`` says otherwise): a worker that hangs or dies ends the
+command with :class:`WorkerTimeoutError` and its pool is stopped, instead of a silent wait.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import TimeoutError as FutureTimeout
+from typing import Any
+
+from poc_env.errors import ConfigError, PocEnvError, as_number
+
+DEFAULT_TIMEOUT_S = 1800.0
+_ENV_VAR = "POC_ENV_WORKER_TIMEOUT_S"
+
+
+class WorkerTimeoutError(PocEnvError, TimeoutError):
+    """A job on a worker process did not finish within the timeout."""
+
+
+def worker_timeout_s() -> float:
+    """Seconds to wait for any one job's result (``POC_ENV_WORKER_TIMEOUT_S``, default 1800)."""
+    text = os.environ.get(_ENV_VAR)
+    if text is None:
+        return DEFAULT_TIMEOUT_S
+    try:
+        value = float(text)
+    except ValueError:
+        raise ConfigError(_ENV_VAR, text, "a number of seconds > 0") from None
+    return as_number(_ENV_VAR, value, 0.0, None, lo_open=True)
+
+
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes started by a fork server (see the module docstring)."""
+    return ProcessPoolExecutor(
+        max_workers=workers, mp_context=multiprocessing.get_context("forkserver")
+    )
+
+
+def stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the workers now (a hung one included)."""
+    procs = list(getattr(pool, "_processes", {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.kill()
+    for p in procs:
+        p.join(timeout=5)
+
+
+def run_jobs(
+    fn: Callable[[Any], Any],
+    jobs: Sequence[Any],
+    workers: int = 1,
+    *,
+    pool: ProcessPoolExecutor | None = None,
+    desc: str | None = None,
+) -> list[Any]:
+    """``[fn(job) for job in jobs]``, on ``workers`` processes when ``workers > 1`` (results in
+    job order). ``pool``: an open pool to reuse (it stays open on success; it is stopped on a
+    failure); without one a pool is made and shut down here. ``desc``: a progress bar's label.
+    """
+    bar = None
+    if desc is not None:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(jobs), desc=desc, unit="job", leave=False)
+    try:
+        if workers == 1 or len(jobs) < 2:
+            out = []
+            for job in jobs:
+                out.append(fn(job))
+                if bar is not None:
+                    bar.update(1)
+            return out
+        own = pool is None
+        ex = process_pool(workers) if pool is None else pool
+        timeout = worker_timeout_s()
+        try:
+            futures: list[Future] = [ex.submit(fn, job) for job in jobs]
+            out = []
+            for k, fut in enumerate(futures):
+                try:
+                    out.append(fut.result(timeout=timeout))
+                except FutureTimeout:
+                    raise WorkerTimeoutError(
+                        f"job {k} of {len(jobs)} on a worker process gave no result within "
+                        f"{timeout:g} s; allowed: jobs that finish within {_ENV_VAR} seconds "
+                        f"(raise it for long jobs, or run with one worker)"
+                    ) from None
+                if bar is not None:
+                    bar.update(1)
+        except BaseException:
+            stop_pool(ex)
+            raise
+        if own:
+            ex.shutdown()
+        return out
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def sleep_job(seconds: float) -> float:
+    """A job that sleeps (to test and diagnose timeouts on real worker processes)."""
+    import time
+
+    time.sleep(seconds)
+    return seconds
