@@ -1,27 +1,64 @@
 """Mission export: a plan (``plan.json``, schema 1) as GeoJSON, KML or QGroundControl missions.
 
-Local metres are placed at a geographic origin (the map's (0, 0)) by a local tangent-plane
-projection on the WGS84 ellipsoid: ``lat = lat0 + y / M(lat0)``, ``lon = lon0 + x / (N(lat0)
-cos lat0)`` with the meridional and prime-vertical radii of curvature M and N at the origin.
-Within 200 km of the origin its distances are within about 0.1 % of the geodesic ones -- the
-scale of the paper's 150 x 200 km areas -- and it inverts exactly, so exported files parse back
-to the same waypoints. For continental areas use a proper projection (e.g. pyproj's azimuthal
-equidistant) before exporting.
+Projection
+----------
+Plans are in local metres; a coordinate reference system (CRS) places them on the WGS84
+ellipsoid. Every projection goes through pyproj (PROJ) Transformers with ``always_xy=True``
+(so every call is (lon, lat) <-> (easting, northing); :func:`to_geographic` and
+:func:`to_local` keep the (lat, lon) order of their callers):
+
+- ``aeqd`` (default): the azimuthal equidistant projection centred on the map's (0, 0),
+  ``+proj=aeqd +lat_0=LAT +lon_0=LON +datum=WGS84 +units=m +no_defs``. Distances and bearings
+  from the origin are exact; between any two points within 300 km of the origin the scale error
+  is below about ``rho**2 / (6 R**2)`` = 0.04 %. Measured by tests/planning/test_export.py against
+  the ellipsoid (``pyproj.Geod``): over the paper_6_2 extent with its 20 km margin
+  (x in [-20, 220] km, y in [-80, 170] km) local distances agree with geodesic ones within
+  0.03 %; round trips return the same metres within 1e-3 m out to +-300 km (see
+  docs/EXPORT.md for the numbers).
+- ``utm``: Universal Transverse Mercator on WGS84, the zone chosen from the origin
+  (``floor((lon + 180) / 6) + 1``, south when lat < 0; the Norway/Svalbard exceptions are not
+  applied) or given. Local metres are UTM metres shifted so that the origin is (0, 0).
+- ``epsg`` / ``proj``: any projected CRS in metres given as an EPSG code or a PROJ string,
+  shifted the same way.
+
+In every case ``local = projected(lon, lat) - projected(origin)``; for ``aeqd`` the shift is 0.
+The hand-written tangent plane used before put a 200 km east-west line at y = 150 km 2.5 % short
+(its longitude scale was fixed at the origin's latitude); the test keeps that case.
 
 ``plan.json`` (schema 1) holds: ``schema``, ``scenario``, ``seed``, ``map_source``,
 ``optimizer`` {``name``, ``settings``}, ``runtime_s``, ``posc``, ``upper_bound`` and
 ``uavs``: a list of {``id``, ``rectangle`` {``center_m`` [x, y], ``length_m``, ``width_m``,
 ``theta_deg``}, ``spacing_m``, ``takeoff_m``, ``landing_m``, ``waypoints_m`` [[x, y], ...],
 ``track_length_m``, ``flight_time_s``, ``pod``, ``poc``, ``pos``, ``feasible``}.
+``waypoints_m`` are the search pattern only: the route flown is take-off field, transit to
+``waypoints_m[0]``, the search from ``waypoints_m[0]`` to ``waypoints_m[-1]``, transit to the
+landing field.
+
+Optional fields (a plan without them is read as before, so every schema-1 file still loads):
+
+- ``crs``: {``kind``: ``aeqd`` | ``utm`` | ``epsg`` | ``proj``, ``origin_deg`` [lat, lon],
+  ``proj`` (a PROJ string; required unless ``kind`` is ``epsg``), ``epsg`` (an integer; required
+  for ``epsg``)}, as written by :func:`make_crs`. With it, export needs no ``--origin``; an
+  ``--origin`` given anyway must equal ``crs.origin_deg``. Without it, ``--origin`` is required
+  and the default ``aeqd`` CRS at that origin is used.
+- ``flight``: {``cruise_speed_mps`` (v_b), ``search_speed_mps`` (v_s), ``altitude_m``,
+  ``max_altitude_m``} of the scenario's UAV (default the paper's 220 km/h, 180 km/h, 1,000 m,
+  4,000 m).
+- ``operating_area_m``: the operating area (eq. 20's boundary) as a polygon [[x, y], ...]; the
+  QGC geofence's inclusion polygon. Without it the inclusion fence is left empty.
+- ``no_fly_zones_m``: a list of polygons; exclusion fences.
+- ``airfields``: [{``name``, ``position_m``}]; names in KML/GeoJSON.
 
 :func:`load_plan` checks every field an export reads before anything is written: finite numbers
 in documented ranges (points within :data:`MAX_EXTENT_M` of the origin, probabilities in
-[0, 1]), the right shapes, and UAV ids of 1-64 ``A-Z a-z 0-9 _ -`` (they become file names), so
-no NaN, no out-of-range latitude and no path outside ``--out`` can reach a mission file.
+[0, 1]), the right shapes, a known CRS kind that pyproj accepts as a projected CRS in metres,
+and UAV ids of 1-64 ``A-Z a-z 0-9 _ -`` (they become file names), so no NaN, no out-of-range
+latitude and no path outside ``--out`` can reach a mission file.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -30,14 +67,17 @@ from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import escape
 
+import numpy as np
+from pyproj import CRS, Transformer
+from pyproj.exceptions import CRSError, ProjError
+
 from poc_env.errors import ConfigError
 from poc_env.io import write_text_atomic
 
 SCHEMA = 1
 FORMATS = ("geojson", "kml", "qgc")
-_A = 6378137.0  # WGS84 semi-major axis, m
-_F = 1 / 298.257223563
-_E2 = _F * (2 - _F)
+CRS_KINDS = ("aeqd", "utm", "epsg", "proj")
+ALTITUDE_REFS = ("home", "amsl")
 
 PLAN_KEYS = {
     "schema", "scenario", "seed", "map_source", "optimizer", "runtime_s", "posc",
@@ -47,6 +87,29 @@ UAV_KEYS = {
     "id", "rectangle", "spacing_m", "takeoff_m", "landing_m", "waypoints_m", "track_length_m",
     "flight_time_s", "pod", "poc", "pos", "feasible",
 }  # fmt: skip
+
+#: The paper's UAV (§6.2) for plans that record no ``flight`` section.
+DEFAULT_FLIGHT = {
+    "cruise_speed_mps": 220 / 3.6,
+    "search_speed_mps": 180 / 3.6,
+    "altitude_m": 1000.0,
+    "max_altitude_m": 4000.0,
+}
+
+# MAVLink ids (https://mavlink.io/en/messages/common.html): MAV_CMD and MAV_FRAME.
+MAV_CMD_NAV_WAYPOINT = 16
+MAV_CMD_NAV_LAND = 21
+MAV_CMD_NAV_TAKEOFF = 22
+MAV_CMD_DO_CHANGE_SPEED = 178
+MAV_CMD_DO_LAND_START = 189
+MAV_FRAME_GLOBAL = 0
+MAV_FRAME_MISSION = 2
+MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
+#: altitude reference -> (MAV_FRAME, QGC AltitudeMode (1 relative, 2 absolute), KML altitudeMode)
+_ALT_REF = {
+    "home": (MAV_FRAME_GLOBAL_RELATIVE_ALT, 1, "relativeToGround"),
+    "amsl": (MAV_FRAME_GLOBAL, 2, "absolute"),
+}
 
 
 def parse_origin(text: str) -> tuple[float, float]:
@@ -60,37 +123,160 @@ def parse_origin(text: str) -> tuple[float, float]:
     return lat, lon
 
 
-def _radii(lat0: float) -> tuple[float, float]:
-    s = math.sin(math.radians(lat0))
-    w = math.sqrt(1 - _E2 * s * s)
-    return _A * (1 - _E2) / w**3, _A / w  # M, N
+def _origin(origin: Any) -> tuple[float, float]:
+    if isinstance(origin, str):
+        return parse_origin(origin)
+    try:
+        lat, lon = origin
+    except (TypeError, ValueError):
+        raise ConfigError("origin", origin, "(lat, lon) in degrees") from None
+    return parse_origin(f"{lat!r},{lon!r}")
 
 
-def to_geographic(xy, origin: tuple[float, float]) -> list[tuple[float, float]]:
-    """Local metres [[x, y], ...] -> [(lat, lon), ...] degrees (see the module docstring)."""
-    lat0, lon0 = origin
-    m, n = _radii(lat0)
-    c = math.cos(math.radians(lat0))
-    out = []
-    for x, y in xy:
-        lat = lat0 + math.degrees(y / m)
-        lon = lon0 + math.degrees(x / (n * c))
-        if not -180.0 <= lon <= 180.0:  # across the antimeridian
-            lon = (lon + 180.0) % 360.0 - 180.0
-        if not (math.isfinite(lat) and math.isfinite(lon) and -90.0 <= lat <= 90.0):
-            raise ConfigError(
-                "waypoints", [x, y], f"points whose latitude from origin {origin} is within +-90"
-            )
-        out.append((lat, lon))
-    return out
+def utm_zone(origin: tuple[float, float]) -> int:
+    """The UTM zone (1-60) of a (lat, lon) origin: ``floor((lon + 180) / 6) + 1``."""
+    return min(math.floor((origin[1] + 180.0) / 6.0) + 1, 60)
 
 
-def to_local(latlon, origin: tuple[float, float]) -> list[tuple[float, float]]:
-    """The exact inverse of :func:`to_geographic`."""
-    lat0, lon0 = origin
-    m, n = _radii(lat0)
-    c = math.cos(math.radians(lat0))
-    return [(math.radians(lon - lon0) * n * c, math.radians(lat - lat0) * m) for lat, lon in latlon]
+def make_crs(
+    kind: str = "aeqd",
+    origin: Any = None,
+    *,
+    zone: int | None = None,
+    epsg: int | None = None,
+    proj: str | None = None,
+) -> dict[str, Any]:
+    """The ``crs`` record of a plan (see the module docstring), checked by pyproj.
+
+    ``aeqd``: azimuthal equidistant centred on ``origin`` (lat, lon); ``utm``: UTM zone
+    ``zone`` (default: the origin's, south when lat < 0); ``epsg``/``proj``: a projected CRS in
+    metres, with ``origin`` the point that becomes local (0, 0).
+    """
+    lat, lon = _origin(origin)
+    if kind == "aeqd":
+        text = f"+proj=aeqd +lat_0={lat!r} +lon_0={lon!r} +datum=WGS84 +units=m +no_defs"
+        rec: dict[str, Any] = {"kind": kind, "proj": text}
+    elif kind == "utm":
+        z = utm_zone((lat, lon)) if zone is None else zone
+        if isinstance(z, bool) or not isinstance(z, int) or not 1 <= z <= 60:
+            raise ConfigError("crs.zone", z, "a UTM zone 1-60")
+        south = " +south" if lat < 0 else ""
+        text = f"+proj=utm +zone={z}{south} +datum=WGS84 +units=m +no_defs"
+        rec = {"kind": kind, "proj": text, "epsg": (32700 if south else 32600) + z}
+    elif kind == "epsg":
+        rec = {"kind": kind, "epsg": epsg}
+    elif kind == "proj":
+        rec = {"kind": kind, "proj": proj}
+    else:
+        raise ConfigError("crs.kind", kind, "one of " + ", ".join(CRS_KINDS))
+    rec["origin_deg"] = [lat, lon]
+    _check_crs("crs", rec)
+    return rec
+
+
+def _crs_text(rec: dict[str, Any]) -> str:
+    return f"EPSG:{rec['epsg']}" if rec["kind"] == "epsg" else str(rec["proj"])
+
+
+def _check_crs(field: str, rec: Any) -> dict[str, Any]:
+    """A plan's ``crs`` record, validated: known kind, a projected CRS in metres, an origin."""
+    if not isinstance(rec, dict):
+        raise ConfigError(field, rec, "a mapping with kind, origin_deg and proj or epsg")
+    kind = rec.get("kind")
+    if kind not in CRS_KINDS:
+        raise ConfigError(f"{field}.kind", kind, "one of " + ", ".join(CRS_KINDS))
+    allowed = {"kind", "origin_deg", "proj", "epsg"}
+    extra = sorted(set(rec) - allowed)
+    if extra:
+        raise ConfigError(f"{field}.{extra[0]}", rec[extra[0]], "one of " + ", ".join(allowed))
+    o = rec.get("origin_deg")
+    if not isinstance(o, (list, tuple)) or len(o) != 2:
+        raise ConfigError(f"{field}.origin_deg", o, "[lat, lon] in degrees")
+    _number(f"{field}.origin_deg", o[0], -89.9, 89.9)
+    _number(f"{field}.origin_deg", o[1], -180.0, 180.0)
+    if kind == "epsg":
+        code = rec.get("epsg")
+        if isinstance(code, bool) or not isinstance(code, int) or not 1024 <= code <= 999999:
+            raise ConfigError(f"{field}.epsg", code, "an EPSG code (integer) of a projected CRS")
+    else:
+        text = rec.get("proj")
+        if not isinstance(text, str) or not text.strip() or len(text) > 1000:
+            raise ConfigError(f"{field}.proj", text, "a PROJ string, e.g. '+proj=aeqd ...'")
+    key = "epsg" if kind == "epsg" else "proj"
+    try:
+        crs = CRS.from_user_input(_crs_text(rec))
+    except CRSError as err:
+        raise ConfigError(f"{field}.{key}", rec.get(key), f"a CRS pyproj accepts ({err})") from None
+    units = {a.unit_name for a in crs.axis_info}
+    if not crs.is_projected or units != {"metre"}:
+        raise ConfigError(f"{field}.{key}", rec.get(key), "a projected CRS in metres")
+    if kind in ("aeqd", "utm") and not re.search(rf"\+proj={kind}(\s|$)", str(rec["proj"])):
+        raise ConfigError(f"{field}.proj", rec.get("proj"), f"+proj={kind} ... for kind {kind}")
+    return rec
+
+
+@functools.lru_cache(maxsize=64)
+def _transformers(
+    text: str, lat0: float, lon0: float
+) -> tuple[Transformer, Transformer, float, float]:
+    """(lon/lat -> projected, projected -> lon/lat, x0, y0) of a CRS; cached per CRS and origin."""
+    fwd = Transformer.from_crs("EPSG:4326", text, always_xy=True)
+    inv = Transformer.from_crs(text, "EPSG:4326", always_xy=True)
+    x0, y0 = fwd.transform(lon0, lat0, errcheck=True)
+    return fwd, inv, float(x0), float(y0)
+
+
+def _resolve(crs: Any) -> tuple[Transformer, Transformer, float, float]:
+    """A (lat, lon) origin (default aeqd there) or a plan's ``crs`` record -> transformers."""
+    if isinstance(crs, dict):
+        rec = crs
+    else:
+        lat, lon = _origin(crs)
+        rec = {
+            "kind": "aeqd",
+            "proj": f"+proj=aeqd +lat_0={lat!r} +lon_0={lon!r} +datum=WGS84 +units=m +no_defs",
+            "origin_deg": [lat, lon],
+        }
+    lat0, lon0 = (float(v) for v in rec["origin_deg"])
+    return _transformers(_crs_text(rec), lat0, lon0)
+
+
+def to_geographic(xy, origin: Any) -> list[tuple[float, float]]:
+    """Local metres [[x, y], ...] -> [(lat, lon), ...] degrees.
+
+    ``origin``: the (lat, lon) of the map's (0, 0) (the default ``aeqd`` CRS there) or a plan's
+    ``crs`` record (see the module docstring).
+    """
+    pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+    if pts.size == 0:
+        return []
+    _, inv, x0, y0 = _resolve(origin)
+    lon, lat = inv.transform(pts[:, 0] + x0, pts[:, 1] + y0)
+    lon = np.atleast_1d(np.asarray(lon, dtype=float))
+    lat = np.atleast_1d(np.asarray(lat, dtype=float))
+    lon = np.where(np.abs(lon) <= 180.0, lon, (lon + 180.0) % 360.0 - 180.0)  # antimeridian
+    bad = ~(np.isfinite(lat) & np.isfinite(lon) & (np.abs(lat) <= 90.0))
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ConfigError(
+            "waypoints", pts[k].tolist(), f"points the projection {origin} maps on the globe"
+        )
+    return [(float(a), float(b)) for a, b in zip(lat, lon)]
+
+
+def to_local(latlon, origin: Any) -> list[tuple[float, float]]:
+    """The inverse of :func:`to_geographic`: [(lat, lon), ...] degrees -> [(x, y), ...] m."""
+    pts = np.asarray(latlon, dtype=float).reshape(-1, 2)
+    if pts.size == 0:
+        return []
+    fwd, _, x0, y0 = _resolve(origin)
+    try:
+        x, y = fwd.transform(pts[:, 1], pts[:, 0], errcheck=True)
+    except ProjError as err:
+        raise ConfigError("latlon", pts.tolist()[:3], f"points on the globe ({err})") from None
+    x = np.atleast_1d(np.asarray(x, dtype=float)) - x0
+    y = np.atleast_1d(np.asarray(y, dtype=float)) - y0
+    return [(float(a), float(b)) for a, b in zip(x, y)]
 
 
 def load_plan(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -151,12 +337,50 @@ def load_plan(path: str | os.PathLike[str]) -> dict[str, Any]:
             _number(f"{where}.{key}", u[key], 0.0, 1.0)
         if not isinstance(u["feasible"], bool):
             raise ConfigError(f"{where}.feasible", u["feasible"], "true or false")
+    _check_optional(plan)
     return plan
 
 
+def _check_optional(plan: dict[str, Any]) -> None:
+    """The optional fields (module docstring): absent or null is fine, anything else checked."""
+    if plan.get("crs") is not None:
+        _check_crs("plan.crs", plan["crs"])
+    fl = plan.get("flight")
+    if fl is not None:
+        if not isinstance(fl, dict) or not set(fl) <= set(DEFAULT_FLIGHT):
+            raise ConfigError("plan.flight", fl, "a mapping of " + ", ".join(DEFAULT_FLIGHT))
+        for key in ("cruise_speed_mps", "search_speed_mps"):
+            if key in fl:
+                _number(f"plan.flight.{key}", fl[key], 1e-3, MAX_SPEED_MPS)
+        for key in ("altitude_m", "max_altitude_m"):
+            if key in fl:
+                _number(f"plan.flight.{key}", fl[key], 1e-3, MAX_ALTITUDE_M)
+    if plan.get("operating_area_m") is not None:
+        _polygon("plan.operating_area_m", plan["operating_area_m"])
+    zones = plan.get("no_fly_zones_m")
+    if zones is not None:
+        if not isinstance(zones, list):
+            raise ConfigError("plan.no_fly_zones_m", zones, "a list of polygons")
+        for i, z in enumerate(zones):
+            _polygon(f"plan.no_fly_zones_m[{i}]", z)
+    fields = plan.get("airfields")
+    if fields is not None:
+        if not isinstance(fields, list):
+            raise ConfigError("plan.airfields", fields, "a list of {name, position_m}")
+        for i, a in enumerate(fields):
+            if not isinstance(a, dict) or sorted(a) != ["name", "position_m"]:
+                raise ConfigError(f"plan.airfields[{i}]", a, "a mapping of name, position_m")
+            if not isinstance(a["name"], str) or not 1 <= len(a["name"]) <= 64:
+                raise ConfigError(f"plan.airfields[{i}].name", a["name"], "1-64 characters")
+            _point(f"plan.airfields[{i}].position_m", a["position_m"])
+
+
 #: Largest |x| or |y| of a plan point, metres: 2,000 km from the map origin, far beyond a
-#: regional search (the projection is accurate to about 0.1 % within 200 km).
+#: regional search (the projections are documented and measured within 300 km).
 MAX_EXTENT_M = 2.0e6
+#: Largest speed (m/s) and altitude (m) a plan's ``flight`` section may hold.
+MAX_SPEED_MPS = 1000.0
+MAX_ALTITUDE_M = 30_000.0
 _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 
@@ -178,55 +402,172 @@ def _point(field: str, value: Any) -> None:
         _number(field, v, -MAX_EXTENT_M, MAX_EXTENT_M)
 
 
+def _polygon(field: str, value: Any) -> None:
+    """A polygon: a list of at least 3 [x, y] points in metres."""
+    if not isinstance(value, list) or len(value) < 3:
+        raise ConfigError(field, value, "a list of at least 3 [x, y] points in metres")
+    for i, v in enumerate(value):
+        _point(f"{field}[{i}]", v)
+
+
 def _route(u: dict) -> list[list[float]]:
     return [list(u["takeoff_m"]), *u["waypoints_m"], list(u["landing_m"])]
 
 
-def geojson(plan: dict, origin: tuple[float, float]) -> dict:
-    """A FeatureCollection: per UAV the route (LineString) and its search rectangle (Polygon)."""
+def _flight(plan: dict) -> dict[str, float]:
+    return {**DEFAULT_FLIGHT, **(plan.get("flight") or {})}
+
+
+def _altitudes(
+    plan: dict, altitude_m: float | None, altitude_ref: str, field_elevation_m: float
+) -> tuple[float, float]:
+    """(cruise altitude, ground level) in the reference ``altitude_ref``, checked."""
+    if altitude_ref not in _ALT_REF:
+        raise ConfigError("altitude_ref", altitude_ref, "home or amsl")
+    fl = _flight(plan)
+    ground = 0.0
+    if altitude_ref == "amsl":
+        ground = _number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
+    alt = fl["altitude_m"] + ground if altitude_m is None else altitude_m
+    _number("altitude_m", alt, -1e9, 1e9)
+    top = fl["max_altitude_m"]
+    if not alt > ground:
+        above = "home (> 0)" if altitude_ref == "home" else f"the field elevation {ground:g} m"
+        raise ConfigError("altitude_m", alt, f"above {above} and at most the ceiling {top:g} m")
+    if alt - ground > top:
+        raise ConfigError("altitude_m", alt, f"at most the UAV ceiling {top:g} m above the field")
+    return float(alt), ground
+
+
+def _plan_crs(plan: dict, origin: Any, projection: str, zone: int | None) -> dict[str, Any]:
+    """The plan's CRS; ``origin`` must agree with it (or is needed when it has none)."""
+    rec = plan.get("crs")
+    if rec is not None:
+        if origin is not None:
+            lat, lon = _origin(origin)
+            lat0, lon0 = rec["origin_deg"]
+            if max(abs(lat - lat0), abs(lon - lon0)) > 1e-7:
+                raise ConfigError(
+                    "origin", origin, f"{lat0!r},{lon0!r} (the plan's crs.origin_deg) or omitted"
+                )
+        return dict(rec)
+    if origin is None:
+        raise ConfigError("origin", None, "LAT,LON of the map's (0, 0): the plan records no crs")
+    return make_crs(projection, origin, zone=zone)
+
+
+def _ll(points, crs: dict) -> list[tuple[float, float]]:
+    return to_geographic(points, crs)
+
+
+def _r6(v: float) -> float:
+    """Degrees rounded to 1e-6 (about 0.1 m)."""
+    return round(float(v), 6)
+
+
+def _rectangle_ring(u: dict) -> list[list[float]]:
+    from poc_env.geometry import rectangle_corners
+
+    r = u["rectangle"]
+    corners = rectangle_corners(
+        r["center_m"], r["length_m"], r["width_m"], math.radians(r["theta_deg"])
+    ).tolist()
+    return [*corners, corners[0]]
+
+
+def geojson(
+    plan: dict,
+    crs: Any,
+    altitude_m: float | None = None,
+    altitude_ref: str = "home",
+    field_elevation_m: float = 0.0,
+) -> dict:
+    """A FeatureCollection: per UAV the route (LineString) and its search rectangle (Polygon).
+
+    Coordinates [lon, lat, z] rounded to 1e-6 degrees (about 0.1 m); z is the altitude in the
+    reference ``altitude_ref`` (the same numbers as the QGC mission and the KML); properties in
+    km, minutes, km/h and %.
+    """
+    alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+    fl = _flight(plan)
     feats = []
     for u in plan["uavs"]:
-        route = [[lon, lat] for lat, lon in to_geographic(_route(u), origin)]
-        props = {k: u[k] for k in ("id", "spacing_m", "track_length_m", "pod", "poc", "pos")}
+        pts = _ll(_route(u), crs)
+        zs = [ground, *[alt] * (len(pts) - 2), ground]
+        route = [[_r6(lon), _r6(lat), z] for (lat, lon), z in zip(pts, zs)]
+        props = {
+            "id": u["id"],
+            "kind": "route",
+            "spacing_km": round(u["spacing_m"] / 1e3, 3),
+            "track_km": round(u["track_length_m"] / 1e3, 3),
+            "flight_time_min": round(u["flight_time_s"] / 60, 1),
+            "pod_pct": round(100 * u["pod"], 2),
+            "poc_pct": round(100 * u["poc"], 2),
+            "pos_pct": round(100 * u["pos"], 2),
+            "feasible": u["feasible"],
+            "altitude_m": round(alt, 1),
+            "altitude_ref": altitude_ref,
+            "cruise_speed_kmh": round(fl["cruise_speed_mps"] * 3.6, 1),
+            "search_speed_kmh": round(fl["search_speed_mps"] * 3.6, 1),
+        }
         feats.append(
             {
                 "type": "Feature",
                 "geometry": {"type": "LineString", "coordinates": route},
-                "properties": {**props, "kind": "route"},
+                "properties": props,
             }
         )
+        ring = [[_r6(lon), _r6(lat)] for lat, lon in _ll(_rectangle_ring(u), crs)]
         r = u["rectangle"]
-        from poc_env.geometry import rectangle_corners
-
-        corners = rectangle_corners(
-            r["center_m"], r["length_m"], r["width_m"], math.radians(r["theta_deg"])
-        ).tolist()
-        ring = [[lon, lat] for lat, lon in to_geographic([*corners, corners[0]], origin)]
         feats.append(
             {
                 "type": "Feature",
                 "geometry": {"type": "Polygon", "coordinates": [ring]},
-                "properties": {"id": u["id"], "kind": "search_rectangle"},
+                "properties": {
+                    "id": u["id"],
+                    "kind": "search_rectangle",
+                    "length_km": round(r["length_m"] / 1e3, 3),
+                    "width_km": round(r["width_m"] / 1e3, 3),
+                    "theta_deg": round(r["theta_deg"], 2),
+                },
             }
         )
     return {
         "type": "FeatureCollection",
         "features": feats,
-        "properties": {"scenario": plan["scenario"], "posc": plan["posc"]},
+        "properties": {
+            "scenario": plan["scenario"],
+            "posc_pct": round(100 * plan["posc"], 2),
+            "local_crs": _crs_text(crs) if isinstance(crs, dict) else None,
+            "altitude_ref": altitude_ref,
+        },
     }
 
 
-def kml(plan: dict, origin: tuple[float, float], altitude_m: float = 1000.0) -> str:
-    """KML with one Placemark (LineString route) per UAV."""
+def kml(
+    plan: dict,
+    crs: Any,
+    altitude_m: float | None = None,
+    altitude_ref: str = "home",
+    field_elevation_m: float = 0.0,
+) -> str:
+    """KML with one Placemark (LineString route) per UAV.
+
+    ``altitude_ref`` ``home`` -> ``relativeToGround``, ``amsl`` -> ``absolute``; z as in
+    :func:`geojson` and the QGC mission (see docs/EXPORT.md for the caveat on home vs ground).
+    """
+    alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+    mode = _ALT_REF[altitude_ref][2]
     marks = []
     for u in plan["uavs"]:
-        coords = " ".join(
-            f"{lon:.8f},{lat:.8f},{altitude_m:g}" for lat, lon in to_geographic(_route(u), origin)
-        )
+        pts = _ll(_route(u), crs)
+        zs = [ground, *[alt] * (len(pts) - 2), ground]
+        coords = " ".join(f"{lon:.8f},{lat:.8f},{z:g}" for (lat, lon), z in zip(pts, zs))
         marks.append(
             f"<Placemark><name>UAV {escape(str(u['id']))}</name>"
-            f"<description>POS {u['pos']:.4f}, track {u['track_length_m'] / 1000:.1f} km"
-            f"</description><LineString><altitudeMode>relativeToGround</altitudeMode>"
+            f"<description>POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
+            f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref})"
+            f"</description><LineString><altitudeMode>{mode}</altitudeMode>"
             f"<coordinates>{coords}</coordinates></LineString></Placemark>"
         )
     name = escape(str(plan["scenario"]))
@@ -237,63 +578,167 @@ def kml(plan: dict, origin: tuple[float, float], altitude_m: float = 1000.0) -> 
     )
 
 
-def _item(seq: int, command: int, lat: float, lon: float, alt: float, params4=(0, 0, 0, None)):
+#: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
+#: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
+APPROACH_DISTANCE_M = 4000.0
+APPROACH_HEIGHT_M = 300.0
+
+
+def _nav(command: int, lat: float, lon: float, alt: float, ref: str, p4=(0, 0, 0, None)) -> dict:
+    frame, mode, _ = _ALT_REF[ref]
     return {
-        "type": "SimpleItem", "autoContinue": True, "command": command, "doJumpId": seq,
-        "frame": 3, "params": [*params4, lat, lon, alt], "Altitude": alt, "AltitudeMode": 1,
-        "AMSLAltAboveTerrain": None,
+        "AMSLAltAboveTerrain": None, "Altitude": alt, "AltitudeMode": mode, "autoContinue": True,
+        "command": command, "doJumpId": 0, "frame": frame, "params": [*p4, lat, lon, alt],
+        "type": "SimpleItem",
     }  # fmt: skip
 
 
+def _do(command: int, params: list) -> dict:
+    return {
+        "autoContinue": True, "command": command, "doJumpId": 0, "frame": MAV_FRAME_MISSION,
+        "params": params, "type": "SimpleItem",
+    }  # fmt: skip
+
+
+def _speed(v: float) -> dict:
+    """MAV_CMD_DO_CHANGE_SPEED: airspeed (type 0) v m/s, throttle unchanged (-1), absolute."""
+    return _do(MAV_CMD_DO_CHANGE_SPEED, [0, round(float(v), 3), -1, 0, 0, 0, 0])
+
+
+def _clockwise(ring_xy: list) -> list:
+    """The ring in clockwise order (QGC geofence polygons; x east, y north)."""
+    a = np.asarray(ring_xy, dtype=float)
+    area2 = float(np.sum(a[:, 0] * np.roll(a[:, 1], -1) - np.roll(a[:, 0], -1) * a[:, 1]))
+    return list(ring_xy[::-1]) if area2 > 0 else list(ring_xy)
+
+
 def qgc_plan(
-    u: dict, origin: tuple[float, float], altitude_m: float = 1000.0, cruise_speed_mps: float = 61.1
+    u: dict,
+    crs: Any,
+    altitude_m: float = 1000.0,
+    cruise_speed_mps: float = DEFAULT_FLIGHT["cruise_speed_mps"],
+    *,
+    search_speed_mps: float = DEFAULT_FLIGHT["search_speed_mps"],
+    altitude_ref: str = "home",
+    ground_m: float = 0.0,
+    operating_area_m: list | None = None,
+    no_fly_zones_m: list | None = None,
 ) -> dict:
-    """A QGroundControl ``.plan`` (fixed wing): take-off, the waypoints, land."""
-    pts = to_geographic(_route(u), origin)
-    items = [_item(1, 22, *pts[0], altitude_m, (15, 0, 0, None))]  # MAV_CMD_NAV_TAKEOFF
-    items += [_item(k + 2, 16, lat, lon, altitude_m) for k, (lat, lon) in enumerate(pts[1:-1])]
-    items.append(_item(len(pts), 21, *pts[-1], 0.0))  # MAV_CMD_NAV_LAND
+    """A QGroundControl ``.plan`` for a fixed-wing UAV (PX4, ``vehicleType`` 1).
+
+    Items: NAV_TAKEOFF at the field; DO_CHANGE_SPEED v_b; the transit waypoint
+    ``waypoints_m[0]``; DO_CHANGE_SPEED v_s; the search waypoints; DO_CHANGE_SPEED v_b;
+    DO_LAND_START; an approach waypoint (:data:`APPROACH_DISTANCE_M` out,
+    :data:`APPROACH_HEIGHT_M` up); NAV_LAND at the field. Geofence: the operating area as the
+    inclusion polygon (empty without one) and the no-fly zones as exclusion polygons, clockwise;
+    rally points at the take-off and landing fields. ``altitude_ref`` ``home`` writes
+    MAV_FRAME_GLOBAL_RELATIVE_ALT (3), ``amsl`` MAV_FRAME_GLOBAL (0) with ``ground_m`` the
+    field elevation.
+    """
+    ref = altitude_ref
+    if ref not in _ALT_REF:
+        raise ConfigError("altitude_ref", ref, "home or amsl")
+    wps = [list(w) for w in u["waypoints_m"]]
+    start, end = list(u["takeoff_m"]), list(u["landing_m"])
+    last = np.asarray(wps[-1] if wps else start, dtype=float)
+    d = last - np.asarray(end, dtype=float)
+    norm = float(np.hypot(*d))
+    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
+    approach = (np.asarray(end, dtype=float) + APPROACH_DISTANCE_M * unit).tolist()
+    ll = _ll([start, *wps, approach, end], crs)
+    t_ll, w_ll, a_ll, l_ll = ll[0], ll[1:-2], ll[-2], ll[-1]
+    app_alt = ground_m + min(APPROACH_HEIGHT_M, altitude_m - ground_m)
+    items = [_nav(MAV_CMD_NAV_TAKEOFF, *t_ll, altitude_m, ref, (15, 0, 0, None))]
+    if w_ll:
+        items.append(_speed(cruise_speed_mps))
+        items.append(_nav(MAV_CMD_NAV_WAYPOINT, *w_ll[0], altitude_m, ref))
+        items.append(_speed(search_speed_mps))
+        items += [_nav(MAV_CMD_NAV_WAYPOINT, lat, lon, altitude_m, ref) for lat, lon in w_ll[1:]]
+    items.append(_speed(cruise_speed_mps))
+    items.append(_do(MAV_CMD_DO_LAND_START, [0, 0, 0, 0, 0, 0, 0]))
+    items.append(_nav(MAV_CMD_NAV_WAYPOINT, *a_ll, app_alt, ref))
+    items.append(_nav(MAV_CMD_NAV_LAND, *l_ll, ground_m, ref))
+    for k, it in enumerate(items):
+        it["doJumpId"] = k + 1
+    polygons = []
+    if operating_area_m:
+        ring = _ll(_clockwise(operating_area_m), crs)
+        polygons.append(
+            {"inclusion": True, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
+        )
+    for z in no_fly_zones_m or []:
+        ring = _ll(_clockwise(z), crs)
+        polygons.append(
+            {"inclusion": False, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
+        )
+    fields = [start] if start == end else [start, end]
+    rally = [[lat, lon, APPROACH_HEIGHT_M] for lat, lon in _ll(fields, crs)]
     return {
         "fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
         "mission": {
             "version": 2, "firmwareType": 12, "vehicleType": 1,
+            "globalPlanAltitudeMode": _ALT_REF[ref][1],
             "cruiseSpeed": cruise_speed_mps, "hoverSpeed": 5,
-            "plannedHomePosition": [pts[0][0], pts[0][1], 0], "items": items,
+            "plannedHomePosition": [t_ll[0], t_ll[1], ground_m], "items": items,
         },
-        "geoFence": {"circles": [], "polygons": [], "version": 2},
-        "rallyPoints": {"points": [], "version": 2},
+        "geoFence": {"circles": [], "polygons": polygons, "version": 2},
+        "rallyPoints": {"points": rally, "version": 2},
     }  # fmt: skip
 
 
 def export_plan(
     plan_path: str | os.PathLike[str],
     fmt: str,
-    origin: str | tuple[float, float],
+    origin: str | tuple[float, float] | None = None,
     out_dir: str | os.PathLike[str] | None = None,
+    *,
+    projection: str = "aeqd",
+    zone: int | None = None,
+    altitude_m: float | None = None,
+    altitude_ref: str = "home",
+    field_elevation_m: float = 0.0,
 ) -> list[Path]:
-    """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths."""
+    """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
+
+    The CRS is the plan's ``crs`` (``origin``, if given, must agree) or, for a plan without one,
+    ``projection`` (``aeqd`` or ``utm``, UTM zone ``zone`` or the origin's) at ``origin``.
+    ``altitude_m`` (default the plan's ``flight.altitude_m``, above the field) in the reference
+    ``altitude_ref`` (``home`` or ``amsl``; ``field_elevation_m`` is the fields' AMSL height).
+    """
     if fmt not in FORMATS:
         raise ConfigError("format", fmt, "one of " + ", ".join(FORMATS))
-    org = (
-        parse_origin(origin)
-        if isinstance(origin, str)
-        else parse_origin(f"{origin[0]},{origin[1]}")
-    )
+    if origin is not None:
+        _origin(origin)
+    if projection not in ("aeqd", "utm"):
+        raise ConfigError("projection", projection, "aeqd or utm")
+    if altitude_ref not in _ALT_REF:
+        raise ConfigError("altitude_ref", altitude_ref, "home or amsl")
     plan = load_plan(plan_path)
+    crs = _plan_crs(plan, origin, projection, zone)
+    alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     out = Path(out_dir) if out_dir else Path(plan_path).parent
     stem = Path(plan_path).stem
     if fmt == "geojson":
+        doc = geojson(plan, crs, alt, altitude_ref, ground)
         return [
-            write_text_atomic(
-                out / f"{stem}.geojson", json.dumps(geojson(plan, org), indent=1, allow_nan=False)
-            )
+            write_text_atomic(out / f"{stem}.geojson", json.dumps(doc, indent=1, allow_nan=False))
         ]
     if fmt == "kml":
-        return [write_text_atomic(out / f"{stem}.kml", kml(plan, org))]
-    return [
-        write_text_atomic(
-            out / f"{stem}_uav{u['id']}.plan",
-            json.dumps(qgc_plan(u, org), indent=1, allow_nan=False),
+        return [write_text_atomic(out / f"{stem}.kml", kml(plan, crs, alt, altitude_ref, ground))]
+    fl = _flight(plan)
+    docs = [
+        (
+            u["id"],
+            qgc_plan(
+                u, crs, alt, fl["cruise_speed_mps"], search_speed_mps=fl["search_speed_mps"],
+                altitude_ref=altitude_ref, ground_m=ground,
+                operating_area_m=plan.get("operating_area_m"),
+                no_fly_zones_m=plan.get("no_fly_zones_m"),
+            ),
         )
         for u in plan["uavs"]
+    ]  # fmt: skip
+    return [
+        write_text_atomic(out / f"{stem}_uav{uid}.plan", json.dumps(doc, indent=1, allow_nan=False))
+        for uid, doc in docs
     ]

@@ -1,5 +1,12 @@
 """The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 1) and a figure.
 
+The plan also records (optional schema-1 fields, see :mod:`agents.planning.export`) the UAV's
+speeds and altitudes (``flight``), the operating area of eq. 20 (``operating_area_m``, the
+bounding box of the grid and the airfields grown by ``episode.boundary_margin_km``, as in
+:func:`poc_env.sim.core.make_params`), the no-fly zones and the airfields, and, when
+``origin_deg`` is given, its coordinate reference system (``crs``: azimuthal equidistant at
+that origin by default, UTM with ``projection="utm"``).
+
 :func:`make_plan` runs an optimiser of :mod:`~agents.planning.optimizers` (default the paper's
 adaptive DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section)
 on :class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-1 dict
@@ -19,7 +26,7 @@ from typing import Any
 import numpy as np
 
 import poc_env.limits as limits
-from agents.planning.export import SCHEMA
+from agents.planning.export import SCHEMA, make_crs
 from agents.planning.objective import PlanObjective
 from agents.planning.optimizers import get_optimizer
 from poc_env.config import Scenario, load_scenario
@@ -40,14 +47,21 @@ def make_plan(
     maxiter: int | None = None,
     progress: bool = False,
     init: np.ndarray | None = None,
+    origin_deg: tuple[float, float] | str | None = None,
+    projection: str = "aeqd",
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-1 dict (see the module docstring).
+
+    ``origin_deg``: (lat, lon) of the map's (0, 0); with it the plan records its ``crs``
+    (``projection`` ``aeqd`` or ``utm``, see :func:`agents.planning.export.make_crs`) and
+    exports need no ``--origin``.
 
     ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
     population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
     """
     sc = load_scenario(scenario)
     opt = get_optimizer(optimizer)
+    crs = None if origin_deg is None else make_crs(projection, origin_deg)
     if prior is None:
         prior = build_prior(sc.map)
     obj = PlanObjective(sc, prior, uavs=uavs)
@@ -130,7 +144,31 @@ def make_plan(
         "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
         "x": [float(v) for v in x],
         "uavs": uav_out,
+        **_geography(sc, prior, crs),
     }
+
+
+def _geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
+    """The optional plan.json fields an export reads: flight, area, zones, airfields, crs."""
+    from poc_env.sim.core import make_params
+
+    x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)  # eq. 20's boundary
+    out: dict[str, Any] = {
+        "flight": {
+            "cruise_speed_mps": sc.uav.cruise_speed_mps,
+            "search_speed_mps": sc.uav.search_speed_mps,
+            "altitude_m": sc.uav.cruise_altitude_m,
+            "max_altitude_m": sc.uav.max_altitude_m,
+        },
+        "operating_area_m": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
+        "no_fly_zones_m": [[[float(v) for v in p] for p in z] for z in sc.map.no_fly_zones_m],
+        "airfields": [
+            {"name": a.name, "position_m": [float(v) for v in a.position_m]} for a in sc.airfields
+        ],
+    }
+    if crs is not None:
+        out["crs"] = crs
+    return out
 
 
 def plan_table(plan: dict[str, Any]) -> str:
