@@ -1,13 +1,22 @@
 """Mission export: GeoJSON, KML and QGroundControl files parse back to the same waypoints."""
 
 import json
+import math
 import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
+from pyproj import Geod, Transformer
 
-from agents.planning.export import export_plan, load_plan, parse_origin, to_geographic, to_local
+from agents.planning.export import (
+    export_plan,
+    load_plan,
+    make_crs,
+    parse_origin,
+    to_geographic,
+    to_local,
+)
 from poc_env.cli import main
 from poc_env.errors import ConfigError
 
@@ -196,3 +205,327 @@ def test_exports_hold_only_finite_coordinates(tmp_path):
                 else [v for it in data["mission"]["items"] for v in it["params"][4:6]]
             )
             assert np.all(np.isfinite(coords)) and np.all(np.abs(coords) <= 180.0)
+
+
+# --------------------------------------------------------------------------- projections (pyproj)
+
+GEOD = Geod(ellps="WGS84")
+#: paper_6_2: x in [0, 200] km, y in [-60, 150] km (airfields at y = -60 km), grown by the
+#: 20 km boundary margin of eq. 20.
+PAPER_6_2_EXTENT = ((-20e3, -80e3), (220e3, 170e3))
+
+
+def _crs(kind):
+    return ORIGIN if kind == "aeqd-origin" else make_crs(kind, ORIGIN)
+
+
+def _geodesic(p, q, crs):
+    (lat1, lon1), (lat2, lon2) = to_geographic([p, q], crs)
+    return GEOD.inv(lon1, lat1, lon2, lat2)[2]
+
+
+@pytest.mark.parametrize("kind", ["aeqd-origin", "aeqd", "utm"])
+def test_round_trip_to_millimetres_over_300_km(kind):
+    crs = _crs(kind)
+    xy = np.random.default_rng(1).uniform(-300e3, 300e3, (500, 2))
+    back = np.array(to_local(to_geographic(xy, crs), crs))
+    np.testing.assert_allclose(back, xy, rtol=0, atol=1e-3)
+    ((lat, _),) = to_geographic([(0.0, 111_132.95)], make_crs("aeqd", (45.0, 0.0)))
+    assert lat == pytest.approx(46.0, abs=1e-3)  # 1 degree of latitude at 45 N
+
+
+@pytest.mark.parametrize("kind", ["aeqd", "utm"])
+def test_distances_match_the_ellipsoid_over_the_paper_6_2_extent(kind):
+    """Local distances within 0.1 % of geodesic ones (measured: aeqd 0.024 %, utm 0.040 %)."""
+    crs = _crs(kind)
+    rng = np.random.default_rng(2)
+    lo, hi = PAPER_6_2_EXTENT
+    a, b = rng.uniform(lo, hi, (2, 400, 2))
+    la, lb = np.array(to_geographic(a, crs)), np.array(to_geographic(b, crs))
+    geo = GEOD.inv(la[:, 1], la[:, 0], lb[:, 1], lb[:, 0])[2]
+    loc = np.hypot(*(a - b).T)
+    keep = loc > 1e3
+    assert np.max(np.abs(loc[keep] / geo[keep] - 1)) < 1e-3
+
+
+def _old_tangent_plane(x, y, origin):
+    """The hand-written projection this module used before (kept to show what the test catches)."""
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    lat0, lon0 = origin
+    s = math.sin(math.radians(lat0))
+    w = math.sqrt(1 - e2 * s * s)
+    m, n = a * (1 - e2) / w**3, a / w
+    return lat0 + math.degrees(y / m), lon0 + math.degrees(x / (n * math.cos(math.radians(lat0))))
+
+
+@pytest.mark.parametrize("kind", ["aeqd", "utm"])
+def test_the_issue_case_200_km_east_west_at_y_150_km(kind):
+    """Issue 14: the old tangent plane put this line 2.4 % short; pyproj is within 0.1 %."""
+    p, q = (0.0, 150e3), (200e3, 150e3)
+    assert abs(_geodesic(p, q, _crs(kind)) / 200e3 - 1) < 1e-3
+    (lat1, lon1), (lat2, lon2) = (_old_tangent_plane(*p, ORIGIN), _old_tangent_plane(*q, ORIGIN))
+    old = GEOD.inv(lon1, lat1, lon2, lat2)[2]
+    assert 1 - old / 200e3 > 0.02  # the error the new projection removes
+
+
+@pytest.mark.parametrize("kind", ["aeqd", "utm"])
+def test_an_airfield_projected_with_pyproj_comes_back_in_the_mission(tmp_path, kind):
+    """A field given in lat/lon, projected into the scenario by pyproj itself, is where the .plan
+    puts the take-off and landing (< 1 m)."""
+    crs = make_crs(kind, ORIGIN)
+    field = (45.213, 126.917)  # lat, lon
+    fwd = Transformer.from_crs("EPSG:4326", crs["proj"], always_xy=True)
+    x0, y0 = fwd.transform(ORIGIN[1], ORIGIN[0])
+    x, y = fwd.transform(field[1], field[0])
+    path, plan = _plan(tmp_path, crs=crs)
+    for u in plan["uavs"]:
+        u["takeoff_m"] = u["landing_m"] = [x - x0, y - y0]
+    path.write_text(json.dumps(plan))
+    for out in export_plan(path, "qgc", None, tmp_path / "out"):
+        items = json.loads(out.read_text())["mission"]["items"]
+        for it in (items[0], items[-1]):
+            lat, lon = it["params"][4:6]
+            assert GEOD.inv(lon, lat, field[1], field[0])[2] < 1.0
+
+
+def test_utm_zone_from_the_origin_or_given():
+    north = make_crs("utm", ORIGIN)
+    assert north["epsg"] == 32652 and "+zone=52" in north["proj"] and "+south" not in north["proj"]
+    south = make_crs("utm", (-34.9, 138.6))
+    assert south["epsg"] == 32754 and "+south" in south["proj"]
+    given = make_crs("utm", ORIGIN, zone=51)
+    assert given["epsg"] == 32651
+    # UTM metres shifted to the origin: (0, 0) is the origin, north is +y
+    (lat, lon), (lat2, _) = to_geographic([(0.0, 0.0), (0.0, 10e3)], north)
+    assert (lat, lon) == pytest.approx(ORIGIN, abs=1e-9) and lat2 > lat
+    with pytest.raises(ConfigError, match=r"crs\.zone"):
+        make_crs("utm", ORIGIN, zone=61)
+
+
+# --------------------------------------------------------------------------- crs in plan.json
+
+
+def test_plan_crs_is_used_and_origin_must_agree(tmp_path):
+    crs = make_crs("aeqd", ORIGIN)
+    path, _ = _plan(tmp_path, crs=crs)
+    assert load_plan(path)["crs"] == crs
+    (a,) = export_plan(path, "geojson", None, tmp_path / "a")  # no --origin needed
+    (b,) = export_plan(path, "geojson", "45.75,126.65", tmp_path / "b")  # the same origin
+    assert a.read_text() == b.read_text()
+    with pytest.raises(ConfigError, match=r"origin: .*crs\.origin_deg"):
+        export_plan(path, "geojson", "45.7,126.65", tmp_path / "c")
+    (tmp_path / "bare").mkdir()
+    bare, _ = _plan(tmp_path / "bare")
+    with pytest.raises(ConfigError, match=r"origin: got None; allowed: .*no crs"):
+        export_plan(bare, "kml")
+
+
+def test_utm_plan_exports_in_utm(tmp_path):
+    crs = make_crs("utm", ORIGIN)
+    path, plan = _plan(tmp_path, crs=crs)
+    (out,) = export_plan(path, "qgc", None, tmp_path / "o")[:1]
+    items = json.loads(out.read_text())["mission"]["items"]
+    lat, lon = items[0]["params"][4:6]
+    np.testing.assert_allclose(
+        to_local([(lat, lon)], crs), [plan["uavs"][0]["takeoff_m"]], atol=1e-6
+    )
+    # the same plan without crs, exported with --origin and projection utm, gives the same files
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    p2, _ = _plan(bare)
+    (out2,) = export_plan(p2, "qgc", ORIGIN, bare / "o", projection="utm")[:1]
+    assert json.loads(out2.read_text()) == json.loads(out.read_text())
+
+
+BAD_CRS = [
+    ({"kind": "lambert", "origin_deg": [45.75, 126.65], "proj": "+proj=lcc"}, r"plan\.crs\.kind"),
+    ({"kind": "aeqd", "origin_deg": [45.75, 126.65], "proj": "+proj=nonsense"}, r"plan\.crs\.proj"),
+    ({"kind": "epsg", "origin_deg": [45.75, 126.65], "epsg": 4326}, r"plan\.crs\.epsg.*projected"),
+    ({"kind": "aeqd", "origin_deg": [95.0, 126.65], "proj": "+proj=aeqd"}, r"plan\.crs\.origin"),
+    ({"kind": "aeqd", "origin_deg": [45.0, 126.0], "proj": "+proj=utm +zone=52"}, r"crs\.proj"),
+    ({"kind": "aeqd", "origin_deg": [45.0, 126.0], "proj": "+proj=aeqd", "x": 1}, r"plan\.crs\.x"),
+    ("EPSG:32652", r"plan\.crs"),
+]
+
+
+@pytest.mark.parametrize("crs,field", BAD_CRS, ids=[str(i) for i in range(len(BAD_CRS))])
+def test_bad_crs_is_a_config_error_naming_the_field(tmp_path, crs, field):
+    path, _ = _plan(tmp_path, crs=crs)
+    with pytest.raises(ConfigError, match=field):
+        load_plan(path)
+
+
+def test_epsg_crs_and_schema_1_plans_without_crs_still_load(tmp_path):
+    path, _ = _plan(tmp_path, crs={"kind": "epsg", "origin_deg": list(ORIGIN), "epsg": 32652})
+    plan = load_plan(path)
+    (out,) = export_plan(path, "kml", None, tmp_path / "o")
+    assert out.is_file() and plan["crs"]["epsg"] == 32652
+    path, plan = _plan(tmp_path)
+    assert "crs" not in load_plan(path)  # a schema-1 plan of before: read with --origin
+
+
+# --------------------------------------------------------------------------- flyable QGC missions
+
+V_B, V_S = 220 / 3.6, 180 / 3.6
+
+
+def _geo_plan(tmp_path, **changes):
+    area = [[-20e3, -80e3], [220e3, -80e3], [220e3, 170e3], [-20e3, 170e3]]  # counter-clockwise
+    zone = [[80e3, 80e3], [90e3, 80e3], [90e3, 95e3]]
+    return _plan(
+        tmp_path,
+        crs=make_crs("aeqd", ORIGIN),
+        flight={"cruise_speed_mps": V_B, "search_speed_mps": V_S, "altitude_m": 1200.0,
+                "max_altitude_m": 4000.0},
+        operating_area_m=area,
+        no_fly_zones_m=[zone],
+        airfields=[{"name": "A", "position_m": [20e3, -60e3]}],
+        **changes,
+    )  # fmt: skip
+
+
+def test_qgc_mission_is_flyable(tmp_path):
+    path, plan = _geo_plan(tmp_path)
+    out = export_plan(path, "qgc", None, tmp_path / "o")[0]
+    doc = json.loads(out.read_text())
+    u = plan["uavs"][0]
+    assert doc["fileType"] == "Plan" and doc["version"] == 1
+    assert doc["groundStation"] == "QGroundControl"
+    m = doc["mission"]
+    assert (m["version"], m["firmwareType"], m["vehicleType"]) == (2, 12, 1)  # PX4 fixed wing
+    assert m["globalPlanAltitudeMode"] == 1 and m["cruiseSpeed"] == pytest.approx(V_B)
+    items = m["items"]
+    assert [i["doJumpId"] for i in items] == list(range(1, len(items) + 1))
+    n = len(u["waypoints_m"])
+    assert [i["command"] for i in items] == [
+        22, 178, 16, 178, *[16] * (n - 1), 178, 189, 16, 21,
+    ]  # fmt: skip
+    speeds = [i["params"][1] for i in items if i["command"] == 178]
+    assert speeds == pytest.approx([V_B, V_S, V_B], abs=1e-3)  # transit, search, transit
+    for i in items:
+        assert set(i) >= {"type", "command", "frame", "params", "autoContinue", "doJumpId"}
+        assert i["type"] == "SimpleItem" and len(i["params"]) == 7
+        if i["command"] in (178, 189):
+            assert i["frame"] == 2  # MAV_FRAME_MISSION
+        else:
+            assert i["frame"] == 3 and i["AltitudeMode"] == 1  # MAV_FRAME_GLOBAL_RELATIVE_ALT
+            assert i["params"][6] == i["Altitude"]
+    assert items[1]["params"][0] == 0 and items[1]["params"][2] == -1  # airspeed, throttle kept
+    # cruise altitude from the plan's flight section; the landing at the field, 0 m above home
+    assert {i["Altitude"] for i in items if i["command"] == 16} - {1200.0} == {300.0}
+    approach, land = items[-2], items[-1]
+    assert land["Altitude"] == 0.0 and approach["Altitude"] == 300.0
+    a_xy, l_xy = to_local([approach["params"][4:6], land["params"][4:6]], ORIGIN)
+    np.testing.assert_allclose(l_xy, u["landing_m"], atol=1e-6)
+    assert math.dist(a_xy, l_xy) == pytest.approx(4000.0, abs=1e-3)
+    # the approach comes from the last search point's side
+    last = np.asarray(u["waypoints_m"][-1]) - u["landing_m"]
+    assert np.dot(np.subtract(a_xy, l_xy), last) > 0
+
+
+def test_qgc_geofence_and_rally_points(tmp_path):
+    path, plan = _geo_plan(tmp_path)
+    doc = json.loads(export_plan(path, "qgc", None, tmp_path / "o")[0].read_text())
+    fence = doc["geoFence"]
+    assert fence["version"] == 2 and fence["circles"] == []
+    inc, exc = fence["polygons"]
+    assert inc["inclusion"] is True and exc["inclusion"] is False
+    assert inc["version"] == exc["version"] == 1
+    for poly, ring in ((inc, plan["operating_area_m"]), (exc, plan["no_fly_zones_m"][0])):
+        xy = np.array(to_local(poly["polygon"], ORIGIN))
+        area2 = np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1])
+        assert area2 < 0  # clockwise, as QGC's plan format asks
+        assert sorted(map(tuple, xy.round(3))) == sorted(map(tuple, np.round(ring, 3)))
+    rally = doc["rallyPoints"]
+    assert rally["version"] == 2
+    ((lat, lon, alt),) = rally["points"]  # take-off and landing at the same field
+    np.testing.assert_allclose(to_local([(lat, lon)], ORIGIN), [[20e3, -60e3]], atol=1e-6)
+    assert alt == 300.0
+    # without an operating area in the plan the inclusion fence is left empty
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    p2, _ = _plan(bare)
+    doc = json.loads(export_plan(p2, "qgc", ORIGIN)[0].read_text())
+    assert doc["geoFence"]["polygons"] == []
+
+
+@pytest.mark.parametrize("ref,frame,mode,kml_mode", [("home", 3, 1, "relativeToGround"),
+                                                     ("amsl", 0, 2, "absolute")])  # fmt: skip
+def test_altitude_reference_is_the_same_in_every_format(tmp_path, ref, frame, mode, kml_mode):
+    path, plan = _geo_plan(tmp_path)
+    kw = {"altitude_m": 1500.0, "altitude_ref": ref, "field_elevation_m": 150.0}
+    qgc = json.loads(export_plan(path, "qgc", None, tmp_path / "q", **kw)[0].read_text())
+    (gj,) = export_plan(path, "geojson", None, tmp_path / "g", **kw)
+    (km,) = export_plan(path, "kml", None, tmp_path / "k", **kw)
+    ground = 0.0 if ref == "home" else 150.0
+    items = qgc["mission"]["items"]
+    assert qgc["mission"]["globalPlanAltitudeMode"] == mode
+    assert qgc["mission"]["plannedHomePosition"][2] == ground
+    nav = [i for i in items if i["command"] in (16, 21, 22)]
+    assert all(i["frame"] == frame and i["AltitudeMode"] == mode for i in nav)
+    search = [i["Altitude"] for i in nav[1:-2]]
+    assert search == [1500.0] * len(plan["uavs"][0]["waypoints_m"])
+    assert nav[-1]["Altitude"] == ground and nav[-2]["Altitude"] == ground + 300.0
+    route = json.loads(gj.read_text())["features"][0]
+    zs = [c[2] for c in route["geometry"]["coordinates"]]
+    assert zs == [ground, *search, ground]
+    assert route["properties"]["altitude_ref"] == ref
+    root = ET.parse(km).getroot()
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    assert {e.text for e in root.iterfind(".//k:altitudeMode", ns)} == {kml_mode}
+    text = root.find(".//k:coordinates", ns).text
+    assert [float(t.split(",")[2]) for t in text.split()] == zs
+
+
+@pytest.mark.parametrize(
+    "kw,field",
+    [
+        ({"altitude_m": 0.0}, "altitude_m"),
+        ({"altitude_m": -5.0}, "altitude_m"),
+        ({"altitude_m": 4500.0}, "altitude_m: .*ceiling 4000"),
+        ({"altitude_m": 100.0, "altitude_ref": "amsl", "field_elevation_m": 150.0}, "altitude_m"),
+        ({"altitude_ref": "agl"}, "altitude_ref"),
+        ({"projection": "mercator"}, "projection"),
+    ],
+)
+def test_bad_altitudes_are_refused_before_writing(tmp_path, kw, field):
+    path, _ = _geo_plan(tmp_path)
+    with pytest.raises(ConfigError, match=field):
+        export_plan(path, "qgc", None, tmp_path / "o", **kw)
+    assert not (tmp_path / "o").exists()
+
+
+def test_geojson_rounded_with_human_units(tmp_path):
+    path, plan = _geo_plan(tmp_path)
+    (out,) = export_plan(path, "geojson", None, tmp_path / "o")
+    text = out.read_text()
+    data = json.loads(text)
+    for feat in data["features"]:
+        for pos in _positions(feat["geometry"]["coordinates"]):
+            assert all(round(c, 6) == c for c in pos[:2])
+    assert not re.search(r"\d\.\d{7,}", text)  # no 17-digit floats anywhere
+    route = data["features"][0]["properties"]
+    u = plan["uavs"][0]
+    assert route["pos_pct"] == 15.8 and route["pod_pct"] == 79.0 and route["poc_pct"] == 20.0
+    assert route["track_km"] == 300.0 and route["flight_time_min"] == 150.0
+    assert route["spacing_km"] == u["spacing_m"] / 1e3
+    assert route["cruise_speed_kmh"] == 220.0 and route["search_speed_kmh"] == 180.0
+    assert data["properties"]["posc_pct"] == 30.0
+
+
+def test_make_plan_records_crs_and_geography_that_export_uses(tmp_path):
+    from agents.planning.planner import make_plan, write_plan
+
+    plan = make_plan("small", popsize=8, maxiter=2, origin_deg=ORIGIN, projection="utm")
+    assert plan["crs"] == make_crs("utm", ORIGIN)
+    assert {"flight", "operating_area_m", "no_fly_zones_m", "airfields"} <= set(plan)
+    path = write_plan(plan, tmp_path / "plan.json")
+    assert load_plan(path)["crs"]["kind"] == "utm"
+    outs = export_plan(path, "qgc", None, tmp_path / "o")  # the crs replaces --origin
+    doc = json.loads(outs[0].read_text())
+    assert doc["geoFence"]["polygons"][0]["inclusion"] is True
+    speeds = [i["params"][1] for i in doc["mission"]["items"] if i["command"] == 178]
+    fl = plan["flight"]
+    assert speeds[:2] == pytest.approx([fl["cruise_speed_mps"], fl["search_speed_mps"]], abs=1e-3)
+    assert "crs" not in make_plan("small", popsize=8, maxiter=2)
