@@ -9,12 +9,12 @@ ellipsoid. Every projection goes through pyproj (PROJ) Transformers with ``alway
 
 - ``aeqd`` (default): the azimuthal equidistant projection centred on the map's (0, 0),
   ``+proj=aeqd +lat_0=LAT +lon_0=LON +datum=WGS84 +units=m +no_defs``. Distances and bearings
-  from the origin are exact; between any two points within 300 km of the origin the scale error
-  is below about ``rho**2 / (6 R**2)`` = 0.04 %. Measured by tests/planning/test_export.py against
-  the ellipsoid (``pyproj.Geod``): over the paper_6_2 extent with its 20 km margin
-  (x in [-20, 220] km, y in [-80, 170] km) local distances agree with geodesic ones within
-  0.03 %; round trips return the same metres within 1e-3 m out to +-300 km (see
-  docs/EXPORT.md for the numbers).
+  from the origin are exact; elsewhere the scale across the radius is about
+  ``1 + rho**2 / (6 R**2)``, below 0.04 % within 300 km of the origin. Measured against the
+  ellipsoid (``pyproj.Geod``, tests/planning/test_export.py, numbers in docs/EXPORT.md): over the
+  paper_6_2 extent with its 20 km margin (x in [-20, 220] km, y in [-80, 170] km) local
+  distances agree with geodesic ones within 0.024 % (UTM: 0.040 %; the test asserts 0.1 %);
+  round trips return the same metres within 4e-9 m out to +-300 km (the test asserts 1e-3 m).
 - ``utm``: Universal Transverse Mercator on WGS84, the zone chosen from the origin
   (``floor((lon + 180) / 6) + 1``, south when lat < 0; the Norway/Svalbard exceptions are not
   applied) or given. Local metres are UTM metres shifted so that the origin is (0, 0).
@@ -22,8 +22,9 @@ ellipsoid. Every projection goes through pyproj (PROJ) Transformers with ``alway
   shifted the same way.
 
 In every case ``local = projected(lon, lat) - projected(origin)``; for ``aeqd`` the shift is 0.
-The hand-written tangent plane used before put a 200 km east-west line at y = 150 km 2.5 % short
-(its longitude scale was fixed at the origin's latitude); the test keeps that case.
+The hand-written tangent plane used before put a 200 km east-west line at y = 150 km on the
+ground 195.116 km long (2.44 % short: its longitude scale was fixed at the origin's latitude);
+it is now 199.982 km (0.009 % short; UTM 200.055 km, 0.027 % long), and the test keeps that case.
 
 ``plan.json`` (schema 1) holds: ``schema``, ``scenario``, ``seed``, ``map_source``,
 ``optimizer`` {``name``, ``settings``}, ``runtime_s``, ``posc``, ``upper_bound`` and
