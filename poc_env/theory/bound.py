@@ -1,8 +1,9 @@
-"""The physical optimum: the most POS any plan could reach with a given total effort.
+"""Upper bounds on the POS of a search: the physical optimum, honest and reach-aware.
 
-For a prior (cell masses ``m_j``, cell areas ``a_j``), a detection law ``POD(C)`` as a function
-of the coverage ``C`` (:func:`poc_env.theory.search_theory.pod_from_coverage`) and a total effort
-``Z = W x track length`` (m^2), the Koopman/Stone optimal allocation solves
+**The allocation bound.** For a prior (cell masses ``m_j``, cell areas ``a_j``), a detection
+law ``POD(C)`` as a function of the coverage ``C`` (:func:`poc_env.theory.search_theory.
+pod_from_coverage`) and a total effort ``Z = W x track length`` (m^2), the Koopman/Stone
+optimal allocation solves
 
     maximise  sum_j m_j POD(C_j)   subject to   sum_j a_j C_j = Z,  C_j >= 0.
 
@@ -12,8 +13,71 @@ marginal return ``(m_j / a_j) POD'(C_j) = lambda``. Each law's entry in the tabl
 ``g = ln(m_j / (a_j lambda))`` for ``m_j / a_j > lambda`` (0 elsewhere): for the inverse-cube law
 (POD' = exp(-pi C^2 / 4)) ``C_j = sqrt(4/pi g)``, for the exponential law ``C_j = g``;
 ``lambda`` is found by bisection so that the effort is spent exactly. A law without one (the
-definite-range law, linear up to C = 1) fills the densest cells first. No plan with the same
-effort and law can beat this value: every plan report prints it beside its POS.
+definite-range law, linear up to C = 1) fills the densest cells first
+(:func:`physical_optimum`).
+
+**The honest plain bound** (:func:`honest_optimum`, :func:`env_limits`). The environment
+(:mod:`poc_env.sim.core`) moves a UAV by ``v dt`` per step with ``v <= max_speed`` (the old
+speed, clipped to ``[min_speed, max_speed]``; pitch only shortens the horizontal segment it
+sweeps), senses the whole segment, and keeps a UAV flying until it lands, crashes (flight time
+reaching the endurance T -- the 0.85 T of eq. 18 is only penalised) or the horizon ends. So a UAV
+sweeps at most ``W v_max`` m^2/s for at most :func:`sensing_time_s` (``dt`` x the steps until T
+or the horizon), and the plain bound takes ``Z = sum_i W v_max t_sense``. (The earlier bound,
+every UAV at the search speed v_s for 0.85 T, is smaller and a policy flying faster or longer can
+exceed it.)
+
+Why a flown episode stays below it, per law:
+
+- ``exponential``: a step detects a sample point only through the length of the step inside the
+  point's own cell (``p = 1 - exp(-W L_j / a_j)``, the same for every sample point of cell j),
+  and exponents of successive steps add; so cell j's POD is exactly ``1 - exp(-C_j)`` with
+  ``C_j = W x (track length in j) / a_j`` and ``sum a_j C_j <= Z``: the bound is rigorous.
+- ``definite_range``: a step detects the points within W/2 of it (foot on the step), a set of
+  area ``W L``; the detected area of the whole flight is at most ``W x track length = Z``. With
+  ``c_j`` the detected share of cell j (at most 1), POS = ``sum m_j c_j`` with
+  ``sum a_j c_j <= Z`` -- the allocation bound for ``POD = min(C, 1)``. This is rigorous for
+  targets uniform in their cells; the environment counts ``s x s`` sample points per cell
+  instead of area, and a track laid exactly along a row of sample points (at ``W / h`` an
+  integer, ``h`` the sample spacing) catches ``W / h + 1`` rows instead of ``W / h``: a
+  measure-zero alignment that a policy cannot hold over a flight, noted, not excluded.
+- ``inverse_cube``: ``erf(sqrt(pi)/2 C)`` is what parallel tracks at spacing ``W / C`` give
+  (eq. 10); it is the bound's model of the best a given local effort can do (uneven spacing is
+  worse by concavity, crossing or circling tracks spend effort where the exponent is already
+  high). It is not a theorem for every path, and sample points again differ from the area
+  average by a little (tracks at ``S = W = 2 h`` half a sample spacing off the points with an
+  unbounded cut-off give 0.7921 against eq. 10's 0.7899; the default cut-off 4 W removes more
+  than that). The adversarial flights of ``tests/experiments/test_bound_env.py`` test it.
+
+**The reach-aware bound** (:func:`reach_bound`, :func:`reach_optimum`). A UAV starts at its
+take-off field ``s`` and flies at most at ``v = v_max``. *Claim:* the track length it flies at
+points farther than ``d`` from ``s`` is at most ``v (t_sense - d / v)^+``. *Proof:* the first time
+the UAV is farther than ``d`` is at least ``d / v`` (straight lines are the shortest paths), and
+from then on it flies at most ``v`` per second until ``t_sense``. A sample point of cell j can
+only be detected from track within ``rho`` of it (``rho``, :attr:`EnvLimits.spill_m`: W/2 for
+the definite range, the lateral cut-off for the inverse cube, 0 for the exponential law whose
+effort and detection share a cell), so the effort that serves cells at distance at least
+``d_j`` (nearest point of the cell) lies at distance at least ``d_j - rho`` from ``s``: with
+``tau_ij = (d_ij - rho)^+ / v`` and ``r = W v``, for every UAV i and time t
+
+    sum_{j : tau_ij >= t} a_j C_ij <= r (t_sense - t)^+,   C_j = sum_i C_ij,
+
+and the bound maximises ``sum_j m_j POD(C_j)`` under these nested constraints (a relaxation of
+every flight, so an upper bound; without transit it is the plain bound, so it is never above
+it). Effort spent while flying out is itself effort in the nearer cells it crosses, which the
+constraint for the nearer threshold already counts. The environment does not make a UAV come
+back (it may sense until it crashes at T), so the default bound has no return leg;
+``round_trip=True`` (for plans that must land within the usable endurance 0.85 T) uses
+``tau = 2 (min(d(take-off, j), d(landing, j)) - rho)^+ / v`` and the usable endurance: the UAV
+must also be back, so the track at distance ``>= d`` from both fields is at most
+``v T_usable - 2 d``.
+
+The solver (:func:`reach_optimum`) is exact: the feasible efforts form a polymatroid (its rank is
+``g(A) = sum_i r (t_i - min_{j in A} tau_ij)^+``) and the decomposition algorithm for separable
+concave objectives over a polymatroid reduces it to water-fillings (:func:`physical_optimum`)
+and a search for the most violated cell set, which for one or two distinct take-off points is a
+scan over thresholds (more are merged into two, a valid relaxation). A Lagrangian dual value at
+the allocation's marginal returns certifies it (``ReachBound.upper``, gap below 1e-9 on the
+shipped scenarios). 0.1 s on ``paper_6_2`` (40 x 30 cells, 6 UAVs).
 """
 
 from __future__ import annotations
@@ -22,8 +86,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from poc_env.config import Scenario
 from poc_env.errors import ConfigError, check_positive
 from poc_env.theory.detection import DetectionLaw, detection_law
+from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage
 
 
@@ -100,3 +166,291 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
         cov = cov * (effort / spent)
     value = float(np.sum(m * pod_from_coverage(cov, law)))
     return Bound(value, cov, float(lam), effort, law)
+
+
+# ---------------------------------------------------------------- the environment's limits
+
+
+def sensing_time_s(endurance_s: float, dt_s: float, horizon_steps: int) -> float:
+    """Longest time a UAV of the environment can sense: ``dt`` x the steps it can fly.
+
+    :func:`poc_env.sim.core.step` moves (and sweeps with) every UAV that is flying at the start
+    of a step; its compiled bookkeeping adds ``dt`` to the flight time after the step and crashes
+    the UAV once that reaches the endurance T (eq. 17); landing only ends a flight earlier, and no
+    step runs after the horizon. This replays the same float additions, so the count is exact
+    even when T / dt is not an integer (the UAV then senses ``ceil(T / dt)`` steps, a little
+    more than T).
+    """
+    elapsed = 0.0
+    steps = 0
+    while steps < horizon_steps:
+        steps += 1
+        elapsed = elapsed + dt_s
+        if elapsed >= endurance_s:
+            break
+    return steps * float(dt_s)
+
+
+@dataclass(frozen=True)
+class EnvLimits:
+    """What the environment lets each UAV do at most (see :func:`env_limits`)."""
+
+    #: (n, 2) take-off positions (every episode starts there).
+    takeoff_m: np.ndarray
+    #: (n, 2) landing positions.
+    landing_m: np.ndarray
+    #: the largest speed, ``uav.max_speed`` (m/s).
+    speed_mps: float
+    #: effort rate ``W v_max`` of one UAV (m^2/s).
+    rate_m2_s: float
+    #: :func:`sensing_time_s` (s), the same for every UAV.
+    time_s: float
+    #: sweep width W (m).
+    sweep_width_m: float
+    #: farthest distance between a point and the track that detected it (m): definite range
+    #: W / 2, inverse cube the lateral cut-off; 0 for laws whose effort and detection share a
+    #: cell (exponential: a step detects in a cell only through its length inside that cell).
+    spill_m: float
+    law: str
+
+    @property
+    def effort_m2(self) -> float:
+        """The plain bound's effort: every UAV sweeping at v_max for its whole sensing time."""
+        return float(len(self.takeoff_m) * self.rate_m2_s * self.time_s)
+
+
+def env_limits(scenario: Scenario) -> EnvLimits:
+    """The environment's limits for ``scenario`` (a :class:`poc_env.config.Scenario`)."""
+    sc = scenario
+    entry = detection_law(sc.sensor.law)
+    w = sc.sensor.sweep_width_m
+    cutoff = sc.sensor.cutoff_sweep_widths * w
+    spill = 0.0 if entry.needs_cell else float(entry.reach(w, cutoff, sc.map.cell_m))
+    v = sc.uav.max_speed_mps
+    return EnvLimits(
+        takeoff_m=np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2),
+        landing_m=np.asarray(sc.landing_m, dtype=float).reshape(-1, 2),
+        speed_mps=float(v),
+        rate_m2_s=float(w * v),
+        time_s=sensing_time_s(sc.uav.endurance_s, sc.episode.dt_s, sc.horizon_steps),
+        sweep_width_m=float(w),
+        spill_m=spill,
+        law=entry.name,
+    )
+
+
+def honest_optimum(scenario: Scenario, prior) -> Bound:
+    """The plain bound with the environment's limits: :func:`physical_optimum` for the effort
+    of every UAV sweeping at ``max_speed`` for its whole sensing time (:func:`env_limits`)."""
+    lim = env_limits(scenario)
+    grid = Grid.from_config(scenario.map)
+    return physical_optimum(prior, grid.cell_area_m2, lim.effort_m2, lim.law)
+
+
+# ------------------------------------------------------------------- the reach-aware bound
+
+
+@dataclass(frozen=True)
+class ReachBound:
+    """Result of :func:`reach_optimum`.
+
+    ``pos`` is the value of the allocation found; ``upper`` the dual (Lagrangian) value at the
+    allocation's marginal returns, a certified upper bound on the problem's optimum
+    (``upper - pos`` is the optimality gap). Report ``upper``.
+    """
+
+    pos: float
+    upper: float
+    coverage: np.ndarray
+    effort_m2: float
+    law: str
+
+    @property
+    def gap(self) -> float:
+        return self.upper - self.pos
+
+
+def cell_distances(grid: Grid, points) -> np.ndarray:
+    """(k, ny, nx) distance from each of ``points`` (k, 2) to the nearest point of each cell."""
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    ox, oy = grid.origin_m
+    c = grid.cell_m
+    x0 = ox + c * np.arange(grid.nx)
+    y0 = oy + c * np.arange(grid.ny)
+    dx = np.maximum(np.maximum(x0[None] - p[:, :1], p[:, :1] - (x0[None] + c)), 0.0)
+    dy = np.maximum(np.maximum(y0[None] - p[:, 1:], p[:, 1:] - (y0[None] + c)), 0.0)
+    return np.hypot(dy[:, :, None], dx[:, None, :])
+
+
+def _capacity(rate: np.ndarray, budget: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Capacity ``R(t) = sum_k rate_k (budget_k - t)^+`` of one group (hinges ``k``) at ``t``."""
+    return np.sum(rate[:, None] * np.maximum(budget[:, None] - t[None, :], 0.0), axis=0)
+
+
+def _rank(tau: np.ndarray, rate: np.ndarray, budget: np.ndarray, cells: np.ndarray) -> float:
+    """g(A) = sum_g R_g(min_{j in A} tau_gj) for the cells ``A`` (indices)."""
+    if cells.size == 0:
+        return 0.0
+    near = tau[:, cells].min(axis=1)
+    return float(sum(_capacity(rate[g], budget[g], near[g : g + 1])[0] for g in range(len(near))))
+
+
+def _most_violated(
+    tau: np.ndarray, rate: np.ndarray, budget: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, float]:
+    """min over cell sets A of g(A) - x(A), and a minimiser (boolean mask).
+
+    g(A) depends on A only through the nearest cell of A per group, and x >= 0, so a minimiser
+    is among the "upper sets" {j : tau_gj >= t_g for every g} with each t_g a value of tau_g: for
+    one group a scan of the sorted values, for two a table of suffix sums over both ranks.
+    """
+    keys = []
+    caps = []
+    for g in range(tau.shape[0]):
+        u, inv = np.unique(tau[g], return_inverse=True)
+        keys.append(inv)
+        caps.append(_capacity(rate[g], budget[g], u))
+    if len(keys) == 1:
+        s = np.bincount(keys[0], weights=x, minlength=caps[0].size)[::-1].cumsum()[::-1]
+        val = caps[0] - s
+        k = int(np.argmin(val))
+        return keys[0] >= k, float(val[k])
+    table = np.zeros((caps[0].size, caps[1].size))
+    np.add.at(table, (keys[0], keys[1]), x)
+    s = table[::-1, ::-1].cumsum(axis=0).cumsum(axis=1)[::-1, ::-1]
+    val = caps[0][:, None] + caps[1][None, :] - s
+    a, b = np.unravel_index(int(np.argmin(val)), val.shape)
+    return (keys[0] >= a) & (keys[1] >= b), float(val[a, b])
+
+
+def _merge_groups(tau, rate, budget):
+    """Groups as (transit row, hinge rates, hinge budgets). Groups with the same transit row
+    share one capacity function (exact: their hinges add). Beyond two distinct rows, the later
+    groups are merged into the second with the smaller transit of the two (a relaxation: a cell
+    set's capacity can only grow, the total effort stays the same; the bound stays valid,
+    looser)."""
+    groups: dict[bytes, list] = {}
+    for g in range(tau.shape[0]):
+        key = tau[g].tobytes()
+        if key in groups:
+            groups[key][1].append(rate[g])
+            groups[key][2].append(budget[g])
+        else:
+            groups[key] = [tau[g].copy(), [rate[g]], [budget[g]]]
+    items = list(groups.values())
+    while len(items) > 2:
+        t1, r1, b1 = items.pop()
+        t0, r0, b0 = items[-1]
+        items[-1] = [np.minimum(t0, t1), r0 + r1, b0 + b1]
+    return (
+        np.array([i[0] for i in items]),
+        [np.array(i[1], dtype=float) for i in items],
+        [np.array(i[2], dtype=float) for i in items],
+    )
+
+
+def reach_optimum(
+    prior, cell_area_m2, transit_s, rate_m2_s, budget_s, law: str = "inverse_cube"
+) -> ReachBound:
+    """Most POS reachable when group ``g`` of searchers sweeps ``rate_m2_s[g]`` m^2/s for
+    ``budget_s[g]`` s and needs ``transit_s[g]`` (shape ``(G, *prior.shape)``) to reach each cell
+    (see the module docstring for the model and the proof of validity).
+
+    Maximises ``sum_j m_j POD(C_j)`` over ``C >= 0`` such that, for every group g and time t,
+    the effort of g in cells with transit >= t is at most ``rate_g (budget_g - t)^+``. The
+    feasible efforts ``x_j = a_j C_j`` form a polymatroid of rank
+    ``g(A) = sum_g rate_g (budget_g - min_{j in A} transit_gj)^+``; the objective is separable
+    and concave, so the decomposition algorithm (Fujishige, *Submodular functions and
+    optimization*, §8.2) is exact: spend the whole rank by water-filling (:func:`physical_optimum`);
+    if some set A holds more effort than g(A), the optimum fills A exactly, so solve A with rank
+    g restricted to it and the rest with the contracted rank g(A u B) - g(A) (the same form with
+    ``budget_g`` lowered to A's nearest transit), recursively. The returned ``upper`` is the
+    Lagrangian dual at the allocation's marginal returns, a certificate.
+    """
+    entry = detection_law(law)
+    m = np.asarray(prior, dtype=float)
+    if m.size == 0 or not np.all(np.isfinite(m)) or np.any(m < 0):
+        raise ConfigError("prior", "array", "finite cell masses >= 0")
+    area = np.broadcast_to(np.asarray(cell_area_m2, dtype=float), m.shape).ravel()
+    if np.any(area <= 0):
+        raise ConfigError("cell_area_m2", "array", "cell areas > 0")
+    tau = np.asarray(transit_s, dtype=float).reshape(-1, m.size)
+    rate = np.asarray(rate_m2_s, dtype=float).ravel()
+    budget = np.asarray(budget_s, dtype=float).ravel()
+    if not (tau.shape[0] == rate.size == budget.size) or tau.shape[0] == 0:
+        raise ConfigError("transit_s", tau.shape, "one row per group, as many as rates and budgets")
+    if not (np.all(np.isfinite(tau)) and np.all(tau >= 0)):
+        raise ConfigError("transit_s", "array", "finite transit times >= 0")
+    for name, arr in (("rate_m2_s", rate), ("budget_s", budget)):
+        if not (np.all(np.isfinite(arr)) and np.all(arr >= 0)):
+            raise ConfigError(name, "array", "finite values >= 0")
+    mf = m.ravel()
+    tau, rates, budgets = _merge_groups(tau, rate, budget)
+    x = np.zeros(m.size)
+    level = np.zeros(m.size)  # the multiplier of the subproblem that settled each cell
+    reach = np.zeros(m.size, dtype=bool)
+    for g in range(tau.shape[0]):
+        reach |= _capacity(rates[g], budgets[g], tau[g]) > 0
+    reach &= mf > 0
+    stack = [(np.flatnonzero(reach), budgets)]
+    while stack:
+        cells, bud = stack.pop()
+        total = _rank(tau, rates, bud, cells)
+        if cells.size == 0 or total <= 0:
+            continue
+        xi = area[cells] * physical_optimum(mf[cells], area[cells], total, entry.name).coverage
+        mask, val = _most_violated(tau[:, cells], rates, bud, xi)
+        if val >= -1e-12 * total or mask.all() or not mask.any():
+            x[cells] = xi
+            unfilled = xi < area[cells] * (1.0 - 1e-12)
+            level[cells] = np.max(mf[cells][unfilled] / area[cells][unfilled], initial=0.0)
+            continue
+        inner = cells[mask]
+        stack.append((inner, bud))
+        near = tau[:, inner].min(axis=1)
+        stack.append((cells[~mask], [np.minimum(b, a) for b, a in zip(bud, near, strict=True)]))
+    cov = x / area
+    pos = float(np.sum(mf * entry.pod(cov)))
+    # dual certificate: for any feasible y, sum phi(y) <= sum phi(x) + p.(y - x) (concavity),
+    # and max_y p.y over the polymatroid is its greedy value sum_g rate_g int_0^budget max p dt
+    # (definite range: at C = 1 any slope in [0, m/a] is a supergradient; the settling
+    # subproblem's multiplier -- its densest unfilled cell -- makes the certificate tight)
+    if entry.optimal_coverage is None:
+        p = np.minimum(mf / area, level)
+    else:
+        p = mf / area * entry.pod_slope(cov)
+    best = 0.0
+    for g in range(tau.shape[0]):
+        order = np.argsort(tau[g], kind="stable")
+        run = np.maximum.accumulate(p[order])
+        # int_0^inf max_{tau_j <= t} p_j (-R_g'(t)) dt, R_g piecewise linear: on each interval
+        # between consecutive transits the running maximum is constant
+        t = tau[g][order]
+        cap = _capacity(rates[g], budgets[g], t)
+        best += float(np.sum(run * (cap - np.append(cap[1:], 0.0))))
+    upper = max(pos, pos - float(p @ x) + best)
+    return ReachBound(pos, upper, cov.reshape(m.shape), float(x.sum()), entry.name)
+
+
+def reach_bound(scenario: Scenario, prior, round_trip: bool = False) -> ReachBound:
+    """The reach-aware bound of ``scenario`` on ``prior`` (see the module docstring).
+
+    Default (the environment): each UAV sweeps at most ``W v_max`` from its take-off field for
+    its sensing time (:func:`env_limits`) and need not come back (the environment lets it sense
+    until it crashes at T); the transit to cell j is ``(d(take-off, cell j) - spill)^+ / v_max``.
+    ``round_trip=True`` (a plan that must land): the budget is the usable endurance 0.85 T and
+    the transit ``2 (min(d(take-off, j), d(landing, j)) - spill)^+ / v_max``.
+    """
+    lim = env_limits(scenario)
+    grid = Grid.from_config(scenario.map)
+    d = cell_distances(grid, lim.takeoff_m)
+    budget = lim.time_s
+    if round_trip:
+        d = 2.0 * np.minimum(d, cell_distances(grid, lim.landing_m))
+        budget = scenario.uav.usable_endurance_s
+    spill = (2.0 if round_trip else 1.0) * lim.spill_m
+    tau = np.maximum(d - spill, 0.0) / lim.speed_mps
+    n = len(lim.takeoff_m)
+    return reach_optimum(
+        prior, grid.cell_area_m2, tau, np.full(n, lim.rate_m2_s), np.full(n, budget), lim.law
+    )
