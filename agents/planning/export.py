@@ -533,6 +533,19 @@ def geojson(
                 },
             }
         )
+    for o in _overlays(plan, crs, alt, ground):
+        if o["geometry"] == "Polygon":
+            coords: Any = [[[_r6(lon), _r6(lat)] for lat, lon in o["latlon"]]]
+        else:
+            coords = [[_r6(lon), _r6(lat), z] for (lat, lon), z in zip(o["latlon"], o["z"])]
+            coords = coords[0] if o["geometry"] == "Point" else coords
+        feats.append(
+            {
+                "type": "Feature",
+                "geometry": {"type": o["geometry"], "coordinates": coords},
+                "properties": o["properties"],
+            }
+        )
     return {
         "type": "FeatureCollection",
         "features": feats,
@@ -559,30 +572,147 @@ def kml(
     """
     alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     mode = _ALT_REF[altitude_ref][2]
-    marks = []
+    fl = _flight(plan)
+    overlays = _overlays(plan, crs, alt, ground)
+    folders = []
     for u in plan["uavs"]:
         pts = _ll(_route(u), crs)
         zs = [ground, *[alt] * (len(pts) - 2), ground]
-        coords = " ".join(f"{lon:.8f},{lat:.8f},{z:g}" for (lat, lon), z in zip(pts, zs))
-        marks.append(
-            f"<Placemark><name>UAV {escape(str(u['id']))}</name>"
+        uid = escape(str(u["id"]))
+        route = (
+            f"<Placemark><name>UAV {uid} route</name><styleUrl>#route</styleUrl>"
             f"<description>POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
-            f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref})"
-            f"</description><LineString><altitudeMode>{mode}</altitudeMode>"
-            f"<coordinates>{coords}</coordinates></LineString></Placemark>"
+            f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref}); transit "
+            f"{3.6 * fl['cruise_speed_mps']:.0f} km/h, search {3.6 * fl['search_speed_mps']:.0f}"
+            f" km/h</description><LineString><altitudeMode>{mode}</altitudeMode>"
+            f"<coordinates>{_kml_coords(pts, zs)}</coordinates></LineString></Placemark>"
         )
+        ring = _ll(_rectangle_ring(u), crs)
+        rect = (
+            f"<Placemark><name>UAV {uid} search rectangle</name><styleUrl>#rectangle</styleUrl>"
+            f"<Polygon><outerBoundaryIs><LinearRing><coordinates>{_kml_coords(ring)}"
+            "</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>"
+        )
+        mine = [o for o in overlays if o["properties"].get("id") == u["id"]]
+        extra = "".join(_kml_placemark(o, mode) for o in mine)
+        folders.append(f"<Folder><name>UAV {uid}</name>{route}{rect}{extra}</Folder>")
+    others = "".join(_kml_placemark(o, mode) for o in overlays if "id" not in o["properties"])
     name = escape(str(plan["scenario"]))
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
-        f"<name>{name}</name>{''.join(marks)}</Document></kml>\n"
+        f"<name>{name}</name>{_KML_STYLES}{''.join(folders)}"
+        f"<Folder><name>Area, airfields, no-fly zones</name>{others}</Folder></Document></kml>\n"
     )
+
+
+#: KML styles (colours aabbggrr): routes orange, approaches white, search rectangles and the
+#: operating area outlined, no-fly zones filled red, airfields as the default pin.
+_KML_STYLES = (
+    '<Style id="route"><LineStyle><color>ff00a5ff</color><width>2</width></LineStyle></Style>'
+    '<Style id="landing_approach"><LineStyle><color>ffffffff</color><width>2</width></LineStyle>'
+    "</Style>"
+    '<Style id="rectangle"><LineStyle><color>ffffff00</color><width>1.5</width></LineStyle>'
+    "<PolyStyle><fill>0</fill></PolyStyle></Style>"
+    '<Style id="operating_area"><LineStyle><color>ff00ffff</color><width>1.5</width></LineStyle>'
+    "<PolyStyle><fill>0</fill></PolyStyle></Style>"
+    '<Style id="no_fly_zone"><LineStyle><color>ff0000ff</color><width>1.5</width></LineStyle>'
+    "<PolyStyle><color>660000ff</color></PolyStyle></Style>"
+    '<Style id="airfield"><IconStyle><scale>1.1</scale></IconStyle></Style>'
+)
+
+
+def _kml_coords(latlon, zs=None) -> str:
+    if zs is None:
+        return " ".join(f"{lon:.8f},{lat:.8f}" for lat, lon in latlon)
+    return " ".join(f"{lon:.8f},{lat:.8f},{z:g}" for (lat, lon), z in zip(latlon, zs))
+
+
+def _kml_placemark(o: dict, mode: str) -> str:
+    name = escape(str(o["properties"]["name"]))
+    head = f"<Placemark><name>{name}</name><styleUrl>#{o['properties']['kind']}</styleUrl>"
+    if o["geometry"] == "Polygon":
+        geom = (
+            f"<Polygon><outerBoundaryIs><LinearRing><coordinates>{_kml_coords(o['latlon'])}"
+            "</coordinates></LinearRing></outerBoundaryIs></Polygon>"
+        )
+    else:
+        tag = o["geometry"]
+        geom = (
+            f"<{tag}><altitudeMode>{mode}</altitudeMode><coordinates>"
+            f"{_kml_coords(o['latlon'], o['z'])}</coordinates></{tag}>"
+        )
+    return f"{head}{geom}</Placemark>"
+
+
+def _overlays(plan: dict, crs: Any, alt: float, ground: float) -> list[dict[str, Any]]:
+    """What GeoJSON and KML draw beside the routes and rectangles, in one place: per UAV the
+    landing approach (as flown by the QGC mission), the airfields, the operating area and the
+    no-fly zones (polygons counter-clockwise, closed). Each: ``geometry`` (GeoJSON type),
+    ``latlon``, ``z`` (None for polygons, drawn on the ground) and ``properties``."""
+    out: list[dict[str, Any]] = []
+    for u in plan["uavs"]:
+        out.append(
+            {
+                "geometry": "LineString",
+                "latlon": _ll([approach_point(u), u["landing_m"]], crs),
+                "z": [_approach_altitude(alt, ground), ground],
+                "properties": {
+                    "id": u["id"],
+                    "kind": "landing_approach",
+                    "name": f"UAV {u['id']} landing approach",
+                    "approach_km": APPROACH_DISTANCE_M / 1e3,
+                    "approach_height_m": APPROACH_HEIGHT_M,
+                },
+            }
+        )
+    for a in plan.get("airfields") or []:
+        out.append(
+            {
+                "geometry": "Point",
+                "latlon": _ll([a["position_m"]], crs),
+                "z": [ground],
+                "properties": {"kind": "airfield", "name": a["name"]},
+            }
+        )
+    polys = []
+    if plan.get("operating_area_m"):
+        polys.append(("operating_area", "operating area (eq. 20)", plan["operating_area_m"]))
+    for i, z in enumerate(plan.get("no_fly_zones_m") or []):
+        polys.append(("no_fly_zone", f"no-fly zone {i + 1}", z))
+    for kind, name, ring in polys:
+        ccw = _clockwise(ring)[::-1]
+        out.append(
+            {
+                "geometry": "Polygon",
+                "latlon": _ll([*ccw, ccw[0]], crs),
+                "z": None,
+                "properties": {"kind": kind, "name": name},
+            }
+        )
+    return out
 
 
 #: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
 #: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
 APPROACH_DISTANCE_M = 4000.0
 APPROACH_HEIGHT_M = 300.0
+
+
+def approach_point(u: dict) -> list[float]:
+    """The fixed-wing approach waypoint of a UAV plan (metres): :data:`APPROACH_DISTANCE_M` from
+    the landing field towards the last search point (east of the field if they coincide)."""
+    end = np.asarray(u["landing_m"], dtype=float)
+    wps = u["waypoints_m"]
+    d = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float) - end
+    norm = float(np.hypot(*d))
+    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
+    return [float(v) for v in end + APPROACH_DISTANCE_M * unit]
+
+
+def _approach_altitude(altitude_m: float, ground_m: float) -> float:
+    """:data:`APPROACH_HEIGHT_M` above the field (lower if the cruise altitude is lower)."""
+    return ground_m + min(APPROACH_HEIGHT_M, altitude_m - ground_m)
 
 
 def _nav(command: int, lat: float, lon: float, alt: float, ref: str, p4=(0, 0, 0, None)) -> dict:
@@ -622,6 +752,7 @@ def qgc_plan(
     search_speed_mps: float = DEFAULT_FLIGHT["search_speed_mps"],
     altitude_ref: str = "home",
     ground_m: float = 0.0,
+    home_amsl_m: float = 0.0,
     operating_area_m: list | None = None,
     no_fly_zones_m: list | None = None,
 ) -> dict:
@@ -634,21 +765,17 @@ def qgc_plan(
     inclusion polygon (empty without one) and the no-fly zones as exclusion polygons, clockwise;
     rally points at the take-off and landing fields. ``altitude_ref`` ``home`` writes
     MAV_FRAME_GLOBAL_RELATIVE_ALT (3), ``amsl`` MAV_FRAME_GLOBAL (0) with ``ground_m`` the
-    field elevation.
+    field elevation; ``home_amsl_m`` is the planned home position's AMSL altitude.
     """
     ref = altitude_ref
     if ref not in _ALT_REF:
         raise ConfigError("altitude_ref", ref, "home or amsl")
     wps = [list(w) for w in u["waypoints_m"]]
     start, end = list(u["takeoff_m"]), list(u["landing_m"])
-    last = np.asarray(wps[-1] if wps else start, dtype=float)
-    d = last - np.asarray(end, dtype=float)
-    norm = float(np.hypot(*d))
-    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
-    approach = (np.asarray(end, dtype=float) + APPROACH_DISTANCE_M * unit).tolist()
+    approach = approach_point(u)
     ll = _ll([start, *wps, approach, end], crs)
     t_ll, w_ll, a_ll, l_ll = ll[0], ll[1:-2], ll[-2], ll[-1]
-    app_alt = ground_m + min(APPROACH_HEIGHT_M, altitude_m - ground_m)
+    app_alt = _approach_altitude(altitude_m, ground_m)
     items = [_nav(MAV_CMD_NAV_TAKEOFF, *t_ll, altitude_m, ref, (15, 0, 0, None))]
     if w_ll:
         items.append(_speed(cruise_speed_mps))
@@ -680,7 +807,7 @@ def qgc_plan(
             "version": 2, "firmwareType": 12, "vehicleType": 1,
             "globalPlanAltitudeMode": _ALT_REF[ref][1],
             "cruiseSpeed": cruise_speed_mps, "hoverSpeed": 5,
-            "plannedHomePosition": [t_ll[0], t_ll[1], ground_m], "items": items,
+            "plannedHomePosition": [t_ll[0], t_ll[1], home_amsl_m], "items": items,
         },
         "geoFence": {"circles": [], "polygons": polygons, "version": 2},
         "rallyPoints": {"points": rally, "version": 2},
@@ -717,6 +844,7 @@ def export_plan(
     plan = load_plan(plan_path)
     crs = _plan_crs(plan, origin, projection, zone)
     alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+    elevation = _number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
     out = Path(out_dir) if out_dir else Path(plan_path).parent
     stem = Path(plan_path).stem
     if fmt == "geojson":
@@ -732,7 +860,7 @@ def export_plan(
             u["id"],
             qgc_plan(
                 u, crs, alt, fl["cruise_speed_mps"], search_speed_mps=fl["search_speed_mps"],
-                altitude_ref=altitude_ref, ground_m=ground,
+                altitude_ref=altitude_ref, ground_m=ground, home_amsl_m=elevation,
                 operating_area_m=plan.get("operating_area_m"),
                 no_fly_zones_m=plan.get("no_fly_zones_m"),
             ),

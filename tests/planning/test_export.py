@@ -80,7 +80,9 @@ def test_kml_parses_back(tmp_path):
     path, plan = _plan(tmp_path)
     (out,) = export_plan(path, "kml", "45.75,126.65")
     ns = {"k": "http://www.opengis.net/kml/2.2"}
-    coords = [c.text for c in ET.parse(out).getroot().iterfind(".//k:coordinates", ns)]
+    routes = ET.parse(out).getroot().findall(".//k:Placemark[k:styleUrl='#route']", ns)
+    assert len(routes) == len(plan["uavs"])
+    coords = [r.find(".//k:coordinates", ns).text for r in routes]
     for text, u in zip(coords, plan["uavs"]):
         pts = [tuple(map(float, t.split(",")[:2])) for t in text.split()]
         back = to_local([(lat, lon) for lon, lat in pts], ORIGIN)
@@ -461,7 +463,7 @@ def test_altitude_reference_is_the_same_in_every_format(tmp_path, ref, frame, mo
     ground = 0.0 if ref == "home" else 150.0
     items = qgc["mission"]["items"]
     assert qgc["mission"]["globalPlanAltitudeMode"] == mode
-    assert qgc["mission"]["plannedHomePosition"][2] == ground
+    assert qgc["mission"]["plannedHomePosition"][2] == 150.0  # AMSL in both references
     nav = [i for i in items if i["command"] in (16, 21, 22)]
     assert all(i["frame"] == frame and i["AltitudeMode"] == mode for i in nav)
     search = [i["Altitude"] for i in nav[1:-2]]
@@ -529,3 +531,36 @@ def test_make_plan_records_crs_and_geography_that_export_uses(tmp_path):
     fl = plan["flight"]
     assert speeds[:2] == pytest.approx([fl["cruise_speed_mps"], fl["search_speed_mps"]], abs=1e-3)
     assert "crs" not in make_plan("small", popsize=8, maxiter=2)
+
+
+def test_geojson_and_kml_draw_the_area_zones_airfields_and_the_flown_approach(tmp_path):
+    path, _ = _geo_plan(tmp_path)
+    (gj,) = export_plan(path, "geojson", None, tmp_path / "g")
+    (km,) = export_plan(path, "kml", None, tmp_path / "k")
+    qgc = json.loads(export_plan(path, "qgc", None, tmp_path / "q")[0].read_text())
+    feats = json.loads(gj.read_text())["features"]
+    kinds = [f["properties"]["kind"] for f in feats]
+    assert kinds.count("landing_approach") == 2 and kinds.count("no_fly_zone") == 1
+    assert kinds.count("operating_area") == 1
+    (field,) = [f for f in feats if f["properties"]["kind"] == "airfield"]
+    assert field["properties"]["name"] == "A" and field["geometry"]["type"] == "Point"
+    np.testing.assert_allclose(
+        to_local([field["geometry"]["coordinates"][1::-1]], ORIGIN), [[20e3, -60e3]], atol=0.15
+    )
+    # the approach drawn is the one the mission flies (same place, same altitude)
+    app = next(f for f in feats if f["properties"]["kind"] == "landing_approach")
+    item = qgc["mission"]["items"][-2]
+    lon, lat, z = app["geometry"]["coordinates"][0]
+    assert (lat, lon) == pytest.approx(tuple(item["params"][4:6]), abs=1e-6)
+    assert z == item["Altitude"]
+    for f in feats:  # RFC 7946: exterior rings counter-clockwise
+        if f["geometry"]["type"] == "Polygon":
+            xy = np.array(to_local([(b, a) for a, b in f["geometry"]["coordinates"][0]], ORIGIN))
+            assert np.sum(xy[:-1, 0] * xy[1:, 1] - xy[1:, 0] * xy[:-1, 1]) > 0
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    root = ET.parse(km).getroot()
+    folders = [f.find("k:name", ns).text for f in root.iterfind(".//k:Folder", ns)]
+    assert folders == ["UAV 1", "UAV 2", "Area, airfields, no-fly zones"]
+    styles = {s.get("id") for s in root.iterfind(".//k:Style", ns)}
+    used = {e.text[1:] for e in root.iterfind(".//k:styleUrl", ns)}
+    assert used <= styles and {"route", "no_fly_zone", "airfield", "operating_area"} <= used
