@@ -3,10 +3,13 @@
 Every policy runs the same ``episodes`` seeds (``seed0 .. seed0 + episodes - 1``); each episode
 creates a fresh environment reset with its seed, so results do not depend on ``workers`` or on
 the order in which episodes run. Besides POSC (eq. 13) the table reports the hidden target's
-detection rate and mean time to detection, constraint-violation steps, crashes, and the
-physical optimum for the swarm's largest possible effort (every UAV searching for the whole
-usable endurance 0.85 T at v_s), an upper bound no policy can exceed. Policies are named as
-in :mod:`agents.policies.registry` (``ppo:PATH`` included).
+detection rate and mean time to detection, constraint-violation steps, crashes, and two upper
+bounds no policy can exceed in the environment (:mod:`poc_env.theory.bound`): the plain
+physical optimum for the swarm's largest effort (every UAV sweeping at ``max_speed`` for as long
+as the environment lets it sense, until the endurance T or the horizon), and the reach-aware
+bound (the same UAVs must first fly from their airfields to the cells, at most at ``max_speed``).
+The normalised score is POSC / reach-aware bound, per episode and averaged (``normalised``).
+Policies are named as in :mod:`agents.policies.registry` (``ppo:PATH`` included).
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import csv
 import io
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -55,9 +58,16 @@ class Episode:
     landed: int
     steps: int
     posc_curve: tuple[float, ...] = field(repr=False)
-    #: physical optimum of this episode's random prior for the swarm's largest effort (None
-    #: without ``random_priors``: the scenario's bound is computed once by :func:`evaluate`)
+    #: plain physical optimum of this episode's prior for the swarm's largest effort
+    #: (:func:`effort_bound`; None until known: :func:`evaluate` fills it in)
     bound: float | None = None
+    #: reach-aware bound of this episode's prior (:func:`reach_effort_bound`)
+    bound_reach: float | None = None
+
+    @property
+    def normalised(self) -> float | None:
+        """POSC / reach-aware bound (None without the bound)."""
+        return None if not self.bound_reach else self.posc / self.bound_reach
 
 
 #: Second entropy word of the evaluation priors' generators: ``default_rng([seed, STREAM])``.
@@ -111,6 +121,7 @@ def run_episode(
         steps=int(st.step[0]),
         posc_curve=tuple(curve),
         bound=effort_bound(env.scenario, map_file, prior) if random_priors else None,
+        bound_reach=reach_effort_bound(env.scenario, map_file, prior) if random_priors else None,
     )
 
 
@@ -125,6 +136,9 @@ class Evaluation:
     bound: float
     policies: tuple[str, ...]
     random_priors: bool = False
+    #: reach-aware bound (mean over the episodes' priors with ``random_priors``); None if not
+    #: computed (then ``bound_reach`` and ``normalised`` are left empty)
+    bound_reach: float | None = None
 
     def rows(self) -> list[dict[str, Any]]:
         out = []
@@ -133,6 +147,9 @@ class Evaluation:
             x = np.array([e.posc for e in eps])
             half = 1.96 * x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else 0.0
             ttd = [e.time_to_detection_s for e in eps if e.time_to_detection_s is not None]
+            norm = [e.normalised for e in eps]
+            if any(v is None for v in norm) and self.bound_reach:
+                norm = [e.posc / self.bound_reach for e in eps]
             out.append(
                 {
                     "policy": p,
@@ -145,6 +162,10 @@ class Evaluation:
                     "crashed": float(np.mean([e.crashed for e in eps])),
                     "landed": float(np.mean([e.landed for e in eps])),
                     "bound": self.bound,
+                    "bound_reach": self.bound_reach,
+                    "normalised": None
+                    if any(v is None for v in norm)
+                    else float(np.mean(np.asarray(norm, dtype=float))),
                 }
             )
         return out
@@ -153,22 +174,28 @@ class Evaluation:
         width = max(14, *(len(p) for p in self.policies))
         head = (
             f"{'policy':<{width}} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
-            f"{'viol.steps':>10} {'crashed':>8} {'landed':>7}"
+            f"{'viol.steps':>10} {'crashed':>8} {'landed':>7} {'POSC/reach':>10}"
         )
         lines = [head, "-" * len(head)]
         for r in self.rows():
             t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
+            nrm = "-" if r["normalised"] is None else f"{r['normalised']:.4f}"
             lines.append(
                 f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
                 f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
-                f"{r['crashed']:>8.2f} {r['landed']:>7.2f}"
+                f"{r['crashed']:>8.2f} {r['landed']:>7.2f} {nrm:>10}"
             )
         lines.append("-" * len(head))
         mean = "mean over the episodes' random priors of the " if self.random_priors else ""
         lines.append(
-            f"{mean}physical optimum for the swarm's largest effort (all UAVs searching "
-            f"0.85 T): {self.bound:.4f}"
+            f"{mean}physical optimum for the swarm's largest effort (all UAVs at max speed "
+            f"until T): {self.bound:.4f}"
         )
+        if self.bound_reach is not None:
+            lines.append(
+                f"{mean}reach-aware bound (transit from the airfields at max speed; normalises "
+                f"POSC/reach): {self.bound_reach:.4f}"
+            )
         return "\n".join(lines)
 
     def to_csv(self) -> str:
@@ -183,19 +210,32 @@ class Evaluation:
 def effort_bound(
     scenario: Any, map_file: str | None = None, prior: np.ndarray | None = None
 ) -> float:
-    """Physical optimum for every UAV searching its whole usable endurance at v_s, on
-    ``prior`` (default: the scenario's prior or ``map_file``)."""
+    """Plain physical optimum for every UAV sweeping at ``max_speed`` for as long as the
+    environment lets it sense (:func:`poc_env.theory.bound.honest_optimum`), on ``prior``
+    (default: the scenario's prior or ``map_file``)."""
     from poc_env.config import load_scenario
-    from poc_env.theory.bound import physical_optimum
-    from poc_env.theory.probability_map import Grid, build_prior
+    from poc_env.theory.bound import honest_optimum
+    from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario(scenario)
     if prior is None:
         prior = build_prior(sc.map, map_file)
-    u = sc.uav
-    effort = sc.n_uavs * u.usable_endurance_s * u.search_speed_mps * sc.sensor.sweep_width_m
-    grid = Grid.from_config(sc.map)
-    return physical_optimum(prior, grid.cell_area_m2, effort, sc.sensor.law).pos
+    return honest_optimum(sc, prior).pos
+
+
+def reach_effort_bound(
+    scenario: Any, map_file: str | None = None, prior: np.ndarray | None = None
+) -> float:
+    """Reach-aware bound (:func:`poc_env.theory.bound.reach_bound`, its certified upper value)
+    on ``prior`` (default: the scenario's prior or ``map_file``)."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import reach_bound
+    from poc_env.theory.probability_map import build_prior
+
+    sc = load_scenario(scenario)
+    if prior is None:
+        prior = build_prior(sc.map, map_file)
+    return reach_bound(sc, prior).upper
 
 
 def evaluate(
@@ -223,9 +263,12 @@ def evaluate(
     results = tuple(run_jobs(_run, jobs, workers, desc="episodes" if progress else None))
     if random_priors:  # each episode's own prior; the same seeds for every policy
         bound = float(np.mean([float(e.bound or 0.0) for e in results[:episodes]]))
+        reach = float(np.mean([float(e.bound_reach or 0.0) for e in results[:episodes]]))
     else:
         bound = effort_bound(sc, map_file)
-    return Evaluation(sc.name, results, bound, tuple(policies), random_priors)
+        reach = reach_effort_bound(sc, map_file)
+        results = tuple(replace(e, bound=bound, bound_reach=reach) for e in results)
+    return Evaluation(sc.name, results, bound, tuple(policies), random_priors, reach)
 
 
 def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Path:
@@ -243,7 +286,9 @@ def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Pa
         h = 1.96 * arr.std(axis=0, ddof=1) / np.sqrt(len(arr)) if len(arr) > 1 else 0 * m
         ax.plot(t, m, label=p)
         ax.fill_between(t, m - h, m + h, alpha=0.2)
-    ax.axhline(ev.bound, color="k", ls="--", lw=0.8, label="physical optimum")
+    ax.axhline(ev.bound, color="k", ls="--", lw=0.8, label="physical optimum (plain)")
+    if ev.bound_reach is not None:
+        ax.axhline(ev.bound_reach, color="k", ls=":", lw=0.8, label="reach-aware bound")
     ax.set_xlabel("time / min")
     ax.set_ylabel("POSC")
     ax.set_title(f"{ev.scenario}: POSC over time ({len(ev.episodes)} episodes)")

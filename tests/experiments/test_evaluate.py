@@ -2,6 +2,7 @@
 
 import csv
 
+import numpy as np
 import pytest
 
 from agents.experiments.evaluate import effort_bound, evaluate
@@ -65,3 +66,36 @@ def test_policies_come_from_the_registry():
     assert err.value.allowed == "one of " + ", ".join(registered())
     with pytest.raises(ConfigError, match="checkpoint path"):
         evaluate("small", ["ppo:"], episodes=1)
+
+
+def test_both_bounds_and_the_normalised_score(tmp_path):
+    """Every episode carries the plain and the reach-aware bound of its prior; the normalised
+    score is POSC / reach-aware bound, per episode and averaged in the rows and the CSV."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import honest_optimum, reach_bound
+    from poc_env.theory.probability_map import build_prior
+
+    ev = evaluate("small", ["lawnmower"], episodes=2)
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    assert ev.bound == pytest.approx(honest_optimum(sc, prior).pos, abs=1e-12)
+    assert ev.bound_reach == pytest.approx(reach_bound(sc, prior).upper, abs=1e-12)
+    assert ev.bound_reach <= ev.bound + 1e-9
+    for e in ev.episodes:
+        assert e.bound == ev.bound and e.bound_reach == ev.bound_reach
+        assert e.normalised == pytest.approx(e.posc / ev.bound_reach)
+        assert e.posc <= e.bound_reach
+    (row,) = ev.rows()
+    assert row["normalised"] == pytest.approx(row["posc_mean"] / ev.bound_reach)
+    assert "POSC/reach" in ev.table() and "reach-aware bound" in ev.table()
+    rows = list(csv.DictReader(ev.to_csv().splitlines()))
+    assert float(rows[0]["bound_reach"]) == pytest.approx(ev.bound_reach)
+    assert float(rows[0]["normalised"]) == pytest.approx(row["normalised"])
+    # random priors: each episode's own bounds, the mean in the table
+    rp = evaluate("small", ["lawnmower"], episodes=2, random_priors=True)
+    reach = [e.bound_reach for e in rp.episodes]
+    assert reach[0] != reach[1] and rp.bound_reach == pytest.approx(np.mean(reach))
+    assert rp.rows()[0]["normalised"] == pytest.approx(
+        np.mean([e.posc / e.bound_reach for e in rp.episodes])
+    )
+    assert all(e.posc <= e.bound_reach <= e.bound + 1e-9 for e in rp.episodes)
