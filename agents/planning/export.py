@@ -814,6 +814,37 @@ def qgc_plan(
     }  # fmt: skip
 
 
+def _check_fences(plan: dict, area: list | None) -> None:
+    """ConfigError if a UAV's mission (route and landing approach) leaves the inclusion fence
+    ``area`` (by more than 1 m) or flies through a no-fly zone (more than 1 m of a leg)."""
+    from shapely.geometry import LineString, Point, Polygon
+
+    inc = Polygon(area).buffer(1.0) if area else None
+    zones = [Polygon(z) for z in plan.get("no_fly_zones_m") or []]
+    for k, u in enumerate(plan["uavs"]):
+        pts = [*_route(u)[:-1], approach_point(u), list(u["landing_m"])]
+        names = [
+            "takeoff_m", *(f"waypoints_m[{i}]" for i in range(len(pts) - 3)), "approach",
+            "landing_m",
+        ]  # fmt: skip
+        if inc is not None:
+            for name, pt in zip(names, pts):
+                if not inc.covers(Point(pt)):
+                    out = inc.exterior.distance(Point(pt)) / 1e3
+                    raise ConfigError(
+                        f"plan.uavs[{k}].{name}", pt,
+                        f"inside the operating area, the mission's inclusion geofence ({out:.1f}"
+                        " km outside): re-plan, or export without it (geofence=False)",
+                    )  # fmt: skip
+        line = LineString(pts)
+        for i, z in enumerate(zones):
+            if z.is_valid and line.intersection(z).length > 1.0:
+                raise ConfigError(
+                    f"plan.uavs[{k}]", u["id"],
+                    f"a mission outside no-fly zone {i + 1} (an exclusion geofence): re-plan",
+                )  # fmt: skip
+
+
 def export_plan(
     plan_path: str | os.PathLike[str],
     fmt: str,
@@ -825,6 +856,7 @@ def export_plan(
     altitude_m: float | None = None,
     altitude_ref: str = "home",
     field_elevation_m: float = 0.0,
+    geofence: bool = True,
 ) -> list[Path]:
     """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
 
@@ -832,6 +864,8 @@ def export_plan(
     ``projection`` (``aeqd`` or ``utm``, UTM zone ``zone`` or the origin's) at ``origin``.
     ``altitude_m`` (default the plan's ``flight.altitude_m``, above the field) in the reference
     ``altitude_ref`` (``home`` or ``amsl``; ``field_elevation_m`` is the fields' AMSL height).
+    QGC missions that would breach their own geofence (a point outside the operating area, a
+    leg through a no-fly zone) are refused; ``geofence=False`` leaves the inclusion fence out.
     """
     if fmt not in FORMATS:
         raise ConfigError("format", fmt, "one of " + ", ".join(FORMATS))
@@ -855,13 +889,15 @@ def export_plan(
     if fmt == "kml":
         return [write_text_atomic(out / f"{stem}.kml", kml(plan, crs, alt, altitude_ref, ground))]
     fl = _flight(plan)
+    area = plan.get("operating_area_m") if geofence else None
+    _check_fences(plan, area)
     docs = [
         (
             u["id"],
             qgc_plan(
                 u, crs, alt, fl["cruise_speed_mps"], search_speed_mps=fl["search_speed_mps"],
                 altitude_ref=altitude_ref, ground_m=ground, home_amsl_m=elevation,
-                operating_area_m=plan.get("operating_area_m"),
+                operating_area_m=area,
                 no_fly_zones_m=plan.get("no_fly_zones_m"),
             ),
         )

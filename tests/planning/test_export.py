@@ -564,3 +564,20 @@ def test_geojson_and_kml_draw_the_area_zones_airfields_and_the_flown_approach(tm
     styles = {s.get("id") for s in root.iterfind(".//k:Style", ns)}
     used = {e.text[1:] for e in root.iterfind(".//k:styleUrl", ns)}
     assert used <= styles and {"route", "no_fly_zone", "airfield", "operating_area"} <= used
+
+
+def test_a_mission_that_would_breach_its_own_geofence_is_refused(tmp_path):
+    path, plan = _geo_plan(tmp_path)
+    plan["uavs"][1]["waypoints_m"][2] = [235e3, 100e3]  # 15 km east of the operating area
+    path.write_text(json.dumps(plan))
+    with pytest.raises(ConfigError, match=r"uavs\[1\]\.waypoints_m\[2\].*15\.0 km outside"):
+        export_plan(path, "qgc", None, tmp_path / "o")
+    assert not (tmp_path / "o").exists()
+    outs = export_plan(path, "qgc", None, tmp_path / "o", geofence=False)
+    fence = json.loads(outs[1].read_text())["geoFence"]["polygons"]
+    assert [p["inclusion"] for p in fence] == [False]  # the no-fly zone stays
+    _, plan = _geo_plan(tmp_path)
+    plan["uavs"][0]["waypoints_m"][:2] = [[70e3, 85e3], [100e3, 88e3]]  # across the zone
+    path.write_text(json.dumps(plan))
+    with pytest.raises(ConfigError, match=r"uavs\[0\].*no-fly zone 1"):
+        export_plan(path, "qgc", None, tmp_path / "p", geofence=False)
