@@ -128,7 +128,7 @@ def _origin(origin: Any) -> tuple[float, float]:
     if isinstance(origin, str):
         return parse_origin(origin)
     try:
-        lat, lon = origin
+        lat, lon = (float(v) for v in origin)
     except (TypeError, ValueError):
         raise ConfigError("origin", origin, "(lat, lon) in degrees") from None
     return parse_origin(f"{lat!r},{lon!r}")

@@ -303,6 +303,10 @@ def test_utm_zone_from_the_origin_or_given():
     assert (lat, lon) == pytest.approx(ORIGIN, abs=1e-9) and lat2 > lat
     with pytest.raises(ConfigError, match=r"crs\.zone"):
         make_crs("utm", ORIGIN, zone=61)
+    assert make_crs("aeqd", np.array(ORIGIN)) == make_crs("aeqd", ORIGIN)  # numpy floats too
+    for bad in ("north", (1.0,), (95.0, 0.0)):
+        with pytest.raises(ConfigError, match="origin"):
+            make_crs("aeqd", bad)
 
 
 # --------------------------------------------------------------------------- crs in plan.json
