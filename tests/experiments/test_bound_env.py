@@ -4,6 +4,8 @@ T), touring the densest cells or circling over the densest one, on random priors
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import poc_env
 from poc_env.theory.bound import honest_optimum, reach_bound
@@ -73,3 +75,44 @@ def test_adversarial_flights_stay_below_both_bounds(law, horizon):
             assert 0.0 < posc <= reach.upper + 1e-12
             worst = max(worst, posc / reach.upper)
     assert worst > 0.3  # the flights are real searches, not idle ones
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    law=st.sampled_from(["inverse_cube", "exponential", "definite_range"]),
+    field_b=st.tuples(st.floats(-30, 70), st.floats(-30, 70)),
+    counts=st.tuples(st.integers(1, 3), st.integers(0, 2)),
+    max_speed=st.floats(225, 320),
+    endurance_h=st.floats(0.2, 0.7),
+    dt_s=st.sampled_from([15.0, 30.0, 45.0]),
+    seed=st.integers(0, 10_000),
+    mode=st.sampled_from(["circle", "tour"]),
+)
+def test_no_flight_beats_the_bounds_over_random_configs(
+    law, field_b, counts, max_speed, endurance_h, dt_s, seed, mode
+):
+    """Random priors and configs (law, a second airfield anywhere near the area, fleet split,
+    max speed, endurance, step): the adversarial flights stay below both bounds."""
+    fleet = [{"takeoff": "A", "count": counts[0]}]
+    if counts[1]:
+        fleet.append({"takeoff": "B", "count": counts[1], "landing": "A"})
+    overrides = {
+        "sensor.law": law,
+        "airfields": [
+            {"name": "A", "position_km": [20, -5]},
+            {"name": "B", "position_km": list(field_b)},
+        ],
+        "fleet": fleet,
+        "uav.max_speed_kmh": max_speed,
+        "uav.endurance_h": endurance_h,
+        "episode.dt_s": dt_s,
+        "comms.min_neighbours": 0,
+    }
+    env = poc_env.parallel_env("small", overrides=overrides)
+    sc = env.scenario
+    prior = random_gaussian_mixture(Grid.from_config(sc.map), np.random.default_rng(seed))
+    plain = honest_optimum(sc, prior).pos
+    reach = reach_bound(sc, prior)
+    assert reach.gap <= 1e-9 and reach.upper <= plain + 1e-9
+    posc, _, _ = _fly(env, prior, seed, mode)
+    assert posc <= reach.upper + 1e-12
