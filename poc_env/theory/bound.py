@@ -320,12 +320,32 @@ def _most_violated(
         val = caps[0] - s
         k = int(np.argmin(val))
         return keys[0] >= k, float(val[k])
-    table = np.zeros((caps[0].size, caps[1].size))
-    np.add.at(table, (keys[0], keys[1]), x)
-    s = table[::-1, ::-1].cumsum(axis=0).cumsum(axis=1)[::-1, ::-1]
-    val = caps[0][:, None] + caps[1][None, :] - s
-    a, b = np.unravel_index(int(np.argmin(val)), val.shape)
-    return (keys[0] >= a) & (keys[1] >= b), float(val[a, b])
+    # two groups: val[a, b] = cap0[a] + cap1[b] - x({key0 >= a, key1 >= b}), by blocks of rows
+    # (from the last row down; ``carry`` is the suffix sum of the rows below the block)
+    k1, k2 = caps[0].size, caps[1].size
+    block = max(1, min(k1, _TABLE_CELLS // k2))
+    carry = np.zeros(k2)
+    best, where = np.inf, (0, 0)
+    for hi in range(k1, 0, -block):
+        lo = max(0, hi - block)
+        sel = (keys[0] >= lo) & (keys[0] < hi)
+        table = np.zeros((hi - lo, k2))
+        np.add.at(table, (keys[0][sel] - lo, keys[1][sel]), x[sel])
+        suffix = table[::-1, ::-1].cumsum(axis=0).cumsum(axis=1)[::-1, ::-1] + carry
+        val = caps[0][lo:hi, None] + caps[1][None, :] - suffix
+        k = int(np.argmin(val))
+        if val.flat[k] < best:
+            best, where = float(val.flat[k]), (lo + k // k2, k % k2)
+        carry = suffix[0]
+    a, b = where
+    return (keys[0] >= a) & (keys[1] >= b), best
+
+
+#: Cells of one block of the two-group threshold table (memory ~ 8 bytes each).
+_TABLE_CELLS = 1 << 22
+#: Above this many threshold pairs, two transit rows are merged into one (a valid relaxation)
+#: so that the search for the most violated set stays fast.
+_MAX_PAIRS = 50_000_000
 
 
 def _merge_groups(tau, rate, budget):
@@ -333,7 +353,7 @@ def _merge_groups(tau, rate, budget):
     share one capacity function (exact: their hinges add). Beyond two distinct rows, the later
     groups are merged into the second with the smaller transit of the two (a relaxation: a cell
     set's capacity can only grow, the total effort stays the same; the bound stays valid,
-    looser)."""
+    looser); on grids of more than ``sqrt(_MAX_PAIRS)`` cells, two rows are merged into one."""
     groups: dict[bytes, list] = {}
     for g in range(tau.shape[0]):
         key = tau[g].tobytes()
@@ -343,7 +363,8 @@ def _merge_groups(tau, rate, budget):
         else:
             groups[key] = [tau[g].copy(), [rate[g]], [budget[g]]]
     items = list(groups.values())
-    while len(items) > 2:
+    limit = 1 if tau.shape[1] ** 2 > _MAX_PAIRS else 2
+    while len(items) > limit:
         t1, r1, b1 = items.pop()
         t0, r0, b0 = items[-1]
         items[-1] = [np.minimum(t0, t1), r0 + r1, b0 + b1]
