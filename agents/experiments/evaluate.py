@@ -198,6 +198,36 @@ class Evaluation:
             )
         return "\n".join(lines)
 
+    def episode_rows(self) -> list[dict[str, Any]]:
+        """One row per episode: POSC, both bounds of its prior and POSC / reach-aware bound."""
+        reach = self.bound_reach
+        return [
+            {
+                "policy": e.policy,
+                "seed": e.seed,
+                "posc": e.posc,
+                "bound": e.bound if e.bound is not None else self.bound,
+                "bound_reach": e.bound_reach if e.bound_reach is not None else reach,
+                "normalised": e.normalised
+                if e.normalised is not None
+                else (e.posc / reach if reach else None),
+                "detected": e.detected,
+                "violation_steps": e.violation_steps,
+                "crashed": e.crashed,
+                "landed": e.landed,
+            }
+            for e in self.episodes
+        ]
+
+    def episodes_csv(self) -> str:
+        """:meth:`episode_rows` as CSV."""
+        buf = io.StringIO()
+        rows = self.episode_rows()
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+        return buf.getvalue()
+
     def to_csv(self) -> str:
         buf = io.StringIO()
         rows = self.rows()

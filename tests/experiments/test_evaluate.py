@@ -91,6 +91,10 @@ def test_both_bounds_and_the_normalised_score(tmp_path):
     rows = list(csv.DictReader(ev.to_csv().splitlines()))
     assert float(rows[0]["bound_reach"]) == pytest.approx(ev.bound_reach)
     assert float(rows[0]["normalised"]) == pytest.approx(row["normalised"])
+    per_episode = list(csv.DictReader(ev.episodes_csv().splitlines()))
+    assert [int(r["seed"]) for r in per_episode] == [e.seed for e in ev.episodes]
+    for r, e in zip(per_episode, ev.episodes, strict=True):
+        assert float(r["normalised"]) == pytest.approx(e.posc / ev.bound_reach)
     # random priors: each episode's own bounds, the mean in the table
     rp = evaluate("small", ["lawnmower"], episodes=2, random_priors=True)
     reach = [e.bound_reach for e in rp.episodes]
@@ -99,3 +103,6 @@ def test_both_bounds_and_the_normalised_score(tmp_path):
         np.mean([e.posc / e.bound_reach for e in rp.episodes])
     )
     assert all(e.posc <= e.bound_reach <= e.bound + 1e-9 for e in rp.episodes)
+    rows = rp.episode_rows()
+    assert [r["bound_reach"] for r in rows] == reach
+    assert [r["normalised"] for r in rows] == [e.posc / e.bound_reach for e in rp.episodes]
