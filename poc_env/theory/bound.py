@@ -187,14 +187,15 @@ def sensing_time_s(endurance_s: float, dt_s: float, horizon_steps: int) -> float
     even when T / dt is not an integer (the UAV then senses ``ceil(T / dt)`` steps, a little
     more than T).
     """
-    elapsed = 0.0
-    steps = 0
-    while steps < horizon_steps:
-        steps += 1
-        elapsed = elapsed + dt_s
-        if elapsed >= endurance_s:
-            break
-    return steps * float(dt_s)
+    elapsed, done = 0.0, 0
+    while done < horizon_steps:  # sequential sums (np.add.accumulate), in chunks
+        n = min(1 << 16, horizon_steps - done)
+        acc = np.cumsum(np.concatenate(([elapsed], np.full(n, float(dt_s)))))[1:]
+        hit = np.flatnonzero(acc >= endurance_s)
+        if hit.size:
+            return float((done + int(hit[0]) + 1) * dt_s)
+        elapsed, done = float(acc[-1]), done + n
+    return float(horizon_steps * dt_s)
 
 
 @dataclass(frozen=True)

@@ -123,6 +123,14 @@ def test_sensing_time_matches_the_kernel_rule():
     assert sensing_time_s(100.0, 30.0, 1000) == 120.0  # ceil(100 / 30) steps
     assert sensing_time_s(90.0, 30.0, 1000) == 90.0
     assert sensing_time_s(90.0, 30.0, 2) == 60.0  # the horizon comes first
+    rng = np.random.default_rng(2)
+    for _ in range(200):  # the same float additions as the kernel's flight time
+        dt, t_end = float(rng.uniform(0.1, 50.0)), float(rng.uniform(1.0, 5000.0))
+        elapsed, steps = 0.0, 0
+        while elapsed < t_end:
+            elapsed, steps = elapsed + dt, steps + 1
+        assert sensing_time_s(t_end, dt, 10**6) == steps * dt
+    assert sensing_time_s(1e6, 0.5, 200_000) == 100_000.0  # several chunks, the horizon
     sc = load_scenario("small")
     lim = env_limits(sc)
     assert lim.time_s == 81 * 30.0 and lim.rate_m2_s == pytest.approx(2500.0 * 240 / 3.6)
