@@ -110,6 +110,15 @@ def _wrote(paths, stage: Path | None = None, dest: Path | None = None) -> None:
         print(f"wrote {p}")
 
 
+def _add_projection(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--projection",
+        default="aeqd",
+        help="aeqd (azimuthal equidistant at the origin, the default) or utm",
+    )
+    p.add_argument("--utm-zone", type=int, default=None, help="UTM zone (default: the origin's)")
+
+
 def _add_scenario(p: argparse.ArgumentParser, default: str) -> None:
     p.add_argument("--scenario", default=default, help="built-in name or YAML path")
     p.add_argument("--map", dest="map_file", default=None, help="prior map (.npy or .csv)")
@@ -213,9 +222,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     from poc_env.config import load_scenario
     from poc_env.viz.rendering import render_episode
 
-    _check_int("seed", args.seed, 0)
-    _check_int("max_steps", args.max_steps, 1)
-    _check_int("every", args.every, 1)
+    _check_int("seed", args.seed, 0, limits.MAX_SEED)
+    _check_int("max_steps", args.max_steps, 1, limits.MAX_STEPS)
+    _check_int("every", args.every, 1, limits.MAX_STEPS)
     _check_out("out", args.out, "file")
     sc = load_scenario(args.scenario)
     path = render_episode(
@@ -246,9 +255,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    _check_int("seed", args.seed, 0)
-    _check_int("episodes", args.episodes, 1)
-    _check_int("workers", args.workers, 1)
+    _check_int("seed", args.seed, 0, limits.MAX_SEED)
+    _check_int("episodes", args.episodes, 1, limits.MAX_EPISODES)
+    _check_int("workers", args.workers, 1, limits.MAX_WORKERS)
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     if not names:
         from agents.policies.registry import registered
@@ -300,7 +309,7 @@ def _evaluate(
 def cmd_curve(args: argparse.Namespace) -> int:
     from agents.rl.curve import plot_training_curve
 
-    _check_int("until", args.until, 1)
+    _check_int("until", args.until, 1, 2**53)
     _check_out("out", args.out, "file")
     print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
     return 0
@@ -309,7 +318,7 @@ def cmd_curve(args: argparse.Namespace) -> int:
 def cmd_experiment(args: argparse.Namespace) -> int:
     from agents.experiments.paper import cmd
 
-    _check_int("workers", args.workers, 1)
+    _check_int("workers", args.workers, 1, limits.MAX_WORKERS)
     _check_out("out", args.out, "folder")
     return cmd(args)
 
@@ -343,8 +352,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _check_plan_args(args: argparse.Namespace) -> None:
-    _check_int("seed", args.seed, 0)
-    _check_int("uavs", args.uavs, 1)
+    _check_int("seed", args.seed, 0, limits.MAX_SEED)
+    _check_int("uavs", args.uavs, 1, 64)
     _check_int("popsize", args.popsize, 4, limits.POPSIZE_MAX)
     _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
     _check_out("out", args.out, "file")
@@ -378,6 +387,9 @@ def _plan(
         popsize=args.popsize,
         maxiter=args.maxiter,
         progress=not args.quiet,
+        origin_deg=args.origin,
+        projection=args.projection,
+        zone=args.utm_zone,
     )
     print(plan_table(plan))
     if plot is not None:
@@ -391,15 +403,26 @@ def _plan(
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    import functools
+
     from agents.planning.export import export_plan
 
+    export = functools.partial(
+        export_plan,
+        projection=args.projection,
+        zone=args.utm_zone,
+        altitude_m=args.altitude_m,
+        altitude_ref=args.altitude_ref,
+        field_elevation_m=args.field_elevation_m,
+        geofence=not args.no_geofence,
+    )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
-        _wrote(export_plan(args.plan, args.format, args.origin, args.out))
+        _wrote(export(args.plan, args.format, args.origin, args.out))
         return 0
     dest = Path(args.out) if args.out else Path(args.plan).parent
     _check_out("out", dest, "folder")
     with _output_folder("out", dest) as stage:
-        _wrote(export_plan(args.plan, args.format, args.origin, stage), stage, dest)
+        _wrote(export(args.plan, args.format, args.origin, stage), stage, dest)
     return 0
 
 
@@ -422,8 +445,8 @@ def _mkdir(path: Path) -> Path:
 
 def cmd_demo(args: argparse.Namespace) -> int:
     """The main job on the built-in scenarios: survey, plan, and policies flown and scored."""
-    _check_int("episodes", args.episodes, 1)
-    _check_int("workers", args.workers, 1)
+    _check_int("episodes", args.episodes, 1, limits.MAX_EPISODES)
+    _check_int("workers", args.workers, 1, limits.MAX_WORKERS)
     _check_out("out", args.out, "folder")
     out = Path(args.out)
     with _output_folder("out", out) as stage:
@@ -439,6 +462,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
             popsize=None,
             maxiter=None,
             quiet=True,
+            origin=None,
+            projection="aeqd",
+            utm_zone=None,
         )
         _plan(
             plan_args,
@@ -551,6 +577,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
+    p.add_argument(
+        "--origin",
+        default=None,
+        help="LAT,LON of the map's (0, 0): the plan records its crs, so export needs no origin",
+    )
+    _add_projection(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_plan)
 
@@ -558,9 +590,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("plan", help="plan.json (schema 1)")
     p.add_argument("--format", required=True, help="geojson, kml or qgc")
     p.add_argument(
-        "--origin", required=True, help="LAT,LON of the map's (0, 0), degrees (e.g. -45.5,126.6)"
+        "--origin",
+        default=None,
+        help="LAT,LON of the map's (0, 0), degrees (e.g. -45.5,126.6); needed unless the plan "
+        "records its crs (plan --origin)",
     )
     p.add_argument("--out", default=None, help="folder (default: beside the plan)")
+    _add_projection(p)
+    p.add_argument("--altitude-m", type=float, default=None, help="flight altitude (default: plan)")
+    p.add_argument(
+        "--altitude-ref",
+        default="home",
+        help="home (relative to the take-off field) or amsl (above mean sea level)",
+    )
+    p.add_argument(
+        "--field-elevation-m", type=float, default=0.0, help="airfield elevation above MSL"
+    )
+    p.add_argument(
+        "--no-geofence",
+        action="store_true",
+        help="QGC: leave the inclusion fence out (by default a mission leaving its own "
+        "operating area or crossing a no-fly zone is refused)",
+    )
     p.set_defaults(func=cmd_export)
 
     p = sub.add_parser("curve", help="plot a training run's POSC curve (TensorBoard logs) as PNG")

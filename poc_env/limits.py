@@ -49,6 +49,11 @@ MAX_WEIGHT = 1e9
 POPSIZE_MAX = 10_000
 MAXITER_MAX = 100_000
 N_ENVS_MAX = 1024
+#: Most episodes per policy in one ``evaluate`` (the paper's tables use 10 to 50), most worker
+#: processes, and the largest seed (numpy takes any; 2^63 keeps seeds printable and portable).
+MAX_EPISODES = 10_000
+MAX_WORKERS = 256
+MAX_SEED = 2**63 - 1
 
 # --------------------------------------------------------------------------- memory guard
 DEFAULT_MEMORY_GB = 4.0

@@ -37,6 +37,8 @@ LAYERS = (
     ("agents.benchmarks", 8),
     ("agents", 8),
     ("poc_env.cli", 9),
+    # the hostile-input campaign drives every input, the command line included: top layer
+    ("agents.benchmarks.campaign", 9),
 )
 NAMES = {0: "base", 1: "theory", 2: "sim", 3: "viz", 4: "envs", 5: "planning"}
 NAMES |= {6: "policies", 7: "rl", 8: "experiments", 9: "cli"}

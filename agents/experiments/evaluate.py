@@ -24,9 +24,10 @@ from typing import Any
 
 import numpy as np
 
+import poc_env.limits as limits
 from agents.experiments.pool import process_pool, run_jobs  # noqa: F401 (process_pool: API)
 from agents.policies.registry import make_policy
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, as_int
 
 
 def check_policies(policies: Sequence[str]) -> None:
@@ -281,10 +282,9 @@ def evaluate(
     """Run every policy on the same seeds; see the module docstring."""
     from poc_env.config import load_scenario
 
-    if episodes < 1:
-        raise ConfigError("episodes", episodes, "an integer >= 1")
-    if workers < 1:
-        raise ConfigError("workers", workers, "an integer >= 1")
+    episodes = as_int("episodes", episodes, 1, limits.MAX_EPISODES)
+    workers = as_int("workers", workers, 1, limits.MAX_WORKERS)
+    seed0 = as_int("seed", seed0, 0, limits.MAX_SEED)
     check_policies(policies)
     sc = load_scenario(scenario)
     if random_priors and map_file is not None:

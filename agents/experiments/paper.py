@@ -48,8 +48,9 @@ from typing import Any
 
 import numpy as np
 
+import poc_env.limits as limits
 from poc_env.config import Scenario, load_scenario
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, as_int
 from poc_env.io import atomic_dir, write_text_atomic
 
 #: Table 4 / 5 of the paper: (track km, POD, POC, POS) per UAV, and POS_C.
@@ -137,9 +138,7 @@ class Runner:
     """Runs independent jobs over ``workers`` processes (results in job order)."""
 
     def __init__(self, workers: int = 1, progress: bool = False) -> None:
-        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-            raise ConfigError("workers", workers, "an integer >= 1")
-        self.workers = workers
+        self.workers = as_int("workers", workers, 1, limits.MAX_WORKERS)
         self.progress = progress
         self._pool: ProcessPoolExecutor | None = None
 

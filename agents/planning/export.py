@@ -72,7 +72,7 @@ import numpy as np
 from pyproj import CRS, Transformer
 from pyproj.exceptions import CRSError, ProjError
 
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, as_number
 from poc_env.io import write_text_atomic
 
 SCHEMA = 1
@@ -386,13 +386,9 @@ _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 
 def _number(field: str, value: Any, lo: float, hi: float) -> float:
-    """``value`` as a float if it is a finite JSON number in [lo, hi], else ConfigError."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(field, value, f"a number in [{lo:g}, {hi:g}]")
-    x = float(value)
-    if not (math.isfinite(x) and lo <= x <= hi):
-        raise ConfigError(field, value, f"a finite number in [{lo:g}, {hi:g}]")
-    return x
+    """``value`` as a float if it is a finite JSON number in [lo, hi], else ConfigError (the
+    project's one coercion, :func:`poc_env.errors.as_number`)."""
+    return as_number(field, value, lo, hi)
 
 
 def _point(field: str, value: Any) -> None:

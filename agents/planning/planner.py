@@ -49,19 +49,20 @@ def make_plan(
     init: np.ndarray | None = None,
     origin_deg: tuple[float, float] | str | None = None,
     projection: str = "aeqd",
+    zone: int | None = None,
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-1 dict (see the module docstring).
 
     ``origin_deg``: (lat, lon) of the map's (0, 0); with it the plan records its ``crs``
-    (``projection`` ``aeqd`` or ``utm``, see :func:`agents.planning.export.make_crs`) and
-    exports need no ``--origin``.
+    (``projection`` ``aeqd`` or ``utm`` in UTM ``zone``, see
+    :func:`agents.planning.export.make_crs`) and exports need no ``--origin``.
 
     ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
     population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
     """
     sc = load_scenario(scenario)
     opt = get_optimizer(optimizer)
-    crs = None if origin_deg is None else make_crs(projection, origin_deg)
+    crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     if prior is None:
         prior = build_prior(sc.map)
     obj = PlanObjective(sc, prior, uavs=uavs)

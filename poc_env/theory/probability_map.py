@@ -209,12 +209,13 @@ def validate_map(values: np.ndarray, grid: Grid, source: str = "map") -> np.ndar
     map whose sum was off by more than 1e-6 is reported with a warning.
     """
     allowed = "real, finite probabilities >= 0 with a positive sum"
-    if np.iscomplexobj(values):
-        raise MapFileError(f"{source}: complex values; allowed: {allowed}")
     try:
-        arr = np.array(values, dtype=float)
+        complex_ = bool(np.iscomplexobj(values))
+        arr = None if complex_ else np.array(values, dtype=float)
     except (TypeError, ValueError, OverflowError):
         raise MapFileError(f"{source}: values that are not numbers; allowed: {allowed}") from None
+    if arr is None:
+        raise MapFileError(f"{source}: complex values; allowed: {allowed}")
     if arr.shape != grid.shape:
         raise _shape_error(source, arr.shape, grid)
     if not np.all(np.isfinite(arr)):

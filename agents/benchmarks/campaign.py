@@ -1,0 +1,623 @@
+"""The hostile-input campaign: property-based cases over every external input.
+
+    poc-env bench campaign [--cases 5000] [--seed 0] [--targets overrides,maps,...]
+
+Each *target* is an input a user or a file can hand poc-env -- scenario overrides, prior maps
+(arrays and files), region files, ``plan.json`` for export, command lines, and environment
+actions -- with a hypothesis strategy that draws plausible values, typos and hostile values
+alike (strings for numbers, bools, NaN, infinities, 1e308, 10**400, nulls, wrong shapes,
+random bytes). Every case is run and classified:
+
+* ``ok``: a valid result, checked for what would make it silently wrong (finite numbers,
+  probabilities in [0, 1], a map summing to 1, probability mass conserved by a step, mission
+  files that are strict JSON with coordinates on the globe, outputs only where asked);
+* ``error``: a project error (:class:`poc_env.errors.PocEnvError`, exit status 2 on the command
+  line) whose message names what is allowed;
+* ``unclear``: a project error without ``allowed:`` or a field;
+* ``traceback``: any other exception;
+* ``silent``: a result that fails its check -- a silent wrong answer.
+
+The last three must be 0. ``tests/test_campaign.py`` runs every target through hypothesis in
+the default suite (a few hundred cases); this command runs a large campaign and prints the
+counts, the figure quoted in issue 15's closing note. Needs ``hypothesis`` (the ``dev`` extra).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+import traceback
+import warnings
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from poc_env.errors import PocEnvError
+
+OUTCOMES = ("ok", "error", "unclear", "traceback", "silent")
+
+
+class SilentWrong(AssertionError):
+    """A result that passed without an error but is wrong (a check failed)."""
+
+
+def check(cond: bool, what: str) -> None:
+    if not cond:
+        raise SilentWrong(what)
+
+
+def classify(fn: Callable[[Any], None], case: Any) -> tuple[str, str]:
+    """Run ``fn(case)`` and return (outcome, detail)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fn(case)
+    except SilentWrong as err:
+        return "silent", str(err)
+    except PocEnvError as err:
+        text = str(err)
+        return ("error" if "allowed" in text else "unclear"), text
+    except Exception:
+        return "traceback", traceback.format_exc(limit=-3)
+    return "ok", ""
+
+
+# --------------------------------------------------------------------------- hostile values
+
+
+def hostile_scalars():
+    """Values that break naive parsers: every JSON/YAML scalar type and the float extremes."""
+    from hypothesis import strategies as st
+
+    return st.one_of(
+        st.sampled_from(
+            [
+                None,
+                True,
+                False,
+                "",
+                "5",
+                "1e3",
+                "nan",
+                "no",
+                "abc",
+                [],
+                {},
+                [1, 2],
+                float("nan"),
+                float("inf"),
+                -float("inf"),
+                1e308,
+                -1e308,
+                5e-324,
+                0,
+                0.0,
+                -1,
+                2**63,
+                10**400,
+                -(10**30),
+                3.0,
+                2.5,
+            ]
+        ),
+        st.integers(min_value=-(10**6), max_value=10**6),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.text(max_size=8),
+    )
+
+
+def _near(default: Any):
+    """Values around a field's default (mostly valid) or hostile ones."""
+    from hypothesis import strategies as st
+
+    if isinstance(default, bool):
+        return st.one_of(st.booleans(), hostile_scalars())
+    if isinstance(default, int):
+        return st.one_of(st.integers(max(0, default - 3), default + 3), hostile_scalars())
+    if isinstance(default, float):
+        lo, hi = (0.2 * default, 3 * default) if default > 0 else (0.0, 1.0)
+        return st.one_of(st.floats(lo, hi), hostile_scalars())
+    return hostile_scalars()
+
+
+# --------------------------------------------------------------------------- target: overrides
+
+
+def scenario_leaves() -> dict[str, Any]:
+    """Dotted YAML keys of ``small``'s scalar fields with their values (the override space)."""
+    from poc_env.config import load_scenario
+
+    out: dict[str, Any] = {}
+
+    def walk(d: Any, prefix: str) -> None:
+        for k, v in d.items():
+            key = f"{prefix}{k}"
+            if isinstance(v, dict):
+                walk(v, key + ".")
+            elif not isinstance(v, list):
+                out[key] = v
+
+    walk(load_scenario("small").to_dict(), "")
+    out.pop("name", None)
+    return out
+
+
+def overrides_strategy():
+    from hypothesis import strategies as st
+
+    leaves = scenario_leaves()
+    pairs = st.sampled_from(sorted(leaves)).flatmap(
+        lambda k: st.tuples(st.just(k), _near(leaves[k]))
+    )
+    listy = st.sampled_from(
+        [
+            ("fleet", [{"takeoff": "A", "count": 2.0}]),
+            ("fleet", [{"takeoff": "nowhere"}]),
+            ("fleet", [{"takeoff": "A", "count": 65}]),
+            ("airfields", [{"name": "A", "position_km": [float("nan"), 0]}]),
+            ("airfields", [{"name": "A", "position_km": [1e308, 0]}]),
+            ("map.prior.components", [{"mean_km": [10, 10], "sigma_km": [5, 5], "weight": 1e308}]),
+            ("map.prior.components", [{"mean_km": [10, 10], "sigma_km": [0, 5]}]),
+            ("map.prior.components", [{"mean_km": "here", "sigma_km": [5, 5]}]),
+            ("map.no_fly_zones_km", [[[0, 0], [10, 10], [10, 0], [0, 10]]]),
+            ("map.no_fly_zones_km", [[[0, 0], [1, 1]]]),
+            ("map.threat_peaks", [{"center_km": [5, 5], "lambda_per_km2": -1}]),
+            ("map.prior", None),
+            ("uav", "fast"),
+        ]
+    )
+    return st.lists(st.one_of(pairs, listy), min_size=1, max_size=4).map(dict)
+
+
+def run_overrides(overrides: dict[str, Any]) -> None:
+    """A scenario from hostile overrides; if it loads, three steps of the env must be sane."""
+    import poc_env
+    from poc_env.config import load_scenario
+
+    sc = load_scenario("small", {**overrides, "episode.horizon_steps": 3})
+    env = poc_env.parallel_env(sc, obs_type="flat")
+    obs, _ = env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        if not env.agents:
+            break
+        actions = {a: rng.uniform(-1, 1, 3).astype(np.float32) for a in env.agents}
+        obs, rew, *_ = env.step(actions)
+        check(all(np.all(np.isfinite(o)) for o in obs.values()), "observation not finite")
+        check(all(math.isfinite(r) for r in rew.values()), "reward not finite")
+        st = env.sim_state
+        check(bool(0.0 <= st.posc[0] <= 1.0 + 1e-9), f"POSC {st.posc[0]} outside [0, 1]")
+        mass = float(st.posc[0] + st.belief[0].sum())
+        check(abs(mass - float(st.initial_mass[0])) < 1e-9, f"mass not conserved: {mass!r}")
+
+
+# --------------------------------------------------------------------------- target: maps
+
+
+def maps_strategy():
+    from hypothesis import strategies as st
+    from hypothesis.extra import numpy as hnp
+
+    shapes = st.sampled_from([(8, 8), (8, 8), (8, 8), (8, 7), (7, 8), (64,), (0, 8), (8, 8, 1)])
+    elems = st.one_of(
+        st.floats(0, 1),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.sampled_from([0.0, 1e308, 5e-324, -0.0, -1e-12, 1e-300]),
+    )
+    arrays = shapes.flatmap(lambda s: hnp.arrays(np.float64, s, elements=elems))
+    complex_ = st.just(np.ones((8, 8), complex))
+    objects = st.sampled_from([[["a"] * 8] * 8, None, "map", [[1, 2], [3]]])
+    files = st.tuples(
+        st.sampled_from([".npy", ".csv", ".txt", ""]),
+        st.one_of(st.binary(max_size=200), st.sampled_from([b"\x93NUMPY", b"0,1\n1,0\n"])),
+    )
+    return st.one_of(arrays, arrays, complex_, objects, files)
+
+
+def run_maps(case: Any) -> None:
+    """A prior from an array or a file's bytes; if accepted it is a finite map summing to 1."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import Grid, load_map, validate_map
+
+    grid = Grid.from_config(load_scenario("small").map)
+    if isinstance(case, tuple):
+        suffix, data = case
+        with tempfile.TemporaryDirectory() as d:
+            path = Path(d) / f"map{suffix}"
+            path.write_bytes(data)
+            m = load_map(path, grid)
+    else:
+        m = validate_map(case, grid)
+    check(m.shape == grid.shape, f"shape {m.shape}")
+    check(bool(np.all(np.isfinite(m)) and np.all(m >= 0)), "map values not finite >= 0")
+    check(abs(float(m.sum()) - 1.0) < 1e-9, f"map sums to {m.sum()!r}")
+
+
+# --------------------------------------------------------------------------- target: regions
+
+_REGION = {
+    "id": 1,
+    "kind": "polygon",
+    "airfield": "A",
+    "spacing_km": 12,
+    "direction_deg": 30,
+    "vertices_km": [[0, 0], [100, 0], [100, 80], [0, 80]],
+}
+_CIRCLE = {
+    "id": 2,
+    "kind": "circle",
+    "airfield": "B",
+    "pattern": "expanding_square",
+    "spacing_km": 8,
+    "center_km": [200, 150],
+    "radius_km": 40,
+    "second_search": False,
+}
+
+
+def regions_strategy():
+    from hypothesis import strategies as st
+
+    keys = sorted(set(_REGION) | set(_CIRCLE) | {"holes_km", "landing"})
+    values = st.one_of(
+        hostile_scalars(),
+        st.sampled_from(
+            [
+                [[0, 0], [100, 100], [100, 0], [0, 100]],
+                [[[10, 10], [20, 10]]],
+                [[[10, 10], [20, 10], [20, 20]]],
+                [[0, 0], [1, 1], [2, 2]],
+                "sector",
+                "spiral",
+                "parallel",
+                "circle",
+                "polygon",
+                "A",
+                "Z",
+            ]
+        ),
+    )
+    change = st.dictionaries(st.sampled_from(keys), values, max_size=3)
+    return st.tuples(st.sampled_from([_REGION, _CIRCLE]), change)
+
+
+def run_regions(case: tuple[dict, dict]) -> None:
+    """A region file with hostile fields; if it loads, its survey must be finite."""
+    import yaml
+
+    from agents.planning.survey import load_regions, run_survey
+
+    base, change = case
+    region = {**base, **change}
+    doc = {"name": "fuzz", "scenario": "paper_6_1", "regions": [region]}
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "regions.yaml"
+        path.write_text(yaml.safe_dump(doc))
+        plan = load_regions(path)
+        res = run_survey("paper_6_1", plan)
+    for r in res.rows:
+        nums = (r.track_length_km, r.pod, r.poc, r.pos, r.flight_time_h)
+        check(all(math.isfinite(v) for v in nums), f"survey row not finite: {r}")
+        check(0 <= r.pod <= 1 and 0 <= r.pos <= 1 + 1e-9, f"probabilities out of range: {r}")
+    for t in res.tracks:
+        check(bool(np.all(np.isfinite(t))), "track not finite")
+
+
+# --------------------------------------------------------------------------- target: plan.json
+
+
+def sample_plan() -> dict[str, Any]:
+    """A valid schema-1 plan of two UAVs."""
+    uavs = []
+    for k in range(2):
+        uavs.append(
+            {
+                "id": k + 1,
+                "rectangle": {
+                    "center_m": [50e3, 60e3], "length_m": 40e3, "width_m": 20e3,
+                    "theta_deg": 30.0,
+                },
+                "spacing_m": 5e3, "takeoff_m": [20e3, -60e3], "landing_m": [20e3, -60e3],
+                "waypoints_m": [[10e3, 10e3], [60e3, 10e3], [60e3, 20e3]],
+                "track_length_m": 300e3, "flight_time_s": 9000.0, "pod": 0.79, "poc": 0.2,
+                "pos": 0.158, "feasible": True,
+            }
+        )  # fmt: skip
+    return {
+        "schema": 1, "scenario": "paper_6_2", "seed": 1, "map_source": "builtin",
+        "optimizer": {"name": "adaptive_de", "settings": {}}, "runtime_s": 0.4,
+        "posc": 0.3, "upper_bound": 0.5, "uavs": uavs,
+    }  # fmt: skip
+
+
+_PLAN_PATHS = [
+    ("schema",), ("posc",), ("upper_bound",), ("seed",), ("uavs",), ("optimizer",),
+    ("uavs", 0, "id"), ("uavs", 0, "waypoints_m"), ("uavs", 0, "waypoints_m", 0),
+    ("uavs", 0, "waypoints_m", 0, 0), ("uavs", 0, "takeoff_m"), ("uavs", 0, "landing_m", 1),
+    ("uavs", 0, "rectangle"), ("uavs", 0, "rectangle", "theta_deg"),
+    ("uavs", 0, "rectangle", "center_m"), ("uavs", 1, "pos"), ("uavs", 1, "flight_time_s"),
+    ("uavs", 1, "spacing_m"), ("uavs", 1, "feasible"), ("uavs", 1, "id"),
+]  # fmt: skip
+
+
+def plans_strategy():
+    from hypothesis import strategies as st
+
+    values = st.one_of(
+        hostile_scalars(),
+        st.sampled_from(
+            ["../../escaped", "a/b", "UAV 1", "x" * 65, [1e300, 1e300], [float("nan"), 0], [1],
+             [[0, 0]], {"center_m": None}]
+        ),
+    )  # fmt: skip
+    edits = st.lists(st.tuples(st.sampled_from(_PLAN_PATHS), values), max_size=3)
+    fmt = st.sampled_from(["geojson", "kml", "qgc"])
+    origin = st.one_of(
+        st.sampled_from(["45.5,126.6", "-45,7", "91,0", "nan,0", "0,181", "x", "89.95,0"]),
+        st.tuples(st.floats(-89, 89), st.floats(-180, 180)).map(lambda t: f"{t[0]},{t[1]}"),
+    )
+    return st.tuples(edits, fmt, origin, st.booleans())
+
+
+def _set_path(doc: Any, path: tuple, value: Any) -> None:
+    node = doc
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = value
+
+
+def run_plans(case: tuple[list, str, str, bool]) -> None:
+    """Export a mutated plan.json; if it exports, the files must be safe to fly."""
+    from agents.planning.export import export_plan
+
+    edits, fmt, origin, raw_nan = case
+    plan = sample_plan()
+    for path, value in edits:
+        with contextlib.suppress(LookupError, TypeError):
+            _set_path(plan, path, value)
+    with tempfile.TemporaryDirectory() as d:
+        root = Path(d)
+        out = root / "out"
+        src = root / "plan.json"
+        try:
+            text = json.dumps(plan, allow_nan=raw_nan)
+        except ValueError:
+            text = json.dumps(plan, allow_nan=True)
+        src.write_text(text)
+        files = export_plan(src, fmt, origin, out)
+        written = {p for p in root.rglob("*") if p.is_file()} - {src}
+        check(all(out in p.parents for p in written), f"file outside --out: {written}")
+        for f in files:
+            body = f.read_text()
+            if fmt in ("geojson", "qgc"):
+                data = json.loads(body, parse_constant=_refuse_constant)
+                _check_coordinates(data, fmt)
+            else:
+                low = body.lower()
+                check("nan" not in low and "inf" not in low, "KML with nan/inf")
+
+
+def _refuse_constant(name: str) -> float:
+    raise SilentWrong(f"not strict JSON: {name}")
+
+
+def _check_coordinates(data: Any, fmt: str) -> None:
+    pairs: list[tuple[float, float]] = []
+    if fmt == "geojson":
+        for feat in data["features"]:
+            coords = np.asarray(feat["geometry"]["coordinates"], dtype=float)
+            pairs += [(lat, lon) for lon, lat in coords.reshape(-1, coords.shape[-1])[:, :2]]
+    else:
+        for item in data["mission"]["items"]:
+            if item.get("params") and item["params"][4] is not None:
+                pairs.append((item["params"][4], item["params"][5]))
+    for lat, lon in pairs:
+        check(math.isfinite(lat) and math.isfinite(lon), "coordinate not finite")
+        check(-90 <= lat <= 90 and -180 <= lon <= 180, f"coordinate off the globe: {lat}, {lon}")
+
+
+# --------------------------------------------------------------------------- target: cli
+
+
+def cli_strategy():
+    from hypothesis import strategies as st
+
+    values = st.one_of(
+        st.sampled_from(["-1", "0", "1", "1.5", "inf", "nan", "", "abc", "10**400", "1e308",
+                         "999999999999999999999", "/dev/null", ".", "-45,7", "x/../../y"]),
+        st.integers(-5, 10**6).map(str),
+    )  # fmt: skip
+    commands = st.sampled_from(
+        [
+            ["plan", "--scenario", "small", "--maxiter", "1", "--popsize", "4", "--quiet"],
+            ["evaluate", "--scenario", "small", "--episodes", "1", "--policies", "lawnmower",
+             "--quiet"],
+            ["survey", "--scenario", "paper_6_1", "--regions", "paper_6_1_polygons"],
+            ["render", "--scenario", "small", "--max-steps", "2"],
+            ["export", "PLAN", "--format", "geojson", "--origin", "45,126"],
+            ["scenarios"],
+        ]
+    )  # fmt: skip
+    options = st.sampled_from(
+        ["--seed", "--uavs", "--popsize", "--maxiter", "--episodes", "--workers", "--out",
+         "--plot", "--origin", "--format", "--map", "--scenario", "--policies", "--every",
+         "--max-memory-gb", "--regions", "--max-steps"]
+    )  # fmt: skip
+    return st.tuples(commands, st.lists(st.tuples(options, values), max_size=2))
+
+
+def run_cli(case: tuple[list[str], list[tuple[str, str]]]) -> None:
+    """A command line with hostile option values: exit 0, or 2 with ``error: ...``; every file
+    written inside the working folder."""
+    from poc_env.cli import main
+
+    base, opts = case
+    with tempfile.TemporaryDirectory() as d:
+        root = Path(d)
+        plan = root / "plan.json"
+        plan.write_text(json.dumps(sample_plan()))
+        argv = [str(plan) if b == "PLAN" else b for b in base]
+        for opt, val in opts:
+            val = val.replace("x/../../y", str(root / "x" / ".." / "y"))
+            argv += [opt, val]
+        if "--out" not in argv and base[0] in ("plan", "render", "survey", "evaluate"):
+            argv += ["--out", str(root / ("o.json" if base[0] == "plan" else "o.gif"
+                                          if base[0] == "render" else "o"))]  # fmt: skip
+        out, err = io.StringIO(), io.StringIO()
+        cwd = os.getcwd()
+        os.chdir(root)
+        try:
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                try:
+                    code = main(argv)
+                except SystemExit as exc:  # argparse: usage errors exit 2
+                    code = int(exc.code or 0)
+        finally:
+            os.chdir(cwd)
+        if code not in (0, 2):
+            raise SilentWrong(f"exit status {code} for {argv}")
+        if code == 2:
+            msg = err.getvalue()
+            if "Traceback" in msg:
+                raise RuntimeError(msg)
+            if not msg.strip():
+                raise SilentWrong(f"exit 2 without a message for {argv}")
+            if msg.startswith("error:") and "allowed" not in msg and "usage:" not in msg:
+                raise PocEnvError(msg)  # counted as unclear
+            raise _CliError(msg)
+
+
+class _CliError(PocEnvError):
+    """A clean exit 2 (counted as a clear error)."""
+
+    def __str__(self) -> str:
+        return "allowed: " + super().__str__()
+
+
+# --------------------------------------------------------------------------- target: actions
+
+
+def actions_strategy():
+    from hypothesis import strategies as st
+    from hypothesis.extra import numpy as hnp
+
+    good = hnp.arrays(np.float32, 3, elements=st.floats(-1, 1, width=32))
+    bad = st.one_of(
+        hnp.arrays(np.float64, st.sampled_from([(3,), (2,), (4,), (3, 1)]),
+                   elements=st.floats(allow_nan=True, allow_infinity=True)),
+        st.sampled_from([None, "up", [1, 2, 3], ["1", "2", "3"], [1, [2], 3], 1.0, True,
+                         np.array([1 + 1j, 0, 0]), {"x": 1}]),
+    )  # fmt: skip
+    per_agent = st.one_of(good, good, bad)
+    return st.tuples(
+        st.lists(per_agent, min_size=3, max_size=3),
+        st.sampled_from(["all", "missing", "extra", "list", "none"]),
+    )
+
+
+def run_actions(case: tuple[list, str]) -> None:
+    """``step()`` with hostile actions: a ConfigError or a sane step."""
+    import poc_env
+
+    acts, shape = case
+    env = poc_env.parallel_env("small", obs_type="flat", episode__horizon_steps=5)
+    env.reset(seed=1)
+    actions: Any = dict(zip(env.agents, acts))
+    if shape == "missing":
+        actions.pop(env.agents[0])
+    elif shape == "extra":
+        actions["uav_99"] = acts[0]
+    elif shape == "list":
+        actions = list(acts)
+    elif shape == "none":
+        actions = None
+    obs, rew, *_ = env.step(actions)
+    check(all(np.all(np.isfinite(o)) for o in obs.values()), "observation not finite")
+    check(all(math.isfinite(r) for r in rew.values()), "reward not finite")
+    st = env.sim_state
+    check(bool(np.all(np.isfinite(st.pos))), "position not finite")
+
+
+# --------------------------------------------------------------------------- the campaign
+
+TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
+    "overrides": (overrides_strategy, run_overrides),
+    "maps": (maps_strategy, run_maps),
+    "regions": (regions_strategy, run_regions),
+    "plans": (plans_strategy, run_plans),
+    "cli": (cli_strategy, run_cli),
+    "actions": (actions_strategy, run_actions),
+}
+#: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
+WEIGHTS = {"overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3}
+
+
+def run_target(name: str, cases: int, seed: int = 0) -> tuple[Counter, list[tuple[str, Any]]]:
+    """Run ``cases`` hypothesis cases of target ``name``; (outcome counts, failing cases)."""
+    from hypothesis import HealthCheck, Phase, given, settings
+    from hypothesis import seed as hypothesis_seed
+
+    strategy, fn = TARGETS[name]
+    counts: Counter = Counter()
+    bad: list[tuple[str, Any]] = []
+
+    @hypothesis_seed(seed)
+    @settings(
+        max_examples=cases,
+        database=None,
+        deadline=None,
+        suppress_health_check=list(HealthCheck),
+        phases=[Phase.generate],
+    )
+    @given(strategy())
+    def one(case: Any) -> None:
+        outcome, detail = classify(fn, case)
+        counts[outcome] += 1
+        if outcome in ("traceback", "silent", "unclear"):
+            bad.append((detail, case))
+
+    one()
+    return counts, bad
+
+
+def main(argv: list[str] | None = None) -> dict[str, Counter]:
+    p = argparse.ArgumentParser(prog="poc-env bench campaign", description=__doc__.split("\n")[0])
+    p.add_argument("--cases", type=int, default=5000, help="total cases over all targets")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--targets", default=",".join(TARGETS))
+    p.add_argument("--show", type=int, default=3, help="failing cases to print per target")
+    args = p.parse_args(argv)
+    names = [t for t in args.targets.split(",") if t]
+    for t in names:
+        if t not in TARGETS:
+            p.error(f"--targets: got {t!r}; allowed: {', '.join(TARGETS)}")
+    total_w = sum(WEIGHTS[t] for t in names)
+    results: dict[str, Counter] = {}
+    print(f"{'target':<10} " + " ".join(f"{o:>9}" for o in ("tried", *OUTCOMES)))
+    grand: Counter = Counter()
+    for t in names:
+        n = max(1, round(args.cases * WEIGHTS[t] / total_w))
+        counts, bad = run_target(t, n, args.seed)
+        results[t] = counts
+        grand.update(counts)
+        tried = sum(counts.values())
+        print(f"{t:<10} {tried:>9} " + " ".join(f"{counts[o]:>9}" for o in OUTCOMES), flush=True)
+        for detail, case in bad[: args.show]:
+            print(f"    {detail.strip().splitlines()[-1][:200]}\n      case: {case!r:.300}")
+    tried = sum(grand.values())
+    print(f"{'all':<10} {tried:>9} " + " ".join(f"{grand[o]:>9}" for o in OUTCOMES))
+    return results
+
+
+if __name__ == "__main__":  # pragma: no cover
+    res = main()
+    sys.exit(1 if any(c["traceback"] or c["silent"] for c in res.values()) else 0)
