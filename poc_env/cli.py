@@ -248,6 +248,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         "env": "agents.benchmarks.env",
         "plan": "agents.benchmarks.plan",
         "train": "agents.benchmarks.train",
+        "campaign": "agents.benchmarks.campaign",
     }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
@@ -629,8 +630,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument(
         "what",
-        choices=["env", "plan", "train"],
-        help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s",
+        choices=["env", "plan", "train", "campaign"],
+        help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s; campaign: "
+        "hostile-input cases and their outcomes (needs hypothesis, the dev extra)",
     )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)
