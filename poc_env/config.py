@@ -236,7 +236,7 @@ class MapConfig:
                     name, size / KM, f"a whole multiple of cell_km = {self.cell_m / KM:g}"
                 )
         limits.check_memory(
-            "map.cell_km",
+            "cell_km",
             self.cell_m / KM,
             limits.map_bytes(self.nx * self.ny),
             f"{self.nx} x {self.ny} cell map",

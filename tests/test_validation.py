@@ -139,7 +139,8 @@ def test_memory_guard_refuses_a_huge_map_and_a_flag_raises_the_limit(monkeypatch
     big = {"map.width_km": 2000, "map.height_km": 2000, "map.cell_km": 1}  # 4 million cells
     with pytest.raises(ConfigError, match=r"map\.cell_km.*GiB.*--max-memory-gb") as err:
         load_scenario("small", big)
-    assert err.value.value == 1
+    assert err.value.field == "map.cell_km" and err.value.value == 1
+    assert str(err.value).startswith("map.cell_km: got 1;")
     limits.set_memory_limit_gb(64)
     try:
         assert load_scenario("small", big).map.nx == 2000  # only the check: nothing allocated
