@@ -84,3 +84,19 @@ def test_origin_may_start_with_a_minus(tmp_path, capsys):
         main(["export", str(plan), "--format", "kml", "--origin=-45.5,-7", "--out", str(out)]) == 0
     )
     assert "error" not in capsys.readouterr().err
+
+
+def test_readme_rl_evaluation_finishes_without_omp_settings(tmp_path):
+    """Issue 15 item 14: the README's RL evaluation on two workers, in the environment a new
+    user has (no OMP_NUM_THREADS): torch's thread pool is running in the parent, and the
+    workers must still finish (they are started by a fork server, and every wait times out)."""
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    cmd = [sys.executable, "-m", "poc_env.cli", "evaluate", "--workers", "2", "--episodes", "2",
+           "--policies", "ppo:ppo_pilot_paper_6_2,lawnmower", "--quiet"]  # fmt: skip
+    done = subprocess.run(
+        cmd, env=env, cwd=tmp_path, capture_output=True, text=True, timeout=600, check=False
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "ppo:ppo_pilot_paper_6_2" in done.stdout and "lawnmower" in done.stdout
