@@ -48,14 +48,19 @@ def test_atomic_dir_existing_folder_keeps_other_files(tmp_path):
     assert not _leftovers(tmp_path)
 
 
-def test_staging_of_a_killed_run_is_removed(tmp_path):
+def _dead_pid() -> int:
+    """The PID of a process that has exited (a killed writer's, as far as files can tell)."""
     proc = subprocess.run(
         [sys.executable, "-c", "import os; print(os.getpid())"],
         capture_output=True,
         text=True,
         check=True,
     )
-    dead = int(proc.stdout)
+    return int(proc.stdout)
+
+
+def test_staging_of_a_killed_run_is_removed(tmp_path):
+    dead = _dead_pid()
     stale = tmp_path / f".out.partial-{dead}-abc"
     stale.mkdir()
     (stale / "half.csv").write_text("x")
@@ -152,18 +157,10 @@ def test_kill_during_writing_leaves_old_or_new_output(tmp_path):
 
 def test_temp_files_of_killed_writers_are_cleaned(tmp_path):
     import os
-    import subprocess
-    import sys
 
     from poc_env.io import write_text_atomic
 
-    dead = subprocess.run(
-        [sys.executable, "-c", "import os; print(os.getpid())"],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    dead_pid = int(dead.stdout)
+    dead_pid = _dead_pid()
     stale = tmp_path / f".step_8.zip.tmp-{dead_pid}-abcd1234.zip"
     live = tmp_path / f".other.json.tmp-{os.getpid()}-abcd1234"
     stale.write_bytes(b"half a model")
