@@ -300,6 +300,7 @@ def _evaluate(
     if stage is not None:
         files = (
             write_text_atomic(stage / "evaluate.csv", ev.to_csv()),
+            write_text_atomic(stage / "episodes.csv", ev.episodes_csv()),
             write_text_atomic(stage / "evaluate.txt", ev.table() + "\n"),
             plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s),
         )

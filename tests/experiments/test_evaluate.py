@@ -51,6 +51,8 @@ def test_cli_evaluate(tmp_path, capsys):
     assert "lawnmower" in out and "physical optimum" in out
     rows = list(csv.DictReader((tmp_path / "evaluate.csv").open()))
     assert [r["policy"] for r in rows] == ["lawnmower", "random"]
+    eps = list(csv.DictReader((tmp_path / "episodes.csv").open()))
+    assert len(eps) == 4 and {"normalised", "bound_reach"} <= set(eps[0])
     assert (tmp_path / "posc_over_time.png").read_bytes()[:4] == b"\x89PNG"
     assert main(["evaluate", "--scenario", "small", "--policies", "nope", "--quiet"]) == 2
 
