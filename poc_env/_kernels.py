@@ -182,7 +182,10 @@ def _dr_pod(px, py, ax, ay, ux, uy, length, w):
 
 @_jit
 def _clip_len(ax, ay, bx, by, lox, loy, hix, hiy):
-    """Length of segment a -> b inside the box [lo, hi] (Liang-Barsky)."""
+    """Length of segment a -> b inside the half-open box [lo, hi) (Liang-Barsky).
+
+    Half-open: a segment running exactly along an edge belongs to one cell (the one above or to
+    the right), so effort along a shared edge is counted once, not in both cells."""
     t0 = 0.0
     t1 = 1.0
     for k in range(2):
@@ -191,7 +194,7 @@ def _clip_len(ax, ay, bx, by, lox, loy, hix, hiy):
         else:
             p, d, lo, hi = ay, by - ay, loy, hiy
         if d == 0.0:
-            if not (lo <= p <= hi):
+            if not (lo <= p < hi):
                 return 0.0
         else:
             ta = (lo - p) / d

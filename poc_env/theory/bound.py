@@ -31,11 +31,8 @@ Why a flown episode stays below it, per law:
 - ``exponential``: a step detects a sample point only through the length of the step inside the
   point's own cell (``p = 1 - exp(-W L_j / a_j)``, the same for every sample point of cell j),
   and exponents of successive steps add; so cell j's POD is exactly ``1 - exp(-C_j)`` with
-  ``C_j = W x (track length in j) / a_j`` and ``sum a_j C_j <= Z``: the bound is rigorous --
-  except for a track exactly along a cell edge, which the kernel (``_kernels._clip_len``,
-  closed cell boxes) counts in both cells, doubling its effort: a known kernel bug (an xfail
-  test in ``tests/theory/test_bound_lattice.py``) that a policy can hit (a UAV heading due north
-  from an airfield on a cell edge stays on it to the last bit).
+  ``C_j = W x (track length in j) / a_j`` and ``sum a_j C_j <= Z``: the bound is rigorous
+  (cells are half-open in the kernel, so a track exactly along a cell edge counts once).
 - ``definite_range``: a step detects the points within W/2 of it (foot on the step), a set of
   area ``W L``; the detected area of the whole flight is at most ``W x track length = Z``. With
   ``c_j`` the detected share of cell j (at most 1), POS = ``sum m_j c_j`` with

@@ -66,12 +66,6 @@ def test_definite_range_lattice_envelope():
     assert _parallel_tracks_pod("definite_range", 0.5, 0.5) == pytest.approx(0.75)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known: _kernels._clip_len clips to the closed cell box, so a track exactly on a "
-    "cell edge is effort in both cells (the exponential law then detects twice what the bound "
-    "allows for it); half-open cells would fix it",
-)
 def test_exponential_track_on_a_cell_edge_is_effort_in_one_cell():
     grid = Grid(2, 2, CELL)
     belief = np.ones((1, 2 * S_PER_CELL, 2 * S_PER_CELL))
