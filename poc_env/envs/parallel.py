@@ -10,17 +10,28 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from poc_env import limits
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, PocEnvError
+from poc_env.sim import comms as comms_mod
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
 from poc_env.sim.rewards import reward_terms, total_reward
-from poc_env.theory.probability_map import Grid, load_map, validate_map
+from poc_env.theory.probability_map import (
+    Grid,
+    load_map,
+    random_gaussian_mixture,
+    validate_map,
+)
 
 OBS_TYPES = ("dict", "flat")
 #: Array kinds an action may have: bool, signed and unsigned integer, real float.
 _NUMERIC_KINDS = "biuf"
 _ACTION_ALLOWED = "3 finite real numbers in [-1, 1] (a list or array, not strings or complex)"
+#: The reward terms of :func:`poc_env.sim.rewards.reward_terms`, as info keys ``reward_<term>``.
+REWARD_TERMS = ("pos", "time", "violation", "overtime", "crash")
+#: The constraint flags, as info keys ``violation_<flag>``.
+VIOLATION_FLAGS = ("out_of_bounds", "no_fly", "collision", "threat", "comms", "overtime")
 
 
 def check_seed(seed: Any, field: str = "seed") -> Any:
@@ -106,7 +117,7 @@ class UAVSearchParallelEnv(ParallelEnv):
     ``alpha * POS`` of the step (team-shared by default, ``reward.credit: individual`` for
     own credit) ``- beta *`` the eq. 25 time term ``-`` penalties for constraint violations,
     overtime beyond 0.85 T and crashes (:mod:`poc_env.sim.rewards`). Every term is in
-    ``infos[agent]["reward_terms"]``. With team credit and ``beta = 0`` and no penalties, an
+    ``infos[agent]["reward_<term>"]``. With team credit and ``beta = 0`` and no penalties, an
     episode's return is its POSC (eq. 13).
 
     ## Starting State
@@ -114,6 +125,41 @@ class UAVSearchParallelEnv(ParallelEnv):
     UAVs start over their take-off fields at cruise altitude and cruise speed, level, heading
     for the centre of the grid; the belief is the prior (the scenario's, a ``--map`` file, or
     ``options={"prior": array}``); the hidden target is drawn from it by the env's generator.
+
+    With ``random_prior=True`` every reset without an ``options["prior"]`` draws a fresh prior,
+    a Gaussian mixture of 1-6 components of random position, spread, orientation and weight over
+    a small uniform background (:func:`~poc_env.theory.probability_map.random_gaussian_mixture`,
+    the same family as the RL training's), from the env's generator, which ``reset(seed=s)``
+    reseeds: the seed changes the episode (prior and target), the same seed and actions give a
+    bit-identical episode. Without it only the hidden target depends on the seed.
+
+    ## Infos
+
+    ``infos[agent]`` has the same keys at ``reset`` and at every ``step``, each a Python number
+    or a fixed-shape numpy array (for TorchRL-style specs; at reset nothing has happened yet:
+    step quantities are 0/False):
+
+    ===========================  ======  ==================================================
+    key                          type    meaning
+    ===========================  ======  ==================================================
+    pos, pos_team                float   POS found this step by the UAV / by the swarm (eq. 12)
+    posc                         float   POSC so far (eq. 13)
+    reward_<term>                float   each reward term: pos, time, violation, overtime, crash
+    violation_<flag>             bool    out_of_bounds, no_fly, collision, threat, comms,
+                                         overtime (eq. 18, 20-24) in this step
+    shielded                     bool    the safety shield changed this UAV's action
+    landed, crashed              bool    the UAV's state
+    flight_time_s                float   the UAV's flight time
+    target_detected              bool    the hidden target was detected
+    time_to_detection_s          float   time of that detection, -1.0 before it (not NaN:
+                                         checkers compare infos with ==)
+    topology                     int     active Table 2 topology code, -1 for the auto rule
+    links                        bool    (N,) this UAV's row of the active adjacency
+    connected                    bool    the flying UAVs are connected through relays
+    ===========================  ======  ==================================================
+
+    The topology's name and the link list are attributes: ``env.unwrapped.topology``
+    (``"auto"`` or a Table 2 letter) and ``env.unwrapped.links`` (pairs ``(i, j)``, ``i < j``).
 
     ## Episode End
 
@@ -131,12 +177,19 @@ class UAVSearchParallelEnv(ParallelEnv):
     ``render_mode`` (``None``, ``"rgb_array"``, ``"human"``), ``obs_type`` (``"dict"`` or
     ``"flat"``), ``map_file`` (a prior ``.npy``/``.csv``), ``overrides`` (dotted YAML keys,
     e.g. ``{"sensor.sweep_width_km": 4}``) and keyword overrides with ``__`` for the dot
-    (``uav__endurance_h=2``). The default time step is 60 s: at 180 km/h a UAV flies 3 km,
-    below the 5 km cell and the 5 km sweep width, and an episode of T = 3 h is 180 steps.
+    (``uav__endurance_h=2``), ``random_prior`` (bool, default False: a random prior at every
+    reset, see Starting State; not with ``map_file``) and ``max_cycles`` (PettingZoo's
+    convention: every agent still flying is truncated after that many steps; it sets
+    ``episode.horizon_steps``, so both given must agree). The default time step is 60 s: at
+    180 km/h a UAV flies 3 km, below the 5 km cell and the 5 km sweep width, and an episode of
+    T = 3 h is 180 steps.
 
     ## Version History
 
-    * v0: first release.
+    * v0: first release. Infos became flat and numeric (``reward_terms`` and ``violations``
+      dicts became ``reward_<term>`` and ``violation_<flag>`` keys; ``topology`` an int code,
+      ``links`` an adjacency row; names and pairs moved to attributes); ``random_prior`` and
+      ``max_cycles`` added (defaults keep the first release's episodes).
     """
 
     metadata = {
@@ -153,6 +206,8 @@ class UAVSearchParallelEnv(ParallelEnv):
         obs_type: str = "dict",
         map_file: str | None = None,
         overrides: Mapping[str, Any] | None = None,
+        random_prior: bool = False,
+        max_cycles: int | None = None,
         **kwargs: Any,
     ) -> None:
         if render_mode not in (None, "rgb_array", "human"):
@@ -161,7 +216,30 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise ConfigError("obs_type", obs_type, "'dict' or 'flat'")
         if map_file is not None and not isinstance(map_file, str | os.PathLike):
             raise ConfigError("map_file", map_file, "None or a path to a .npy or .csv prior map")
-        self.scenario = load_scenario(scenario, resolve_overrides(overrides, kwargs))
+        if not isinstance(random_prior, bool | np.bool_):
+            raise ConfigError("random_prior", random_prior, "True or False")
+        if random_prior and map_file is not None:
+            raise ConfigError(
+                "random_prior", random_prior, "False when a map_file prior is given (one prior)"
+            )
+        merged = resolve_overrides(overrides, kwargs)
+        if max_cycles is not None:
+            allowed = f"None or an integer in [1, {limits.MAX_STEPS}] (the episode's steps)"
+            if (
+                isinstance(max_cycles, bool)
+                or not isinstance(max_cycles, int | np.integer)
+                or not 1 <= max_cycles <= limits.MAX_STEPS
+            ):
+                raise ConfigError("max_cycles", max_cycles, allowed)
+            given = merged.get("episode.horizon_steps")
+            if given is not None and given != max_cycles:
+                raise ConfigError(
+                    "max_cycles", max_cycles, f"None or equal to episode.horizon_steps ({given})"
+                )
+            merged["episode.horizon_steps"] = int(max_cycles)
+        self.scenario = load_scenario(scenario, merged)
+        self.random_prior = bool(random_prior)
+        self.max_cycles = self.scenario.horizon_steps
         grid = Grid.from_config(self.scenario.map)
         prior = load_map(map_file, grid) if map_file is not None else None
         self.params = sim.make_params(self.scenario, prior)
@@ -225,6 +303,8 @@ class UAVSearchParallelEnv(ParallelEnv):
         prior = None
         if options and "prior" in options:
             prior = validate_map(options["prior"], self.params.grid, "options['prior']")[None]
+        elif self.random_prior:
+            prior = random_gaussian_mixture(self.params.grid, self._rng)[None]
         self._state = sim.initial(self.params, [self._rng], prior)
         p0 = self.params.prior if prior is None else prior[0]
         self._poc_scale = np.array([float(p0.max())])
@@ -234,8 +314,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             self._renderer.reset_history()
             self._renderer.record(self._state)
         observations = self._observations()
-        infos = {a: {"posc": 0.0} for a in self.agents}
-        return observations, infos
+        return observations, self._infos(self.agents)
 
     def _observations(self) -> dict[str, Any]:
         st = self.sim_state
@@ -310,54 +389,15 @@ class UAVSearchParallelEnv(ParallelEnv):
         terms = reward_terms(self.scenario.reward, ev)
         reward = np.asarray(total_reward(terms)[0], dtype=float).tolist()
         live = list(self.agents)
-        detected = bool(st.detected[0])
-        rewards, terminations, truncations, infos = {}, {}, {}, {}
-        topo = self._topology_info(bool(ev.connected[0]))
-        # per-agent values as Python lists, converted once per step
-        term_names = list(terms)
-        term_rows = list(zip(*(np.asarray(v[0], dtype=float).tolist() for v in terms.values())))
-        pos = ev.pos_agent[0].tolist()
-        oob = ev.out_of_bounds[0].tolist()
-        no_fly = ev.no_fly[0].tolist()
-        collision = ev.collision[0].tolist()
-        threat = ev.threat[0].tolist()
-        comms = (~ev.comms_ok[0]).tolist()
-        overtime = ev.overtime[0].tolist()
-        shielded = ev.shielded[0].tolist()
-        landed = st.landed[0].tolist()
-        crashed = st.crashed[0].tolist()
-        elapsed = st.elapsed[0].tolist()
+        rewards, terminations, truncations = {}, {}, {}
         terminal = sim.terminal(self.params, st)[0].tolist()
         truncated = sim.truncated(self.params, st)[0].tolist()
-        pos_team = float(ev.pos_team[0])
-        posc = float(st.posc[0])
-        detect_time = float(st.detect_step[0] * self.params.dt) if detected else None
         for a in live:
             i = self._index[a]
             rewards[a] = reward[i]
             terminations[a] = terminal[i]
             truncations[a] = truncated[i]
-            infos[a] = {
-                "pos": float(pos[i]),
-                "pos_team": pos_team,
-                "posc": posc,
-                "reward_terms": dict(zip(term_names, term_rows[i])),
-                "violations": {
-                    "out_of_bounds": oob[i],
-                    "no_fly": no_fly[i],
-                    "collision": collision[i],
-                    "threat": threat[i],
-                    "comms": comms[i],
-                    "overtime": overtime[i],
-                },
-                "shielded": shielded[i],
-                "landed": landed[i],
-                "crashed": crashed[i],
-                "flight_time_s": float(elapsed[i]),
-                "target_detected": detected,
-                "time_to_detection_s": detect_time,
-                **topo,
-            }
+        infos = self._infos(live, ev, terms)
         observations = self._observations_for(live)  # agents finishing now get a last obs
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self._renderer is not None:
@@ -374,17 +414,86 @@ class UAVSearchParallelEnv(ParallelEnv):
         finally:
             self.agents = keep
 
-    def _topology_info(self, connected: bool) -> dict[str, Any]:
+    def _infos(
+        self,
+        agents: list[str],
+        ev: sim.Events | None = None,
+        terms: Mapping[str, np.ndarray] | None = None,
+    ) -> dict[str, dict[str, Any]]:
+        """Per-agent infos: the same keys at reset (``ev`` None: nothing happened yet) and at
+        every step, every value a Python float/int/bool or a fixed-shape numpy array."""
         st = self.sim_state
-        rows, cols = np.nonzero(st.links[0] & self._upper)
+        n = self.params.n_agents
+        zeros, no = [0.0] * n, [False] * n
+        if ev is None:
+            pos, pos_team, shielded = zeros, 0.0, no
+            flags = {f: no for f in VIOLATION_FLAGS}
+            flying = st.flying[0]
+            reach = comms_mod.reachable(st.links)[0]
+            connected = bool(reach[np.ix_(flying, flying)].all())
+        else:
+            pos, pos_team = ev.pos_agent[0].tolist(), float(ev.pos_team[0])
+            shielded = ev.shielded[0].tolist()
+            flags = {
+                "out_of_bounds": ev.out_of_bounds[0].tolist(),
+                "no_fly": ev.no_fly[0].tolist(),
+                "collision": ev.collision[0].tolist(),
+                "threat": ev.threat[0].tolist(),
+                "comms": (~ev.comms_ok[0]).tolist(),
+                "overtime": ev.overtime[0].tolist(),
+            }
+            connected = bool(ev.connected[0])
+        term_cols = {
+            t: (np.asarray(terms[t][0], dtype=float).tolist() if terms is not None else zeros)
+            for t in REWARD_TERMS
+        }
+        landed = st.landed[0].tolist()
+        crashed = st.crashed[0].tolist()
+        elapsed = st.elapsed[0].tolist()
+        detected = bool(st.detected[0])
+        detect_time = float(st.detect_step[0] * self.params.dt) if detected else -1.0
+        posc = float(st.posc[0])
+        topology = int(st.topology[0])
+        links = st.links[0]
+        out = {}
+        for a in agents:
+            i = self._index[a]
+            info: dict[str, Any] = {
+                "pos": float(pos[i]),
+                "pos_team": pos_team,
+                "posc": posc,
+            }
+            for t in REWARD_TERMS:
+                info[f"reward_{t}"] = float(term_cols[t][i])
+            for f in VIOLATION_FLAGS:
+                info[f"violation_{f}"] = bool(flags[f][i])
+            info.update(
+                shielded=bool(shielded[i]),
+                landed=bool(landed[i]),
+                crashed=bool(crashed[i]),
+                flight_time_s=float(elapsed[i]),
+                target_detected=detected,
+                time_to_detection_s=detect_time,
+                topology=topology,
+                links=links[i].copy(),
+                connected=connected,
+            )
+            out[a] = info
+        return out
+
+    @property
+    def topology(self) -> str:
+        """Name of the active §3.2.5 topology (Table 2 letter), or ``"auto"``."""
         name = None
         if self.params.switcher is not None:
-            name = self.params.switcher.name(int(st.topology[0]))
-        return {
-            "topology": name or "auto",
-            "links": list(zip(rows.tolist(), cols.tolist())),
-            "connected": connected,
-        }
+            name = self.params.switcher.name(int(self.sim_state.topology[0]))
+        return name or "auto"
+
+    @property
+    def links(self) -> list[tuple[int, int]]:
+        """Active communication links as agent-index pairs ``(i, j)``, ``i < j``."""
+        rows, cols = np.nonzero(self.sim_state.links[0] & self._upper)
+        return list(zip(rows.tolist(), cols.tolist()))
 
     def state(self) -> np.ndarray:
         st = self.sim_state

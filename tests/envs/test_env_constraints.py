@@ -28,9 +28,9 @@ def test_collision_is_flagged_and_penalised():
     env.reset(seed=0)
     _place(env, [(20, 20), (20.3, 20), (5, 35)], [0, 0, 0])  # 0 and 1 fly in formation
     _, _, _, _, infos = _step(env)
-    flags = [infos[a]["violations"]["collision"] for a in env.possible_agents]
+    flags = [infos[a]["violation_collision"] for a in env.possible_agents]
     assert flags == [True, True, False]
-    assert infos["uav_0"]["reward_terms"]["violation"] < 0
+    assert infos["uav_0"]["reward_violation"] < 0
 
 
 def test_collision_terminates_in_terminate_mode():
@@ -55,8 +55,8 @@ def test_no_fly_entry_is_flagged():
     env.reset(seed=0)
     _place(env, [(23, 20), (5, 5), (5, 35)], [0, 90, 90])  # uav_0 heads east into the zone
     _, _, _, _, infos = _step(env)
-    assert infos["uav_0"]["violations"]["no_fly"]
-    assert not infos["uav_1"]["violations"]["no_fly"]
+    assert infos["uav_0"]["violation_no_fly"]
+    assert not infos["uav_1"]["violation_no_fly"]
 
 
 def test_no_fly_entry_is_shielded():
@@ -64,7 +64,7 @@ def test_no_fly_entry_is_shielded():
     env.reset(seed=0)
     _place(env, [(23, 20), (5, 5), (5, 35)], [0, 90, 90])
     _, _, _, _, infos = _step(env)
-    assert not infos["uav_0"]["violations"]["no_fly"]
+    assert not infos["uav_0"]["violation_no_fly"]
     assert infos["uav_0"]["shielded"] and not infos["uav_1"]["shielded"]
     x, y = env.sim_state.pos[0, 0, :2] / 1e3
     assert not (24 <= x <= 30 and 15 <= y <= 25)
@@ -76,12 +76,12 @@ def test_two_neighbour_rule():
     # a line spaced 8 km: the ends have one neighbour in range, the middle two
     _place(env, [(10, 20), (18, 20), (26, 20)], [90, 90, 90])
     _, _, _, _, infos = _step(env)
-    assert [infos[a]["violations"]["comms"] for a in env.possible_agents] == [True, False, True]
+    assert [infos[a]["violation_comms"] for a in env.possible_agents] == [True, False, True]
     env2 = poc_env.parallel_env("small", overrides={"comms.range_km": 20})
     env2.reset(seed=0)
     _place(env2, [(10, 20), (18, 20), (26, 20)], [90, 90, 90])
     _, _, _, _, infos2 = _step(env2)
-    assert not any(infos2[a]["violations"]["comms"] for a in env2.possible_agents)
+    assert not any(infos2[a]["violation_comms"] for a in env2.possible_agents)
 
 
 FIVE = {
@@ -109,8 +109,10 @@ def test_table2_switch_inside_an_episode(far_pair, expected):
         pts[k] = (20.0, 16.0 + 3 * n)
     _place(env, [pts[k] for k in range(1, 6)], [90] * 5)
     _, _, _, _, infos = _step(env)
-    assert infos["uav_0"]["topology"] == expected
-    assert (i - 1, j - 1) not in infos["uav_0"]["links"]
+    assert env.topology == expected
+    assert infos["uav_0"]["topology"] == env.params.switcher.code(expected)
+    assert (i - 1, j - 1) not in env.links
+    assert not infos[f"uav_{i - 1}"]["links"][j - 1] and not infos[f"uav_{j - 1}"]["links"][i - 1]
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
