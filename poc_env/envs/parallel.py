@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Mapping
 from typing import Any
@@ -132,6 +133,10 @@ class UAVSearchParallelEnv(ParallelEnv):
     the same family as the RL training's), from the env's generator, which ``reset(seed=s)``
     reseeds: the seed changes the episode (prior and target), the same seed and actions give a
     bit-identical episode. Without it only the hidden target depends on the seed.
+    ``random_airfields=True`` moves every scenario airfield at each reset (after the prior, from
+    the same generator) to a uniform point of the search grid at least ``landing_radius_km``
+    outside the no-fly zones; UAVs keep their fleet's take-off and landing fields, the operating
+    area (eq. 20) stays the scenario's. ``env.params.takeoff``/``landing`` are the current ones.
 
     ## Infos
 
@@ -178,7 +183,8 @@ class UAVSearchParallelEnv(ParallelEnv):
     ``"flat"``), ``map_file`` (a prior ``.npy``/``.csv``), ``overrides`` (dotted YAML keys,
     e.g. ``{"sensor.sweep_width_km": 4}``) and keyword overrides with ``__`` for the dot
     (``uav__endurance_h=2``), ``random_prior`` (bool, default False: a random prior at every
-    reset, see Starting State; not with ``map_file``) and ``max_cycles`` (PettingZoo's
+    reset, see Starting State; not with ``map_file``), ``random_airfields`` (bool, default
+    False) and ``max_cycles`` (PettingZoo's
     convention: every agent still flying is truncated after that many steps; it sets
     ``episode.horizon_steps``, so both given must agree). The default time step is 60 s: at
     180 km/h a UAV flies 3 km, below the 5 km cell and the 5 km sweep width, and an episode of
@@ -188,8 +194,8 @@ class UAVSearchParallelEnv(ParallelEnv):
 
     * v0: first release. Infos became flat and numeric (``reward_terms`` and ``violations``
       dicts became ``reward_<term>`` and ``violation_<flag>`` keys; ``topology`` an int code,
-      ``links`` an adjacency row; names and pairs moved to attributes); ``random_prior`` and
-      ``max_cycles`` added (defaults keep the first release's episodes).
+      ``links`` an adjacency row; names and pairs moved to attributes); ``random_prior``,
+      ``random_airfields`` and ``max_cycles`` added (defaults keep the first release's episodes).
     """
 
     metadata = {
@@ -208,6 +214,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         overrides: Mapping[str, Any] | None = None,
         random_prior: bool = False,
         max_cycles: int | None = None,
+        random_airfields: bool = False,
         **kwargs: Any,
     ) -> None:
         if render_mode not in (None, "rgb_array", "human"):
@@ -216,8 +223,9 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise ConfigError("obs_type", obs_type, "'dict' or 'flat'")
         if map_file is not None and not isinstance(map_file, str | os.PathLike):
             raise ConfigError("map_file", map_file, "None or a path to a .npy or .csv prior map")
-        if not isinstance(random_prior, bool | np.bool_):
-            raise ConfigError("random_prior", random_prior, "True or False")
+        for name, flag in (("random_prior", random_prior), ("random_airfields", random_airfields)):
+            if not isinstance(flag, bool | np.bool_):
+                raise ConfigError(name, flag, "True or False")
         if random_prior and map_file is not None:
             raise ConfigError(
                 "random_prior", random_prior, "False when a map_file prior is given (one prior)"
@@ -243,6 +251,13 @@ class UAVSearchParallelEnv(ParallelEnv):
         grid = Grid.from_config(self.scenario.map)
         prior = load_map(map_file, grid) if map_file is not None else None
         self.params = sim.make_params(self.scenario, prior)
+        self._base_params = self.params
+        self.random_airfields = bool(random_airfields)
+        names = [a.name for a in self.scenario.airfields]
+        fleet = [g for g in self.scenario.fleet for _ in range(g.count)]
+        self._takeoff_field = np.array([names.index(g.takeoff) for g in fleet], dtype=np.intp)
+        landing = [g.landing or g.takeoff for g in fleet]  # None only before __post_init__
+        self._landing_field = np.array([names.index(a) for a in landing], dtype=np.intp)
         self.render_mode = render_mode
         self.obs_type = obs_type
         n = self.params.n_agents
@@ -305,6 +320,16 @@ class UAVSearchParallelEnv(ParallelEnv):
             prior = validate_map(options["prior"], self.params.grid, "options['prior']")[None]
         elif self.random_prior:
             prior = random_gaussian_mixture(self.params.grid, self._rng)[None]
+        if self.random_airfields:
+            fields = self._draw_airfields()
+            self.params = dataclasses.replace(
+                self._base_params,
+                takeoff=fields[self._takeoff_field],
+                landing=fields[self._landing_field],
+            )
+            if self._renderer is not None:  # its background shows the airfields: draw afresh
+                self._renderer.close()
+                self._renderer = None
         self._state = sim.initial(self.params, [self._rng], prior)
         p0 = self.params.prior if prior is None else prior[0]
         self._poc_scale = np.array([float(p0.max())])
@@ -315,6 +340,27 @@ class UAVSearchParallelEnv(ParallelEnv):
             self._renderer.record(self._state)
         observations = self._observations()
         return observations, self._infos(self.agents)
+
+    def _draw_airfields(self) -> np.ndarray:
+        """One position ``(n_airfields, 2)`` per scenario airfield, uniform over the search grid,
+        outside the no-fly zones by at least the landing radius, from the env's generator."""
+        x0, y0, x1, y1 = self.params.grid.bounds
+        zones = self.params.zones
+        clearance = self.scenario.episode.landing_radius_m
+        out = np.empty((len(self.scenario.airfields), 2))
+        for k in range(len(out)):
+            for _ in range(1000):
+                xy = np.array([self._rng.uniform(x0, x1), self._rng.uniform(y0, y1)])
+                if zones.n_zones == 0 or float(zones.distance(xy)) >= clearance:
+                    break
+            else:
+                raise ConfigError(
+                    "random_airfields",
+                    True,
+                    "a search grid with room for an airfield outside the no-fly zones",
+                )
+            out[k] = xy
+        return out
 
     def _observations(self) -> dict[str, Any]:
         st = self.sim_state

@@ -304,3 +304,62 @@ def test_checkers_with_random_prior():
     max_cycles_test(_module(random_prior=True))
     for obs_type in ("flat", "dict"):
         check_env(gymnasium.make(poc_env.ENV_ID, obs_type=obs_type, **kw).unwrapped)
+
+
+# -- random airfields --------------------------------------------------------------------------
+ZONE = {"map.no_fly_zones_km": [[[0, 0], [30, 0], [30, 30], [0, 30]]]}  # most of small's grid
+
+
+def test_random_airfields_follow_the_seed_and_the_fleet():
+    env = poc_env.parallel_env("paper_6_2", random_airfields=True, random_prior=True)
+    base = np.asarray(env.scenario.takeoff_m)
+    fields = {}
+    for seed in (0, 1, 0):
+        env.reset(seed=seed)
+        p = env.params
+        # UAVs of a fleet group share their field; the two groups' fields differ
+        assert (p.takeoff[:3] == p.takeoff[0]).all() and (p.takeoff[3:] == p.takeoff[3]).all()
+        assert not np.array_equal(p.takeoff[0], p.takeoff[3])
+        np.testing.assert_array_equal(p.landing, p.takeoff)  # each group lands where it left
+        np.testing.assert_array_equal(env.sim_state.pos[0, :, :2], p.takeoff)  # start there
+        x0, y0, x1, y1 = p.grid.bounds
+        assert ((p.takeoff >= [x0, y0]) & (p.takeoff <= [x1, y1])).all()
+        assert not np.allclose(p.takeoff, base)
+        fields.setdefault(seed, []).append(p.takeoff.copy())
+    np.testing.assert_array_equal(fields[0][0], fields[0][1])
+    assert not np.allclose(fields[0][0], fields[1][0])
+    assert env.params.prior is env._base_params.prior  # only the airfields move
+
+
+def test_random_airfields_keep_out_of_no_fly_zones():
+    env = poc_env.parallel_env("small", random_airfields=True, overrides=ZONE)
+    clearance = env.scenario.episode.landing_radius_m
+    for seed in range(20):
+        env.reset(seed=seed)
+        assert float(env.params.zones.distance(env.params.takeoff[0])) >= clearance
+
+
+def test_random_airfields_same_seed_identical_episode_and_checkers():
+    kw = {"scenario": "small", "random_airfields": True}
+    t1 = _trace(poc_env.parallel_env(**kw), 5)
+    t2 = _trace(poc_env.parallel_env(**kw), 5)
+    assert _identical(t1, t2)
+    assert not _identical(t1, _trace(poc_env.parallel_env(**kw), 6))
+    parallel_api_test(uav_search_v0.parallel_env(**kw), num_cycles=40)
+    parallel_seed_test(lambda: uav_search_v0.parallel_env(**kw), num_cycles=30)
+    check_env(gymnasium.make(poc_env.ENV_ID, **kw).unwrapped)
+
+
+def test_without_random_airfields_the_fields_are_the_scenarios():
+    env = poc_env.parallel_env("paper_6_2", random_prior=True)
+    env.reset(seed=3)
+    np.testing.assert_array_equal(env.params.takeoff, np.asarray(env.scenario.takeoff_m))
+
+
+def test_bad_random_airfields():
+    with pytest.raises(ConfigError, match="random_airfields"):
+        poc_env.parallel_env("small", random_airfields="yes")
+    full = {"map.no_fly_zones_km": [[[-1, -1], [41, -1], [41, 41], [-1, 41]]]}  # whole grid
+    env = poc_env.parallel_env("small", random_airfields=True, overrides=full)
+    with pytest.raises(ConfigError, match="random_airfields"):
+        env.reset(seed=0)
