@@ -363,3 +363,20 @@ def test_bad_random_airfields():
     env = poc_env.parallel_env("small", random_airfields=True, overrides=full)
     with pytest.raises(ConfigError, match="random_airfields"):
         env.reset(seed=0)
+
+
+def test_infos_stack_into_tensors_over_an_episode():
+    """What a TorchRL-style wrapper does with infos: one tensor per key, stacked over the steps
+    (reset included) and agents; this needs every value numeric with one shape and dtype."""
+    torch = pytest.importorskip("torch")
+    env = poc_env.parallel_env("small", random_prior=True, max_cycles=15)
+    _, infos = env.reset(seed=0)
+    rows = [infos["uav_2"]]
+    rng = np.random.default_rng(2)
+    while "uav_2" in env.agents:
+        *_, infos = env.step(_actions(rng, env.agents))
+        rows.append(infos["uav_2"])
+    for key in rows[0]:
+        stacked = torch.stack([torch.as_tensor(r[key]) for r in rows])
+        assert stacked.shape[0] == len(rows) > 2
+        assert stacked.dtype in (torch.float32, torch.float64, torch.int64, torch.bool)
