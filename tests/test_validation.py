@@ -306,3 +306,25 @@ def test_second_search_false_halves_the_expanding_square(tmp_path):
     one = _regions(tmp_path, **circle, second_search=False).regions[0].track()
     two = _regions(tmp_path, **circle, second_search=True).regions[0].track()
     assert two.length_m > 1.8 * one.length_m
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("learning_rate", float("inf")),
+        ("learning_rate", 1e300),
+        ("learning_rate", 0.0),
+        ("gamma", float("nan")),
+        ("ent_coef", "0.1"),
+        ("n_envs", 10**9),
+        ("n_steps", 2.5),
+        ("seed", -1),
+        ("total_timesteps", True),
+    ],
+)
+def test_training_options_are_checked_before_training(field, value):
+    from agents.rl.args import TrainArgs
+
+    with pytest.raises(ConfigError) as err:
+        TrainArgs(**{field: value})
+    assert err.value.field == field

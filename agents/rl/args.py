@@ -24,7 +24,8 @@ from typing import Annotated, Any
 
 from tyro.conf import arg as _arg
 
-from poc_env.errors import ConfigError
+import poc_env.limits as limits
+from poc_env.errors import ConfigError, as_int, as_number
 
 ALGOS = ("ppo",)
 RECIPES = ("shared", "central", "pilot")
@@ -86,31 +87,23 @@ class TrainArgs:
             raise ConfigError("algo", self.algo, "one of " + ", ".join(ALGOS))
         if self.recipe not in RECIPES:
             raise ConfigError("recipe", self.recipe, "one of " + ", ".join(RECIPES))
-        for name, lo in (
-            ("total_timesteps", 1),
-            ("seed", 0),
-            ("n_envs", 1),
-            ("checkpoint_every", 1),
-            ("keep_checkpoints", 0),
-            ("n_steps", 1),
-            ("batch_size", 2),
-            ("n_epochs", 1),
-            ("torch_threads", 1),
+        for name, lo, hi in (
+            ("total_timesteps", 1, 10**12),
+            ("seed", 0, limits.MAX_SEED),
+            ("n_envs", 1, limits.N_ENVS_MAX),
+            ("checkpoint_every", 1, 10**12),
+            ("keep_checkpoints", 0, 10**6),
+            ("n_steps", 1, 10**6),
+            ("batch_size", 2, 10**7),
+            ("n_epochs", 1, 1000),
+            ("torch_threads", 1, 256),
         ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-                raise ConfigError(name, v, f"an integer >= {lo}")
-        for name, low, high in (
-            ("learning_rate", 0.0, math.inf),
-            ("gamma", 0.0, 1.0),
-            ("gae_lambda", 0.0, 1.0),
-            ("ent_coef", 0.0, math.inf),
-        ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int | float) or not low <= v <= high:
-                raise ConfigError(name, v, f"a number in [{low}, {high}]")
-        if self.learning_rate == 0:
-            raise ConfigError("learning_rate", self.learning_rate, "a number > 0")
+            as_int(name, getattr(self, name), lo, hi)
+        # learning rate in (0, 10]: inf or 1e300 turn the weights to NaN in the first update
+        as_number("learning_rate", self.learning_rate, 0.0, 10.0, lo_open=True)
+        as_number("gamma", self.gamma, 0.0, 1.0)
+        as_number("gae_lambda", self.gae_lambda, 0.0, 1.0)
+        as_number("ent_coef", self.ent_coef, 0.0, 100.0)
         shaping = self.approach_shaping
         if isinstance(shaping, bool) or not isinstance(shaping, int | float):
             raise ConfigError("approach_shaping", shaping, "a finite number")
