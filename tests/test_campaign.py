@@ -13,7 +13,14 @@ import pytest
 from agents.benchmarks.campaign import TARGETS, SilentWrong, classify, run_target
 
 #: Cases per target in the default suite (the CLI and region cases cost most).
-DEFAULT_CASES = {"overrides": 40, "maps": 60, "regions": 15, "plans": 60, "cli": 12, "actions": 40}
+DEFAULT_CASES = {
+    "overrides": 150,
+    "maps": 200,
+    "regions": 40,
+    "plans": 200,
+    "cli": 40,
+    "actions": 150,
+}
 
 
 def _assert_clean(name: str, cases: int, seed: int) -> None:
