@@ -1,0 +1,343 @@
+"""Geographic scenarios in (issue 14): GeoJSON/KML/GeoTIFF/CSV -> scenario YAML + .npy + CRS.
+
+Every fixture is generated here (tmp_path): a search area around 45.7 N 126.6 E, a GeoTIFF
+with a Gaussian blob written by rasterio, airfields and no-fly zones.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pyproj import Transformer
+
+from agents.planning import geoimport
+from agents.planning.geoimport import (
+    add_scenario_import_arguments,
+    cmd_scenario_import,
+    import_scenario,
+    write_imported,
+)
+from poc_env.config import load_scenario
+from poc_env.errors import ConfigError, GeometryError
+from poc_env.theory.probability_map import build_prior
+
+# a 1.2 deg x 0.8 deg area (about 94 km x 89 km) around 45.7 N 126.6 E
+AREA = [[126.0, 45.3], [127.2, 45.3], [127.2, 46.1], [126.0, 46.1], [126.0, 45.3]]
+BLOB = (45.75, 126.7)  # lat, lon of the blob's centre
+FIELDS = [("Harbin", 126.25, 45.62), ("Acheng", 126.95, 45.25)]
+ZONE = [[126.4, 45.9], [126.4, 46.0], [126.6, 46.0], [126.6, 45.9], [126.4, 45.9]]
+
+
+def _fc(features: list) -> dict:
+    return {"type": "FeatureCollection", "features": features}
+
+
+def _poly(rings: list, **props) -> dict:
+    return {
+        "type": "Feature",
+        "properties": props,
+        "geometry": {"type": "Polygon", "coordinates": rings},
+    }
+
+
+def _pt(lon: float, lat: float, **props) -> dict:
+    geom = {"type": "Point", "coordinates": [lon, lat]}
+    return {"type": "Feature", "properties": props, "geometry": geom}
+
+
+def _write(path: Path, doc: dict) -> Path:
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def _tif(path: Path, *, crs: str | None = "EPSG:4326", lon0=125.8, lat1=46.3, w=170, h=120):
+    rasterio = pytest.importorskip("rasterio")
+    from affine import Affine
+
+    res = 0.01
+    lons = lon0 + (np.arange(w) + 0.5) * res
+    lats = lat1 - (np.arange(h) + 0.5) * res
+    lon, lat = np.meshgrid(lons, lats)
+    z = np.exp(-(((lon - BLOB[1]) / 0.12) ** 2 + ((lat - BLOB[0]) / 0.08) ** 2) / 2)
+    z /= z.sum()
+    kw = {"crs": crs} if crs else {}
+    with rasterio.open(
+        path,
+        "w",
+        driver="GTiff",
+        width=w,
+        height=h,
+        count=1,
+        dtype="float64",
+        transform=Affine(res, 0.0, lon0, 0.0, -res, lat1),
+        **kw,
+    ) as dst:
+        dst.write(z, 1)
+    return path, float(z.sum())
+
+
+@pytest.fixture
+def layers(tmp_path: Path) -> dict[str, Path]:
+    return {
+        "area": _write(tmp_path / "area.geojson", _fc([_poly([AREA], name="search")])),
+        "fields": _write(
+            tmp_path / "fields.geojson", _fc([_pt(lon, lat, name=n) for n, lon, lat in FIELDS])
+        ),
+        "zones": _write(tmp_path / "zones.geojson", _fc([_poly([ZONE])])),
+    }
+
+
+def _centre_of_mass(m: np.ndarray, sc) -> tuple[float, float]:
+    c = sc.map.cell_m
+    x0, y0 = sc.map.origin_m
+    ys, xs = np.mgrid[0 : m.shape[0], 0 : m.shape[1]]
+    return (
+        float((m * (x0 + (xs + 0.5) * c)).sum()),
+        float((m * (y0 + (ys + 0.5) * c)).sum()),
+    )
+
+
+def test_geotiff_round_trip(tmp_path, layers, monkeypatch):
+    tif, raster_total = _tif(tmp_path / "prior.tif")
+    res = import_scenario(
+        layers["area"], prior=tif, airfields=layers["fields"], no_fly=layers["zones"], name="my"
+    )
+    files = write_imported(res, tmp_path / "my.yaml")
+    assert [f.name for f in files] == ["my.yaml", "my.npy", "my.crs.json"]
+    monkeypatch.chdir(tmp_path)  # prior.file is read relative to the current folder
+    sc = load_scenario(str(tmp_path / "my.yaml"))
+    prior = build_prior(sc.map)
+    assert prior.shape == (sc.map.ny, sc.map.nx)
+    assert abs(prior.sum() - 1.0) < 1e-9
+    # mass conserved: kept + outside = the raster's total, to 1e-9
+    rep = res["report"]["prior"]
+    assert abs(rep["inside"] + rep["outside"] - raster_total) < 1e-9
+    assert rep["outside_share"] < 0.01
+    # the default origin is the area's south-west corner; the CRS is recorded
+    crs = json.loads((tmp_path / "my.crs.json").read_text())
+    assert crs["kind"] == "aeqd" and crs["origin_deg"] == [45.3, 126.0]
+    assert "lat 45.3, lon 126.0" in (tmp_path / "my.yaml").read_text()
+    fwd = Transformer.from_crs("EPSG:4326", crs["proj"], always_xy=True)
+    # the centre of mass lands within one cell of the blob's projected centre
+    bx, by = fwd.transform(BLOB[1], BLOB[0])
+    cx, cy = _centre_of_mass(prior, sc)
+    assert np.hypot(cx - bx, cy - by) < sc.map.cell_m
+    # airfields: local km match pyproj to < 1 m
+    for (name, lon, lat), af in zip(FIELDS, sc.airfields):
+        ex, ey = fwd.transform(lon, lat)
+        assert af.name == name
+        assert np.hypot(af.position_m[0] - ex, af.position_m[1] - ey) < 1.0
+    # the grid covers the area; the no-fly zone is in the scenario
+    zx, zy = fwd.transform([p[0] for p in AREA], [p[1] for p in AREA])
+    x0, y0 = sc.map.origin_m
+    assert x0 <= min(zx) and y0 <= min(zy)
+    assert x0 + sc.map.width_m >= max(zx) and y0 + sc.map.height_m >= max(zy)
+    assert len(sc.map.no_fly_zones_m) == 1
+    assert sc.n_uavs == 6 and {g.takeoff for g in sc.fleet} == {"Harbin", "Acheng"}
+
+
+def test_csv_prior_and_origin(tmp_path, layers):
+    rng = np.random.default_rng(3)
+    lat = BLOB[0] + 0.05 * rng.standard_normal(400)
+    lon = BLOB[1] + 0.05 * rng.standard_normal(400)
+    p = rng.uniform(0.5, 1.5, 400)
+    lines = ["lat,lon,probability"] + [f"{a},{b},{c}" for a, b, c in zip(lat, lon, p)]
+    lines.append("47.5,126.5,50")  # outside the area: dropped and reported
+    csv_path = tmp_path / "prior.csv"
+    csv_path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match="outside the search area"):
+        res = import_scenario(
+            layers["area"], prior=csv_path, airfields=layers["fields"], origin="45.7,126.6"
+        )
+    rep = res["report"]["prior"]
+    assert abs(rep["outside"] - 50) < 1e-9 and abs(rep["inside"] - p.sum()) < 1e-9
+    assert abs(res["prior"].sum() - 1.0) < 1e-12
+    assert res["crs"]["origin_deg"] == [45.7, 126.6]
+    origin_km = res["scenario"]["map"]["origin_km"]
+    assert origin_km[0] < 0 and origin_km[1] < 0 and origin_km[0] % 5 == 0
+    # every point binned into the cell that contains it
+    fwd = Transformer.from_crs("EPSG:4326", res["crs"]["proj"], always_xy=True)
+    x, y = fwd.transform(lon, lat)
+    ix = np.floor((np.asarray(x) / 1000 - origin_km[0]) / 5).astype(int)
+    iy = np.floor((np.asarray(y) / 1000 - origin_km[1]) / 5).astype(int)
+    expect = np.zeros_like(res["prior"])
+    np.add.at(expect, (iy, ix), p)
+    np.testing.assert_allclose(res["prior"], expect / p.sum(), atol=1e-12)
+
+
+def test_kml_and_clockwise_winding_and_uniform_prior(tmp_path, layers):
+    ring = " ".join(f"{lon},{lat},0" for lon, lat in reversed(AREA))  # clockwise
+    kml = (
+        '<?xml version="1.0"?><kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
+        f"<Placemark><name>area</name><Polygon><outerBoundaryIs><LinearRing><coordinates>{ring}"
+        "</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark></Document></kml>"
+    )
+    (tmp_path / "area.kml").write_text(kml)
+    fields = "".join(
+        f"<Placemark><name>{n}</name><Point><coordinates>{lon},{lat}</coordinates></Point>"
+        "</Placemark>"
+        for n, lon, lat in FIELDS
+    )
+    (tmp_path / "fields.kml").write_text(f"<kml><Document>{fields}</Document></kml>")
+    a = import_scenario(tmp_path / "area.kml", airfields=tmp_path / "fields.kml")
+    b = import_scenario(layers["area"], airfields=layers["fields"])
+    assert a["scenario"]["map"] == {**b["scenario"]["map"]}
+    assert a["scenario"]["airfields"] == b["scenario"]["airfields"]
+    np.testing.assert_allclose(a["prior"], b["prior"])
+    assert a["prior"].max() > 0 and abs(a["prior"].sum() - 1) < 1e-12
+
+
+def test_cli_writes_the_set_atomically(tmp_path, layers, capsys, monkeypatch):
+    p = argparse.ArgumentParser()
+    add_scenario_import_arguments(p)
+    out = tmp_path / "out" / "sc.yaml"
+    args = p.parse_args(
+        [str(layers["area"]), "--airfields", str(layers["fields"]), "--out", str(out)]
+    )
+    assert cmd_scenario_import(args) == 0
+    assert "wrote" in capsys.readouterr().out
+    assert sorted(f.name for f in out.parent.iterdir()) == ["sc.crs.json", "sc.npy", "sc.yaml"]
+    before = {f.name: f.read_bytes() for f in out.parent.iterdir()}
+
+    def boom(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(geoimport.np, "save", boom)
+    args.cell_km = 2.5
+    with pytest.raises(OSError):
+        cmd_scenario_import(args)
+    # nothing new published, nothing left behind: the old set is intact
+    assert {f.name: f.read_bytes() for f in out.parent.iterdir()} == before
+
+
+# --------------------------------------------------------------------------- bad input
+def _bad(tmp_path, layers, match, err=ConfigError, **kw):
+    args = {"airfields": layers["fields"]}
+    args.update(kw)
+    area = args.pop("area", layers["area"])
+    with pytest.raises(err, match=match):
+        import_scenario(area, **args)
+
+
+def test_bad_polygons(tmp_path, layers):
+    bow = [[126.0, 45.3], [127.2, 46.1], [127.2, 45.3], [126.0, 46.1], [126.0, 45.3]]
+    f = _write(tmp_path / "bow.geojson", _fc([_poly([AREA]), _poly([bow])]))
+    _bad(tmp_path, layers, r"bow\.geojson feature 1: invalid polygon", GeometryError, no_fly=f)
+    hole = [[126.5, 45.5], [126.7, 45.5], [126.7, 45.7], [126.5, 45.5]]
+    f = _write(tmp_path / "hole.geojson", _poly([AREA, hole]))
+    _bad(tmp_path, layers, r"hole\.geojson feature 0: a polygon with 1 hole", GeometryError, area=f)
+    swapped = [[lat, lon] for lon, lat in AREA]
+    f = _write(tmp_path / "sw.geojson", _fc([_poly([swapped])]))
+    _bad(tmp_path, layers, r"sw\.geojson feature 0 vertex 0.*swapped", area=f)
+    doc = _fc([_poly([AREA])])
+    doc["crs"] = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3857"}}
+    f = _write(tmp_path / "merc.geojson", doc)
+    _bad(tmp_path, layers, r"merc\.geojson crs.*EPSG:4326", area=f)
+    doc["crs"]["properties"]["name"] = "urn:ogc:def:crs:OGC:1.3:CRS84"
+    f = _write(tmp_path / "ok.geojson", doc)
+    import_scenario(f, airfields=layers["fields"])  # the declared WGS84 crs is accepted
+    f = _write(tmp_path / "two.geojson", _fc([_poly([AREA]), _poly([ZONE])]))
+    _bad(tmp_path, layers, r"2 polygons.*exactly one Polygon", area=f)
+    f = _write(tmp_path / "pt.geojson", _fc([_pt(126.5, 45.5)]))
+    _bad(tmp_path, layers, r"pt\.geojson feature 0.*a Polygon", area=f)
+
+
+def test_bad_points(tmp_path, layers):
+    f = _write(
+        tmp_path / "f.geojson", _fc([_pt(126.3, 45.6, name="A"), _pt(45.6, 126.3, name="B")])
+    )
+    _bad(tmp_path, layers, r"f\.geojson feature 1 vertex 0.*swapped", airfields=f)
+    f = _write(tmp_path / "far.geojson", _fc([_pt(2.35, 48.85, name="Paris")]))
+    _bad(tmp_path, layers, r"far\.geojson feature 0.*within 1000 km", airfields=f)
+    f = _write(tmp_path / "sw2.geojson", _fc([_pt(46.0, 47.0, name="X")]))
+    # (lat 47, lon 46) is far; read as (lat 46, lon 47)... also far: no swap hint
+    _bad(tmp_path, layers, r"sw2\.geojson feature 0.*km away\)$", airfields=f)
+    f = _write(tmp_path / "noname.geojson", _fc([_pt(126.3, 45.6)]))
+    _bad(tmp_path, layers, r"noname\.geojson feature 0 name", airfields=f)
+    f = _write(
+        tmp_path / "dup.geojson", _fc([_pt(126.3, 45.6, name="A"), _pt(126.4, 45.6, name="A")])
+    )
+    _bad(tmp_path, layers, r"distinct airfield names", airfields=f)
+    inside = _write(tmp_path / "in.geojson", _fc([_pt(126.5, 45.95, name="A")]))
+    _bad(
+        tmp_path,
+        layers,
+        r"airfields\[A\].*outside no-fly zone 0",
+        airfields=inside,
+        no_fly=layers["zones"],
+    )
+
+
+def test_bad_files(tmp_path, layers):
+    (tmp_path / "empty.geojson").write_text("")
+    _bad(tmp_path, layers, r"empty\.geojson: got 'an empty file'", area=tmp_path / "empty.geojson")
+    (tmp_path / "area.shp").write_text("x")
+    _bad(tmp_path, layers, r"area\.shp: got '\.shp'.*geojson", area=tmp_path / "area.shp")
+    _bad(tmp_path, layers, r"missing or not a regular file", area=tmp_path / "nope.geojson")
+    (tmp_path / "junk.geojson").write_text("{not json")
+    _bad(tmp_path, layers, r"junk\.geojson: got 'not JSON", area=tmp_path / "junk.geojson")
+    (tmp_path / "p.png").write_text("x")
+    _bad(tmp_path, layers, r"p\.png.*\.tif / \.tiff / \.csv", prior=tmp_path / "p.png")
+    (tmp_path / "bomb.kml").write_text('<!DOCTYPE kml [<!ENTITY a "x">]><kml/>')
+    _bad(tmp_path, layers, r"bomb\.kml.*no DTD", area=tmp_path / "bomb.kml")
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("lat,lon\n45.7,126.6\n", r"p\.csv header.*missing: \['probability'\]"),
+        ("45.7,126.6,1\n", r"p\.csv header"),
+        ("lat,lon,probability\n45.7,east,1\n", r"p\.csv line 2 lon: got 'east'"),
+        ("lat,lon,probability\n45.7,126.6,nan\n", r"p\.csv line 2 probability"),
+        ("lat,lon,probability\n45.7,126.6,-1\n", r"p\.csv line 2 probability: got -1"),
+        ("lat,lon,probability\n126.6,45.7,1\n", r"p\.csv line 2 lat.*swapped"),
+        ("lat,lon,probability\n", r"p\.csv: got 'a header and no data rows'"),
+        ("lat,lon,probability\n47.5,126.6,1\n", r"no probability mass inside the area"),
+    ],
+)
+def test_bad_csv(tmp_path, layers, text, match):
+    (tmp_path / "p.csv").write_text(text)
+    _bad(tmp_path, layers, match, prior=tmp_path / "p.csv")
+
+
+def test_csv_lat_lon_swapped_columns_detected(tmp_path):
+    # an area where both readings are valid coordinates: (lat 40, lon 60) vs (lat 60, lon 40)
+    area = [[59.5, 39.5], [60.5, 39.5], [60.5, 40.5], [59.5, 40.5], [59.5, 39.5]]
+    a = _write(tmp_path / "a.geojson", _poly([area]))
+    f = _write(tmp_path / "f.geojson", _fc([_pt(60.0, 40.0, name="F")]))
+    (tmp_path / "p.csv").write_text("lat,lon,probability\n60.0,40.0,1\n60.1,40.1,1\n")
+    with pytest.raises(ConfigError, match=r"p\.csv.*swapped"):
+        import_scenario(a, airfields=f, prior=tmp_path / "p.csv")
+
+
+def test_bad_geotiff(tmp_path, layers):
+    tif, _ = _tif(tmp_path / "nocrs.tif", crs=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # rasterio: "Dataset has no geotransform..." variants
+        _bad(tmp_path, layers, r"nocrs\.tif crs: got None", prior=tif)
+    tif, _ = _tif(tmp_path / "small.tif", w=60)  # ends at 126.4 E, the area at 127.2 E
+    _bad(
+        tmp_path,
+        layers,
+        r"small\.tif: got 'a raster covering \d+\.\d% of the search area'",
+        prior=tif,
+    )
+    (tmp_path / "junk.tif").write_bytes(b"not a tiff")
+    _bad(tmp_path, layers, r"junk\.tif: got .unreadable", prior=tmp_path / "junk.tif")
+
+
+def test_import_needs_airfields_and_sane_options(tmp_path, layers):
+    with pytest.raises(ConfigError, match=r"^airfields"):
+        import_scenario(layers["area"])
+    _bad(tmp_path, layers, r"^cell_km", cell_km=-1)
+    _bad(tmp_path, layers, r"^name", name="../x")
+    _bad(tmp_path, layers, r"^origin", origin="126.6,45.7")
+    with pytest.raises(ConfigError, match=r"^out"):
+        write_imported(
+            import_scenario(layers["area"], airfields=layers["fields"]), tmp_path / "x.txt"
+        )
