@@ -341,3 +341,18 @@ def test_import_needs_airfields_and_sane_options(tmp_path, layers):
         write_imported(
             import_scenario(layers["area"], airfields=layers["fields"]), tmp_path / "x.txt"
         )
+
+
+def test_geotiff_sub_pixels_on_a_fine_grid(tmp_path, layers):
+    # 2 km cells: sub-pixels of at most 0.5 km, so each 0.01 deg pixel is cut 3 x 3
+    tif, raster_total = _tif(tmp_path / "prior.tif")
+    res = import_scenario(layers["area"], prior=tif, airfields=layers["fields"], cell_km=2.0)
+    rep = res["report"]["prior"]
+    assert rep["samples"] == 170 * 120 * 9
+    assert abs(rep["inside"] + rep["outside"] - raster_total) < 1e-9
+    assert abs(res["prior"].sum() - 1.0) < 1e-9
+    fwd = Transformer.from_crs("EPSG:4326", res["crs"]["proj"], always_xy=True)
+    bx, by = fwd.transform(BLOB[1], BLOB[0])
+    sc = load_scenario(res["scenario"])
+    cx, cy = _centre_of_mass(res["prior"], sc)
+    assert np.hypot(cx - bx, cy - by) < 2000.0
