@@ -356,3 +356,47 @@ def test_geotiff_sub_pixels_on_a_fine_grid(tmp_path, layers):
     sc = load_scenario(res["scenario"])
     cx, cy = _centre_of_mass(res["prior"], sc)
     assert np.hypot(cx - bx, cy - by) < 2000.0
+
+
+def test_geotiff_in_a_projected_crs(tmp_path, layers):
+    # a UTM zone 52N raster (1 km pixels): the raster CRS -> WGS84 -> local path
+    rasterio = pytest.importorskip("rasterio")
+    from affine import Affine
+
+    utm = Transformer.from_crs("EPSG:4326", "EPSG:32652", always_xy=True)
+    bx, by = utm.transform(BLOB[1], BLOB[0])
+    x0, y1, n = bx - 80_000.0, by + 80_000.0, 160
+    xs = x0 + (np.arange(n) + 0.5) * 1000.0
+    ys = y1 - (np.arange(n) + 0.5) * 1000.0
+    X, Y = np.meshgrid(xs, ys)
+    z = np.exp(-(((X - bx) / 9000.0) ** 2 + ((Y - by) / 7000.0) ** 2) / 2)
+    tif = tmp_path / "utm.tif"
+    with rasterio.open(
+        tif, "w", driver="GTiff", width=n, height=n, count=1, dtype="float64",
+        crs="EPSG:32652", transform=Affine(1000.0, 0.0, x0, 0.0, -1000.0, y1),
+    ) as dst:  # fmt: skip
+        dst.write(z, 1)
+    res = import_scenario(layers["area"], prior=tif, airfields=layers["fields"])
+    rep = res["report"]["prior"]
+    assert abs(rep["inside"] + rep["outside"] - z.sum()) < 1e-9 * z.sum()
+    fwd = Transformer.from_crs("EPSG:4326", res["crs"]["proj"], always_xy=True)
+    ex, ey = fwd.transform(BLOB[1], BLOB[0])
+    cx, cy = _centre_of_mass(res["prior"], load_scenario(res["scenario"]))
+    assert np.hypot(cx - ex, cy - ey) < 5000.0
+
+
+def test_geotiff_needs_the_geo_extra(tmp_path, layers, monkeypatch):
+    import importlib.util
+
+    from poc_env.errors import MissingExtraError
+
+    tif, _ = _tif(tmp_path / "prior.tif")
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda m, *a: None if m == "rasterio" else real(m, *a)
+    )
+    with pytest.raises(MissingExtraError, match=r"'geo' extra"):
+        import_scenario(layers["area"], prior=tif, airfields=layers["fields"])
+    # GeoJSON and CSV input need no rasterio
+    (tmp_path / "p.csv").write_text("lat,lon,probability\n45.7,126.6,1\n")
+    import_scenario(layers["area"], prior=tmp_path / "p.csv", airfields=layers["fields"])
