@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import shapely
 import yaml
 from shapely import contains_xy
 from shapely.geometry import Point, Polygon
@@ -382,6 +383,7 @@ def _read_geotiff(file: Path, crs: dict, grid: _Grid, area: Polygon) -> tuple[np
         band = src.read(1, masked=True).astype(float).filled(0.0)
         transform = src.transform
         to_wgs = Transformer.from_crs(src.crs, "EPSG:4326", always_xy=True)
+        from_wgs = Transformer.from_crs("EPSG:4326", src.crs, always_xy=True)
         h, w = band.shape
     band = np.where(np.isfinite(band), band, 0.0)
     if (band < 0).any():
@@ -395,23 +397,34 @@ def _read_geotiff(file: Path, crs: dict, grid: _Grid, area: Polygon) -> tuple[np
         lon, lat = to_wgs.transform(np.asarray(xs), np.asarray(ys))
         return np.array(to_local(np.column_stack([lat, lon]), crs)).reshape(-1, 2)
 
-    # coverage: the raster's outline (densified edges) must cover the area
-    t = np.linspace(0.0, 1.0, 33)
-    ring_c = np.concatenate([t * w, np.full_like(t, w), (1 - t) * w, np.zeros_like(t)])
-    ring_r = np.concatenate([np.zeros_like(t), t * h, np.full_like(t, h), (1 - t) * h])
-    outline = Polygon(local(ring_c, ring_r))
-    if not outline.is_valid or not outline.buffer(1.0).covers(area):
-        share = outline.intersection(area).area / area.area if outline.is_valid else 0.0
+    # coverage: the area's densified boundary and a 40 x 40 lattice of its interior points,
+    # taken into the raster's pixel space, must all lie on the raster
+    ring = np.asarray(shapely.segmentize(area.exterior, grid.cell / 2).coords)
+    bx0, by0, bx1, by1 = area.bounds
+    gx, gy = np.meshgrid(np.linspace(bx0, bx1, 40), np.linspace(by0, by1, 40))
+    interior = np.column_stack([gx.ravel(), gy.ravel()])
+    interior = interior[contains_xy(area, interior[:, 0], interior[:, 1])]
+    ring_cr = _pixels(ring, crs, from_wgs, ~transform)
+    on = [_on(*ring_cr, w, h), _on(*_pixels(interior, crs, from_wgs, ~transform), w, h)]
+    if not (on[0].all() and on[1].all()):
+        share = float(on[1].mean()) if len(on[1]) else 0.0
         raise ConfigError(
             str(file),
-            f"a raster covering {share:.1%} of the search area",
+            f"a raster covering about {share:.0%} of the search area",
             "a GeoTIFF covering the whole search area",
         )
+    # only pixels in the area's pixel-space bounding box (+1 pixel) can put mass in it; the
+    # mass of every other pixel is outside the area as a whole (no need to project it)
+    c0, c1 = max(0, int(ring_cr[0].min()) - 1), min(w, int(ring_cr[0].max()) + 2)
+    r0, r1 = max(0, int(ring_cr[1].min()) - 1), min(h, int(ring_cr[1].max()) + 2)
+    window = np.zeros_like(band, dtype=bool)
+    window[r0:r1, c0:c1] = True
+    rows_nz, cols_nz = np.nonzero(window & (band != 0))
+    far = float(band[~window].sum())
     # sub-pixel size: a pixel's extent in metres from its projected neighbours
-    rc, cc = h // 2, w // 2
+    rc, cc = max(0, min((r0 + r1) // 2, h - 1)), max(0, min((c0 + c1) // 2, w - 1))
     p = local(np.array([cc, cc + 1, cc]), np.array([rc, rc, rc + 1]))
     pix_m = max(np.hypot(*(p[1] - p[0])), np.hypot(*(p[2] - p[0])))
-    rows_nz, cols_nz = np.nonzero(band)
     s = int(min(16, max(1, math.ceil(pix_m / (grid.cell / 4)))))
     while s > 1 and len(rows_nz) * s * s > MAX_SAMPLES:
         s -= 1
@@ -421,7 +434,29 @@ def _read_geotiff(file: Path, crs: dict, grid: _Grid, area: Polygon) -> tuple[np
     rows = (rows_nz[:, None] + fr.ravel()[None, :]).ravel()
     mass = np.repeat(band[rows_nz, cols_nz] / (s * s), s * s)
     xy = local(cols, rows)
+    if far > 0:  # one sample far outside the area carrying the mass of every far pixel
+        xy = np.vstack([xy, [[math.inf, math.inf]]])
+        mass = np.append(mass, far)
     return xy[:, 0], xy[:, 1], mass
+
+
+def _pixels(xy: np.ndarray, crs: dict, from_wgs: Any, inv: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(col, row) pixel coordinates of local points (via WGS84 and the inverse geotransform)."""
+    from agents.planning.export import to_geographic
+
+    ll = np.array(to_geographic(xy, crs)).reshape(-1, 2)
+    if ll.size == 0:
+        return np.zeros(0), np.zeros(0)
+    x, y = from_wgs.transform(ll[:, 1], ll[:, 0])
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    a, b, c, d, e, f = (float(v) for v in tuple(inv)[:6])
+    return a * x + b * y + c, d * x + e * y + f
+
+
+def _on(col: np.ndarray, row: np.ndarray, w: int, h: int) -> np.ndarray:
+    eps = 1e-6
+    ok = np.isfinite(col) & np.isfinite(row)
+    return ok & (col >= -eps) & (col <= w + eps) & (row >= -eps) & (row <= h + eps)
 
 
 def _prior(path: Any, crs: dict, grid: _Grid, area: Polygon) -> tuple[np.ndarray, dict]:
