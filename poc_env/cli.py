@@ -505,6 +505,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
 
+    p = sub.add_parser("scenario", help="scenario tools: import GIS layers as a scenario")
+    scenario_sub = p.add_subparsers(dest="scenario_command", required=True)
+    p = scenario_sub.add_parser(
+        "import", help="GeoJSON/KML area, airfields and no-fly zones, GeoTIFF/CSV prior -> YAML"
+    )
+    from agents.planning.geoimport import add_scenario_import_arguments, cmd_scenario_import
+
+    add_scenario_import_arguments(p)
+    p.set_defaults(func=cmd_scenario_import)
+
     p = sub.add_parser("survey", help="score a region plan (Table 4 / 5 analog) with the bound")
     _add_scenario(p, "paper_6_1")
     p.add_argument("--regions", default=None, help="region plan: built-in name or YAML path")
