@@ -176,7 +176,8 @@ class PriorConfig:
 
     ``kind: gaussian_mixture`` builds it from ``components`` plus a uniform ``background`` share
     (the fraction of the mass spread evenly over the map); ``kind: file`` reads ``file`` (.npy or
-    .csv, shape ``(ny, nx)``, row 0 at the south edge).
+    .csv, shape ``(ny, nx)``, row 0 at the south edge; a relative path is read from the
+    scenario YAML's folder).
     """
 
     kind: str = _f(default="gaussian_mixture")
@@ -797,9 +798,19 @@ def load_scenario(
             )
         data = read_yaml(path)
         data.setdefault("name", Path(path).stem)
+        _resolve_prior_file(data, Path(path).parent)
     for key, value in (overrides or {}).items():
         _set_dotted(data, key, value)
     return _from_mapping(Scenario, data, "")
+
+
+def _resolve_prior_file(data: dict[str, Any], folder: Path) -> None:
+    """A relative ``map.prior.file`` is read from the YAML file's folder, not the current one."""
+    prior = (data.get("map") or {}).get("prior") if isinstance(data.get("map"), dict) else None
+    if isinstance(prior, dict) and isinstance(prior.get("file"), str):
+        f = Path(prior["file"])
+        if not f.is_absolute():
+            prior["file"] = str(folder / f)
 
 
 def save_scenario(scenario: Scenario, path: str | os.PathLike[str]) -> Path:

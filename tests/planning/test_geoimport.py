@@ -109,7 +109,9 @@ def test_geotiff_round_trip(tmp_path, layers, monkeypatch):
     )
     files = write_imported(res, tmp_path / "my.yaml")
     assert [f.name for f in files] == ["my.yaml", "my.npy", "my.crs.json"]
-    monkeypatch.chdir(tmp_path)  # prior.file is read relative to the current folder
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # prior.file is read relative to the YAML's folder
     sc = load_scenario(str(tmp_path / "my.yaml"))
     prior = build_prior(sc.map)
     assert prior.shape == (sc.map.ny, sc.map.nx)
