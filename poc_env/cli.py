@@ -119,8 +119,19 @@ def _add_projection(p: argparse.ArgumentParser) -> None:
     p.add_argument("--utm-zone", type=int, default=None, help="UTM zone (default: the origin's)")
 
 
+def _add_overrides(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--overrides",
+        nargs="+",
+        default=None,
+        metavar="KEY=VALUE",
+        help="scenario keys to change, YAML values (e.g. sensor.sweep_width_km=4 uav.count=3)",
+    )
+
+
 def _add_scenario(p: argparse.ArgumentParser, default: str) -> None:
     p.add_argument("--scenario", default=default, help="built-in name or YAML path")
+    _add_overrides(p)
     p.add_argument("--map", dest="map_file", default=None, help="prior map (.npy or .csv)")
 
 
@@ -147,10 +158,10 @@ def cmd_survey(args: argparse.Namespace) -> int:
 def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> int:
     """The survey of ``cmd_survey``, its files written into ``stage`` (shown as ``dest``)."""
     from agents.planning.survey import load_regions, run_survey, write_survey
-    from poc_env.config import load_scenario
+    from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
     plan = load_regions(args.regions or f"{sc.name}_polygons")
     prior = build_prior(sc.map, args.map_file)
     if getattr(args, "optimise", False):
@@ -219,14 +230,14 @@ def _state_policy(scenario, name: str, seed: int):
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from poc_env.config import load_scenario
+    from poc_env.config import load_scenario, parse_overrides
     from poc_env.viz.rendering import render_episode
 
     _check_int("seed", args.seed, 0, limits.MAX_SEED)
     _check_int("max_steps", args.max_steps, 1, limits.MAX_STEPS)
     _check_int("every", args.every, 1, limits.MAX_STEPS)
     _check_out("out", args.out, "file")
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
     path = render_episode(
         sc,
         _state_policy(sc, args.policy, args.seed),
@@ -277,10 +288,10 @@ def _evaluate(
 ) -> int:
     """The evaluation of ``cmd_evaluate``, its files written into ``stage`` (shown as ``dest``)."""
     from agents.experiments.evaluate import evaluate, plot_curves
-    from poc_env.config import load_scenario
+    from poc_env.config import load_scenario, parse_overrides
     from poc_env.io import write_text_atomic
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
     ev = evaluate(
         sc,
         names,
@@ -373,10 +384,10 @@ def _plan(
     ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
     """
     from agents.planning.planner import make_plan, plan_table, plot_plan, write_plan
-    from poc_env.config import load_scenario
+    from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
     if args.uavs is not None:
         sc = sc.with_uavs(args.uavs)
     prior = build_prior(sc.map, args.map_file)
@@ -435,7 +446,9 @@ def cmd_figures(args: argparse.Namespace) -> int:
     out = Path(args.out)
     with _output_folder("out", out) as stage:
         _wrote(pattern_gallery(stage), stage, out)
-        survey_args = argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None)
+        survey_args = argparse.Namespace(
+            scenario="paper_6_1", regions=None, map_file=None, overrides=None
+        )
         name = "survey_paper_6_1"
         return _survey(survey_args, _mkdir(stage / name), out / name)
 
@@ -453,10 +466,15 @@ def cmd_demo(args: argparse.Namespace) -> int:
     out = Path(args.out)
     with _output_folder("out", out) as stage:
         print("== §6.1.1 polygon survey (Table 4 analog) ==")
-        _survey(argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None), stage, out)
+        _survey(
+            argparse.Namespace(scenario="paper_6_1", regions=None, map_file=None, overrides=None),
+            stage,
+            out,
+        )
         print("\n== §6.2 time-limited plan with adaptive DE (Table 6 analog) ==")
         plan_args = argparse.Namespace(
             scenario="paper_6_2",
+            overrides=None,
             map_file=None,
             uavs=None,
             optimizer="adaptive_de",
@@ -477,6 +495,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         print("\n== policies flown in the environment, same seeds ==")
         eval_args = argparse.Namespace(
             scenario="paper_6_2",
+            overrides=None,
             map_file=None,
             episodes=args.episodes,
             seed=1000,
@@ -528,6 +547,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")
     p.add_argument("--scenario", default="small", help="built-in name or YAML path")
+    _add_overrides(p)
     p.add_argument(
         "--policy",
         default="lawnmower",

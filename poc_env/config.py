@@ -21,7 +21,7 @@ import math
 import os
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -802,6 +802,23 @@ def load_scenario(
     for key, value in (overrides or {}).items():
         _set_dotted(data, key, value)
     return _from_mapping(Scenario, data, "")
+
+
+def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
+    """``["a.b=1", ...]`` (the command line's ``--overrides``) -> ``{"a.b": 1}``; each value is
+    parsed as YAML by :func:`load_yaml_text`."""
+    if isinstance(items, str) or not isinstance(items, list | tuple):
+        raise ConfigError("overrides", items, "a list of KEY=VALUE strings")
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = str(item).partition("=")
+        if not sep or not key.strip():
+            raise ConfigError("overrides", item, "KEY=VALUE, e.g. episode.horizon_steps=20")
+        try:
+            out[key.strip()] = load_yaml_text(value)
+        except yaml.YAMLError as err:
+            raise ConfigError("overrides", item, f"a YAML value after '=' ({err})") from None
+    return out
 
 
 def _resolve_prior_file(data: dict[str, Any], folder: Path) -> None:

@@ -25,6 +25,7 @@ from typing import Annotated, Any
 from tyro.conf import arg as _arg
 
 import poc_env.limits as limits
+from poc_env.config import parse_overrides
 from poc_env.errors import ConfigError, as_int, as_number
 
 ALGOS = ("ppo",)
@@ -134,26 +135,6 @@ class TrainArgs:
         if unknown:
             raise ConfigError(f"{where}.{unknown[0]}", data[unknown[0]], "a TrainArgs field")
         return cls(**data)
-
-
-def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
-    """``["a.b=1", ...]`` -> ``{"a.b": 1}`` (values parsed as YAML)."""
-    import yaml
-
-    from poc_env.config import load_yaml_text
-
-    if isinstance(items, str) or not isinstance(items, list | tuple):
-        raise ConfigError("overrides", items, "a list of KEY=VALUE strings")
-    out: dict[str, Any] = {}
-    for item in items:
-        key, sep, value = str(item).partition("=")
-        if not sep or not key.strip():
-            raise ConfigError("overrides", item, "KEY=VALUE, e.g. episode.horizon_steps=20")
-        try:
-            out[key.strip()] = load_yaml_text(value)
-        except yaml.YAMLError as err:
-            raise ConfigError("overrides", item, f"a YAML value after '=' ({err})") from None
-    return out
 
 
 # -- the command line --------------------------------------------------------------------------

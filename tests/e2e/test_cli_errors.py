@@ -100,3 +100,37 @@ def test_readme_rl_evaluation_finishes_without_omp_settings(tmp_path):
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert "ppo:ppo_pilot_paper_6_2" in done.stdout and "lawnmower" in done.stdout
+
+
+def test_overrides_on_every_scenario_command(tmp_path, capsys):
+    """--overrides KEY=VALUE on plan, evaluate, survey and render changes the scenario (issue
+    14 ergonomics) and a bad key or value is a clear error naming it."""
+    out = tmp_path / "p.json"
+    base = ["plan", "--scenario", "small", "--maxiter", "2", "--popsize", "8", "--quiet"]
+    import json
+
+    def feasible(*extra: str) -> list[bool]:
+        assert main([*base, "--out", str(out), *extra]) == 0
+        return [u["feasible"] for u in json.loads(out.read_text())["uavs"]]
+
+    # the same seed's plan, judged against a shorter endurance: some UAV no longer fits 0.85 T
+    assert all(feasible())
+    assert not all(feasible("--overrides", "uav.endurance_h=0.5"))
+    assert main([*base, "--out", str(out), "--overrides", "reward.alpha='5'"]) == 2
+    assert "reward.alpha: got '5'" in capsys.readouterr().err
+    ev = [
+        "evaluate",
+        "--scenario",
+        "small",
+        "--episodes",
+        "1",
+        "--policies",
+        "lawnmower",
+        "--quiet",
+    ]
+    assert main([*ev, "--overrides", "episode.horizon_steps=3"]) == 0
+    assert main([*ev, "--overrides", "nope.key=1"]) == 2
+    assert "nope" in capsys.readouterr().err
+    assert main(["render", "--out", str(tmp_path / "e.gif"), "--overrides", "episode.dt_s=-1"]) == 2
+    assert main(["survey", "--overrides", "sensor.sweep_width_km=abc"]) == 2
+    assert "sensor.sweep_width_km" in capsys.readouterr().err
