@@ -20,6 +20,7 @@ DEFAULT_CASES = {
     "plans": 200,
     "cli": 40,
     "actions": 150,
+    "geo": 60,
 }
 
 

@@ -3,10 +3,10 @@
     poc-env bench campaign [--cases 5000] [--seed 0] [--targets overrides,maps,...]
 
 Each *target* is an input a user or a file can hand poc-env -- scenario overrides, prior maps
-(arrays and files), region files, ``plan.json`` for export, command lines, and environment
-actions -- with a hypothesis strategy that draws plausible values, typos and hostile values
-alike (strings for numbers, bools, NaN, infinities, 1e308, 10**400, nulls, wrong shapes,
-random bytes). Every case is run and classified:
+(arrays and files), region files, ``plan.json`` for export, command lines, environment
+actions and GIS layers for ``scenario import`` -- with a hypothesis strategy that draws
+plausible values, typos and hostile values alike (strings for numbers, bools, NaN,
+infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is run and classified:
 
 * ``ok``: a valid result, checked for what would make it silently wrong (finite numbers,
   probabilities in [0, 1], a map summing to 1, probability mass conserved by a step, mission
@@ -18,7 +18,7 @@ random bytes). Every case is run and classified:
 * ``silent``: a result that fails its check -- a silent wrong answer.
 
 The last three must be 0. ``tests/test_campaign.py`` runs every target through hypothesis in
-the default suite (780 cases); this command runs a large campaign and prints the
+the default suite (840 cases); this command runs a large campaign and prints the
 counts, the figure quoted in issue 15's closing note. Needs ``hypothesis`` (the ``dev`` extra).
 """
 
@@ -552,6 +552,91 @@ def run_actions(case: tuple[list, str]) -> None:
     check(bool(np.all(np.isfinite(st.pos))), "position not finite")
 
 
+# --------------------------------------------------------------------------- target: geo
+
+_AREA = [[126.2, 45.4], [127.4, 45.4], [127.4, 46.2], [126.2, 46.2], [126.2, 45.4]]
+_FIELDS = [("ZYHB", [126.25, 45.623]), ("Acheng", [126.95, 45.25])]
+_CSV = [(45.8, 126.9, 0.3), (45.76, 126.98, 0.25), (45.72, 127.05, 0.2)]
+
+
+def geo_strategy():
+    from hypothesis import strategies as st
+
+    coord = st.one_of(
+        st.floats(-200, 200),
+        st.sampled_from([float("nan"), float("inf"), 1e308, "45", None, 90.5, -181.0]),
+    )
+    ring = st.one_of(
+        st.just(_AREA),
+        st.just(_AREA),
+        st.just(_AREA),
+        st.just(_AREA[::-1]),  # clockwise
+        st.just([[126.2, 45.4], [127.4, 46.2], [127.4, 45.4], [126.2, 46.2], [126.2, 45.4]]),
+        st.just([[45.4, 126.2], [45.4, 127.4], [46.2, 127.4], [46.2, 126.2], [45.4, 126.2]]),
+        st.lists(st.lists(coord, min_size=2, max_size=3), max_size=6),
+        hostile_scalars(),
+    )
+    good_point = st.sampled_from([p for _, p in _FIELDS])
+    point = st.one_of(good_point, good_point, good_point, st.lists(coord, max_size=3))
+    csv_row = st.one_of(
+        st.sampled_from(_CSV),
+        st.sampled_from(_CSV),
+        st.tuples(coord, coord, st.one_of(st.floats(-1, 2), coord)),
+    )
+    good_csv = "lat,lon,probability\n" + "".join(f"{a},{b},{c}\n" for a, b, c in _CSV)
+    csv_text = st.one_of(
+        st.just(good_csv),
+        st.just(good_csv),
+        st.lists(csv_row, min_size=0, max_size=4).map(
+            lambda rows: "lat,lon,probability\n" + "".join(f"{a},{b},{c}\n" for a, b, c in rows)
+        ),
+        st.sampled_from(["", "lat,lon\n45.8,126.9\n", "x,y,z\n1,2,3\n", "\x00\x01"]),
+    )
+    cell = st.one_of(st.just(5.0), st.just(5.0), st.floats(0.001, 500), hostile_scalars())
+    return st.tuples(ring, point, csv_text, cell, st.sampled_from(["aeqd", "utm", "merc"]))
+
+
+def run_geo(case: tuple) -> None:
+    """``scenario import`` of hostile GIS layers; an accepted scenario loads, its prior sums to
+    1, and its airfields sit where pyproj puts them."""
+    from agents.planning.geoimport import import_scenario, write_imported
+    from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import build_prior
+
+    ring, point, csv_text, cell, projection = case
+
+    def fc(features: list) -> str:
+        return json.dumps({"type": "FeatureCollection", "features": features}, allow_nan=True)
+
+    with tempfile.TemporaryDirectory() as d:
+        root = Path(d)
+        (root / "area.geojson").write_text(
+            fc([{"type": "Feature", "properties": {},
+                 "geometry": {"type": "Polygon", "coordinates": [ring]}}])
+        )  # fmt: skip
+        (root / "fields.geojson").write_text(
+            fc([{"type": "Feature", "properties": {"name": "A"},
+                 "geometry": {"type": "Point", "coordinates": point}},
+                {"type": "Feature", "properties": {"name": "B"},
+                 "geometry": {"type": "Point", "coordinates": _FIELDS[1][1]}}])
+        )  # fmt: skip
+        (root / "prior.csv").write_text(csv_text)
+        res = import_scenario(
+            root / "area.geojson",
+            prior=root / "prior.csv",
+            airfields=root / "fields.geojson",
+            cell_km=cell,
+            name="fuzz",
+            projection=projection,
+        )
+        write_imported(res, root / "fuzz.yaml")
+        sc = load_scenario(str(root / "fuzz.yaml"))
+        prior = build_prior(sc.map)
+        check(abs(float(prior.sum()) - 1.0) < 1e-9, f"imported prior sums to {prior.sum()!r}")
+        for a in sc.airfields:
+            check(all(math.isfinite(v) for v in a.position_m), "airfield not finite")
+
+
 # --------------------------------------------------------------------------- the campaign
 
 TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
@@ -561,9 +646,10 @@ TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
     "plans": (plans_strategy, run_plans),
     "cli": (cli_strategy, run_cli),
     "actions": (actions_strategy, run_actions),
+    "geo": (geo_strategy, run_geo),
 }
 #: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
-WEIGHTS = {"overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3}
+WEIGHTS = {"overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1}
 
 
 def run_target(name: str, cases: int, seed: int = 0) -> tuple[Counter, list[tuple[str, Any]]]:

@@ -41,8 +41,9 @@ from shapely import contains_xy
 from shapely.geometry import Point, Polygon
 from shapely.geometry.polygon import orient
 
+import poc_env.limits as limits
 from agents.planning.export import make_crs, parse_origin, to_local
-from poc_env.errors import ConfigError, GeometryError, require_extra
+from poc_env.errors import ConfigError, GeometryError, as_number, require_extra
 from poc_env.geometry import validate_polygon
 from poc_env.io import atomic_path
 
@@ -552,12 +553,7 @@ def import_scenario(
 
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]{1,64}", name):
         raise ConfigError("name", name, "1-64 characters A-Z a-z 0-9 _ . -")
-    try:
-        cell_km = float(cell_km)
-    except (TypeError, ValueError):
-        raise ConfigError("cell_km", cell_km, "a number > 0") from None
-    if not (math.isfinite(cell_km) and cell_km > 0):
-        raise ConfigError("cell_km", cell_km, "a number > 0")
+    cell_km = as_number("cell_km", cell_km, limits.MIN_CELL_KM, limits.MAX_EXTENT_KM)
     if airfields is None:
         raise ConfigError(
             "airfields", None,
