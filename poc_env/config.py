@@ -269,7 +269,7 @@ class UAVConfig:
 
     #: maximum endurance T (eq. 18).
     endurance_s: float = _f(
-        "endurance_h", HOUR, default=3 * HOUR, lo=0.0, lo_open=True, hi=limits.MAX_ENDURANCE_H
+        "endurance_h", HOUR, default=3 * HOUR, lo=limits.MIN_ENDURANCE_H, hi=limits.MAX_ENDURANCE_H
     )
     #: share of T usable for the plan: t_i <= 0.85 T (eq. 18).
     usable_fraction: float = _f(default=0.85, lo=0.01, hi=1.0)

@@ -29,7 +29,9 @@ MAX_COORD_KM = 10_000.0
 MIN_CELL_KM = 0.01
 #: Fastest UAV: 1,500 km/h (beyond any search aircraft; the paper's fly 100-240 km/h).
 MAX_SPEED_KMH = 1500.0
-#: Longest endurance: 240 h (ten days; the paper's UAVs fly 3 h).
+#: Endurance from 0.01 h (36 s; a subnormal endurance made the time share of the reward infinite)
+#: to 240 h (ten days; the paper's UAVs fly 3 h).
+MIN_ENDURANCE_H = 0.01
 MAX_ENDURANCE_H = 240.0
 #: Largest acceleration (m/s^2), turn and pitch rates (deg/s), pitch (deg), altitude (m).
 MAX_ACCEL_MPS2 = 100.0

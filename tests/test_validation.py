@@ -84,6 +84,7 @@ def test_as_bool_refuses_everything_but_a_flag(value):
         ("episode.dt_s", 1e308, "episode.dt_s"),
         ("map.origin_km", ["1", 2], "map.origin_km"),
         ("name", 5, "name"),
+        ("uav.endurance_h", 5e-324, "uav.endurance_h"),  # found by the campaign: inf reward
     ],
 )
 def test_bad_scenario_values_name_the_field(key, value, field):
