@@ -158,7 +158,7 @@ class GaussianComponent:
     mean_m: tuple[float, float] = _f("mean_km", KM)
     sigma_m: tuple[float, float] = _f("sigma_km", KM)
     #: relative weight (the mixture is normalised; any positive scale will do).
-    weight: float = _f(default=1.0, lo=0.0, lo_open=True)
+    weight: float = _f(default=1.0, lo=limits.MIN_POSITIVE)
     rotation_rad: float = _f("rotation_deg", DEG, default=0.0, lo=-3600.0, hi=3600.0)
 
     def __post_init__(self) -> None:
@@ -166,7 +166,7 @@ class GaussianComponent:
         object.__setattr__(self, "mean_m", _vec2("mean_km", self.mean_m))
         sx, sy = _vec2("sigma_km", self.sigma_m)
         for sig in (sx, sy):
-            as_number("sigma_km", sig / KM, 0.0, _KM_MAX, lo_open=True)
+            as_number("sigma_km", sig / KM, limits.MIN_POSITIVE, _KM_MAX)
         object.__setattr__(self, "sigma_m", (sx, sy))
 
 
@@ -200,7 +200,7 @@ class ThreatPeak:
 
     center_m: tuple[float, float] = _f("center_km", KM)
     #: decay rate lambda in 1/m^2 (YAML: ``lambda_per_km2``).
-    lambda_per_m2: float = _f("lambda_per_km2", 1e-6, lo=0.0, lo_open=True, hi=1e6)
+    lambda_per_m2: float = _f("lambda_per_km2", 1e-6, lo=limits.MIN_POSITIVE, hi=1e6)
 
     def __post_init__(self) -> None:
         _coerce(self)
@@ -215,8 +215,8 @@ class MapConfig:
     :data:`poc_env.limits.MIN_CELL_KM`, and no more cells than the memory guard allows.
     """
 
-    width_m: float = _f("width_km", KM, lo=0.0, lo_open=True, hi=_KM_MAX)
-    height_m: float = _f("height_km", KM, lo=0.0, lo_open=True, hi=_KM_MAX)
+    width_m: float = _f("width_km", KM, lo=limits.MIN_POSITIVE, hi=_KM_MAX)
+    height_m: float = _f("height_km", KM, lo=limits.MIN_POSITIVE, hi=_KM_MAX)
     cell_m: float = _f("cell_km", KM, lo=limits.MIN_CELL_KM, hi=_KM_MAX)
     origin_m: tuple[float, float] = _f("origin_km", KM, default=(0.0, 0.0))
     prior: PriorConfig = _f(default_factory=PriorConfig)
@@ -258,9 +258,9 @@ class MapConfig:
         return round(self.height_m / self.cell_m)
 
 
-_SPEED: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_SPEED_KMH}
-_RATE: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_RATE_DEG_S}
-_ALT: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_ALTITUDE_M}
+_SPEED: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_SPEED_KMH}
+_RATE: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_RATE_DEG_S}
+_ALT: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_ALTITUDE_M}
 
 
 @dataclass(frozen=True)
@@ -282,12 +282,12 @@ class UAVConfig:
     max_speed_mps: float = _f("max_speed_kmh", KMH, default=240 * KMH, **_SPEED)
     #: per-step limits of the eq. 19 increments (dv, d alpha, d beta).
     max_accel_mps2: float = _f(
-        "max_accel_mps2", 1.0, default=0.5, lo=0.0, lo_open=True, hi=limits.MAX_ACCEL_MPS2
+        "max_accel_mps2", 1.0, default=0.5, lo=limits.MIN_POSITIVE, hi=limits.MAX_ACCEL_MPS2
     )
     max_turn_rate_rad_s: float = _f("max_turn_rate_deg_s", DEG, default=3.0 * DEG, **_RATE)
     max_pitch_rate_rad_s: float = _f("max_pitch_rate_deg_s", DEG, default=1.0 * DEG, **_RATE)
     max_pitch_rad: float = _f(
-        "max_pitch_deg", DEG, default=15.0 * DEG, lo=0.0, lo_open=True, hi=limits.MAX_PITCH_DEG
+        "max_pitch_deg", DEG, default=15.0 * DEG, lo=limits.MIN_POSITIVE, hi=limits.MAX_PITCH_DEG
     )
     #: search altitude (z of eq. 19) and the ceiling.
     cruise_altitude_m: float = _f("cruise_altitude_m", 1.0, default=1000.0, **_ALT)
@@ -325,7 +325,7 @@ class SensorConfig:
     """
 
     sweep_width_m: float = _f(
-        "sweep_width_km", KM, default=5 * KM, lo=0.0, lo_open=True, hi=limits.MAX_SWEEP_WIDTH_KM
+        "sweep_width_km", KM, default=5 * KM, lo=limits.MIN_POSITIVE, hi=limits.MAX_SWEEP_WIDTH_KM
     )
     #: ``inverse_cube`` (Koopman, composes to eq. 10), ``exponential`` (random search) or
     #: ``definite_range`` (cookie cutter).
@@ -373,7 +373,7 @@ class FleetGroup:
 class CommsConfig:
     """Communication constraint (eq. 24) and topology switching (§3.2.5)."""
 
-    range_m: float = _f("range_km", KM, default=150 * KM, lo=0.0, lo_open=True, hi=_RANGE_MAX)
+    range_m: float = _f("range_km", KM, default=150 * KM, lo=limits.MIN_POSITIVE, hi=_RANGE_MAX)
     #: every UAV needs at least this many others within range (the paper: two).
     min_neighbours: int = _f(default=2, lo=0, hi=63)
     #: ``table2`` (the paper's five-UAV switching table) or ``auto`` (any N).
@@ -395,7 +395,7 @@ class ConstraintsConfig:
 
     #: minimum separation d_s between UAVs (eq. 21).
     safety_distance_m: float = _f(
-        "safety_distance_km", KM, default=1 * KM, lo=0.0, lo_open=True, hi=_RANGE_MAX
+        "safety_distance_km", KM, default=1 * KM, lo=limits.MIN_POSITIVE, hi=_RANGE_MAX
     )
     #: ``penalize`` (report and subtract a penalty), ``terminate`` (the agent ends) or
     #: ``shield`` (the action is modified to stay safe).
@@ -433,13 +433,13 @@ class RewardConfig:
 class EpisodeConfig:
     """Time stepping of the environment."""
 
-    dt_s: float = _f("dt_s", 1.0, default=60.0, lo=0.0, lo_open=True, hi=limits.MAX_DT_S)
+    dt_s: float = _f("dt_s", 1.0, default=60.0, lo=limits.MIN_POSITIVE, hi=limits.MAX_DT_S)
     #: truncation horizon in steps (default: endurance T / dt, rounded up).
     horizon_steps: int | None = _f(default=None, lo=1, hi=limits.MAX_STEPS)
     detection_ends_episode: bool = _f(default=False)
     #: landing rule: within this horizontal distance of the landing field ...
     landing_radius_m: float = _f(
-        "landing_radius_km", KM, default=3 * KM, lo=0.0, lo_open=True, hi=_KM_MAX
+        "landing_radius_km", KM, default=3 * KM, lo=limits.MIN_POSITIVE, hi=_KM_MAX
     )
     #: ... at or below this altitude (default above the cruise altitude: no descent needed) ...
     landing_max_altitude_m: float = _f("landing_max_altitude_m", 1.0, default=1500.0, **_ALT)

@@ -19,6 +19,9 @@ import os
 from poc_env.errors import ConfigError, as_number
 
 # --------------------------------------------------------------------------- physical ranges
+#: Smallest value of a quantity that must be positive (a length, speed, rate, weight), in its
+#: YAML unit: subnormal values such as 5e-324 pass "> 0" and then overflow a division.
+MIN_POSITIVE = 1e-9
 #: Largest side of the search area, and largest distance of any point (origin, airfields,
 #: zones, peaks) from the map origin: 2,000 km (a continental search; the paper's is 200 km).
 MAX_EXTENT_KM = 2000.0

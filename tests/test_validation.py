@@ -296,6 +296,13 @@ def test_region_file_errors_name_the_region_and_field(tmp_path, change, error, m
         _regions(tmp_path, **change)
 
 
+def test_subnormal_radius_is_refused_not_divided_by(tmp_path):
+    # found by the campaign (seed 37): radius_km 1.1e-308 passed "> 0", then divided by zero
+    circle = {"kind": "circle", "pattern": "expanding_square", "center_km": [50, 50]}
+    with pytest.raises(ConfigError, match=r"radius_km: got 1.1e-308; allowed: a number in \[1e-09"):
+        _regions(tmp_path, **circle, radius_km=1.1e-308, vertices_km=[])
+
+
 def test_second_search_false_halves_the_expanding_square(tmp_path):
     circle = {
         "kind": "circle",

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+import poc_env.limits as limits
 from poc_env.config import (
     CONFIG_DIR,
     DEG,
@@ -77,9 +78,9 @@ class RegionSpec:
     vertices_m: tuple[tuple[float, float], ...] = _f("vertices_km", KM, default=())
     holes_m: tuple[tuple[tuple[float, float], ...], ...] = _f("holes_km", KM, default=())
     center_m: tuple[float, float] | None = _f("center_km", KM, default=None)
-    radius_m: float | None = _f("radius_km", KM, default=None, lo=0, lo_open=True, hi=2000.0)
+    radius_m: float | None = _f("radius_km", KM, default=None, lo=limits.MIN_POSITIVE, hi=2000.0)
     pattern: str | None = _f(default=None)
-    spacing_m: float = _f("spacing_km", KM, default=5 * KM, lo=0, lo_open=True, hi=2000.0)
+    spacing_m: float = _f("spacing_km", KM, default=5 * KM, lo=limits.MIN_POSITIVE, hi=2000.0)
     direction_rad: float = _f("direction_deg", DEG, default=0.0, lo=-3600.0, hi=3600.0)
     airfield: str | None = _f(default=None)
     landing: str | None = _f(default=None)
