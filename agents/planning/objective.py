@@ -101,6 +101,7 @@ __all__ = [
     "PlanScores",
     "area_fractions",
     "exclusive_fractions",
+    "flown_rectangle",
     "lawnmower",
 ]
 
@@ -169,6 +170,37 @@ def lawnmower(center, length, width, theta, spacing, start) -> Lawnmower:
     last = c + v_e[..., None] * e_e + u_e[..., None] * e_l
     search = n * long_
     return Lawnmower(n, long_, search, search + (n - 1.0) * d, first, last)
+
+
+def flown_rectangle(center, length, width, theta, spacing):
+    """The strip the lawnmower of :func:`lawnmower` actually sweeps: ``(center, L, E', alpha)``.
+
+    The rule of the project's rectangles (see docs/PLANNER.md): lines along the long side ``L``
+    (direction ``alpha``), the first ``d/2`` inside the ``+e_E`` edge, one every ``d`` while
+    inside, ``n = max(1, ceil(E/d - 1/2))`` lines. Their swaths tile the strip of width
+    ``E' = n d`` starting at that edge, centred ``(E - n d)/2`` along ``e_E`` from the centre
+    (a rectangle narrower than ``d`` has one line through its middle: the strip is centred and
+    ``E' = min(d, L)``). Flying this strip with lines along ``alpha`` -- by the project's rule
+    (:func:`~poc_env.theory.patterns.parallel_search`) or by the usual ``ceil(E'/d)`` lawnmower,
+    which coincide here -- gives exactly the same lines, hence the same eq. 17 flight time.
+    ``E'`` may exceed ``L`` (wide strips of short lines): the lines still run along ``alpha``,
+    so a consumer must use the returned direction, not "the long side".
+
+    Returns ``(center (..., 2), line_length L, strip_width E', lines_direction alpha)``.
+    """
+    c = np.asarray(center, dtype=float)
+    l_ = np.asarray(length, dtype=float)
+    w_ = np.asarray(width, dtype=float)
+    d = np.asarray(spacing, dtype=float)
+    alpha = np.where(l_ >= w_, theta, np.asarray(theta, dtype=float) + 0.5 * np.pi)
+    long_ = np.maximum(l_, w_)
+    short = np.minimum(l_, w_)
+    n = np.maximum(1.0, np.ceil(short / d - 0.5))
+    narrow = short < d
+    strip = np.where(narrow, np.minimum(d, long_), n * d)
+    shift = np.where(narrow, 0.0, 0.5 * (short - n * d))
+    e_e = np.stack([-np.sin(alpha), np.cos(alpha)], axis=-1)
+    return c + shift[..., None] * e_e, long_, strip, alpha
 
 
 # --------------------------------------------------------------------------- objective
@@ -398,6 +430,15 @@ class PlanObjective:
                     "takeoff_m": self.takeoff_m[i].tolist(),
                     "landing_m": self.landing_m[i].tolist(),
                     "n_lines": int(sc.n_lines[0, i]),
+                    "flown_rectangle": _flown_dict(
+                        flown_rectangle(
+                            (f["x_c"][i], f["y_c"][i]),
+                            f["l"][i],
+                            f["w"][i],
+                            f["theta"][i],
+                            f["d"][i],
+                        )
+                    ),
                     "waypoints_m": track.waypoints.tolist(),
                     "track_length_m": float(sc.track_length_m[0, i]),
                     "search_length_m": float(sc.search_length_m[0, i]),
@@ -461,3 +502,15 @@ class PlanObjective:
         j = self.alpha * float(posc) - self.beta * float(np.mean(t / usable))
         phi = overtime_s(t, self.endurance_s, self.usable_fraction)
         return -j + self.penalty_m * float(np.sum(phi))
+
+
+def _flown_dict(fr) -> dict[str, object]:
+    """A :func:`flown_rectangle` as plan.json-ready numbers."""
+    c, line_length, strip, alpha = fr
+    return {
+        "center_m": [float(c[0]), float(c[1])],
+        "line_length_m": float(line_length),
+        "strip_width_m": float(strip),
+        "lines_theta_rad": float(alpha),
+        "rule": "lines along lines_theta_rad at spacing d, d/2 inside each long edge",
+    }
