@@ -345,9 +345,27 @@ class PlanObjective:
         return arr.reshape(-1, self.dim)
 
     def split(self, x) -> dict[str, np.ndarray]:
-        """The encoding's fields, each (P, n): ``x_c, y_c, l, w, theta, d``."""
+        """The encoding's fields, each (P, n): ``x_c, y_c, l, w, theta, d``, repaired to the map.
+
+        Repair (the map rule, docs/PLANNER.md): a rectangle whose axis-aligned bounding box
+        (half-extents ``h_x = (|l cos θ| + |w sin θ|)/2``, ``h_y = (|l sin θ| + |w cos θ|)/2``)
+        is wider or taller than the map is scaled about its centre until it fits, then its
+        centre is moved to the nearest point that keeps the box inside the map. Every
+        rectangle therefore lies in the map, and so do its lines and waypoints; a rectangle
+        already inside is unchanged. Every evaluation and :meth:`decode` see the repaired
+        fields, so a plan's rectangle is the one scored and flown.
+        """
         v = self.as_population(x).reshape(-1, self.n, PARAMS_PER_UAV)
-        return {name: v[..., k] for k, name in enumerate(PARAM_NAMES)}
+        f = {name: v[..., k] for k, name in enumerate(PARAM_NAMES)}
+        x0, y0, x1, y1 = self.grid.bounds
+        c, s = np.abs(np.cos(f["theta"])), np.abs(np.sin(f["theta"]))
+        hx = 0.5 * (f["l"] * c + f["w"] * s)
+        hy = 0.5 * (f["l"] * s + f["w"] * c)
+        k = np.minimum(1.0, np.minimum(0.5 * (x1 - x0) / hx, 0.5 * (y1 - y0) / hy))
+        f["l"], f["w"], hx, hy = f["l"] * k, f["w"] * k, hx * k, hy * k
+        f["x_c"] = np.clip(f["x_c"], x0 + hx, np.maximum(x0 + hx, x1 - hx))
+        f["y_c"] = np.clip(f["y_c"], y0 + hy, np.maximum(y0 + hy, y1 - hy))
+        return f
 
     # -- vectorised evaluation ---------------------------------------------------------------
     def memberships(self, x) -> np.ndarray:
@@ -471,6 +489,8 @@ class PlanObjective:
         arr = np.asarray(x, dtype=float)
         if arr.shape != (self.dim,):
             raise ConfigError("x", arr.shape, f"one individual, shape ({self.dim},)")
+        f = self.split(arr)  # the map repair is the encoding's, shared with evaluate()
+        arr = np.stack([f[name][0] for name in PARAM_NAMES], axis=-1).reshape(-1)
         boxes = np.array(self.grid.cell_boxes(), dtype=object)
         w_sweep = self.sweep_width_m
         members: list[Any] = []

@@ -217,6 +217,35 @@ def test_flown_rectangle_of_a_narrow_and_a_wide_rectangle():
     assert (ln, strip) == (100.0, 30.0) and np.allclose(c, [0.0, 2.0])
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_every_waypoint_lies_in_the_map(paper, seed):
+    """Deliverable 5: the map repair keeps every rectangle, line and waypoint in the map."""
+    x0, y0, x1, y1 = paper.grid.bounds
+    x = _population(paper, 20, 200 + seed, compact=False)
+    for xi in x:
+        for uav in paper.decode(xi):
+            wp = np.asarray(uav["waypoints_m"])
+            assert (wp[:, 0] >= x0 - 1).all() and (wp[:, 0] <= x1 + 1).all()
+            assert (wp[:, 1] >= y0 - 1).all() and (wp[:, 1] <= y1 + 1).all()
+
+
+def test_map_repair_leaves_inside_rectangles_alone(paper):
+    x = _population(paper, 1, 300)[0].reshape(paper.n, 6)
+    cx, cy = np.mean(np.asarray(paper.grid.bounds).reshape(2, 2), axis=0)
+    x[:, 0:2] = (cx, cy)
+    x[:, 2:4] = 1000.0
+    f = paper.split(x.reshape(-1))
+    assert np.array_equal(np.stack([f[k][0] for k in ("x_c", "y_c", "l", "w")], -1), x[:, :4])
+    x[:, 0] = paper.grid.bounds[2] + 5000.0  # centre east of the map: pulled back inside
+    f = paper.split(x.reshape(-1))
+    assert np.allclose(
+        f["x_c"][0]
+        + 0.5
+        * (f["l"][0] * np.abs(np.cos(f["theta"][0])) + f["w"][0] * np.abs(np.sin(f["theta"][0]))),
+        paper.grid.bounds[2],
+    )
+
+
 def test_decoded_waypoints_lie_in_their_rectangles(paper):
     x = _population(paper, 1, 12)[0]
     for uav in paper.decode(x):
