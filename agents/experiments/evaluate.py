@@ -222,20 +222,19 @@ class Evaluation:
 
     def episodes_csv(self) -> str:
         """:meth:`episode_rows` as CSV."""
-        buf = io.StringIO()
-        rows = self.episode_rows()
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-        return buf.getvalue()
+        return _csv(self.episode_rows())
 
     def to_csv(self) -> str:
-        buf = io.StringIO()
-        rows = self.rows()
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-        return buf.getvalue()
+        return _csv(self.rows())
+
+
+def _csv(rows: list[dict[str, Any]]) -> str:
+    """Rows of one mapping each as CSV text, the first row's keys as the header."""
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()
 
 
 def effort_bound(

@@ -145,13 +145,7 @@ def lawnmower(center, length, width, theta, spacing, start) -> Lawnmower:
     order); the track ends on the other outer line, at the far end for odd ``n``.
     """
     c = np.asarray(center, dtype=float)
-    l_ = np.asarray(length, dtype=float)
-    w_ = np.asarray(width, dtype=float)
-    d = np.asarray(spacing, dtype=float)
-    alpha = np.where(l_ >= w_, theta, np.asarray(theta, dtype=float) + 0.5 * np.pi)
-    long_ = np.maximum(l_, w_)
-    short = np.minimum(l_, w_)
-    n = np.maximum(1.0, np.ceil(short / d - 0.5))
+    alpha, long_, short, d, n = _lines(length, width, theta, spacing)
     e_l = np.stack([np.cos(alpha), np.sin(alpha)], axis=-1)
     e_e = np.stack([-np.sin(alpha), np.cos(alpha)], axis=-1)
     v_first = np.where(short < d, 0.0, 0.5 * (short - d))
@@ -174,6 +168,17 @@ def lawnmower(center, length, width, theta, spacing, start) -> Lawnmower:
     return Lawnmower(n, long_, search, search + (n - 1.0) * d, first, last)
 
 
+def _lines(length, width, theta, spacing):
+    """The one rectangle rule: lines along the long side (direction ``alpha``), ``n = max(1,
+    ceil(E/d - 1/2))`` of them across the short side ``E``. Returns (alpha, L, E, d, n)."""
+    l_ = np.asarray(length, dtype=float)
+    w_ = np.asarray(width, dtype=float)
+    d = np.asarray(spacing, dtype=float)
+    alpha = np.where(l_ >= w_, theta, np.asarray(theta, dtype=float) + 0.5 * np.pi)
+    short = np.minimum(l_, w_)
+    return alpha, np.maximum(l_, w_), short, d, np.maximum(1.0, np.ceil(short / d - 0.5))
+
+
 def flown_rectangle(center, length, width, theta, spacing):
     """The strip the lawnmower of :func:`lawnmower` actually sweeps: ``(center, L, E', alpha)``.
 
@@ -191,13 +196,7 @@ def flown_rectangle(center, length, width, theta, spacing):
     Returns ``(center (..., 2), line_length L, strip_width E', lines_direction alpha)``.
     """
     c = np.asarray(center, dtype=float)
-    l_ = np.asarray(length, dtype=float)
-    w_ = np.asarray(width, dtype=float)
-    d = np.asarray(spacing, dtype=float)
-    alpha = np.where(l_ >= w_, theta, np.asarray(theta, dtype=float) + 0.5 * np.pi)
-    long_ = np.maximum(l_, w_)
-    short = np.minimum(l_, w_)
-    n = np.maximum(1.0, np.ceil(short / d - 0.5))
+    alpha, long_, short, d, n = _lines(length, width, theta, spacing)
     narrow = short < d
     strip = np.where(narrow, np.minimum(d, long_), n * d)
     shift = np.where(narrow, 0.0, 0.5 * (short - n * d))
