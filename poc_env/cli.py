@@ -403,6 +403,7 @@ def _plan(
         origin_deg=args.origin,
         projection=args.projection,
         zone=args.utm_zone,
+        preset=args.preset,
     )
     print(plan_table(plan))
     if plot is not None:
@@ -606,6 +607,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=None,
         help=f"default: scenario planner G; 1 to {limits.MAXITER_MAX}",
+    )
+    p.add_argument(
+        "--preset",
+        default="paper",
+        help="DE settings: paper (the scenario's, the paper's F0 0.2, CR 0.1; default) or "
+        "tuned (same NP, G; F0 0.15, CR 0.9, measured in docs/PLANNER.md)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

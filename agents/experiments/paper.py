@@ -28,6 +28,9 @@ policy) by default; ``--quick`` is a reduced budget (NP = 20, G = 30, 2 seeds, 2
 three points per curve) that runs in about a minute and is what the test suite runs.
 Where an experiment runs several seeds per setting, the table shows the mean with a 95 %
 interval and the best plan (what a planner would fly: the best of its restarts).
+``--preset tuned`` gives every plan the measured DE constants instead of the paper's
+(:data:`agents.planning.optimizers.TUNED_DE`, same NP and G; docs/PLANNER.md section 4);
+``paper`` (the default) is the paper's settings. ``table7``'s ``de_plan`` policy keeps its own.
 
 Seeds: experiment ``NAME`` with ``--seed S`` uses optimiser seeds ``S .. S + seeds - 1``
 and episode seeds ``1000 + S ..``; every job is independent of ``--workers`` and of the
@@ -38,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import io
 import time
 from collections.abc import Callable, Sequence
@@ -105,6 +109,8 @@ class Budget:
     seeds: int
     episodes: int
     quick: bool
+    #: DE settings preset of every plan (:func:`agents.planning.optimizers.preset_settings`).
+    preset: str = "paper"
 
     def np_g(self, sc: Scenario) -> tuple[int, int]:
         return (self.popsize or sc.planner.population, self.maxiter or sc.planner.generations)
@@ -293,7 +299,9 @@ def exp_table6(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
 
     sc = load_scenario("paper_6_2")
     popsize, maxiter = budget.np_g(sc)
-    plan = _plan_job((sc, {"seed": seed, "popsize": popsize, "maxiter": maxiter}))["plan"]
+    plan = _plan_job(
+        (sc, {"seed": seed, "popsize": popsize, "maxiter": maxiter, "preset": budget.preset})
+    )["plan"]
     rows = []
     for u, p in zip(plan["uavs"], PAPER_TABLE6):
         r = u["rectangle"]
@@ -431,7 +439,16 @@ def exp_fig22(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     sc = load_scenario("paper_6_2")
     popsize, maxiter = budget.np_g(sc)
     jobs = [
-        (sc, {"optimizer": o, "seed": seed + k, "popsize": popsize, "maxiter": maxiter})
+        (
+            sc,
+            {
+                "optimizer": o,
+                "seed": seed + k,
+                "popsize": popsize,
+                "maxiter": maxiter,
+                "preset": budget.preset,
+            },
+        )
         for o in OPTIMIZERS
         for k in range(budget.seeds)
     ]
@@ -445,14 +462,24 @@ def exp_fig22(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     fig = _convergence_plot(
         {o: [r["history"] for r in by[o]] for o in OPTIMIZERS},
         out / "fig22.png",
-        f"paper_6_2, NP {popsize}, G {maxiter}, {budget.seeds} seeds (mean ± sd)",
+        f"paper_6_2, NP {popsize}, G {maxiter}, preset {budget.preset}, {budget.seeds} seeds "
+        "(mean ± sd)",
         "share of the evaluation budget",
     )
     cols = [("optimizer", "optimizer", ""), *_SETTING_COLS, ("wins_vs_classic_de", "wins", "d")]
     table = _fmt_table(rows, cols) + (
         "\nwins: seeds on which the optimiser's final objective beats classic DE's (same seed)."
+        f"\npreset {budget.preset}: F0, CR of the two DEs "
+        f"({', '.join(f'{k} {v}' for k, v in _de_constants(sc, budget.preset).items())})."
     )
     return Result("fig22", rows, table, [fig])
+
+
+def _de_constants(sc: Scenario, preset: str) -> dict[str, float]:
+    from agents.planning.optimizers import preset_settings
+
+    pl = preset_settings(preset, sc.planner)
+    return {"F0": pl["f0"], "CR": pl["cr"]}
 
 
 def _sweep(
@@ -576,8 +603,8 @@ def exp_table8(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     sc = load_scenario("paper_6_2")
     popsize, maxiter = budget.np_g(sc)
     sizes = list(range(4, 9))
-    jobs = [(sc, {"popsize": popsize, "maxiter": maxiter, "seed": seed + k}, sizes)
-            for k in range(budget.seeds)]  # fmt: skip
+    kw = {"popsize": popsize, "maxiter": maxiter, "preset": budget.preset}
+    jobs = [(sc, {**kw, "seed": seed + k}, sizes) for k in range(budget.seeds)]
     chains = runner.map(_fleet_job, jobs, "table8")
     settings: list[tuple[Any, Scenario, dict[str, Any]]] = [(n, sc, {}) for n in sizes]
     by = {n: [chain[i] for chain in chains] for i, n in enumerate(sizes)}
@@ -612,7 +639,7 @@ def exp_fig23(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     w_km = base.sensor.sweep_width_m / 1e3
     settings = [
         (f, load_scenario("paper_6_2", {"sensor.sweep_width_km": w_km * f}),
-         {"popsize": popsize, "maxiter": maxiter})
+         {"popsize": popsize, "maxiter": maxiter, "preset": budget.preset})
         for f in _scales(budget, 0.6, 1.4)
     ]  # fmt: skip
     return _sweep("fig23", budget, runner, out, seed, settings, "w_scale", "W / 5 km")
@@ -649,7 +676,7 @@ def scaled_area(factor: float) -> Scenario:
 
 def exp_fig24(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     popsize, maxiter = budget.np_g(load_scenario("paper_6_2"))
-    kw = {"popsize": popsize, "maxiter": maxiter}
+    kw = {"popsize": popsize, "maxiter": maxiter, "preset": budget.preset}
     settings = [(f, scaled_area(f), kw) for f in _scales(budget, 0.5, 1.5)]
     return _sweep("fig24", budget, runner, out, seed, settings, "area_scale", "side length x")
 
@@ -659,7 +686,7 @@ def _parameter(name: str, budget, runner, out, seed, key, values, label) -> Resu
     popsize, maxiter = budget.np_g(sc)
     jobs = []
     for v in values:
-        kw = {"popsize": popsize, "maxiter": maxiter, key: v}
+        kw = {"popsize": popsize, "maxiter": maxiter, "preset": budget.preset, key: v}
         jobs += [(sc, {**kw, "seed": seed + k}) for k in range(budget.seeds)]
     res = runner.map(_plan_job, jobs, name)
     n = budget.seeds
@@ -709,14 +736,23 @@ def run_experiment(
     seed: int = 0,
     progress: bool = False,
     echo: Callable[[str], None] | None = print,
+    preset: str = "paper",
 ) -> list[Result]:
-    """Run experiment ``name`` (or ``all``); write and return its results."""
+    """Run experiment ``name`` (or ``all``); write and return its results.
+
+    ``preset`` (``paper`` or ``tuned``, :func:`agents.planning.optimizers.preset_settings`):
+    the DE settings of every plan the experiments make.
+    """
+    from agents.planning.optimizers import PRESETS
+
     if name != "all" and name not in EXPERIMENTS:
         raise ConfigError("experiment", name, "one of " + ", ".join([*EXPERIMENTS, "all"]))
+    if not isinstance(preset, str) or preset not in PRESETS:
+        raise ConfigError("preset", preset, " or ".join(PRESETS))
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ConfigError("seed", seed, "an integer >= 0")
     names = list(EXPERIMENTS) if name == "all" else [name]
-    budget = QUICK if quick else FULL
+    budget = dataclasses.replace(QUICK if quick else FULL, preset=preset)
     runner = Runner(workers, progress)
     results = []
     try:
@@ -757,6 +793,11 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--workers", type=int, default=1, help="worker processes")
     ap.add_argument("--seed", type=int, default=0, help="first optimiser seed")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
+    ap.add_argument(
+        "--preset",
+        default="paper",
+        help="DE settings of every plan: paper (default) or tuned (docs/PLANNER.md)",
+    )
 
 
 def cmd(ns: argparse.Namespace) -> int:
@@ -768,6 +809,7 @@ def cmd(ns: argparse.Namespace) -> int:
         workers=ns.workers,
         seed=ns.seed,
         progress=not ns.quiet,
+        preset=ns.preset,
     )
     print(f"\ntotal wall time {time.perf_counter() - t0:.1f} s ({ns.workers} workers)")
     return 0

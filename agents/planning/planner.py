@@ -28,7 +28,7 @@ import numpy as np
 import poc_env.limits as limits
 from agents.planning.export import SCHEMA, make_crs
 from agents.planning.objective import PlanObjective
-from agents.planning.optimizers import get_optimizer
+from agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.io import write_text_atomic
@@ -50,8 +50,15 @@ def make_plan(
     origin_deg: tuple[float, float] | str | None = None,
     projection: str = "aeqd",
     zone: int | None = None,
+    preset: str = "paper",
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-1 dict (see the module docstring).
+
+    ``preset`` (:func:`agents.planning.optimizers.preset_settings`): ``paper`` runs the
+    scenario's ``planner`` settings (the paper's), ``tuned`` the same budget with the measured
+    DE constants :data:`~agents.planning.optimizers.TUNED_DE` (F0, CR; DE optimisers only);
+    ``popsize`` and ``maxiter`` override the preset's budget. Recorded in
+    ``optimizer.settings.preset``.
 
     ``origin_deg``: (lat, lon) of the map's (0, 0); with it the plan records its ``crs``
     (``projection`` ``aeqd`` or ``utm`` in UTM ``zone``, see
@@ -66,12 +73,12 @@ def make_plan(
     if prior is None:
         prior = build_prior(sc.map)
     obj = PlanObjective(sc, prior, uavs=uavs)
-    pl = sc.planner
+    pl = preset_settings(preset, sc.planner)
     settings: dict[str, Any] = {
-        "popsize": pl.population
+        "popsize": pl["popsize"]
         if popsize is None
         else as_int("popsize", popsize, 4, limits.POPSIZE_MAX),
-        "maxiter": pl.generations
+        "maxiter": pl["maxiter"]
         if maxiter is None
         else as_int("maxiter", maxiter, 1, limits.MAXITER_MAX),
     }
@@ -82,9 +89,10 @@ def make_plan(
         f"population of {settings['popsize']} plans of {obj.n} UAVs over {prior.size} cells",
     )
     kwargs: dict[str, Any] = dict(settings)
+    settings["preset"] = preset
     if optimizer in ("adaptive_de", "classic_de"):
-        kwargs.update(f0=pl.f0, cr=pl.cr)
-        settings.update(f0=pl.f0, cr=pl.cr)
+        kwargs.update(f0=pl["f0"], cr=pl["cr"])
+        settings.update(f0=pl["f0"], cr=pl["cr"])
         if init is not None:
             kwargs["init"] = init
             settings["warm_start"] = int(np.atleast_2d(init).shape[0])

@@ -203,3 +203,63 @@ def test_other_bad_arguments():
         adaptive_de(shifted_sphere, BOUNDS_12, rng="seed")
     with pytest.raises(ConfigError, match="uavs"):
         PlanObjective("small", uavs=0)
+
+
+# ------------------------------------------------------------------------ presets (issue 12)
+
+
+def test_presets_paper_is_the_planner_section_and_tuned_changes_only_f0_cr():
+    from agents.planning.optimizers import TUNED_DE, preset_settings
+
+    pl = PlannerConfig()
+    paper = preset_settings("paper", pl)
+    assert paper == {"popsize": pl.population, "maxiter": pl.generations, "f0": pl.f0, "cr": pl.cr}
+    assert (paper["f0"], paper["cr"]) == (0.2, 0.1)  # the paper's §6 constants
+    tuned = preset_settings("tuned", pl)
+    assert tuned == {**paper, **TUNED_DE}
+    assert (tuned["f0"], tuned["cr"]) != (paper["f0"], paper["cr"])
+
+
+@pytest.mark.parametrize("bad", ["bogus", "", "Paper", None, 1])
+def test_unknown_preset_is_a_config_error(bad):
+    from agents.experiments.paper import run_experiment
+    from agents.planning.optimizers import preset_settings
+    from agents.planning.planner import make_plan
+
+    for call in (
+        lambda: preset_settings(bad, PlannerConfig()),
+        lambda: make_plan("small", preset=bad, popsize=4, maxiter=1),
+        lambda: run_experiment("fig22", quick=True, out="/nonexistent", preset=bad, echo=None),
+    ):
+        with pytest.raises(ConfigError, match=r"preset: got .*; allowed: paper or tuned"):
+            call()
+
+
+def test_cli_preset_bogus_is_a_clear_error(capsys, tmp_path):
+    from poc_env.cli import main
+
+    for argv in (
+        ["plan", "--preset", "bogus", "--quiet", "--out", str(tmp_path / "p.json")],
+        ["experiment", "fig22", "--quick", "--preset", "bogus", "--out", str(tmp_path / "e")],
+    ):
+        assert main(argv) == 2
+        assert "error: preset: got 'bogus'; allowed: paper or tuned" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_tuned_preset_reaches_the_optimizer():
+    """make_plan(preset="tuned") runs adaptive DE with TUNED_DE's F0 and CR: its plan is the
+    one a direct call with those constants finds (same seed), not the paper preset's."""
+    from agents.planning.optimizers import TUNED_DE
+    from agents.planning.planner import make_plan
+
+    obj = PlanObjective("small")
+    budget = dict(popsize=12, maxiter=15)
+    tuned = make_plan("small", preset="tuned", seed=3, **budget)
+    paper = make_plan("small", preset="paper", seed=3, **budget)
+    direct = adaptive_de(obj, obj.bounds, rng=3, **budget, **TUNED_DE)
+    np.testing.assert_array_equal(tuned["x"], direct.x)
+    assert not np.array_equal(paper["x"], tuned["x"])
+    s = tuned["optimizer"]["settings"]
+    assert (s["preset"], s["f0"], s["cr"]) == ("tuned", TUNED_DE["f0"], TUNED_DE["cr"])
+    assert paper["optimizer"]["settings"]["preset"] == "paper"
