@@ -22,6 +22,12 @@ DE (constant F = F0) on seeds ``0 .. --seeds - 1`` (default 10), their means, ho
 adaptive DE wins, and the adaptive plans' mean POSC against the physical optimum for their
 effort (:func:`poc_env.theory.bound.physical_optimum`). It takes a few seconds per seed.
 
+``--preset tuned`` times and scores the tuned DE constants instead of the paper's (same NP, G;
+:func:`agents.planning.optimizers.preset_settings`). ``--sweep NP,G,F0,CR ...`` runs adaptive DE
+with each candidate on seeds ``--seed0 .. --seed0 + --seeds - 1`` and prints one table row per
+candidate (mean and sd of the final eq. 26 objective, mean POS_C, median plan time): the sweep
+behind the ``tuned`` preset (docs/PLANNER.md section 4).
+
 ``main(argv)`` returns ``{figure: value, ...}``.
 """
 
@@ -41,8 +47,14 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 from agents.planning.objective import PlanObjective  # noqa: E402
-from agents.planning.optimizers import adaptive_de, classic_de, scipy_de  # noqa: E402
+from agents.planning.optimizers import (  # noqa: E402
+    adaptive_de,
+    classic_de,
+    preset_settings,
+    scipy_de,
+)
 from poc_env.config import load_scenario  # noqa: E402
+from poc_env.errors import ConfigError  # noqa: E402
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -53,8 +65,45 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--maxiter", type=int, default=None, help="G (default: the scenario's)")
     p.add_argument("--runs", type=int, default=3, help="timed runs per figure (median)")
     p.add_argument("--quality", action="store_true", help="adaptive vs classic DE (slow)")
-    p.add_argument("--seeds", type=int, default=10, help="seeds for --quality")
+    p.add_argument("--seeds", type=int, default=10, help="seeds for --quality and --sweep")
+    p.add_argument("--preset", default="paper", help="DE settings: paper (default) or tuned")
+    p.add_argument(
+        "--sweep", nargs="+", default=None, metavar="NP,G,F0,CR", help="adaptive DE candidates"
+    )
+    p.add_argument("--seed0", type=int, default=0, help="first seed of --sweep")
     return p
+
+
+def _candidate(text: str) -> tuple[int, int, float, float]:
+    try:
+        a, b, c, d = text.split(",")
+        return int(a), int(b), float(c), float(d)
+    except ValueError:
+        raise ConfigError("sweep", text, "NP,G,F0,CR (e.g. 100,300,0.15,0.9)") from None
+
+
+def sweep(obj: PlanObjective, candidates: list[str], seeds: range) -> dict[str, float]:
+    """One row per candidate ``NP,G,F0,CR``: eq. 26 mean and sd, POS_C mean, median time."""
+    cands = [_candidate(c) for c in candidates]
+    print("| NP | G | F0 | CR | eq. 26 mean | sd | POS_C mean | plan_s (median) |", flush=True)
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |", flush=True)
+    out: dict[str, float] = {}
+    for npop, gens, f0, cr in cands:
+        fs, ts, ps = [], [], []
+        for s in seeds:
+            t0 = time.perf_counter()
+            r = adaptive_de(obj, obj.bounds, popsize=npop, maxiter=gens, f0=f0, cr=cr, rng=s)
+            ts.append(time.perf_counter() - t0)
+            fs.append(r.fun)
+            ps.append(float(obj.evaluate(r.x[None]).posc[0]))
+        key = f"{npop},{gens},{f0:g},{cr:g}"
+        out[key] = float(np.mean(fs))
+        print(
+            f"| {npop} | {gens} | {f0:g} | {cr:g} | {np.mean(fs):.4f} | {np.std(fs):.4f} "
+            f"| {np.mean(ps):.4f} | {statistics.median(ts):.2f} |",
+            flush=True,
+        )
+    return out
 
 
 def _line(name: str, value: float, note: str = "") -> None:
@@ -65,13 +114,17 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     args = _parser().parse_args(argv)
     sc = load_scenario(args.scenario)
     obj = PlanObjective(sc, uavs=args.uavs)
-    npop = args.popsize or sc.planner.population
-    gens = args.maxiter or sc.planner.generations
-    f0, cr = sc.planner.f0, sc.planner.cr
+    if args.sweep:
+        adaptive_de(obj, obj.bounds, popsize=8, maxiter=2, rng=0)  # warm-up (JIT)
+        return sweep(obj, args.sweep, range(args.seed0, args.seed0 + args.seeds))
+    preset = preset_settings(args.preset, sc.planner)
+    npop = args.popsize or preset["popsize"]
+    gens = args.maxiter or preset["maxiter"]
+    f0, cr = preset["f0"], preset["cr"]
     budget: dict[str, Any] = dict(popsize=npop, maxiter=gens)
     print(
         f"# {sc.name}: {obj.n} UAVs, {obj.grid.ny} x {obj.grid.nx} cells, NP {npop}, G {gens}, "
-        f"F0 {f0}, CR {cr}; one core; medians of {args.runs} runs",
+        f"F0 {f0}, CR {cr} (preset {args.preset}); one core; medians of {args.runs} runs",
         flush=True,
     )
     # warm-up: compile (or load) the kernels
