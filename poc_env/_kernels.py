@@ -1047,6 +1047,43 @@ def _minus_rects(
 
 
 @_jit_inline
+def _span_point(xm, ym, xn, yn, y_lo, y_hi, lo, hi):
+    """``lo, hi`` widened by corner m (if in the band ``[y_lo, y_hi]``) and by the points where
+    the edge m -> n crosses the band's two lines (interpolated along the edge, as in
+    :func:`_clip`: well conditioned at any angle)."""
+    if y_lo <= ym <= y_hi:
+        lo = min(lo, xm)
+        hi = max(hi, xm)
+    for yy in (y_lo, y_hi):
+        if (ym < yy < yn) or (yn < yy < ym):
+            x = xm + (yy - ym) / (yn - ym) * (xn - xm)
+            lo = min(lo, x)
+            hi = max(hi, x)
+    return lo, hi
+
+
+@_jit_inline
+def _row_span(dy, half, c, s, a, b):
+    """x-range, from the centre, of the rectangle (half sides ``a`` along ``(c, s)``, ``b``
+    across) within the band ``|y - dy| <= half``; ``lo > hi`` when they do not meet. The same
+    range as clipping the rectangle to the band (:func:`_clip`), without the polygon arrays:
+    the corners inside the band and the edges' crossings of its two lines."""
+    y_lo = dy - half
+    y_hi = dy + half
+    x0_, y0_ = -a * c + b * s, -a * s - b * c
+    x1_, y1_ = a * c + b * s, a * s - b * c
+    x2_, y2_ = a * c - b * s, a * s + b * c
+    x3_, y3_ = -a * c - b * s, -a * s + b * c
+    lo = math.inf
+    hi = -math.inf
+    lo, hi = _span_point(x0_, y0_, x1_, y1_, y_lo, y_hi, lo, hi)
+    lo, hi = _span_point(x1_, y1_, x2_, y2_, y_lo, y_hi, lo, hi)
+    lo, hi = _span_point(x2_, y2_, x3_, y3_, y_lo, y_hi, lo, hi)
+    lo, hi = _span_point(x3_, y3_, x0_, y0_, y_lo, y_hi, lo, hi)
+    return lo, hi
+
+
+@_jit_inline
 def _inside_columns(dy, c, s, ai, bi, ox, h, i0, i1):
     """Columns ``[f0, f1)`` of ``[i0, i1)`` whose cells lie wholly inside the rectangle.
 
@@ -1157,23 +1194,13 @@ def rectangle_fractions(
             small = half * min(ac, as_)
             for j in range(j0, j1):
                 dy = y0 + (j + 0.5) * h - cy[r]
-                # the rectangle (relative to its centre) clipped to this row's band -> columns
-                for m in range(4):
-                    su = -a if (m == 0 or m == 3) else a
-                    sv = -b if m < 2 else b
-                    px[m] = su * c - sv * s
-                    py[m] = su * s + sv * c
-                n = _clip(px, py, 4, qx, qy, 0.0, 1.0, dy + half)
-                n = _clip(qx, qy, n, px, py, 0.0, -1.0, half - dy)
-                if n == 0:
+                # the rectangle's x-range within this row's band -> columns (grown by 1e-9 h:
+                # a column of zero area is harmless, the per-cell tests give it nothing)
+                lo_x, hi_x = _row_span(dy, half, c, s, a, b)
+                if not lo_x <= hi_x:
                     continue
-                lo_x = px[0]
-                hi_x = px[0]
-                for m in range(1, n):
-                    lo_x = min(lo_x, px[m])
-                    hi_x = max(hi_x, px[m])
-                i0 = max(math.floor((cx[r] + lo_x - x0) / h), 0)
-                i1 = min(math.ceil((cx[r] + hi_x - x0) / h), nx)
+                i0 = max(math.floor((cx[r] + lo_x - x0) / h - 1e-9), 0)
+                i1 = min(math.ceil((cx[r] + hi_x - x0) / h + 1e-9), nx)
                 f0, f1 = i1, i1
                 if not centres:
                     f0, f1 = _inside_columns(dy, c, s, a - hp, b - hp, cx[r] - x0, h, i0, i1)
