@@ -956,15 +956,36 @@ def _cell_square(h, qx, qy):
 
 
 @_jit_inline
-def _clip_rect(px, py, n, qx, qy, rx, ry, c, s, a, b):
+def _clip_rect(px, py, n, qx, qy, rx, ry, c, s, a, b, half):
     """``p[:n]`` clipped to the rectangle centred at ``(rx, ry)`` (axes ``(c, s)``, half sides
-    ``a``, ``b``), both in the same coordinates; the result in ``q`` (``p`` is overwritten)."""
+    ``a``, ``b``), both in the same coordinates; the result in ``q`` (``p`` is overwritten).
+
+    ``p`` lies in the cell ``[-half, half]^2`` (cell-centred coordinates), whose projection on
+    a side's normal lies within ``+-half (|c| + |s|)``: a side whose line misses the cell
+    leaves ``p`` as it is (the clip would copy it) and is skipped, and a side with the cell
+    wholly beyond it leaves nothing. Most cells are cut by one or two of the four sides.
+    """
+    ext = half * (abs(c) + abs(s))
     eo = c * rx + s * ry  # u of the rectangle's centre along e = (c, s)
     fo = -s * rx + c * ry  # v along f = (-s, c)
-    n = _clip(px, py, n, qx, qy, c, s, eo + a)  # u <= a
-    n = _clip(qx, qy, n, px, py, -c, -s, a - eo)  # u >= -a
-    n = _clip(px, py, n, qx, qy, -s, c, fo + b)  # v <= b
-    return _clip(qx, qy, n, px, py, s, -c, b - fo)  # v >= -b, the result in p
+    for side in range(4):
+        if side == 0:  # u <= a
+            nx_, ny_, t = c, s, eo + a
+        elif side == 1:  # u >= -a
+            nx_, ny_, t = -c, -s, a - eo
+        elif side == 2:  # v <= b
+            nx_, ny_, t = -s, c, fo + b
+        else:  # v >= -b
+            nx_, ny_, t = s, -c, b - fo
+        if t >= ext:
+            continue
+        if t <= -ext:
+            return 0
+        n = _clip(px, py, n, qx, qy, nx_, ny_, t)
+        for m in range(n):
+            px[m] = qx[m]
+            py[m] = qy[m]
+    return n
 
 
 @_jit_inline
@@ -1242,7 +1263,7 @@ def rectangle_fractions(
                         m_own = _slab_cdf(b - v, big, small) - _slab_cdf(-b - v, big, small)
                     else:  # near a corner: clip the cell by the rectangle
                         n = _cell_square(h, px, py)
-                        n = _clip_rect(px, py, n, qx, qy, -dx, -dy, c, s, a, b)
+                        n = _clip_rect(px, py, n, qx, qy, -dx, -dy, c, s, a, b, half)
                         m_own = _area(px, py, n) * inv_area
                     plain = m_own
                     if earlier == 1 and own_full:  # the cell minus one rectangle
@@ -1250,17 +1271,28 @@ def rectangle_fractions(
                     elif earlier == 1:  # (cell ∩ Q_k) minus (cell ∩ Q_k ∩ Q_e)
                         e = parts[j, i, 0]
                         n = _cell_square(h, px, py)
-                        n = _clip_rect(px, py, n, qx, qy, -dx, -dy, c, s, a, b)
+                        n = _clip_rect(px, py, n, qx, qy, -dx, -dy, c, s, a, b, half)
                         ex = cx[e] - (cx[r] + dx)
                         ey_ = cy[e] - (cy[r] + dy)
                         n = _clip_rect(
-                            px, py, n, qx, qy, ex, ey_, cos_t[e], sin_t[e], half_l[e], half_w[e]
+                            px,
+                            py,
+                            n,
+                            qx,
+                            qy,
+                            ex,
+                            ey_,
+                            cos_t[e],
+                            sin_t[e],
+                            half_l[e],
+                            half_w[e],
+                            half,
                         )
                         m_own = m_own - _area(px, py, n) * inv_area
                     elif earlier:
                         n = _cell_square(h, sx[0], sy[0])
                         if not own_full:
-                            n = _clip_rect(sx[0], sy[0], n, qx, qy, -dx, -dy, c, s, a, b)
+                            n = _clip_rect(sx[0], sy[0], n, qx, qy, -dx, -dy, c, s, a, b, half)
                         for q in range(earlier):
                             e = parts[j, i, q]
                             rx[q] = cx[e] - (cx[r] + dx)
