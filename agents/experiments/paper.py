@@ -394,13 +394,13 @@ def _convergence_plot(curves: dict[str, list[list[float]]], path: Path, title: s
         m, s = h.mean(axis=0), h.std(axis=0)
         ax.plot(x, m, color=f"C{k}", label=label)
         ax.fill_between(x, m - s, m + s, color=f"C{k}", alpha=0.15)
-        lows.append(float(np.min(m - s)))
+        lows.append(float(m[-1] - s[-1]))
         tops.append(float(m[-1]))
     # Overtime penalties (eq. 26, M = 1000 per second) make early values 1e7 times the final
     # ones; when every curve ends feasible (eq. 26 <= 0), show the feasible range only.
     lo = min(lows)
     if max(tops) <= 0.0 and np.isfinite(lo) and lo < 0.0:
-        ax.set_ylim(1.05 * lo, -0.05 * lo)
+        ax.set_ylim(1.1 * lo, -0.05 * lo)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("best eq. 26 objective (lower is better)")
     ax.set_title(title)
