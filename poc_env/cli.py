@@ -404,6 +404,7 @@ def _plan(
         projection=args.projection,
         zone=args.utm_zone,
         preset=args.preset,
+        planner=getattr(args, "planner", "de"),
     )
     print(plan_table(plan))
     if plot is not None:
@@ -613,6 +614,13 @@ def build_parser() -> argparse.ArgumentParser:
         default="paper",
         help="DE settings: paper (the scenario's, the paper's F0 0.2, CR 0.1; default) or "
         "tuned (same NP, G; F0 0.15, CR 0.9, measured in docs/PLANNER.md)",
+    )
+    p.add_argument(
+        "--planner",
+        default="de",
+        choices=["de", "allocation"],
+        help="de: the paper's optimiser plan (default); allocation: routes from the reach-aware "
+        "optimal allocation (docs/PLANNER.md)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

@@ -51,8 +51,13 @@ def make_plan(
     projection: str = "aeqd",
     zone: int | None = None,
     preset: str = "paper",
+    planner: str = "de",
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-1 dict (see the module docstring).
+
+    ``planner``: ``de`` (this optimiser-based plan) or ``allocation``
+    (:func:`agents.planning.allocation.make_allocation_plan`, routes from the reach-aware
+    optimal allocation; the optimiser arguments do not apply to it).
 
     ``preset`` (:func:`agents.planning.optimizers.preset_settings`): ``paper`` runs the
     scenario's ``planner`` settings (the paper's), ``tuned`` the same budget with the measured
@@ -67,6 +72,14 @@ def make_plan(
     ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
     population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
     """
+    if planner == "allocation":
+        from agents.planning.allocation import make_allocation_plan
+
+        return make_allocation_plan(
+            scenario, prior=prior, map_source=map_source, uavs=uavs, seed=seed
+        )
+    if planner != "de":
+        raise ConfigError("planner", planner, "de or allocation")
     sc = load_scenario(scenario)
     opt = get_optimizer(optimizer)
     crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)

@@ -176,6 +176,7 @@ register("greedy_bayes", "agents.policies.greedy:GreedyBayesPolicy")
 register("potential_game", "agents.policies.game:PotentialGamePolicy")
 register("de_receding", "agents.policies.receding:DERecedingPolicy")
 register("de_plan", "agents.policies.de_plan:DEPlanPolicy")
+register("allocation_plan", "agents.policies.allocation:AllocationPlanPolicy")
 register(
     "ppo",
     "agents.rl.policy:PPOPolicy",

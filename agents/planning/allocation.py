@@ -1,0 +1,392 @@
+"""The allocation planner: flyable tracks from the reach-aware optimal allocation of effort.
+
+``poc-env plan --planner allocation`` and the ``allocation_plan`` policy
+(:mod:`agents.policies.allocation`). Steps of :func:`make_allocation_plan`:
+
+1. **Allocation.** :func:`poc_env.theory.bound.reach_optimum` with the plan's own limits: each
+   UAV sweeps ``eta W v_s`` m^2/s (``v_s`` the search speed, ``eta`` the share of pattern time
+   spent on search lines, below) for the usable endurance 0.85 T (eq. 18) and needs the
+   round trip ``(d(take-off, cell) + d(cell, landing)) / v_c`` at cruise speed to reach a cell.
+   The result is the coverage ``C_j`` each cell should get.
+2. **Tracks.** Coverage is laid as nested layers of parallel lines along x. With
+   ``Delta = max C / K`` (``K`` = ``levels``) the lines lie on a lattice of spacing
+   ``h = W / max C`` (eq. 10: ``C = W / d``); lattice line ``i`` belongs to layer
+   ``k = i mod K + 1`` and flies over the cells of its row whose coverage is at least
+   ``(k - 1/2) Delta``. A cell of coverage ``C`` is crossed by the lines of ``round(C / Delta)``
+   layers, i.e. by lines at spacing ``W / (round(C / Delta) Delta)``, the coverage the allocation
+   asks for up to the rounding. Lines are clipped to the cells, so nothing is flown outside the
+   map.
+3. **Route.** The lines of each connected region (8-connected cells of positive coverage) are
+   flown boustrophedon (alternate directions, line by line in y); regions are chained nearest
+   first from the airfields.
+4. **Assignment.** The route is cut into contiguous pieces, one per UAV, greedily: each piece
+   goes to the free UAV whose take-off is nearest its first point and grows while the UAV's
+   eq. 17-18 time (transit at ``v_c`` out and home, lines and connections at ``v_s``, a
+   half-turn at the maximum turn rate per line end) fits ``margin x 0.85 T``. Contiguous
+   pieces put UAVs on different lines of the route at different times (deconfliction by
+   construction; flown separation is measured, see docs/PLANNER.md).
+5. **Effort scale.** Turns, connections and the cut into pieces cost time the allocation does
+   not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and the plan keeps the one of
+   highest planned POS (lines no UAV can fit are left unflown).
+
+The plan is the same dict as :func:`agents.planning.planner.make_plan` (every schema-1 field of
+:mod:`agents.planning.export`): per UAV the ``rectangle`` is the axis-aligned bounding box of its
+search lines (``theta_deg`` 0) and ``spacing_m`` the finest line spacing it flies; only
+``waypoints_m`` is the route (``route`` true in the plan). Extra fields: ``planner``
+(``"allocation"``), ``bound_reach`` (:func:`poc_env.theory.bound.reach_bound`, the environment's
+reach-aware bound), ``allocation_pos`` (the allocation's own POS), ``eta`` and ``reason`` (why a
+plan is empty, else null). ``posc`` is the planned POS: each cell's coverage from the line
+length flown inside it (eq. 10 per cell, connections and transit not credited).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from agents.planning.export import SCHEMA
+from poc_env.config import Scenario, load_scenario
+from poc_env.errors import ConfigError, as_int
+from poc_env.theory.bound import cell_distances, reach_bound, reach_optimum
+from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.search_theory import pod_from_coverage
+
+#: default number of coverage layers (K) and share of 0.85 T a route may fill.
+LEVELS = 6
+MARGIN = 0.95
+#: bearing step between field-mates' dog-legs (degrees, :func:`_fan_out`).
+FAN_DEG = 30.0
+#: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
+ETAS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.75, 0.9)
+
+
+def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
+    """ConfigError for malformed input; a reason string when the plan must be empty."""
+    if prior.shape != grid.shape:
+        raise ConfigError("prior", prior.shape, f"an array of the grid's shape {grid.shape}")
+    if not np.all(np.isfinite(prior)) or np.any(prior < 0):
+        raise ConfigError("prior", "array", "finite cell masses >= 0")
+    x0, y0, x1, y1 = grid.bounds
+    diag = float(np.hypot(x1 - x0, y1 - y0))
+    if len(sc.takeoff_m) > 1 and sc.constraints.safety_distance_m >= diag:
+        raise ConfigError(
+            "constraints.safety_distance_km",
+            sc.constraints.safety_distance_m / 1e3,
+            f"below the map's diagonal {diag / 1e3:g} km (two UAVs could never search it apart)",
+        )
+    if float(prior.sum()) <= 0:
+        return "the prior has no mass on the map"
+    return None
+
+
+def _tracks(cov: np.ndarray, grid: Grid, w: float, levels: int) -> list[list[tuple]]:
+    """Search lines per region: lists of (y, x_start, x_end, row) in boustrophedon order."""
+    cmax = float(cov.max())
+    if cmax <= 0:
+        return []
+    k = max(1, int(levels))
+    delta = cmax / k
+    h = w / cmax
+    ox, oy = grid.origin_m
+    c = grid.cell_m
+    layer_of = np.clip(np.rint(cov / delta), 0, k).astype(int)  # layers crossing each cell
+    labels, nreg = ndimage.label(layer_of > 0, structure=np.ones((3, 3)))
+    nlines = int(np.floor(grid.ny * c / h))
+    ys = oy + h * (np.arange(nlines) + 0.5)
+    regions: list[list[tuple]] = []
+    for reg in range(1, nreg + 1):
+        lines = []
+        for i, y in enumerate(ys):
+            r = int((y - oy) // c)
+            if r < 0 or r >= grid.ny:
+                continue
+            layer = i % k + 1
+            ok = (layer_of[r] >= layer) & (labels[r] == reg)
+            if not ok.any():
+                continue
+            # runs of consecutive cells
+            edges = np.diff(np.concatenate([[0], ok.astype(int), [0]]))
+            starts = np.flatnonzero(edges == 1)
+            ends = np.flatnonzero(edges == -1)
+            for a, b in zip(starts, ends, strict=True):
+                lines.append((float(y), ox + a * c, ox + b * c, r))
+        # boustrophedon: line by line (same y in order of x), direction alternating per y
+        out = []
+        flip = False
+        for y in sorted({ln[0] for ln in lines}):
+            row = sorted((ln for ln in lines if ln[0] == y), key=lambda t: t[1], reverse=flip)
+            out += [(y, b, a, r) if flip else (y, a, b, r) for (_, a, b, r) in row]
+            flip = not flip
+        if out:
+            regions.append(out)
+    return regions
+
+
+def _order(regions: list[list[tuple]], start: np.ndarray) -> list[tuple]:
+    """Chain regions nearest-first from ``start`` (each may be flown reversed)."""
+    left = list(regions)
+    pos = np.asarray(start, dtype=float)
+    route: list[tuple] = []
+    while left:
+        best = None
+        for i, reg in enumerate(left):
+            for rev in (False, True):
+                seq = [(y, b, a, r) for (y, a, b, r) in reversed(reg)] if rev else reg
+                d = float(np.hypot(seq[0][1] - pos[0], seq[0][0] - pos[1]))
+                if best is None or d < best[0]:
+                    best = (d, i, seq)
+        assert best is not None
+        _, i, seq = best
+        route += seq
+        left.pop(i)
+        pos = np.array([seq[-1][2], seq[-1][0]])
+    return route
+
+
+def _split(route, takeoff, landing, sc: Scenario, margin: float):
+    """Contiguous route pieces per UAV (index lists), each piece's time, lines left unflown."""
+    u = sc.uav
+    budget = margin * u.usable_endurance_s
+    turn_s = np.pi / u.max_turn_rate_rad_s  # a half-turn at the maximum rate
+    n = len(takeoff)
+    pieces: list[list[int]] = [[] for _ in range(n)]
+    times = np.zeros(n)
+    free = list(range(n))
+    dropped = 0
+    i = 0
+    while i < len(route) and free:
+        p0 = np.array([route[i][1], route[i][0]])
+        placed = False
+        for k in sorted(free, key=lambda j: float(np.hypot(*(takeoff[j] - p0)))):
+            out_s = float(np.hypot(*(takeoff[k] - p0))) / u.cruise_speed_mps
+            pattern = 0.0
+            prev = None
+            while i < len(route):
+                y, a, b, _ = route[i]
+                add = abs(b - a) / u.search_speed_mps
+                if prev is not None:
+                    add += float(np.hypot(a - prev[0], y - prev[1])) / u.search_speed_mps
+                    add += turn_s
+                home = float(np.hypot(*(landing[k] - np.array([b, y])))) / u.cruise_speed_mps
+                if out_s + pattern + add + home > budget:
+                    break
+                pattern += add
+                pieces[k].append(i)
+                times[k] = out_s + pattern + home
+                prev = (b, y)
+                i += 1
+            if pieces[k]:
+                free.remove(k)
+                placed = True
+                break
+        if not placed:  # no free UAV can fly this line alone: drop it
+            dropped += 1
+            i += 1
+    return pieces, times, dropped + len(route) - i
+
+
+def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
+    """Each UAV's waypoints; UAVs sharing a field first fly a dog-leg fanned out by bearing.
+
+    UAVs taking off together towards nearby bearings would fly the transit side by side within
+    d_s (eq. 21). Field-mates are ranked by the bearing of their first line and each flies first
+    to a point ``D = max(min(half the way, 8 km + 2 d_s), 4 d_s)`` out, its bearing turned by
+    ``(rank - (m - 1) / 2) x FAN_DEG`` (``m`` field-mates), so neighbours are at least
+    ``D sin FAN_DEG`` apart there; the leg after it is flown at search speed by the follower.
+    """
+    wps = [
+        [[float(x), float(route[j][0])] for j in idx for x in (route[j][1], route[j][2])]
+        for idx in pieces
+    ]
+    keys = [tuple(np.round(t, 3)) for t in takeoff]
+    d_out = 8000.0 + 2 * sc.constraints.safety_distance_m
+    for field in set(keys):
+        mates = [k for k in range(len(takeoff)) if keys[k] == field and wps[k]]
+        if len(mates) < 2:
+            continue
+        a = takeoff[mates[0]]
+        bearing = {k: float(np.arctan2(wps[k][0][1] - a[1], wps[k][0][0] - a[0])) for k in mates}
+        ranked = sorted(mates, key=lambda k: bearing[k])
+        for r, k in enumerate(ranked):
+            dist = float(np.hypot(wps[k][0][0] - a[0], wps[k][0][1] - a[1]))
+            ang = bearing[k] + np.radians(FAN_DEG) * (r - (len(ranked) - 1) / 2)
+            reach = max(min(0.5 * dist, d_out), 4.0 * sc.constraints.safety_distance_m)
+            wps[k] = [[float(a[0] + reach * np.cos(ang)), float(a[1] + reach * np.sin(ang))]] + wps[
+                k
+            ]
+    return wps
+
+
+def _coverage_of(route, idx, grid: Grid, w: float) -> np.ndarray:
+    """Coverage W x (line length in the cell) / area of the lines ``idx`` (eq. 10 per cell)."""
+    cov = np.zeros(grid.shape)
+    ox, _ = grid.origin_m
+    c = grid.cell_m
+    for j in idx:
+        _, a, b, r = route[j]
+        lo, hi = min(a, b), max(a, b)
+        c0, c1 = round((lo - ox) / c), round((hi - ox) / c)
+        cov[r, c0:c1] += w * c / grid.cell_area_m2
+    return cov
+
+
+def make_allocation_plan(
+    scenario: Scenario | str = "paper_6_2",
+    *,
+    prior: np.ndarray | None = None,
+    map_source: str = "builtin",
+    uavs: int | None = None,
+    seed: int = 0,
+    levels: int = LEVELS,
+    margin: float = MARGIN,
+) -> dict[str, Any]:
+    """The allocation plan of ``scenario`` on ``prior`` (see the module docstring).
+
+    Deterministic (``seed`` is recorded only). Malformed input raises
+    :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
+    reaching any mass) has empty waypoint lists, ``posc`` 0 and a ``reason``.
+    """
+    t0 = time.perf_counter()
+    sc = load_scenario(scenario)
+    if uavs is not None:
+        sc = sc.with_uavs(as_int("uavs", uavs, 1, 64))
+    levels = as_int("levels", levels, 1, 64)
+    if not (0.1 <= float(margin) <= 1.0):
+        raise ConfigError("margin", margin, "a share of 0.85 T in [0.1, 1]")
+    grid = Grid.from_config(sc.map)
+    prior = build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float)
+    reason = _check(sc, prior, grid)
+    u = sc.uav
+    w = sc.sensor.sweep_width_m
+    law = sc.sensor.law
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    n = len(takeoff)
+    tau = (cell_distances(grid, takeoff) + cell_distances(grid, landing)) / u.cruise_speed_mps
+    budget = np.full(n, u.usable_endurance_s)
+    if reason is None and not np.any((tau < budget[:, None, None]) & (prior > 0)[None]):
+        reason = "no UAV can reach any mass and come back within 0.85 T (eq. 18)"
+
+    def build(eta: float):
+        alloc = reach_optimum(
+            prior, grid.cell_area_m2, tau, np.full(n, eta * w * u.search_speed_mps), budget, law
+        )
+        regions = _tracks(alloc.coverage, grid, w, levels)
+        route = _order(regions, takeoff.mean(axis=0))
+        pieces, times, left = _split(route, takeoff, landing, sc, margin)
+        return alloc, route, pieces, times, left
+
+    eta = 0.0
+    best: tuple[Any, ...] | None = None
+    best_val = -1.0
+    fleet = None
+    if reason is None:
+        for cand in ETAS:
+            res = build(cand)
+            cov = sum((_coverage_of(res[1], idx, grid, w) for idx in res[2]), np.zeros(grid.shape))
+            val = float(np.sum(prior * pod_from_coverage(cov, law)))
+            if val > best_val:
+                best, best_val, eta = res, val, cand
+        fleet = reach_optimum(
+            prior, grid.cell_area_m2, tau, np.full(n, w * u.search_speed_mps), budget, law
+        )
+        if best is None or not any(best[2]):
+            reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
+            best = None
+    route: list[tuple] = []
+    pieces: list[list[int]] = [[] for _ in range(n)]
+    alloc_pos = 0.0
+    if best is not None:
+        alloc_pos = float(best[0].pos)
+        route, pieces = best[1], best[2]
+    routes = _fan_out(route, pieces, takeoff, sc)
+    uav_out = []
+    covs = [_coverage_of(route, pieces[k], grid, w) for k in range(n)]
+    cov_total = np.sum(covs, axis=0) if covs else np.zeros(grid.shape)
+    pod_total = pod_from_coverage(cov_total, law)
+    posc = float(np.sum(prior * pod_total))
+    for k in range(n):
+        rect = {
+            "center_m": [float(v) for v in takeoff[k]],
+            "length_m": 0.0,
+            "width_m": 0.0,
+            "theta_deg": 0.0,
+        }
+        spacing = 0.0
+        t_k = 0.0
+        length = 0.0
+        pos_k = poc_k = pod_k = 0.0
+        idx = pieces[k]
+        wps = routes[k]
+        if idx:
+            arr = np.asarray(
+                [p for j in idx for p in ((route[j][1], route[j][0]), (route[j][2], route[j][0]))]
+            )
+            lo_, hi_ = arr.min(axis=0), arr.max(axis=0)
+            rect = {
+                "center_m": [float(v) for v in (lo_ + hi_) / 2],
+                "length_m": float(hi_[0] - lo_[0]),
+                "width_m": float(hi_[1] - lo_[1]),
+                "theta_deg": 0.0,
+            }
+            ys = np.unique(arr[:, 1])
+            spacing = float(np.min(np.diff(ys))) if ys.size > 1 else w
+            path = np.vstack([takeoff[k], np.asarray(wps), landing[k]])
+            legs = np.hypot(*np.diff(path, axis=0).T)
+            length = float(legs.sum())
+            # eq. 17: transit legs at cruise speed, the route at search speed, half-turns
+            t_k = float(
+                (legs[0] + legs[-1]) / u.cruise_speed_mps
+                + legs[1:-1].sum() / u.search_speed_mps
+                + (len(idx) - 1) * np.pi / u.max_turn_rate_rad_s
+            )
+        ck = covs[k]
+        share = np.divide(ck, cov_total, out=np.zeros_like(ck), where=cov_total > 0)
+        pos_k = float(np.sum(prior * pod_total * share))
+        poc_k = float(np.sum(prior * (ck > 0)))
+        pod_k = pos_k / poc_k if poc_k > 0 else 0.0
+        uav_out.append(
+            {
+                "id": k + 1,
+                "rectangle": rect,
+                "spacing_m": spacing,
+                "takeoff_m": [float(v) for v in takeoff[k]],
+                "landing_m": [float(v) for v in landing[k]],
+                "waypoints_m": wps,
+                "transit_waypoints": len(wps) - 2 * len(idx),
+                "track_length_m": length,
+                "flight_time_s": t_k,
+                "pod": pod_k,
+                "poc": poc_k,
+                "pos": pos_k,
+                "feasible": bool(t_k <= u.usable_endurance_s),
+            }
+        )
+    runtime = time.perf_counter() - t0
+    rb = reach_bound(sc, prior).upper if reason is None or prior.sum() > 0 else 0.0
+    from agents.planning.planner import _geography
+
+    return {
+        "schema": SCHEMA,
+        "scenario": sc.name,
+        "seed": int(seed),
+        "map_source": map_source,
+        "planner": "allocation",
+        "route": True,
+        "optimizer": {"name": "allocation", "settings": {"levels": levels, "margin": margin}},
+        "runtime_s": runtime,
+        "posc": posc,
+        "upper_bound": float(fleet.upper) if fleet is not None else 0.0,
+        "bound_reach": float(rb),
+        "allocation_pos": alloc_pos,
+        "eta": float(eta),
+        "reason": reason,
+        "objective": -posc,
+        "history": [],
+        "x": [],
+        "uavs": uav_out,
+        **_geography(sc, prior, None),
+    }

@@ -1,0 +1,39 @@
+"""``allocation_plan``: the allocation planner's routes made for each episode, then flown.
+
+At the start of every episode the policy plans with
+:func:`agents.planning.allocation.make_allocation_plan` on the environment's prior (the fine
+belief summed to the grid's cells) and flies each UAV's waypoints with the waypoint follower
+(transit at cruise speed, the route at search speed, home on eq. 18), as ``de_plan`` does.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from agents.planning.allocation import LEVELS, MARGIN, make_allocation_plan
+from agents.policies.base import Policy
+from poc_env.sim.autopilot import WaypointFollower
+
+
+class AllocationPlanPolicy(Policy):
+    """``allocation_plan``: plan routes from the reach-aware allocation, then fly them."""
+
+    name = "allocation_plan"
+
+    def __init__(self, levels: int = LEVELS, margin: float = MARGIN) -> None:
+        self.levels = levels
+        self.margin = margin
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
+        self.plan = make_allocation_plan(
+            env.scenario, prior=prior, seed=seed, levels=self.levels, margin=self.margin
+        )
+        wps = [np.asarray(u["waypoints_m"], dtype=float) for u in self.plan["uavs"]]
+        self.follower = WaypointFollower(env.params, wps, env.possible_agents)
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        return self.follower.predict(observations, state)

@@ -1,0 +1,114 @@
+"""The allocation planner: routes from the reach-aware allocation, within the bounds and 0.85 T."""
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from agents.planning.allocation import make_allocation_plan
+from agents.planning.planner import make_plan
+from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
+from poc_env.theory.bound import honest_optimum, reach_bound
+from poc_env.theory.probability_map import Grid, build_prior
+
+
+def _small(**over):
+    return load_scenario("small", over or None)
+
+
+def test_small_plan_is_flyable_and_inside_the_map():
+    sc = _small()
+    plan = make_allocation_plan(sc)
+    assert plan["reason"] is None
+    grid = Grid.from_config(sc.map)
+    x0, y0, x1, y1 = grid.bounds
+    flown = 0
+    for u in plan["uavs"]:
+        assert u["flight_time_s"] <= sc.uav.usable_endurance_s
+        assert u["feasible"]
+        assert u["transit_waypoints"] in (0, 1)  # a dog-leg out of the shared field
+        wps = np.asarray(u["waypoints_m"]).reshape(-1, 2)[u["transit_waypoints"] :]
+        assert len(wps) % 2 == 0  # search lines: start and end
+        flown += len(wps)
+        if len(wps):
+            assert np.all(wps[:, 0] >= x0) and np.all(wps[:, 0] <= x1)
+            assert np.all(wps[:, 1] >= y0) and np.all(wps[:, 1] <= y1)
+    assert flown > 0
+    assert 0 < plan["posc"] <= plan["bound_reach"]
+    assert plan["posc"] == pytest.approx(sum(u["pos"] for u in plan["uavs"]), abs=1e-9)
+    json.dumps(plan)  # plan.json-able
+
+
+def test_make_plan_dispatches_to_the_allocation_planner():
+    plan = make_plan("small", planner="allocation")
+    assert plan["planner"] == "allocation"
+    assert plan["posc"] == pytest.approx(make_allocation_plan("small")["posc"])
+    with pytest.raises(ConfigError, match="planner"):
+        make_plan("small", planner="bogus")
+
+
+@settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**31 - 1))
+def test_planned_posc_never_above_either_bound(seed):
+    sc = _small()
+    grid = Grid.from_config(sc.map)
+    prior = np.random.default_rng(seed).gamma(0.5, size=grid.shape)
+    prior /= prior.sum()
+    plan = make_allocation_plan(sc, prior=prior)
+    assert plan["posc"] <= reach_bound(sc, prior).upper + 1e-12
+    assert plan["posc"] <= honest_optimum(sc, prior).pos + 1e-12
+    assert plan["posc"] <= plan["upper_bound"] + 1e-12  # the allocation it was built from
+
+
+def test_zero_mass_gives_an_empty_plan_with_a_reason():
+    sc = _small()
+    plan = make_allocation_plan(sc, prior=np.zeros(Grid.from_config(sc.map).shape))
+    assert plan["reason"] == "the prior has no mass on the map"
+    assert plan["posc"] == 0 and all(u["waypoints_m"] == [] for u in plan["uavs"])
+
+
+def test_no_uav_reaches_any_mass_gives_an_empty_plan():
+    sc = _small(**{"uav.endurance_h": 0.05})  # 0.85 T = 153 s: 9 km out and back at most
+    plan = make_allocation_plan(sc)
+    assert "no UAV can reach any mass" in plan["reason"]
+    assert plan["posc"] == 0 and all(u["waypoints_m"] == [] for u in plan["uavs"])
+
+
+def test_mass_only_outside_reach_gives_an_empty_plan():
+    sc = _small(**{"uav.endurance_h": 0.3})  # 0.85 T = 918 s: ~28 km out and back
+    grid = Grid.from_config(sc.map)
+    prior = np.zeros(grid.shape)
+    prior[-1, -1] = 1.0  # the far corner, > 40 km from the field at (20, -5) km
+    plan = make_allocation_plan(sc, prior=prior)
+    assert plan["reason"] is not None and plan["posc"] == 0
+
+
+def test_bad_input_is_a_config_error():
+    sc = _small()
+    with pytest.raises(ConfigError, match="safety_distance"):
+        make_allocation_plan(_small(**{"constraints.safety_distance_km": 1000}))
+    with pytest.raises(ConfigError, match="prior"):
+        make_allocation_plan(sc, prior=np.ones((3, 3)))
+    bad = build_prior(sc.map).copy()
+    bad[0, 0] = -1.0
+    with pytest.raises(ConfigError, match="prior"):
+        make_allocation_plan(sc, prior=bad)
+    with pytest.raises(ConfigError, match="levels"):
+        make_allocation_plan(sc, levels=0)
+
+
+def test_cli_plan_with_the_allocation_planner(tmp_path, capsys):
+    from poc_env.cli import main
+
+    out = tmp_path / "plan.json"
+    assert (
+        main(
+            ["plan", "--scenario", "small", "--planner", "allocation", "--out", str(out), "--quiet"]
+        )
+        == 0
+    )
+    plan = json.loads(out.read_text())
+    assert plan["planner"] == "allocation" and plan["bound_reach"] > plan["posc"] > 0
