@@ -12,7 +12,8 @@
    ``Delta = max C / K`` (``K`` = ``levels``) the lines lie on a lattice of spacing
    ``h = W / max C`` (eq. 10: ``C = W / d``); lattice line ``i`` belongs to layer
    ``k = i mod K + 1`` and flies over the cells of its row whose coverage is at least
-   ``(k - 1/2) Delta``. A cell of coverage ``C`` is crossed by the lines of ``round(C / Delta)``
+   ``(k - 1/2) Delta`` (``K`` is tried from ``levels``, default 3, 4, 6). A cell of coverage
+   ``C`` is crossed by the lines of ``round(C / Delta)``
    layers, i.e. by lines at spacing ``W / (round(C / Delta) Delta)``, the coverage the allocation
    asks for up to the rounding. Lines are clipped to the cells, so nothing is flown outside the
    map.
@@ -22,12 +23,14 @@
 4. **Assignment.** The route is cut into contiguous pieces, one per UAV, greedily: each piece
    goes to the free UAV whose take-off is nearest its first point and grows while the UAV's
    eq. 17-18 time (transit at ``v_c`` out and home, lines and connections at ``v_s``, a
-   half-turn at the maximum turn rate per line end) fits ``margin x 0.85 T``. Contiguous
+   half-turn at the maximum turn rate per line end) fits ``margin x 0.85 T``. Each line first
+   goes to the airfield of least out-and-back distance and each field's lines are chained and
+   cut among that field's UAVs; lines a field cannot fly go to UAVs left without a piece. Contiguous
    pieces put UAVs on different lines of the route at different times (deconfliction by
    construction; flown separation is measured, see docs/PLANNER.md).
 5. **Effort scale.** Turns, connections and the cut into pieces cost time the allocation does
-   not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and the plan keeps the one of
-   highest planned POS (lines no UAV can fit are left unflown).
+   not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and each ``K`` and the plan keeps
+   the one of highest planned POS (lines no UAV can fit are left unflown).
 
 The plan is the same dict as :func:`agents.planning.planner.make_plan` (every schema-1 field of
 :mod:`agents.planning.export`): per UAV the ``rectangle`` is the axis-aligned bounding box of its
@@ -35,12 +38,14 @@ search lines (``theta_deg`` 0) and ``spacing_m`` the finest line spacing it flie
 ``waypoints_m`` is the route (``route`` true in the plan). Extra fields: ``planner``
 (``"allocation"``), ``bound_reach`` (:func:`poc_env.theory.bound.reach_bound`, the environment's
 reach-aware bound), ``allocation_pos`` (the allocation's own POS), ``eta`` and ``reason`` (why a
-plan is empty, else null). ``posc`` is the planned POS: each cell's coverage from the line
-length flown inside it (eq. 10 per cell, connections and transit not credited).
+plan is empty, else null). ``posc`` is the planned POS: each cell's coverage from the length
+of the whole flight path inside it (eq. 10 per cell; transit and connections sweep too, as in
+the environment), which also picks ``eta``.
 """
 
 from __future__ import annotations
 
+import itertools
 import time
 from typing import Any
 
@@ -54,9 +59,9 @@ from poc_env.theory.bound import cell_distances, reach_bound, reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage
 
-#: default number of coverage layers (K) and share of 0.85 T a route may fill.
-LEVELS = 6
-MARGIN = 0.95
+#: the numbers of coverage layers (K) tried and the share of 0.85 T a route may fill.
+LEVELS = (3, 4, 6)
+MARGIN = 1.0
 #: bearing step between field-mates' dog-legs (degrees, :func:`_fan_out`).
 FAN_DEG = 30.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
@@ -188,6 +193,50 @@ def _split(route, takeoff, landing, sc: Scenario, margin: float):
     return pieces, times, dropped + len(route) - i
 
 
+def _assign(regions, takeoff, landing, sc: Scenario, margin: float):
+    """Route and pieces per UAV: lines go to the field of least out-and-back distance, each
+    field's lines are chained from it and cut among its UAVs (:func:`_split`); lines left over
+    go to the UAVs left without a piece. Returns (route, pieces, times, lines unflown)."""
+    n = len(takeoff)
+    keys = [tuple(np.round(np.concatenate([takeoff[k], landing[k]]), 3)) for k in range(n)]
+    fields = sorted(set(keys))
+    groups = [[k for k in range(n) if keys[k] == f] for f in fields]
+    heads = np.array([[takeoff[g[0]], landing[g[0]]] for g in groups])  # (F, 2, 2)
+
+    def field_of(line) -> int:
+        mid = np.array([0.5 * (line[1] + line[2]), line[0]])
+        d = np.hypot(*(heads[:, 0] - mid).T) + np.hypot(*(heads[:, 1] - mid).T)
+        return int(np.argmin(d))
+
+    route: list[tuple] = []
+    pieces: list[list[int]] = [[] for _ in range(n)]
+    times = np.zeros(n)
+    leftover: list[tuple] = []
+    for f, g in enumerate(groups):
+        mine = [[ln for ln in reg if field_of(ln) == f] for reg in regions]
+        sub = _order([r for r in mine if r], heads[f, 0])
+        sp, st, _ = _split(sub, takeoff[g], landing[g], sc, margin)
+        used = {j for p in sp for j in p}
+        leftover += [ln for j, ln in enumerate(sub) if j not in used]
+        base = len(route)
+        route += sub
+        for i, k in enumerate(g):
+            pieces[k] = [base + j for j in sp[i]]
+            times[k] = st[i]
+    idle = [k for k in range(n) if not pieces[k]]
+    if leftover and idle:
+        sub = _order([leftover], takeoff[idle].mean(axis=0))
+        sp, st, _ = _split(sub, takeoff[idle], landing[idle], sc, margin)
+        used = {j for p in sp for j in p}
+        base = len(route)
+        route += sub
+        for i, k in enumerate(idle):
+            pieces[k] = [base + j for j in sp[i]]
+            times[k] = st[i]
+        leftover = [ln for j, ln in enumerate(sub) if j not in used]
+    return route, pieces, times, len(leftover)
+
+
 def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
     """Each UAV's waypoints; UAVs sharing a field first fly a dog-leg fanned out by bearing.
 
@@ -220,6 +269,55 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
     return wps
 
 
+def _flight_time(wps, lines: int, takeoff, landing, sc: Scenario) -> float:
+    """Eq. 17 time of a route: transit legs at cruise speed, the rest at search speed, a
+    half-turn at the maximum turn rate between search lines."""
+    u = sc.uav
+    if not len(wps):
+        return 0.0
+    path = np.vstack([takeoff, np.asarray(wps, dtype=float).reshape(-1, 2), landing])
+    legs = np.hypot(*np.diff(path, axis=0).T)
+    return float(
+        (legs[0] + legs[-1]) / u.cruise_speed_mps
+        + legs[1:-1].sum() / u.search_speed_mps
+        + max(lines - 1, 0) * np.pi / u.max_turn_rate_rad_s
+    )
+
+
+def _trim(routes, pieces, takeoff, landing, sc: Scenario) -> None:
+    """Drop each UAV's last search lines until its route (dog-leg included) fits 0.85 T."""
+    for k, idx in enumerate(pieces):
+        while idx and (
+            _flight_time(routes[k], len(idx), takeoff[k], landing[k], sc)
+            > sc.uav.usable_endurance_s
+        ):
+            idx.pop()
+            del routes[k][-2:]
+        if not idx:
+            routes[k].clear()
+
+
+def _path_coverage(path, grid: Grid, w: float) -> np.ndarray:
+    """Coverage W x (length of the polyline ``path`` inside each cell) / area (eq. 10 per cell),
+    every leg counted (transit too), sampled at a quarter cell; nothing outside the map."""
+    cov = np.zeros(grid.shape)
+    pts = np.asarray(path, dtype=float).reshape(-1, 2)
+    if len(pts) < 2:
+        return cov
+    ox, oy = grid.origin_m
+    c = grid.cell_m
+    for p, q in itertools.pairwise(pts):
+        length = float(np.hypot(*(q - p)))
+        m = max(1, int(np.ceil(4 * length / c)))
+        t = (np.arange(m) + 0.5) / m
+        xy = p + t[:, None] * (q - p)
+        col = np.floor((xy[:, 0] - ox) / c).astype(int)
+        row = np.floor((xy[:, 1] - oy) / c).astype(int)
+        ok = (col >= 0) & (col < grid.nx) & (row >= 0) & (row < grid.ny)
+        np.add.at(cov, (row[ok], col[ok]), w * length / m / grid.cell_area_m2)
+    return cov
+
+
 def _coverage_of(route, idx, grid: Grid, w: float) -> np.ndarray:
     """Coverage W x (line length in the cell) / area of the lines ``idx`` (eq. 10 per cell)."""
     cov = np.zeros(grid.shape)
@@ -240,7 +338,7 @@ def make_allocation_plan(
     map_source: str = "builtin",
     uavs: int | None = None,
     seed: int = 0,
-    levels: int = LEVELS,
+    levels: int | tuple[int, ...] = LEVELS,
     margin: float = MARGIN,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring).
@@ -253,7 +351,7 @@ def make_allocation_plan(
     sc = load_scenario(scenario)
     if uavs is not None:
         sc = sc.with_uavs(as_int("uavs", uavs, 1, 64))
-    levels = as_int("levels", levels, 1, 64)
+    ks = [as_int("levels", v, 1, 64) for v in np.atleast_1d(levels).tolist()]
     if not (0.1 <= float(margin) <= 1.0):
         raise ConfigError("margin", margin, "a share of 0.85 T in [0.1, 1]")
     grid = Grid.from_config(sc.map)
@@ -270,26 +368,41 @@ def make_allocation_plan(
     if reason is None and not np.any((tau < budget[:, None, None]) & (prior > 0)[None]):
         reason = "no UAV can reach any mass and come back within 0.85 T (eq. 18)"
 
-    def build(eta: float):
-        alloc = reach_optimum(
-            prior, grid.cell_area_m2, tau, np.full(n, eta * w * u.search_speed_mps), budget, law
-        )
-        regions = _tracks(alloc.coverage, grid, w, levels)
-        route = _order(regions, takeoff.mean(axis=0))
-        pieces, times, left = _split(route, takeoff, landing, sc, margin)
+    def build(alloc, k: int):
+        regions = _tracks(alloc.coverage, grid, w, k)
+        route, pieces, times, left = _assign(regions, takeoff, landing, sc, margin)
         return alloc, route, pieces, times, left
 
     eta = 0.0
+    chosen = 0
     best: tuple[Any, ...] | None = None
     best_val = -1.0
     fleet = None
     if reason is None:
-        for cand in ETAS:
-            res = build(cand)
-            cov = sum((_coverage_of(res[1], idx, grid, w) for idx in res[2]), np.zeros(grid.shape))
+        for cand, k in [(e, k) for e in ETAS for k in ks]:
+            if k == ks[0]:
+                alloc = reach_optimum(
+                    prior,
+                    grid.cell_area_m2,
+                    tau,
+                    np.full(n, cand * w * u.search_speed_mps),
+                    budget,
+                    law,
+                )
+            res = build(alloc, k)
+            paths = _fan_out(res[1], res[2], takeoff, sc)
+            _trim(paths, [list(p) for p in res[2]], takeoff, landing, sc)
+            cov = sum(
+                (
+                    _path_coverage([takeoff[k], *paths[k], landing[k]], grid, w)
+                    for k in range(n)
+                    if paths[k]
+                ),
+                np.zeros(grid.shape),
+            )
             val = float(np.sum(prior * pod_from_coverage(cov, law)))
             if val > best_val:
-                best, best_val, eta = res, val, cand
+                best, best_val, eta, chosen = res, val, cand, k
         fleet = reach_optimum(
             prior, grid.cell_area_m2, tau, np.full(n, w * u.search_speed_mps), budget, law
         )
@@ -303,8 +416,15 @@ def make_allocation_plan(
         alloc_pos = float(best[0].pos)
         route, pieces = best[1], best[2]
     routes = _fan_out(route, pieces, takeoff, sc)
+    pieces = [list(p) for p in pieces]
+    _trim(routes, pieces, takeoff, landing, sc)
     uav_out = []
-    covs = [_coverage_of(route, pieces[k], grid, w) for k in range(n)]
+    covs = [
+        _path_coverage([takeoff[k], *routes[k], landing[k]], grid, w)
+        if routes[k]
+        else np.zeros(grid.shape)
+        for k in range(n)
+    ]
     cov_total = np.sum(covs, axis=0) if covs else np.zeros(grid.shape)
     pod_total = pod_from_coverage(cov_total, law)
     posc = float(np.sum(prior * pod_total))
@@ -335,14 +455,8 @@ def make_allocation_plan(
             ys = np.unique(arr[:, 1])
             spacing = float(np.min(np.diff(ys))) if ys.size > 1 else w
             path = np.vstack([takeoff[k], np.asarray(wps), landing[k]])
-            legs = np.hypot(*np.diff(path, axis=0).T)
-            length = float(legs.sum())
-            # eq. 17: transit legs at cruise speed, the route at search speed, half-turns
-            t_k = float(
-                (legs[0] + legs[-1]) / u.cruise_speed_mps
-                + legs[1:-1].sum() / u.search_speed_mps
-                + (len(idx) - 1) * np.pi / u.max_turn_rate_rad_s
-            )
+            length = float(np.hypot(*np.diff(path, axis=0).T).sum())
+            t_k = _flight_time(wps, len(idx), takeoff[k], landing[k], sc)
         ck = covs[k]
         share = np.divide(ck, cov_total, out=np.zeros_like(ck), where=cov_total > 0)
         pos_k = float(np.sum(prior * pod_total * share))
@@ -376,7 +490,10 @@ def make_allocation_plan(
         "map_source": map_source,
         "planner": "allocation",
         "route": True,
-        "optimizer": {"name": "allocation", "settings": {"levels": levels, "margin": margin}},
+        "optimizer": {
+            "name": "allocation",
+            "settings": {"levels": chosen, "tried": ks, "margin": margin},
+        },
         "runtime_s": runtime,
         "posc": posc,
         "upper_bound": float(fleet.upper) if fleet is not None else 0.0,

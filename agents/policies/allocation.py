@@ -22,7 +22,7 @@ class AllocationPlanPolicy(Policy):
 
     name = "allocation_plan"
 
-    def __init__(self, levels: int = LEVELS, margin: float = MARGIN) -> None:
+    def __init__(self, levels: int | tuple[int, ...] = LEVELS, margin: float = MARGIN) -> None:
         self.levels = levels
         self.margin = margin
 
