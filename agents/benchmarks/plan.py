@@ -22,6 +22,10 @@ DE (constant F = F0) on seeds ``0 .. --seeds - 1`` (default 10), their means, ho
 adaptive DE wins, and the adaptive plans' mean POSC against the physical optimum for their
 effort (:func:`poc_env.theory.bound.physical_optimum`). It takes a few seconds per seed.
 
+``--planner allocation`` times only the allocation planner
+(:mod:`agents.planning.allocation`): ``allocation_plan_s`` (target 2 s), its planned POS_C and
+POS_C over the reach-aware bound; ``both`` (default) adds those lines after the DE figures.
+
 ``--preset tuned`` times and scores the tuned DE constants instead of the paper's (same NP, G;
 :func:`agents.planning.optimizers.preset_settings`). ``--sweep NP,G,F0,CR ...`` runs adaptive DE
 with each candidate on seeds ``--seed0 .. --seed0 + --seeds - 1`` and prints one table row per
@@ -71,7 +75,40 @@ def _parser() -> argparse.ArgumentParser:
         "--sweep", nargs="+", default=None, metavar="NP,G,F0,CR", help="adaptive DE candidates"
     )
     p.add_argument("--seed0", type=int, default=0, help="first seed of --sweep")
+    p.add_argument(
+        "--planner",
+        default="both",
+        choices=["de", "allocation", "both"],
+        help="time adaptive DE, the allocation planner, or both (default)",
+    )
     return p
+
+
+def allocation(sc, uavs: int, runs: int) -> dict[str, float]:
+    """``allocation_plan_s`` (median of ``runs`` timed plans after a warm-up), its planned POS_C
+    and POS_C over the reach-aware bound (:func:`agents.planning.allocation.make_allocation_plan`
+    on the scenario's prior)."""
+    from agents.planning.allocation import make_allocation_plan
+
+    make_allocation_plan(sc, uavs=uavs)  # warm-up
+    times = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        plan = make_allocation_plan(sc, uavs=uavs)
+        times.append(time.perf_counter() - t0)
+    out = {
+        "allocation_plan_s": statistics.median(times),
+        "allocation_posc": float(plan["posc"]),
+        "allocation_posc_over_reach": float(plan["posc"] / plan["bound_reach"]),
+    }
+    _line("allocation_plan_s", out["allocation_plan_s"], "allocation planner (target <= 2 s)")
+    _line("allocation_posc", out["allocation_posc"], "planned POS_C (whole flight path swept)")
+    _line(
+        "allocation_posc_over_reach",
+        out["allocation_posc_over_reach"],
+        f"planned POS_C / reach-aware bound {plan['bound_reach']:.4f}",
+    )
+    return out
 
 
 def _candidate(text: str) -> tuple[int, int, float, float]:
@@ -117,6 +154,9 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     if args.sweep:
         adaptive_de(obj, obj.bounds, popsize=8, maxiter=2, rng=0)  # warm-up (JIT)
         return sweep(obj, args.sweep, range(args.seed0, args.seed0 + args.seeds))
+    if args.planner == "allocation":
+        print(f"# {sc.name}: {obj.n} UAVs; one core; medians of {args.runs} runs", flush=True)
+        return allocation(sc, obj.n, args.runs)
     preset = preset_settings(args.preset, sc.planner)
     npop = args.popsize or preset["popsize"]
     gens = args.maxiter or preset["maxiter"]
@@ -168,6 +208,8 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     _line("scipy_plan_s", out["scipy_plan_s"], "scipy.optimize.differential_evolution, same budget")
     out["ratio_to_scipy"] = out["plan_s"] / out["scipy_plan_s"]
     _line("ratio_to_scipy", out["ratio_to_scipy"], "plan_s / scipy_plan_s (< 1: faster)")
+    if args.planner == "both":
+        out.update(allocation(sc, obj.n, args.runs))
 
     if args.quality:
         ada, cla, posc, bound = [], [], [], []

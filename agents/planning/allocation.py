@@ -65,7 +65,7 @@ MARGIN = 1.0
 #: bearing step between field-mates' dog-legs (degrees, :func:`_fan_out`).
 FAN_DEG = 30.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
-ETAS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.75, 0.9)
+ETAS = (0.3, 0.4, 0.5, 0.65)
 
 
 def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
