@@ -62,8 +62,8 @@ from poc_env.theory.search_theory import pod_from_coverage
 #: the numbers of coverage layers (K) tried and the share of 0.85 T a route may fill.
 LEVELS = (3, 4, 6)
 MARGIN = 1.0
-#: bearing step between field-mates' dog-legs (degrees, :func:`_fan_out`).
-FAN_DEG = 30.0
+#: least bearing difference between field-mates flying out (degrees, :func:`_fan_out`).
+FAN_DEG = 20.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
 ETAS = (0.3, 0.4, 0.5, 0.65)
 
@@ -241,10 +241,12 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
     """Each UAV's waypoints; UAVs sharing a field first fly a dog-leg fanned out by bearing.
 
     UAVs taking off together towards nearby bearings would fly the transit side by side within
-    d_s (eq. 21). Field-mates are ranked by the bearing of their first line and each flies first
-    to a point ``D = max(min(half the way, 8 km + 2 d_s), 4 d_s)`` out, its bearing turned by
-    ``(rank - (m - 1) / 2) x FAN_DEG`` (``m`` field-mates), so neighbours are at least
-    ``D sin FAN_DEG`` apart there; the leg after it is flown at search speed by the follower.
+    d_s (eq. 21). Field-mates' bearings to their first lines are spread, lowest first, to at
+    least ``FAN_DEG`` apart; a UAV whose bearing moved first flies to a point
+    ``D = max(min(half the way, 8 km + 2 d_s), 4 d_s)`` out on its new bearing (the leg after
+    it is flown at search speed by the follower), the others fly straight out at cruise speed.
+    Straight paths ``FAN_DEG`` apart are ``d_s`` apart from ``d_s / sin FAN_DEG`` out (5.8 km
+    for 10 deg and 1 km: the first two steps, when field-mates are together anyway).
     """
     wps = [
         [[float(x), float(route[j][0])] for j in idx for x in (route[j][1], route[j][2])]
@@ -259,9 +261,14 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
         a = takeoff[mates[0]]
         bearing = {k: float(np.arctan2(wps[k][0][1] - a[1], wps[k][0][0] - a[0])) for k in mates}
         ranked = sorted(mates, key=lambda k: bearing[k])
-        for r, k in enumerate(ranked):
+        gap = np.radians(FAN_DEG)
+        prev = -np.inf
+        for k in ranked:
+            ang = max(bearing[k], prev + gap)
+            prev = ang
+            if ang == bearing[k]:
+                continue
             dist = float(np.hypot(wps[k][0][0] - a[0], wps[k][0][1] - a[1]))
-            ang = bearing[k] + np.radians(FAN_DEG) * (r - (len(ranked) - 1) / 2)
             reach = max(min(0.5 * dist, d_out), 4.0 * sc.constraints.safety_distance_m)
             wps[k] = [[float(a[0] + reach * np.cos(ang)), float(a[1] + reach * np.sin(ang))]] + wps[
                 k
