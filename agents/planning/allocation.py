@@ -62,6 +62,8 @@ from poc_env.theory.search_theory import pod_from_coverage
 #: the numbers of coverage layers (K) tried and the share of 0.85 T a route may fill.
 LEVELS = (3, 4, 6)
 MARGIN = 1.0
+#: coverage laid at most (eq. 10: POD erf(sqrt(pi)/2 x 3) > 0.9999; more only adds lines).
+COVER_CAP = 3.0
 #: least bearing difference between field-mates flying out (degrees, :func:`_fan_out`).
 FAN_DEG = 20.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
@@ -88,7 +90,9 @@ def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
 
 
 def _tracks(cov: np.ndarray, grid: Grid, w: float, levels: int) -> list[list[tuple]]:
-    """Search lines per region: lists of (y, x_start, x_end, row) in boustrophedon order."""
+    """Search lines per region: lists of (y, x_start, x_end, row) in boustrophedon order
+    (coverage capped at :data:`COVER_CAP`)."""
+    cov = np.minimum(cov, COVER_CAP)
     cmax = float(cov.max())
     if cmax <= 0:
         return []
