@@ -8,7 +8,8 @@
    spent on search lines, below) for the usable endurance 0.85 T (eq. 18) and needs the
    round trip ``(d(take-off, cell) + d(cell, landing)) / v_c`` at cruise speed to reach a cell.
    The result is the coverage ``C_j`` each cell should get.
-2. **Tracks.** Coverage is laid as nested layers of parallel lines along x. With
+2. **Tracks.** Coverage is laid as nested layers of parallel lines along x (or along y: every
+   step runs on the map mirrored about its diagonal too, and the better one is kept). With
    ``Delta = max C / K`` (``K`` = ``levels``) the lines lie on a lattice of spacing
    ``h = W / max C`` (eq. 10: ``C = W / d``); lattice line ``i`` belongs to layer
    ``k = i mod K + 1`` and flies over the cells of its row whose coverage is at least
@@ -34,7 +35,8 @@
 
 The plan is the same dict as :func:`agents.planning.planner.make_plan` (every schema-1 field of
 :mod:`agents.planning.export`): per UAV the ``rectangle`` is the axis-aligned bounding box of its
-search lines (``theta_deg`` 0) and ``spacing_m`` the finest line spacing it flies; only
+search lines (``theta_deg`` 0) and ``spacing_m`` the finest line spacing it flies
+(``lines_along`` says whether the lines run along x or y); only
 ``waypoints_m`` is the route (``route`` true in the plan). Extra fields: ``planner``
 (``"allocation"``), ``bound_reach`` (:func:`poc_env.theory.bound.reach_bound`, the environment's
 reach-aware bound), ``allocation_pos`` (the allocation's own POS), ``eta`` and ``reason`` (why a
@@ -379,10 +381,34 @@ def make_allocation_plan(
     if reason is None and not np.any((tau < budget[:, None, None]) & (prior > 0)[None]):
         reason = "no UAV can reach any mass and come back within 0.85 T (eq. 18)"
 
-    def build(alloc, k: int):
-        regions = _tracks(alloc.coverage, grid, w, k)
-        route, pieces, times, left = _assign(regions, takeoff, landing, sc, margin)
-        return alloc, route, pieces, times, left
+    oy_ox = (grid.origin_m[1], grid.origin_m[0])
+    frames = {  # lines along x, or along y (the same code on the mirrored map)
+        False: (grid, takeoff, landing, prior),
+        True: (
+            Grid(grid.ny, grid.nx, grid.cell_m, oy_ox),
+            takeoff[:, ::-1],
+            landing[:, ::-1],
+            prior.T,
+        ),
+    }
+
+    def build(alloc, k: int, swap: bool):
+        g_f, to_f, la_f, _ = frames[swap]
+        cov = alloc.coverage.T if swap else alloc.coverage
+        regions = _tracks(cov, g_f, w, k)
+        route, pieces, times, left = _assign(regions, to_f, la_f, sc, margin)
+        return alloc, route, pieces, times, left, swap
+
+    def fly(res) -> tuple[list, list]:
+        """Waypoints (map frame) and line indices per UAV of a build, fanned out and trimmed."""
+        _, route, pieces, _, _, swap = res
+        _, to_f, la_f, _ = frames[swap]
+        paths = _fan_out(route, pieces, to_f, sc)
+        idx = [list(p) for p in pieces]
+        _trim(paths, idx, to_f, la_f, sc)
+        if swap:
+            paths = [[[q[1], q[0]] for q in path] for path in paths]
+        return paths, idx
 
     eta = 0.0
     chosen = 0
@@ -400,35 +426,34 @@ def make_allocation_plan(
                     budget,
                     law,
                 )
-            res = build(alloc, k)
-            paths = _fan_out(res[1], res[2], takeoff, sc)
-            _trim(paths, [list(p) for p in res[2]], takeoff, landing, sc)
-            cov = sum(
-                (
-                    _path_coverage([takeoff[k], *paths[k], landing[k]], grid, w)
-                    for k in range(n)
-                    if paths[k]
-                ),
-                np.zeros(grid.shape),
-            )
-            val = float(np.sum(prior * pod_from_coverage(cov, law)))
-            if val > best_val:
-                best, best_val, eta, chosen = res, val, cand, k
+            for swap in (False, True):
+                res = build(alloc, k, swap)
+                paths, _ = fly(res)
+                cov = sum(
+                    (
+                        _path_coverage([takeoff[j], *paths[j], landing[j]], grid, w)
+                        for j in range(n)
+                        if paths[j]
+                    ),
+                    np.zeros(grid.shape),
+                )
+                val = float(np.sum(prior * pod_from_coverage(cov, law)))
+                if val > best_val:
+                    best, best_val, eta, chosen = res, val, cand, k
         fleet = reach_optimum(
             prior, grid.cell_area_m2, tau, np.full(n, w * u.search_speed_mps), budget, law
         )
         if best is None or not any(best[2]):
             reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
             best = None
-    route: list[tuple] = []
     pieces: list[list[int]] = [[] for _ in range(n)]
+    routes: list[list[list[float]]] = [[] for _ in range(n)]
     alloc_pos = 0.0
+    along = "x"
     if best is not None:
         alloc_pos = float(best[0].pos)
-        route, pieces = best[1], best[2]
-    routes = _fan_out(route, pieces, takeoff, sc)
-    pieces = [list(p) for p in pieces]
-    _trim(routes, pieces, takeoff, landing, sc)
+        routes, pieces = fly(best)
+        along = "y" if best[5] else "x"
     uav_out = []
     covs = [
         _path_coverage([takeoff[k], *routes[k], landing[k]], grid, w)
@@ -453,9 +478,7 @@ def make_allocation_plan(
         idx = pieces[k]
         wps = routes[k]
         if idx:
-            arr = np.asarray(
-                [p for j in idx for p in ((route[j][1], route[j][0]), (route[j][2], route[j][0]))]
-            )
+            arr = np.asarray(wps[len(wps) - 2 * len(idx) :])  # the search lines' ends
             lo_, hi_ = arr.min(axis=0), arr.max(axis=0)
             rect = {
                 "center_m": [float(v) for v in (lo_ + hi_) / 2],
@@ -463,7 +486,7 @@ def make_allocation_plan(
                 "width_m": float(hi_[1] - lo_[1]),
                 "theta_deg": 0.0,
             }
-            ys = np.unique(arr[:, 1])
+            ys = np.unique(arr[:, 1 if along == "x" else 0])  # across the lines
             spacing = float(np.min(np.diff(ys))) if ys.size > 1 else w
             path = np.vstack([takeoff[k], np.asarray(wps), landing[k]])
             length = float(np.hypot(*np.diff(path, axis=0).T).sum())
@@ -501,6 +524,7 @@ def make_allocation_plan(
         "map_source": map_source,
         "planner": "allocation",
         "route": True,
+        "lines_along": along,
         "optimizer": {
             "name": "allocation",
             "settings": {"levels": chosen, "tried": ks, "margin": margin},

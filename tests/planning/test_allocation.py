@@ -112,3 +112,23 @@ def test_cli_plan_with_the_allocation_planner(tmp_path, capsys):
     )
     plan = json.loads(out.read_text())
     assert plan["planner"] == "allocation" and plan["bound_reach"] > plan["posc"] > 0
+
+
+def test_lines_follow_an_elongated_prior():
+    sc = _small()
+    grid = Grid.from_config(sc.map)
+    for axis in (0, 1):
+        prior = np.zeros(grid.shape)
+        if axis == 0:
+            prior[3, :] = 1.0  # one row of cells: lines along x
+        else:
+            prior[:, 3] = 1.0  # one column: lines along y
+        prior /= prior.sum()
+        plan = make_allocation_plan(sc, prior=prior)
+        assert plan["lines_along"] == ("x" if axis == 0 else "y")
+        for u in plan["uavs"]:
+            lines = np.asarray(u["waypoints_m"][u["transit_waypoints"] :]).reshape(-1, 2, 2)
+            across = 1 if axis == 0 else 0
+            assert np.allclose(lines[:, 0, across], lines[:, 1, across])  # straight lines
+            assert u["flight_time_s"] <= sc.uav.usable_endurance_s
+        assert plan["posc"] <= reach_bound(sc, prior).upper + 1e-12
