@@ -39,10 +39,12 @@ search lines (``theta_deg`` 0) and ``spacing_m`` the finest line spacing it flie
 (``lines_along`` says whether the lines run along x or y); only
 ``waypoints_m`` is the route (``route`` true in the plan). Extra fields: ``planner``
 (``"allocation"``), ``bound_reach`` (:func:`poc_env.theory.bound.reach_bound`, the environment's
-reach-aware bound), ``allocation_pos`` (the allocation's own POS), ``eta`` and ``reason`` (why a
-plan is empty, else null). ``posc`` is the planned POS: each cell's coverage from the length
-of the whole flight path inside it (eq. 10 per cell; transit and connections sweep too, as in
-the environment), which also picks ``eta``.
+reach-aware bound; also as ``bounds`` {``honest``, ``reach``} with
+:func:`poc_env.theory.bound.honest_optimum`), ``allocation_pos`` (the allocation's own POS),
+``eta`` and ``reason`` (why a plan is empty, else null). ``posc`` is the planned POS: each
+cell's coverage from the length of the whole flight path inside it (eq. 10 per cell; transit
+and connections sweep too, as in the environment), which also picks ``eta``. The schema-2
+``rectangle: null`` of route plans is not used yet (a bounding box passes schema-1 exports).
 """
 
 from __future__ import annotations
@@ -57,7 +59,7 @@ from scipy import ndimage
 from agents.planning.export import SCHEMA
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
-from poc_env.theory.bound import cell_distances, reach_bound, reach_optimum
+from poc_env.theory.bound import cell_distances, honest_optimum, reach_bound, reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage
 
@@ -533,6 +535,7 @@ def make_allocation_plan(
         "posc": posc,
         "upper_bound": float(fleet.upper) if fleet is not None else 0.0,
         "bound_reach": float(rb),
+        "bounds": {"honest": float(honest_optimum(sc, prior).pos), "reach": float(rb)},
         "allocation_pos": alloc_pos,
         "eta": float(eta),
         "reason": reason,
