@@ -487,6 +487,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
             origin=None,
             projection="aeqd",
             utm_zone=None,
+            preset="paper",
+            planner="de",
         )
         _plan(
             plan_args,

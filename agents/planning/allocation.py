@@ -33,9 +33,10 @@
    not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and each ``K`` and the plan keeps
    the one of highest planned POS (lines no UAV can fit are left unflown).
 
-The plan is the same dict as :func:`agents.planning.planner.make_plan` (every schema-1 field of
-:mod:`agents.planning.export`): per UAV the ``rectangle`` is the axis-aligned bounding box of its
-search lines (``theta_deg`` 0) and ``spacing_m`` the finest line spacing it flies
+The plan is the same schema-2 dict as :func:`agents.planning.planner.make_plan` (see
+:mod:`agents.planning.export`): per UAV the ``rectangle`` is ``null`` (a route plan has no
+decision rectangle), ``areas_m`` the ground its search lines sweep (each line ``spacing_m``
+wide, for maps and exports) and ``spacing_m`` the finest line spacing it flies
 (``lines_along`` says whether the lines run along x or y); only
 ``waypoints_m`` is the route (``route`` true in the plan). Extra fields: ``planner``
 (``"allocation"``), ``bound_reach`` (:func:`poc_env.theory.bound.reach_bound`, the environment's
@@ -43,8 +44,7 @@ reach-aware bound; also as ``bounds`` {``honest``, ``reach``} with
 :func:`poc_env.theory.bound.honest_optimum`), ``allocation_pos`` (the allocation's own POS),
 ``eta`` and ``reason`` (why a plan is empty, else null). ``posc`` is the planned POS: each
 cell's coverage from the length of the whole flight path inside it (eq. 10 per cell; transit
-and connections sweep too, as in the environment), which also picks ``eta``. The schema-2
-``rectangle: null`` of route plans is not used yet (a bounding box passes schema-1 exports).
+and connections sweep too, as in the environment), which also picks ``eta``.
 """
 
 from __future__ import annotations
@@ -284,6 +284,19 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
     return wps
 
 
+def _swept_areas(lines: np.ndarray, spacing: float) -> list[list[list[float]]]:
+    """The ground the search lines ``(L, 2, 2)`` sweep, each ``spacing`` wide (flat ends), as
+    outer rings in metres (simplified to 1 m): the ``areas_m`` of plan.json schema 2, for
+    people; ``waypoints_m`` is what is flown."""
+    import shapely
+
+    half = max(0.5 * spacing, 1.0)
+    swaths = [shapely.LineString(seg).buffer(half, cap_style="flat") for seg in lines]
+    union = shapely.union_all(swaths).simplify(1.0)
+    polys = list(getattr(union, "geoms", [union]))
+    return [[[float(x), float(y)] for x, y in p.exterior.coords[:-1]] for p in polys if p.area > 0]
+
+
 def _flight_time(wps, lines: int, takeoff, landing, sc: Scenario) -> float:
     """Eq. 17 time of a route: transit legs at cruise speed, the rest at search speed, a
     half-turn at the maximum turn rate between search lines."""
@@ -355,8 +368,10 @@ def make_allocation_plan(
     seed: int = 0,
     levels: int | tuple[int, ...] = LEVELS,
     margin: float = MARGIN,
+    crs: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The allocation plan of ``scenario`` on ``prior`` (see the module docstring).
+    """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
+    (a :func:`agents.planning.export.make_crs` record) is recorded for exports.
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -467,12 +482,7 @@ def make_allocation_plan(
     pod_total = pod_from_coverage(cov_total, law)
     posc = float(np.sum(prior * pod_total))
     for k in range(n):
-        rect = {
-            "center_m": [float(v) for v in takeoff[k]],
-            "length_m": 0.0,
-            "width_m": 0.0,
-            "theta_deg": 0.0,
-        }
+        areas: list[list[list[float]]] = []
         spacing = 0.0
         t_k = 0.0
         length = 0.0
@@ -481,15 +491,9 @@ def make_allocation_plan(
         wps = routes[k]
         if idx:
             arr = np.asarray(wps[len(wps) - 2 * len(idx) :])  # the search lines' ends
-            lo_, hi_ = arr.min(axis=0), arr.max(axis=0)
-            rect = {
-                "center_m": [float(v) for v in (lo_ + hi_) / 2],
-                "length_m": float(hi_[0] - lo_[0]),
-                "width_m": float(hi_[1] - lo_[1]),
-                "theta_deg": 0.0,
-            }
             ys = np.unique(arr[:, 1 if along == "x" else 0])  # across the lines
             spacing = float(np.min(np.diff(ys))) if ys.size > 1 else w
+            areas = _swept_areas(arr.reshape(-1, 2, 2), spacing)
             path = np.vstack([takeoff[k], np.asarray(wps), landing[k]])
             length = float(np.hypot(*np.diff(path, axis=0).T).sum())
             t_k = _flight_time(wps, len(idx), takeoff[k], landing[k], sc)
@@ -501,7 +505,8 @@ def make_allocation_plan(
         uav_out.append(
             {
                 "id": k + 1,
-                "rectangle": rect,
+                "rectangle": None,
+                "areas_m": areas,
                 "spacing_m": spacing,
                 "takeoff_m": [float(v) for v in takeoff[k]],
                 "landing_m": [float(v) for v in landing[k]],
@@ -520,6 +525,7 @@ def make_allocation_plan(
     from agents.planning.planner import _geography
 
     return {
+        **_geography(sc, prior, crs),
         "schema": SCHEMA,
         "scenario": sc.name,
         "seed": int(seed),
@@ -543,5 +549,4 @@ def make_allocation_plan(
         "history": [],
         "x": [],
         "uavs": uav_out,
-        **_geography(sc, prior, None),
     }

@@ -1,4 +1,4 @@
-"""Mission export: a plan (``plan.json``, schema 1) as GeoJSON, KML or QGroundControl missions.
+"""Mission export: a plan (``plan.json``, schema 2) as GeoJSON, KML or QGroundControl missions.
 
 Projection
 ----------
@@ -26,16 +26,33 @@ The hand-written tangent plane used before put a 200 km east-west line at y = 15
 ground 195.116 km long (2.44 % short: its longitude scale was fixed at the origin's latitude);
 it is now 199.982 km (0.009 % short; UTM 200.055 km, 0.027 % long), and the test keeps that case.
 
-``plan.json`` (schema 1) holds: ``schema``, ``scenario``, ``seed``, ``map_source``,
-``optimizer`` {``name``, ``settings``}, ``runtime_s``, ``posc``, ``upper_bound`` and
-``uavs``: a list of {``id``, ``rectangle`` {``center_m`` [x, y], ``length_m``, ``width_m``,
-``theta_deg``}, ``spacing_m``, ``takeoff_m``, ``landing_m``, ``waypoints_m`` [[x, y], ...],
-``track_length_m``, ``flight_time_s``, ``pod``, ``poc``, ``pos``, ``feasible``}.
-``waypoints_m`` are the search pattern only: the route flown is take-off field, transit to
-``waypoints_m[0]``, the search from ``waypoints_m[0]`` to ``waypoints_m[-1]``, transit to the
-landing field.
+``plan.json`` (schema 2; schema-1 files still load) holds: ``schema``, ``scenario``, ``seed``,
+``map_source``, ``optimizer`` {``name``, ``settings``}, ``runtime_s``, ``posc``,
+``upper_bound`` and ``uavs``: a list of {``id``, ``rectangle`` {``center_m`` [x, y],
+``length_m``, ``width_m``, ``theta_deg``} (the optimiser's decision rectangle; ``null`` in a
+schema-2 route plan such as the allocation planner's), ``spacing_m``, ``takeoff_m``,
+``landing_m``, ``waypoints_m`` [[x, y], ...], ``track_length_m``, ``flight_time_s``, ``pod``,
+``poc``, ``pos``, ``feasible``}. ``waypoints_m`` are the search pattern only: the route flown is
+take-off field, transit to ``waypoints_m[0]``, the search from ``waypoints_m[0]`` to
+``waypoints_m[-1]``, transit to the landing field. **``waypoints_m`` is what the time model
+flies**; the rectangles are for people.
 
-Optional fields (a plan without them is read as before, so every schema-1 file still loads):
+Schema 2 adds (all optional, checked when present):
+
+- per UAV ``flown_rectangle`` {``center_m``, ``line_length_m``, ``strip_width_m``,
+  ``lines_theta_rad``, ``rule``}: the strip the lines actually sweep
+  (:func:`agents.planning.objective.flown_rectangle`). :data:`RECTANGLE_RULE` (also written as
+  the top-level ``rectangle_rule``) says how to fly it: lines along ``lines_theta_rad`` at
+  spacing ``spacing_m``, ``d/2`` inside each long edge, ``strip_width_m / spacing_m`` lines.
+  Re-flying it by that rule (or by the usual ``ceil(E/d)`` lawnmower, which coincides on it)
+  gives the plan's own eq. 17 flight time; re-flying the decision rectangle the usual way does
+  not (issue 12), so every export draws the flown strip, not the decision rectangle.
+- per UAV ``areas_m``: polygons the UAV searches (a route plan's regions), drawn as search areas.
+- ``bounds`` {``honest``, ``reach``}: :func:`poc_env.theory.bound.honest_optimum` and the
+  reach-aware :func:`poc_env.theory.bound.reach_bound` of the plan's prior, the bounds no policy
+  beats in the environment (``upper_bound`` stays the optimiser's same-effort bound).
+
+Optional fields of both schemas (a plan without them is read as before):
 
 - ``crs``: {``kind``: ``aeqd`` | ``utm`` | ``epsg`` | ``proj``, ``origin_deg`` [lat, lon],
   ``proj`` (a PROJ string; required unless ``kind`` is ``epsg``), ``epsg`` (an integer; required
@@ -75,7 +92,15 @@ from pyproj.exceptions import CRSError, ProjError
 from poc_env.errors import ConfigError, as_number
 from poc_env.io import write_text_atomic
 
-SCHEMA = 1
+SCHEMA = 2
+#: The schemas :func:`load_plan` reads.
+READ_SCHEMAS = (1, 2)
+#: How a plan's ``flown_rectangle`` is flown (module docstring).
+RECTANGLE_RULE = (
+    "flown_rectangle: lines along lines_theta_rad at spacing spacing_m, the first and last d/2 "
+    "inside the strip's long edges, strip_width_m / spacing_m lines, boustrophedon; this is "
+    "the track waypoints_m flies and flight_time_s times"
+)
 FORMATS = ("geojson", "kml", "qgc")
 CRS_KINDS = ("aeqd", "utm", "epsg", "proj")
 ALTITUDE_REFS = ("home", "amsl")
@@ -291,8 +316,9 @@ def load_plan(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError("plan", str(p), f"valid JSON ({err})") from None
     if not isinstance(plan, dict):
         raise ConfigError("plan", type(plan).__name__, "a JSON object")
-    if plan.get("schema") != SCHEMA:
-        raise ConfigError("plan.schema", plan.get("schema"), f"{SCHEMA}")
+    schema = plan.get("schema")
+    if isinstance(schema, bool) or schema not in READ_SCHEMAS:
+        raise ConfigError("plan.schema", schema, " or ".join(map(str, READ_SCHEMAS)))
     missing = sorted(PLAN_KEYS - set(plan))
     if missing:
         raise ConfigError(f"plan.{missing[0]}", None, "present (schema 1 field)")
@@ -322,15 +348,7 @@ def load_plan(path: str | os.PathLike[str]) -> dict[str, Any]:
             raise ConfigError(f"{where}.waypoints_m", wps, "a list of [x, y] points in metres")
         for i, w in enumerate(wps):
             _point(f"{where}.waypoints_m[{i}]", w)
-        r = u["rectangle"]
-        if not isinstance(r, dict) or sorted(r) != ["center_m", "length_m", "theta_deg", "width_m"]:
-            raise ConfigError(
-                f"{where}.rectangle", r, "a mapping of center_m, length_m, width_m, theta_deg"
-            )
-        _point(f"{where}.rectangle.center_m", r["center_m"])
-        for key in ("length_m", "width_m"):
-            _number(f"{where}.rectangle.{key}", r[key], 0.0, MAX_EXTENT_M)
-        _number(f"{where}.rectangle.theta_deg", r["theta_deg"], -360.0, 360.0)
+        _check_rectangles(where, u, schema)
         for key in ("spacing_m", "track_length_m"):
             _number(f"{where}.{key}", u[key], 0.0, 100 * MAX_EXTENT_M)
         _number(f"{where}.flight_time_s", u["flight_time_s"], 0.0, 1e7)
@@ -342,10 +360,92 @@ def load_plan(path: str | os.PathLike[str]) -> dict[str, Any]:
     return plan
 
 
+def _check_rectangles(where: str, u: dict[str, Any], schema: int) -> None:
+    """``rectangle`` (null allowed from schema 2), ``flown_rectangle`` and ``areas_m``."""
+    r = u["rectangle"]
+    if r is not None or schema < 2:
+        keys = ["center_m", "length_m", "theta_deg", "width_m"]
+        if not isinstance(r, dict) or sorted(r) != keys:
+            allowed = "a mapping of center_m, length_m, width_m, theta_deg"
+            raise ConfigError(f"{where}.rectangle", r, allowed + (" or null" if schema > 1 else ""))
+        _point(f"{where}.rectangle.center_m", r["center_m"])
+        for key in ("length_m", "width_m"):
+            _number(f"{where}.rectangle.{key}", r[key], 0.0, MAX_EXTENT_M)
+        _number(f"{where}.rectangle.theta_deg", r["theta_deg"], -360.0, 360.0)
+    fr = u.get("flown_rectangle")
+    if fr is not None:
+        keys = ["center_m", "line_length_m", "lines_theta_rad", "rule", "strip_width_m"]
+        if not isinstance(fr, dict) or sorted(fr) != keys:
+            raise ConfigError(f"{where}.flown_rectangle", fr, "a mapping of " + ", ".join(keys))
+        _point(f"{where}.flown_rectangle.center_m", fr["center_m"])
+        for key in ("line_length_m", "strip_width_m"):
+            _number(f"{where}.flown_rectangle.{key}", fr[key], 0.0, MAX_EXTENT_M)
+        _number(f"{where}.flown_rectangle.lines_theta_rad", fr["lines_theta_rad"], -7.0, 7.0)
+        if not isinstance(fr["rule"], str) or len(fr["rule"]) > 500:
+            raise ConfigError(f"{where}.flown_rectangle.rule", fr["rule"], "a text of <= 500")
+    areas = u.get("areas_m")
+    if areas is not None:
+        if not isinstance(areas, list):
+            raise ConfigError(f"{where}.areas_m", areas, "a list of polygons")
+        for i, a in enumerate(areas):
+            _polygon(f"{where}.areas_m[{i}]", a)
+
+
+def search_rings(u: dict[str, Any]) -> list[tuple[str, list[list[float]], dict[str, Any]]]:
+    """What a UAV searches, as closed rings in local metres: ``(kind, ring, properties)``.
+
+    The flown strip when the plan has one (``search_strip``: what the lines sweep, see
+    :data:`RECTANGLE_RULE`), else the decision rectangle (``search_rectangle``; schema 1),
+    then every ``areas_m`` polygon (``search_area``). Properties in km and degrees. One
+    implementation for GeoJSON, KML and the figures.
+    """
+    from poc_env.geometry import rectangle_corners
+
+    out: list[tuple[str, list[list[float]], dict[str, Any]]] = []
+    fr, r = u.get("flown_rectangle"), u.get("rectangle")
+    if fr is not None:
+        c = rectangle_corners(
+            fr["center_m"], fr["line_length_m"], fr["strip_width_m"], fr["lines_theta_rad"]
+        ).tolist()
+        props = {
+            "line_length_km": round(fr["line_length_m"] / 1e3, 3),
+            "strip_width_km": round(fr["strip_width_m"] / 1e3, 3),
+            "lines_heading_deg": round(math.degrees(fr["lines_theta_rad"]) % 360.0, 2),
+            "spacing_km": round(u["spacing_m"] / 1e3, 3),
+            "rule": fr["rule"],
+        }
+        out.append(("search_strip", [*c, c[0]], props))
+    elif r is not None:
+        c = rectangle_corners(
+            r["center_m"], r["length_m"], r["width_m"], math.radians(r["theta_deg"])
+        ).tolist()
+        props = {
+            "length_km": round(r["length_m"] / 1e3, 3),
+            "width_km": round(r["width_m"] / 1e3, 3),
+            "theta_deg": round(r["theta_deg"], 2),
+        }
+        out.append(("search_rectangle", [*c, c[0]], props))
+    for a in u.get("areas_m") or []:
+        ring = [[float(x), float(y)] for x, y in a]
+        if ring[0] != ring[-1]:
+            ring.append(ring[0])
+        out.append(("search_area", ring, {"spacing_km": round(u["spacing_m"] / 1e3, 3)}))
+    return out
+
+
 def _check_optional(plan: dict[str, Any]) -> None:
     """The optional fields (module docstring): absent or null is fine, anything else checked."""
     if plan.get("crs") is not None:
         _check_crs("plan.crs", plan["crs"])
+    b = plan.get("bounds")
+    if b is not None:
+        if not isinstance(b, dict) or sorted(b) != ["honest", "reach"]:
+            raise ConfigError("plan.bounds", b, "a mapping of honest, reach")
+        for key in ("honest", "reach"):
+            _number(f"plan.bounds.{key}", b[key], 0.0, 1.0)
+    rule = plan.get("rectangle_rule")
+    if rule is not None and (not isinstance(rule, str) or len(rule) > 1000):
+        raise ConfigError("plan.rectangle_rule", rule, "a text of <= 1000 characters")
     fl = plan.get("flight")
     if fl is not None:
         if not isinstance(fl, dict) or not set(fl) <= set(DEFAULT_FLIGHT):
@@ -462,16 +562,6 @@ def _r6(v: float) -> float:
     return round(float(v), 6)
 
 
-def _rectangle_ring(u: dict) -> list[list[float]]:
-    from poc_env.geometry import rectangle_corners
-
-    r = u["rectangle"]
-    corners = rectangle_corners(
-        r["center_m"], r["length_m"], r["width_m"], math.radians(r["theta_deg"])
-    ).tolist()
-    return [*corners, corners[0]]
-
-
 def geojson(
     plan: dict,
     crs: Any,
@@ -514,21 +604,15 @@ def geojson(
                 "properties": props,
             }
         )
-        ring = [[_r6(lon), _r6(lat)] for lat, lon in _ll(_rectangle_ring(u), crs)]
-        r = u["rectangle"]
-        feats.append(
-            {
-                "type": "Feature",
-                "geometry": {"type": "Polygon", "coordinates": [ring]},
-                "properties": {
-                    "id": u["id"],
-                    "kind": "search_rectangle",
-                    "length_km": round(r["length_m"] / 1e3, 3),
-                    "width_km": round(r["width_m"] / 1e3, 3),
-                    "theta_deg": round(r["theta_deg"], 2),
-                },
-            }
-        )
+        for kind, ring_m, props in search_rings(u):
+            ring = [[_r6(lon), _r6(lat)] for lat, lon in _ll(ring_m, crs)]
+            feats.append(
+                {
+                    "type": "Feature",
+                    "geometry": {"type": "Polygon", "coordinates": [ring]},
+                    "properties": {"id": u["id"], "kind": kind, **props},
+                }
+            )
     for o in _overlays(plan, crs, alt, ground):
         if o["geometry"] == "Polygon":
             coords: Any = [[[_r6(lon), _r6(lat)] for lat, lon in o["latlon"]]]
@@ -583,11 +667,13 @@ def kml(
             f" km/h</description><LineString><altitudeMode>{mode}</altitudeMode>"
             f"<coordinates>{_kml_coords(pts, zs)}</coordinates></LineString></Placemark>"
         )
-        ring = _ll(_rectangle_ring(u), crs)
-        rect = (
-            f"<Placemark><name>UAV {uid} search rectangle</name><styleUrl>#rectangle</styleUrl>"
-            f"<Polygon><outerBoundaryIs><LinearRing><coordinates>{_kml_coords(ring)}"
-            "</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>"
+        rect = "".join(
+            f"<Placemark><name>UAV {uid} {kind.replace('_', ' ')}</name>"
+            f"<styleUrl>#rectangle</styleUrl><description>{escape(_kml_props(props))}"
+            "</description><Polygon><outerBoundaryIs><LinearRing><coordinates>"
+            f"{_kml_coords(_ll(ring_m, crs))}</coordinates></LinearRing></outerBoundaryIs>"
+            "</Polygon></Placemark>"
+            for kind, ring_m, props in search_rings(u)
         )
         mine = [o for o in overlays if o["properties"].get("id") == u["id"]]
         extra = "".join(_kml_placemark(o, mode) for o in mine)
@@ -616,6 +702,11 @@ _KML_STYLES = (
     "<PolyStyle><color>660000ff</color></PolyStyle></Style>"
     '<Style id="airfield"><IconStyle><scale>1.1</scale></IconStyle></Style>'
 )
+
+
+def _kml_props(props: dict[str, Any]) -> str:
+    """A search area's properties as one line of text (KML descriptions)."""
+    return "; ".join(f"{k.replace('_', ' ')}: {v}" for k, v in props.items())
 
 
 def _kml_coords(latlon, zs=None) -> str:

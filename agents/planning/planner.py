@@ -1,6 +1,6 @@
-"""The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 1) and a figure.
+"""The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 2) and a figure.
 
-The plan also records (optional schema-1 fields, see :mod:`agents.planning.export`) the UAV's
+The plan also records (optional fields, see :mod:`agents.planning.export`) the UAV's
 speeds and altitudes (``flight``), the operating area of eq. 20 (``operating_area_m``, the
 bounding box of the grid and the airfields grown by ``episode.boundary_margin_km``, as in
 :func:`poc_env.sim.core.make_params`), the no-fly zones and the airfields, and, when
@@ -9,7 +9,7 @@ that origin by default, UTM with ``projection="utm"``).
 
 :func:`make_plan` runs an optimiser of :mod:`~agents.planning.optimizers` (default the paper's
 adaptive DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section)
-on :class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-1 dict
+on :class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-2 dict
 documented in :mod:`agents.planning.export` (every field there, plus a few extras such as the
 convergence history). The ``de_plan`` policy (:mod:`agents.policies.de_plan`) makes such a plan
 at the start of every episode and flies it.
@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 import poc_env.limits as limits
-from agents.planning.export import SCHEMA, make_crs
+from agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
 from agents.planning.objective import PlanObjective
 from agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.config import Scenario, load_scenario
@@ -53,7 +53,7 @@ def make_plan(
     preset: str = "paper",
     planner: str = "de",
 ) -> dict[str, Any]:
-    """Optimise the plan and return it as a schema-1 dict (see the module docstring).
+    """Optimise the plan and return it as a schema-2 dict (see the module docstring).
 
     ``planner``: ``de`` (this optimiser-based plan) or ``allocation``
     (:func:`agents.planning.allocation.make_allocation_plan`, routes from the reach-aware
@@ -72,17 +72,17 @@ def make_plan(
     ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
     population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
     """
+    if planner not in ("de", "allocation"):
+        raise ConfigError("planner", planner, "de or allocation")
+    crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     if planner == "allocation":
         from agents.planning.allocation import make_allocation_plan
 
         return make_allocation_plan(
-            scenario, prior=prior, map_source=map_source, uavs=uavs, seed=seed
+            scenario, prior=prior, map_source=map_source, uavs=uavs, seed=seed, crs=crs
         )
-    if planner != "de":
-        raise ConfigError("planner", planner, "de or allocation")
     sc = load_scenario(scenario)
     opt = get_optimizer(optimizer)
-    crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     if prior is None:
         prior = build_prior(sc.map)
     obj = PlanObjective(sc, prior, uavs=uavs)
@@ -141,6 +141,7 @@ def make_plan(
                     "width_m": u["width_m"],
                     "theta_deg": u["theta_deg"],
                 },
+                "flown_rectangle": u["flown_rectangle"],
                 "spacing_m": u["spacing_m"],
                 "takeoff_m": u["takeoff_m"],
                 "landing_m": u["landing_m"],
@@ -165,14 +166,18 @@ def make_plan(
         "objective": float(res.fun),
         "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
         "x": [float(v) for v in x],
+        "rectangle_rule": RECTANGLE_RULE,
         "uavs": uav_out,
         **_geography(sc, prior, crs),
     }
 
 
 def _geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
-    """The optional plan.json fields an export reads: flight, area, zones, airfields, crs."""
+    """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
+    the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
+    and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value)."""
     from poc_env.sim.core import make_params
+    from poc_env.theory.bound import honest_optimum, reach_bound
 
     x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)  # eq. 20's boundary
     out: dict[str, Any] = {
@@ -188,6 +193,11 @@ def _geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> d
             {"name": a.name, "position_m": [float(v) for v in a.position_m]} for a in sc.airfields
         ],
     }
+    if float(np.sum(prior)) > 0:  # an empty prior (a route plan's stated reason) has no bounds
+        out["bounds"] = {
+            "honest": float(honest_optimum(sc, prior).pos),
+            "reach": float(reach_bound(sc, prior).upper),
+        }
     if crs is not None:
         out["crs"] = crs
     return out
@@ -202,10 +212,14 @@ def plan_table(plan: dict[str, Any]) -> str:
     lines = [head, "-" * len(head)]
     for u in plan["uavs"]:
         r = u["rectangle"]
-        c = f"({r['center_m'][0] / 1e3:.1f}, {r['center_m'][1] / 1e3:.1f})"
-        lw = f"({r['length_m'] / 1e3:.1f}, {r['width_m'] / 1e3:.1f})"
+        if r is None:  # a route plan (schema 2): no decision rectangle
+            c, lw, theta = "-", "-", "-"
+        else:
+            c = f"({r['center_m'][0] / 1e3:.1f}, {r['center_m'][1] / 1e3:.1f})"
+            lw = f"({r['length_m'] / 1e3:.1f}, {r['width_m'] / 1e3:.1f})"
+            theta = f"{r['theta_deg']:.1f}"
         lines.append(
-            f"{u['id']:>3} {c:>16} {lw:>14} {r['theta_deg']:>9.1f} {u['spacing_m'] / 1e3:>6.2f} "
+            f"{u['id']:>3} {c:>16} {lw:>14} {theta:>9} {u['spacing_m'] / 1e3:>6.2f} "
             f"{u['pod']:>6.3f} {u['poc']:>6.3f} {u['pos']:>6.3f} "
             f"{u['flight_time_s'] / 3600:>6.2f} {'yes' if u['feasible'] else 'NO':>3}"
         )
@@ -215,6 +229,13 @@ def plan_table(plan: dict[str, Any]) -> str:
         f"{plan['upper_bound']:.4f}   ({plan['optimizer']['name']}, seed {plan['seed']}, "
         f"{plan['runtime_s']:.2f} s)"
     )
+    b = plan.get("bounds")
+    if b:
+        ratio = f" (POS_C / reach {plan['posc'] / b['reach']:.3f})" if b["reach"] > 0 else ""
+        lines.append(
+            f"bounds for the environment: honest {b['honest']:.4f}, "
+            f"reach-aware {b['reach']:.4f}{ratio}"
+        )
     return "\n".join(lines)
 
 
@@ -224,8 +245,9 @@ def write_plan(plan: dict[str, Any], path: str | os.PathLike[str]) -> Path:
 
 
 def plot_plan(plan: dict[str, Any], scenario: Scenario, prior, path) -> Path:
-    """Fig. 21 analog: prior, search rectangles, tracks and airfields."""
-    from poc_env.geometry import rectangle_corners
+    """Fig. 21 analog: prior, search areas (the flown strips, :func:`search_rings`), tracks and
+    airfields."""
+    from agents.planning.export import search_rings
     from poc_env.theory.probability_map import Grid
     from poc_env.viz.plots import _figure, draw_airfields, draw_prior, save_figure_atomic
 
@@ -234,12 +256,9 @@ def plot_plan(plan: dict[str, Any], scenario: Scenario, prior, path) -> Path:
     ax = fig.add_subplot()
     draw_prior(ax, grid, prior)
     for k, u in enumerate(plan["uavs"]):
-        r = u["rectangle"]
-        corners = rectangle_corners(
-            r["center_m"], r["length_m"], r["width_m"], np.radians(r["theta_deg"])
-        )
-        ring = np.vstack([corners, corners[:1]]) / 1e3
-        ax.plot(ring[:, 0], ring[:, 1], color="w", lw=1.4)
+        for _, ring_m, _ in search_rings(u):
+            ring = np.asarray(ring_m) / 1e3
+            ax.plot(ring[:, 0], ring[:, 1], color="w", lw=1.4)
         route = np.array([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]]) / 1e3
         ax.plot(route[:, 0], route[:, 1], color=f"C{k % 10}", lw=0.8, label=f"UAV {u['id']}")
     pts = np.unique(np.array([u["takeoff_m"] for u in plan["uavs"]]), axis=0)

@@ -112,7 +112,7 @@ def test_bad_origin(origin):
 
 
 def test_bad_plans(tmp_path):
-    path, _ = _plan(tmp_path, schema=2)
+    path, _ = _plan(tmp_path, schema=3)
     with pytest.raises(ConfigError, match="schema"):
         load_plan(path)
     path, plan = _plan(tmp_path)

@@ -18,7 +18,7 @@ def plan():
 
 
 def test_plan_is_feasible_and_inside_its_rectangles(plan):
-    assert plan["schema"] == 1 and len(plan["uavs"]) == 3
+    assert plan["schema"] == 2 and len(plan["uavs"]) == 3
     for u in plan["uavs"]:
         r = u["rectangle"]
         rect = rectangle_polygon(

@@ -10,6 +10,7 @@ from poc_env.cli import main
 from poc_env.errors import ConfigError
 
 BUILTIN = (
+    "allocation_plan",
     "de_plan",
     "de_receding",
     "greedy_bayes",
