@@ -164,29 +164,8 @@ def test_flight_time_is_eq_17_of_the_generated_track(paper):
         assert uav["feasible"] == (t <= 0.85 * paper.endurance_s)
 
 
-def _usual_lawnmower(center, line_length, strip, alpha, d, start):
-    """The textbook lawnmower of a strip: ceil(E/d) lines at d/2, 3d/2, ... across it."""
-    n = max(1, int(np.ceil(strip / d - 1e-9)))
-    e_l = np.array([np.cos(alpha), np.sin(alpha)])
-    e_e = np.array([-np.sin(alpha), np.cos(alpha)])
-    offs = (0.5 * strip - 0.5 * d - d * np.arange(n)) if strip >= d else np.zeros(1)
-    best = None
-    for order in (offs, offs[::-1]):
-        for up in (True, False):
-            pts = []
-            for k, v in enumerate(order):
-                ends = [-0.5 * line_length, 0.5 * line_length]
-                if (k % 2 == 0) != up:
-                    ends = ends[::-1]
-                pts += [center + v * e_e + u * e_l for u in ends]
-            pts = np.asarray(pts)
-            if best is None or np.hypot(*(pts[0] - start)) < np.hypot(*(best[0] - start)) - 1e-12:
-                best = pts
-    return n, best
-
-
 @pytest.mark.parametrize("seed", range(4))
-def test_reflying_the_flown_rectangle_gives_the_plans_flight_time(paper, seed):
+def test_reflying_the_flown_rectangle_gives_the_plans_flight_time(paper, seed, usual_lawnmower):
     """Deliverable 5: the exported strip, flown by the documented rule with the project's
     generator and by the usual ceil(E/d) lawnmower, gives the plan's eq. 17 time (1e-6 rel)."""
     x = _population(paper, 1, 100 + seed, compact=seed % 2 == 0)[0]
@@ -196,7 +175,7 @@ def test_reflying_the_flown_rectangle_gives_the_plans_flight_time(paper, seed):
         strip, alpha, d = fr["strip_width_m"], fr["lines_theta_rad"], uav["spacing_m"]
         rect = rectangle_polygon(c, line_length, strip, alpha)
         track = parallel_search(rect, d, 0.5 * np.pi - alpha, start=uav["takeoff_m"])
-        n_usual, usual = _usual_lawnmower(c, line_length, strip, alpha, d, uav["takeoff_m"])
+        n_usual, usual = usual_lawnmower(c, line_length, strip, alpha, d, uav["takeoff_m"])
         assert n_usual == uav["n_lines"] == len(track.search_legs())
         for wp in (track.waypoints, usual):
             t = flight_time_s(

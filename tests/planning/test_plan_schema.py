@@ -29,28 +29,6 @@ def plan():
     return make_plan("small", seed=3, popsize=12, maxiter=6, origin_deg=ORIGIN)
 
 
-def _usual_lawnmower(center, line_length, strip, alpha, d, start):
-    """The textbook lawnmower of a strip: ceil(E/d) lines at d/2, 3d/2, ... across it, from
-    the corner nearest ``start``."""
-    n = max(1, int(np.ceil(strip / d - 1e-6)))
-    e_l = np.array([np.cos(alpha), np.sin(alpha)])
-    e_e = np.array([-np.sin(alpha), np.cos(alpha)])
-    offs = (0.5 * strip - 0.5 * d - d * np.arange(n)) if strip >= d else np.zeros(1)
-    best = None
-    for order in (offs, offs[::-1]):
-        for up in (True, False):
-            pts = []
-            for k, v in enumerate(order):
-                ends = [-0.5 * line_length, 0.5 * line_length]
-                if (k % 2 == 0) != up:
-                    ends = ends[::-1]
-                pts += [center + v * e_e + u * e_l for u in ends]
-            arr = np.asarray(pts)
-            if best is None or np.hypot(*(arr[0] - start)) < np.hypot(*(best[0] - start)) - 1e-9:
-                best = arr
-    return best
-
-
 def test_a_new_plan_is_schema_2_with_flown_strips_rule_and_bounds(plan, tmp_path):
     assert plan["schema"] == SCHEMA == 2 and 1 in READ_SCHEMAS
     assert plan["rectangle_rule"] == RECTANGLE_RULE
@@ -65,7 +43,7 @@ def test_a_new_plan_is_schema_2_with_flown_strips_rule_and_bounds(plan, tmp_path
     assert load_plan(path)["uavs"][0]["flown_rectangle"] == plan["uavs"][0]["flown_rectangle"]
 
 
-def test_reflying_the_exported_strip_gives_the_plans_flight_time(plan, tmp_path):
+def test_reflying_the_exported_strip_gives_the_plans_flight_time(plan, tmp_path, usual_lawnmower):
     """Issue 12: the GeoJSON search strip, flown by the usual ceil(E/d) lawnmower at the plan's
     spacing, takes the plan's own eq. 17 time (coordinates are rounded to 1e-6 deg, ~0.1 m)."""
     path = write_plan(plan, tmp_path / "plan.json")
@@ -82,7 +60,9 @@ def test_reflying_the_exported_strip_gives_the_plans_flight_time(plan, tmp_path)
         length, strip = np.hypot(*(c[1] - c[0])), np.hypot(*(c[3] - c[0]))
         heading = strips[u["id"]]["properties"]["lines_heading_deg"]
         assert np.degrees(alpha) % 360 == pytest.approx(heading, abs=0.006)  # 2 decimals
-        wps = _usual_lawnmower(c.mean(axis=0), length, strip, alpha, u["spacing_m"], u["takeoff_m"])
+        start = u["takeoff_m"]
+        n, wps = usual_lawnmower(c.mean(axis=0), length, strip, alpha, u["spacing_m"], start)
+        assert n == max(1, round(strip / u["spacing_m"]))  # the rule's strip_width / spacing
         t = flight_time_s(
             u["takeoff_m"], wps, u["landing_m"], fl["cruise_speed_mps"], fl["search_speed_mps"]
         )
