@@ -57,7 +57,8 @@ from poc_env.config import Scenario
 from poc_env.envs.vector import SwarmVecEnv
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
-from poc_env.sim.autopilot import homing, returning, steer
+from poc_env.sim.autopilot import returning
+from poc_env.sim.control import heading_increments
 from poc_env.sim.core import Params
 from poc_env.sim.observations import (
     RASTER_INDEX,
@@ -71,7 +72,6 @@ N_SECTORS = 8
 RING_EDGES_M = (10e3, 30e3, 70e3)
 N_RINGS = len(RING_EDGES_M) + 1
 OTHERS_RADIUS_M = 30e3
-LOOKAHEAD_M = 10e3
 N_IDS = 8
 FEATURES = VECTOR_SIZE + N_SECTORS * N_RINGS + N_SECTORS + 1 + N_IDS
 FEATURE_LOW = np.concatenate([VECTOR_LOW, np.zeros(FEATURES - VECTOR_SIZE, np.float32)])
@@ -130,23 +130,10 @@ class PilotFeatures:
 
 def pilot_actions(params: Params, vector: np.ndarray, action: np.ndarray, k) -> np.ndarray:
     """Eq. 19 actions ``(B, 3)`` flying the pilot ``action (B, 2)`` (module docstring) for UAVs
-    ``k (B,)`` whose observation vectors are ``vector (B, VECTOR_SIZE)``."""
-    u = params.scenario.uav
+    ``k (B,)`` whose observation vectors are ``vector (B, VECTOR_SIZE)``: the environment's
+    ``control="heading"`` level (:func:`poc_env.sim.control.heading_increments`)."""
     q = decode_vector(params, np.asarray(vector, dtype=np.float32))
-    xy = q["xy"]
-    a = np.asarray(action, dtype=float).reshape(-1, 2)
-    norm = np.hypot(a[:, 0], a[:, 1])
-    keep = norm < 1e-6
-    ux = np.where(keep, np.cos(q["heading"]), a[:, 0] / np.where(keep, 1.0, norm))
-    uy = np.where(keep, np.sin(q["heading"]), a[:, 1] / np.where(keep, 1.0, norm))
-    goal = xy + LOOKAHEAD_M * np.stack([ux, uy], axis=-1)
-    inside = params.grid.contains(xy)
-    speed = np.where(inside, u.search_speed_mps, u.cruise_speed_mps)
-    out = steer(params, xy, q["heading"], q["speed"], q["pitch"], q["z"], goal, speed)
-    home = returning(params, xy, q["usable"], k)
-    if home.any():
-        out[home] = homing(params, {key: v[home] for key, v in q.items()}, np.asarray(k)[home])
-    return out.astype(np.float32)
+    return heading_increments(params, q, action, k)
 
 
 def grid_distance(params: Params, xy: np.ndarray) -> np.ndarray:

@@ -60,7 +60,8 @@ class UAVSearchGym(gym.Env):
             self.observation_space = spaces.Box(
                 np.tile(one.low, n), np.tile(one.high, n), dtype=np.float32
             )
-        self.action_space = spaces.Box(-1.0, 1.0, (3 * n,), np.float32)
+        self._dim = self.par._dim  # the control level's action size per UAV
+        self.action_space = spaces.Box(-1.0, 1.0, (self._dim * n,), np.float32)
         self._last: dict[str, Any] = {}
         self._last_info: dict[str, dict[str, Any]] = {}
 
@@ -109,16 +110,16 @@ class UAVSearchGym(gym.Env):
         return self._joint(obs), reward, terminated, truncated, self._joint_info(infos)
 
     def _action_array(self, action) -> np.ndarray:
-        """The joint action as an (N, 3) float array; ConfigError naming ``action`` otherwise."""
-        n = len(self.par.possible_agents)
-        allowed = f"{3 * n} finite real numbers in [-1, 1] (shape ({3 * n},))"
+        """The joint action as an (N, dim) float array; ConfigError naming ``action`` otherwise."""
+        n, d = len(self.par.possible_agents), self._dim
+        allowed = f"{d * n} finite real numbers in [-1, 1] (shape ({d * n},))"
         try:
             a = np.asarray(action)
         except (ValueError, TypeError):  # ragged nesting
             raise ConfigError("action", action, allowed) from None
-        if a.dtype.kind not in "biuf" or a.size != 3 * n or not np.isfinite(a).all():
+        if a.dtype.kind not in "biuf" or a.size != d * n or not np.isfinite(a).all():
             raise ConfigError("action", action, allowed)
-        return a.astype(float, copy=False).reshape(n, 3)
+        return a.astype(float, copy=False).reshape(n, d)
 
     def render(self):
         return self.par.render()

@@ -17,6 +17,7 @@ from poc_env.errors import ConfigError, PocEnvError
 from poc_env.sim import comms as comms_mod
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
+from poc_env.sim.control import ACTION_DIMS, check_control, to_increments
 from poc_env.sim.rewards import reward_terms, total_reward
 from poc_env.theory.probability_map import (
     Grid,
@@ -80,6 +81,12 @@ class UAVSearchParallelEnv(ParallelEnv):
     as fractions of their per-step limits ``max_accel * dt``, ``max_turn_rate * dt`` and
     ``max_pitch_rate * dt``. Speed stays in ``[v_min, v_max]``, pitch in ``[-beta_max,
     beta_max]``. Actions of finished agents are not expected; NaN/inf or wrong shapes raise.
+
+    ``control="heading"`` (``Box(-1, 1, (2,))``: a map-frame direction) and
+    ``control="waypoint"`` (``Box(-1, 1, (2,))``: a point of the operating area, (-1, -1) its
+    south-west corner) are flown by the autopilot of :mod:`poc_env.sim.control`, which turns
+    them into the increments above within their limits; with ``auto_return=True`` (default)
+    it takes a UAV home and lands it once eq. 18's usable endurance only covers the way back.
 
     ## Observation Space
 
@@ -215,6 +222,8 @@ class UAVSearchParallelEnv(ParallelEnv):
         random_prior: bool = False,
         max_cycles: int | None = None,
         random_airfields: bool = False,
+        control: str = "increments",
+        auto_return: bool = True,
         **kwargs: Any,
     ) -> None:
         if render_mode not in (None, "rgb_array", "human"):
@@ -230,6 +239,11 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise ConfigError(
                 "random_prior", random_prior, "False when a map_file prior is given (one prior)"
             )
+        self.control = check_control(control)
+        if not isinstance(auto_return, bool | np.bool_):
+            raise ConfigError("auto_return", auto_return, "True or False")
+        self.auto_return = bool(auto_return)
+        self._dim = ACTION_DIMS[self.control]
         merged = resolve_overrides(overrides, kwargs)
         if max_cycles is not None:
             allowed = f"None or an integer in [1, {limits.MAX_STEPS}] (the episode's steps)"
@@ -276,7 +290,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             high = np.concatenate([raster.high.ravel(), vector.high])
             space = spaces.Box(low, high, dtype=np.float32)
         self._obs_space = space
-        self._act_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self._act_space = spaces.Box(-1.0, 1.0, (self._dim,), np.float32)
         slow = np.concatenate([np.zeros(g.ny * g.nx), np.tile(obs_mod.VECTOR_LOW, n)])
         shigh = np.concatenate([np.ones(g.ny * g.nx), np.tile(obs_mod.VECTOR_HIGH, n)])
         self.state_space = spaces.Box(
@@ -389,12 +403,12 @@ class UAVSearchParallelEnv(ParallelEnv):
             if (
                 arr is not None
                 and arr.dtype.kind in _NUMERIC_KINDS
-                and arr.shape == (len(agents), 3)
+                and arr.shape == (len(agents), self._dim)
                 and np.isfinite(arr).all()
             ):
                 if len(agents) == self.params.n_agents:
                     return arr.astype(float, copy=False)[None]
-                out = np.zeros((1, self.params.n_agents, 3))
+                out = np.zeros((1, self.params.n_agents, self._dim))
                 out[0, [self._index[a] for a in agents]] = arr
                 return out
         return self._actions_array_checked(actions)
@@ -402,7 +416,8 @@ class UAVSearchParallelEnv(ParallelEnv):
     def _actions_array_checked(self, actions: Mapping[str, Any]) -> np.ndarray:
         """Agent by agent, raising a precise error for the first bad entry."""
         n = self.params.n_agents
-        arr = np.zeros((1, n, 3))
+        arr = np.zeros((1, n, self._dim))
+        allowed = _ACTION_ALLOWED.replace("3 finite", f"{self._dim} finite")
         for agent, act in actions.items():
             i = self._check_agent(agent)
             if agent not in self.agents:
@@ -411,13 +426,13 @@ class UAVSearchParallelEnv(ParallelEnv):
             try:
                 a = np.asarray(act)
             except (ValueError, TypeError):  # ragged nesting
-                raise ConfigError(field, act, _ACTION_ALLOWED) from None
+                raise ConfigError(field, act, allowed) from None
             if a.dtype.kind not in _NUMERIC_KINDS:
-                raise ConfigError(field, act, _ACTION_ALLOWED)
-            if a.shape != (3,):
-                raise ConfigError(field, act, f"shape (3,): {_ACTION_ALLOWED}")
+                raise ConfigError(field, act, allowed)
+            if a.shape != (self._dim,):
+                raise ConfigError(field, act, f"shape ({self._dim},): {allowed}")
             if not np.all(np.isfinite(a)):
-                raise ConfigError(field, a.tolist(), _ACTION_ALLOWED)
+                raise ConfigError(field, a.tolist(), allowed)
             arr[0, i] = a
         missing = [a for a in self.agents if a not in actions]
         if missing:
@@ -431,6 +446,13 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise EpisodeOverError("every agent has finished; call reset() before step()")
         arr = self._actions_array(actions)
         st = self.sim_state
+        if self.control != "increments":  # the autopilot of poc_env.sim.control
+            n = self.params.n_agents
+            q = obs_mod.decode_vector(self.params, obs_mod.vectors(self.params, st)[0])
+            inc = to_increments(
+                self.params, self.control, q, arr[0], np.arange(n), self.auto_return
+            )
+            arr = np.where(st.flying[0][:, None], inc, 0.0)[None]
         ev = sim.step(self.params, st, arr, [self._rng])
         terms = reward_terms(self.scenario.reward, ev)
         reward = np.asarray(total_reward(terms)[0], dtype=float).tolist()

@@ -1,0 +1,91 @@
+"""Control levels: what a policy commands, turned into eq. 19 increments by one autopilot.
+
+=============  ==================  ==========================================================
+control        action per UAV      meaning
+=============  ==================  ==========================================================
+increments     Box(-1, 1, (3,))    the paper's eq. 19 increments (dv, d alpha, d beta) as
+                                   fractions of their per-step limits (the default)
+heading        Box(-1, 1, (2,))    a map-frame direction (a_x, a_y); the autopilot turns
+                                   towards the point :data:`LOOKAHEAD_M` along it, at the
+                                   search speed over the grid and the cruise speed outside it,
+                                   level at the cruise altitude; a zero vector keeps the heading
+waypoint       Box(-1, 1, (2,))    a target point: (-1, -1) is the operating area's
+                                   south-west corner (eq. 20's boundary), (1, 1) its
+                                   north-east one; flown like ``heading`` towards that point
+=============  ==================  ==========================================================
+
+Every level other than ``increments`` is flown by :func:`poc_env.sim.autopilot.steer`, so every
+increment stays within its eq. 19 limit (|a| <= 1 before scaling). With ``auto_return`` (the
+default) the autopilot takes a UAV home and lands it as soon as eq. 18's usable endurance only
+covers the way back (:func:`poc_env.sim.autopilot.returning`, then
+:func:`~poc_env.sim.autopilot.homing`); the policy's action is then ignored. The RL
+``pilot`` recipe (:mod:`agents.rl.pilot`) is the ``heading`` level read from the observation
+vector, through :func:`heading_increments`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from poc_env.errors import ConfigError
+from poc_env.sim.autopilot import homing, returning, steer
+from poc_env.sim.core import Params
+
+CONTROLS = ("increments", "heading", "waypoint")
+#: Action size per UAV of each control level.
+ACTION_DIMS = {"increments": 3, "heading": 2, "waypoint": 2}
+#: How far ahead along a commanded heading the autopilot aims (m).
+LOOKAHEAD_M = 10e3
+
+
+def check_control(control: object) -> str:
+    """``control`` if it names a level of :data:`CONTROLS`, else a ConfigError."""
+    if not isinstance(control, str) or control not in CONTROLS:
+        raise ConfigError("control", control, "one of " + ", ".join(CONTROLS))
+    return control
+
+
+def _fly_to(params: Params, q: dict, goal: np.ndarray, k, auto_return: bool) -> np.ndarray:
+    """Increments (B, 3) flying towards ``goal (B, 2)``; home once eq. 18 says so."""
+    u = params.scenario.uav
+    xy = np.asarray(q["xy"], dtype=float)
+    speed = np.where(params.grid.contains(xy), u.search_speed_mps, u.cruise_speed_mps)
+    out = steer(params, xy, q["heading"], q["speed"], q["pitch"], q["z"], goal, speed)
+    if auto_return:
+        home = returning(params, xy, q["usable"], k)
+        if home.any():
+            out[home] = homing(params, {key: v[home] for key, v in q.items()}, np.asarray(k)[home])
+    return out.astype(np.float32)
+
+
+def heading_increments(
+    params: Params, q: dict, action: np.ndarray, k, auto_return: bool = True
+) -> np.ndarray:
+    """The ``heading`` level: increments (B, 3) for directions ``action (B, 2)`` of UAVs
+    ``k (B,)`` whose state is ``q`` (:func:`poc_env.sim.observations.decode_vector`)."""
+    xy = np.asarray(q["xy"], dtype=float)
+    a = np.asarray(action, dtype=float).reshape(-1, 2)
+    norm = np.hypot(a[:, 0], a[:, 1])
+    keep = norm < 1e-6
+    ux = np.where(keep, np.cos(q["heading"]), a[:, 0] / np.where(keep, 1.0, norm))
+    uy = np.where(keep, np.sin(q["heading"]), a[:, 1] / np.where(keep, 1.0, norm))
+    goal = xy + LOOKAHEAD_M * np.stack([ux, uy], axis=-1)
+    return _fly_to(params, q, goal, k, auto_return)
+
+
+def waypoint_goal(params: Params, action: np.ndarray) -> np.ndarray:
+    """The point (B, 2) in metres a ``waypoint`` action (B, 2) in [-1, 1] names."""
+    x0, y0, x1, y1 = params.bounds
+    a = np.clip(np.asarray(action, dtype=float).reshape(-1, 2), -1.0, 1.0)
+    return np.stack([x0 + (a[:, 0] + 1) / 2 * (x1 - x0), y0 + (a[:, 1] + 1) / 2 * (y1 - y0)], -1)
+
+
+def to_increments(
+    params: Params, control: str, q: dict, action: np.ndarray, k, auto_return: bool = True
+) -> np.ndarray:
+    """Eq. 19 increments (B, 3) for the ``control`` level's actions (B, ACTION_DIMS[control])."""
+    if control == "increments":
+        return np.asarray(action, dtype=float).reshape(-1, 3)
+    if control == "heading":
+        return heading_increments(params, q, action, k, auto_return)
+    return _fly_to(params, q, waypoint_goal(params, action), k, auto_return)
