@@ -77,7 +77,7 @@ def test_heading_flies_the_commanded_direction():
 
 def test_increments_stay_the_default_and_unknown_levels_are_refused():
     assert poc_env.parallel_env("small").action_space("uav_0").shape == (3,)
-    with pytest.raises(ConfigError, match="control.*heading"):
+    with pytest.raises(ConfigError, match=r"control.*heading"):
         poc_env.parallel_env("small", control="velocity")
     with pytest.raises(ConfigError, match="auto_return"):
         poc_env.parallel_env("small", control="heading", auto_return="yes")
