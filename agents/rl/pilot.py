@@ -61,71 +61,19 @@ from poc_env.sim.autopilot import returning
 from poc_env.sim.control import heading_increments
 from poc_env.sim.core import Params
 from poc_env.sim.observations import (
-    RASTER_INDEX,
-    VECTOR_HIGH,
-    VECTOR_LOW,
+    FEATURE_HIGH,
+    FEATURE_LOW,
     VECTOR_SIZE,
+    CompassFeatures,
     decode_vector,
 )
 
-N_SECTORS = 8
-RING_EDGES_M = (10e3, 30e3, 70e3)
-N_RINGS = len(RING_EDGES_M) + 1
-OTHERS_RADIUS_M = 30e3
-N_IDS = 8
-FEATURES = VECTOR_SIZE + N_SECTORS * N_RINGS + N_SECTORS + 1 + N_IDS
-FEATURE_LOW = np.concatenate([VECTOR_LOW, np.zeros(FEATURES - VECTOR_SIZE, np.float32)])
-FEATURE_HIGH = np.concatenate([VECTOR_HIGH, np.ones(FEATURES - VECTOR_SIZE, np.float32)])
 OBSERVATION_SPACE = spaces.Box(FEATURE_LOW, FEATURE_HIGH, dtype=np.float32)
 ACTION_SPACE = spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 
-class PilotFeatures:
-    """Map the env's per-agent observations to the pilot features (module docstring)."""
-
-    def __init__(self, params: Params) -> None:
-        self.params = params
-        self.centers = params.grid.centers.reshape(-1, 2).astype(float)
-        self.others = max(params.n_agents - 1, 1)
-
-    def __call__(self, raster: np.ndarray, vector: np.ndarray, k) -> np.ndarray:
-        """``raster (B, C, ny, nx)``, ``vector (B, VECTOR_SIZE)`` of UAVs ``k (B,)`` ->
-        ``(B, FEATURES)``."""
-        raster = np.asarray(raster, dtype=np.float32)
-        vector = np.asarray(vector, dtype=np.float32)
-        b = vector.shape[0]
-        out = np.zeros((b, FEATURES), dtype=np.float32)
-        out[:, :VECTOR_SIZE] = vector
-        if b == 0:
-            return out
-        xy = decode_vector(self.params, vector)["xy"]
-        d = self.centers[None, :, :] - xy[:, None, :]
-        dist = np.hypot(d[..., 0], d[..., 1])
-        ang = np.arctan2(d[..., 1], d[..., 0])
-        sector = np.floor((ang + np.pi) / (2 * np.pi) * N_SECTORS).astype(np.int64) % N_SECTORS
-        # sector 0 should point east: shift by half a turn (arctan2 + pi starts at west)
-        sector = (sector + N_SECTORS // 2) % N_SECTORS
-        ring = np.searchsorted(np.asarray(RING_EDGES_M), dist, side="right")
-        rows = np.arange(b)[:, None]
-        poc = raster[:, RASTER_INDEX["poc"]].reshape(b, -1).astype(float)
-        total = poc.sum(axis=1)
-        mass = np.bincount(
-            (rows * (N_SECTORS * N_RINGS) + sector * N_RINGS + ring).ravel(),
-            weights=poc.ravel(),
-            minlength=b * N_SECTORS * N_RINGS,
-        ).reshape(b, -1)
-        share = np.divide(mass, total[:, None], out=np.zeros_like(mass), where=total[:, None] > 0)
-        out[:, VECTOR_SIZE : VECTOR_SIZE + N_SECTORS * N_RINGS] = share
-        others = raster[:, RASTER_INDEX["others"]].reshape(b, -1).astype(float)
-        others *= dist <= OTHERS_RADIUS_M
-        count = np.bincount(
-            (rows * N_SECTORS + sector).ravel(), weights=others.ravel(), minlength=b * N_SECTORS
-        ).reshape(b, -1)
-        k0 = VECTOR_SIZE + N_SECTORS * N_RINGS
-        out[:, k0 : k0 + N_SECTORS] = np.minimum(count / self.others, 1.0)
-        out[:, k0 + N_SECTORS] = poc.mean(axis=1)
-        out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
-        return out
+#: The pilot features are the environment's ``compass`` observation.
+PilotFeatures = CompassFeatures
 
 
 def pilot_actions(params: Params, vector: np.ndarray, action: np.ndarray, k) -> np.ndarray:

@@ -26,7 +26,7 @@ from poc_env.theory.probability_map import (
     validate_map,
 )
 
-OBS_TYPES = ("dict", "flat")
+OBS_TYPES = ("dict", "flat", "compass")
 #: Array kinds an action may have: bool, signed and unsigned integer, real float.
 _NUMERIC_KINDS = "biuf"
 _ACTION_ALLOWED = "3 finite real numbers in [-1, 1] (a list or array, not strings or complex)"
@@ -91,7 +91,10 @@ class UAVSearchParallelEnv(ParallelEnv):
     ## Observation Space
 
     ``obs_type="dict"``: ``Dict(raster=Box(0, 1, (4, ny, nx)), vector=Box(low, high, (14,)))``;
-    ``obs_type="flat"``: their concatenation (raster first). float32. Raster channels:
+    ``obs_type="flat"``: their concatenation (raster first); ``obs_type="compass"``: a
+    size-free ``Box((63,))`` (:class:`poc_env.sim.observations.CompassFeatures`: the vector,
+    the remaining POC per 8 sectors x 4 distance rings, nearby UAVs per sector, the mean POC
+    and the agent index). float32. Raster channels:
 
     ==  =======  =====================================================================
     0   poc      current cell POC / largest prior cell POC, in [0, 1]
@@ -229,7 +232,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         if render_mode not in (None, "rgb_array", "human"):
             raise ConfigError("render_mode", render_mode, "None, 'rgb_array' or 'human'")
         if obs_type not in OBS_TYPES:
-            raise ConfigError("obs_type", obs_type, "'dict' or 'flat'")
+            raise ConfigError("obs_type", obs_type, "'dict', 'flat' or 'compass'")
         if map_file is not None and not isinstance(map_file, str | os.PathLike):
             raise ConfigError("map_file", map_file, "None or a path to a .npy or .csv prior map")
         for name, flag in (("random_prior", random_prior), ("random_airfields", random_airfields)):
@@ -285,6 +288,8 @@ class UAVSearchParallelEnv(ParallelEnv):
         vector = spaces.Box(obs_mod.VECTOR_LOW, obs_mod.VECTOR_HIGH, dtype=np.float32)
         if obs_type == "dict":
             space: spaces.Space = spaces.Dict({"raster": raster, "vector": vector})
+        elif obs_type == "compass":
+            space = spaces.Box(obs_mod.FEATURE_LOW, obs_mod.FEATURE_HIGH, dtype=np.float32)
         else:
             low = np.concatenate([raster.low.ravel(), vector.low])
             high = np.concatenate([raster.high.ravel(), vector.high])
@@ -384,6 +389,9 @@ class UAVSearchParallelEnv(ParallelEnv):
         if self.obs_type == "dict":
             return {a: {"raster": ras[index[a]], "vector": vec[index[a]]} for a in self.agents}
         n = len(vec)
+        if self.obs_type == "compass":
+            feats = obs_mod.CompassFeatures(self.params)(ras, vec, np.arange(n))
+            return {a: feats[index[a]] for a in self.agents}
         flat = np.empty((n, ras[0].size + vec.shape[1]), dtype=np.float32)
         flat[:, : ras[0].size] = ras.reshape(n, -1)
         flat[:, ras[0].size :] = vec

@@ -12,6 +12,7 @@ from poc_env.envs.gymnasium_env import UAVSearchGym
 from poc_env.errors import ConfigError
 from poc_env.sim import control as ctl
 from poc_env.sim import core as sim
+from poc_env.sim.observations import CompassFeatures
 
 
 def _fly(env, seed, policy):
@@ -95,3 +96,26 @@ def test_api_checkers_pass_on_each_level(control):
     env = UAVSearchGym(scenario="small", control=control)
     assert env.action_space.shape == (2 * len(env.par.possible_agents),)
     check_env(env, skip_render_check=True)
+
+
+def test_compass_observation_is_the_pilot_features_of_the_dict_observation():
+    """obs_type="compass" (a size-free Box) equals the pilot recipe's features of the same
+    state's dict observation, so a heading policy trained on them runs on the env as is."""
+    kw = {"control": "heading", "random_prior": True}
+    env_c = poc_env.parallel_env("small", obs_type="compass", **kw)
+    env_d = poc_env.parallel_env("small", obs_type="dict", **kw)
+    space = env_c.observation_space("uav_0")
+    assert space.shape == (63,)
+    oc, _ = env_c.reset(seed=4)
+    od, _ = env_d.reset(seed=4)
+    feats = CompassFeatures(env_d.params)
+    for _ in range(3):
+        for k, a in enumerate(env_c.agents):
+            want = feats(od[a]["raster"][None], od[a]["vector"][None], [k])[0]
+            np.testing.assert_array_equal(oc[a], want)
+            assert space.contains(oc[a])
+        acts = {a: np.array([0.0, 1.0]) for a in env_c.agents}
+        oc = env_c.step(acts)[0]
+        od = env_d.step(acts)[0]
+    parallel_api_test(poc_env.parallel_env("small", obs_type="compass"), num_cycles=20)
+    check_env(UAVSearchGym(scenario="small", obs_type="compass", control="heading"))

@@ -6,9 +6,6 @@ import numpy as np
 import pytest
 
 from agents.rl.pilot import (
-    FEATURES,
-    N_RINGS,
-    N_SECTORS,
     OBSERVATION_SPACE,
     PilotFeatures,
     PilotVecEnv,
@@ -17,7 +14,7 @@ from agents.rl.pilot import (
 )
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.sim.autopilot import must_return
-from poc_env.sim.observations import VECTOR_SIZE, decode_vector
+from poc_env.sim.observations import FEATURES, N_RINGS, N_SECTORS, VECTOR_SIZE, decode_vector
 
 COMPASS = slice(VECTOR_SIZE, VECTOR_SIZE + N_SECTORS * N_RINGS)
 
