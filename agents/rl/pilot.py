@@ -63,7 +63,6 @@ from poc_env.sim.core import Params
 from poc_env.sim.observations import (
     FEATURE_HIGH,
     FEATURE_LOW,
-    VECTOR_SIZE,
     CompassFeatures,
     decode_vector,
 )
@@ -109,33 +108,20 @@ class PilotVecEnv(SwarmVecEnv):
         approach_shaping: float = 0.0,
         gamma: float = 0.99,
     ) -> None:
-        super().__init__(scenario, n_envs, seed, "dict", random_priors, overrides)
-        self.observation_space = OBSERVATION_SPACE
-        self.action_space = ACTION_SPACE
-        self.features = PilotFeatures(self.params)
+        super().__init__(
+            scenario, n_envs, seed, "compass", random_priors, overrides, control="heading"
+        )
         self.approach_shaping = float(approach_shaping)
         self.gamma = float(gamma)
-        self._agent_index = np.tile(np.arange(self.n_agents), self.n_envs)
         self._phi = np.zeros((self.n_envs, self.n_agents))
-
-    def _observe(self, state: sim.State, poc_scale: np.ndarray):
-        ras = obs_mod.rasters(self.params, state, poc_scale, self._hazard)
-        vec = obs_mod.vectors(self.params, state)
-        m = ras.shape[0] * ras.shape[1]
-        k = np.tile(np.arange(self.n_agents), ras.shape[0])
-        return self.features(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), k)
 
     def _potential(self, state: sim.State) -> np.ndarray:
         return -grid_distance(self.params, state.pos[..., :2]) / 1e3
 
     def _sim_actions(self, a: np.ndarray) -> np.ndarray:
         assert self.state is not None
-        st = self.state
-        vec = obs_mod.vectors(self.params, st).reshape(-1, VECTOR_SIZE)
-        inc = pilot_actions(self.params, vec, a.reshape(-1, 2), self._agent_index)
-        inc = inc.reshape(self.n_envs, self.n_agents, 3).astype(float)
-        self._phi = self._potential(st)
-        return np.where(st.flying[..., None], inc, 0.0)
+        self._phi = self._potential(self.state)
+        return super()._sim_actions(a)
 
     def _reward(self, ev: sim.Events, state: sim.State) -> np.ndarray:
         r = super()._reward(ev, state)

@@ -17,7 +17,7 @@ from poc_env.errors import ConfigError, PocEnvError
 from poc_env.sim import comms as comms_mod
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
-from poc_env.sim.control import ACTION_DIMS, check_control, to_increments
+from poc_env.sim.control import ACTION_DIMS, check_control, swarm_increments
 from poc_env.sim.rewards import reward_terms, total_reward
 from poc_env.theory.probability_map import (
     Grid,
@@ -454,13 +454,8 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise EpisodeOverError("every agent has finished; call reset() before step()")
         arr = self._actions_array(actions)
         st = self.sim_state
-        if self.control != "increments":  # the autopilot of poc_env.sim.control
-            n = self.params.n_agents
-            q = obs_mod.decode_vector(self.params, obs_mod.vectors(self.params, st)[0])
-            inc = to_increments(
-                self.params, self.control, q, arr[0], np.arange(n), self.auto_return
-            )
-            arr = np.where(st.flying[0][:, None], inc, 0.0)[None]
+        # the control level's autopilot (poc_env.sim.control); increments pass through
+        arr = swarm_increments(self.params, self.control, st, arr, self.auto_return)
         ev = sim.step(self.params, st, arr, [self._rng])
         terms = reward_terms(self.scenario.reward, ev)
         reward = np.asarray(total_reward(terms)[0], dtype=float).tolist()

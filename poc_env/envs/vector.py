@@ -4,13 +4,15 @@
 state (arrays ``(n_envs, N, ...)``, one :func:`poc_env.sim.core.step` call per step for all of
 them) and shows every *(env, agent)* pair to SB3 as one environment, a **slot**: ``num_envs =
 n_envs * N``, slot ``e * N + i`` is agent ``uav_i`` of env ``e``. All slots share one policy
-(parameter sharing). Observation space: the per-agent space of
-:class:`~poc_env.envs.parallel.UAVSearchParallelEnv` (``obs_type="dict"`` or ``"flat"``); action
-space ``Box(-1, 1, (3,))``. Observations, rewards and terminations come from the same functions
-the PettingZoo env uses (:mod:`poc_env.sim.observations`, :mod:`poc_env.sim.rewards`,
-:func:`poc_env.sim.core.terminal` and :func:`~poc_env.sim.core.truncated`); nothing is
-re-implemented here. This module needs the ``rl`` extra (stable-baselines3): without it,
-importing it raises :class:`~poc_env.errors.MissingExtraError`.
+(parameter sharing). Observation and action spaces: the per-agent spaces of
+:class:`~poc_env.envs.parallel.UAVSearchParallelEnv` for the same ``obs_type`` (``"dict"``,
+``"flat"`` or ``"compass"``) and ``control`` level (``"increments"``: ``Box(-1, 1, (3,))``;
+``"heading"``/``"waypoint"``: ``Box(-1, 1, (2,))``, flown by the same autopilot).
+Observations, rewards and terminations come from the same functions the PettingZoo env uses
+(:mod:`poc_env.sim.observations`, :mod:`poc_env.sim.rewards`, :func:`poc_env.sim.core.terminal` and
+:func:`~poc_env.sim.core.truncated`); nothing is re-implemented here. This module needs the ``rl``
+extra (stable-baselines3): without it, importing it raises
+:class:`~poc_env.errors.MissingExtraError`.
 
 Slots of finished agents
 ------------------------
@@ -90,6 +92,7 @@ from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError, UAVSearchParallel
 from poc_env.errors import ConfigError, MissingExtraError
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
+from poc_env.sim.control import swarm_increments
 from poc_env.sim.rewards import reward_terms, total_reward
 from poc_env.theory.probability_map import random_gaussian_mixture, validate_map
 
@@ -119,12 +122,16 @@ class SwarmVecEnv(VecEnv):
     seed:
         Root seed of the per-env generators (``None``: fresh entropy).
     obs_type:
-        ``"dict"`` (raster + vector, for ``MultiInputPolicy``) or ``"flat"``.
+        ``"dict"`` (raster + vector, for ``MultiInputPolicy``), ``"flat"`` or ``"compass"``
+        (the size-free features of :class:`~poc_env.sim.observations.CompassFeatures`).
     random_priors:
         Draw a fresh prior (:func:`~poc_env.theory.probability_map.random_gaussian_mixture`) from
         the env's generator at every reset, instead of the scenario's prior.
     overrides:
         Dotted scenario keys, as for the PettingZoo env (``{"episode.horizon_steps": 10}``).
+    control, auto_return:
+        The control level and its return-home autopilot, as for the PettingZoo env
+        (:mod:`poc_env.sim.control`).
     """
 
     def __init__(
@@ -135,17 +142,24 @@ class SwarmVecEnv(VecEnv):
         obs_type: str = "dict",
         random_priors: bool = False,
         overrides: Mapping[str, Any] | None = None,
+        control: str = "increments",
+        auto_return: bool = True,
     ) -> None:
         if isinstance(n_envs, bool) or not isinstance(n_envs, int | np.integer) or n_envs < 1:
             raise ConfigError("n_envs", n_envs, "an integer >= 1")
         if obs_type not in OBS_TYPES:
-            raise ConfigError("obs_type", obs_type, "'dict' or 'flat'")
+            raise ConfigError("obs_type", obs_type, "one of " + ", ".join(OBS_TYPES))
         if seed is not None and (
             isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
         ):
             raise ConfigError("seed", seed, "an integer >= 0 or None")
         # the PettingZoo env resolves the scenario and defines the per-agent spaces: one source
-        par = UAVSearchParallelEnv(scenario, obs_type=obs_type, overrides=overrides)
+        par = UAVSearchParallelEnv(
+            scenario, obs_type=obs_type, overrides=overrides, control=control,
+            auto_return=auto_return,
+        )  # fmt: skip
+        self.control = par.control
+        self.auto_return = par.auto_return
         self.scenario = par.scenario
         self.params = par.params
         self.obs_type = obs_type
@@ -155,7 +169,7 @@ class SwarmVecEnv(VecEnv):
         self.possible_agents = list(par.possible_agents)
         self.render_mode = None
         obs_space = par.observation_space(self.possible_agents[0])
-        act_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        act_space = par.action_space(self.possible_agents[0])
         super().__init__(self.n_envs * self.n_agents, obs_space, act_space)
         self._hazard = obs_mod.hazard_mask(self.params)
         e, n = self.n_envs, self.n_agents
@@ -168,6 +182,8 @@ class SwarmVecEnv(VecEnv):
         self._returns = np.zeros((e, n))
         self._lengths = np.zeros((e, n), dtype=np.int64)
         self._actions = np.zeros((e, n, 3))
+        if obs_type == "compass":
+            self.features = obs_mod.CompassFeatures(self.params)
         self._t_start = time.time()
         self._closed = False
 
@@ -235,6 +251,8 @@ class SwarmVecEnv(VecEnv):
         m = ras.shape[0] * ras.shape[1]
         ras = ras.reshape(m, *ras.shape[2:])
         vec = vec.reshape(m, vec.shape[-1])
+        if self.obs_type == "compass":
+            return self.features(ras, vec, np.arange(m) % self.n_agents)
         if self.obs_type == "dict":
             return {"raster": ras, "vector": vec}
         return np.concatenate([ras.reshape(m, -1), vec], axis=1)
@@ -267,9 +285,14 @@ class SwarmVecEnv(VecEnv):
 
     # -- hooks for subclasses (agents.rl.pilot.PilotVecEnv) ----------------------------------------
     def _sim_actions(self, a: np.ndarray) -> np.ndarray:
-        """The simulator's eq. 19 actions (E, N, 3) for the slots' actions ``a (E, N, ...)``;
-        finished agents get 0."""
-        return np.where(self._active[..., None], a, 0.0)
+        """The simulator's eq. 19 actions (E, N, 3) for the slots' actions ``a (E, N, ...)``
+        (the control level's autopilot, :func:`poc_env.sim.control.swarm_increments`, which
+        flies home-bound UAVs whatever their slot commands); finished agents get 0."""
+        assert self.state is not None
+        inc = swarm_increments(self.params, self.control, self.state, a, self.auto_return)
+        if self.control == "increments":
+            inc = np.where(self._active[..., None], inc, 0.0)
+        return inc
 
     def _reward(self, ev: sim.Events, state: sim.State) -> np.ndarray:
         """Reward (E, N) of the step that produced ``ev`` and ``state``."""

@@ -29,7 +29,8 @@ import numpy as np
 
 from poc_env.errors import ConfigError
 from poc_env.sim.autopilot import homing, returning, steer
-from poc_env.sim.core import Params
+from poc_env.sim.core import Params, State
+from poc_env.sim.observations import decode_vector, vectors
 
 CONTROLS = ("increments", "heading", "waypoint")
 #: Action size per UAV of each control level.
@@ -89,3 +90,21 @@ def to_increments(
     if control == "heading":
         return heading_increments(params, q, action, k, auto_return)
     return _fly_to(params, q, waypoint_goal(params, action), k, auto_return)
+
+
+def swarm_increments(
+    params: Params, control: str, state: State, action: np.ndarray, auto_return: bool = True
+) -> np.ndarray:
+    """Eq. 19 increments (E, N, 3) for every UAV of the batched ``state`` commanded by the
+    ``control`` level's actions ``action (E, N, ACTION_DIMS[control])``: the one conversion the
+    PettingZoo env and the batched VecEnvs share. ``increments`` pass through unchanged; the
+    autopilot levels read each UAV's state from its observation vector and give 0 to UAVs that
+    no longer fly."""
+    e, n = state.flying.shape
+    a = np.asarray(action, dtype=float).reshape(e, n, ACTION_DIMS[control])
+    if control == "increments":
+        return a
+    q = decode_vector(params, vectors(params, state).reshape(e * n, -1))
+    k = np.tile(np.arange(n), e)
+    inc = to_increments(params, control, q, a.reshape(e * n, -1), k, auto_return)
+    return np.where(state.flying[..., None], inc.reshape(e, n, 3), 0.0)

@@ -8,7 +8,7 @@ import pytest
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.envs.vector import SwarmVecEnv, env_seed_sequences
 from poc_env.errors import ConfigError
-from poc_env.sim.observations import RASTER_INDEX, VECTOR_INDEX
+from poc_env.sim.observations import RASTER_INDEX, VECTOR_INDEX, VECTOR_SIZE
 
 TIME, FLYING, ENDURANCE = VECTOR_INDEX["time"], VECTOR_INDEX["flying"], VECTOR_INDEX["endurance"]
 
@@ -35,15 +35,20 @@ def _is_zero(obs) -> bool:
 
 
 def _vector(obs, k):
-    return obs["vector"][k]
+    if isinstance(obs, dict):
+        return obs["vector"][k]
+    return obs[k][:VECTOR_SIZE]  # the compass features start with the vector
 
 
-def _compare_with_parallel_env(n_envs: int, k: int, seed: int, action_seed: int):
+def _compare_with_parallel_env(
+    n_envs: int, k: int, seed: int, action_seed: int, control="increments", obs_type="dict"
+):
     """Env ``k`` of the adapter against the PettingZoo env seeded with its seed sequence, with
     the same random actions, for the whole first episode; returns how many agents of env k
     finished before the episode ended."""
-    vec = SwarmVecEnv("small", n_envs=n_envs, seed=seed)
-    par = UAVSearchParallelEnv("small")
+    kw = {"control": control, "obs_type": obs_type}
+    vec = SwarmVecEnv("small", n_envs=n_envs, seed=seed, **kw)
+    par = UAVSearchParallelEnv("small", **kw)
     n = vec.n_agents
     agents = par.possible_agents
     obs_v = vec.reset()
@@ -57,7 +62,7 @@ def _compare_with_parallel_env(n_envs: int, k: int, seed: int, action_seed: int)
     early = 0
     steps = 0
     while par.agents:
-        acts = rng.uniform(-1, 1, (vec.num_envs, 3)).astype(np.float32)
+        acts = rng.uniform(-1, 1, (vec.num_envs, vec.action_space.shape[0])).astype(np.float32)
         live = list(par.agents)
         obs_p, rew_p, term, trunc, _ = par.step(
             {a: acts[k * n + i] for i, a in enumerate(agents) if a in live}
@@ -103,6 +108,14 @@ def _compare_with_parallel_env(n_envs: int, k: int, seed: int, action_seed: int)
 def test_adapter_matches_parallel_env_for_a_whole_episode():
     early = _compare_with_parallel_env(n_envs=1, k=0, seed=3, action_seed=11)
     assert early >= 1  # random pitch crashes some UAVs before the end: that path is covered
+
+
+@pytest.mark.parametrize("control", ["heading", "waypoint"])
+def test_adapter_matches_parallel_env_at_every_control_level(control):
+    # the autopilot levels with the compass observation: same transitions, same landings
+    _compare_with_parallel_env(1, 0, seed=4, action_seed=2, control=control, obs_type="compass")
+    vec = SwarmVecEnv("small", n_envs=2, control=control)
+    assert vec.action_space.shape == (2,)
 
 
 def test_each_env_of_a_batch_matches_its_own_parallel_env():
