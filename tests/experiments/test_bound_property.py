@@ -1,0 +1,147 @@
+"""Issue 12: nothing the project ships beats the bounds it prints.
+
+Property (hypothesis, random episodes of ``small``: random prior, seed, fleet size and split
+over two airfields, endurance, optionally a short horizon): every shipped policy flown in the
+environment (``random``, ``lawnmower``, ``greedy_bayes``, ``de_plan`` and ``allocation_plan``,
+the planners at quick settings) scores a POSC no higher than the episode's honest plain bound
+and its reach-aware bound, as :func:`agents.experiments.evaluate.run_episode` reports them (the
+bounds ``poc-env evaluate`` prints and normalises by); and every plan (``make_plan`` with a
+random optimiser, ``make_allocation_plan``) predicts a POS_C no higher than its own plan.json
+``bounds`` and ``upper_bound``. Tolerance :data:`TOL` (float rounding only: the reach-aware
+bound may exceed the plain one by ~1e-15).
+
+The property is not vacuous: :func:`test_halved_bounds_are_caught` halves each bound at its
+source (``poc_env.theory.bound``, and the names the allocation planner imported) and expects the
+same checks to report violations on a fixed episode.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from agents.experiments.evaluate import episode_prior, run_episode
+from agents.planning.allocation import make_allocation_plan
+from agents.planning.planner import make_plan
+from poc_env.config import Scenario, load_scenario
+
+#: Float tolerance of every comparison with a bound.
+TOL = 1e-9
+#: The shipped policies flown in every episode.
+POLICIES = ("random", "lawnmower", "greedy_bayes", "de_plan", "allocation_plan")
+#: Optimisers whose plans are checked (one drawn per example).
+OPTIMIZERS = ("adaptive_de", "classic_de", "chaotic_abc", "grouped_pso", "scipy_de", "cmaes")
+#: Quick planner budget (``de_plan`` reads the scenario's planner section).
+QUICK = {"planner.population": 12, "planner.generations": 8}
+
+
+def scenario(counts: tuple[int, int], endurance_h: float, horizon: int | None) -> Scenario:
+    """``small`` with ``counts`` UAVs from airfields A and B, the endurance and the horizon."""
+    fleet = [{"takeoff": "A", "count": counts[0]}]
+    if counts[1]:
+        fleet.append({"takeoff": "B", "count": counts[1], "landing": "A"})
+    overrides = {
+        **QUICK,
+        "airfields": [
+            {"name": "A", "position_km": [20, -5]},
+            {"name": "B", "position_km": [-4, 30]},
+        ],
+        "fleet": fleet,
+        "uav.endurance_h": endurance_h,
+        "comms.min_neighbours": 0,
+    }
+    if horizon is not None:
+        overrides["episode.horizon_steps"] = horizon
+    return load_scenario("small", overrides)
+
+
+def violations(sc: Scenario, seed: int, optimizer: str, plans: bool = True) -> list[str]:
+    """Every way the flights and plans of episode ``seed`` beat a bound (empty: none)."""
+    out = []
+    for policy in POLICIES:
+        e = run_episode(sc, policy, seed, random_priors=True)
+        assert e.bound is not None and e.bound_reach is not None
+        for name, bound in (("honest", e.bound), ("reach", e.bound_reach)):
+            if e.posc > bound + TOL:
+                out.append(f"{policy} flown POSC {e.posc:.6f} > {name} bound {bound:.6f}")
+    if not plans:
+        return out
+    prior = episode_prior(sc, seed)
+    de = make_plan(sc, prior=prior, seed=seed, optimizer=optimizer, popsize=12, maxiter=8)
+    alloc = make_allocation_plan(sc, prior=prior, seed=seed)
+    for label, plan in ((optimizer, de), ("allocation", alloc)):
+        bounds = {**plan["bounds"], "upper_bound": plan["upper_bound"]}
+        for name, bound in bounds.items():
+            if plan["posc"] > bound + TOL:
+                out.append(f"{label} plan POS_C {plan['posc']:.6f} > its {name} {bound:.6f}")
+    return out
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    counts=st.tuples(st.integers(1, 3), st.integers(0, 2)),
+    endurance_h=st.floats(0.3, 0.8),
+    seed=st.integers(0, 10_000),
+    optimizer=st.sampled_from(OPTIMIZERS),
+)
+def test_no_policy_or_plan_beats_the_bounds(counts, endurance_h, seed, optimizer):
+    """Full horizon: flights and plans (their predicted POS_C) stay below every bound."""
+    sc = scenario(counts, endurance_h, None)
+    assert violations(sc, seed, optimizer) == []
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    counts=st.tuples(st.integers(1, 3), st.integers(0, 2)),
+    horizon=st.integers(6, 30),
+    seed=st.integers(0, 10_000),
+)
+def test_no_policy_beats_the_bounds_on_a_short_horizon(counts, horizon, seed):
+    """A horizon of 3-15 minutes, where the transit from the airfields binds: flights only.
+    A plan's predicted POS_C assumes its whole endurance and ignores the horizon, so on such an
+    episode it can exceed the plan.json bounds, which are the environment's (measured: an
+    allocation plan predicting 0.666 against a reach-aware bound of 0.484 at 18 steps); the
+    flown POSC cannot."""
+    sc = scenario(counts, 0.6667, horizon)
+    assert violations(sc, seed, "adaptive_de", plans=False) == []
+
+
+def _halve(monkeypatch, which: str) -> None:
+    """Halve the ``which`` bound (``honest`` or ``reach``) wherever it is computed."""
+    import agents.planning.allocation as allocation
+    import poc_env.theory.bound as bound
+
+    if which == "honest":
+        orig_h = bound.honest_optimum
+
+        def honest(*a, **k):
+            b = orig_h(*a, **k)
+            return dataclasses.replace(b, pos=0.5 * b.pos)
+
+        monkeypatch.setattr(bound, "honest_optimum", honest)
+        monkeypatch.setattr(allocation, "honest_optimum", honest)
+    else:
+        orig_r = bound.reach_bound
+
+        def reach(*a, **k):
+            b = orig_r(*a, **k)
+            return dataclasses.replace(b, pos=0.5 * b.pos, upper=0.5 * b.upper)
+
+        monkeypatch.setattr(bound, "reach_bound", reach)
+        monkeypatch.setattr(allocation, "reach_bound", reach)
+
+
+@pytest.mark.parametrize("which", ["honest", "reach"])
+def test_halved_bounds_are_caught(monkeypatch, which):
+    """The checks above find violations when a bound is half its value (fixed episode)."""
+    sc = scenario((3, 0), 0.6667, None)
+    assert violations(sc, 3, "adaptive_de") == []
+    _halve(monkeypatch, which)
+    found = violations(sc, 3, "adaptive_de")
+    flown = [v for v in found if "flown" in v and f"{which} bound" in v]
+    planned = [v for v in found if "plan POS_C" in v and f"its {which}" in v]
+    assert flown and planned, found
+    assert all(which in v for v in found)
