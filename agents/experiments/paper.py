@@ -15,7 +15,7 @@ table5     §6.1.2 two-circles-four-polygons survey (Table 5, Figs. 18-19), both
 table6     §6.2 time-limited adaptive-DE plan (Table 6, Fig. 21)
 table7     de_plan, greedy_bayes and potential_game flown in the env, N episodes (Table 7)
 fig22      convergence of adaptive DE, classic DE, chaotic ABC, grouped PSO, scipy DE, CMA-ES
-table8     POS for 4 to 8 UAVs with the increment column (Table 8)
+table8     POS for 4 to 8 UAVs, increments, POS / reach-aware bound of each fleet (Table 8)
 fig23      POS against the sweep width W x 0.6 .. 1.4
 fig24      POS against the task area's length and width x 0.5 .. 1.5
 fig25      adaptive DE with G = 230, 270, 300 generations
@@ -511,9 +511,11 @@ def _sweep(
     xlabel: str,
     paper: dict[Any, float] | None = None,
     results: dict[Any, list[dict[str, Any]]] | None = None,
+    bound_reach: dict[Any, float] | None = None,
 ) -> Result:
     """Plan every setting with ``budget.seeds`` seeds (or take ``results``); POS (best and
-    mean) and bound per setting."""
+    mean) and bound per setting; with ``bound_reach`` (per setting) also the environment's
+    reach-aware bound and POS_C / that bound (best plan and mean), as ``table7`` reports it."""
     if results is None:
         jobs = [
             (sc, {**kw, "seed": seed + k}) for _, sc, kw in settings for k in range(budget.seeds)
@@ -530,6 +532,11 @@ def _sweep(
             row["paper_pos"] = paper.get(row[key])
         row["increment"] = None if prev is None else row["best_posc"] - prev
         prev = row["best_posc"]
+        if bound_reach is not None:
+            reach = bound_reach[row[key]]
+            row["bound_reach"] = reach
+            row["best_over_reach"] = row["best_posc"] / reach if reach > 0 else None
+            row["mean_over_reach"] = row["posc_mean"] / reach if reach > 0 else None
     fig = _figure()
     ax = fig.add_subplot()
     xs = [r[key] for r in rows]
@@ -543,6 +550,8 @@ def _sweep(
         label="mean over seeds (95 %)",
     )
     ax.plot(xs, [r["bound_of_best"] for r in rows], "k:", label="physical optimum (same effort)")
+    if bound_reach is not None:
+        ax.plot(xs, [r["bound_reach"] for r in rows], "k--", label="reach-aware bound (env)")
     if paper is not None:
         ax.plot(list(paper), list(paper.values()), "r^-", label="paper")
     ax.set_xlabel(xlabel)
@@ -552,6 +561,12 @@ def _sweep(
     ax.set_title(f"{name}: NP {budget.np_g(settings[0][1])[0]}, G {budget.np_g(settings[0][1])[1]}")
     path = _save(fig, out / f"{name}.png")
     cols = [(key, key, ""), *_SETTING_COLS, ("increment", "increment", ".4f")]
+    if bound_reach is not None:
+        cols += [
+            ("bound_reach", "reach bound", ".4f"),
+            ("best_over_reach", "best/reach", ".4f"),
+            ("mean_over_reach", "mean/reach", ".4f"),
+        ]
     if paper is not None:
         cols.append(("paper_pos", "paper", ".4f"))
     return Result(name, rows, _fmt_table(rows, cols), [path])
@@ -618,6 +633,8 @@ def largest_area_for(pos: float, effort_m2: float, law: str = "inverse_cube") ->
 
 
 def exp_table8(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
+    from agents.experiments.evaluate import reach_effort_bound
+
     sc = load_scenario("paper_6_2")
     popsize, maxiter = budget.np_g(sc)
     sizes = list(range(4, 9))
@@ -626,9 +643,12 @@ def exp_table8(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     chains = runner.map(_fleet_job, jobs, "table8")
     settings: list[tuple[Any, Scenario, dict[str, Any]]] = [(n, sc, {}) for n in sizes]
     by = {n: [chain[i] for chain in chains] for i, n in enumerate(sizes)}
+    # the environment's reach-aware bound of each fleet, as table7 and ``evaluate`` report it
+    # (a plan's own ``bounds`` are its scenario's fleet's, not the n UAVs it planned)
+    reach = {n: reach_effort_bound(sc.with_uavs(n)) for n in sizes}
     res = _sweep(
         "table8", budget, runner, out, seed, settings, "uavs", "number of UAVs", PAPER_TABLE8,
-        results=by,
+        results=by, bound_reach=reach,
     )  # fmt: skip
     u = sc.uav
     area = sc.map.width_m * sc.map.height_m

@@ -18,6 +18,7 @@ same checks to report violations on a fixed episode.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -145,3 +146,23 @@ def test_halved_bounds_are_caught(monkeypatch, which):
     planned = [v for v in found if "plan POS_C" in v and f"its {which}" in v]
     assert flown and planned, found
     assert all(which in v for v in found)
+
+
+def test_table8_reports_each_fleets_reach_bound_and_stays_below_it(tmp_path):
+    """``experiment table8``: the reach-aware bound beside every fleet size is the one
+    ``evaluate`` and ``table7`` use (:func:`reach_effort_bound`) for that many UAVs, grows with
+    the fleet, and no plan's POS_C beats it."""
+    from agents.experiments.evaluate import reach_effort_bound
+    from agents.experiments.paper import run_experiment
+
+    res = run_experiment("table8", quick=True, out=tmp_path, echo=None)[0]
+    sc = load_scenario("paper_6_2")
+    reach = [r["bound_reach"] for r in res.rows]
+    for r in res.rows:
+        assert r["bound_reach"] == reach_effort_bound(sc.with_uavs(r["uavs"]))
+        assert r["best_posc"] <= r["bound_reach"] + TOL
+        assert r["best_over_reach"] == pytest.approx(r["best_posc"] / r["bound_reach"])
+        assert r["mean_over_reach"] == pytest.approx(r["posc_mean"] / r["bound_reach"])
+    assert all(b > a for a, b in itertools.pairwise(reach))
+    assert "reach bound" in res.table and "best/reach" in res.table
+    assert "bound_reach" in (tmp_path / "table8" / "table8.csv").read_text().splitlines()[0]
