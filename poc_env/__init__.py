@@ -26,7 +26,14 @@ def _register() -> None:
     import gymnasium
 
     if ENV_ID not in gymnasium.registry:
-        gymnasium.register(ENV_ID, entry_point="poc_env.envs.gymnasium_env:UAVSearchGym")
+        gymnasium.register(
+            ENV_ID,
+            entry_point="poc_env.envs.gymnasium_env:UAVSearchGym",
+            vector_entry_point="poc_env.envs.gym_vector:SwarmGymVectorEnv",
+        )
+    from poc_env.tasks import register_tasks
+
+    register_tasks()  # the benchmark tasks (poc_env.tasks), Gymnasium and PettingZoo
     try:
         from pettingzoo.env_registry.registration import _get_registry, register
     except ImportError:  # PettingZoo < 1.27 has no registry

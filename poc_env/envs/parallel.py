@@ -26,7 +26,7 @@ from poc_env.theory.probability_map import (
     validate_map,
 )
 
-OBS_TYPES = ("dict", "flat", "compass")
+OBS_TYPES = obs_mod.OBS_TYPES
 #: Array kinds an action may have: bool, signed and unsigned integer, real float.
 _NUMERIC_KINDS = "biuf"
 _ACTION_ALLOWED = "3 finite real numbers in [-1, 1] (a list or array, not strings or complex)"
@@ -305,6 +305,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         self._state: sim.State | None = None
         self._renderer = None
         self._poc_scale = np.ones(1)
+        self._features = obs_mod.CompassFeatures(self.params) if obs_type == "compass" else None
 
     # -- spaces ------------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space:
@@ -346,6 +347,8 @@ class UAVSearchParallelEnv(ParallelEnv):
                 takeoff=fields[self._takeoff_field],
                 landing=fields[self._landing_field],
             )
+            if self._features is not None:
+                self._features = obs_mod.CompassFeatures(self.params)
             if self._renderer is not None:  # its background shows the airfields: draw afresh
                 self._renderer.close()
                 self._renderer = None
@@ -382,20 +385,15 @@ class UAVSearchParallelEnv(ParallelEnv):
         return out
 
     def _observations(self) -> dict[str, Any]:
-        st = self.sim_state
-        vec = obs_mod.vectors(self.params, st)[0]
-        ras = obs_mod.rasters(self.params, st, self._poc_scale, self._hazard)[0]
+        obs = obs_mod.observe(
+            self.params, self.sim_state, self._poc_scale, self._hazard, self.obs_type,
+            self._features,
+        )  # fmt: skip
         index = self._index
         if self.obs_type == "dict":
+            ras, vec = obs["raster"][0], obs["vector"][0]
             return {a: {"raster": ras[index[a]], "vector": vec[index[a]]} for a in self.agents}
-        n = len(vec)
-        if self.obs_type == "compass":
-            feats = obs_mod.CompassFeatures(self.params)(ras, vec, np.arange(n))
-            return {a: feats[index[a]] for a in self.agents}
-        flat = np.empty((n, ras[0].size + vec.shape[1]), dtype=np.float32)
-        flat[:, : ras[0].size] = ras.reshape(n, -1)
-        flat[:, ras[0].size :] = vec
-        return {a: flat[index[a]] for a in self.agents}
+        return {a: obs[0, index[a]] for a in self.agents}
 
     def _actions_array(self, actions: Mapping[str, Any]) -> np.ndarray:
         if not isinstance(actions, Mapping):

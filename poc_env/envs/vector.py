@@ -79,7 +79,6 @@ replays env ``e``'s first episode (with the scenario's prior) transition for tra
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -182,8 +181,7 @@ class SwarmVecEnv(VecEnv):
         self._returns = np.zeros((e, n))
         self._lengths = np.zeros((e, n), dtype=np.int64)
         self._actions = np.zeros((e, n, 3))
-        if obs_type == "compass":
-            self.features = obs_mod.CompassFeatures(self.params)
+        self._features = obs_mod.CompassFeatures(self.params) if obs_type == "compass" else None
         self._t_start = time.time()
         self._closed = False
 
@@ -246,16 +244,12 @@ class SwarmVecEnv(VecEnv):
     # -- observations ---------------------------------------------------------------------------
     def _observe(self, state: sim.State, poc_scale: np.ndarray):
         """Observations of every agent of ``state``'s envs, as (E * N, ...) slot arrays."""
-        ras = obs_mod.rasters(self.params, state, poc_scale, self._hazard)
-        vec = obs_mod.vectors(self.params, state)
-        m = ras.shape[0] * ras.shape[1]
-        ras = ras.reshape(m, *ras.shape[2:])
-        vec = vec.reshape(m, vec.shape[-1])
-        if self.obs_type == "compass":
-            return self.features(ras, vec, np.arange(m) % self.n_agents)
-        if self.obs_type == "dict":
-            return {"raster": ras, "vector": vec}
-        return np.concatenate([ras.reshape(m, -1), vec], axis=1)
+        obs = obs_mod.observe(
+            self.params, state, poc_scale, self._hazard, self.obs_type, self._features
+        )
+        if isinstance(obs, dict):
+            return {k: v.reshape(-1, *v.shape[2:]) for k, v in obs.items()}
+        return obs.reshape(-1, obs.shape[-1])
 
     def _slot_obs(self, obs, k: int):
         """Slot ``k``'s observation, copied out of the batch."""
@@ -350,7 +344,7 @@ class SwarmVecEnv(VecEnv):
                     info["crashed"] = bool(st.crashed[k, i])
                     info["violations"] = int(st.violations[k, i])
             fresh = self._new_episodes(ended)
-            _scatter(st, fresh, ended)
+            sim.scatter_envs(st, fresh, ended)
             first = self._observe(fresh, self._poc_scale[ended])
             slots = (ended[:, None] * n + np.arange(n)).ravel()
             self._write(obs, slots, first)
@@ -394,15 +388,3 @@ class SwarmVecEnv(VecEnv):
     def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
         """True for ``Monitor`` only: infos follow its conventions (module docstring)."""
         return [wrapper_class is Monitor for _ in self._indices(indices)]
-
-
-def _scatter(state: sim.State, fresh: sim.State, envs: np.ndarray) -> None:
-    """Write the sub-batch ``fresh`` into rows ``envs`` of every array of ``state``."""
-    for f in dataclasses.fields(state):
-        dst = getattr(state, f.name)
-        if dst is None:
-            continue
-        if not dst.flags.writeable:
-            dst = dst.copy()
-            setattr(state, f.name, dst)
-        dst[envs] = getattr(fresh, f.name)

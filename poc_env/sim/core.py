@@ -34,6 +34,7 @@ when the map has them).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -573,3 +574,27 @@ def episode_over(params: Params, state: State, finished: np.ndarray | None = Non
     if finished is None:
         finished = terminal(params, state)
     return horizon_reached(params, state) | np.all(finished, axis=1)
+
+
+def take_envs(state: State, envs: np.ndarray) -> State:
+    """The sub-batch of ``state`` holding envs ``envs`` (copies of every array)."""
+    return dataclasses.replace(
+        state,
+        **{
+            f.name: getattr(state, f.name)[envs]
+            for f in dataclasses.fields(state)
+            if getattr(state, f.name) is not None
+        },
+    )
+
+
+def scatter_envs(state: State, fresh: State, envs: np.ndarray) -> None:
+    """Write the sub-batch ``fresh`` into rows ``envs`` of every array of ``state``."""
+    for f in dataclasses.fields(state):
+        dst = getattr(state, f.name)
+        if dst is None:
+            continue
+        if not dst.flags.writeable:
+            dst = dst.copy()
+            setattr(state, f.name, dst)
+        dst[envs] = getattr(fresh, f.name)

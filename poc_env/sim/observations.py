@@ -262,3 +262,33 @@ class CompassFeatures:
         out[:, k0 + N_SECTORS] = poc.mean(axis=1)
         out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
         return out
+
+
+#: Observation kinds of every env (``obs_type``): raster + vector, the two raveled, the compass.
+OBS_TYPES = ("dict", "flat", "compass")
+
+
+def observe(
+    params: Params,
+    state: State,
+    poc_scale: np.ndarray,
+    hazard: np.ndarray,
+    obs_type: str,
+    features: CompassFeatures | None = None,
+):
+    """Every agent's observation of kind ``obs_type``, batched over envs and agents: for
+    ``"dict"`` a dict of ``raster (E, N, C, ny, nx)`` and ``vector (E, N, VECTOR_SIZE)``; for
+    ``"flat"`` (the raster raveled in C order, then the vector) and ``"compass"``
+    (:class:`CompassFeatures`, pass one to reuse it) a float32 array ``(E, N, D)``. The one
+    implementation the PettingZoo env, the Gymnasium views and the VecEnvs share."""
+    ras = rasters(params, state, poc_scale, hazard)
+    vec = vectors(params, state)
+    if obs_type == "dict":
+        return {"raster": ras, "vector": vec}
+    e, n = vec.shape[:2]
+    if obs_type == "compass":
+        f = features if features is not None else CompassFeatures(params)
+        m = e * n
+        flat = f(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), np.arange(m) % n)
+        return flat.reshape(e, n, -1)
+    return np.concatenate([ras.reshape(e, n, -1), vec], axis=2)

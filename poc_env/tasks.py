@@ -1,0 +1,178 @@
+"""The registered benchmark tasks: one id per (scenario, prior, control level).
+
+Every task is registered with Gymnasium (``gymnasium.make(id)``: the centralised view,
+:class:`~poc_env.envs.gymnasium_env.UAVSearchGym`; ``gymnasium.make_vec(id, num_envs)``: the
+batched :class:`~poc_env.envs.gym_vector.SwarmGymVectorEnv`) and with PettingZoo's registry
+(``pettingzoo.env_registry.registration.make("parallel" | "aec", id)``); :func:`make_parallel`
+and :func:`make_aec` are the same without the registry. Keyword arguments given at ``make``
+override the task's (``obs_type="dict"``, ``overrides={...}``, ``max_cycles=...``).
+
+Ids: ``poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v<version>``
+
+============  =============  =====================================================================
+part          values         meaning
+============  =============  =====================================================================
+Scenario      ``Small``      ``small``: 3 UAVs, 40 x 30 km, a 2-Gaussian prior (quick)
+              ``Paper62``    ``paper_6_2``: the paper's section 6.2 case (6 UAVs, 2 airfields)
+              ``Paper61``    ``paper_6_1``: the paper's section 6.1 case (fitted prior)
+Random        (absent)       the scenario's prior at every reset (the seed moves the hidden
+                             target, detection thresholds and link failures only)
+              ``Random``     a fresh seeded Gaussian-mixture prior at every reset
+                             (``random_prior=True``): held-out maps for generalisation
+Control       ``Increments`` the paper's eq. 19 increments, ``Box(-1, 1, (3,))`` per UAV
+              ``Heading``    a map-frame heading flown by the autopilot, ``Box(-1, 1, (2,))``
+              ``Waypoint``   a target point in the operating area, ``Box(-1, 1, (2,))``
+============  =============  =====================================================================
+
+Every task observes ``obs_type="compass"`` (a 63-value Box per UAV, the same size on every map:
+:class:`~poc_env.sim.observations.CompassFeatures`), which default MLP encoders of SB3 and RLlib
+take as they are, and flies with ``auto_return=True`` for the autopilot levels. The first
+release's id ``poc_env/UAVSearch-v0`` (``paper_6_2``, increments, the ``dict`` observation in
+PettingZoo, ``flat`` in Gymnasium) stays registered unchanged.
+
+Versioning rule
+---------------
+A task id names a fixed MDP. Any change that can change what an agent observes, what it is
+rewarded, how the swarm moves or when an episode ends (observations, rewards, dynamics,
+constraints, scenario files, the random-prior generator, the task's keyword arguments) bumps the
+version of every task it touches (``-v0`` to ``-v1``); scores are compared only between equal
+ids. Speed-ups that leave every transition bit-identical (the test suite's equivalence tests
+decide) keep the version. :data:`VERSION` is the current version; the CHANGELOG lists each bump.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from poc_env.errors import ConfigError
+
+#: The version of every task below (see the versioning rule).
+VERSION = 0
+NAMESPACE = "poc_env"
+#: Task-name part -> built-in scenario.
+SCENARIOS = {"Small": "small", "Paper62": "paper_6_2", "Paper61": "paper_6_1"}
+#: Task-name part -> control level (:data:`poc_env.sim.control.CONTROLS`).
+CONTROL_NAMES = {"Increments": "increments", "Heading": "heading", "Waypoint": "waypoint"}
+#: The Gymnasium entry points of every task.
+ENTRY_POINT = "poc_env.envs.gymnasium_env:UAVSearchGym"
+VECTOR_ENTRY_POINT = "poc_env.envs.gym_vector:SwarmGymVectorEnv"
+
+
+@dataclass(frozen=True)
+class Task:
+    """One registered task: its id and the environment keyword arguments it stands for."""
+
+    id: str
+    scenario: str
+    control: str
+    random_prior: bool
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of the PettingZoo env / Gymnasium view for this task."""
+        out: dict[str, Any] = {
+            "scenario": self.scenario,
+            "control": self.control,
+            "random_prior": self.random_prior,
+            "obs_type": "compass",
+        }
+        out.update(self.extra)
+        return out
+
+
+def task_id(scenario: str, control: str, random_prior: bool, version: int = VERSION) -> str:
+    """The id of a task from its name parts (``"Small"``, ``"Heading"``, ...)."""
+    rand = "-Random" if random_prior else ""
+    return f"{NAMESPACE}/UAVSearch-{scenario}{rand}-{control}-v{version}"
+
+
+def _build() -> dict[str, Task]:
+    out = {}
+    for s_name, scenario in SCENARIOS.items():
+        for rand in (False, True):
+            for c_name, control in CONTROL_NAMES.items():
+                tid = task_id(s_name, c_name, rand)
+                out[tid] = Task(tid, scenario, control, rand)
+    return out
+
+
+#: Every registered task, by id (in the order of the table above).
+TASKS: dict[str, Task] = _build()
+
+
+def get_task(task: str) -> Task:
+    """The task of id ``task`` (the ``poc_env/`` namespace may be left out)."""
+    if isinstance(task, str):
+        key = task if "/" in task else f"{NAMESPACE}/{task}"
+        if key in TASKS:
+            return TASKS[key]
+    names = ", ".join(t.split("/", 1)[1] for t in TASKS)
+    raise ConfigError("task", task, f"a registered task id: {names} (poc-env tasks)")
+
+
+def task_kwargs(task: str, **overrides: Any) -> dict[str, Any]:
+    """The task's keyword arguments with ``overrides`` on top."""
+    kw = get_task(task).kwargs
+    kw.update(overrides)
+    return kw
+
+
+def make_parallel(task: str, **overrides: Any):
+    """The PettingZoo parallel env of ``task`` (keyword arguments override the task's)."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    return UAVSearchParallelEnv(**task_kwargs(task, **overrides))
+
+
+def make_aec(task: str, **overrides: Any):
+    """The PettingZoo AEC env of ``task`` (the parallel env through ``parallel_to_aec``)."""
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    return parallel_to_aec(make_parallel(task, **overrides))
+
+
+def register_tasks() -> None:
+    """Register every task with Gymnasium and PettingZoo (idempotent)."""
+    import gymnasium
+
+    for tid, task in TASKS.items():
+        if tid not in gymnasium.registry:
+            gymnasium.register(
+                tid,
+                entry_point=ENTRY_POINT,
+                vector_entry_point=VECTOR_ENTRY_POINT,
+                kwargs=task.kwargs,
+            )
+    try:
+        from pettingzoo.env_registry.registration import _get_registry, register
+    except ImportError:  # PettingZoo < 1.27 has no registry
+        return
+    for kind, entry in (("parallel", "parallel_env"), ("aec", "env")):
+        reg = _get_registry(kind)
+        for tid, task in TASKS.items():
+            if tid not in reg:
+                entry_point = f"poc_env.uav_search_v0:{entry}"
+                register(kind, tid, entry_point=entry_point, kwargs=task.kwargs)
+
+
+def task_table() -> list[dict[str, Any]]:
+    """One row per task (id, scenario, control, random prior, agents, horizon): the rows of
+    ``poc-env tasks``."""
+    from poc_env.config import load_scenario
+
+    rows = []
+    for tid, task in TASKS.items():
+        sc = load_scenario(task.scenario)
+        rows.append(
+            {
+                "id": tid,
+                "scenario": task.scenario,
+                "control": task.control,
+                "random_prior": task.random_prior,
+                "n_uavs": sc.n_uavs,
+                "horizon_steps": sc.horizon_steps,
+            }
+        )
+    return rows

@@ -1,0 +1,172 @@
+"""The registered benchmark tasks (poc_env.tasks) and the batched Gymnasium vector env."""
+
+from __future__ import annotations
+
+import functools
+import types
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from pettingzoo.env_registry.registration import make as pz_make
+from pettingzoo.test import api_test, max_cycles_test, parallel_api_test, parallel_seed_test
+
+import poc_env
+from poc_env import tasks
+from poc_env.envs.gym_vector import SwarmGymVectorEnv
+from poc_env.errors import ConfigError
+from poc_env.sim.control import ACTION_DIMS
+from poc_env.sim.observations import FEATURES
+
+SHORT = {"episode.horizon_steps": 25}
+ALL = list(tasks.TASKS)
+
+
+def test_the_table_of_tasks():
+    assert len(ALL) == 3 * 2 * 3
+    assert "poc_env/UAVSearch-Paper62-Random-Heading-v0" in ALL
+    assert "poc_env/UAVSearch-Small-Increments-v0" in ALL
+    for tid in ALL:
+        assert tid in gymnasium.registry
+        spec = gymnasium.spec(tid)
+        assert spec.vector_entry_point == tasks.VECTOR_ENTRY_POINT
+        assert spec.kwargs == tasks.TASKS[tid].kwargs
+        assert tid.endswith(f"-v{tasks.VERSION}")
+    rows = tasks.task_table()
+    assert [r["id"] for r in rows] == ALL
+    assert {(r["scenario"], r["n_uavs"]) for r in rows} == {
+        ("small", 3),
+        ("paper_6_2", 6),
+        ("paper_6_1", 6),
+    }
+
+
+@pytest.mark.parametrize("tid", ALL)
+def test_every_task_passes_the_four_checkers(tid):
+    task = tasks.TASKS[tid]
+    kw = {"overrides": SHORT}
+    par = pz_make("parallel", tid, **kw)
+    assert par.control == task.control and par.random_prior == task.random_prior
+    n = par.params.n_agents
+    assert par.observation_space("uav_0").shape == (FEATURES,)
+    assert par.action_space("uav_0").shape == (ACTION_DIMS[task.control],)
+    parallel_api_test(par, num_cycles=30)
+    api_test(pz_make("aec", tid, **kw), num_cycles=30)
+    parallel_seed_test(functools.partial(tasks.make_parallel, tid, **kw), num_cycles=20)
+    env = gymnasium.make(tid, **kw)
+    assert env.observation_space.shape == (n * FEATURES,)
+    check_env(env.unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("tid", [ALL[0], ALL[4], ALL[11]])
+def test_max_cycles_on_tasks(tid):
+    kw = {"overrides": {"uav.cruise_altitude_m": 4000.0}}  # no crash before the cut-off
+    module = types.SimpleNamespace(
+        env=functools.partial(tasks.make_aec, tid, **kw),
+        parallel_env=functools.partial(tasks.make_parallel, tid, **kw),
+    )
+    max_cycles_test(module)
+
+
+def test_random_tasks_draw_a_prior_per_seed_and_replay_a_seed():
+    tid = "poc_env/UAVSearch-Small-Random-Heading-v0"
+    priors = []
+    for seed in (0, 1, 0):
+        env = tasks.make_parallel(tid)
+        env.reset(seed=seed)
+        priors.append(env.sim_state.prior_fine[0].copy() if env.sim_state.prior_fine is not None
+                      else env.sim_state.belief[0].copy())  # fmt: skip
+    assert not np.allclose(priors[0], priors[1])
+    np.testing.assert_array_equal(priors[0], priors[2])
+    fixed = tasks.make_parallel("poc_env/UAVSearch-Small-Heading-v0")
+    fixed.reset(seed=0)
+    b0 = fixed.sim_state.belief[0].copy()
+    fixed.reset(seed=1)
+    np.testing.assert_array_equal(b0, fixed.sim_state.belief[0])
+
+
+def test_make_overrides_the_tasks_arguments():
+    env = gymnasium.make("poc_env/UAVSearch-Small-Heading-v0", obs_type="dict")
+    assert isinstance(env.observation_space, gymnasium.spaces.Dict)
+    par = tasks.make_parallel("UAVSearch-Small-Heading-v0", control="waypoint")  # no namespace
+    assert par.control == "waypoint"
+
+
+@pytest.mark.parametrize("bad", ["UAVSearch-Tiny-Heading-v0", "poc_env/UAVSearch-Small-v0", 3])
+def test_unknown_task(bad):
+    with pytest.raises(ConfigError, match=r"task: got .*allowed: a registered task id"):
+        tasks.make_parallel(bad)
+
+
+# -- gymnasium.make_vec: the batched core equals the sync vector env ---------------------------
+def _run_both(tid, num_envs, steps, seed, **kw):
+    v = gymnasium.make_vec(tid, num_envs=num_envs, vectorization_mode="vector_entry_point", **kw)
+    s = gymnasium.make_vec(tid, num_envs=num_envs, vectorization_mode="sync", **kw)
+    assert isinstance(v.unwrapped, SwarmGymVectorEnv)
+    assert v.single_observation_space == s.single_observation_space
+    assert v.action_space == s.action_space
+    ov, iv = v.reset(seed=seed)
+    os_, _ = s.reset(seed=seed)
+    np.testing.assert_array_equal(ov, os_)
+    keys = set(iv)
+    rng = np.random.default_rng(seed)
+    ends = 0
+    for t in range(steps):
+        a = rng.uniform(-1, 1, v.action_space.shape).astype(np.float32)
+        got, want = v.step(a), s.step(a)
+        for j in range(4):
+            np.testing.assert_array_equal(got[j], want[j], err_msg=f"step {t} item {j}")
+        np.testing.assert_array_equal(got[4]["posc"], want[4]["posc"])
+        assert set(got[4]) == keys
+        assert all(np.asarray(x).dtype.kind in "biuf" for x in got[4].values())
+        ends += int(got[2].sum() + got[3].sum())
+    return ends
+
+
+@pytest.mark.parametrize(
+    "tid",
+    [
+        "poc_env/UAVSearch-Small-Increments-v0",
+        "poc_env/UAVSearch-Small-Random-Heading-v0",
+        "poc_env/UAVSearch-Small-Random-Waypoint-v0",
+        poc_env.ENV_ID,
+    ],
+)
+def test_make_vec_equals_the_sync_vector_env(tid):
+    # a 12-step horizon: every env ends and autoresets (NEXT_STEP) twice within 40 steps
+    ends = _run_both(tid, 3, 40, seed=5, overrides={"episode.horizon_steps": 12})
+    assert ends >= 6
+
+
+def test_make_vec_without_mode_uses_the_batched_core():
+    v = gymnasium.make_vec("poc_env/UAVSearch-Small-Heading-v0", num_envs=4)
+    assert isinstance(v.unwrapped, SwarmGymVectorEnv)
+    obs, info = v.reset(seed=[1, 2, 3, None])
+    assert obs.shape == (4, 3 * FEATURES)
+    assert info["landed"].shape == (4, 3) and info["posc"].shape == (4,)
+
+
+@pytest.mark.parametrize(
+    ("kw", "field"),
+    [
+        ({"num_envs": 0}, "num_envs"),
+        ({"num_envs": 2, "render_mode": "rgb_array"}, "render_mode"),
+        ({"num_envs": 2, "random_airfields": True}, "random_airfields"),
+        ({"num_envs": 2, "control": "joystick"}, "control"),
+    ],
+)
+def test_vector_env_bad_arguments(kw, field):
+    with pytest.raises(ConfigError, match=field):
+        SwarmGymVectorEnv(scenario="small", **kw)
+
+
+def test_vector_env_bad_actions_and_seeds():
+    v = SwarmGymVectorEnv(2, scenario="small", control="heading")
+    with pytest.raises(ConfigError, match="seed"):
+        v.reset(seed=[1, 2, 3])
+    v.reset(seed=0)
+    with pytest.raises(ConfigError, match=r"actions: .*shape \(2, 6\)"):
+        v.step(np.zeros((2, 9)))
+    with pytest.raises(ConfigError, match="actions"):
+        v.step(np.full((2, 6), np.nan))
