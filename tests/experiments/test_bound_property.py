@@ -1,14 +1,15 @@
 """Issue 12: nothing the project ships beats the bounds it prints.
 
 Property (hypothesis, random episodes of ``small``: random prior, seed, fleet size and split
-over two airfields, endurance, optionally a short horizon): every shipped policy flown in the
-environment (``random``, ``lawnmower``, ``greedy_bayes``, ``de_plan`` and ``allocation_plan``,
-the planners at quick settings) scores a POSC no higher than the episode's honest plain bound
-and its reach-aware bound, as :func:`agents.experiments.evaluate.run_episode` reports them (the
-bounds ``poc-env evaluate`` prints and normalises by); and every plan (``make_plan`` with a
-random optimiser, ``make_allocation_plan``) predicts a POS_C no higher than its own plan.json
-``bounds`` and ``upper_bound``. Tolerance :data:`TOL` (float rounding only: the reach-aware
-bound may exceed the plain one by ~1e-15).
+over two airfields, endurance, detection law, optionally a short horizon): every shipped
+policy flown in the environment (``random``, ``lawnmower``, ``greedy_bayes``, ``de_plan`` and
+``allocation_plan``, the planners at quick settings) scores a POSC no higher than the
+episode's honest plain bound and its reach-aware bound, as
+:func:`agents.experiments.evaluate.run_episode` reports them (the bounds ``poc-env evaluate``
+prints and normalises by); and every plan (``make_plan`` with a random optimiser,
+``make_allocation_plan``) predicts a POS_C no higher than its own plan.json ``bounds`` and
+``upper_bound``. Tolerance :data:`TOL` (float rounding only: the reach-aware bound may exceed
+the plain one by ~1e-15).
 
 The property is not vacuous: :func:`test_halved_bounds_are_caught` halves each bound at its
 source (``poc_env.theory.bound``, and the names the allocation planner imported) and expects the
@@ -35,12 +36,17 @@ TOL = 1e-9
 POLICIES = ("random", "lawnmower", "greedy_bayes", "de_plan", "allocation_plan")
 #: Optimisers whose plans are checked (one drawn per example).
 OPTIMIZERS = ("adaptive_de", "classic_de", "chaotic_abc", "grouped_pso", "scipy_de", "cmaes")
+#: Detection laws drawn (the environment's and the bounds').
+LAWS = ("inverse_cube", "exponential", "definite_range")
 #: Quick planner budget (``de_plan`` reads the scenario's planner section).
 QUICK = {"planner.population": 12, "planner.generations": 8}
 
 
-def scenario(counts: tuple[int, int], endurance_h: float, horizon: int | None) -> Scenario:
-    """``small`` with ``counts`` UAVs from airfields A and B, the endurance and the horizon."""
+def scenario(
+    counts: tuple[int, int], endurance_h: float, horizon: int | None, law: str = "inverse_cube"
+) -> Scenario:
+    """``small`` with ``counts`` UAVs from airfields A and B, the endurance, the horizon and
+    the detection law."""
     fleet = [{"takeoff": "A", "count": counts[0]}]
     if counts[1]:
         fleet.append({"takeoff": "B", "count": counts[1], "landing": "A"})
@@ -52,6 +58,7 @@ def scenario(counts: tuple[int, int], endurance_h: float, horizon: int | None) -
         ],
         "fleet": fleet,
         "uav.endurance_h": endurance_h,
+        "sensor.law": law,
         "comms.min_neighbours": 0,
     }
     if horizon is not None:
@@ -87,10 +94,11 @@ def violations(sc: Scenario, seed: int, optimizer: str, plans: bool = True) -> l
     endurance_h=st.floats(0.3, 0.8),
     seed=st.integers(0, 10_000),
     optimizer=st.sampled_from(OPTIMIZERS),
+    law=st.sampled_from(LAWS),
 )
-def test_no_policy_or_plan_beats_the_bounds(counts, endurance_h, seed, optimizer):
+def test_no_policy_or_plan_beats_the_bounds(counts, endurance_h, seed, optimizer, law):
     """Full horizon: flights and plans (their predicted POS_C) stay below every bound."""
-    sc = scenario(counts, endurance_h, None)
+    sc = scenario(counts, endurance_h, None, law)
     assert violations(sc, seed, optimizer) == []
 
 
@@ -99,14 +107,15 @@ def test_no_policy_or_plan_beats_the_bounds(counts, endurance_h, seed, optimizer
     counts=st.tuples(st.integers(1, 3), st.integers(0, 2)),
     horizon=st.integers(6, 30),
     seed=st.integers(0, 10_000),
+    law=st.sampled_from(LAWS),
 )
-def test_no_policy_beats_the_bounds_on_a_short_horizon(counts, horizon, seed):
+def test_no_policy_beats_the_bounds_on_a_short_horizon(counts, horizon, seed, law):
     """A horizon of 3-15 minutes, where the transit from the airfields binds: flights only.
     A plan's predicted POS_C assumes its whole endurance and ignores the horizon, so on such an
     episode it can exceed the plan.json bounds, which are the environment's (measured: an
     allocation plan predicting 0.666 against a reach-aware bound of 0.484 at 18 steps); the
     flown POSC cannot."""
-    sc = scenario(counts, 0.6667, horizon)
+    sc = scenario(counts, 0.6667, horizon, law)
     assert violations(sc, seed, "adaptive_de", plans=False) == []
 
 
