@@ -27,6 +27,7 @@ _EXTRA_OF = {
     "torch": "rl",
     "stable_baselines3": "rl",
     "tensorboard": "rl",
+    "ray": "rllib",
     "matplotlib": "plot",
     "PIL": "plot",
 }
@@ -277,10 +278,33 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
     _check_out("out", args.out, "folder")
-    if not args.out:
-        return _evaluate(args, names, None, None)
-    with _output_folder("out", args.out) as stage:
-        return _evaluate(args, names, stage, Path(args.out))
+    with _ray(args):
+        if not args.out:
+            return _evaluate(args, names, None, None)
+        with _output_folder("out", args.out) as stage:
+            return _evaluate(args, names, stage, Path(args.out))
+
+
+def _ray(args: argparse.Namespace) -> contextlib.AbstractContextManager:
+    """``--ray [ADDRESS]``: the command's jobs run on Ray (agents.experiments.pool.ray_jobs)."""
+    if getattr(args, "ray", None) is None:
+        return contextlib.nullcontext()
+    from agents.experiments.pool import ray_jobs
+
+    return ray_jobs(args.ray)
+
+
+def _add_ray(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        default=None,
+        metavar="ADDRESS",
+        help="run the episodes as Ray tasks: on a new local instance (no ADDRESS), or on the "
+        "cluster at ADDRESS (host:port of a head node, ray://host:10001, auto); results equal "
+        "--workers 1 for the same seeds. Needs the rllib extra",
+    )
 
 
 def _evaluate(
@@ -333,7 +357,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
     _check_int("workers", args.workers, 1, limits.MAX_WORKERS)
     _check_out("out", args.out, "folder")
-    return cmd(args)
+    with _ray(args):
+        return cmd(args)
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -348,7 +373,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         run = train(targs)
     except KeyboardInterrupt:
         return 130
-    print(f"wrote {run / 'model.zip'} (run folder {run})")
+    model = run / ("checkpoint" if targs.engine == "rllib" else "model.zip")
+    print(f"wrote {model} (run folder {run})")
     return 0
 
 
@@ -581,6 +607,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_ray(p)
     p.set_defaults(func=cmd_evaluate)
 
     # train's options (and its --help) come from the TrainArgs dataclass: main() hands them to
@@ -673,6 +700,7 @@ def build_parser() -> argparse.ArgumentParser:
     from agents.experiments.paper import add_arguments as add_experiment_arguments
 
     add_experiment_arguments(p)
+    _add_ray(p)
     p.set_defaults(func=cmd_experiment)
 
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")

@@ -7,6 +7,11 @@ lock the pool held. Workers import what they run afresh, so only policies regist
 time (every built-in) reach them, and a script that runs jobs on workers needs the usual
 ``if __name__ == "__main__":`` guard.
 
+Inside :func:`ray_jobs` (``poc-env evaluate/experiment --ray [ADDRESS]``) the same jobs run as
+Ray tasks instead, on a local Ray instance or an existing cluster
+(:func:`poc_env.cluster.ray_session`); results come back in job order, so they equal the local
+ones job for job (every job seeds its own generators).
+
 Every wait for a result has a timeout, :func:`worker_timeout_s` seconds per job (30 minutes
 unless ``POC_ENV_WORKER_TIMEOUT_S`` says otherwise): a worker that hangs or dies ends the
 command with :class:`WorkerTimeoutError` and its pool is stopped, instead of a silent wait.
@@ -14,9 +19,11 @@ command with :class:`WorkerTimeoutError` and its pool is stopped, instead of a s
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import multiprocessing
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any
@@ -25,6 +32,57 @@ from poc_env.errors import ConfigError, PocEnvError, as_number
 
 DEFAULT_TIMEOUT_S = 1800.0
 _ENV_VAR = "POC_ENV_WORKER_TIMEOUT_S"
+#: True inside :func:`ray_jobs`: :func:`run_jobs` sends its jobs to Ray.
+_ON_RAY: contextvars.ContextVar[bool] = contextvars.ContextVar("poc_env_on_ray", default=False)
+
+
+@contextlib.contextmanager
+def ray_jobs(address: str | None = None, num_cpus: int = 2) -> Iterator[None]:
+    """Within the block, :func:`run_jobs` runs every job as a Ray task, on a local instance
+    (``address`` None or ``"local"``, ``num_cpus`` CPUs) or the cluster at ``address``."""
+    from poc_env.cluster import ray_session
+
+    with ray_session(address, num_cpus, what="--ray"):
+        token = _ON_RAY.set(True)
+        try:
+            yield
+        finally:
+            _ON_RAY.reset(token)
+
+
+def _call(fn: Callable[[Any], Any], job: Any) -> Any:
+    return fn(job)
+
+
+def _run_on_ray(fn: Callable[[Any], Any], jobs: Sequence[Any], bar: Any) -> list[Any]:
+    import ray
+    from ray.exceptions import GetTimeoutError, RayTaskError
+
+    remote = ray.remote(num_cpus=1, max_retries=0)(_call)
+    refs = [remote.remote(fn, job) for job in jobs]
+    timeout = worker_timeout_s()
+    out = []
+    try:
+        for k, ref in enumerate(refs):
+            try:
+                out.append(ray.get(ref, timeout=timeout))
+            except GetTimeoutError:
+                raise WorkerTimeoutError(
+                    f"job {k} of {len(jobs)} on Ray gave no result within {timeout:g} s; "
+                    f"allowed: jobs that finish within {_ENV_VAR} seconds"
+                ) from None
+            except RayTaskError as exc:  # the job's own error, as a local run would raise it
+                cause = getattr(exc, "cause", None)
+                if isinstance(cause, BaseException):
+                    raise cause from None
+                raise
+            if bar is not None:
+                bar.update(1)
+    except BaseException:
+        for ref in refs:
+            ray.cancel(ref, force=True)
+        raise
+    return out
 
 
 class WorkerTimeoutError(PocEnvError, TimeoutError):
@@ -79,6 +137,8 @@ def run_jobs(
 
         bar = tqdm(total=len(jobs), desc=desc, unit="job", leave=False)
     try:
+        if _ON_RAY.get():
+            return _run_on_ray(fn, jobs, bar)
         if workers == 1 or len(jobs) < 2:
             out = []
             for job in jobs:

@@ -183,3 +183,9 @@ register(
     argument="path",
     argument_help="a checkpoint path (a .zip or a run folder)",
 )
+register(
+    "rllib",
+    "agents.rl.rllib:RLlibPolicy",
+    argument="path",
+    argument_help="a run folder of poc-env train --engine rllib",
+)

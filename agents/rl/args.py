@@ -29,6 +29,7 @@ from poc_env.config import parse_overrides
 from poc_env.errors import ConfigError, as_int, as_number
 
 ALGOS = ("ppo",)
+ENGINES = ("sb3", "rllib")
 RECIPES = ("shared", "central", "pilot")
 
 
@@ -40,6 +41,19 @@ class TrainArgs:
     """Built-in scenario name or YAML path; the resolved scenario is saved as scenario.yaml."""
     overrides: Annotated[list[str], _arg(metavar="KEY=VALUE")] = field(default_factory=list)
     """Scenario overrides, dotted KEY=VALUE (VALUE is YAML), e.g. episode.horizon_steps=20."""
+    engine: Annotated[str, _arg(metavar="|".join(ENGINES))] = "sb3"
+    """sb3: stable-baselines3 on our VecEnvs (the recipes); rllib: RLlib multi-agent PPO on the
+    task's PettingZoo env (agents.rl.rllib), locally or on a Ray cluster (--address)."""
+    task: Annotated[str | None, _arg(metavar="TASK_ID")] = None
+    """rllib: a registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0;
+    without one: --scenario at the heading level with the compass observation."""
+    rllib_policies: Annotated[str, _arg(metavar="shared|per_uav")] = "shared"
+    """rllib: one policy shared by every UAV, or one policy per UAV."""
+    num_env_runners: int = 0
+    """rllib: Ray actors sampling episodes (0: sample in the driver)."""
+    address: Annotated[str | None, _arg(metavar="ADDRESS")] = None
+    """rllib: an existing Ray cluster (host:port, ray://host:10001, auto); default: a new local
+    instance that is stopped at the end."""
     algo: Annotated[str, _arg(metavar="|".join(ALGOS))] = "ppo"
     """RL algorithm: ppo (stable-baselines3 PPO)."""
     recipe: Annotated[str, _arg(metavar="|".join(RECIPES))] = "shared"
@@ -88,6 +102,21 @@ class TrainArgs:
             raise ConfigError("algo", self.algo, "one of " + ", ".join(ALGOS))
         if self.recipe not in RECIPES:
             raise ConfigError("recipe", self.recipe, "one of " + ", ".join(RECIPES))
+        if self.engine not in ENGINES:
+            raise ConfigError("engine", self.engine, "one of " + ", ".join(ENGINES))
+        if self.rllib_policies not in ("shared", "per_uav"):
+            raise ConfigError("rllib_policies", self.rllib_policies, "shared or per_uav")
+        as_int("num_env_runners", self.num_env_runners, 0, limits.MAX_WORKERS)
+        if self.task is not None:
+            from poc_env.tasks import get_task
+
+            get_task(self.task)
+            if self.engine != "rllib":
+                raise ConfigError("task", self.task, "a task with --engine rllib (sb3: --recipe)")
+        if self.engine == "rllib" and self.resume is not None:
+            raise ConfigError("resume", self.resume, "sb3 runs only (an rllib run starts anew)")
+        if self.address is not None and self.engine != "rllib":
+            raise ConfigError("address", self.address, "an address with --engine rllib only")
         for name, lo, hi in (
             ("total_timesteps", 1, 10**12),
             ("seed", 0, limits.MAX_SEED),

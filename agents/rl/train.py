@@ -263,7 +263,7 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
             )
         return p
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    base = Path("runs") / f"{scenario_name}-{args.algo}-s{args.seed}-{stamp}"
+    base = Path("runs") / f"{scenario_name}-{args.engine}-{args.algo}-s{args.seed}-{stamp}"
     p, k = base, 1
     while p.exists():
         k += 1
@@ -276,6 +276,12 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
     ``callback``: an extra SB3 callback, called after the checkpointer and the progress bar.
     Needs the ``rl`` extra (checked before anything is written)."""
+    if args.engine == "rllib":
+        from agents.rl.rllib import train_rllib
+
+        name = args.task.rsplit("/", 1)[-1] if args.task else args.scenario
+        run_dir = _new_run_dir(args, Path(name).stem)
+        return train_rllib(dataclasses.replace(args, run_dir=str(run_dir)), run_dir)
     require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
     if args.resume is not None:
         return _resume(Path(args.resume), args.progress, callback)

@@ -18,6 +18,7 @@ BUILTIN = (
     "potential_game",
     "random",
     "ppo:PATH",
+    "rllib:PATH",
 )
 
 
@@ -29,11 +30,13 @@ def scratch_registry(monkeypatch):
 
 def test_every_builtin_policy_is_registered_and_made_fresh():
     assert registered() == BUILTIN
-    for name in BUILTIN[:-1]:
+    for name in BUILTIN[:-2]:
         a, b = make_policy(name), make_policy(name)
         assert isinstance(a, Policy) and a.name == name and a is not b
     factory = registry.spec("ppo:runs/x").load()  # imported by name: no RL import before this
     assert factory.__name__ == "PPOPolicy" and issubclass(factory, Policy)
+    factory = registry.spec("rllib:runs/x").load()
+    assert factory.__name__ == "RLlibPolicy" and issubclass(factory, Policy)
 
 
 def test_keywords_reach_the_factory():

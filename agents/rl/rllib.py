@@ -1,0 +1,297 @@
+"""RLlib multi-agent PPO on the registered tasks: ``poc-env train --engine rllib``.
+
+The environment is the task's PettingZoo parallel env (:func:`poc_env.tasks.make_parallel`)
+behind RLlib's own ``ParallelPettingZooEnv`` wrapper, so what RLlib trains on is exactly what
+every other framework sees; the compass observation is a Box, which RLlib's default MLP
+encoder takes without configuration. Two policy layouts (``--rllib-policies``):
+
+- ``shared``: one RLModule flies every UAV (parameter sharing, as the SB3 recipes);
+- ``per_uav``: one RLModule per UAV (``uav_0`` ... ``uav_{N-1}``).
+
+Training runs inside :func:`poc_env.cluster.ray_session`: a local Ray instance by default, an
+existing cluster with ``--address``; ``--num-env-runners K`` samples on K Ray actors (0: in the
+driver). The run folder gets ``config.json`` (the :class:`~agents.rl.args.TrainArgs`),
+``metrics.csv`` (one row per training iteration) and ``checkpoint/`` (RLlib's
+``save_to_path``, written into a temporary folder and renamed when complete).
+:class:`RLlibPolicy` (``rllib:PATH`` in ``poc-env evaluate``) flies such a checkpoint.
+Needs the ``rllib`` extra (``ray[rllib]``).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from agents.policies.base import Policy
+from agents.rl.checkpoint import read_json, write_json
+from poc_env.errors import ConfigError, MissingExtraError
+from poc_env.io import write_text_atomic
+
+if TYPE_CHECKING:
+    from agents.rl.args import TrainArgs
+
+ENV_NAME = "poc_env_task"
+POLICY_LAYOUTS = ("shared", "per_uav")
+
+
+def _require() -> None:
+    for m in ("ray", "torch"):
+        try:
+            __import__(m)
+        except ModuleNotFoundError as exc:
+            if (exc.name or "").partition(".")[0] != m:
+                raise
+            raise MissingExtraError("rllib", "poc-env train --engine rllib") from exc
+
+
+def env_kwargs(args: TrainArgs) -> dict[str, Any]:
+    """The PettingZoo env's keyword arguments of a run: its task's, with the run's overrides
+    (without a task: the scenario at the heading level with the compass observation)."""
+    from poc_env import tasks
+    from poc_env.config import parse_overrides
+
+    if args.task is not None:
+        kw = tasks.task_kwargs(args.task)
+    else:
+        kw = {
+            "scenario": args.scenario,
+            "control": "heading",
+            "obs_type": "compass",
+            "random_prior": args.random_priors,
+        }
+    if args.overrides:
+        kw["overrides"] = parse_overrides(args.overrides)
+    return kw
+
+
+def make_env(config: dict[str, Any]):
+    """RLlib's env creator: ``config`` holds the PettingZoo env's keyword arguments."""
+    from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
+
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    return ParallelPettingZooEnv(UAVSearchParallelEnv(**dict(config)))
+
+
+def _shared_policy(agent_id: Any, *args: Any, **kwargs: Any) -> str:
+    return "shared"
+
+
+def _own_policy(agent_id: Any, *args: Any, **kwargs: Any) -> str:
+    return str(agent_id)
+
+
+def ppo_config(args: TrainArgs, kw: dict[str, Any], n_agents: int):
+    """The PPOConfig of a run (RLlib's new API stack, torch, CPU)."""
+    from ray.rllib.algorithms.ppo import PPOConfig
+    from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
+    from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+
+    if args.rllib_policies == "shared":
+        ids = ["shared"]
+        mapping = _shared_policy
+    else:
+        ids = [f"uav_{i}" for i in range(n_agents)]
+        mapping = _own_policy
+    model = {"fcnet_hiddens": list(args.net_arch), "fcnet_activation": "tanh"}
+    specs = {i: RLModuleSpec(model_config=model) for i in ids}
+    fragment = max(1, args.n_steps)
+    return (
+        PPOConfig()
+        .environment(ENV_NAME, env_config=kw)
+        .framework("torch")
+        .env_runners(
+            num_env_runners=args.num_env_runners,
+            num_envs_per_env_runner=1,
+            rollout_fragment_length=fragment,
+            num_cpus_per_env_runner=1,
+        )
+        .multi_agent(policies=set(ids), policy_mapping_fn=mapping)
+        .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs=specs))
+        .training(
+            train_batch_size_per_learner=fragment * n_agents * max(1, args.num_env_runners),
+            minibatch_size=min(args.batch_size, fragment * n_agents),
+            num_epochs=args.n_epochs,
+            lr=args.learning_rate,
+            gamma=args.gamma,
+            lambda_=args.gae_lambda,
+            entropy_coeff=args.ent_coef,
+        )
+        .debugging(seed=args.seed)
+    )
+
+
+def _metric(result: dict[str, Any], *keys: str) -> float:
+    node: Any = result
+    for k in keys:
+        if not isinstance(node, dict) or k not in node:
+            return float("nan")
+        node = node[k]
+    try:
+        return float(node)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
+def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
+    """Train ``args`` with RLlib into ``run_dir`` (module docstring); returns the run folder."""
+    _require()
+    import torch as th
+    from ray.tune.registry import register_env
+
+    from poc_env.cluster import ray_session
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    kw = env_kwargs(args)
+    n_agents = UAVSearchParallelEnv(**kw).params.n_agents  # validates the env's arguments
+    run_dir.mkdir(parents=True, exist_ok=True)
+    write_json(run_dir / "config.json", dataclasses.asdict(args))
+    threads = th.get_num_threads()
+    th.set_num_threads(args.torch_threads)
+    rows: list[dict[str, float]] = []
+    cpus = max(2, args.num_env_runners + 1)
+    try:
+        with ray_session(args.address, num_cpus=cpus, what="poc-env train --engine rllib"):
+            register_env(ENV_NAME, make_env)
+            algo = ppo_config(args, kw, n_agents).build_algo()
+            try:
+                t0 = time.perf_counter()
+                steps = 0
+                while steps < args.total_timesteps:
+                    result = algo.train()
+                    steps = int(_metric(result, "num_env_steps_sampled_lifetime"))
+                    agent_steps = _metric(result, "num_agent_steps_sampled_lifetime")
+                    if not np.isfinite(agent_steps):
+                        agent_steps = steps * n_agents
+                    rows.append(
+                        {
+                            "iteration": len(rows) + 1,
+                            "env_steps": steps,
+                            "agent_steps": agent_steps,
+                            "seconds": round(time.perf_counter() - t0, 3),
+                            "episode_return_mean": _metric(
+                                result, "env_runners", "episode_return_mean"
+                            ),
+                        }
+                    )
+                    if args.progress:
+                        r = rows[-1]
+                        print(
+                            f"iteration {r['iteration']}: {steps} env steps, "
+                            f"return {r['episode_return_mean']:.4f}",
+                            flush=True,
+                        )
+                _save(algo, run_dir / "checkpoint")
+            finally:
+                algo.stop()
+    finally:
+        th.set_num_threads(threads)
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    w.writeheader()
+    w.writerows(rows)
+    write_text_atomic(run_dir / "metrics.csv", buf.getvalue())
+    return run_dir
+
+
+def _save(algo: Any, dest: Path) -> None:
+    """RLlib's checkpoint into ``dest``, complete or absent (a temporary folder, renamed)."""
+    tmp = Path(tempfile.mkdtemp(prefix=".checkpoint-", dir=dest.parent))
+    try:
+        algo.save_to_path(str(tmp))
+        if dest.exists():
+            shutil.rmtree(dest)
+        os.replace(tmp, dest)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+# -- flying a checkpoint -----------------------------------------------------------------------
+def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
+    p = Path(path)
+    if (p / "checkpoint").is_dir():
+        p = p / "checkpoint"
+    if not (p / "learner_group").is_dir():
+        raise ConfigError(
+            "checkpoint", str(path), "a run folder of poc-env train --engine rllib or its "
+            "checkpoint/ folder (holding learner_group/)",
+        )  # fmt: skip
+    return p
+
+
+class RLlibPolicy(Policy):
+    """An RLlib checkpoint of ``poc-env train --engine rllib`` as a poc-env policy.
+
+    ``RLlibPolicy(path)``: a run folder or its ``checkpoint/``. The run's ``config.json`` names
+    the task, so the policy knows its control level and observation; :meth:`reset` refuses an
+    env of another number of UAVs. Actions are the mean of the Gaussian (deterministic)."""
+
+    def __init__(self, path: str | os.PathLike[str], name: str | None = None) -> None:
+        _require()
+        from ray.rllib.core.rl_module.rl_module import RLModule
+
+        from agents.rl.args import TrainArgs
+
+        self.dir = _checkpoint_dir(path)
+        self.name = name or f"rllib:{path}"
+        cfg = self.dir.parent / "config.json"
+        if not cfg.is_file():
+            raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
+        self.args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
+        kw = env_kwargs(self.args)
+        self.control = kw.get("control", "increments")
+        modules = self.dir / "learner_group" / "learner" / "rl_module"
+        self.modules = {
+            d.name: RLModule.from_checkpoint(str(d))
+            for d in sorted(modules.iterdir())
+            if d.is_dir()
+        }
+        self._n = None
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        from poc_env.sim.observations import CompassFeatures
+
+        n = env.params.n_agents
+        if self.args.rllib_policies == "per_uav" and len(self.modules) != n:
+            raise ConfigError(
+                "checkpoint", str(self.dir), f"one policy per UAV for {n} UAVs "
+                f"(this run has {len(self.modules)})",
+            )  # fmt: skip
+        self._n = n
+        self._features = CompassFeatures(env.params)
+        self._agents = list(env.possible_agents)
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        import torch as th
+
+        from poc_env.sim.control import to_increments
+        from poc_env.sim.observations import decode_vector, split_observation
+
+        if not observations:
+            return {}, state
+        live = [a for a in self._agents if a in observations]
+        shape = self.env.params.grid.shape
+        ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
+        k = np.array([self._agents.index(a) for a in live])
+        feats = self._features(np.stack(ras), np.stack(vec), k)
+        acts = np.zeros((len(live), 3 if self.control == "increments" else 2))
+        for j, a in enumerate(live):
+            module = self.modules["shared"] if "shared" in self.modules else self.modules[a]
+            with th.no_grad():
+                out = module.forward_inference({"obs": th.as_tensor(feats[j : j + 1])})
+            dist = out["action_dist_inputs"].numpy()[0]
+            acts[j] = np.clip(dist[: acts.shape[1]], -1.0, 1.0)  # the Gaussian's mean
+        q = decode_vector(self.env.params, np.stack(vec))
+        inc = to_increments(self.env.params, self.control, q, acts, k)
+        return {a: inc[j] for j, a in enumerate(live)}, state

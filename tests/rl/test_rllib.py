@@ -1,0 +1,123 @@
+"""RLlib multi-agent PPO (agents.rl.rllib) and Ray-distributed jobs (poc_env.cluster,
+agents.experiments.pool.ray_jobs): tiny runs on one local Ray instance (2 CPUs, no dashboard)."""
+
+from __future__ import annotations
+
+import csv
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ray", reason="the rllib extra is not installed")
+
+from agents.experiments.evaluate import evaluate
+from agents.experiments.pool import ray_jobs, run_jobs
+from agents.policies.registry import make_policy
+from agents.rl.args import TrainArgs
+from agents.rl.rllib import RLlibPolicy
+from agents.rl.train import train
+from poc_env import cluster
+from poc_env.errors import ConfigError, MissingExtraError
+
+TASK = "poc_env/UAVSearch-Small-Random-Heading-v0"
+SHORT = ["episode.horizon_steps=30"]
+
+
+@pytest.fixture(scope="module")
+def ray_local():
+    """One local Ray instance for the module (train and ray_jobs join it, leave it running)."""
+    with cluster.ray_session(None, num_cpus=2) as ray:
+        yield ray
+
+
+def _args(tmp_path, name, **kw):
+    base = {
+        "engine": "rllib",
+        "task": TASK,
+        "overrides": SHORT,
+        "total_timesteps": 200,
+        "n_steps": 100,
+        "batch_size": 100,
+        "n_epochs": 1,
+        "net_arch": [16],
+        "run_dir": str(tmp_path / name),
+        "progress": False,
+    }
+    base.update(kw)
+    return TrainArgs(**base)
+
+
+def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
+    run = train(_args(tmp_path, "shared", num_env_runners=1))  # sampling on a Ray actor
+    assert (run / "checkpoint" / "learner_group").is_dir()
+    rows = list(csv.DictReader((run / "metrics.csv").open()))
+    assert rows and int(rows[-1]["env_steps"]) >= 200
+    assert int(float(rows[-1]["agent_steps"])) == 3 * int(rows[-1]["env_steps"])
+    policy = make_policy(f"rllib:{run}")
+    assert isinstance(policy, RLlibPolicy) and set(policy.modules) == {"shared"}
+    ev = evaluate("small", [f"rllib:{run}"], episodes=2, seed0=0)
+    posc = [r["posc_mean"] for r in ev.rows()]
+    assert 0.0 <= posc[0] <= 1.0
+
+
+def test_one_policy_per_uav(ray_local, tmp_path):
+    run = train(_args(tmp_path, "per_uav", rllib_policies="per_uav"))
+    policy = RLlibPolicy(run)
+    assert set(policy.modules) == {"uav_0", "uav_1", "uav_2"}
+    import poc_env
+
+    with pytest.raises(ConfigError, match="one policy per UAV for 6 UAVs"):
+        policy.reset(poc_env.parallel_env("paper_6_2"), seed=0)
+
+
+def test_ray_jobs_equal_local_jobs(ray_local):
+    # the same episodes, as Ray tasks on 2 workers and in this process: identical results
+    names = ["lawnmower", "random", "greedy_bayes"]
+    local = evaluate("small", names, episodes=4, seed0=7, random_priors=True)
+    with ray_jobs(None):
+        remote = evaluate("small", names, episodes=4, seed0=7, workers=2, random_priors=True)
+    assert local.to_csv() == remote.to_csv()
+    assert np.ptp([e.posc for e in local.episodes if e.policy == "lawnmower"]) > 0  # seeds vary
+
+
+def test_a_jobs_error_comes_back_as_itself(ray_local):
+    with ray_jobs(None), pytest.raises(ConfigError, match="episodes"):
+        run_jobs(_bad_job, [1, 2])
+
+
+def _bad_job(x):
+    raise ConfigError("episodes", x, "a test error")
+
+
+def test_unreachable_address_fails_fast():
+    t0 = time.perf_counter()
+    with (
+        pytest.raises(ConfigError, match=r"address: got '127.0.0.1:1'.*nothing answered"),
+        cluster.ray_session("127.0.0.1:1"),
+    ):
+        pass
+    assert time.perf_counter() - t0 < 60  # a clear error, not Ray's minutes of retries
+    for bad in ("nohost", "host:port", "ray://:0", ""):
+        with pytest.raises(ConfigError, match="address"), cluster.ray_session(bad):
+            pass
+
+
+def test_cli_errors(tmp_path, capsys):
+    from poc_env.cli import main
+
+    assert main(["evaluate", "--scenario", "small", "--episodes", "1", "--ray", "127.0.0.1:1"]) != 0
+    assert "address: got '127.0.0.1:1'" in capsys.readouterr().err
+    with pytest.raises(ConfigError, match="task: got 'poc_env/Nope-v0'"):
+        _args(tmp_path, "x", task="poc_env/Nope-v0")
+    with pytest.raises(ConfigError, match=r"task: .*with --engine rllib"):
+        _args(tmp_path, "x", engine="sb3")
+    with pytest.raises(ConfigError, match="rllib_policies"):
+        _args(tmp_path, "x", rllib_policies="each")
+
+
+def test_missing_ray_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)
+    with pytest.raises(MissingExtraError, match=r"poc-env\[rllib\]"):
+        cluster.require_ray("--ray")
