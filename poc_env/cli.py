@@ -130,7 +130,7 @@ def _add_overrides(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_scenario(p: argparse.ArgumentParser, default: str) -> None:
+def _add_scenario(p: argparse.ArgumentParser, default: str | None) -> None:
     p.add_argument("--scenario", default=default, help="built-in name or YAML path")
     _add_overrides(p)
     p.add_argument("--map", dest="map_file", default=None, help="prior map (.npy or .csv)")
@@ -144,6 +144,21 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
         print(
             f"{name:<12} {sc.map.width_m / 1e3:g} x {sc.map.height_m / 1e3:g} km, "
             f"{sc.map.nx} x {sc.map.ny} cells, {sc.n_uavs} UAVs -- {sc.description}"
+        )
+    return 0
+
+
+def cmd_tasks(args: argparse.Namespace) -> int:
+    from poc_env.tasks import task_table
+
+    rows = task_table()
+    width = max(len(r["id"]) for r in rows)
+    print(f"{'task':<{width}}  {'scenario':<10} {'control':<10} prior   UAVs  horizon")
+    for r in rows:
+        prior = "random" if r["random_prior"] else "fixed "
+        print(
+            f"{r['id']:<{width}}  {r['scenario']:<10} {r['control']:<10} {prior}  "
+            f"{r['n_uavs']:>4}  {r['horizon_steps']:>7}"
         )
     return 0
 
@@ -261,6 +276,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         "plan": "agents.benchmarks.plan",
         "train": "agents.benchmarks.train",
         "campaign": "agents.benchmarks.campaign",
+        "baselines": "agents.benchmarks.baselines",
+        "suite": "agents.benchmarks.suite",
     }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
@@ -315,7 +332,15 @@ def _evaluate(
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.io import write_text_atomic
 
-    sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
+    scenario, random_priors, label = args.scenario, args.random_priors, None
+    if args.task is not None:  # the task's scenario and prior kind (poc_env.tasks)
+        from poc_env.tasks import get_task
+
+        task = get_task(args.task)
+        if scenario is not None:
+            raise ConfigError("task", args.task, "either --task or --scenario, not both")
+        scenario, random_priors, label = task.scenario, random_priors or task.random_prior, task.id
+    sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
     ev = evaluate(
         sc,
         names,
@@ -324,11 +349,11 @@ def _evaluate(
         workers=args.workers,
         map_file=args.map_file,
         progress=not args.quiet,
-        random_priors=args.random_priors,
+        random_priors=random_priors,
     )
-    priors = ", a fresh random prior per seed" if args.random_priors else ""
+    priors = ", a fresh random prior per seed" if random_priors else ""
     print(
-        f"{sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
+        f"{label or sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
         f"{args.seed + args.episodes - 1}{priors}"
     )
     print(ev.table())
@@ -554,6 +579,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
 
+    p = sub.add_parser("tasks", help="list the registered benchmark tasks (poc_env.tasks)")
+    p.set_defaults(func=cmd_tasks)
+
     p = sub.add_parser("scenario", help="scenario tools: import GIS layers as a scenario")
     scenario_sub = p.add_subparsers(dest="scenario_command", required=True)
     p = scenario_sub.add_parser(
@@ -590,7 +618,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("evaluate", help="score policies on the same episodes")
-    _add_scenario(p, "paper_6_2")
+    _add_scenario(p, None)
+    p.add_argument(
+        "--task",
+        default=None,
+        metavar="TASK_ID",
+        help="a registered task (poc-env tasks): its scenario, and held-out random priors for "
+        "-Random- tasks; instead of --scenario (default scenario: paper_6_2)",
+    )
     p.add_argument(
         "--policies",
         default="lawnmower,random",
@@ -706,9 +741,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument(
         "what",
-        choices=["env", "plan", "train", "campaign"],
+        choices=["env", "plan", "train", "campaign", "baselines", "suite"],
         help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s; campaign: "
-        "hostile-input cases and their outcomes (needs hypothesis, the dev extra)",
+        "hostile-input cases and their outcomes (needs hypothesis, the dev extra); baselines: "
+        "the baseline table of every registered task; suite: env-steps/s per control level and "
+        "PPO transitions/s in SB3 and RLlib",
     )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)

@@ -7,6 +7,8 @@ from typing import Any
 import numpy as np
 
 from agents.policies.base import Policy
+from poc_env.sim.control import to_increments
+from poc_env.sim.observations import decode_vector, split_observation
 
 
 class RandomPolicy(Policy):
@@ -29,3 +31,33 @@ class RandomPolicy(Policy):
             v[2] = 0.0
             acts[a] = v.astype(np.float32)
         return acts, state
+
+
+class RandomHeadingPolicy(RandomPolicy):
+    """``random_heading``: a uniform random map-frame heading per UAV and step, flown by the
+    ``heading`` control level's autopilot (:mod:`poc_env.sim.control`, with auto-return): the
+    floor of the ``-Heading-`` tasks."""
+
+    name = "random_heading"
+    control = "heading"
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        if not observations:
+            return {}, state
+        agents = list(self.env.possible_agents)
+        live = [a for a in agents if a in observations]
+        shape = self.env.params.grid.shape
+        vec = np.stack([split_observation(observations[a], shape)[1] for a in live])
+        q = decode_vector(self.env.params, vec)
+        act = self.rng.uniform(-1.0, 1.0, (len(live), 2))
+        k = np.array([agents.index(a) for a in live])
+        inc = to_increments(self.env.params, self.control, q, act, k)
+        return {a: inc[j].astype(np.float32) for j, a in enumerate(live)}, state
+
+
+class RandomWaypointPolicy(RandomHeadingPolicy):
+    """``random_waypoint``: a uniform random target point per UAV and step, flown by the
+    ``waypoint`` control level's autopilot: the floor of the ``-Waypoint-`` tasks."""
+
+    name = "random_waypoint"
+    control = "waypoint"

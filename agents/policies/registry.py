@@ -171,6 +171,8 @@ REGISTRY: Mapping[str, PolicySpec] = MappingProxyType(_REGISTRY)
 
 # -- the policies of poc-env -----------------------------------------------------------------
 register("random", "agents.policies.random:RandomPolicy")
+register("random_heading", "agents.policies.random:RandomHeadingPolicy")
+register("random_waypoint", "agents.policies.random:RandomWaypointPolicy")
 register("lawnmower", "agents.policies.lawnmower:LawnmowerPolicy")
 register("greedy_bayes", "agents.policies.greedy:GreedyBayesPolicy")
 register("potential_game", "agents.policies.game:PotentialGamePolicy")

@@ -45,8 +45,9 @@ class TrainArgs:
     """sb3: stable-baselines3 on our VecEnvs (the recipes); rllib: RLlib multi-agent PPO on the
     task's PettingZoo env (agents.rl.rllib), locally or on a Ray cluster (--address)."""
     task: Annotated[str | None, _arg(metavar="TASK_ID")] = None
-    """rllib: a registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0;
-    without one: --scenario at the heading level with the compass observation."""
+    """A registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0: its
+    scenario, prior kind and control level, an MLP on its compass observation (sb3: shared over
+    the UAVs by SwarmVecEnv). rllib without one: --scenario at the heading level."""
     rllib_policies: Annotated[str, _arg(metavar="shared|per_uav")] = "shared"
     """rllib: one policy shared by every UAV, or one policy per UAV."""
     num_env_runners: int = 0
@@ -111,8 +112,11 @@ class TrainArgs:
             from poc_env.tasks import get_task
 
             get_task(self.task)
-            if self.engine != "rllib":
-                raise ConfigError("task", self.task, "a task with --engine rllib (sb3: --recipe)")
+            if self.engine == "sb3" and self.recipe != "shared":
+                raise ConfigError(
+                    "recipe", self.recipe, "shared (the default) with --task: the task's env "
+                    "and an MLP on its compass observation replace the recipe",
+                )  # fmt: skip
         if self.engine == "rllib" and self.resume is not None:
             raise ConfigError("resume", self.resume, "sb3 runs only (an rllib run starts anew)")
         if self.address is not None and self.engine != "rllib":

@@ -54,12 +54,32 @@ def _flat_space(space: Any) -> Any:
     return space
 
 
+def _run_task(model: Path) -> Any:
+    """The task a model was trained on, from its run folder's ``config.json`` (the model's
+    folder or up to two above it: ``model.zip``, ``checkpoints/<step>/model.zip``), or None."""
+    import json
+
+    from poc_env.tasks import get_task
+
+    for folder in list(model.parents)[:3]:
+        cfg = folder / "config.json"
+        if cfg.is_file():
+            try:
+                task = json.loads(cfg.read_text()).get("task")
+            except (ValueError, AttributeError, OSError):
+                return None
+            return get_task(task) if task else None
+    return None
+
+
 class PPOPolicy(Policy):
     """A PPO checkpoint flying through the :class:`agents.policies.base.Policy` interface.
 
     ``PPOPolicy(path)`` loads ``path`` (a ``.zip``, or a run folder: its ``model.zip`` or latest
     checkpoint) on the CPU; :meth:`reset` checks it against the env and picks the recipe from
-    the model's spaces: ``pilot`` (the pilot features and autopilot of :mod:`agents.rl.pilot`),
+    the model's spaces: ``compass`` (the compass features; actions at the control level of the
+    task the run was trained on, from its ``config.json``, or ``heading`` for the ``pilot``
+    recipe, flown by :mod:`poc_env.sim.control`),
     ``shared`` (the per-agent space: the live agents' observations go through
     ``model.predict`` as one batch), ``shared_flat``, or ``central`` (the joint flat space:
     finished agents keep their last observation, as in ``UAVSearch-v0``). Actions are
@@ -95,8 +115,13 @@ class PPOPolicy(Policy):
         m_obs, m_act = self.model.observation_space, self.model.action_space
         one_act = spaces.Box(-1.0, 1.0, (3,), np.float32)
         joint_act = spaces.Box(-1.0, 1.0, (3 * len(agents),), np.float32)
-        if m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
-            self.mode = "pilot"
+        task = _run_task(self.path)
+        if task is not None and m_obs == pilot.OBSERVATION_SPACE:
+            # trained on a task: its control level flies the compass-observation policy
+            self.mode, self.control = "compass", task.control
+            self._features = pilot.PilotFeatures(env.params)
+        elif m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
+            self.mode, self.control = "compass", "heading"  # the pilot recipe
             self._features = pilot.PilotFeatures(env.params)
         elif m_obs == agent_space and m_act == one_act:
             self.mode = "shared"
@@ -127,15 +152,17 @@ class PPOPolicy(Policy):
             act = np.asarray(act, dtype=np.float32).reshape(len(self._agents), 3)
             return {a: act[self._agents.index(a)] for a in live}, state
         batch: Any
-        if self.mode == "pilot":
-            from agents.rl.pilot import pilot_actions
+        if self.mode == "compass":
+            from poc_env.sim.control import to_increments
+            from poc_env.sim.observations import decode_vector
 
             shape = self.env.params.grid.shape
             ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
             k = np.array([self._agents.index(a) for a in live])
             feats = self._features(np.stack(ras), np.stack(vec), k)
             act, _ = self.model.predict(feats, deterministic=deterministic)
-            inc = pilot_actions(self.env.params, np.stack(vec), np.asarray(act), k)
+            q = decode_vector(self.env.params, np.stack(vec))
+            inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "shared":
             batch = {

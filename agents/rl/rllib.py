@@ -11,7 +11,8 @@ encoder takes without configuration. Two policy layouts (``--rllib-policies``):
 Training runs inside :func:`poc_env.cluster.ray_session`: a local Ray instance by default, an
 existing cluster with ``--address``; ``--num-env-runners K`` samples on K Ray actors (0: in the
 driver). The run folder gets ``config.json`` (the :class:`~agents.rl.args.TrainArgs`),
-``metrics.csv`` (one row per training iteration) and ``checkpoint/`` (RLlib's
+``metrics.csv`` (one row per training iteration; ``agent_steps`` is env steps x UAVs, an
+upper bound once UAVs land) and ``checkpoint/`` (RLlib's
 ``save_to_path``, written into a temporary folder and renamed when complete).
 :class:`RLlibPolicy` (``rllib:PATH`` in ``poc-env evaluate``) flies such a checkpoint.
 Needs the ``rllib`` extra (``ray[rllib]``).
@@ -118,8 +119,9 @@ def ppo_config(args: TrainArgs, kw: dict[str, Any], n_agents: int):
         .multi_agent(policies=set(ids), policy_mapping_fn=mapping)
         .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs=specs))
         .training(
-            train_batch_size_per_learner=fragment * n_agents * max(1, args.num_env_runners),
-            minibatch_size=min(args.batch_size, fragment * n_agents),
+            # RLlib counts a multi-agent batch in env steps (each holds every live UAV's step)
+            train_batch_size_per_learner=fragment * max(1, args.num_env_runners),
+            minibatch_size=min(args.batch_size, fragment * max(1, args.num_env_runners)),
             num_epochs=args.n_epochs,
             lr=args.learning_rate,
             gamma=args.gamma,
@@ -169,9 +171,7 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
                 while steps < args.total_timesteps:
                     result = algo.train()
                     steps = int(_metric(result, "num_env_steps_sampled_lifetime"))
-                    agent_steps = _metric(result, "num_agent_steps_sampled_lifetime")
-                    if not np.isfinite(agent_steps):
-                        agent_steps = steps * n_agents
+                    agent_steps = steps * n_agents  # upper bound: UAVs that landed act no more
                     rows.append(
                         {
                             "iteration": len(rows) + 1,

@@ -122,6 +122,19 @@ def _central_env(scenario: Scenario, random_priors: bool, seed_seq: np.random.Se
 def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
     """The training VecEnv of ``args.recipe``; env ``e``'s generators come from
     ``SeedSequence(args.seed).spawn(args.n_envs)[e]``."""
+    if args.task is not None:  # the task's env: its control level, the compass observation
+        from poc_env.envs.vector import SwarmVecEnv
+        from poc_env.tasks import get_task
+
+        task = get_task(args.task)
+        return SwarmVecEnv(
+            scenario,
+            n_envs=args.n_envs,
+            seed=args.seed,
+            obs_type="compass",
+            random_priors=task.random_prior,
+            control=task.control,
+        )
     if args.recipe == "pilot":
         from agents.rl.pilot import PilotVecEnv
 
@@ -157,7 +170,7 @@ def make_model(args: TrainArgs, env: VecEnv, tb_dir: Path | None) -> PPO:
     from stable_baselines3 import PPO
 
     policy_kwargs: dict[str, Any] | None = None
-    if args.recipe == "shared":
+    if args.recipe == "shared" and args.task is None:
         from agents.rl.networks import SwarmExtractor
 
         policy, policy_kwargs = "MultiInputPolicy", {"features_extractor_class": SwarmExtractor}
@@ -287,8 +300,12 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         return _resume(Path(args.resume), args.progress, callback)
     from poc_env.config import load_scenario, save_scenario
 
+    if args.task is not None:
+        from poc_env.tasks import get_task
+
+        args = dataclasses.replace(args, scenario=get_task(args.task).scenario)
     sc = load_scenario(args.scenario, parse_overrides(args.overrides))
-    run_dir = _new_run_dir(args, sc.name)
+    run_dir = _new_run_dir(args, args.task.rsplit("/", 1)[-1] if args.task else sc.name)
     args = dataclasses.replace(args, run_dir=str(run_dir))
     run_dir.mkdir(parents=True, exist_ok=True)
     write_json(run_dir / "config.json", dataclasses.asdict(args))

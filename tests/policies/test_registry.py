@@ -17,6 +17,8 @@ BUILTIN = (
     "lawnmower",
     "potential_game",
     "random",
+    "random_heading",
+    "random_waypoint",
     "ppo:PATH",
     "rllib:PATH",
 )

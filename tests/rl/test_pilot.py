@@ -148,7 +148,7 @@ def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
     pol = PPOPolicy(tmp_path / "m.zip")
     penv, obs = _env("small")
     pol.reset(penv, 0)
-    assert pol.mode == "pilot"
+    assert (pol.mode, pol.control) == ("compass", "heading")
     acts, _ = pol.predict(obs)
     assert set(acts) == set(penv.agents)
     assert all(a.shape == (3,) and np.all(np.abs(a) <= 1) for a in acts.values())
@@ -178,7 +178,7 @@ def test_shipped_checkpoint_loads_and_flies_a_whole_episode():
         assert path.stat().st_size <= 5 * 2**20  # the 5 MB limit
         policy = PPOPolicy(path)
     policy.reset(env, seed)
-    assert policy.mode == "pilot"
+    assert (policy.mode, policy.control) == ("compass", "heading")
     while env.agents:
         actions, _ = policy.predict(obs)
         assert all(np.all(np.abs(a) <= 1.0) for a in actions.values())

@@ -111,8 +111,8 @@ def test_cli_errors(tmp_path, capsys):
     assert "address: got '127.0.0.1:1'" in capsys.readouterr().err
     with pytest.raises(ConfigError, match="task: got 'poc_env/Nope-v0'"):
         _args(tmp_path, "x", task="poc_env/Nope-v0")
-    with pytest.raises(ConfigError, match=r"task: .*with --engine rllib"):
-        _args(tmp_path, "x", engine="sb3")
+    with pytest.raises(ConfigError, match=r"recipe: got 'pilot'.*with --task"):
+        _args(tmp_path, "x", engine="sb3", recipe="pilot")
     with pytest.raises(ConfigError, match="rllib_policies"):
         _args(tmp_path, "x", rllib_policies="each")
 

@@ -1,0 +1,175 @@
+"""The baseline table: every registered task x the classical and learned baselines.
+
+    poc-env bench baselines [--tasks ID ...] [--episodes 20] [--policies ...] [--out DIR]
+                            [--workers K | --ray [ADDRESS]] [--quick]
+
+Each task is scored with :func:`agents.experiments.evaluate.evaluate` on the same seeds for
+every policy (seeds ``--seed .. --seed + episodes - 1``; on ``-Random-`` tasks each seed flies
+its own held-out prior, :func:`~agents.experiments.evaluate.episode_prior`, a generator stream
+training never draws from). Columns: mean POSC with its 95 % interval over the seeds
+(1.96 standard errors), POSC normalised by each episode's reach-aware bound
+(:func:`poc_env.theory.bound.reach_effort_bound`: the best POSC any swarm could reach with
+transit from its airfields at top speed), and the mean constraint-violation steps.
+
+Policies per task (``--policies`` overrides):
+
+- the floor at the task's control level: ``random`` (increments), ``random_heading`` or
+  ``random_waypoint``;
+- the classical planners ``lawnmower``, ``greedy_bayes``, ``de_plan`` (the paper's DE,
+  faithful preset) and ``allocation_plan``: they command eq. 19 increments themselves, so they
+  fly the same on a task's three control levels (scored once per scenario and prior, shown on
+  each row);
+- learned: ``ppo:PATH`` / ``rllib:PATH`` checkpoints given with ``--learned TASK=POLICY``.
+
+Writes ``baselines.csv`` (one row per task and policy) and ``baselines.md`` (the table of the
+README) into ``--out``, both or neither. ``--quick``: 2 episodes on the Small tasks only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import sys
+from pathlib import Path
+from typing import Any
+
+from poc_env.errors import ConfigError
+
+CLASSICAL = ("lawnmower", "greedy_bayes", "de_plan", "allocation_plan")
+FLOOR = {"increments": "random", "heading": "random_heading", "waypoint": "random_waypoint"}
+
+
+def _parse(argv: list[str] | None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="poc-env bench baselines", description=__doc__.split("\n")[0])
+    p.add_argument("--tasks", nargs="*", default=None, help="task ids (default: every task)")
+    p.add_argument("--episodes", type=int, default=20)
+    p.add_argument("--seed", type=int, default=1000, help="first episode seed")
+    p.add_argument("--policies", default=None, help="comma-separated: replaces the default set")
+    p.add_argument(
+        "--learned",
+        action="append",
+        default=[],
+        metavar="TASK=POLICY",
+        help="a learned policy for a task, e.g. UAVSearch-Small-Random-Heading-v0=rllib:runs/x",
+    )
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS")
+    p.add_argument("--out", default=None, help="folder for baselines.csv and baselines.md")
+    p.add_argument("--quick", action="store_true", help="2 episodes, Small tasks only")
+    return p.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Rows (task, policy, posc_mean, posc_ci95, normalised, violation_steps, episodes)."""
+    from agents.experiments.evaluate import evaluate
+    from poc_env import tasks
+
+    ids = args.tasks or [t for t in tasks.TASKS if not args.quick or "-Small-" in t]
+    chosen = [tasks.get_task(t) for t in ids]
+    episodes = 2 if args.quick else args.episodes
+    learned: dict[str, list[str]] = {}
+    for item in args.learned:
+        tid, sep, pol = item.partition("=")
+        if not sep or not pol:
+            raise ConfigError("learned", item, "TASK=POLICY, e.g. UAVSearch-Small-Heading-v0=ppo:x")
+        learned.setdefault(tasks.get_task(tid).id, []).append(pol)
+    fixed = args.policies.split(",") if args.policies else None
+    cache: dict[tuple[str, bool, str], dict[str, Any]] = {}
+    rows = []
+    for task in chosen:
+        names = fixed or [FLOOR[task.control], *CLASSICAL]
+        names = [*names, *learned.get(task.id, [])]
+        todo = [n for n in names if (task.scenario, task.random_prior, n) not in cache]
+        if todo:
+            ev = evaluate(
+                task.scenario,
+                todo,
+                episodes=episodes,
+                seed0=args.seed,
+                workers=args.workers,
+                random_priors=task.random_prior,
+            )
+            for r in ev.rows():
+                cache[(task.scenario, task.random_prior, r["policy"])] = r
+        for n in names:
+            r = cache[(task.scenario, task.random_prior, n)]
+            rows.append(
+                {
+                    "task": task.id,
+                    "policy": n,
+                    "episodes": r["episodes"],
+                    "posc_mean": r["posc_mean"],
+                    "posc_ci95": r["posc_ci95"],
+                    "normalised": r["normalised"],
+                    "violation_steps": r["violation_steps"],
+                    "bound_reach": r["bound_reach"],
+                }
+            )
+        print(f"{task.id}: done", file=sys.stderr, flush=True)
+    return rows
+
+
+def to_csv(rows: list[dict[str, Any]]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def to_markdown(rows: list[dict[str, Any]], command: str) -> str:
+    """One line per task: each policy's ``POSC ± ci (POSC/reach; violation steps)``."""
+    policies: list[str] = []
+    for r in rows:
+        label = "random" if r["policy"] in FLOOR.values() else r["policy"]
+        if label not in policies:
+            policies.append(label)
+    head = "| task | " + " | ".join(policies) + " |"
+    out = [head, "|" + "---|" * (len(policies) + 1)]
+    by_task: dict[str, dict[str, str]] = {}
+    for r in rows:
+        label = "random" if r["policy"] in FLOOR.values() else r["policy"]
+        norm = "-" if r["normalised"] is None else f"{r['normalised']:.3f}"
+        cell = f"{r['posc_mean']:.3f} ± {r['posc_ci95']:.3f} ({norm}; {r['violation_steps']:.0f})"
+        by_task.setdefault(r["task"], {})[label] = cell
+    for tid, cells in by_task.items():
+        name = tid.split("/", 1)[1]
+        out.append(f"| {name} | " + " | ".join(cells.get(p, "-") for p in policies) + " |")
+    n = rows[0]["episodes"]
+    out.append("")
+    out.append(
+        f"Cells: mean POSC ± 95 % interval over {n} seeds (POSC / reach-aware bound; mean "
+        f"violation steps). Random = the floor at the task's control level. Command: `{command}`"
+    )
+    return "\n".join(out) + "\n"
+
+
+def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
+    import contextlib
+    import shlex
+
+    from agents.experiments.pool import ray_jobs
+    from poc_env.io import atomic_dir, write_text_atomic
+
+    args = _parse(argv)
+    given = sys.argv[1:] if argv is None else argv
+    command = "poc-env bench baselines " + shlex.join(given)
+    ctx = ray_jobs(args.ray) if args.ray is not None else contextlib.nullcontext()
+    with ctx:
+        rows = run(args)
+    md = to_markdown(rows, command.strip())
+    print(md)
+    if args.out:  # both files or neither: staged, then merged into --out (poc_env.io)
+        with atomic_dir(Path(args.out)) as stage:
+            write_text_atomic(stage / "baselines.csv", to_csv(rows))
+            write_text_atomic(stage / "baselines.md", md)
+    return rows
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)

@@ -1,0 +1,55 @@
+"""SB3 PPO on a registered task (``poc-env train --task``): the task's env and control level,
+and the trained policy flies at that level in evaluate."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import poc_env
+from agents.experiments.evaluate import evaluate
+from agents.rl.args import TrainArgs
+from agents.rl.policy import PPOPolicy
+from agents.rl.train import make_env, train
+from poc_env.config import load_scenario
+from poc_env.sim.observations import FEATURES
+
+
+@pytest.mark.parametrize(
+    ("task", "dim"),
+    [("UAVSearch-Small-Random-Waypoint-v0", 2), ("UAVSearch-Small-Increments-v0", 3)],
+)
+def test_task_env_is_the_tasks(task, dim):
+    args = TrainArgs(task=task, n_envs=2, progress=False)
+    env = make_env(args, load_scenario("small"))
+    assert env.observation_space.shape == (FEATURES,)
+    assert env.action_space.shape == (dim,)
+    assert env.control == poc_env.tasks.get_task(task).control
+    assert env.random_priors == ("Random" in task)
+
+
+def test_trained_task_policy_flies_its_control_level(tmp_path):
+    run = train(
+        TrainArgs(
+            task="UAVSearch-Small-Random-Waypoint-v0",
+            total_timesteps=600,
+            n_steps=32,
+            batch_size=96,
+            n_envs=2,
+            run_dir=str(tmp_path / "run"),
+            progress=False,
+        )
+    )
+    assert json.loads((run / "config.json").read_text())["task"].endswith("Waypoint-v0")
+    pol = PPOPolicy(run)
+    env = poc_env.parallel_env("small")
+    pol.reset(env, seed=0)
+    assert (pol.mode, pol.control) == ("compass", "waypoint")
+    obs, _ = env.reset(seed=0)
+    acts, _ = pol.predict(obs)
+    # the waypoint autopilot's increments, within eq. 19's limits
+    assert all(np.all(np.abs(a) <= 1.0 + 1e-9) and a.shape == (3,) for a in acts.values())
+    ev = evaluate("small", [f"ppo:{run}"], episodes=1, seed0=0, random_priors=True)
+    assert 0.0 <= ev.rows()[0]["posc_mean"] <= 1.0
