@@ -340,6 +340,15 @@ def _evaluate(
         if scenario is not None:
             raise ConfigError("task", args.task, "either --task or --scenario, not both")
         scenario, random_priors, label = task.scenario, random_priors or task.random_prior, task.id
+        from agents.rl.policy import checkpoint_control
+
+        for name in names:  # a learned policy is scored on the control level it learned
+            trained = checkpoint_control(name)
+            if trained is not None and trained != task.control:
+                raise ConfigError(
+                    "policies", name, f"a checkpoint trained at the task's control level "
+                    f"({task.control}); this one was trained at '{trained}'",
+                )  # fmt: skip
     sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
     ev = evaluate(
         sc,

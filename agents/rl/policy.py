@@ -72,6 +72,37 @@ def _run_task(model: Path) -> Any:
     return None
 
 
+def checkpoint_control(spelling: str) -> str | None:
+    """The control level a ``ppo:PATH`` or ``rllib:PATH`` policy was trained at (from its
+    run's task; ``heading`` for the pilot recipe), or None for other policies and runs
+    without a task."""
+    kind, sep, path = spelling.partition(":")
+    if not sep or kind not in ("ppo", "rllib"):
+        return None
+    if kind == "rllib":
+        import json
+
+        for folder in (Path(path), Path(path).parent):
+            cfg = folder / "config.json"
+            if cfg.is_file():
+                try:
+                    data = json.loads(cfg.read_text())
+                except ValueError:
+                    return None
+                task = data.get("task") if isinstance(data, dict) else None
+                if task:
+                    from poc_env.tasks import get_task
+
+                    return get_task(task).control
+                return "heading"  # rllib runs without a task fly the heading level
+        return None
+    try:
+        task = _run_task(model_path(path))
+    except ConfigError:
+        return None
+    return None if task is None else task.control
+
+
 class PPOPolicy(Policy):
     """A PPO checkpoint flying through the :class:`agents.policies.base.Policy` interface.
 

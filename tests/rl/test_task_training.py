@@ -53,3 +53,24 @@ def test_trained_task_policy_flies_its_control_level(tmp_path):
     assert all(np.all(np.abs(a) <= 1.0 + 1e-9) and a.shape == (3,) for a in acts.values())
     ev = evaluate("small", [f"ppo:{run}"], episodes=1, seed0=0, random_priors=True)
     assert 0.0 <= ev.rows()[0]["posc_mean"] <= 1.0
+
+
+def test_a_checkpoint_of_another_control_level_is_refused(tmp_path, capsys):
+    from poc_env.cli import main
+
+    run = train(
+        TrainArgs(
+            task="UAVSearch-Small-Waypoint-v0",
+            total_timesteps=100,
+            n_steps=16,
+            batch_size=48,
+            n_envs=1,
+            run_dir=str(tmp_path / "run"),
+            progress=False,
+        )
+    )
+    argv = ["evaluate", "--policies", f"ppo:{run}", "--episodes", "1", "--quiet", "--task"]
+    assert main([*argv, "UAVSearch-Small-Heading-v0"]) != 0
+    err = capsys.readouterr().err
+    assert "policies: got 'ppo:" in err and "trained at 'waypoint'" in err
+    assert main([*argv, "UAVSearch-Small-Random-Waypoint-v0"]) == 0  # same level, other maps
