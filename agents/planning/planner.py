@@ -168,7 +168,8 @@ def make_plan(
         "x": [float(v) for v in x],
         "rectangle_rule": RECTANGLE_RULE,
         "uavs": uav_out,
-        **_geography(sc, prior, crs),
+        # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
+        **_geography(obj.scenario, prior, crs),
     }
 
 

@@ -129,3 +129,19 @@ def test_bad_schema_2_fields_name_the_field(plan, tmp_path, where, value, field)
     path.write_text(json.dumps(bad))
     with pytest.raises(ConfigError, match=field):
         load_plan(path)
+
+
+@pytest.mark.parametrize("planner", ["de", "allocation"])
+def test_bounds_are_the_planned_fleets(planner):
+    # uavs=n plans n UAVs: plan.json's bounds are that fleet's, not the scenario's
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import reach_bound
+    from poc_env.theory.probability_map import build_prior
+
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    kw = {"popsize": 4, "maxiter": 1} if planner == "de" else {}
+    one = make_plan("small", uavs=1, planner=planner, **kw)
+    assert len(one["uavs"]) == 1
+    assert one["bounds"]["reach"] == pytest.approx(reach_bound(sc.with_uavs(1), prior).upper)
+    assert one["bounds"]["reach"] < reach_bound(sc, prior).upper
