@@ -708,7 +708,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("export", help="a plan.json as GeoJSON, KML or QGroundControl missions")
     p.add_argument("plan", help="plan.json (schema 1)")
-    p.add_argument("--format", required=True, help="geojson, kml or qgc")
+    p.add_argument(
+        "--format",
+        required=True,
+        help="geojson, kml, qgc or html (one self-contained map page: prior, routes, table)",
+    )
     p.add_argument(
         "--origin",
         default=None,

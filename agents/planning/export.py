@@ -101,7 +101,7 @@ RECTANGLE_RULE = (
     "inside the strip's long edges, strip_width_m / spacing_m lines, boustrophedon; this is "
     "the track waypoints_m flies and flight_time_s times"
 )
-FORMATS = ("geojson", "kml", "qgc")
+FORMATS = ("geojson", "kml", "qgc", "html")
 CRS_KINDS = ("aeqd", "utm", "epsg", "proj")
 ALTITUDE_REFS = ("home", "amsl")
 
@@ -944,6 +944,7 @@ def export_plan(
     altitude_ref: str = "home",
     field_elevation_m: float = 0.0,
     geofence: bool = True,
+    prior: Any = None,
 ) -> list[Path]:
     """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
 
@@ -953,6 +954,9 @@ def export_plan(
     ``altitude_ref`` (``home`` or ``amsl``; ``field_elevation_m`` is the fields' AMSL height).
     QGC missions that would breach their own geofence (a point outside the operating area, a
     leg through a no-fly zone) are refused; ``geofence=False`` leaves the inclusion fence out.
+    ``html`` writes the map report (:mod:`agents.planning.report`); its prior overlay is
+    ``prior`` (an array of the scenario grid's shape or a map file) or, by default, the plan's
+    scenario prior rebuilt by :func:`agents.planning.report.plan_prior`.
     """
     if fmt not in FORMATS:
         raise ConfigError("format", fmt, "one of " + ", ".join(FORMATS))
@@ -975,6 +979,12 @@ def export_plan(
         ]
     if fmt == "kml":
         return [write_text_atomic(out / f"{stem}.kml", kml(plan, crs, alt, altitude_ref, ground))]
+    if fmt == "html":
+        from agents.planning.report import html_report, plan_prior
+
+        overlay, note = plan_prior(plan, plan_path, prior)
+        page = html_report(plan, crs, overlay, note, alt, altitude_ref, ground)
+        return [write_text_atomic(out / f"{stem}.html", page)]
     fl = _flight(plan)
     area = plan.get("operating_area_m") if geofence else None
     _check_fences(plan, area)

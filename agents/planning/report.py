@@ -1,0 +1,620 @@
+"""The HTML map report of a plan: one self-contained page a planning officer opens offline.
+
+``poc-env export plan.json --format html`` (:func:`agents.planning.export.export_plan`) writes
+``<stem>.html``: Leaflet 1.9.4 (vendored in ``assets/leaflet``, BSD-2-Clause, inlined with its
+CSS and images) draws
+
+- an OpenStreetMap tile basemap (online only; offline the tiles fail quietly and everything
+  else is drawn),
+- the plan's prior probability of containment as a coloured image overlay (:func:`warp_prior`),
+- per UAV its route in one colour (transit legs dashed, the search pattern solid, the landing
+  approach dotted), its search strips, rectangles or areas
+  (:func:`~agents.planning.export.search_rings`),
+- the airfields (named markers), the no-fly zones (red polygons) and the operating area,
+
+with a layer control, a legend and a per-UAV table (flight time, distances, POD, POC, POS,
+altitude). The table is static HTML: it reads without JavaScript. When the page has drawn every
+layer, its script sets ``document.body.dataset.drawn`` to the number of overlay layers added.
+
+The prior
+---------
+plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
+``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded
+by name (a built-in scenario, or a YAML path recorded as the name) and its prior built with
+:func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
+(resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so
+the rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones
+and operating area); when they differ, or the scenario or map file cannot be found, the page
+says why and draws no overlay rather than a wrong one. A caller with the prior at hand passes it
+(``export_plan(..., prior=...)``: an array of the scenario's grid shape, or a ``.npy``/``.csv``
+file) and it is used as given.
+
+Warping: the grid lives in the plan's projected CRS; a web map stretches an image linearly in
+Web Mercator (Leaflet ``imageOverlay``), Google Earth linearly in latitude and longitude (KML
+``GroundOverlay``). :func:`warp_prior` therefore computes, for each output pixel centre, its
+latitude and longitude (Mercator-spaced or evenly spaced rows), projects it into local metres
+with :func:`~agents.planning.export.to_local` (pyproj) and takes the value of the grid cell
+holding it (nearest cell, no interpolation: each pixel shows one cell's POC). Pixels outside the
+grid are transparent. The colour is a fixed colormap (:data:`COLORMAP`, YlOrRd's five anchors,
+linear between them) of the cell value over the grid's largest cell value; the alpha rises from
+:data:`ALPHA_RANGE` ``[0]`` at zero to ``[1]`` at the maximum so the basemap shows through low
+values. The PNG is written with zlib and struct (:func:`png_bytes`): no matplotlib or pillow,
+so the report works from a wheel installed without extras.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+import os
+import struct
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.planning.export import (
+    _crs_text,
+    _flight,
+    _overlays,
+    _route,
+    search_rings,
+    to_geographic,
+    to_local,
+)
+from poc_env.errors import ConfigError
+from poc_env.theory.probability_map import Grid
+
+ASSETS = Path(__file__).resolve().parent / "assets" / "leaflet"
+#: YlOrRd (ColorBrewer) anchors, low to high: the overlay's colormap, linear between anchors.
+COLORMAP = np.array(
+    [[255, 255, 204], [254, 217, 118], [253, 141, 60], [227, 26, 28], [128, 0, 38]], dtype=float
+)
+#: Overlay alpha (0-255) at zero and at the grid's largest cell value.
+ALPHA_RANGE = (40, 230)
+#: Route colours per UAV (cycled): blues, greens and purples, apart from the overlay's
+#: yellow-red ramp and the red no-fly zones.
+ROUTE_COLOURS = (
+    "#1f5fd1", "#1a9e3f", "#7b3fbf", "#0aa5b8", "#d63fa8", "#4b4b4b", "#6b8e23", "#00008b",
+)  # fmt: skip
+TILE_URL = "https://tile.openstreetmap.org/{z}/{x}/{y}.png"
+TILE_ATTRIBUTION = '&copy; <a href="https://www.openstreetmap.org/copyright">OpenStreetMap</a>'
+#: Longest side of the overlay image, pixels (at least 3 pixels per cell up to this size).
+MAX_OVERLAY_PX = 1600
+MIN_OVERLAY_PX = 512
+
+
+@dataclass(frozen=True)
+class PriorOverlay:
+    """A prior grid (``values`` of shape ``grid.shape``) and where it came from."""
+
+    grid: Grid
+    values: np.ndarray
+    source: str
+
+
+def png_bytes(rgba: np.ndarray) -> bytes:
+    """An RGBA image (H, W, 4) uint8 as PNG bytes (colour type 6, 8 bit, filter 0 rows)."""
+    img = np.ascontiguousarray(rgba, dtype=np.uint8)
+    if img.ndim != 3 or img.shape[2] != 4 or img.shape[0] < 1 or img.shape[1] < 1:
+        raise ConfigError("image", getattr(img, "shape", None), "an (H, W, 4) RGBA array")
+    h, w = img.shape[:2]
+    raw = np.concatenate([np.zeros((h, 1), np.uint8), img.reshape(h, 4 * w)], axis=1).tobytes()
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    head = struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", head)
+        + chunk(b"IDAT", zlib.compress(raw, 9))
+        + chunk(b"IEND", b"")
+    )
+
+
+def colorize(t: np.ndarray) -> np.ndarray:
+    """Values in [0, 1] -> RGBA uint8 by :data:`COLORMAP` and :data:`ALPHA_RANGE`."""
+    t = np.clip(np.asarray(t, dtype=float), 0.0, 1.0)
+    pos = t * (len(COLORMAP) - 1)
+    k = np.minimum(pos.astype(int), len(COLORMAP) - 2)
+    f = (pos - k)[..., None]
+    rgb = COLORMAP[k] * (1 - f) + COLORMAP[k + 1] * f
+    a = ALPHA_RANGE[0] + (ALPHA_RANGE[1] - ALPHA_RANGE[0]) * t
+    return np.round(np.concatenate([rgb, a[..., None]], axis=-1)).astype(np.uint8)
+
+
+def _mercator(lat_deg: np.ndarray) -> np.ndarray:
+    return np.log(np.tan(np.pi / 4 + np.radians(lat_deg) / 2))
+
+
+def _inverse_mercator(y: np.ndarray) -> np.ndarray:
+    return np.degrees(2 * np.arctan(np.exp(y)) - np.pi / 2)
+
+
+def overlay_bounds(grid: Grid, crs: Any) -> tuple[float, float, float, float]:
+    """(south, west, north, east) degrees enclosing the grid (its outline sampled densely)."""
+    x0, y0, x1, y1 = grid.bounds
+    s = np.linspace(0.0, 1.0, 65)
+    edge = np.concatenate(
+        [
+            np.stack([x0 + s * (x1 - x0), np.full_like(s, y0)], 1),
+            np.stack([np.full_like(s, x1), y0 + s * (y1 - y0)], 1),
+            np.stack([x0 + s * (x1 - x0), np.full_like(s, y1)], 1),
+            np.stack([np.full_like(s, x0), y0 + s * (y1 - y0)], 1),
+        ]
+    )
+    ll = np.array(to_geographic(edge, crs))
+    return (
+        float(ll[:, 0].min()),
+        float(ll[:, 1].min()),
+        float(ll[:, 0].max()),
+        float(ll[:, 1].max()),
+    )
+
+
+def warp_prior(
+    ov: PriorOverlay, crs: Any, rows: str = "mercator"
+) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """The prior as an RGBA image on a lat/lon box: ``(rgba, (south, west, north, east))``.
+
+    ``rows``: ``mercator`` (rows evenly spaced in Web Mercator y: Leaflet's imageOverlay) or
+    ``latitude`` (evenly spaced in latitude: KML GroundOverlay). Each pixel takes the colour of
+    the grid cell under its centre (module docstring); outside the grid it is transparent.
+    """
+    if rows not in ("mercator", "latitude"):
+        raise ConfigError("rows", rows, "mercator or latitude")
+    south, west, north, east = overlay_bounds(ov.grid, crs)
+    if rows == "mercator":
+        top, bottom = float(_mercator(np.array(north))), float(_mercator(np.array(south)))
+        height_units = top - bottom
+    else:
+        top, bottom = north, south
+        height_units = math.radians(north - south) / max(
+            math.cos(math.radians(0.5 * (north + south))), 1e-6
+        )
+    width_units = math.radians(east - west)
+    cells = max(ov.grid.nx, ov.grid.ny)
+    longest = int(min(MAX_OVERLAY_PX, max(MIN_OVERLAY_PX, 3 * cells)))
+    scale = longest / max(width_units, height_units, 1e-12)
+    w = max(2, round(width_units * scale))
+    h = max(2, round(height_units * scale))
+    v = top + (np.arange(h) + 0.5) / h * (bottom - top)
+    lat = _inverse_mercator(v) if rows == "mercator" else v
+    lon = west + (np.arange(w) + 0.5) / w * (east - west)
+    glat, glon = np.meshgrid(lat, lon, indexing="ij")
+    xy = np.array(to_local(np.stack([glat.ravel(), glon.ravel()], 1), crs)).reshape(h, w, 2)
+    j, i = ov.grid.cell_of(xy)
+    peak = float(np.max(ov.values))
+    t = ov.values[j, i] / peak if peak > 0 else np.zeros((h, w))
+    rgba = colorize(t)
+    rgba[~ov.grid.contains(xy)] = 0
+    return rgba, (south, west, north, east)
+
+
+def plan_prior(
+    plan: dict[str, Any], plan_path: str | os.PathLike[str], prior: Any = None
+) -> tuple[PriorOverlay | None, str]:
+    """The plan's prior grid and a note, or ``(None, why not)`` (see the module docstring).
+
+    ``prior``: None (rebuild it from the plan's scenario and map source), an array of the
+    scenario grid's shape, or a map file path (``.npy``/``.csv``, as ``poc-env plan --map``);
+    a given prior that does not fit the scenario grid is a ConfigError.
+    """
+    from poc_env.config import builtin_scenarios, load_scenario
+    from poc_env.errors import MapFileError
+    from poc_env.theory.probability_map import build_prior, load_map
+
+    name = str(plan.get("scenario"))
+    known = name in builtin_scenarios()
+    if not known and not Path(name).is_file():
+        if prior is None:
+            return None, f"no prior overlay: scenario {name!r} is not built in or a YAML file"
+        raise ConfigError("scenario", name, "a built-in scenario or YAML file (for --prior)")
+    sc = load_scenario(name)
+    grid = Grid.from_config(sc.map)
+    if prior is not None:
+        if isinstance(prior, (str, Path)):
+            values, source = load_map(prior, grid), str(prior)
+        else:
+            values, source = np.asarray(prior, dtype=float), "given"
+            if values.shape != grid.shape or not np.all(np.isfinite(values)):
+                raise ConfigError("prior", values.shape, f"finite values of shape {grid.shape}")
+        return PriorOverlay(grid, values, source), f"prior: {source}"
+    mismatch = _scenario_mismatch(plan, sc)
+    if mismatch:
+        return (
+            None,
+            f"no prior overlay: scenario {name!r} as built differs from the plan {mismatch}",
+        )
+    src = str(plan.get("map_source") or "builtin")
+    if src == "builtin":
+        return PriorOverlay(grid, build_prior(sc.map), f"{name} (built in)"), f"prior: {name}"
+    for cand in (Path(src), Path(plan_path).parent / src):
+        if cand.is_file():
+            try:
+                return PriorOverlay(grid, build_prior(sc.map, cand), str(cand)), f"prior: {cand}"
+            except MapFileError as err:
+                return None, f"no prior overlay: {err}"
+    return None, f"no prior overlay: map file {src!r} not found"
+
+
+def _scenario_mismatch(plan: dict[str, Any], sc: Any) -> str:
+    """What the rebuilt scenario contradicts in the plan (airfields, zones, area), or ''."""
+    fields = plan.get("airfields")
+    if fields is not None:
+        mine = [(a.name, [float(v) for v in a.position_m]) for a in sc.airfields]
+        theirs = [(a["name"], [float(v) for v in a["position_m"]]) for a in fields]
+        if mine != theirs:
+            return "(airfields)"
+    zones = plan.get("no_fly_zones_m")
+    if zones is not None:
+        mine_z = [[[float(v) for v in p] for p in z] for z in sc.map.no_fly_zones_m]
+        if mine_z != [[[float(v) for v in p] for p in z] for z in zones]:
+            return "(no-fly zones)"
+    area = plan.get("operating_area_m")
+    if area is not None:
+        from poc_env.sim.core import make_params
+
+        b = np.asarray(make_params(sc).bounds, dtype=float)
+        a = np.asarray(area, dtype=float)
+        if not np.allclose([a[:, 0].min(), a[:, 1].min(), a[:, 0].max(), a[:, 1].max()], b):
+            return "(operating area)"
+    return ""
+
+
+def _r6(v: float) -> float:
+    return round(float(v), 6)
+
+
+def _latlon(points: Any, crs: Any) -> list[list[float]]:
+    return [[_r6(lat), _r6(lon)] for lat, lon in to_geographic(points, crs)]
+
+
+def _field_name(plan: dict[str, Any], xy: Any) -> str:
+    for a in plan.get("airfields") or []:
+        if np.hypot(*(np.asarray(a["position_m"], float) - np.asarray(xy, float))) < 1.0:
+            return str(a["name"])
+    return f"({xy[0] / 1e3:.1f}, {xy[1] / 1e3:.1f}) km"
+
+
+def report_data(
+    plan: dict[str, Any],
+    crs: Any,
+    overlay: PriorOverlay | None,
+    alt: float,
+    altitude_ref: str,
+    ground: float,
+) -> dict[str, Any]:
+    """Everything the page's script draws, in lat/lon degrees (rounded to 1e-6)."""
+    extra = _overlays(plan, crs, alt, ground)
+    uavs = []
+    for k, u in enumerate(plan["uavs"]):
+        wps = [list(w) for w in u["waypoints_m"]]
+        start, end = list(u["takeoff_m"]), list(u["landing_m"])
+        if wps:
+            transit = [_latlon([start, wps[0]], crs), _latlon([wps[-1], end], crs)]
+            search = _latlon(wps, crs) if len(wps) > 1 else []
+        else:
+            transit, search = [_latlon([start, end], crs)], []
+        approach = [
+            [[_r6(a), _r6(b)] for a, b in o["latlon"]]
+            for o in extra
+            if o["properties"].get("id") == u["id"]
+        ]
+        rings = [{"kind": kind, "latlon": _latlon(ring, crs)} for kind, ring, _ in search_rings(u)]
+        uavs.append(
+            {
+                "id": str(u["id"]),
+                "colour": ROUTE_COLOURS[k % len(ROUTE_COLOURS)],
+                "transit": transit,
+                "search": search,
+                "approach": approach,
+                "rings": rings,
+            }
+        )
+    overlay_doc = None
+    if overlay is not None:
+        rgba, (s, w, n, e) = warp_prior(overlay, crs, "mercator")
+        url = "data:image/png;base64," + base64.b64encode(png_bytes(rgba)).decode("ascii")
+        overlay_doc = {
+            "url": url,
+            "bounds": [[s, w], [n, e]],
+            "peak": float(np.max(overlay.values)),
+            "source": overlay.source,
+        }
+    polys = {"no_fly_zone": [], "operating_area": []}  # type: dict[str, list[Any]]
+    for o in extra:
+        kind = o["properties"]["kind"]
+        if kind in polys:
+            polys[kind].append(
+                {
+                    "name": o["properties"]["name"],
+                    "latlon": [[_r6(a), _r6(b)] for a, b in o["latlon"]],
+                }
+            )
+    fields = [
+        {"name": str(a["name"]), "latlon": _latlon([a["position_m"]], crs)[0]}
+        for a in plan.get("airfields") or []
+    ]
+    if not fields:  # a plan without airfields: mark the take-off and landing points
+        seen: list[list[float]] = []
+        for u in plan["uavs"]:
+            for p in (u["takeoff_m"], u["landing_m"]):
+                if list(p) not in seen:
+                    seen.append(list(p))
+        fields = [{"name": _field_name(plan, p), "latlon": _latlon([p], crs)[0]} for p in seen]
+    return {
+        "scenario": str(plan["scenario"]),
+        "uavs": uavs,
+        "airfields": fields,
+        "no_fly_zones": polys["no_fly_zone"],
+        "operating_area": polys["operating_area"],
+        "overlay": overlay_doc,
+        "colormap": [[int(c) for c in row] for row in COLORMAP],
+        "alpha": list(ALPHA_RANGE),
+        "tiles": {"url": TILE_URL, "attribution": TILE_ATTRIBUTION},
+    }
+
+
+def expected_layers(plan: dict[str, Any], overlay: bool) -> int:
+    """How many overlay layers the page adds (the ``data-drawn`` marker): the prior (if
+    drawn), one per UAV route, the search areas, the airfields, the no-fly zones and the
+    operating area (each when the plan has them; airfields always: take-off points stand in)."""
+    rings = any(search_rings(u) for u in plan["uavs"])
+    return (
+        int(overlay)
+        + len(plan["uavs"])
+        + int(rings)
+        + 1
+        + int(bool(plan.get("no_fly_zones_m")))
+        + int(bool(plan.get("operating_area_m")))
+    )
+
+
+def _inline_css() -> str:
+    """leaflet.css with its images as data URIs (the page loads nothing but tiles)."""
+    css = (ASSETS / "leaflet.css").read_text(encoding="utf-8")
+    for img in sorted((ASSETS / "images").glob("*.png")):
+        uri = "data:image/png;base64," + base64.b64encode(img.read_bytes()).decode("ascii")
+        css = css.replace(f"url(images/{img.name})", f"url({uri})")
+    return css
+
+
+def _table(plan: dict[str, Any], alt: float, altitude_ref: str) -> str:
+    fl = _flight(plan)
+    rows = []
+    for k, u in enumerate(plan["uavs"]):
+        pts = np.asarray(_route(u), dtype=float)
+        route_km = float(np.sum(np.hypot(*np.diff(pts, axis=0).T))) / 1e3
+        t = u["flight_time_s"]
+        cells = [
+            f'<span class="swatch" style="background:{ROUTE_COLOURS[k % len(ROUTE_COLOURS)]}">'
+            f"</span>{html.escape(str(u['id']))}",
+            html.escape(_field_name(plan, u["takeoff_m"])),
+            html.escape(_field_name(plan, u["landing_m"])),
+            f"{int(t // 3600)}:{int(t % 3600 // 60):02d}",
+            f"{u['track_length_m'] / 1e3:.1f}",
+            f"{route_km:.1f}",
+            f"{u['spacing_m'] / 1e3:.2f}",
+            f"{100 * u['pod']:.1f}",
+            f"{100 * u['poc']:.1f}",
+            f"{100 * u['pos']:.2f}",
+            f"{alt:g} ({altitude_ref})",
+            "yes" if u["feasible"] else "NO",
+        ]
+        rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    head = (
+        "UAV", "take-off", "landing", "flight time (h:min)", "search track (km)",
+        "route (km, incl. transit)", "spacing (km)", "POD (%)", "POC (%)", "POS (%)",
+        "altitude (m)", "within endurance",
+    )  # fmt: skip
+    speeds = (
+        f"transit {3.6 * fl['cruise_speed_mps']:.0f} km/h, search "
+        f"{3.6 * fl['search_speed_mps']:.0f} km/h"
+    )
+    return (
+        '<table id="uav-table"><thead><tr>'
+        + "".join(f"<th>{h}</th>" for h in head)
+        + "</tr></thead><tbody>"
+        + "".join(rows)
+        + f'</tbody></table><p class="small">Speeds: {speeds}. Route: take-off field, '
+        "search pattern, landing field (the landing approach is not counted).</p>"
+    )
+
+
+def html_report(
+    plan: dict[str, Any],
+    crs: Any,
+    overlay: PriorOverlay | None,
+    note: str,
+    alt: float,
+    altitude_ref: str,
+    ground: float,
+) -> str:
+    """The self-contained page (module docstring)."""
+    data = report_data(plan, crs, overlay, alt, altitude_ref, ground)
+    payload = json.dumps(data, allow_nan=False).replace("<", "\\u003c")
+    b = plan.get("bounds") or {}
+    bounds = (
+        f"; bounds for the environment: honest {100 * b['honest']:.1f} %, reach-aware "
+        f"{100 * b['reach']:.1f} %"
+        if b
+        else ""
+    )
+    title = html.escape(f"poc-env plan: {plan['scenario']}")
+    summary = html.escape(
+        f"scenario {plan['scenario']}, {len(plan['uavs'])} UAVs, POS_C "
+        f"{100 * plan['posc']:.2f} %{bounds}; optimiser {plan['optimizer'].get('name')}, "
+        f"seed {plan['seed']}; CRS {_crs_text(crs) if isinstance(crs, dict) else crs}"
+    )
+    return _PAGE.format(
+        title=title,
+        css=_inline_css(),
+        js=(ASSETS / "leaflet.js").read_text(encoding="utf-8"),
+        summary=summary,
+        note=html.escape(note),
+        table=_table(plan, alt, altitude_ref),
+        payload=payload,
+        script=_SCRIPT,
+    )
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{title}</title>
+<style>{css}</style>
+<style>
+body {{ margin: 0; font: 13px/1.35 system-ui, sans-serif; color: #222; }}
+header, section {{ padding: 6px 10px; }}
+h1 {{ font-size: 16px; margin: 0 0 2px 0; }}
+#map {{ height: 480px; }}
+table {{ border-collapse: collapse; }}
+th, td {{ border: 1px solid #bbb; padding: 2px 6px; text-align: right; }}
+th {{ background: #eee; }}
+.swatch {{ display: inline-block; width: 14px; height: 4px; margin: 0 4px 2px 0; }}
+.small {{ color: #555; font-size: 12px; }}
+.legend {{ background: rgba(255,255,255,0.9); padding: 6px 8px; border-radius: 4px;
+  line-height: 1.5; }}
+.legend .ramp {{ width: 140px; height: 10px; }}
+.legend svg {{ vertical-align: middle; }}
+</style></head>
+<body>
+<header><h1>{title}</h1><div class="small">{summary}</div>
+<div class="small" id="prior-note">{note}</div></header>
+<div id="map"></div>
+<section>{table}</section>
+<script type="application/json" id="plan-data">{payload}</script>
+<script>{js}</script>
+<script>{script}</script>
+</body></html>
+"""
+
+_SCRIPT = r"""
+(function () {
+  "use strict";
+  var data = JSON.parse(document.getElementById("plan-data").textContent);
+  var map = L.map("map", {preferCanvas: false});
+  var base = L.tileLayer(data.tiles.url, {maxZoom: 18, attribution: data.tiles.attribution});
+  base.addTo(map);
+  var overlays = {};
+  var added = 0;
+  var extent = L.latLngBounds([]);
+  function add(name, layer) {
+    layer.addTo(map);
+    overlays[name] = layer;
+    added += 1;
+    if (layer.getBounds) { extent.extend(layer.getBounds()); }
+  }
+  function label(text) {
+    var span = document.createElement("span");
+    span.textContent = text;
+    return span;
+  }
+  var image = null;
+  if (data.overlay) {
+    image = L.imageOverlay(data.overlay.url, data.overlay.bounds, {opacity: 1.0});
+    add("Prior probability of containment", image);
+  }
+  data.uavs.forEach(function (u) {
+    var g = L.featureGroup();
+    u.transit.forEach(function (leg) {
+      L.polyline(leg, {color: u.colour, weight: 3, dashArray: "8 6"}).addTo(g);
+    });
+    if (u.search.length > 1) {
+      L.polyline(u.search, {color: u.colour, weight: 3}).addTo(g);
+    }
+    u.approach.forEach(function (leg) {
+      L.polyline(leg, {color: u.colour, weight: 2, opacity: 0.7, dashArray: "2 4"}).addTo(g);
+    });
+    g.bindTooltip(label("UAV " + u.id));
+    add("UAV " + u.id + " route", g);
+  });
+  var areas = L.featureGroup();
+  var nAreas = 0;
+  data.uavs.forEach(function (u) {
+    u.rings.forEach(function (r) {
+      L.polygon(r.latlon, {color: u.colour, weight: 1.5, opacity: 0.6, fillOpacity: 0.06})
+        .bindTooltip(label("UAV " + u.id + " " + r.kind.replace("_", " "))).addTo(areas);
+      nAreas += 1;
+    });
+  });
+  if (nAreas) { add("Search areas", areas); }
+  var fields = L.featureGroup();
+  data.airfields.forEach(function (a) {
+    L.circleMarker(a.latlon, {radius: 6, color: "#000", weight: 2, fillColor: "#fff",
+                              fillOpacity: 1}).bindTooltip(label(a.name), {permanent: true,
+                              direction: "right"}).addTo(fields);
+  });
+  add("Airfields", fields);
+  if (data.no_fly_zones.length) {
+    var nfz = L.featureGroup();
+    data.no_fly_zones.forEach(function (z) {
+      L.polygon(z.latlon, {color: "#d00000", weight: 2, fillColor: "#ff0000", fillOpacity: 0.35})
+        .bindTooltip(label(z.name)).addTo(nfz);
+    });
+    add("No-fly zones", nfz);
+  }
+  if (data.operating_area.length) {
+    var area = L.featureGroup();
+    data.operating_area.forEach(function (z) {
+      L.polygon(z.latlon, {color: "#555", weight: 1.5, dashArray: "4 4", fill: false})
+        .bindTooltip(label(z.name)).addTo(area);
+    });
+    add("Operating area", area);
+  }
+  var view = extent.isValid() ? extent : L.latLngBounds([[-1, -1], [1, 1]]);
+  map.fitBounds(view, {padding: [10, 10]});
+  L.control.layers({"OpenStreetMap": base}, overlays, {collapsed: false}).addTo(map);
+  L.control.scale({imperial: false}).addTo(map);
+  var legend = L.control({position: "bottomright"});
+  legend.onAdd = function () {
+    var div = L.DomUtil.create("div", "legend");
+    function row(svg, text) {
+      var r = document.createElement("div");
+      r.innerHTML = svg;
+      r.appendChild(document.createTextNode(" " + text));
+      div.appendChild(r);
+    }
+    if (data.overlay) {
+      var stops = data.colormap.map(function (c, i) {
+        var f = i / (data.colormap.length - 1);
+        var a = (data.alpha[0] + (data.alpha[1] - data.alpha[0]) * f) / 255;
+        return "rgba(" + c[0] + "," + c[1] + "," + c[2] + "," + a.toFixed(3) + ")";
+      });
+      var ramp = document.createElement("div");
+      ramp.className = "ramp";
+      ramp.style.background = "linear-gradient(to right, " + stops.join(", ") + ")";
+      div.appendChild(document.createTextNode("Prior POC per cell"));
+      div.appendChild(ramp);
+      var peak = (100 * data.overlay.peak).toPrecision(3);
+      div.appendChild(document.createTextNode("0 \u2013 " + peak + " % (cell maximum)"));
+    }
+    var line = function (dash) {
+      return '<svg width="30" height="8"><line x1="0" y1="4" x2="30" y2="4" stroke="#333" ' +
+        'stroke-width="3"' + (dash ? ' stroke-dasharray="' + dash + '"' : "") + "/></svg>";
+    };
+    row(line("6 4"), "transit");
+    row(line(""), "search");
+    row(line("2 3"), "landing approach");
+    row('<svg width="30" height="12"><rect x="1" y="1" width="28" height="10" fill="#ff0000" ' +
+        'fill-opacity="0.35" stroke="#d00000"/></svg>', "no-fly zone");
+    row('<svg width="30" height="12"><circle cx="15" cy="6" r="5" fill="#fff" stroke="#000" ' +
+        'stroke-width="2"/></svg>', "airfield");
+    return div;
+  };
+  legend.addTo(map);
+  function done() { document.body.dataset.drawn = String(added); }
+  if (image) {
+    if (image.getElement() && image.getElement().complete) { done(); }
+    else { image.once("load", done); }
+  } else {
+    done();
+  }
+})();
+"""

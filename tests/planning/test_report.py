@@ -1,0 +1,241 @@
+"""The HTML map report: one self-contained page, drawn by a real headless browser.
+
+The browser test runs Debian's chromium offline (every host name resolves to nothing) and
+checks the page's ``data-drawn`` marker, the screenshot (the prior overlay's colours and the
+first route's colour inside the map) and the console log. Without chromium it is skipped,
+except when ``CI`` is set: then it fails and says how to install chromium.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from agents.planning.export import export_plan, load_plan, to_geographic
+from agents.planning.planner import make_plan, write_plan
+from agents.planning.report import (
+    ALPHA_RANGE,
+    ROUTE_COLOURS,
+    colorize,
+    expected_layers,
+    plan_prior,
+    png_bytes,
+    warp_prior,
+)
+from poc_env.cli import main
+from poc_env.errors import ConfigError
+
+ORIGIN = (45.75, 126.65)
+#: Leaflet's map background (leaflet.css ``.leaflet-container``): what an offline map shows.
+LEAFLET_BG = np.array([221, 221, 221])
+
+
+@pytest.fixture(scope="module")
+def small_plan(tmp_path_factory):
+    """A quick plan on the small scenario with a CRS (3 UAVs, no no-fly zones)."""
+    path = tmp_path_factory.mktemp("report") / "plan.json"
+    plan = make_plan("small", popsize=8, maxiter=3, seed=0, origin_deg=ORIGIN)
+    write_plan(plan, path)
+    return path
+
+
+def _payload(page: str) -> dict:
+    m = re.search(r'<script type="application/json" id="plan-data">(.*?)</script>', page, re.S)
+    assert m, "the page embeds its data"
+    return json.loads(m.group(1))
+
+
+def _png(uri: str) -> np.ndarray:
+    from PIL import Image
+
+    head = "data:image/png;base64,"
+    assert uri.startswith(head)
+    return np.asarray(Image.open(io.BytesIO(base64.b64decode(uri[len(head) :]))).convert("RGBA"))
+
+
+def test_page_is_one_self_contained_file(small_plan, tmp_path):
+    (out,) = export_plan(small_plan, "html", out_dir=tmp_path)
+    assert out.name == "plan.html" and sorted(p.name for p in tmp_path.iterdir()) == ["plan.html"]
+    page = out.read_text(encoding="utf-8")
+    plan = load_plan(small_plan)
+    # nothing loaded from elsewhere: no external script, stylesheet or image; CSS urls inlined
+    assert not re.search(r"<script[^>]*\bsrc=", page)
+    assert "<link" not in page
+    assert not re.search(r"\bsrc=[\"'](?!data:)", page)
+    assert set(re.findall(r"url\((?!data:)([^)]*)\)", page)) <= {"#default#VML"}
+    assert "L.map(" in page and "Leaflet 1.9.4" in page  # the vendored library is inlined
+    data = _payload(page)
+    assert len(data["uavs"]) == len(plan["uavs"]) == 3
+    assert [u["id"] for u in data["uavs"]] == [str(u["id"]) for u in plan["uavs"]]
+    assert data["tiles"]["url"].startswith("https://tile.openstreetmap.org/")
+    assert data["overlay"] is not None and len(data["airfields"]) == 1
+    for u, pu in zip(data["uavs"], plan["uavs"]):
+        assert u["colour"] in ROUTE_COLOURS
+        # transit legs: take-off -> first search point, last search point -> landing
+        assert len(u["transit"]) == 2 and len(u["search"]) == len(pu["waypoints_m"])
+        (lat, lon), *_ = to_geographic([pu["takeoff_m"]], plan["crs"])
+        assert u["transit"][0][0] == pytest.approx([lat, lon], abs=1e-6)
+    # the per-UAV table is static HTML: one row per UAV with its POS
+    table = page[page.index('<table id="uav-table">') : page.index("</table>")]
+    assert table.count("<tr>") == 1 + len(plan["uavs"])
+    for u in plan["uavs"]:
+        assert f"<td>{100 * u['pos']:.2f}</td>" in table
+
+
+def test_png_writer_round_trip():
+    from PIL import Image
+
+    rgba = np.random.default_rng(3).integers(0, 256, (7, 11, 4), dtype=np.uint8)
+    back = np.asarray(Image.open(io.BytesIO(png_bytes(rgba))))
+    np.testing.assert_array_equal(back, rgba)
+    with pytest.raises(ConfigError, match="RGBA"):
+        png_bytes(np.zeros((3, 3, 3), np.uint8))
+
+
+def test_colormap_ends_and_alpha():
+    c = colorize(np.array([0.0, 1.0]))
+    assert c[0].tolist() == [255, 255, 204, ALPHA_RANGE[0]]
+    assert c[1].tolist() == [128, 0, 38, ALPHA_RANGE[1]]
+
+
+@pytest.mark.parametrize("rows", ["mercator", "latitude"])
+def test_overlay_pixels_show_the_cell_under_them(small_plan, rows):
+    """Each cell centre, projected to lat/lon by pyproj and located in the image by the rows'
+    spacing (Web Mercator for Leaflet, latitude for KML), has that cell's colour."""
+    plan = load_plan(small_plan)
+    ov, note = plan_prior(plan, small_plan)
+    assert ov is not None, note
+    rgba, (s, w, n, e) = warp_prior(ov, plan["crs"], rows)
+    h, wpx = rgba.shape[:2]
+    peak = ov.values.max()
+
+    def y(lat):
+        return (
+            math.log(math.tan(math.pi / 4 + math.radians(lat) / 2)) if rows == "mercator" else lat
+        )
+
+    centres = ov.grid.centers.reshape(-1, 2)
+    for (lat, lon), (x_m, y_m) in zip(to_geographic(centres, plan["crs"]), centres):
+        r = int((y(n) - y(lat)) / (y(n) - y(s)) * h)
+        c = int((lon - w) / (e - w) * wpx)
+        j, i = ov.grid.cell_of(np.array([x_m, y_m]))
+        np.testing.assert_array_equal(rgba[r, c], colorize(ov.values[j, i] / peak))
+    assert rgba[0, 0, 3] == 0 or rgba[-1, -1, 3] == 0 or (rgba[..., 3] > 0).all()
+    assert (rgba[..., 3] == 0).sum() < 0.1 * h * wpx  # the box is tight around the grid
+
+
+def test_prior_is_rebuilt_only_when_the_plan_agrees(small_plan, tmp_path):
+    plan = load_plan(small_plan)
+    ov, note = plan_prior(plan, small_plan)
+    assert ov is not None and ov.values.shape == ov.grid.shape and "small" in note
+    moved = dict(plan, airfields=[{"name": "A", "position_m": [0.0, 0.0]}])
+    ov2, note2 = plan_prior(moved, small_plan)
+    assert ov2 is None and "airfields" in note2
+    ov3, note3 = plan_prior(dict(plan, scenario="nowhere"), small_plan)
+    assert ov3 is None and "nowhere" in note3
+    given = np.ones(ov.grid.shape)
+    ov4, _ = plan_prior(moved, small_plan, given)
+    assert ov4 is not None and ov4.source == "given"
+    with pytest.raises(ConfigError, match="prior"):
+        plan_prior(plan, small_plan, np.ones((3, 3)))
+    # a page without the overlay still draws the rest and says why
+    path = tmp_path / "moved.json"
+    path.write_text(json.dumps(moved))
+    (out,) = export_plan(path, "html")
+    page = out.read_text(encoding="utf-8")
+    assert _payload(page)["overlay"] is None and "no prior overlay" in page
+
+
+def test_cli_html_and_bad_input(small_plan, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["export", str(small_plan), "--format", "html", "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["plan.html"]
+    # no crs and no --origin: a clean error, nothing written
+    plan = json.loads(small_plan.read_text())
+    del plan["crs"]
+    bare = tmp_path / "bare.json"
+    bare.write_text(json.dumps(plan))
+    capsys.readouterr()
+    dest = tmp_path / "none"
+    assert main(["export", str(bare), "--format", "html", "--out", str(dest)]) == 2
+    err = capsys.readouterr().err
+    assert "error: origin:" in err and "records no crs" in err
+    assert not dest.exists() or not any(dest.iterdir())
+    assert main(["export", str(small_plan), "--format", "htm", "--out", str(dest)]) == 2
+    assert "html" in capsys.readouterr().err  # the allowed formats name html
+
+
+def _chromium() -> str:
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        if os.environ.get("CI"):
+            pytest.fail(
+                "chromium is required in CI for the HTML report test: install it with "
+                "`apt-get install -y chromium` (Debian/Ubuntu; `make` does this as root)"
+            )
+        pytest.skip("chromium is not installed (apt-get install -y chromium)")
+    return exe
+
+
+def _run_chromium(exe: str, page, *args: str) -> subprocess.CompletedProcess:
+    cmd = [
+        exe, "--headless", "--no-sandbox", "--disable-gpu", "--window-size=900,700",
+        "--virtual-time-budget=3000", "--host-resolver-rules=MAP * ~NOTFOUND",
+        "--no-first-run", "--disable-extensions", *args, page.as_uri(),
+    ]  # fmt: skip
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
+
+
+def test_headless_browser_draws_every_layer(small_plan, tmp_path):
+    from PIL import Image
+
+    exe = _chromium()
+    (page,) = export_plan(small_plan, "html", out_dir=tmp_path)
+    plan = load_plan(small_plan)
+    data = _payload(page.read_text(encoding="utf-8"))
+    want = expected_layers(plan, overlay=True)
+    assert want == 7  # prior, 3 routes, search areas, airfields, operating area
+
+    dom = _run_chromium(exe, page, "--dump-dom")
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    m = re.search(r'<body[^>]*data-drawn="(\d+)"', dom.stdout)
+    assert m, "the page's script did not finish drawing"
+    assert int(m.group(1)) == want
+
+    shot = tmp_path / "shot.png"
+    run = _run_chromium(exe, page, f"--screenshot={shot}", "--enable-logging=stderr", "--v=0")
+    assert run.returncode == 0 and shot.is_file(), run.stderr[-2000:]
+    console = [
+        line
+        for line in run.stderr.splitlines()
+        if (":CONSOLE" in line or "Uncaught" in line) and "tile.openstreetmap.org" not in line
+    ]
+    assert console == [], console
+
+    img = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    # the map: the rows showing Leaflet's grey background (offline, no tiles)
+    grey = (np.abs(img - LEAFLET_BG).max(axis=-1) == 0).sum(axis=1) > 100
+    rows = np.flatnonzero(grey)
+    assert rows.size > 200, "the map is not on the screenshot"
+    mapped = img[rows.min() : rows.max() + 1].reshape(-1, 3)
+    # the overlay's colours, as composited over the grey background
+    ov = _png(data["overlay"]["url"]).reshape(-1, 4).astype(int)
+    ov = np.unique(ov[ov[:, 3] > 0], axis=0)
+    a = ov[:, 3:] / 255
+    blended = np.round(a * ov[:, :3] + (1 - a) * LEAFLET_BG)
+    near = np.abs(mapped[:, None, :] - blended[None, :, :]).max(axis=-1) <= 3
+    hits = near.any(axis=1)
+    assert hits.sum() > 2000, hits.sum()  # overlay pixels on screen
+    assert np.unique(np.argmax(near[hits], axis=1)).size >= 10  # many of its colours
+    # the first route's colour (opaque lines), inside the map (not the table's swatch)
+    first = np.array([int(ROUTE_COLOURS[0][k : k + 2], 16) for k in (1, 3, 5)])
+    assert (np.abs(mapped - first).max(axis=-1) <= 6).sum() > 30
