@@ -226,10 +226,31 @@ class MapConfig:
     threat_peaks: tuple[ThreatPeak, ...] = _f(default=())
     #: eq. 23 threshold Th_s on the peak threat f.
     threat_threshold: float = _f(default=0.5, lo=0.0, hi=1.0)
+    #: Optional geography: (lat, lon) in degrees of the local (0, 0), and the projection
+    #: between local metres and lat/lon (``aeqd``: azimuthal equidistant at that point;
+    #: ``utm``: UTM zone ``utm_zone`` or the origin's). With it, ``poc-env plan`` records the
+    #: plan's CRS without ``--origin`` (agents.planning.export.make_crs).
+    origin_deg: tuple[float, float] | None = None
+    projection: str = "aeqd"
+    utm_zone: int | None = _f(default=None, lo=1, hi=60)
 
     def __post_init__(self) -> None:
         _coerce(self)
         object.__setattr__(self, "origin_m", _vec2("origin_km", self.origin_m))
+        if self.origin_deg is not None:
+            lat, lon = _vec2("origin_deg", self.origin_deg)
+            if not (-89.9 <= lat <= 89.9 and -180.0 <= lon <= 180.0):
+                raise ConfigError(
+                    "origin_deg", self.origin_deg, "[lat, lon] in degrees, |lat| <= 89.9, "
+                    "|lon| <= 180 (latitude first)",
+                )  # fmt: skip
+            object.__setattr__(self, "origin_deg", (lat, lon))
+        if self.projection not in ("aeqd", "utm"):
+            raise ConfigError("projection", self.projection, "aeqd or utm")
+        if self.utm_zone is not None and self.projection != "utm":
+            raise ConfigError("utm_zone", self.utm_zone, "null unless projection is utm")
+        if self.origin_deg is None and (self.projection != "aeqd" or self.utm_zone is not None):
+            raise ConfigError("origin_deg", None, "[lat, lon] when a projection is given")
         for name, size in (("width_km", self.width_m), ("height_km", self.height_m)):
             n = size / self.cell_m
             if abs(n - round(n)) > 1e-6 or round(n) < 1:

@@ -200,3 +200,24 @@ def test_yaml_alias_bomb_is_refused_quickly(tmp_path):
 
     assert load_yaml_text("a: &a [1, 2]\nb: *a\n") == {"a": [1, 2], "b": [1, 2]}
     assert load_scenario("small") == load_scenario(CONFIG_DIR / "small.yaml")
+
+
+def test_map_geography_keys():
+    from poc_env.config import load_scenario
+
+    sc = load_scenario("small", {"map.origin_deg": [45.7, 126.6], "map.projection": "utm"})
+    assert sc.map.origin_deg == (45.7, 126.6) and sc.map.projection == "utm"
+    assert load_scenario(sc.to_dict()).map == sc.map  # written and read back
+    assert load_scenario("small").map.origin_deg is None
+    for bad, field in (
+        ({"map.origin_deg": [126.6, 45.7]}, "origin_deg"),  # lon, lat swapped
+        ({"map.origin_deg": [45.7, 126.6], "map.projection": "merc"}, "projection"),
+        ({"map.projection": "utm"}, "origin_deg"),
+        ({"map.origin_deg": [45.7, 126.6], "map.utm_zone": 52}, "utm_zone"),
+        (
+            {"map.origin_deg": [45.7, 126.6], "map.projection": "utm", "map.utm_zone": 61},
+            "utm_zone",
+        ),
+    ):
+        with pytest.raises(ConfigError, match=rf"map\.{field}: got"):
+            load_scenario("small", bad)

@@ -613,7 +613,12 @@ def import_scenario(
         "cell_km": cell_km,
         "origin_km": [_km(grid.x0), _km(grid.y0)],
         "prior": {"kind": "file", "file": f"{name}.npy"},
+        # the geography: plan reads it, so plan.json gets its CRS without --origin
+        "origin_deg": [float(v) for v in crs["origin_deg"]],
+        "projection": crs["kind"],
     }
+    if crs["kind"] == "utm":
+        new_map["utm_zone"] = int(crs["epsg"]) % 100
     if zones:
         new_map["no_fly_zones_km"] = zones
     if "threat_threshold" in old_map:
@@ -651,10 +656,9 @@ def scenario_yaml(result: dict[str, Any]) -> str:
         f"# Imported by `poc-env scenario import` ({result['scenario']['description']}).",
         f"# Geographic origin (local 0, 0): lat {lat!r}, lon {lon!r}; CRS {crs['kind']}:",
         f"#   {crs.get('proj', 'EPSG:' + str(crs.get('epsg')))}",
-        f"# The CRS record is in {name}.crs.json. Plan with: "
-        f"poc-env plan --scenario {name}.yaml --origin {lat!r},{lon!r}"
-        + ("" if crs["kind"] == "aeqd" else f" --projection {crs['kind']}"),
-        f"# The prior {name}.npy is read relative to the current folder: run from this folder.",
+        f"# map.origin_deg/projection carry it (plan records the CRS: poc-env plan --scenario "
+        f"{name}.yaml); the full record is in {name}.crs.json.",
+        f"# The prior {name}.npy is read relative to this file's folder.",
     ]
     return "\n".join(head) + "\n" + yaml.safe_dump(result["scenario"], sort_keys=False)
 

@@ -74,7 +74,7 @@ def make_plan(
     """
     if planner not in ("de", "allocation"):
         raise ConfigError("planner", planner, "de or allocation")
-    crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
+    crs = _scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
     if planner == "allocation":
         from agents.planning.allocation import make_allocation_plan
 
@@ -171,6 +171,25 @@ def make_plan(
         # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
         **_geography(obj.scenario, prior, crs),
     }
+
+
+def _scenario_crs(
+    sc: Scenario, origin_deg: Any, projection: str, zone: int | None
+) -> dict[str, Any] | None:
+    """The plan's CRS: from ``origin_deg`` (``--origin``), else from the scenario's
+    ``map.origin_deg``/``projection``/``utm_zone``; both given must name the same origin."""
+    m = sc.map
+    if origin_deg is None:
+        if m.origin_deg is None:
+            return None
+        return make_crs(m.projection, m.origin_deg, zone=m.utm_zone)
+    crs = make_crs(projection, origin_deg, zone=zone)
+    if m.origin_deg is not None and tuple(crs["origin_deg"]) != tuple(m.origin_deg):
+        raise ConfigError(
+            "origin", origin_deg, f"nothing (the scenario's map.origin_deg "
+            f"{list(m.origin_deg)} is used) or that same origin",
+        )  # fmt: skip
+    return crs
 
 
 def _geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:

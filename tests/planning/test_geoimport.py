@@ -124,6 +124,14 @@ def test_geotiff_round_trip(tmp_path, layers, monkeypatch):
     crs = json.loads((tmp_path / "my.crs.json").read_text())
     assert crs["kind"] == "aeqd" and crs["origin_deg"] == [45.3, 126.0]
     assert "lat 45.3, lon 126.0" in (tmp_path / "my.yaml").read_text()
+    # the scenario carries its geography: a plan records the same CRS without --origin
+    assert sc.map.origin_deg == (45.3, 126.0) and sc.map.projection == "aeqd"
+    from agents.planning.planner import make_plan
+
+    plan = make_plan(str(tmp_path / "my.yaml"), popsize=4, maxiter=1)
+    assert plan["crs"] == crs
+    with pytest.raises(ConfigError, match=r"origin: got .*map.origin_deg \[45.3, 126.0\]"):
+        make_plan(str(tmp_path / "my.yaml"), popsize=4, maxiter=1, origin_deg=(45.0, 126.0))
     fwd = Transformer.from_crs("EPSG:4326", crs["proj"], always_xy=True)
     # the centre of mass lands within one cell of the blob's projected centre
     bx, by = fwd.transform(BLOB[1], BLOB[0])
