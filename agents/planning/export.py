@@ -90,7 +90,7 @@ from pyproj import CRS, Transformer
 from pyproj.exceptions import CRSError, ProjError
 
 from poc_env.errors import ConfigError, as_number
-from poc_env.io import write_text_atomic
+from poc_env.io import write_bytes_atomic, write_text_atomic
 
 SCHEMA = 2
 #: The schemas :func:`load_plan` reads.
@@ -644,11 +644,16 @@ def kml(
     altitude_m: float | None = None,
     altitude_ref: str = "home",
     field_elevation_m: float = 0.0,
+    ground_overlay: dict[str, Any] | None = None,
 ) -> str:
     """KML with one Placemark (LineString route) per UAV.
 
     ``altitude_ref`` ``home`` -> ``relativeToGround``, ``amsl`` -> ``absolute``; z as in
     :func:`geojson` and the QGC mission (see docs/EXPORT.md for the caveat on home vs ground).
+    ``ground_overlay`` {``href``, ``box`` (south, west, north, east) degrees, ``note``}: the
+    prior as a GroundOverlay (an image evenly spaced in latitude and longitude, see
+    :func:`agents.planning.report.warp_prior`) in its own folder under everything else; without
+    one, ``note`` (if any) becomes the document's description.
     """
     alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     mode = _ALT_REF[altitude_ref][2]
@@ -683,7 +688,7 @@ def kml(
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
-        f"<name>{name}</name>{_KML_STYLES}{''.join(folders)}"
+        f"<name>{name}</name>{_kml_ground_overlay(ground_overlay)}{_KML_STYLES}{''.join(folders)}"
         f"<Folder><name>Area, airfields, no-fly zones</name>{others}</Folder></Document></kml>\n"
     )
 
@@ -702,6 +707,23 @@ _KML_STYLES = (
     "<PolyStyle><color>660000ff</color></PolyStyle></Style>"
     '<Style id="airfield"><IconStyle><scale>1.1</scale></IconStyle></Style>'
 )
+
+
+def _kml_ground_overlay(g: dict[str, Any] | None) -> str:
+    """The prior's GroundOverlay folder (or the note why there is none) of :func:`kml`."""
+    if g is None:
+        return ""
+    note = f"<description>{escape(str(g.get('note', '')))}</description>"
+    if not g.get("href"):
+        return note
+    s, w, n, e = (f"{v:.8f}" for v in g["box"])
+    return (
+        f"{note}<Folder><name>Prior probability of containment</name><GroundOverlay>"
+        f"<name>prior POC per cell</name><description>{escape(str(g.get('note', '')))}"
+        f"</description><drawOrder>0</drawOrder><Icon><href>{escape(str(g['href']))}</href>"
+        f"</Icon><LatLonBox><north>{n}</north><south>{s}</south><east>{e}</east><west>{w}</west>"
+        "</LatLonBox></GroundOverlay></Folder>"
+    )
 
 
 def _kml_props(props: dict[str, Any]) -> str:
@@ -978,7 +1000,18 @@ def export_plan(
             write_text_atomic(out / f"{stem}.geojson", json.dumps(doc, indent=1, allow_nan=False))
         ]
     if fmt == "kml":
-        return [write_text_atomic(out / f"{stem}.kml", kml(plan, crs, alt, altitude_ref, ground))]
+        from agents.planning.report import plan_prior, png_bytes, warp_prior
+
+        overlay, note = plan_prior(plan, plan_path, prior)
+        written = []
+        g: dict[str, Any] = {"note": note}
+        if overlay is not None:  # the image first: the KML names it
+            rgba, box = warp_prior(overlay, crs, "latitude")
+            png = write_bytes_atomic(out / f"{stem}_prior.png", png_bytes(rgba))
+            g.update(href=png.name, box=box)
+            written.append(png)
+        text = kml(plan, crs, alt, altitude_ref, ground, ground_overlay=g)
+        return [write_text_atomic(out / f"{stem}.kml", text), *written]
     if fmt == "html":
         from agents.planning.report import html_report, plan_prior
 

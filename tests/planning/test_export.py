@@ -78,7 +78,8 @@ def test_geojson_parses_back(tmp_path):
 
 def test_kml_parses_back(tmp_path):
     path, plan = _plan(tmp_path)
-    (out,) = export_plan(path, "kml", "45.75,126.65")
+    out, png = export_plan(path, "kml", "45.75,126.65")  # the route file and the prior's image
+    assert (out.name, png.name) == ("plan.kml", "plan_prior.png")
     ns = {"k": "http://www.opengis.net/kml/2.2"}
     routes = ET.parse(out).getroot().findall(".//k:Placemark[k:styleUrl='#route']", ns)
     assert len(routes) == len(plan["uavs"])
@@ -365,7 +366,7 @@ def test_bad_crs_is_a_config_error_naming_the_field(tmp_path, crs, field):
 def test_epsg_crs_and_schema_1_plans_without_crs_still_load(tmp_path):
     path, _ = _plan(tmp_path, crs={"kind": "epsg", "origin_deg": list(ORIGIN), "epsg": 32652})
     plan = load_plan(path)
-    (out,) = export_plan(path, "kml", None, tmp_path / "o")
+    out, _ = export_plan(path, "kml", None, tmp_path / "o")
     assert out.is_file() and plan["crs"]["epsg"] == 32652
     path, plan = _plan(tmp_path)
     assert "crs" not in load_plan(path)  # a schema-1 plan of before: read with --origin
@@ -585,3 +586,49 @@ def test_a_mission_that_would_breach_its_own_geofence_is_refused(tmp_path):
     path.write_text(json.dumps(plan))
     with pytest.raises(ConfigError, match=r"uavs\[0\].*no-fly zone 1"):
         export_plan(path, "qgc", None, tmp_path / "p", geofence=False)
+
+
+def test_kml_draws_the_prior_as_a_ground_overlay(tmp_path, capsys):
+    """The prior as a GroundOverlay: a PNG beside the KML (written as a set by the CLI), on a
+    LatLonBox enclosing the grid, each cell centre's pixel coloured by that cell (rows evenly
+    spaced in latitude, as Google Earth stretches it)."""
+    from PIL import Image
+
+    from agents.planning.report import colorize, plan_prior
+    from poc_env.theory.probability_map import Grid
+
+    path, _ = _plan(tmp_path)
+    out = tmp_path / "out"
+    assert main(["export", str(path), "--format", "kml", "--origin", "45.75,126.65", "--out",
+                 str(out)]) == 0  # fmt: skip
+    assert sorted(p.name for p in out.iterdir()) == ["plan.kml", "plan_prior.png"]
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    root = ET.parse(out / "plan.kml").getroot()
+    (go,) = root.findall(".//k:GroundOverlay", ns)
+    assert go.find("k:Icon/k:href", ns).text == "plan_prior.png"
+    box = {k: float(go.find(f"k:LatLonBox/k:{k}", ns).text) for k in ("north", "south", "east",
+                                                                       "west")}  # fmt: skip
+    ov, _ = plan_prior(load_plan(path), path)
+    grid = ov.grid
+    assert isinstance(grid, Grid) and grid.shape == ov.values.shape
+    corners = np.array(to_geographic([grid.bounds[:2], grid.bounds[2:]], ORIGIN))
+    eps = 1e-7  # the box is written with 8 decimals
+    assert box["south"] - eps <= corners[:, 0].min() and corners[:, 0].max() <= box["north"] + eps
+    assert box["west"] - eps <= corners[:, 1].min() and corners[:, 1].max() <= box["east"] + eps
+    img = np.asarray(Image.open(out / "plan_prior.png").convert("RGBA"))
+    h, w = img.shape[:2]
+    rng = np.random.default_rng(5)
+    cells = rng.integers(0, [grid.ny, grid.nx], (40, 2))
+    centres = grid.centers[cells[:, 0], cells[:, 1]]
+    peak = ov.values.max()
+    for (lat, lon), (j, i) in zip(to_geographic(centres, ORIGIN), cells):
+        r = int((box["north"] - lat) / (box["north"] - box["south"]) * h)
+        c = int((lon - box["west"]) / (box["east"] - box["west"]) * w)
+        np.testing.assert_array_equal(img[r, c], colorize(ov.values[j, i] / peak))
+    # a plan whose scenario cannot be rebuilt as planned: no overlay, and the KML says why
+    moved, _ = _plan(tmp_path, airfields=[{"name": "X", "position_m": [1.0, 2.0]}])
+    outs = export_plan(moved, "kml", "45.75,126.65")
+    assert [p.name for p in outs] == ["plan.kml"]
+    root = ET.parse(outs[0]).getroot()
+    assert root.find(".//k:GroundOverlay", ns) is None
+    assert "no prior overlay" in root.find("k:Document/k:description", ns).text
