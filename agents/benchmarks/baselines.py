@@ -19,7 +19,10 @@ Policies per task (``--policies`` overrides):
   faithful preset) and ``allocation_plan``: they command eq. 19 increments themselves, so they
   fly the same on a task's three control levels (scored once per scenario and prior, shown on
   each row);
-- learned: ``ppo:PATH`` / ``rllib:PATH`` checkpoints given with ``--learned TASK=POLICY``.
+- learned: ``--learned LABEL=POLICY`` adds a column ``LABEL`` flown by ``POLICY`` (a
+  ``ppo:PATH`` or ``rllib:PATH`` spelling) on every task; ``{Control}`` in ``POLICY`` becomes
+  the task's control part (``Heading`` ...), so one option names a run per control level, and
+  ``LABEL@Heading=POLICY`` restricts the column to that control level's tasks.
 
 Writes ``baselines.csv`` (one row per task and policy) and ``baselines.md`` (the table of the
 README) into ``--out``, both or neither. ``--quick``: 2 episodes on the Small tasks only.
@@ -50,8 +53,9 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         "--learned",
         action="append",
         default=[],
-        metavar="TASK=POLICY",
-        help="a learned policy for a task, e.g. UAVSearch-Small-Random-Heading-v0=rllib:runs/x",
+        metavar="LABEL[@Control]=POLICY",
+        help="a learned policy column, e.g. PPO-RLlib=rllib:runs/rllib_{Control} or "
+        "pilot@Heading=ppo:ppo_pilot_paper_6_2",
     )
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS")
@@ -68,18 +72,28 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
     ids = args.tasks or [t for t in tasks.TASKS if not args.quick or "-Small-" in t]
     chosen = [tasks.get_task(t) for t in ids]
     episodes = 2 if args.quick else args.episodes
-    learned: dict[str, list[str]] = {}
+    learned: list[tuple[str, str | None, str]] = []
+    controls = {v: k for k, v in tasks.CONTROL_NAMES.items()}
     for item in args.learned:
-        tid, sep, pol = item.partition("=")
-        if not sep or not pol:
-            raise ConfigError("learned", item, "TASK=POLICY, e.g. UAVSearch-Small-Heading-v0=ppo:x")
-        learned.setdefault(tasks.get_task(tid).id, []).append(pol)
+        head, sep, pol = item.partition("=")
+        label, at, only = head.partition("@")
+        if not sep or not pol or not label or (at and only not in tasks.CONTROL_NAMES):
+            raise ConfigError(
+                "learned", item, "LABEL=POLICY or LABEL@Control=POLICY (Control: "
+                + ", ".join(tasks.CONTROL_NAMES) + "), e.g. PPO-RLlib=rllib:runs/r_{Control}",
+            )  # fmt: skip
+        learned.append((label, only or None, pol))
     fixed = args.policies.split(",") if args.policies else None
     cache: dict[tuple[str, bool, str], dict[str, Any]] = {}
     rows = []
     for task in chosen:
-        names = fixed or [FLOOR[task.control], *CLASSICAL]
-        names = [*names, *learned.get(task.id, [])]
+        names = list(fixed) if fixed else [FLOOR[task.control], *CLASSICAL]
+        labels = dict.fromkeys(names, "")
+        for label, only, pol in learned:
+            if only is None or tasks.CONTROL_NAMES[only] == task.control:
+                spelled = pol.replace("{Control}", controls[task.control])
+                names.append(spelled)
+                labels[spelled] = label
         todo = [n for n in names if (task.scenario, task.random_prior, n) not in cache]
         if todo:
             ev = evaluate(
@@ -98,6 +112,7 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
                 {
                     "task": task.id,
                     "policy": n,
+                    "label": labels.get(n) or n,
                     "episodes": r["episodes"],
                     "posc_mean": r["posc_mean"],
                     "posc_ci95": r["posc_ci95"],
@@ -122,14 +137,14 @@ def to_markdown(rows: list[dict[str, Any]], command: str) -> str:
     """One line per task: each policy's ``POSC ± ci (POSC/reach; violation steps)``."""
     policies: list[str] = []
     for r in rows:
-        label = "random" if r["policy"] in FLOOR.values() else r["policy"]
+        label = "random" if r["policy"] in FLOOR.values() else r["label"]
         if label not in policies:
             policies.append(label)
     head = "| task | " + " | ".join(policies) + " |"
     out = [head, "|" + "---|" * (len(policies) + 1)]
     by_task: dict[str, dict[str, str]] = {}
     for r in rows:
-        label = "random" if r["policy"] in FLOOR.values() else r["policy"]
+        label = "random" if r["policy"] in FLOOR.values() else r["label"]
         norm = "-" if r["normalised"] is None else f"{r['normalised']:.3f}"
         cell = f"{r['posc_mean']:.3f} ± {r['posc_ci95']:.3f} ({norm}; {r['violation_steps']:.0f})"
         by_task.setdefault(r["task"], {})[label] = cell

@@ -37,9 +37,34 @@ def test_baselines_default_floor_follows_the_control_level():
     assert rows[0]["posc_ci95"] > 0  # random draws differ between seeds
 
 
-def test_baselines_bad_learned():
+@pytest.mark.parametrize("bad", ["nope", "=ppo:x", "X@Joystick=ppo:x"])
+def test_baselines_bad_learned(bad):
     with pytest.raises(ConfigError, match="learned"):
-        baselines.run(baselines._parse(["--quick", "--learned", "nope"]))
+        baselines.run(baselines._parse(["--quick", "--learned", bad]))
+
+
+def test_baselines_learned_columns_follow_the_control_level():
+    argv = ["--tasks", "UAVSearch-Small-Heading-v0", "UAVSearch-Small-Waypoint-v0"]
+    argv += ["--episodes", "1", "--policies", "lawnmower"]
+    # a column per label; {Control} names the task's level; @Heading keeps it to Heading tasks
+    argv += ["--learned", "floor={Control}", "--learned", "only@Heading=random_heading"]
+    with pytest.raises(ConfigError, match="got 'Heading'"):
+        baselines.run(baselines._parse(argv))
+    argv[-3] = "floor=random_{control}"  # a literal: the placeholder is {Control}
+    with pytest.raises(ConfigError, match=r"random_\{control\}"):
+        baselines.run(baselines._parse(argv))
+    argv[-3] = "floor=random_waypoint"
+    rows = baselines.run(baselines._parse(argv))
+    got = [(r["task"].split("-")[2], r["label"], r["policy"]) for r in rows]
+    assert got == [
+        ("Heading", "lawnmower", "lawnmower"),
+        ("Heading", "floor", "random_waypoint"),
+        ("Heading", "only", "random_heading"),
+        ("Waypoint", "lawnmower", "lawnmower"),
+        ("Waypoint", "floor", "random_waypoint"),
+    ]
+    md = baselines.to_markdown(rows, "cmd")
+    assert "| task | lawnmower | floor | only |" in md
 
 
 def test_suite_env_figures_are_positive():
