@@ -602,8 +602,10 @@ _SCRIPT = r"""
     row(line("6 4"), "transit");
     row(line(""), "search");
     row(line("2 3"), "landing approach");
-    row('<svg width="30" height="12"><rect x="1" y="1" width="28" height="10" fill="#ff0000" ' +
-        'fill-opacity="0.35" stroke="#d00000"/></svg>', "no-fly zone");
+    if (data.no_fly_zones.length) {
+      row('<svg width="30" height="12"><rect x="1" y="1" width="28" height="10" fill="#ff0000" ' +
+          'fill-opacity="0.35" stroke="#d00000"/></svg>', "no-fly zone");
+    }
     row('<svg width="30" height="12"><circle cx="15" cy="6" r="5" fill="#fff" stroke="#000" ' +
         'stroke-width="2"/></svg>', "airfield");
     return div;

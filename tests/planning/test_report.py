@@ -195,23 +195,15 @@ def _run_chromium(exe: str, page, *args: str) -> subprocess.CompletedProcess:
     return subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
 
 
-def test_headless_browser_draws_every_layer(small_plan, tmp_path):
+def _browse(exe: str, page) -> tuple[int, np.ndarray, list[str]]:
+    """(the page's data-drawn marker, the screenshot's map rows as (N, 3) RGB, console lines)."""
     from PIL import Image
-
-    exe = _chromium()
-    (page,) = export_plan(small_plan, "html", out_dir=tmp_path)
-    plan = load_plan(small_plan)
-    data = _payload(page.read_text(encoding="utf-8"))
-    want = expected_layers(plan, overlay=True)
-    assert want == 7  # prior, 3 routes, search areas, airfields, operating area
 
     dom = _run_chromium(exe, page, "--dump-dom")
     assert dom.returncode == 0, dom.stderr[-2000:]
     m = re.search(r'<body[^>]*data-drawn="(\d+)"', dom.stdout)
     assert m, "the page's script did not finish drawing"
-    assert int(m.group(1)) == want
-
-    shot = tmp_path / "shot.png"
+    shot = page.parent / "shot.png"
     run = _run_chromium(exe, page, f"--screenshot={shot}", "--enable-logging=stderr", "--v=0")
     assert run.returncode == 0 and shot.is_file(), run.stderr[-2000:]
     console = [
@@ -219,14 +211,29 @@ def test_headless_browser_draws_every_layer(small_plan, tmp_path):
         for line in run.stderr.splitlines()
         if (":CONSOLE" in line or "Uncaught" in line) and "tile.openstreetmap.org" not in line
     ]
-    assert console == [], console
-
     img = np.asarray(Image.open(shot).convert("RGB")).astype(int)
     # the map: the rows showing Leaflet's grey background (offline, no tiles)
     grey = (np.abs(img - LEAFLET_BG).max(axis=-1) == 0).sum(axis=1) > 100
     rows = np.flatnonzero(grey)
     assert rows.size > 200, "the map is not on the screenshot"
-    mapped = img[rows.min() : rows.max() + 1].reshape(-1, 3)
+    return int(m.group(1)), img[rows.min() : rows.max() + 1].reshape(-1, 3), console
+
+
+def _near(pixels: np.ndarray, hex_colour: str, tol: int) -> int:
+    rgb = np.array([int(hex_colour[k : k + 2], 16) for k in (1, 3, 5)])
+    return int((np.abs(pixels - rgb).max(axis=-1) <= tol).sum())
+
+
+def test_headless_browser_draws_every_layer(small_plan, tmp_path):
+    exe = _chromium()
+    (page,) = export_plan(small_plan, "html", out_dir=tmp_path)
+    plan = load_plan(small_plan)
+    data = _payload(page.read_text(encoding="utf-8"))
+    want = expected_layers(plan, overlay=True)
+    assert want == 7  # prior, 3 routes, search areas, airfields, operating area
+    drawn, mapped, console = _browse(exe, page)
+    assert drawn == want
+    assert console == [], console
     # the overlay's colours, as composited over the grey background
     ov = _png(data["overlay"]["url"]).reshape(-1, 4).astype(int)
     ov = np.unique(ov[ov[:, 3] > 0], axis=0)
@@ -237,5 +244,24 @@ def test_headless_browser_draws_every_layer(small_plan, tmp_path):
     assert hits.sum() > 2000, hits.sum()  # overlay pixels on screen
     assert np.unique(np.argmax(near[hits], axis=1)).size >= 10  # many of its colours
     # the first route's colour (opaque lines), inside the map (not the table's swatch)
-    first = np.array([int(ROUTE_COLOURS[0][k : k + 2], 16) for k in (1, 3, 5)])
-    assert (np.abs(mapped - first).max(axis=-1) <= 6).sum() > 30
+    assert _near(mapped, ROUTE_COLOURS[0], 6) > 30
+    assert _near(mapped, "#d00000", 6) == 0  # no no-fly zone in this plan
+
+
+def test_headless_browser_draws_no_fly_zones_with_a_given_prior(small_plan, tmp_path):
+    """A plan with a no-fly zone its scenario does not have: with the prior given, the page
+    draws the overlay and the zone (red outline) too; one more layer."""
+    exe = _chromium()
+    plan = json.loads(small_plan.read_text())
+    plan["no_fly_zones_m"] = [[[5e3, 5e3], [15e3, 5e3], [15e3, 15e3], [5e3, 15e3]]]
+    path = tmp_path / "nfz.json"
+    path.write_text(json.dumps(plan))
+    ov, note = plan_prior(load_plan(path), path)
+    assert ov is None and "no-fly zones" in note  # not rebuilt: the scenario has none
+    ov, _ = plan_prior(load_plan(small_plan), small_plan)
+    (page,) = export_plan(path, "html", prior=ov.values)
+    assert _payload(page.read_text(encoding="utf-8"))["overlay"]["source"] == "given"
+    drawn, mapped, console = _browse(exe, page)
+    assert drawn == expected_layers(load_plan(path), overlay=True) == 8
+    assert console == [], console
+    assert _near(mapped, "#d00000", 6) > 30
