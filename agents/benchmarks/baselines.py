@@ -133,18 +133,25 @@ def to_csv(rows: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
+def _column(row: dict[str, Any]) -> str:
+    """A row's column: its label; the unlabelled floors of every control level share one."""
+    if row["label"] == row["policy"] and row["policy"] in FLOOR.values():
+        return "random"
+    return row["label"]
+
+
 def to_markdown(rows: list[dict[str, Any]], command: str) -> str:
     """One line per task: each policy's ``POSC ± ci (POSC/reach; violation steps)``."""
     policies: list[str] = []
     for r in rows:
-        label = "random" if r["policy"] in FLOOR.values() else r["label"]
+        label = _column(r)
         if label not in policies:
             policies.append(label)
     head = "| task | " + " | ".join(policies) + " |"
     out = [head, "|" + "---|" * (len(policies) + 1)]
     by_task: dict[str, dict[str, str]] = {}
     for r in rows:
-        label = "random" if r["policy"] in FLOOR.values() else r["label"]
+        label = _column(r)
         norm = "-" if r["normalised"] is None else f"{r['normalised']:.3f}"
         cell = f"{r['posc_mean']:.3f} ± {r['posc_ci95']:.3f} ({norm}; {r['violation_steps']:.0f})"
         by_task.setdefault(r["task"], {})[label] = cell
