@@ -20,9 +20,10 @@ The prior
 ---------
 plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
 ``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded
-by name (a built-in scenario, or a YAML path recorded as the name) and its prior built with
-:func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
-(resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so
+by name (:func:`scenario_source`: a built-in scenario, or ``NAME.yaml`` beside the plan or in
+the current folder, as ``poc-env plan --scenario NAME.yaml`` records ``NAME``) and its prior
+built with :func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when
+there is one (resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so
 the rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones
 and operating area); when they differ, or the scenario or map file cannot be found, the page
 says why and draws no overlay rather than a wrong one. A caller with the prior at hand passes it
@@ -205,17 +206,18 @@ def plan_prior(
     scenario grid's shape, or a map file path (``.npy``/``.csv``, as ``poc-env plan --map``);
     a given prior that does not fit the scenario grid is a ConfigError.
     """
-    from poc_env.config import builtin_scenarios, load_scenario
+    from poc_env.config import load_scenario
     from poc_env.errors import MapFileError
     from poc_env.theory.probability_map import build_prior, load_map
 
     name = str(plan.get("scenario"))
-    known = name in builtin_scenarios()
-    if not known and not Path(name).is_file():
+    where = scenario_source(name, plan_path)
+    if where is None:
+        why = f"scenario {name!r} is neither built in nor a YAML file {name}.yaml beside the plan"
         if prior is None:
-            return None, f"no prior overlay: scenario {name!r} is not built in or a YAML file"
-        raise ConfigError("scenario", name, "a built-in scenario or YAML file (for --prior)")
-    sc = load_scenario(name)
+            return None, f"no prior overlay: {why}"
+        raise ConfigError("scenario", name, f"a scenario to place the prior on ({why})")
+    sc = load_scenario(where)
     grid = Grid.from_config(sc.map)
     if prior is not None:
         if isinstance(prior, (str, Path)):
@@ -241,6 +243,20 @@ def plan_prior(
             except MapFileError as err:
                 return None, f"no prior overlay: {err}"
     return None, f"no prior overlay: map file {src!r} not found"
+
+
+def scenario_source(name: str, plan_path: str | os.PathLike[str]) -> str | None:
+    """Where the plan's scenario ``name`` is: a built-in name, a YAML path, or ``NAME.yaml``
+    beside the plan or in the current folder (``poc-env plan --scenario my.yaml`` records
+    ``my``); None if none exists."""
+    from poc_env.config import builtin_scenarios
+
+    if name in builtin_scenarios():
+        return name
+    cands = [Path(name)] if name.endswith((".yaml", ".yml")) else []
+    for folder in (Path(plan_path).parent, Path.cwd()):
+        cands += [folder / f"{name}.yaml", folder / f"{name}.yml"]
+    return next((str(c) for c in cands if c.is_file()), None)
 
 
 def _scenario_mismatch(plan: dict[str, Any], sc: Any) -> str:

@@ -265,3 +265,34 @@ def test_headless_browser_draws_no_fly_zones_with_a_given_prior(small_plan, tmp_
     assert drawn == expected_layers(load_plan(path), overlay=True) == 8
     assert console == [], console
     assert _near(mapped, "#d00000", 6) > 30
+
+
+def test_a_yaml_scenario_beside_the_plan_gives_the_overlay(tmp_path, monkeypatch):
+    """``plan --scenario DIR/mine.yaml`` records ``mine``: the export finds ``mine.yaml`` beside
+    the plan (from another folder), reads its file prior relative to the YAML, and draws it."""
+    import yaml
+
+    from poc_env.config import CONFIG_DIR
+
+    data = yaml.safe_load((CONFIG_DIR / "small.yaml").read_text())
+    data["name"] = "mine"
+    data["map"]["prior"] = {"kind": "file", "file": "mine.npy"}
+    folder = tmp_path / "work"
+    folder.mkdir()
+    prior = np.full((8, 8), 0.01)
+    prior[6, 1] = 1.0  # one hot cell: north-west
+    np.save(folder / "mine.npy", prior / prior.sum())
+    (folder / "mine.yaml").write_text(yaml.safe_dump(data))
+    plan = make_plan(str(folder / "mine.yaml"), popsize=8, maxiter=2, origin_deg=ORIGIN)
+    assert plan["scenario"] == "mine"
+    write_plan(plan, folder / "plan.json")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    (page,) = export_plan(folder / "plan.json", "html")
+    ov = _payload(page.read_text(encoding="utf-8"))["overlay"]
+    assert ov is not None and "mine" in ov["source"]
+    img = _png(ov["url"])
+    hot = np.unravel_index(np.argmax(img[..., 3]), img.shape[:2])
+    # the most opaque pixel lies in the north-west of the image (row 6 of 8 from the south)
+    assert hot[0] < img.shape[0] / 2 and hot[1] < img.shape[1] / 2
