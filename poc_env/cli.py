@@ -165,6 +165,11 @@ def cmd_tasks(args: argparse.Namespace) -> int:
 
 def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
+    _check_out("plan_out", args.plan_out, "file")
+    if args.origin is not None:
+        from agents.planning.export import make_crs
+
+        make_crs(args.projection, args.origin, zone=args.utm_zone)  # checked before the survey
     if not args.out:
         return _survey(args, None, None)
     with _output_folder("out", args.out) as stage:
@@ -198,6 +203,21 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
     print(result.table())
     if stage is not None:
         _wrote(write_survey(result, stage, prior=prior, scenario=sc, plan=plan), stage, dest)
+    if getattr(args, "plan_out", None):
+        from agents.planning.planner import write_plan
+        from agents.planning.survey import survey_plan
+
+        doc = survey_plan(
+            result,
+            sc,
+            plan,
+            prior,
+            map_source=args.map_file or "builtin",
+            origin_deg=args.origin,
+            projection=args.projection,
+            zone=args.utm_zone,
+        )
+        print(f"wrote {write_plan(doc, args.plan_out)}")
     return 0
 
 
@@ -557,16 +577,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
             (out / "plan.json", out / "plan.png"),
         )
         print("\n== policies flown in the environment, same seeds ==")
-        eval_args = argparse.Namespace(
-            scenario="paper_6_2",
-            overrides=None,
-            map_file=None,
-            episodes=args.episodes,
-            seed=1000,
-            workers=args.workers,
-            random_priors=False,
-            quiet=True,
-        )
+        # parsed by the real parser, so every option evaluate reads has its default
+        eval_args = build_parser().parse_args(
+            ["evaluate", "--scenario", "paper_6_2", "--episodes", str(args.episodes),
+             "--seed", "1000", "--workers", str(args.workers), "--quiet"]
+        )  # fmt: skip
         return _evaluate(eval_args, ["de_plan", "lawnmower", "random"], stage, out)
 
 
@@ -610,6 +625,17 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="choose each region's spacing and direction for the most POS within 0.85 T",
     )
+    p.add_argument(
+        "--plan-out",
+        default=None,
+        help="also write the survey as a plan.json (schema 2) for poc-env export",
+    )
+    p.add_argument(
+        "--origin",
+        default=None,
+        help="LAT,LON of the map's (0, 0) recorded in --plan-out's crs (export then needs none)",
+    )
+    _add_projection(p)
     p.set_defaults(func=cmd_survey)
 
     p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")

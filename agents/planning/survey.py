@@ -366,3 +366,69 @@ def write_survey(
 
         paths.append(plot_survey(result, scenario, plan, prior, out / "survey.png"))
     return paths
+
+
+def survey_plan(
+    result: SurveyResult,
+    scenario: Scenario,
+    regions: RegionPlan,
+    prior: np.ndarray,
+    *,
+    map_source: str = "builtin",
+    origin_deg: Any = None,
+    projection: str = "aeqd",
+    zone: int | None = None,
+) -> dict[str, Any]:
+    """A survey as a schema-2 plan (:mod:`agents.planning.export`), so that ``poc-env export``
+    writes its missions, KML, GeoJSON and map report.
+
+    Per UAV: ``rectangle`` null, ``waypoints_m`` the region's pattern (what the survey timed:
+    take-off field, the pattern, landing field), ``areas_m`` the region's outline (a circle as
+    its polygon; holes are not drawn), ``spacing_m``, ``track_length_m`` (the pattern's length),
+    ``flight_time_s`` (eq. 17), ``pod``, ``poc``, ``pos`` (eq. 10 x POC, the survey's columns),
+    ``feasible``, plus ``pattern`` and ``pos_flown``. Top level: ``posc`` the survey's POS_C,
+    ``upper_bound`` its physical optimum for the same effort, ``optimizer`` {``name``:
+    ``survey``, ``settings`` {``regions``}}, and the plan's geography (flight, operating area,
+    no-fly zones, airfields, bounds and, with ``origin_deg``, the ``crs``) as
+    :func:`agents.planning.planner.make_plan` records it.
+    """
+    from agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
+    from agents.planning.planner import _geography
+
+    crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
+    uavs = []
+    for k, (spec, row) in enumerate(zip(regions.regions, result.rows)):
+        geom = spec.region().geometry
+        outline = [[float(x), float(y)] for x, y in list(geom.exterior.coords)[:-1]]
+        uavs.append(
+            {
+                "id": int(spec.id),
+                "rectangle": None,
+                "spacing_m": float(spec.spacing_m),
+                "takeoff_m": [float(v) for v in result.takeoff_m[k]],
+                "landing_m": [float(v) for v in result.landing_m[k]],
+                "waypoints_m": np.asarray(result.tracks[k], dtype=float).tolist(),
+                "track_length_m": float(row.track_length_km * KM),
+                "flight_time_s": float(row.flight_time_h * 3600.0),
+                "pod": float(row.pod),
+                "poc": float(row.poc),
+                "pos": float(row.pos),
+                "feasible": bool(row.feasible),
+                "areas_m": [outline],
+                "pattern": row.pattern,
+                "pos_flown": float(row.pos_flown),
+            }
+        )
+    return {
+        "schema": SCHEMA,
+        "scenario": scenario.name,
+        "seed": 0,
+        "map_source": map_source,
+        "optimizer": {"name": "survey", "settings": {"regions": regions.name}},
+        "runtime_s": 0.0,
+        "posc": float(result.posc),
+        "upper_bound": float(result.bound),
+        "rectangle_rule": RECTANGLE_RULE,
+        "uavs": uavs,
+        **_geography(scenario, prior, crs),
+    }

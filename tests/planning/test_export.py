@@ -632,3 +632,50 @@ def test_kml_draws_the_prior_as_a_ground_overlay(tmp_path, capsys):
     root = ET.parse(outs[0]).getroot()
     assert root.find(".//k:GroundOverlay", ns) is None
     assert "no prior overlay" in root.find("k:Document/k:description", ns).text
+
+
+@pytest.mark.parametrize("regions", ["paper_6_1_polygons", "paper_6_1_mixed"])
+def test_survey_plans_reach_every_export_format(tmp_path, capsys, regions):
+    """``poc-env survey --plan-out`` writes a schema-2 plan (per UAV the pattern as
+    ``waypoints_m`` and the region as ``areas_m``, no rectangle) that every format exports: the
+    GeoJSON routes are the survey's tracks, the search areas its regions, the numbers its table."""
+    from agents.planning.survey import run_survey
+
+    plan_path = tmp_path / "survey_plan.json"
+    assert main(["survey", "--scenario", "paper_6_1", "--regions", regions, "--plan-out",
+                 str(plan_path), "--origin", "30.5,114.3"]) == 0  # fmt: skip
+    plan = load_plan(plan_path)
+    result = run_survey("paper_6_1", regions)
+    assert plan["schema"] == 2 and plan["optimizer"]["name"] == "survey"
+    assert plan["posc"] == pytest.approx(result.posc) and len(plan["uavs"]) == len(result.rows)
+    for u, row, track in zip(plan["uavs"], result.rows, result.tracks):
+        assert u["rectangle"] is None and len(u["areas_m"]) == 1
+        np.testing.assert_allclose(u["waypoints_m"], track)
+        assert u["pos"] == pytest.approx(row.pos) and u["pattern"] == row.pattern
+        assert u["flight_time_s"] == pytest.approx(row.flight_time_h * 3600)
+    for fmt in ("geojson", "kml", "html"):
+        assert main(["export", str(plan_path), "--format", fmt, "--out", str(tmp_path / fmt)]) == 0
+    qgc = ["export", str(plan_path), "--format", "qgc", "--out", str(tmp_path / "qgc")]
+    if regions == "paper_6_1_mixed":  # a circle pattern leaves the operating area by 1.7 km
+        capsys.readouterr()
+        assert main(qgc) == 2 and "inclusion geofence" in capsys.readouterr().err
+        qgc.append("--no-geofence")
+    assert main(qgc) == 0
+    doc = json.loads((tmp_path / "geojson" / "survey_plan.geojson").read_text())
+    crs = plan["crs"]
+    routes = [f for f in doc["features"] if f["properties"]["kind"] == "route"]
+    for f, u in zip(routes, plan["uavs"]):
+        back = to_local([(lat, lon) for lon, lat, _ in f["geometry"]["coordinates"]], crs)
+        np.testing.assert_allclose(back, _route(u), atol=0.15)
+    areas = [f for f in doc["features"] if f["properties"]["kind"] == "search_area"]
+    assert len(areas) == len(plan["uavs"])
+    assert len(list((tmp_path / "qgc").iterdir())) == len(plan["uavs"])
+    assert (tmp_path / "kml" / "survey_plan_prior.png").is_file()  # the scenario prior rebuilt
+    page = (tmp_path / "html" / "survey_plan.html").read_text(encoding="utf-8")
+    assert "prior: paper_6_1" in page
+    # --origin is checked before the survey runs; --plan-out must be a file path
+    capsys.readouterr()
+    assert main(["survey", "--plan-out", str(tmp_path / "x.json"), "--origin", "95,0"]) == 2
+    assert "origin" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
+    assert main(["survey", "--plan-out", str(tmp_path)]) == 2
+    assert "plan_out" in capsys.readouterr().err
