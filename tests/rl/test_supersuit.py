@@ -11,6 +11,9 @@ has the fix, and then it checks that the chain does what :class:`SwarmVecEnv` do
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -113,3 +116,19 @@ def test_supersuit_black_death_chain_matches_swarm_vec_env():
         assert (rew[dead] == 0).all()
         zero_rows += int(dead.sum())
     assert zero_rows > 0
+
+
+def test_docs_example_builds_swarm_vec_env():
+    """The SwarmVecEnv example of docs/FRAMEWORKS.md runs as written and builds what the
+    test above checks."""
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "FRAMEWORKS.md").read_text("utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", doc, flags=re.S)
+    blocks = [b for b in blocks if "SwarmVecEnv(" in b]
+    assert len(blocks) == 1
+    ns: dict = {}
+    exec(compile(blocks[0], "docs/FRAMEWORKS.md", "exec"), ns)
+    venv, ref = ns["venv"], swarm_vec_env()
+    assert (venv.num_envs, venv.action_space, venv.control) == (
+        ref.num_envs, ref.action_space, ref.control,
+    )  # fmt: skip
+    np.testing.assert_array_equal(venv.reset(), ref.reset())

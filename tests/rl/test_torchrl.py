@@ -7,8 +7,10 @@ no reset before the last UAV finishes), and a ``SyncDataCollector`` run across e
 
 from __future__ import annotations
 
+import re
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -135,3 +137,13 @@ def test_missing_torchrl_is_a_missing_extra_error(monkeypatch):
         torchrl_env("UAVSearch-Small-Heading-v0")
     assert err.value.extra == "torchrl"
     assert "pip install 'poc-env[torchrl]'" in str(err.value)
+
+
+def test_docs_example_runs(capsys):
+    """The TorchRL example of docs/FRAMEWORKS.md runs as written."""
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "FRAMEWORKS.md").read_text("utf-8")
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", doc, flags=re.S) if "torchrl" in b]
+    assert len(blocks) == 1
+    exec(compile(blocks[0], "docs/FRAMEWORKS.md", "exec"), {})
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 2 and all(line.startswith("torch.Size([2, 100, 3, 63])") for line in lines)
