@@ -242,7 +242,7 @@ class RLlibPolicy(Policy):
 
         from agents.rl.args import TrainArgs
 
-        self.dir = _checkpoint_dir(path)
+        self.dir = _checkpoint_dir(path).resolve()  # RLlib reads URIs: absolute paths only
         self.name = name or f"rllib:{path}"
         cfg = self.dir.parent / "config.json"
         if not cfg.is_file():

@@ -62,9 +62,10 @@ def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
     assert 0.0 <= posc[0] <= 1.0
 
 
-def test_one_policy_per_uav(ray_local, tmp_path):
-    run = train(_args(tmp_path, "per_uav", rllib_policies="per_uav"))
-    policy = RLlibPolicy(run)
+def test_one_policy_per_uav(ray_local, tmp_path, monkeypatch):
+    train(_args(tmp_path, "per_uav", rllib_policies="per_uav"))
+    monkeypatch.chdir(tmp_path)
+    policy = RLlibPolicy("per_uav")  # a relative run folder (RLlib itself needs absolute URIs)
     assert set(policy.modules) == {"uav_0", "uav_1", "uav_2"}
     import poc_env
 
