@@ -43,8 +43,15 @@ def test_readme_gis_walkthrough_runs_as_written(tmp_path):
         assert done.returncode == 0, done.stderr[-2000:]
     out = tmp_path / "missions"
     assert sorted(p.name for p in out.iterdir()) == [
+        "plan.html",
         "plan.kml",
+        "plan_prior.png",
         *[f"plan_uav{k}.plan" for k in range(1, 7)],
     ]
+    # the scenario's map.origin_deg gave the plan its CRS (no --origin in the walkthrough)
+    import json
+
+    plan = json.loads((tmp_path / "plan.json").read_text())
+    assert plan["crs"]["origin_deg"] == [45.4, 126.2]
     for name in ("harbin.yaml", "harbin.npy", "harbin.crs.json", "plan.json"):
         assert (tmp_path / name).is_file(), name
