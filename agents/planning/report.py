@@ -19,14 +19,14 @@ layer, its script sets ``document.body.dataset.drawn`` to the number of overlay 
 The prior
 ---------
 plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
-``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded
-by name (:func:`scenario_source`: a built-in scenario, or ``NAME.yaml`` beside the plan or in
-the current folder, as ``poc-env plan --scenario NAME.yaml`` records ``NAME``) and its prior
-built with :func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when
-there is one (resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so
-the rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones
-and operating area); when they differ, or the scenario or map file cannot be found, the page
-says why and draws no overlay rather than a wrong one. A caller with the prior at hand passes it
+``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded by
+name (:func:`scenario_source`: a built-in scenario, or ``NAME.yaml`` beside the plan or in the
+current folder, as ``poc-env plan --scenario NAME.yaml`` records ``NAME``) and its prior built with
+:func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
+(resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so the
+rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones and
+operating area); when they differ, or the scenario or map file cannot be found, the page says why
+and draws no overlay rather than a wrong one. A caller with the prior at hand passes it
 (``export_plan(..., prior=...)``: an array of the scenario's grid shape, or a ``.npy``/``.csv``
 file) and it is used as given.
 
