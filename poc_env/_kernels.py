@@ -877,6 +877,69 @@ def vectors(
                 out[e, i, k] = q
 
 
+@_jit
+def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
+    """The compass observation's sums (:class:`poc_env.sim.observations.CompassFeatures`) in
+    one pass over the cells: for each UAV ``i`` at ``(px[i], py[i])`` and each cell centre
+    ``(cx[j], cy[j])``, the sector (``n_sectors`` equal angles, sector 0 starting due east,
+    counter-clockwise) and the ring (how many ``edges`` are <= the distance) of the cell; returns
+    ``mass (B, n_sectors * (len(edges) + 1))``, the POC ``poc[i, j]`` summed per (sector, ring),
+    and ``count (B, n_sectors)``, ``others[i, j]`` summed per sector over the cells within
+    ``radius``. Cells are visited in index order, as ``np.bincount`` does."""
+    b = px.shape[0]
+    n_cells = cx.shape[0]
+    n_rings = edges.shape[0] + 1
+    mass = np.zeros((b, n_sectors * n_rings))
+    count = np.zeros((b, n_sectors))
+    two_pi = 2.0 * np.pi
+    half = n_sectors // 2
+    edges2 = edges * edges
+    radius2 = radius * radius
+    octants = n_sectors == 8
+    tol = 1e-9  # relative margin around a boundary inside which the exact formula decides
+    for i in range(b):
+        for j in range(n_cells):
+            dx = cx[j] - px[i]
+            dy = cy[j] - py[i]
+            ax = abs(dx)
+            ay = abs(dy)
+            big = max(ax, ay)
+            if octants and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
+                # clearly inside an octant: signs and |dy| vs |dx| name it, no arctan2 needed
+                if dy > 0 and dx > 0:
+                    sector = 0 if ay < ax else 1
+                elif dy > 0:
+                    sector = 2 if ay > ax else 3
+                elif dx < 0:
+                    sector = 4 if ay < ax else 5
+                else:
+                    sector = 6 if ay > ax else 7
+            else:  # on or next to a sector boundary: the defining formula, bit for bit
+                ang = np.arctan2(dy, dx)
+                sector = int(np.floor((ang + np.pi) / two_pi * n_sectors)) % n_sectors
+                sector = (sector + half) % n_sectors  # arctan2 + pi starts at west
+            d2 = dx * dx + dy * dy
+            ring = 0
+            exact = False
+            for r in range(n_rings - 1):  # squared distances decide unless next to an edge
+                if abs(d2 - edges2[r]) <= tol * edges2[r]:
+                    exact = True
+            near_radius = abs(d2 - radius2) <= tol * radius2
+            if exact or near_radius:
+                dist = np.hypot(dx, dy)
+                while ring < n_rings - 1 and edges[ring] <= dist:
+                    ring += 1
+                inside = dist <= radius
+            else:
+                while ring < n_rings - 1 and edges2[ring] <= d2:
+                    ring += 1
+                inside = d2 <= radius2
+            mass[i, sector * n_rings + ring] += poc[i, j]
+            if inside:
+                count[i, sector] += others[i, j]
+    return mass, count
+
+
 # --------------------------------------------------------------------------------- rectangle areas
 
 

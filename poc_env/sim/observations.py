@@ -222,6 +222,9 @@ class CompassFeatures:
     def __init__(self, params: Params) -> None:
         self.params = params
         self.centers = params.grid.centers.reshape(-1, 2).astype(float)
+        self._cx = np.ascontiguousarray(self.centers[:, 0])
+        self._cy = np.ascontiguousarray(self.centers[:, 1])
+        self._edges = np.asarray(RING_EDGES_M, dtype=float)
         self.others = max(params.n_agents - 1, 1)
 
     def __call__(self, raster: np.ndarray, vector: np.ndarray, k) -> np.ndarray:
@@ -235,28 +238,15 @@ class CompassFeatures:
         if b == 0:
             return out
         xy = decode_vector(self.params, vector)["xy"]
-        d = self.centers[None, :, :] - xy[:, None, :]
-        dist = np.hypot(d[..., 0], d[..., 1])
-        ang = np.arctan2(d[..., 1], d[..., 0])
-        sector = np.floor((ang + np.pi) / (2 * np.pi) * N_SECTORS).astype(np.int64) % N_SECTORS
-        # sector 0 should point east: shift by half a turn (arctan2 + pi starts at west)
-        sector = (sector + N_SECTORS // 2) % N_SECTORS
-        ring = np.searchsorted(np.asarray(RING_EDGES_M), dist, side="right")
-        rows = np.arange(b)[:, None]
         poc = raster[:, RASTER_INDEX["poc"]].reshape(b, -1).astype(float)
+        others = raster[:, RASTER_INDEX["others"]].reshape(b, -1).astype(float)
+        mass, count = _kernels.compass_bins(
+            self._cx, self._cy, np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1]),
+            poc, others, self._edges, float(OTHERS_RADIUS_M), N_SECTORS,
+        )  # fmt: skip
         total = poc.sum(axis=1)
-        mass = np.bincount(
-            (rows * (N_SECTORS * N_RINGS) + sector * N_RINGS + ring).ravel(),
-            weights=poc.ravel(),
-            minlength=b * N_SECTORS * N_RINGS,
-        ).reshape(b, -1)
         share = np.divide(mass, total[:, None], out=np.zeros_like(mass), where=total[:, None] > 0)
         out[:, VECTOR_SIZE : VECTOR_SIZE + N_SECTORS * N_RINGS] = share
-        others = raster[:, RASTER_INDEX["others"]].reshape(b, -1).astype(float)
-        others *= dist <= OTHERS_RADIUS_M
-        count = np.bincount(
-            (rows * N_SECTORS + sector).ravel(), weights=others.ravel(), minlength=b * N_SECTORS
-        ).reshape(b, -1)
         k0 = VECTOR_SIZE + N_SECTORS * N_RINGS
         out[:, k0 : k0 + N_SECTORS] = np.minimum(count / self.others, 1.0)
         out[:, k0 + N_SECTORS] = poc.mean(axis=1)

@@ -685,3 +685,111 @@ def test_rectangle_membership_kernel_matches_shapely(seed):
     for exclusive, dense in ((False, plain), (True, excl)):
         mass = rectangle_mass(grid, center, ln, wd, th, exclusive=exclusive, weights=weights)
         np.testing.assert_allclose(mass, np.sum(dense * weights, axis=(-2, -1)), rtol=1e-12)
+
+
+def ref_compass(params, raster, vector, k):
+    """The compass features in plain numpy (the formulation the kernel replaced)."""
+    from poc_env.sim.observations import (
+        FEATURES,
+        N_IDS,
+        N_RINGS,
+        N_SECTORS,
+        OTHERS_RADIUS_M,
+        RASTER_INDEX,
+        RING_EDGES_M,
+        VECTOR_SIZE,
+        decode_vector,
+    )  # fmt: skip
+
+    raster = np.asarray(raster, dtype=np.float32)
+    vector = np.asarray(vector, dtype=np.float32)
+    b = vector.shape[0]
+    out = np.zeros((b, FEATURES), dtype=np.float32)
+    out[:, :VECTOR_SIZE] = vector
+    centers = params.grid.centers.reshape(-1, 2).astype(float)
+    xy = decode_vector(params, vector)["xy"]
+    d = centers[None, :, :] - xy[:, None, :]
+    dist = np.hypot(d[..., 0], d[..., 1])
+    ang = np.arctan2(d[..., 1], d[..., 0])
+    sector = np.floor((ang + np.pi) / (2 * np.pi) * N_SECTORS).astype(np.int64) % N_SECTORS
+    sector = (sector + N_SECTORS // 2) % N_SECTORS
+    ring = np.searchsorted(np.asarray(RING_EDGES_M), dist, side="right")
+    rows = np.arange(b)[:, None]
+    poc = raster[:, RASTER_INDEX["poc"]].reshape(b, -1).astype(float)
+    total = poc.sum(axis=1)
+    mass = np.bincount(
+        (rows * (N_SECTORS * N_RINGS) + sector * N_RINGS + ring).ravel(),
+        weights=poc.ravel(),
+        minlength=b * N_SECTORS * N_RINGS,
+    ).reshape(b, -1)
+    share = np.divide(mass, total[:, None], out=np.zeros_like(mass), where=total[:, None] > 0)
+    out[:, VECTOR_SIZE : VECTOR_SIZE + N_SECTORS * N_RINGS] = share
+    others = raster[:, RASTER_INDEX["others"]].reshape(b, -1).astype(float)
+    others *= dist <= OTHERS_RADIUS_M
+    count = np.bincount(
+        (rows * N_SECTORS + sector).ravel(), weights=others.ravel(), minlength=b * N_SECTORS
+    ).reshape(b, -1)
+    k0 = VECTOR_SIZE + N_SECTORS * N_RINGS
+    out[:, k0 : k0 + N_SECTORS] = np.minimum(count / max(params.n_agents - 1, 1), 1.0)
+    out[:, k0 + N_SECTORS] = poc.mean(axis=1)
+    out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
+    return out
+
+
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_compass_kernel_equals_numpy_bit_for_bit(name):
+    """The compiled compass sums give the numpy formulation's features exactly (so tasks keep
+    their version): UAVs inside and outside the grid, on cell centres (angle ties) and on
+    sector boundaries, with a belief partly searched."""
+    params = sim.make_params(load_scenario(name))
+    rng = np.random.default_rng(7)
+    feats = obs.CompassFeatures(params)
+    hazard = obs.hazard_mask(params)
+    for trial in range(6):
+        st = sim.initial(params, [np.random.default_rng(trial + k) for k in range(3)])
+        x0, y0, x1, y1 = params.grid.bounds
+        st.pos[..., 0] = rng.uniform(x0 - 30e3, x1 + 30e3, st.pos.shape[:2])
+        st.pos[..., 1] = rng.uniform(y0 - 30e3, y1 + 30e3, st.pos.shape[:2])
+        if trial % 2:  # exactly on cell centres: neighbours at 0, 45, 90 ... degrees
+            c = params.grid.centers.reshape(-1, 2)
+            st.pos[..., :2] = c[rng.integers(0, len(c), st.pos.shape[:2])]
+        st.belief *= rng.random(st.belief.shape)
+        ras = obs.rasters(params, st, np.ones(3), hazard)
+        vec = obs.vectors(params, st)
+        m = ras.shape[0] * ras.shape[1]
+        r2, v2 = ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1)
+        k = np.arange(m) % params.n_agents
+        np.testing.assert_array_equal(feats(r2, v2, k), ref_compass(params, r2, v2, k))
+
+
+def test_compass_bins_on_boundaries_equal_the_defining_formula():
+    """Cells exactly on sector boundaries (axes, diagonals), exactly at ring edges and at the
+    others radius, and next to them: the kernel's comparisons agree with arctan2/hypot."""
+    from poc_env.sim.observations import N_RINGS, N_SECTORS, OTHERS_RADIUS_M, RING_EDGES_M
+
+    rng = np.random.default_rng(3)
+    px, py = np.array([1234.5, -7e3]), np.array([-42.0, 5e3])
+    offs = []
+    for d in (*RING_EDGES_M, OTHERS_RADIUS_M, 5e3, 1.0):
+        for ux, uy in ((1, 0), (0, 1), (-1, 0), (0, -1), (1, 1), (-1, 1), (-1, -1), (1, -1)):
+            offs.append((ux * d, uy * d))
+            offs.append((ux * d * (1 + 1e-12), uy * d))
+    offs += [tuple(v) for v in rng.normal(0, 30e3, (200, 2))]
+    offs.append((0.0, 0.0))
+    off = np.array(offs)
+    cx, cy = px[0] + off[:, 0], py[0] + off[:, 1]
+    poc, others = rng.random((2, len(cx))), rng.random((2, len(cx)))
+    edges = np.asarray(RING_EDGES_M, dtype=float)
+    mass, count = _kernels.compass_bins(
+        cx, cy, px, py, poc, others, edges, float(OTHERS_RADIUS_M), N_SECTORS
+    )
+    for i in range(2):
+        dx, dy = cx - px[i], cy - py[i]
+        dist = np.hypot(dx, dy)
+        sector = np.floor((np.arctan2(dy, dx) + np.pi) / (2 * np.pi) * N_SECTORS).astype(int)
+        sector = (sector % N_SECTORS + N_SECTORS // 2) % N_SECTORS
+        ring = np.searchsorted(edges, dist, side="right")
+        want_m = np.bincount(sector * N_RINGS + ring, poc[i], N_SECTORS * N_RINGS)
+        want_c = np.bincount(sector, others[i] * (dist <= OTHERS_RADIUS_M), N_SECTORS)
+        np.testing.assert_array_equal(mass[i], want_m)
+        np.testing.assert_array_equal(count[i], want_c)
