@@ -171,3 +171,15 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
             for folder in created:  # deepest first
                 with contextlib.suppress(OSError):
                     folder.rmdir()
+
+
+def csv_text(rows: list[dict]) -> str:
+    """Rows (one mapping each) as CSV text, the first row's keys as the header."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()

@@ -31,8 +31,6 @@ README) into ``--out``, both or neither. ``--quick``: 2 episodes on the Small ta
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import sys
 from pathlib import Path
 from typing import Any
@@ -125,14 +123,6 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
     return rows
 
 
-def to_csv(rows: list[dict[str, Any]]) -> str:
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-    w.writeheader()
-    w.writerows(rows)
-    return buf.getvalue()
-
-
 def _column(row: dict[str, Any]) -> str:
     """A row's column: its label; the unlabelled floors of every control level share one."""
     if row["label"] == row["policy"] and row["policy"] in FLOOR.values():
@@ -172,7 +162,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
     from agents.experiments.pool import ray_jobs
-    from poc_env.io import atomic_dir, write_text_atomic
+    from poc_env.io import atomic_dir, csv_text, write_text_atomic
 
     args = _parse(argv)
     given = sys.argv[1:] if argv is None else argv
@@ -184,7 +174,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     print(md)
     if args.out:  # both files or neither: staged, then merged into --out (poc_env.io)
         with atomic_dir(Path(args.out)) as stage:
-            write_text_atomic(stage / "baselines.csv", to_csv(rows))
+            write_text_atomic(stage / "baselines.csv", csv_text(rows))
             write_text_atomic(stage / "baselines.md", md)
     return rows
 

@@ -14,8 +14,6 @@ Policies are named as in :mod:`agents.policies.registry` (``ppo:PATH`` included)
 
 from __future__ import annotations
 
-import csv
-import io
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -28,6 +26,7 @@ import poc_env.limits as limits
 from agents.experiments.pool import process_pool, run_jobs  # noqa: F401 (process_pool: API)
 from agents.policies.registry import make_policy
 from poc_env.errors import ConfigError, as_int
+from poc_env.io import csv_text
 
 
 def check_policies(policies: Sequence[str]) -> None:
@@ -222,19 +221,10 @@ class Evaluation:
 
     def episodes_csv(self) -> str:
         """:meth:`episode_rows` as CSV."""
-        return _csv(self.episode_rows())
+        return csv_text(self.episode_rows())
 
     def to_csv(self) -> str:
-        return _csv(self.rows())
-
-
-def _csv(rows: list[dict[str, Any]]) -> str:
-    """Rows of one mapping each as CSV text, the first row's keys as the header."""
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-    w.writeheader()
-    w.writerows(rows)
-    return buf.getvalue()
+        return csv_text(self.rows())
 
 
 def effort_bound(

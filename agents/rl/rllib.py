@@ -20,9 +20,7 @@ Needs the ``rllib`` extra (``ray[rllib]``).
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
 import os
 import shutil
 import tempfile
@@ -35,7 +33,7 @@ import numpy as np
 from agents.policies.base import Policy
 from agents.rl.checkpoint import read_json, write_json
 from poc_env.errors import ConfigError, MissingExtraError
-from poc_env.io import write_text_atomic
+from poc_env.io import csv_text, write_text_atomic
 
 if TYPE_CHECKING:
     from agents.rl.args import TrainArgs
@@ -195,11 +193,7 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
                 algo.stop()
     finally:
         th.set_num_threads(threads)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-    w.writeheader()
-    w.writerows(rows)
-    write_text_atomic(run_dir / "metrics.csv", buf.getvalue())
+    write_text_atomic(run_dir / "metrics.csv", csv_text(rows))
     return run_dir
 
 
