@@ -199,7 +199,8 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
 
 def _save(algo: Any, dest: Path) -> None:
     """RLlib's checkpoint into ``dest``, complete or absent (a temporary folder, renamed)."""
-    tmp = Path(tempfile.mkdtemp(prefix=".checkpoint-", dir=dest.parent))
+    # RLlib writes through pyarrow's file systems, which take absolute paths (URIs) only
+    tmp = Path(tempfile.mkdtemp(prefix=".checkpoint-", dir=dest.parent)).resolve()
     try:
         algo.save_to_path(str(tmp))
         if dest.exists():

@@ -4,6 +4,7 @@ agents.experiments.pool.ray_jobs): tiny runs on one local Ray instance (2 CPUs, 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import sys
 import time
 
@@ -63,9 +64,9 @@ def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
 
 
 def test_one_policy_per_uav(ray_local, tmp_path, monkeypatch):
-    train(_args(tmp_path, "per_uav", rllib_policies="per_uav"))
-    monkeypatch.chdir(tmp_path)
-    policy = RLlibPolicy("per_uav")  # a relative run folder (RLlib itself needs absolute URIs)
+    monkeypatch.chdir(tmp_path)  # relative run folders (RLlib itself needs absolute URIs)
+    train(dataclasses.replace(_args(tmp_path, "x", rllib_policies="per_uav"), run_dir="per_uav"))
+    policy = RLlibPolicy("per_uav")
     assert set(policy.modules) == {"uav_0", "uav_1", "uav_2"}
     import poc_env
 
