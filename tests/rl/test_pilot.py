@@ -164,13 +164,14 @@ def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
     np.testing.assert_array_equal(seen, trained_on)
 
 
-def test_shipped_checkpoint_loads_and_flies_a_whole_episode():
+@pytest.mark.parametrize("name", ["ppo_pilot_paper_6_2", "ppo_heading_paper_6_2"])
+def test_shipped_checkpoint_loads_and_flies_a_whole_episode(name):
     from importlib.resources import as_file, files
 
     from agents.experiments.evaluate import episode_prior
     from agents.rl.policy import PPOPolicy
 
-    shipped = files("agents") / "checkpoints" / "ppo_pilot_paper_6_2.zip"  # package data
+    shipped = files("agents") / "checkpoints" / f"{name}.zip"  # package data
     env = UAVSearchParallelEnv("paper_6_2")
     seed = 987_654  # far from the evaluation seeds, and priors training never drew
     obs, _ = env.reset(seed=seed, options={"prior": episode_prior(env.scenario, seed)})
