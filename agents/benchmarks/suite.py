@@ -87,6 +87,9 @@ def bench_sb3(scenario: str, iterations: int) -> float:
 
 def bench_rllib(task: str, runners: int, iterations: int) -> float:
     """RLlib PPO agent transitions/s with ``runners`` env runners (shared policy)."""
+    from poc_env.cluster import require_ray
+
+    require_ray("poc-env bench suite (the RLlib figures; --skip-rllib leaves them out)")
     import torch as th
     from ray.tune.registry import register_env
 
@@ -153,4 +156,12 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    from poc_env.errors import PocEnvError
+
+    try:
+        main()
+    except PocEnvError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)

@@ -80,22 +80,12 @@ def checkpoint_control(spelling: str) -> str | None:
     if not sep or kind not in ("ppo", "rllib"):
         return None
     if kind == "rllib":
-        import json
+        from agents.rl.rllib import run_control
 
-        for folder in (Path(path), Path(path).parent):
-            cfg = folder / "config.json"
-            if cfg.is_file():
-                try:
-                    data = json.loads(cfg.read_text())
-                except ValueError:
-                    return None
-                task = data.get("task") if isinstance(data, dict) else None
-                if task:
-                    from poc_env.tasks import get_task
-
-                    return get_task(task).control
-                return "heading"  # rllib runs without a task fly the heading level
-        return None
+        try:
+            return run_control(path)
+        except ConfigError:
+            return None
     try:
         task = _run_task(model_path(path))
     except ConfigError:

@@ -224,6 +224,18 @@ def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
     return p
 
 
+def run_control(path: str | os.PathLike[str]) -> str:
+    """The control level an RLlib run (its folder or ``checkpoint/``) was trained at, from its
+    ``config.json`` through :func:`env_kwargs` (the rule the run itself used)."""
+    from agents.rl.args import TrainArgs
+
+    cfg = _checkpoint_dir(path).parent / "config.json"
+    if not cfg.is_file():
+        raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
+    args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
+    return str(env_kwargs(args).get("control", "increments"))
+
+
 class RLlibPolicy(Policy):
     """An RLlib checkpoint of ``poc-env train --engine rllib`` as a poc-env policy.
 
@@ -270,7 +282,7 @@ class RLlibPolicy(Policy):
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         import torch as th
 
-        from poc_env.sim.control import to_increments
+        from poc_env.sim.control import ACTION_DIMS, to_increments
         from poc_env.sim.observations import decode_vector, split_observation
 
         if not observations:
@@ -280,13 +292,17 @@ class RLlibPolicy(Policy):
         ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
         k = np.array([self._agents.index(a) for a in live])
         feats = self._features(np.stack(ras), np.stack(vec), k)
-        acts = np.zeros((len(live), 3 if self.control == "increments" else 2))
-        for j, a in enumerate(live):
-            module = self.modules["shared"] if "shared" in self.modules else self.modules[a]
+        acts = np.zeros((len(live), ACTION_DIMS[self.control]))
+        groups = (
+            {"shared": list(range(len(live)))}
+            if "shared" in self.modules
+            else {a: [j] for j, a in enumerate(live)}
+        )  # one forward pass per module: every live UAV at once for a shared policy
+        for name, rows in groups.items():
             with th.no_grad():
-                out = module.forward_inference({"obs": th.as_tensor(feats[j : j + 1])})
-            dist = out["action_dist_inputs"].numpy()[0]
-            acts[j] = np.clip(dist[: acts.shape[1]], -1.0, 1.0)  # the Gaussian's mean
+                out = self.modules[name].forward_inference({"obs": th.as_tensor(feats[rows])})
+            dist = out["action_dist_inputs"].numpy()
+            acts[rows] = np.clip(dist[:, : acts.shape[1]], -1.0, 1.0)  # the Gaussian's mean
         q = decode_vector(self.env.params, np.stack(vec))
         inc = to_increments(self.env.params, self.control, q, acts, k)
         return {a: inc[j] for j, a in enumerate(live)}, state

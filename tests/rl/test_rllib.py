@@ -56,6 +56,9 @@ def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
     rows = list(csv.DictReader((run / "metrics.csv").open()))
     assert rows and int(rows[-1]["env_steps"]) >= 200
     assert int(float(rows[-1]["agent_steps"])) == 3 * int(rows[-1]["env_steps"])
+    from agents.rl.policy import checkpoint_control
+
+    assert checkpoint_control(f"rllib:{run}") == "heading"  # from the run's task
     policy = make_policy(f"rllib:{run}")
     assert isinstance(policy, RLlibPolicy) and set(policy.modules) == {"shared"}
     ev = evaluate("small", [f"rllib:{run}"], episodes=2, seed0=0)
