@@ -315,6 +315,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
     _check_out("out", args.out, "folder")
+    if args.baseline is not None and args.baseline not in names:
+        raise ConfigError("baseline", args.baseline, "one of --policies: " + ", ".join(names))
     with _ray(args):
         if not args.out:
             return _evaluate(args, names, None, None)
@@ -350,7 +352,7 @@ def _evaluate(
     """The evaluation of ``cmd_evaluate``, its files written into ``stage`` (shown as ``dest``)."""
     from agents.experiments.evaluate import evaluate, plot_curves
     from poc_env.config import load_scenario, parse_overrides
-    from poc_env.io import write_text_atomic
+    from poc_env.io import csv_text, write_text_atomic
 
     scenario, random_priors, label = args.scenario, args.random_priors, None
     if args.task is not None:  # the task's scenario and prior kind (poc_env.tasks)
@@ -385,15 +387,21 @@ def _evaluate(
         f"{label or sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
         f"{args.seed + args.episodes - 1}{priors}"
     )
-    print(ev.table())
+    text = ev.table()
+    if args.baseline is not None:
+        text += "\n\n" + ev.paired_table(args.baseline)
+    print(text)
     if stage is not None:
-        files = (
+        files = [
             write_text_atomic(stage / "evaluate.csv", ev.to_csv()),
             write_text_atomic(stage / "episodes.csv", ev.episodes_csv()),
-            write_text_atomic(stage / "evaluate.txt", ev.table() + "\n"),
+            write_text_atomic(stage / "evaluate.txt", text + "\n"),
             plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s),
-        )
-        _wrote(files, stage, dest)
+        ]
+        if args.baseline is not None:
+            paired = csv_text(ev.paired(args.baseline))
+            files.append(write_text_atomic(stage / "paired.csv", paired))
+        _wrote(tuple(files), stage, dest)
     return 0
 
 
@@ -674,6 +682,13 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="every seed flies a fresh random Gaussian-mixture prior (agents.experiments.evaluate."
         "episode_prior; a generator stream training never draws from)",
+    )
+    p.add_argument(
+        "--baseline",
+        default=None,
+        metavar="POLICY",
+        help="one of --policies: also print (and write paired.csv) every other policy's mean "
+        "per-seed POSC difference to it, with its 95 %% interval and wins/ties/losses",
     )
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -198,6 +198,60 @@ class Evaluation:
             )
         return "\n".join(lines)
 
+    def paired(self, baseline: str) -> list[dict[str, Any]]:
+        """Every other policy against ``baseline`` on the same seeds: the mean of the per-seed
+        POSC differences (policy - baseline), its 95 % interval (1.96 standard errors of the
+        differences), and the seeds the policy wins, ties (|difference| < 1e-12) and loses.
+
+        The seeds are shared, so the prior-to-prior spread that dominates each policy's own
+        interval cancels: this is the comparison to quote when two policies' intervals overlap.
+
+        Raises
+        ------
+        ConfigError
+            Field ``baseline`` when ``baseline`` is not one of the evaluated policies.
+        """
+        if baseline not in self.policies:
+            raise ConfigError("baseline", baseline, "one of the evaluated policies: "
+                              + ", ".join(self.policies))  # fmt: skip
+        ref = {e.seed: e.posc for e in self.episodes if e.policy == baseline}
+        out = []
+        for p in self.policies:
+            if p == baseline:
+                continue
+            d = np.array([e.posc - ref[e.seed] for e in self.episodes if e.policy == p])
+            half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else 0.0
+            out.append(
+                {
+                    "policy": p,
+                    "baseline": baseline,
+                    "episodes": len(d),
+                    "diff_mean": float(d.mean()),
+                    "diff_ci95": float(half),
+                    "wins": int((d > 1e-12).sum()),
+                    "ties": int((np.abs(d) <= 1e-12).sum()),
+                    "losses": int((d < -1e-12).sum()),
+                }
+            )
+        return out
+
+    def paired_table(self, baseline: str) -> str:
+        """:meth:`paired` as text: the difference, its interval, and wins/ties/losses."""
+        rows = self.paired(baseline)
+        width = max(14, *(len(p) for p in self.policies))
+        head = (
+            f"{'policy':<{width}} {'- ' + baseline:>{max(16, len(baseline) + 2)}} {'±95%':>7} "
+            f"{'wins':>5} {'ties':>5} {'losses':>6}"
+        )
+        lines = [f"paired differences in POSC against {baseline} (same seeds)", head]
+        lines.append("-" * len(head))
+        for r in rows:
+            lines.append(
+                f"{r['policy']:<{width}} {r['diff_mean']:>+{max(16, len(baseline) + 2)}.4f} "
+                f"{r['diff_ci95']:>7.4f} {r['wins']:>5} {r['ties']:>5} {r['losses']:>6}"
+            )
+        return "\n".join(lines)
+
     def episode_rows(self) -> list[dict[str, Any]]:
         """One row per episode: POSC, both bounds of its prior and POSC / reach-aware bound."""
         reach = self.bound_reach

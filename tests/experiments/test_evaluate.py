@@ -108,3 +108,27 @@ def test_both_bounds_and_the_normalised_score(tmp_path):
     rows = rp.episode_rows()
     assert [r["bound_reach"] for r in rows] == reach
     assert [r["normalised"] for r in rows] == [e.posc / e.bound_reach for e in rp.episodes]
+
+
+def test_paired_differences_against_a_baseline(tmp_path, capsys):
+    """``--baseline``: per-seed differences on shared seeds, read back from paired.csv and
+    recomputed from episodes.csv; a baseline outside --policies is refused before any run."""
+    out = tmp_path / "ev"
+    argv = ["evaluate", "--scenario", "small", "--policies", "lawnmower,random,greedy_bayes"]
+    argv += ["--episodes", "3", "--random-priors", "--quiet", "--baseline", "random"]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert "paired differences in POSC against random" in capsys.readouterr().out
+    eps = list(csv.DictReader((out / "episodes.csv").open()))
+    posc = {(e["policy"], int(e["seed"])): float(e["posc"]) for e in eps}
+    rows = {r["policy"]: r for r in csv.DictReader((out / "paired.csv").open())}
+    assert set(rows) == {"lawnmower", "greedy_bayes"}
+    for p, r in rows.items():
+        d = np.array([posc[p, s] - posc["random", s] for s in (1000, 1001, 1002)])
+        assert float(r["diff_mean"]) == pytest.approx(d.mean(), abs=1e-12)
+        assert float(r["diff_ci95"]) == pytest.approx(1.96 * d.std(ddof=1) / np.sqrt(3))
+        assert int(r["wins"]) + int(r["ties"]) + int(r["losses"]) == 3
+        assert int(r["wins"]) == int((d > 1e-12).sum())
+    bad = ["evaluate", "--scenario", "small", "--policies", "lawnmower", "--baseline", "random"]
+    assert main([*bad, "--quiet", "--out", str(tmp_path / "none")]) == 2
+    assert "baseline" in capsys.readouterr().err
+    assert not (tmp_path / "none").exists()
