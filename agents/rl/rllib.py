@@ -13,7 +13,10 @@ existing cluster with ``--address``; ``--num-env-runners K`` samples on K Ray ac
 driver). The run folder gets ``config.json`` (the :class:`~agents.rl.args.TrainArgs`),
 ``metrics.csv`` (one row per training iteration; ``agent_steps`` is env steps x UAVs, an
 upper bound once UAVs land) and ``checkpoint/`` (RLlib's
-``save_to_path``, written into a temporary folder and renamed when complete).
+``save_to_path``, written into a temporary folder and renamed when complete); both are
+rewritten every ``--checkpoint-every`` env steps and at the end, so a stopped run keeps its
+newest checkpoint and curve. ``--total-timesteps`` counts env steps here (each holds one
+transition of every UAV still flying).
 :class:`RLlibPolicy` (``rllib:PATH`` in ``poc-env evaluate``) flies such a checkpoint.
 Needs the ``rllib`` extra (``ray[rllib]``).
 """
@@ -166,6 +169,7 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
             try:
                 t0 = time.perf_counter()
                 steps = 0
+                next_save = args.checkpoint_every
                 while steps < args.total_timesteps:
                     result = algo.train()
                     steps = int(_metric(result, "num_env_steps_sampled_lifetime"))
@@ -188,6 +192,12 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
                             f"return {r['episode_return_mean']:.4f}",
                             flush=True,
                         )
+                    if steps >= next_save and steps < args.total_timesteps:
+                        # a long run keeps its newest checkpoint and curve (a kill loses at
+                        # most checkpoint_every env steps)
+                        _save(algo, run_dir / "checkpoint")
+                        write_text_atomic(run_dir / "metrics.csv", csv_text(rows))
+                        next_save = (steps // args.checkpoint_every + 1) * args.checkpoint_every
                 _save(algo, run_dir / "checkpoint")
             finally:
                 algo.stop()

@@ -77,6 +77,27 @@ def test_one_policy_per_uav(ray_local, tmp_path, monkeypatch):
         policy.reset(poc_env.parallel_env("paper_6_2"), seed=0)
 
 
+def test_a_long_run_keeps_its_newest_checkpoint_and_curve(ray_local, tmp_path, monkeypatch):
+    """Every --checkpoint-every env steps the checkpoint and metrics.csv are rewritten, so a
+    run stopped midway keeps them (here: seen at each save, before the run ends)."""
+    import agents.rl.rllib as rl
+
+    seen: list[int] = []
+    real = rl._save
+
+    def save(algo, dest):
+        real(algo, dest)
+        metrics = dest.parent / "metrics.csv"
+        seen.append(len(list(csv.DictReader(metrics.open()))) if metrics.exists() else 0)
+
+    monkeypatch.setattr(rl, "_save", save)
+    run = train(_args(tmp_path, "long", total_timesteps=300, checkpoint_every=100))
+    # two saves midway (metrics.csv then holds 0 and 1 rows: it is written after the save),
+    # then the final one; every iteration is in the final curve
+    assert seen[:2] == [0, 1] and len(seen) == 3
+    assert len(list(csv.DictReader((run / "metrics.csv").open()))) == 3
+
+
 def test_ray_jobs_equal_local_jobs(ray_local):
     # the same episodes, as Ray tasks on 2 workers and in this process: identical results
     names = ["lawnmower", "random", "greedy_bayes"]
