@@ -298,6 +298,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         "campaign": "agents.benchmarks.campaign",
         "baselines": "agents.benchmarks.baselines",
         "suite": "agents.benchmarks.suite",
+        "learning": "agents.benchmarks.learning",
+        "generalise": "agents.benchmarks.generalise",
     }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
@@ -795,11 +797,22 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
     p.add_argument(
         "what",
-        choices=["env", "plan", "train", "campaign", "baselines", "suite"],
+        choices=[
+            "env",
+            "plan",
+            "train",
+            "campaign",
+            "baselines",
+            "suite",
+            "learning",
+            "generalise",
+        ],
         help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s; campaign: "
         "hostile-input cases and their outcomes (needs hypothesis, the dev extra); baselines: "
         "the baseline table of every registered task; suite: env-steps/s per control level and "
-        "PPO transitions/s in SB3 and RLlib",
+        "PPO transitions/s in SB3 and RLlib; learning: held-out learning curves of training "
+        "runs over seeds and the transitions to reach a planner; generalise: policies on "
+        "held-out geometries and comms-limited beliefs",
     )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)
