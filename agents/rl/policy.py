@@ -54,22 +54,28 @@ def _flat_space(space: Any) -> Any:
     return space
 
 
-def _run_task(model: Path) -> Any:
-    """The task a model was trained on, from its run folder's ``config.json`` (the model's
-    folder or up to two above it: ``model.zip``, ``checkpoints/<step>/model.zip``), or None."""
+def _run_config(model: Path) -> dict[str, Any]:
+    """The ``config.json`` of a model's run folder (the model's folder or up to two above it:
+    ``model.zip``, ``checkpoints/<step>/model.zip``), or ``{}``."""
     import json
-
-    from poc_env.tasks import get_task
 
     for folder in list(model.parents)[:3]:
         cfg = folder / "config.json"
         if cfg.is_file():
             try:
-                task = json.loads(cfg.read_text()).get("task")
-            except (ValueError, AttributeError, OSError):
-                return None
-            return get_task(task) if task else None
-    return None
+                data = json.loads(cfg.read_text())
+            except (ValueError, OSError):
+                return {}
+            return data if isinstance(data, dict) else {}
+    return {}
+
+
+def _run_task(model: Path) -> Any:
+    """The task a model was trained on, from its run's ``config.json``, or None."""
+    from poc_env.tasks import get_task
+
+    task = _run_config(model).get("task")
+    return get_task(task) if task else None
 
 
 def checkpoint_control(spelling: str) -> str | None:
@@ -140,7 +146,8 @@ class PPOPolicy(Policy):
         if task is not None and m_obs == pilot.OBSERVATION_SPACE:
             # trained on a task: its control level flies the compass-observation policy
             self.mode, self.control = "compass", task.control
-            self._features = pilot.PilotFeatures(env.params)
+            index = _run_config(self.path).get("agent_index", True) is not False
+            self._features = pilot.PilotFeatures(env.params, agent_index=index)
         elif m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
             self.mode, self.control = "compass", "heading"  # the pilot recipe
             self._features = pilot.PilotFeatures(env.params)

@@ -131,6 +131,9 @@ class SwarmVecEnv(VecEnv):
     control, auto_return:
         The control level and its return-home autopilot, as for the PettingZoo env
         (:mod:`poc_env.sim.control`).
+    agent_index:
+        With ``obs_type="compass"``: ``False`` zeroes the agent-index block of the features
+        (the ablation of the credit-and-sharing table; the registered tasks keep it).
     """
 
     def __init__(
@@ -143,7 +146,10 @@ class SwarmVecEnv(VecEnv):
         overrides: Mapping[str, Any] | None = None,
         control: str = "increments",
         auto_return: bool = True,
+        agent_index: bool = True,
     ) -> None:
+        if not isinstance(agent_index, bool):
+            raise ConfigError("agent_index", agent_index, "true or false")
         if isinstance(n_envs, bool) or not isinstance(n_envs, int | np.integer) or n_envs < 1:
             raise ConfigError("n_envs", n_envs, "an integer >= 1")
         if obs_type not in OBS_TYPES:
@@ -181,7 +187,10 @@ class SwarmVecEnv(VecEnv):
         self._returns = np.zeros((e, n))
         self._lengths = np.zeros((e, n), dtype=np.int64)
         self._actions = np.zeros((e, n, 3))
-        self._features = obs_mod.CompassFeatures(self.params) if obs_type == "compass" else None
+        self.agent_index = agent_index
+        self._features = (
+            obs_mod.CompassFeatures(self.params, agent_index) if obs_type == "compass" else None
+        )
         self._t_start = time.time()
         self._closed = False
 

@@ -217,10 +217,14 @@ class CompassFeatures:
     """The ``compass`` observation (``obs_type="compass"``): the state vector, the belief
     compass, nearby UAVs per sector, the mean remaining POC and the agent index (table in
     :mod:`agents.rl.pilot`'s docstring), computed from the raster and vector observations of
-    any number of UAVs at once."""
+    any number of UAVs at once.
 
-    def __init__(self, params: Params) -> None:
+    ``agent_index=False`` leaves the index block at zero: the ablation of the credit-and-sharing
+    table (a shared policy that cannot tell the UAVs of one airfield apart)."""
+
+    def __init__(self, params: Params, agent_index: bool = True) -> None:
         self.params = params
+        self.agent_index = bool(agent_index)
         self.centers = params.grid.centers.reshape(-1, 2).astype(float)
         self._cx = np.ascontiguousarray(self.centers[:, 0])
         self._cy = np.ascontiguousarray(self.centers[:, 1])
@@ -250,7 +254,8 @@ class CompassFeatures:
         k0 = VECTOR_SIZE + N_SECTORS * N_RINGS
         out[:, k0 : k0 + N_SECTORS] = np.minimum(count / self.others, 1.0)
         out[:, k0 + N_SECTORS] = poc.mean(axis=1)
-        out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
+        if self.agent_index:
+            out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
         return out
 
 

@@ -319,3 +319,22 @@ def test_sb3_api_and_errors():
         SwarmVecEnv("small", obs_type="pixels")
     with pytest.raises(ConfigError, match="seed"):
         SwarmVecEnv("small", seed=-1)
+
+
+def test_compass_without_the_agent_index():
+    """``agent_index=False``: the same transitions, the index block of every slot at zero."""
+    from poc_env.sim.observations import N_IDS
+
+    kw = {"n_envs": 2, "seed": 3, "obs_type": "compass", "control": "heading"}
+    a = SwarmVecEnv("small", **kw)
+    b = SwarmVecEnv("small", agent_index=False, **kw)
+    oa, ob = a.reset(), b.reset()
+    act = np.random.default_rng(0).uniform(-1, 1, (a.num_envs, 2)).astype(np.float32)
+    for _ in range(3):
+        assert oa[:, -N_IDS:].any() and not ob[:, -N_IDS:].any()
+        np.testing.assert_array_equal(oa[:, :-N_IDS], ob[:, :-N_IDS])
+        oa, ra, *_ = a.step(act)
+        ob, rb, *_ = b.step(act)
+        np.testing.assert_array_equal(ra, rb)
+    with pytest.raises(ConfigError, match="agent_index"):
+        SwarmVecEnv("small", agent_index="no", **kw)

@@ -62,6 +62,10 @@ def test_features_stay_in_the_space_and_carry_the_agent_index():
     # same vector + raster, different index: different features
     assert not np.array_equal(feats(ras[:1], vec[:1], [0]), feats(ras[:1], vec[:1], [1]))
     np.testing.assert_array_equal(f[:, :VECTOR_SIZE], vec)
+    # the ablation without the index: the same features with the index block at zero
+    g = PilotFeatures(env.params, agent_index=False)(ras, vec, np.arange(len(env.agents)))
+    assert not g[:, -8:].any()
+    np.testing.assert_array_equal(g[:, :-8], f[:, :-8])
 
 
 def test_autopilot_heads_where_told_within_limits():
