@@ -364,7 +364,8 @@ def _evaluate(
         if scenario is not None:
             raise ConfigError("task", args.task, "either --task or --scenario, not both")
         scenario, random_priors, label = task.scenario, random_priors or task.random_prior, task.id
-        from agents.rl.policy import checkpoint_control
+        from agents.rl.policy import checkpoint_control, checkpoint_origin
+        from poc_env.tasks import get_task as _task_of
 
         for name in names:  # a learned policy is scored on the control level it learned
             trained = checkpoint_control(name)
@@ -373,6 +374,16 @@ def _evaluate(
                     "policies", name, f"a checkpoint trained at the task's control level "
                     f"({task.control}); this one was trained at '{trained}'",
                 )  # fmt: skip
+            origin, recipe = checkpoint_origin(name)
+            if origin is None and recipe in ("shared", "central"):
+                raise ConfigError(
+                    "policies", name, f"a checkpoint trained on the task's compass observation "
+                    f"({task.id}); this one was trained with the '{recipe}' recipe's "
+                    "observation (raster and vector)",
+                )  # fmt: skip
+            if origin is not None and _task_of(origin).id != task.id:
+                print(f"note: {name} was trained on {_task_of(origin).id}; flown here on "
+                      f"{task.id} (a transfer: same control level and observation)")  # fmt: skip
     sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
     ev = evaluate(
         sc,

@@ -55,12 +55,13 @@ def _flat_space(space: Any) -> Any:
 
 
 def _run_config(model: Path) -> dict[str, Any]:
-    """The ``config.json`` of a model's run folder (the model's folder or up to two above it:
-    ``model.zip``, ``checkpoints/<step>/model.zip``), or ``{}``."""
+    """The training config of a model: ``<model>.json`` beside it (a shipped checkpoint's
+    card: the run's config.json plus how it was evaluated), else the ``config.json`` of its
+    run folder (the model's folder or up to two above it: ``model.zip``,
+    ``checkpoints/step_N.zip``), or ``{}``."""
     import json
 
-    for folder in list(model.parents)[:3]:
-        cfg = folder / "config.json"
+    for cfg in [model.with_suffix(".json")] + [f / "config.json" for f in model.parents[:3]]:
         if cfg.is_file():
             try:
                 data = json.loads(cfg.read_text())
@@ -97,6 +98,21 @@ def checkpoint_control(spelling: str) -> str | None:
     except ConfigError:
         return None
     return None if task is None else task.control
+
+
+def checkpoint_origin(spelling: str) -> tuple[str | None, str | None]:
+    """``(task id, recipe)`` a ``ppo:PATH`` policy was trained with (from its run's config or
+    card), ``(None, None)`` for other policies and models without a config."""
+    kind, sep, path = spelling.partition(":")
+    if not sep or kind != "ppo":
+        return None, None
+    try:
+        cfg = _run_config(model_path(path))
+    except ConfigError:
+        return None, None
+    task = cfg.get("task")
+    recipe = cfg.get("recipe")
+    return (str(task) if task else None), (str(recipe) if recipe else None)
 
 
 class PPOPolicy(Policy):

@@ -74,3 +74,30 @@ def test_a_checkpoint_of_another_control_level_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "policies: got 'ppo:" in err and "trained at 'waypoint'" in err
     assert main([*argv, "UAVSearch-Small-Random-Waypoint-v0"]) == 0  # same level, other maps
+    out = capsys.readouterr().out  # a transfer is allowed and said so, naming both tasks
+    assert "was trained on poc_env/UAVSearch-Small-Waypoint-v0; flown here on " in out
+    assert "poc_env/UAVSearch-Small-Random-Waypoint-v0 (a transfer" in out
+    assert main([*argv, "UAVSearch-Small-Waypoint-v0"]) == 0
+    assert "a transfer" not in capsys.readouterr().out
+
+
+def test_a_checkpoint_of_another_observation_is_refused(tmp_path, capsys):
+    """A shared-recipe checkpoint (raster + vector observation) is not a task policy."""
+    from poc_env.cli import main
+
+    run = train(
+        TrainArgs(
+            scenario="small",
+            overrides=["episode.horizon_steps=8"],
+            total_timesteps=48,
+            n_steps=8,
+            batch_size=24,
+            n_envs=1,
+            run_dir=str(tmp_path / "shared"),
+            progress=False,
+        )
+    )
+    argv = ["evaluate", "--policies", f"ppo:{run}", "--episodes", "1", "--quiet", "--task"]
+    assert main([*argv, "UAVSearch-Small-Increments-v0"]) != 0
+    err = capsys.readouterr().err
+    assert "compass observation" in err and "'shared' recipe" in err
