@@ -64,7 +64,8 @@ class TrainArgs:
     net_arch: list[int] = field(default_factory=lambda: [128, 128])
     """pilot and central recipes: hidden layers of the policy and value MLPs."""
     total_timesteps: int = 1_000_000
-    """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts."""
+    """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts.
+    PPO's only: a BC warm start (--bc-teacher) comes on top, and 0 saves the BC policy alone."""
     seed: int = 0
     """Root seed of the env generators (SeedSequence) and the torch, numpy, python ones."""
     n_envs: int = 4
@@ -97,6 +98,20 @@ class TrainArgs:
     """torch intra-op threads (small networks run fastest and reproducibly on one)."""
     progress: bool = True
     """Show a progress bar with the mean POSC of recent episodes."""
+    bc_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
+    """--task, sb3: behaviour-cloning warm start from this registered classical policy
+    (allocation_plan, greedy_bayes, lawnmower, ...; not ppo:/rllib:) before PPO (agents.rl.bc):
+    its demonstrations at the task's control level fit the policy mean and value head; bc.json
+    in the run folder. A resumed run does not repeat it."""
+    bc_episodes: int = 32
+    """BC: teacher episodes to record (seeds and priors from their own stream of --seed)."""
+    bc_epochs: int = 10
+    """BC: passes over the demonstrations (Adam, learning rate 1e-3)."""
+    bc_batch_size: int = 64
+    """BC: minibatch size of the fit (smaller than PPO's: demonstrations are few)."""
+    bc_log_std: float = -1.0
+    """BC: the policy's log standard deviation after the fit (PPO explores around the teacher;
+    -1.0: std 0.37)."""
 
     def __post_init__(self) -> None:
         if self.algo not in ALGOS:
@@ -122,7 +137,7 @@ class TrainArgs:
         if self.address is not None and self.engine != "rllib":
             raise ConfigError("address", self.address, "an address with --engine rllib only")
         for name, lo, hi in (
-            ("total_timesteps", 1, 10**12),
+            ("total_timesteps", 0 if self.bc_teacher is not None else 1, 10**12),
             ("seed", 0, limits.MAX_SEED),
             ("n_envs", 1, limits.N_ENVS_MAX),
             ("checkpoint_every", 1, 10**12),
@@ -157,6 +172,27 @@ class TrainArgs:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, getattr(self, name), "true or false")
         parse_overrides(self.overrides)
+        self._check_bc()
+
+    def _check_bc(self) -> None:
+        """The behaviour-cloning fields (agents.rl.bc)."""
+        as_int("bc_episodes", self.bc_episodes, 1, limits.MAX_EPISODES)
+        as_int("bc_epochs", self.bc_epochs, 1, 10_000)
+        as_int("bc_batch_size", self.bc_batch_size, 1, 10**7)
+        as_number("bc_log_std", self.bc_log_std, -20.0, 2.0)
+        if self.bc_teacher is None:
+            return
+        from agents.rl.bc import check_teacher
+
+        check_teacher(self.bc_teacher)
+        if self.task is None:
+            raise ConfigError(
+                "bc_teacher", self.bc_teacher, "None without --task (BC warm-starts task runs)"
+            )
+        if self.engine != "sb3":
+            raise ConfigError(
+                "bc_teacher", self.bc_teacher, "None with --engine rllib (BC is for sb3 runs)"
+            )
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "config") -> TrainArgs:

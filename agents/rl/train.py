@@ -30,6 +30,8 @@ Every run writes to its own folder (default ``runs/<scenario>-<algo>-s<seed>-<ti
     tb/ppo_1/        TensorBoard logs (SB3's, plus rollout/posc_mean)
     checkpoints/     atomic checkpoints and latest.json (:mod:`agents.rl.checkpoint`)
     model.zip        the final model
+    bc.json          with ``--bc-teacher``: the behaviour-cloning warm start (teacher POSC,
+                     samples, losses; :mod:`agents.rl.bc`); TensorBoard scalars in tb/bc/
 
 Checkpoints are taken at rollout boundaries once every ``checkpoint_every`` timesteps and at
 the end; the newest ``keep_checkpoints`` are kept.
@@ -360,6 +362,10 @@ def _run(
         env = make_env(args, sc)
         if checkpoint is None:
             model = make_model(args, env, run_dir / "tb")
+            if args.bc_teacher is not None:  # warm start; a resumed run has it in its weights
+                from agents.rl.bc import warm_start
+
+                warm_start(args, sc, model, run_dir)
         else:
             model = restore_checkpoint(checkpoint, env, run_dir)
         start = int(model.num_timesteps)

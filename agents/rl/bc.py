@@ -1,0 +1,399 @@
+"""Behaviour-cloning (BC) warm start for task training (``poc-env train --task ID --bc-teacher``).
+
+PPO from scratch learns next to nothing at the paper's eq. 19 control level (the
+``Increments`` tasks): a random walk of increments seldom reaches the grid, let alone covers
+it. The warm start flies a classical teacher of :mod:`agents.policies.registry`
+(``allocation_plan``, ``greedy_bayes``, ``lawnmower``, ...) for a few episodes, fits the fresh
+SB3 ``MlpPolicy`` to what it did, and hands the fitted policy to ordinary PPO fine-tuning:
+
+1. :func:`collect_demos` flies the teacher in
+   :class:`poc_env.envs.parallel.UAVSearchParallelEnv` (increments control, dict observations)
+   exactly as :func:`agents.experiments.evaluate.run_episode` does (``env.reset(seed,
+   prior)``, ``policy.reset(env, seed)``, ``predict(obs)`` every step) and records, for every
+   step and every UAV still flying, the ``compass`` features the trained policy sees
+   (:class:`~poc_env.sim.observations.CompassFeatures` over
+   :func:`~poc_env.sim.observations.split_observation`, as :class:`agents.rl.policy.PPOPolicy`
+   computes them; the same values :class:`~poc_env.envs.vector.SwarmVecEnv` observes), a label
+   at the task's control level and the UAV's env reward.
+2. :func:`pretrain` fits the policy's Gaussian mean to the labels and its value head to the
+   discounted returns (both mean squared errors, one Adam), then sets the policy's
+   ``log_std`` (default -1, std 0.37) so PPO explores near the teacher.
+3. :func:`warm_start` does both for a fresh run (:func:`agents.rl.train._run`; a resumed run
+   loads its checkpoint instead and never repeats BC; one killed before its first checkpoint
+   starts again from step 0, BC included, with the same result) and writes ``bc.json`` and
+   TensorBoard scalars (``tb/bc``). ``--total-timesteps`` counts PPO transitions only (0:
+   the BC policy alone is saved).
+
+Labels (one per UAV and step, ``Box(-1, 1)`` of the control level,
+:mod:`poc_env.sim.control`):
+
+=============  ==================================================================================
+control        label
+=============  ==================================================================================
+increments     the teacher's eq. 19 action ``(dv, d alpha, d beta)``, clipped to [-1, 1]
+heading        the unit vector of the UAV's displacement over the step (new xy - old xy); steps
+               with zero displacement have no label and are left out
+waypoint       the UAV's position after the step mapped to [-1, 1] over ``params.bounds`` (eq.
+               20's operating area, the inverse of :func:`poc_env.sim.control.waypoint_goal`)
+=============  ==================================================================================
+
+Value targets: the discounted return ``G_t = r_t + gamma G_{t+1}`` of each UAV's own trajectory
+(its rewards from the scenario's reward config, :mod:`poc_env.sim.rewards`), ending with the
+UAV's last step (landing, crash or the horizon: no bootstrap), as PPO's value head estimates
+them in :class:`~poc_env.envs.vector.SwarmVecEnv`.
+
+Seeding: every episode seed and random prior comes from one generator of the caller's
+``SeedSequence``; :func:`warm_start` uses ``SeedSequence(seed, spawn_key=DEMO_KEY)``, a stream
+that neither the training envs (``SeedSequence(seed).spawn(n_envs)``: one-word spawn keys)
+nor the evaluation priors (``default_rng([seed, EVAL_PRIOR_STREAM])``: no spawn key) can
+produce, so demonstrations never replay a training or held-out episode. Minibatches are
+shuffled by a generator of ``SeedSequence(seed, spawn_key=FIT_KEY)``; BC draws nothing from
+the global torch, numpy or python generators, so a run with BC is as reproducible as one
+without.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from poc_env.errors import ConfigError, as_int, as_number
+
+if TYPE_CHECKING:
+    from stable_baselines3 import PPO
+
+    from agents.rl.args import TrainArgs
+    from poc_env.config import Scenario
+    from poc_env.tasks import Task
+
+#: Spawn key of the demonstration episodes' SeedSequence (seeds and priors).
+DEMO_KEY = (0xBC, 0)
+#: Spawn key of the SeedSequence that shuffles BC minibatches.
+FIT_KEY = (0xBC, 1)
+
+
+def teachers() -> tuple[str, ...]:
+    """The policies that may teach: every registered policy spelled by its name alone."""
+    from agents.policies.registry import REGISTRY
+
+    return tuple(sorted(name for name, s in REGISTRY.items() if s.argument is None))
+
+
+def check_teacher(name: Any, field: str = "bc_teacher") -> str:
+    """``name`` if it is a registered classical policy (:func:`teachers`), else a ConfigError
+    naming ``field`` and listing them (``ppo:PATH`` and ``rllib:PATH`` are refused)."""
+    allowed = teachers()
+    if not isinstance(name, str) or name not in allowed:
+        raise ConfigError(
+            field, name, "a registered classical policy (not ppo:/rllib:): " + ", ".join(allowed)
+        )
+    return name
+
+
+@dataclass(frozen=True)
+class Demos:
+    """Demonstrations of a teacher: one row per (step, flying UAV) that has a label.
+
+    ``obs (M, FEATURES)`` the compass features, ``labels (M, ACTION_DIMS[control])`` the
+    targets of the control level (module docstring), ``rewards (M,)`` the UAV's env reward of
+    the step, ``returns (M,)`` its discounted return from the step, ``episode (M,)`` and
+    ``uav (M,)`` whose step it is (a UAV's rows are consecutive, in step order); ``posc`` and
+    ``seeds``: one per episode."""
+
+    teacher: str
+    control: str
+    gamma: float
+    obs: np.ndarray
+    labels: np.ndarray
+    rewards: np.ndarray
+    returns: np.ndarray
+    episode: np.ndarray
+    uav: np.ndarray
+    posc: tuple[float, ...]
+    seeds: tuple[int, ...]
+
+    @property
+    def samples(self) -> int:
+        return int(self.obs.shape[0])
+
+
+def _label(control: str, params: Any, action: np.ndarray, xy0: np.ndarray, xy1: np.ndarray):
+    """The label of one UAV's step at ``control`` (None: no label)."""
+    if control == "increments":
+        return np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+    if control == "heading":
+        d = xy1 - xy0
+        norm = float(np.hypot(d[0], d[1]))
+        return None if norm <= 0.0 else d / norm
+    x0, y0, x1, y1 = params.bounds
+    a = np.array([2 * (xy1[0] - x0) / (x1 - x0) - 1, 2 * (xy1[1] - y0) / (y1 - y0) - 1])
+    return np.clip(a, -1.0, 1.0)
+
+
+def discounted_returns(rewards: np.ndarray, gamma: float) -> np.ndarray:
+    """``G_t = r_t + gamma G_{t+1}`` over one trajectory (``G`` after its last step: 0)."""
+    out = np.zeros(len(rewards))
+    g = 0.0
+    for t in range(len(rewards) - 1, -1, -1):
+        g = float(rewards[t]) + gamma * g
+        out[t] = g
+    return out
+
+
+def collect_demos(
+    scenario: str | Scenario,
+    task: str | Task,
+    teacher: str,
+    episodes: int,
+    seed_seq: np.random.SeedSequence,
+    gamma: float = 0.99,
+    agent_index: bool = True,
+) -> Demos:
+    """Fly ``teacher`` for ``episodes`` episodes of ``scenario`` and record demonstrations at
+    ``task``'s control level (module docstring).
+
+    ``scenario``: the run's scenario (overrides applied); ``task``: a task id or
+    :class:`~poc_env.tasks.Task` (its ``random_prior`` and ``control``); ``seed_seq``: the
+    stream of the episodes' seeds and (with random priors) priors, drawn in turn from one
+    generator, so episode ``i`` is the same whatever ``episodes`` is; ``gamma``: the discount of
+    the value targets; ``agent_index``: as the run's ``SwarmVecEnv`` (the compass index block).
+    """
+    from agents.policies.registry import make_policy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.sim.control import ACTION_DIMS
+    from poc_env.sim.observations import FEATURES, CompassFeatures, split_observation
+    from poc_env.tasks import get_task
+    from poc_env.theory.probability_map import random_gaussian_mixture
+
+    check_teacher(teacher, "teacher")
+    episodes = as_int("episodes", episodes, 1, None)
+    t = get_task(task) if isinstance(task, str) else task
+    control = t.control
+    env = UAVSearchParallelEnv(scenario=scenario)  # increments, dict observations
+    params = env.params
+    shape = params.grid.shape
+    features = CompassFeatures(params, agent_index)
+    index = {a: i for i, a in enumerate(env.possible_agents)}
+    rng = np.random.default_rng(seed_seq)
+    obs_rows: list[np.ndarray] = []
+    lab_rows: list[np.ndarray] = []
+    rew_rows: list[float] = []
+    ret_rows: list[float] = []
+    who: list[tuple[int, int]] = []
+    poscs: list[float] = []
+    seeds: list[int] = []
+    for ep in range(episodes):
+        seed = int(rng.integers(0, 2**31))
+        prior = random_gaussian_mixture(params.grid, rng) if t.random_prior else None
+        obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
+        policy = make_policy(teacher)
+        policy.reset(env, seed)
+        # per UAV: (features, label or None, reward) of each of its steps
+        traj: dict[int, list[tuple[np.ndarray, np.ndarray | None, float]]] = {
+            i: [] for i in index.values()
+        }
+        while env.agents:
+            live = list(env.agents)
+            k = np.array([index[a] for a in live])
+            ras, vec = zip(*(split_observation(obs[a], shape) for a in live), strict=True)
+            feats = features(np.stack(ras), np.stack(vec), k)
+            actions, _ = policy.predict(obs)
+            xy0 = np.array(env.sim_state.pos[0, :, :2], dtype=float)
+            obs, rewards, *_ = env.step(actions)
+            xy1 = np.array(env.sim_state.pos[0, :, :2], dtype=float)
+            for j, a in enumerate(live):
+                i = int(k[j])
+                lab = _label(control, params, actions[a], xy0[i], xy1[i])
+                traj[i].append((feats[j], lab, float(rewards[a])))
+        for i, rows in traj.items():
+            if not rows:
+                continue
+            g = discounted_returns(np.array([r for *_, r in rows]), gamma)
+            for (f, lab, r), gt in zip(rows, g, strict=True):
+                if lab is not None:
+                    obs_rows.append(f)
+                    lab_rows.append(lab)
+                    rew_rows.append(r)
+                    ret_rows.append(float(gt))
+                    who.append((ep, i))
+        poscs.append(float(env.sim_state.posc[0]))
+        seeds.append(seed)
+    env.close()
+    dim = ACTION_DIMS[control]
+    return Demos(
+        teacher=teacher,
+        control=control,
+        gamma=float(gamma),
+        obs=np.array(obs_rows, dtype=np.float32).reshape(-1, FEATURES),
+        labels=np.array(lab_rows, dtype=np.float32).reshape(-1, dim),
+        rewards=np.array(rew_rows, dtype=np.float32),
+        returns=np.array(ret_rows, dtype=np.float32),
+        episode=np.array([e for e, _ in who], dtype=np.int64),
+        uav=np.array([i for _, i in who], dtype=np.int64),
+        posc=tuple(poscs),
+        seeds=tuple(seeds),
+    )
+
+
+def bc_losses(model: PPO, demos: Demos) -> dict[str, float]:
+    """Mean squared errors of ``model``'s policy on ``demos``: ``actor_mse`` (Gaussian mean
+    vs labels), ``action_mse`` (deterministic actions, i.e. the mean clipped to the action
+    space, vs labels) and ``value_mse`` (value head vs discounted returns)."""
+    import torch as th
+
+    policy = model.policy
+    with th.no_grad():
+        obs = th.as_tensor(demos.obs)
+        mean = policy.get_distribution(obs).mode()  # the Gaussian mean
+        value = policy.predict_values(obs).squeeze(-1)
+    lab = th.as_tensor(demos.labels)
+    ret = th.as_tensor(demos.returns)
+    return {
+        "actor_mse": float(((mean - lab) ** 2).mean()),
+        "action_mse": float(((mean.clamp(-1.0, 1.0) - lab) ** 2).mean()),
+        "value_mse": float(((value - ret) ** 2).mean()),
+    }
+
+
+def pretrain(
+    model: PPO,
+    demos: Demos,
+    epochs: int = 10,
+    batch_size: int = 64,
+    seed: int | np.random.Generator = 0,
+    log_std: float = -1.0,
+    learning_rate: float = 1e-3,
+    writer: Any = None,
+) -> dict[str, Any]:
+    """Fit ``model``'s SB3 actor-critic policy to ``demos`` (behaviour cloning), in place.
+
+    Loss per minibatch: MSE of the Gaussian mean to the labels plus MSE of the value head to
+    the discounted returns (the actor and value MLPs of ``MlpPolicy`` share no weights, so the
+    two fits do not trade off), minimised by Adam (``learning_rate``) for ``epochs`` passes in
+    minibatches of ``batch_size`` shuffled by ``seed`` (an int or a numpy Generator). The
+    mean, not the likelihood, is fitted: NLL would also shrink the std towards the demo
+    noise, which the warm start sets explicitly instead: ``policy.log_std`` becomes
+    ``log_std`` at the end. PPO's own optimiser (and its state) is left alone.
+
+    Returns the losses (:func:`bc_losses`) ``before`` and ``after``, the mean minibatch losses
+    of each epoch (``epochs_actor_mse``, ``epochs_value_mse``) and the sizes; with a
+    TensorBoard ``writer`` (``SummaryWriter``) the per-epoch losses are logged as
+    ``bc/actor_mse`` and ``bc/value_mse``.
+    """
+    import torch as th
+
+    epochs = as_int("bc_epochs", epochs, 0, None)
+    batch_size = as_int("bc_batch_size", batch_size, 1, None)
+    log_std = as_number("bc_log_std", log_std, -20.0, 2.0)
+    if demos.samples == 0:
+        raise ConfigError("bc_episodes", demos.samples, "demonstrations with labelled samples")
+    policy = model.policy
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    before = bc_losses(model, demos)
+    obs = th.as_tensor(demos.obs)
+    lab = th.as_tensor(demos.labels)
+    ret = th.as_tensor(demos.returns)
+    opt = th.optim.Adam(policy.parameters(), lr=learning_rate)
+    policy.set_training_mode(True)
+    hist_a: list[float] = []
+    hist_v: list[float] = []
+    m = demos.samples
+    for epoch in range(epochs):
+        perm = th.as_tensor(rng.permutation(m))
+        sum_a = sum_v = 0.0
+        for lo in range(0, m, batch_size):
+            b = perm[lo : lo + batch_size]
+            mean = policy.get_distribution(obs[b]).mode()
+            value = policy.predict_values(obs[b]).squeeze(-1)
+            la = ((mean - lab[b]) ** 2).mean()
+            lv = ((value - ret[b]) ** 2).mean()
+            opt.zero_grad()
+            (la + lv).backward()
+            opt.step()
+            sum_a += float(la.detach()) * len(b)
+            sum_v += float(lv.detach()) * len(b)
+        hist_a.append(sum_a / m)
+        hist_v.append(sum_v / m)
+        if writer is not None:
+            writer.add_scalar("bc/actor_mse", hist_a[-1], epoch + 1)
+            writer.add_scalar("bc/value_mse", hist_v[-1], epoch + 1)
+    policy.set_training_mode(False)
+    with th.no_grad():
+        policy.log_std.fill_(log_std)  # type: ignore[operator]
+    return {
+        "epochs": epochs,
+        "batch_size": batch_size,
+        "learning_rate": learning_rate,
+        "log_std": log_std,
+        "before": before,
+        "after": bc_losses(model, demos),
+        "epochs_actor_mse": hist_a,
+        "epochs_value_mse": hist_v,
+    }
+
+
+def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -> dict[str, Any]:
+    """The BC warm start of a fresh task run: demonstrations of ``args.bc_teacher``
+    (``args.bc_episodes`` episodes of the run's ``scenario``, stream :data:`DEMO_KEY` of
+    ``args.seed``), :func:`pretrain` (``args.bc_epochs``, minibatches of
+    ``args.bc_batch_size``, ``args.bc_log_std``), ``bc.json`` in ``run_dir`` (teacher POSC,
+    samples, losses, times) and TensorBoard scalars in ``run_dir/tb/bc``. Returns what
+    ``bc.json`` holds."""
+    from agents.rl.checkpoint import write_json
+
+    assert args.task is not None and args.bc_teacher is not None
+    t0 = time.perf_counter()
+    demos = collect_demos(
+        scenario,
+        args.task,
+        args.bc_teacher,
+        args.bc_episodes,
+        np.random.SeedSequence(args.seed, spawn_key=DEMO_KEY),
+        gamma=args.gamma,
+        agent_index=getattr(args, "agent_index", True),
+    )
+    t1 = time.perf_counter()
+    writer = _tb_writer(run_dir / "tb" / "bc")
+    try:
+        fit = pretrain(
+            model,
+            demos,
+            epochs=args.bc_epochs,
+            batch_size=args.bc_batch_size,
+            seed=np.random.default_rng(np.random.SeedSequence(args.seed, spawn_key=FIT_KEY)),
+            log_std=args.bc_log_std,
+            writer=writer,
+        )
+    finally:
+        if writer is not None:
+            writer.close()
+    t2 = time.perf_counter()
+    posc = np.array(demos.posc)
+    out: dict[str, Any] = {
+        "teacher": demos.teacher,
+        "control": demos.control,
+        "episodes": len(demos.posc),
+        "teacher_posc_mean": float(posc.mean()),
+        "teacher_posc": [float(p) for p in posc],
+        "seeds": list(demos.seeds),
+        "samples": demos.samples,
+        "gamma": demos.gamma,
+        **fit,
+        "collect_seconds": round(t1 - t0, 3),
+        "fit_seconds": round(t2 - t1, 3),
+    }
+    write_json(run_dir / "bc.json", out)
+    return out
+
+
+def _tb_writer(folder: Path) -> Any:
+    """A TensorBoard ``SummaryWriter`` on ``folder``, or None if torch's writer is missing."""
+    try:
+        from torch.utils.tensorboard import SummaryWriter
+    except ImportError:  # pragma: no cover - tensorboard is part of the rl extra
+        return None
+    return SummaryWriter(str(folder))
