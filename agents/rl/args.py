@@ -48,6 +48,9 @@ class TrainArgs:
     """A registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0: its
     scenario, prior kind and control level, an MLP on its compass observation (sb3: shared over
     the UAVs by SwarmVecEnv). rllib without one: --scenario at the heading level."""
+    agent_index: bool = True
+    """--task (sb3): the compass observation carries the UAV's index (one-hot), so a shared
+    policy can tell UAVs of one airfield apart; --no-agent-index zeroes it (an ablation)."""
     rllib_policies: Annotated[str, _arg(metavar="shared|per_uav")] = "shared"
     """rllib: one policy shared by every UAV, or one policy per UAV."""
     num_env_runners: int = 0
@@ -168,7 +171,7 @@ class TrainArgs:
             v = getattr(self, name)
             if v is not None and not isinstance(v, str | os.PathLike):
                 raise ConfigError(name, v, "a folder path or None")
-        for name in ("random_priors", "progress"):
+        for name in ("random_priors", "progress", "agent_index"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, getattr(self, name), "true or false")
         parse_overrides(self.overrides)

@@ -354,7 +354,7 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
         args.bc_episodes,
         np.random.SeedSequence(args.seed, spawn_key=DEMO_KEY),
         gamma=args.gamma,
-        agent_index=getattr(args, "agent_index", True),
+        agent_index=args.agent_index,
     )
     t1 = time.perf_counter()
     writer = _tb_writer(run_dir / "tb" / "bc")

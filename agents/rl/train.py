@@ -136,6 +136,7 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
             obs_type="compass",
             random_priors=task.random_prior,
             control=task.control,
+            agent_index=args.agent_index,
         )
     if args.recipe == "pilot":
         from agents.rl.pilot import PilotVecEnv

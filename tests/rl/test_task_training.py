@@ -14,6 +14,7 @@ from agents.rl.args import TrainArgs
 from agents.rl.policy import PPOPolicy
 from agents.rl.train import make_env, train
 from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
 from poc_env.sim.observations import FEATURES
 
 
@@ -79,6 +80,32 @@ def test_a_checkpoint_of_another_control_level_is_refused(tmp_path, capsys):
     assert "poc_env/UAVSearch-Small-Random-Waypoint-v0 (a transfer" in out
     assert main([*argv, "UAVSearch-Small-Waypoint-v0"]) == 0
     assert "a transfer" not in capsys.readouterr().out
+
+
+def test_no_agent_index_trains_and_flies_without_it(tmp_path):
+    """--no-agent-index: the training env's features and the checkpoint's, flown by
+    PPOPolicy, both have the index block at zero."""
+    from poc_env.sim.observations import N_IDS
+
+    args = TrainArgs(
+        task="UAVSearch-Small-Random-Heading-v0",
+        agent_index=False,
+        total_timesteps=96,
+        n_steps=16,
+        batch_size=48,
+        n_envs=2,
+        run_dir=str(tmp_path / "run"),
+        progress=False,
+    )
+    env = make_env(args, load_scenario("small"))
+    assert env.agent_index is False and not env.reset()[:, -N_IDS:].any()
+    pol = PPOPolicy(train(args))
+    penv = poc_env.parallel_env("small")
+    penv.reset(seed=0)
+    pol.reset(penv, seed=0)
+    assert pol._features.agent_index is False
+    with pytest.raises(ConfigError, match="agent_index"):
+        TrainArgs(task="UAVSearch-Small-Heading-v0", agent_index="no")
 
 
 def test_a_checkpoint_of_another_observation_is_refused(tmp_path, capsys):
