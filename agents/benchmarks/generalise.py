@@ -29,6 +29,12 @@ airfields at (20, -60) and (120, -60) km, six UAVs, one shared belief):
   with ``paper_6_2``'s 150 km range the six UAVs stay linked almost throughout (on seed 1000
   the PPO checkpoint's swarm was split for 2 of 152 steps and every UAV's belief equalled the
   global one), so this condition mostly checks that the comms path changes nothing there.
+- ``comms_60km`` (``comms.belief_sharing=comms comms.range_km=60``): the same with a 60 km
+  radio range, so the swarm does split (62 of 152 steps on seed 1000 with the PPO checkpoint)
+  and beliefs differ; eq. 24's two-neighbour rule is broken more often, which the violation
+  column shows. ``allocation_plan`` and ``de_plan`` plan once from the belief at take-off and
+  ``lawnmower`` ignores it, so only belief-driven policies (``greedy_bayes``, learned ones)
+  can lose from stale beliefs here.
 
 A learned policy can fly every condition because the compass observation
 (:mod:`agents.rl.pilot`, :class:`poc_env.sim.observations.CompassFeatures`) is size-free: shares
@@ -70,6 +76,7 @@ CONDITIONS: dict[str, dict[str, Any]] = {
     "tall_150x200": {"map.width_km": 150, "map.height_km": 200},
     "cells_6km": {"map.cell_km": 6, "map.width_km": 198},
     "comms_belief": {"comms.belief_sharing": "comms"},
+    "comms_60km": {"comms.belief_sharing": "comms", "comms.range_km": 60},
 }
 #: the condition ``kept`` divides by.
 REFERENCE = "train"

@@ -28,6 +28,7 @@ def test_each_condition_builds_the_geometry_and_comms_it_names():
         "tall_150x200": ((40, 30), 5 * KM, "global"),
         "cells_6km": ((25, 33), 6 * KM, "global"),
         "comms_belief": ((30, 40), 5 * KM, "comms"),
+        "comms_60km": ((30, 40), 5 * KM, "comms"),
     }
     assert set(built) == set(expected)
     for c, sc in built.items():
@@ -44,6 +45,8 @@ def test_each_condition_builds_the_geometry_and_comms_it_names():
         obs, _ = env.reset(seed=1000, options={"prior": prior})
         assert len(obs) == 6
     assert built["cells_6km"].map.width_m == 198 * KM  # 33 whole cells of 6 km
+    assert built["comms_60km"].comms.range_m == 60 * KM
+    assert built["comms_belief"].comms.range_m == built["train"].comms.range_m
     # train is always flown first: it is the reference of kept
     assert generalise.conditions(["cells_6km", "train"]) == ["train", "cells_6km"]
     assert generalise.conditions(["tall_150x200"]) == ["train", "tall_150x200"]
