@@ -51,6 +51,10 @@ class TrainArgs:
     agent_index: bool = True
     """--task (sb3): the compass observation carries the UAV's index (one-hot), so a shared
     policy can tell UAVs of one airfield apart; --no-agent-index zeroes it (an ablation)."""
+    return_autopilot: bool = False
+    """--task at the increments level (sb3): the autopilot takes each UAV home and lands it
+    once eq. 18 says so (its increments are ignored from then on), as at the autopilot levels;
+    the policy flies the search. Recorded in config.json; ppo:RUN flies the same way."""
     rllib_policies: Annotated[str, _arg(metavar="shared|per_uav")] = "shared"
     """rllib: one policy shared by every UAV, or one policy per UAV."""
     num_env_runners: int = 0
@@ -171,7 +175,7 @@ class TrainArgs:
             v = getattr(self, name)
             if v is not None and not isinstance(v, str | os.PathLike):
                 raise ConfigError(name, v, "a folder path or None")
-        for name in ("random_priors", "progress", "agent_index"):
+        for name in ("random_priors", "progress", "agent_index", "return_autopilot"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, getattr(self, name), "true or false")
         parse_overrides(self.overrides)

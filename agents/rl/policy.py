@@ -140,6 +140,7 @@ class PPOPolicy(Policy):
         self.name = name or f"ppo:{path}"
         self.model = _cached_model(self.path)
         self.mode = ""
+        self._return = False  # increments checkpoints trained with --return-autopilot
         self._last: dict[str, np.ndarray] = {}
 
     def reset(self, env: Any, seed: int) -> None:
@@ -162,8 +163,10 @@ class PPOPolicy(Policy):
         if task is not None and m_obs == pilot.OBSERVATION_SPACE:
             # trained on a task: its control level flies the compass-observation policy
             self.mode, self.control = "compass", task.control
-            index = _run_config(self.path).get("agent_index", True) is not False
+            cfg = _run_config(self.path)
+            index = cfg.get("agent_index", True) is not False
             self._features = pilot.PilotFeatures(env.params, agent_index=index)
+            self._return = self.control == "increments" and cfg.get("return_autopilot") is True
         elif m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
             self.mode, self.control = "compass", "heading"  # the pilot recipe
             self._features = pilot.PilotFeatures(env.params)
@@ -207,6 +210,10 @@ class PPOPolicy(Policy):
             act, _ = self.model.predict(feats, deterministic=deterministic)
             q = decode_vector(self.env.params, np.stack(vec))
             inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
+            if self._return:  # trained with the return autopilot
+                from poc_env.sim.control import return_home
+
+                inc = return_home(self.env.params, q, inc, k).astype(np.float32)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "shared":
             batch = {

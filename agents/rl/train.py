@@ -137,6 +137,7 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
             random_priors=task.random_prior,
             control=task.control,
             agent_index=args.agent_index,
+            return_autopilot=args.return_autopilot,
         )
     if args.recipe == "pilot":
         from agents.rl.pilot import PilotVecEnv

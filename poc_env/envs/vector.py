@@ -134,6 +134,10 @@ class SwarmVecEnv(VecEnv):
     agent_index:
         With ``obs_type="compass"``: ``False`` zeroes the agent-index block of the features
         (the ablation of the credit-and-sharing table; the registered tasks keep it).
+    return_autopilot:
+        At the ``increments`` level: the autopilot takes over a UAV once eq. 18 says it must
+        head home, and lands it (:func:`poc_env.sim.control.return_home`), as at the autopilot
+        levels; off in the registered tasks (a training option, recorded in the run).
     """
 
     def __init__(
@@ -147,9 +151,11 @@ class SwarmVecEnv(VecEnv):
         control: str = "increments",
         auto_return: bool = True,
         agent_index: bool = True,
+        return_autopilot: bool = False,
     ) -> None:
-        if not isinstance(agent_index, bool):
-            raise ConfigError("agent_index", agent_index, "true or false")
+        for name, flag in (("agent_index", agent_index), ("return_autopilot", return_autopilot)):
+            if not isinstance(flag, bool):
+                raise ConfigError(name, flag, "true or false")
         if isinstance(n_envs, bool) or not isinstance(n_envs, int | np.integer) or n_envs < 1:
             raise ConfigError("n_envs", n_envs, "an integer >= 1")
         if obs_type not in OBS_TYPES:
@@ -188,6 +194,7 @@ class SwarmVecEnv(VecEnv):
         self._lengths = np.zeros((e, n), dtype=np.int64)
         self._actions = np.zeros((e, n, 3))
         self.agent_index = agent_index
+        self.return_autopilot = return_autopilot
         self._features = (
             obs_mod.CompassFeatures(self.params, agent_index) if obs_type == "compass" else None
         )
@@ -292,7 +299,9 @@ class SwarmVecEnv(VecEnv):
         (the control level's autopilot, :func:`poc_env.sim.control.swarm_increments`, which
         flies home-bound UAVs whatever their slot commands); finished agents get 0."""
         assert self.state is not None
-        inc = swarm_increments(self.params, self.control, self.state, a, self.auto_return)
+        inc = swarm_increments(
+            self.params, self.control, self.state, a, self.auto_return, self.return_autopilot
+        )
         if self.control == "increments":
             inc = np.where(self._active[..., None], inc, 0.0)
         return inc

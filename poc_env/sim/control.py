@@ -53,10 +53,21 @@ def _fly_to(params: Params, q: dict, goal: np.ndarray, k, auto_return: bool) -> 
     speed = np.where(params.grid.contains(xy), u.search_speed_mps, u.cruise_speed_mps)
     out = steer(params, xy, q["heading"], q["speed"], q["pitch"], q["z"], goal, speed)
     if auto_return:
-        home = returning(params, xy, q["usable"], k)
-        if home.any():
-            out[home] = homing(params, {key: v[home] for key, v in q.items()}, np.asarray(k)[home])
+        out = return_home(params, q, out, k)
     return out.astype(np.float32)
+
+
+def return_home(params: Params, q: dict, inc: np.ndarray, k) -> np.ndarray:
+    """``inc (B, 3)`` with the rows of UAVs that must head home replaced by the autopilot's
+    homing increments: once eq. 18's usable endurance only covers the way back
+    (:func:`~poc_env.sim.autopilot.returning`), :func:`~poc_env.sim.autopilot.homing` flies the
+    UAV to its landing field and lands it. The one return rule of every autopilot level, and of
+    the ``increments`` policies trained with a return autopilot (``train --return-autopilot``)."""
+    out = np.array(inc, dtype=float, copy=True)
+    home = returning(params, np.asarray(q["xy"], dtype=float), q["usable"], k)
+    if home.any():
+        out[home] = homing(params, {key: v[home] for key, v in q.items()}, np.asarray(k)[home])
+    return out
 
 
 def heading_increments(
@@ -93,17 +104,27 @@ def to_increments(
 
 
 def swarm_increments(
-    params: Params, control: str, state: State, action: np.ndarray, auto_return: bool = True
+    params: Params,
+    control: str,
+    state: State,
+    action: np.ndarray,
+    auto_return: bool = True,
+    return_increments: bool = False,
 ) -> np.ndarray:
     """Eq. 19 increments (E, N, 3) for every UAV of the batched ``state`` commanded by the
     ``control`` level's actions ``action (E, N, ACTION_DIMS[control])``: the one conversion the
     PettingZoo env and the batched VecEnvs share. ``increments`` pass through unchanged; the
     autopilot levels read each UAV's state from its observation vector and give 0 to UAVs that
-    no longer fly."""
+    no longer fly. ``return_increments`` applies :func:`return_home` to the ``increments`` level
+    too (off in every registered task: their increments pass through; a training option)."""
     e, n = state.flying.shape
     a = np.asarray(action, dtype=float).reshape(e, n, ACTION_DIMS[control])
-    if control == "increments":
+    if control == "increments" and not return_increments:
         return a
+    if control == "increments":
+        q = decode_vector(params, vectors(params, state).reshape(e * n, -1))
+        inc = return_home(params, q, a.reshape(e * n, 3), np.tile(np.arange(n), e))
+        return np.where(state.flying[..., None], inc.reshape(e, n, 3), a)
     q = decode_vector(params, vectors(params, state).reshape(e * n, -1))
     k = np.tile(np.arange(n), e)
     inc = to_increments(params, control, q, a.reshape(e * n, -1), k, auto_return)

@@ -338,3 +338,24 @@ def test_compass_without_the_agent_index():
         np.testing.assert_array_equal(ra, rb)
     with pytest.raises(ConfigError, match="agent_index"):
         SwarmVecEnv("small", agent_index="no", **kw)
+
+
+def test_return_autopilot_at_the_increments_level():
+    """``return_autopilot``: straight level flight (zero increments) lands every UAV home once
+    eq. 18 says so; without it (the registered tasks) the same flight ends in crashes."""
+    outcome = {}
+    for flag in (False, True):
+        env = SwarmVecEnv(
+            "small", n_envs=2, seed=0, obs_type="compass", control="increments",
+            return_autopilot=flag,
+        )  # fmt: skip
+        env.reset()
+        ends = []
+        for _ in range(300):
+            *_, infos = env.step(np.zeros((env.num_envs, 3), np.float32))
+            ends += [(i["landed"], i["crashed"]) for i in infos if "landed" in i]
+        outcome[flag] = ends
+    assert outcome[True] and all(landed and not crashed for landed, crashed in outcome[True])
+    assert outcome[False] and not any(landed for landed, _ in outcome[False])
+    with pytest.raises(ConfigError, match="return_autopilot"):
+        SwarmVecEnv("small", control="increments", return_autopilot=1)

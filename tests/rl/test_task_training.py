@@ -108,6 +108,51 @@ def test_no_agent_index_trains_and_flies_without_it(tmp_path):
         TrainArgs(task="UAVSearch-Small-Heading-v0", agent_index="no")
 
 
+def test_return_autopilot_trains_and_flies_the_same_way(tmp_path):
+    """--return-autopilot at the increments level: recorded in config.json, and PPOPolicy
+    replaces the increments of home-bound UAVs by the autopilot's, as the training env did."""
+    from poc_env.sim.control import return_home
+    from poc_env.sim.observations import decode_vector, split_observation
+
+    run = train(
+        TrainArgs(
+            task="UAVSearch-Small-Random-Increments-v0",
+            return_autopilot=True,
+            total_timesteps=96,
+            n_steps=16,
+            batch_size=48,
+            n_envs=2,
+            run_dir=str(tmp_path / "run"),
+            progress=False,
+        )
+    )
+    assert json.loads((run / "config.json").read_text())["return_autopilot"] is True
+    pol = PPOPolicy(run)
+    net = pol.model.policy.action_net  # level flight (zero increments) until the way home
+    net.weight.data.zero_()
+    net.bias.data.zero_()
+    env = poc_env.parallel_env("small")
+    obs, _ = env.reset(seed=0)
+    pol.reset(env, seed=0)
+    assert pol._return and pol.control == "increments"
+    plain = PPOPolicy(run)
+    plain.reset(env, seed=0)
+    plain._return = False
+    took_over = False
+    while env.agents:
+        acts, _ = pol.predict(obs)
+        raw, _ = plain.predict(obs)
+        live = list(acts)
+        vec = np.stack([split_observation(obs[a], env.params.grid.shape)[1] for a in live])
+        k = np.array([env.possible_agents.index(a) for a in live])
+        want = return_home(env.params, decode_vector(env.params, vec), np.stack(
+            [raw[a] for a in live]), k)  # fmt: skip
+        np.testing.assert_allclose(np.stack([acts[a] for a in live]), want, atol=1e-6)
+        took_over |= any(not np.allclose(acts[a], raw[a]) for a in live)
+        obs, *_ = env.step(acts)
+    assert took_over and env.sim_state.landed[0].all()  # the autopilot brought them home
+
+
 def test_a_checkpoint_of_another_observation_is_refused(tmp_path, capsys):
     """A shared-recipe checkpoint (raster + vector observation) is not a task policy."""
     from poc_env.cli import main
