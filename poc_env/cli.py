@@ -317,8 +317,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
     _check_out("out", args.out, "folder")
-    if args.baseline is not None and args.baseline not in names:
-        raise ConfigError("baseline", args.baseline, "one of --policies: " + ", ".join(names))
+    baselines = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
+    for b in baselines:
+        if b not in names:
+            raise ConfigError("baseline", b, "one or more of --policies: " + ", ".join(names))
+    args.baselines = baselines
     with _ray(args):
         if not args.out:
             return _evaluate(args, names, None, None)
@@ -401,8 +404,9 @@ def _evaluate(
         f"{args.seed + args.episodes - 1}{priors}"
     )
     text = ev.table()
-    if args.baseline is not None:
-        text += "\n\n" + ev.paired_table(args.baseline)
+    baselines = getattr(args, "baselines", [])
+    for b in baselines:
+        text += "\n\n" + ev.paired_table(b)
     print(text)
     if stage is not None:
         files = [
@@ -411,8 +415,8 @@ def _evaluate(
             write_text_atomic(stage / "evaluate.txt", text + "\n"),
             plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s),
         ]
-        if args.baseline is not None:
-            paired = csv_text(ev.paired(args.baseline))
+        if baselines:
+            paired = csv_text([row for b in baselines for row in ev.paired(b)])
             files.append(write_text_atomic(stage / "paired.csv", paired))
         _wrote(tuple(files), stage, dest)
     return 0
@@ -699,9 +703,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--baseline",
         default=None,
-        metavar="POLICY",
-        help="one of --policies: also print (and write paired.csv) every other policy's mean "
-        "per-seed POSC difference to it, with its 95 %% interval and wins/ties/losses",
+        metavar="POLICY[,POLICY...]",
+        help="one or more of --policies: also print (and write paired.csv) every other "
+        "policy's mean per-seed POSC difference to each, with its 95 %% interval and "
+        "wins/ties/losses",
     )
     p.add_argument("--out", default=None, help="folder for evaluate.csv/.txt and the figure")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

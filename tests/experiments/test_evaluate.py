@@ -115,15 +115,21 @@ def test_paired_differences_against_a_baseline(tmp_path, capsys):
     recomputed from episodes.csv; a baseline outside --policies is refused before any run."""
     out = tmp_path / "ev"
     argv = ["evaluate", "--scenario", "small", "--policies", "lawnmower,random,greedy_bayes"]
-    argv += ["--episodes", "3", "--random-priors", "--quiet", "--baseline", "random"]
+    argv += ["--episodes", "3", "--random-priors", "--quiet", "--baseline", "random,lawnmower"]
     assert main([*argv, "--out", str(out)]) == 0
-    assert "paired differences in POSC against random" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "paired differences in POSC against random" in text
+    assert "paired differences in POSC against lawnmower" in text
     eps = list(csv.DictReader((out / "episodes.csv").open()))
     posc = {(e["policy"], int(e["seed"])): float(e["posc"]) for e in eps}
-    rows = {r["policy"]: r for r in csv.DictReader((out / "paired.csv").open())}
-    assert set(rows) == {"lawnmower", "greedy_bayes"}
-    for p, r in rows.items():
-        d = np.array([posc[p, s] - posc["random", s] for s in (1000, 1001, 1002)])
+    paired = list(csv.DictReader((out / "paired.csv").open()))
+    assert {(r["baseline"], r["policy"]) for r in paired} == {
+        ("random", "lawnmower"), ("random", "greedy_bayes"),
+        ("lawnmower", "random"), ("lawnmower", "greedy_bayes"),
+    }  # fmt: skip
+    for r in paired:
+        p, b = r["policy"], r["baseline"]
+        d = np.array([posc[p, s] - posc[b, s] for s in (1000, 1001, 1002)])
         assert float(r["diff_mean"]) == pytest.approx(d.mean(), abs=1e-12)
         assert float(r["diff_ci95"]) == pytest.approx(1.96 * d.std(ddof=1) / np.sqrt(3))
         assert int(r["wins"]) + int(r["ties"]) + int(r["losses"]) == 3
