@@ -222,14 +222,30 @@ def _save(algo: Any, dest: Path) -> None:
 
 
 # -- flying a checkpoint -----------------------------------------------------------------------
+def shipped_rllib() -> list[str]:
+    """Names of the RLlib checkpoints shipped in the package (``agents/checkpoints/<name>/``:
+    the run's ``config.json`` and the RLModule states of ``checkpoint/``, what flying needs)."""
+    import importlib.resources
+
+    folder = importlib.resources.files("agents").joinpath("checkpoints")
+    return sorted(
+        f.name for f in folder.iterdir() if f.is_dir() and f.joinpath("config.json").is_file()
+    )
+
+
 def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
     p = Path(path)
+    if not p.exists() and str(path) in shipped_rllib():
+        import importlib.resources
+
+        p = Path(str(importlib.resources.files("agents").joinpath("checkpoints", str(path))))
     if (p / "checkpoint").is_dir():
         p = p / "checkpoint"
     if not (p / "learner_group").is_dir():
         raise ConfigError(
             "checkpoint", str(path), "a run folder of poc-env train --engine rllib or its "
-            "checkpoint/ folder (holding learner_group/)",
+            "checkpoint/ folder (holding learner_group/), or a shipped one: "
+            + ", ".join(shipped_rllib()),
         )  # fmt: skip
     return p
 
