@@ -168,30 +168,66 @@ def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
     np.testing.assert_array_equal(seen, trained_on)
 
 
-@pytest.mark.parametrize("name", ["ppo_pilot_paper_6_2", "ppo_heading_paper_6_2"])
-def test_shipped_checkpoint_loads_and_flies_a_whole_episode(name):
+SHIPPED = [
+    "ppo_pilot_paper_6_2",
+    "ppo_heading_paper_6_2",
+    "ppo_heading_individual_paper_6_2",
+    "ppo_increments_paper_6_2",
+    "rllib_heading_paper_6_2",
+]
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_checkpoint_replays_its_card_and_flies_an_unseen_episode(name):
+    """The card beside a shipped model (agents.rl.card) records its held-out evaluation: the
+    first of those episodes replays to the recorded POSC, and a further episode (a seed and
+    prior neither training nor that evaluation used) lands every UAV and reaches the card's
+    floor (the lowest POSC of the evaluation's episodes)."""
+    import json
     from importlib.resources import as_file, files
 
-    from agents.experiments.evaluate import episode_prior
+    from agents.experiments.evaluate import run_episode
+    from poc_env.tasks import get_task
+
+    folder = files("agents") / "checkpoints"  # package data
+    card = json.loads((folder / f"{name}.json").read_text())
+    kind = "rllib" if card.get("engine") == "rllib" else "ppo"
+    if kind == "rllib":
+        pytest.importorskip("ray", reason="the rllib extra is not installed")
+    with as_file(folder / (name if kind == "rllib" else f"{name}.zip")) as path:
+        files_ = [f for f in path.rglob("*") if f.is_file()] if path.is_dir() else [path]
+        assert sum(f.stat().st_size for f in files_) <= 5 * 2**20  # the issue's 5 MB limit
+    scenario = get_task(card["task"]).scenario if card.get("task") else "paper_6_2"
+    ev = card["evaluation"]
+    first = run_episode(scenario, f"{kind}:{name}", ev["seeds"][0], random_priors=True)
+    assert first.posc == pytest.approx(ev["posc"][0], rel=1e-6)
+    unseen = run_episode(scenario, f"{kind}:{name}", 987_654, random_priors=True)
+    assert unseen.landed == 6 and unseen.crashed == 0  # the autopilot brings all home
+    assert unseen.posc >= ev["floor"] > 0.0
+
+
+@pytest.mark.parametrize(
+    ("name", "control"),
+    [
+        ("ppo_pilot_paper_6_2", "heading"),
+        ("ppo_heading_paper_6_2", "heading"),
+        ("ppo_heading_individual_paper_6_2", "heading"),
+        ("ppo_increments_paper_6_2", "increments"),
+    ],
+)
+def test_shipped_checkpoint_flies_at_its_level_within_limits(name, control):
     from agents.rl.policy import PPOPolicy
 
-    shipped = files("agents") / "checkpoints" / f"{name}.zip"  # package data
     env = UAVSearchParallelEnv("paper_6_2")
-    seed = 987_654  # far from the evaluation seeds, and priors training never drew
-    obs, _ = env.reset(seed=seed, options={"prior": episode_prior(env.scenario, seed)})
-    with as_file(shipped) as path:
-        assert path.stat().st_size <= 5 * 2**20  # the issue's 5 MB limit
-        policy = PPOPolicy(path)
-    policy.reset(env, seed)
-    assert (policy.mode, policy.control) == ("compass", "heading")
-    while env.agents:
+    obs, _ = env.reset(seed=5)
+    policy = PPOPolicy(name)
+    policy.reset(env, 5)
+    assert (policy.mode, policy.control) == ("compass", control)
+    assert policy._return == (control == "increments")  # its card: --return-autopilot
+    for _ in range(5):
         actions, _ = policy.predict(obs)
         assert all(np.all(np.abs(a) <= 1.0) for a in actions.values())
         obs, *_ = env.step(actions)
-    st = env.sim_state
-    assert st.landed[0].all() and not st.crashed[0].any()  # the autopilot brings all home
-    # a trained policy, not a fresh one: it searches (a random policy finds ~0.001 here)
-    assert st.posc[0] > 0.2
 
 
 def test_shipped_checkpoint_by_name(tmp_path, monkeypatch):
