@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import Any
 
 from poc_env.errors import ConfigError
@@ -161,8 +160,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import contextlib
     import shlex
 
+    from agents.benchmarks import write_table_set
     from agents.experiments.pool import ray_jobs
-    from poc_env.io import atomic_dir, csv_text, write_text_atomic
 
     args = _parse(argv)
     given = sys.argv[1:] if argv is None else argv
@@ -172,16 +171,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         rows = run(args)
     md = to_markdown(rows, command.strip())
     print(md)
-    if args.out:  # both files or neither: staged, then merged into --out (poc_env.io)
-        with atomic_dir(Path(args.out)) as stage:
-            write_text_atomic(stage / "baselines.csv", csv_text(rows))
-            write_text_atomic(stage / "baselines.md", md)
+    if args.out:  # both files or neither
+        write_table_set(args.out, "baselines", rows, md)
     return rows
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except ConfigError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    from agents.benchmarks import run_main
+
+    run_main(main)

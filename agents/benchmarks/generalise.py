@@ -65,7 +65,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 from typing import Any
 
 from poc_env.errors import ConfigError
@@ -233,7 +232,7 @@ def to_markdown(rows: list[dict[str, Any]], command: str) -> str:
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
-    from poc_env.io import atomic_dir, csv_text, write_text_atomic
+    from agents.benchmarks import write_table_set
 
     args = _parse(argv)
     given = sys.argv[1:] if argv is None else argv
@@ -241,16 +240,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     rows = run(args)
     md = to_markdown(rows, command.strip())
     print(md)
-    if args.out:  # both files or neither: staged, then merged into --out (poc_env.io)
-        with atomic_dir(Path(args.out)) as stage:
-            write_text_atomic(stage / "generalise.csv", csv_text(rows))
-            write_text_atomic(stage / "generalise.md", md)
+    if args.out:  # both files or neither
+        write_table_set(args.out, "generalise", rows, md)
     return rows
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except ConfigError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    from agents.benchmarks import run_main
+
+    run_main(main)

@@ -242,7 +242,7 @@ def plot(rows: list[dict[str, Any]], reference: str, ref: float, path: Path) -> 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
-    from poc_env.io import atomic_dir, csv_text, write_text_atomic
+    from agents.benchmarks import write_table_set
 
     args = _parse(argv)
     for name, lo in (("episodes", 1), ("seed", 0), ("workers", 1), ("every", 1)):
@@ -254,17 +254,13 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     rows, summary, ref = run(args)
     md = to_markdown(summary, args.reference, ref, command.strip())
     print(md)
-    if args.out:  # one set: staged, then merged into --out (poc_env.io)
-        with atomic_dir(Path(args.out)) as stage:
-            write_text_atomic(stage / "learning.csv", csv_text(rows))
-            write_text_atomic(stage / "learning.md", md)
-            plot(rows, args.reference, ref, stage / "learning.png")
+    if args.out:  # the three files or none
+        figure = lambda path: plot(rows, args.reference, ref, path)  # noqa: E731
+        write_table_set(args.out, "learning", rows, md, figure)
     return summary
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except ConfigError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    from agents.benchmarks import run_main
+
+    run_main(main)

@@ -156,12 +156,6 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    import sys
+    from agents.benchmarks import run_main
 
-    from poc_env.errors import PocEnvError
-
-    try:
-        main()
-    except PocEnvError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    run_main(main)

@@ -18,6 +18,12 @@ from poc_env.errors import ConfigError
 from poc_env.sim.observations import FEATURES
 
 
+def _tiny(tmp_path, **kw) -> TrainArgs:
+    """A smoke-sized SB3 run into ``tmp_path / "run"`` (fields in ``kw`` win)."""
+    base = dict(total_timesteps=96, n_steps=16, batch_size=48, n_envs=2, progress=False)
+    return TrainArgs(**{**base, "run_dir": str(tmp_path / "run"), **kw})
+
+
 @pytest.mark.parametrize(
     ("task", "dim"),
     [("UAVSearch-Small-Random-Waypoint-v0", 2), ("UAVSearch-Small-Increments-v0", 3)],
@@ -33,14 +39,12 @@ def test_task_env_is_the_tasks(task, dim):
 
 def test_trained_task_policy_flies_its_control_level(tmp_path):
     run = train(
-        TrainArgs(
+        _tiny(
+            tmp_path,
             task="UAVSearch-Small-Random-Waypoint-v0",
             total_timesteps=600,
             n_steps=32,
             batch_size=96,
-            n_envs=2,
-            run_dir=str(tmp_path / "run"),
-            progress=False,
         )
     )
     assert json.loads((run / "config.json").read_text())["task"].endswith("Waypoint-v0")
@@ -59,17 +63,7 @@ def test_trained_task_policy_flies_its_control_level(tmp_path):
 def test_a_checkpoint_of_another_control_level_is_refused(tmp_path, capsys):
     from poc_env.cli import main
 
-    run = train(
-        TrainArgs(
-            task="UAVSearch-Small-Waypoint-v0",
-            total_timesteps=100,
-            n_steps=16,
-            batch_size=48,
-            n_envs=1,
-            run_dir=str(tmp_path / "run"),
-            progress=False,
-        )
-    )
+    run = train(_tiny(tmp_path, task="UAVSearch-Small-Waypoint-v0", total_timesteps=100, n_envs=1))
     argv = ["evaluate", "--policies", f"ppo:{run}", "--episodes", "1", "--quiet", "--task"]
     assert main([*argv, "UAVSearch-Small-Heading-v0"]) != 0
     err = capsys.readouterr().err
@@ -87,16 +81,7 @@ def test_no_agent_index_trains_and_flies_without_it(tmp_path):
     PPOPolicy, both have the index block at zero."""
     from poc_env.sim.observations import N_IDS
 
-    args = TrainArgs(
-        task="UAVSearch-Small-Random-Heading-v0",
-        agent_index=False,
-        total_timesteps=96,
-        n_steps=16,
-        batch_size=48,
-        n_envs=2,
-        run_dir=str(tmp_path / "run"),
-        progress=False,
-    )
+    args = _tiny(tmp_path, task="UAVSearch-Small-Random-Heading-v0", agent_index=False)
     env = make_env(args, load_scenario("small"))
     assert env.agent_index is False and not env.reset()[:, -N_IDS:].any()
     pol = PPOPolicy(train(args))
@@ -114,18 +99,7 @@ def test_return_autopilot_trains_and_flies_the_same_way(tmp_path):
     from poc_env.sim.control import return_home
     from poc_env.sim.observations import decode_vector, split_observation
 
-    run = train(
-        TrainArgs(
-            task="UAVSearch-Small-Random-Increments-v0",
-            return_autopilot=True,
-            total_timesteps=96,
-            n_steps=16,
-            batch_size=48,
-            n_envs=2,
-            run_dir=str(tmp_path / "run"),
-            progress=False,
-        )
-    )
+    run = train(_tiny(tmp_path, task="UAVSearch-Small-Random-Increments-v0", return_autopilot=True))
     assert json.loads((run / "config.json").read_text())["return_autopilot"] is True
     pol = PPOPolicy(run)
     net = pol.model.policy.action_net  # level flight (zero increments) until the way home
@@ -158,15 +132,14 @@ def test_a_checkpoint_of_another_observation_is_refused(tmp_path, capsys):
     from poc_env.cli import main
 
     run = train(
-        TrainArgs(
+        _tiny(
+            tmp_path,
             scenario="small",
             overrides=["episode.horizon_steps=8"],
             total_timesteps=48,
             n_steps=8,
             batch_size=24,
             n_envs=1,
-            run_dir=str(tmp_path / "shared"),
-            progress=False,
         )
     )
     argv = ["evaluate", "--policies", f"ppo:{run}", "--episodes", "1", "--quiet", "--task"]
