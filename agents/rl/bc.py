@@ -129,9 +129,9 @@ def _label(control: str, params: Any, action: np.ndarray, xy0: np.ndarray, xy1: 
         d = xy1 - xy0
         norm = float(np.hypot(d[0], d[1]))
         return None if norm <= 0.0 else d / norm
-    x0, y0, x1, y1 = params.bounds
-    a = np.array([2 * (xy1[0] - x0) / (x1 - x0) - 1, 2 * (xy1[1] - y0) / (y1 - y0) - 1])
-    return np.clip(a, -1.0, 1.0)
+    from poc_env.sim.control import waypoint_action
+
+    return waypoint_action(params, xy1)[0]
 
 
 def discounted_returns(rewards: np.ndarray, gamma: float) -> np.ndarray:

@@ -54,7 +54,8 @@ def make_card(
         raise ConfigError("policy", policy, f"a policy evaluated in {eps_path}")
     posc = np.array([float(r["posc"]) for r in rows])
     stem = model.stem
-    step = int(stem.split("_", 1)[1]) if stem.startswith("step_") else None
+    tail = stem.split("_", 1)[1] if stem.startswith("step_") else ""
+    step = int(tail) if tail.isdigit() else None
     return {
         **{k: v for k, v in config.items() if k not in ("run_dir", "resume", "progress")},
         "model_step": step,
@@ -63,7 +64,9 @@ def make_card(
             "seeds": [int(r["seed"]) for r in rows],
             "posc": [float(x) for x in posc],
             "posc_mean": float(posc.mean()),
-            "posc_ci95": float(1.96 * posc.std(ddof=1) / np.sqrt(len(posc))),
+            "posc_ci95": float(1.96 * posc.std(ddof=1) / np.sqrt(len(posc)))
+            if len(posc) > 1
+            else 0.0,  # one episode: no spread to estimate (as evaluate reports it)
             "normalised": float(np.mean([float(r["normalised"]) for r in rows])),
             "violation_steps": float(np.mean([float(r["violation_steps"]) for r in rows])),
             "floor": float(posc.min()),

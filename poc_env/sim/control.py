@@ -92,6 +92,15 @@ def waypoint_goal(params: Params, action: np.ndarray) -> np.ndarray:
     return np.stack([x0 + (a[:, 0] + 1) / 2 * (x1 - x0), y0 + (a[:, 1] + 1) / 2 * (y1 - y0)], -1)
 
 
+def waypoint_action(params: Params, xy: np.ndarray) -> np.ndarray:
+    """The ``waypoint`` action (B, 2) naming the points ``xy (B, 2)`` in metres: the inverse of
+    :func:`waypoint_goal`, clipped to [-1, 1] (points outside the operating area name its edge)."""
+    x0, y0, x1, y1 = params.bounds
+    p = np.asarray(xy, dtype=float).reshape(-1, 2)
+    a = np.stack([2 * (p[:, 0] - x0) / (x1 - x0) - 1, 2 * (p[:, 1] - y0) / (y1 - y0) - 1], -1)
+    return np.clip(a, -1.0, 1.0)
+
+
 def to_increments(
     params: Params, control: str, q: dict, action: np.ndarray, k, auto_return: bool = True
 ) -> np.ndarray:

@@ -119,3 +119,12 @@ def test_compass_observation_is_the_pilot_features_of_the_dict_observation():
         od = env_d.step(acts)[0]
     parallel_api_test(poc_env.parallel_env("small", obs_type="compass"), num_cycles=20)
     check_env(UAVSearchGym(scenario="small", obs_type="compass", control="heading"))
+
+
+def test_waypoint_action_is_the_inverse_of_waypoint_goal():
+    env = poc_env.parallel_env("paper_6_2")
+    a = np.random.default_rng(0).uniform(-1, 1, (20, 2))
+    np.testing.assert_allclose(ctl.waypoint_action(env.params, ctl.waypoint_goal(env.params, a)), a)
+    x0, _, _, y1 = env.params.bounds
+    far = np.array([[x0 - 1e6, y1 + 1e6]])  # outside the area: its corner
+    np.testing.assert_array_equal(ctl.waypoint_action(env.params, far), [[-1.0, 1.0]])
