@@ -14,8 +14,8 @@ intrinsics) and the standard library. ``error_model="numpy"`` makes ``x / 0`` an
 an exception; ``inline="always"`` lets the compiler vectorise the sweep's inner loop.
 
 Sections: detection laws and the fused sensing sweep (eq. 12-14 of the paper), eq. 20-21
-constraint checks, eq. 24 communication graphs, the simulator step, observations, and the area
-fractions of rotated rectangles over grid cells.
+constraint checks, eq. 24 communication graphs, the simulator step, observations, the area
+fractions of rotated rectangles over grid cells, and their weighted masses by boundary integrals.
 """
 
 from __future__ import annotations
@@ -1395,3 +1395,258 @@ def rectangle_fractions(
                             if earlier == 0:
                                 part_frac[j, i] = plain
                             count[j, i] = earlier + 1
+
+
+# ---------------------------------------------------- rectangle masses by boundary integrals
+
+
+@_jit_inline
+def _edge_mass(xa, ya, xb, yb, gx, gy, xref, iref, w, pre, ny, nx):
+    """``∫ F dY`` along the segment a -> b, with ``F(X, Y) = ∫_{xref}^{X} w(X', Y) dX'``.
+
+    Cell units, ``X = (x - x_c) / h``: column ``i`` spans ``[gx + i, gx + i + 1]``, row ``j``
+    ``[gy + j, gy + j + 1]``; ``w`` the weight (mass) of every cell, ``pre[j, i] = sum
+    w[j, :i]``, ``iref`` the column of ``xref``. The segment is cut where it crosses grid lines
+    (a DDA walk); on each piece ``F`` is linear along the segment, so the midpoint rule is exact.
+    ``F`` counts from ``xref`` (the polygon's leftmost point), not from the map's edge: the
+    terms then have the size of the polygon's own mass, and a tiny polygon keeps its digits.
+    """
+    dx = xb - xa
+    dy = yb - ya
+    if dy == 0.0:
+        return 0.0
+    i = math.floor(xa - gx)
+    j = math.floor(ya - gy)
+    if dx > 0.0:
+        di, tx, dtx = 1, (gx + i + 1 - xa) / dx, 1.0 / dx
+    elif dx < 0.0:
+        di, tx, dtx = -1, (gx + i - xa) / dx, -1.0 / dx
+    else:
+        di, tx, dtx = 0, math.inf, math.inf
+    if dy > 0.0:
+        dj, ty, dty = 1, (gy + j + 1 - ya) / dy, 1.0 / dy
+    else:
+        dj, ty, dty = -1, (gy + j - ya) / dy, -1.0 / dy
+    head = gx + iref + 1 - xref  # width of the reference column right of xref
+    t0 = 0.0
+    total = 0.0
+    while True:
+        t1 = min(tx, ty, 1.0)
+        if t1 > t0:
+            xm = xa + 0.5 * (t0 + t1) * dx
+            jj = min(max(j, 0), ny - 1)
+            ii = min(max(i, iref), nx - 1)  # a rounding step left of xref: extrapolate
+            if ii == iref:
+                f = w[jj, ii] * (xm - xref)
+            else:
+                f = (
+                    w[jj, iref] * head
+                    + (pre[jj, ii] - pre[jj, iref + 1])
+                    + w[jj, ii] * (xm - gx - ii)
+                )
+            total += f * (t1 - t0)
+            t0 = t1
+        if t1 >= 1.0:
+            break
+        if tx <= ty:
+            i += di
+            tx += dtx
+        else:
+            j += dj
+            ty += dty
+    return total * dy
+
+
+@_jit_inline
+def _polygon_mass(px, py, n, gx, gy, w, pre, ny, nx, tiny):
+    """Mass of the convex polygon ``p[:n]`` (counter-clockwise, inside the map) over the
+    cell weights ``w``: Green's theorem, ``∬ w dA = ∮ F dY`` (:func:`_edge_mass`); 0 for a
+    polygon of area ``<= tiny`` (cells)."""
+    if n < 3 or _area(px, py, n) <= tiny:
+        return 0.0
+    xref = px[0]
+    for m in range(1, n):
+        xref = min(xref, px[m])
+    iref = min(max(math.floor(xref - gx), 0), nx - 1)
+    total = 0.0
+    for m in range(n):
+        mm = m + 1
+        if mm == n:
+            mm = 0
+        total += _edge_mass(px[m], py[m], px[mm], py[mm], gx, gy, xref, iref, w, pre, ny, nx)
+    return total
+
+
+@_jit_inline
+def _clip_box(px, py, n, qx, qy, lox, loy, hix, hiy):
+    """``p[:n]`` clipped to the box ``[lox, hix] x [loy, hiy]`` (in place; ``q`` scratch)."""
+    xl = yl = math.inf
+    xh = yh = -math.inf
+    for m in range(n):
+        xl, xh = min(xl, px[m]), max(xh, px[m])
+        yl, yh = min(yl, py[m]), max(yh, py[m])
+    if xl >= lox and xh <= hix and yl >= loy and yh <= hiy:
+        return n
+    for side in range(4):
+        if side == 0:
+            nx_, ny_, t = -1.0, 0.0, -lox
+        elif side == 1:
+            nx_, ny_, t = 1.0, 0.0, hix
+        elif side == 2:
+            nx_, ny_, t = 0.0, -1.0, -loy
+        else:
+            nx_, ny_, t = 0.0, 1.0, hiy
+        n = _clip(px, py, n, qx, qy, nx_, ny_, t)
+        for m in range(n):
+            px[m] = qx[m]
+            py[m] = qy[m]
+    return n
+
+
+@_jit_inline
+def _clip_to_rect(px, py, n, qx, qy, rx, ry, c, s, a, b):
+    """``p[:n]`` clipped to the rectangle centred at ``(rx, ry)`` (axes ``(c, s)``, half sides
+    ``a``, ``b``), the result in ``q``; returns its size (``p`` is overwritten)."""
+    eo = c * rx + s * ry
+    fo = -s * rx + c * ry
+    for side in range(4):
+        if side == 0:  # u <= a
+            nx_, ny_, t = c, s, eo + a
+        elif side == 1:  # u >= -a
+            nx_, ny_, t = -c, -s, a - eo
+        elif side == 2:  # v <= b
+            nx_, ny_, t = -s, c, fo + b
+        else:  # v >= -b
+            nx_, ny_, t = s, -c, b - fo
+        n = _clip(px, py, n, qx, qy, nx_, ny_, t)
+        if n < 3:
+            return 0
+        if side < 3:
+            for m in range(n):
+                px[m] = qx[m]
+                py[m] = qy[m]
+    return n
+
+
+@_jit_inline
+def _minus_rects_mass(
+    n0, n_earlier, rx, ry, cos_e, sin_e, a_e, b_e, sx, sy, sn, sp, tx, ty, mass_args
+):
+    """Mass of the convex polygon ``sx[0, :n0]`` minus the union of ``n_earlier`` rectangles
+    (centres ``rx, ry`` in the polygon's coordinates, axes ``cos_e, sin_e``, half sides
+    ``a_e, b_e``), by inclusion-exclusion: ``m(P) - sum m(P ∩ R_e) + sum m(P ∩ R_e ∩ R_f)
+    - ...``, depth first over the intersections (level ``d`` holds ``P ∩`` d rectangles,
+    ``sp`` the next rectangle to try there), a branch ending where its polygon has no area
+    (``<= tiny``). Every intersection is convex (:func:`_clip_to_rect`), its mass by
+    :func:`_polygon_mass` (``mass_args = (gx, gy, w, pre, ny, nx, tiny)``); the rectangles of
+    a converged population rarely overlap, so there are few terms. Never below 0."""
+    gx, gy, w, pre, ny, nx, tiny = mass_args
+    total = _polygon_mass(sx[0], sy[0], n0, gx, gy, w, pre, ny, nx, tiny)
+    sn[0] = n0
+    sp[0] = 0
+    level = 0
+    while level >= 0:
+        e = sp[level]
+        if e >= n_earlier:
+            level -= 1
+            continue
+        sp[level] = e + 1
+        src_x, src_y, dst_x, dst_y = sx[level], sy[level], sx[level + 1], sy[level + 1]
+        m = sn[level]
+        for q in range(m):
+            dst_x[q] = src_x[q]
+            dst_y[q] = src_y[q]
+        m = _clip_to_rect(dst_x, dst_y, m, tx, ty, rx[e], ry[e], cos_e[e], sin_e[e], a_e[e], b_e[e])
+        if m < 3 or _area(tx, ty, m) <= tiny:
+            continue
+        for q in range(m):
+            dst_x[q] = tx[q]
+            dst_y[q] = ty[q]
+        part = _polygon_mass(dst_x, dst_y, m, gx, gy, w, pre, ny, nx, tiny)
+        total += -part if level % 2 == 0 else part
+        level += 1
+        sn[level] = m
+        sp[level] = e + 1
+    return max(total, 0.0)
+
+
+@_jit
+def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, exclusive, mass):
+    """Weighted mass of rotated rectangles over a grid, by boundary integrals (no per-cell areas).
+
+    ``weights (ny, nx)``: the mass of each ``h x h`` cell of the grid at origin ``(x0, y0)``,
+    spread evenly over the cell. ``mass (P, n)`` gets, for rectangle ``p * n + k`` of the flat
+    inputs (centre ``(cx, cy)``, half side ``half_l`` along ``(cos_t, sin_t)``, ``half_w``
+    across), ``sum_cells area(cell ∩ Q) / h^2 * weights`` -- the same number as
+    :func:`rectangle_fractions`' weighted masses, to rounding. With ``exclusive``, UAV ``k``
+    gets the mass of ``Q_k`` minus the union of ``Q_0 .. Q_{k-1}`` of its individual (§3.1.6).
+
+    Per rectangle, in cell units about its centre: the rectangle clipped to the map, minus the
+    earlier rectangles whose bounding circles meet it (cut into disjoint convex pieces,
+    :func:`_minus_rects_mass`), and each convex piece's mass by Green's theorem on the row-wise
+    cumulative weights (:func:`_polygon_mass`): O(grid lines its edges cross), not O(cells).
+    """
+    n_ind, n_uav = mass.shape
+    ny, nx = weights.shape
+    pre = np.zeros((ny, nx + 1))
+    for j in range(ny):
+        for i in range(nx):
+            pre[j, i + 1] = pre[j, i] + weights[j, i]
+    size = 8 + 4 * n_uav  # the map clip adds 4 corners at most, each rectangle 4 more
+    sx = np.empty((n_uav + 1, size))
+    sy = np.empty((n_uav + 1, size))
+    sn = np.empty(n_uav + 1, np.int64)
+    sp = np.empty(n_uav + 1, np.int64)
+    qx = np.empty(size)
+    qy = np.empty(size)
+    rx = np.empty(max(n_uav, 1))
+    ry = np.empty(max(n_uav, 1))
+    ce = np.empty(max(n_uav, 1))
+    se = np.empty(max(n_uav, 1))
+    ae = np.empty(max(n_uav, 1))
+    be = np.empty(max(n_uav, 1))
+    inv_h = 1.0 / h
+    tiny = 1e-14  # pieces under this area (cells) are dropped, as in rectangle_fractions
+    for p in range(n_ind):
+        for k in range(n_uav):
+            r = p * n_uav + k
+            c = cos_t[r]
+            s = sin_t[r]
+            a = half_l[r] * inv_h
+            b = half_w[r] * inv_h
+            gx = (x0 - cx[r]) * inv_h
+            gy = (y0 - cy[r]) * inv_h
+            px, py = sx[0], sy[0]
+            px[0], py[0] = -a * c + b * s, -a * s - b * c
+            px[1], py[1] = a * c + b * s, a * s - b * c
+            px[2], py[2] = a * c - b * s, a * s + b * c
+            px[3], py[3] = -a * c - b * s, -a * s + b * c
+            n = _clip_box(px, py, 4, qx, qy, gx, gy, gx + nx, gy + ny)
+            if n < 3:
+                continue
+            n_e = 0
+            if exclusive:
+                rk = math.hypot(a, b)
+                hx = a * abs(c) + b * abs(s)
+                hy = a * abs(s) + b * abs(c)
+                for e in range(k):  # the earlier rectangles whose bounding box and circle meet
+                    q = p * n_uav + e
+                    ex = (cx[q] - cx[r]) * inv_h
+                    ey = (cy[q] - cy[r]) * inv_h
+                    a_q = half_l[q] * inv_h
+                    b_q = half_w[q] * inv_h
+                    cq, sq = abs(cos_t[q]), abs(sin_t[q])
+                    if abs(ex) > hx + a_q * cq + b_q * sq or abs(ey) > hy + a_q * sq + b_q * cq:
+                        continue
+                    if math.hypot(ex, ey) <= rk + math.hypot(a_q, b_q):
+                        rx[n_e], ry[n_e] = ex, ey
+                        ce[n_e], se[n_e] = cos_t[q], sin_t[q]
+                        ae[n_e], be[n_e] = a_q, b_q
+                        n_e += 1
+            if n_e == 0:
+                mass[p, k] = _polygon_mass(px, py, n, gx, gy, weights, pre, ny, nx, tiny)
+            else:
+                mass[p, k] = _minus_rects_mass(
+                    n, n_e, rx, ry, ce, se, ae, be, sx, sy, sn, sp, qx, qy,
+                    (gx, gy, weights, pre, ny, nx, tiny),
+                )  # fmt: skip

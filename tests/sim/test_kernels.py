@@ -793,3 +793,54 @@ def test_compass_bins_on_boundaries_equal_the_defining_formula():
         want_c = np.bincount(sector, others[i] * (dist <= OTHERS_RADIUS_M), N_SECTORS)
         np.testing.assert_array_equal(mass[i], want_m)
         np.testing.assert_array_equal(count[i], want_c)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_boundary_masses_equal_the_dense_fractions_and_shapely(seed):
+    """``rectangle_masses`` (Green's theorem on the row-wise cumulative weights, no per-cell
+    areas) against the dense fractions times the weights and against shapely, plain and
+    exclusive (§3.1.6), to 1e-12 of the rectangle's plain mass: random rectangles, ones on
+    cell edges, axis-aligned, reaching outside or wholly outside the map, copies of the UAV
+    before, tiny (sides of 0.01-0.05 cell) and huge (sides up to 4 times the map)."""
+    import shapely
+
+    from poc_env.geometry import rectangle_polygon
+    from poc_env.theory.probability_map import Grid
+    from poc_env.theory.regions import area_fractions, boundary_mass, exclusive_fractions
+
+    grid = Grid.from_config(load_scenario("paper_6_2").map)
+    h = grid.cell_m
+    rng = np.random.default_rng(100 + seed)
+    center, ln, wd, th = _random_rectangles(rng, grid, 16, 5)
+    size = rng.integers(0, 4, ln.shape)  # 1 tiny, 2 huge, else as drawn
+    size[:, 1:][np.all(center[:, 1:] == center[:, :-1], axis=-1)] = 0  # keep copies copies
+    tiny, huge = size == 1, size == 2
+    ln[tiny] = h * rng.uniform(0.01, 0.05, tiny.sum())
+    wd[tiny] = h * rng.uniform(0.01, 0.05, tiny.sum())
+    ln[huge] = h * rng.uniform(20, 160, huge.sum())
+    wd[huge] = h * rng.uniform(20, 160, huge.sum())
+    weights = rng.random(grid.shape)
+    weights[rng.random(grid.shape) < 0.2] = 0.0
+    plain = np.sum(area_fractions(grid, center, ln, wd, th) * weights, axis=(-2, -1))
+    excl = np.sum(exclusive_fractions(grid, center, ln, wd, th) * weights, axis=(-2, -1))
+    assert np.any(excl < plain - 0.01 * plain.max())  # overlaps (and copies) are present
+    assert np.any(plain == 0) and np.any(huge & (plain > 0)) and np.any(tiny & (plain > 0))
+    new_plain = boundary_mass(grid, center, ln, wd, th, weights, exclusive=False)
+    new_excl = boundary_mass(grid, center, ln, wd, th, weights, exclusive=True)
+    assert np.all(np.abs(new_plain - plain) <= 1e-12 * plain)
+    assert np.all(np.abs(new_excl - excl) <= 1e-12 * plain)
+    boxes = np.array(grid.cell_boxes(), dtype=object)
+    for p in range(center.shape[0]):
+        earlier = []
+        for k in range(center.shape[1]):
+            rect = rectangle_polygon(center[p, k], ln[p, k], wd[p, k], th[p, k])
+            own = rect.difference(shapely.union_all(earlier)) if earlier else rect
+            earlier.append(rect)
+            # shapely works in metres about the map's origin: its own rounding of a tiny
+            # rectangle's corners is about 1e-12 of its mass, so a looser bound there
+            tol = (1e-10 if tiny[p, k] else 1e-12) * plain[p, k]
+            for geom, got in ((rect, new_plain[p, k]), (own, new_excl[p, k])):
+                ref = np.sum(shapely.area(shapely.intersection(geom, boxes)) * weights.ravel())
+                assert abs(got - ref / grid.cell_area_m2) <= tol, (p, k)
+    with pytest.raises(ConfigError):
+        boundary_mass(grid, center, ln, wd, th, weights[:-1], exclusive=True)
