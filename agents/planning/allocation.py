@@ -49,16 +49,24 @@ and connections sweep too, as in the environment), which also picks ``eta``.
 
 from __future__ import annotations
 
-import itertools
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from scipy import ndimage
 
 from agents.planning.export import SCHEMA
+from agents.planning.refine import (
+    Airspace,
+    leg_coverage,
+    refine_routes,
+    route_fits,
+    route_time,
+)
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
+from poc_env.sim.core import takeoff_heading
 from poc_env.theory.bound import cell_distances, honest_optimum, reach_bound, reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage
@@ -72,6 +80,48 @@ COVER_CAP = 3.0
 FAN_DEG = 20.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
 ETAS = (0.3, 0.4, 0.5, 0.65)
+#: the default speed rule of :func:`plan_speeds`.
+SPEED = "max"
+SPEED_RULES = ("max", "paper")
+#: margins on d_s (eq. 21) and the communication range (eq. 24) for the refinement's airspace
+#: check: the follower flies the planned route, not the planned timing, to the second.
+SEPARATION_MARGIN = 2.0
+RANGE_MARGIN = 0.9
+#: passes of :func:`agents.planning.refine.refine_routes` over the chosen routes (0: none).
+REFINE = 4
+
+
+@dataclass(frozen=True)
+class Speeds:
+    """Ground speeds (m/s) a route is planned and flown at: ``out`` from take-off to the first
+    waypoint, ``line`` on the route (search lines and the connections between them), ``home``
+    from the last waypoint to the landing field."""
+
+    out: float
+    line: float
+    home: float
+
+    def as_dict(self) -> dict[str, float]:
+        return {"out": self.out, "line": self.line, "home": self.home}
+
+
+def plan_speeds(sc: Scenario, rule: str = SPEED) -> Speeds:
+    """The speeds of a route plan under ``rule``.
+
+    ``"paper"``: eq. 17's speeds, transit at the cruise speed ``v_c`` and search at ``v_s``.
+    ``"max"``: out and on the route at the eq. 19 maximum ``v_max``, home at ``v_c``. In the
+    environment the sweep width W does not depend on speed (eq. 10 per unit length flown), so a
+    route flown at ``v_max`` sweeps ``v_max / v_s`` (4/3 on the paper's UAV) as much ground per
+    second. Home stays at ``v_c`` because eq. 18's return rule (the follower's and the
+    environment's) budgets the flight home at ``v_c``. A sensor whose sweep width falls with
+    speed should be planned with ``"paper"``.
+    """
+    u = sc.uav
+    if rule == "paper":
+        return Speeds(u.cruise_speed_mps, u.search_speed_mps, u.cruise_speed_mps)
+    if rule == "max":
+        return Speeds(u.max_speed_mps, u.max_speed_mps, u.cruise_speed_mps)
+    raise ConfigError("speed", rule, "max or paper")
 
 
 def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
@@ -159,7 +209,7 @@ def _order(regions: list[list[tuple]], start: np.ndarray) -> list[tuple]:
     return route
 
 
-def _split(route, takeoff, landing, sc: Scenario, margin: float):
+def _split(route, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     """Contiguous route pieces per UAV (index lists), each piece's time, lines left unflown."""
     u = sc.uav
     budget = margin * u.usable_endurance_s
@@ -174,16 +224,16 @@ def _split(route, takeoff, landing, sc: Scenario, margin: float):
         p0 = np.array([route[i][1], route[i][0]])
         placed = False
         for k in sorted(free, key=lambda j: float(np.hypot(*(takeoff[j] - p0)))):
-            out_s = float(np.hypot(*(takeoff[k] - p0))) / u.cruise_speed_mps
+            out_s = float(np.hypot(*(takeoff[k] - p0))) / v.out
             pattern = 0.0
             prev = None
             while i < len(route):
                 y, a, b, _ = route[i]
-                add = abs(b - a) / u.search_speed_mps
+                add = abs(b - a) / v.line
                 if prev is not None:
-                    add += float(np.hypot(a - prev[0], y - prev[1])) / u.search_speed_mps
+                    add += float(np.hypot(a - prev[0], y - prev[1])) / v.line
                     add += turn_s
-                home = float(np.hypot(*(landing[k] - np.array([b, y])))) / u.cruise_speed_mps
+                home = float(np.hypot(*(landing[k] - np.array([b, y])))) / v.home
                 if out_s + pattern + add + home > budget:
                     break
                 pattern += add
@@ -201,7 +251,7 @@ def _split(route, takeoff, landing, sc: Scenario, margin: float):
     return pieces, times, dropped + len(route) - i
 
 
-def _assign(regions, takeoff, landing, sc: Scenario, margin: float):
+def _assign(regions, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     """Route and pieces per UAV: lines go to the field of least out-and-back distance, each
     field's lines are chained from it and cut among its UAVs (:func:`_split`); lines left over
     go to the UAVs left without a piece. Returns (route, pieces, times, lines unflown)."""
@@ -223,7 +273,7 @@ def _assign(regions, takeoff, landing, sc: Scenario, margin: float):
     for f, g in enumerate(groups):
         mine = [[ln for ln in reg if field_of(ln) == f] for reg in regions]
         sub = _order([r for r in mine if r], heads[f, 0])
-        sp, st, _ = _split(sub, takeoff[g], landing[g], sc, margin)
+        sp, st, _ = _split(sub, takeoff[g], landing[g], sc, margin, v)
         used = {j for p in sp for j in p}
         leftover += [ln for j, ln in enumerate(sub) if j not in used]
         base = len(route)
@@ -234,7 +284,7 @@ def _assign(regions, takeoff, landing, sc: Scenario, margin: float):
     idle = [k for k in range(n) if not pieces[k]]
     if leftover and idle:
         sub = _order([leftover], takeoff[idle].mean(axis=0))
-        sp, st, _ = _split(sub, takeoff[idle], landing[idle], sc, margin)
+        sp, st, _ = _split(sub, takeoff[idle], landing[idle], sc, margin, v)
         used = {j for p in sp for j in p}
         base = len(route)
         route += sub
@@ -297,27 +347,27 @@ def _swept_areas(lines: np.ndarray, spacing: float) -> list[list[list[float]]]:
     return [[[float(x), float(y)] for x, y in p.exterior.coords[:-1]] for p in polys if p.area > 0]
 
 
-def _flight_time(wps, lines: int, takeoff, landing, sc: Scenario) -> float:
-    """Eq. 17 time of a route: transit legs at cruise speed, the rest at search speed, a
-    half-turn at the maximum turn rate between search lines."""
-    u = sc.uav
+def _flight_time(wps, takeoff, landing, sc: Scenario, v: Speeds, heading0=None) -> float:
+    """Eq. 17 time of a route (:func:`agents.planning.refine.route_time`: out at ``v.out``,
+    on the route at ``v.line``, home at ``v.home``, turns at the maximum turn rate)."""
     if not len(wps):
         return 0.0
     path = np.vstack([takeoff, np.asarray(wps, dtype=float).reshape(-1, 2), landing])
-    legs = np.hypot(*np.diff(path, axis=0).T)
-    return float(
-        (legs[0] + legs[-1]) / u.cruise_speed_mps
-        + legs[1:-1].sum() / u.search_speed_mps
-        + max(lines - 1, 0) * np.pi / u.max_turn_rate_rad_s
-    )
+    return route_time(path, v, sc.uav.max_turn_rate_rad_s, heading0)
 
 
-def _trim(routes, pieces, takeoff, landing, sc: Scenario) -> None:
-    """Drop each UAV's last search lines until its route (dog-leg included) fits 0.85 T."""
+def _trim(routes, pieces, takeoff, landing, sc: Scenario, v: Speeds, headings) -> None:
+    """Drop each UAV's last search lines until its route (dog-leg included) is flown whole
+    under eq. 18 (:func:`agents.planning.refine.route_fits`)."""
+    u = sc.uav
     for k, idx in enumerate(pieces):
-        while idx and (
-            _flight_time(routes[k], len(idx), takeoff[k], landing[k], sc)
-            > sc.uav.usable_endurance_s
+        while idx and not route_fits(
+            np.vstack([takeoff[k], np.asarray(routes[k]).reshape(-1, 2), landing[k]]),
+            v,
+            u.max_turn_rate_rad_s,
+            u.usable_endurance_s,
+            _reserve(sc),
+            headings[k],
         ):
             idx.pop()
             del routes[k][-2:]
@@ -325,38 +375,20 @@ def _trim(routes, pieces, takeoff, landing, sc: Scenario) -> None:
             routes[k].clear()
 
 
+def _reserve(sc: Scenario) -> float:
+    """Time in hand at every waypoint: the two steps of eq. 18's return rule
+    (:func:`poc_env.sim.autopilot.returning`) and one more, because the follower sees its
+    position once a step and may pass a waypoint up to a step later than planned."""
+    return 3.0 * sc.episode.dt_s
+
+
 def _path_coverage(path, grid: Grid, w: float) -> np.ndarray:
     """Coverage W x (length of the polyline ``path`` inside each cell) / area (eq. 10 per cell),
-    every leg counted (transit too), sampled at a quarter cell; nothing outside the map."""
-    cov = np.zeros(grid.shape)
+    every leg counted (transit too; :func:`agents.planning.refine.leg_coverage`)."""
     pts = np.asarray(path, dtype=float).reshape(-1, 2)
     if len(pts) < 2:
-        return cov
-    ox, oy = grid.origin_m
-    c = grid.cell_m
-    for p, q in itertools.pairwise(pts):
-        length = float(np.hypot(*(q - p)))
-        m = max(1, int(np.ceil(4 * length / c)))
-        t = (np.arange(m) + 0.5) / m
-        xy = p + t[:, None] * (q - p)
-        col = np.floor((xy[:, 0] - ox) / c).astype(int)
-        row = np.floor((xy[:, 1] - oy) / c).astype(int)
-        ok = (col >= 0) & (col < grid.nx) & (row >= 0) & (row < grid.ny)
-        np.add.at(cov, (row[ok], col[ok]), w * length / m / grid.cell_area_m2)
-    return cov
-
-
-def _coverage_of(route, idx, grid: Grid, w: float) -> np.ndarray:
-    """Coverage W x (line length in the cell) / area of the lines ``idx`` (eq. 10 per cell)."""
-    cov = np.zeros(grid.shape)
-    ox, _ = grid.origin_m
-    c = grid.cell_m
-    for j in idx:
-        _, a, b, r = route[j]
-        lo, hi = min(a, b), max(a, b)
-        c0, c1 = round((lo - ox) / c), round((hi - ox) / c)
-        cov[r, c0:c1] += w * c / grid.cell_area_m2
-    return cov
+        return np.zeros(grid.shape)
+    return leg_coverage(pts[:-1], pts[1:], grid, w)[0].reshape(grid.shape)
 
 
 def make_allocation_plan(
@@ -368,6 +400,8 @@ def make_allocation_plan(
     seed: int = 0,
     levels: int | tuple[int, ...] = LEVELS,
     margin: float = MARGIN,
+    speed: str = SPEED,
+    refine: int = REFINE,
     crs: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
@@ -381,7 +415,8 @@ def make_allocation_plan(
     sc = load_scenario(scenario)
     if uavs is not None:
         sc = sc.with_uavs(as_int("uavs", uavs, 1, 64))
-    ks = [as_int("levels", v, 1, 64) for v in np.atleast_1d(levels).tolist()]
+    ks = [as_int("levels", k, 1, 64) for k in np.atleast_1d(levels).tolist()]
+    refine = as_int("refine", refine, 0, 100)
     if not (0.1 <= float(margin) <= 1.0):
         raise ConfigError("margin", margin, "a share of 0.85 T in [0.1, 1]")
     grid = Grid.from_config(sc.map)
@@ -393,7 +428,8 @@ def make_allocation_plan(
     takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
     n = len(takeoff)
-    tau = (cell_distances(grid, takeoff) + cell_distances(grid, landing)) / u.cruise_speed_mps
+    v = plan_speeds(sc, speed)
+    tau = cell_distances(grid, takeoff) / v.out + cell_distances(grid, landing) / v.home
     budget = np.full(n, u.usable_endurance_s)
     if reason is None and not np.any((tau < budget[:, None, None]) & (prior > 0)[None]):
         reason = "no UAV can reach any mass and come back within 0.85 T (eq. 18)"
@@ -413,16 +449,16 @@ def make_allocation_plan(
         g_f, to_f, la_f, _ = frames[swap]
         cov = alloc.coverage.T if swap else alloc.coverage
         regions = _tracks(cov, g_f, w, k)
-        route, pieces, times, left = _assign(regions, to_f, la_f, sc, margin)
+        route, pieces, times, left = _assign(regions, to_f, la_f, sc, margin, v)
         return alloc, route, pieces, times, left, swap
 
     def fly(res) -> tuple[list, list]:
         """Waypoints (map frame) and line indices per UAV of a build, fanned out and trimmed."""
         _, route, pieces, _, _, swap = res
-        _, to_f, la_f, _ = frames[swap]
+        g_f, to_f, la_f, _ = frames[swap]
         paths = _fan_out(route, pieces, to_f, sc)
         idx = [list(p) for p in pieces]
-        _trim(paths, idx, to_f, la_f, sc)
+        _trim(paths, idx, to_f, la_f, sc, v, takeoff_heading(g_f.bounds, to_f))
         if swap:
             paths = [[[q[1], q[0]] for q in path] for path in paths]
         return paths, idx
@@ -439,7 +475,7 @@ def make_allocation_plan(
                     prior,
                     grid.cell_area_m2,
                     tau,
-                    np.full(n, cand * w * u.search_speed_mps),
+                    np.full(n, cand * w * v.line),
                     budget,
                     law,
                 )
@@ -457,21 +493,43 @@ def make_allocation_plan(
                 val = float(np.sum(prior * pod_from_coverage(cov, law)))
                 if val > best_val:
                     best, best_val, eta, chosen = res, val, cand, k
-        fleet = reach_optimum(
-            prior, grid.cell_area_m2, tau, np.full(n, w * u.search_speed_mps), budget, law
-        )
+        fleet = reach_optimum(prior, grid.cell_area_m2, tau, np.full(n, w * v.line), budget, law)
         if best is None or not any(best[2]):
             reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
             best = None
-    pieces: list[list[int]] = [[] for _ in range(n)]
     routes: list[list[list[float]]] = [[] for _ in range(n)]
+    pieces: list[list[int]] = [[] for _ in range(n)]
     alloc_pos = 0.0
     along = "x"
+    spacing = w
+    posc = 0.0
     if best is not None:
         alloc_pos = float(best[0].pos)
         routes, pieces = fly(best)
         along = "y" if best[5] else "x"
-    uav_out = []
+        spacing = w / max(float(np.minimum(best[0].coverage, COVER_CAP).max()), 1e-12)
+        if refine:
+            routes, posc = refine_routes(
+                routes,
+                takeoff,
+                landing,
+                prior,
+                grid,
+                w,
+                law,
+                v,
+                u.usable_endurance_s,
+                u.max_turn_rate_rad_s,
+                _reserve(sc),
+                sweeps=refine,
+                headings=takeoff_heading(grid.bounds, takeoff),
+                airspace=Airspace(
+                    sc.episode.dt_s,
+                    SEPARATION_MARGIN * sc.constraints.safety_distance_m,
+                    RANGE_MARGIN * sc.comms.range_m,
+                    sc.comms.min_neighbours,
+                ),
+            )
     covs = [
         _path_coverage([takeoff[k], *routes[k], landing[k]], grid, w)
         if routes[k]
@@ -481,40 +539,41 @@ def make_allocation_plan(
     cov_total = np.sum(covs, axis=0) if covs else np.zeros(grid.shape)
     pod_total = pod_from_coverage(cov_total, law)
     posc = float(np.sum(prior * pod_total))
+    x0, y0, x1, y1 = grid.bounds
+    heading_k = takeoff_heading(grid.bounds, takeoff)
+    uav_out = []
     for k in range(n):
-        areas: list[list[list[float]]] = []
-        spacing = 0.0
-        t_k = 0.0
-        length = 0.0
-        pos_k = poc_k = pod_k = 0.0
-        idx = pieces[k]
         wps = routes[k]
-        if idx:
-            arr = np.asarray(wps[len(wps) - 2 * len(idx) :])  # the search lines' ends
-            ys = np.unique(arr[:, 1 if along == "x" else 0])  # across the lines
-            spacing = float(np.min(np.diff(ys))) if ys.size > 1 else w
-            areas = _swept_areas(arr.reshape(-1, 2, 2), spacing)
-            path = np.vstack([takeoff[k], np.asarray(wps), landing[k]])
-            length = float(np.hypot(*np.diff(path, axis=0).T).sum())
-            t_k = _flight_time(wps, len(idx), takeoff[k], landing[k], sc)
+        arr = np.asarray(wps, dtype=float).reshape(-1, 2)
+        inside = (arr[:, 0] >= x0) & (arr[:, 0] <= x1) & (arr[:, 1] >= y0) & (arr[:, 1] <= y1)
+        if refine:  # transit: the waypoints before the route first enters the map
+            lead = int(np.argmax(inside)) if inside.any() else len(arr)
+        else:  # the dog-leg before the lines
+            lead = len(arr) - 2 * len(pieces[k])
+        legs: np.ndarray = np.zeros((0, 2, 2))
+        if refine and len(arr) > lead + 1:  # every leg of the route is flown as search
+            legs = np.stack([arr[lead:-1], arr[lead + 1 :]], axis=1)
+        elif not refine:  # the lines
+            legs = arr[lead:].reshape(-1, 2, 2)
+        path = np.vstack([takeoff[k], arr, landing[k]])
+        t_k = _flight_time(wps, takeoff[k], landing[k], sc, v, heading_k[k])
         ck = covs[k]
         share = np.divide(ck, cov_total, out=np.zeros_like(ck), where=cov_total > 0)
         pos_k = float(np.sum(prior * pod_total * share))
         poc_k = float(np.sum(prior * (ck > 0)))
-        pod_k = pos_k / poc_k if poc_k > 0 else 0.0
         uav_out.append(
             {
                 "id": k + 1,
                 "rectangle": None,
-                "areas_m": areas,
-                "spacing_m": spacing,
-                "takeoff_m": [float(v) for v in takeoff[k]],
-                "landing_m": [float(v) for v in landing[k]],
+                "areas_m": _swept_areas(np.asarray(legs), spacing) if len(legs) else [],
+                "spacing_m": spacing if wps else 0.0,
+                "takeoff_m": [float(c) for c in takeoff[k]],
+                "landing_m": [float(c) for c in landing[k]],
                 "waypoints_m": wps,
-                "transit_waypoints": len(wps) - 2 * len(idx),
-                "track_length_m": length,
+                "transit_waypoints": lead if wps else 0,
+                "track_length_m": float(np.hypot(*np.diff(path, axis=0).T).sum()) if wps else 0.0,
                 "flight_time_s": t_k,
-                "pod": pod_k,
+                "pod": pos_k / poc_k if poc_k > 0 else 0.0,
                 "poc": poc_k,
                 "pos": pos_k,
                 "feasible": bool(t_k <= u.usable_endurance_s),
@@ -533,9 +592,17 @@ def make_allocation_plan(
         "planner": "allocation",
         "route": True,
         "lines_along": along,
+        "speed_rule": speed,
+        "speeds_mps": v.as_dict(),
         "optimizer": {
             "name": "allocation",
-            "settings": {"levels": chosen, "tried": ks, "margin": margin},
+            "settings": {
+                "levels": chosen,
+                "tried": ks,
+                "margin": margin,
+                "speed": speed,
+                "refine": refine,
+            },
         },
         "runtime_s": runtime,
         "posc": posc,

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.planning.allocation import LEVELS, MARGIN, make_allocation_plan
+from agents.planning.allocation import LEVELS, MARGIN, REFINE, SPEED, make_allocation_plan
 from agents.policies.base import Policy
 from poc_env.sim.autopilot import WaypointFollower
 
@@ -22,18 +22,39 @@ class AllocationPlanPolicy(Policy):
 
     name = "allocation_plan"
 
-    def __init__(self, levels: int | tuple[int, ...] = LEVELS, margin: float = MARGIN) -> None:
+    def __init__(
+        self,
+        levels: int | tuple[int, ...] = LEVELS,
+        margin: float = MARGIN,
+        speed: str = SPEED,
+        refine: int = REFINE,
+    ) -> None:
         self.levels = levels
         self.margin = margin
+        self.speed = speed
+        self.refine = refine
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
         prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
         self.plan = make_allocation_plan(
-            env.scenario, prior=prior, seed=seed, levels=self.levels, margin=self.margin
+            env.scenario,
+            prior=prior,
+            seed=seed,
+            levels=self.levels,
+            margin=self.margin,
+            speed=self.speed,
+            refine=self.refine,
         )
         wps = [np.asarray(u["waypoints_m"], dtype=float) for u in self.plan["uavs"]]
-        self.follower = WaypointFollower(env.params, wps, env.possible_agents)
+        v = self.plan["speeds_mps"]
+        self.follower = WaypointFollower(
+            env.params,
+            wps,
+            env.possible_agents,
+            transit_speed_mps=v["out"],
+            pattern_speed_mps=v["line"],
+        )
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         return self.follower.predict(observations, state)

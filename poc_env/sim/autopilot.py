@@ -2,10 +2,12 @@
 
 The follower is how planned routes (the DE plan, lawnmowers, patterns) fly in the
 environment: each step it turns towards the current waypoint as far as the turn limit allows,
-holds the search speed on the pattern and the cruise speed in transit, and levels the pitch to
-hold the cruise altitude. A waypoint counts as reached when it is within half a step. After the
-last waypoint -- or as soon as the remaining usable endurance (0.85 T, eq. 18) only just covers
-the flight home at cruise speed plus two steps -- the UAV heads for its landing field.
+holds the pattern speed on the pattern and the transit speed on the way to the first waypoint
+(by default eq. 17's search speed v_s and cruise speed v_c; a route plan may fly faster), and
+levels the pitch to hold the cruise altitude. A waypoint counts as reached when it is within
+half a step. After the last waypoint -- or as soon as the remaining usable endurance (0.85 T,
+eq. 18) only just covers the flight home at cruise speed plus two steps -- the UAV heads for its
+landing field.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from poc_env.errors import ConfigError
 from poc_env.sim.core import Params
 from poc_env.sim.observations import decode_vector, split_observation
 
@@ -85,9 +88,28 @@ class WaypointFollower:
     observations) and returns an action dict; the interface mirrors SB3's ``predict``.
     """
 
-    def __init__(self, params: Params, waypoints: Sequence[np.ndarray], agents: Sequence[str]):
+    def __init__(
+        self,
+        params: Params,
+        waypoints: Sequence[np.ndarray],
+        agents: Sequence[str],
+        *,
+        transit_speed_mps: float | None = None,
+        pattern_speed_mps: float | None = None,
+    ):
+        u = params.scenario.uav
         self.params = params
         self.agents = list(agents)
+        self.transit_speed = u.cruise_speed_mps if transit_speed_mps is None else transit_speed_mps
+        self.pattern_speed = u.search_speed_mps if pattern_speed_mps is None else pattern_speed_mps
+        for name, v in (
+            ("transit_speed_mps", self.transit_speed),
+            ("pattern_speed_mps", self.pattern_speed),
+        ):
+            if not (u.min_speed_mps <= v <= u.max_speed_mps):
+                raise ConfigError(
+                    name, v, f"within [{u.min_speed_mps:g}, {u.max_speed_mps:g}] m/s (eq. 19)"
+                )
         self.waypoints = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
         self.index = np.zeros(len(self.agents), dtype=int)
 
@@ -102,7 +124,6 @@ class WaypointFollower:
         return split_observation(obs, self.params.grid.shape)[1]
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
-        u = self.params.scenario.uav
         actions = {}
         for k, agent in enumerate(self.agents):
             if agent not in observations:
@@ -126,7 +147,7 @@ class WaypointFollower:
             if self.index[k] >= len(wps):
                 actions[agent] = go_home(self.params, q, k)
                 continue
-            v = u.search_speed_mps if on_pattern else u.cruise_speed_mps
+            v = self.pattern_speed if on_pattern else self.transit_speed
             actions[agent] = steer(
                 self.params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v
             ).astype(np.float32)

@@ -202,6 +202,14 @@ def _draw_target(prior_fine: np.ndarray, h: float, origin, rng: np.random.Genera
     return (origin[0] + (i + du) * h, origin[1] + (j + dv) * h)
 
 
+def takeoff_heading(bounds, takeoff) -> np.ndarray:
+    """Every UAV's heading at take-off (rad): towards the centre of the map ``bounds``
+    ``(x0, y0, x1, y1)`` from its take-off point (``takeoff`` (n, 2))."""
+    cx, cy = np.mean(np.reshape(bounds, (2, 2)), axis=0)
+    t = np.asarray(takeoff, dtype=float).reshape(-1, 2)
+    return np.arctan2(cy - t[:, 1], cx - t[:, 0])
+
+
 def initial(
     params: Params,
     rngs: list[np.random.Generator],
@@ -228,8 +236,7 @@ def initial(
     pos = np.zeros((e, n, 3))
     pos[:, :, :2] = params.takeoff[None]
     pos[:, :, 2] = u.cruise_altitude_m
-    cx, cy = np.mean(np.reshape(params.grid.bounds, (2, 2)), axis=0)
-    heading = np.arctan2(cy - params.takeoff[:, 1], cx - params.takeoff[:, 0])
+    heading = takeoff_heading(params.grid.bounds, params.takeoff)
     h = params.grid.cell_m / s
     target = np.zeros((e, 2))
     threshold = np.zeros(e)

@@ -88,6 +88,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError, check_positive
@@ -150,19 +151,18 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
             effort,
             law,
         )
-    # bisection on log(lambda): spent effort decreases monotonically in lambda
-    lo = np.log(density[density > 0].min()) - 60.0
-    hi = np.log(density.max())
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        spent = float(np.sum(area * _coverage_at(np.exp(mid), density, entry)))
-        if spent > effort:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-15:
-            break
-    lam = np.exp(0.5 * (lo + hi))
+    # root of spent(log lambda) = effort (Brent's method): spent effort decreases monotonically
+    # in lambda, from above the effort at ``lo`` to 0 at the densest cell's density
+    pos_cells = density > 0
+    d, a = density[pos_cells], area[pos_cells]
+
+    def excess(mu: float) -> float:
+        return float(np.sum(a * _coverage_at(np.exp(mu), d, entry))) - effort
+
+    lo = np.log(d.min()) - 60.0
+    hi = np.log(d.max())
+    mu = lo if excess(lo) <= 0 else brentq(excess, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
+    lam = np.exp(mu)
     cov = _coverage_at(lam, density, entry)
     spent = float(np.sum(area * cov))
     if spent > 0:  # spend exactly the effort (removes the last bisection rounding)

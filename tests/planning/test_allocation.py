@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from agents.planning.allocation import make_allocation_plan
+from agents.planning.allocation import REFINE, make_allocation_plan
 from agents.planning.planner import make_plan
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
@@ -19,9 +19,10 @@ def _small(**over):
     return load_scenario("small", over or None)
 
 
-def test_small_plan_is_flyable_and_inside_the_map():
+@pytest.mark.parametrize("refine", [0, REFINE])
+def test_small_plan_is_flyable_and_inside_the_map(refine):
     sc = _small()
-    plan = make_allocation_plan(sc)
+    plan = make_allocation_plan(sc, refine=refine)
     assert plan["reason"] is None
     grid = Grid.from_config(sc.map)
     x0, y0, x1, y1 = grid.bounds
@@ -31,7 +32,8 @@ def test_small_plan_is_flyable_and_inside_the_map():
         assert u["feasible"]
         assert u["transit_waypoints"] in (0, 1)  # a dog-leg out of the shared field
         wps = np.asarray(u["waypoints_m"]).reshape(-1, 2)[u["transit_waypoints"] :]
-        assert len(wps) % 2 == 0  # search lines: start and end
+        if not refine:
+            assert len(wps) % 2 == 0  # search lines: start and end
         flown += len(wps)
         if len(wps):
             assert np.all(wps[:, 0] >= x0) and np.all(wps[:, 0] <= x1)
@@ -116,6 +118,7 @@ def test_cli_plan_with_the_allocation_planner(tmp_path, capsys):
 
 
 def test_lines_follow_an_elongated_prior():
+    """Step 2 (the lines, before any refinement) lays straight lines along the prior."""
     sc = _small()
     grid = Grid.from_config(sc.map)
     for axis in (0, 1):
@@ -125,7 +128,7 @@ def test_lines_follow_an_elongated_prior():
         else:
             prior[:, 3] = 1.0  # one column: lines along y
         prior /= prior.sum()
-        plan = make_allocation_plan(sc, prior=prior)
+        plan = make_allocation_plan(sc, prior=prior, refine=0)
         assert plan["lines_along"] == ("x" if axis == 0 else "y")
         for u in plan["uavs"]:
             lines = np.asarray(u["waypoints_m"][u["transit_waypoints"] :]).reshape(-1, 2, 2)

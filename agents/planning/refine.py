@@ -1,0 +1,395 @@
+"""Route refinement: local search on the waypoints of a route plan, scored as the environment
+scores a flight.
+
+:func:`refine_routes` takes each UAV's waypoints (between its take-off and landing fields) and
+improves the planned POS of the whole swarm by hill climbing on single waypoints. The score is
+the planned POS of :mod:`agents.planning.allocation`: every leg of every UAV's flight path,
+transit included, adds coverage ``W x (length inside the cell) / area`` to the cells it crosses
+(eq. 10 per cell) and the swarm finds ``sum_j p_j POD(C_j)`` (eq. 14-16 with the detection
+law's POD). Moves, for waypoint ``i`` of UAV ``k`` in turn:
+
+* **move** it by one of :data:`RADII` (in cells) in one of 8 directions;
+* **delete** it;
+* **insert** a waypoint before it (and before the landing field, to extend a route), at the
+  leg's midpoint moved across the leg by one of ``0, +-RADII`` cells.
+
+A move is kept when it raises the swarm's planned POS by more than :data:`TOL` and keeps the
+UAV's eq. 17 time (out at ``v.out``, on the route at ``v.line``, home at ``v.home``, plus a
+turn of ``|angle| / omega_max`` at every waypoint, the allocation planner's half-turn rule
+generalised) within ``budget``; the best move of each waypoint is taken. Moved and inserted
+waypoints stay inside the map. The search stops after ``sweeps`` passes over all waypoints or
+after a pass without a kept move, so a refinement is deterministic (no clock, no random draw).
+
+Coverage is sampled at four points per cell along each leg (as the allocation planner's
+``_path_coverage``), so the score equals the allocation planner's ``posc`` of the same routes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from poc_env.sim.comms import in_range, two_neighbour_ok
+from poc_env.sim.constraints import pairwise_distances, separation_violations
+from poc_env.theory.probability_map import Grid
+from poc_env.theory.search_theory import pod_from_coverage
+
+#: candidates (best planned POS first) checked against the airspace per waypoint.
+TRIES = 6
+#: move radii in cells.
+RADII = (0.5, 1.0, 2.0, 4.0)
+#: least gain in planned POS for a move to be kept.
+TOL = 1e-9
+#: share of ``|heading change| / omega_max`` a waypoint costs (:func:`arrival_times`): the
+#: follower cuts corners (a waypoint counts as reached half a step away), so a full turn at the
+#: maximum rate overstates the time; 0.5 matched the follower's arrival times to 1-2 min on
+#: paper_6_2 (docs/PLANNER.md).
+TURN_SHARE = 0.5
+_DIRS = np.array(
+    [[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4], dtype=float
+)  # unit steps of the move
+
+
+def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = None) -> np.ndarray:
+    """Coverage (eq. 10 per cell) of legs ``starts -> ends`` (L, 2), sampled at a quarter cell,
+    summed per row of ``rows`` (L,) (default: all in one row): an array (rows, ny * nx).
+    Nothing outside the map counts."""
+    starts = np.asarray(starts, dtype=float).reshape(-1, 2)
+    ends = np.asarray(ends, dtype=float).reshape(-1, 2)
+    rows = np.zeros(len(starts), dtype=np.int64) if rows is None else np.asarray(rows)
+    n_rows = int(rows.max()) + 1 if rows.size else 1
+    ncell = grid.ny * grid.nx
+    if not len(starts):
+        return np.zeros((n_rows, ncell))
+    c = grid.cell_m
+    d = ends - starts
+    length = np.hypot(d[:, 0], d[:, 1])
+    m = np.maximum(1, np.ceil(4.0 * length / c)).astype(np.int64)
+    leg = np.repeat(np.arange(len(starts)), m)
+    first = np.cumsum(m) - m
+    t = (np.arange(int(m.sum())) - first[leg] + 0.5) / m[leg]
+    xy = starts[leg] + t[:, None] * d[leg]
+    ox, oy = grid.origin_m
+    col = np.floor((xy[:, 0] - ox) / c).astype(np.int64)
+    row = np.floor((xy[:, 1] - oy) / c).astype(np.int64)
+    ok = (col >= 0) & (col < grid.nx) & (row >= 0) & (row < grid.ny)
+    weight = w * length[leg] / m[leg] / grid.cell_area_m2
+    idx = rows[leg] * ncell + row * grid.nx + col
+    out = np.bincount(idx[ok], weights=weight[ok], minlength=n_rows * ncell)
+    return out.reshape(n_rows, ncell)
+
+
+@njit(cache=True)
+def _timeline(
+    p, v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out, dep
+):  # pragma: no cover
+    """Arrival times of the path ``p`` (m, 2) in ``out`` (m,) and whether it fits (see
+    :func:`arrival_times`, :func:`route_fits`); points within 1 mm of the point before get the
+    same time as it and no turn. ``heading0`` NaN: no heading at take-off. ``dep`` (m,) gets
+    the time each point is left (its arrival plus the turn there)."""
+    m = p.shape[0]
+    out[0] = 0.0
+    dep[:] = np.inf
+    t = 0.0
+    last = 0  # the last point kept
+    have = not math.isnan(heading0)  # a heading exists (at take-off, or from a flown leg)
+    hx = math.cos(heading0) if have else 0.0
+    hy = math.sin(heading0) if have else 0.0
+    fits = True
+    for j in range(1, m):
+        dx = p[j, 0] - p[last, 0]
+        dy = p[j, 1] - p[last, 1]
+        length = math.hypot(dx, dy)
+        if length <= 1e-3 and j < m - 1:
+            out[j] = t
+            continue
+        v = v_line
+        if last == 0:
+            v = v_out
+        if j == m - 1:
+            v = v_home
+        if length > 0:
+            if have:
+                cross = hx * dy - hy * dx
+                dot = hx * dx + hy * dy
+                t += turn_cost * abs(math.atan2(cross, dot))
+            hx = dx
+            hy = dy
+            have = True
+            dep[last] = t
+            t += length / v
+        out[j] = t
+        last = j
+        if j < m - 1:
+            home = math.hypot(p[m - 1, 0] - p[j, 0], p[m - 1, 1] - p[j, 1])
+            if t + home / v_home + reserve > budget + 1e-9:
+                fits = False
+    if t > budget + 1e-9:
+        fits = False
+    return fits
+
+
+def _dedupe(path) -> np.ndarray:
+    """``path`` without points within 1 mm of the point before (no zero-length legs)."""
+    p = np.asarray(path, dtype=float).reshape(-1, 2)
+    if len(p) < 2:
+        return p
+    keep = np.ones(len(p), dtype=bool)
+    keep[1:] = np.hypot(*np.diff(p, axis=0).T) > 1e-3
+    keep[-1] = True
+    return p[keep]
+
+
+def arrival_times(path, speeds, turn_rate: float, heading0: float | None = None) -> np.ndarray:
+    """Time (s) at which a flight reaches each point of ``path`` (take-off, waypoints, landing):
+    the first leg at ``speeds.out``, the last at ``speeds.home``, the rest at ``speeds.line``,
+    and ``TURN_SHARE x |heading change| / turn_rate`` at every waypoint, and at take-off when
+    the UAV starts with heading ``heading0`` (rad) (eq. 17 with the turns of the eq. 19
+    turn-rate limit). A point repeating the one before adds nothing."""
+    p = np.ascontiguousarray(np.asarray(path, dtype=float).reshape(-1, 2))
+    out = np.zeros(len(p))
+    h0 = np.nan if heading0 is None else float(heading0)
+    if len(p) > 1:
+        cost = TURN_SHARE / turn_rate
+        dep = np.empty(len(p))
+        _timeline(p, speeds.out, speeds.line, speeds.home, cost, np.inf, 0.0, h0, out, dep)
+    return out
+
+
+def route_time(path, speeds, turn_rate: float, heading0: float | None = None) -> float:
+    """Eq. 17 time of a full path: :func:`arrival_times` at the landing field."""
+    return float(arrival_times(path, speeds, turn_rate, heading0)[-1])
+
+
+def route_fits(
+    path, speeds, turn_rate: float, budget: float, reserve: float, heading0: float | None = None
+) -> bool:
+    """Whether a path is flown whole under eq. 18: it lands within ``budget`` and at no
+    waypoint is the return rule due, i.e. ``t_i + |p_i - landing| / speeds.home + reserve <=
+    budget`` (the follower and the environment's autopilot turn home when the usable endurance
+    left only covers the direct flight home at ``v_c`` plus ``reserve``). Along a straight leg
+    ``t + distance home / v`` is convex, so the waypoints are where it peaks."""
+    p = np.ascontiguousarray(np.asarray(path, dtype=float).reshape(-1, 2))
+    if len(p) < 2:
+        return True
+    out = np.empty(len(p))
+    dep = np.empty(len(p))
+    h0 = np.nan if heading0 is None else float(heading0)
+    cost = TURN_SHARE / turn_rate
+    return bool(
+        _timeline(p, speeds.out, speeds.line, speeds.home, cost, budget, reserve, h0, out, dep)
+    )
+
+
+@njit(cache=True)
+def _sample(p, arrive, dep, times, out, act):  # pragma: no cover
+    """Positions ``out (S, 2)`` at ``times (S,)`` (ascending) along the path ``p`` flown with
+    arrival times ``arrive`` and departure times ``dep`` (:func:`_timeline`): still at a point
+    while turning there, along a leg at constant speed; ``act`` False once landed."""
+    m = p.shape[0]
+    j = 0  # the point last left
+    for s in range(times.shape[0]):
+        tau = times[s]
+        if tau >= arrive[m - 1]:
+            out[s, 0] = p[m - 1, 0]
+            out[s, 1] = p[m - 1, 1]
+            act[s] = False
+            continue
+        act[s] = True
+        while j < m - 1 and tau >= arrive[j + 1]:
+            j += 1
+        if tau <= dep[j] or not dep[j] < arrive[j + 1]:
+            out[s, 0] = p[j, 0]
+            out[s, 1] = p[j, 1]
+        else:
+            f = (tau - dep[j]) / (arrive[j + 1] - dep[j])
+            out[s, 0] = p[j, 0] + f * (p[j + 1, 0] - p[j, 0])
+            out[s, 1] = p[j, 1] + f * (p[j + 1, 1] - p[j, 1])
+
+
+def track(path, speeds, turn_rate: float, times, heading0: float | None = None):
+    """Where a flight of ``path`` is at ``times`` (:func:`arrival_times`'s timing): positions
+    (S, 2) and whether it is still flying (S,)."""
+    p = np.ascontiguousarray(_dedupe(path))
+    arrive = np.zeros(len(p))
+    dep = np.full(len(p), np.inf)
+    h0 = np.nan if heading0 is None else float(heading0)
+    if len(p) > 1:
+        cost = TURN_SHARE / turn_rate
+        _timeline(p, speeds.out, speeds.line, speeds.home, cost, np.inf, 0.0, h0, arrive, dep)
+    t = np.ascontiguousarray(times, dtype=float)
+    pos = np.empty((len(t), 2))
+    act = np.empty(len(t), dtype=bool)
+    _sample(p, arrive, dep, t, pos, act)
+    return pos, act
+
+
+def swarm_violations(pos, act, separation_m: float, range_m: float, min_neighbours: int) -> int:
+    """UAV-steps in violation at sampled positions ``pos (S, n, 2)`` of the flying UAVs ``act
+    (S, n)``: closer than ``separation_m`` to another (eq. 21) or with fewer than
+    ``min_neighbours`` others within ``range_m`` (eq. 24, §3.2.4) -- the environment's own
+    checks (:func:`poc_env.sim.constraints.separation_violations`,
+    :func:`poc_env.sim.comms.two_neighbour_ok`)."""
+    dist = pairwise_distances(pos)
+    close, _ = separation_violations(pos, separation_m, act, dist)
+    ok = two_neighbour_ok(in_range(pos, range_m, act, dist), min_neighbours, act)
+    return int(close.sum() + (~ok & act).sum())
+
+
+@dataclass(frozen=True)
+class Airspace:
+    """The environment's separation and communication rules, checked every ``dt_s`` at the
+    planned positions (:func:`swarm_violations`); ``separation_m`` and ``range_m`` may carry
+    margins for the follower's timing."""
+
+    dt_s: float
+    separation_m: float
+    range_m: float
+    min_neighbours: int
+
+    def violations(self, pos, act) -> int:
+        return swarm_violations(pos, act, self.separation_m, self.range_m, self.min_neighbours)
+
+
+def refine_routes(
+    routes: Sequence[Sequence[Sequence[float]]],
+    takeoff,
+    landing,
+    prior: np.ndarray,
+    grid: Grid,
+    w: float,
+    law: str,
+    speeds,
+    budget: float,
+    turn_rate: float,
+    reserve: float,
+    sweeps: int = 4,
+    headings=None,
+    airspace: Airspace | None = None,
+) -> tuple[list[list[list[float]]], float]:
+    """Refined waypoints per UAV and their planned POS (module docstring). ``routes[k]`` are
+    UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; a route that does not
+    :func:`route_fits` ``budget`` and ``reserve`` first loses waypoints from its end until it
+    does, and every kept move keeps it fitting. ``headings`` (n,): the UAVs' headings at
+    take-off (rad), or None. With ``airspace``, a move is kept only if it adds no
+    :func:`swarm_violations` at the planned positions (the best-scoring candidates are tried in
+    turn, at most :data:`TRIES`)."""
+    takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
+    landing = np.asarray(landing, dtype=float).reshape(-1, 2)
+    n = len(takeoff)
+    p_flat = np.asarray(prior, dtype=float).ravel()
+    x0, y0, x1, y1 = grid.bounds
+    c = grid.cell_m
+    lo = np.array([x0 + 1e-6 * c, y0 + 1e-6 * c])
+    hi = np.array([x1 - 1e-6 * c, y1 - 1e-6 * c])
+    paths = [
+        _dedupe(
+            np.vstack([takeoff[k], np.asarray(routes[k], dtype=float).reshape(-1, 2), landing[k]])
+        )
+        for k in range(n)
+    ]
+
+    h0 = [None] * n if headings is None else [float(h) for h in headings]
+
+    def fits(path: np.ndarray, k: int) -> bool:
+        return route_fits(path, speeds, turn_rate, budget, reserve, h0[k])
+
+    for k in range(n):
+        while len(paths[k]) > 2 and not fits(paths[k], k):
+            paths[k] = np.delete(paths[k], -2, axis=0)
+
+    def path_cov(path: np.ndarray) -> np.ndarray:
+        return leg_coverage(path[:-1], path[1:], grid, w)[0]
+
+    if airspace is not None:
+        times = np.arange(int(np.ceil(budget / airspace.dt_s)) + 1) * airspace.dt_s
+        pos = np.empty((len(times), n, 2))
+        act = np.empty((len(times), n), dtype=bool)
+        for k in range(n):
+            pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
+        viol = airspace.violations(pos, act)
+
+    covs = [path_cov(p) for p in paths]
+    total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)
+    value = float(p_flat @ pod_from_coverage(total, law))
+    radii = np.asarray(RADII) * c
+    offsets = (radii[:, None, None] * _DIRS[None]).reshape(-1, 2)
+    across = np.concatenate([[0.0], radii, -radii]) if len(radii) else np.zeros(1)
+    for _ in range(max(0, int(sweeps))):
+        kept = 0
+        for k in range(n):
+            i = 1
+            while i < len(paths[k]):  # i: the waypoint moved/deleted, or inserted before
+                path = paths[k]
+                cands: list[np.ndarray] = []
+                starts: list[np.ndarray] = []
+                ends: list[np.ndarray] = []
+                rows: list[int] = []
+                kinds: list[int] = []  # 0: legs (i-1, i), (i, i+1) replaced; 1: leg (i-1, i)
+                a = path[i - 1]
+                b = path[i]
+                movable = i < len(path) - 1
+                if movable:
+                    nxt = path[i + 1]
+                    for off in offsets:
+                        q = np.clip(b + off, lo, hi)
+                        cands.append(np.vstack([path[:i], q, path[i + 1 :]]))
+                        starts += [a, q]
+                        ends += [q, nxt]
+                        rows += [len(kinds)] * 2
+                        kinds.append(0)
+                    cands.append(np.vstack([path[:i], path[i + 1 :]]))
+                    starts.append(a)
+                    ends.append(nxt)
+                    rows.append(len(kinds))
+                    kinds.append(0)
+                d = b - a
+                length = float(np.hypot(*d))
+                normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
+                for s in across:
+                    q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
+                    cands.append(np.vstack([path[:i], q, path[i:]]))
+                    starts += [a, q]
+                    ends += [q, b]
+                    rows += [len(kinds)] * 2
+                    kinds.append(1)
+                ok = np.array([fits(p, k) for p in cands])
+                new = leg_coverage(starts, ends, grid, w, np.asarray(rows))
+                old_a = leg_coverage(a, b, grid, w)[0]
+                old_b = leg_coverage(b, path[i + 1], grid, w)[0] if movable else 0.0
+                base0 = total - old_a - old_b
+                base1 = total - old_a
+                kinds_arr = np.asarray(kinds)
+                cand_total = np.where(kinds_arr[:, None] == 0, base0, base1) + new
+                vals = pod_from_coverage(cand_total, law) @ p_flat
+                vals = np.where(ok, vals, -np.inf)
+                j = -1
+                for c_j in np.argsort(-vals, kind="stable")[:TRIES]:
+                    if not vals[c_j] > value + TOL:
+                        break
+                    if airspace is None:
+                        j = int(c_j)
+                        break
+                    old = pos[:, k].copy(), act[:, k].copy()
+                    pos[:, k], act[:, k] = track(cands[c_j], speeds, turn_rate, times, h0[k])
+                    v_new = airspace.violations(pos, act)
+                    if v_new <= viol:
+                        j, viol = int(c_j), v_new
+                        break
+                    pos[:, k], act[:, k] = old
+                if j >= 0:
+                    paths[k] = cands[j]
+                    total = cand_total[j]
+                    value = float(vals[j])
+                    kept += 1
+                    if kinds[j] == 0 and len(cands[j]) < len(path):
+                        continue  # deleted: the next waypoint is now at i
+                i += 1
+        if not kept:
+            break
+    out = [[[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] for p in paths]
+    return out, value
