@@ -1650,3 +1650,82 @@ def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, e
                     n, n_e, rx, ry, ce, se, ae, be, sx, sy, sn, sp, qx, qy,
                     (gx, gy, weights, pre, ny, nx, tiny),
                 )  # fmt: skip
+
+
+@_jit
+def plan_rectangles(x, box, takeoff, landing, x0, y0, h, weights, geo, terms):
+    """The planner's rectangles (``agents.planning.objective``) for a population, in one pass.
+
+    ``x (P, 6 n)``: per UAV ``(x_c, y_c, l, w, theta, d)``. Per rectangle, as the objective's
+    numpy steps (same operations, in the same order): the map repair of ``split`` (a rectangle
+    whose bounding box, half-extents ``h_x, h_y``, is wider or taller than ``box = (x0, y0, x1,
+    y1)`` scaled about its centre until it fits, the centre then clipped so that the box lies
+    in the map); the lawnmower of ``lawnmower`` (lines along the long side ``L``, ``n = max(1,
+    ceil(E/d - 1/2))`` of them, the first waypoint the corner of the outer lines nearest the
+    take-off, the last on the other outer line) and its transit from ``takeoff[i]`` and to
+    ``landing[i]``. Results: ``geo (P, n, 5)`` the repaired ``x_c, y_c, l, w, theta``;
+    ``terms (P, n, 6)`` the line count, ``L``, the search legs ``n L``, the track ``n L +
+    (n - 1) d``, the transit, and the prior mass of the rectangle less the ones before it
+    (:func:`rectangle_masses`, exclusive, over ``weights`` on the grid at ``(x0, y0)``).
+    """
+    n_ind = x.shape[0]
+    n_uav = x.shape[1] // 6
+    bx0, by0, bx1, by1 = box[0], box[1], box[2], box[3]
+    size = n_ind * n_uav
+    cx = np.empty(size)
+    cy = np.empty(size)
+    hl = np.empty(size)
+    hw = np.empty(size)
+    ct = np.empty(size)
+    st = np.empty(size)
+    for p in range(n_ind):
+        for i in range(n_uav):
+            xc, yc, ln, wd, th, d = x[p, 6 * i : 6 * i + 6]
+            c = abs(math.cos(th))
+            s = abs(math.sin(th))
+            hx = 0.5 * (ln * c + wd * s)
+            hy = 0.5 * (ln * s + wd * c)
+            k = min(1.0, min(0.5 * (bx1 - bx0) / hx, 0.5 * (by1 - by0) / hy))
+            ln, wd, hx, hy = ln * k, wd * k, hx * k, hy * k
+            xc = min(max(xc, bx0 + hx), max(bx0 + hx, bx1 - hx))
+            yc = min(max(yc, by0 + hy), max(by0 + hy, by1 - hy))
+            geo[p, i, 0], geo[p, i, 1], geo[p, i, 2] = xc, yc, ln
+            geo[p, i, 3], geo[p, i, 4] = wd, th
+            # the lawnmower
+            alpha = th if ln >= wd else th + 0.5 * np.pi
+            short = min(ln, wd)
+            long_ = max(ln, wd)
+            n = max(1.0, math.ceil(short / d - 0.5))
+            elx, ely = math.cos(alpha), math.sin(alpha)
+            eex, eey = -ely, elx
+            v_first = 0.0 if short < d else 0.5 * (short - d)
+            v_last = v_first - (n - 1.0) * d
+            best = math.inf
+            v_s = u_s = 0.0
+            k_s = 0
+            for q in range(4):
+                v = v_first if q < 2 else v_last
+                u = -0.5 * long_ if q % 2 == 0 else 0.5 * long_
+                dx = xc + v * eex + u * elx - takeoff[i, 0]
+                dy = yc + v * eey + u * ely - takeoff[i, 1]
+                dist = math.sqrt(dx * dx + dy * dy)
+                if dist < best:
+                    best, v_s, u_s, k_s = dist, v, u, q
+            v_e = v_last if k_s < 2 else v_first
+            u_e = -u_s if n % 2 == 1 else u_s
+            fx = xc + v_s * eex + u_s * elx - takeoff[i, 0]
+            fy = yc + v_s * eey + u_s * ely - takeoff[i, 1]
+            lx = landing[i, 0] - (xc + v_e * eex + u_e * elx)
+            ly = landing[i, 1] - (yc + v_e * eey + u_e * ely)
+            search = n * long_
+            terms[p, i, 0] = n
+            terms[p, i, 1] = long_
+            terms[p, i, 2] = search
+            terms[p, i, 3] = search + (n - 1.0) * d
+            terms[p, i, 4] = math.sqrt(fx * fx + fy * fy) + math.sqrt(lx * lx + ly * ly)
+            r = p * n_uav + i
+            cx[r], cy[r], hl[r], hw[r] = xc, yc, 0.5 * ln, 0.5 * wd
+            ct[r], st[r] = math.cos(th), math.sin(th)
+    mass = np.zeros((n_ind, n_uav))
+    rectangle_masses(cx, cy, hl, hw, ct, st, x0, y0, h, weights, True, mass)
+    terms[:, :, 5] = mass

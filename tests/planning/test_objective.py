@@ -364,3 +364,44 @@ def test_planner_weights_are_its_own_not_the_rl_rewards(small):
     for key, bad in (("planner.alpha", -1.0), ("planner.beta", float("nan"))):
         with pytest.raises(ConfigError, match=key):
             load_scenario("small", {key: bad})
+
+
+def test_compiled_plan_pass_equals_split_lawnmower_and_exclusive_masses(paper):
+    """``_kernels.plan_rectangles`` (one compiled pass per population: map repair, lawnmower,
+    transit and the exclusive prior masses by boundary integrals) against the numpy steps:
+    ``split``, :func:`lawnmower`, the transit lengths and the dense exclusive fractions times
+    the prior, to 1e-12 (masses: of the rectangle's plain mass)."""
+    from poc_env import _kernels
+
+    x = np.vstack([_population(paper, 40, 8), _population(paper, 40, 9, compact=False)])
+    x[:10, 6:12] = x[:10, 0:6]  # copies of the UAV before
+    geo = np.empty((len(x), paper.n, 5))
+    terms = np.empty((len(x), paper.n, 6))
+    _kernels.plan_rectangles(
+        np.ascontiguousarray(x),
+        np.array(paper.grid.bounds, dtype=float),
+        paper.takeoff_m,
+        paper.landing_m,
+        *map(float, paper.grid.origin_m),
+        paper.grid.cell_m,
+        paper.prior,
+        geo,
+        terms,
+    )
+    f = paper.split(x)
+    for k, name in enumerate(("x_c", "y_c", "l", "w", "theta")):
+        np.testing.assert_allclose(geo[..., k], f[name], rtol=1e-12, atol=0)
+    center = np.stack([f["x_c"], f["y_c"]], axis=-1)
+    mower = lawnmower(center, f["l"], f["w"], f["theta"], f["d"], paper.takeoff_m[None])
+    transit = np.linalg.norm(mower.first_m - paper.takeoff_m, axis=-1) + np.linalg.norm(
+        paper.landing_m - mower.last_m, axis=-1
+    )
+    want = [mower.n_lines, mower.line_length_m, mower.search_m, mower.track_m, transit]
+    for k, w in enumerate(want):
+        np.testing.assert_allclose(terms[..., k], w, rtol=1e-12, atol=0)
+    args = (paper.grid, center, f["l"], f["w"], f["theta"])
+    prior = paper.prior[None, None]
+    plain = np.sum(area_fractions(*args) * prior, axis=(-2, -1))
+    excl = np.sum(exclusive_fractions(*args) * prior, axis=(-2, -1))
+    assert np.all(excl[:10, 1] < 1e-9 * plain[:10, 1]) and np.all(plain[:10, 1] > 0)
+    assert np.all(np.abs(terms[..., 5] - excl) <= 1e-12 * plain)
