@@ -4,6 +4,10 @@ At the start of every episode the policy plans with :func:`agents.planning.plann
 on the environment's prior (the fine belief summed to the grid's cells) with the episode's seed,
 and flies each UAV's waypoints with the waypoint follower, which also brings it home to land.
 ``popsize`` and ``maxiter`` default to the scenario's ``planner`` section (NP = 100, G = 300).
+
+``optimizer_plan:NAME`` is the same policy with another optimiser of
+:data:`agents.planning.optimizers.OPTIMIZERS` (``optimizer_plan:cmaes``, ...) on the same
+objective and budget, so every optimiser's plan can be flown on the same episodes.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.planning.optimizers import get_optimizer
 from agents.planning.planner import make_plan
 from agents.policies.base import Policy
 from poc_env.sim.autopilot import WaypointFollower
@@ -22,15 +27,27 @@ class DEPlanPolicy(Policy):
 
     name = "de_plan"
 
-    def __init__(self, popsize: int | None = None, maxiter: int | None = None) -> None:
+    def __init__(
+        self,
+        popsize: int | None = None,
+        maxiter: int | None = None,
+        optimizer: str = "adaptive_de",
+    ) -> None:
+        get_optimizer(optimizer)  # ConfigError naming the allowed optimisers
         self.popsize = popsize
         self.maxiter = maxiter
+        self.optimizer = optimizer
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
         prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
         self.plan = make_plan(
-            env.scenario, prior=prior, seed=seed, popsize=self.popsize, maxiter=self.maxiter
+            env.scenario,
+            prior=prior,
+            seed=seed,
+            popsize=self.popsize,
+            maxiter=self.maxiter,
+            optimizer=self.optimizer,
         )
         wps = [np.asarray(u["waypoints_m"]) for u in self.plan["uavs"]]
         self.follower = WaypointFollower(env.params, wps, env.possible_agents)

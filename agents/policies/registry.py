@@ -180,6 +180,13 @@ register("de_receding", "agents.policies.receding:DERecedingPolicy")
 register("de_plan", "agents.policies.de_plan:DEPlanPolicy")
 register("allocation_plan", "agents.policies.allocation:AllocationPlanPolicy")
 register(
+    "optimizer_plan",
+    "agents.policies.de_plan:DEPlanPolicy",
+    argument="optimizer",
+    argument_help="an optimiser of the eq. 26 plan (adaptive_de, classic_de, chaotic_abc, "
+    "grouped_pso, scipy_de, cmaes)",
+)
+register(
     "ppo",
     "agents.rl.policy:PPOPolicy",
     argument="path",

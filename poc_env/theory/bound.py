@@ -152,7 +152,7 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
             law,
         )
     # root of spent(log lambda) = effort (Brent's method): spent effort decreases monotonically
-    # in lambda, from above the effort at ``lo`` to 0 at the densest cell's density
+    # in lambda, from above the effort at ``lo`` to 0 above the densest cell's density
     pos_cells = density > 0
     d, a = density[pos_cells], area[pos_cells]
 
@@ -160,13 +160,17 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
         return float(np.sum(a * _coverage_at(np.exp(mu), d, entry))) - effort
 
     lo = np.log(d.min()) - 60.0
-    hi = np.log(d.max())
+    hi = np.log(d.max()) + 1.0  # every cell's KKT coverage is 0 there: excess = -effort < 0
     mu = lo if excess(lo) <= 0 else brentq(excess, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
     lam = np.exp(mu)
     cov = _coverage_at(lam, density, entry)
     spent = float(np.sum(area * cov))
-    if spent > 0:  # spend exactly the effort (removes the last bisection rounding)
-        cov = cov * (effort / spent)
+    step = 1e-12
+    while spent <= 0:  # an effort below the rounding of log(lambda): the densest cells only
+        cov = _coverage_at(np.exp(mu - step), density, entry)
+        spent = float(np.sum(area * cov))
+        step *= 10.0
+    cov = cov * (effort / spent)  # spend exactly the effort (removes the root's rounding)
     value = float(np.sum(m * pod_from_coverage(cov, law)))
     return Bound(value, cov, float(lam), effort, law)
 

@@ -89,3 +89,16 @@ def test_no_scored_plan_beats_the_bound():
         assert res.posc <= res.bound + 1e-12
         assert res.posc_flown <= res.ceiling + 1e-12
         assert res.bound <= res.ceiling + 1e-12
+
+
+@pytest.mark.parametrize("law", ["inverse_cube", "exponential"])
+@pytest.mark.parametrize("effort", [1e-6, 1e-2, 1.0, 1e6, 1e12])
+def test_tiny_and_huge_efforts_with_tied_densest_cells_spend_exactly_the_effort(law, effort):
+    """The multiplier's root bracket holds even when several cells share the largest density
+    and the effort is below what a rounding of the multiplier would spend there (the planner's
+    nested subproblems hit this)."""
+    prior = np.array([0.3, 0.3, 0.2, 0.0, 0.2])
+    b = physical_optimum(prior, 25e6, effort, law)
+    assert np.sum(b.coverage * 25e6) == pytest.approx(effort, rel=1e-9)
+    assert 0.0 <= b.pos <= prior.sum()
+    assert b.coverage[0] == pytest.approx(b.coverage[1], rel=1e-9)  # ties get equal coverage
