@@ -5,7 +5,15 @@ import pytest
 
 import poc_env
 from agents.planning.allocation import _path_coverage, make_allocation_plan, plan_speeds
-from agents.planning.refine import arrival_times, refine_routes, route_fits, route_time
+from agents.planning.refine import (
+    Airspace,
+    arrival_times,
+    refine_routes,
+    route_fits,
+    route_time,
+    swarm_violations,
+    track,
+)
 from agents.policies.allocation import AllocationPlanPolicy
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
@@ -109,3 +117,63 @@ def test_speed_rule_is_checked_and_recorded():
         make_allocation_plan("small", speed="fast")
     with pytest.raises(ConfigError, match="refine"):
         make_allocation_plan("small", refine=-1)
+
+
+def test_track_is_where_the_timing_puts_the_uav():
+    v = type("V", (), {"out": 10.0, "line": 10.0, "home": 10.0})()
+    path = [[0, 0], [100, 0], [100, 100]]
+    t = arrival_times(path, v, turn_rate=1.0)  # a quarter turn costs 0.5 * pi/2 s at (100, 0)
+    times = np.array([0.0, 5.0, t[1], t[1] + 0.5, t[2] - 5.0, t[2] + 1.0])
+    pos, act = track(path, v, 1.0, times)
+    assert np.allclose(pos[:4], [[0, 0], [50, 0], [100, 0], [100, 0]])  # turning in place
+    assert np.allclose(pos[4], [100, 50])
+    assert act.tolist() == [True] * 5 + [False]  # landed after its last point
+
+
+def test_swarm_violations_count_the_environments_rules():
+    pos = np.array([[[0.0, 0.0], [500.0, 0.0], [5000.0, 0.0]]])  # one time, three UAVs
+    act = np.ones((1, 3), dtype=bool)
+    # UAVs 0 and 1 are within 1 km; everybody is in range of two others
+    assert swarm_violations(pos, act, 1000.0, 10_000.0, 2) == 2
+    # a 4 km range leaves UAV 2 alone and UAVs 0, 1 with one neighbour each
+    assert swarm_violations(pos, act, 1000.0, 4000.0, 2) == 2 + 3
+    act[0, 1] = False  # landed UAVs neither violate nor count as neighbours
+    assert swarm_violations(pos, act, 1000.0, 10_000.0, 2) == 0
+
+
+def test_refinement_adds_no_planned_airspace_violation():
+    sc, grid, prior, takeoff, landing = _setup()
+    v = plan_speeds(sc, "max")
+    u = sc.uav
+    routes = [x["waypoints_m"] for x in make_allocation_plan(sc, refine=0)["uavs"]]
+    space = Airspace(
+        sc.episode.dt_s, 2 * sc.constraints.safety_distance_m, 0.9 * sc.comms.range_m, 2
+    )
+    times = np.arange(int(np.ceil(u.usable_endurance_s / space.dt_s)) + 1) * space.dt_s
+
+    def planned_violations(rs):
+        flights = [
+            track(
+                np.vstack([takeoff[k], np.reshape(r, (-1, 2)), landing[k]]),
+                v,
+                u.max_turn_rate_rad_s,
+                times,
+            )
+            for k, r in enumerate(rs)
+        ]
+        pos = np.stack([f[0] for f in flights], axis=1)
+        act = np.stack([f[1] for f in flights], axis=1)
+        return space.violations(pos, act)
+
+    args = (takeoff, landing, prior, grid, sc.sensor.sweep_width_m, sc.sensor.law, v)
+    free, _ = refine_routes(
+        routes, *args, u.usable_endurance_s, u.max_turn_rate_rad_s, 90.0, sweeps=2
+    )
+    kept, _ = refine_routes(
+        routes, *args, u.usable_endurance_s, u.max_turn_rate_rad_s, 90.0, sweeps=2, airspace=space
+    )
+    trimmed, _ = refine_routes(
+        routes, *args, u.usable_endurance_s, u.max_turn_rate_rad_s, 90.0, sweeps=0
+    )
+    assert planned_violations(kept) <= planned_violations(trimmed)
+    assert planned_violations(free) > planned_violations(kept)  # the check is what holds it
