@@ -510,6 +510,8 @@ def _plan(
         zone=args.utm_zone,
         preset=args.preset,
         planner=getattr(args, "planner", "de"),
+        speed=getattr(args, "speed", None),
+        refine=getattr(args, "refine", None),
     )
     print(plan_table(plan))
     if plot is not None:
@@ -753,6 +755,19 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["de", "allocation"],
         help="de: the paper's optimiser plan (default); allocation: routes from the reach-aware "
         "optimal allocation (docs/PLANNER.md)",
+    )
+    p.add_argument(
+        "--speed",
+        default=None,
+        help="allocation planner: max (out and on the route at v_max, home at v_c; default) or "
+        "paper (eq. 17's v_c and v_s: for a sensor whose sweep width falls with speed)",
+    )
+    p.add_argument(
+        "--refine",
+        type=int,
+        default=None,
+        help="allocation planner: passes of the waypoint refinement (default 4; 0: the straight "
+        "search lines only)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

@@ -52,12 +52,16 @@ def make_plan(
     zone: int | None = None,
     preset: str = "paper",
     planner: str = "de",
+    speed: str | None = None,
+    refine: int | None = None,
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-2 dict (see the module docstring).
 
     ``planner``: ``de`` (this optimiser-based plan) or ``allocation``
     (:func:`agents.planning.allocation.make_allocation_plan`, routes from the reach-aware
-    optimal allocation; the optimiser arguments do not apply to it).
+    optimal allocation; the optimiser arguments do not apply to it). ``speed`` (``max`` or
+    ``paper``) and ``refine`` (passes of the waypoint refinement, 0 for straight lines only) are
+    the allocation planner's (None: its defaults); the DE plan refuses them.
 
     ``preset`` (:func:`agents.planning.optimizers.preset_settings`): ``paper`` runs the
     scenario's ``planner`` settings (the paper's), ``tuned`` the same budget with the measured
@@ -76,11 +80,21 @@ def make_plan(
         raise ConfigError("planner", planner, "de or allocation")
     crs = _scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
     if planner == "allocation":
-        from agents.planning.allocation import make_allocation_plan
+        from agents.planning.allocation import REFINE, SPEED, make_allocation_plan
 
         return make_allocation_plan(
-            scenario, prior=prior, map_source=map_source, uavs=uavs, seed=seed, crs=crs
+            scenario,
+            prior=prior,
+            map_source=map_source,
+            uavs=uavs,
+            seed=seed,
+            crs=crs,
+            speed=SPEED if speed is None else speed,
+            refine=REFINE if refine is None else refine,
         )
+    for name, value in (("speed", speed), ("refine", refine)):
+        if value is not None:
+            raise ConfigError(name, value, "only with planner allocation (leave it out for de)")
     sc = load_scenario(scenario)
     opt = get_optimizer(optimizer)
     if prior is None:
