@@ -583,8 +583,15 @@ def make_allocation_plan(
     rb = reach_bound(sc, prior).upper if reason is None or prior.sum() > 0 else 0.0
     from agents.planning.planner import _geography
 
+    geo = _geography(sc, prior, crs)
+    geo["flight"] = {  # the speeds this plan is flown at (plan_speeds)
+        **geo["flight"],
+        "cruise_speed_mps": v.home,
+        "search_speed_mps": v.line,
+        "transit_speed_mps": v.out,
+    }
     return {
-        **_geography(sc, prior, crs),
+        **geo,
         "schema": SCHEMA,
         "scenario": sc.name,
         "seed": int(seed),

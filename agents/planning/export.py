@@ -59,9 +59,11 @@ Optional fields of both schemas (a plan without them is read as before):
   for ``epsg``)}, as written by :func:`make_crs`. With it, export needs no ``--origin``; an
   ``--origin`` given anyway must equal ``crs.origin_deg``. Without it, ``--origin`` is required
   and the default ``aeqd`` CRS at that origin is used.
-- ``flight``: {``cruise_speed_mps`` (v_b), ``search_speed_mps`` (v_s), ``altitude_m``,
-  ``max_altitude_m``} of the scenario's UAV (default the paper's 220 km/h, 180 km/h, 1,000 m,
-  4,000 m).
+- ``flight``: {``cruise_speed_mps`` (v_b, the flight home), ``search_speed_mps`` (v_s, on the
+  route after the first waypoint), ``transit_speed_mps`` (out to the first waypoint; default
+  v_b), ``altitude_m``, ``max_altitude_m``} of the scenario's UAV (default the paper's 220 km/h,
+  180 km/h, 220 km/h, 1,000 m, 4,000 m). The allocation planner's ``--speed max`` plans record
+  v_max as the search and transit speeds.
 - ``operating_area_m``: the operating area (eq. 20's boundary) as a polygon [[x, y], ...]; the
   QGC geofence's inclusion polygon. Without it the inclusion fence is left empty.
 - ``no_fly_zones_m``: a list of polygons; exclusion fences.
@@ -118,6 +120,7 @@ UAV_KEYS = {
 DEFAULT_FLIGHT = {
     "cruise_speed_mps": 220 / 3.6,
     "search_speed_mps": 180 / 3.6,
+    "transit_speed_mps": 220 / 3.6,
     "altitude_m": 1000.0,
     "max_altitude_m": 4000.0,
 }
@@ -450,7 +453,7 @@ def _check_optional(plan: dict[str, Any]) -> None:
     if fl is not None:
         if not isinstance(fl, dict) or not set(fl) <= set(DEFAULT_FLIGHT):
             raise ConfigError("plan.flight", fl, "a mapping of " + ", ".join(DEFAULT_FLIGHT))
-        for key in ("cruise_speed_mps", "search_speed_mps"):
+        for key in ("cruise_speed_mps", "search_speed_mps", "transit_speed_mps"):
             if key in fl:
                 _number(f"plan.flight.{key}", fl[key], 1e-3, MAX_SPEED_MPS)
         for key in ("altitude_m", "max_altitude_m"):
@@ -596,6 +599,7 @@ def geojson(
             "altitude_ref": altitude_ref,
             "cruise_speed_kmh": round(fl["cruise_speed_mps"] * 3.6, 1),
             "search_speed_kmh": round(fl["search_speed_mps"] * 3.6, 1),
+            "transit_speed_kmh": round(fl["transit_speed_mps"] * 3.6, 1),
         }
         feats.append(
             {
@@ -667,9 +671,10 @@ def kml(
         route = (
             f"<Placemark><name>UAV {uid} route</name><styleUrl>#route</styleUrl>"
             f"<description>POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
-            f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref}); transit "
-            f"{3.6 * fl['cruise_speed_mps']:.0f} km/h, search {3.6 * fl['search_speed_mps']:.0f}"
-            f" km/h</description><LineString><altitudeMode>{mode}</altitudeMode>"
+            f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref}); out "
+            f"{3.6 * fl['transit_speed_mps']:.0f} km/h, search {3.6 * fl['search_speed_mps']:.0f}"
+            f" km/h, home {3.6 * fl['cruise_speed_mps']:.0f} km/h</description>"
+            f"<LineString><altitudeMode>{mode}</altitudeMode>"
             f"<coordinates>{_kml_coords(pts, zs)}</coordinates></LineString></Placemark>"
         )
         rect = "".join(
@@ -859,6 +864,7 @@ def qgc_plan(
     cruise_speed_mps: float = DEFAULT_FLIGHT["cruise_speed_mps"],
     *,
     search_speed_mps: float = DEFAULT_FLIGHT["search_speed_mps"],
+    transit_speed_mps: float | None = None,
     altitude_ref: str = "home",
     ground_m: float = 0.0,
     home_amsl_m: float = 0.0,
@@ -867,8 +873,9 @@ def qgc_plan(
 ) -> dict:
     """A QGroundControl ``.plan`` for a fixed-wing UAV (PX4, ``vehicleType`` 1).
 
-    Items: NAV_TAKEOFF at the field; DO_CHANGE_SPEED v_b; the transit waypoint
-    ``waypoints_m[0]``; DO_CHANGE_SPEED v_s; the search waypoints; DO_CHANGE_SPEED v_b;
+    Items: NAV_TAKEOFF at the field; DO_CHANGE_SPEED to the transit speed (default v_b); the
+    transit waypoint ``waypoints_m[0]``; DO_CHANGE_SPEED v_s; the search waypoints;
+    DO_CHANGE_SPEED v_b;
     DO_LAND_START; an approach waypoint (:data:`APPROACH_DISTANCE_M` out,
     :data:`APPROACH_HEIGHT_M` up); NAV_LAND at the field. Geofence: the operating area as the
     inclusion polygon (empty without one) and the no-fly zones as exclusion polygons, clockwise;
@@ -887,7 +894,7 @@ def qgc_plan(
     app_alt = _approach_altitude(altitude_m, ground_m)
     items = [_nav(MAV_CMD_NAV_TAKEOFF, *t_ll, altitude_m, ref, (15, 0, 0, None))]
     if w_ll:
-        items.append(_speed(cruise_speed_mps))
+        items.append(_speed(cruise_speed_mps if transit_speed_mps is None else transit_speed_mps))
         items.append(_nav(MAV_CMD_NAV_WAYPOINT, *w_ll[0], altitude_m, ref))
         items.append(_speed(search_speed_mps))
         items += [_nav(MAV_CMD_NAV_WAYPOINT, lat, lon, altitude_m, ref) for lat, lon in w_ll[1:]]
@@ -1026,7 +1033,8 @@ def export_plan(
             u["id"],
             qgc_plan(
                 u, crs, alt, fl["cruise_speed_mps"], search_speed_mps=fl["search_speed_mps"],
-                altitude_ref=altitude_ref, ground_m=ground, home_amsl_m=elevation,
+                transit_speed_mps=fl["transit_speed_mps"], altitude_ref=altitude_ref,
+                ground_m=ground, home_amsl_m=elevation,
                 operating_area_m=area,
                 no_fly_zones_m=plan.get("no_fly_zones_m"),
             ),

@@ -115,6 +115,19 @@ def test_cli_plan_with_the_allocation_planner(tmp_path, capsys):
     )
     plan = json.loads(out.read_text())
     assert plan["planner"] == "allocation" and plan["bound_reach"] > plan["posc"] > 0
+    straight = tmp_path / "straight.json"
+    args = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*args, "--speed", "paper", "--refine", "0", "--out", str(straight)]) == 0
+    flat = json.loads(straight.read_text())
+    assert flat["speed_rule"] == "paper" and flat["optimizer"]["settings"]["refine"] == 0
+    assert flat["posc"] < plan["posc"]  # v_s and no refinement find less
+    capsys.readouterr()
+    bad = tmp_path / "bad.json"
+    assert main([*args, "--speed", "fast", "--out", str(bad)]) == 2
+    assert "speed: got 'fast'; allowed: max or paper" in capsys.readouterr().err
+    assert main(["plan", "--scenario", "small", "--refine", "2", "--out", str(bad)]) == 2
+    assert "refine: got 2; allowed: only with planner allocation" in capsys.readouterr().err
+    assert not bad.exists()
 
 
 def test_lines_follow_an_elongated_prior():
@@ -136,16 +149,3 @@ def test_lines_follow_an_elongated_prior():
             assert np.allclose(lines[:, 0, across], lines[:, 1, across])  # straight lines
             assert u["flight_time_s"] <= sc.uav.usable_endurance_s
         assert plan["posc"] <= reach_bound(sc, prior).upper + 1e-12
-    straight = tmp_path / "straight.json"
-    args = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
-    assert main([*args, "--speed", "paper", "--refine", "0", "--out", str(straight)]) == 0
-    flat = json.loads(straight.read_text())
-    assert flat["speed_rule"] == "paper" and flat["optimizer"]["settings"]["refine"] == 0
-    assert flat["posc"] < plan["posc"]  # v_s and no refinement find less
-    capsys.readouterr()
-    bad = tmp_path / "bad.json"
-    assert main([*args, "--speed", "fast", "--out", str(bad)]) == 2
-    assert "speed: got 'fast'; allowed: max or paper" in capsys.readouterr().err
-    assert main(["plan", "--scenario", "small", "--refine", "2", "--out", str(bad)]) == 2
-    assert "refine: got 2; allowed: only with planner allocation" in capsys.readouterr().err
-    assert not bad.exists()

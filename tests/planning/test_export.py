@@ -18,6 +18,7 @@ from agents.planning.export import (
     to_local,
 )
 from poc_env.cli import main
+from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
 ORIGIN = (45.75, 126.65)
@@ -679,3 +680,30 @@ def test_survey_plans_reach_every_export_format(tmp_path, capsys, regions):
     assert "origin" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
     assert main(["survey", "--plan-out", str(tmp_path)]) == 2
     assert "plan_out" in capsys.readouterr().err
+
+
+def test_allocation_missions_carry_the_speeds_the_plan_was_timed_at(tmp_path):
+    """An allocation plan at ``--speed max`` is timed with v_max out and on the route and v_c
+    home; its QGC missions set exactly those speeds (DO_CHANGE_SPEED), so the aircraft fly
+    the plan's flight_time_s, and a plan without ``transit_speed_mps`` still exports at v_b."""
+    plan_path = tmp_path / "alloc.json"
+    assert main(["plan", "--scenario", "small", "--planner", "allocation", "--quiet",
+                 "--origin", "30.5,114.3", "--out", str(plan_path)]) == 0  # fmt: skip
+    plan = load_plan(plan_path)
+    sc = load_scenario("small")
+    assert plan["flight"]["transit_speed_mps"] == sc.uav.max_speed_mps
+    assert plan["flight"]["search_speed_mps"] == sc.uav.max_speed_mps
+    assert plan["flight"]["cruise_speed_mps"] == sc.uav.cruise_speed_mps
+    assert main(["export", str(plan_path), "--format", "qgc", "--out", str(tmp_path / "q")]) == 0
+    for f in sorted((tmp_path / "q").iterdir()):
+        items = json.loads(f.read_text())["mission"]["items"]
+        speeds = [it["params"][1] for it in items if it["command"] == 178]  # DO_CHANGE_SPEED
+        want = [sc.uav.max_speed_mps, sc.uav.max_speed_mps, sc.uav.cruise_speed_mps]
+        assert speeds == pytest.approx(want, abs=1e-3)  # written to the mm/s
+    old = json.loads(plan_path.read_text())
+    del old["flight"]["transit_speed_mps"]
+    plan_path.write_text(json.dumps(old))
+    assert main(["export", str(plan_path), "--format", "qgc", "--out", str(tmp_path / "o")]) == 0
+    items = json.loads(next((tmp_path / "o").iterdir()).read_text())["mission"]["items"]
+    first = next(it["params"][1] for it in items if it["command"] == 178)
+    assert first == pytest.approx(220 / 3.6, abs=1e-3)
