@@ -1733,3 +1733,81 @@ def plan_rectangles(x, box, takeoff, landing, x0, y0, h, weights, geo, terms):
     mass = np.zeros((n_ind, n_uav))
     rectangle_masses(cx, cy, hl, hw, ct, st, x0, y0, h, weights, True, mass)
     terms[:, :, 5] = mass
+
+
+# ---------------------------------------------------------- route timing (agents.planning.refine)
+
+
+@_jit
+def route_timeline(p, v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out, dep):
+    """Arrival times of the path ``p`` (m, 2) in ``out`` (m,) and whether it fits (see
+    :func:`agents.planning.refine.arrival_times` and ``route_fits``); points within 1 mm of
+    the point before get the same time as it and no turn. ``heading0`` NaN: no heading at
+    take-off. ``dep`` (m,) gets the time each point is left (its arrival plus the turn
+    there)."""
+    m = p.shape[0]
+    out[0] = 0.0
+    dep[:] = np.inf
+    t = 0.0
+    last = 0  # the last point kept
+    have = not math.isnan(heading0)  # a heading exists (at take-off, or from a flown leg)
+    hx = math.cos(heading0) if have else 0.0
+    hy = math.sin(heading0) if have else 0.0
+    fits = True
+    for j in range(1, m):
+        dx = p[j, 0] - p[last, 0]
+        dy = p[j, 1] - p[last, 1]
+        length = math.hypot(dx, dy)
+        if length <= 1e-3 and j < m - 1:
+            out[j] = t
+            continue
+        v = v_line
+        if last == 0:
+            v = v_out
+        if j == m - 1:
+            v = v_home
+        if length > 0:
+            if have:
+                cross = hx * dy - hy * dx
+                dot = hx * dx + hy * dy
+                t += turn_cost * abs(math.atan2(cross, dot))
+            hx = dx
+            hy = dy
+            have = True
+            dep[last] = t
+            t += length / v
+        out[j] = t
+        last = j
+        if j < m - 1:
+            home = math.hypot(p[m - 1, 0] - p[j, 0], p[m - 1, 1] - p[j, 1])
+            if t + home / v_home + reserve > budget + 1e-9:
+                fits = False
+    if t > budget + 1e-9:
+        fits = False
+    return fits
+
+
+@_jit
+def route_sample(p, arrive, dep, times, out, act):
+    """Positions ``out (S, 2)`` at ``times (S,)`` (ascending) along the path ``p`` flown with
+    arrival times ``arrive`` and departure times ``dep`` (:func:`route_timeline`): still at a point
+    while turning there, along a leg at constant speed; ``act`` False once landed."""
+    m = p.shape[0]
+    j = 0  # the point last left
+    for s in range(times.shape[0]):
+        tau = times[s]
+        if tau >= arrive[m - 1]:
+            out[s, 0] = p[m - 1, 0]
+            out[s, 1] = p[m - 1, 1]
+            act[s] = False
+            continue
+        act[s] = True
+        while j < m - 1 and tau >= arrive[j + 1]:
+            j += 1
+        if tau <= dep[j] or not dep[j] < arrive[j + 1]:
+            out[s, 0] = p[j, 0]
+            out[s, 1] = p[j, 1]
+        else:
+            f = (tau - dep[j]) / (arrive[j + 1] - dep[j])
+            out[s, 0] = p[j, 0] + f * (p[j + 1, 0] - p[j, 0])
+            out[s, 1] = p[j, 1] + f * (p[j + 1, 1] - p[j, 1])

@@ -26,13 +26,12 @@ Coverage is sampled at four points per cell along each leg (as the allocation pl
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from poc_env import _kernels
 from poc_env.sim.comms import in_range, two_neighbour_ok
 from poc_env.sim.constraints import pairwise_distances, separation_violations
 from poc_env.theory.probability_map import Grid
@@ -83,56 +82,6 @@ def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = N
     return out.reshape(n_rows, ncell)
 
 
-@njit(cache=True)
-def _timeline(
-    p, v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out, dep
-):  # pragma: no cover
-    """Arrival times of the path ``p`` (m, 2) in ``out`` (m,) and whether it fits (see
-    :func:`arrival_times`, :func:`route_fits`); points within 1 mm of the point before get the
-    same time as it and no turn. ``heading0`` NaN: no heading at take-off. ``dep`` (m,) gets
-    the time each point is left (its arrival plus the turn there)."""
-    m = p.shape[0]
-    out[0] = 0.0
-    dep[:] = np.inf
-    t = 0.0
-    last = 0  # the last point kept
-    have = not math.isnan(heading0)  # a heading exists (at take-off, or from a flown leg)
-    hx = math.cos(heading0) if have else 0.0
-    hy = math.sin(heading0) if have else 0.0
-    fits = True
-    for j in range(1, m):
-        dx = p[j, 0] - p[last, 0]
-        dy = p[j, 1] - p[last, 1]
-        length = math.hypot(dx, dy)
-        if length <= 1e-3 and j < m - 1:
-            out[j] = t
-            continue
-        v = v_line
-        if last == 0:
-            v = v_out
-        if j == m - 1:
-            v = v_home
-        if length > 0:
-            if have:
-                cross = hx * dy - hy * dx
-                dot = hx * dx + hy * dy
-                t += turn_cost * abs(math.atan2(cross, dot))
-            hx = dx
-            hy = dy
-            have = True
-            dep[last] = t
-            t += length / v
-        out[j] = t
-        last = j
-        if j < m - 1:
-            home = math.hypot(p[m - 1, 0] - p[j, 0], p[m - 1, 1] - p[j, 1])
-            if t + home / v_home + reserve > budget + 1e-9:
-                fits = False
-    if t > budget + 1e-9:
-        fits = False
-    return fits
-
-
 def _dedupe(path) -> np.ndarray:
     """``path`` without points within 1 mm of the point before (no zero-length legs)."""
     p = np.asarray(path, dtype=float).reshape(-1, 2)
@@ -156,7 +105,9 @@ def arrival_times(path, speeds, turn_rate: float, heading0: float | None = None)
     if len(p) > 1:
         cost = TURN_SHARE / turn_rate
         dep = np.empty(len(p))
-        _timeline(p, speeds.out, speeds.line, speeds.home, cost, np.inf, 0.0, h0, out, dep)
+        _kernels.route_timeline(
+            p, speeds.out, speeds.line, speeds.home, cost, np.inf, 0.0, h0, out, dep
+        )
     return out
 
 
@@ -181,34 +132,10 @@ def route_fits(
     h0 = np.nan if heading0 is None else float(heading0)
     cost = TURN_SHARE / turn_rate
     return bool(
-        _timeline(p, speeds.out, speeds.line, speeds.home, cost, budget, reserve, h0, out, dep)
+        _kernels.route_timeline(
+            p, speeds.out, speeds.line, speeds.home, cost, budget, reserve, h0, out, dep
+        )
     )
-
-
-@njit(cache=True)
-def _sample(p, arrive, dep, times, out, act):  # pragma: no cover
-    """Positions ``out (S, 2)`` at ``times (S,)`` (ascending) along the path ``p`` flown with
-    arrival times ``arrive`` and departure times ``dep`` (:func:`_timeline`): still at a point
-    while turning there, along a leg at constant speed; ``act`` False once landed."""
-    m = p.shape[0]
-    j = 0  # the point last left
-    for s in range(times.shape[0]):
-        tau = times[s]
-        if tau >= arrive[m - 1]:
-            out[s, 0] = p[m - 1, 0]
-            out[s, 1] = p[m - 1, 1]
-            act[s] = False
-            continue
-        act[s] = True
-        while j < m - 1 and tau >= arrive[j + 1]:
-            j += 1
-        if tau <= dep[j] or not dep[j] < arrive[j + 1]:
-            out[s, 0] = p[j, 0]
-            out[s, 1] = p[j, 1]
-        else:
-            f = (tau - dep[j]) / (arrive[j + 1] - dep[j])
-            out[s, 0] = p[j, 0] + f * (p[j + 1, 0] - p[j, 0])
-            out[s, 1] = p[j, 1] + f * (p[j + 1, 1] - p[j, 1])
 
 
 def track(path, speeds, turn_rate: float, times, heading0: float | None = None):
@@ -220,11 +147,13 @@ def track(path, speeds, turn_rate: float, times, heading0: float | None = None):
     h0 = np.nan if heading0 is None else float(heading0)
     if len(p) > 1:
         cost = TURN_SHARE / turn_rate
-        _timeline(p, speeds.out, speeds.line, speeds.home, cost, np.inf, 0.0, h0, arrive, dep)
+        _kernels.route_timeline(
+            p, speeds.out, speeds.line, speeds.home, cost, np.inf, 0.0, h0, arrive, dep
+        )
     t = np.ascontiguousarray(times, dtype=float)
     pos = np.empty((len(t), 2))
     act = np.empty(len(t), dtype=bool)
-    _sample(p, arrive, dep, t, pos, act)
+    _kernels.route_sample(p, arrive, dep, t, pos, act)
     return pos, act
 
 
