@@ -85,6 +85,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from poc_env import _kernels
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.geometry import rectangle_polygon
@@ -281,6 +282,8 @@ class PlanObjective:
             )
         self.prior = p
         self._prior_flat = np.ascontiguousarray(p, dtype=float).reshape(-1)
+        self._prior_grid = np.ascontiguousarray(p, dtype=float)
+        self._box = np.array(self.grid.bounds, dtype=float)
         self.n = sc.n_uavs
         self.dim = PARAMS_PER_UAV * self.n
         self.sweep_width_m = sc.sensor.sweep_width_m
@@ -377,28 +380,36 @@ class PlanObjective:
         return exclusive_fractions(self.grid, center, f["l"], f["w"], f["theta"])
 
     def evaluate(self, x) -> PlanScores:
-        """Every term of eq. 25-26 for the population X (P, 6n), in one vectorised pass."""
-        f = self.split(x)
-        center = np.stack([f["x_c"], f["y_c"]], axis=-1)
-        mower = lawnmower(center, f["l"], f["w"], f["theta"], f["d"], self.takeoff_m[None, :, :])
-        transit = np.linalg.norm(mower.first_m - self.takeoff_m, axis=-1) + np.linalg.norm(
-            self.landing_m - mower.last_m, axis=-1
+        """Every term of eq. 25-26 for the population X (P, 6n), in one vectorised pass.
+
+        The map repair, the lawnmower, the transit and each UAV's POC (its rectangle's prior
+        mass less what the UAVs before it cover, §3.1.6, by boundary integrals) come from one
+        compiled pass, :func:`poc_env._kernels.plan_rectangles`, which performs the operations
+        of :meth:`split` and :func:`lawnmower` in the same order (pinned to 1e-12 by
+        ``test_compiled_plan_pass_equals_split_lawnmower_and_exclusive_masses``); eq. 17, the
+        POD and eq. 25-26 stay in numpy."""
+        pop = np.ascontiguousarray(self.as_population(x))
+        geo = np.empty((len(pop), self.n, 5))
+        terms = np.empty((len(pop), self.n, 6))
+        _kernels.plan_rectangles(  # type: ignore[call-arg]
+            pop,
+            self._box,
+            self.takeoff_m,
+            self.landing_m,
+            *map(float, self.grid.origin_m),
+            self.grid.cell_m,
+            self._prior_grid,
+            geo,
+            terms,
         )
-        t = flight_time_from_lengths(
-            transit, mower.track_m, self.cruise_speed_mps, self.search_speed_mps
-        )
-        short = np.minimum(f["l"], f["w"])
-        coverage = self.sweep_width_m * np.minimum(mower.n_lines / short, 1.0 / f["d"])
+        n_lines, search, track, transit, poc = (terms[..., k] for k in (0, 2, 3, 4, 5))
+        t = flight_time_from_lengths(transit, track, self.cruise_speed_mps, self.search_speed_mps)
+        short = np.minimum(geo[..., 2], geo[..., 3])
+        d = pop.reshape(len(pop), self.n, PARAMS_PER_UAV)[..., PARAM_NAMES.index("d")]
+        coverage = self.sweep_width_m * np.minimum(n_lines / short, 1.0 / d)
         pod = pod_from_coverage(coverage, self.law)
-        m = exclusive_fractions(self.grid, center, f["l"], f["w"], f["theta"])
-        # The overlap rule (§3.1.6) is already in the exclusive memberships, for which
-        # swarm_pos's capacity form min(m_i, 1 - allocated) is m_i itself: POC_i is then one
-        # matrix product (eq. 15-16 via search_theory.pos/posc; the scalar reference keeps
-        # swarm_pos, and the tests pin the two equal). The kernel could sum the masses itself
-        # (rectangle_mass(..., weights=prior), no dense array, about 0.1 s less per plan), but
-        # in another order: the last bits of POC_i change and with them the DE's trajectories
-        # (docs/PLANNER.md section 3), so the matrix product stays.
-        poc = m.reshape(*m.shape[:-2], -1) @ self._prior_flat
+        centre = geo[..., :2]  # _combine reads the line count and lengths only
+        mower = Lawnmower(n_lines, terms[..., 1], search, track, centre, centre)
         pos = pos_of(poc, pod)
         posc = posc_of(pos, axis=-1)
         return self._combine(poc, pod, pos, posc, t, mower, transit)

@@ -77,7 +77,12 @@ def test_table4_reproduces_the_paper_and_table8_grows(quick_all):
     t8 = {r.name: r for r in results}["table8"].rows
     best = [r["best_posc"] for r in t8]
     assert [r["uavs"] for r in t8] == [4, 5, 6, 7, 8]
-    assert all(b > a for a, b in itertools.pairwise(best))
+    # each fleet starts from the smaller fleet's best plan (grow_plan), so POS cannot fall; at
+    # the quick budget a step may add nothing (the 7th UAV's gain was 2.8e-17, rounding, before
+    # the boundary-integral masses, 0.0 after: docs/PLANNER.md section 3), so growth is
+    # asserted where it is real: never down, and up from 4 to 8 UAVs
+    assert all(b >= a - 1e-12 for a, b in itertools.pairwise(best))
+    assert best[-1] > best[0]
 
 
 def test_table8_each_seed_chain_increases_below_its_bound():
