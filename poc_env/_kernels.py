@@ -1019,6 +1019,20 @@ def _cell_square(h, qx, qy):
 
 
 @_jit_inline
+def _rect_side(side, c, s, eo, fo, a, b):
+    """Half-plane ``n . p <= t`` of side ``side`` (0: u <= a, 1: u >= -a, 2: v <= b, 3: v >= -b)
+    of the rectangle with axes ``e = (c, s)``, ``f = (-s, c)``, half sides ``a``, ``b`` and
+    centre at ``u = eo``, ``v = fo``: returns ``(n_x, n_y, t)``."""
+    if side == 0:
+        return c, s, eo + a
+    if side == 1:
+        return -c, -s, a - eo
+    if side == 2:
+        return -s, c, fo + b
+    return s, -c, b - fo
+
+
+@_jit_inline
 def _clip_rect(px, py, n, qx, qy, rx, ry, c, s, a, b, half):
     """``p[:n]`` clipped to the rectangle centred at ``(rx, ry)`` (axes ``(c, s)``, half sides
     ``a``, ``b``), both in the same coordinates; the result in ``q`` (``p`` is overwritten).
@@ -1032,14 +1046,7 @@ def _clip_rect(px, py, n, qx, qy, rx, ry, c, s, a, b, half):
     eo = c * rx + s * ry  # u of the rectangle's centre along e = (c, s)
     fo = -s * rx + c * ry  # v along f = (-s, c)
     for side in range(4):
-        if side == 0:  # u <= a
-            nx_, ny_, t = c, s, eo + a
-        elif side == 1:  # u >= -a
-            nx_, ny_, t = -c, -s, a - eo
-        elif side == 2:  # v <= b
-            nx_, ny_, t = -s, c, fo + b
-        else:  # v >= -b
-            nx_, ny_, t = s, -c, b - fo
+        nx_, ny_, t = _rect_side(side, c, s, eo, fo, a, b)
         if t >= ext:
             continue
         if t <= -ext:
@@ -1510,14 +1517,7 @@ def _clip_to_rect(px, py, n, qx, qy, rx, ry, c, s, a, b):
     eo = c * rx + s * ry
     fo = -s * rx + c * ry
     for side in range(4):
-        if side == 0:  # u <= a
-            nx_, ny_, t = c, s, eo + a
-        elif side == 1:  # u >= -a
-            nx_, ny_, t = -c, -s, a - eo
-        elif side == 2:  # v <= b
-            nx_, ny_, t = -s, c, fo + b
-        else:  # v >= -b
-            nx_, ny_, t = s, -c, b - fo
+        nx_, ny_, t = _rect_side(side, c, s, eo, fo, a, b)
         n = _clip(px, py, n, qx, qy, nx_, ny_, t)
         if n < 3:
             return 0

@@ -82,7 +82,6 @@ FAN_DEG = 20.0
 ETAS = (0.3, 0.4, 0.5, 0.65)
 #: the default speed rule of :func:`plan_speeds`.
 SPEED = "max"
-SPEED_RULES = ("max", "paper")
 #: margins on d_s (eq. 21) and the communication range (eq. 24) for the refinement's airspace
 #: check: the follower flies the planned route, not the planned timing, to the second.
 SEPARATION_MARGIN = 2.0

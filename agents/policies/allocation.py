@@ -13,11 +13,10 @@ from typing import Any
 import numpy as np
 
 from agents.planning.allocation import LEVELS, MARGIN, REFINE, SPEED, make_allocation_plan
-from agents.policies.base import Policy
-from poc_env.sim.autopilot import WaypointFollower
+from agents.policies.base import PlanPolicy
 
 
-class AllocationPlanPolicy(Policy):
+class AllocationPlanPolicy(PlanPolicy):
     """``allocation_plan``: plan routes from the reach-aware allocation, then fly them."""
 
     name = "allocation_plan"
@@ -34,10 +33,8 @@ class AllocationPlanPolicy(Policy):
         self.speed = speed
         self.refine = refine
 
-    def reset(self, env: Any, seed: int) -> None:
-        super().reset(env, seed)
-        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
-        self.plan = make_allocation_plan(
+    def make(self, env: Any, prior: np.ndarray, seed: int) -> dict:
+        return make_allocation_plan(
             env.scenario,
             prior=prior,
             seed=seed,
@@ -46,15 +43,3 @@ class AllocationPlanPolicy(Policy):
             speed=self.speed,
             refine=self.refine,
         )
-        wps = [np.asarray(u["waypoints_m"], dtype=float) for u in self.plan["uavs"]]
-        v = self.plan["speeds_mps"]
-        self.follower = WaypointFollower(
-            env.params,
-            wps,
-            env.possible_agents,
-            transit_speed_mps=v["out"],
-            pattern_speed_mps=v["line"],
-        )
-
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
-        return self.follower.predict(observations, state)

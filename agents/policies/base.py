@@ -11,6 +11,10 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
+from poc_env.sim.autopilot import WaypointFollower
+
 
 class Policy:
     """Base class: ``reset(env, seed)`` then ``predict(observations)`` each step."""
@@ -22,3 +26,30 @@ class Policy:
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         raise NotImplementedError
+
+
+class PlanPolicy(Policy):
+    """A plan made at each episode's start, then flown: ``reset`` plans on the environment's
+    prior (the fine belief summed to the grid's cells) with :meth:`make` and flies every UAV's
+    ``waypoints_m`` with the waypoint follower, at the plan's ``speeds_mps`` (``out`` in
+    transit, ``line`` on the route) when it records them, else at eq. 17's v_c and v_s."""
+
+    def make(self, env: Any, prior: np.ndarray, seed: int) -> dict:
+        raise NotImplementedError
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
+        self.plan = self.make(env, prior, seed)
+        wps = [np.asarray(u["waypoints_m"], dtype=float) for u in self.plan["uavs"]]
+        v = self.plan.get("speeds_mps") or {}
+        self.follower = WaypointFollower(
+            env.params,
+            wps,
+            env.possible_agents,
+            transit_speed_mps=v.get("out"),
+            pattern_speed_mps=v.get("line"),
+        )
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        return self.follower.predict(observations, state)

@@ -18,11 +18,10 @@ import numpy as np
 
 from agents.planning.optimizers import get_optimizer
 from agents.planning.planner import make_plan
-from agents.policies.base import Policy
-from poc_env.sim.autopilot import WaypointFollower
+from agents.policies.base import PlanPolicy
 
 
-class DEPlanPolicy(Policy):
+class DEPlanPolicy(PlanPolicy):
     """``de_plan``: plan with adaptive DE on the episode's prior, then fly it (follower)."""
 
     name = "de_plan"
@@ -38,10 +37,8 @@ class DEPlanPolicy(Policy):
         self.maxiter = maxiter
         self.optimizer = optimizer
 
-    def reset(self, env: Any, seed: int) -> None:
-        super().reset(env, seed)
-        prior = env.params.grid.coarsen(env.sim_state.belief[0], env.params.s)
-        self.plan = make_plan(
+    def make(self, env: Any, prior: np.ndarray, seed: int) -> dict:
+        return make_plan(
             env.scenario,
             prior=prior,
             seed=seed,
@@ -49,8 +46,3 @@ class DEPlanPolicy(Policy):
             maxiter=self.maxiter,
             optimizer=self.optimizer,
         )
-        wps = [np.asarray(u["waypoints_m"]) for u in self.plan["uavs"]]
-        self.follower = WaypointFollower(env.params, wps, env.possible_agents)
-
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
-        return self.follower.predict(observations, state)

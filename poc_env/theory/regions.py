@@ -253,6 +253,31 @@ def cell_overlap(region: Region | Sequence[Sequence[float]], grid: Grid) -> np.n
 _NONE = np.zeros((0, 0))
 
 
+_Rects = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _flat_rectangles(center, length, width, theta) -> tuple[tuple[int, ...], _Rects]:
+    """The kernels' rectangle arguments: the leading shape of ``center`` (..., 2) and flat
+    contiguous centre x, centre y, half length, half width, cos theta, sin theta."""
+    c = np.asarray(center, dtype=float)
+    lead = c.shape[:-1]
+    th = np.broadcast_to(np.asarray(theta, dtype=float), lead)
+
+    def flat(v):
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), lead).ravel())
+
+    half_l = 0.5 * np.asarray(length, dtype=float)
+    half_w = 0.5 * np.asarray(width, dtype=float)
+    return lead, (
+        flat(c[..., 0]),
+        flat(c[..., 1]),
+        flat(half_l),
+        flat(half_w),
+        flat(np.cos(th)),
+        flat(np.sin(th)),
+    )
+
+
 def rectangle_mass(
     grid: Grid,
     center,
@@ -276,13 +301,7 @@ def rectangle_mass(
     the last leading axis holds one individual's rectangles, and each excludes the cells (or,
     for areas, the parts of cells) covered by the ones before it (§3.1.6).
     """
-    c = np.asarray(center, dtype=float)
-    lead = c.shape[:-1]
-    th = np.broadcast_to(np.asarray(theta, dtype=float), lead)
-
-    def flat(v):
-        return np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), lead).ravel())
-
+    lead, rects = _flat_rectangles(center, length, width, theta)
     group = lead[-1] if exclusive and lead else 1
     mass = np.zeros(lead)
     if weights is None:
@@ -295,12 +314,7 @@ def rectangle_mass(
             raise ConfigError("weights", w.shape, f"shape {grid.shape}")
         shaped = np.zeros((0, 0, 0, 0))
     _kernels.rectangle_fractions(
-        flat(c[..., 0]),
-        flat(c[..., 1]),
-        flat(0.5 * np.asarray(length, dtype=float)),
-        flat(0.5 * np.asarray(width, dtype=float)),
-        flat(np.cos(th)),
-        flat(np.sin(th)),
+        *rects,
         float(grid.origin_m[0]),
         float(grid.origin_m[1]),
         float(grid.cell_m),
@@ -331,24 +345,14 @@ def boundary_mass(
     c = np.asarray(center, dtype=float)
     if c.ndim < 1 or c.shape[-1] != 2:
         raise ConfigError("center", c.shape, "shape (..., 2)")
-    lead = c.shape[:-1]
     w = np.ascontiguousarray(weights, dtype=float)
     if w.shape != grid.shape:
         raise ConfigError("weights", w.shape, f"shape {grid.shape}")
-    th = np.broadcast_to(np.asarray(theta, dtype=float), lead)
-
-    def flat(v):
-        return np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=float), lead).ravel())
-
+    lead, rects = _flat_rectangles(c, length, width, theta)
     group = lead[-1] if exclusive and lead else 1
     mass = np.zeros(lead)
     _kernels.rectangle_masses(
-        flat(c[..., 0]),
-        flat(c[..., 1]),
-        flat(0.5 * np.asarray(length, dtype=float)),
-        flat(0.5 * np.asarray(width, dtype=float)),
-        flat(np.cos(th)),
-        flat(np.sin(th)),
+        *rects,
         float(grid.origin_m[0]),
         float(grid.origin_m[1]),
         float(grid.cell_m),
