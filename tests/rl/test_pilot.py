@@ -168,6 +168,10 @@ def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
     np.testing.assert_array_equal(seen, trained_on)
 
 
+# the tolerance for a number recorded on another machine (a card, a golden episode): see
+# docs/CONTRIBUTING.md, "Numbers recorded elsewhere"
+CROSS_CPU_REL = 1e-3
+
 SHIPPED = [
     "ppo_pilot_paper_6_2",
     "ppo_heading_paper_6_2",
@@ -200,7 +204,12 @@ def test_shipped_checkpoint_replays_its_card_and_flies_an_unseen_episode(name):
     scenario = get_task(card["task"]).scenario if card.get("task") else "paper_6_2"
     ev = card["evaluation"]
     first = run_episode(scenario, f"{kind}:{name}", ev["seeds"][0], random_priors=True)
-    assert first.posc == pytest.approx(ev["posc"][0], rel=1e-6)
+    # The card was recorded on another machine. torch picks CPU-specific kernels (AVX2,
+    # AVX-512, ...), so the network's float32 outputs differ in their last bits between CPUs
+    # and a replayed episode drifts from the recorded one (1.1e-6 relative seen on an AVX-512
+    # EPYC). A number recorded elsewhere gets a cross-CPU tolerance (docs/CONTRIBUTING.md);
+    # 1e-3 still fails on another model, another prior or a changed environment.
+    assert first.posc == pytest.approx(ev["posc"][0], rel=CROSS_CPU_REL)
     unseen = run_episode(scenario, f"{kind}:{name}", 987_654, random_priors=True)
     assert unseen.landed == 6 and unseen.crashed == 0  # the autopilot brings all home
     assert unseen.posc >= ev["floor"] > 0.0
