@@ -13,7 +13,7 @@ and copy the printed weights into configs/paper_6_1.yaml.
 import numpy as np
 from scipy.optimize import nnls
 
-from agents.planning.survey import load_regions
+from poc_env.agents.planning.survey import load_regions
 from poc_env.config import GaussianComponent, load_scenario
 from poc_env.theory.probability_map import Grid, gaussian_mixture
 from poc_env.theory.regions import cell_overlap

@@ -1658,7 +1658,8 @@ def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, e
 
 @_jit
 def plan_rectangles(x, box, takeoff, landing, x0, y0, h, weights, geo, terms):
-    """The planner's rectangles (``agents.planning.objective``) for a population, in one pass.
+    """The planner's rectangles (``poc_env.agents.planning.objective``) for a population, in one
+    pass.
 
     ``x (P, 6 n)``: per UAV ``(x_c, y_c, l, w, theta, d)``. Per rectangle, as the objective's
     numpy steps (same operations, in the same order): the map repair of ``split`` (a rectangle
@@ -1735,13 +1736,14 @@ def plan_rectangles(x, box, takeoff, landing, x0, y0, h, weights, geo, terms):
     terms[:, :, 5] = mass
 
 
-# ---------------------------------------------------------- route timing (agents.planning.refine)
+# ---------------------------------------------------------- route timing
+# (poc_env.agents.planning.refine)
 
 
 @_jit
 def route_timeline(p, v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out, dep):
     """Arrival times of the path ``p`` (m, 2) in ``out`` (m,) and whether it fits (see
-    :func:`agents.planning.refine.arrival_times` and ``route_fits``); points within 1 mm of
+    :func:`poc_env.agents.planning.refine.arrival_times` and ``route_fits``); points within 1 mm of
     the point before get the same time as it and no turn. ``heading0`` NaN: no heading at
     take-off. ``dep`` (m,) gets the time each point is left (its arrival plus the turn
     there)."""

@@ -2,8 +2,8 @@
 
 Subcommands: ``scenarios`` (list the built-ins), ``survey`` (Table 4 / 5 analog of a region
 plan), ``figures`` (regenerate the README's pictures), ``demo`` (the main job on the default
-scenario), ``train`` (PPO; options generated from ``agents.rl.args.TrainArgs``). Bad input ends
-with ``error: ...`` naming the field, the value and what is allowed, and exit status 2 -- never
+scenario), ``train`` (PPO; options generated from ``poc_env.agents.rl.args.TrainArgs``). Bad input
+ends with ``error: ...`` naming the field, the value and what is allowed, and exit status 2 -- never
 a traceback.
 """
 
@@ -167,7 +167,7 @@ def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
     if args.origin is not None:
-        from agents.planning.export import make_crs
+        from poc_env.agents.planning.export import make_crs
 
         make_crs(args.projection, args.origin, zone=args.utm_zone)  # checked before the survey
     if not args.out:
@@ -178,7 +178,7 @@ def cmd_survey(args: argparse.Namespace) -> int:
 
 def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> int:
     """The survey of ``cmd_survey``, its files written into ``stage`` (shown as ``dest``)."""
-    from agents.planning.survey import load_regions, run_survey, write_survey
+    from poc_env.agents.planning.survey import load_regions, run_survey, write_survey
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -186,7 +186,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
     plan = load_regions(args.regions or f"{sc.name}_polygons")
     prior = build_prior(sc.map, args.map_file)
     if getattr(args, "optimise", False):
-        from agents.planning.region_planner import optimise_regions
+        from poc_env.agents.planning.region_planner import optimise_regions
 
         plan = optimise_regions(sc, plan)
         print("Spacing and direction optimised per region (Table 3 analog):")
@@ -204,8 +204,8 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
     if stage is not None:
         _wrote(write_survey(result, stage, prior=prior, scenario=sc, plan=plan), stage, dest)
     if getattr(args, "plan_out", None):
-        from agents.planning.planner import write_plan
-        from agents.planning.survey import survey_plan
+        from poc_env.agents.planning.planner import write_plan
+        from poc_env.agents.planning.survey import survey_plan
 
         doc = survey_plan(
             result,
@@ -222,7 +222,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
 
 
 def _state_policy(scenario, name: str, seed: int):
-    """A registered policy (``agents.policies.registry``) as ``policy_fn(state, rng)`` for
+    """A registered policy (``poc_env.agents.policies.registry``) as ``policy_fn(state, rng)`` for
     :func:`~poc_env.viz.rendering.render_episode`.
 
     The policy is reset with an environment reset by ``seed``, whose state is the rendered
@@ -230,7 +230,7 @@ def _state_policy(scenario, name: str, seed: int):
     rendered state's observations of the flying UAVs, built as the environment builds them.
     Its own generators come from ``seed``: ``rng`` is not used.
     """
-    from agents.policies.registry import make_policy
+    from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
     from poc_env.sim.observations import hazard_mask, rasters, vectors
 
@@ -292,14 +292,14 @@ def cmd_bench(args: argparse.Namespace) -> int:
     import subprocess
 
     modules = {
-        "env": "agents.benchmarks.env",
-        "plan": "agents.benchmarks.plan",
-        "train": "agents.benchmarks.train",
-        "campaign": "agents.benchmarks.campaign",
-        "baselines": "agents.benchmarks.baselines",
-        "suite": "agents.benchmarks.suite",
-        "learning": "agents.benchmarks.learning",
-        "generalise": "agents.benchmarks.generalise",
+        "env": "poc_env.agents.benchmarks.env",
+        "plan": "poc_env.agents.benchmarks.plan",
+        "train": "poc_env.agents.benchmarks.train",
+        "campaign": "poc_env.agents.benchmarks.campaign",
+        "baselines": "poc_env.agents.benchmarks.baselines",
+        "suite": "poc_env.agents.benchmarks.suite",
+        "learning": "poc_env.agents.benchmarks.learning",
+        "generalise": "poc_env.agents.benchmarks.generalise",
     }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
@@ -312,7 +312,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     _check_int("workers", args.workers, 1, limits.MAX_WORKERS)
     names = [p.strip() for p in args.policies.split(",") if p.strip()]
     if not names:
-        from agents.policies.registry import registered
+        from poc_env.agents.policies.registry import registered
 
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
@@ -330,10 +330,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def _ray(args: argparse.Namespace) -> contextlib.AbstractContextManager:
-    """``--ray [ADDRESS]``: the command's jobs run on Ray (agents.experiments.pool.ray_jobs)."""
+    """``--ray [ADDRESS]``: the command's jobs run on Ray
+    (poc_env.agents.experiments.pool.ray_jobs)."""
     if getattr(args, "ray", None) is None:
         return contextlib.nullcontext()
-    from agents.experiments.pool import ray_jobs
+    from poc_env.agents.experiments.pool import ray_jobs
 
     return ray_jobs(args.ray)
 
@@ -355,7 +356,7 @@ def _evaluate(
     args: argparse.Namespace, names: list[str], stage: Path | None, dest: Path | None
 ) -> int:
     """The evaluation of ``cmd_evaluate``, its files written into ``stage`` (shown as ``dest``)."""
-    from agents.experiments.evaluate import evaluate, plot_curves
+    from poc_env.agents.experiments.evaluate import evaluate, plot_curves
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.io import csv_text, write_text_atomic
 
@@ -367,7 +368,7 @@ def _evaluate(
         if scenario is not None:
             raise ConfigError("task", args.task, "either --task or --scenario, not both")
         scenario, random_priors, label = task.scenario, random_priors or task.random_prior, task.id
-        from agents.rl.policy import checkpoint_control, checkpoint_origin
+        from poc_env.agents.rl.policy import checkpoint_control, checkpoint_origin
         from poc_env.tasks import get_task as _task_of
 
         for name in names:  # a learned policy is scored on the control level it learned
@@ -423,7 +424,7 @@ def _evaluate(
 
 
 def cmd_curve(args: argparse.Namespace) -> int:
-    from agents.rl.curve import plot_training_curve
+    from poc_env.agents.rl.curve import plot_training_curve
 
     _check_int("until", args.until, 1, 2**53)
     _check_out("out", args.out, "file")
@@ -432,7 +433,7 @@ def cmd_curve(args: argparse.Namespace) -> int:
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from agents.experiments.paper import cmd
+    from poc_env.agents.experiments.paper import cmd
 
     _check_int("workers", args.workers, 1, limits.MAX_WORKERS)
     _check_out("out", args.out, "folder")
@@ -441,9 +442,10 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    """Train (or resume) an RL policy; every option comes from ``agents.rl.args.TrainArgs``."""
-    from agents.rl.args import parse_train_args
-    from agents.rl.train import train
+    """Train (or resume) an RL policy; every option comes from
+    ``poc_env.agents.rl.args.TrainArgs``."""
+    from poc_env.agents.rl.args import parse_train_args
+    from poc_env.agents.rl.train import train
 
     targs = parse_train_args(args.train_options)
     _check_int("n_envs", targs.n_envs, 1, limits.N_ENVS_MAX)
@@ -488,7 +490,7 @@ def _plan(
 
     ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
     """
-    from agents.planning.planner import make_plan, plan_table, plot_plan, write_plan
+    from poc_env.agents.planning.planner import make_plan, plan_table, plot_plan, write_plan
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -527,7 +529,7 @@ def _plan(
 def cmd_export(args: argparse.Namespace) -> int:
     import functools
 
-    from agents.planning.export import export_plan
+    from poc_env.agents.planning.export import export_plan
 
     export = functools.partial(
         export_plan,
@@ -625,7 +627,7 @@ def build_parser() -> argparse.ArgumentParser:
         f"this many GiB (default {limits.DEFAULT_MEMORY_GB:g}, or POC_ENV_MAX_MEMORY_GB)",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    from agents.policies.registry import registered
+    from poc_env.agents.policies.registry import registered
 
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
@@ -638,7 +640,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = scenario_sub.add_parser(
         "import", help="GeoJSON/KML area, airfields and no-fly zones, GeoTIFF/CSV prior -> YAML"
     )
-    from agents.planning.geoimport import add_scenario_import_arguments, cmd_scenario_import
+    from poc_env.agents.planning.geoimport import add_scenario_import_arguments, cmd_scenario_import
 
     add_scenario_import_arguments(p)
     p.set_defaults(func=cmd_scenario_import)
@@ -699,8 +701,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--random-priors",
         action="store_true",
-        help="every seed flies a fresh random Gaussian-mixture prior (agents.experiments.evaluate."
-        "episode_prior; a generator stream training never draws from)",
+        help="every seed flies a fresh random Gaussian-mixture prior "
+        "(poc_env.agents.experiments.evaluate.episode_prior; a generator stream training "
+        "never draws from)",
     )
     p.add_argument(
         "--baseline",
@@ -716,7 +719,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_evaluate)
 
     # train's options (and its --help) come from the TrainArgs dataclass: main() hands them to
-    # agents.rl.args.parse_train_args
+    # poc_env.agents.rl.args.parse_train_args
     p = sub.add_parser(
         "train", help="train an RL policy (PPO) into a run folder, or --resume one", add_help=False
     )
@@ -819,7 +822,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_curve)
 
     p = sub.add_parser("experiment", help="reproduce a §6 experiment of the paper (or all)")
-    from agents.experiments.paper import add_arguments as add_experiment_arguments
+    from poc_env.agents.experiments.paper import add_arguments as add_experiment_arguments
 
     add_experiment_arguments(p)
     _add_ray(p)

@@ -1,7 +1,7 @@
 """The dependency rule of the layout, read from the source (imports inside functions included).
 
     base (errors, limits, io, geometry, config, _kernels) <- theory <- sim <- viz <- envs
-    <- agents.planning <- agents.policies <- agents.rl <- agents.experiments / benchmarks <- cli
+    <- poc_env.agents.planning <- .policies <- .rl <- .experiments / .benchmarks <- cli
 
 A module may import its own layer and the layers below it, never one above. The layers are
 listed once, here and in docs/ARCHITECTURE.md; a new module must be placed in one.
@@ -31,15 +31,15 @@ LAYERS = (
     ("poc_env.envs", 4),
     ("poc_env.uav_search_v0", 4),
     ("poc_env", 4),  # the package's __init__: parallel_env, env, registration
-    ("agents.planning", 5),
-    ("agents.policies", 6),
-    ("agents.rl", 7),
-    ("agents.experiments", 8),
-    ("agents.benchmarks", 8),
-    ("agents", 8),
+    ("poc_env.agents.planning", 5),
+    ("poc_env.agents.policies", 6),
+    ("poc_env.agents.rl", 7),
+    ("poc_env.agents.experiments", 8),
+    ("poc_env.agents.benchmarks", 8),
+    ("poc_env.agents", 8),
     ("poc_env.cli", 9),
     # the hostile-input campaign drives every input, the command line included: top layer
-    ("agents.benchmarks.campaign", 9),
+    ("poc_env.agents.benchmarks.campaign", 9),
 )
 NAMES = {0: "base", 1: "theory", 2: "sim", 3: "viz", 4: "envs", 5: "planning"}
 NAMES |= {6: "policies", 7: "rl", 8: "experiments", 9: "cli"}
@@ -52,9 +52,13 @@ def layer(module: str) -> int:
 
 def modules() -> list[tuple[str, Path]]:
     out = []
-    for pkg in ("poc_env", "agents"):
+    # agents/ installs as poc_env.agents (poc_env/agents is a link to it): walked once, as that
+    for pkg, dotted in (("poc_env", ("poc_env",)), ("agents", ("poc_env", "agents"))):
         for f in sorted((ROOT / pkg).rglob("*.py")):
-            parts = f.relative_to(ROOT).with_suffix("").parts
+            rel = f.relative_to(ROOT / pkg)
+            if pkg == "poc_env" and rel.parts[0] == "agents":
+                continue
+            parts = (*dotted, *rel.with_suffix("").parts)
             name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
             out.append((name, f))
     return out
@@ -79,7 +83,7 @@ def project_imports(module: str, path: Path) -> list[tuple[int, str]]:
             names = [n for n in names if n == stem or _is_module(n)]
         else:
             continue
-        found += [(node.lineno, n) for n in names if n.split(".")[0] in ("poc_env", "agents")]
+        found += [(node.lineno, n) for n in names if n.split(".")[0] == "poc_env"]
     return found
 
 
@@ -110,9 +114,9 @@ def test_imports_respect_layers(name, path):
 def test_rule_catches_an_upward_import(tmp_path):
     """The checker itself: an import of agents from the simulator is reported."""
     src = tmp_path / "core.py"
-    src.write_text("def f():\n    from agents.planning import planner\n", encoding="utf-8")
+    src.write_text("def f():\n    from poc_env.agents.planning import planner\n", encoding="utf-8")
     found = project_imports("poc_env.sim.core", src)
-    assert found == [(2, "agents.planning"), (2, "agents.planning.planner")]
+    assert found == [(2, "poc_env.agents.planning"), (2, "poc_env.agents.planning.planner")]
     assert max(layer(t) for _, t in found) > layer("poc_env.sim.core")
 
 
@@ -120,8 +124,8 @@ def test_nothing_below_the_cli_imports_agents():
     offenders = [
         f"{name}: {t}"
         for name, path in modules()
-        if name.startswith("poc_env") and name != "poc_env.cli"
+        if layer(name) < layer("poc_env.agents.planning")
         for _, t in project_imports(name, path)
-        if t.startswith("agents")
+        if t.startswith("poc_env.agents")
     ]
     assert not offenders, offenders

@@ -150,7 +150,7 @@ def test_memory_guard_refuses_a_huge_map_and_a_flag_raises_the_limit(monkeypatch
 
 
 def test_memory_guard_on_env_batches_and_populations(monkeypatch):
-    from agents.planning.planner import make_plan
+    from poc_env.agents.planning.planner import make_plan
     from poc_env.envs.vector import SwarmVecEnv
 
     monkeypatch.setenv("POC_ENV_MAX_MEMORY_GB", "0.01")  # 10 MiB
@@ -161,7 +161,7 @@ def test_memory_guard_on_env_batches_and_populations(monkeypatch):
 
 
 def test_planner_settings_are_checked_not_defaulted():
-    from agents.planning.planner import make_plan
+    from poc_env.agents.planning.planner import make_plan
 
     for bad in (0, -1, 3.5, "100", 10**12):
         with pytest.raises(ConfigError, match=r"^popsize"):
@@ -264,7 +264,7 @@ _REGIONS = {
 
 
 def _regions(tmp_path, **change):
-    from agents.planning.survey import load_regions
+    from poc_env.agents.planning.survey import load_regions
 
     d = copy.deepcopy(_REGIONS)
     d["regions"][0].update(change)
@@ -331,7 +331,7 @@ def test_second_search_false_halves_the_expanding_square(tmp_path):
     ],
 )
 def test_training_options_are_checked_before_training(field, value):
-    from agents.rl.args import TrainArgs
+    from poc_env.agents.rl.args import TrainArgs
 
     with pytest.raises(ConfigError) as err:
         TrainArgs(**{field: value})

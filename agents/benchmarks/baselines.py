@@ -3,10 +3,10 @@
     poc-env bench baselines [--tasks ID ...] [--episodes 20] [--policies ...] [--out DIR]
                             [--workers K | --ray [ADDRESS]] [--quick]
 
-Each task is scored with :func:`agents.experiments.evaluate.evaluate` on the same seeds for
+Each task is scored with :func:`poc_env.agents.experiments.evaluate.evaluate` on the same seeds for
 every policy (seeds ``--seed .. --seed + episodes - 1``; on ``-Random-`` tasks each seed flies
-its own held-out prior, :func:`~agents.experiments.evaluate.episode_prior`, a generator stream
-training never draws from). Columns: mean POSC with its 95 % interval over the seeds
+its own held-out prior, :func:`~poc_env.agents.experiments.evaluate.episode_prior`, a generator
+stream training never draws from). Columns: mean POSC with its 95 % interval over the seeds
 (1.96 standard errors), POSC normalised by each episode's reach-aware bound
 (:func:`poc_env.theory.bound.reach_effort_bound`: the best POSC any swarm could reach with
 transit from its airfields at top speed), and the mean constraint-violation steps.
@@ -63,8 +63,8 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
 
 def run(args: argparse.Namespace) -> list[dict[str, Any]]:
     """Rows (task, policy, posc_mean, posc_ci95, normalised, violation_steps, episodes)."""
-    from agents.experiments.evaluate import evaluate
     from poc_env import tasks
+    from poc_env.agents.experiments.evaluate import evaluate
 
     ids = args.tasks or [t for t in tasks.TASKS if not args.quick or "-Small-" in t]
     chosen = [tasks.get_task(t) for t in ids]
@@ -160,8 +160,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import contextlib
     import shlex
 
-    from agents.benchmarks import write_table_set
-    from agents.experiments.pool import ray_jobs
+    from poc_env.agents.benchmarks import write_table_set
+    from poc_env.agents.experiments.pool import ray_jobs
 
     args = _parse(argv)
     given = sys.argv[1:] if argv is None else argv
@@ -177,6 +177,6 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
 
 
 if __name__ == "__main__":
-    from agents.benchmarks import run_main
+    from poc_env.agents.benchmarks import run_main
 
     run_main(main)

@@ -294,7 +294,7 @@ def run_regions(case: tuple[dict, dict]) -> None:
     """A region file with hostile fields; if it loads, its survey must be finite."""
     import yaml
 
-    from agents.planning.survey import load_regions, run_survey
+    from poc_env.agents.planning.survey import load_regions, run_survey
 
     base, change = case
     region = {**base, **change}
@@ -377,7 +377,7 @@ def _set_path(doc: Any, path: tuple, value: Any) -> None:
 
 def run_plans(case: tuple[list, str, str, bool]) -> None:
     """Export a mutated plan.json; if it exports, the files must be safe to fly."""
-    from agents.planning.export import export_plan
+    from poc_env.agents.planning.export import export_plan
 
     edits, fmt, origin, raw_nan = case
     plan = sample_plan()
@@ -602,7 +602,7 @@ def geo_strategy():
 def run_geo(case: tuple) -> None:
     """``scenario import`` of hostile GIS layers; an accepted scenario loads, its prior sums to
     1, and its airfields sit where pyproj puts them."""
-    from agents.planning.geoimport import import_scenario, write_imported
+    from poc_env.agents.planning.geoimport import import_scenario, write_imported
     from poc_env.config import load_scenario
     from poc_env.theory.probability_map import build_prior
 

@@ -7,7 +7,7 @@ Every condition is the scenario (``--scenario``, default ``paper_6_2``) with a f
 (:func:`poc_env.config.load_scenario`, dotted keys as ``--overrides``). Every policy flies the
 same seeds ``--seed .. --seed + episodes - 1`` on every condition, each seed with its own
 random Gaussian-mixture prior from the held-out evaluation stream
-(:func:`agents.experiments.evaluate.episode_prior`, ``EVAL_PRIOR_STREAM``: a generator
+(:func:`poc_env.agents.experiments.evaluate.episode_prior`, ``EVAL_PRIOR_STREAM``: a generator
 training never draws from), drawn on the condition's own grid. The conditions, with their exact
 overrides (written for ``paper_6_2``: 200 km wide x 150 km tall, 40 x 30 cells of 5 km,
 airfields at (20, -60) and (120, -60) km, six UAVs, one shared belief):
@@ -37,7 +37,8 @@ airfields at (20, -60) and (120, -60) km, six UAVs, one shared belief):
   can lose from stale beliefs here.
 
 A learned policy can fly every condition because the compass observation
-(:mod:`agents.rl.pilot`, :class:`poc_env.sim.observations.CompassFeatures`) is size-free: shares
+(:mod:`poc_env.agents.rl.pilot`, :class:`poc_env.sim.observations.CompassFeatures`) is size-free:
+shares
 of the remaining POC by sector and distance ring around the UAV, and the UAV's own state, in a
 fixed-length vector whatever the grid's shape or cell size. So one checkpoint
 (``ppo:ppo_heading_paper_6_2``, shipped in ``agents/checkpoints``) flies every geometry without
@@ -86,7 +87,8 @@ DEFAULT_POLICIES = (
     "lawnmower",
     "ppo:ppo_heading_paper_6_2",
 )
-#: first episode seed: the default ``seed0`` of :func:`agents.experiments.evaluate.evaluate`.
+#: first episode seed: the default ``seed0`` of
+# :func:`poc_env.agents.experiments.evaluate.evaluate`.
 SEED0 = 1000
 
 
@@ -153,7 +155,7 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
     Every name, every condition's scenario and every policy is checked before the first
     episode runs.
     """
-    from agents.experiments.evaluate import check_policies, evaluate
+    from poc_env.agents.experiments.evaluate import check_policies, evaluate
 
     conds = conditions(_names("conditions", args.conditions))
     policies = _names("policies", args.policies)
@@ -232,7 +234,7 @@ def to_markdown(rows: list[dict[str, Any]], command: str) -> str:
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
-    from agents.benchmarks import write_table_set
+    from poc_env.agents.benchmarks import write_table_set
 
     args = _parse(argv)
     given = sys.argv[1:] if argv is None else argv
@@ -246,6 +248,6 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
 
 
 if __name__ == "__main__":
-    from agents.benchmarks import run_main
+    from poc_env.agents.benchmarks import run_main
 
     run_main(main)

@@ -5,8 +5,8 @@
 
 Every checkpoint of every run (``checkpoints/step_*.zip`` of ``poc-env train``, kept with
 ``--keep-checkpoints 0``) is flown deterministically on the same ``--episodes`` held-out
-episodes of the run's task (:func:`agents.experiments.evaluate.evaluate`: seeds ``--seed ..``,
-on ``-Random-`` tasks each seed's own prior from the evaluation stream training never draws
+episodes of the run's task (:func:`poc_env.agents.experiments.evaluate.evaluate`: seeds ``--seed
+..``, on ``-Random-`` tasks each seed's own prior from the evaluation stream training never draws
 from), and so is the ``--reference`` policy (default ``de_plan``, the paper's planner). This
 measures the curve on unseen maps, not the training episodes' POSC SB3 logs.
 
@@ -95,7 +95,7 @@ def _recipes(items: list[str]) -> dict[str, list[Path]]:
 
 def run(args: argparse.Namespace) -> tuple[list[dict[str, Any]], list[dict[str, Any]], float]:
     """(rows per run and checkpoint, summary rows per run and recipe, the reference's mean)."""
-    from agents.experiments.evaluate import check_policies, evaluate
+    from poc_env.agents.experiments.evaluate import check_policies, evaluate
     from poc_env.tasks import get_task
 
     recipes = _recipes(args.recipe)
@@ -242,7 +242,7 @@ def plot(rows: list[dict[str, Any]], reference: str, ref: float, path: Path) -> 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
-    from agents.benchmarks import write_table_set
+    from poc_env.agents.benchmarks import write_table_set
 
     args = _parse(argv)
     for name, lo in (("episodes", 1), ("seed", 0), ("workers", 1), ("every", 1)):
@@ -261,6 +261,6 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
 
 
 if __name__ == "__main__":
-    from agents.benchmarks import run_main
+    from poc_env.agents.benchmarks import run_main
 
     run_main(main)

@@ -1,19 +1,21 @@
 """Speed (and optionally quality) of the paper-budget plan: adaptive DE on eq. 26.
 
-    python -m agents.benchmarks.plan [--scenario paper_6_2] [--uavs 6] [--runs 3] [--quality]
+    python -m poc_env.agents.benchmarks.plan [--scenario paper_6_2] [--uavs 6] [--runs 3]
+    [--quality]
 
 One line per figure, on one core (``OMP_NUM_THREADS=1``, ``NUMBA_NUM_THREADS=1``, set before
 numpy is imported), medians of ``--runs`` timed runs after a warm-up that keeps JIT compilation
 out of the figures:
 
-* ``plan_s``: wall time of one plan, :func:`agents.planning.optimizers.adaptive_de` with the paper's
+* ``plan_s``: wall time of one plan, :func:`poc_env.agents.planning.optimizers.adaptive_de` with
+the paper's
   budget (NP = 100, G = 300, F0 = 0.2, CR = 0.1, from the scenario's ``planner`` section) on
   ``PlanObjective`` (6 UAVs, the 30 x 40 map of ``paper_6_2``); target
   0.5 s;
 * ``evals_per_s``: objective evaluations per second inside that plan (``nfev / plan_s``), and
   ``objective_evals_per_s``: the objective alone, one population call of NP individuals;
 * ``scipy_plan_s`` and ``ratio_to_scipy``: :func:`scipy.optimize.differential_evolution` on
-  the same objective with the same budget (via :func:`agents.planning.optimizers.scipy_de`:
+  the same objective with the same budget (via :func:`poc_env.agents.planning.optimizers.scipy_de`:
   ``popsize`` individuals, ``maxiter`` generations, vectorised, no polish) and our time over
   its time.
 
@@ -23,11 +25,12 @@ adaptive DE wins, and the adaptive plans' mean POSC against the physical optimum
 effort (:func:`poc_env.theory.bound.physical_optimum`). It takes a few seconds per seed.
 
 ``--planner allocation`` times only the allocation planner
-(:mod:`agents.planning.allocation`): ``allocation_plan_s`` (target 2 s), its planned POS_C and
-POS_C over the reach-aware bound; ``both`` (default) adds those lines after the DE figures.
+(:mod:`poc_env.agents.planning.allocation`): ``allocation_plan_s`` (target 2 s), its planned POS_C
+and POS_C over the reach-aware bound; ``both`` (default) adds those lines after the DE figures.
 
 ``--preset tuned`` times and scores the tuned DE constants instead of the paper's (same NP, G;
-:func:`agents.planning.optimizers.preset_settings`). ``--sweep NP,G,F0,CR ...`` runs adaptive DE
+:func:`poc_env.agents.planning.optimizers.preset_settings`). ``--sweep NP,G,F0,CR ...`` runs
+adaptive DE
 with each candidate on seeds ``--seed0 .. --seed0 + --seeds - 1`` and prints one table row per
 candidate (mean and sd of the final eq. 26 objective, mean POS_C, median plan time): the sweep
 behind the ``tuned`` preset (docs/PLANNER.md section 4).
@@ -50,8 +53,8 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from agents.planning.objective import PlanObjective  # noqa: E402
-from agents.planning.optimizers import (  # noqa: E402
+from poc_env.agents.planning.objective import PlanObjective  # noqa: E402
+from poc_env.agents.planning.optimizers import (  # noqa: E402
     adaptive_de,
     classic_de,
     preset_settings,
@@ -86,9 +89,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def allocation(sc, uavs: int, runs: int) -> dict[str, float]:
     """``allocation_plan_s`` (median of ``runs`` timed plans after a warm-up), its planned POS_C
-    and POS_C over the reach-aware bound (:func:`agents.planning.allocation.make_allocation_plan`
-    on the scenario's prior)."""
-    from agents.planning.allocation import make_allocation_plan
+    and POS_C over the reach-aware bound
+    (:func:`poc_env.agents.planning.allocation.make_allocation_plan` on the scenario's prior)."""
+    from poc_env.agents.planning.allocation import make_allocation_plan
 
     make_allocation_plan(sc, uavs=uavs)  # warm-up
     times = []

@@ -80,7 +80,7 @@ def bench_parallel(task: str, runs: int, seed: int = 0) -> float:
 
 def bench_sb3(scenario: str, iterations: int) -> float:
     """SB3 PPO agent transitions/s on the pilot recipe (SwarmVecEnv at the heading level)."""
-    from agents.benchmarks.train import bench_train
+    from poc_env.agents.benchmarks.train import bench_train
 
     return bench_train(scenario, "pilot", iterations=iterations)["transitions_per_s"]
 
@@ -93,8 +93,8 @@ def bench_rllib(task: str, runners: int, iterations: int) -> float:
     import torch as th
     from ray.tune.registry import register_env
 
-    from agents.rl.args import TrainArgs
-    from agents.rl.rllib import ENV_NAME, env_kwargs, make_env, ppo_config
+    from poc_env.agents.rl.args import TrainArgs
+    from poc_env.agents.rl.rllib import ENV_NAME, env_kwargs, make_env, ppo_config
     from poc_env.cluster import ray_session
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
@@ -156,6 +156,6 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    from agents.benchmarks import run_main
+    from poc_env.agents.benchmarks import run_main
 
     run_main(main)

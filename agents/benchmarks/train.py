@@ -2,8 +2,8 @@
 
     poc-env bench train [--scenario paper_6_2] [--recipe shared] [--n-envs N] [--iterations 2]
 
-(or ``python -m agents.benchmarks.train ...``). Trains PPO with the default
-:class:`~agents.rl.args.TrainArgs` (the shipped network and hyper-parameters) on one torch
+(or ``python -m poc_env.agents.benchmarks.train ...``). Trains PPO with the default
+:class:`~poc_env.agents.rl.args.TrainArgs` (the shipped network and hyper-parameters) on one torch
 thread: one warm-up iteration (allocations, first-call overheads), then ``--iterations`` timed
 ones. Prints the agent transitions per second (a central joint step counts once per UAV) and
 the shares of wall time spent in the environment (``VecEnv.step_wait``: simulator,
@@ -20,8 +20,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from agents.rl.args import RECIPES, TrainArgs
-from agents.rl.train import make_env, make_model, seed_everything
+from poc_env.agents.rl.args import RECIPES, TrainArgs
+from poc_env.agents.rl.train import make_env, make_model, seed_everything
 
 
 def bench_train(

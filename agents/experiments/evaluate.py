@@ -9,7 +9,7 @@ physical optimum for the swarm's largest effort (every UAV sweeping at ``max_spe
 as the environment lets it sense, until the endurance T or the horizon), and the reach-aware
 bound (the same UAVs must first fly from their airfields to the cells, at most at ``max_speed``).
 The normalised score is POSC / reach-aware bound, per episode and averaged (``normalised``).
-Policies are named as in :mod:`agents.policies.registry` (``ppo:PATH`` included).
+Policies are named as in :mod:`poc_env.agents.policies.registry` (``ppo:PATH`` included).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 
 import poc_env.limits as limits
-from agents.experiments.pool import process_pool, run_jobs  # noqa: F401 (process_pool: API)
-from agents.policies.registry import make_policy
+from poc_env.agents.experiments.pool import process_pool, run_jobs  # noqa: F401 (process_pool: API)
+from poc_env.agents.policies.registry import make_policy
 from poc_env.errors import ConfigError, as_int
 from poc_env.io import csv_text
 
@@ -92,8 +92,8 @@ def run_episode(
     map_file: str | None = None,
     random_priors: bool = False,
 ) -> Episode:
-    """One episode of ``policy`` (a name of :func:`agents.policies.registry.registered`) on a
-    fresh env reset with ``seed`` (and, with ``random_priors``, the prior :func:`episode_prior`
+    """One episode of ``policy`` (a name of :func:`poc_env.agents.policies.registry.registered`) on
+    a fresh env reset with ``seed`` (and, with ``random_priors``, the prior :func:`episode_prior`
     of ``seed``)."""
     from poc_env.envs.parallel import UAVSearchParallelEnv
 

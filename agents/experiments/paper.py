@@ -29,7 +29,7 @@ three points per curve) that runs in about a minute and is what the test suite r
 Where an experiment runs several seeds per setting, the table shows the mean with a 95 %
 interval and the best plan (what a planner would fly: the best of its restarts).
 ``--preset tuned`` gives every plan the measured DE constants instead of the paper's
-(:data:`agents.planning.optimizers.TUNED_DE`, same NP and G; docs/PLANNER.md section 4);
+(:data:`poc_env.agents.planning.optimizers.TUNED_DE`, same NP and G; docs/PLANNER.md section 4);
 ``paper`` (the default) is the paper's settings. ``table7``'s ``de_plan`` policy keeps its own.
 
 Seeds: experiment ``NAME`` with ``--seed S`` uses optimiser seeds ``S .. S + seeds - 1``
@@ -109,7 +109,8 @@ class Budget:
     seeds: int
     episodes: int
     quick: bool
-    #: DE settings preset of every plan (:func:`agents.planning.optimizers.preset_settings`).
+    #: DE settings preset of every plan
+    # (:func:`poc_env.agents.planning.optimizers.preset_settings`).
     preset: str = "paper"
 
     def np_g(self, sc: Scenario) -> tuple[int, int]:
@@ -149,7 +150,7 @@ class Runner:
         self._pool: ProcessPoolExecutor | None = None
 
     def map(self, fn: Callable[[Any], Any], jobs: Sequence[Any], desc: str) -> list[Any]:
-        from agents.experiments.pool import process_pool, run_jobs
+        from poc_env.agents.experiments.pool import process_pool, run_jobs
 
         if self.workers > 1 and len(jobs) > 1 and self._pool is None:
             self._pool = process_pool(self.workers)
@@ -170,7 +171,7 @@ class Runner:
 # -- jobs (module level: they run in worker processes) ----------------------------------------
 def _plan_job(job: tuple[Scenario, dict[str, Any]]) -> dict[str, Any]:
     """Plan ``scenario`` with ``make_plan(**kwargs)``; the figures the experiments need."""
-    from agents.planning.planner import make_plan
+    from poc_env.agents.planning.planner import make_plan
 
     sc, kw = job
     plan = make_plan(sc, **kw)
@@ -220,8 +221,8 @@ def _save(fig, path: Path) -> Path:
 
 # -- §6.1: region surveys -------------------------------------------------------------------
 def _survey(name: str, regions: str, paper, out: Path) -> Result:
-    from agents.planning.region_planner import optimise_regions
-    from agents.planning.survey import load_regions, run_survey
+    from poc_env.agents.planning.region_planner import optimise_regions
+    from poc_env.agents.planning.survey import load_regions, run_survey
     from poc_env.theory.probability_map import build_prior
     from poc_env.viz.plots import plot_survey
 
@@ -294,7 +295,7 @@ def exp_table5(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
 
 # -- §6.2: the time-limited plan --------------------------------------------------------------
 def exp_table6(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
-    from agents.planning.planner import plan_table, plot_plan, write_plan
+    from poc_env.agents.planning.planner import plan_table, plot_plan, write_plan
     from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario("paper_6_2")
@@ -354,7 +355,7 @@ def exp_table6(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
 
 
 def exp_table7(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
-    from agents.experiments.evaluate import (
+    from poc_env.agents.experiments.evaluate import (
         Evaluation,
         _run,
         effort_bound,
@@ -494,7 +495,7 @@ def exp_fig22(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
 
 
 def _de_constants(sc: Scenario, preset: str) -> dict[str, float]:
-    from agents.planning.optimizers import preset_settings
+    from poc_env.agents.planning.optimizers import preset_settings
 
     pl = preset_settings(preset, sc.planner)
     return {"F0": pl["f0"], "CR": pl["cr"]}
@@ -580,7 +581,7 @@ def grow_plan(x_small, small, large, rng: np.random.Generator) -> np.ndarray:
     rule credits the shared cells once, so it adds nothing yet), or gets genes drawn uniformly
     within the bounds if its airfield had none. The warm start therefore scores what the
     smaller fleet had, and DE's greedy selection never loses it."""
-    from agents.planning.objective import PARAMS_PER_UAV as K
+    from poc_env.agents.planning.objective import PARAMS_PER_UAV as K
 
     lo, hi = np.asarray(large.bounds, dtype=float).T
     out = rng.uniform(lo, hi)
@@ -599,7 +600,7 @@ def grow_plan(x_small, small, large, rng: np.random.Generator) -> np.ndarray:
 
 def _fleet_job(job: tuple[Scenario, dict[str, Any], Sequence[int]]) -> list[dict[str, Any]]:
     """Plans for fleets of ``sizes`` UAVs with one seed, each warm-started from the last."""
-    from agents.planning.objective import PlanObjective
+    from poc_env.agents.planning.objective import PlanObjective
     from poc_env.theory.probability_map import build_prior
 
     sc, kw, sizes = job
@@ -633,7 +634,7 @@ def largest_area_for(pos: float, effort_m2: float, law: str = "inverse_cube") ->
 
 
 def exp_table8(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
-    from agents.experiments.evaluate import reach_effort_bound
+    from poc_env.agents.experiments.evaluate import reach_effort_bound
 
     sc = load_scenario("paper_6_2")
     popsize, maxiter = budget.np_g(sc)
@@ -778,10 +779,10 @@ def run_experiment(
 ) -> list[Result]:
     """Run experiment ``name`` (or ``all``); write and return its results.
 
-    ``preset`` (``paper`` or ``tuned``, :func:`agents.planning.optimizers.preset_settings`):
+    ``preset`` (``paper`` or ``tuned``, :func:`poc_env.agents.planning.optimizers.preset_settings`):
     the DE settings of every plan the experiments make.
     """
-    from agents.planning.optimizers import PRESETS
+    from poc_env.agents.planning.optimizers import PRESETS
 
     if name != "all" and name not in EXPERIMENTS:
         raise ConfigError("experiment", name, "one of " + ", ".join([*EXPERIMENTS, "all"]))

@@ -1,7 +1,7 @@
 """The allocation planner: flyable tracks from the reach-aware optimal allocation of effort.
 
 ``poc-env plan --planner allocation`` and the ``allocation_plan`` policy
-(:mod:`agents.policies.allocation`). Steps of :func:`make_allocation_plan`:
+(:mod:`poc_env.agents.policies.allocation`). Steps of :func:`make_allocation_plan`:
 
 1. **Allocation.** :func:`poc_env.theory.bound.reach_optimum` with the plan's own limits: each
    UAV sweeps ``eta W v_s`` m^2/s (``v_s`` the search speed, ``eta`` the share of pattern time
@@ -33,8 +33,8 @@
    not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and each ``K`` and the plan keeps
    the one of highest planned POS (lines no UAV can fit are left unflown).
 
-The plan is the same schema-2 dict as :func:`agents.planning.planner.make_plan` (see
-:mod:`agents.planning.export`): per UAV the ``rectangle`` is ``null`` (a route plan has no
+The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
+:mod:`poc_env.agents.planning.export`): per UAV the ``rectangle`` is ``null`` (a route plan has no
 decision rectangle), ``areas_m`` the ground its search lines sweep (each line ``spacing_m``
 wide, for maps and exports) and ``spacing_m`` the finest line spacing it flies
 (``lines_along`` says whether the lines run along x or y); only
@@ -56,8 +56,8 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from agents.planning.export import SCHEMA
-from agents.planning.refine import (
+from poc_env.agents.planning.export import SCHEMA
+from poc_env.agents.planning.refine import (
     Airspace,
     leg_coverage,
     refine_routes,
@@ -86,7 +86,7 @@ SPEED = "max"
 #: check: the follower flies the planned route, not the planned timing, to the second.
 SEPARATION_MARGIN = 2.0
 RANGE_MARGIN = 0.9
-#: passes of :func:`agents.planning.refine.refine_routes` over the chosen routes (0: none).
+#: passes of :func:`poc_env.agents.planning.refine.refine_routes` over the chosen routes (0: none).
 REFINE = 4
 
 
@@ -347,7 +347,7 @@ def _swept_areas(lines: np.ndarray, spacing: float) -> list[list[list[float]]]:
 
 
 def _flight_time(wps, takeoff, landing, sc: Scenario, v: Speeds, heading0=None) -> float:
-    """Eq. 17 time of a route (:func:`agents.planning.refine.route_time`: out at ``v.out``,
+    """Eq. 17 time of a route (:func:`poc_env.agents.planning.refine.route_time`: out at ``v.out``,
     on the route at ``v.line``, home at ``v.home``, turns at the maximum turn rate)."""
     if not len(wps):
         return 0.0
@@ -357,7 +357,7 @@ def _flight_time(wps, takeoff, landing, sc: Scenario, v: Speeds, heading0=None) 
 
 def _trim(routes, pieces, takeoff, landing, sc: Scenario, v: Speeds, headings) -> None:
     """Drop each UAV's last search lines until its route (dog-leg included) is flown whole
-    under eq. 18 (:func:`agents.planning.refine.route_fits`)."""
+    under eq. 18 (:func:`poc_env.agents.planning.refine.route_fits`)."""
     u = sc.uav
     for k, idx in enumerate(pieces):
         while idx and not route_fits(
@@ -383,7 +383,7 @@ def _reserve(sc: Scenario) -> float:
 
 def _path_coverage(path, grid: Grid, w: float) -> np.ndarray:
     """Coverage W x (length of the polyline ``path`` inside each cell) / area (eq. 10 per cell),
-    every leg counted (transit too; :func:`agents.planning.refine.leg_coverage`)."""
+    every leg counted (transit too; :func:`poc_env.agents.planning.refine.leg_coverage`)."""
     pts = np.asarray(path, dtype=float).reshape(-1, 2)
     if len(pts) < 2:
         return np.zeros(grid.shape)
@@ -404,7 +404,7 @@ def make_allocation_plan(
     crs: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
-    (a :func:`agents.planning.export.make_crs` record) is recorded for exports.
+    (a :func:`poc_env.agents.planning.export.make_crs` record) is recorded for exports.
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -580,7 +580,7 @@ def make_allocation_plan(
         )
     runtime = time.perf_counter() - t0
     rb = reach_bound(sc, prior).upper if reason is None or prior.sum() > 0 else 0.0
-    from agents.planning.planner import _geography
+    from poc_env.agents.planning.planner import _geography
 
     geo = _geography(sc, prior, crs)
     geo["flight"] = {  # the speeds this plan is flown at (plan_speeds)

@@ -41,8 +41,8 @@ Schema 2 adds (all optional, checked when present):
 
 - per UAV ``flown_rectangle`` {``center_m``, ``line_length_m``, ``strip_width_m``,
   ``lines_theta_rad``, ``rule``}: the strip the lines actually sweep
-  (:func:`agents.planning.objective.flown_rectangle`). :data:`RECTANGLE_RULE` (also written as
-  the top-level ``rectangle_rule``) says how to fly it: lines along ``lines_theta_rad`` at
+  (:func:`poc_env.agents.planning.objective.flown_rectangle`). :data:`RECTANGLE_RULE` (also written
+  as the top-level ``rectangle_rule``) says how to fly it: lines along ``lines_theta_rad`` at
   spacing ``spacing_m``, ``d/2`` inside each long edge, ``strip_width_m / spacing_m`` lines.
   Re-flying it by that rule (or by the usual ``ceil(E/d)`` lawnmower, which coincides on it)
   gives the plan's own eq. 17 flight time; re-flying the decision rectangle the usual way does
@@ -656,8 +656,8 @@ def kml(
     :func:`geojson` and the QGC mission (see docs/EXPORT.md for the caveat on home vs ground).
     ``ground_overlay`` {``href``, ``box`` (south, west, north, east) degrees, ``note``}: the
     prior as a GroundOverlay (an image evenly spaced in latitude and longitude, see
-    :func:`agents.planning.report.warp_prior`) in its own folder under everything else; without
-    one, ``note`` (if any) becomes the document's description.
+    :func:`poc_env.agents.planning.report.warp_prior`) in its own folder under everything else;
+    without one, ``note`` (if any) becomes the document's description.
     """
     alt, ground = _altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     mode = _ALT_REF[altitude_ref][2]
@@ -983,9 +983,9 @@ def export_plan(
     ``altitude_ref`` (``home`` or ``amsl``; ``field_elevation_m`` is the fields' AMSL height).
     QGC missions that would breach their own geofence (a point outside the operating area, a
     leg through a no-fly zone) are refused; ``geofence=False`` leaves the inclusion fence out.
-    ``html`` writes the map report (:mod:`agents.planning.report`); its prior overlay is
+    ``html`` writes the map report (:mod:`poc_env.agents.planning.report`); its prior overlay is
     ``prior`` (an array of the scenario grid's shape or a map file) or, by default, the plan's
-    scenario prior rebuilt by :func:`agents.planning.report.plan_prior`.
+    scenario prior rebuilt by :func:`poc_env.agents.planning.report.plan_prior`.
     """
     if fmt not in FORMATS:
         raise ConfigError("format", fmt, "one of " + ", ".join(FORMATS))
@@ -1007,7 +1007,7 @@ def export_plan(
             write_text_atomic(out / f"{stem}.geojson", json.dumps(doc, indent=1, allow_nan=False))
         ]
     if fmt == "kml":
-        from agents.planning.report import plan_prior, png_bytes, warp_prior
+        from poc_env.agents.planning.report import plan_prior, png_bytes, warp_prior
 
         overlay, note = plan_prior(plan, plan_path, prior)
         written = []
@@ -1020,7 +1020,7 @@ def export_plan(
         text = kml(plan, crs, alt, altitude_ref, ground, ground_overlay=g)
         return [write_text_atomic(out / f"{stem}.kml", text), *written]
     if fmt == "html":
-        from agents.planning.report import html_report, plan_prior
+        from poc_env.agents.planning.report import html_report, plan_prior
 
         overlay, note = plan_prior(plan, plan_path, prior)
         page = html_report(plan, crs, overlay, note, alt, altitude_ref, ground)

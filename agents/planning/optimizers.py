@@ -353,7 +353,8 @@ def adaptive_de(
         ``callback(intermediate_result)`` after every generation; return True to stop.
     staged : bool or list of index lists, default False
         The step-by-step variant of §4.5. ``True`` (for the 6n encoding of
-        :mod:`agents.planning.objective`): three stages that evolve first every UAV's position
+        :mod:`poc_env.agents.planning.objective`): three stages that evolve first every UAV's
+        position
         ``(x_c, y_c)``, then its size ``(l, w)``, then its angle and spacing ``(theta, d)``;
         a list of index lists gives custom stages. The generations are split evenly between
         the stages (the first ``maxiter % k`` stages get one more). During a stage, mutation
@@ -400,7 +401,7 @@ def adaptive_de(
     Examples
     --------
     >>> import numpy as np
-    >>> from agents.planning.optimizers import adaptive_de
+    >>> from poc_env.agents.planning.optimizers import adaptive_de
     >>> sphere = lambda X: np.sum((X - 1.0) ** 2, axis=1)
     >>> res = adaptive_de(sphere, [(-5, 5)] * 4, popsize=30, maxiter=200, f0=0.3, cr=0.9, rng=1)
     >>> bool(res.fun < 1e-6), res.nfev
@@ -539,7 +540,7 @@ def chaotic_abc(
     Examples
     --------
     >>> import numpy as np
-    >>> from agents.planning.optimizers import chaotic_abc
+    >>> from poc_env.agents.planning.optimizers import chaotic_abc
     >>> res = chaotic_abc(lambda X: np.sum(X**2, axis=1), [(-5, 5)] * 3, popsize=20,
     ...                   maxiter=100, rng=0)
     >>> bool(res.fun < 1e-2)
@@ -688,7 +689,7 @@ def grouped_pso(
     Examples
     --------
     >>> import numpy as np
-    >>> from agents.planning.optimizers import grouped_pso
+    >>> from poc_env.agents.planning.optimizers import grouped_pso
     >>> res = grouped_pso(lambda X: np.sum(X**2, axis=1), [(-5, 5)] * 3, popsize=20,
     ...                   maxiter=100, rng=0)
     >>> bool(res.fun < 1e-2)
@@ -779,7 +780,7 @@ def scipy_de(
     Examples
     --------
     >>> import numpy as np
-    >>> from agents.planning.optimizers import scipy_de
+    >>> from poc_env.agents.planning.optimizers import scipy_de
     >>> res = scipy_de(lambda X: np.sum(X**2, axis=1), [(-5, 5)] * 3, popsize=20,
     ...                maxiter=100, rng=0)
     >>> bool(res.fun < 1e-6), res.nfev
@@ -868,7 +869,7 @@ def cmaes(
     Examples
     --------
     >>> import numpy as np
-    >>> from agents.planning.optimizers import cmaes
+    >>> from poc_env.agents.planning.optimizers import cmaes
     >>> res = cmaes(lambda X: np.sum(X**2, axis=1), [(-5, 5)] * 3, popsize=10, maxiter=100,
     ...             rng=0)
     >>> bool(res.fun < 1e-6)

@@ -1,18 +1,21 @@
 """The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 2) and a figure.
 
-The plan also records (optional fields, see :mod:`agents.planning.export`) the UAV's
+The plan also records (optional fields, see :mod:`poc_env.agents.planning.export`) the UAV's
 speeds and altitudes (``flight``), the operating area of eq. 20 (``operating_area_m``, the
 bounding box of the grid and the airfields grown by ``episode.boundary_margin_km``, as in
 :func:`poc_env.sim.core.make_params`), the no-fly zones and the airfields, and, when
 ``origin_deg`` is given, its coordinate reference system (``crs``: azimuthal equidistant at
 that origin by default, UTM with ``projection="utm"``).
 
-:func:`make_plan` runs an optimiser of :mod:`~agents.planning.optimizers` (default the paper's
+:func:`make_plan` runs an optimiser of :mod:`~poc_env.agents.planning.optimizers` (default the
+paper's
 adaptive DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section)
-on :class:`~agents.planning.objective.PlanObjective` and returns the plan as the schema-2 dict
-documented in :mod:`agents.planning.export` (every field there, plus a few extras such as the
-convergence history). The ``de_plan`` policy (:mod:`agents.policies.de_plan`) makes such a plan
-at the start of every episode and flies it.
+on :class:`~poc_env.agents.planning.objective.PlanObjective` and returns the plan as the schema-2
+dict
+documented in :mod:`poc_env.agents.planning.export` (every field there, plus a few extras such as
+the
+convergence history). The ``de_plan`` policy (:mod:`poc_env.agents.policies.de_plan`) makes such a
+plan at the start of every episode and flies it.
 """
 
 from __future__ import annotations
@@ -26,9 +29,9 @@ from typing import Any
 import numpy as np
 
 import poc_env.limits as limits
-from agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
-from agents.planning.objective import PlanObjective
-from agents.planning.optimizers import get_optimizer, preset_settings
+from poc_env.agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
+from poc_env.agents.planning.objective import PlanObjective
+from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.io import write_text_atomic
@@ -58,20 +61,20 @@ def make_plan(
     """Optimise the plan and return it as a schema-2 dict (see the module docstring).
 
     ``planner``: ``de`` (this optimiser-based plan) or ``allocation``
-    (:func:`agents.planning.allocation.make_allocation_plan`, routes from the reach-aware
+    (:func:`poc_env.agents.planning.allocation.make_allocation_plan`, routes from the reach-aware
     optimal allocation; the optimiser arguments do not apply to it). ``speed`` (``max`` or
     ``paper``) and ``refine`` (passes of the waypoint refinement, 0 for straight lines only) are
     the allocation planner's (None: its defaults); the DE plan refuses them.
 
-    ``preset`` (:func:`agents.planning.optimizers.preset_settings`): ``paper`` runs the
+    ``preset`` (:func:`poc_env.agents.planning.optimizers.preset_settings`): ``paper`` runs the
     scenario's ``planner`` settings (the paper's), ``tuned`` the same budget with the measured
-    DE constants :data:`~agents.planning.optimizers.TUNED_DE` (F0, CR; DE optimisers only);
+    DE constants :data:`~poc_env.agents.planning.optimizers.TUNED_DE` (F0, CR; DE optimisers only);
     ``popsize`` and ``maxiter`` override the preset's budget. Recorded in
     ``optimizer.settings.preset``.
 
     ``origin_deg``: (lat, lon) of the map's (0, 0); with it the plan records its ``crs``
     (``projection`` ``aeqd`` or ``utm`` in UTM ``zone``, see
-    :func:`agents.planning.export.make_crs`) and exports need no ``--origin``.
+    :func:`poc_env.agents.planning.export.make_crs`) and exports need no ``--origin``.
 
     ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
     population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
@@ -80,7 +83,7 @@ def make_plan(
         raise ConfigError("planner", planner, "de or allocation")
     crs = _scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
     if planner == "allocation":
-        from agents.planning.allocation import REFINE, SPEED, make_allocation_plan
+        from poc_env.agents.planning.allocation import REFINE, SPEED, make_allocation_plan
 
         return make_allocation_plan(
             scenario,
@@ -281,7 +284,7 @@ def write_plan(plan: dict[str, Any], path: str | os.PathLike[str]) -> Path:
 def plot_plan(plan: dict[str, Any], scenario: Scenario, prior, path) -> Path:
     """Fig. 21 analog: prior, search areas (the flown strips, :func:`search_rings`), tracks and
     airfields."""
-    from agents.planning.export import search_rings
+    from poc_env.agents.planning.export import search_rings
     from poc_env.theory.probability_map import Grid
     from poc_env.viz.plots import _figure, draw_airfields, draw_prior, save_figure_atomic
 

@@ -3,7 +3,7 @@ scores a flight.
 
 :func:`refine_routes` takes each UAV's waypoints (between its take-off and landing fields) and
 improves the planned POS of the whole swarm by hill climbing on single waypoints. The score is
-the planned POS of :mod:`agents.planning.allocation`: every leg of every UAV's flight path,
+the planned POS of :mod:`poc_env.agents.planning.allocation`: every leg of every UAV's flight path,
 transit included, adds coverage ``W x (length inside the cell) / area`` to the cells it crosses
 (eq. 10 per cell) and the swarm finds ``sum_j p_j POD(C_j)`` (eq. 14-16 with the detection
 law's POD). Moves, for waypoint ``i`` of UAV ``k`` in turn:

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.planning.survey import RegionPlan, RegionSpec, _airfields_for, load_regions
+from poc_env.agents.planning.survey import RegionPlan, RegionSpec, _airfields_for, load_regions
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.timing import flight_time_s

@@ -1,6 +1,7 @@
 """The HTML map report of a plan: one self-contained page a planning officer opens offline.
 
-``poc-env export plan.json --format html`` (:func:`agents.planning.export.export_plan`) writes
+``poc-env export plan.json --format html`` (:func:`poc_env.agents.planning.export.export_plan`)
+writes
 ``<stem>.html``: Leaflet 1.9.4 (vendored in ``assets/leaflet``, BSD-2-Clause, inlined with its
 CSS and images) draws
 
@@ -9,7 +10,7 @@ CSS and images) draws
 - the plan's prior probability of containment as a coloured image overlay (:func:`warp_prior`),
 - per UAV its route in one colour (transit legs dashed, the search pattern solid, the landing
   approach dotted), its search strips, rectangles or areas
-  (:func:`~agents.planning.export.search_rings`),
+  (:func:`~poc_env.agents.planning.export.search_rings`),
 - the airfields (named markers), the no-fly zones (red polygons) and the operating area,
 
 with a layer control, a legend and a per-UAV table (flight time, distances, POD, POC, POS,
@@ -34,7 +35,7 @@ Warping: the grid lives in the plan's projected CRS; a web map stretches an imag
 Web Mercator (Leaflet ``imageOverlay``), Google Earth linearly in latitude and longitude (KML
 ``GroundOverlay``). :func:`warp_prior` therefore computes, for each output pixel centre, its
 latitude and longitude (Mercator-spaced or evenly spaced rows), projects it into local metres
-with :func:`~agents.planning.export.to_local` (pyproj) and takes the value of the grid cell
+with :func:`~poc_env.agents.planning.export.to_local` (pyproj) and takes the value of the grid cell
 holding it (nearest cell, no interpolation: each pixel shows one cell's POC). Pixels outside the
 grid are transparent. The colour is a fixed colormap (:data:`COLORMAP`, YlOrRd's five anchors,
 linear between them) of the cell value over the grid's largest cell value; the alpha rises from
@@ -58,7 +59,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.planning.export import (
+from poc_env.agents.planning.export import (
     _crs_text,
     _flight,
     _overlays,

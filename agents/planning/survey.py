@@ -379,8 +379,8 @@ def survey_plan(
     projection: str = "aeqd",
     zone: int | None = None,
 ) -> dict[str, Any]:
-    """A survey as a schema-2 plan (:mod:`agents.planning.export`), so that ``poc-env export``
-    writes its missions, KML, GeoJSON and map report.
+    """A survey as a schema-2 plan (:mod:`poc_env.agents.planning.export`), so that ``poc-env
+    export`` writes its missions, KML, GeoJSON and map report.
 
     Per UAV: ``rectangle`` null, ``waypoints_m`` the region's pattern (what the survey timed:
     take-off field, the pattern, landing field), ``areas_m`` the region's outline (a circle as
@@ -390,10 +390,10 @@ def survey_plan(
     ``upper_bound`` its physical optimum for the same effort, ``optimizer`` {``name``:
     ``survey``, ``settings`` {``regions``}}, and the plan's geography (flight, operating area,
     no-fly zones, airfields, bounds and, with ``origin_deg``, the ``crs``) as
-    :func:`agents.planning.planner.make_plan` records it.
+    :func:`poc_env.agents.planning.planner.make_plan` records it.
     """
-    from agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
-    from agents.planning.planner import _geography
+    from poc_env.agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
+    from poc_env.agents.planning.planner import _geography
 
     crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     uavs = []

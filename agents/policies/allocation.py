@@ -1,7 +1,7 @@
 """``allocation_plan``: the allocation planner's routes made for each episode, then flown.
 
 At the start of every episode the policy plans with
-:func:`agents.planning.allocation.make_allocation_plan` on the environment's prior (the fine
+:func:`poc_env.agents.planning.allocation.make_allocation_plan` on the environment's prior (the fine
 belief summed to the grid's cells) and flies each UAV's waypoints with the waypoint follower
 (transit at cruise speed, the route at search speed, home on eq. 18), as ``de_plan`` does.
 """
@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.planning.allocation import LEVELS, MARGIN, REFINE, SPEED, make_allocation_plan
-from agents.policies.base import PlanPolicy
+from poc_env.agents.planning.allocation import LEVELS, MARGIN, REFINE, SPEED, make_allocation_plan
+from poc_env.agents.policies.base import PlanPolicy
 
 
 class AllocationPlanPolicy(PlanPolicy):

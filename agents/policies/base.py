@@ -4,7 +4,7 @@ A policy is reset at the start of every episode with the environment (its scenar
 agent names) and the episode's seed, then maps the per-agent observation dict to an action dict
 (``predict`` mirrors SB3's signature: ``(observations, state, episode_start, deterministic) ->
 (actions, state)``). The evaluator scores a lawnmower, the DE planner and a PPO checkpoint the
-same way through this interface; :mod:`agents.policies.registry` makes them by name.
+same way through this interface; :mod:`poc_env.agents.policies.registry` makes them by name.
 """
 
 from __future__ import annotations

@@ -1,12 +1,13 @@
 """``de_plan``: the paper's §6.2 plan (eq. 26, adaptive DE) made for each episode, then flown.
 
-At the start of every episode the policy plans with :func:`agents.planning.planner.make_plan`
+At the start of every episode the policy plans with
+:func:`poc_env.agents.planning.planner.make_plan`
 on the environment's prior (the fine belief summed to the grid's cells) with the episode's seed,
 and flies each UAV's waypoints with the waypoint follower, which also brings it home to land.
 ``popsize`` and ``maxiter`` default to the scenario's ``planner`` section (NP = 100, G = 300).
 
 ``optimizer_plan:NAME`` is the same policy with another optimiser of
-:data:`agents.planning.optimizers.OPTIMIZERS` (``optimizer_plan:cmaes``, ...) on the same
+:data:`poc_env.agents.planning.optimizers.OPTIMIZERS` (``optimizer_plan:cmaes``, ...) on the same
 objective and budget, so every optimiser's plan can be flown on the same episodes.
 """
 
@@ -16,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from agents.planning.optimizers import get_optimizer
-from agents.planning.planner import make_plan
-from agents.policies.base import PlanPolicy
+from poc_env.agents.planning.optimizers import get_optimizer
+from poc_env.agents.planning.planner import make_plan
+from poc_env.agents.policies.base import PlanPolicy
 
 
 class DEPlanPolicy(PlanPolicy):

@@ -8,7 +8,7 @@ planning approximation of the cell average).
 
 Each UAV chooses among ``K`` heading changes (while no choice would sweep any POC, e.g. on the
 way from the airfield, it flies towards ``greedy_bayes``'s cell,
-:func:`agents.policies.greedy.best_cell`); its utility is its marginal expected POS over a
+:func:`poc_env.agents.policies.greedy.best_cell`); its utility is its marginal expected POS over a
 ``lookahead``-step straight flight, the POS of the swarm's choices minus the POS without its own
 (a "wonderful life" utility, so the game is a potential game whose potential is the swarm's
 expected POS). Log-linear learning: in each of ``rounds`` rounds one UAV drawn by the policy's
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.policies.base import Policy
-from agents.policies.greedy import best_cell
+from poc_env.agents.policies.base import Policy
+from poc_env.agents.policies.greedy import best_cell
 from poc_env.sim.autopilot import go_home, must_return, steer
 from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
 from poc_env.theory.search_theory import segment_pod

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.policies.base import Policy
+from poc_env.agents.policies.base import Policy
 from poc_env.sim.autopilot import go_home, must_return, steer
 from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
 

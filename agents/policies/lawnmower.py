@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from shapely.geometry import box
 
-from agents.policies.base import Policy
+from poc_env.agents.policies.base import Policy
 from poc_env.sim.autopilot import WaypointFollower
 from poc_env.sim.core import Params
 from poc_env.theory.patterns import parallel_search

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.policies.base import Policy
+from poc_env.agents.policies.base import Policy
 from poc_env.sim.control import to_increments
 from poc_env.sim.observations import decode_vector, split_observation
 

@@ -8,7 +8,8 @@ belief (the POC raster of the observations; the UAVs' detections combined as
 ``1 - prod(1 - p_i)``, eq. 12-14, with the environment's detection law at cell centres), minus
 an exterior penalty (eq. 26 style) for predicted separation below d_s (eq. 21), UAVs with fewer
 than the required neighbours in communication range (eq. 24) and positions outside the
-operating area (eq. 20). The optimiser is :func:`agents.planning.optimizers.adaptive_de` (eq. 27-32)
+operating area (eq. 20). The optimiser is :func:`poc_env.agents.planning.optimizers.adaptive_de`
+(eq. 27-32)
 with a small budget (``popsize`` x ``maxiter`` per step), seeded from the episode's seed. Outside
 the search area (on the way from the airfield) a UAV flies towards ``greedy_bayes``'s cell;
 UAVs return to land with the follower's rule.
@@ -20,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from agents.planning.optimizers import adaptive_de
-from agents.policies.base import Policy
-from agents.policies.greedy import best_cell
+from poc_env.agents.planning.optimizers import adaptive_de
+from poc_env.agents.policies.base import Policy
+from poc_env.agents.policies.greedy import best_cell
 from poc_env.sim.autopilot import go_home, must_return, steer
 from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
 from poc_env.theory.search_theory import segment_pod

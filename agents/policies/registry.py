@@ -3,17 +3,18 @@
 The registry works as Gymnasium's environment registry does: a name maps to an entry point, a
 ``"module:attribute"`` string naming a factory (usually the policy class) that is imported only
 when a policy of that name is made. So this module imports no policy module, and the policies
-layer never imports the RL layer: ``ppo`` points at a class of :mod:`agents.rl` by name only.
+layer never imports the RL layer: ``ppo`` points at a class of :mod:`poc_env.agents.rl` by name
+only.
 
 A policy registered with an ``argument`` is spelled ``name:VALUE``, and ``VALUE`` is passed to
 the factory as that keyword: ``ppo:PATH`` makes ``PPOPolicy(path=PATH)`` (a ``.zip`` or a run
 folder; model files are pickle-based, load only trusted files).
 
-Adding a policy touches two files: its module (a :class:`~agents.policies.base.Policy`
+Adding a policy touches two files: its module (a :class:`~poc_env.agents.policies.base.Policy`
 subclass) and the :func:`register` call at the end of this one. ``poc-env evaluate``,
 ``poc-env render --policy`` and the Python API all make their policies here::
 
-    from agents.policies import make_policy, registered
+    from poc_env.agents.policies import make_policy, registered
     registered()                      # ('de_plan', ..., 'random', 'ppo:PATH')
     policy = make_policy("de_plan", popsize=16, maxiter=20)
     policy.reset(env, seed=0)
@@ -29,7 +30,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from agents.policies.base import Policy
+from poc_env.agents.policies.base import Policy
 from poc_env.errors import ConfigError
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*$")
@@ -88,7 +89,7 @@ class PolicySpec:
             raise ConfigError(
                 f"policies[{self.name}].entry_point",
                 self.entry_point,
-                "a factory returning an agents.policies.base.Policy",
+                "a factory returning an poc_env.agents.policies.base.Policy",
             )
         return policy
 
@@ -170,31 +171,31 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
 REGISTRY: Mapping[str, PolicySpec] = MappingProxyType(_REGISTRY)
 
 # -- the policies of poc-env -----------------------------------------------------------------
-register("random", "agents.policies.random:RandomPolicy")
-register("random_heading", "agents.policies.random:RandomHeadingPolicy")
-register("random_waypoint", "agents.policies.random:RandomWaypointPolicy")
-register("lawnmower", "agents.policies.lawnmower:LawnmowerPolicy")
-register("greedy_bayes", "agents.policies.greedy:GreedyBayesPolicy")
-register("potential_game", "agents.policies.game:PotentialGamePolicy")
-register("de_receding", "agents.policies.receding:DERecedingPolicy")
-register("de_plan", "agents.policies.de_plan:DEPlanPolicy")
-register("allocation_plan", "agents.policies.allocation:AllocationPlanPolicy")
+register("random", "poc_env.agents.policies.random:RandomPolicy")
+register("random_heading", "poc_env.agents.policies.random:RandomHeadingPolicy")
+register("random_waypoint", "poc_env.agents.policies.random:RandomWaypointPolicy")
+register("lawnmower", "poc_env.agents.policies.lawnmower:LawnmowerPolicy")
+register("greedy_bayes", "poc_env.agents.policies.greedy:GreedyBayesPolicy")
+register("potential_game", "poc_env.agents.policies.game:PotentialGamePolicy")
+register("de_receding", "poc_env.agents.policies.receding:DERecedingPolicy")
+register("de_plan", "poc_env.agents.policies.de_plan:DEPlanPolicy")
+register("allocation_plan", "poc_env.agents.policies.allocation:AllocationPlanPolicy")
 register(
     "optimizer_plan",
-    "agents.policies.de_plan:DEPlanPolicy",
+    "poc_env.agents.policies.de_plan:DEPlanPolicy",
     argument="optimizer",
     argument_help="an optimiser of the eq. 26 plan (adaptive_de, classic_de, chaotic_abc, "
     "grouped_pso, scipy_de, cmaes)",
 )
 register(
     "ppo",
-    "agents.rl.policy:PPOPolicy",
+    "poc_env.agents.rl.policy:PPOPolicy",
     argument="path",
     argument_help="a checkpoint path (a .zip or a run folder)",
 )
 register(
     "rllib",
-    "agents.rl.rllib:RLlibPolicy",
+    "poc_env.agents.rl.rllib:RLlibPolicy",
     argument="path",
     argument_help="a run folder of poc-env train --engine rllib",
 )

@@ -1,10 +1,10 @@
 """Reinforcement learning with stable-baselines3 PPO (the ``rl`` extra).
 
-``args``        :class:`~agents.rl.args.TrainArgs`, the options of ``poc-env train``
-``train``       env and model factories, :func:`~agents.rl.train.train` (the entry point)
+``args``        :class:`~poc_env.agents.rl.args.TrainArgs`, the options of ``poc-env train``
+``train``       env and model factories, :func:`~poc_env.agents.rl.train.train` (the entry point)
 ``checkpoint``  atomic checkpoints, resume, generator states, loading model files
 ``networks``    the CNN+MLP feature extractor of the ``shared`` recipe
 ``pilot``       the ``pilot`` recipe: PPO picks headings, an autopilot flies eq. 19
-``policy``      :class:`~agents.rl.policy.PPOPolicy`, a checkpoint behind the Policy interface
-``curve``       the training curve of a run (``poc-env curve``)
+``policy``      :class:`~poc_env.agents.rl.policy.PPOPolicy`, a checkpoint behind the Policy
+interface ``curve``       the training curve of a run (``poc-env curve``)
 """

@@ -1,10 +1,11 @@
 """What a training run depends on (:class:`TrainArgs`) and the ``poc-env train`` command line.
 
 Recipes (``--recipe``): ``shared`` flies every UAV with one policy (parameter sharing over
-:class:`poc_env.envs.vector.SwarmVecEnv`, CNN+MLP :class:`agents.rl.networks.SwarmExtractor`);
+:class:`poc_env.envs.vector.SwarmVecEnv`, CNN+MLP
+:class:`poc_env.agents.rl.networks.SwarmExtractor`);
 ``central`` is one agent over the joint observation and action (``poc_env/UAVSearch-v0``,
 ``MlpPolicy``); ``pilot`` lets PPO pick headings and an autopilot fly eq. 19
-(:mod:`agents.rl.pilot`).
+(:mod:`poc_env.agents.rl.pilot`).
 
 Every option of ``poc-env train`` is a field of :class:`TrainArgs` (``--total-timesteps`` for
 ``total_timesteps``), with the docstring under the field as its help; :func:`parse_train_args`
@@ -43,7 +44,7 @@ class TrainArgs:
     """Scenario overrides, dotted KEY=VALUE (VALUE is YAML), e.g. episode.horizon_steps=20."""
     engine: Annotated[str, _arg(metavar="|".join(ENGINES))] = "sb3"
     """sb3: stable-baselines3 on our VecEnvs (the recipes); rllib: RLlib multi-agent PPO on the
-    task's PettingZoo env (agents.rl.rllib), locally or on a Ray cluster (--address)."""
+    task's PettingZoo env (poc_env.agents.rl.rllib), locally or on a Ray cluster (--address)."""
     task: Annotated[str | None, _arg(metavar="TASK_ID")] = None
     """A registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0: its
     scenario, prior kind and control level, an MLP on its compass observation (sb3: shared over
@@ -107,7 +108,8 @@ class TrainArgs:
     """Show a progress bar with the mean POSC of recent episodes."""
     bc_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: behaviour-cloning warm start from this registered classical policy
-    (allocation_plan, greedy_bayes, lawnmower, ...; not ppo:/rllib:) before PPO (agents.rl.bc):
+    (allocation_plan, greedy_bayes, lawnmower, ...; not ppo:/rllib:) before PPO
+    (poc_env.agents.rl.bc):
     its demonstrations at the task's control level fit the policy mean and value head; bc.json
     in the run folder. A resumed run does not repeat it."""
     bc_episodes: int = 32
@@ -182,14 +184,14 @@ class TrainArgs:
         self._check_bc()
 
     def _check_bc(self) -> None:
-        """The behaviour-cloning fields (agents.rl.bc)."""
+        """The behaviour-cloning fields (poc_env.agents.rl.bc)."""
         as_int("bc_episodes", self.bc_episodes, 1, limits.MAX_EPISODES)
         as_int("bc_epochs", self.bc_epochs, 1, 10_000)
         as_int("bc_batch_size", self.bc_batch_size, 1, 10**7)
         as_number("bc_log_std", self.bc_log_std, -20.0, 2.0)
         if self.bc_teacher is None:
             return
-        from agents.rl.bc import check_teacher
+        from poc_env.agents.rl.bc import check_teacher
 
         check_teacher(self.bc_teacher)
         if self.task is None:

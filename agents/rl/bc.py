@@ -2,23 +2,24 @@
 
 PPO from scratch learns next to nothing at the paper's eq. 19 control level (the
 ``Increments`` tasks): a random walk of increments seldom reaches the grid, let alone covers
-it. The warm start flies a classical teacher of :mod:`agents.policies.registry`
+it. The warm start flies a classical teacher of :mod:`poc_env.agents.policies.registry`
 (``allocation_plan``, ``greedy_bayes``, ``lawnmower``, ...) for a few episodes, fits the fresh
 SB3 ``MlpPolicy`` to what it did, and hands the fitted policy to ordinary PPO fine-tuning:
 
 1. :func:`collect_demos` flies the teacher in
    :class:`poc_env.envs.parallel.UAVSearchParallelEnv` (increments control, dict observations)
-   exactly as :func:`agents.experiments.evaluate.run_episode` does (``env.reset(seed,
+   exactly as :func:`poc_env.agents.experiments.evaluate.run_episode` does (``env.reset(seed,
    prior)``, ``policy.reset(env, seed)``, ``predict(obs)`` every step) and records, for every
    step and every UAV still flying, the ``compass`` features the trained policy sees
    (:class:`~poc_env.sim.observations.CompassFeatures` over
-   :func:`~poc_env.sim.observations.split_observation`, as :class:`agents.rl.policy.PPOPolicy`
+   :func:`~poc_env.sim.observations.split_observation`, as
+   :class:`poc_env.agents.rl.policy.PPOPolicy`
    computes them; the same values :class:`~poc_env.envs.vector.SwarmVecEnv` observes), a label
    at the task's control level and the UAV's env reward.
 2. :func:`pretrain` fits the policy's Gaussian mean to the labels and its value head to the
    discounted returns (both mean squared errors, one Adam), then sets the policy's
    ``log_std`` (default -1, std 0.37) so PPO explores near the teacher.
-3. :func:`warm_start` does both for a fresh run (:func:`agents.rl.train._run`; a resumed run
+3. :func:`warm_start` does both for a fresh run (:func:`poc_env.agents.rl.train._run`; a resumed run
    loads its checkpoint instead and never repeats BC; one killed before its first checkpoint
    starts again from step 0, BC included, with the same result) and writes ``bc.json`` and
    TensorBoard scalars (``tb/bc``). ``--total-timesteps`` counts PPO transitions only (0:
@@ -66,7 +67,7 @@ from poc_env.errors import ConfigError, as_int, as_number
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
 
-    from agents.rl.args import TrainArgs
+    from poc_env.agents.rl.args import TrainArgs
     from poc_env.config import Scenario
     from poc_env.tasks import Task
 
@@ -78,7 +79,7 @@ FIT_KEY = (0xBC, 1)
 
 def teachers() -> tuple[str, ...]:
     """The policies that may teach: every registered policy spelled by its name alone."""
-    from agents.policies.registry import REGISTRY
+    from poc_env.agents.policies.registry import REGISTRY
 
     return tuple(sorted(name for name, s in REGISTRY.items() if s.argument is None))
 
@@ -162,7 +163,7 @@ def collect_demos(
     generator, so episode ``i`` is the same whatever ``episodes`` is; ``gamma``: the discount of
     the value targets; ``agent_index``: as the run's ``SwarmVecEnv`` (the compass index block).
     """
-    from agents.policies.registry import make_policy
+    from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
     from poc_env.sim.control import ACTION_DIMS
     from poc_env.sim.observations import FEATURES, CompassFeatures, split_observation
@@ -343,7 +344,7 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
     ``args.bc_batch_size``, ``args.bc_log_std``), ``bc.json`` in ``run_dir`` (teacher POSC,
     samples, losses, times) and TensorBoard scalars in ``run_dir/tb/bc``. Returns what
     ``bc.json`` holds."""
-    from agents.rl.checkpoint import write_json
+    from poc_env.agents.rl.checkpoint import write_json
 
     assert args.task is not None and args.bc_teacher is not None
     t0 = time.perf_counter()

@@ -1,13 +1,13 @@
 """A shipped checkpoint's card: where the model came from and how it scored.
 
-    python -m agents.rl.card MODEL.zip --run RUN_DIR --evaluation EVAL_DIR --policy SPELLING
+    python -m poc_env.agents.rl.card MODEL.zip --run RUN_DIR --evaluation EVAL_DIR --policy SPELLING
                              --out CARD.json
 
 A card sits beside its model as ``<name>.json`` (``agents/checkpoints/ppo_heading_paper_6_2.json``)
 and holds:
 
 * ``task``, ``recipe``, ``agent_index`` and the rest of the run's ``config.json`` (what
-  :class:`agents.rl.policy.PPOPolicy` reads to fly the model at its control level with its
+  :class:`poc_env.agents.rl.policy.PPOPolicy` reads to fly the model at its control level with its
   observation; the run folder itself is not shipped);
 * ``model_step``: the checkpoint's step (``checkpoints/step_N.zip``);
 * ``evaluation``: the held-out evaluation of the model as ``poc-env evaluate --out EVAL_DIR``
@@ -77,7 +77,9 @@ def make_card(
 def main(argv: list[str] | None = None) -> Path:
     from poc_env.io import write_text_atomic
 
-    p = argparse.ArgumentParser(prog="python -m agents.rl.card", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(
+        prog="python -m poc_env.agents.rl.card", description=__doc__.split("\n")[0]
+    )
     p.add_argument("model", type=Path)
     p.add_argument("--run", type=Path, default=None, help="the model's run folder")
     p.add_argument("--recipe", default=None, help="without --run: the recipe to record")

@@ -120,7 +120,8 @@ def env_generators(env: VecEnv) -> list[list[np.random.Generator]]:
     """Every env's generators (per env: a list), for checkpoints.
 
     ``env`` is a :class:`~poc_env.envs.vector.SwarmVecEnv` (one generator per env) or a
-    ``DummyVecEnv`` whose envs offer ``generators()`` (:class:`agents.rl.train.CentralEnv`)."""
+    ``DummyVecEnv`` whose envs offer ``generators()``
+    (:class:`poc_env.agents.rl.train.CentralEnv`)."""
     from stable_baselines3.common.vec_env import DummyVecEnv
 
     from poc_env.envs.vector import SwarmVecEnv
@@ -134,11 +135,11 @@ def env_generators(env: VecEnv) -> list[list[np.random.Generator]]:
                 generators = e.get_wrapper_attr("generators")
             except AttributeError:
                 raise ConfigError(
-                    "env", e, "an env with generators() (agents.rl.train.CentralEnv)"
+                    "env", e, "an env with generators() (poc_env.agents.rl.train.CentralEnv)"
                 ) from None
             out.append(list(generators()))
         return out
-    raise ConfigError("env", env, "a VecEnv from agents.rl.train.make_env")
+    raise ConfigError("env", env, "a VecEnv from poc_env.agents.rl.train.make_env")
 
 
 _ENV_ARRAYS = ("priors", "_poc_scale", "_active", "_returns", "_lengths")
@@ -185,7 +186,7 @@ def describe_space(space: Any) -> str:
 
 def shipped_checkpoints() -> list[str]:
     """Names of the PPO checkpoints shipped inside the package (``agents/checkpoints``)."""
-    folder = importlib.resources.files("agents").joinpath("checkpoints")
+    folder = importlib.resources.files("poc_env.agents").joinpath("checkpoints")
     return sorted(f.name[:-4] for f in folder.iterdir() if f.name.endswith(".zip"))
 
 
@@ -195,7 +196,7 @@ def model_path(path: str | os.PathLike[str]) -> Path:
     ``ppo_pilot_paper_6_2``), read from the installed package."""
     p = Path(path)
     if not p.exists() and str(path) in shipped_checkpoints():
-        ref = importlib.resources.files("agents").joinpath("checkpoints", f"{path}.zip")
+        ref = importlib.resources.files("poc_env.agents").joinpath("checkpoints", f"{path}.zip")
         return Path(str(ref))
     if p.is_dir():
         if (p / "model.zip").is_file():
@@ -233,7 +234,7 @@ def _load_ppo(path: Path, **kwargs: Any) -> PPO:
             except ModuleNotFoundError as err:
                 if err.name != _OLD_NETWORKS:
                     raise
-                from agents.rl.networks import SwarmExtractor
+                from poc_env.agents.rl.networks import SwarmExtractor
 
                 kw = {"features_extractor_class": SwarmExtractor}
                 custom = {"policy_kwargs": kw}

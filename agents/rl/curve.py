@@ -1,6 +1,7 @@
 """The training curve of a run (``poc-env curve``): mean POSC of recent episodes over timesteps.
 
-Read from the run's TensorBoard logs, where the progress callback of :func:`agents.rl.train.train`
+Read from the run's TensorBoard logs, where the progress callback of
+:func:`poc_env.agents.rl.train.train`
 records ``rollout/posc_mean`` (the mean POSC of the last 100 finished episodes) once per rollout.
 """
 

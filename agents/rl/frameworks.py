@@ -36,7 +36,7 @@ def _import_torchrl_wrapper() -> Any:
     except ModuleNotFoundError as exc:
         if (exc.name or "").partition(".")[0] not in ("torchrl", "tensordict", "torch"):
             raise
-        raise MissingExtraError("torchrl", "agents.rl.frameworks.torchrl_env") from exc
+        raise MissingExtraError("torchrl", "poc_env.agents.rl.frameworks.torchrl_env") from exc
     return PettingZooWrapper
 
 

@@ -17,7 +17,7 @@ policy and hands the rest to the same flight layer the planned baselines use
 * **Observation** ``Box((FEATURES,))`` per UAV, computed from the env's own observation
   (raster + vector) by :class:`PilotFeatures`, so a checkpoint acts on
   :class:`~poc_env.envs.parallel.UAVSearchParallelEnv` observations through
-  :class:`agents.rl.policy.PPOPolicy`:
+  :class:`poc_env.agents.rl.policy.PPOPolicy`:
 
   ========  ===================================================================================
   0-13      the env's state vector (:data:`poc_env.sim.observations.VECTOR_NAMES`)

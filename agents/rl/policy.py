@@ -1,4 +1,4 @@
-"""A PPO checkpoint flying through the :class:`agents.policies.base.Policy` interface.
+"""A PPO checkpoint flying through the :class:`poc_env.agents.policies.base.Policy` interface.
 
 ``ppo:PATH`` in ``poc-env evaluate --policies`` and the policy registry name
 :class:`PPOPolicy`. Model files are pickle-based: load only trusted files.
@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from agents.policies.base import Policy
-from agents.rl.checkpoint import describe_space, load_policy, model_path
+from poc_env.agents.policies.base import Policy
+from poc_env.agents.rl.checkpoint import describe_space, load_policy, model_path
 from poc_env.errors import ConfigError
 from poc_env.sim.observations import split_observation
 
@@ -87,7 +87,7 @@ def checkpoint_control(spelling: str) -> str | None:
     if not sep or kind not in ("ppo", "rllib"):
         return None
     if kind == "rllib":
-        from agents.rl.rllib import run_control
+        from poc_env.agents.rl.rllib import run_control
 
         try:
             return run_control(path)
@@ -116,7 +116,7 @@ def checkpoint_origin(spelling: str) -> tuple[str | None, str | None]:
 
 
 class PPOPolicy(Policy):
-    """A PPO checkpoint flying through the :class:`agents.policies.base.Policy` interface.
+    """A PPO checkpoint flying through the :class:`poc_env.agents.policies.base.Policy` interface.
 
     ``PPOPolicy(path)`` loads ``path`` (a ``.zip``, or a run folder: its ``model.zip`` or latest
     checkpoint) on the CPU; :meth:`reset` checks it against the env and picks the recipe from
@@ -128,7 +128,7 @@ class PPOPolicy(Policy):
     finished agents keep their last observation, as in ``UAVSearch-v0``). Actions are
     deterministic by default::
 
-        from agents.rl.policy import PPOPolicy
+        from poc_env.agents.rl.policy import PPOPolicy
         policy = PPOPolicy("runs/.../model.zip"); policy.reset(env, seed=0)
         actions, _ = policy.predict(observations)
 
@@ -147,7 +147,7 @@ class PPOPolicy(Policy):
         super().reset(env, seed)
         from gymnasium import spaces
 
-        from agents.rl import pilot
+        from poc_env.agents.rl import pilot
 
         agents = list(env.possible_agents)
         agent_space = env.observation_space(agents[0])

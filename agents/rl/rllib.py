@@ -10,7 +10,7 @@ encoder takes without configuration. Two policy layouts (``--rllib-policies``):
 
 Training runs inside :func:`poc_env.cluster.ray_session`: a local Ray instance by default, an
 existing cluster with ``--address``; ``--num-env-runners K`` samples on K Ray actors (0: in the
-driver). The run folder gets ``config.json`` (the :class:`~agents.rl.args.TrainArgs`),
+driver). The run folder gets ``config.json`` (the :class:`~poc_env.agents.rl.args.TrainArgs`),
 ``metrics.csv`` (one row per training iteration; ``agent_steps`` is env steps x UAVs, an
 upper bound once UAVs land) and ``checkpoint/`` (RLlib's
 ``save_to_path``, written into a temporary folder and renamed when complete); both are
@@ -33,13 +33,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from agents.policies.base import Policy
-from agents.rl.checkpoint import read_json, write_json
+from poc_env.agents.policies.base import Policy
+from poc_env.agents.rl.checkpoint import read_json, write_json
 from poc_env.errors import ConfigError, MissingExtraError
 from poc_env.io import csv_text, write_text_atomic
 
 if TYPE_CHECKING:
-    from agents.rl.args import TrainArgs
+    from poc_env.agents.rl.args import TrainArgs
 
 ENV_NAME = "poc_env_task"
 POLICY_LAYOUTS = ("shared", "per_uav")
@@ -227,7 +227,7 @@ def shipped_rllib() -> list[str]:
     the run's ``config.json`` and the RLModule states of ``checkpoint/``, what flying needs)."""
     import importlib.resources
 
-    folder = importlib.resources.files("agents").joinpath("checkpoints")
+    folder = importlib.resources.files("poc_env.agents").joinpath("checkpoints")
     return sorted(
         f.name for f in folder.iterdir() if f.is_dir() and f.joinpath("config.json").is_file()
     )
@@ -238,7 +238,9 @@ def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
     if not p.exists() and str(path) in shipped_rllib():
         import importlib.resources
 
-        p = Path(str(importlib.resources.files("agents").joinpath("checkpoints", str(path))))
+        p = Path(
+            str(importlib.resources.files("poc_env.agents").joinpath("checkpoints", str(path)))
+        )
     if (p / "checkpoint").is_dir():
         p = p / "checkpoint"
     if not (p / "learner_group").is_dir():
@@ -253,7 +255,7 @@ def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
 def run_control(path: str | os.PathLike[str]) -> str:
     """The control level an RLlib run (its folder or ``checkpoint/``) was trained at, from its
     ``config.json`` through :func:`env_kwargs` (the rule the run itself used)."""
-    from agents.rl.args import TrainArgs
+    from poc_env.agents.rl.args import TrainArgs
 
     cfg = _checkpoint_dir(path).parent / "config.json"
     if not cfg.is_file():
@@ -273,7 +275,7 @@ class RLlibPolicy(Policy):
         _require()
         from ray.rllib.core.rl_module.rl_module import RLModule
 
-        from agents.rl.args import TrainArgs
+        from poc_env.agents.rl.args import TrainArgs
 
         self.dir = _checkpoint_dir(path).resolve()  # RLlib reads URIs: absolute paths only
         self.name = name or f"rllib:{path}"

@@ -1,20 +1,20 @@
 """Train RL policies in poc-env: ``poc-env train`` (stable-baselines3 PPO).
 
-:func:`train` runs one :class:`~agents.rl.args.TrainArgs` (or resumes a run folder); it builds
-the training env with :func:`make_env` and the model with :func:`make_model`. Recipes:
+:func:`train` runs one :class:`~poc_env.agents.rl.args.TrainArgs` (or resumes a run folder); it
+builds the training env with :func:`make_env` and the model with :func:`make_model`. Recipes:
 
 ``shared``
     One policy flies every UAV (parameter sharing): :class:`poc_env.envs.vector.SwarmVecEnv`
     shows each (env, UAV) pair to SB3 as one environment slot, the policy is
-    ``MultiInputPolicy`` with :class:`agents.rl.networks.SwarmExtractor` (CNN over the belief
-    raster + MLP over the state vector). A checkpoint is independent of the number of UAVs
+    ``MultiInputPolicy`` with :class:`poc_env.agents.rl.networks.SwarmExtractor` (CNN over the
+    belief raster + MLP over the state vector). A checkpoint is independent of the number of UAVs
     (not of the grid).
 ``central``
     The centralised single-agent view ``gymnasium.make("poc_env/UAVSearch-v0")``: one agent
     sees every UAV's flat observation stacked and sets every UAV's action; plain
     ``MlpPolicy``. Simpler, but the network is tied to the number of UAVs.
 ``pilot``
-    PPO picks where each UAV heads, an autopilot flies eq. 19 (:mod:`agents.rl.pilot`);
+    PPO picks where each UAV heads, an autopilot flies eq. 19 (:mod:`poc_env.agents.rl.pilot`);
     ``MlpPolicy`` over the pilot features.
 
 With ``random_priors`` (default) every episode starts from a fresh seeded Gaussian-mixture
@@ -28,10 +28,10 @@ Every run writes to its own folder (default ``runs/<scenario>-<algo>-s<seed>-<ti
     config.json      the resolved TrainArgs (``--resume`` reads it back)
     scenario.yaml    the resolved scenario (overrides applied); envs are built from it
     tb/ppo_1/        TensorBoard logs (SB3's, plus rollout/posc_mean)
-    checkpoints/     atomic checkpoints and latest.json (:mod:`agents.rl.checkpoint`)
+    checkpoints/     atomic checkpoints and latest.json (:mod:`poc_env.agents.rl.checkpoint`)
     model.zip        the final model
     bc.json          with ``--bc-teacher``: the behaviour-cloning warm start (teacher POSC,
-                     samples, losses; :mod:`agents.rl.bc`); TensorBoard scalars in tb/bc/
+                     samples, losses; :mod:`poc_env.agents.rl.bc`); TensorBoard scalars in tb/bc/
 
 Checkpoints are taken at rollout boundaries once every ``checkpoint_every`` timesteps and at
 the end; the newest ``keep_checkpoints`` are kept.
@@ -43,7 +43,7 @@ Resume
 ``reset_num_timesteps=False`` up to the saved ``total_timesteps``: the same step count, the
 same learning-rate and clip-range schedule, the same TensorBoard run, and the checkpoint
 numbering continues. With the shared and pilot recipes the resumed run is bit-identical to an
-uninterrupted one (:mod:`agents.rl.checkpoint` says what is restored).
+uninterrupted one (:mod:`poc_env.agents.rl.checkpoint` says what is restored).
 """
 
 from __future__ import annotations
@@ -60,8 +60,8 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
-from agents.rl.args import TrainArgs, parse_overrides
-from agents.rl.checkpoint import (
+from poc_env.agents.rl.args import TrainArgs, parse_overrides
+from poc_env.agents.rl.checkpoint import (
     Checkpoint,
     checkpoint_callback,
     latest_checkpoint,
@@ -140,7 +140,7 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
             return_autopilot=args.return_autopilot,
         )
     if args.recipe == "pilot":
-        from agents.rl.pilot import PilotVecEnv
+        from poc_env.agents.rl.pilot import PilotVecEnv
 
         return PilotVecEnv(
             scenario,
@@ -175,7 +175,7 @@ def make_model(args: TrainArgs, env: VecEnv, tb_dir: Path | None) -> PPO:
 
     policy_kwargs: dict[str, Any] | None = None
     if args.recipe == "shared" and args.task is None:
-        from agents.rl.networks import SwarmExtractor
+        from poc_env.agents.rl.networks import SwarmExtractor
 
         policy, policy_kwargs = "MultiInputPolicy", {"features_extractor_class": SwarmExtractor}
     else:
@@ -294,7 +294,7 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
     ``callback``: an extra SB3 callback, called after the checkpointer and the progress bar.
     Needs the ``rl`` extra (checked before anything is written)."""
     if args.engine == "rllib":
-        from agents.rl.rllib import train_rllib
+        from poc_env.agents.rl.rllib import train_rllib
 
         name = args.task.rsplit("/", 1)[-1] if args.task else args.scenario
         run_dir = _new_run_dir(args, Path(name).stem)
@@ -365,7 +365,7 @@ def _run(
         if checkpoint is None:
             model = make_model(args, env, run_dir / "tb")
             if args.bc_teacher is not None:  # warm start; a resumed run has it in its weights
-                from agents.rl.bc import warm_start
+                from poc_env.agents.rl.bc import warm_start
 
                 warm_start(args, sc, model, run_dir)
         else:

@@ -293,7 +293,7 @@ class SwarmVecEnv(VecEnv):
             raise ConfigError("actions", "non-finite values", "finite numbers in [-1, 1]")
         self._actions = self._sim_actions(a)
 
-    # -- hooks for subclasses (agents.rl.pilot.PilotVecEnv) ----------------------------------------
+    # -- hooks for subclasses (poc_env.agents.rl.pilot.PilotVecEnv) -------------------------
     def _sim_actions(self, a: np.ndarray) -> np.ndarray:
         """The simulator's eq. 19 actions (E, N, 3) for the slots' actions ``a (E, N, ...)``
         (the control level's autopilot, :func:`poc_env.sim.control.swarm_increments`, which

@@ -19,7 +19,7 @@ increment stays within its eq. 19 limit (|a| <= 1 before scaling). With ``auto_r
 default) the autopilot takes a UAV home and lands it as soon as eq. 18's usable endurance only
 covers the way back (:func:`poc_env.sim.autopilot.returning`, then
 :func:`~poc_env.sim.autopilot.homing`); the policy's action is then ignored. The RL
-``pilot`` recipe (:mod:`agents.rl.pilot`) is the ``heading`` level read from the observation
+``pilot`` recipe (:mod:`poc_env.agents.rl.pilot`) is the ``heading`` level read from the observation
 vector, through :func:`heading_increments`.
 """
 

@@ -216,7 +216,7 @@ FEATURE_HIGH = np.concatenate([VECTOR_HIGH, np.ones(FEATURES - VECTOR_SIZE, np.f
 class CompassFeatures:
     """The ``compass`` observation (``obs_type="compass"``): the state vector, the belief
     compass, nearby UAVs per sector, the mean remaining POC and the agent index (table in
-    :mod:`agents.rl.pilot`'s docstring), computed from the raster and vector observations of
+    :mod:`poc_env.agents.rl.pilot`'s docstring), computed from the raster and vector observations of
     any number of UAVs at once.
 
     ``agent_index=False`` leaves the index block at zero: the ablation of the credit-and-sharing

@@ -1,4 +1,5 @@
-"""``poc-env bench train`` (agents.benchmarks.train): it runs and reports what it measured."""
+"""``poc-env bench train`` (poc_env.agents.benchmarks.train): it runs and reports what it
+measured."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import sys
 
 
 def test_bench_train_smoke(capsys):
-    from agents.benchmarks.train import main
+    from poc_env.agents.benchmarks.train import main
 
     r = main(["--scenario", "small", "--n-envs", "2", "--iterations", "1"])
     assert r["transitions_per_s"] > 0 and r["transitions"] == 256 * 6

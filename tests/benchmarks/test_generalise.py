@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.benchmarks import generalise
-from agents.experiments.evaluate import episode_prior, evaluate
+from poc_env.agents.benchmarks import generalise
+from poc_env.agents.experiments.evaluate import episode_prior, evaluate
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.errors import ConfigError
 
@@ -103,7 +103,7 @@ def test_tiny_run_writes_one_row_per_condition_and_policy(tmp_path, capsys):
 def test_bad_names_fail_before_any_episode_and_write_nothing(
     tmp_path, monkeypatch, field, argv, named
 ):
-    import agents.experiments.evaluate as ev_mod
+    import poc_env.agents.experiments.evaluate as ev_mod
 
     calls = []
     monkeypatch.setattr(ev_mod, "evaluate", lambda *a, **k: calls.append(a))
@@ -117,7 +117,7 @@ def test_bad_names_fail_before_any_episode_and_write_nothing(
 
 def test_module_reports_a_bad_condition_without_a_traceback(tmp_path):
     res = subprocess.run(
-        [sys.executable, "-m", "agents.benchmarks.generalise", "--conditions", "nope"],
+        [sys.executable, "-m", "poc_env.agents.benchmarks.generalise", "--conditions", "nope"],
         capture_output=True,
         text=True,
         timeout=60,

@@ -7,10 +7,10 @@ import csv
 
 import pytest
 
-from agents.benchmarks import learning
-from agents.experiments.evaluate import evaluate
-from agents.rl.args import TrainArgs
-from agents.rl.train import train
+from poc_env.agents.benchmarks import learning
+from poc_env.agents.experiments.evaluate import evaluate
+from poc_env.agents.rl.args import TrainArgs
+from poc_env.agents.rl.train import train
 from poc_env.errors import ConfigError
 
 TASK = "UAVSearch-Small-Random-Heading-v0"

@@ -6,8 +6,8 @@ import csv
 
 import pytest
 
-from agents.benchmarks import baselines, suite
 from poc_env import tasks
+from poc_env.agents.benchmarks import baselines, suite
 from poc_env.cli import main as cli
 from poc_env.errors import ConfigError
 

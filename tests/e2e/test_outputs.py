@@ -91,7 +91,7 @@ def test_failed_survey_leaves_the_previous_output(tmp_path, monkeypatch):
 
 
 def test_failed_evaluate_writes_nothing(tmp_path, monkeypatch):
-    import agents.experiments.evaluate as evaluate
+    import poc_env.agents.experiments.evaluate as evaluate
 
     def broken(*args, **kwargs):
         raise KeyboardInterrupt
@@ -105,7 +105,7 @@ def test_failed_evaluate_writes_nothing(tmp_path, monkeypatch):
 
 
 def test_plan_and_its_plot_are_written_together(tmp_path, monkeypatch):
-    import agents.planning.planner as planner
+    import poc_env.agents.planning.planner as planner
 
     def broken(*args, **kwargs):
         raise KeyboardInterrupt

@@ -101,7 +101,7 @@ def _vec_env(kind: str, overrides):
         from poc_env.envs.vector import SwarmVecEnv
 
         return SwarmVecEnv("small", n_envs=2, seed=0, overrides=overrides), 3
-    from agents.rl.pilot import PilotVecEnv
+    from poc_env.agents.rl.pilot import PilotVecEnv
 
     return PilotVecEnv("small", n_envs=2, seed=0, overrides=overrides), 2
 

@@ -5,8 +5,8 @@ over two airfields, endurance, detection law, optionally a short horizon): every
 policy flown in the environment (``random``, ``lawnmower``, ``greedy_bayes``, ``de_plan`` and
 ``allocation_plan``, the planners at quick settings) scores a POSC no higher than the
 episode's honest plain bound and its reach-aware bound, as
-:func:`agents.experiments.evaluate.run_episode` reports them (the bounds ``poc-env evaluate``
-prints and normalises by); and every plan (``make_plan`` with a random optimiser,
+:func:`poc_env.agents.experiments.evaluate.run_episode` reports them (the bounds ``poc-env
+evaluate`` prints and normalises by); and every plan (``make_plan`` with a random optimiser,
 ``make_allocation_plan``) predicts a POS_C no higher than its own plan.json ``bounds`` and
 ``upper_bound``. Tolerance :data:`TOL` (float rounding only: the reach-aware bound may exceed
 the plain one by ~1e-15).
@@ -25,9 +25,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from agents.experiments.evaluate import episode_prior, run_episode
-from agents.planning.allocation import make_allocation_plan
-from agents.planning.planner import make_plan
+from poc_env.agents.experiments.evaluate import episode_prior, run_episode
+from poc_env.agents.planning.allocation import make_allocation_plan
+from poc_env.agents.planning.planner import make_plan
 from poc_env.config import Scenario, load_scenario
 
 #: Float tolerance of every comparison with a bound.
@@ -121,7 +121,7 @@ def test_no_policy_beats_the_bounds_on_a_short_horizon(counts, horizon, seed, la
 
 def _halve(monkeypatch, which: str) -> None:
     """Halve the ``which`` bound (``honest`` or ``reach``) wherever it is computed."""
-    import agents.planning.allocation as allocation
+    import poc_env.agents.planning.allocation as allocation
     import poc_env.theory.bound as bound
 
     if which == "honest":
@@ -161,8 +161,8 @@ def test_table8_reports_each_fleets_reach_bound_and_stays_below_it(tmp_path):
     """``experiment table8``: the reach-aware bound beside every fleet size is the one
     ``evaluate`` and ``table7`` use (:func:`reach_effort_bound`) for that many UAVs, grows with
     the fleet, and no plan's POS_C beats it."""
-    from agents.experiments.evaluate import reach_effort_bound
-    from agents.experiments.paper import run_experiment
+    from poc_env.agents.experiments.evaluate import reach_effort_bound
+    from poc_env.agents.experiments.paper import run_experiment
 
     res = run_experiment("table8", quick=True, out=tmp_path, echo=None)[0]
     sc = load_scenario("paper_6_2")

@@ -5,7 +5,7 @@ import csv
 import numpy as np
 import pytest
 
-from agents.experiments.evaluate import effort_bound, evaluate
+from poc_env.agents.experiments.evaluate import effort_bound, evaluate
 from poc_env.cli import main
 from poc_env.errors import ConfigError
 
@@ -58,9 +58,9 @@ def test_cli_evaluate(tmp_path, capsys):
 
 
 def test_policies_come_from_the_registry():
-    """evaluate makes its policies by name from agents.policies.registry: an unknown name is
+    """evaluate makes its policies by name from poc_env.agents.policies.registry: an unknown name is
     refused before any episode runs, with every registered name in the message."""
-    from agents.policies.registry import registered
+    from poc_env.agents.policies.registry import registered
 
     with pytest.raises(ConfigError) as err:
         evaluate("small", ["lawnmower", "telepathy"], episodes=1)

@@ -1,4 +1,5 @@
-"""``poc-env experiment`` (agents.experiments.paper): every output, reproducibility, Table 8."""
+"""``poc-env experiment`` (poc_env.agents.experiments.paper): every output, reproducibility, Table
+8."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import itertools
 import numpy as np
 import pytest
 
-from agents.experiments.paper import (
+from poc_env.agents.experiments.paper import (
     EXPERIMENTS,
     QUICK,
     _fleet_job,
@@ -17,7 +18,7 @@ from agents.experiments.paper import (
     run_experiment,
     scaled_area,
 )
-from agents.planning.objective import PlanObjective
+from poc_env.agents.planning.objective import PlanObjective
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import build_prior

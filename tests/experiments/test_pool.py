@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from agents.experiments.pool import WorkerTimeoutError, run_jobs, sleep_job
+from poc_env.agents.experiments.pool import WorkerTimeoutError, run_jobs, sleep_job
 
 
 def test_results_come_back_in_job_order_on_workers():

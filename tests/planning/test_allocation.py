@@ -7,8 +7,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from agents.planning.allocation import REFINE, make_allocation_plan
-from agents.planning.planner import make_plan
+from poc_env.agents.planning.allocation import REFINE, make_allocation_plan
+from poc_env.agents.planning.planner import make_plan
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.bound import honest_optimum, reach_bound

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from pyproj import Geod, Transformer
 
-from agents.planning.export import (
+from poc_env.agents.planning.export import (
     export_plan,
     load_plan,
     make_crs,
@@ -523,7 +523,7 @@ def test_geojson_rounded_with_human_units(tmp_path):
 
 
 def test_make_plan_records_crs_and_geography_that_export_uses(tmp_path):
-    from agents.planning.planner import make_plan, write_plan
+    from poc_env.agents.planning.planner import make_plan, write_plan
 
     plan = make_plan("small", popsize=8, maxiter=2, origin_deg=ORIGIN, projection="utm")
     assert plan["crs"] == make_crs("utm", ORIGIN)
@@ -595,7 +595,7 @@ def test_kml_draws_the_prior_as_a_ground_overlay(tmp_path, capsys):
     spaced in latitude, as Google Earth stretches it)."""
     from PIL import Image
 
-    from agents.planning.report import colorize, plan_prior
+    from poc_env.agents.planning.report import colorize, plan_prior
     from poc_env.theory.probability_map import Grid
 
     path, _ = _plan(tmp_path)
@@ -640,7 +640,7 @@ def test_survey_plans_reach_every_export_format(tmp_path, capsys, regions):
     """``poc-env survey --plan-out`` writes a schema-2 plan (per UAV the pattern as
     ``waypoints_m`` and the region as ``areas_m``, no rectangle) that every format exports: the
     GeoJSON routes are the survey's tracks, the search areas its regions, the numbers its table."""
-    from agents.planning.survey import run_survey
+    from poc_env.agents.planning.survey import run_survey
 
     plan_path = tmp_path / "survey_plan.json"
     assert main(["survey", "--scenario", "paper_6_1", "--regions", regions, "--plan-out",

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from pyproj import Transformer
 
-from agents.planning import geoimport
-from agents.planning.geoimport import (
+from poc_env.agents.planning import geoimport
+from poc_env.agents.planning.geoimport import (
     add_scenario_import_arguments,
     cmd_scenario_import,
     import_scenario,
@@ -126,7 +126,7 @@ def test_geotiff_round_trip(tmp_path, layers, monkeypatch):
     assert "lat 45.3, lon 126.0" in (tmp_path / "my.yaml").read_text()
     # the scenario carries its geography: a plan records the same CRS without --origin
     assert sc.map.origin_deg == (45.3, 126.0) and sc.map.projection == "aeqd"
-    from agents.planning.planner import make_plan
+    from poc_env.agents.planning.planner import make_plan
 
     plan = make_plan(str(tmp_path / "my.yaml"), popsize=4, maxiter=1)
     assert plan["crs"] == crs

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import shapely
 
-from agents.planning.objective import (
+from poc_env.agents.planning.objective import (
     PlanObjective,
     area_fractions,
     exclusive_fractions,

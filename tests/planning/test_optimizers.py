@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents.planning.objective import PlanObjective
-from agents.planning.optimizers import (
+from poc_env.agents.planning.objective import PlanObjective
+from poc_env.agents.planning.optimizers import (
     OPTIMIZERS,
     adaptive_de,
     adaptive_mutation,
@@ -209,7 +209,7 @@ def test_other_bad_arguments():
 
 
 def test_presets_paper_is_the_planner_section_and_tuned_changes_only_f0_cr():
-    from agents.planning.optimizers import TUNED_DE, preset_settings
+    from poc_env.agents.planning.optimizers import TUNED_DE, preset_settings
 
     pl = PlannerConfig()
     paper = preset_settings("paper", pl)
@@ -222,9 +222,9 @@ def test_presets_paper_is_the_planner_section_and_tuned_changes_only_f0_cr():
 
 @pytest.mark.parametrize("bad", ["bogus", "", "Paper", None, 1])
 def test_unknown_preset_is_a_config_error(bad):
-    from agents.experiments.paper import run_experiment
-    from agents.planning.optimizers import preset_settings
-    from agents.planning.planner import make_plan
+    from poc_env.agents.experiments.paper import run_experiment
+    from poc_env.agents.planning.optimizers import preset_settings
+    from poc_env.agents.planning.planner import make_plan
 
     for call in (
         lambda: preset_settings(bad, PlannerConfig()),
@@ -250,8 +250,8 @@ def test_cli_preset_bogus_is_a_clear_error(capsys, tmp_path):
 def test_tuned_preset_reaches_the_optimizer():
     """make_plan(preset="tuned") runs adaptive DE with TUNED_DE's F0 and CR: its plan is the
     one a direct call with those constants finds (same seed), not the paper preset's."""
-    from agents.planning.optimizers import TUNED_DE
-    from agents.planning.planner import make_plan
+    from poc_env.agents.planning.optimizers import TUNED_DE
+    from poc_env.agents.planning.planner import make_plan
 
     obj = PlanObjective("small")
     budget = dict(popsize=12, maxiter=15)

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from agents.planning.export import (
+from poc_env.agents.planning.export import (
     READ_SCHEMAS,
     RECTANGLE_RULE,
     SCHEMA,
@@ -17,7 +17,7 @@ from agents.planning.export import (
     search_rings,
     to_local,
 )
-from agents.planning.planner import make_plan, plan_table, write_plan
+from poc_env.agents.planning.planner import make_plan, plan_table, write_plan
 from poc_env.errors import ConfigError
 from poc_env.theory.timing import flight_time_s
 

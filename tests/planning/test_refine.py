@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import poc_env
-from agents.planning.allocation import _path_coverage, make_allocation_plan, plan_speeds
-from agents.planning.refine import (
+from poc_env.agents.planning.allocation import _path_coverage, make_allocation_plan, plan_speeds
+from poc_env.agents.planning.refine import (
     Airspace,
     arrival_times,
     refine_routes,
@@ -14,7 +14,7 @@ from agents.planning.refine import (
     swarm_violations,
     track,
 )
-from agents.policies.allocation import AllocationPlanPolicy
+from poc_env.agents.policies.allocation import AllocationPlanPolicy
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim.autopilot import must_return

@@ -4,8 +4,8 @@ import dataclasses
 
 import pytest
 
-from agents.planning.region_planner import _time, optimise_regions
-from agents.planning.survey import _airfields_for, load_regions, run_survey
+from poc_env.agents.planning.region_planner import _time, optimise_regions
+from poc_env.agents.planning.survey import _airfields_for, load_regions, run_survey
 from poc_env.cli import main
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError

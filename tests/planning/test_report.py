@@ -20,9 +20,9 @@ import subprocess
 import numpy as np
 import pytest
 
-from agents.planning.export import export_plan, load_plan, to_geographic
-from agents.planning.planner import make_plan, write_plan
-from agents.planning.report import (
+from poc_env.agents.planning.export import export_plan, load_plan, to_geographic
+from poc_env.agents.planning.planner import make_plan, write_plan
+from poc_env.agents.planning.report import (
     ALPHA_RANGE,
     ROUTE_COLOURS,
     colorize,

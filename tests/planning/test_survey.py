@@ -5,7 +5,7 @@ import csv
 import numpy as np
 import pytest
 
-from agents.planning.survey import RegionPlan, RegionSpec, load_regions, run_survey
+from poc_env.agents.planning.survey import RegionPlan, RegionSpec, load_regions, run_survey
 from poc_env.cli import main
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError, GeometryError

@@ -3,9 +3,9 @@
 import numpy as np
 
 import poc_env
-from agents.policies.allocation import AllocationPlanPolicy
-from agents.policies.de_plan import DEPlanPolicy
-from agents.policies.registry import make_policy
+from poc_env.agents.policies.allocation import AllocationPlanPolicy
+from poc_env.agents.policies.de_plan import DEPlanPolicy
+from poc_env.agents.policies.registry import make_policy
 
 
 def _fly(pol, seed=0):

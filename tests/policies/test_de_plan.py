@@ -3,9 +3,9 @@
 import pytest
 
 import poc_env
-from agents.planning.planner import make_plan
-from agents.policies import make_policy
-from agents.policies.de_plan import DEPlanPolicy
+from poc_env.agents.planning.planner import make_plan
+from poc_env.agents.policies import make_policy
+from poc_env.agents.policies.de_plan import DEPlanPolicy
 from poc_env.errors import ConfigError
 
 

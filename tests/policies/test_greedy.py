@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from agents.experiments.evaluate import evaluate
-from agents.policies.game import PotentialGamePolicy
-from agents.policies.greedy import best_cell
+from poc_env.agents.experiments.evaluate import evaluate
+from poc_env.agents.policies.game import PotentialGamePolicy
+from poc_env.agents.policies.greedy import best_cell
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.sim.observations import decode_vector
 

@@ -4,7 +4,7 @@ import numpy as np
 from shapely.geometry import Point, box
 
 import poc_env
-from agents.policies.lawnmower import lawnmower_policy, lawnmower_waypoints
+from poc_env.agents.policies.lawnmower import lawnmower_policy, lawnmower_waypoints
 from poc_env.sim.core import make_params
 
 

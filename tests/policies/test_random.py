@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import poc_env
-from agents.policies.registry import make_policy
+from poc_env.agents.policies.registry import make_policy
 
 
 @pytest.mark.parametrize("control", ["heading", "waypoint"])

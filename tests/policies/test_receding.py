@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from agents.experiments.evaluate import evaluate
-from agents.policies.receding import DERecedingPolicy
+from poc_env.agents.experiments.evaluate import evaluate
+from poc_env.agents.policies.receding import DERecedingPolicy
 from poc_env.envs.parallel import UAVSearchParallelEnv
 
 

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-import agents.policies.registry as registry
-from agents.experiments.evaluate import evaluate
-from agents.policies import Policy, make_policy, register, registered
+import poc_env.agents.policies.registry as registry
+from poc_env.agents.experiments.evaluate import evaluate
+from poc_env.agents.policies import Policy, make_policy, register, registered
 from poc_env.cli import main
 from poc_env.errors import ConfigError
 
@@ -61,13 +61,15 @@ def test_unknown_or_misspelt_names_list_the_registered_ones():
 
 def test_register_checks_names_and_entry_points(scratch_registry):
     with pytest.raises(ConfigError, match="entry_point"):
-        register("mower", "agents.policies.lawnmower.LawnmowerPolicy")  # no ':'
+        register("mower", "poc_env.agents.policies.lawnmower.LawnmowerPolicy")  # no ':'
     with pytest.raises(ConfigError, match="name"):
-        register("a:b", "agents.policies.lawnmower:LawnmowerPolicy")
+        register("a:b", "poc_env.agents.policies.lawnmower:LawnmowerPolicy")
     with pytest.raises(ConfigError, match="taken"):
-        register("random", "agents.policies.lawnmower:LawnmowerPolicy")
-    register("random", "agents.policies.random:RandomPolicy")  # the same entry again is fine
-    register("ghost", "agents.policies.no_such_module:Ghost")
+        register("random", "poc_env.agents.policies.lawnmower:LawnmowerPolicy")
+    register(
+        "random", "poc_env.agents.policies.random:RandomPolicy"
+    )  # the same entry again is fine
+    register("ghost", "poc_env.agents.policies.no_such_module:Ghost")
     with pytest.raises(ConfigError, match="importable"):
         make_policy("ghost")
     register("not_a_policy", "numpy:zeros", kwargs={"shape": 2})
@@ -77,8 +79,8 @@ def test_register_checks_names_and_entry_points(scratch_registry):
 
 def test_a_registered_policy_flies_in_evaluate_with_its_defaults(scratch_registry):
     """A new name is all evaluate needs; registered keywords are the policy's defaults."""
-    register("mower", "agents.policies.lawnmower:LawnmowerPolicy")
-    register("quick_game", "agents.policies.game:PotentialGamePolicy", kwargs={"rounds": 2})
+    register("mower", "poc_env.agents.policies.lawnmower:LawnmowerPolicy")
+    register("quick_game", "poc_env.agents.policies.game:PotentialGamePolicy", kwargs={"rounds": 2})
     assert "mower" in registered() and make_policy("quick_game").rounds == 2
     ev = evaluate("small", ["mower", "lawnmower"], episodes=1)
     mower, lawn = ev.episodes

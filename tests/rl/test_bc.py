@@ -1,4 +1,4 @@
-"""Behaviour-cloning warm start (agents.rl.bc, ``poc-env train --task ID --bc-teacher``):
+"""Behaviour-cloning warm start (poc_env.agents.rl.bc, ``poc-env train --task ID --bc-teacher``):
 demonstrations, the fit, determinism, resume, bad input, and the BC policy flown in evaluate."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 import torch as th
 
-from agents.rl.args import TrainArgs, parse_train_args
-from agents.rl.bc import DEMO_KEY, FIT_KEY, _label, collect_demos, pretrain
-from agents.rl.checkpoint import checkpoint_steps, load_policy
-from agents.rl.train import make_env, make_model, seed_everything, train
+from poc_env.agents.rl.args import TrainArgs, parse_train_args
+from poc_env.agents.rl.bc import DEMO_KEY, FIT_KEY, _label, collect_demos, pretrain
+from poc_env.agents.rl.checkpoint import checkpoint_steps, load_policy
+from poc_env.agents.rl.train import make_env, make_model, seed_everything, train
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
@@ -113,7 +113,7 @@ def test_labels_of_the_autopilot_levels():
 
 def test_demo_stream_is_neither_a_training_nor_an_evaluation_stream():
     import poc_env.limits as limits
-    from agents.experiments.evaluate import EVAL_PRIOR_STREAM
+    from poc_env.agents.experiments.evaluate import EVAL_PRIOR_STREAM
 
     seed = 3
     streams = [
@@ -205,7 +205,7 @@ def test_a_resumed_bc_run_continues_bit_identically_without_bc_again(bc_run, tmp
     def no_bc(*a, **k):
         raise AssertionError("BC repeated on resume")
 
-    monkeypatch.setattr("agents.rl.bc.warm_start", no_bc)
+    monkeypatch.setattr("poc_env.agents.rl.bc.warm_start", no_bc)
     train(TrainArgs(resume=str(run), progress=False))
     assert load_policy(run / "model.zip").num_timesteps == 3 * ROLLOUT
     assert _same(_params(run / "model.zip"), _params(bc_run / "model.zip"))
@@ -258,7 +258,7 @@ def test_bc_options_on_the_command_line():
 def test_the_bc_increments_policy_beats_random_through_evaluate(tmp_path):
     """BC alone (no PPO step) from 3 greedy_bayes episodes, flown as ppo:RUN on 10 held-out
     priors: its mean POSC exceeds random's by more than the two 95 % half-widths together."""
-    from agents.experiments.evaluate import evaluate
+    from poc_env.agents.experiments.evaluate import evaluate
 
     run = train(
         _args(

@@ -1,4 +1,5 @@
-"""agents.rl.card: a checkpoint's card from its run's config and a poc-env evaluate folder."""
+"""poc_env.agents.rl.card: a checkpoint's card from its run's config and a poc-env evaluate
+folder."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from agents.rl.card import main, make_card
+from poc_env.agents.rl.card import main, make_card
 from poc_env.cli import main as cli
 from poc_env.errors import ConfigError
 

@@ -1,4 +1,5 @@
-"""The CNN+MLP extractor (agents.rl.networks) on SwarmVecEnv observations, trained by SB3 PPO."""
+"""The CNN+MLP extractor (poc_env.agents.rl.networks) on SwarmVecEnv observations, trained by SB3
+PPO."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from poc_env.errors import ConfigError
 def test_extractor_shapes_for_small_and_paper_grids():
     import torch as th
 
-    from agents.rl.networks import SwarmExtractor
+    from poc_env.agents.rl.networks import SwarmExtractor
 
     for name in ("small", "paper_6_2"):
         vec = SwarmVecEnv(name, n_envs=1, seed=0)
@@ -30,7 +31,7 @@ def _train(seed: int):
     from stable_baselines3 import PPO
     from stable_baselines3.common.utils import set_random_seed
 
-    from agents.rl.networks import SwarmExtractor
+    from poc_env.agents.rl.networks import SwarmExtractor
 
     th.manual_seed(seed)
     set_random_seed(seed)

@@ -1,11 +1,11 @@
-"""The pilot recipe (agents.rl.pilot): features, the autopilot, and its VecEnv."""
+"""The pilot recipe (poc_env.agents.rl.pilot): features, the autopilot, and its VecEnv."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from agents.rl.pilot import (
+from poc_env.agents.rl.pilot import (
     OBSERVATION_SPACE,
     PilotFeatures,
     PilotVecEnv,
@@ -140,9 +140,9 @@ def test_approach_shaping_is_potential_based():
 
 
 def test_ppo_policy_flies_a_pilot_checkpoint(tmp_path):
-    from agents.rl.args import TrainArgs
-    from agents.rl.policy import PPOPolicy
-    from agents.rl.train import make_env, make_model
+    from poc_env.agents.rl.args import TrainArgs
+    from poc_env.agents.rl.policy import PPOPolicy
+    from poc_env.agents.rl.train import make_env, make_model
     from poc_env.config import load_scenario
 
     args = TrainArgs(scenario="small", recipe="pilot", n_envs=1, n_steps=8, batch_size=8)
@@ -183,17 +183,17 @@ SHIPPED = [
 
 @pytest.mark.parametrize("name", SHIPPED)
 def test_shipped_checkpoint_replays_its_card_and_flies_an_unseen_episode(name):
-    """The card beside a shipped model (agents.rl.card) records its held-out evaluation: the
+    """The card beside a shipped model (poc_env.agents.rl.card) records its held-out evaluation: the
     first of those episodes replays to the recorded POSC, and a further episode (a seed and
     prior neither training nor that evaluation used) lands every UAV and reaches the card's
     floor (the lowest POSC of the evaluation's episodes)."""
     import json
     from importlib.resources import as_file, files
 
-    from agents.experiments.evaluate import run_episode
+    from poc_env.agents.experiments.evaluate import run_episode
     from poc_env.tasks import get_task
 
-    folder = files("agents") / "checkpoints"  # package data
+    folder = files("poc_env.agents") / "checkpoints"  # package data
     card = json.loads((folder / f"{name}.json").read_text())
     kind = "rllib" if card.get("engine") == "rllib" else "ppo"
     if kind == "rllib":
@@ -225,7 +225,7 @@ def test_shipped_checkpoint_replays_its_card_and_flies_an_unseen_episode(name):
     ],
 )
 def test_shipped_checkpoint_flies_at_its_level_within_limits(name, control):
-    from agents.rl.policy import PPOPolicy
+    from poc_env.agents.rl.policy import PPOPolicy
 
     env = UAVSearchParallelEnv("paper_6_2")
     obs, _ = env.reset(seed=5)
@@ -244,12 +244,12 @@ def test_shipped_checkpoint_by_name(tmp_path, monkeypatch):
     list the shipped ones."""
     from importlib.resources import files
 
-    from agents.rl.checkpoint import model_path, shipped_checkpoints
+    from poc_env.agents.rl.checkpoint import model_path, shipped_checkpoints
     from poc_env.errors import ConfigError
 
     monkeypatch.chdir(tmp_path)
     assert "ppo_pilot_paper_6_2" in shipped_checkpoints()
     found = model_path("ppo_pilot_paper_6_2")
-    assert found.samefile(str(files("agents") / "checkpoints" / "ppo_pilot_paper_6_2.zip"))
+    assert found.samefile(str(files("poc_env.agents") / "checkpoints" / "ppo_pilot_paper_6_2.zip"))
     with pytest.raises(ConfigError, match="ppo_pilot_paper_6_2"):
         model_path("ppo_pilot_nowhere")

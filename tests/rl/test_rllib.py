@@ -1,5 +1,6 @@
-"""RLlib multi-agent PPO (agents.rl.rllib) and Ray-distributed jobs (poc_env.cluster,
-agents.experiments.pool.ray_jobs): tiny runs on one local Ray instance (2 CPUs, no dashboard)."""
+"""RLlib multi-agent PPO (poc_env.agents.rl.rllib) and Ray-distributed jobs (poc_env.cluster,
+poc_env.agents.experiments.pool.ray_jobs): tiny runs on one local Ray instance (2 CPUs, no
+dashboard)."""
 
 from __future__ import annotations
 
@@ -13,13 +14,13 @@ import pytest
 
 pytest.importorskip("ray", reason="the rllib extra is not installed")
 
-from agents.experiments.evaluate import evaluate
-from agents.experiments.pool import ray_jobs, run_jobs
-from agents.policies.registry import make_policy
-from agents.rl.args import TrainArgs
-from agents.rl.rllib import RLlibPolicy
-from agents.rl.train import train
 from poc_env import cluster
+from poc_env.agents.experiments.evaluate import evaluate
+from poc_env.agents.experiments.pool import ray_jobs, run_jobs
+from poc_env.agents.policies.registry import make_policy
+from poc_env.agents.rl.args import TrainArgs
+from poc_env.agents.rl.rllib import RLlibPolicy
+from poc_env.agents.rl.train import train
 from poc_env.errors import ConfigError, MissingExtraError
 
 TASK = "poc_env/UAVSearch-Small-Random-Heading-v0"
@@ -56,7 +57,7 @@ def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
     rows = list(csv.DictReader((run / "metrics.csv").open()))
     assert rows and int(rows[-1]["env_steps"]) >= 200
     assert int(float(rows[-1]["agent_steps"])) == 3 * int(rows[-1]["env_steps"])
-    from agents.rl.policy import checkpoint_control
+    from poc_env.agents.rl.policy import checkpoint_control
 
     assert checkpoint_control(f"rllib:{run}") == "heading"  # from the run's task
     policy = make_policy(f"rllib:{run}")
@@ -80,7 +81,7 @@ def test_one_policy_per_uav(ray_local, tmp_path, monkeypatch):
 def test_a_long_run_keeps_its_newest_checkpoint_and_curve(ray_local, tmp_path, monkeypatch):
     """Every --checkpoint-every env steps the checkpoint and metrics.csv are rewritten, so a
     run stopped midway keeps them (here: seen at each save, before the run ends)."""
-    import agents.rl.rllib as rl
+    import poc_env.agents.rl.rllib as rl
 
     seen: list[int] = []
     real = rl._save

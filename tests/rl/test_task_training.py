@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import poc_env
-from agents.experiments.evaluate import evaluate
-from agents.rl.args import TrainArgs
-from agents.rl.policy import PPOPolicy
-from agents.rl.train import make_env, train
+from poc_env.agents.experiments.evaluate import evaluate
+from poc_env.agents.rl.args import TrainArgs
+from poc_env.agents.rl.policy import PPOPolicy
+from poc_env.agents.rl.train import make_env, train
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim.observations import FEATURES

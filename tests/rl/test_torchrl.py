@@ -1,4 +1,4 @@
-"""TorchRL on the registered tasks: :func:`agents.rl.frameworks.torchrl_env`.
+"""TorchRL on the registered tasks: :func:`poc_env.agents.rl.frameworks.torchrl_env`.
 
 TorchRL's spec check, rollout shapes per control level, a transition-by-transition replay of a
 wrapped episode on the bare PettingZoo env (UAVs finishing at different times: masks, zeros,
@@ -20,8 +20,8 @@ pytest.importorskip("torchrl")
 import torch
 from torchrl.envs.utils import check_env_specs
 
-from agents.rl.frameworks import GROUP, torchrl_env
 from poc_env import tasks
+from poc_env.agents.rl.frameworks import GROUP, torchrl_env
 from poc_env.errors import MissingExtraError
 
 SHORT = {"episode.horizon_steps": 20}

@@ -1,5 +1,5 @@
-"""``poc-env train`` (agents.rl.train, args, checkpoint, policy, curve): run folders, checkpoints,
-resume, determinism, learning, ppo:PATH, the command line."""
+"""``poc-env train`` (poc_env.agents.rl.train, args, checkpoint, policy, curve): run folders,
+checkpoints, resume, determinism, learning, ppo:PATH, the command line."""
 
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 import torch as th
 
-from agents.rl.args import TrainArgs, parse_train_args
-from agents.rl.checkpoint import checkpoint_steps, latest_checkpoint, load_policy
-from agents.rl.policy import PPOPolicy
-from agents.rl.train import make_env, make_model, seed_everything, train
+from poc_env.agents.rl.args import TrainArgs, parse_train_args
+from poc_env.agents.rl.checkpoint import checkpoint_steps, latest_checkpoint, load_policy
+from poc_env.agents.rl.policy import PPOPolicy
+from poc_env.agents.rl.train import make_env, make_model, seed_everything, train
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.io import atomic_path
@@ -260,13 +260,13 @@ def test_checkpoint_for_another_number_of_uavs_or_grid(runs, tmp_path):
 
 def test_a_shared_checkpoint_from_before_the_layout_by_role_loads(tmp_path, monkeypatch):
     """Shared-recipe files pickle the extractor's class by module path; those written before
-    the layout by role name ``agents.networks`` (now ``agents.rl.networks``)."""
+    the layout by role name ``agents.networks`` (now ``poc_env.agents.rl.networks``)."""
     import sys
     import types
 
     from stable_baselines3 import PPO
 
-    from agents.rl.networks import SwarmExtractor
+    from poc_env.agents.rl.networks import SwarmExtractor
 
     old = types.ModuleType("agents.networks")
     Old = type("SwarmExtractor", (SwarmExtractor,), {"__module__": "agents.networks"})
@@ -290,7 +290,7 @@ def test_a_shared_checkpoint_from_before_the_layout_by_role_loads(tmp_path, monk
 
 # -- evaluation through ppo:PATH --------------------------------------------------------------
 def test_ppo_path_evaluates_through_evaluate(runs):
-    from agents.experiments.evaluate import evaluate, make_policy
+    from poc_env.agents.experiments.evaluate import evaluate, make_policy
 
     names = [
         f"ppo:{runs['shared'] / 'model.zip'}",
@@ -320,7 +320,7 @@ def test_ppo_learns_on_small(tmp_path):
     is deterministic on one torch build, so the 0.1 margin only has to absorb other torch builds
     and BLAS kernels; a broken reward, observation, action mapping or update loses it all.
     """
-    from agents.experiments.evaluate import evaluate
+    from poc_env.agents.experiments.evaluate import evaluate
 
     args = TrainArgs(
         scenario="small",
@@ -346,7 +346,7 @@ def test_ppo_learns_on_small(tmp_path):
 
 # -- training curve ---------------------------------------------------------------------------
 def test_curve_reads_the_runs_logs_and_plots_them(runs, tmp_path, capsys):
-    from agents.rl.curve import training_curve
+    from poc_env.agents.rl.curve import training_curve
     from poc_env.cli import main
 
     data = training_curve(runs["pilot"])["rollout/posc_mean"]
@@ -368,7 +368,7 @@ def _field_docs() -> dict[str, str]:
     import itertools
     import textwrap
 
-    from agents.rl import args as args_module
+    from poc_env.agents.rl import args as args_module
 
     tree = ast.parse(textwrap.dedent(inspect.getsource(args_module.TrainArgs)))
     body = tree.body[0].body  # type: ignore[attr-defined]
@@ -398,7 +398,7 @@ def test_cli_options_come_from_trainargs(tmp_path, capsys, monkeypatch):
     assert (got.total_timesteps, got.random_priors, got.overrides) == (5, False, ["a.b=1"])
     # the README's training command, through `poc-env train` itself
     seen = []
-    monkeypatch.setattr("agents.rl.train.train", lambda a: seen.append(a) or tmp_path)
+    monkeypatch.setattr("poc_env.agents.rl.train.train", lambda a: seen.append(a) or tmp_path)
     readme = (
         "train --scenario paper_6_2 --recipe pilot --seed 1 --n-envs 16 --total-timesteps "
         "10002432 --approach-shaping 0.1 --overrides reward.alpha=100 reward.violation_penalty=0.5"
@@ -439,7 +439,7 @@ def test_resume_skips_a_checkpoint_killed_between_model_and_state(runs, tmp_path
     """A kill after step_192.zip but before its state file: resume takes the last complete
     checkpoint (step_96, with its generators) and ends bit-identical to the uninterrupted run,
     instead of restoring the weights without the generators."""
-    import agents.rl.checkpoint as ckpt
+    import poc_env.agents.rl.checkpoint as ckpt
 
     recipe = "shared"
     run = tmp_path / "killed"

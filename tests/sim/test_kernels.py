@@ -579,9 +579,10 @@ def test_fast_action_path_equals_the_checked_one():
 
 def _project_modules():
     root = Path(poc_env.__file__).resolve().parents[1]
-    for pkg in ("poc_env", "agents"):
+    for pkg in ("poc_env", "agents"):  # agents/ is the sub-package poc_env.agents
         for f in sorted((root / pkg).rglob("*.py")):
             parts = f.relative_to(root).with_suffix("").parts
+            parts = ("poc_env", *parts) if pkg == "agents" else parts
             yield ".".join(parts[:-1] if parts[-1] == "__init__" else parts), f
 
 
@@ -606,7 +607,7 @@ def test_every_compiled_function_lives_in_the_kernels_module():
     kernels_file = Path(_kernels.__file__).resolve()
     for name in ("poc_env.theory.search_theory", "poc_env.sim.core", "poc_env.sim.comms",
                  "poc_env.sim.constraints", "poc_env.sim.observations",
-                 "poc_env.theory.regions", "agents.planning.objective"):  # fmt: skip
+                 "poc_env.theory.regions", "poc_env.agents.planning.objective"):  # fmt: skip
         module = importlib.import_module(name)
         for value in vars(module).values():
             if isinstance(value, Dispatcher):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from agents.planning.survey import RegionPlan, RegionSpec, run_survey
+from poc_env.agents.planning.survey import RegionPlan, RegionSpec, run_survey
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.bound import physical_optimum
