@@ -12,6 +12,12 @@ Ray tasks instead, on a local Ray instance or an existing cluster
 (:func:`poc_env.cluster.ray_session`); results come back in job order, so they equal the local
 ones job for job (every job seeds its own generators).
 
+Workers die with the process that started them: each worker watches its parent command (a
+``kill -9`` of ``poc-env evaluate --workers N`` leaves no worker behind, and the fork server
+ends by itself when its client is gone). On Linux the kernel's parent-death signal ends a
+worker whose fork server has gone; a watchdog thread in every worker, on every platform, ends
+it within :data:`WATCH_S` seconds of the command's end.
+
 Every wait for a result has a timeout, :func:`worker_timeout_s` seconds per job (30 minutes
 unless ``POC_ENV_WORKER_TIMEOUT_S`` says otherwise): a worker that hangs or dies ends the
 command with :class:`WorkerTimeoutError` and its pool is stopped, instead of a silent wait.
@@ -31,6 +37,8 @@ from typing import Any
 from poc_env.errors import ConfigError, PocEnvError, as_number
 
 DEFAULT_TIMEOUT_S = 1800.0
+#: seconds between a worker's checks that the command that started it still runs
+WATCH_S = 0.5
 _ENV_VAR = "POC_ENV_WORKER_TIMEOUT_S"
 #: True inside :func:`ray_jobs`: :func:`run_jobs` sends its jobs to Ray.
 _ON_RAY: contextvars.ContextVar[bool] = contextvars.ContextVar("poc_env_on_ray", default=False)
@@ -101,10 +109,47 @@ def worker_timeout_s() -> float:
     return as_number(_ENV_VAR, value, 0.0, None, lo_open=True)
 
 
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by another user (a reused pid): not ours
+        return False
+    return True
+
+
+def _die_with(owner: int) -> None:
+    """Worker initializer: end this worker when the command ``owner`` (a pid) is gone."""
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):  # the fork server's death ends the worker at once
+        import ctypes
+        import signal
+
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+
+    def watch() -> None:
+        while _alive(owner):
+            threading.Event().wait(WATCH_S)
+        os._exit(1)  # nobody is left to take a result: end now, without cleanup
+
+    if not _alive(owner):
+        os._exit(1)
+    threading.Thread(target=watch, name="poc-env-owner-watch", daemon=True).start()
+
+
 def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A pool of ``workers`` processes started by a fork server (see the module docstring)."""
+    """A pool of ``workers`` processes started by a fork server (see the module docstring);
+    each worker ends when the process that made the pool ends, however it ends."""
     return ProcessPoolExecutor(
-        max_workers=workers, mp_context=multiprocessing.get_context("forkserver")
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("forkserver"),
+        initializer=_die_with,
+        initargs=(os.getpid(),),
     )
 
 
@@ -172,6 +217,18 @@ def run_jobs(
     finally:
         if bar is not None:
             bar.close()
+
+
+def pid_job(args: tuple[str, float]) -> int:
+    """A job that writes its worker's pid into the folder ``args[0]`` and sleeps ``args[1]``
+    seconds (to test that workers die with their command)."""
+    import time
+    from pathlib import Path
+
+    folder, seconds = args
+    Path(folder, f"{os.getpid()}.pid").write_text(str(os.getpid()))
+    time.sleep(seconds)
+    return os.getpid()
 
 
 def sleep_job(seconds: float) -> float:

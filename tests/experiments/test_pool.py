@@ -29,3 +29,46 @@ def test_the_timeout_setting_is_validated(monkeypatch):
     monkeypatch.setenv("POC_ENV_WORKER_TIMEOUT_S", "soon")
     with pytest.raises(ConfigError, match="POC_ENV_WORKER_TIMEOUT_S"):
         run_jobs(sleep_job, [0.0, 0.0], workers=2)
+
+
+def test_workers_die_with_a_killed_command(tmp_path):
+    """``kill -9`` of a command running jobs on workers leaves no worker behind (issue 27:
+    they were reparented to PID 1 and kept their memory for minutes)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    pids = tmp_path / "pids"
+    pids.mkdir()
+    script = (
+        "from poc_env.agents.experiments.pool import pid_job, run_jobs\n"
+        "if __name__ == '__main__':\n"
+        f"    run_jobs(pid_job, [({str(pids)!r}, 600.0)] * 3, workers=3)\n"
+    )
+    cmd = subprocess.Popen([sys.executable, "-c", script])
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(pids.glob("*.pid"))) < 3 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        workers = [int(p.read_text()) for p in pids.glob("*.pid")]
+        assert len(workers) == 3, "the workers did not start"
+    finally:
+        cmd.send_signal(signal.SIGKILL)
+        cmd.wait()
+
+    def alive(pid: int) -> bool:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        with open(f"/proc/{pid}/stat") as f:  # a reaped-later zombie is dead too
+            return f.read().split(")")[-1].split()[0] != "Z"
+
+    deadline = time.monotonic() + 30
+    while any(alive(p) for p in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = [p for p in workers if alive(p)]
+    for p in left:  # the test's own workers, by pid: no orphan even when the check fails
+        os.kill(p, signal.SIGKILL)
+    assert not left, "workers outlived their command"
