@@ -40,6 +40,7 @@ order in which jobs run, so the outputs are reproducible from the seed.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import dataclasses
 import io
@@ -793,24 +794,36 @@ def run_experiment(
     names = list(EXPERIMENTS) if name == "all" else [name]
     budget = dataclasses.replace(QUICK if quick else FULL, preset=preset)
     runner = Runner(workers, progress)
-    results = []
+    results: list[Result] = []
+    # The command's set of outputs is complete or absent: one experiment stages its own folder;
+    # ``all`` stages the whole of ``out``, so a kill part-way leaves the previous run's results
+    # as they were, never mixed with some of the new run's.
+    whole = atomic_dir(out) if name == "all" else contextlib.nullcontext(None)
     try:
-        for n in names:
-            final = Path(out) / n
-            t0 = time.perf_counter()
-            with atomic_dir(final) as folder:  # each experiment's folder: complete or absent
-                res = EXPERIMENTS[n](budget, runner, folder, seed)
-                wall = time.perf_counter() - t0
-                res.files[:0] = [
-                    write_text_atomic(folder / f"{n}.csv", res.csv()),
-                    write_text_atomic(folder / f"{n}.txt", res.table + "\n"),
-                ]
-            res.files = [final / Path(p).relative_to(folder) for p in res.files]
-            results.append(res)
-            if echo is not None:
-                echo(f"\n== {n} ({'quick' if quick else 'paper budget'}, {wall:.1f} s) ==")
-                echo(res.table)
-                echo("wrote " + ", ".join(str(p) for p in res.files))
+        with whole as stage:
+            for k, n in enumerate(names):
+                final = Path(out) / n
+                if echo is not None and len(names) > 1:
+                    echo(f"\n[{k + 1}/{len(names)}] {n} ...")
+                t0 = time.perf_counter()
+                inner = (
+                    contextlib.nullcontext(stage / n) if stage is not None else atomic_dir(final)
+                )
+                with inner as folder:  # each experiment's folder: complete or absent
+                    folder.mkdir(parents=True, exist_ok=True)
+                    res = EXPERIMENTS[n](budget, runner, folder, seed)
+                    wall = time.perf_counter() - t0
+                    res.files[:0] = [
+                        write_text_atomic(folder / f"{n}.csv", res.csv()),
+                        write_text_atomic(folder / f"{n}.txt", res.table + "\n"),
+                    ]
+                res.files = [final / Path(p).relative_to(folder) for p in res.files]
+                results.append(res)
+                if echo is not None:
+                    budget_name = "quick" if quick else "paper budget"
+                    echo(f"\n== {n} ({budget_name}, {wall:.1f} s) ==")
+                    echo(res.table)
+                    echo("wrote " + ", ".join(str(p) for p in res.files))
     finally:
         runner.close()
     return results

@@ -134,3 +134,33 @@ def test_bad_names_and_options():
         run_experiment("table4", quick=True, workers=0, echo=None)
     with pytest.raises(ConfigError, match="seed"):
         run_experiment("table4", quick=True, seed=-1, echo=None)
+
+
+def test_all_killed_part_way_leaves_the_previous_run_untouched(tmp_path, monkeypatch):
+    """``experiment all --out D``: an error (or a kill) in a later experiment leaves D as the
+    previous run left it, not the new run's finished experiments beside the old ones."""
+    import poc_env.agents.experiments.paper as paper
+
+    out = tmp_path / "D"
+    (out / "first").mkdir(parents=True)
+    (out / "first" / "first.csv").write_text("old\n")
+    (out / "mine.txt").write_text("the user's own file\n")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+
+    def first(budget, runner, folder, seed):
+        return paper.Result("first", [{"x": 1}], "new table")
+
+    def second(budget, runner, folder, seed):
+        (folder / "half.csv").write_text("half\n")
+        raise KeyboardInterrupt  # a kill part-way through the second experiment
+
+    monkeypatch.setattr(paper, "EXPERIMENTS", {"first": first, "second": second})
+    with pytest.raises(KeyboardInterrupt):
+        run_experiment("all", quick=True, out=out, echo=None)
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert [p.name for p in tmp_path.iterdir()] == ["D"]  # no staging folder left either
+    # and a run that finishes replaces the old results, keeping the user's other files
+    monkeypatch.setattr(paper, "EXPERIMENTS", {"first": first})
+    run_experiment("all", quick=True, out=out, echo=None)
+    assert (out / "first" / "first.csv").read_text() == "x\n1\n"
+    assert (out / "mine.txt").read_text() == "the user's own file\n"
