@@ -148,6 +148,26 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_policies(args: argparse.Namespace) -> int:
+    """Every registered policy as ``evaluate --policies`` spells it, with what it does."""
+    from poc_env.agents.policies.registry import registered, spec
+    from poc_env.agents.rl.checkpoint import shipped_checkpoints
+    from poc_env.agents.rl.rllib import shipped_rllib
+
+    width = max(len(p) for p in registered())
+    for spelling in registered():
+        s = spec(spelling)
+        what = s.summary
+        if s.argument is not None:
+            what += f"; {spelling.partition(':')[2]}: {s.argument_help or s.argument}"
+        print(f"{spelling:<{width}}  {what}")
+    shipped = [f"ppo:{n}" for n in shipped_checkpoints()]
+    shipped += [f"rllib:{n}" for n in shipped_rllib()]
+    print("\nshipped checkpoints (ppo: the rl extra flies them; rllib: the rllib extra):")
+    print("\n".join(f"  {n}" for n in shipped))
+    return 0
+
+
 def cmd_tasks(args: argparse.Namespace) -> int:
     from poc_env.tasks import task_table
 
@@ -614,6 +634,18 @@ def cmd_demo(args: argparse.Namespace) -> int:
         return _evaluate(eval_args, ["de_plan", "lawnmower", "random"], stage, out)
 
 
+def _version() -> str:
+    """The installed distribution's version (the package's own when run from a checkout)."""
+    import importlib.metadata
+
+    try:
+        return importlib.metadata.version("poc-env")
+    except importlib.metadata.PackageNotFoundError:
+        from poc_env import __version__
+
+        return __version__
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="poc-env",
@@ -626,11 +658,17 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"memory guard: refuse maps, env batches and planner populations estimated above "
         f"this many GiB (default {limits.DEFAULT_MEMORY_GB:g}, or POC_ENV_MAX_MEMORY_GB)",
     )
+    parser.add_argument(
+        "--version", action="version", version=f"%(prog)s {_version()}", help="print the version"
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     from poc_env.agents.policies.registry import registered
 
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
+
+    p = sub.add_parser("policies", help="list the registered policies (evaluate --policies)")
+    p.set_defaults(func=cmd_policies)
 
     p = sub.add_parser("tasks", help="list the registered benchmark tasks (poc_env.tasks)")
     p.set_defaults(func=cmd_tasks)

@@ -54,6 +54,8 @@ class PolicySpec:
         for a policy spelled by its name alone.
     argument_help:
         What ``VALUE`` is, for error messages (``"a checkpoint path"``).
+    summary:
+        One line on what the policy does (``poc-env policies``).
     """
 
     name: str
@@ -61,6 +63,7 @@ class PolicySpec:
     kwargs: Mapping[str, Any] = field(default_factory=dict)
     argument: str | None = None
     argument_help: str = ""
+    summary: str = field(default="", compare=False)  # words, not identity
 
     @property
     def spelling(self) -> str:
@@ -89,7 +92,7 @@ class PolicySpec:
             raise ConfigError(
                 f"policies[{self.name}].entry_point",
                 self.entry_point,
-                "a factory returning an poc_env.agents.policies.base.Policy",
+                "a factory returning a poc_env.agents.policies.base.Policy",
             )
         return policy
 
@@ -109,6 +112,7 @@ def register(
     kwargs: Mapping[str, Any] | None = None,
     argument: str | None = None,
     argument_help: str = "",
+    summary: str = "",
 ) -> PolicySpec:
     """Register a policy factory under ``name`` (see :class:`PolicySpec` for the parameters).
 
@@ -124,7 +128,7 @@ def register(
     if argument is not None and not argument.isidentifier():
         raise ConfigError(f"policies[{name}].argument", argument, "a keyword argument name")
     frozen = MappingProxyType(dict(kwargs or {}))
-    spec = PolicySpec(name, entry_point, frozen, argument, argument_help)
+    spec = PolicySpec(name, entry_point, frozen, argument, argument_help, summary)
     old = _REGISTRY.get(name)
     if old is not None and old != spec:
         raise ConfigError("name", name, f"a name not registered yet (taken by {old.entry_point})")
@@ -171,31 +175,70 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
 REGISTRY: Mapping[str, PolicySpec] = MappingProxyType(_REGISTRY)
 
 # -- the policies of poc-env -----------------------------------------------------------------
-register("random", "poc_env.agents.policies.random:RandomPolicy")
-register("random_heading", "poc_env.agents.policies.random:RandomHeadingPolicy")
-register("random_waypoint", "poc_env.agents.policies.random:RandomWaypointPolicy")
-register("lawnmower", "poc_env.agents.policies.lawnmower:LawnmowerPolicy")
-register("greedy_bayes", "poc_env.agents.policies.greedy:GreedyBayesPolicy")
-register("potential_game", "poc_env.agents.policies.game:PotentialGamePolicy")
-register("de_receding", "poc_env.agents.policies.receding:DERecedingPolicy")
-register("de_plan", "poc_env.agents.policies.de_plan:DEPlanPolicy")
-register("allocation_plan", "poc_env.agents.policies.allocation:AllocationPlanPolicy")
+register(
+    "random",
+    "poc_env.agents.policies.random:RandomPolicy",
+    summary="uniform random speed and heading increments (the floor of the increments level)",
+)
+register(
+    "random_heading",
+    "poc_env.agents.policies.random:RandomHeadingPolicy",
+    summary="a uniform random heading per UAV and step, flown by the heading autopilot",
+)
+register(
+    "random_waypoint",
+    "poc_env.agents.policies.random:RandomWaypointPolicy",
+    summary="a uniform random target point per UAV and step, flown by the waypoint autopilot",
+)
+register(
+    "lawnmower",
+    "poc_env.agents.policies.lawnmower:LawnmowerPolicy",
+    summary="parallel strips over the map, split among the UAVs (the classic survey)",
+)
+register(
+    "greedy_bayes",
+    "poc_env.agents.policies.greedy:GreedyBayesPolicy",
+    summary="each UAV heads for the best reachable cell of the current belief",
+)
+register(
+    "potential_game",
+    "poc_env.agents.policies.game:PotentialGamePolicy",
+    summary="log-linear learning over heading changes (a potential game on marginal POS)",
+)
+register(
+    "de_receding",
+    "poc_env.agents.policies.receding:DERecedingPolicy",
+    summary="the paper's §5 loop: adaptive DE picks every UAV's next headings each step",
+)
+register(
+    "de_plan",
+    "poc_env.agents.policies.de_plan:DEPlanPolicy",
+    summary="the paper's planner: adaptive DE on eq. 26 at take-off, then flies the plan",
+)
+register(
+    "allocation_plan",
+    "poc_env.agents.policies.allocation:AllocationPlanPolicy",
+    summary="routes from the reach-aware optimal allocation, refined, then flown (best planner)",
+)
 register(
     "optimizer_plan",
     "poc_env.agents.policies.de_plan:DEPlanPolicy",
     argument="optimizer",
     argument_help="an optimiser of the eq. 26 plan (adaptive_de, classic_de, chaotic_abc, "
     "grouped_pso, scipy_de, cmaes)",
+    summary="any optimiser's eq. 26 plan, flown as de_plan flies DE's",
 )
 register(
     "ppo",
     "poc_env.agents.rl.policy:PPOPolicy",
     argument="path",
     argument_help="a checkpoint path (a .zip or a run folder)",
+    summary="a stable-baselines3 PPO checkpoint (the rl extra)",
 )
 register(
     "rllib",
     "poc_env.agents.rl.rllib:RLlibPolicy",
     argument="path",
     argument_help="a run folder of poc-env train --engine rllib",
+    summary="an RLlib multi-agent PPO checkpoint (the rllib extra)",
 )
