@@ -20,7 +20,16 @@ from pathlib import Path
 import numpy as np
 
 import poc_env.limits as limits
-from poc_env.errors import ConfigError, MissingExtraError, PocEnvError, as_int
+from poc_env.errors import (
+    EXTRA_MODULES,
+    ConfigError,
+    MissingExtraError,
+    PocEnvError,
+    as_int,
+    has_extra,
+    require_extra,
+    skipped_for_extra,
+)
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
 _EXTRA_OF = {
@@ -222,7 +231,11 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
     )
     print(result.table())
     if stage is not None:
-        _wrote(write_survey(result, stage, prior=prior, scenario=sc, plan=plan), stage, dest)
+        figure = has_extra("plot")  # the tables still, the figure not
+        if not figure:
+            print(skipped_for_extra("plot", "survey.png"))
+        shown = prior if figure else None
+        _wrote(write_survey(result, stage, prior=shown, scenario=sc, plan=plan), stage, dest)
     if getattr(args, "plan_out", None):
         from poc_env.agents.planning.planner import write_plan
         from poc_env.agents.planning.survey import survey_plan
@@ -434,8 +447,11 @@ def _evaluate(
             write_text_atomic(stage / "evaluate.csv", ev.to_csv()),
             write_text_atomic(stage / "episodes.csv", ev.episodes_csv()),
             write_text_atomic(stage / "evaluate.txt", text + "\n"),
-            plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s),
         ]
+        if has_extra("plot"):  # the tables never wait on, nor fail for, the figure
+            files.append(plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s))
+        else:
+            print(skipped_for_extra("plot", "posc_over_time.png"))
         if baselines:
             paired = csv_text([row for b in baselines for row in ev.paired(b)])
             files.append(write_text_atomic(stage / "paired.csv", paired))
@@ -484,6 +500,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from poc_env.io import atomic_path
 
     _check_plan_args(args)
+    if args.plot:  # asked for: checked before the planning, not after
+        require_extra("plot", "poc-env plan --plot", *EXTRA_MODULES["plot"])
     if not args.plot:
         return _plan(args, Path(args.out), None)
     with atomic_path(args.plot) as plot_tmp:  # published after plan.json, or not at all
@@ -619,11 +637,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
             preset="paper",
             planner="de",
         )
+        plot = has_extra("plot")
+        if not plot:
+            print(skipped_for_extra("plot", "plan.png"))
         _plan(
             plan_args,
             stage / "plan.json",
-            stage / "plan.png",
-            (out / "plan.json", out / "plan.png"),
+            stage / "plan.png" if plot else None,
+            (out / "plan.json", out / "plan.png" if plot else None),
         )
         print("\n== policies flown in the environment, same seeds ==")
         # parsed by the real parser, so every option evaluate reads has its default

@@ -67,6 +67,18 @@ class MissingExtraError(PocEnvError, ImportError):
         return (type(self), (self.extra, self.what))
 
 
+#: the modules of each optional dependency group that a feature checks before it starts
+EXTRA_MODULES = {"plot": ("matplotlib", "PIL"), "rl": ("torch", "stable_baselines3")}
+
+
+def has_extra(extra: str) -> bool:
+    """True when every module of the optional group ``extra`` (:data:`EXTRA_MODULES`) can be
+    imported (checked without importing it)."""
+    import importlib.util
+
+    return all(importlib.util.find_spec(m) is not None for m in EXTRA_MODULES[extra])
+
+
 def require_extra(extra: str, what: str, *modules: str) -> None:
     """Raise :class:`MissingExtraError` unless every module in ``modules`` can be imported."""
     import importlib.util
@@ -74,6 +86,11 @@ def require_extra(extra: str, what: str, *modules: str) -> None:
     for m in modules:
         if importlib.util.find_spec(m) is None:
             raise MissingExtraError(extra, what)
+
+
+def skipped_for_extra(extra: str, what: str) -> str:
+    """The note a command prints when it leaves out ``what`` (a figure) for a missing extra."""
+    return f"note: no {what}: it needs the '{extra}' extra (pip install 'poc-env[{extra}]')"
 
 
 class MapFileError(PocEnvError, ValueError):
