@@ -233,12 +233,16 @@ def test_map_file_errors_say_what_is_allowed(grid, tmp_path):
     huge = tmp_path / "huge.npy"
     m = np.lib.format.open_memmap(huge, mode="w+", dtype=np.float64, shape=(20000, 20000))
     del m  # a sparse 3.2 GB file: its shape is refused before its data are read
+    npz = tmp_path / "archive.npy"  # an np.savez archive under a .npy name
+    with npz.open("wb") as f:
+        np.savez(f, prior=np.ones(grid.shape))
     cases = [
         (tmp_path, "is a folder"),
         ("/dev/null", "not a regular file"),
         (tmp_path / "none.npy", "does not exist"),
         (bad, "corrupt"),
         (huge, r"shape \(20000, 20000\)"),
+        (npz, r"\.npz archive"),  # np.load reads it by content: was an AttributeError
     ]
     for path, match in cases:
         with pytest.raises(MapFileError, match=match) as err:

@@ -12,6 +12,7 @@ user's map is read by :func:`load_map` from ``.npy`` or ``.csv``.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
 from dataclasses import dataclass
@@ -257,6 +258,13 @@ def load_map(path: str | os.PathLike[str], grid: Grid) -> np.ndarray:
     try:
         if suffix == ".npy":
             mm = np.load(p, allow_pickle=False, mmap_mode="r")
+            if not isinstance(mm, np.ndarray):  # np.load reads a .npz archive by its content
+                with contextlib.suppress(AttributeError):
+                    mm.close()
+                raise MapFileError(
+                    f"{name} holds a .npz archive ({type(mm).__name__}), not one array; "
+                    f"allowed: {allowed} (np.save, not np.savez)"
+                )
             if mm.shape != grid.shape:  # before reading the data
                 raise _shape_error(name, mm.shape, grid)
             arr = np.array(mm)
