@@ -734,11 +734,26 @@ def builtin_scenarios() -> list[str]:
 MAX_YAML_NODES = 100_000
 #: Largest YAML file read, bytes (the built-in scenarios are about 2 kB).
 MAX_YAML_BYTES = 4 * 2**20
+#: Deepest nesting of YAML collections read (the built-in scenarios nest 4 deep); a deeper
+#: document is refused before the parser's recursion could run out of stack.
+MAX_YAML_DEPTH = 64
 
 
 class _LimitedLoader(yaml.SafeLoader):
     """``yaml.SafeLoader`` that refuses documents expanding to more than MAX_YAML_NODES nodes
-    (counted on the composed graph, before anything is built)."""
+    (counted on the composed graph, before anything is built) or nesting collections more than
+    MAX_YAML_DEPTH deep."""
+
+    _depth = 0
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        self._depth += 1
+        try:
+            if self._depth > MAX_YAML_DEPTH:
+                raise yaml.YAMLError(f"collections nested more than {MAX_YAML_DEPTH} deep")
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
 
     def compose_document(self) -> Any:
         node = super().compose_document()

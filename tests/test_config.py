@@ -202,6 +202,22 @@ def test_yaml_alias_bomb_is_refused_quickly(tmp_path):
     assert load_scenario("small") == load_scenario(CONFIG_DIR / "small.yaml")
 
 
+def test_deeply_nested_yaml_is_refused_not_a_recursion_error(tmp_path):
+    """Issue 27 item 4: 100,000 nested lists (200 kB, well under the size cap) ended in a
+    RecursionError; any nesting past MAX_YAML_DEPTH is a clear error, shallower still loads."""
+    from poc_env.config import MAX_YAML_DEPTH, load_yaml_text
+
+    deep = tmp_path / "deep.yaml"
+    deep.write_text("name: deep\nmap: " + "[" * 100_000 + "]" * 100_000 + "\n")
+    with pytest.raises(ConfigError, match=f"nested more than {MAX_YAML_DEPTH} deep"):
+        load_scenario(deep)
+    d = MAX_YAML_DEPTH - 1  # inside the top-level mapping: exactly the limit
+    nested: list = []
+    for _ in range(d - 1):
+        nested = [nested]
+    assert load_yaml_text("a: " + "[" * d + "]" * d) == {"a": nested}
+
+
 def test_map_geography_keys():
     from poc_env.config import load_scenario
 
