@@ -11,9 +11,28 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+_UNSAFE_IN_NAME = re.compile(r"[^A-Za-z0-9._+-]+")
+
+
+def safe_stem(text: str, limit: int = 64) -> str:
+    """``text`` made safe as one component of a file name that the program chooses (a run
+    folder named after a scenario): every run of characters outside ``[A-Za-z0-9._+-]``
+    becomes ``_`` (path separators, ``..``, control characters, spaces included), leading
+    dots go, and the result is at most ``limit`` characters (``_`` when nothing is left).
+
+    >>> safe_stem("../../../etc/x")
+    '__.__._etc_x'
+    >>> safe_stem("Harbin search, day 2")
+    'Harbin_search_day_2'
+    """
+    stem = _UNSAFE_IN_NAME.sub("_", str(text)).lstrip(".")
+    stem = stem.replace("..", "_.")  # no parent reference survives anywhere in the name
+    return stem[:limit] or "_"
 
 
 def publish_atomic(tmp: str | os.PathLike[str], path: str | os.PathLike[str]) -> None:

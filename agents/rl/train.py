@@ -70,7 +70,7 @@ from poc_env.agents.rl.checkpoint import (
     write_json,
 )
 from poc_env.errors import ConfigError, require_extra
-from poc_env.io import atomic_path
+from poc_env.io import atomic_path, safe_stem
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -280,7 +280,9 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
             )
         return p
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    base = Path("runs") / f"{scenario_name}-{args.engine}-{args.algo}-s{args.seed}-{stamp}"
+    # the scenario's name is the user's text: one safe component under runs/, never a path
+    name = safe_stem(f"{scenario_name}-{args.engine}-{args.algo}-s{args.seed}-{stamp}", 128)
+    base = Path("runs") / name
     p, k = base, 1
     while p.exists():
         k += 1
