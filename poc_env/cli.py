@@ -163,6 +163,12 @@ def cmd_tasks(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_record(args: argparse.Namespace) -> int:
+    from poc_env.recorded import main_args
+
+    return main_args(args)
+
+
 def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
@@ -634,6 +640,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("tasks", help="list the registered benchmark tasks (poc_env.tasks)")
     p.set_defaults(func=cmd_tasks)
+
+    p = sub.add_parser(
+        "record", help="record the fixed episodes of registered tasks (poc_env.recorded)"
+    )
+    from poc_env.recorded import add_arguments as record_arguments
+
+    record_arguments(p)
+    p.set_defaults(func=cmd_record)
 
     p = sub.add_parser("scenario", help="scenario tools: import GIS layers as a scenario")
     scenario_sub = p.add_subparsers(dest="scenario_command", required=True)
