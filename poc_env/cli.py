@@ -192,6 +192,18 @@ def cmd_tasks(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_record(args: argparse.Namespace) -> int:
+    from poc_env.recorded import main_args
+
+    return main_args(args)
+
+
+def cmd_spec(args: argparse.Namespace) -> int:
+    from poc_env.spec import main_args
+
+    return main_args(args)
+
+
 def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
@@ -694,6 +706,22 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("tasks", help="list the registered benchmark tasks (poc_env.tasks)")
     p.set_defaults(func=cmd_tasks)
 
+    p = sub.add_parser(
+        "record", help="record the fixed episodes of registered tasks (poc_env.recorded)"
+    )
+    from poc_env.recorded import add_arguments as record_arguments
+
+    record_arguments(p)
+    p.set_defaults(func=cmd_record)
+
+    p = sub.add_parser(
+        "spec", help="check (or --write) docs/ENVIRONMENT.md's tables generated from poc_env.spec"
+    )
+    from poc_env.spec import add_arguments as spec_arguments
+
+    spec_arguments(p)
+    p.set_defaults(func=cmd_spec)
+
     p = sub.add_parser("scenario", help="scenario tools: import GIS layers as a scenario")
     scenario_sub = p.add_subparsers(dest="scenario_command", required=True)
     p = scenario_sub.add_parser(
@@ -843,7 +871,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_plan)
 
     p = sub.add_parser("export", help="a plan.json as GeoJSON, KML or QGroundControl missions")
-    p.add_argument("plan", help="plan.json (schema 1)")
+    p.add_argument("plan", help="plan.json (schema 2; schema-1 files still load)")
     p.add_argument(
         "--format",
         required=True,

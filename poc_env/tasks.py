@@ -7,22 +7,15 @@ batched :class:`~poc_env.envs.gym_vector.SwarmGymVectorEnv`) and with PettingZoo
 and :func:`make_aec` are the same without the registry. Keyword arguments given at ``make``
 override the task's (``obs_type="dict"``, ``overrides={...}``, ``max_cycles=...``).
 
-Ids: ``poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v<version>``
-
-============  =============  =====================================================================
-part          values         meaning
-============  =============  =====================================================================
-Scenario      ``Small``      ``small``: 3 UAVs, 40 x 30 km, a 2-Gaussian prior (quick)
-              ``Paper62``    ``paper_6_2``: the paper's section 6.2 case (6 UAVs, 2 airfields)
-              ``Paper61``    ``paper_6_1``: the paper's section 6.1 case (fitted prior)
-Random        (absent)       the scenario's prior at every reset (the seed moves the hidden
-                             target, detection thresholds and link failures only)
-              ``Random``     a fresh seeded Gaussian-mixture prior at every reset
-                             (``random_prior=True``): held-out maps for generalisation
-Control       ``Increments`` the paper's eq. 19 increments, ``Box(-1, 1, (3,))`` per UAV
-              ``Heading``    a map-frame heading flown by the autopilot, ``Box(-1, 1, (2,))``
-              ``Waypoint``   a target point in the operating area, ``Box(-1, 1, (2,))``
-============  =============  =====================================================================
+Ids: ``poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v<version>``. Scenario: ``Small``
+(``small``, quick), ``Paper62`` (``paper_6_2``, the paper's section 6.2 case) or ``Paper61``
+(``paper_6_1``, section 6.1); ``-Random``: a fresh seeded
+Gaussian-mixture prior at every reset (``random_prior=True``); Control: ``Increments`` (eq. 19),
+``Heading`` or ``Waypoint`` (flown by the autopilot). The table of parts and their meanings is
+:data:`poc_env.spec.SCENARIO_PARTS`, :data:`~poc_env.spec.RANDOM_PARTS` and
+:data:`~poc_env.spec.CONTROL_PARTS`, which this module registers and ``docs/ENVIRONMENT.md``
+renders with each scenario's size and fleet read from its file (``poc-env spec
+--write``).
 
 Every task observes ``obs_type="compass"`` (a 63-value Box per UAV, the same size on every map:
 :class:`~poc_env.sim.observations.CompassFeatures`), which default MLP encoders of SB3 and RLlib
@@ -37,7 +30,16 @@ rewarded, how the swarm moves or when an episode ends (observations, rewards, dy
 constraints, scenario files, the random-prior generator, the task's keyword arguments) bumps the
 version of every task it touches (``-v0`` to ``-v1``); scores are compared only between equal
 ids. Speed-ups that leave every transition bit-identical (the test suite's equivalence tests
-decide) keep the version. :data:`VERSION` is the current version; the CHANGELOG lists each bump.
+decide) keep the version. :data:`VERSION` is the current version; it lives in one place,
+:data:`poc_env.spec.TASK_VERSION`, and the CHANGELOG lists each bump.
+
+The rule is mechanical: every registered id has a recorded episode (:mod:`poc_env.recorded`,
+``tests/recorded/<id>.npz``: observations, rewards, terminations, truncations and infos of a
+fixed-seed, fixed-action episode), and ``tests/envs/test_recorded.py`` replays each one. Any
+change to an observation, a reward, the dynamics or the episode end fails those tests until the
+version is bumped (new ids) and the episodes recorded anew (``poc-env record --all``, removing
+the old ids' files with their ids); a new task fails until it is recorded. An id is never
+reused: old ids keep their behaviour or leave the registry.
 """
 
 from __future__ import annotations
@@ -45,15 +47,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from poc_env import spec
 from poc_env.errors import ConfigError
 
-#: The version of every task below (see the versioning rule).
-VERSION = 0
+#: The version of every task below (see the versioning rule): :data:`poc_env.spec.TASK_VERSION`.
+VERSION = spec.TASK_VERSION
 NAMESPACE = "poc_env"
-#: Task-name part -> built-in scenario.
-SCENARIOS = {"Small": "small", "Paper62": "paper_6_2", "Paper61": "paper_6_1"}
-#: Task-name part -> control level (:data:`poc_env.sim.control.CONTROLS`).
-CONTROL_NAMES = {"Increments": "increments", "Heading": "heading", "Waypoint": "waypoint"}
+#: Task-name part -> built-in scenario (:data:`poc_env.spec.SCENARIO_PARTS`).
+SCENARIOS = {p.text: str(p.value) for p in spec.SCENARIO_PARTS}
+#: Task-name part -> control level (:data:`poc_env.spec.CONTROL_PARTS`).
+CONTROL_NAMES = {p.text: str(p.value) for p in spec.CONTROL_PARTS}
 #: The Gymnasium entry points of every task.
 ENTRY_POINT = "poc_env.envs.gymnasium_env:UAVSearchGym"
 VECTOR_ENTRY_POINT = "poc_env.envs.gym_vector:SwarmGymVectorEnv"
@@ -91,7 +94,7 @@ def task_id(scenario: str, control: str, random_prior: bool, version: int = VERS
 def _build() -> dict[str, Task]:
     out = {}
     for s_name, scenario in SCENARIOS.items():
-        for rand in (False, True):
+        for rand in (bool(p.value) for p in spec.RANDOM_PARTS):
             for c_name, control in CONTROL_NAMES.items():
                 tid = task_id(s_name, c_name, rand)
                 out[tid] = Task(tid, scenario, control, rand)

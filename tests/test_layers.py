@@ -23,6 +23,7 @@ LAYERS = (
     ("poc_env.geometry", 0),
     ("poc_env.config", 0),
     ("poc_env.limits", 0),
+    ("poc_env.spec", 0),
     ("poc_env.cluster", 0),
     ("poc_env._kernels", 0),
     ("poc_env.theory", 1),
@@ -30,6 +31,7 @@ LAYERS = (
     ("poc_env.viz", 3),
     ("poc_env.envs", 4),
     ("poc_env.uav_search_v0", 4),
+    ("poc_env.recorded", 4),
     ("poc_env", 4),  # the package's __init__: parallel_env, env, registration
     ("poc_env.agents.planning", 5),
     ("poc_env.agents.policies", 6),

@@ -17,17 +17,11 @@ policy and hands the rest to the same flight layer the planned baselines use
 * **Observation** ``Box((FEATURES,))`` per UAV, computed from the env's own observation
   (raster + vector) by :class:`PilotFeatures`, so a checkpoint acts on
   :class:`~poc_env.envs.parallel.UAVSearchParallelEnv` observations through
-  :class:`poc_env.agents.rl.policy.PPOPolicy`:
-
-  ========  ===================================================================================
-  0-13      the env's state vector (:data:`poc_env.sim.observations.VECTOR_NAMES`)
-  14-45     belief compass: the share of the remaining POC (raster channel ``poc``) in each of 8
-            map-frame sectors (east first, counter-clockwise) x 4 distance rings around the
-            UAV (0-10, 10-30, 30-70, > 70 km), index ``14 + 4 * sector + ring``
-  46-53     other UAVs (raster channel ``others``) within 30 km in each sector / (N - 1)
-  54        mean of raster channel ``poc`` (remaining POC relative to the prior's peak cell)
-  55-62     the UAV's index k as a one-hot of ``k mod 8``
-  ========  ===================================================================================
+  :class:`poc_env.agents.rl.policy.PPOPolicy`. It is the environment's ``compass``
+  observation: the state vector, the belief compass (the share of the remaining POC in each of
+  8 map-frame sectors x 4 distance rings), other UAVs per sector, the mean remaining POC and
+  the UAV's index as a one-hot, block by block in :data:`poc_env.spec.COMPASS` (rendered in
+  ``docs/ENVIRONMENT.md``).
 
   The index matters: with parameter sharing, UAVs taking off together from one airfield see
   identical observations, so a deterministic policy without it flies them as one stacked

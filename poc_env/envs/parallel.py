@@ -11,7 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from poc_env import limits
+from poc_env import limits, spec
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, PocEnvError
 from poc_env.sim import comms as comms_mod
@@ -30,10 +30,12 @@ OBS_TYPES = obs_mod.OBS_TYPES
 #: Array kinds an action may have: bool, signed and unsigned integer, real float.
 _NUMERIC_KINDS = "biuf"
 _ACTION_ALLOWED = "3 finite real numbers in [-1, 1] (a list or array, not strings or complex)"
-#: The reward terms of :func:`poc_env.sim.rewards.reward_terms`, as info keys ``reward_<term>``.
-REWARD_TERMS = ("pos", "time", "violation", "overtime", "crash")
-#: The constraint flags, as info keys ``violation_<flag>``.
-VIOLATION_FLAGS = ("out_of_bounds", "no_fly", "collision", "threat", "comms", "overtime")
+#: The reward terms (:data:`poc_env.spec.REWARD_TERMS`), as info keys ``reward_<term>``.
+REWARD_TERMS = spec.names(spec.REWARD_TERMS)
+#: The constraint flags (:data:`poc_env.spec.VIOLATION_FLAGS`), as info keys ``violation_<flag>``.
+VIOLATION_FLAGS = tuple(flag for flag, _ in spec.VIOLATION_FLAGS)
+#: Every per-agent info key, in order (:func:`poc_env.spec.info_keys`).
+INFO_KEYS = spec.info_keys()
 
 
 def check_seed(seed: Any, field: str = "seed") -> Any:
@@ -94,32 +96,9 @@ class UAVSearchParallelEnv(ParallelEnv):
     ``obs_type="flat"``: their concatenation (raster first); ``obs_type="compass"``: a
     size-free ``Box((63,))`` (:class:`poc_env.sim.observations.CompassFeatures`: the vector,
     the remaining POC per 8 sectors x 4 distance rings, nearby UAVs per sector, the mean POC
-    and the agent index). float32. Raster channels:
-
-    ==  =======  =====================================================================
-    0   poc      current cell POC / largest prior cell POC, in [0, 1]
-    1   self     1 in this UAV's cell
-    2   others   1 in cells with another flying UAV
-    3   hazard   1 in no-fly or threat cells
-    ==  =======  =====================================================================
-
-    Vector (units normalised as shown; see :mod:`poc_env.sim.observations`):
-
-    =====  ==============  =====================================================  ========
-    idx    name            meaning                                                 bounds
-    =====  ==============  =====================================================  ========
-    0-1    x, y            position in the operating area (0..1 across it)        [-1, 2]
-    2      z               altitude / ceiling                                      [0, 1]
-    3      speed           (v - v_min) / (v_max - v_min)                           [0, 1]
-    4-5    sin, cos        heading alpha                                           [-1, 1]
-    6      pitch           beta / beta_max                                         [-1, 1]
-    7      endurance       1 - t / T                                               [0, 1]
-    8      usable          1 - t / (0.85 T)                                        [-1, 1]
-    9-10   to_landing      (landing field - position) / operating-area diagonal   [-1, 1]
-    11     neighbours      UAVs within RC_max / (N - 1)                            [0, 1]
-    12     flying          1 while flying                                          [0, 1]
-    13     time            step / horizon                                          [0, 1]
-    =====  ==============  =====================================================  ========
+    and the agent index). float32. The raster channels, vector entries and compass blocks
+    (names, bounds, meanings) are the tables of :mod:`poc_env.spec` (``RASTER``, ``VECTOR``,
+    ``COMPASS``), rendered in ``docs/ENVIRONMENT.md``.
 
     ``state()`` (centralised critics): the POC raster (ny x nx) then every agent's vector.
 
@@ -127,9 +106,9 @@ class UAVSearchParallelEnv(ParallelEnv):
 
     ``alpha * POS`` of the step (team-shared by default, ``reward.credit: individual`` for
     own credit) ``- beta *`` the eq. 25 time term ``-`` penalties for constraint violations,
-    overtime beyond 0.85 T and crashes (:mod:`poc_env.sim.rewards`). Every term is in
-    ``infos[agent]["reward_<term>"]``. With team credit and ``beta = 0`` and no penalties, an
-    episode's return is its POSC (eq. 13).
+    overtime beyond 0.85 T and crashes (:mod:`poc_env.sim.rewards`; the terms are
+    :data:`poc_env.spec.REWARD_TERMS`). Every term is in ``infos[agent]["reward_<term>"]``.
+    With team credit and ``beta = 0`` and no penalties, an episode's return is its POSC (eq. 13).
 
     ## Starting State
 
@@ -152,26 +131,9 @@ class UAVSearchParallelEnv(ParallelEnv):
 
     ``infos[agent]`` has the same keys at ``reset`` and at every ``step``, each a Python number
     or a fixed-shape numpy array (for TorchRL-style specs; at reset nothing has happened yet:
-    step quantities are 0/False):
-
-    ===========================  ======  ==================================================
-    key                          type    meaning
-    ===========================  ======  ==================================================
-    pos, pos_team                float   POS found this step by the UAV / by the swarm (eq. 12)
-    posc                         float   POSC so far (eq. 13)
-    reward_<term>                float   each reward term: pos, time, violation, overtime, crash
-    violation_<flag>             bool    out_of_bounds, no_fly, collision, threat, comms,
-                                         overtime (eq. 18, 20-24) in this step
-    shielded                     bool    the safety shield changed this UAV's action
-    landed, crashed              bool    the UAV's state
-    flight_time_s                float   the UAV's flight time
-    target_detected              bool    the hidden target was detected
-    time_to_detection_s          float   time of that detection, -1.0 before it (not NaN:
-                                         checkers compare infos with ==)
-    topology                     int     active Table 2 topology code, -1 for the auto rule
-    links                        bool    (N,) this UAV's row of the active adjacency
-    connected                    bool    the flying UAVs are connected through relays
-    ===========================  ======  ==================================================
+    step quantities are 0/False). The keys, types, shapes and meanings are the table
+    :data:`poc_env.spec.INFOS` (:func:`poc_env.spec.info_keys`, rendered in
+    ``docs/ENVIRONMENT.md``); a key missing from either side raises at ``reset``.
 
     The topology's name and the link list are attributes: ``env.unwrapped.topology``
     (``"auto"`` or a Table 2 letter) and ``env.unwrapped.links`` (pairs ``(i, j)``, ``i < j``).
@@ -548,6 +510,8 @@ class UAVSearchParallelEnv(ParallelEnv):
                 connected=connected,
             )
             out[a] = info
+        if ev is None and agents and tuple(out[agents[0]]) != INFO_KEYS:  # once per reset
+            raise RuntimeError(f"infos {tuple(out[agents[0]])} differ from spec {INFO_KEYS}")
         return out
 
     @property

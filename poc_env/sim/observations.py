@@ -1,33 +1,8 @@
 """Per-agent observations and the global state, batched over envs and agents.
 
-Raster (``RASTER_CHANNELS`` x ny x nx, float32 in [0, 1], one pixel per grid cell):
-
-===  ================  ========================================================================
-ch   name              meaning
-===  ================  ========================================================================
-0    ``poc``           current POC of the cell / the largest cell POC of the episode's prior
-1    ``self``          1 in the cell holding this UAV (all 0 while it is outside the grid)
-2    ``others``        1 in cells holding another flying UAV
-3    ``hazard``        1 where the cell centre is in a no-fly zone or above the threat threshold
-===  ================  ========================================================================
-
-Vector (``VECTOR_SIZE`` float32 values, bounds in ``VECTOR_LOW`` / ``VECTOR_HIGH``):
-
-===  =====================  ==================================================  ===========
-idx  name                   meaning                                             bounds
-===  =====================  ==================================================  ===========
-0-1  ``x``, ``y``           position in the operating area, 0 .. 1 per axis     [-1, 2]
-2    ``z``                  altitude / ceiling                                  [0, 1]
-3    ``speed``              (v - v_min) / (v_max - v_min)                       [0, 1]
-4-5  ``sin``, ``cos``       heading alpha                                       [-1, 1]
-6    ``pitch``              beta / beta_max                                     [-1, 1]
-7    ``endurance``          remaining endurance 1 - t / T                       [0, 1]
-8    ``usable``             remaining usable time 1 - t / (0.85 T), clipped     [-1, 1]
-9-10 ``to_landing``         vector to the landing field / area diagonal         [-1, 1]
-11   ``neighbours``         UAVs in communication range / (N - 1)               [0, 1]
-12   ``flying``             1 while the UAV flies, 0 after landing or a crash   [0, 1]
-13   ``time``               step / horizon                                      [0, 1]
-===  =====================  ==================================================  ===========
+The layouts (raster channels, vector entries, compass blocks: names, bounds, meanings) are the
+tables of :mod:`poc_env.spec` (``RASTER``, ``VECTOR``, ``COMPASS``), rendered in
+``docs/ENVIRONMENT.md``; this module reads its names, sizes and bounds from there.
 """
 
 from __future__ import annotations
@@ -37,23 +12,21 @@ import functools
 import numpy as np
 
 import poc_env._kernels as _kernels
+import poc_env.spec as spec
 from poc_env.sim import constraints as cons
 from poc_env.sim.comms import _shaped
 from poc_env.sim.core import Params, State
 
-#: Raster channels in order (the table above); read them by name: ``RASTER_INDEX["poc"]``.
-RASTER_NAMES = ("poc", "self", "others", "hazard")
+#: Raster channels in order (:data:`poc_env.spec.RASTER`); by name: ``RASTER_INDEX["poc"]``.
+RASTER_NAMES = spec.names(spec.RASTER)
 RASTER_INDEX = {name: c for c, name in enumerate(RASTER_NAMES)}
 RASTER_CHANNELS = len(RASTER_NAMES)
-VECTOR_NAMES = (
-    "x", "y", "z", "speed", "sin", "cos", "pitch", "endurance", "usable",
-    "to_landing_x", "to_landing_y", "neighbours", "flying", "time",
-)  # fmt: skip
+#: State-vector entries in order (:data:`poc_env.spec.VECTOR`).
+VECTOR_NAMES = spec.names(spec.VECTOR)
 VECTOR_SIZE = len(VECTOR_NAMES)
-#: Vector entries by name (the table above): ``vec[..., VECTOR_INDEX["flying"]]``.
+#: Vector entries by name: ``vec[..., VECTOR_INDEX["flying"]]``.
 VECTOR_INDEX = {name: i for i, name in enumerate(VECTOR_NAMES)}
-VECTOR_LOW = np.array([-1, -1, 0, 0, -1, -1, -1, 0, -1, -1, -1, 0, 0, 0], dtype=np.float32)
-VECTOR_HIGH = np.array([2, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1], dtype=np.float32)
+VECTOR_LOW, VECTOR_HIGH = spec.bounds(spec.VECTOR)
 
 
 def split_observation(obs, grid_shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -203,21 +176,22 @@ def decode_vector(params: Params, vec: np.ndarray) -> dict[str, np.ndarray]:
 
 # ------------------------------------------------------------------- compass observation
 
-N_SECTORS = 8
-RING_EDGES_M = (10e3, 30e3, 70e3)
-N_RINGS = len(RING_EDGES_M) + 1
-OTHERS_RADIUS_M = 30e3
-N_IDS = 8
-FEATURES = VECTOR_SIZE + N_SECTORS * N_RINGS + N_SECTORS + 1 + N_IDS
-FEATURE_LOW = np.concatenate([VECTOR_LOW, np.zeros(FEATURES - VECTOR_SIZE, np.float32)])
-FEATURE_HIGH = np.concatenate([VECTOR_HIGH, np.ones(FEATURES - VECTOR_SIZE, np.float32)])
+# the layout is :data:`poc_env.spec.COMPASS`: blocks vector, compass, others, mean_poc, index
+N_SECTORS = spec.N_SECTORS
+RING_EDGES_M = spec.RING_EDGES_M
+N_RINGS = spec.N_RINGS
+OTHERS_RADIUS_M = spec.OTHERS_RADIUS_M
+N_IDS = spec.N_IDS
+FEATURES = spec.COMPASS_SIZE
+FEATURE_LOW, FEATURE_HIGH = spec.compass_bounds()
+_BLOCK = spec.compass_offsets()
 
 
 class CompassFeatures:
     """The ``compass`` observation (``obs_type="compass"``): the state vector, the belief
-    compass, nearby UAVs per sector, the mean remaining POC and the agent index (table in
-    :mod:`poc_env.agents.rl.pilot`'s docstring), computed from the raster and vector observations of
-    any number of UAVs at once.
+    compass, nearby UAVs per sector, the mean remaining POC and the agent index (the blocks of
+    :data:`poc_env.spec.COMPASS`, tabulated in ``docs/ENVIRONMENT.md``), computed from the
+    raster and vector observations of any number of UAVs at once.
 
     ``agent_index=False`` leaves the index block at zero: the ablation of the credit-and-sharing
     table (a shared policy that cannot tell the UAVs of one airfield apart)."""
@@ -238,7 +212,7 @@ class CompassFeatures:
         vector = np.asarray(vector, dtype=np.float32)
         b = vector.shape[0]
         out = np.zeros((b, FEATURES), dtype=np.float32)
-        out[:, :VECTOR_SIZE] = vector
+        out[:, _BLOCK["vector"]] = vector
         if b == 0:
             return out
         xy = decode_vector(self.params, vector)["xy"]
@@ -250,12 +224,11 @@ class CompassFeatures:
         )  # fmt: skip
         total = poc.sum(axis=1)
         share = np.divide(mass, total[:, None], out=np.zeros_like(mass), where=total[:, None] > 0)
-        out[:, VECTOR_SIZE : VECTOR_SIZE + N_SECTORS * N_RINGS] = share
-        k0 = VECTOR_SIZE + N_SECTORS * N_RINGS
-        out[:, k0 : k0 + N_SECTORS] = np.minimum(count / self.others, 1.0)
-        out[:, k0 + N_SECTORS] = poc.mean(axis=1)
+        out[:, _BLOCK["compass"]] = share
+        out[:, _BLOCK["others"]] = np.minimum(count / self.others, 1.0)
+        out[:, _BLOCK["mean_poc"]] = poc.mean(axis=1)[:, None]
         if self.agent_index:
-            out[np.arange(b), k0 + N_SECTORS + 1 + np.asarray(k) % N_IDS] = 1.0
+            out[np.arange(b), _BLOCK["index"].start + np.asarray(k) % N_IDS] = 1.0
         return out
 
 

@@ -10,15 +10,20 @@ Per step and agent ``i`` of an env with ``n`` UAVs:
   violation (eq. 20-24), ``overtime_penalty`` for a step beyond 0.85 T (eq. 18),
   ``crash_penalty`` once when the UAV crashes.
 
-Summed over an episode with team credit, the POS term is ``alpha * POSC`` (eq. 13).
+Summed over an episode with team credit, the POS term is ``alpha * POSC`` (eq. 13). The terms,
+in order, are the table :data:`poc_env.spec.REWARD_TERMS` (each is an info key
+``reward_<term>``); a term added here and not there, or there and not here, raises.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+import poc_env.spec as spec
 from poc_env.config import RewardConfig
 from poc_env.sim.core import Events
+
+_TERMS = spec.names(spec.REWARD_TERMS)
 
 
 def reward_terms(cfg: RewardConfig, events: Events) -> dict[str, np.ndarray]:
@@ -30,13 +35,16 @@ def reward_terms(cfg: RewardConfig, events: Events) -> dict[str, np.ndarray]:
     else:
         pos = events.pos_agent
         time = events.time_term / n
-    return {
+    out = {
         "pos": cfg.alpha * pos,
         "time": -cfg.beta * time,
         "violation": -cfg.violation_penalty * events.violation,
         "overtime": -cfg.overtime_penalty * events.overtime,
         "crash": -cfg.crash_penalty * events.crashed_now,
     }
+    if tuple(out) != _TERMS:
+        raise RuntimeError(f"reward terms {tuple(out)} differ from poc_env.spec {_TERMS}")
+    return out
 
 
 def total_reward(terms: dict[str, np.ndarray]) -> np.ndarray:

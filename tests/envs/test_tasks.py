@@ -25,8 +25,8 @@ ALL = list(tasks.TASKS)
 
 def test_the_table_of_tasks():
     assert len(ALL) == 3 * 2 * 3
-    assert "poc_env/UAVSearch-Paper62-Random-Heading-v0" in ALL
-    assert "poc_env/UAVSearch-Small-Increments-v0" in ALL
+    assert f"poc_env/UAVSearch-Paper62-Random-Heading-v{tasks.VERSION}" in ALL
+    assert f"poc_env/UAVSearch-Small-Increments-v{tasks.VERSION}" in ALL
     for tid in ALL:
         assert tid in gymnasium.registry
         spec = gymnasium.spec(tid)
@@ -70,7 +70,7 @@ def test_max_cycles_on_tasks(tid):
 
 
 def test_random_tasks_draw_a_prior_per_seed_and_replay_a_seed():
-    tid = "poc_env/UAVSearch-Small-Random-Heading-v0"
+    tid = f"poc_env/UAVSearch-Small-Random-Heading-v{tasks.VERSION}"
     priors = []
     for seed in (0, 1, 0):
         env = tasks.make_parallel(tid)
@@ -79,7 +79,7 @@ def test_random_tasks_draw_a_prior_per_seed_and_replay_a_seed():
                       else env.sim_state.belief[0].copy())  # fmt: skip
     assert not np.allclose(priors[0], priors[1])
     np.testing.assert_array_equal(priors[0], priors[2])
-    fixed = tasks.make_parallel("poc_env/UAVSearch-Small-Heading-v0")
+    fixed = tasks.make_parallel(f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}")
     fixed.reset(seed=0)
     b0 = fixed.sim_state.belief[0].copy()
     fixed.reset(seed=1)
@@ -87,9 +87,10 @@ def test_random_tasks_draw_a_prior_per_seed_and_replay_a_seed():
 
 
 def test_make_overrides_the_tasks_arguments():
-    env = gymnasium.make("poc_env/UAVSearch-Small-Heading-v0", obs_type="dict")
+    env = gymnasium.make(f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}", obs_type="dict")
     assert isinstance(env.observation_space, gymnasium.spaces.Dict)
-    par = tasks.make_parallel("UAVSearch-Small-Heading-v0", control="waypoint")  # no namespace
+    no_namespace = f"UAVSearch-Small-Heading-v{tasks.VERSION}"
+    par = tasks.make_parallel(no_namespace, control="waypoint")
     assert par.control == "waypoint"
 
 
@@ -127,9 +128,9 @@ def _run_both(tid, num_envs, steps, seed, **kw):
 @pytest.mark.parametrize(
     "tid",
     [
-        "poc_env/UAVSearch-Small-Increments-v0",
-        "poc_env/UAVSearch-Small-Random-Heading-v0",
-        "poc_env/UAVSearch-Small-Random-Waypoint-v0",
+        f"poc_env/UAVSearch-Small-Increments-v{tasks.VERSION}",
+        f"poc_env/UAVSearch-Small-Random-Heading-v{tasks.VERSION}",
+        f"poc_env/UAVSearch-Small-Random-Waypoint-v{tasks.VERSION}",
         poc_env.ENV_ID,
     ],
 )
@@ -140,7 +141,7 @@ def test_make_vec_equals_the_sync_vector_env(tid):
 
 
 def test_make_vec_without_mode_uses_the_batched_core():
-    v = gymnasium.make_vec("poc_env/UAVSearch-Small-Heading-v0", num_envs=4)
+    v = gymnasium.make_vec(f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}", num_envs=4)
     assert isinstance(v.unwrapped, SwarmGymVectorEnv)
     obs, info = v.reset(seed=[1, 2, 3, None])
     assert obs.shape == (4, 3 * FEATURES)

@@ -1,0 +1,418 @@
+"""The environment's contract tables, once: observation layouts, reward terms, info keys, tasks.
+
+Every table of the environment's interface is a tuple here that the code reads (the observation
+builders and spaces, the reward terms, the infos, the task registry), the tests read, and the
+documentation is generated from (:func:`markdown`, written into ``docs/ENVIRONMENT.md`` between
+``<!-- spec:NAME -->`` markers by ``poc-env spec --write``; ``tests/envs/test_spec.py`` checks
+the committed page equals the generated text).
+
+* :data:`RASTER` and :data:`VECTOR`: the ``dict`` observation (``flat`` is the raster raveled
+  in C order, then the vector); :data:`COMPASS`: the size-free ``compass`` observation every
+  registered task uses.
+* :data:`REWARD_TERMS`: the terms :func:`poc_env.sim.rewards.reward_terms` returns, in order.
+* :data:`VIOLATION_FLAGS` and :data:`INFOS`: the per-agent info keys (:func:`info_keys`).
+* :data:`SCENARIO_PARTS`, :data:`RANDOM_PARTS`, :data:`CONTROL_PARTS` and
+  :data:`TASK_VERSION`: the registered task ids (:mod:`poc_env.tasks`).
+
+Changing a row that changes what an agent observes or is rewarded, or how the swarm moves or
+ends, bumps :data:`TASK_VERSION` (the versioning rule of :mod:`poc_env.tasks`); the recorded
+episodes (:mod:`poc_env.recorded`) fail until then.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import re
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+#: The version of every registered task id (``...-v<TASK_VERSION>``): the one place it lives.
+TASK_VERSION = 0
+
+
+class Entry(NamedTuple):
+    """One row of a contract table: a name, its shape (symbolic: ``N`` agents, ``ny x nx``
+    cells), dtype, bounds and meaning."""
+
+    name: str
+    shape: str
+    dtype: str
+    low: float | None
+    high: float | None
+    meaning: str
+
+
+def _e(name, meaning, low=0.0, high=1.0, shape="()", dtype="float32") -> Entry:
+    return Entry(name, shape, dtype, low, high, meaning)
+
+
+# -- observations --------------------------------------------------------------------------
+#: Raster channels of the ``dict`` / ``flat`` observation, one ``(ny, nx)`` image each.
+_CELLS = "(ny, nx)"
+RASTER = (
+    _e(
+        "poc", "current POC of the cell / the largest cell POC of the episode's prior", shape=_CELLS
+    ),
+    _e("self", "1 in the cell holding this UAV (all 0 while it is outside the grid)", shape=_CELLS),
+    _e("others", "1 in cells holding another flying UAV", shape=_CELLS),
+    _e(
+        "hazard",
+        "1 where the cell centre is in a no-fly zone or above the threat limit",
+        shape=_CELLS,
+    ),
+)
+#: The state vector of every observation kind.
+VECTOR = (
+    _e("x", "position in the operating area, 0 .. 1 across it", -1.0, 2.0),
+    _e("y", "position in the operating area, 0 .. 1 along it", -1.0, 2.0),
+    _e("z", "altitude / ceiling"),
+    _e("speed", "(v - v_min) / (v_max - v_min)"),
+    _e("sin", "sine of the heading alpha", -1.0),
+    _e("cos", "cosine of the heading alpha", -1.0),
+    _e("pitch", "beta / beta_max", -1.0),
+    _e("endurance", "remaining endurance 1 - t / T"),
+    _e("usable", "remaining usable time 1 - t / (0.85 T), clipped", -1.0),
+    _e("to_landing_x", "x of (landing field - position) / operating-area diagonal", -1.0),
+    _e("to_landing_y", "y of (landing field - position) / operating-area diagonal", -1.0),
+    _e("neighbours", "UAVs within communication range / (N - 1)"),
+    _e("flying", "1 while the UAV flies, 0 after landing or a crash"),
+    _e("time", "step / horizon"),
+)
+
+#: Compass parameters: map-frame sectors (east first, counter-clockwise), ring edges (m), the
+#: radius within which other UAVs are counted (m), the size of the agent-index one-hot.
+N_SECTORS = 8
+RING_EDGES_M = (10e3, 30e3, 70e3)
+N_RINGS = len(RING_EDGES_M) + 1
+OTHERS_RADIUS_M = 30e3
+N_IDS = 8
+
+
+def _rings_text() -> str:
+    km = [0.0, *(e / 1e3 for e in RING_EDGES_M)]
+    return ", ".join(f"{a:g}-{b:g}" for a, b in itertools.pairwise(km)) + f", > {km[-1]:g} km"
+
+
+class Block(NamedTuple):
+    """A block of consecutive values of the compass observation."""
+
+    name: str
+    size: int
+    low: float | None  # None: the vector's own bounds
+    high: float | None
+    meaning: str
+
+
+#: The ``compass`` observation (``Box((FEATURES,))`` per UAV), block by block.
+COMPASS = (
+    Block("vector", len(VECTOR), None, None, "the state vector (table above)"),
+    Block(
+        "compass",
+        N_SECTORS * N_RINGS,
+        0.0,
+        1.0,
+        f"share of the remaining POC (raster channel poc) in each of {N_SECTORS} map-frame "
+        f"sectors (east first, counter-clockwise) x {N_RINGS} distance rings around the UAV "
+        f"({_rings_text()}), index offset + {N_RINGS} * sector + ring",
+    ),
+    Block(
+        "others",
+        N_SECTORS,
+        0.0,
+        1.0,
+        f"other UAVs (raster channel others) within {OTHERS_RADIUS_M / 1e3:g} km in each sector "
+        "/ (N - 1), at most 1",
+    ),
+    Block("mean_poc", 1, 0.0, 1.0, "mean of raster channel poc (remaining POC / prior's peak)"),
+    Block("index", N_IDS, 0.0, 1.0, f"the UAV's index k as a one-hot of k mod {N_IDS}"),
+)
+
+
+def names(table: Sequence[Entry | Block | RewardTerm]) -> tuple[str, ...]:
+    """The names of a table's rows, in order."""
+    return tuple(row.name for row in table)
+
+
+def bounds(table: Sequence[Entry]) -> tuple[np.ndarray, np.ndarray]:
+    """float32 (low, high) of a table of scalar entries."""
+    low = np.array([e.low for e in table], dtype=np.float32)
+    high = np.array([e.high for e in table], dtype=np.float32)
+    return low, high
+
+
+def compass_bounds() -> tuple[np.ndarray, np.ndarray]:
+    """float32 (low, high) of the compass observation, block by block."""
+    vlow, vhigh = bounds(VECTOR)
+    lows, highs = [], []
+    for b in COMPASS:
+        lows.append(vlow if b.low is None else np.full(b.size, b.low, np.float32))
+        highs.append(vhigh if b.high is None else np.full(b.size, b.high, np.float32))
+    return np.concatenate(lows), np.concatenate(highs)
+
+
+def compass_offsets() -> dict[str, slice]:
+    """Each compass block's slice of the observation."""
+    out, k = {}, 0
+    for b in COMPASS:
+        out[b.name] = slice(k, k + b.size)
+        k += b.size
+    return out
+
+
+COMPASS_SIZE = sum(b.size for b in COMPASS)
+
+
+# -- rewards -------------------------------------------------------------------------------
+class RewardTerm(NamedTuple):
+    name: str
+    formula: str
+    meaning: str
+
+
+#: The reward's terms, each with the sign it enters the reward with (:mod:`poc_env.sim.rewards`).
+REWARD_TERMS = (
+    RewardTerm(
+        "pos",
+        "+alpha * POS",
+        "POS found this step (eq. 12): the swarm's (credit: team) or the UAV's own "
+        "(credit: individual)",
+    ),
+    RewardTerm(
+        "time",
+        "-beta * dt / (0.85 T) / N",
+        "the eq. 25 time term of the flying UAVs (team: their mean share; individual: own)",
+    ),
+    RewardTerm(
+        "violation",
+        "-violation_penalty",
+        "a step with any safety or communication violation (eq. 20-24)",
+    ),
+    RewardTerm("overtime", "-overtime_penalty", "a step beyond the usable 0.85 T (eq. 18)"),
+    RewardTerm("crash", "-crash_penalty", "once, when the UAV crashes"),
+)
+
+# -- infos ---------------------------------------------------------------------------------
+#: Constraint flags, info keys ``violation_<flag>``.
+VIOLATION_FLAGS = (
+    ("out_of_bounds", "left the operating area (eq. 20)"),
+    ("no_fly", "entered a no-fly zone (eq. 20)"),
+    ("collision", "closer than the safe distance to another UAV (eq. 21)"),
+    ("threat", "terrain threat above the threshold (eq. 22-23)"),
+    ("comms", "out of communication with the swarm (eq. 24)"),
+    ("overtime", "flying beyond the usable 0.85 T (eq. 18)"),
+)
+
+
+def _i(name, dtype, meaning, shape="()") -> Entry:
+    return Entry(name, shape, dtype, None, None, meaning)
+
+
+#: Per-agent infos of the PettingZoo env (``infos[agent]``), in order; ``reward_<term>`` and
+#: ``violation_<flag>`` stand for one key per :data:`REWARD_TERMS` / :data:`VIOLATION_FLAGS` row.
+INFOS = (
+    _i("pos", "float", "POS found this step by the UAV (eq. 12)"),
+    _i("pos_team", "float", "POS found this step by the swarm"),
+    _i("posc", "float", "POSC so far (eq. 13)"),
+    _i("reward_<term>", "float", "each reward term, with its sign (reward terms table)"),
+    _i("violation_<flag>", "bool", "each constraint flag in this step (violation flags table)"),
+    _i("shielded", "bool", "the safety shield changed this UAV's action"),
+    _i("landed", "bool", "the UAV has landed"),
+    _i("crashed", "bool", "the UAV has crashed"),
+    _i("flight_time_s", "float", "the UAV's flight time"),
+    _i("target_detected", "bool", "the hidden target was detected"),
+    _i(
+        "time_to_detection_s",
+        "float",
+        "time of that detection, -1.0 before it (not NaN: checkers compare infos with ==)",
+    ),
+    _i("topology", "int", "active Table 2 topology code, -1 for the auto rule"),
+    _i("links", "bool", "this UAV's row of the active adjacency", shape="(N,)"),
+    _i("connected", "bool", "the flying UAVs are connected through relays"),
+)
+
+
+def info_keys() -> tuple[str, ...]:
+    """Every per-agent info key, in order (the templates of :data:`INFOS` expanded)."""
+    out: list[str] = []
+    for e in INFOS:
+        if e.name == "reward_<term>":
+            out += [f"reward_{t.name}" for t in REWARD_TERMS]
+        elif e.name == "violation_<flag>":
+            out += [f"violation_{f}" for f, _ in VIOLATION_FLAGS]
+        else:
+            out.append(e.name)
+    return tuple(out)
+
+
+# -- tasks ---------------------------------------------------------------------------------
+class Part(NamedTuple):
+    """One value of a task-id part: its text in the id, what it sets, what it means."""
+
+    text: str
+    value: str | bool
+    meaning: str
+
+
+#: Scenario parts: id text -> built-in scenario (its size and fleet are read from the file).
+SCENARIO_PARTS = (
+    Part("Small", "small", "a 2-Gaussian prior (quick)"),
+    Part("Paper62", "paper_6_2", "the paper's section 6.2 case (2 airfields)"),
+    Part("Paper61", "paper_6_1", "the paper's section 6.1 case (fitted prior)"),
+)
+RANDOM_PARTS = (
+    Part(
+        "",
+        False,
+        "the scenario's prior at every reset (the seed moves the hidden target, detection "
+        "thresholds and link failures only)",
+    ),
+    Part(
+        "Random",
+        True,
+        "a fresh seeded Gaussian-mixture prior at every reset (random_prior=True): held-out "
+        "maps for generalisation",
+    ),
+)
+CONTROL_PARTS = (
+    Part("Increments", "increments", "the paper's eq. 19 increments, Box(-1, 1, (3,)) per UAV"),
+    Part("Heading", "heading", "a map-frame heading flown by the autopilot, Box(-1, 1, (2,))"),
+    Part("Waypoint", "waypoint", "a target point in the operating area, Box(-1, 1, (2,))"),
+)
+
+
+# -- markdown ------------------------------------------------------------------------------
+def _table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def _num(x: float | None) -> str:
+    return "" if x is None else f"{x:g}"
+
+
+def _bounds_text(low: float | None, high: float | None) -> str:
+    return f"[{_num(low)}, {_num(high)}]"
+
+
+def _scenario_text(scenario: str) -> str:
+    from poc_env.config import load_scenario
+
+    sc = load_scenario(scenario)
+    m = sc.map
+    w, h, c = (round(v / 1e3, 3) for v in (m.width_m, m.height_m, m.cell_m))
+    ny, nx = round(m.height_m / m.cell_m), round(m.width_m / m.cell_m)
+    return f"`{scenario}`: {sc.n_uavs} UAVs, {w:g} x {h:g} km ({nx} x {ny} cells of {c:g} km)"
+
+
+def task_parts_markdown() -> str:
+    rows = []
+    for p in SCENARIO_PARTS:
+        rows.append(("Scenario", f"`{p.text}`", f"{_scenario_text(str(p.value))}, {p.meaning}"))
+    for p in RANDOM_PARTS:
+        rows.append(("Random", f"`{p.text}`" if p.text else "(absent)", p.meaning))
+    for p in CONTROL_PARTS:
+        rows.append(("Control", f"`{p.text}`", f"`{p.value}`: {p.meaning}"))
+    head = (
+        f"Ids: `poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v{TASK_VERSION}` "
+        f"({len(SCENARIO_PARTS) * len(RANDOM_PARTS) * len(CONTROL_PARTS)} tasks; the version, "
+        f"{TASK_VERSION}, is `poc_env.spec.TASK_VERSION`).\n\n"
+    )
+    return head + _table(("part", "values", "meaning"), rows)
+
+
+def raster_markdown() -> str:
+    rows = [
+        (c, f"`{e.name}`", e.meaning, _bounds_text(e.low, e.high)) for c, e in enumerate(RASTER)
+    ]
+    return _table(("channel", "name", "meaning", "bounds"), rows)
+
+
+def vector_markdown() -> str:
+    rows = [
+        (i, f"`{e.name}`", e.meaning, _bounds_text(e.low, e.high)) for i, e in enumerate(VECTOR)
+    ]
+    return _table(("index", "name", "meaning", "bounds"), rows)
+
+
+def compass_markdown() -> str:
+    rows = []
+    for b in COMPASS:
+        s = compass_offsets()[b.name]
+        idx = f"{s.start}" if b.size == 1 else f"{s.start}-{s.stop - 1}"
+        bnd = "the vector's" if b.low is None else _bounds_text(b.low, b.high)
+        rows.append((idx, f"`{b.name}`", b.meaning, bnd))
+    head = f"`Box(({COMPASS_SIZE},), float32)` per UAV, the same size on every map.\n\n"
+    return head + _table(("index", "block", "meaning", "bounds"), rows)
+
+
+def reward_markdown() -> str:
+    rows = [(f"`{t.name}`", f"`reward_{t.name}`", t.formula, t.meaning) for t in REWARD_TERMS]
+    return _table(("term", "info key", "enters as", "per step and agent"), rows)
+
+
+def info_markdown() -> str:
+    rows = [(f"`{e.name}`", e.dtype, e.shape, e.meaning) for e in INFOS]
+    flags = _table(("flag", "meaning"), [(f"`{f}`", m) for f, m in VIOLATION_FLAGS])
+    return (
+        _table(("key", "type", "shape", "meaning"), rows)
+        + f"\n\nViolation flags (`violation_<flag>`):\n\n{flags}"
+    )
+
+
+#: The generated sections of ``docs/ENVIRONMENT.md``, by marker name.
+SECTIONS = {
+    "tasks": task_parts_markdown,
+    "raster": raster_markdown,
+    "vector": vector_markdown,
+    "compass": compass_markdown,
+    "rewards": reward_markdown,
+    "infos": info_markdown,
+}
+DOC = Path(__file__).resolve().parents[1] / "docs" / "ENVIRONMENT.md"
+
+
+def markdown(name: str) -> str:
+    """The generated markdown of section ``name`` (:data:`SECTIONS`)."""
+    return SECTIONS[name]()
+
+
+def render_doc(text: str) -> str:
+    """``text`` with every ``<!-- spec:NAME -->`` ... ``<!-- /spec:NAME -->`` section replaced
+    by its generated markdown (KeyError for an unknown or missing section)."""
+    for name in SECTIONS:
+        pattern = re.compile(rf"(<!-- spec:{name} -->\n).*?(<!-- /spec:{name} -->)", re.DOTALL)
+        m = pattern.search(text)
+        if m is None:
+            raise KeyError(f"docs section <!-- spec:{name} --> missing")
+        text = text[: m.end(1)] + markdown(name) + "\n" + text[m.start(2) :]
+    return text
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of ``poc-env spec``."""
+    p.add_argument("--write", action="store_true", help="rewrite the page's generated sections")
+    p.add_argument("--doc", default=str(DOC), help=f"the page (default {DOC})")
+
+
+def main_args(args: argparse.Namespace) -> int:
+    """Check (exit status 1 if stale) or, with ``--write``, rewrite the generated sections of
+    ``docs/ENVIRONMENT.md``."""
+    path = Path(args.doc)
+    old = path.read_text(encoding="utf-8")
+    new = render_doc(old)
+    if args.write:
+        if new != old:
+            path.write_text(new, encoding="utf-8")
+        print(f"{path}: {'rewritten' if new != old else 'up to date'}")
+        return 0
+    if new != old:
+        print(f"{path} is stale: run poc-env spec --write", file=sys.stderr)
+        return 1
+    print(f"{path}: up to date")
+    return 0
