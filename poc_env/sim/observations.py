@@ -36,7 +36,7 @@ import functools
 
 import numpy as np
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.observations as _kernels
 from poc_env.sim import constraints as cons
 from poc_env.sim.comms import _shaped
 from poc_env.sim.core import Params, State
