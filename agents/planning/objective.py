@@ -218,7 +218,10 @@ def plan_rectangles(x, box, takeoff, landing, x0, y0, h, weights, geo, terms) ->
     rects = np.empty((6, n_ind * n_uav))
     _kernels.plan_rectangles(x, box, takeoff, landing, geo, terms, rects)
     mass = np.zeros((n_ind, n_uav))
-    rectangles.rectangle_masses(*rects, x0, y0, h, weights, True, mass)
+    cx, cy, half_l, half_w, cos_t, sin_t = rects
+    rectangles.rectangle_masses(
+        cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, True, mass
+    )
     terms[:, :, 5] = mass
 
 
@@ -408,12 +411,14 @@ class PlanObjective:
         pop = np.ascontiguousarray(self.as_population(x))
         geo = np.empty((len(pop), self.n, 5))
         terms = np.empty((len(pop), self.n, 6))
+        x0, y0 = map(float, self.grid.origin_m)
         plan_rectangles(
             pop,
             self._box,
             self.takeoff_m,
             self.landing_m,
-            *map(float, self.grid.origin_m),
+            x0,
+            y0,
             self.grid.cell_m,
             self._prior_grid,
             geo,

@@ -31,10 +31,12 @@ its own loop, pinned to ``comms.in_range`` by the tests; the hidden target's POD
 laws), or the Python caller composes kernels of two modules (the planner's rectangle pass,
 then :func:`~poc_env._kernels.rectangles.rectangle_masses`).
 
-``tests/sim/test_kernels.py`` enforces the rule: ``test_kernel_modules_import_nothing_of_the_
-project`` (read from the source, with a self-test that the checker catches an import),
-``test_compiled_functions_call_only_their_own_module`` (the loaded dispatchers' globals) and
-``test_compiled_code_lives_only_in_kernel_modules``.
+``tests/sim/test_kernels.py`` enforces the rule:
+``test_kernel_modules_import_nothing_of_the_project`` reads each kernel module's imports,
+``test_compiled_functions_call_only_their_own_module`` follows the loaded dispatchers'
+globals, ``test_cache_rule_catches_a_call_into_another_kernel_module`` shows both checkers
+catch a violation, and ``test_compiled_code_lives_only_in_kernel_modules`` keeps numba out of
+every other module.
 
 Each module compiles with ``error_model="numpy"`` (``x / 0`` is an inf, not an exception);
 ``inline="always"`` lets the compiler vectorise inner loops. This package's ``__init__``
