@@ -30,7 +30,7 @@ import numpy as np
 import yaml
 
 import poc_env.limits as limits
-from poc_env._kernels import LAW_CODES
+from poc_env._kernels.sensing import LAW_CODES
 from poc_env.errors import ConfigError, as_bool, as_int, as_number, describe_range
 from poc_env.io import write_text_atomic
 
@@ -341,8 +341,8 @@ class SensorConfig:
     """The downward sensor: sweep width W and the detection law.
 
     ``law`` is a name of the table of laws (:mod:`poc_env.theory.detection`), validated against
-    the names of their compiled branches (:data:`poc_env._kernels.LAW_CODES`), which the table
-    checks it covers.
+    the names of their compiled branches (:data:`poc_env._kernels.sensing.LAW_CODES`), which
+    the table checks it covers.
     """
 
     sweep_width_m: float = _f(

@@ -85,7 +85,8 @@ from typing import Any
 import numpy as np
 import shapely
 
-from poc_env import _kernels
+from poc_env._kernels import rectangles
+from poc_env.agents.planning import _kernels
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.geometry import rectangle_polygon
@@ -203,6 +204,25 @@ def flown_rectangle(center, length, width, theta, spacing):
     shift = np.where(narrow, 0.0, 0.5 * (short - n * d))
     e_e = np.stack([-np.sin(alpha), np.cos(alpha)], axis=-1)
     return c + shift[..., None] * e_e, long_, strip, alpha
+
+
+def plan_rectangles(x, box, takeoff, landing, x0, y0, h, weights, geo, terms) -> None:
+    """The planner's rectangles for a population ``x (P, 6 n)``: ``geo (P, n, 5)`` gets the
+    repaired ``x_c, y_c, l, w, theta`` of :meth:`PlanObjective.split`, ``terms (P, n, 6)`` the
+    line count, line length, search legs, track and transit of :func:`lawnmower`, and the
+    prior mass of each rectangle less the ones before it (§3.1.6, exclusive, over ``weights``
+    on the grid at ``(x0, y0)`` with cells of ``h``). Two compiled passes: the planner's
+    (:func:`poc_env.agents.planning._kernels.plan_rectangles`), then the masses by boundary
+    integrals (:func:`poc_env._kernels.rectangles.rectangle_masses`)."""
+    n_ind, n_uav = geo.shape[0], geo.shape[1]
+    rects = np.empty((6, n_ind * n_uav))
+    _kernels.plan_rectangles(x, box, takeoff, landing, geo, terms, rects)
+    mass = np.zeros((n_ind, n_uav))
+    cx, cy, half_l, half_w, cos_t, sin_t = rects
+    rectangles.rectangle_masses(
+        cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, True, mass
+    )
+    terms[:, :, 5] = mass
 
 
 # --------------------------------------------------------------------------- objective
@@ -384,19 +404,21 @@ class PlanObjective:
 
         The map repair, the lawnmower, the transit and each UAV's POC (its rectangle's prior
         mass less what the UAVs before it cover, §3.1.6, by boundary integrals) come from one
-        compiled pass, :func:`poc_env._kernels.plan_rectangles`, which performs the operations
+        compiled pass, :func:`plan_rectangles`, which performs the operations
         of :meth:`split` and :func:`lawnmower` in the same order (pinned to 1e-12 by
         ``test_compiled_plan_pass_equals_split_lawnmower_and_exclusive_masses``); eq. 17, the
         POD and eq. 25-26 stay in numpy."""
         pop = np.ascontiguousarray(self.as_population(x))
         geo = np.empty((len(pop), self.n, 5))
         terms = np.empty((len(pop), self.n, 6))
-        _kernels.plan_rectangles(  # type: ignore[call-arg]
+        x0, y0 = map(float, self.grid.origin_m)
+        plan_rectangles(
             pop,
             self._box,
             self.takeoff_m,
             self.landing_m,
-            *map(float, self.grid.origin_m),
+            x0,
+            y0,
             self.grid.cell_m,
             self._prior_grid,
             geo,

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from poc_env import _kernels
+from poc_env.agents.planning import _kernels
 from poc_env.sim.comms import in_range, two_neighbour_ok
 from poc_env.sim.constraints import pairwise_distances, separation_violations
 from poc_env.theory.probability_map import Grid

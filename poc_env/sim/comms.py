@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.swarm as _swarm
 from poc_env.config import CONFIG_DIR, read_yaml
 from poc_env.errors import ConfigError
 from poc_env.sim.constraints import pairwise_distances
@@ -104,7 +104,7 @@ def in_range(
     d = pairwise_distances(xy) if dist is None else np.asarray(dist, dtype=float)
     n_envs, n = d.shape[0], d.shape[-1]
     out = np.empty((n_envs, n, n), dtype=bool)
-    _kernels.in_range(np.ascontiguousarray(d), float(range_m), _active(active, (n_envs, n)), out)
+    _swarm.in_range(np.ascontiguousarray(d), float(range_m), _active(active, (n_envs, n)), out)
     return out
 
 
@@ -124,7 +124,7 @@ def two_neighbour_ok(
     shape = a.shape[:-1]
     act = np.ones((1, n), dtype=bool) if active is None else _active(active, shape)
     out = np.empty(shape, dtype=bool)
-    _kernels.two_neighbour(
+    _swarm.two_neighbour(
         np.ascontiguousarray(a).reshape(-1, n, n),
         int(min_neighbours),
         act.reshape(-1, n),
@@ -222,7 +222,8 @@ def auto_topology(
        losing any one link of a UAV does not isolate it.
 
     Without ``xy`` all links weigh the same (any spanning forest). Ties go to the lower UAV
-    index. Compiled (:func:`poc_env._kernels.auto_topology`): a loop over envs and the small graph.
+    index. Compiled (:func:`poc_env._kernels.swarm.auto_topology`): a loop over envs and the
+    small graph.
 
     Parameters
     ----------
@@ -246,7 +247,7 @@ def auto_topology(
     n_comp = np.empty(n_envs, dtype=np.int64)
     k_nearest = nearest_count(min_neighbours, n)
     av = _shaped(av, (n_envs, n, n), bool)
-    _kernels.auto_topology(av, d, use_dist, act, k_nearest, links, n_comp)
+    _swarm.auto_topology(av, d, use_dist, act, k_nearest, links, n_comp)
     return CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
 
 

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from shapely.geometry import Polygon
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.swarm as _swarm
 from poc_env.errors import ConfigError
 from poc_env.geometry import as_polygon
 
@@ -206,7 +206,7 @@ def outside_boundary(xy: np.ndarray, bounds: Sequence[float]) -> np.ndarray:
     x0, y0, x1, y1 = (float(v) for v in bounds)
     out = np.empty(p.shape[:-1], dtype=bool)
     flat = np.ascontiguousarray(p[..., :2]).reshape(-1, 2)
-    _kernels.outside_boundary(flat, x0, y0, x1, y1, out.reshape(-1))
+    _swarm.outside_boundary(flat, x0, y0, x1, y1, out.reshape(-1))
     return out
 
 
@@ -215,7 +215,7 @@ def pairwise_distances(xy: np.ndarray) -> np.ndarray:
     p = np.asarray(xy, dtype=float)
     n, d = p.shape[-2], p.shape[-1]
     out = np.empty((*p.shape[:-1], n))
-    _kernels.pairwise_distances(np.ascontiguousarray(p).reshape(-1, n, d), out.reshape(-1, n, n))
+    _swarm.pairwise_distances(np.ascontiguousarray(p).reshape(-1, n, d), out.reshape(-1, n, n))
     return out
 
 

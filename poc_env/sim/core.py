@@ -26,20 +26,22 @@ One step, for each flying UAV (eq. numbers are the paper's):
    agents land, crash or run out of endurance.
 
 Speed: after the sweep, the bookkeeping of steps 3-5 and the topology update run as a few
-compiled passes (:mod:`poc_env._kernels`: ``step``, ``target_pod``, ``auto_links``) over the
-same kernels the numpy-facing functions of :mod:`constraints` and :mod:`comms` use, with the
-pairwise distances computed once per step; no-fly zones and threat peaks stay in numpy (only
-when the map has them).
+compiled passes (:mod:`poc_env._kernels.swarm`: ``step``, ``auto_links``;
+:mod:`poc_env._kernels.sensing`: ``target_pod``) over the same kernels the numpy-facing
+functions of :mod:`constraints` and :mod:`comms` use, with the pairwise distances computed
+once per step; no-fly zones and threat peaks stay in numpy (only when the map has them).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.sensing as _sensing
+import poc_env._kernels.swarm as _swarm
 import poc_env.limits as limits
 from poc_env.config import Scenario
 from poc_env.sim import comms as comms_mod
@@ -75,6 +77,31 @@ class Params:
     @property
     def fine_shape(self) -> tuple[int, int]:
         return (self.grid.ny * self.s, self.grid.nx * self.s)
+
+    @functools.cached_property
+    def step_constants(self) -> np.ndarray:
+        """The scalar constants of the compiled step (:data:`poc_env._kernels.swarm.
+        STEP_CONSTANTS`), packed once per Params."""
+        sc = self.scenario
+        u, ep = sc.uav, sc.episode
+        x0, y0, x1, y1 = self.bounds
+        return _swarm.step_constants(
+            dt_s=self.dt,
+            usable_s=u.usable_endurance_s,
+            time_share=self.dt / u.usable_endurance_s,
+            endurance_s=u.endurance_s,
+            x0=x0,
+            y0=y0,
+            x1=x1,
+            y1=y1,
+            safety_distance_m=sc.constraints.safety_distance_m,
+            range_m=sc.comms.range_m,
+            min_neighbours=int(sc.comms.min_neighbours),
+            landing_radius_m=ep.landing_radius_m,
+            landing_max_altitude_m=ep.landing_max_altitude_m,
+            landing_max_speed_mps=ep.landing_max_speed_mps,
+            terminate=sc.constraints.violation == "terminate",
+        )
 
 
 def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
@@ -321,7 +348,7 @@ def _update_topology(
         links = np.empty((e, n, n), dtype=bool)
         n_comp = np.empty(e, dtype=np.int64)
         k_nearest = comms_mod.nearest_count(cc.min_neighbours, n)
-        _kernels.auto_links(dist, float(cc.range_m), state.flying, k_nearest, links, n_comp)
+        _swarm.auto_links(dist, float(cc.range_m), state.flying, k_nearest, links, n_comp)
         state.links = links
         return comms_mod.CommsTopology(links=links, connected=n_comp <= 1, n_components=n_comp)
     adj = comms_mod.in_range(xy, cc.range_m, state.flying, dist)
@@ -392,7 +419,6 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     """Advance every env by ``dt`` (in place); see the module docstring for the order."""
     sc = params.scenario
     u = sc.uav
-    ep = sc.episode
     moving = state.flying.copy()
     e, n = moving.shape
     dv, dalpha, dbeta = scale_actions(params, np.asarray(actions, dtype=float))
@@ -424,7 +450,7 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     # hidden target (same law and cut-off as the belief, at its exact position)
     p_t = np.empty(moving.shape)
     ox, oy = params.grid.origin_m
-    if _kernels.target_pod(
+    if _sensing.target_pod(
         state.target,
         a2,
         b2,
@@ -455,54 +481,22 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     # POS bookkeeping (eq. 12-13), detection, time model (eq. 17-18), constraints (eq. 20-24),
     # landing, the step counter: one compiled pass
     team = np.empty(e)
-    flags = np.empty((_kernels.N_FLAGS, e, n), dtype=bool)
+    flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
     time_term = np.empty((e, n))
     detected_now = np.empty(e, dtype=bool)
     dist = np.empty((e, n, n))
     detect_step = state.detect_step.copy()
-    x0, y0, x1, y1 = params.bounds
-    _kernels.step(
-        found,
-        state.agent_pos,
-        state.posc,
-        team,
-        new,
-        state.speed,
-        moving,
-        nofly,
-        threat,
-        state.target_exponent,
-        state.target_threshold,
-        state.step,
-        state.detected,
-        detect_step,
-        state.elapsed,
-        state.left_home,
-        state.landed,
-        state.crashed,
-        state.flying,
-        state.violations,
+    _swarm.step(
+        (
+            state.agent_pos, state.posc, new, state.speed, state.target_exponent,
+            state.target_threshold, state.step, state.detected, detect_step, state.elapsed,
+            state.left_home, state.landed, state.crashed, state.flying, state.violations,
+        ),
+        (found, moving, nofly, threat),
+        (team, detected_now, time_term, flags, dist),
         params.landing,
-        float(params.dt),
-        float(u.usable_endurance_s),
-        float(params.dt / u.usable_endurance_s),
-        float(u.endurance_s),
-        float(x0),
-        float(y0),
-        float(x1),
-        float(y1),
-        float(sc.constraints.safety_distance_m),
-        float(sc.comms.range_m),
-        int(sc.comms.min_neighbours),
-        float(ep.landing_radius_m),
-        float(ep.landing_max_altitude_m),
-        float(ep.landing_max_speed_mps),
-        sc.constraints.violation == "terminate",
-        detected_now,
-        time_term,
-        flags,
-        dist,
-    )
+        params.step_constants,
+    )  # fmt: skip
     state.detect_step = detect_step
     # the topology among the UAVs still flying after this step (§3.2.5)
     connected = np.asarray(_update_topology(params, state, rngs, dist).connected)
@@ -512,15 +506,15 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         pos_agent=found,
         pos_team=team,
         time_term=time_term,
-        overtime=flags[_kernels.OVERTIME],
-        out_of_bounds=flags[_kernels.OOB],
+        overtime=flags[_swarm.OVERTIME],
+        out_of_bounds=flags[_swarm.OOB],
         no_fly=nofly,
-        collision=flags[_kernels.COLLISION],
+        collision=flags[_swarm.COLLISION],
         threat=threat,
-        comms_ok=flags[_kernels.COMMS_OK],
+        comms_ok=flags[_swarm.COMMS_OK],
         shielded=shielded,
-        landed_now=flags[_kernels.LANDED],
-        crashed_now=flags[_kernels.CRASHED],
+        landed_now=flags[_swarm.LANDED],
+        crashed_now=flags[_swarm.CRASHED],
         detected_now=detected_now,
         connected=connected,
     )

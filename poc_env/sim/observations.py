@@ -11,7 +11,7 @@ import functools
 
 import numpy as np
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.observations as _kernels
 import poc_env.spec as spec
 from poc_env.sim import constraints as cons
 from poc_env.sim.comms import _shaped

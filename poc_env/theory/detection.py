@@ -9,8 +9,8 @@ appears in four places of the paper's search theory, all kept here (:data:`LAWS`
   marginal return equals a Lagrange multiplier (the optimal-effort bound,
   :mod:`poc_env.theory.bound`);
 - ``reach``: the farthest distance from a step at which the step-wise form can detect anything;
-- ``code``: the law's compiled branch in :mod:`poc_env._kernels`, the step-wise (segment) form
-  the environment sweeps with (eq. 12-14 on sample points).
+- ``code``: the law's compiled branch in :mod:`poc_env._kernels.sensing`, the step-wise
+  (segment) form the environment sweeps with (eq. 12-14 on sample points).
 
 Laws:
 
@@ -27,8 +27,8 @@ Laws:
     ``POD = min(C, 1)``.
 
 Adding a law: one :class:`DetectionLaw` entry here, its compiled branch in
-:mod:`poc_env._kernels` (``LAW_CODES`` and the branches of ``_point_pod`` and ``sweep``), and its
-tests (``tests/theory/test_detection.py``).
+:mod:`poc_env._kernels.sensing` (``LAW_CODES`` and the branches of ``_point_pod`` and
+``sweep``), and its tests (``tests/theory/test_detection.py``).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import erf
 
-from poc_env._kernels import DEFINITE_RANGE, EXPONENTIAL, INVERSE_CUBE, LAW_CODES
+from poc_env._kernels.sensing import DEFINITE_RANGE, EXPONENTIAL, INVERSE_CUBE, LAW_CODES
 from poc_env.errors import ConfigError
 
 _SQRT_PI_2 = np.sqrt(np.pi) / 2.0
@@ -56,7 +56,7 @@ class DetectionLaw:
     name:
         The value of ``sensor.law``.
     code:
-        The law's compiled branch in :mod:`poc_env._kernels`.
+        The law's compiled branch in :mod:`poc_env._kernels.sensing`.
     pod:
         POD of a coverage factor ``C >= 0`` (parallel tracks: ``C = W / S``, eq. 9-10).
     pod_slope:
@@ -117,7 +117,9 @@ LAWS: dict[str, DetectionLaw] = {
 }
 
 if set(LAWS) != set(LAW_CODES) or any(LAW_CODES[k] != v.code for k, v in LAWS.items()):
-    raise ImportError("poc_env.theory.detection.LAWS and poc_env._kernels.LAW_CODES disagree")
+    raise ImportError(
+        "poc_env.theory.detection.LAWS and poc_env._kernels.sensing.LAW_CODES disagree"
+    )
 
 #: The law names, in table order (``sensor.law`` accepts these).
 LAW_NAMES = tuple(LAWS)

@@ -31,7 +31,7 @@ from scipy.optimize import differential_evolution
 from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.validation import explain_validity, make_valid
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.rectangles as _rectangles
 from poc_env.errors import ConfigError, GeometryError, check_positive, check_range
 from poc_env.geometry import rectangle_polygon, validate_polygon
 from poc_env.theory.probability_map import Grid
@@ -290,7 +290,7 @@ def rectangle_mass(
     weights: np.ndarray | None = None,
 ) -> np.ndarray:
     """Prior mass in rotated rectangles ``Q(center, l, w, theta)``: the one compiled kernel
-    (:func:`poc_env._kernels.rectangle_fractions`) behind the planner's objective and the
+    (:func:`poc_env._kernels.rectangles.rectangle_fractions`) behind the planner's objective and the
     region allocator.
 
     ``center`` (..., 2), the others (...). Without ``weights`` returns the fraction of every
@@ -313,7 +313,7 @@ def rectangle_mass(
         if w.shape != grid.shape:
             raise ConfigError("weights", w.shape, f"shape {grid.shape}")
         shaped = np.zeros((0, 0, 0, 0))
-    _kernels.rectangle_fractions(
+    _rectangles.rectangle_fractions(
         *rects,
         float(grid.origin_m[0]),
         float(grid.origin_m[1]),
@@ -333,7 +333,7 @@ def boundary_mass(
     grid: Grid, center, length, width, theta, weights: np.ndarray, *, exclusive: bool
 ) -> np.ndarray:
     """Weighted mass of rotated rectangles, ``sum area(cell ∩ Q) / cell_area * weights``, by
-    boundary integrals (:func:`poc_env._kernels.rectangle_masses`).
+    boundary integrals (:func:`poc_env._kernels.rectangles.rectangle_masses`).
 
     The same numbers as :func:`rectangle_mass` with ``weights`` (to rounding, about 1e-15
     relative), without per-cell areas: each rectangle costs the grid lines its edges cross,
@@ -351,7 +351,7 @@ def boundary_mass(
     lead, rects = _flat_rectangles(c, length, width, theta)
     group = lead[-1] if exclusive and lead else 1
     mass = np.zeros(lead)
-    _kernels.rectangle_masses(
+    _rectangles.rectangle_masses(
         *rects,
         float(grid.origin_m[0]),
         float(grid.origin_m[1]),

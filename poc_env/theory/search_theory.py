@@ -17,7 +17,7 @@ profile of a 5 km sweep width). After a step, ``POC_new = (1 - p) POC_old`` at e
 so ``POSC + sum(POC)`` stays equal to the initial total.
 
 Implementation: each law's step-wise form is one compiled scalar function of a point and a
-segment (:mod:`poc_env._kernels`). The array functions here (:func:`segment_exponent`,
+segment (:mod:`poc_env._kernels.sensing`). The array functions here (:func:`segment_exponent`,
 :func:`segment_pod`, :func:`sweep_windows`) map it over numpy arrays; :func:`sweep_segments`,
 the fused kernel the simulator uses, calls it point by point over each segment's reach and
 updates the belief in place. The numpy path (:func:`sweep_windows` + :func:`apply_windows`) is
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import poc_env._kernels as _kernels
+import poc_env._kernels.sensing as _sensing
 from poc_env.errors import ConfigError, check_positive
 from poc_env.theory.detection import LAW_NAMES, detection_law
 from poc_env.theory.probability_map import Grid
@@ -112,19 +112,19 @@ def segment_exponent(x_m, y1_m, y2_m, sweep_width_m):
     the foot, the difference is rewritten without cancellation,
     ``x^2 (y2^2 - y1^2) / (r1 r2 (y2 r1 + y1 r2))``, so the limit ``x -> 0`` is finite
     (``W^2 / (16 pi) * (1/y1^2 - 1/y2^2)``); a point on the segment itself gets ``F = inf``.
-    The formula is the compiled scalar the sweep kernel uses (:mod:`poc_env._kernels`).
+    The formula is the compiled scalar the sweep kernel uses (:mod:`poc_env._kernels.sensing`).
     """
-    return _kernels.segment_exponent(x_m, y1_m, y2_m, float(sweep_width_m))
+    return _sensing.segment_exponent(x_m, y1_m, y2_m, float(sweep_width_m))
 
 
 def distance_to_segment(points, a, b):
     """Euclidean distance from ``points`` to the segments ``a -> b`` (broadcast)."""
-    return _kernels.distance_to_segment(*_xy(points), *_xy(a), *_xy(b))
+    return _sensing.distance_to_segment(*_xy(points), *_xy(a), *_xy(b))
 
 
 def clip_length(a, b, lo, hi):
     """Length of segment a -> b inside the axis-aligned boxes [lo, hi] (Liang-Barsky, broadcast)."""
-    return _kernels.clip_length(*_xy(a), *_xy(b), *_xy(lo), *_xy(hi))
+    return _sensing.clip_length(*_xy(a), *_xy(b), *_xy(lo), *_xy(hi))
 
 
 def segment_pod(
@@ -144,7 +144,7 @@ def segment_pod(
     if entry.needs_cell and cell_m is None:
         raise ConfigError("cell_m", cell_m, f"the cell size when law is {entry.name}")
     cell = float(cell_m) if cell_m is not None else 1.0
-    pod = _kernels.segment_pod(
+    pod = _sensing.segment_pod(
         entry.code, *_xy(points), *_xy(a), *_xy(b), float(sweep_width_m), float(cutoff_m), cell
     )
     return pod > 0.0 if entry.indicator else pod
@@ -223,8 +223,8 @@ def sweep_windows(
     ky, kx = min(size, ny), min(size, nx)
     mid = 0.5 * (a + b)
     x0, y0 = grid.origin_m
-    i0 = _kernels.window_start(mid[:, 0], x0, h, kx, nx)
-    j0 = _kernels.window_start(mid[:, 1], y0, h, ky, ny)
+    i0 = _sensing.window_start(mid[:, 0], x0, h, kx, nx)
+    j0 = _sensing.window_start(mid[:, 1], y0, h, ky, ny)
     xs = x0 + (i0[:, None] + np.arange(kx) + 0.5) * h  # (B, kx)
     ys = y0 + (j0[:, None] + np.arange(ky) + 0.5) * h  # (B, ky)
     pts = np.stack(np.broadcast_arrays(xs[:, None, :], ys[:, :, None]), axis=-1)
@@ -290,7 +290,7 @@ def sweep_segments(
     b = np.ascontiguousarray(np.asarray(b, dtype=np.float64) - origin)
     found = np.empty(a.shape[:2])
     x0, y0 = 0.0, 0.0
-    _kernels.sweep(
+    _sensing.sweep(
         belief,
         a,
         b,

@@ -367,17 +367,17 @@ def test_planner_weights_are_its_own_not_the_rl_rewards(small):
 
 
 def test_compiled_plan_pass_equals_split_lawnmower_and_exclusive_masses(paper):
-    """``_kernels.plan_rectangles`` (one compiled pass per population: map repair, lawnmower,
+    """``plan_rectangles`` (compiled passes per population: map repair, lawnmower,
     transit and the exclusive prior masses by boundary integrals) against the numpy steps:
     ``split``, :func:`lawnmower`, the transit lengths and the dense exclusive fractions times
     the prior, to 1e-12 (masses: of the rectangle's plain mass)."""
-    from poc_env import _kernels
+    from poc_env.agents.planning.objective import plan_rectangles
 
     x = np.vstack([_population(paper, 40, 8), _population(paper, 40, 9, compact=False)])
     x[:10, 6:12] = x[:10, 0:6]  # copies of the UAV before
     geo = np.empty((len(x), paper.n, 5))
     terms = np.empty((len(x), paper.n, 6))
-    _kernels.plan_rectangles(
+    plan_rectangles(
         np.ascontiguousarray(x),
         np.array(paper.grid.bounds, dtype=float),
         paper.takeoff_m,

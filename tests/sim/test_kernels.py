@@ -1,4 +1,4 @@
-"""The compiled kernels (poc_env._kernels) against plain-numpy references.
+"""The compiled kernels (the package poc_env._kernels) against plain-numpy references.
 
 Each kernel is compared with a numpy reference: the numpy implementations below (pairwise
 distances, eq. 20, 21 and 24 checks, the auto topology, observations) or the library's own
@@ -15,6 +15,7 @@ import ast
 import copy
 import dataclasses
 import importlib
+import importlib.util
 import inspect
 from pathlib import Path
 
@@ -23,7 +24,8 @@ import pytest
 from numba.core.registry import CPUDispatcher as Dispatcher
 
 import poc_env
-from poc_env import _kernels
+from poc_env._kernels import observations as obs_kernels
+from poc_env._kernels import sensing
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim import comms, constraints
@@ -415,8 +417,8 @@ def test_step_is_deterministic(name, overrides):
 
 @pytest.mark.parametrize(("name", "overrides"), CONFIGS)
 def test_step_kernel_matches_numpy_references(name, overrides):
-    """Each part of the compiled step (_kernels.step, target_pod, auto_links) against the numpy
-    functions of the library: eq. 12-13 sums, the target's detection exponent
+    """Each part of the compiled step (swarm.step and auto_links, sensing.target_pod) against
+    the numpy functions of the library: eq. 12-13 sums, the target's detection exponent
     (search_theory.segment_pod), eq. 17-18 time, eq. 20, 21 and 24 flags, landing and crashes,
     and the topology the step leaves (comms.in_range + comms.auto_topology)."""
     params = sim.make_params(load_scenario(name, overrides))
@@ -493,7 +495,7 @@ def test_step_kernel_matches_numpy_references(name, overrides):
 
 
 def test_target_pod_kernel_matches_segment_pod():
-    """_kernels.target_pod against search_theory.segment_pod (numpy path), every law."""
+    """sensing.target_pod against search_theory.segment_pod (numpy path), every law."""
     rng = np.random.default_rng(4)
     for law in LAW_NAMES:
         for _ in range(20):
@@ -505,7 +507,7 @@ def test_target_pod_kernel_matches_segment_pod():
             origin = (-700.0, 300.0)
             w, cutoff, cell = 1500.0, 6000.0, 2000.0
             out = np.empty((5, 4))
-            hit = _kernels.target_pod(
+            hit = sensing.target_pod(
                 target, a, b, moving, *origin, detection_law(law).code, w, cutoff, cell, out
             )
             want = search_theory.segment_pod(target[:, None, :], a, b, w, law, cutoff, cell, origin)
@@ -586,40 +588,151 @@ def _project_modules():
             yield ".".join(parts[:-1] if parts[-1] == "__init__" else parts), f
 
 
-def test_every_compiled_function_lives_in_the_kernels_module():
-    """Numba caches a compiled function by its own source file only, so a kernel calling a
-    compiled function of another file would keep a stale copy after that file is edited. Every
-    compiled function is therefore in poc_env/_kernels.py: no other module imports numba, and
-    every numba dispatcher reachable from the library modules comes from that file."""
-    for name, path in _project_modules():
-        if name == "poc_env._kernels":
+def _is_kernel_module(name: str) -> bool:
+    """The kernel modules: the package ``poc_env._kernels`` and every module named ``_kernels``
+    or inside a ``_kernels`` package (the planner's ``poc_env.agents.planning._kernels``)."""
+    return "_kernels" in name.split(".")
+
+
+def kernel_modules() -> list[tuple[str, Path]]:
+    return [(name, path) for name, path in _project_modules() if _is_kernel_module(name)]
+
+
+#: What a kernel module may import: the standard library's math helpers, numpy, numba and
+#: llvmlite (numba's code generator). Nothing of the project, nor any relative import.
+KERNEL_IMPORTS = frozenset({"__future__", "math", "functools", "numpy", "numba", "llvmlite"})
+
+
+def cache_rule_violations(path: Path) -> list[str]:
+    """Imports of ``path`` that break the cache rule of :mod:`poc_env._kernels`: a kernel module
+    imports nothing but :data:`KERNEL_IMPORTS`, so every compiled function it calls, every
+    constant it freezes and its compile options are in its own file (``line: import``)."""
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            mods = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            mods = ["." * node.level + (node.module or "")]
+        elif isinstance(node, ast.Call) and getattr(node.func, "id", "") == "__import__":
+            mods = ["__import__(...)"]
+        else:
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        for node in ast.walk(tree):
+        bad += [f"{node.lineno}: {m}" for m in mods if m.split(".")[0] not in KERNEL_IMPORTS]
+    return bad
+
+
+def foreign_compiled_calls(module) -> list[str]:
+    """Compiled functions of ``module`` that reach a compiled function (a numba dispatcher,
+    ufunc or intrinsic) defined in another file through their globals."""
+    from numba.core.extending import _Intrinsic
+
+    def source(obj) -> Path:
+        fn = getattr(obj, "py_func", None) or getattr(obj, "_defn", None) or obj
+        return Path(inspect.getsourcefile(fn) or "").resolve()
+
+    def names(code) -> set[str]:
+        out = set(code.co_names)
+        for const in code.co_consts:
+            if inspect.iscode(const):
+                out |= names(const)
+        return out
+
+    own = Path(module.__file__).resolve()
+    bad = []
+    for name, value in vars(module).items():
+        if not isinstance(value, Dispatcher):
+            continue
+        for used in sorted(names(value.py_func.__code__)):
+            target = value.py_func.__globals__.get(used)
+            if isinstance(target, (Dispatcher, _Intrinsic)) and source(target) != own:
+                bad.append(f"{module.__name__}.{name} calls {used} of {source(target).name}")
+    return bad
+
+
+@pytest.mark.parametrize("name,path", kernel_modules(), ids=[m for m, _ in kernel_modules()])
+def test_kernel_modules_import_nothing_of_the_project(name, path):
+    """The cache rule (:mod:`poc_env._kernels`), read from the source: a kernel module imports
+    only the standard library's math helpers, numpy, numba and llvmlite."""
+    bad = cache_rule_violations(path)
+    assert not bad, f"{name} breaks the cache rule of poc_env._kernels: {bad}"
+
+
+def test_cache_rule_catches_a_call_into_another_kernel_module(tmp_path):
+    """The checkers themselves: a kernel that imports and calls another module's compiled
+    function is reported, from the source and from the loaded module."""
+    src = tmp_path / "bad_kernels.py"
+    src.write_text(
+        "from numba import njit\n"
+        "from poc_env._kernels.swarm import in_range\n"
+        "from . import sensing\n"
+        "\n"
+        "\n"
+        "@njit(cache=False)\n"
+        "def adjacency(dist, range_m, act, out):\n"
+        "    in_range(dist, range_m, act, out)\n",
+        encoding="utf-8",
+    )
+    assert cache_rule_violations(src) == ["2: poc_env._kernels.swarm", "3: ."]
+    spec = importlib.util.spec_from_file_location("bad_kernels", src)
+    module = importlib.util.module_from_spec(spec)
+    code = src.read_text(encoding="utf-8").replace("from . import sensing\n", "")
+    exec(compile(code, str(src), "exec"), module.__dict__)
+    assert foreign_compiled_calls(module) == ["bad_kernels.adjacency calls in_range of swarm.py"]
+
+
+@pytest.mark.parametrize("name", [m for m, _ in kernel_modules()])
+def test_compiled_functions_call_only_their_own_module(name):
+    """The loaded kernels: every dispatcher of a kernel module is defined in its file, and the
+    compiled functions it calls through its globals too (no closures: the old source-hash key)."""
+    module = importlib.import_module(name)
+    own = Path(module.__file__).resolve()
+    for value in vars(module).values():
+        if isinstance(value, Dispatcher):
+            assert Path(inspect.getsourcefile(value.py_func) or "").resolve() == own, value
+            assert value.py_func.__closure__ is None, value
+    assert not foreign_compiled_calls(module)
+
+
+def test_compiled_code_lives_only_in_kernel_modules():
+    """No other module imports numba or llvmlite, and every numba dispatcher reachable from the
+    library modules that call kernels comes from a kernel module."""
+    callers = []
+    for name, path in _project_modules():
+        if _is_kernel_module(name):
+            continue
+        text = path.read_text(encoding="utf-8")
+        for node in ast.walk(ast.parse(text)):
             mods = []
             if isinstance(node, ast.Import):
                 mods = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and not node.level:
                 mods = [node.module or ""]
             assert not any(m.split(".")[0] in ("numba", "llvmlite") for m in mods), (
-                f"{name} imports numba: compiled code belongs in poc_env/_kernels.py"
+                f"{name} imports numba: compiled code belongs in a kernel module (poc_env._kernels)"
             )
-    kernels_file = Path(_kernels.__file__).resolve()
-    for name in ("poc_env.theory.search_theory", "poc_env.sim.core", "poc_env.sim.comms",
-                 "poc_env.sim.constraints", "poc_env.sim.observations",
-                 "poc_env.theory.regions", "poc_env.agents.planning.objective"):  # fmt: skip
+        if "_kernels" in text:
+            callers.append(name)
+    assert len(callers) >= 8  # the walk found the callers
+    kernel_files = {path.resolve() for _, path in kernel_modules()}
+    for name in callers:
         module = importlib.import_module(name)
         for value in vars(module).values():
             if isinstance(value, Dispatcher):
                 src = Path(inspect.getsourcefile(value.py_func) or "").resolve()
-                assert src == kernels_file, f"{name}: {value} compiled outside _kernels"
+                assert src in kernel_files, f"{name}: {value} compiled outside the kernel modules"
 
 
-def test_no_closure_cache_keys_are_left():
-    """The kernels are plain module-level functions: no closure (the old source-hash key)."""
-    for value in vars(_kernels).values():
-        if isinstance(value, Dispatcher):
-            assert value.py_func.__closure__ is None, value
+def test_step_constants_are_named_once():
+    """The step's constants array: every name of ``STEP_CONSTANTS`` once, no other, read-only."""
+    from poc_env._kernels import swarm
+
+    params = sim.make_params(load_scenario("small"))
+    c = params.step_constants
+    assert c is params.step_constants  # packed once per Params
+    assert c.shape == (len(swarm.STEP_CONSTANTS),) and not c.flags.writeable
+    assert c[swarm.STEP_CONSTANTS.index("dt_s")] == params.dt
+    with pytest.raises(TypeError):
+        swarm.step_constants(dt_s=1.0)
 
 
 # ------------------------------------------------------------ rectangle membership (issue 12)
@@ -781,7 +894,7 @@ def test_compass_bins_on_boundaries_equal_the_defining_formula():
     cx, cy = px[0] + off[:, 0], py[0] + off[:, 1]
     poc, others = rng.random((2, len(cx))), rng.random((2, len(cx)))
     edges = np.asarray(RING_EDGES_M, dtype=float)
-    mass, count = _kernels.compass_bins(
+    mass, count = obs_kernels.compass_bins(
         cx, cy, px, py, poc, others, edges, float(OTHERS_RADIUS_M), N_SECTORS
     )
     for i in range(2):

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from poc_env._kernels import one_minus_exp_neg
+from poc_env._kernels.sensing import one_minus_exp_neg
 from poc_env.theory.detection import LAW_NAMES
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import (

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.special import erf
 
-from poc_env._kernels import LAW_CODES
+from poc_env._kernels.sensing import LAW_CODES
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.bound import physical_optimum

@@ -1,0 +1,173 @@
+"""Compiled passes of the planner: its rectangles for a whole population, and route timing.
+
+:func:`plan_rectangles` is the map repair, lawnmower and transit of
+:mod:`poc_env.agents.planning.objective` for a population in one pass (the prior masses then
+come from :func:`poc_env._kernels.rectangles.rectangle_masses`, called by the objective);
+:func:`route_timeline` and :func:`route_sample` time and sample a flight along a path
+(:mod:`poc_env.agents.planning.refine`).
+
+A kernel module under the cache rule of :mod:`poc_env._kernels`: it imports nothing of the
+project, so the planner composes its kernels with the environment's in Python.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_jit = njit(cache=True, error_model="numpy")
+
+# ------------------------------------------------------------------- the rectangles of a population
+
+
+@_jit
+def plan_rectangles(x, box, takeoff, landing, geo, terms, rects):
+    """The planner's rectangles (``poc_env.agents.planning.objective``) for a population, in one
+    pass.
+
+    ``x (P, 6 n)``: per UAV ``(x_c, y_c, l, w, theta, d)``. Per rectangle, as the objective's
+    numpy steps (same operations, in the same order): the map repair of ``split`` (a rectangle
+    whose bounding box, half-extents ``h_x, h_y``, is wider or taller than ``box = (x0, y0, x1,
+    y1)`` scaled about its centre until it fits, the centre then clipped so that the box lies
+    in the map); the lawnmower of ``lawnmower`` (lines along the long side ``L``, ``n = max(1,
+    ceil(E/d - 1/2))`` of them, the first waypoint the corner of the outer lines nearest the
+    take-off, the last on the other outer line) and its transit from ``takeoff[i]`` and to
+    ``landing[i]``. Results: ``geo (P, n, 5)`` the repaired ``x_c, y_c, l, w, theta``;
+    ``terms (P, n, 6)`` the line count, ``L``, the search legs ``n L``, the track ``n L +
+    (n - 1) d`` and the transit in columns 0-4 (column 5, the prior mass, is the caller's:
+    :func:`poc_env.agents.planning.objective.plan_rectangles`); ``rects (6, P n)`` the
+    rectangles as :func:`poc_env._kernels.rectangles.rectangle_masses` takes them (centre
+    ``x``, ``y``, half length, half width, cos and sin of theta; rectangle ``p n + i``).
+    """
+    n_ind = x.shape[0]
+    n_uav = x.shape[1] // 6
+    bx0, by0, bx1, by1 = box[0], box[1], box[2], box[3]
+    cx, cy, hl, hw, ct, st = rects[0], rects[1], rects[2], rects[3], rects[4], rects[5]
+    for p in range(n_ind):
+        for i in range(n_uav):
+            xc, yc, ln, wd, th, d = x[p, 6 * i : 6 * i + 6]
+            c = abs(math.cos(th))
+            s = abs(math.sin(th))
+            hx = 0.5 * (ln * c + wd * s)
+            hy = 0.5 * (ln * s + wd * c)
+            k = min(1.0, min(0.5 * (bx1 - bx0) / hx, 0.5 * (by1 - by0) / hy))
+            ln, wd, hx, hy = ln * k, wd * k, hx * k, hy * k
+            xc = min(max(xc, bx0 + hx), max(bx0 + hx, bx1 - hx))
+            yc = min(max(yc, by0 + hy), max(by0 + hy, by1 - hy))
+            geo[p, i, 0], geo[p, i, 1], geo[p, i, 2] = xc, yc, ln
+            geo[p, i, 3], geo[p, i, 4] = wd, th
+            # the lawnmower
+            alpha = th if ln >= wd else th + 0.5 * np.pi
+            short = min(ln, wd)
+            long_ = max(ln, wd)
+            n = max(1.0, math.ceil(short / d - 0.5))
+            elx, ely = math.cos(alpha), math.sin(alpha)
+            eex, eey = -ely, elx
+            v_first = 0.0 if short < d else 0.5 * (short - d)
+            v_last = v_first - (n - 1.0) * d
+            best = math.inf
+            v_s = u_s = 0.0
+            k_s = 0
+            for q in range(4):
+                v = v_first if q < 2 else v_last
+                u = -0.5 * long_ if q % 2 == 0 else 0.5 * long_
+                dx = xc + v * eex + u * elx - takeoff[i, 0]
+                dy = yc + v * eey + u * ely - takeoff[i, 1]
+                dist = math.sqrt(dx * dx + dy * dy)
+                if dist < best:
+                    best, v_s, u_s, k_s = dist, v, u, q
+            v_e = v_last if k_s < 2 else v_first
+            u_e = -u_s if n % 2 == 1 else u_s
+            fx = xc + v_s * eex + u_s * elx - takeoff[i, 0]
+            fy = yc + v_s * eey + u_s * ely - takeoff[i, 1]
+            lx = landing[i, 0] - (xc + v_e * eex + u_e * elx)
+            ly = landing[i, 1] - (yc + v_e * eey + u_e * ely)
+            search = n * long_
+            terms[p, i, 0] = n
+            terms[p, i, 1] = long_
+            terms[p, i, 2] = search
+            terms[p, i, 3] = search + (n - 1.0) * d
+            terms[p, i, 4] = math.sqrt(fx * fx + fy * fy) + math.sqrt(lx * lx + ly * ly)
+            r = p * n_uav + i
+            cx[r], cy[r], hl[r], hw[r] = xc, yc, 0.5 * ln, 0.5 * wd
+            ct[r], st[r] = math.cos(th), math.sin(th)
+
+
+# ------------------------------------------------------------------------------------ route timing
+
+
+@_jit
+def route_timeline(p, v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out, dep):
+    """Arrival times of the path ``p`` (m, 2) in ``out`` (m,) and whether it fits (see
+    :func:`poc_env.agents.planning.refine.arrival_times` and ``route_fits``); points within 1 mm of
+    the point before get the same time as it and no turn. ``heading0`` NaN: no heading at
+    take-off. ``dep`` (m,) gets the time each point is left (its arrival plus the turn
+    there)."""
+    m = p.shape[0]
+    out[0] = 0.0
+    dep[:] = np.inf
+    t = 0.0
+    last = 0  # the last point kept
+    have = not math.isnan(heading0)  # a heading exists (at take-off, or from a flown leg)
+    hx = math.cos(heading0) if have else 0.0
+    hy = math.sin(heading0) if have else 0.0
+    fits = True
+    for j in range(1, m):
+        dx = p[j, 0] - p[last, 0]
+        dy = p[j, 1] - p[last, 1]
+        length = math.hypot(dx, dy)
+        if length <= 1e-3 and j < m - 1:
+            out[j] = t
+            continue
+        v = v_line
+        if last == 0:
+            v = v_out
+        if j == m - 1:
+            v = v_home
+        if length > 0:
+            if have:
+                cross = hx * dy - hy * dx
+                dot = hx * dx + hy * dy
+                t += turn_cost * abs(math.atan2(cross, dot))
+            hx = dx
+            hy = dy
+            have = True
+            dep[last] = t
+            t += length / v
+        out[j] = t
+        last = j
+        if j < m - 1:
+            home = math.hypot(p[m - 1, 0] - p[j, 0], p[m - 1, 1] - p[j, 1])
+            if t + home / v_home + reserve > budget + 1e-9:
+                fits = False
+    if t > budget + 1e-9:
+        fits = False
+    return fits
+
+
+@_jit
+def route_sample(p, arrive, dep, times, out, act):
+    """Positions ``out (S, 2)`` at ``times (S,)`` (ascending) along the path ``p`` flown with
+    arrival times ``arrive`` and departure times ``dep`` (:func:`route_timeline`): still at a point
+    while turning there, along a leg at constant speed; ``act`` False once landed."""
+    m = p.shape[0]
+    j = 0  # the point last left
+    for s in range(times.shape[0]):
+        tau = times[s]
+        if tau >= arrive[m - 1]:
+            out[s, 0] = p[m - 1, 0]
+            out[s, 1] = p[m - 1, 1]
+            act[s] = False
+            continue
+        act[s] = True
+        while j < m - 1 and tau >= arrive[j + 1]:
+            j += 1
+        if tau <= dep[j] or not dep[j] < arrive[j + 1]:
+            out[s, 0] = p[j, 0]
+            out[s, 1] = p[j, 1]
+        else:
+            f = (tau - dep[j]) / (arrive[j + 1] - dep[j])
+            out[s, 0] = p[j, 0] + f * (p[j + 1, 0] - p[j, 0])
+            out[s, 1] = p[j, 1] + f * (p[j + 1, 1] - p[j, 1])

@@ -1,0 +1,220 @@
+"""Compiled observations: the raster channels, the state vectors and the compass sums.
+
+The kernels behind :func:`poc_env.sim.observations.rasters`, :func:`~poc_env.sim.observations.
+vectors` and :class:`~poc_env.sim.observations.CompassFeatures`; tested against plain numpy
+in ``tests/sim/test_kernels.py``.
+
+A kernel module: imports nothing of the project (the cache rule, :mod:`poc_env._kernels`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_jit = njit(cache=True, error_model="numpy")
+
+# ------------------------------------------------------------------------------------ observations
+
+
+@_jit
+def rasters(belief, s, coarse, own_sum, scale, hazard, pos, flying, x0, y0, x1, y1, cell, out):
+    """Fill ``out (E, N, C, ny, nx)``: channel 0 the coarse POC / ``scale`` clipped to [0, 1]
+    (cells summed as ``Grid.coarsen`` does with numpy, or taken from ``coarse``), 1 the own
+    cell, 2 the cells of the other present UAVs, 3 ``hazard``. A UAV is present when flying
+    inside the grid ``[x0, x1] x [y0, y1]`` (``Grid.contains``); its cell is
+    ``Grid.cell_of``'s, ``floor((x - x0) / cell)`` clipped to the grid."""
+    n_env, n, _, ny, nx = out.shape
+    poc = np.empty((ny, nx), dtype=np.float32)
+    poc_sum = np.empty((ny, nx))
+    rows = np.empty(n, dtype=np.intp)
+    cols = np.empty(n, dtype=np.intp)
+    present = np.empty(n, dtype=np.bool_)
+    for e in range(n_env):
+        for k in range(n):
+            x, y = pos[e, k, 0], pos[e, k, 1]
+            present[k] = flying[e, k] and x >= x0 and x <= x1 and y >= y0 and y <= y1
+            if present[k]:
+                rows[k] = min(max(math.floor((y - y0) / cell), 0), ny - 1)
+                cols[k] = min(max(math.floor((x - x0) / cell), 0), nx - 1)
+        if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
+            for j in range(ny):
+                acc = poc_sum[j]
+                acc[:] = 0.0
+                for a in range(s):
+                    row = belief[e, j * s + a]
+                    if s == 2:
+                        for i in range(nx):
+                            acc[i] += row[2 * i] + row[2 * i + 1]
+                    else:
+                        for i in range(nx):
+                            r = -0.0
+                            for b in range(s):
+                                r += row[i * s + b]
+                            acc[i] += r
+        else:
+            poc_sum[:] = coarse[e]
+        for j in range(ny):
+            for i in range(nx):
+                q = poc_sum[j, i] / scale[e]
+                if q < 0.0:  # np.clip(q, 0.0, 1.0) with scalar bounds; NaN stays NaN
+                    q = 0.0
+                elif q > 1.0:
+                    q = 1.0
+                poc[j, i] = q
+        for k in range(n):
+            out[e, k, 0] = poc
+            out[e, k, 1] = 0.0
+            out[e, k, 2] = 0.0
+            out[e, k, 3] = hazard
+        for k in range(n):
+            if present[k]:
+                rj, ci = rows[k], cols[k]
+                out[e, k, 1, rj, ci] = 1.0
+                for m in range(n):
+                    if m != k:
+                        out[e, m, 2, rj, ci] = 1.0
+
+
+@_jit
+def _neighbours(pos, flying, e, i, range_m):
+    """How many other flying UAVs of env ``e`` are within ``range_m`` of UAV ``i`` (0 unless it
+    flies): the row of eq. 24's in-range graph, with the operations of the swarm kernels
+    ``pairwise_distances`` (``sqrt(0 + dx^2 + dy^2)``) and ``in_range`` (``dist <= range_m``),
+    which this module may not call (the cache rule, :mod:`poc_env._kernels`)."""
+    count = 0
+    if flying[e, i]:
+        for j in range(flying.shape[1]):
+            if flying[e, j] and i != j:
+                d2 = 0.0
+                for k in range(2):
+                    c = pos[e, i, k] - pos[e, j, k]
+                    d2 += c * c
+                if math.sqrt(d2) <= range_m:
+                    count += 1
+    return count
+
+
+@_jit
+def vectors(
+    pos,
+    speed,
+    sin_h,
+    cos_h,
+    pitch,
+    elapsed,
+    flying,
+    step,
+    landing,
+    bx0,
+    by0,
+    w,
+    h,
+    diag,
+    max_alt,
+    min_speed,
+    speed_span,
+    max_pitch,
+    endurance,
+    usable,
+    horizon,
+    range_m,
+    others,
+    low,
+    high,
+    out,
+):
+    """The vector table of the module docstring into ``out (E, N, VECTOR_SIZE)``, float64
+    values clipped to [low, high] as numpy clips them, then rounded to float32. Neighbours
+    are counted by :func:`_neighbours` (:func:`comms.in_range`'s graph)."""
+    n_env, n = flying.shape
+    v = np.empty(out.shape[2])
+    for e in range(n_env):
+        t = step[e] / horizon
+        for i in range(n):
+            x, y = pos[e, i, 0], pos[e, i, 1]
+            v[0] = (x - bx0) / w
+            v[1] = (y - by0) / h
+            v[2] = pos[e, i, 2] / max_alt
+            v[3] = (speed[e, i] - min_speed) / speed_span
+            v[4] = sin_h[e, i]
+            v[5] = cos_h[e, i]
+            v[6] = pitch[e, i] / max_pitch
+            v[7] = 1.0 - elapsed[e, i] / endurance
+            v[8] = 1.0 - elapsed[e, i] / usable
+            v[9] = (landing[i, 0] - x) / diag
+            v[10] = (landing[i, 1] - y) / diag
+            v[11] = _neighbours(pos, flying, e, i, range_m) / others
+            v[12] = 1.0 if flying[e, i] else 0.0
+            v[13] = t
+            for k in range(v.size):
+                q = v[k]
+                if not np.isnan(q):  # np.clip with array bounds: ties go to the bound
+                    q = q if q > low[k] else low[k]
+                    q = q if q < high[k] else high[k]
+                out[e, i, k] = q
+
+
+@_jit
+def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
+    """The compass observation's sums (:class:`poc_env.sim.observations.CompassFeatures`) in
+    one pass over the cells: for each UAV ``i`` at ``(px[i], py[i])`` and each cell centre
+    ``(cx[j], cy[j])``, the sector (``n_sectors`` equal angles, sector 0 starting due east,
+    counter-clockwise) and the ring (how many ``edges`` are <= the distance) of the cell; returns
+    ``mass (B, n_sectors * (len(edges) + 1))``, the POC ``poc[i, j]`` summed per (sector, ring),
+    and ``count (B, n_sectors)``, ``others[i, j]`` summed per sector over the cells within
+    ``radius``. Cells are visited in index order, as ``np.bincount`` does."""
+    b = px.shape[0]
+    n_cells = cx.shape[0]
+    n_rings = edges.shape[0] + 1
+    mass = np.zeros((b, n_sectors * n_rings))
+    count = np.zeros((b, n_sectors))
+    two_pi = 2.0 * np.pi
+    half = n_sectors // 2
+    edges2 = edges * edges
+    radius2 = radius * radius
+    octants = n_sectors == 8
+    tol = 1e-9  # relative margin around a boundary inside which the exact formula decides
+    for i in range(b):
+        for j in range(n_cells):
+            dx = cx[j] - px[i]
+            dy = cy[j] - py[i]
+            ax = abs(dx)
+            ay = abs(dy)
+            big = max(ax, ay)
+            if octants and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
+                # clearly inside an octant: signs and |dy| vs |dx| name it, no arctan2 needed
+                if dy > 0 and dx > 0:
+                    sector = 0 if ay < ax else 1
+                elif dy > 0:
+                    sector = 2 if ay > ax else 3
+                elif dx < 0:
+                    sector = 4 if ay < ax else 5
+                else:
+                    sector = 6 if ay > ax else 7
+            else:  # on or next to a sector boundary: the defining formula, bit for bit
+                ang = np.arctan2(dy, dx)
+                sector = int(np.floor((ang + np.pi) / two_pi * n_sectors)) % n_sectors
+                sector = (sector + half) % n_sectors  # arctan2 + pi starts at west
+            d2 = dx * dx + dy * dy
+            ring = 0
+            exact = False
+            for r in range(n_rings - 1):  # squared distances decide unless next to an edge
+                if abs(d2 - edges2[r]) <= tol * edges2[r]:
+                    exact = True
+            near_radius = abs(d2 - radius2) <= tol * radius2
+            if exact or near_radius:
+                dist = np.hypot(dx, dy)
+                while ring < n_rings - 1 and edges[ring] <= dist:
+                    ring += 1
+                inside = dist <= radius
+            else:
+                while ring < n_rings - 1 and edges2[ring] <= d2:
+                    ring += 1
+                inside = d2 <= radius2
+            mass[i, sector * n_rings + ring] += poc[i, j]
+            if inside:
+                count[i, sector] += others[i, j]
+    return mass, count

@@ -1,0 +1,310 @@
+"""Compiled swarm geometry: pairwise distances, eq. 20-21 and 24, and the simulator step.
+
+The pairwise distances of the UAVs, the boundary (eq. 20) and separation (eq. 21) checks
+(:mod:`poc_env.sim.constraints`), the in-range graph, the two-neighbour rule (eq. 24) and the
+auto topology (:mod:`poc_env.sim.comms`), and the bookkeeping of the simulator step after
+sensing (:mod:`poc_env.sim.core`), which applies these same kernels to the new positions.
+They share one file because the step calls them (the cache rule, :mod:`poc_env._kernels`:
+a kernel module imports nothing of the project).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_jit = njit(cache=True, error_model="numpy")
+
+# ------------------------------------------------------------------------- constraints (eq. 20-21)
+
+
+@_jit
+def _outside(x, y, x0, y0, x1, y1):
+    """Point (x, y) lies outside the rectangle [x0, x1] x [y0, y1] (eq. 20, ``Omega_b``)."""
+    return x < x0 or x > x1 or y < y0 or y > y1
+
+
+@_jit
+def outside_boundary(p, x0, y0, x1, y1, out):
+    """:func:`_outside` of every point ``p (P, 2)`` into ``out (P,)``."""
+    for k in range(p.shape[0]):
+        out[k] = _outside(p[k, 0], p[k, 1], x0, y0, x1, y1)
+
+
+@_jit
+def pairwise_distances(p, out):
+    """Distances ``out (B, n, n)`` of the points ``p (B, n, d)``: sqrt(0 + dx0^2 + dx1^2 ...)."""
+    n_b, n, d = p.shape
+    for b in range(n_b):
+        for i in range(n):
+            for j in range(n):
+                d2 = 0.0
+                for k in range(d):
+                    c = p[b, i, k] - p[b, j, k]
+                    d2 += c * c
+                out[b, i, j] = math.sqrt(d2)
+
+
+@_jit
+def separation(dist, d_s, act, use_act, pairs, per_agent):
+    """Eq. 21 on distances ``dist (B, n, n)``: ``pairs`` closer than ``d_s`` between distinct
+    (and, with ``use_act``, active) UAVs; ``per_agent (B, n)`` has at least one such pair."""
+    n_b, n = dist.shape[0], dist.shape[1]
+    for b in range(n_b):
+        for i in range(n):
+            hit = False
+            for j in range(n):
+                v = i != j and dist[b, i, j] < d_s
+                if use_act:
+                    v = v and act[b, i] and act[b, j]
+                pairs[b, i, j] = v
+                hit = hit or v
+            per_agent[b, i] = hit
+
+
+# -------------------------------------------------------------------------- communication (eq. 24)
+
+
+@_jit
+def in_range(dist, range_m, act, out):
+    """Eq. 24 adjacency ``out (B, n, n)``: distinct active UAVs with ``dist <= range_m``."""
+    n_b, n = out.shape[0], out.shape[1]
+    for b in range(n_b):
+        for i in range(n):
+            ai = act[b, i]
+            for j in range(n):
+                out[b, i, j] = ai and act[b, j] and i != j and dist[b, i, j] <= range_m
+
+
+@_jit
+def two_neighbour(adj, min_neighbours, act, use_act, out):
+    """The §3.2.4 rule per UAV into ``out (B, n)``, see :func:`two_neighbour_ok`."""
+    n_b, n = adj.shape[0], adj.shape[1]
+    for b in range(n_b):
+        need = min_neighbours
+        if use_act:
+            n_act = 0
+            for i in range(n):
+                if act[b, i]:
+                    n_act += 1
+            need = min(min_neighbours, n_act - 1)
+        for i in range(n):
+            count = 0
+            for j in range(n):
+                if adj[b, i, j]:
+                    count += 1
+            out[b, i] = (use_act and not act[b, i]) or count >= need
+
+
+@_jit
+def auto_topology(av, dist, use_dist, act, k_nearest, links, n_comp):
+    """:func:`auto_topology` of each env into ``links (E, n, n)`` and ``n_comp (E,)``.
+
+    A pair is available when ``av`` says so, both UAVs are active and they are distinct; it
+    weighs ``dist`` (or 1 without ``use_dist``), an unavailable pair ``inf``. Prim's algorithm
+    as in the docstring of :func:`auto_topology`: each round takes the unvisited UAV of
+    smallest key (the first on ties), or starts a new component at the first unvisited UAV
+    when no key is finite; then every UAV's ``k_nearest`` lightest available links (the first
+    on ties).
+    """
+    n_env, n = av.shape[0], av.shape[1]
+    w = np.empty((n, n))
+    key = np.empty(n)
+    parent = np.zeros(n, dtype=np.intp)
+    visited = np.empty(n, dtype=np.bool_)
+    chosen = np.empty(n, dtype=np.bool_)
+    for e in range(n_env):
+        for i in range(n):
+            for j in range(n):
+                links[e, i, j] = False
+                if av[e, i, j] and act[e, i] and act[e, j] and i != j:
+                    w[i, j] = dist[e, i, j] if use_dist else 1.0
+                else:
+                    w[i, j] = np.inf
+            visited[i] = not act[e, i]
+            key[i] = np.inf
+            parent[i] = 0
+        comps = 0
+        for _ in range(n):
+            j = -1
+            best = np.inf
+            remaining = False
+            for i in range(n):
+                if not visited[i]:
+                    remaining = True
+                    if key[i] < best:
+                        best = key[i]
+                        j = i
+            if not remaining:
+                break
+            if j >= 0:  # grow the current tree along its lightest edge
+                links[e, parent[j], j] = True
+            else:  # no finite key: a new component at the first unvisited UAV
+                comps += 1
+                for i in range(n):
+                    if not visited[i]:
+                        j = i
+                        break
+            visited[j] = True
+            for i in range(n):
+                if not visited[i] and w[j, i] < key[i]:
+                    key[i] = w[j, i]
+                    parent[i] = j
+        n_comp[e] = comps
+        for i in range(n):
+            for j in range(n):
+                chosen[j] = False
+            for _ in range(k_nearest):
+                m = -1
+                best = np.inf
+                for j in range(n):
+                    if not chosen[j] and w[i, j] < best:
+                        best = w[i, j]
+                        m = j
+                if m < 0:
+                    break
+                chosen[m] = True
+                links[e, i, m] = True
+        for i in range(n):
+            for j in range(i + 1, n):
+                v = links[e, i, j] or links[e, j, i]
+                links[e, i, j] = v
+                links[e, j, i] = v
+
+
+@_jit
+def auto_links(dist, range_m, flying, k_nearest, links, n_comp):
+    """:func:`comms.auto_topology` on :func:`comms.in_range` of ``dist`` among the flying."""
+    adj = np.empty(links.shape, dtype=np.bool_)
+    in_range(dist, range_m, flying, adj)
+    auto_topology(adj, dist, True, flying, k_nearest, links, n_comp)
+
+
+# ------------------------------------------------------------------------------ the simulator step
+
+#: Rows of the bool ``flags`` array that :func:`step` fills (one array: fewer arguments).
+OVERTIME, OOB, COLLISION, COMMS_OK, LANDED, CRASHED = range(6)
+N_FLAGS = 6
+
+#: The scalar constants of :func:`step`, in the order of its ``constants`` array
+#: (:func:`step_constants` builds it once per scenario).
+STEP_CONSTANTS = (
+    "dt_s",  # the time step
+    "usable_s",  # usable endurance 0.85 T (eq. 18)
+    "time_share",  # dt / usable: the time term of a moving UAV
+    "endurance_s",  # T
+    "x0", "y0", "x1", "y1",  # the operating area (eq. 20)
+    "safety_distance_m",  # d_s (eq. 21)
+    "range_m",  # communication range (eq. 24)
+    "min_neighbours",  # the two-neighbour rule's count (eq. 24), an integer
+    "landing_radius_m",
+    "landing_max_altitude_m",
+    "landing_max_speed_mps",
+    "terminate",  # 1.0: an unsafe step crashes the UAV (constraints.violation "terminate")
+)  # fmt: skip
+
+
+def step_constants(**values: float) -> np.ndarray:
+    """The float64 array of :func:`step`'s scalar constants from their names
+    (:data:`STEP_CONSTANTS`, every one and no other)."""
+    if set(values) != set(STEP_CONSTANTS):
+        raise TypeError(f"step_constants needs exactly {STEP_CONSTANTS}, got {sorted(values)}")
+    out = np.array([float(values[name]) for name in STEP_CONSTANTS], dtype=np.float64)
+    out.flags.writeable = False
+    return out
+
+
+@_jit
+def step(state, sensed, events, landing, constants):
+    """Steps 3-5 of :func:`poc_env.sim.core.step` after sensing, in place on the state arrays.
+
+    ``state`` (read and updated): ``(agent_pos, posc, pos, speed, exponent, threshold,
+    step_count, detected, detect_step, elapsed, left_home, landed, crashed, flying,
+    violations)``, ``pos`` the new positions; ``sensed`` (read): ``(found, moving, nofly,
+    threat)``, what each UAV found this step, who moved, and the no-fly and threat flags;
+    ``events`` (written): ``(team, detected_now, time_term, flags, dist)``; ``landing (N, 2)``;
+    ``constants``: :func:`step_constants`.
+
+    What each UAV found (``agent_pos``), the team's POS (``team``, eq. 12 summed over the UAVs
+    in agent order) and POSC (eq. 13);
+    detection of the hidden target; the time model (eq. 17-18); the boundary (eq. 20),
+    separation (eq. 21) and two-neighbour (eq. 24) checks through the same kernels
+    :mod:`~poc_env.sim.constraints` and :mod:`~poc_env.sim.comms` call; violation counts;
+    landing and crashes; the step counter. ``dist`` receives the pairwise distances of the new
+    positions (for the topology update).
+    """
+    (
+        agent_pos, posc, pos, speed, exponent, threshold, step_count, detected, detect_step,
+        elapsed, left_home, landed, crashed, flying, violations,
+    ) = state  # fmt: skip
+    found, moving, nofly, threat = sensed
+    team, detected_now, time_term, flags, dist = events
+    dt = constants[0]
+    usable = constants[1]
+    time_share = constants[2]
+    endurance = constants[3]
+    x0, y0, x1, y1 = constants[4], constants[5], constants[6], constants[7]
+    d_s = constants[8]
+    range_m = constants[9]
+    min_neighbours = int(constants[10])
+    landing_radius = constants[11]
+    landing_max_alt = constants[12]
+    landing_max_speed = constants[13]
+    terminate = constants[14] != 0.0
+    n_env, n = moving.shape
+    pairwise_distances(pos[:, :, :2], dist)
+    pairs = np.empty((n_env, n, n), dtype=np.bool_)
+    separation(dist, d_s, moving, True, pairs, flags[COLLISION])
+    in_range(dist, range_m, moving, pairs)
+    two_neighbour(pairs, min_neighbours, moving, True, flags[COMMS_OK])
+    for e in range(n_env):
+        total = 0.0
+        for i in range(n):
+            total += found[e, i]
+        team[e] = total
+        posc[e] += total
+        now = not detected[e] and exponent[e] >= threshold[e]
+        detected_now[e] = now
+        if now:
+            detected[e] = True
+            detect_step[e] = step_count[e] + 1
+        step_count[e] += 1
+        for i in range(n):
+            agent_pos[e, i] += found[e, i]
+            mv = moving[e, i]
+            elapsed[e, i] = elapsed[e, i] + (dt if mv else 0.0)
+            flags[OVERTIME, e, i] = mv and elapsed[e, i] > usable
+            time_term[e, i] = time_share if mv else 0.0
+            x, y, z = pos[e, i, 0], pos[e, i, 1], pos[e, i, 2]
+            oob = mv and _outside(x, y, x0, y0, x1, y1)
+            flags[OOB, e, i] = oob
+            collision = mv and flags[COLLISION, e, i]
+            flags[COLLISION, e, i] = collision
+            comms_ok = flags[COMMS_OK, e, i] or not mv
+            flags[COMMS_OK, e, i] = comms_ok
+            unsafe = oob or nofly[e, i] or collision or threat[e, i]
+            if mv and (unsafe or not comms_ok):
+                violations[e, i] += 1
+            home = math.hypot(x - landing[i, 0], y - landing[i, 1])
+            if mv and home > landing_radius:
+                left_home[e, i] = True
+            land = (
+                mv
+                and left_home[e, i]
+                and home <= landing_radius
+                and z <= landing_max_alt
+                and speed[e, i] <= landing_max_speed
+            )
+            crash = mv and not land and (z <= 0.0 or elapsed[e, i] >= endurance)
+            if terminate:
+                crash = crash or (mv and not land and unsafe)
+            flags[LANDED, e, i] = land
+            flags[CRASHED, e, i] = crash
+            if land:
+                landed[e, i] = True
+            if crash:
+                crashed[e, i] = True
+            if land or crash:
+                flying[e, i] = False
