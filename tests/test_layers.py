@@ -23,7 +23,6 @@ LAYERS = (
     ("poc_env.geometry", 0),
     ("poc_env.config", 0),
     ("poc_env.limits", 0),
-    ("poc_env.cluster", 0),
     ("poc_env._kernels", 0),
     ("poc_env.theory", 1),
     ("poc_env.sim", 2),
