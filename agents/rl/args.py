@@ -191,8 +191,6 @@ class TrainArgs:
         as_number("bc_log_std", self.bc_log_std, -20.0, 2.0)
         if self.bc_teacher is None:
             return
-        from poc_env.agents.rl.bc import check_teacher
-
         check_teacher(self.bc_teacher)
         if self.task is None:
             raise ConfigError(
@@ -213,6 +211,25 @@ class TrainArgs:
         if unknown:
             raise ConfigError(f"{where}.{unknown[0]}", data[unknown[0]], "a TrainArgs field")
         return cls(**data)
+
+
+def teachers() -> tuple[str, ...]:
+    """The policies that may teach a BC warm start (:mod:`poc_env.agents.rl.bc`): every registered
+    policy spelled by its name alone."""
+    from poc_env.agents.policies.registry import REGISTRY
+
+    return tuple(sorted(name for name, s in REGISTRY.items() if s.argument is None))
+
+
+def check_teacher(name: Any, field: str = "bc_teacher") -> str:
+    """``name`` if it is a registered classical policy (:func:`teachers`), else a ConfigError
+    naming ``field`` and listing them (``ppo:PATH`` and ``rllib:PATH`` are refused)."""
+    allowed = teachers()
+    if not isinstance(name, str) or name not in allowed:
+        raise ConfigError(
+            field, name, "a registered classical policy (not ppo:/rllib:): " + ", ".join(allowed)
+        )
+    return name
 
 
 # -- the command line --------------------------------------------------------------------------
