@@ -340,7 +340,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         "env": "poc_env.agents.benchmarks.env",
         "plan": "poc_env.agents.benchmarks.plan",
         "train": "poc_env.agents.benchmarks.train",
-        "campaign": "poc_env.agents.benchmarks.campaign",
+        "campaign": "poc_env.agents.testing.campaign",
         "baselines": "poc_env.agents.benchmarks.baselines",
         "suite": "poc_env.agents.benchmarks.suite",
         "learning": "poc_env.agents.benchmarks.learning",

@@ -2,7 +2,7 @@
 overrides, maps, region files, plan.json, command lines, actions -- gives a clear project error
 or a valid result; never a traceback, never a silent wrong answer.
 
-The strategies and checks live in :mod:`poc_env.agents.benchmarks.campaign` (one implementation);
+The strategies and checks live in :mod:`poc_env.agents.testing.campaign` (one implementation);
 ``poc-env bench campaign --cases 5000`` runs the large campaign, the ``slow`` test a larger one.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from poc_env.agents.benchmarks.campaign import TARGETS, SilentWrong, classify, run_target
+from poc_env.agents.testing.campaign import TARGETS, SilentWrong, classify, run_target
 
 #: Cases per target in the default suite (the CLI and region cases cost most).
 DEFAULT_CASES = {
@@ -64,7 +64,7 @@ def test_the_checks_catch_a_silent_wrong_map(monkeypatch):
     import numpy as np
 
     import poc_env.theory.probability_map as pm
-    from poc_env.agents.benchmarks.campaign import run_maps
+    from poc_env.agents.testing.campaign import run_maps
 
     monkeypatch.setattr(pm, "validate_map", lambda values, grid, source="map": np.asarray(values))
     assert classify(run_maps, np.full((8, 8), 0.5))[0] == "silent"

@@ -87,15 +87,15 @@ def bench_sb3(scenario: str, iterations: int) -> float:
 
 def bench_rllib(task: str, runners: int, iterations: int) -> float:
     """RLlib PPO agent transitions/s with ``runners`` env runners (shared policy)."""
-    from poc_env.cluster import require_ray
+    from poc_env.agents.rl.cluster import require_ray
 
     require_ray("poc-env bench suite (the RLlib figures; --skip-rllib leaves them out)")
     import torch as th
     from ray.tune.registry import register_env
 
     from poc_env.agents.rl.args import TrainArgs
+    from poc_env.agents.rl.cluster import ray_session
     from poc_env.agents.rl.rllib import ENV_NAME, env_kwargs, make_env, ppo_config
-    from poc_env.cluster import ray_session
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     th.set_num_threads(1)

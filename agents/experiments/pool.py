@@ -9,8 +9,8 @@ time (every built-in) reach them, and a script that runs jobs on workers needs t
 
 Inside :func:`ray_jobs` (``poc-env evaluate/experiment --ray [ADDRESS]``) the same jobs run as
 Ray tasks instead, on a local Ray instance or an existing cluster
-(:func:`poc_env.cluster.ray_session`); results come back in job order, so they equal the local
-ones job for job (every job seeds its own generators).
+(:func:`poc_env.agents.rl.cluster.ray_session`); results come back in job order, so they equal
+the local ones job for job (every job seeds its own generators).
 
 Workers die with the process that started them: each worker watches its parent command (a
 ``kill -9`` of ``poc-env evaluate --workers N`` leaves no worker behind, and the fork server
@@ -48,7 +48,7 @@ _ON_RAY: contextvars.ContextVar[bool] = contextvars.ContextVar("poc_env_on_ray",
 def ray_jobs(address: str | None = None, num_cpus: int = 2) -> Iterator[None]:
     """Within the block, :func:`run_jobs` runs every job as a Ray task, on a local instance
     (``address`` None or ``"local"``, ``num_cpus`` CPUs) or the cluster at ``address``."""
-    from poc_env.cluster import ray_session
+    from poc_env.agents.rl.cluster import ray_session
 
     with ray_session(address, num_cpus, what="--ray"):
         token = _ON_RAY.set(True)

@@ -9,14 +9,19 @@ Recipes (``--recipe``): ``shared`` flies every UAV with one policy (parameter sh
 
 Every option of ``poc-env train`` is a field of :class:`TrainArgs` (``--total-timesteps`` for
 ``total_timesteps``), with the docstring under the field as its help; :func:`parse_train_args`
-builds the parser from the dataclass with `tyro <https://brentyi.github.io/tyro/>`_. The
-resolved arguments are saved as ``config.json`` in the run folder, and ``--resume`` reads them
-back with :meth:`TrainArgs.from_dict`.
+builds the parser from the dataclass with `tyro <https://brentyi.github.io/tyro/>`_. The fields
+come in groups (:data:`GROUPS`): the run's own options, PPO's hyper-parameters (both engines),
+``sb3``, ``rllib`` and ``bc`` (the behaviour-cloning warm start); ``--help`` shows one box per
+group, while the flags keep their plain names and :class:`TrainArgs` stays one flat record. The
+resolved arguments are saved flat as ``config.json`` in the run folder, and ``--resume`` reads
+them back with :meth:`TrainArgs.from_dict` (a field missing from an older run's file takes its
+default).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 from collections.abc import Sequence
@@ -38,6 +43,7 @@ RECIPES = ("shared", "central", "pilot")
 class TrainArgs:
     """Everything a training run depends on; saved as ``config.json`` in the run folder."""
 
+    # -- the run --------------------------------------------------------------------------------
     scenario: Annotated[str, _arg(metavar="NAME")] = "paper_6_2"
     """Built-in scenario name or YAML path; the resolved scenario is saved as scenario.yaml."""
     overrides: Annotated[list[str], _arg(metavar="KEY=VALUE")] = field(default_factory=list)
@@ -49,35 +55,11 @@ class TrainArgs:
     """A registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0: its
     scenario, prior kind and control level, an MLP on its compass observation (sb3: shared over
     the UAVs by SwarmVecEnv). rllib without one: --scenario at the heading level."""
-    agent_index: bool = True
-    """--task (sb3): the compass observation carries the UAV's index (one-hot), so a shared
-    policy can tell UAVs of one airfield apart; --no-agent-index zeroes it (an ablation)."""
-    return_autopilot: bool = False
-    """--task at the increments level (sb3): the autopilot takes each UAV home and lands it
-    once eq. 18 says so (its increments are ignored from then on), as at the autopilot levels;
-    the policy flies the search. Recorded in config.json; ppo:RUN flies the same way."""
-    rllib_policies: Annotated[str, _arg(metavar="shared|per_uav")] = "shared"
-    """rllib: one policy shared by every UAV, or one policy per UAV."""
-    num_env_runners: int = 0
-    """rllib: Ray actors sampling episodes (0: sample in the driver)."""
-    address: Annotated[str | None, _arg(metavar="ADDRESS")] = None
-    """rllib: an existing Ray cluster (host:port, ray://host:10001, auto); default: a new local
-    instance that is stopped at the end."""
-    algo: Annotated[str, _arg(metavar="|".join(ALGOS))] = "ppo"
-    """RL algorithm: ppo (stable-baselines3 PPO)."""
-    recipe: Annotated[str, _arg(metavar="|".join(RECIPES))] = "shared"
-    """shared: one policy flies every UAV; central: one joint agent; pilot: headings + autopilot."""
-    approach_shaping: float = 0.0
-    """pilot: c of the approach term c (gamma Phi(s') - Phi(s)), Phi = -(km to the grid)."""
-    net_arch: list[int] = field(default_factory=lambda: [128, 128])
-    """pilot and central recipes: hidden layers of the policy and value MLPs."""
     total_timesteps: int = 1_000_000
     """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts.
     PPO's only: a BC warm start (--bc-teacher) comes on top, and 0 saves the BC policy alone."""
     seed: int = 0
     """Root seed of the env generators (SeedSequence) and the torch, numpy, python ones."""
-    n_envs: int = 4
-    """Independent swarms simulated side by side (shared, pilot: n_envs x UAVs slots)."""
     random_priors: bool = True
     """A fresh random Gaussian-mixture prior every episode instead of the scenario's."""
     run_dir: Annotated[str | None, _arg(metavar="DIR")] = None
@@ -86,8 +68,11 @@ class TrainArgs:
     """Continue this run folder from its latest checkpoint and config (no other options)."""
     checkpoint_every: int = 50_000
     """Timesteps between checkpoints (taken at the next rollout boundary)."""
-    keep_checkpoints: int = 5
-    """Newest checkpoints to keep (0: keep all)."""
+    torch_threads: int = 1
+    """torch intra-op threads (small networks run fastest and reproducibly on one)."""
+    progress: bool = True
+    """Show a progress bar with the mean POSC of recent episodes."""
+    # -- ppo: PPO's hyper-parameters (both engines) ------------------------------------------------
     n_steps: int = 256
     """PPO: steps per slot per rollout (rollout = n_steps x slots transitions)."""
     batch_size: int = 512
@@ -102,10 +87,35 @@ class TrainArgs:
     """PPO: GAE lambda."""
     ent_coef: float = 0.0
     """PPO: entropy bonus coefficient."""
-    torch_threads: int = 1
-    """torch intra-op threads (small networks run fastest and reproducibly on one)."""
-    progress: bool = True
-    """Show a progress bar with the mean POSC of recent episodes."""
+    net_arch: list[int] = field(default_factory=lambda: [128, 128])
+    """pilot and central recipes: hidden layers of the policy and value MLPs."""
+    # -- sb3: --engine sb3 (stable-baselines3 on our VecEnvs) --------------------------------------
+    algo: Annotated[str, _arg(metavar="|".join(ALGOS))] = "ppo"
+    """RL algorithm: ppo (stable-baselines3 PPO)."""
+    recipe: Annotated[str, _arg(metavar="|".join(RECIPES))] = "shared"
+    """shared: one policy flies every UAV; central: one joint agent; pilot: headings + autopilot."""
+    approach_shaping: float = 0.0
+    """pilot: c of the approach term c (gamma Phi(s') - Phi(s)), Phi = -(km to the grid)."""
+    n_envs: int = 4
+    """Independent swarms simulated side by side (shared, pilot: n_envs x UAVs slots)."""
+    agent_index: bool = True
+    """--task (sb3): the compass observation carries the UAV's index (one-hot), so a shared
+    policy can tell UAVs of one airfield apart; --no-agent-index zeroes it (an ablation)."""
+    return_autopilot: bool = False
+    """--task at the increments level (sb3): the autopilot takes each UAV home and lands it
+    once eq. 18 says so (its increments are ignored from then on), as at the autopilot levels;
+    the policy flies the search. Recorded in config.json; ppo:RUN flies the same way."""
+    keep_checkpoints: int = 5
+    """Newest checkpoints to keep (0: keep all)."""
+    # -- rllib: --engine rllib (RLlib multi-agent PPO) ---------------------------------------------
+    rllib_policies: Annotated[str, _arg(metavar="shared|per_uav")] = "shared"
+    """rllib: one policy shared by every UAV, or one policy per UAV."""
+    num_env_runners: int = 0
+    """rllib: Ray actors sampling episodes (0: sample in the driver)."""
+    address: Annotated[str | None, _arg(metavar="ADDRESS")] = None
+    """rllib: an existing Ray cluster (host:port, ray://host:10001, auto); default: a new local
+    instance that is stopped at the end."""
+    # -- bc: the behaviour-cloning warm start (sb3 with --task) ------------------------------------
     bc_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: behaviour-cloning warm start from this registered classical policy
     (allocation_plan, greedy_bayes, lawnmower, ...; not ppo:/rllib:) before PPO
@@ -191,8 +201,6 @@ class TrainArgs:
         as_number("bc_log_std", self.bc_log_std, -20.0, 2.0)
         if self.bc_teacher is None:
             return
-        from poc_env.agents.rl.bc import check_teacher
-
         check_teacher(self.bc_teacher)
         if self.task is None:
             raise ConfigError(
@@ -215,6 +223,25 @@ class TrainArgs:
         return cls(**data)
 
 
+def teachers() -> tuple[str, ...]:
+    """The policies that may teach a BC warm start (:mod:`poc_env.agents.rl.bc`): every registered
+    policy spelled by its name alone."""
+    from poc_env.agents.policies.registry import REGISTRY
+
+    return tuple(sorted(name for name, s in REGISTRY.items() if s.argument is None))
+
+
+def check_teacher(name: Any, field: str = "bc_teacher") -> str:
+    """``name`` if it is a registered classical policy (:func:`teachers`), else a ConfigError
+    naming ``field`` and listing them (``ppo:PATH`` and ``rllib:PATH`` are refused)."""
+    allowed = teachers()
+    if not isinstance(name, str) or name not in allowed:
+        raise ConfigError(
+            field, name, "a registered classical policy (not ppo:/rllib:): " + ", ".join(allowed)
+        )
+    return name
+
+
 # -- the command line --------------------------------------------------------------------------
 PROG = "poc-env train"
 DESCRIPTION = (
@@ -224,16 +251,111 @@ DESCRIPTION = (
 )
 
 
-@dataclass(frozen=True)
-class _Parsed(TrainArgs):
-    """TrainArgs as typed on the command line, not yet validated.
+#: The option groups of ``poc-env train --help``: group -> (its heading, its TrainArgs fields).
+#: Fields in no group are the run's own options; a group's options keep their plain names
+#: (``--n-steps``, not ``--ppo.n-steps``), so a group changes the help's layout, not the flags.
+GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "ppo": (
+        "PPO's hyper-parameters (both engines).",
+        (
+            "n_steps",
+            "batch_size",
+            "n_epochs",
+            "learning_rate",
+            "gamma",
+            "gae_lambda",
+            "ent_coef",
+            "net_arch",
+        ),
+    ),
+    "sb3": (
+        "The sb3 engine (--engine sb3): stable-baselines3 on our VecEnvs (the recipes, or "
+        "--task's env).",
+        (
+            "algo",
+            "recipe",
+            "approach_shaping",
+            "n_envs",
+            "agent_index",
+            "return_autopilot",
+            "keep_checkpoints",
+        ),
+    ),
+    "rllib": (
+        "The rllib engine (--engine rllib): RLlib multi-agent PPO (poc_env.agents.rl.rllib), "
+        "locally or on a Ray cluster.",
+        ("rllib_policies", "num_env_runners", "address"),
+    ),
+    "bc": (
+        "Behaviour-cloning warm start before PPO (sb3 with --task; poc_env.agents.rl.bc).",
+        ("bc_teacher", "bc_episodes", "bc_epochs", "bc_batch_size", "bc_log_std"),
+    ),
+}
 
-    tyro reports a ``ValueError`` raised while it builds the dataclass in its own format; the
-    values are validated by building :class:`TrainArgs` afterwards instead, so that a bad value
-    ends like every other poc-env input error (``error: FIELD: got VALUE; allowed: ...``)."""
 
-    def __post_init__(self) -> None:
-        pass
+def field_help() -> dict[str, str]:
+    """The docstring under each :class:`TrainArgs` field (``inspect.cleandoc``), read from the
+    source as tyro reads a dataclass's: the help of its option."""
+    import ast
+    import inspect
+    import itertools
+    import textwrap
+
+    tree = ast.parse(textwrap.dedent(inspect.getsource(TrainArgs)))
+    body = tree.body[0].body  # type: ignore[attr-defined]
+    return {
+        a.target.id: inspect.cleandoc(b.value.value)
+        for a, b in itertools.pairwise(body)
+        if isinstance(a, ast.AnnAssign) and isinstance(a.target, ast.Name)
+        if isinstance(b, ast.Expr) and isinstance(b.value, ast.Constant)
+        if isinstance(b.value.value, str)
+    }
+
+
+@functools.cache
+def _parser_type() -> type:
+    """The dataclass tyro parses: TrainArgs' fields (types, metavars, defaults, docstrings as
+    help) with each group of :data:`GROUPS` nested under its name (one help box per group, no
+    prefix on its flags). Its values are not validated: tyro reports a ``ValueError`` raised
+    while it builds the dataclass in its own format, so :func:`parse_train_args` validates by
+    building :class:`TrainArgs` afterwards, and a bad value ends like every other poc-env input
+    error (``error: FIELD: got VALUE; allowed: ...``)."""
+    import typing
+
+    from tyro.conf import OmitArgPrefixes
+
+    fields = {f.name: f for f in dataclasses.fields(TrainArgs)}
+    grouped = [n for _, names in GROUPS.values() for n in names]
+    if len(set(grouped)) != len(grouped) or not set(grouped) <= set(fields):
+        raise AssertionError(f"GROUPS must name TrainArgs fields once each: {grouped}")
+    hints = typing.get_type_hints(TrainArgs, include_extras=True)
+    helps = field_help()
+
+    def option(name: str) -> tuple[str, Any, Any]:
+        f = fields[name]
+        default = (
+            field(default=f.default)
+            if f.default is not dataclasses.MISSING
+            else field(default_factory=f.default_factory)
+        )
+        return name, Annotated[hints[name], _arg(help=helps[name])], default
+
+    top = [option(n) for n in fields if n not in grouped]
+    for group, (heading, names) in GROUPS.items():
+        cls = dataclasses.make_dataclass(
+            f"TrainArgs_{group}", [option(n) for n in names], frozen=True
+        )
+        nested: Any = Annotated[cls, _arg(help=heading)]  # the heading of its help box
+        top.append((group, OmitArgPrefixes[nested], field(default_factory=cls)))  # type: ignore[misc]
+    return dataclasses.make_dataclass("TrainArgsOptions", top, frozen=True)
+
+
+def _flat(parsed: Any) -> dict[str, Any]:
+    """TrainArgs' field values from a parsed :func:`_parser_type` instance."""
+    values = {n: getattr(parsed, n) for n in vars(parsed) if n not in GROUPS}
+    for group in GROUPS:
+        values |= vars(getattr(parsed, group))
+    return values
 
 
 def given_options(argv: Sequence[str]) -> list[str]:
@@ -267,8 +389,8 @@ def parse_train_args(argv: Sequence[str] | None = None) -> TrainArgs:
     import tyro
 
     argv = list(sys.argv[1:] if argv is None else argv)
-    parsed = tyro.cli(_Parsed, args=argv, prog=PROG, description=DESCRIPTION)
-    values = {f.name: getattr(parsed, f.name) for f in dataclasses.fields(TrainArgs)}
+    parsed: Any = tyro.cli(_parser_type(), args=argv, prog=PROG, description=DESCRIPTION)
+    values = _flat(parsed)
     if values["resume"] is not None:
         extra = [k for k in given_options(argv) if k not in ("resume", "progress")]
         if extra:

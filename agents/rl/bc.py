@@ -62,6 +62,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from poc_env.agents.rl.args import check_teacher
 from poc_env.errors import ConfigError, as_int, as_number
 
 if TYPE_CHECKING:
@@ -75,24 +76,6 @@ if TYPE_CHECKING:
 DEMO_KEY = (0xBC, 0)
 #: Spawn key of the SeedSequence that shuffles BC minibatches.
 FIT_KEY = (0xBC, 1)
-
-
-def teachers() -> tuple[str, ...]:
-    """The policies that may teach: every registered policy spelled by its name alone."""
-    from poc_env.agents.policies.registry import REGISTRY
-
-    return tuple(sorted(name for name, s in REGISTRY.items() if s.argument is None))
-
-
-def check_teacher(name: Any, field: str = "bc_teacher") -> str:
-    """``name`` if it is a registered classical policy (:func:`teachers`), else a ConfigError
-    naming ``field`` and listing them (``ppo:PATH`` and ``rllib:PATH`` are refused)."""
-    allowed = teachers()
-    if not isinstance(name, str) or name not in allowed:
-        raise ConfigError(
-            field, name, "a registered classical policy (not ppo:/rllib:): " + ", ".join(allowed)
-        )
-    return name
 
 
 @dataclass(frozen=True)

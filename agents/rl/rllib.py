@@ -8,11 +8,11 @@ encoder takes without configuration. Two policy layouts (``--rllib-policies``):
 - ``shared``: one RLModule flies every UAV (parameter sharing, as the SB3 recipes);
 - ``per_uav``: one RLModule per UAV (``uav_0`` ... ``uav_{N-1}``).
 
-Training runs inside :func:`poc_env.cluster.ray_session`: a local Ray instance by default, an
-existing cluster with ``--address``; ``--num-env-runners K`` samples on K Ray actors (0: in the
-driver). The run folder gets ``config.json`` (the :class:`~poc_env.agents.rl.args.TrainArgs`),
-``metrics.csv`` (one row per training iteration; ``agent_steps`` is env steps x UAVs, an
-upper bound once UAVs land) and ``checkpoint/`` (RLlib's
+Training runs inside :func:`poc_env.agents.rl.cluster.ray_session`: a local Ray instance by
+default, an existing cluster with ``--address``; ``--num-env-runners K`` samples on K Ray actors
+(0: in the driver). The run folder gets ``config.json`` (the
+:class:`~poc_env.agents.rl.args.TrainArgs`), ``metrics.csv`` (one row per training iteration;
+``agent_steps`` is env steps x UAVs, an upper bound once UAVs land) and ``checkpoint/`` (RLlib's
 ``save_to_path``, written into a temporary folder and renamed when complete); both are
 rewritten every ``--checkpoint-every`` env steps and at the end, so a stopped run keeps its
 newest checkpoint and curve. ``--total-timesteps`` counts env steps here (each holds one
@@ -151,7 +151,7 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
     import torch as th
     from ray.tune.registry import register_env
 
-    from poc_env.cluster import ray_session
+    from poc_env.agents.rl.cluster import ray_session
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     kw = env_kwargs(args)

@@ -1,6 +1,6 @@
-"""RLlib multi-agent PPO (poc_env.agents.rl.rllib) and Ray-distributed jobs (poc_env.cluster,
-poc_env.agents.experiments.pool.ray_jobs): tiny runs on one local Ray instance (2 CPUs, no
-dashboard)."""
+"""RLlib multi-agent PPO (poc_env.agents.rl.rllib) and Ray-distributed jobs
+(poc_env.agents.rl.cluster, poc_env.agents.experiments.pool.ray_jobs): tiny runs on one local
+Ray instance (2 CPUs, no dashboard)."""
 
 from __future__ import annotations
 
@@ -14,10 +14,10 @@ import pytest
 
 pytest.importorskip("ray", reason="the rllib extra is not installed")
 
-from poc_env import cluster
 from poc_env.agents.experiments.evaluate import evaluate
 from poc_env.agents.experiments.pool import ray_jobs, run_jobs
 from poc_env.agents.policies.registry import make_policy
+from poc_env.agents.rl import cluster
 from poc_env.agents.rl.args import TrainArgs
 from poc_env.agents.rl.rllib import RLlibPolicy
 from poc_env.agents.rl.train import train
