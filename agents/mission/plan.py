@@ -246,6 +246,8 @@ def check_plan(plan: Any) -> Plan:
     if not isinstance(plan["uavs"], list) or not plan["uavs"]:
         raise ConfigError("plan.uavs", plan["uavs"], "a non-empty list of UAV plans")
     as_number("plan.posc", plan["posc"], 0.0, 1.0)
+    if not isinstance(plan["optimizer"], dict):  # the map report names its optimiser
+        raise ConfigError("plan.optimizer", plan["optimizer"], "a mapping of name, settings")
     ids: set[str] = set()
     for k, u in enumerate(plan["uavs"]):
         where = f"plan.uavs[{k}]"

@@ -54,3 +54,11 @@ def test_check_plan_refuses_what_is_not_a_plan():
     del bad["uavs"][0]["pod"]
     with pytest.raises(ConfigError, match=r"plan\.uavs\[0\]\.pod"):
         check_plan(bad)
+
+
+def test_an_optimizer_that_is_not_a_mapping_is_refused():
+    """Found by the campaign once it exported html: the map report read optimizer.name."""
+    bad = sample_plan()
+    bad["optimizer"] = "adaptive_de"
+    with pytest.raises(ConfigError, match=r"plan\.optimizer"):
+        check_plan(bad)
