@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -c constraints.txt "torch==2.13.0"
 	$(PY) -m pip install -q -c constraints.txt -e ".[dev]"
-	@# the HTML map report's browser test (tests/planning/test_report.py) needs chromium
+	@# the HTML map report's browser test (tests/mission/test_report.py) needs chromium
 	@if ! command -v chromium >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1 \
 	    && [ "$$(id -u)" = 0 ]; then \
 	  echo "installing chromium (apt-get) for the HTML report test"; \

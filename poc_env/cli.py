@@ -208,7 +208,7 @@ def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
     if args.origin is not None:
-        from poc_env.agents.planning.export import make_crs
+        from poc_env.agents.mission.crs import make_crs
 
         make_crs(args.projection, args.origin, zone=args.utm_zone)  # checked before the survey
     if not args.out:
@@ -249,7 +249,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
         shown = prior if figure else None
         _wrote(write_survey(result, stage, prior=shown, scenario=sc, plan=plan), stage, dest)
     if getattr(args, "plan_out", None):
-        from poc_env.agents.planning.planner import write_plan
+        from poc_env.agents.mission.plan import write_plan
         from poc_env.agents.planning.survey import survey_plan
 
         doc = survey_plan(
@@ -540,7 +540,8 @@ def _plan(
 
     ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
     """
-    from poc_env.agents.planning.planner import make_plan, plan_table, plot_plan, write_plan
+    from poc_env.agents.mission.plan import write_plan
+    from poc_env.agents.planning.planner import make_plan, plan_table, plot_plan
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -579,7 +580,7 @@ def _plan(
 def cmd_export(args: argparse.Namespace) -> int:
     import functools
 
-    from poc_env.agents.planning.export import export_plan
+    from poc_env.agents.mission.export import export_plan
 
     export = functools.partial(
         export_plan,
@@ -727,7 +728,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = scenario_sub.add_parser(
         "import", help="GeoJSON/KML area, airfields and no-fly zones, GeoTIFF/CSV prior -> YAML"
     )
-    from poc_env.agents.planning.geoimport import add_scenario_import_arguments, cmd_scenario_import
+    from poc_env.agents.mission.geoimport import add_scenario_import_arguments, cmd_scenario_import
 
     add_scenario_import_arguments(p)
     p.set_defaults(func=cmd_scenario_import)
@@ -870,12 +871,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_plan)
 
-    p = sub.add_parser("export", help="a plan.json as GeoJSON, KML or QGroundControl missions")
+    from poc_env.agents.mission.formats import FORMATS
+
+    p = sub.add_parser("export", help="a plan.json as GeoJSON, KML, QGroundControl missions, ...")
     p.add_argument("plan", help="plan.json (schema 2; schema-1 files still load)")
     p.add_argument(
         "--format",
         required=True,
-        help="geojson, kml, qgc or html (one self-contained map page: prior, routes, table)",
+        metavar="{" + ",".join(FORMATS) + "}",  # checked by export_plan: a ConfigError names them
+        help="; ".join(f"{f.name}: {f.summary}" for f in FORMATS.values()),
     )
     p.add_argument(
         "--origin",

@@ -229,7 +229,7 @@ class MapConfig:
     #: Optional geography: (lat, lon) in degrees of the local (0, 0), and the projection
     #: between local metres and lat/lon (``aeqd``: azimuthal equidistant at that point;
     #: ``utm``: UTM zone ``utm_zone`` or the origin's). With it, ``poc-env plan`` records the
-    #: plan's CRS without ``--origin`` (poc_env.agents.planning.export.make_crs).
+    #: plan's CRS without ``--origin`` (poc_env.agents.mission.crs.make_crs).
     origin_deg: tuple[float, float] | None = None
     projection: str = "aeqd"
     utm_zone: int | None = _f(default=None, lo=1, hi=60)

@@ -1,10 +1,12 @@
 """The dependency rule of the layout, read from the source (imports inside functions included).
 
     base (errors, limits, io, geometry, config, _kernels) <- theory <- sim <- viz <- envs
-    <- poc_env.agents.planning <- .policies <- .rl <- .experiments / .benchmarks <- cli / .testing
+    <- poc_env.agents.mission <- .planning <- .policies <- .rl <- .experiments / .benchmarks
+    <- cli / .testing
 
 A module may import its own layer and the layers below it, never one above. The layers are
-listed once, here and in docs/ARCHITECTURE.md; a new module must be placed in one.
+listed once, here and in docs/ARCHITECTURE.md; a new module must be placed in one. And no
+module imports itself back, however indirectly: the import graph has no cycles.
 """
 
 from __future__ import annotations
@@ -32,18 +34,23 @@ LAYERS = (
     ("poc_env.uav_search_v0", 4),
     ("poc_env.recorded", 4),
     ("poc_env", 4),  # the package's __init__: parallel_env, env, registration
-    ("poc_env.agents.planning", 5),
-    ("poc_env.agents.policies", 6),
-    ("poc_env.agents.rl", 7),
-    ("poc_env.agents.experiments", 8),
-    ("poc_env.agents.benchmarks", 8),
-    ("poc_env.agents", 8),
-    ("poc_env.cli", 9),
+    # geography in, missions out: the plan model, the CRS, every export format, GIS import
+    ("poc_env.agents.mission", 5),
+    ("poc_env.agents.planning", 6),
+    ("poc_env.agents.policies", 7),
+    ("poc_env.agents.rl", 8),
+    ("poc_env.agents.experiments", 9),
+    ("poc_env.agents.benchmarks", 9),
+    ("poc_env.agents", 9),
+    ("poc_env.cli", 10),
     # test harnesses (the hostile-input campaign) drive every input, the command line included
-    ("poc_env.agents.testing", 9),
+    ("poc_env.agents.testing", 10),
 )
-NAMES = {0: "base", 1: "theory", 2: "sim", 3: "viz", 4: "envs", 5: "planning"}
-NAMES |= {6: "policies", 7: "rl", 8: "experiments", 9: "cli"}
+NAMES = {0: "base", 1: "theory", 2: "sim", 3: "viz", 4: "envs", 5: "mission", 6: "planning"}
+NAMES |= {7: "policies", 8: "rl", 9: "experiments", 10: "cli"}
+
+#: What the planners may use of the mission package: the plan model and the CRS, no exporter.
+PLANNING_MAY_IMPORT = ("poc_env.agents.mission.plan", "poc_env.agents.mission.crs")
 
 
 def layer(module: str) -> int:
@@ -125,8 +132,124 @@ def test_nothing_below_the_cli_imports_agents():
     offenders = [
         f"{name}: {t}"
         for name, path in modules()
-        if layer(name) < layer("poc_env.agents.planning")
+        if layer(name) < layer("poc_env.agents.mission")
         for _, t in project_imports(name, path)
         if t.startswith("poc_env.agents")
     ]
     assert not offenders, offenders
+
+
+def test_planning_needs_no_exporter():
+    """Planners build plans with the plan model and the CRS; exporters are not theirs."""
+    offenders = [
+        f"{name}:{line} imports {t}"
+        for name, path in modules()
+        if name.startswith("poc_env.agents.planning")
+        for line, t in project_imports(name, path)
+        if t.startswith("poc_env.agents.mission") and t not in PLANNING_MAY_IMPORT
+    ]
+    assert not offenders, offenders
+
+
+def graph_imports(module: str, path: Path) -> set[str]:
+    """The project modules ``path`` imports, as edges of the import graph: as
+    :func:`project_imports`, except that ``from pkg import sub`` of submodules only is an edge to
+    each ``pkg.sub``, not to ``pkg`` (Python runs every parent package first anyway; naming one
+    is no dependency on its ``__init__``)."""
+    found = set()
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - node.level + 1]
+                stem = ".".join([*base, node.module] if node.module else base)
+            else:
+                stem = node.module or ""
+            subs = [f"{stem}.{a.name}" for a in node.names if _is_module(f"{stem}.{a.name}")]
+            names = subs if len(subs) == len(node.names) else [stem, *subs]
+        else:
+            continue
+        found |= {n for n in names if n.split(".")[0] == "poc_env"}
+    return found
+
+
+def import_graph(mods: list[tuple[str, Path]]) -> dict[str, set[str]]:
+    """module -> the project modules it imports (lazy imports included, itself excluded)."""
+    names = {name for name, _ in mods}
+    return {
+        name: {t for t in graph_imports(name, path) if t in names and t != name}
+        for name, path in mods
+    }
+
+
+def cycles(graph: dict[str, set[str]]) -> list[frozenset[str]]:
+    """The import cycles of ``graph``: its strongly connected components of two or more
+    modules (Tarjan's algorithm, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[frozenset[str]] = []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[node])
+            if low[node] == index[node]:
+                scc = set()
+                while True:
+                    m = stack.pop()
+                    on_stack.discard(m)
+                    scc.add(m)
+                    if m == node:
+                        break
+                if len(scc) > 1:
+                    found.append(frozenset(scc))
+    return found
+
+
+def test_no_import_cycles():
+    """No module imports itself back through others (imports inside functions included)."""
+    found = list(cycles(import_graph(modules())))
+    assert not found, "import cycles: " + "; ".join(" <-> ".join(sorted(c)) for c in found)
+
+
+def test_cycle_check_catches_a_cycle(tmp_path):
+    """The checker itself: two modules importing each other, one lazily, are a cycle; a chain
+    is not."""
+    a, b, c = tmp_path / "a.py", tmp_path / "b.py", tmp_path / "c.py"
+    a.write_text("from poc_env.agents.mission import plan\n", encoding="utf-8")
+    b.write_text("def f():\n    import poc_env.agents.mission.export\n", encoding="utf-8")
+    c.write_text("import poc_env.agents.mission.export\n", encoding="utf-8")
+    mods = [
+        ("poc_env.agents.mission.export", a),  # export -> plan
+        ("poc_env.agents.mission.plan", b),  # plan -> export, inside a function
+        ("poc_env.agents.mission.crs", c),  # crs -> export: no way back
+    ]
+    graph = import_graph(mods)
+    assert graph["poc_env.agents.mission.plan"] == {"poc_env.agents.mission.export"}
+    assert cycles(graph) == [
+        frozenset({"poc_env.agents.mission.export", "poc_env.agents.mission.plan"})
+    ]
+    assert cycles({"x": {"y"}, "y": {"z"}, "z": set()}) == []

@@ -296,7 +296,8 @@ def exp_table5(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
 
 # -- §6.2: the time-limited plan --------------------------------------------------------------
 def exp_table6(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
-    from poc_env.agents.planning.planner import plan_table, plot_plan, write_plan
+    from poc_env.agents.mission.plan import write_plan
+    from poc_env.agents.planning.planner import plan_table, plot_plan
     from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario("paper_6_2")

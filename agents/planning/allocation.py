@@ -34,7 +34,7 @@
    the one of highest planned POS (lines no UAV can fit are left unflown).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
-:mod:`poc_env.agents.planning.export`): per UAV the ``rectangle`` is ``null`` (a route plan has no
+:mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
 decision rectangle), ``areas_m`` the ground its search lines sweep (each line ``spacing_m``
 wide, for maps and exports) and ``spacing_m`` the finest line spacing it flies
 (``lines_along`` says whether the lines run along x or y); only
@@ -56,7 +56,8 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from poc_env.agents.planning.export import SCHEMA
+from poc_env.agents.mission.plan import SCHEMA
+from poc_env.agents.planning.geography import plan_geography
 from poc_env.agents.planning.refine import (
     Airspace,
     leg_coverage,
@@ -404,7 +405,7 @@ def make_allocation_plan(
     crs: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
-    (a :func:`poc_env.agents.planning.export.make_crs` record) is recorded for exports.
+    (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -580,9 +581,7 @@ def make_allocation_plan(
         )
     runtime = time.perf_counter() - t0
     rb = reach_bound(sc, prior).upper if reason is None or prior.sum() > 0 else 0.0
-    from poc_env.agents.planning.planner import _geography
-
-    geo = _geography(sc, prior, crs)
+    geo = plan_geography(sc, prior, crs)
     geo["flight"] = {  # the speeds this plan is flown at (plan_speeds)
         **geo["flight"],
         "cruise_speed_mps": v.home,

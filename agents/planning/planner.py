@@ -1,6 +1,6 @@
 """The §6.2 time-limited plan: optimise eq. 26 and write ``plan.json`` (schema 2) and a figure.
 
-The plan also records (optional fields, see :mod:`poc_env.agents.planning.export`) the UAV's
+The plan also records (optional fields, see :mod:`poc_env.agents.mission.plan`) the UAV's
 speeds and altitudes (``flight``), the operating area of eq. 20 (``operating_area_m``, the
 bounding box of the grid and the airfields grown by ``episode.boundary_margin_km``, as in
 :func:`poc_env.sim.core.make_params`), the no-fly zones and the airfields, and, when
@@ -12,7 +12,7 @@ paper's
 adaptive DE with NP = 100, G = 300, F0 = 0.2, CR = 0.1 from the scenario's ``planner`` section)
 on :class:`~poc_env.agents.planning.objective.PlanObjective` and returns the plan as the schema-2
 dict
-documented in :mod:`poc_env.agents.planning.export` (every field there, plus a few extras such as
+documented in :mod:`poc_env.agents.mission.plan` (every field there, plus a few extras such as
 the
 convergence history). The ``de_plan`` policy (:mod:`poc_env.agents.policies.de_plan`) makes such a
 plan at the start of every episode and flies it.
@@ -20,8 +20,6 @@ plan at the start of every episode and flies it.
 
 from __future__ import annotations
 
-import json
-import os
 import time
 from pathlib import Path
 from typing import Any
@@ -29,12 +27,12 @@ from typing import Any
 import numpy as np
 
 import poc_env.limits as limits
-from poc_env.agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
+from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
+from poc_env.agents.planning.geography import plan_geography, scenario_crs
 from poc_env.agents.planning.objective import PlanObjective
 from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
-from poc_env.io import write_text_atomic
 from poc_env.theory.probability_map import build_prior
 
 
@@ -74,14 +72,14 @@ def make_plan(
 
     ``origin_deg``: (lat, lon) of the map's (0, 0); with it the plan records its ``crs``
     (``projection`` ``aeqd`` or ``utm`` in UTM ``zone``, see
-    :func:`poc_env.agents.planning.export.make_crs`) and exports need no ``--origin``.
+    :func:`poc_env.agents.mission.crs.make_crs`) and exports need no ``--origin``.
 
     ``init`` (adaptive and classic DE): individuals of the 6n encoding that seed the initial
     population (a warm start); the plan's ``x`` (the best individual) is returned as ``"x"``.
     """
     if planner not in ("de", "allocation"):
         raise ConfigError("planner", planner, "de or allocation")
-    crs = _scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
+    crs = scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
     if planner == "allocation":
         from poc_env.agents.planning.allocation import REFINE, SPEED, make_allocation_plan
 
@@ -186,58 +184,8 @@ def make_plan(
         "rectangle_rule": RECTANGLE_RULE,
         "uavs": uav_out,
         # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
-        **_geography(obj.scenario, prior, crs),
+        **plan_geography(obj.scenario, prior, crs),
     }
-
-
-def _scenario_crs(
-    sc: Scenario, origin_deg: Any, projection: str, zone: int | None
-) -> dict[str, Any] | None:
-    """The plan's CRS: from ``origin_deg`` (``--origin``), else from the scenario's
-    ``map.origin_deg``/``projection``/``utm_zone``; both given must name the same origin."""
-    m = sc.map
-    if origin_deg is None:
-        if m.origin_deg is None:
-            return None
-        return make_crs(m.projection, m.origin_deg, zone=m.utm_zone)
-    crs = make_crs(projection, origin_deg, zone=zone)
-    if m.origin_deg is not None and tuple(crs["origin_deg"]) != tuple(m.origin_deg):
-        raise ConfigError(
-            "origin", origin_deg, f"nothing (the scenario's map.origin_deg "
-            f"{list(m.origin_deg)} is used) or that same origin",
-        )  # fmt: skip
-    return crs
-
-
-def _geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
-    """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
-    the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
-    and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value)."""
-    from poc_env.sim.core import make_params
-    from poc_env.theory.bound import honest_optimum, reach_bound
-
-    x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)  # eq. 20's boundary
-    out: dict[str, Any] = {
-        "flight": {
-            "cruise_speed_mps": sc.uav.cruise_speed_mps,
-            "search_speed_mps": sc.uav.search_speed_mps,
-            "altitude_m": sc.uav.cruise_altitude_m,
-            "max_altitude_m": sc.uav.max_altitude_m,
-        },
-        "operating_area_m": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
-        "no_fly_zones_m": [[[float(v) for v in p] for p in z] for z in sc.map.no_fly_zones_m],
-        "airfields": [
-            {"name": a.name, "position_m": [float(v) for v in a.position_m]} for a in sc.airfields
-        ],
-    }
-    if float(np.sum(prior)) > 0:  # an empty prior (a route plan's stated reason) has no bounds
-        out["bounds"] = {
-            "honest": float(honest_optimum(sc, prior).pos),
-            "reach": float(reach_bound(sc, prior).upper),
-        }
-    if crs is not None:
-        out["crs"] = crs
-    return out
 
 
 def plan_table(plan: dict[str, Any]) -> str:
@@ -276,15 +224,10 @@ def plan_table(plan: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def write_plan(plan: dict[str, Any], path: str | os.PathLike[str]) -> Path:
-    """Write plan.json atomically."""
-    return write_text_atomic(path, json.dumps(plan, indent=1))
-
-
 def plot_plan(plan: dict[str, Any], scenario: Scenario, prior, path) -> Path:
     """Fig. 21 analog: prior, search areas (the flown strips, :func:`search_rings`), tracks and
     airfields."""
-    from poc_env.agents.planning.export import search_rings
+    from poc_env.agents.mission.plan import search_rings
     from poc_env.theory.probability_map import Grid
     from poc_env.viz.plots import _figure, draw_airfields, draw_prior, save_figure_atomic
 

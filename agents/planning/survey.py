@@ -379,7 +379,7 @@ def survey_plan(
     projection: str = "aeqd",
     zone: int | None = None,
 ) -> dict[str, Any]:
-    """A survey as a schema-2 plan (:mod:`poc_env.agents.planning.export`), so that ``poc-env
+    """A survey as a schema-2 plan (:mod:`poc_env.agents.mission.plan`), so that ``poc-env
     export`` writes its missions, KML, GeoJSON and map report.
 
     Per UAV: ``rectangle`` null, ``waypoints_m`` the region's pattern (what the survey timed:
@@ -392,8 +392,9 @@ def survey_plan(
     no-fly zones, airfields, bounds and, with ``origin_deg``, the ``crs``) as
     :func:`poc_env.agents.planning.planner.make_plan` records it.
     """
-    from poc_env.agents.planning.export import RECTANGLE_RULE, SCHEMA, make_crs
-    from poc_env.agents.planning.planner import _geography
+    from poc_env.agents.mission.crs import make_crs
+    from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
+    from poc_env.agents.planning.geography import plan_geography
 
     crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     uavs = []
@@ -430,5 +431,5 @@ def survey_plan(
         "upper_bound": float(result.bound),
         "rectangle_rule": RECTANGLE_RULE,
         "uavs": uavs,
-        **_geography(scenario, prior, crs),
+        **plan_geography(scenario, prior, crs),
     }

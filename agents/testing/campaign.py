@@ -30,6 +30,7 @@ import io
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import traceback
@@ -360,7 +361,9 @@ def plans_strategy():
         ),
     )  # fmt: skip
     edits = st.lists(st.tuples(st.sampled_from(_PLAN_PATHS), values), max_size=3)
-    fmt = st.sampled_from(["geojson", "kml", "qgc"])
+    from poc_env.agents.mission.formats import FORMATS
+
+    fmt = st.sampled_from(list(FORMATS))  # every registered format
     origin = st.one_of(
         st.sampled_from(["45.5,126.6", "-45,7", "91,0", "nan,0", "0,181", "x", "89.95,0"]),
         st.tuples(st.floats(-89, 89), st.floats(-180, 180)).map(lambda t: f"{t[0]},{t[1]}"),
@@ -377,7 +380,7 @@ def _set_path(doc: Any, path: tuple, value: Any) -> None:
 
 def run_plans(case: tuple[list, str, str, bool]) -> None:
     """Export a mutated plan.json; if it exports, the files must be safe to fly."""
-    from poc_env.agents.planning.export import export_plan
+    from poc_env.agents.mission.export import export_plan
 
     edits, fmt, origin, raw_nan = case
     plan = sample_plan()
@@ -397,16 +400,62 @@ def run_plans(case: tuple[list, str, str, bool]) -> None:
         written = {p for p in root.rglob("*") if p.is_file()} - {src}
         check(all(out in p.parents for p in written), f"file outside --out: {written}")
         for f in files:
-            if f.suffix == ".png":  # the KML's prior overlay: a PNG, not text
-                check(f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", f"not a PNG: {f.name}")
-                continue
-            body = f.read_text()
-            if fmt in ("geojson", "qgc"):
-                data = json.loads(body, parse_constant=_refuse_constant)
-                _check_coordinates(data, fmt)
-            else:
-                low = body.lower()
-                check("nan" not in low and "inf" not in low, "KML with nan/inf")
+            check_output_file(f)
+
+
+def check_output_file(f: Path) -> None:
+    """An exported file is well formed and its coordinates are finite and on the globe; each
+    file kind an export format writes (:data:`OUTPUT_CHECKS`, by suffix) has its check."""
+    suffix = f.suffix.lower()
+    if suffix not in OUTPUT_CHECKS:
+        raise SilentWrong(f"no check for an exported {suffix} file ({f.name}): add one")
+    OUTPUT_CHECKS[suffix](f)
+
+
+def _check_png(f: Path) -> None:
+    check(f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", f"not a PNG: {f.name}")
+
+
+def _check_json_file(f: Path) -> None:
+    data = json.loads(f.read_text(), parse_constant=_refuse_constant)
+    _check_coordinates(data, "geojson" if f.suffix == ".geojson" else "qgc")
+
+
+def _check_kml(f: Path) -> None:
+    low = f.read_text().lower()
+    check("nan" not in low and "inf" not in low, "KML with nan/inf")
+
+
+def _check_html(f: Path) -> None:
+    """The map report: its plan data is strict JSON and every drawn point is on the globe."""
+    body = f.read_text()
+    m = re.search(r'<script type="application/json" id="plan-data">(.*?)</script>', body, re.S)
+    check(m is not None, "HTML report without its plan data")
+    assert m is not None
+    data = json.loads(m.group(1), parse_constant=_refuse_constant)
+    pairs = []
+    for u in data["uavs"]:
+        for line in [
+            *u["transit"],
+            u["search"],
+            *u["approach"],
+            *(r["latlon"] for r in u["rings"]),
+        ]:
+            pairs += [tuple(p) for p in line]
+    pairs += [tuple(a["latlon"]) for a in data["airfields"]]
+    for lat, lon in pairs:
+        check(math.isfinite(lat) and math.isfinite(lon), "coordinate not finite")
+        check(-90 <= lat <= 90 and -180 <= lon <= 180, f"coordinate off the globe: {lat}, {lon}")
+
+
+#: suffix of an exported file -> its check (:func:`check_output_file`)
+OUTPUT_CHECKS = {
+    ".png": _check_png,
+    ".geojson": _check_json_file,
+    ".plan": _check_json_file,
+    ".kml": _check_kml,
+    ".html": _check_html,
+}
 
 
 def _refuse_constant(name: str) -> float:
@@ -602,7 +651,7 @@ def geo_strategy():
 def run_geo(case: tuple) -> None:
     """``scenario import`` of hostile GIS layers; an accepted scenario loads, its prior sums to
     1, and its airfields sit where pyproj puts them."""
-    from poc_env.agents.planning.geoimport import import_scenario, write_imported
+    from poc_env.agents.mission.geoimport import import_scenario, write_imported
     from poc_env.config import load_scenario
     from poc_env.theory.probability_map import build_prior
 

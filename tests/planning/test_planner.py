@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from shapely.geometry import Point
 
-from poc_env.agents.planning.export import export_plan, load_plan
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.plan import load_plan
 from poc_env.agents.planning.planner import make_plan
 from poc_env.cli import main
 from poc_env.geometry import rectangle_polygon

@@ -1,4 +1,5 @@
-"""Shared test helpers of tests/planning (fixtures, so pytest's importlib mode finds them)."""
+"""Shared test helpers (fixtures, so pytest's importlib mode finds them): tests/planning and
+tests/mission use the lawnmower reference."""
 
 from __future__ import annotations
 

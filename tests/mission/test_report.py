@@ -20,17 +20,18 @@ import subprocess
 import numpy as np
 import pytest
 
-from poc_env.agents.planning.export import export_plan, load_plan, to_geographic
-from poc_env.agents.planning.planner import make_plan, write_plan
-from poc_env.agents.planning.report import (
+from poc_env.agents.mission.crs import to_geographic
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.formats.report import ROUTE_COLOURS, expected_layers
+from poc_env.agents.mission.overlay import (
     ALPHA_RANGE,
-    ROUTE_COLOURS,
     colorize,
-    expected_layers,
     plan_prior,
     png_bytes,
     warp_prior,
 )
+from poc_env.agents.mission.plan import load_plan, write_plan
+from poc_env.agents.planning.planner import make_plan
 from poc_env.cli import main
 from poc_env.errors import ConfigError
 

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from pyproj import Transformer
 
-from poc_env.agents.planning import geoimport
-from poc_env.agents.planning.geoimport import (
+from poc_env.agents.mission import geoimport
+from poc_env.agents.mission.geoimport import (
     add_scenario_import_arguments,
     cmd_scenario_import,
     import_scenario,

@@ -8,16 +8,17 @@ import json
 import numpy as np
 import pytest
 
-from poc_env.agents.planning.export import (
+from poc_env.agents.mission.crs import to_local
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.plan import (
     READ_SCHEMAS,
     RECTANGLE_RULE,
     SCHEMA,
-    export_plan,
     load_plan,
     search_rings,
-    to_local,
+    write_plan,
 )
-from poc_env.agents.planning.planner import make_plan, plan_table, write_plan
+from poc_env.agents.planning.planner import make_plan, plan_table
 from poc_env.errors import ConfigError
 from poc_env.theory.timing import flight_time_s
 

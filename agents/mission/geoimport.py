@@ -3,8 +3,8 @@
 ``poc-env scenario import area.geojson --prior prior.tif --airfields fields.geojson --out my.yaml``
 turns GIS layers (longitude/latitude, WGS84) into a ready scenario: a YAML file, its prior as a
 ``.npy`` grid beside it and a ``.crs.json`` sidecar holding the coordinate reference system
-(the :func:`poc_env.agents.planning.export.make_crs` record). Every projection goes through
-:func:`poc_env.agents.planning.export.to_local` (pyproj); nothing here projects by hand.
+(the :func:`poc_env.agents.mission.crs.make_crs` record). Every projection goes through
+:func:`poc_env.agents.mission.crs.to_local` (pyproj); nothing here projects by hand.
 The formats, the resampling rule and the errors are documented in docs/GEO.md.
 
 - CRS: azimuthal equidistant (default; ``utm`` on request) centred on ``origin`` (lat, lon);
@@ -42,7 +42,7 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
-from poc_env.agents.planning.export import make_crs, parse_origin, to_local
+from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
 from poc_env.errors import ConfigError, GeometryError, as_number, require_extra
 from poc_env.geometry import validate_polygon
 from poc_env.io import atomic_path
@@ -443,7 +443,7 @@ def _read_geotiff(file: Path, crs: dict, grid: _Grid, area: Polygon) -> tuple[np
 
 def _pixels(xy: np.ndarray, crs: dict, from_wgs: Any, inv: Any) -> tuple[np.ndarray, np.ndarray]:
     """(col, row) pixel coordinates of local points (via WGS84 and the inverse geotransform)."""
-    from poc_env.agents.planning.export import to_geographic
+    from poc_env.agents.mission.crs import to_geographic
 
     ll = np.array(to_geographic(xy, crs)).reshape(-1, 2)
     if ll.size == 0:
@@ -505,7 +505,7 @@ def _prior(path: Any, crs: dict, grid: _Grid, area: Polygon) -> tuple[np.ndarray
 
 def _swap_back(x: np.ndarray, y: np.ndarray, crs: dict) -> tuple[np.ndarray, np.ndarray]:
     """(lat, lon) of local points read with lat and lon exchanged: (lon, lat) as (lat, lon)."""
-    from poc_env.agents.planning.export import to_geographic
+    from poc_env.agents.mission.crs import to_geographic
 
     ll = np.array(to_geographic(np.column_stack([x, y]), crs))
     lat, lon = ll[:, 1], ll[:, 0]
@@ -641,7 +641,7 @@ def import_scenario(
 
 def to_geographic_one(xy: Any, crs: dict) -> tuple[float, float]:
     """(lon, lat) of one local point (for error messages)."""
-    from poc_env.agents.planning.export import to_geographic
+    from poc_env.agents.mission.crs import to_geographic
 
     lat, lon = to_geographic([xy], crs)[0]
     return lon, lat

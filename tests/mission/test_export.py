@@ -9,14 +9,9 @@ import numpy as np
 import pytest
 from pyproj import Geod, Transformer
 
-from poc_env.agents.planning.export import (
-    export_plan,
-    load_plan,
-    make_crs,
-    parse_origin,
-    to_geographic,
-    to_local,
-)
+from poc_env.agents.mission.crs import make_crs, parse_origin, to_geographic, to_local
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.plan import load_plan
 from poc_env.cli import main
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
@@ -523,7 +518,8 @@ def test_geojson_rounded_with_human_units(tmp_path):
 
 
 def test_make_plan_records_crs_and_geography_that_export_uses(tmp_path):
-    from poc_env.agents.planning.planner import make_plan, write_plan
+    from poc_env.agents.mission.plan import write_plan
+    from poc_env.agents.planning.planner import make_plan
 
     plan = make_plan("small", popsize=8, maxiter=2, origin_deg=ORIGIN, projection="utm")
     assert plan["crs"] == make_crs("utm", ORIGIN)
@@ -595,7 +591,7 @@ def test_kml_draws_the_prior_as_a_ground_overlay(tmp_path, capsys):
     spaced in latitude, as Google Earth stretches it)."""
     from PIL import Image
 
-    from poc_env.agents.planning.report import colorize, plan_prior
+    from poc_env.agents.mission.overlay import colorize, plan_prior
     from poc_env.theory.probability_map import Grid
 
     path, _ = _plan(tmp_path)

@@ -1,0 +1,99 @@
+"""Mission export: a plan.json written in one of the registered formats.
+
+``poc-env export plan.json --format NAME`` calls :func:`export_plan`: it checks every argument
+and the plan (:func:`poc_env.agents.mission.plan.load_plan`) before anything is written,
+settles the CRS (:func:`poc_env.agents.mission.crs.plan_crs`) and the altitudes
+(:func:`poc_env.agents.mission.features.altitudes`), and hands an
+:class:`~poc_env.agents.mission.job.ExportJob` to the format's writer in
+:data:`poc_env.agents.mission.formats.FORMATS`.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from poc_env.agents.mission.crs import check_origin, plan_crs
+from poc_env.agents.mission.features import altitudes, check_altitude_ref
+from poc_env.agents.mission.formats import FORMATS
+from poc_env.agents.mission.job import ExportJob
+from poc_env.agents.mission.plan import load_plan
+from poc_env.errors import ConfigError, as_number
+
+
+def export_plan(
+    plan_path: str | os.PathLike[str],
+    fmt: str,
+    origin: str | tuple[float, float] | None = None,
+    out_dir: str | os.PathLike[str] | None = None,
+    *,
+    projection: str = "aeqd",
+    zone: int | None = None,
+    altitude_m: float | None = None,
+    altitude_ref: str = "home",
+    field_elevation_m: float = 0.0,
+    geofence: bool = True,
+    prior: Any = None,
+) -> list[Path]:
+    """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
+
+    Parameters
+    ----------
+    plan_path : path
+        A plan.json (:mod:`poc_env.agents.mission.plan`).
+    fmt : str
+        A name of :data:`~poc_env.agents.mission.formats.FORMATS`.
+    origin : str or (float, float), optional
+        (lat, lon) of the map's (0, 0). The CRS is the plan's ``crs`` (``origin``, if given,
+        must agree) or, for a plan without one, ``projection`` (``aeqd`` or ``utm``, UTM zone
+        ``zone`` or the origin's) at ``origin``.
+    out_dir : path, optional
+        The folder (default: the plan's).
+    altitude_m : float, optional
+        Default the plan's ``flight.altitude_m`` (above the field), in the reference
+        ``altitude_ref`` (``home`` or ``amsl``; ``field_elevation_m`` is the fields' AMSL
+        height).
+    geofence : bool
+        QGC missions that would breach their own geofence (a point outside the operating area,
+        a leg through a no-fly zone) are refused; ``geofence=False`` leaves the inclusion fence
+        out.
+    prior : None, array or path
+        The prior overlay of ``kml`` and ``html`` (an array of the scenario grid's shape or a
+        map file); by default the plan's scenario prior rebuilt by
+        :func:`poc_env.agents.mission.overlay.plan_prior`.
+
+    Returns
+    -------
+    list of Path
+        The files written (atomically).
+
+    Raises
+    ------
+    ConfigError
+        A wrong argument or plan field, named; nothing is written then.
+    """
+    if fmt not in FORMATS:
+        raise ConfigError("format", fmt, "one of " + ", ".join(FORMATS))
+    if origin is not None:
+        check_origin(origin)
+    if projection not in ("aeqd", "utm"):
+        raise ConfigError("projection", projection, "aeqd or utm")
+    check_altitude_ref(altitude_ref)
+    plan = load_plan(plan_path)
+    crs = plan_crs(plan.get("crs"), origin, projection, zone)
+    alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+    elevation = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
+    job = ExportJob(
+        plan=plan,
+        plan_path=Path(plan_path),
+        crs=crs,
+        altitude_m=alt,
+        ground_m=ground,
+        altitude_ref=altitude_ref,
+        field_elevation_m=elevation,
+        geofence=geofence,
+        prior=prior,
+        out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
+    )
+    return FORMATS[fmt].write(job)

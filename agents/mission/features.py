@@ -1,0 +1,153 @@
+"""What every map format draws, computed once: altitudes, landing approaches, fences, fields.
+
+GeoJSON, KML, the QGroundControl missions and the HTML map report read these so that they
+show the same numbers: the cruise altitude and ground level in the chosen altitude reference
+(:func:`altitudes`), each UAV's fixed-wing landing approach (:func:`approach_point`), and the
+airfields, operating area and no-fly zones (:func:`overlays`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from poc_env.agents.mission.crs import to_geographic
+from poc_env.agents.mission.plan import Plan, UavPlan, flight
+from poc_env.errors import ConfigError, as_number
+
+#: Altitude references: ``home`` (above the take-off field) or ``amsl`` (above mean sea level).
+ALTITUDE_REFS = ("home", "amsl")
+
+#: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
+#: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
+APPROACH_DISTANCE_M = 4000.0
+APPROACH_HEIGHT_M = 300.0
+
+
+def check_altitude_ref(altitude_ref: str) -> str:
+    """``altitude_ref`` if it is one of :data:`ALTITUDE_REFS`, else ConfigError."""
+    if altitude_ref not in ALTITUDE_REFS:
+        raise ConfigError("altitude_ref", altitude_ref, "home or amsl")
+    return altitude_ref
+
+
+def altitudes(
+    plan: Plan, altitude_m: float | None, altitude_ref: str, field_elevation_m: float
+) -> tuple[float, float]:
+    """(cruise altitude, ground level) in the reference ``altitude_ref``, checked.
+
+    Parameters
+    ----------
+    plan : Plan
+        Its ``flight.altitude_m`` (above the field) is the default altitude and its
+        ``flight.max_altitude_m`` the ceiling.
+    altitude_m : float or None
+        The altitude in the reference ``altitude_ref``; None: the plan's.
+    altitude_ref : {"home", "amsl"}
+    field_elevation_m : float
+        The fields' height above mean sea level (``amsl`` only).
+
+    Raises
+    ------
+    ConfigError
+        An altitude at or below the ground or above the UAV's ceiling.
+    """
+    check_altitude_ref(altitude_ref)
+    fl = flight(plan)
+    ground = 0.0
+    if altitude_ref == "amsl":
+        ground = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
+    alt = fl["altitude_m"] + ground if altitude_m is None else altitude_m
+    as_number("altitude_m", alt, -1e9, 1e9)
+    top = fl["max_altitude_m"]
+    if not alt > ground:
+        above = "home (> 0)" if altitude_ref == "home" else f"the field elevation {ground:g} m"
+        raise ConfigError("altitude_m", alt, f"above {above} and at most the ceiling {top:g} m")
+    if alt - ground > top:
+        raise ConfigError("altitude_m", alt, f"at most the UAV ceiling {top:g} m above the field")
+    return float(alt), ground
+
+
+def approach_point(u: UavPlan) -> list[float]:
+    """The fixed-wing approach waypoint of a UAV plan (metres): :data:`APPROACH_DISTANCE_M` from
+    the landing field towards the last search point (east of the field if they coincide)."""
+    end = np.asarray(u["landing_m"], dtype=float)
+    wps = u["waypoints_m"]
+    d = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float) - end
+    norm = float(np.hypot(*d))
+    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
+    return [float(v) for v in end + APPROACH_DISTANCE_M * unit]
+
+
+def approach_altitude(altitude_m: float, ground_m: float) -> float:
+    """:data:`APPROACH_HEIGHT_M` above the field (lower if the cruise altitude is lower)."""
+    return ground_m + min(APPROACH_HEIGHT_M, altitude_m - ground_m)
+
+
+def clockwise(ring_xy: list) -> list:
+    """The ring in clockwise order (QGC geofence polygons; x east, y north)."""
+    a = np.asarray(ring_xy, dtype=float)
+    area2 = float(np.sum(a[:, 0] * np.roll(a[:, 1], -1) - np.roll(a[:, 0], -1) * a[:, 1]))
+    return list(ring_xy[::-1]) if area2 > 0 else list(ring_xy)
+
+
+def r6(v: float) -> float:
+    """Degrees rounded to 1e-6 (about 0.1 m)."""
+    return round(float(v), 6)
+
+
+def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, Any]]:
+    """What GeoJSON, KML and the map report draw beside the routes and search areas.
+
+    Per UAV the landing approach (as flown by the QGC mission), the airfields, the operating
+    area and the no-fly zones (polygons counter-clockwise, closed).
+
+    Returns
+    -------
+    list of dict
+        Each: ``geometry`` (GeoJSON type), ``latlon``, ``z`` (None for polygons, drawn on the
+        ground) and ``properties``.
+    """
+    out: list[dict[str, Any]] = []
+    for u in plan["uavs"]:
+        out.append(
+            {
+                "geometry": "LineString",
+                "latlon": to_geographic([approach_point(u), u["landing_m"]], crs),
+                "z": [approach_altitude(alt, ground), ground],
+                "properties": {
+                    "id": u["id"],
+                    "kind": "landing_approach",
+                    "name": f"UAV {u['id']} landing approach",
+                    "approach_km": APPROACH_DISTANCE_M / 1e3,
+                    "approach_height_m": APPROACH_HEIGHT_M,
+                },
+            }
+        )
+    for a in plan.get("airfields") or []:
+        out.append(
+            {
+                "geometry": "Point",
+                "latlon": to_geographic([a["position_m"]], crs),
+                "z": [ground],
+                "properties": {"kind": "airfield", "name": a["name"]},
+            }
+        )
+    polys = []
+    area = plan.get("operating_area_m")
+    if area:
+        polys.append(("operating_area", "operating area (eq. 20)", area))
+    for i, z in enumerate(plan.get("no_fly_zones_m") or []):
+        polys.append(("no_fly_zone", f"no-fly zone {i + 1}", z))
+    for kind, name, ring in polys:
+        ccw = clockwise(ring)[::-1]
+        out.append(
+            {
+                "geometry": "Polygon",
+                "latlon": to_geographic([*ccw, ccw[0]], crs),
+                "z": None,
+                "properties": {"kind": kind, "name": name},
+            }
+        )
+    return out

@@ -1,0 +1,96 @@
+"""GeoJSON (RFC 7946): one FeatureCollection of the routes, search areas, approaches and fences."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from poc_env.agents.mission.crs import crs_text, to_geographic
+from poc_env.agents.mission.features import altitudes, overlays, r6
+from poc_env.agents.mission.job import ExportJob
+from poc_env.agents.mission.plan import Plan, flight, route, search_rings
+from poc_env.io import write_text_atomic
+
+
+def geojson(
+    plan: Plan,
+    crs: Any,
+    altitude_m: float | None = None,
+    altitude_ref: str = "home",
+    field_elevation_m: float = 0.0,
+) -> dict:
+    """A FeatureCollection: per UAV the route (LineString) and its search areas (Polygons).
+
+    Coordinates [lon, lat, z] rounded to 1e-6 degrees (about 0.1 m); z is the altitude in the
+    reference ``altitude_ref`` (the same numbers as the QGC mission and the KML); properties in
+    km, minutes, km/h and %.
+    """
+    alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+    fl = flight(plan)
+    feats = []
+    for u in plan["uavs"]:
+        pts = to_geographic(route(u), crs)
+        zs = [ground, *[alt] * (len(pts) - 2), ground]
+        line = [[r6(lon), r6(lat), z] for (lat, lon), z in zip(pts, zs)]
+        props = {
+            "id": u["id"],
+            "kind": "route",
+            "spacing_km": round(u["spacing_m"] / 1e3, 3),
+            "track_km": round(u["track_length_m"] / 1e3, 3),
+            "flight_time_min": round(u["flight_time_s"] / 60, 1),
+            "pod_pct": round(100 * u["pod"], 2),
+            "poc_pct": round(100 * u["poc"], 2),
+            "pos_pct": round(100 * u["pos"], 2),
+            "feasible": u["feasible"],
+            "altitude_m": round(alt, 1),
+            "altitude_ref": altitude_ref,
+            "cruise_speed_kmh": round(fl["cruise_speed_mps"] * 3.6, 1),
+            "search_speed_kmh": round(fl["search_speed_mps"] * 3.6, 1),
+            "transit_speed_kmh": round(fl["transit_speed_mps"] * 3.6, 1),
+        }
+        feats.append(
+            {
+                "type": "Feature",
+                "geometry": {"type": "LineString", "coordinates": line},
+                "properties": props,
+            }
+        )
+        for kind, ring_m, ring_props in search_rings(u):
+            ring = [[r6(lon), r6(lat)] for lat, lon in to_geographic(ring_m, crs)]
+            feats.append(
+                {
+                    "type": "Feature",
+                    "geometry": {"type": "Polygon", "coordinates": [ring]},
+                    "properties": {"id": u["id"], "kind": kind, **ring_props},
+                }
+            )
+    for o in overlays(plan, crs, alt, ground):
+        if o["geometry"] == "Polygon":
+            coords: Any = [[[r6(lon), r6(lat)] for lat, lon in o["latlon"]]]
+        else:
+            coords = [[r6(lon), r6(lat), z] for (lat, lon), z in zip(o["latlon"], o["z"])]
+            coords = coords[0] if o["geometry"] == "Point" else coords
+        feats.append(
+            {
+                "type": "Feature",
+                "geometry": {"type": o["geometry"], "coordinates": coords},
+                "properties": o["properties"],
+            }
+        )
+    return {
+        "type": "FeatureCollection",
+        "features": feats,
+        "properties": {
+            "scenario": plan["scenario"],
+            "posc_pct": round(100 * plan["posc"], 2),
+            "local_crs": crs_text(crs) if isinstance(crs, dict) else None,
+            "altitude_ref": altitude_ref,
+        },
+    }
+
+
+def write(job: ExportJob) -> list[Path]:
+    """``<stem>.geojson`` (strict JSON: no NaN)."""
+    doc = geojson(job.plan, job.crs, job.altitude_m, job.altitude_ref, job.ground_m)
+    return [write_text_atomic(job.path(".geojson"), json.dumps(doc, indent=1, allow_nan=False))]

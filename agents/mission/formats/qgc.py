@@ -1,0 +1,189 @@
+"""QGroundControl missions: one ``.plan`` per UAV (fixed wing, PX4), with its geofence.
+
+A mission that would breach its own geofence (a point outside the operating area, a leg
+through a no-fly zone) is refused before anything is written (:func:`check_fences`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from poc_env.agents.mission.crs import to_geographic
+from poc_env.agents.mission.features import (
+    APPROACH_HEIGHT_M,
+    approach_altitude,
+    approach_point,
+    check_altitude_ref,
+    clockwise,
+)
+from poc_env.agents.mission.job import ExportJob
+from poc_env.agents.mission.plan import DEFAULT_FLIGHT, Plan, UavPlan, flight, route
+from poc_env.errors import ConfigError
+from poc_env.io import write_text_atomic
+
+# MAVLink ids (https://mavlink.io/en/messages/common.html): MAV_CMD and MAV_FRAME.
+MAV_CMD_NAV_WAYPOINT = 16
+MAV_CMD_NAV_LAND = 21
+MAV_CMD_NAV_TAKEOFF = 22
+MAV_CMD_DO_CHANGE_SPEED = 178
+MAV_CMD_DO_LAND_START = 189
+MAV_FRAME_GLOBAL = 0
+MAV_FRAME_MISSION = 2
+MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
+#: altitude reference -> (MAV_FRAME, QGC AltitudeMode (1 relative, 2 absolute))
+ALTITUDE_FRAMES = {
+    "home": (MAV_FRAME_GLOBAL_RELATIVE_ALT, 1),
+    "amsl": (MAV_FRAME_GLOBAL, 2),
+}
+
+
+def _nav(command: int, lat: float, lon: float, alt: float, ref: str, p4=(0, 0, 0, None)) -> dict:
+    frame, mode = ALTITUDE_FRAMES[ref]
+    return {
+        "AMSLAltAboveTerrain": None, "Altitude": alt, "AltitudeMode": mode, "autoContinue": True,
+        "command": command, "doJumpId": 0, "frame": frame, "params": [*p4, lat, lon, alt],
+        "type": "SimpleItem",
+    }  # fmt: skip
+
+
+def _do(command: int, params: list) -> dict:
+    return {
+        "autoContinue": True, "command": command, "doJumpId": 0, "frame": MAV_FRAME_MISSION,
+        "params": params, "type": "SimpleItem",
+    }  # fmt: skip
+
+
+def _speed(v: float) -> dict:
+    """MAV_CMD_DO_CHANGE_SPEED: airspeed (type 0) v m/s, throttle unchanged (-1), absolute."""
+    return _do(MAV_CMD_DO_CHANGE_SPEED, [0, round(float(v), 3), -1, 0, 0, 0, 0])
+
+
+def qgc_plan(
+    u: UavPlan,
+    crs: Any,
+    altitude_m: float = 1000.0,
+    cruise_speed_mps: float = DEFAULT_FLIGHT["cruise_speed_mps"],
+    *,
+    search_speed_mps: float = DEFAULT_FLIGHT["search_speed_mps"],
+    transit_speed_mps: float | None = None,
+    altitude_ref: str = "home",
+    ground_m: float = 0.0,
+    home_amsl_m: float = 0.0,
+    operating_area_m: list | None = None,
+    no_fly_zones_m: list | None = None,
+) -> dict:
+    """A QGroundControl ``.plan`` for a fixed-wing UAV (PX4, ``vehicleType`` 1).
+
+    Items: NAV_TAKEOFF at the field; DO_CHANGE_SPEED to the transit speed (default v_b); the
+    transit waypoint ``waypoints_m[0]``; DO_CHANGE_SPEED v_s; the search waypoints;
+    DO_CHANGE_SPEED v_b;
+    DO_LAND_START; an approach waypoint (:data:`APPROACH_DISTANCE_M` out,
+    :data:`APPROACH_HEIGHT_M` up); NAV_LAND at the field. Geofence: the operating area as the
+    inclusion polygon (empty without one) and the no-fly zones as exclusion polygons, clockwise;
+    rally points at the take-off and landing fields. ``altitude_ref`` ``home`` writes
+    MAV_FRAME_GLOBAL_RELATIVE_ALT (3), ``amsl`` MAV_FRAME_GLOBAL (0) with ``ground_m`` the
+    field elevation; ``home_amsl_m`` is the planned home position's AMSL altitude.
+    """
+    ref = check_altitude_ref(altitude_ref)
+    wps = [list(w) for w in u["waypoints_m"]]
+    start, end = list(u["takeoff_m"]), list(u["landing_m"])
+    approach = approach_point(u)
+    ll = to_geographic([start, *wps, approach, end], crs)
+    t_ll, w_ll, a_ll, l_ll = ll[0], ll[1:-2], ll[-2], ll[-1]
+    app_alt = approach_altitude(altitude_m, ground_m)
+    items = [_nav(MAV_CMD_NAV_TAKEOFF, *t_ll, altitude_m, ref, (15, 0, 0, None))]
+    if w_ll:
+        items.append(_speed(cruise_speed_mps if transit_speed_mps is None else transit_speed_mps))
+        items.append(_nav(MAV_CMD_NAV_WAYPOINT, *w_ll[0], altitude_m, ref))
+        items.append(_speed(search_speed_mps))
+        items += [_nav(MAV_CMD_NAV_WAYPOINT, lat, lon, altitude_m, ref) for lat, lon in w_ll[1:]]
+    items.append(_speed(cruise_speed_mps))
+    items.append(_do(MAV_CMD_DO_LAND_START, [0, 0, 0, 0, 0, 0, 0]))
+    items.append(_nav(MAV_CMD_NAV_WAYPOINT, *a_ll, app_alt, ref))
+    items.append(_nav(MAV_CMD_NAV_LAND, *l_ll, ground_m, ref))
+    for k, it in enumerate(items):
+        it["doJumpId"] = k + 1
+    polygons = []
+    if operating_area_m:
+        ring = to_geographic(clockwise(operating_area_m), crs)
+        polygons.append(
+            {"inclusion": True, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
+        )
+    for z in no_fly_zones_m or []:
+        ring = to_geographic(clockwise(z), crs)
+        polygons.append(
+            {"inclusion": False, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
+        )
+    fields = [start] if start == end else [start, end]
+    rally = [[lat, lon, APPROACH_HEIGHT_M] for lat, lon in to_geographic(fields, crs)]
+    return {
+        "fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+        "mission": {
+            "version": 2, "firmwareType": 12, "vehicleType": 1,
+            "globalPlanAltitudeMode": ALTITUDE_FRAMES[ref][1],
+            "cruiseSpeed": cruise_speed_mps, "hoverSpeed": 5,
+            "plannedHomePosition": [t_ll[0], t_ll[1], home_amsl_m], "items": items,
+        },
+        "geoFence": {"circles": [], "polygons": polygons, "version": 2},
+        "rallyPoints": {"points": rally, "version": 2},
+    }  # fmt: skip
+
+
+def check_fences(plan: Plan, area: list | None) -> None:
+    """ConfigError if a UAV's mission (route and landing approach) leaves the inclusion fence
+    ``area`` (by more than 1 m) or flies through a no-fly zone (more than 1 m of a leg)."""
+    from shapely.geometry import LineString, Point, Polygon
+
+    inc = Polygon(area).buffer(1.0) if area else None
+    zones = [Polygon(z) for z in plan.get("no_fly_zones_m") or []]
+    for k, u in enumerate(plan["uavs"]):
+        pts = [*route(u)[:-1], approach_point(u), list(u["landing_m"])]
+        names = [
+            "takeoff_m", *(f"waypoints_m[{i}]" for i in range(len(pts) - 3)), "approach",
+            "landing_m",
+        ]  # fmt: skip
+        if inc is not None:
+            for name, pt in zip(names, pts):
+                if not inc.covers(Point(pt)):
+                    out = inc.exterior.distance(Point(pt)) / 1e3
+                    raise ConfigError(
+                        f"plan.uavs[{k}].{name}", pt,
+                        f"inside the operating area, the mission's inclusion geofence ({out:.1f}"
+                        " km outside): re-plan, or export without it (geofence=False)",
+                    )  # fmt: skip
+        line = LineString(pts)
+        for i, z in enumerate(zones):
+            if z.is_valid and line.intersection(z).length > 1.0:
+                raise ConfigError(
+                    f"plan.uavs[{k}]", u["id"],
+                    f"a mission outside no-fly zone {i + 1} (an exclusion geofence): re-plan",
+                )  # fmt: skip
+
+
+def write(job: ExportJob) -> list[Path]:
+    """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` (the operating area as the
+    inclusion fence unless ``job.geofence`` is false)."""
+    plan = job.plan
+    fl = flight(plan)
+    area = plan.get("operating_area_m") if job.geofence else None
+    check_fences(plan, area)
+    docs = [
+        (
+            u["id"],
+            qgc_plan(
+                u, job.crs, job.altitude_m, fl["cruise_speed_mps"],
+                search_speed_mps=fl["search_speed_mps"],
+                transit_speed_mps=fl["transit_speed_mps"], altitude_ref=job.altitude_ref,
+                ground_m=job.ground_m, home_amsl_m=job.field_elevation_m,
+                operating_area_m=area,
+                no_fly_zones_m=plan.get("no_fly_zones_m"),
+            ),
+        )
+        for u in plan["uavs"]
+    ]  # fmt: skip
+    return [
+        write_text_atomic(job.path(f"_uav{uid}.plan"), json.dumps(doc, indent=1, allow_nan=False))
+        for uid, doc in docs
+    ]

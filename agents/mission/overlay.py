@@ -1,0 +1,252 @@
+"""The prior overlay: the plan's prior probability of containment as a PNG on a lat/lon box.
+
+The KML's GroundOverlay (``<stem>_prior.png``) and the HTML map report's image overlay are
+this image, warped for each.
+
+The prior
+---------
+plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
+``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded by
+name (:func:`scenario_source`: a built-in scenario, or ``NAME.yaml`` beside the plan or in the
+current folder, as ``poc-env plan --scenario NAME.yaml`` records ``NAME``) and its prior built with
+:func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
+(resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so the
+rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones and
+operating area); when they differ, or the scenario or map file cannot be found, the page says why
+and draws no overlay rather than a wrong one. A caller with the prior at hand passes it
+(``export_plan(..., prior=...)``: an array of the scenario's grid shape, or a ``.npy``/``.csv``
+file) and it is used as given.
+
+Warping: the grid lives in the plan's projected CRS; a web map stretches an image linearly in
+Web Mercator (Leaflet ``imageOverlay``), Google Earth linearly in latitude and longitude (KML
+``GroundOverlay``). :func:`warp_prior` therefore computes, for each output pixel centre, its
+latitude and longitude (Mercator-spaced or evenly spaced rows), projects it into local metres
+with :func:`~poc_env.agents.mission.crs.to_local` (pyproj) and takes the value of the grid cell
+holding it (nearest cell, no interpolation: each pixel shows one cell's POC). Pixels outside the
+grid are transparent. The colour is a fixed colormap (:data:`COLORMAP`, YlOrRd's five anchors,
+linear between them) of the cell value over the grid's largest cell value; the alpha rises from
+:data:`ALPHA_RANGE` ``[0]`` at zero to ``[1]`` at the maximum so the basemap shows through low
+values. The PNG is written with zlib and struct (:func:`png_bytes`): no matplotlib or pillow,
+so the report works from a wheel installed without extras.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import struct
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from poc_env.agents.mission.crs import to_geographic, to_local
+from poc_env.agents.mission.plan import Plan
+from poc_env.errors import ConfigError
+from poc_env.theory.probability_map import Grid
+
+#: YlOrRd (ColorBrewer) anchors, low to high: the overlay's colormap, linear between anchors.
+COLORMAP = np.array(
+    [[255, 255, 204], [254, 217, 118], [253, 141, 60], [227, 26, 28], [128, 0, 38]], dtype=float
+)
+#: Overlay alpha (0-255) at zero and at the grid's largest cell value.
+ALPHA_RANGE = (40, 230)
+#: Longest side of the overlay image, pixels (at least 3 pixels per cell up to this size).
+MAX_OVERLAY_PX = 1600
+MIN_OVERLAY_PX = 512
+
+
+@dataclass(frozen=True)
+class PriorOverlay:
+    """A prior grid (``values`` of shape ``grid.shape``) and where it came from."""
+
+    grid: Grid
+    values: np.ndarray
+    source: str
+
+
+def png_bytes(rgba: np.ndarray) -> bytes:
+    """An RGBA image (H, W, 4) uint8 as PNG bytes (colour type 6, 8 bit, filter 0 rows)."""
+    img = np.ascontiguousarray(rgba, dtype=np.uint8)
+    if img.ndim != 3 or img.shape[2] != 4 or img.shape[0] < 1 or img.shape[1] < 1:
+        raise ConfigError("image", getattr(img, "shape", None), "an (H, W, 4) RGBA array")
+    h, w = img.shape[:2]
+    raw = np.concatenate([np.zeros((h, 1), np.uint8), img.reshape(h, 4 * w)], axis=1).tobytes()
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    head = struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", head)
+        + chunk(b"IDAT", zlib.compress(raw, 9))
+        + chunk(b"IEND", b"")
+    )
+
+
+def colorize(t: np.ndarray) -> np.ndarray:
+    """Values in [0, 1] -> RGBA uint8 by :data:`COLORMAP` and :data:`ALPHA_RANGE`."""
+    t = np.clip(np.asarray(t, dtype=float), 0.0, 1.0)
+    pos = t * (len(COLORMAP) - 1)
+    k = np.minimum(pos.astype(int), len(COLORMAP) - 2)
+    f = (pos - k)[..., None]
+    rgb = COLORMAP[k] * (1 - f) + COLORMAP[k + 1] * f
+    a = ALPHA_RANGE[0] + (ALPHA_RANGE[1] - ALPHA_RANGE[0]) * t
+    return np.round(np.concatenate([rgb, a[..., None]], axis=-1)).astype(np.uint8)
+
+
+def _mercator(lat_deg: np.ndarray) -> np.ndarray:
+    return np.log(np.tan(np.pi / 4 + np.radians(lat_deg) / 2))
+
+
+def _inverse_mercator(y: np.ndarray) -> np.ndarray:
+    return np.degrees(2 * np.arctan(np.exp(y)) - np.pi / 2)
+
+
+def overlay_bounds(grid: Grid, crs: Any) -> tuple[float, float, float, float]:
+    """(south, west, north, east) degrees enclosing the grid (its outline sampled densely)."""
+    x0, y0, x1, y1 = grid.bounds
+    s = np.linspace(0.0, 1.0, 65)
+    edge = np.concatenate(
+        [
+            np.stack([x0 + s * (x1 - x0), np.full_like(s, y0)], 1),
+            np.stack([np.full_like(s, x1), y0 + s * (y1 - y0)], 1),
+            np.stack([x0 + s * (x1 - x0), np.full_like(s, y1)], 1),
+            np.stack([np.full_like(s, x0), y0 + s * (y1 - y0)], 1),
+        ]
+    )
+    ll = np.array(to_geographic(edge, crs))
+    return (
+        float(ll[:, 0].min()),
+        float(ll[:, 1].min()),
+        float(ll[:, 0].max()),
+        float(ll[:, 1].max()),
+    )
+
+
+def warp_prior(
+    ov: PriorOverlay, crs: Any, rows: str = "mercator"
+) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """The prior as an RGBA image on a lat/lon box: ``(rgba, (south, west, north, east))``.
+
+    ``rows``: ``mercator`` (rows evenly spaced in Web Mercator y: Leaflet's imageOverlay) or
+    ``latitude`` (evenly spaced in latitude: KML GroundOverlay). Each pixel takes the colour of
+    the grid cell under its centre (module docstring); outside the grid it is transparent.
+    """
+    if rows not in ("mercator", "latitude"):
+        raise ConfigError("rows", rows, "mercator or latitude")
+    south, west, north, east = overlay_bounds(ov.grid, crs)
+    if rows == "mercator":
+        top, bottom = float(_mercator(np.array(north))), float(_mercator(np.array(south)))
+        height_units = top - bottom
+    else:
+        top, bottom = north, south
+        height_units = math.radians(north - south) / max(
+            math.cos(math.radians(0.5 * (north + south))), 1e-6
+        )
+    width_units = math.radians(east - west)
+    cells = max(ov.grid.nx, ov.grid.ny)
+    longest = int(min(MAX_OVERLAY_PX, max(MIN_OVERLAY_PX, 3 * cells)))
+    scale = longest / max(width_units, height_units, 1e-12)
+    w = max(2, round(width_units * scale))
+    h = max(2, round(height_units * scale))
+    v = top + (np.arange(h) + 0.5) / h * (bottom - top)
+    lat = _inverse_mercator(v) if rows == "mercator" else v
+    lon = west + (np.arange(w) + 0.5) / w * (east - west)
+    glat, glon = np.meshgrid(lat, lon, indexing="ij")
+    xy = np.array(to_local(np.stack([glat.ravel(), glon.ravel()], 1), crs)).reshape(h, w, 2)
+    j, i = ov.grid.cell_of(xy)
+    peak = float(np.max(ov.values))
+    t = ov.values[j, i] / peak if peak > 0 else np.zeros((h, w))
+    rgba = colorize(t)
+    rgba[~ov.grid.contains(xy)] = 0
+    return rgba, (south, west, north, east)
+
+
+def plan_prior(
+    plan: Plan, plan_path: str | os.PathLike[str], prior: Any = None
+) -> tuple[PriorOverlay | None, str]:
+    """The plan's prior grid and a note, or ``(None, why not)`` (see the module docstring).
+
+    ``prior``: None (rebuild it from the plan's scenario and map source), an array of the
+    scenario grid's shape, or a map file path (``.npy``/``.csv``, as ``poc-env plan --map``);
+    a given prior that does not fit the scenario grid is a ConfigError.
+    """
+    from poc_env.config import load_scenario
+    from poc_env.errors import MapFileError
+    from poc_env.theory.probability_map import build_prior, load_map
+
+    name = str(plan.get("scenario"))
+    where = scenario_source(name, plan_path)
+    if where is None:
+        why = f"scenario {name!r} is neither built in nor a YAML file {name}.yaml beside the plan"
+        if prior is None:
+            return None, f"no prior overlay: {why}"
+        raise ConfigError("scenario", name, f"a scenario to place the prior on ({why})")
+    sc = load_scenario(where)
+    grid = Grid.from_config(sc.map)
+    if prior is not None:
+        if isinstance(prior, (str, Path)):
+            values, source = load_map(prior, grid), str(prior)
+        else:
+            values, source = np.asarray(prior, dtype=float), "given"
+            if values.shape != grid.shape or not np.all(np.isfinite(values)):
+                raise ConfigError("prior", values.shape, f"finite values of shape {grid.shape}")
+        return PriorOverlay(grid, values, source), f"prior: {source}"
+    mismatch = _scenario_mismatch(plan, sc)
+    if mismatch:
+        return (
+            None,
+            f"no prior overlay: scenario {name!r} as built differs from the plan {mismatch}",
+        )
+    src = str(plan.get("map_source") or "builtin")
+    if src == "builtin":
+        return PriorOverlay(grid, build_prior(sc.map), f"{name} (built in)"), f"prior: {name}"
+    for cand in (Path(src), Path(plan_path).parent / src):
+        if cand.is_file():
+            try:
+                return PriorOverlay(grid, build_prior(sc.map, cand), str(cand)), f"prior: {cand}"
+            except MapFileError as err:
+                return None, f"no prior overlay: {err}"
+    return None, f"no prior overlay: map file {src!r} not found"
+
+
+def scenario_source(name: str, plan_path: str | os.PathLike[str]) -> str | None:
+    """Where the plan's scenario ``name`` is: a built-in name, a YAML path, or ``NAME.yaml``
+    beside the plan or in the current folder (``poc-env plan --scenario my.yaml`` records
+    ``my``); None if none exists."""
+    from poc_env.config import builtin_scenarios
+
+    if name in builtin_scenarios():
+        return name
+    cands = [Path(name)] if name.endswith((".yaml", ".yml")) else []
+    for folder in (Path(plan_path).parent, Path.cwd()):
+        cands += [folder / f"{name}.yaml", folder / f"{name}.yml"]
+    return next((str(c) for c in cands if c.is_file()), None)
+
+
+def _scenario_mismatch(plan: Plan, sc: Any) -> str:
+    """What the rebuilt scenario contradicts in the plan (airfields, zones, area), or ''."""
+    fields = plan.get("airfields")
+    if fields is not None:
+        mine = [(a.name, [float(v) for v in a.position_m]) for a in sc.airfields]
+        theirs = [(a["name"], [float(v) for v in a["position_m"]]) for a in fields]
+        if mine != theirs:
+            return "(airfields)"
+    zones = plan.get("no_fly_zones_m")
+    if zones is not None:
+        mine_z = [[[float(v) for v in p] for p in z] for z in sc.map.no_fly_zones_m]
+        if mine_z != [[[float(v) for v in p] for p in z] for z in zones]:
+            return "(no-fly zones)"
+    area = plan.get("operating_area_m")
+    if area is not None:
+        from poc_env.sim.core import make_params
+
+        b = np.asarray(make_params(sc).bounds, dtype=float)
+        a = np.asarray(area, dtype=float)
+        if not np.allclose([a[:, 0].min(), a[:, 1].min(), a[:, 0].max(), a[:, 1].max()], b):
+            return "(operating area)"
+    return ""

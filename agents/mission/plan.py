@@ -1,0 +1,426 @@
+"""The plan model: ``plan.json`` (schema 2; schema-1 files still load), read and written here only.
+
+A plan is a JSON object; :class:`Plan` and the classes below type it (``TypedDict``: at run
+time a plan is the plain ``dict`` the file holds, so a plan loads and rewrites byte for byte).
+:func:`load_plan` reads and checks one, :func:`write_plan` writes one; nothing else in the
+project opens a plan.json.
+
+Fields
+------
+``schema``, ``scenario``, ``seed``, ``map_source``, ``optimizer`` {``name``, ``settings``},
+``runtime_s``, ``posc``, ``upper_bound`` and ``uavs``: a list of {``id``, ``rectangle``
+{``center_m`` [x, y], ``length_m``, ``width_m``, ``theta_deg``} (the optimiser's decision
+rectangle; ``null`` in a schema-2 route plan such as the allocation planner's), ``spacing_m``,
+``takeoff_m``, ``landing_m``, ``waypoints_m`` [[x, y], ...], ``track_length_m``,
+``flight_time_s``, ``pod``, ``poc``, ``pos``, ``feasible``}. ``waypoints_m`` are the search
+pattern only: the route flown is take-off field, transit to ``waypoints_m[0]``, the search from
+``waypoints_m[0]`` to ``waypoints_m[-1]``, transit to the landing field. **``waypoints_m`` is
+what the time model flies**; the rectangles are for people.
+
+Schema 2 adds (all optional, checked when present):
+
+- per UAV ``flown_rectangle`` {``center_m``, ``line_length_m``, ``strip_width_m``,
+  ``lines_theta_rad``, ``rule``}: the strip the lines actually sweep
+  (:func:`poc_env.agents.planning.objective.flown_rectangle`). :data:`RECTANGLE_RULE` (also
+  written as the top-level ``rectangle_rule``) says how to fly it: lines along
+  ``lines_theta_rad`` at spacing ``spacing_m``, ``d/2`` inside each long edge,
+  ``strip_width_m / spacing_m`` lines. Re-flying it by that rule (or by the usual ``ceil(E/d)``
+  lawnmower, which coincides on it) gives the plan's own eq. 17 flight time; re-flying the
+  decision rectangle the usual way does not (issue 12), so every export draws the flown strip,
+  not the decision rectangle.
+- per UAV ``areas_m``: polygons the UAV searches (a route plan's regions), drawn as search areas.
+- ``bounds`` {``honest``, ``reach``}: :func:`poc_env.theory.bound.honest_optimum` and the
+  reach-aware :func:`poc_env.theory.bound.reach_bound` of the plan's prior, the bounds no policy
+  beats in the environment (``upper_bound`` stays the optimiser's same-effort bound).
+
+Optional fields of both schemas (a plan without them is read as before):
+
+- ``crs``: the :func:`poc_env.agents.mission.crs.make_crs` record {``kind``: ``aeqd`` | ``utm``
+  | ``epsg`` | ``proj``, ``origin_deg`` [lat, lon], ``proj``, ``epsg``}. With it, export needs
+  no ``--origin``; an ``--origin`` given anyway must equal ``crs.origin_deg``. Without it,
+  ``--origin`` is required and the default ``aeqd`` CRS at that origin is used.
+- ``flight``: {``cruise_speed_mps`` (v_b, the flight home), ``search_speed_mps`` (v_s, on the
+  route after the first waypoint), ``transit_speed_mps`` (out to the first waypoint; default
+  v_b), ``altitude_m``, ``max_altitude_m``} of the scenario's UAV (default the paper's 220 km/h,
+  180 km/h, 220 km/h, 1,000 m, 4,000 m). The allocation planner's ``--speed max`` plans record
+  v_max as the search and transit speeds.
+- ``operating_area_m``: the operating area (eq. 20's boundary) as a polygon [[x, y], ...]; the
+  QGC geofence's inclusion polygon. Without it the inclusion fence is left empty.
+- ``no_fly_zones_m``: a list of polygons; exclusion fences.
+- ``airfields``: [{``name``, ``position_m``}]; names in KML/GeoJSON.
+
+Planners add fields of their own (``objective``, ``history``, ``x``, ``planner``, ...); they are
+kept as written and not read by any export.
+
+:func:`load_plan` checks every field an export reads before anything is written: finite numbers
+in documented ranges (points within :data:`MAX_EXTENT_M` of the origin, probabilities in
+[0, 1]), the right shapes, a known CRS kind that pyproj accepts as a projected CRS in metres,
+and UAV ids of 1-64 ``A-Z a-z 0-9 _ -`` (they become file names), so no NaN, no out-of-range
+latitude and no path outside ``--out`` can reach a mission file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from pathlib import Path
+from typing import Any, TypedDict
+
+from poc_env.agents.mission.crs import check_crs
+from poc_env.errors import ConfigError, as_number
+from poc_env.io import write_text_atomic
+
+SCHEMA = 2
+#: The schemas :func:`load_plan` reads.
+READ_SCHEMAS = (1, 2)
+#: How a plan's ``flown_rectangle`` is flown (module docstring).
+RECTANGLE_RULE = (
+    "flown_rectangle: lines along lines_theta_rad at spacing spacing_m, the first and last d/2 "
+    "inside the strip's long edges, strip_width_m / spacing_m lines, boustrophedon; this is "
+    "the track waypoints_m flies and flight_time_s times"
+)
+
+#: The top-level fields every schema has.
+PLAN_KEYS = {
+    "schema", "scenario", "seed", "map_source", "optimizer", "runtime_s", "posc",
+    "upper_bound", "uavs",
+}  # fmt: skip
+#: The per-UAV fields every schema has.
+UAV_KEYS = {
+    "id", "rectangle", "spacing_m", "takeoff_m", "landing_m", "waypoints_m", "track_length_m",
+    "flight_time_s", "pod", "poc", "pos", "feasible",
+}  # fmt: skip
+
+#: The paper's UAV (§6.2) for plans that record no ``flight`` section.
+DEFAULT_FLIGHT = {
+    "cruise_speed_mps": 220 / 3.6,
+    "search_speed_mps": 180 / 3.6,
+    "transit_speed_mps": 220 / 3.6,
+    "altitude_m": 1000.0,
+    "max_altitude_m": 4000.0,
+}
+
+#: Largest |x| or |y| of a plan point, metres: 2,000 km from the map origin, far beyond a
+#: regional search (the projections are documented and measured within 300 km).
+MAX_EXTENT_M = 2.0e6
+#: Largest speed (m/s) and altitude (m) a plan's ``flight`` section may hold.
+MAX_SPEED_MPS = 1000.0
+MAX_ALTITUDE_M = 30_000.0
+_SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
+
+
+class Rectangle(TypedDict):
+    """The optimiser's decision rectangle of a UAV (metres, degrees)."""
+
+    center_m: list[float]
+    length_m: float
+    width_m: float
+    theta_deg: float
+
+
+class FlownRectangle(TypedDict):
+    """The strip a UAV's lines sweep and the rule that flies it (:data:`RECTANGLE_RULE`)."""
+
+    center_m: list[float]
+    line_length_m: float
+    strip_width_m: float
+    lines_theta_rad: float
+    rule: str
+
+
+class _UavRequired(TypedDict):
+    id: int | str
+    rectangle: Rectangle | None
+    spacing_m: float
+    takeoff_m: list[float]
+    landing_m: list[float]
+    waypoints_m: list[list[float]]
+    track_length_m: float
+    flight_time_s: float
+    pod: float
+    poc: float
+    pos: float
+    feasible: bool
+
+
+class UavPlan(_UavRequired, total=False):
+    """One UAV of a plan (module docstring); schema 2's members are optional."""
+
+    flown_rectangle: FlownRectangle | None
+    areas_m: list[list[list[float]]] | None
+
+
+class Airfield(TypedDict):
+    """A named airfield in local metres."""
+
+    name: str
+    position_m: list[float]
+
+
+class Bounds(TypedDict):
+    """The environment's two bounds of the plan's prior."""
+
+    honest: float
+    reach: float
+
+
+class Flight(TypedDict, total=False):
+    """The UAV's speeds and altitudes (:data:`DEFAULT_FLIGHT` fills what is missing)."""
+
+    cruise_speed_mps: float
+    search_speed_mps: float
+    transit_speed_mps: float
+    altitude_m: float
+    max_altitude_m: float
+
+
+class _PlanRequired(TypedDict):
+    schema: int
+    scenario: str
+    seed: int
+    map_source: str
+    optimizer: dict[str, Any]
+    runtime_s: float
+    posc: float
+    upper_bound: float
+    uavs: list[UavPlan]
+
+
+class Plan(_PlanRequired, total=False):
+    """A plan.json (module docstring): the schema-1 fields, schema 2's and the optional ones."""
+
+    rectangle_rule: str | None
+    bounds: Bounds | None
+    crs: dict[str, Any] | None
+    flight: Flight | None
+    operating_area_m: list[list[float]] | None
+    no_fly_zones_m: list[list[list[float]]] | None
+    airfields: list[Airfield] | None
+
+
+def write_plan(plan: Any, path: str | os.PathLike[str]) -> Path:
+    """Write ``plan`` (a :class:`Plan`, with any extra fields of its planner) as plan.json.
+
+    Atomically (:func:`poc_env.io.write_text_atomic`), as ``json.dumps(plan, indent=1)``: a plan
+    read by :func:`load_plan` rewrites to the same bytes.
+    """
+    return write_text_atomic(path, json.dumps(plan, indent=1))
+
+
+def load_plan(path: str | os.PathLike[str]) -> Plan:
+    """Read and check a plan.json (module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Naming the missing or wrong field (``plan.uavs[0].takeoff_m``, ...).
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError("plan", str(p), "an existing plan.json written by `poc-env plan`")
+    try:
+        plan = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise ConfigError("plan", str(p), f"valid JSON ({err})") from None
+    return check_plan(plan)
+
+
+def check_plan(plan: Any) -> Plan:
+    """``plan`` (parsed JSON) checked field by field and returned as is.
+
+    Raises
+    ------
+    ConfigError
+        Naming the missing or wrong field.
+    """
+    if not isinstance(plan, dict):
+        raise ConfigError("plan", type(plan).__name__, "a JSON object")
+    schema = plan.get("schema")
+    if isinstance(schema, bool) or schema not in READ_SCHEMAS:
+        raise ConfigError("plan.schema", schema, " or ".join(map(str, READ_SCHEMAS)))
+    missing = sorted(PLAN_KEYS - set(plan))
+    if missing:
+        raise ConfigError(f"plan.{missing[0]}", None, "present (schema 1 field)")
+    if not isinstance(plan["uavs"], list) or not plan["uavs"]:
+        raise ConfigError("plan.uavs", plan["uavs"], "a non-empty list of UAV plans")
+    as_number("plan.posc", plan["posc"], 0.0, 1.0)
+    if not isinstance(plan["optimizer"], dict):  # the map report names its optimiser
+        raise ConfigError("plan.optimizer", plan["optimizer"], "a mapping of name, settings")
+    ids: set[str] = set()
+    for k, u in enumerate(plan["uavs"]):
+        where = f"plan.uavs[{k}]"
+        miss = sorted(UAV_KEYS - set(u)) if isinstance(u, dict) else ["id"]
+        if miss:
+            raise ConfigError(f"{where}.{miss[0]}", None, "present (schema 1 field)")
+        uid = u["id"]
+        if (
+            isinstance(uid, bool)
+            or not isinstance(uid, (int, str))
+            or not _SAFE_ID.fullmatch(str(uid))
+        ):
+            raise ConfigError(f"{where}.id", uid, "an integer >= 0 or 1-64 of A-Z a-z 0-9 _ -")
+        if str(uid) in ids:
+            raise ConfigError(f"{where}.id", uid, "unique among the plan's UAVs")
+        ids.add(str(uid))
+        _point(f"{where}.takeoff_m", u["takeoff_m"])
+        _point(f"{where}.landing_m", u["landing_m"])
+        wps = u["waypoints_m"]
+        if not isinstance(wps, list):
+            raise ConfigError(f"{where}.waypoints_m", wps, "a list of [x, y] points in metres")
+        for i, w in enumerate(wps):
+            _point(f"{where}.waypoints_m[{i}]", w)
+        _check_rectangles(where, u, schema)
+        for key in ("spacing_m", "track_length_m"):
+            as_number(f"{where}.{key}", u[key], 0.0, 100 * MAX_EXTENT_M)
+        as_number(f"{where}.flight_time_s", u["flight_time_s"], 0.0, 1e7)
+        for key in ("pod", "poc", "pos"):
+            as_number(f"{where}.{key}", u[key], 0.0, 1.0)
+        if not isinstance(u["feasible"], bool):
+            raise ConfigError(f"{where}.feasible", u["feasible"], "true or false")
+    _check_optional(plan)
+    return plan  # type: ignore[return-value]  # checked above, field by field
+
+
+def _check_rectangles(where: str, u: dict[str, Any], schema: int) -> None:
+    """``rectangle`` (null allowed from schema 2), ``flown_rectangle`` and ``areas_m``."""
+    r = u["rectangle"]
+    if r is not None or schema < 2:
+        keys = ["center_m", "length_m", "theta_deg", "width_m"]
+        if not isinstance(r, dict) or sorted(r) != keys:
+            allowed = "a mapping of center_m, length_m, width_m, theta_deg"
+            raise ConfigError(f"{where}.rectangle", r, allowed + (" or null" if schema > 1 else ""))
+        _point(f"{where}.rectangle.center_m", r["center_m"])
+        for key in ("length_m", "width_m"):
+            as_number(f"{where}.rectangle.{key}", r[key], 0.0, MAX_EXTENT_M)
+        as_number(f"{where}.rectangle.theta_deg", r["theta_deg"], -360.0, 360.0)
+    fr = u.get("flown_rectangle")
+    if fr is not None:
+        keys = ["center_m", "line_length_m", "lines_theta_rad", "rule", "strip_width_m"]
+        if not isinstance(fr, dict) or sorted(fr) != keys:
+            raise ConfigError(f"{where}.flown_rectangle", fr, "a mapping of " + ", ".join(keys))
+        _point(f"{where}.flown_rectangle.center_m", fr["center_m"])
+        for key in ("line_length_m", "strip_width_m"):
+            as_number(f"{where}.flown_rectangle.{key}", fr[key], 0.0, MAX_EXTENT_M)
+        as_number(f"{where}.flown_rectangle.lines_theta_rad", fr["lines_theta_rad"], -7.0, 7.0)
+        if not isinstance(fr["rule"], str) or len(fr["rule"]) > 500:
+            raise ConfigError(f"{where}.flown_rectangle.rule", fr["rule"], "a text of <= 500")
+    areas = u.get("areas_m")
+    if areas is not None:
+        if not isinstance(areas, list):
+            raise ConfigError(f"{where}.areas_m", areas, "a list of polygons")
+        for i, a in enumerate(areas):
+            _polygon(f"{where}.areas_m[{i}]", a)
+
+
+def _check_optional(plan: dict[str, Any]) -> None:
+    """The optional fields (module docstring): absent or null is fine, anything else checked."""
+    if plan.get("crs") is not None:
+        check_crs("plan.crs", plan["crs"])
+    b = plan.get("bounds")
+    if b is not None:
+        if not isinstance(b, dict) or sorted(b) != ["honest", "reach"]:
+            raise ConfigError("plan.bounds", b, "a mapping of honest, reach")
+        for key in ("honest", "reach"):
+            as_number(f"plan.bounds.{key}", b[key], 0.0, 1.0)
+    rule = plan.get("rectangle_rule")
+    if rule is not None and (not isinstance(rule, str) or len(rule) > 1000):
+        raise ConfigError("plan.rectangle_rule", rule, "a text of <= 1000 characters")
+    fl = plan.get("flight")
+    if fl is not None:
+        if not isinstance(fl, dict) or not set(fl) <= set(DEFAULT_FLIGHT):
+            raise ConfigError("plan.flight", fl, "a mapping of " + ", ".join(DEFAULT_FLIGHT))
+        for key in ("cruise_speed_mps", "search_speed_mps", "transit_speed_mps"):
+            if key in fl:
+                as_number(f"plan.flight.{key}", fl[key], 1e-3, MAX_SPEED_MPS)
+        for key in ("altitude_m", "max_altitude_m"):
+            if key in fl:
+                as_number(f"plan.flight.{key}", fl[key], 1e-3, MAX_ALTITUDE_M)
+    if plan.get("operating_area_m") is not None:
+        _polygon("plan.operating_area_m", plan["operating_area_m"])
+    zones = plan.get("no_fly_zones_m")
+    if zones is not None:
+        if not isinstance(zones, list):
+            raise ConfigError("plan.no_fly_zones_m", zones, "a list of polygons")
+        for i, z in enumerate(zones):
+            _polygon(f"plan.no_fly_zones_m[{i}]", z)
+    fields = plan.get("airfields")
+    if fields is not None:
+        if not isinstance(fields, list):
+            raise ConfigError("plan.airfields", fields, "a list of {name, position_m}")
+        for i, a in enumerate(fields):
+            if not isinstance(a, dict) or sorted(a) != ["name", "position_m"]:
+                raise ConfigError(f"plan.airfields[{i}]", a, "a mapping of name, position_m")
+            if not isinstance(a["name"], str) or not 1 <= len(a["name"]) <= 64:
+                raise ConfigError(f"plan.airfields[{i}].name", a["name"], "1-64 characters")
+            _point(f"plan.airfields[{i}].position_m", a["position_m"])
+
+
+def _point(field: str, value: Any) -> None:
+    """An [x, y] point in metres within :data:`MAX_EXTENT_M` of the origin."""
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ConfigError(field, value, "[x, y] in metres")
+    for v in value:
+        as_number(field, v, -MAX_EXTENT_M, MAX_EXTENT_M)
+
+
+def _polygon(field: str, value: Any) -> None:
+    """A polygon: a list of at least 3 [x, y] points in metres."""
+    if not isinstance(value, list) or len(value) < 3:
+        raise ConfigError(field, value, "a list of at least 3 [x, y] points in metres")
+    for i, v in enumerate(value):
+        _point(f"{field}[{i}]", v)
+
+
+def route(u: UavPlan) -> list[list[float]]:
+    """The route a UAV flies: take-off field, ``waypoints_m``, landing field (metres)."""
+    return [list(u["takeoff_m"]), *u["waypoints_m"], list(u["landing_m"])]
+
+
+def flight(plan: Plan) -> dict[str, float]:
+    """The plan's ``flight`` section with :data:`DEFAULT_FLIGHT` filling what it lacks."""
+    given: dict[str, float] = dict(plan.get("flight") or {})  # type: ignore[arg-type]
+    return {**DEFAULT_FLIGHT, **given}
+
+
+def search_rings(u: UavPlan) -> list[tuple[str, list[list[float]], dict[str, Any]]]:
+    """What a UAV searches, as closed rings in local metres: ``(kind, ring, properties)``.
+
+    The flown strip when the plan has one (``search_strip``: what the lines sweep, see
+    :data:`RECTANGLE_RULE`), else the decision rectangle (``search_rectangle``; schema 1),
+    then every ``areas_m`` polygon (``search_area``). Properties in km and degrees. One
+    implementation for GeoJSON, KML, the map report and the planner's figure.
+    """
+    from poc_env.geometry import rectangle_corners
+
+    out: list[tuple[str, list[list[float]], dict[str, Any]]] = []
+    fr, r = u.get("flown_rectangle"), u.get("rectangle")
+    if fr is not None:
+        c = rectangle_corners(
+            fr["center_m"], fr["line_length_m"], fr["strip_width_m"], fr["lines_theta_rad"]
+        ).tolist()
+        props = {
+            "line_length_km": round(fr["line_length_m"] / 1e3, 3),
+            "strip_width_km": round(fr["strip_width_m"] / 1e3, 3),
+            "lines_heading_deg": round(math.degrees(fr["lines_theta_rad"]) % 360.0, 2),
+            "spacing_km": round(u["spacing_m"] / 1e3, 3),
+            "rule": fr["rule"],
+        }
+        out.append(("search_strip", [*c, c[0]], props))
+    elif r is not None:
+        c = rectangle_corners(
+            r["center_m"], r["length_m"], r["width_m"], math.radians(r["theta_deg"])
+        ).tolist()
+        props = {
+            "length_km": round(r["length_m"] / 1e3, 3),
+            "width_km": round(r["width_m"] / 1e3, 3),
+            "theta_deg": round(r["theta_deg"], 2),
+        }
+        out.append(("search_rectangle", [*c, c[0]], props))
+    for a in u.get("areas_m") or []:
+        ring = [[float(x), float(y)] for x, y in a]
+        if ring[0] != ring[-1]:
+            ring.append(ring[0])
+        out.append(("search_area", ring, {"spacing_km": round(u["spacing_m"] / 1e3, 3)}))
+    return out

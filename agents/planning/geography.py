@@ -1,0 +1,67 @@
+"""The geography every plan records: its CRS, the UAV's flight, the operating area, the no-fly
+zones, the airfields and the environment's two bounds (the optional fields of
+:mod:`poc_env.agents.mission.plan`), one implementation for the DE planner
+(:mod:`~poc_env.agents.planning.planner`), the allocation planner
+(:mod:`~poc_env.agents.planning.allocation`) and region surveys
+(:mod:`~poc_env.agents.planning.survey`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from poc_env.agents.mission.crs import make_crs
+from poc_env.config import Scenario
+from poc_env.errors import ConfigError
+
+
+def scenario_crs(
+    sc: Scenario, origin_deg: Any, projection: str, zone: int | None
+) -> dict[str, Any] | None:
+    """The plan's CRS: from ``origin_deg`` (``--origin``), else from the scenario's
+    ``map.origin_deg``/``projection``/``utm_zone``; both given must name the same origin."""
+    m = sc.map
+    if origin_deg is None:
+        if m.origin_deg is None:
+            return None
+        return make_crs(m.projection, m.origin_deg, zone=m.utm_zone)
+    crs = make_crs(projection, origin_deg, zone=zone)
+    if m.origin_deg is not None and tuple(crs["origin_deg"]) != tuple(m.origin_deg):
+        raise ConfigError(
+            "origin", origin_deg, f"nothing (the scenario's map.origin_deg "
+            f"{list(m.origin_deg)} is used) or that same origin",
+        )  # fmt: skip
+    return crs
+
+
+def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
+    """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
+    the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
+    and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value)."""
+    from poc_env.sim.core import make_params
+    from poc_env.theory.bound import honest_optimum, reach_bound
+
+    x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)  # eq. 20's boundary
+    out: dict[str, Any] = {
+        "flight": {
+            "cruise_speed_mps": sc.uav.cruise_speed_mps,
+            "search_speed_mps": sc.uav.search_speed_mps,
+            "altitude_m": sc.uav.cruise_altitude_m,
+            "max_altitude_m": sc.uav.max_altitude_m,
+        },
+        "operating_area_m": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
+        "no_fly_zones_m": [[[float(v) for v in p] for p in z] for z in sc.map.no_fly_zones_m],
+        "airfields": [
+            {"name": a.name, "position_m": [float(v) for v in a.position_m]} for a in sc.airfields
+        ],
+    }
+    if float(np.sum(prior)) > 0:  # an empty prior (a route plan's stated reason) has no bounds
+        out["bounds"] = {
+            "honest": float(honest_optimum(sc, prior).pos),
+            "reach": float(reach_bound(sc, prior).upper),
+        }
+    if crs is not None:
+        out["crs"] = crs
+    return out
