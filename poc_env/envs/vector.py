@@ -310,7 +310,7 @@ class SwarmVecEnv(VecEnv):
             raise EpisodeOverError("call reset() before step()")
         p, n = self.params, self.n_agents
         active = self._active
-        tr = self.engine.step(self._actions)
+        tr = self.engine.step(self._actions, with_info=False)  # the few infos: from the state
         st = self.engine.current
         reward = np.where(active, self._reward(tr, st), 0.0)
         self._returns += reward
@@ -338,9 +338,9 @@ class SwarmVecEnv(VecEnv):
         ended = np.flatnonzero(env_end)
         if len(ended):
             elapsed = round(time.time() - self._t_start, 6)
-            posc_all = tr.info["posc"].tolist()
-            landed, crashed = tr.info["landed"].tolist(), tr.info["crashed"].tolist()
-            violations = tr.info["violations"].tolist()
+            posc_all = st.posc.tolist()
+            landed, crashed = st.landed.tolist(), st.crashed.tolist()
+            violations = st.violations.tolist()
             for k in ended.tolist():
                 posc = posc_all[k]
                 for i in range(n):

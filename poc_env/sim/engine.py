@@ -180,15 +180,16 @@ def infos(
     (cumulative constraint-violation steps). ``events`` None: a reset (nothing happened yet,
     step quantities are 0/False)."""
     e, n = state.flying.shape
+    zeros = np.zeros((e, n))
     if events is None:
-        zeros, no = np.zeros((e, n)), np.zeros((e, n), dtype=bool)
+        no = np.zeros((e, n), dtype=bool)
         pos, pos_team, shielded = zeros, zeros, no
         flags = {f: no for f in VIOLATION_FLAGS}
         both = state.flying[:, :, None] & state.flying[:, None, :]
         connected = np.all(comms_mod.reachable(state.links) | ~both, axis=(1, 2))
     else:
         pos = events.pos_agent
-        pos_team = np.broadcast_to(events.pos_team[:, None], (e, n))
+        pos_team = _per_agent(np.asarray(events.pos_team, dtype=float), n)
         shielded = events.shielded
         flags = {
             "out_of_bounds": events.out_of_bounds,
@@ -200,30 +201,35 @@ def infos(
         }
         connected = np.asarray(events.connected, dtype=bool)
     out: dict[str, np.ndarray] = {
-        "posc": np.asarray(state.posc, dtype=float),
+        "posc": state.posc.astype(float),
         "pos": np.asarray(pos, dtype=float),
-        "pos_team": np.asarray(pos_team, dtype=float),
+        "pos_team": pos_team,
     }
     for t in REWARD_TERMS:
-        term = np.zeros((e, n)) if terms is None else terms[t]
-        out[f"reward_{t}"] = np.broadcast_to(np.asarray(term, dtype=float), (e, n))
+        term = zeros if terms is None else terms[t]
+        out[f"reward_{t}"] = np.asarray(term, dtype=float)  # (E, N) already
     for f in VIOLATION_FLAGS:
-        out[f"violation_{f}"] = np.asarray(flags[f], dtype=bool)
-    detected = np.asarray(state.detected, dtype=bool)
+        out[f"violation_{f}"] = flags[f]
+    detected = state.detected
     detect_time = np.where(detected, state.detect_step * params.dt, -1.0)
     out.update(
-        shielded=np.asarray(shielded, dtype=bool),
+        shielded=shielded,
         landed=state.landed.copy(),
         crashed=state.crashed.copy(),
-        flight_time_s=np.asarray(state.elapsed, dtype=float).copy(),
-        target_detected=np.broadcast_to(detected[:, None], (e, n)),
-        time_to_detection_s=np.broadcast_to(detect_time[:, None], (e, n)),
-        topology=np.broadcast_to(np.asarray(state.topology, dtype=np.int64)[:, None], (e, n)),
+        flight_time_s=state.elapsed.astype(float),
+        target_detected=_per_agent(detected, n),
+        time_to_detection_s=_per_agent(detect_time, n),
+        topology=_per_agent(state.topology.astype(np.int64), n),
         links=state.links.copy(),
-        connected=np.broadcast_to(connected[:, None], (e, n)),
-        violations=np.asarray(state.violations, dtype=np.int64).copy(),
+        connected=_per_agent(connected, n),
+        violations=state.violations.astype(np.int64),
     )
     return out
+
+
+def _per_agent(x: np.ndarray, n: int) -> np.ndarray:
+    """(E, N): each env's value ``x (E,)`` repeated for its ``n`` agents."""
+    return np.repeat(x[:, None], n, axis=1)
 
 
 def mean_over(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -487,10 +493,15 @@ class Engine:
 
     # -- step ----------------------------------------------------------------------------------
     def step(
-        self, actions: np.ndarray, envs: Sequence[int] | np.ndarray | None = None
+        self,
+        actions: np.ndarray,
+        envs: Sequence[int] | np.ndarray | None = None,
+        with_info: bool = True,
     ) -> Transition:
         """Advance ``envs`` (default all) by one step under the control level's ``actions
-        (E', N, ACTION_DIMS[control])`` (finished UAVs' actions are ignored by the core)."""
+        (E', N, ACTION_DIMS[control])`` (finished UAVs' actions are ignored by the core).
+        ``with_info=False`` leaves ``Transition.info`` empty (an adapter that reads the few
+        infos it needs from the state saves computing the full set)."""
         idx = self.envs(envs)
         whole = self._everything(idx)
         p = self.params
@@ -508,7 +519,7 @@ class Engine:
         if not whole:
             sim.scatter_envs(self.current, st, idx)
         obs = self.observe_state(st, idx)
-        info = infos(p, st, ev, terms)
+        info = infos(p, st, ev, terms) if with_info else {}
         return Transition(obs, reward, terms, ev, terminated, truncated, over, info)
 
 
