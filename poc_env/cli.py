@@ -272,19 +272,16 @@ def _state_policy(scenario, name: str, seed: int):
 
     The policy is reset with an environment reset by ``seed``, whose state is the rendered
     episode's first state (both start from ``default_rng(seed)``); then each step it gets the
-    rendered state's observations of the flying UAVs, built as the environment builds them.
-    Its own generators come from ``seed``: ``rng`` is not used.
+    rendered state's observations of the flying UAVs, built by the environment's engine
+    (:meth:`poc_env.sim.engine.Engine.observe_state`). Its own generators come from ``seed``:
+    ``rng`` is not used.
     """
     from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
-    from poc_env.sim.observations import hazard_mask, rasters, vectors
 
     policy = make_policy(name)
     env = UAVSearchParallelEnv(scenario)
-    params = env.params
     agents = env.possible_agents
-    hazard = hazard_mask(params)
-    poc_scale = np.array([float(params.prior.max())])
     started = False
 
     def policy_fn(state, rng):
@@ -293,15 +290,13 @@ def _state_policy(scenario, name: str, seed: int):
             env.reset(seed=seed)
             policy.reset(env, seed)
             started = True
-        vec = vectors(params, state)[0]
-        ras = rasters(params, state, poc_scale, hazard)[0]
-        obs = {
-            a: {"raster": ras[i], "vector": vec[i]}
-            for i, a in enumerate(agents)
-            if state.flying[0, i]
-        }
-        acts, _ = policy.predict(obs)
-        out = np.zeros((1, params.n_agents, 3))
+        obs = env.engine.observe_state(state)
+        ras, vec = obs["raster"][0], obs["vector"][0]
+        flying = state.flying[0]
+        acts, _ = policy.predict(
+            {a: {"raster": ras[i], "vector": vec[i]} for i, a in enumerate(agents) if flying[i]}
+        )
+        out = np.zeros((1, len(agents), 3))
         for i, a in enumerate(agents):
             if a in acts:
                 out[0, i] = acts[a]

@@ -233,6 +233,7 @@ INFOS = (
     _i("topology", "int", "active Table 2 topology code, -1 for the auto rule"),
     _i("links", "bool", "this UAV's row of the active adjacency", shape="(N,)"),
     _i("connected", "bool", "the flying UAVs are connected through relays"),
+    _i("violations", "int", "the UAV's constraint-violation steps so far (eq. 18, 20-24)"),
 )
 
 

@@ -9,11 +9,13 @@ same way through this interface; :mod:`poc_env.agents.policies.registry` makes t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from poc_env.sim.autopilot import WaypointFollower
+from poc_env.sim.autopilot import WaypointFollower, go_home, must_return
+from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
 
 
 class Policy:
@@ -53,3 +55,70 @@ class PlanPolicy(Policy):
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         return self.follower.predict(observations, state)
+
+
+@dataclass(frozen=True)
+class Reading:
+    """What a belief-driven policy reads from one live UAV's observation.
+
+    Attributes
+    ----------
+    k:
+        The UAV's index.
+    agent:
+        Its agent name.
+    poc:
+        ``(ny, nx)`` its POC raster (the belief it holds, kept up to date by eq. 14).
+    q:
+        Its state decoded from the observation vector
+        (:func:`poc_env.sim.observations.decode_vector`).
+    """
+
+    k: int
+    agent: str
+    poc: np.ndarray
+    q: dict
+
+
+class BeliefPolicy(Policy):
+    """An online policy that re-decides every step from the observations alone: it reads every
+    live UAV's belief and state (:meth:`read`), flies home and lands the UAVs whose usable
+    endurance (eq. 18) only covers the way back (:func:`poc_env.sim.autopilot.must_return`,
+    :func:`~poc_env.sim.autopilot.go_home`, the waypoint follower's rule), and leaves the rest
+    to :meth:`search`, which subclasses write (``greedy_bayes``, ``potential_game``,
+    ``de_receding``)."""
+
+    def reset(self, env: Any, seed: int) -> None:
+        super().reset(env, seed)
+        self.params = env.params
+        self.agents = env.possible_agents
+
+    def read(self, observations: dict) -> list[Reading]:
+        """One :class:`Reading` per live UAV, in agent order."""
+        p = self.params
+        out = []
+        for k, agent in enumerate(self.agents):
+            if agent not in observations:
+                continue
+            ras, vec = split_observation(observations[agent], p.grid.shape)
+            poc = np.asarray(ras[RASTER_INDEX["poc"]], dtype=float)
+            out.append(Reading(k, agent, poc, decode_vector(p, vec)))
+        return out
+
+    def search(self, searching: list[Reading], readings: list[Reading]) -> dict[str, Any]:
+        """Actions ``{agent: eq. 19 action}`` of the ``searching`` UAVs (those not heading
+        home), given every live UAV's ``readings``."""
+        raise NotImplementedError
+
+    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+        p = self.params
+        readings = self.read(observations)
+        home = {r.agent: go_home(p, r.q, r.k) for r in readings if must_return(p, r.q, r.k)}
+        moves = self.search([r for r in readings if r.agent not in home], readings)
+        actions = {}
+        for r in readings:  # in agent order
+            if r.agent in home:
+                actions[r.agent] = home[r.agent]
+            elif r.agent in moves:
+                actions[r.agent] = moves[r.agent]
+        return actions, state

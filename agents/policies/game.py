@@ -23,14 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.policies.base import Policy
+from poc_env.agents.policies.base import BeliefPolicy, Reading
 from poc_env.agents.policies.greedy import best_cell
-from poc_env.sim.autopilot import go_home, must_return, steer
-from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
+from poc_env.sim.autopilot import steer
 from poc_env.theory.search_theory import segment_pod
 
 
-class PotentialGamePolicy(Policy):
+class PotentialGamePolicy(BeliefPolicy):
     """``potential_game``: log-linear learning over heading changes (module docstring)."""
 
     name = "potential_game"
@@ -43,8 +42,6 @@ class PotentialGamePolicy(Policy):
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
-        self.params = env.params
-        self.agents = env.possible_agents
         self.rng = np.random.default_rng([seed, 11])
         self.centers = env.params.grid.centers
         self.turns = np.linspace(-1.0, 1.0, self.choices)
@@ -71,24 +68,14 @@ class PotentialGamePolicy(Policy):
             p.grid.origin_m,
         )
 
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+    def search(self, searching: list[Reading], readings: list[Reading]) -> dict[str, Any]:
         p = self.params
         u = p.scenario.uav
         actions = {}
-        players, pods, qs, poc = [], {}, {}, None
-        for k, agent in enumerate(self.agents):
-            if agent not in observations:
-                continue
-            ras, vec = split_observation(observations[agent], p.grid.shape)
-            raster = np.asarray(ras[RASTER_INDEX["poc"]], dtype=float)
-            q = decode_vector(p, vec)
-            qs[k] = q
-            if must_return(p, q, k):
-                actions[agent] = go_home(p, q, k)
-                continue
-            poc = raster if poc is None else poc
-            players.append(k)
-            pods[k] = self._pods(q)
+        players = [r.k for r in searching]
+        qs = {r.k: r.q for r in searching}
+        pods = {r.k: self._pods(r.q) for r in searching}
+        poc = searching[0].poc if searching else None  # the first searching UAV's belief
         for _ in range(self.rounds if players else 0):
             k = players[int(self.rng.integers(len(players)))]
             others = np.ones_like(poc)
@@ -131,4 +118,4 @@ class PotentialGamePolicy(Policy):
             )
             a[1] = self.turns[self.choice[k]]
             actions[self.agents[k]] = a.astype(np.float32)
-        return actions, state
+        return actions

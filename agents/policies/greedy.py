@@ -14,9 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.policies.base import Policy
-from poc_env.sim.autopilot import go_home, must_return, steer
-from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
+from poc_env.agents.policies.base import BeliefPolicy, Reading
+from poc_env.sim.autopilot import steer
 
 
 def best_cell(params, poc: np.ndarray, q: dict, k: int, taken=()) -> int:
@@ -34,34 +33,25 @@ def best_cell(params, poc: np.ndarray, q: dict, k: int, taken=()) -> int:
     return int(np.argmax(score))
 
 
-class GreedyBayesPolicy(Policy):
+class GreedyBayesPolicy(BeliefPolicy):
     """``greedy_bayes``: head for the best reachable cell (see the module docstring)."""
 
     name = "greedy_bayes"
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
-        self.params = env.params
-        self.agents = env.possible_agents
         self.centers = env.params.grid.centers.reshape(-1, 2)
 
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+    def search(self, searching: list[Reading], readings: list[Reading]) -> dict[str, Any]:
         p = self.params
         u = p.scenario.uav
         taken: set[int] = set()
         actions = {}
-        for k, agent in enumerate(self.agents):
-            if agent not in observations:
-                continue
-            ras, vec = split_observation(observations[agent], p.grid.shape)
-            poc = np.asarray(ras[RASTER_INDEX["poc"]], dtype=float)
-            q = decode_vector(p, vec)
-            if must_return(p, q, k):
-                actions[agent] = go_home(p, q, k)
-                continue
-            best = best_cell(p, poc, q, k, taken)
+        for r in searching:  # in turn: a cell already chosen this step is not chosen again
+            q = r.q
+            best = best_cell(p, r.poc, q, r.k, taken)
             taken.add(best)
-            actions[agent] = steer(
+            actions[r.agent] = steer(
                 p,
                 q["xy"],
                 q["heading"],
@@ -71,4 +61,4 @@ class GreedyBayesPolicy(Policy):
                 self.centers[best],
                 u.search_speed_mps,
             ).astype(np.float32)
-        return actions, state
+        return actions

@@ -22,14 +22,13 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.planning.optimizers import adaptive_de
-from poc_env.agents.policies.base import Policy
+from poc_env.agents.policies.base import BeliefPolicy, Reading
 from poc_env.agents.policies.greedy import best_cell
-from poc_env.sim.autopilot import go_home, must_return, steer
-from poc_env.sim.observations import RASTER_INDEX, decode_vector, split_observation
+from poc_env.sim.autopilot import steer
 from poc_env.theory.search_theory import segment_pod
 
 
-class DERecedingPolicy(Policy):
+class DERecedingPolicy(BeliefPolicy):
     """``de_receding`` (module docstring)."""
 
     name = "de_receding"
@@ -44,8 +43,6 @@ class DERecedingPolicy(Policy):
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
-        self.params = env.params
-        self.agents = env.possible_agents
         self.rng = np.random.default_rng([seed, 13])
 
     def _objective(self, poc, qs, ks):
@@ -95,27 +92,19 @@ class DERecedingPolicy(Policy):
 
         return f
 
-    def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
+    def search(self, searching: list[Reading], readings: list[Reading]) -> dict[str, Any]:
         p = self.params
         u = p.scenario.uav
-        actions, qs, poc, searching = {}, {}, None, []
-        for k, agent in enumerate(self.agents):
-            if agent not in observations:
-                continue
-            ras, vec = split_observation(observations[agent], p.grid.shape)
-            raster = np.asarray(ras[RASTER_INDEX["poc"]], dtype=float)
-            q = qs[k] = decode_vector(p, vec)
-            poc = raster if poc is None else poc
-            if must_return(p, q, k):
-                actions[agent] = go_home(p, q, k)
-            else:
-                searching.append(k)
-        if searching:
-            f = self._objective(poc, qs, searching)
-            bounds = [(-1.0, 1.0)] * len(searching)
+        actions = {}
+        qs = {r.k: r.q for r in readings}
+        poc = readings[0].poc if readings else None  # the first live UAV's belief
+        searching_k = [r.k for r in searching]
+        if searching_k:
+            f = self._objective(poc, qs, searching_k)
+            bounds = [(-1.0, 1.0)] * len(searching_k)
             seed = int(self.rng.integers(2**31))
             res = adaptive_de(f, bounds, popsize=self.popsize, maxiter=self.maxiter, rng=seed)
-            for j, k in enumerate(searching):
+            for j, k in enumerate(searching_k):
                 q = qs[k]
                 a = steer(
                     p,
@@ -141,4 +130,4 @@ class DERecedingPolicy(Policy):
                         u.cruise_speed_mps,
                     )
                 actions[self.agents[k]] = a.astype(np.float32)
-        return actions, state
+        return actions

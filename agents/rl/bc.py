@@ -149,9 +149,9 @@ def collect_demos(
     from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
     from poc_env.sim.control import ACTION_DIMS
+    from poc_env.sim.engine import RandomPrior
     from poc_env.sim.observations import FEATURES, CompassFeatures, split_observation
     from poc_env.tasks import get_task
-    from poc_env.theory.probability_map import random_gaussian_mixture
 
     check_teacher(teacher, "teacher")
     episodes = as_int("episodes", episodes, 1, None)
@@ -172,7 +172,7 @@ def collect_demos(
     seeds: list[int] = []
     for ep in range(episodes):
         seed = int(rng.integers(0, 2**31))
-        prior = random_gaussian_mixture(params.grid, rng) if t.random_prior else None
+        prior = RandomPrior().draw(params.grid, rng) if t.random_prior else None
         obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
         policy = make_policy(teacher)
         policy.reset(env, seed)

@@ -142,7 +142,17 @@ def env_generators(env: VecEnv) -> list[list[np.random.Generator]]:
     raise ConfigError("env", env, "a VecEnv from poc_env.agents.rl.train.make_env")
 
 
+#: A SwarmVecEnv's arrays beside its state, by their names in ``step_<N>.env.npz``: the
+#: engine's episode priors and POC scales, the adapter's slot bookkeeping.
 _ENV_ARRAYS = ("priors", "_poc_scale", "_active", "_returns", "_lengths")
+
+
+def _env_array(env: Any, name: str) -> np.ndarray:
+    if name == "priors":
+        return env.engine.priors
+    if name == "_poc_scale":
+        return env.engine.poc_scale
+    return getattr(env, name)
 
 
 def env_snapshot(env: Any) -> dict[str, np.ndarray]:
@@ -153,7 +163,7 @@ def env_snapshot(env: Any) -> dict[str, np.ndarray]:
         for f in dataclasses.fields(st)
         if getattr(st, f.name) is not None
     }
-    out.update({name: np.asarray(getattr(env, name)) for name in _ENV_ARRAYS})
+    out.update({name: np.array(_env_array(env, name)) for name in _ENV_ARRAYS})
     return out
 
 
@@ -166,9 +176,13 @@ def restore_env_snapshot(env: Any, arrays: Any) -> None:
     new = sim.State(**state)
     for name in _ENV_ARRAYS:
         value = np.array(arrays[name])
-        if value.shape != np.shape(getattr(env, name)):
-            raise ValueError(f"{name}: shape {value.shape} != {np.shape(getattr(env, name))}")
-        setattr(env, name, value)
+        dst = _env_array(env, name)
+        if value.shape != np.shape(dst):
+            raise ValueError(f"{name}: shape {value.shape} != {np.shape(dst)}")
+        if name in ("priors", "_poc_scale"):
+            dst[...] = value  # the engine's arrays, in place
+        else:
+            setattr(env, name, value)
     env.state = new
 
 

@@ -152,10 +152,10 @@ def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
     from ray.tune.registry import register_env
 
     from poc_env.agents.rl.cluster import ray_session
-    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.sim.engine import make_engine
 
     kw = env_kwargs(args)
-    n_agents = UAVSearchParallelEnv(**kw).params.n_agents  # validates the env's arguments
+    n_agents = make_engine(1, **kw).n_agents  # validates the env's arguments
     run_dir.mkdir(parents=True, exist_ok=True)
     write_json(run_dir / "config.json", dataclasses.asdict(args))
     threads = th.get_num_threads()

@@ -94,25 +94,27 @@ class CentralEnv(gym.Wrapper):
         self._seeded = False
         self.prior_rng = np.random.default_rng(prior_ss)
         self.random_priors = random_priors
-        self._par: Any = typing.cast(Any, self.env.unwrapped).par
+        #: The episode engine of the wrapped env (its generator draws targets, thresholds and
+        #: link failures; the priors come from ``prior_rng``).
+        self.engine = typing.cast(Any, self.env.unwrapped).par.engine
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
-        from poc_env.theory.probability_map import random_gaussian_mixture
+        from poc_env.sim.engine import RandomPrior
 
         if seed is None and not self._seeded:
             seed = self._first_seed
         self._seeded = True
         if self.random_priors and "prior" not in (options or {}):
-            prior = random_gaussian_mixture(self._par.params.grid, self.prior_rng)
+            prior = RandomPrior().draw(self.engine.params.grid, self.prior_rng)
             options = {**(options or {}), "prior": prior}
         return self.env.reset(seed=seed, options=options)
 
     def generators(self) -> list[np.random.Generator]:
         """The env's generators: the simulator's (targets, thresholds, links), the priors'."""
         if not self._seeded:  # what the first reset would do: seed the simulator's generator
-            self._par._rng = np.random.default_rng(self._first_seed)
+            self.engine.seed([self._first_seed])
             self._seeded = True
-        return [self._par._rng, self.prior_rng]
+        return [self.engine.rngs[0], self.prior_rng]
 
 
 def _central_env(scenario: Scenario, random_priors: bool, seed_seq: np.random.SeedSequence):

@@ -13,9 +13,12 @@ actions (a test checks it transition for transition, episode ends included), onl
 - **Autoreset.** ``AutoresetMode.NEXT_STEP``, Gymnasium's default: the step after an env's
   episode ended resets it (its action is ignored, reward 0, ``terminated``/``truncated``
   False) and returns the new episode's first observation.
-- **Infos** (the same keys at reset and at every step, numeric arrays over the envs):
-  ``posc (E,)``, ``pos_team (E,)`` (the step's team POS, 0 at reset), ``landed``, ``crashed``
-  ``(E, N)`` bools and ``violations (E, N)`` (cumulative constraint-violation steps).
+- **Infos**: exactly what the sync vector env returns for the same seeds and actions: every
+  key of the Gymnasium view's info (:mod:`poc_env.envs.gymnasium_env`: ``posc (E,)``, every
+  per-agent key ``(E, N)``, ``links (E, N, N)``, ``violations (E, N)``; a finished agent's
+  row keeps its last values) with Gymnasium's ``_key`` masks (all True), the same keys at
+  reset and at every step. They come from the engine (:func:`poc_env.sim.engine.infos`),
+  computed once per step for every env, as arrays.
 - Not batched: ``render_mode`` and ``random_airfields`` (the airfields are parameters shared by
   the batch); use ``vectorization_mode="sync"`` for those.
 """
@@ -27,16 +30,15 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
-from poc_env.envs.gymnasium_env import UAVSearchGym
-from poc_env.envs.parallel import check_seed
+from poc_env.envs.gymnasium_env import joint_observation, keep_rows, view_info
+from poc_env.envs.parallel import OBS_TYPES, check_seed
 from poc_env.errors import ConfigError
 from poc_env.sim import core as sim
-from poc_env.sim import observations as obs_mod
-from poc_env.sim.control import swarm_increments
-from poc_env.sim.rewards import reward_terms, total_reward
-from poc_env.theory.probability_map import random_gaussian_mixture, validate_map
+from poc_env.sim import engine as engine_mod
+from poc_env.theory.probability_map import validate_map
 
 try:  # gymnasium >= 1.1 names the autoreset modes
     from gymnasium.vector import AutoresetMode
@@ -69,33 +71,45 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
                 kwargs["random_airfields"],
                 "False in the batched vector env (use vectorization_mode='sync')",
             )
-        self.single_env = UAVSearchGym(**kwargs)  # validates every argument, defines the spaces
-        par = self.single_env.par
-        self.par = par
-        self.params = par.params
-        self.scenario = par.scenario
-        self.obs_type = self.single_env.obs_type
+        obs_type = kwargs.setdefault("obs_type", "flat")
+        if obs_type not in OBS_TYPES:
+            raise ConfigError("obs_type", obs_type, "'flat' (default), 'dict' or 'compass'")
+        #: The episode engine this adapter converts (:class:`poc_env.sim.engine.Engine`).
+        self.engine = engine_mod.make_engine(int(num_envs), **kwargs)
+        eng = self.engine
+        self.obs_type = obs_type
         self.num_envs = int(num_envs)
-        self.n_agents = self.params.n_agents
-        self._dim = self.single_env._dim
-        self.single_observation_space = self.single_env.observation_space
-        self.single_action_space = self.single_env.action_space
+        self.n_agents = eng.n_agents
+        self._dim = eng.action_dim
+        self.single_observation_space = engine_mod.joint_space(eng.observation_space, self.n_agents)
+        self.single_action_space = spaces.Box(-1.0, 1.0, (self._dim * self.n_agents,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.render_mode = None
         self.spec = None
-        self._hazard = obs_mod.hazard_mask(self.params)
-        self._features = (
-            obs_mod.CompassFeatures(self.params) if self.obs_type == "compass" else None
-        )
         e, n = self.num_envs, self.n_agents
-        self.rngs = [np.random.default_rng() for _ in range(e)]
-        self.state: sim.State | None = None
-        self._poc_scale = np.ones(e)
         self._live = np.zeros((e, n), dtype=bool)
         self._last: Any = None
+        self._last_info: dict[str, np.ndarray] = {}
         self._autoreset = np.zeros(e, dtype=bool)
-        self._pos_team = np.zeros(e)
+
+    @property
+    def params(self) -> sim.Params:
+        return self.engine.params
+
+    @property
+    def scenario(self):
+        return self.engine.scenario
+
+    @property
+    def state(self) -> sim.State | None:
+        """The batched simulator state (None before :meth:`reset`)."""
+        return self.engine.state
+
+    @property
+    def rngs(self) -> list[np.random.Generator]:
+        """Each env's generator."""
+        return self.engine.rngs
 
     # -- reset -------------------------------------------------------------------------------
     def _seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
@@ -112,24 +126,6 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             return list(seed)
         raise ConfigError("seed", seed, f"None, an integer >= 0 or a list of {self.num_envs}")
 
-    def _fresh(self, envs: np.ndarray, prior: Any = None) -> sim.State:
-        """New episodes for ``envs`` from their generators (the prior first, as the
-        PettingZoo env draws it); sets their POC scale and live agents."""
-        grid = self.params.grid
-        priors = None
-        if prior is not None:
-            one = validate_map(prior, grid, "options['prior']")
-            priors = np.broadcast_to(one, (len(envs), *one.shape))
-        elif self.par.random_prior:
-            priors = np.stack([random_gaussian_mixture(grid, self.rngs[k]) for k in envs])
-        fresh = sim.initial(self.params, [self.rngs[k] for k in envs], priors)
-        p0 = self.params.prior.max() if priors is None else priors.max(axis=(1, 2))
-        self._poc_scale[envs] = p0
-        self._live[envs] = True
-        self._autoreset[envs] = False
-        self._pos_team[envs] = 0.0
-        return fresh
-
     def reset(
         self,
         *,
@@ -141,35 +137,31 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         seeds = self._seeds(seed)
         if options is not None and (not isinstance(options, dict) or set(options) - {"prior"}):
             raise ConfigError("options", options, "None or a dict with the key 'prior'")
-        for k, s in enumerate(seeds):
-            if s is not None:
-                self.rngs[k] = np.random.default_rng(s)
-        everything = np.arange(self.num_envs)
-        self.state = self._fresh(everything, (options or {}).get("prior"))
-        self._last = self._observe(self.state)
-        return self._joint(self._last), self._infos()
+        self.engine.seed(seeds)
+        prior = (options or {}).get("prior")
+        priors = None
+        if prior is not None:
+            priors = [validate_map(prior, self.params.grid, "options['prior']")] * self.num_envs
+        self._last, info = self.engine.reset(priors=priors)
+        self._last_info = view_info(info)
+        self._live[:] = True
+        self._autoreset[:] = False
+        return self._joint(), self._infos()
 
     # -- observations and infos --------------------------------------------------------------
-    def _observe(self, state: sim.State) -> Any:
-        return obs_mod.observe(
-            self.params, state, self._poc_scale, self._hazard, self.obs_type, self._features
-        )
-
-    def _joint(self, obs: Any) -> Any:
+    def _joint(self) -> Any:
+        obs = self._last
         if isinstance(obs, dict):
-            return {k: v.copy() for k, v in obs.items()}
+            return joint_observation(obs)
         return obs.reshape(obs.shape[0], -1).copy()
 
     def _infos(self) -> dict[str, Any]:
-        st = self.state
-        assert st is not None
-        return {
-            "posc": st.posc.astype(float),
-            "pos_team": self._pos_team.copy(),
-            "landed": st.landed.copy(),
-            "crashed": st.crashed.copy(),
-            "violations": st.violations.astype(np.int64),
-        }
+        """The sync vector env's infos: every key batched, with its ``_key`` mask."""
+        out: dict[str, Any] = {}
+        for key, value in self._last_info.items():
+            out[key] = value.copy()
+            out[f"_{key}"] = np.ones(self.num_envs, dtype=bool)
+        return out
 
     # -- step --------------------------------------------------------------------------------
     def _actions(self, actions: Any) -> np.ndarray:
@@ -184,10 +176,9 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         return a.astype(float).reshape(e, n, d)
 
     def step(self, actions: Any):
-        if self.state is None:
+        if self.engine.state is None:
             raise gym.error.ResetNeeded("call reset() before step()")
         a = self._actions(actions)
-        p = self.params
         e = self.num_envs
         reward = np.zeros(e)
         terminated = np.zeros(e, dtype=bool)
@@ -195,54 +186,22 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         again = np.flatnonzero(self._autoreset)
         going = np.flatnonzero(~self._autoreset)
         if len(again):  # NEXT_STEP autoreset: these envs start afresh, their actions unused
-            fresh = self._fresh(again)
-            sim.scatter_envs(self.state, fresh, again)
+            first, fresh_info = self.engine.reset(again)
+            every = np.ones((len(again), self.n_agents), dtype=bool)
+            keep_rows(self._last, first, again, every)
+            keep_rows(self._last_info, fresh_info, again, every)
+            self._live[again] = True
+            self._autoreset[again] = False
         if len(going):
-            whole = len(going) == e
-            st = self.state if whole else sim.take_envs(self.state, going)
             live = self._live[going]
-            inc = swarm_increments(p, self.par.control, st, a[going], self.par.auto_return)
-            inc = np.where(live[..., None], inc, 0.0)  # finished agents ignore their action
-            ev = sim.step(p, st, inc, [self.rngs[k] for k in going])
-            r = total_reward(reward_terms(self.scenario.reward, ev))
-            for j, k in enumerate(going):  # the mean over the live agents, as UAVSearchGym
-                reward[k] = float(np.mean(r[j][live[j]].tolist())) if live[j].any() else 0.0
-            self._pos_team[going] = ev.pos_team
-            done = sim.episode_over(p, st)
-            cut = sim.truncated(p, st)
-            truncated[going] = done & cut.any(axis=1)
+            tr = self.engine.step(a[going], going)  # finished agents' actions: ignored
+            reward[going] = engine_mod.mean_over(tr.reward, live)
+            done = tr.over
+            truncated[going] = done & tr.truncated.any(axis=1)
             terminated[going] = done & ~truncated[going]
-            finished = live & (sim.terminal(p, st) | cut)
-            if not whole:
-                sim.scatter_envs(self.state, st, going)
+            finished = live & (tr.terminated | tr.truncated)
             self._live[going] = live & ~finished
             self._autoreset[going] = done
-            new = obs_mod.observe(
-                p, st, self._poc_scale[going], self._hazard, self.obs_type, self._features
-            )
-            self._keep_last(new, going, live)
-        if len(again):
-            first = obs_mod.observe(
-                p, sim.take_envs(self.state, again), self._poc_scale[again], self._hazard,
-                self.obs_type, self._features,
-            )  # fmt: skip
-            self._keep_last(first, again, np.ones((len(again), self.n_agents), dtype=bool))
-        return self._joint(self._last), reward, terminated, truncated, self._infos()
-
-    def _keep_last(self, new: Any, envs: np.ndarray, rows: np.ndarray) -> None:
-        """Agents ``rows (len(envs), N)`` of ``envs`` get their observation from ``new``;
-        the others keep their last one (finished agents, as in UAVSearchGym)."""
-        if isinstance(new, dict):
-            for key, v in new.items():
-                dst = self._last[key]
-                sub = dst[envs]
-                sub[rows] = v[rows]
-                dst[envs] = sub
-        else:
-            sub = self._last[envs]
-            sub[rows] = new[rows]
-            self._last[envs] = sub
-
-    def close_extras(self, **kwargs: Any) -> None:
-        if hasattr(self, "single_env"):  # not when __init__ refused its arguments
-            self.single_env.close()
+            keep_rows(self._last, tr.obs, going, live)
+            keep_rows(self._last_info, tr.info, going, live)
+        return self._joint(), reward, terminated, truncated, self._infos()

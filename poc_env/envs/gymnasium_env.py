@@ -11,9 +11,12 @@ the swarm's does (:func:`poc_env.sim.core.episode_over`): it is *truncated* if s
 cut off by the horizon (:func:`poc_env.sim.core.truncated`), else *terminated* (every agent
 terminated, :func:`poc_env.sim.core.terminal`).
 
-The info has the same keys at reset and at every step: ``posc`` (float) and every key of the
+The info has the same keys at reset and at every step: ``posc`` (float), every key of the
 parallel env's per-agent infos as a numpy array over the agents, ``(N,)`` (``links``: ``(N,
-N)``), of a fixed dtype.
+N)``), of a fixed dtype, and ``violations`` ``(N,)`` (each UAV's cumulative
+constraint-violation steps). It is the engine's info set (:func:`poc_env.sim.engine.infos`),
+row ``i`` frozen once agent ``i`` has finished; ``gymnasium.make_vec`` returns the same,
+batched.
 """
 
 from __future__ import annotations
@@ -26,7 +29,37 @@ from gymnasium import spaces
 
 from poc_env.envs.parallel import OBS_TYPES, UAVSearchParallelEnv, check_seed
 from poc_env.errors import ConfigError
-from poc_env.sim import core as sim
+from poc_env.sim import engine as engine_mod
+
+
+def joint_observation(obs: Any) -> Any:
+    """Every agent's observation of one env stacked (the view's layout) from the engine's
+    ``(N, ...)`` rows: a dict of ``(N, ...)`` arrays, or the ``N`` rows concatenated."""
+    if isinstance(obs, dict):
+        return {k: v.copy() for k, v in obs.items()}
+    return obs.reshape(-1).copy()
+
+
+def view_info(info: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The view's info arrays of one or more envs from the engine's (:func:`~poc_env.sim.
+    engine.infos`): ``posc`` and every per-agent key with ``violations``, copied."""
+    return {k: np.array(v) for k, v in info.items()}
+
+
+def keep_rows(last: Any, new: Any, envs: np.ndarray, rows: np.ndarray) -> None:
+    """Agents ``rows (len(envs), N)`` of ``envs`` take their entry of ``new`` (batched over
+    ``envs``) in ``last`` (batched over every env); the others keep theirs (finished agents
+    keep their last observation and info). ``last``/``new``: arrays or dicts of arrays."""
+    if isinstance(last, dict):
+        for key, dst in last.items():
+            keep_rows(dst, new[key], envs, rows)
+        return
+    if last.ndim == 1:  # a per-env entry (posc): never frozen
+        last[envs] = new
+        return
+    sub = last[envs]
+    sub[rows] = np.asarray(new)[rows]
+    last[envs] = sub
 
 
 class UAVSearchGym(gym.Env):
@@ -41,73 +74,46 @@ class UAVSearchGym(gym.Env):
         self.par = UAVSearchParallelEnv(render_mode=render_mode, **kwargs)
         self.render_mode = render_mode
         self.obs_type = obs_type
-        agents = self.par.possible_agents
-        one = self.par.observation_space(agents[0])
-        n = len(agents)
-
-        def stacked(box: spaces.Space) -> spaces.Box:
-            assert isinstance(box, spaces.Box)
-            low, high = np.stack([box.low] * n), np.stack([box.high] * n)
-            return spaces.Box(low, high, dtype=np.float32)
-
-        if obs_type == "dict":
-            assert isinstance(one, spaces.Dict)
-            self.observation_space: spaces.Space = spaces.Dict(
-                {k: stacked(one[k]) for k in ("raster", "vector")}
-            )
-        else:
-            assert isinstance(one, spaces.Box)
-            self.observation_space = spaces.Box(
-                np.tile(one.low, n), np.tile(one.high, n), dtype=np.float32
-            )
-        self._dim = self.par._dim  # the control level's action size per UAV
+        eng = self.par.engine
+        n = eng.n_agents
+        self.observation_space: spaces.Space = engine_mod.joint_space(eng.observation_space, n)
+        self._dim = eng.action_dim  # the control level's action size per UAV
         self.action_space = spaces.Box(-1.0, 1.0, (self._dim * n,), np.float32)
-        self._last: dict[str, Any] = {}
-        self._last_info: dict[str, dict[str, Any]] = {}
+        self._last: Any = None
+        self._last_info: dict[str, np.ndarray] = {}
 
-    def _joint(self, obs: dict[str, Any]) -> Any:
-        self._last.update(obs)
-        rows = [self._last[a] for a in self.par.possible_agents]
-        if self.obs_type == "dict":
-            return {k: np.stack([r[k] for r in rows]) for k in ("raster", "vector")}
-        return np.concatenate(rows)
-
-    def _joint_info(self, infos: dict[str, dict[str, Any]]) -> dict[str, Any]:
-        self._last_info.update(infos)
-        rows = [self._last_info[a] for a in self.par.possible_agents]
-        out: dict[str, Any] = {"posc": float(self.par.sim_state.posc[0])}
-        for key, value in rows[0].items():
-            if key == "posc":
-                continue
-            if isinstance(value, np.ndarray):
-                dtype: Any = value.dtype
-            elif isinstance(value, bool | np.bool_):
-                dtype = np.bool_
-            elif isinstance(value, int | np.integer):
-                dtype = np.int64
-            else:
-                dtype = np.float64
-            out[key] = np.asarray([r[key] for r in rows], dtype=dtype)
+    def _joint_info(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"posc": float(self._last_info["posc"][0])}
+        out.update({k: v[0].copy() for k, v in self._last_info.items() if k != "posc"})
         return out
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         check_seed(seed)
         super().reset(seed=seed)
-        self._last = {}
-        self._last_info = {}
-        obs, infos = self.par.reset(seed=seed, options=options)
-        return self._joint(obs), self._joint_info(infos)
+        self.par.reset(seed=seed, options=options)
+        self._last = self.par.engine.observe()  # (1, N, ...): the engine's batch of one env
+        self._last_info = view_info(self.par.info_arrays)
+        return self._observation(), self._joint_info()
+
+    def _observation(self) -> Any:
+        if isinstance(self._last, dict):
+            return joint_observation({k: v[0] for k, v in self._last.items()})
+        return joint_observation(self._last[0])
 
     def step(self, action):
         a = self._action_array(action)
-        acts = {ag: a[k] for k, ag in enumerate(self.par.possible_agents) if ag in self.par.agents}
-        obs, rew, _term, _trunc, infos = self.par.step(acts)
-        reward = float(np.mean(list(rew.values()))) if rew else 0.0
-        p, st = self.par.params, self.par.sim_state
-        done = bool(sim.episode_over(p, st)[0])
-        truncated = done and bool(sim.truncated(p, st)[0].any())
+        par = self.par
+        live = np.array([ag in par.agents for ag in par.possible_agents])[None]
+        par.step({ag: a[k] for k, ag in enumerate(par.possible_agents) if ag in par.agents})
+        tr = par.transition
+        reward = float(engine_mod.mean_over(tr.reward, live)[0])
+        done = bool(tr.over[0])
+        truncated = done and bool(tr.truncated[0].any())
         terminated = done and not truncated
-        return self._joint(obs), reward, terminated, truncated, self._joint_info(infos)
+        everything = np.zeros(1, dtype=np.intp)
+        keep_rows(self._last, tr.obs, everything, live)
+        keep_rows(self._last_info, tr.info, everything, live)
+        return self._observation(), reward, terminated, truncated, self._joint_info()
 
     def _action_array(self, action) -> np.ndarray:
         """The joint action as an (N, dim) float array; ConfigError naming ``action`` otherwise."""

@@ -2,29 +2,20 @@
 
 from __future__ import annotations
 
-import dataclasses
-import os
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from poc_env import limits, spec
-from poc_env.config import Scenario, load_scenario
+from poc_env import spec
+from poc_env.config import Scenario
 from poc_env.errors import ConfigError, PocEnvError
-from poc_env.sim import comms as comms_mod
 from poc_env.sim import core as sim
+from poc_env.sim import engine as engine_mod
 from poc_env.sim import observations as obs_mod
-from poc_env.sim.control import ACTION_DIMS, check_control, swarm_increments
-from poc_env.sim.rewards import reward_terms, total_reward
-from poc_env.theory.probability_map import (
-    Grid,
-    load_map,
-    random_gaussian_mixture,
-    validate_map,
-)
+from poc_env.sim.engine import check_seed, resolve_overrides
+from poc_env.theory.probability_map import validate_map
 
 OBS_TYPES = obs_mod.OBS_TYPES
 #: Array kinds an action may have: bool, signed and unsigned integer, real float.
@@ -37,26 +28,19 @@ VIOLATION_FLAGS = tuple(flag for flag, _ in spec.VIOLATION_FLAGS)
 #: Every per-agent info key, in order (:func:`poc_env.spec.info_keys`).
 INFO_KEYS = spec.info_keys()
 
-
-def check_seed(seed: Any, field: str = "seed") -> Any:
-    """Return ``seed`` if it is None, an integer >= 0 or a ``numpy.random.SeedSequence``."""
-    if seed is None or isinstance(seed, np.random.SeedSequence):
-        return seed
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ConfigError(field, seed, "None, an integer >= 0 or a numpy SeedSequence")
-    return seed
+__all__ = [
+    "OBS_TYPES",
+    "REWARD_TERMS",
+    "VIOLATION_FLAGS",
+    "EpisodeOverError",
+    "UAVSearchParallelEnv",
+    "check_seed",
+    "resolve_overrides",
+]
 
 
 class EpisodeOverError(PocEnvError, RuntimeError):
     """``step()`` was called after every agent finished; call ``reset()``."""
-
-
-def resolve_overrides(overrides: Mapping[str, Any] | None, kwargs: Mapping[str, Any]):
-    """Merge ``overrides`` (dotted YAML keys) and keyword overrides (``sensor__law=...``)."""
-    out = dict(overrides or {})
-    for key, value in kwargs.items():
-        out[key.replace("__", ".")] = value
-    return out
 
 
 class UAVSearchParallelEnv(ParallelEnv):
@@ -193,88 +177,58 @@ class UAVSearchParallelEnv(ParallelEnv):
     ) -> None:
         if render_mode not in (None, "rgb_array", "human"):
             raise ConfigError("render_mode", render_mode, "None, 'rgb_array' or 'human'")
-        if obs_type not in OBS_TYPES:
-            raise ConfigError("obs_type", obs_type, "'dict', 'flat' or 'compass'")
-        if map_file is not None and not isinstance(map_file, str | os.PathLike):
-            raise ConfigError("map_file", map_file, "None or a path to a .npy or .csv prior map")
-        for name, flag in (("random_prior", random_prior), ("random_airfields", random_airfields)):
-            if not isinstance(flag, bool | np.bool_):
-                raise ConfigError(name, flag, "True or False")
-        if random_prior and map_file is not None:
-            raise ConfigError(
-                "random_prior", random_prior, "False when a map_file prior is given (one prior)"
-            )
-        self.control = check_control(control)
-        if not isinstance(auto_return, bool | np.bool_):
-            raise ConfigError("auto_return", auto_return, "True or False")
-        self.auto_return = bool(auto_return)
-        self._dim = ACTION_DIMS[self.control]
-        merged = resolve_overrides(overrides, kwargs)
-        if max_cycles is not None:
-            allowed = f"None or an integer in [1, {limits.MAX_STEPS}] (the episode's steps)"
-            if (
-                isinstance(max_cycles, bool)
-                or not isinstance(max_cycles, int | np.integer)
-                or not 1 <= max_cycles <= limits.MAX_STEPS
-            ):
-                raise ConfigError("max_cycles", max_cycles, allowed)
-            given = merged.get("episode.horizon_steps")
-            if given is not None and given != max_cycles:
-                raise ConfigError(
-                    "max_cycles", max_cycles, f"None or equal to episode.horizon_steps ({given})"
-                )
-            merged["episode.horizon_steps"] = int(max_cycles)
-        self.scenario = load_scenario(scenario, merged)
+        #: The episode engine (one env) this adapter converts: :class:`poc_env.sim.engine.Engine`.
+        self.engine = engine_mod.make_engine(
+            1,
+            scenario=scenario,
+            obs_type=obs_type,
+            map_file=map_file,
+            overrides=overrides,
+            random_prior=random_prior,
+            max_cycles=max_cycles,
+            random_airfields=random_airfields,
+            control=control,
+            auto_return=auto_return,
+            **kwargs,
+        )
+        eng = self.engine
+        self.control = eng.control
+        self.auto_return = eng.auto_return
+        self._dim = eng.action_dim
+        self.scenario = eng.scenario
         self.random_prior = bool(random_prior)
         self.max_cycles = self.scenario.horizon_steps
-        grid = Grid.from_config(self.scenario.map)
-        prior = load_map(map_file, grid) if map_file is not None else None
-        self.params = sim.make_params(self.scenario, prior)
-        self._base_params = self.params
-        self.random_airfields = bool(random_airfields)
-        names = [a.name for a in self.scenario.airfields]
-        fleet = [g for g in self.scenario.fleet for _ in range(g.count)]
-        self._takeoff_field = np.array([names.index(g.takeoff) for g in fleet], dtype=np.intp)
-        landing = [g.landing or g.takeoff for g in fleet]  # None only before __post_init__
-        self._landing_field = np.array([names.index(a) for a in landing], dtype=np.intp)
+        self.random_airfields = eng.random_airfields
         self.render_mode = render_mode
         self.obs_type = obs_type
-        n = self.params.n_agents
+        n = eng.n_agents
         self.possible_agents = [f"uav_{i}" for i in range(n)]
         self.agents: list[str] = []
         self._index = {a: i for i, a in enumerate(self.possible_agents)}
         self._upper = np.triu(np.ones((n, n), dtype=bool))  # links (i, j) with i <= j
-        self._hazard = obs_mod.hazard_mask(self.params)
-        g = self.params.grid
-        raster = spaces.Box(0.0, 1.0, (obs_mod.RASTER_CHANNELS, g.ny, g.nx), np.float32)
-        vector = spaces.Box(obs_mod.VECTOR_LOW, obs_mod.VECTOR_HIGH, dtype=np.float32)
-        if obs_type == "dict":
-            space: spaces.Space = spaces.Dict({"raster": raster, "vector": vector})
-        elif obs_type == "compass":
-            space = spaces.Box(obs_mod.FEATURE_LOW, obs_mod.FEATURE_HIGH, dtype=np.float32)
-        else:
-            low = np.concatenate([raster.low.ravel(), vector.low])
-            high = np.concatenate([raster.high.ravel(), vector.high])
-            space = spaces.Box(low, high, dtype=np.float32)
-        self._obs_space = space
-        self._act_space = spaces.Box(-1.0, 1.0, (self._dim,), np.float32)
-        slow = np.concatenate([np.zeros(g.ny * g.nx), np.tile(obs_mod.VECTOR_LOW, n)])
-        shigh = np.concatenate([np.ones(g.ny * g.nx), np.tile(obs_mod.VECTOR_HIGH, n)])
-        self.state_space = spaces.Box(
-            slow.astype(np.float32), shigh.astype(np.float32), dtype=np.float32
-        )
-        self._rng = np.random.default_rng()
-        self._state: sim.State | None = None
+        self._obs_space = eng.observation_space
+        self._act_space = eng.action_space
+        self.state_space = engine_mod.state_space(eng.params)
         self._renderer = None
-        self._poc_scale = np.ones(1)
-        self._features = obs_mod.CompassFeatures(self.params) if obs_type == "compass" else None
+        self._info: dict[str, np.ndarray] = {}
+
+    @property
+    def info_arrays(self) -> dict[str, np.ndarray]:
+        """The engine's info arrays of the last reset or step (:func:`poc_env.sim.engine.infos`,
+        batched over one env): what :meth:`step` and :meth:`reset` turn into per-agent infos."""
+        return self._info
+
+    @property
+    def params(self) -> sim.Params:
+        """The current episode's parameters (``random_airfields`` moves them at each reset)."""
+        return self.engine.params
 
     # -- spaces ------------------------------------------------------------------------
-    def observation_space(self, agent: str) -> spaces.Space:
+    def observation_space(self, agent: str) -> Any:
         self._check_agent(agent)
         return self._obs_space
 
-    def action_space(self, agent: str) -> spaces.Space:
+    def action_space(self, agent: str) -> Any:
         self._check_agent(agent)
         return self._act_space
 
@@ -287,75 +241,41 @@ class UAVSearchParallelEnv(ParallelEnv):
     @property
     def sim_state(self) -> sim.State:
         """The simulator state (batched arrays with n_envs = 1); None before reset()."""
-        if self._state is None:
+        if self.engine.state is None:
             raise EpisodeOverError("call reset() first")
-        return self._state
+        return self.engine.state
 
     def reset(self, seed: int | None = None, options: dict | None = None):
         check_seed(seed)
         if options is not None and not isinstance(options, Mapping):
             raise ConfigError("options", options, "None or a dict (key 'prior': a map)")
         if seed is not None:
-            self._rng = np.random.default_rng(seed)
+            self.engine.seed([seed])
         prior = None
         if options and "prior" in options:
-            prior = validate_map(options["prior"], self.params.grid, "options['prior']")[None]
-        elif self.random_prior:
-            prior = random_gaussian_mixture(self.params.grid, self._rng)[None]
-        if self.random_airfields:
-            fields = self._draw_airfields()
-            self.params = dataclasses.replace(
-                self._base_params,
-                takeoff=fields[self._takeoff_field],
-                landing=fields[self._landing_field],
-            )
-            if self._features is not None:
-                self._features = obs_mod.CompassFeatures(self.params)
-            if self._renderer is not None:  # its background shows the airfields: draw afresh
-                self._renderer.close()
-                self._renderer = None
-        self._state = sim.initial(self.params, [self._rng], prior)
-        p0 = self.params.prior if prior is None else prior[0]
-        self._poc_scale = np.array([float(p0.max())])
+            prior = validate_map(options["prior"], self.params.grid, "options['prior']")
+        obs, self._info = self.engine.reset(priors=[prior])
+        if self.random_airfields and self._renderer is not None:
+            # its background shows the airfields: draw afresh
+            self._renderer.close()
+            self._renderer = None
         self.agents = list(self.possible_agents)
-        self._detect_time = None
         if self._renderer is not None:
             self._renderer.reset_history()
-            self._renderer.record(self._state)
-        observations = self._observations()
-        return observations, self._infos(self.agents)
-
-    def _draw_airfields(self) -> np.ndarray:
-        """One position ``(n_airfields, 2)`` per scenario airfield, uniform over the search grid,
-        outside the no-fly zones by at least the landing radius, from the env's generator."""
-        x0, y0, x1, y1 = self.params.grid.bounds
-        zones = self.params.zones
-        clearance = self.scenario.episode.landing_radius_m
-        out = np.empty((len(self.scenario.airfields), 2))
-        for k in range(len(out)):
-            for _ in range(1000):
-                xy = np.array([self._rng.uniform(x0, x1), self._rng.uniform(y0, y1)])
-                if zones.n_zones == 0 or float(zones.distance(xy)) >= clearance:
-                    break
-            else:
-                raise ConfigError(
-                    "random_airfields",
-                    True,
-                    "a search grid with room for an airfield outside the no-fly zones",
-                )
-            out[k] = xy
-        return out
+            self._renderer.record(self.sim_state)
+        return self._agent_obs(obs, self.agents), self._agent_infos(self.agents)
 
     def _observations(self) -> dict[str, Any]:
-        obs = obs_mod.observe(
-            self.params, self.sim_state, self._poc_scale, self._hazard, self.obs_type,
-            self._features,
-        )  # fmt: skip
+        """The current observations of the live agents."""
+        return self._agent_obs(self.engine.observe(), self.agents)
+
+    def _agent_obs(self, obs: Any, agents: list[str]) -> dict[str, Any]:
+        """The engine's batched observations ``obs`` as a dict over ``agents``."""
         index = self._index
         if self.obs_type == "dict":
             ras, vec = obs["raster"][0], obs["vector"][0]
-            return {a: {"raster": ras[index[a]], "vector": vec[index[a]]} for a in self.agents}
-        return {a: obs[0, index[a]] for a in self.agents}
+            return {a: {"raster": ras[index[a]], "vector": vec[index[a]]} for a in agents}
+        return {a: obs[0, index[a]] for a in agents}
 
     def _actions_array(self, actions: Mapping[str, Any]) -> np.ndarray:
         if not isinstance(actions, Mapping):
@@ -413,105 +333,50 @@ class UAVSearchParallelEnv(ParallelEnv):
         if not self.agents:
             raise EpisodeOverError("every agent has finished; call reset() before step()")
         arr = self._actions_array(actions)
-        st = self.sim_state
-        # the control level's autopilot (poc_env.sim.control); increments pass through
-        arr = swarm_increments(self.params, self.control, st, arr, self.auto_return)
-        ev = sim.step(self.params, st, arr, [self._rng])
-        terms = reward_terms(self.scenario.reward, ev)
-        reward = np.asarray(total_reward(terms)[0], dtype=float).tolist()
+        tr = self.engine.step(arr)
+        #: The engine's :class:`~poc_env.sim.engine.Transition` of the last step (arrays).
+        self.transition = tr
+        self._info = tr.info
+        reward = tr.reward[0].tolist()
+        terminal = tr.terminated[0].tolist()
+        truncated = tr.truncated[0].tolist()
         live = list(self.agents)
         rewards, terminations, truncations = {}, {}, {}
-        terminal = sim.terminal(self.params, st)[0].tolist()
-        truncated = sim.truncated(self.params, st)[0].tolist()
         for a in live:
             i = self._index[a]
             rewards[a] = reward[i]
             terminations[a] = terminal[i]
             truncations[a] = truncated[i]
-        infos = self._infos(live, ev, terms)
-        observations = self._observations_for(live)  # agents finishing now get a last obs
+        infos = self._agent_infos(live)
+        observations = self._agent_obs(tr.obs, live)  # agents finishing now get a last obs
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self._renderer is not None:
-            self._renderer.record(st)
+            self._renderer.record(self.sim_state)
         if self.render_mode == "human":
             self.render()
         return observations, rewards, terminations, truncations, infos
 
-    def _observations_for(self, agents: list[str]) -> dict[str, Any]:
-        keep = self.agents
-        self.agents = agents
-        try:
-            return self._observations()
-        finally:
-            self.agents = keep
-
-    def _infos(
-        self,
-        agents: list[str],
-        ev: sim.Events | None = None,
-        terms: Mapping[str, np.ndarray] | None = None,
-    ) -> dict[str, dict[str, Any]]:
-        """Per-agent infos: the same keys at reset (``ev`` None: nothing happened yet) and at
-        every step, every value a Python float/int/bool or a fixed-shape numpy array."""
-        st = self.sim_state
-        n = self.params.n_agents
-        zeros, no = [0.0] * n, [False] * n
-        if ev is None:
-            pos, pos_team, shielded = zeros, 0.0, no
-            flags = {f: no for f in VIOLATION_FLAGS}
-            flying = st.flying[0]
-            reach = comms_mod.reachable(st.links)[0]
-            connected = bool(reach[np.ix_(flying, flying)].all())
-        else:
-            pos, pos_team = ev.pos_agent[0].tolist(), float(ev.pos_team[0])
-            shielded = ev.shielded[0].tolist()
-            flags = {
-                "out_of_bounds": ev.out_of_bounds[0].tolist(),
-                "no_fly": ev.no_fly[0].tolist(),
-                "collision": ev.collision[0].tolist(),
-                "threat": ev.threat[0].tolist(),
-                "comms": (~ev.comms_ok[0]).tolist(),
-                "overtime": ev.overtime[0].tolist(),
-            }
-            connected = bool(ev.connected[0])
-        term_cols = {
-            t: (np.asarray(terms[t][0], dtype=float).tolist() if terms is not None else zeros)
-            for t in REWARD_TERMS
-        }
-        landed = st.landed[0].tolist()
-        crashed = st.crashed[0].tolist()
-        elapsed = st.elapsed[0].tolist()
-        detected = bool(st.detected[0])
-        detect_time = float(st.detect_step[0] * self.params.dt) if detected else -1.0
-        posc = float(st.posc[0])
-        topology = int(st.topology[0])
-        links = st.links[0]
+    def _agent_infos(self, agents: list[str]) -> dict[str, dict[str, Any]]:
+        """Per-agent infos from the engine's info arrays (:func:`poc_env.sim.engine.infos`):
+        the same keys at reset and at every step, every value a Python float/int/bool or a
+        fixed-shape numpy array."""
+        info = self._info
+        posc = float(info["posc"][0])
+        missing = [k for k in INFO_KEYS if k not in info]
+        if missing:  # a key of the spec that the engine does not produce: never dropped silently
+            raise RuntimeError(f"infos lack {missing} of the spec's keys {INFO_KEYS}")
+        cols = {k: info[k][0].tolist() for k in INFO_KEYS if k not in ("links", "posc")}
+        links = info["links"][0]
         out = {}
         for a in agents:
             i = self._index[a]
-            info: dict[str, Any] = {
-                "pos": float(pos[i]),
-                "pos_team": pos_team,
-                "posc": posc,
-            }
-            for t in REWARD_TERMS:
-                info[f"reward_{t}"] = float(term_cols[t][i])
-            for f in VIOLATION_FLAGS:
-                info[f"violation_{f}"] = bool(flags[f][i])
-            info.update(
-                shielded=bool(shielded[i]),
-                landed=bool(landed[i]),
-                crashed=bool(crashed[i]),
-                flight_time_s=float(elapsed[i]),
-                target_detected=detected,
-                time_to_detection_s=detect_time,
-                topology=topology,
-                links=links[i].copy(),
-                connected=connected,
-            )
-            out[a] = info
-        if ev is None and agents and tuple(out[agents[0]]) != INFO_KEYS:  # once per reset
-            raise RuntimeError(f"infos {tuple(out[agents[0]])} differ from spec {INFO_KEYS}")
+            row: dict[str, Any] = {}
+            for k in INFO_KEYS:  # the spec's order (poc_env.spec.info_keys)
+                if k == "posc":
+                    row[k] = posc
+                else:
+                    row[k] = links[i].copy() if k == "links" else cols[k][i]
+            out[a] = row
         return out
 
     @property
@@ -531,7 +396,8 @@ class UAVSearchParallelEnv(ParallelEnv):
     def state(self) -> np.ndarray:
         st = self.sim_state
         g = self.params.grid
-        poc = np.clip(g.coarsen(st.belief[0], self.params.s) / self._poc_scale[0], 0, 1)
+        scale = self.engine.poc_scale[0]
+        poc = np.clip(g.coarsen(st.belief[0], self.params.s) / scale, 0, 1)
         vec = obs_mod.vectors(self.params, st)[0]
         return np.concatenate([poc.ravel(), vec.ravel()]).astype(np.float32)
 

@@ -87,13 +87,11 @@ import numpy as np
 from gymnasium import spaces
 
 from poc_env.config import Scenario
-from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError, UAVSearchParallelEnv
+from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError
 from poc_env.errors import ConfigError, MissingExtraError
 from poc_env.sim import core as sim
-from poc_env.sim import observations as obs_mod
-from poc_env.sim.control import swarm_increments
-from poc_env.sim.rewards import reward_terms, total_reward
-from poc_env.theory.probability_map import random_gaussian_mixture, validate_map
+from poc_env.sim import engine as engine_mod
+from poc_env.theory.probability_map import validate_map
 
 try:
     from stable_baselines3.common.monitor import Monitor
@@ -164,42 +162,63 @@ class SwarmVecEnv(VecEnv):
             isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
         ):
             raise ConfigError("seed", seed, "an integer >= 0 or None")
-        # the PettingZoo env resolves the scenario and defines the per-agent spaces: one source
-        par = UAVSearchParallelEnv(
-            scenario, obs_type=obs_type, overrides=overrides, control=control,
+        #: The episode engine this adapter converts (:class:`poc_env.sim.engine.Engine`).
+        self.engine = engine_mod.make_engine(
+            int(n_envs),
+            scenario=scenario,
+            obs_type=obs_type,
+            overrides=overrides,
+            random_prior=bool(random_priors),
+            control=control,
             auto_return=auto_return,
-        )  # fmt: skip
-        self.control = par.control
-        self.auto_return = par.auto_return
-        self.scenario = par.scenario
-        self.params = par.params
+            return_increments=return_autopilot,
+            agent_index=agent_index,
+            seeds=env_seed_sequences(seed, int(n_envs)),
+        )
+        eng = self.engine
+        self.control = eng.control
+        self.auto_return = eng.auto_return
+        self.scenario = eng.scenario
         self.obs_type = obs_type
         self.random_priors = bool(random_priors)
         self.n_envs = int(n_envs)
-        self.n_agents = self.params.n_agents
-        self.possible_agents = list(par.possible_agents)
+        self.n_agents = eng.n_agents
+        self.possible_agents = [f"uav_{i}" for i in range(self.n_agents)]
         self.render_mode = None
-        obs_space = par.observation_space(self.possible_agents[0])
-        act_space = par.action_space(self.possible_agents[0])
-        super().__init__(self.n_envs * self.n_agents, obs_space, act_space)
-        self._hazard = obs_mod.hazard_mask(self.params)
+        super().__init__(self.n_envs * self.n_agents, eng.observation_space, eng.action_space)
         e, n = self.n_envs, self.n_agents
         self._root_seed = seed
-        self.rngs = [np.random.default_rng(s) for s in env_seed_sequences(seed, e)]
-        self.state: sim.State | None = None
-        self.priors = np.broadcast_to(self.params.prior, (e, *self.params.prior.shape)).copy()
-        self._poc_scale = np.ones(e)
         self._active = np.zeros((e, n), dtype=bool)
         self._returns = np.zeros((e, n))
         self._lengths = np.zeros((e, n), dtype=np.int64)
-        self._actions = np.zeros((e, n, 3))
+        self._actions = np.zeros((e, n, eng.action_dim))
         self.agent_index = agent_index
         self.return_autopilot = return_autopilot
-        self._features = (
-            obs_mod.CompassFeatures(self.params, agent_index) if obs_type == "compass" else None
-        )
         self._t_start = time.time()
         self._closed = False
+
+    @property
+    def params(self) -> sim.Params:
+        return self.engine.params
+
+    @property
+    def state(self) -> sim.State | None:
+        """The batched simulator state (None before :meth:`reset`)."""
+        return self.engine.state
+
+    @state.setter
+    def state(self, value: sim.State | None) -> None:
+        self.engine.state = value
+
+    @property
+    def rngs(self) -> list[np.random.Generator]:
+        """Each env's generator (priors, targets, thresholds, link failures)."""
+        return self.engine.rngs
+
+    @property
+    def priors(self) -> np.ndarray:
+        """(n_envs, ny, nx) the prior of each env's current episode."""
+        return self.engine.priors
 
     # -- seeding and reset --------------------------------------------------------------------
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
@@ -210,59 +229,37 @@ class SwarmVecEnv(VecEnv):
         self._seeds = [int(seed)] * self.num_envs
         return list(self._seeds)
 
-    def _draw_priors(self, envs: np.ndarray) -> np.ndarray | None:
-        """Priors (len(envs), ny, nx) for new episodes of ``envs``, or None (scenario prior).
-
-        A ``"prior"`` in the reset options of an env's first slot (``set_options``) wins;
-        else, with ``random_priors``, one is drawn from the env's generator."""
+    def _new_episodes(self, envs: np.ndarray):
+        """New episodes for ``envs`` (a ``"prior"`` in the reset options of an env's first slot,
+        ``set_options``, wins over the prior source); slot bookkeeping reset. Returns their
+        first observations as ``(len(envs) * N, ...)`` slot arrays."""
         grid = self.params.grid
-        given = [self._options[k * self.n_agents].get("prior") for k in envs]
-        if not self.random_priors and all(p is None for p in given):
-            return None
-        out = np.empty((len(envs), grid.ny, grid.nx))
-        for j, k in enumerate(envs):
-            if given[j] is not None:
-                out[j] = validate_map(given[j], grid, f"options[{k * self.n_agents}]['prior']")
-            elif self.random_priors:
-                out[j] = random_gaussian_mixture(grid, self.rngs[k])
-            else:
-                out[j] = self.params.prior
-        return out
-
-    def _new_episodes(self, envs: np.ndarray) -> sim.State:
-        """Fresh states for ``envs`` (episode bookkeeping reset); returns the sub-batch."""
-        priors = self._draw_priors(envs)
-        fresh = sim.initial(self.params, [self.rngs[k] for k in envs], priors)
-        if priors is not None:
-            self.priors[envs] = priors
-        else:
-            self.priors[envs] = self.params.prior
-        self._poc_scale[envs] = self.priors[envs].max(axis=(1, 2))
+        given = []
+        for k in envs:
+            p = self._options[k * self.n_agents].get("prior")
+            field = f"options[{k * self.n_agents}]['prior']"
+            given.append(None if p is None else validate_map(p, grid, field))
+        obs, _ = self.engine.reset(envs, given)
         self._active[envs] = True
         self._returns[envs] = 0.0
         self._lengths[envs] = 0
-        return fresh
+        return self._slots(obs)
 
     def reset(self):
         """Start a new episode in every env; return the first observation of every slot."""
         if self._seeds[0] is not None:
             self._root_seed = self._seeds[0]
-            seqs = env_seed_sequences(self._root_seed, self.n_envs)
-            self.rngs = [np.random.default_rng(s) for s in seqs]
-        everything = np.arange(self.n_envs)
-        self.state = self._new_episodes(everything)
-        obs = self._observe(self.state, self._poc_scale)
+            self.engine.seed(env_seed_sequences(self._root_seed, self.n_envs))
+        obs = self._new_episodes(np.arange(self.n_envs))
         self._reset_seeds()
         self._reset_options()
         self.reset_infos = [{} for _ in range(self.num_envs)]
         return obs
 
     # -- observations ---------------------------------------------------------------------------
-    def _observe(self, state: sim.State, poc_scale: np.ndarray):
-        """Observations of every agent of ``state``'s envs, as (E * N, ...) slot arrays."""
-        obs = obs_mod.observe(
-            self.params, state, poc_scale, self._hazard, self.obs_type, self._features
-        )
+    @staticmethod
+    def _slots(obs):
+        """The engine's observations ``(E, N, ...)`` as ``(E * N, ...)`` slot arrays."""
         if isinstance(obs, dict):
             return {k: v.reshape(-1, *v.shape[2:]) for k, v in obs.items()}
         return obs.reshape(-1, obs.shape[-1])
@@ -295,20 +292,14 @@ class SwarmVecEnv(VecEnv):
 
     # -- hooks for subclasses (poc_env.agents.rl.pilot.PilotVecEnv) -------------------------
     def _sim_actions(self, a: np.ndarray) -> np.ndarray:
-        """The simulator's eq. 19 actions (E, N, 3) for the slots' actions ``a (E, N, ...)``
-        (the control level's autopilot, :func:`poc_env.sim.control.swarm_increments`, which
-        flies home-bound UAVs whatever their slot commands); finished agents get 0."""
-        assert self.state is not None
-        inc = swarm_increments(
-            self.params, self.control, self.state, a, self.auto_return, self.return_autopilot
-        )
-        if self.control == "increments":
-            inc = np.where(self._active[..., None], inc, 0.0)
-        return inc
+        """The control-level actions ``(E, N, ...)`` the engine gets for the slots' actions
+        ``a``; the engine's autopilot (:func:`poc_env.sim.control.swarm_increments`) flies
+        them, home-bound UAVs whatever their slot commands; finished agents' are ignored."""
+        return a
 
-    def _reward(self, ev: sim.Events, state: sim.State) -> np.ndarray:
-        """Reward (E, N) of the step that produced ``ev`` and ``state``."""
-        return total_reward(reward_terms(self.scenario.reward, ev))
+    def _reward(self, tr: engine_mod.Transition, state: sim.State) -> np.ndarray:
+        """Reward (E, N) of the step ``tr`` that produced ``state``."""
+        return tr.reward
 
     def _rl_done(self, state: sim.State) -> np.ndarray | bool:
         """Agents whose RL episode ends although they still fly (E, N), or False."""
@@ -317,21 +308,21 @@ class SwarmVecEnv(VecEnv):
     def step_wait(self):
         if self.state is None:
             raise EpisodeOverError("call reset() before step()")
-        p, st = self.params, self.state
-        n = self.n_agents
+        p, n = self.params, self.n_agents
         active = self._active
-        ev = sim.step(p, st, self._actions, self.rngs)
-        reward = np.where(active, self._reward(ev, st), 0.0)
+        tr = self.engine.step(self._actions, with_info=False)  # the few infos: from the state
+        st = self.engine.current
+        reward = np.where(active, self._reward(tr, st), 0.0)
         self._returns += reward
         self._lengths += active
-        finished = active & (sim.terminal(p, st) | self._rl_done(st))
+        finished = active & (tr.terminated | self._rl_done(st))
         still = active & ~finished
         env_end = sim.episode_over(p, st, ~still)
         done = (finished | env_end[:, None]).ravel()
-        truncated = (still & sim.truncated(p, st)).ravel()
+        truncated = (still & tr.truncated).ravel()
         was_active = active.ravel()
 
-        obs = self._observe(st, self._poc_scale)
+        obs = self._slots(tr.obs)
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         for k in np.flatnonzero(~was_active):
             infos[k]["inactive"] = True
@@ -347,8 +338,11 @@ class SwarmVecEnv(VecEnv):
         ended = np.flatnonzero(env_end)
         if len(ended):
             elapsed = round(time.time() - self._t_start, 6)
-            for k in ended:
-                posc = float(st.posc[k])
+            posc_all = st.posc.tolist()
+            landed, crashed = st.landed.tolist(), st.crashed.tolist()
+            violations = st.violations.tolist()
+            for k in ended.tolist():
+                posc = posc_all[k]
                 for i in range(n):
                     info = infos[k * n + i]
                     info["episode"] = {
@@ -358,12 +352,10 @@ class SwarmVecEnv(VecEnv):
                         "posc": posc,
                     }
                     info["posc"] = posc
-                    info["landed"] = bool(st.landed[k, i])
-                    info["crashed"] = bool(st.crashed[k, i])
-                    info["violations"] = int(st.violations[k, i])
-            fresh = self._new_episodes(ended)
-            sim.scatter_envs(st, fresh, ended)
-            first = self._observe(fresh, self._poc_scale[ended])
+                    info["landed"] = landed[k][i]
+                    info["crashed"] = crashed[k][i]
+                    info["violations"] = violations[k][i]
+            first = self._new_episodes(ended)
             slots = (ended[:, None] * n + np.arange(n)).ravel()
             self._write(obs, slots, first)
         return obs, reward.ravel().astype(np.float32), done, infos

@@ -538,37 +538,43 @@ def render_episode(
 ) -> Path:
     """Fly one episode of ``scenario`` under ``policy_fn`` and write it as a GIF.
 
-    ``scenario`` is anything :func:`poc_env.config.load_scenario` accepts. The env draws from
+    ``scenario`` is anything :func:`poc_env.config.load_scenario` accepts. The episode is the
+    one-env :class:`~poc_env.sim.engine.Engine`'s, whose generator is
     ``np.random.default_rng(seed)``; ``policy_fn(state, rng)`` returns actions ``(1, N, 3)``
     and gets its own generator, ``np.random.default_rng([seed, 1])``. The episode runs until
-    no UAV is flying or ``max_steps`` steps (default: the scenario's horizon). A frame is drawn
-    at reset, every ``every`` steps, and at the last step.
+    it is over (:func:`poc_env.sim.core.episode_over`: every UAV landed or crashed, the target
+    detected with ``episode.detection_ends_episode``, or the horizon), no UAV flies, or after
+    ``max_steps`` steps
+    (default: the scenario's horizon). A frame is drawn at reset, every ``every`` steps, and
+    at the last step.
     """
     from poc_env.config import load_scenario
-    from poc_env.sim import core as simulator
+    from poc_env.sim.engine import Engine
 
     if isinstance(every, bool) or int(every) != every or every < 1:
         raise ConfigError("every", every, "a whole number >= 1")
     if out_path is None or Path(out_path).suffix.lower() != ".gif":
         raise ConfigError("out", str(out_path), "a path ending in .gif")
-    params = simulator.make_params(load_scenario(scenario))
+    engine = Engine(load_scenario(scenario), seeds=[seed])
+    params = engine.params
     limit = params.horizon if max_steps is None else int(max_steps)
     if limit < 0:
         raise ConfigError("max_steps", max_steps, "a whole number >= 0")
-    rngs = [np.random.default_rng(seed)]
     policy_rng = np.random.default_rng([seed, 1])
-    state = simulator.initial(params, rngs)
+    engine.reset()
+    state = engine.current
     renderer = Renderer(params, "rgb_array")
     try:
         renderer.record(state)
         frames = [renderer.frame(state)]
         k = 0
-        while k < limit and state.flying.any():
+        over = False
+        while k < limit and not over:
             actions = np.asarray(policy_fn(state, policy_rng), dtype=float)
-            simulator.step(params, state, actions, rngs)
+            over = bool(engine.step(actions).over[0]) or not state.flying.any()
             k += 1
             renderer.record(state)
-            last = k >= limit or not state.flying.any()
+            last = k >= limit or over
             if k % every == 0 or last:
                 frames.append(renderer.frame(state))
     finally:

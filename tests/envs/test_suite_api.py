@@ -328,7 +328,7 @@ def test_random_airfields_follow_the_seed_and_the_fleet():
         fields.setdefault(seed, []).append(p.takeoff.copy())
     np.testing.assert_array_equal(fields[0][0], fields[0][1])
     assert not np.allclose(fields[0][0], fields[1][0])
-    assert env.params.prior is env._base_params.prior  # only the airfields move
+    assert env.params.prior is env.engine.base_params.prior  # only the airfields move
 
 
 def test_random_airfields_keep_out_of_no_fly_zones():

@@ -335,6 +335,26 @@ def test_render_episode_stops_when_no_uav_flies(tmp_path, plain_params):
         assert im.n_frames == 2
 
 
+def test_render_episode_stops_where_the_episode_stops(tmp_path):
+    """With ``detection_ends_episode`` the GIF ends at the detection, while UAVs still fly."""
+    from poc_env.config import load_scenario
+
+    sc = load_scenario("small", {"episode.detection_ends_episode": True})
+    calls = []
+
+    def policy(state, rng):
+        calls.append(int(state.step[0]))
+        if int(state.step[0]) == 2:  # the target under UAV 0, found with certainty
+            state.target[0] = state.pos[0, 0, :2]
+            state.target_threshold[0] = 1e-9
+        return np.zeros((1, sc.n_uavs, 3))
+
+    out = render_episode(sc, policy, tmp_path / "d.gif", max_steps=50)
+    assert calls == [0, 1, 2]  # the episode is over after the third step
+    with Image.open(out) as im:
+        assert im.n_frames == 4  # reset + 3 steps
+
+
 def test_random_policy_is_level_and_bounded():
     class S:
         pos = np.zeros((2, 5, 3))
