@@ -46,7 +46,7 @@ format: $(STAMP)
 	$(VENV)/bin/ruff format . && $(VENV)/bin/ruff check --fix .
 
 figures: $(STAMP)
-	$(VENV)/bin/poc-env figures --out docs/img
+	$(VENV)/bin/poc-env figures --out results/img
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache

@@ -852,7 +852,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("figures", help="regenerate the README's figures")
-    p.add_argument("--out", default="docs/img")
+    p.add_argument("--out", default="results/img")
     p.set_defaults(func=cmd_figures)
 
     p = sub.add_parser("demo", help="run the main job on the built-in scenarios")
