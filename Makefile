@@ -5,8 +5,12 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 OUT ?= out
+# the documentation site: strict (a broken link, page, anchor or reference fails; not with
+# --quiet, which hides the warnings strict mode counts); quiet about the
+# MkDocs 2 notices its plugins print
+MKDOCS := NO_MKDOCS_2_WARNING=1 DISABLE_MKDOCS_2_WARNING=true $(VENV)/bin/mkdocs
 
-.PHONY: demo test test-slow wheel-check lint format bench figures clean
+.PHONY: demo test test-slow wheel-check lint format bench figures docs clean
 
 $(STAMP): pyproject.toml constraints.txt
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -29,8 +33,14 @@ test: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
 	$(VENV)/bin/mypy
+	$(MKDOCS) build --strict
 	OMP_NUM_THREADS=1 $(PY) -m pytest -q -n 2 -m "not slow"
 	PYTHON=$(PY) .ci/wheel-check
+
+# the documentation site into site/ (pages from docs/, figures from results/, the API reference
+# from the docstrings); `make docs SERVE=1` serves it at http://127.0.0.1:8000 instead
+docs: $(STAMP)
+	$(MKDOCS) $(if $(SERVE),serve,build --strict)
 
 # the wheel, installed without extras in a fresh venv outside the checkout (part of `make test`)
 wheel-check: $(STAMP)
@@ -46,7 +56,7 @@ format: $(STAMP)
 	$(VENV)/bin/ruff format . && $(VENV)/bin/ruff check --fix .
 
 figures: $(STAMP)
-	$(VENV)/bin/poc-env figures --out docs/img
+	$(VENV)/bin/poc-env figures --out results/img
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(OUT) site .pytest_cache .ruff_cache

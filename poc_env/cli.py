@@ -1,7 +1,7 @@
 """The ``poc-env`` command line.
 
 Subcommands: ``scenarios`` (list the built-ins), ``survey`` (Table 4 / 5 analog of a region
-plan), ``figures`` (regenerate the README's pictures), ``demo`` (the main job on the default
+plan), ``figures`` (regenerate the docs' pictures), ``demo`` (the main job on the default
 scenario), ``train`` (PPO; options generated from ``poc_env.agents.rl.args.TrainArgs``). Bad input
 ends with ``error: ...`` naming the field, the value and what is allowed, and exit status 2 -- never
 a traceback.
@@ -938,7 +938,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("figures", help="regenerate the README's figures")
-    p.add_argument("--out", default="docs/img")
+    p.add_argument("--out", default="results/img")
     p.set_defaults(func=cmd_figures)
 
     p = sub.add_parser("demo", help="run the main job on the built-in scenarios")

@@ -24,8 +24,8 @@ Policies per task (``--policies`` overrides):
   the task's control part (``Heading`` ...), so one option names a run per control level, and
   ``LABEL@Heading=POLICY`` restricts the column to that control level's tasks.
 
-Writes ``baselines.csv`` (one row per task and policy) and ``baselines.md`` (the table of the
-README) into ``--out``, both or neither. ``--quick``: 2 episodes on the Small tasks only.
+Writes ``baselines.csv`` (one row per task and policy) and ``baselines.md`` (the table of
+docs/tasks.md) into ``--out``, both or neither. ``--quick``: 2 episodes on the Small tasks only.
 """
 
 from __future__ import annotations

@@ -120,6 +120,16 @@ def physical_optimum(prior, cell_area_m2, effort_m2: float, law: str = "inverse_
     """Maximum POS reachable with ``effort_m2`` of sweep-width x track length (see module doc).
 
     ``prior`` is any array of cell masses; ``cell_area_m2`` a scalar or an array of its shape.
+
+    Examples
+    --------
+    Three 5 km cells holding 0.5, 0.3 and 0.2 of the target, and one cell's area of effort
+    (sweep width x track length): the optimum spends it on the two densest cells only.
+
+    >>> from poc_env.theory.bound import physical_optimum
+    >>> best = physical_optimum([0.5, 0.3, 0.2], cell_area_m2=25e6, effort_m2=25e6)
+    >>> round(best.pos, 4), best.coverage.round(3).tolist()
+    (0.4015, [0.825, 0.175, 0.0])
     """
     entry = detection_law(law)
     law = entry.name

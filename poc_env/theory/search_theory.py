@@ -63,6 +63,14 @@ def pod_parallel(sweep_width_m, spacing_m):
 
     ``erf`` is eq. 11 (``scipy.special.erf``). POD(W = S) = erf(sqrt(pi)/2) = 0.78991. The
     inverse-cube entry of the law table; :func:`pod_from_coverage` gives every law's.
+
+    Examples
+    --------
+    >>> from poc_env.theory.search_theory import pod_parallel
+    >>> round(float(pod_parallel(sweep_width_m=5e3, spacing_m=5e3)), 5)
+    0.78991
+    >>> [round(float(p), 4) for p in pod_parallel(5e3, [2.5e3, 10e3])]  # S = W/2, S = 2W
+    [0.9878, 0.4691]
     """
     return detection_law("inverse_cube").pod(parallel_coverage(sweep_width_m, spacing_m))
 
@@ -72,6 +80,14 @@ def pod_from_coverage(coverage, law: str = "inverse_cube"):
 
     ``inverse_cube``: erf(sqrt(pi)/2 C) (eq. 10); ``exponential``: 1 - exp(-C) (random search);
     ``definite_range``: min(C, 1). Negative coverage counts as 0.
+
+    Examples
+    --------
+    >>> from poc_env.theory.search_theory import pod_from_coverage
+    >>> pod_from_coverage([0.5, 1.0, 2.0], law="definite_range").tolist()
+    [0.5, 1.0, 1.0]
+    >>> pod_from_coverage([0.5, 1.0, 2.0], law="exponential").round(4).tolist()
+    [0.3935, 0.6321, 0.8647]
     """
     entry = detection_law(law)
     return entry.pod(np.maximum(np.asarray(coverage, dtype=float), 0.0))
@@ -164,7 +180,14 @@ def posc(pos_values, axis=None):
 
 
 def update_poc(poc, pod):
-    """POC after a search: POC_new = (1 - POD) x POC_old (eq. 14); unsearched cells keep theirs."""
+    """POC after a search: POC_new = (1 - POD) x POC_old (eq. 14); unsearched cells keep theirs.
+
+    Examples
+    --------
+    >>> from poc_env.theory.search_theory import update_poc
+    >>> update_poc([0.5, 0.3, 0.2], [0.8, 0.0, 0.5]).round(12).tolist()
+    [0.1, 0.3, 0.1]
+    """
     return (1.0 - np.asarray(pod, dtype=float)) * np.asarray(poc, dtype=float)
 
 

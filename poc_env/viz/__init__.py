@@ -1,1 +1,1 @@
-"""Pictures: episode rendering, map plots and the README's figures (matplotlib, imported lazily)."""
+"""Pictures: episode rendering, map plots and the docs' figures (matplotlib, imported lazily)."""
