@@ -475,6 +475,47 @@ class EpisodeConfig:
 
 
 @dataclass(frozen=True)
+class TargetConfig:
+    """How the lost target moves (issue 25): a model of the table in
+    :mod:`poc_env.theory.motion` and its coefficients.
+
+    ``model`` ``static`` (the paper, default: nothing moves), ``diffusion`` (a random walk of
+    coefficient ``diffusion_m2_s``), ``drift`` (advection by the current plus diffusion) or
+    ``leeway`` (current plus the leeway of ``leeway_class`` in the 10 m wind ``wind_kmh``, plus
+    diffusion). The current is ``current_kmh`` (east, north), plus at each reset one of speed
+    ``U(0, random_current_kmh)`` in a uniform direction drawn from the env's generator, plus
+    (``drift``) the gridded field of ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or
+    ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart; a relative path is read from the scenario's
+    folder). The model name, the leeway class and the field are checked against the table and
+    the map when the dynamics are built (:func:`poc_env.theory.motion.check`).
+    """
+
+    model: str = _f(default="static")
+    diffusion_m2_s: float = _f(default=0.0, lo=0.0, hi=1e7)
+    current_kmh: tuple[float, float] = _f(default=(0.0, 0.0))
+    random_current_kmh: float = _f(default=0.0, lo=0.0, hi=100.0)
+    wind_kmh: tuple[float, float] = _f(default=(0.0, 0.0))
+    leeway_class: str = _f(default="person_in_water")
+    field_file: str | None = _f(default=None)
+    field_dt_s: float | None = _f(default=None, lo=limits.MIN_POSITIVE, lo_open=False, hi=1e9)
+
+    def __post_init__(self) -> None:
+        _coerce(self)
+        if not isinstance(self.model, str):
+            raise ConfigError("model", self.model, "a motion model name (a string)")
+        for key in ("current_kmh", "wind_kmh"):
+            u, v = _vec2(key, getattr(self, key), bound=400.0)
+            object.__setattr__(self, key, (u, v))
+        if self.field_file is not None and self.model != "drift":
+            raise ConfigError("field_file", self.field_file, "null unless model is 'drift'")
+
+    @property
+    def moves(self) -> bool:
+        """The target moves (any model but ``static``)."""
+        return self.model != "static"
+
+
+@dataclass(frozen=True)
 class PlannerConfig:
     """The §6.2 planner: adaptive DE settings (§6: NP = 100, G = 300, F0 = 0.2, CR = 0.1), the
     weights of eq. 25 and the penalty factor M of eq. 26.
@@ -515,6 +556,7 @@ class Scenario:
     reward: RewardConfig = _f(default_factory=RewardConfig)
     episode: EpisodeConfig = _f(default_factory=EpisodeConfig)
     planner: PlannerConfig = _f(default_factory=PlannerConfig)
+    target: TargetConfig = _f(default_factory=TargetConfig)
 
     def __post_init__(self) -> None:
         _coerce(self)
@@ -864,6 +906,11 @@ def _resolve_prior_file(data: dict[str, Any], folder: Path) -> None:
         f = Path(prior["file"])
         if not f.is_absolute():
             prior["file"] = str(folder / f)
+    target = data.get("target")
+    if isinstance(target, dict) and isinstance(target.get("field_file"), str):
+        f = Path(target["field_file"])
+        if not f.is_absolute():
+            target["field_file"] = str(folder / f)
 
 
 def save_scenario(scenario: Scenario, path: str | os.PathLike[str]) -> Path:

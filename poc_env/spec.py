@@ -237,6 +237,17 @@ INFOS = (
 )
 
 
+#: Infos of the moving-target tasks only (a static target's episodes keep their info set):
+#: after :data:`INFOS`, in this order.
+MOTION_INFOS = (
+    _i(
+        "mass_out",
+        "float",
+        "belief mass that drifted out of the map so far (POC + POSC + mass_out = 1)",
+    ),
+)
+
+
 def info_keys() -> tuple[str, ...]:
     """Every per-agent info key, in order (the templates of :data:`INFOS` expanded)."""
     out: list[str] = []
@@ -279,6 +290,30 @@ RANDOM_PARTS = (
         "maps for generalisation",
     ),
 )
+#: Motion parts: how the target moves (``target:`` section of the scenario,
+#: :mod:`poc_env.theory.motion`); the value is the task's scenario overrides' name in
+#: :data:`MOTION_OVERRIDES`.
+MOTION_PARTS = (
+    Part("", "static", "the paper's target, standing still"),
+    Part(
+        "Drift",
+        "drift",
+        "a drifting target: a uniform current of U(0, 25) km/h in a uniform direction drawn "
+        "at each reset, plus diffusion D = 50 m^2/s; the belief is a Bayesian filter (predict by "
+        "the motion model, update by eq. 14); info mass_out",
+    ),
+)
+#: The scenario keyword overrides (``target__model=...``) of each motion part's value.
+MOTION_OVERRIDES: dict[str, dict[str, object]] = {
+    "static": {},
+    "drift": {
+        "target__model": "drift",
+        "target__random_current_kmh": 25.0,
+        "target__diffusion_m2_s": 50.0,
+    },
+}
+#: The control levels registered with each moving-target part (the static part has all).
+MOTION_CONTROLS = {"drift": ("Heading",)}
 CONTROL_PARTS = (
     Part("Increments", "increments", "the paper's eq. 19 increments, Box(-1, 1, (3,)) per UAV"),
     Part("Heading", "heading", "a map-frame heading flown by the autopilot, Box(-1, 1, (2,))"),
@@ -319,10 +354,15 @@ def task_parts_markdown() -> str:
         rows.append(("Random", f"`{p.text}`" if p.text else "(absent)", p.meaning))
     for p in CONTROL_PARTS:
         rows.append(("Control", f"`{p.text}`", f"`{p.value}`: {p.meaning}"))
+    for p in MOTION_PARTS:
+        ctl = MOTION_CONTROLS.get(str(p.value))
+        only = f" (with {', '.join(ctl)} only, fixed prior)" if ctl else ""
+        rows.append(("Motion", f"`{p.text}`" if p.text else "(absent)", p.meaning + only))
+    moving = sum(len(MOTION_CONTROLS[str(p.value)]) for p in MOTION_PARTS if p.text)
     head = (
-        f"Ids: `poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v{TASK_VERSION}` "
-        f"({len(SCENARIO_PARTS) * len(RANDOM_PARTS) * len(CONTROL_PARTS)} tasks; the version, "
-        f"{TASK_VERSION}, is `poc_env.spec.TASK_VERSION`).\n\n"
+        f"Ids: `poc_env/UAVSearch-<Scenario>[-Random][-<Motion>]-<Control>-v{TASK_VERSION}` "
+        f"({len(SCENARIO_PARTS) * (len(RANDOM_PARTS) * len(CONTROL_PARTS) + moving)} tasks; "
+        f"the version, {TASK_VERSION}, is `poc_env.spec.TASK_VERSION`).\n\n"
     )
     return head + _table(("part", "values", "meaning"), rows)
 
@@ -359,6 +399,8 @@ def reward_markdown() -> str:
 
 def info_markdown() -> str:
     rows = [(f"`{e.name}`", e.dtype, e.shape, e.meaning) for e in INFOS]
+    rows += [(f"`{e.name}`", e.dtype, e.shape, f"moving targets only: {e.meaning}")
+             for e in MOTION_INFOS]  # fmt: skip
     flags = _table(("flag", "meaning"), [(f"`{f}`", m) for f, m in VIOLATION_FLAGS])
     return (
         _table(("key", "type", "shape", "meaning"), rows)

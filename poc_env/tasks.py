@@ -71,6 +71,9 @@ class Task:
     control: str
     random_prior: bool
     extra: dict[str, Any] = field(default_factory=dict)
+    #: how the target moves (:data:`poc_env.spec.MOTION_PARTS`; its scenario overrides are
+    #: keyword overrides, ``target__model=...``, so a ``make(overrides=...)`` keeps them)
+    motion: str = "static"
 
     @property
     def kwargs(self) -> dict[str, Any]:
@@ -81,14 +84,18 @@ class Task:
             "random_prior": self.random_prior,
             "obs_type": "compass",
         }
+        out.update(spec.MOTION_OVERRIDES[self.motion])
         out.update(self.extra)
         return out
 
 
-def task_id(scenario: str, control: str, random_prior: bool, version: int = VERSION) -> str:
-    """The id of a task from its name parts (``"Small"``, ``"Heading"``, ...)."""
+def task_id(
+    scenario: str, control: str, random_prior: bool, version: int = VERSION, motion: str = ""
+) -> str:
+    """The id of a task from its name parts (``"Small"``, ``"Heading"``, ``"Drift"``, ...)."""
     rand = "-Random" if random_prior else ""
-    return f"{NAMESPACE}/UAVSearch-{scenario}{rand}-{control}-v{version}"
+    move = f"-{motion}" if motion else ""
+    return f"{NAMESPACE}/UAVSearch-{scenario}{rand}{move}-{control}-v{version}"
 
 
 def _build() -> dict[str, Task]:
@@ -98,6 +105,11 @@ def _build() -> dict[str, Task]:
             for c_name, control in CONTROL_NAMES.items():
                 tid = task_id(s_name, c_name, rand)
                 out[tid] = Task(tid, scenario, control, rand)
+    for m in spec.MOTION_PARTS[1:]:  # moving targets: the fixed prior, some control levels
+        for s_name, scenario in SCENARIOS.items():
+            for c_name in spec.MOTION_CONTROLS[str(m.value)]:
+                tid = task_id(s_name, c_name, False, motion=m.text)
+                out[tid] = Task(tid, scenario, CONTROL_NAMES[c_name], False, motion=str(m.value))
     return out
 
 

@@ -365,13 +365,14 @@ class UAVSearchParallelEnv(ParallelEnv):
         missing = [k for k in INFO_KEYS if k not in info]
         if missing:  # a key of the spec that the engine does not produce: never dropped silently
             raise RuntimeError(f"infos lack {missing} of the spec's keys {INFO_KEYS}")
-        cols = {k: info[k][0].tolist() for k in INFO_KEYS if k not in ("links", "posc")}
+        keys = INFO_KEYS + tuple(e.name for e in spec.MOTION_INFOS if e.name in info)
+        cols = {k: info[k][0].tolist() for k in keys if k not in ("links", "posc")}
         links = info["links"][0]
         out = {}
         for a in agents:
             i = self._index[a]
             row: dict[str, Any] = {}
-            for k in INFO_KEYS:  # the spec's order (poc_env.spec.info_keys)
+            for k in keys:  # the spec's order (poc_env.spec.info_keys, then MOTION_INFOS)
                 if k == "posc":
                     row[k] = posc
                 else:

@@ -44,8 +44,10 @@ import poc_env._kernels.sensing as _sensing
 import poc_env._kernels.swarm as _swarm
 import poc_env.limits as limits
 from poc_env.config import Scenario
+from poc_env.errors import ConfigError
 from poc_env.sim import comms as comms_mod
 from poc_env.sim import constraints as cons
+from poc_env.theory import motion as motion_mod
 from poc_env.theory.detection import detection_law
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import sweep_segments, window_size
@@ -73,6 +75,8 @@ class Params:
     cutoff_m: float
     horizon: int
     switcher: comms_mod.Table2Switcher | None = field(default=None, compare=False)
+    #: how the target moves (:mod:`poc_env.theory.motion`); None: static
+    motion: motion_mod.Motion | None = field(default=None, compare=False)
 
     @property
     def fine_shape(self) -> tuple[int, int]:
@@ -129,6 +133,12 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
         switcher = comms_mod.Table2Switcher(
             n_agents=sc.n_uavs, min_neighbours=sc.comms.min_neighbours
         )
+    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), horizon * dt)
+    if motion.moves and sc.comms.belief_sharing == "comms":
+        raise ConfigError(
+            "target.model", sc.target.model, "'static' with comms.belief_sharing: comms (the "
+            "per-UAV beliefs of a moving target are not modelled yet)",
+        )  # fmt: skip
     return Params(
         scenario=sc,
         grid=grid,
@@ -146,6 +156,7 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
         cutoff_m=cutoff,
         horizon=horizon,
         switcher=switcher,
+        motion=motion if motion.moves else None,
     )
 
 
@@ -179,6 +190,11 @@ class State:
     prior_fine: np.ndarray | None = None  # (E, NY, NX) the episode's prior on the fine grid
     own_survival: np.ndarray | None = None  # (E, N, NY, NX) prod (1 - p) of UAV j's own sweeps
     known: np.ndarray | None = None  # (E, N, N, NY, NX) UAV i's latest copy of j's own_survival
+    # moving targets only (None while the target is static, :mod:`poc_env.theory.motion`)
+    mass_out: np.ndarray | None = None  # (E,) belief mass that drifted out of the map
+    drift: np.ndarray | None = None  # (E, 2) the episode's uniform velocity (m/s)
+    target_out: np.ndarray | None = None  # (E,) bool: the hidden target has left the map
+    target_noise: np.ndarray | None = None  # (E, H, 2) the target's random-walk draws
 
     @property
     def n_envs(self) -> int:
@@ -301,8 +317,57 @@ def initial(
         state.prior_fine = belief.copy()
         state.own_survival = np.ones((e, n, *fine))
         state.known = np.ones((e, n, n, *fine))
+    if params.motion is not None:
+        _initial_motion(params, state, rngs)
     _update_topology(params, state, rngs)
     return state
+
+
+def _initial_motion(params: Params, state: State, rngs) -> None:
+    """A moving target's episode: each env's uniform velocity from its generator (after the
+    target and threshold), and the target's random-walk noise from a stream of its own
+    (``rng.spawn``: the env's stream is not advanced)."""
+    motion = params.motion
+    assert motion is not None
+    e = len(rngs)
+    state.mass_out = np.zeros(e)
+    state.drift = np.stack([motion.draw(rng) for rng in rngs]) if e else np.zeros((0, 2))
+    state.target_out = np.zeros(e, dtype=bool)
+    noise = np.zeros((e, max(params.horizon, 1), 2))
+    if motion.diffusion > 0:
+        for k, rng in enumerate(rngs):
+            noise[k] = rng.spawn(1)[0].standard_normal((noise.shape[1], 2))
+    state.target_noise = noise
+
+
+def predict(params: Params, state: State) -> None:
+    """The predict step of the filter (moving targets): the motion model moves the fine
+    belief over this step (mass leaving the map goes to ``state.mass_out``) and the hidden
+    targets (:func:`poc_env.theory.motion.predict`, :func:`~poc_env.theory.motion.
+    move_targets`)."""
+    motion = params.motion
+    assert motion is not None and state.mass_out is not None and state.drift is not None
+    assert state.target_out is not None and state.target_noise is not None
+    h = params.grid.cell_m / params.s
+    dt = params.dt
+    varying = motion.field is not None and len(motion.field.frames) > 1
+    groups = np.unique(state.step) if varying else state.step[:1]
+    for k in groups.tolist():
+        rows = state.step == k if varying else slice(None)
+        t = k * dt
+        belief = state.belief[rows]
+        state.mass_out[rows] += motion_mod.predict(
+            motion, belief, state.drift[rows], t, dt, h, params.s
+        )
+        state.belief[rows] = belief
+        target, out = state.target[rows], state.target_out[rows]
+        idx = np.minimum(state.step[rows], state.target_noise.shape[1] - 1)
+        noise = state.target_noise[rows][np.arange(len(idx)), idx]
+        motion_mod.move_targets(
+            motion, target, out, state.drift[rows], noise, t, dt, params.grid.origin_m,
+            params.grid.cell_m, (params.grid.ny, params.grid.nx),
+        )  # fmt: skip
+        state.target[rows], state.target_out[rows] = target, out
 
 
 def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) -> None:
@@ -441,6 +506,8 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         )
         shielded = res.shielded & moving
         dalpha = np.where(moving, res.turn, dalpha)
+    if params.motion is not None:  # the filter's predict step; static targets skip it
+        predict(params, state)
     a2 = state.pos[..., :2].copy()
     new = kinematics(params, state, dv, dalpha, dbeta, moving)
     b2 = new[..., :2]
@@ -463,6 +530,8 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         float(params.grid.cell_m),
         p_t,
     ):  # log1p(-0) = -0 adds nothing: numpy's log1p only when some UAV may detect
+        if state.target_out is not None:  # a target that left the map is beyond the search
+            p_t[state.target_out] = 0.0
         with np.errstate(divide="ignore"):
             state.target_exponent += -np.log1p(-p_t).sum(axis=1)
 

@@ -211,6 +211,8 @@ def infos(
         connected=_per_agent(connected, n),
         violations=state.violations.astype(np.int64),
     )
+    if state.mass_out is not None:  # moving targets (spec.MOTION_INFOS)
+        out["mass_out"] = _per_agent(state.mass_out.astype(float), n)
     return out
 
 

@@ -1,0 +1,432 @@
+"""The table of target motion models: how a lost target, and the belief about it, move.
+
+The paper's target stands still (``static``). A moving target turns the belief into a Bayesian
+filter: every step first *predicts* (the model moves the fine belief) and then *updates* by
+eq. 14 (the sensors' sweep). Every moving model here is advection by a velocity field ``v``
+plus isotropic diffusion of coefficient ``D`` (m^2/s), the Fokker-Planck equation of the
+target's random walk ``dx = v dt + sqrt(2 D) dW``:
+
+    d p / d t = - div(v p) + D laplacian(p)
+
+Models (:data:`MODELS`; ``target.model`` of the scenario, :class:`~poc_env.config.TargetConfig`):
+
+``static``
+    The paper: ``v = 0, D = 0``; the environment skips the predict step entirely.
+``diffusion``
+    ``v = 0``: a mass-conserving random walk; the variance of a blob grows by ``2 D t`` per
+    axis.
+``drift``
+    ``v`` = the current: ``current_kmh`` (uniform), plus a uniform current of random speed and
+    direction drawn at each reset (``random_current_kmh``), plus an optional gridded,
+    time-varying field (``field_file``, :class:`VelocityField`); plus diffusion ``D``.
+``leeway``
+    ``v`` = the current plus the leeway of the target class in the 10 m wind ``W``
+    (``wind_kmh``): downwind ``a_d |W| + b_d`` along the wind, crosswind ``a_c |W| + b_c`` to
+    its right or left (the side drawn once per episode, 50/50); plus diffusion ``D``. The
+    classes are :data:`LEEWAY_CLASSES`.
+
+Numerics (:func:`advect_diffuse`): a finite-volume step on the fine grid, first-order upwind
+fluxes for advection and centred fluxes for diffusion, explicit, sub-stepped so that
+``(|u| + |v|) tau / h + 4 D tau / h^2 <= 1`` (every cell's outflow at most its mass: positive
+and stable). The scheme is conservative by construction: every flux leaves one cell and
+enters its neighbour; fluxes through the map's edge (outside the map holds no belief, the
+boundary absorbs) are summed into ``mass_out``, so ``in-map + out-of-map`` mass is conserved to
+rounding. For a uniform velocity the centre of mass of the interior moves by exactly ``v t``
+and the diffusion adds exactly ``2 D t`` of variance per axis; upwinding adds the numerical
+diffusion ``|u| h / 2 (1 - |u| tau / h)`` along the flow.
+
+The hidden target moves by the same law (:func:`move_targets`): ``x += v(x, t) dt +
+sqrt(2 D dt) xi`` with ``xi`` standard normal, from noise drawn at reset from a stream of its
+own (``rng.spawn``), so the env's generator draws nothing more for it. A target that leaves the
+map stays out and can no longer be detected, as the belief's mass that left it.
+
+Adding a model: one :class:`MotionModel` entry here (its per-episode velocity draw) and its
+tests (``tests/theory/test_motion.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from poc_env.errors import ConfigError
+
+KMH = 1000.0 / 3600.0
+#: Largest speed a velocity field may hold, m/s: ocean surface currents stay below ~3 m/s; a
+#: field above this is in the wrong unit (km/h, cm/s).
+MAX_FIELD_MPS = 10.0
+
+
+@dataclass(frozen=True)
+class LeewayClass:
+    """Leeway of one search object class: downwind and crosswind leeway, each
+    ``slope * W10 + offset``, slopes in % of the 10 m wind speed, offsets in cm/s; crosswind
+    to the right (``+``) and to the left (``-``) of the downwind direction."""
+
+    name: str
+    description: str
+    dwl_slope_pct: float
+    dwl_offset_cms: float
+    cwl_right_slope_pct: float
+    cwl_right_offset_cms: float
+    cwl_left_slope_pct: float
+    cwl_left_offset_cms: float
+
+    def leeway(self, wind_speed: float, side: float) -> tuple[float, float]:
+        """(downwind, crosswind) leeway in m/s for a 10 m wind of ``wind_speed`` m/s;
+        ``side`` +1 (right of downwind) or -1 (left); crosswind is positive to the right."""
+        dw = self.dwl_slope_pct / 100.0 * wind_speed + self.dwl_offset_cms / 100.0
+        if side >= 0:
+            cw = self.cwl_right_slope_pct / 100.0 * wind_speed + self.cwl_right_offset_cms / 100.0
+        else:
+            cw = self.cwl_left_slope_pct / 100.0 * wind_speed + self.cwl_left_offset_cms / 100.0
+        return dw, cw
+
+
+#: Leeway classes: the mean values of the main classes of the US Coast Guard leeway taxonomy
+#: (Allen, A. A. and Plourde, J. V., 1999, "Review of Leeway: Field Experiments and
+#: Implementation", USCG R&D Center report CG-D-08-99; Allen, A. A., 2005, "Leeway Divergence",
+#: CG-D-05-05), as tabulated for SAROPS (list of 2010-11-15) and reproduced in OpenDrift's
+#: ``OBJECTPROP.DAT`` (2011-08-25): downwind slope [%] and offset [cm/s], crosswind (right,
+#: left) slope [%] and offset [cm/s]. Left crosswind slopes are negative (to the left).
+LEEWAY_CLASSES: dict[str, LeewayClass] = {
+    c.name: c
+    for c in (
+        LeewayClass(
+            "person_in_water", "PIW-1: person in water, unknown state", 0.96, 0.0, 0.54, 0.0,
+            -0.54, 0.0,
+        ),
+        LeewayClass(
+            "piw_vertical_pfd", "PIW-2: person in water, vertical, PFD type III, conscious",
+            0.48, 0.0, 0.15, 0.0, -0.15, 0.0,
+        ),
+        LeewayClass(
+            "life_raft_deep_ballast", "LIFE-RAFT-DB-10: life raft, deep ballast, general",
+            3.52, -2.50, 0.62, -3.00, -0.45, -0.20,
+        ),
+        LeewayClass(
+            "life_raft_no_ballast", "LIFE-RAFT-NB-1: life raft, no ballast, general", 3.70, 0.0,
+            1.98, 0.0, -1.98, 0.0,
+        ),
+        LeewayClass(
+            "skiff", "SKIFF-1: skiff, modified-v runabout outboard powerboat", 3.15, 0.0, 1.29,
+            0.0, -1.29, 0.0,
+        ),
+        LeewayClass(
+            "fishing_vessel", "FISHING-VESSEL-1: fishing vessel, general", 2.47, 0.0, 2.76, 0.0,
+            -2.76, 0.0,
+        ),
+    )
+}  # fmt: skip
+
+
+# ------------------------------------------------------------------------ velocity fields
+@dataclass(frozen=True)
+class VelocityField:
+    """A gridded current on the map's cells: ``frames (T, 2, ny, nx)`` (east, north) in m/s,
+    ``dt_s`` apart from the episode's start, linear in time between frames (a stationary field
+    has ``T = 1``)."""
+
+    frames: np.ndarray
+    dt_s: float
+
+    def at(self, t: float) -> np.ndarray:
+        """The field ``(2, ny, nx)`` at time ``t`` (s), linear between frames."""
+        if len(self.frames) == 1:
+            return self.frames[0]
+        x = min(max(t / self.dt_s, 0.0), len(self.frames) - 1.0)
+        k = min(int(x), len(self.frames) - 2)
+        w = x - k
+        return (1.0 - w) * self.frames[k] + w * self.frames[k + 1]
+
+
+def load_field(
+    path: str, shape: tuple[int, int], span_s: float, dt_s: float | None, field: str
+) -> VelocityField:
+    """Read and check a ``.npy`` velocity field for a map of ``shape`` (ny, nx) cells and an
+    episode of ``span_s`` seconds: ConfigError naming ``field`` for a missing or unreadable
+    file, a wrong shape, NaN or infinite values, speeds beyond :data:`MAX_FIELD_MPS` (wrong
+    unit) or frames that end before the episode does."""
+    p = Path(path)
+    if p.suffix != ".npy":
+        raise ConfigError(field, path, "a .npy file of velocities (2, ny, nx) or (T, 2, ny, nx)")
+    try:
+        arr = np.load(p, allow_pickle=False)
+    except (OSError, ValueError) as err:
+        raise ConfigError(field, path, f"a readable .npy file ({err})") from None
+    want = f"(2, {shape[0]}, {shape[1]}) or (T, 2, {shape[0]}, {shape[1]}): east and north "
+    if arr.ndim == 3:
+        arr = arr[None]
+    if arr.ndim != 4 or arr.shape[1:] != (2, *shape) or arr.dtype.kind not in "iuf":
+        raise ConfigError(field, f"{path} of shape {arr.shape}", want + "m/s on the map's cells")
+    arr = np.asarray(arr, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ConfigError(field, f"{path} with NaN or infinite values", "finite velocities")
+    top = float(np.hypot(arr[:, 0], arr[:, 1]).max())
+    if top > MAX_FIELD_MPS:
+        raise ConfigError(
+            field, f"{path} with speeds up to {top:g}", f"m/s, at most {MAX_FIELD_MPS:g} (km/h?)"
+        )
+    if len(arr) > 1:
+        if dt_s is None:
+            raise ConfigError("target.field_dt_s", dt_s, "the time between frames (s)")
+        if (len(arr) - 1) * dt_s < span_s:
+            raise ConfigError(
+                field,
+                f"{path}: {len(arr)} frames {dt_s:g} s apart",
+                f"frames covering the episode's {span_s:g} s",
+            )
+    return VelocityField(arr, float(dt_s or 1.0))
+
+
+# ----------------------------------------------------------------------------- the table
+@dataclass(frozen=True)
+class MotionModel:
+    """One motion model (module docstring).
+
+    Attributes
+    ----------
+    name:
+        The value of ``target.model``.
+    moves:
+        False: the predict step is skipped (``static``).
+    uses_current, uses_field, uses_wind:
+        Which of the configured velocities the model adds.
+    equation:
+        The model's velocity, as text (documentation).
+    """
+
+    name: str
+    moves: bool
+    uses_current: bool
+    uses_field: bool
+    uses_wind: bool
+    equation: str
+
+
+MODELS: dict[str, MotionModel] = {
+    m.name: m
+    for m in (
+        MotionModel("static", False, False, False, False, "v = 0, D = 0 (the paper)"),
+        MotionModel("diffusion", True, False, False, False, "v = 0; dp/dt = D lap p"),
+        MotionModel(
+            "drift", True, True, True, False,
+            "v = current + field(x, t); dp/dt = -div(v p) + D lap p",
+        ),
+        MotionModel(
+            "leeway", True, True, False, True,
+            "v = current + (a_d |W| + b_d) W/|W| + s (a_c |W| + b_c) W_perp; + D lap p",
+        ),
+    )
+}  # fmt: skip
+MODEL_NAMES = tuple(MODELS)
+
+
+def motion_model(name: Any, field: str = "target.model") -> MotionModel:
+    """The table entry of ``name``; ConfigError naming the models otherwise."""
+    model = MODELS.get(name) if isinstance(name, str) else None
+    if model is None:
+        raise ConfigError(field, name, "one of " + ", ".join(MODELS))
+    return model
+
+
+def leeway_class(name: Any, field: str = "target.leeway_class") -> LeewayClass:
+    """The leeway class ``name``; ConfigError naming the classes otherwise."""
+    cls = LEEWAY_CLASSES.get(name) if isinstance(name, str) else None
+    if cls is None:
+        raise ConfigError(field, name, "one of " + ", ".join(LEEWAY_CLASSES))
+    return cls
+
+
+@dataclass(frozen=True)
+class Motion:
+    """The checked motion of one scenario: its model, ``D`` (m^2/s), the fixed uniform
+    current (m/s), the random current's largest speed (m/s), the wind (m/s), the leeway class
+    and the gridded field (or None)."""
+
+    model: MotionModel
+    diffusion: float
+    current: tuple[float, float]
+    random_current: float
+    wind: tuple[float, float]
+    leeway: LeewayClass | None
+    field: VelocityField | None
+
+    @property
+    def moves(self) -> bool:
+        return self.model.moves
+
+    def draw(self, rng: np.random.Generator) -> np.ndarray:
+        """The episode's uniform velocity (2,) m/s: the fixed current, plus a random current
+        (speed ``U(0, max)``, direction ``U(0, 2 pi)``) when ``random_current > 0``, plus the
+        leeway with its crosswind side drawn 50/50 (leeway). Draws from ``rng`` only what the
+        model uses."""
+        v = np.zeros(2)
+        if self.model.uses_current:
+            v += self.current
+            if self.random_current > 0:
+                speed = rng.uniform(0.0, self.random_current)
+                angle = rng.uniform(0.0, 2.0 * np.pi)
+                v += speed * np.array([np.cos(angle), np.sin(angle)])
+        if self.model.uses_wind and self.leeway is not None:
+            side = 1.0 if rng.random() < 0.5 else -1.0
+            v += leeway_velocity(self.leeway, self.wind, side)
+        return v
+
+
+def leeway_velocity(cls: LeewayClass, wind: tuple[float, float], side: float) -> np.ndarray:
+    """The leeway (2,) m/s of class ``cls`` in the 10 m ``wind`` (east, north; m/s): downwind
+    along the wind, crosswind perpendicular to its right (``side`` +1) or left (-1)."""
+    w = np.asarray(wind, dtype=float)
+    speed = float(np.hypot(*w))
+    if speed == 0.0:
+        return np.zeros(2)
+    down = w / speed
+    right = np.array([down[1], -down[0]])  # the downwind direction turned 90 deg clockwise
+    dw, cw = cls.leeway(speed, side)
+    return dw * down + cw * right
+
+
+def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
+    """The :class:`Motion` of a scenario's ``target`` section (:class:`~poc_env.config.
+    TargetConfig`) on a map of ``shape`` cells and an episode of ``span_s`` seconds;
+    ConfigError naming the field for an unknown model or leeway class or a bad field file."""
+    model = motion_model(target.model)
+    cls = leeway_class(target.leeway_class) if model.uses_wind else None
+    field = None
+    if target.field_file is not None:
+        if not model.uses_field:
+            raise ConfigError("target.field_file", target.field_file, "null unless model is drift")
+        field = load_field(target.field_file, shape, span_s, target.field_dt_s, "target.field_file")
+    return Motion(
+        model=model,
+        diffusion=float(target.diffusion_m2_s) if model.moves else 0.0,
+        current=(target.current_kmh[0] * KMH, target.current_kmh[1] * KMH),
+        random_current=float(target.random_current_kmh) * KMH,
+        wind=(target.wind_kmh[0] * KMH, target.wind_kmh[1] * KMH),
+        leeway=cls,
+        field=field,
+    )
+
+
+# ----------------------------------------------------------------------------- numerics
+def substeps(u_max: float, v_max: float, diffusion: float, dt: float, h: float) -> int:
+    """Sub-steps of one ``dt`` keeping ``(|u| + |v|) tau / h + 4 D tau / h^2 <= 1``."""
+    rate = (u_max + v_max) / h + 4.0 * diffusion / (h * h)
+    return max(1, math.ceil(rate * dt * (1.0 + 1e-12)))
+
+
+def advect_diffuse(
+    mass: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    diffusion: float,
+    dt: float,
+    h: float,
+) -> np.ndarray:
+    """Move the cell masses ``mass (E, NY, NX)`` (in place) for ``dt`` seconds by the cell
+    velocities ``u, v`` (east, north; m/s; broadcastable to ``mass``) and diffusion ``D`` on
+    cells of side ``h``; return the mass ``(E,)`` that left the map.
+
+    Face velocities are the means of the two cells' (the edge cell's own at the map's edge);
+    upwind advective and centred diffusive fluxes, explicit, in :func:`substeps` sub-steps;
+    nothing enters from outside the map.
+    """
+    e, ny, nx = mass.shape
+    u = np.broadcast_to(u, mass.shape)
+    v = np.broadcast_to(v, mass.shape)
+    uf = np.empty((e, ny, nx + 1))
+    uf[:, :, 1:-1] = 0.5 * (u[:, :, 1:] + u[:, :, :-1])
+    uf[:, :, 0], uf[:, :, -1] = u[:, :, 0], u[:, :, -1]
+    vf = np.empty((e, ny + 1, nx))
+    vf[:, 1:-1] = 0.5 * (v[:, 1:] + v[:, :-1])
+    vf[:, 0], vf[:, -1] = v[:, 0], v[:, -1]
+    n = substeps(float(np.abs(uf).max()), float(np.abs(vf).max()), diffusion, dt, h)
+    tau = dt / n
+    k = diffusion * tau / (h * h)
+    # Courant numbers split by sign: flux through a face = cp * left + cm * right
+    cxp, cxm = np.maximum(uf, 0.0) * (tau / h) + k, np.minimum(uf, 0.0) * (tau / h) - k
+    cyp, cym = np.maximum(vf, 0.0) * (tau / h) + k, np.minimum(vf, 0.0) * (tau / h) - k
+    out = np.zeros(e)
+    fx = np.empty((e, ny, nx + 1))
+    fy = np.empty((e, ny + 1, nx))
+    for _ in range(n):
+        fx[:, :, 1:] = cxp[:, :, 1:] * mass
+        fx[:, :, 0] = 0.0
+        fx[:, :, :-1] += cxm[:, :, :-1] * mass
+        fy[:, 1:] = cyp[:, 1:] * mass
+        fy[:, 0] = 0.0
+        fy[:, :-1] += cym[:, :-1] * mass
+        out += fx[:, :, -1].sum(axis=1) - fx[:, :, 0].sum(axis=1)
+        out += fy[:, -1].sum(axis=1) - fy[:, 0].sum(axis=1)
+        mass -= fx[:, :, 1:] - fx[:, :, :-1]
+        mass -= fy[:, 1:] - fy[:, :-1]
+    return out
+
+
+def cell_velocity(
+    motion: Motion, uniform: np.ndarray, t: float, s: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The velocities ``u, v`` of every env on the fine grid (``s`` fine cells per map cell):
+    the episode's uniform velocity ``uniform (E, 2)`` plus the gridded field at time ``t``."""
+    u = uniform[:, 0, None, None]
+    v = uniform[:, 1, None, None]
+    if motion.field is not None:
+        f = motion.field.at(t)
+        fu = np.repeat(np.repeat(f[0], s, axis=0), s, axis=1)
+        fv = np.repeat(np.repeat(f[1], s, axis=0), s, axis=1)
+        return u + fu[None], v + fv[None]
+    return u, v
+
+
+def predict(
+    motion: Motion,
+    belief: np.ndarray,
+    uniform: np.ndarray,
+    t: float,
+    dt: float,
+    h: float,
+    s: int,
+) -> np.ndarray:
+    """The predict step of the filter on the fine belief ``(E, NY, NX)`` (in place) over
+    ``[t, t + dt]``; returns the mass ``(E,)`` that left the map."""
+    u, v = cell_velocity(motion, uniform, t, s)
+    return advect_diffuse(belief, u, v, motion.diffusion, dt, h)
+
+
+def move_targets(
+    motion: Motion,
+    target: np.ndarray,
+    out: np.ndarray,
+    uniform: np.ndarray,
+    noise: np.ndarray,
+    t: float,
+    dt: float,
+    origin: tuple[float, float],
+    cell: float,
+    shape: tuple[int, int],
+) -> None:
+    """Move the hidden targets ``target (E, 2)`` (in place) over ``[t, t + dt]``: ``x += v(x,
+    t) dt + sqrt(2 D dt) noise`` (``noise (E, 2)`` standard normal); a target outside the map
+    (``out (E,)``, updated) no longer moves."""
+    vel = np.array(uniform, dtype=float)
+    ny, nx = shape
+    if motion.field is not None:
+        f = motion.field.at(t)
+        i = np.clip(((target[:, 0] - origin[0]) // cell).astype(int), 0, nx - 1)
+        j = np.clip(((target[:, 1] - origin[1]) // cell).astype(int), 0, ny - 1)
+        vel += f[:, j, i].T
+    step = vel * dt + math.sqrt(2.0 * motion.diffusion * dt) * noise
+    target += np.where(out[:, None], 0.0, step)
+    x0, y0 = origin
+    outside = (
+        (target[:, 0] < x0)
+        | (target[:, 0] >= x0 + nx * cell)
+        | (target[:, 1] < y0)
+        | (target[:, 1] >= y0 + ny * cell)
+    )
+    out |= outside
