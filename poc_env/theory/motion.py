@@ -65,7 +65,14 @@ MAX_FIELD_MPS = 10.0
 class LeewayClass:
     """Leeway of one search object class: downwind and crosswind leeway, each
     ``slope * W10 + offset``, slopes in % of the 10 m wind speed, offsets in cm/s; crosswind
-    to the right (``+``) and to the left (``-``) of the downwind direction."""
+    to the right (``+``) and to the left (``-``) of the downwind direction.
+
+    Source of :data:`LEEWAY_CLASSES`: Allen, A. A. and Plourde, J. V. (1999), *Review of
+    Leeway: Field Experiments and Implementation*, US Coast Guard R&D Center report
+    CG-D-08-99, and Allen, A. A. (2005), *Leeway Divergence*, CG-D-05-05: the mean values of
+    the USCG leeway taxonomy's classes as tabulated for SAROPS (2010) and in OpenDrift's
+    ``OBJECTPROP.DAT`` (2011).
+    """
 
     name: str
     description: str
@@ -317,7 +324,7 @@ def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
 def substeps(u_max: float, v_max: float, diffusion: float, dt: float, h: float) -> int:
     """Sub-steps of one ``dt`` keeping ``(|u| + |v|) tau / h + 4 D tau / h^2 <= 1``."""
     rate = (u_max + v_max) / h + 4.0 * diffusion / (h * h)
-    return max(1, math.ceil(rate * dt * (1.0 + 1e-12)))
+    return max(1, math.ceil(rate * dt - 1e-9))
 
 
 def advect_diffuse(

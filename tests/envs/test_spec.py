@@ -140,7 +140,13 @@ def test_the_task_table_is_the_spec():
         tasks.task_id(s.text, c.text, bool(r.value)): (s.value, c.value, r.value)
         for s, r, c in parts
     }
+    for m in spec.MOTION_PARTS[1:]:  # moving targets: fixed prior, the listed control levels
+        for s in spec.SCENARIO_PARTS:
+            for c in spec.MOTION_CONTROLS[str(m.value)]:
+                tid = tasks.task_id(s.text, c, False, motion=m.text)
+                want[tid] = (s.value, tasks.CONTROL_NAMES[c], False)
     assert {t: (k.scenario, k.control, k.random_prior) for t, k in tasks.TASKS.items()} == want
+    assert {t.motion for t in tasks.TASKS.values()} == {str(m.value) for m in spec.MOTION_PARTS}
     assert all(t.endswith(f"-v{spec.TASK_VERSION}") for t in tasks.TASKS)
 
 

@@ -24,7 +24,8 @@ ALL = list(tasks.TASKS)
 
 
 def test_the_table_of_tasks():
-    assert len(ALL) == 3 * 2 * 3
+    assert len(ALL) == 3 * 2 * 3 + 3  # plus the Drift-Heading tasks
+    assert f"poc_env/UAVSearch-Paper62-Drift-Heading-v{tasks.VERSION}" in ALL
     assert f"poc_env/UAVSearch-Paper62-Random-Heading-v{tasks.VERSION}" in ALL
     assert f"poc_env/UAVSearch-Small-Increments-v{tasks.VERSION}" in ALL
     for tid in ALL:
