@@ -37,6 +37,7 @@ import copy  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
@@ -160,6 +161,45 @@ def bench_mpe(n_agents: int, runs: int, seed: int = 0, max_cycles: int = 100) ->
     return statistics.median(one_run(episodes) for _ in range(runs))
 
 
+#: The moving-target overrides of ``--motion``: the Drift tasks' (poc_env.spec.MOTION_OVERRIDES).
+MOTION_SET: dict[str, dict[str, Any]] = {
+    "drift": {"target.random_current_kmh": 25.0, "target.diffusion_m2_s": 50.0},
+    "diffusion": {"target.diffusion_m2_s": 50.0},
+    "leeway": {
+        "target.random_current_kmh": 25.0,
+        "target.wind_kmh": [40.0, 20.0],
+        "target.diffusion_m2_s": 50.0,
+    },
+}
+
+
+def bench_motion(args: argparse.Namespace, overrides: dict, static: sim.Params) -> dict:
+    """Static vs moving target in the batched core, timed run by run in turn (one thread):
+    the medians and the filter's share of a step, ``1 - static rate / moving rate``."""
+    moving = sim.make_params(
+        load_scenario(
+            args.scenario, {**overrides, "target.model": args.motion, **MOTION_SET[args.motion]}
+        )
+    )
+    out: dict[str, float] = {}
+    for e in args.envs:
+        rates: dict[str, list[float]] = {"static": [], args.motion: []}
+        for _ in range(args.runs):  # interleaved
+            rates["static"].append(bench_core(static, e, 1))
+            rates[args.motion].append(bench_core(moving, e, 1))
+        a = statistics.median(rates["static"])
+        b = statistics.median(rates[args.motion])
+        share = 1.0 - b / a
+        out[f"core_{e}env_static"], out[f"core_{e}env_{args.motion}"] = a, b
+        out[f"filter_share_{e}env"] = share
+        print(
+            f"core {args.scenario} n_envs={e:<4d}: static {a:12,.0f}, {args.motion} {b:12,.0f} "
+            f"agent-steps/s; the filter takes {100 * share:.1f} % of the step",
+            flush=True,
+        )
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict[str, float]:
     """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -174,6 +214,13 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         metavar="KEY=VALUE",
         help="scenario overrides, e.g. sensor.samples_per_cell=2 sensor.cutoff_sweep_widths=3",
     )
+    ap.add_argument(
+        "--motion",
+        choices=("drift", "diffusion", "leeway"),
+        default=None,
+        help="also time a moving target (the Drift tasks' current and diffusion, or that "
+        "model), interleaved with the static one, and print the filter's share of the step",
+    )
     args = ap.parse_args(argv)
 
     overrides = {}
@@ -183,6 +230,8 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     params = sim.make_params(load_scenario(args.scenario, overrides))
     n = params.n_agents
     out: dict[str, float] = {}
+    if args.motion is not None:
+        return bench_motion(args, overrides, params)
     for e in args.envs:
         rate = bench_core(params, e, args.runs)
         out[f"core_{e}env"] = rate

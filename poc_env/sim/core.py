@@ -351,9 +351,19 @@ def predict(params: Params, state: State) -> None:
     h = params.grid.cell_m / params.s
     dt = params.dt
     varying = motion.field is not None and len(motion.field.frames) > 1
-    groups = np.unique(state.step) if varying else state.step[:1]
-    for k in groups.tolist():
-        rows = state.step == k if varying else slice(None)
+    if not varying:  # one velocity per env for the whole batch: in place, no copies
+        state.mass_out += motion_mod.predict(
+            motion, state.belief, state.drift, 0.0, dt, h, params.s
+        )
+        idx = np.minimum(state.step, state.target_noise.shape[1] - 1)
+        noise = state.target_noise[np.arange(len(idx)), idx]
+        motion_mod.move_targets(
+            motion, state.target, state.target_out, state.drift, noise, 0.0, dt,
+            params.grid.origin_m, params.grid.cell_m, (params.grid.ny, params.grid.nx),
+        )  # fmt: skip
+        return
+    for k in np.unique(state.step).tolist():  # a time-varying field: envs grouped by their time
+        rows = state.step == k
         t = k * dt
         belief = state.belief[rows]
         state.mass_out[rows] += motion_mod.predict(
