@@ -291,8 +291,7 @@ class MapConfig:
                     raise ConfigError(
                         f"no_fly_zones_km[{i}]",
                         self.zone_label(i),
-                        "a zone that leaves part of the search area flyable (it covers all of "
-                        "it)",
+                        "a zone that leaves part of the search area flyable (it covers all of it)",
                     )
 
     def zone_label(self, i: int) -> str:

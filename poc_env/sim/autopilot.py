@@ -157,9 +157,8 @@ class WaypointFollower:
             if self.router is None:
                 back = must_return(self.params, q, k)
             else:  # eq. 18's rule on the way around the zones
-                back = q["usable"] * u.usable_endurance_s <= (
-                    home_len / u.cruise_speed_mps + 2 * self.params.dt
-                )
+                rule = home_len / u.cruise_speed_mps + 2 * self.params.dt
+                back = bool(q["usable"] * u.usable_endurance_s <= rule)
             if back:
                 self.index[k] = len(wps)
             on_pattern = 0 < self.index[k] < len(wps)

@@ -23,6 +23,7 @@ follower's transit legs (:mod:`poc_env.sim.autopilot`).
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from typing import Any
 
@@ -73,15 +74,15 @@ class ZoneRouter:
         if not self.active:
             return
         raw = shapely.union_all(self.zones)
-        self.keep_out = shapely.union_all([z.buffer(self.clearance, quad_segs=2) for z in self.zones])
+        self.keep_out = shapely.union_all(
+            [z.buffer(self.clearance, quad_segs=2) for z in self.zones]
+        )
         self.obstacle = raw.buffer(_SLACK * self.clearance, quad_segs=4)
         self.raw = raw.buffer(1.0)
         for g in (self.keep_out, self.obstacle, self.raw):
             shapely.prepare(g)
         polys = list(getattr(self.keep_out, "geoms", [self.keep_out]))
-        nodes = [
-            np.asarray(r.coords)[:-1, :2] for p in polys for r in (p.exterior, *p.interiors)
-        ]
+        nodes = [np.asarray(r.coords)[:-1, :2] for p in polys for r in (p.exterior, *p.interiors)]
         pts = np.concatenate(nodes) if nodes else np.zeros((0, 2))
         if self.area is not None:
             x0, y0, x1, y1 = self.area
@@ -118,9 +119,7 @@ class ZoneRouter:
         0.9 c; from a point already inside that ring, the zones themselves)."""
         if not len(targets):
             return np.zeros(0, dtype=bool)
-        lines = shapely.linestrings(
-            np.stack([np.broadcast_to(p, targets.shape), targets], axis=1)
-        )
+        lines = shapely.linestrings(np.stack([np.broadcast_to(p, targets.shape), targets], axis=1))
         hit = shapely.intersects(lines, self.obstacle)
         # an end already inside the 0.9 c ring (a field near a zone, a UAV cutting a corner):
         # only the zones themselves count for that segment
@@ -211,7 +210,7 @@ class ZoneRouter:
             cur = out[-1]
             return True
 
-        for p, q in zip(pts[:-1], pts[1:], strict=True):
+        for p, q in itertools.pairwise(pts):
             for s, e in self.pieces(p, q):
                 if go(s):
                     out.append(e)

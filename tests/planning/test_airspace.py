@@ -134,8 +134,15 @@ def test_zone_over_an_airfield_or_the_whole_area_is_named():
         load_scenario("small", {"map.no_fly_zones_km": [[[15, -8], [25, -8], [25, 2]]],
                                 "map.no_fly_names": ["R-1"]})  # fmt: skip
     with pytest.raises(ConfigError, match=r"no_fly_zones_km\[1\].*covers all"):
-        load_scenario("small", {"map.no_fly_zones_km": [[[0, 0], [1, 0], [1, 1]],
-                                                         [[-1, 0], [41, 0], [41, 41], [-1, 41]]]})
+        load_scenario(
+            "small",
+            {
+                "map.no_fly_zones_km": [
+                    [[0, 0], [1, 0], [1, 1]],
+                    [[-1, 0], [41, 0], [41, 41], [-1, 41]],
+                ]
+            },
+        )
 
 
 def test_plan_bounds_and_probabilities_are_in_0_1(tmp_path):
