@@ -223,6 +223,9 @@ class MapConfig:
     no_fly_zones_m: tuple[tuple[tuple[float, float], ...], ...] = _f(
         "no_fly_zones_km", KM, default=()
     )
+    #: the zones' names (``scenario import`` keeps each feature's ``name``), one per zone or
+    #: none; messages name zone ``i`` as ``no-fly zone i ('name')`` (counted from 0).
+    no_fly_names: tuple[str, ...] = _f(default=())
     threat_peaks: tuple[ThreatPeak, ...] = _f(default=())
     #: eq. 23 threshold Th_s on the peak threat f.
     threat_threshold: float = _f(default=0.5, lo=0.0, hi=1.0)
@@ -269,6 +272,33 @@ class MapConfig:
             _polygon(f"no_fly_zones_km[{i}]", z) for i, z in enumerate(self.no_fly_zones_m)
         )
         object.__setattr__(self, "no_fly_zones_m", zones)
+        names = self.no_fly_names
+        if not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
+            raise ConfigError("no_fly_names", names, "a list of strings")
+        if names and len(names) != len(zones):
+            raise ConfigError(
+                "no_fly_names", list(names), f"one name per no-fly zone ({len(zones)})"
+            )
+        object.__setattr__(self, "no_fly_names", tuple(names))
+        if zones:
+            from shapely.geometry import Polygon, box
+
+            area = box(self.origin_m[0], self.origin_m[1], self.origin_m[0] + self.width_m,
+                       self.origin_m[1] + self.height_m)  # fmt: skip
+            for i, z in enumerate(zones):
+                poly = Polygon(z)
+                if poly.is_valid and poly.covers(area):
+                    raise ConfigError(
+                        f"no_fly_zones_km[{i}]",
+                        self.zone_label(i),
+                        "a zone that leaves part of the search area flyable (it covers all of it)",
+                    )
+
+    def zone_label(self, i: int) -> str:
+        """How messages name no-fly zone ``i`` (:func:`poc_env.geometry.zone_label`)."""
+        from poc_env.geometry import zone_label
+
+        return zone_label(i, self.no_fly_names)
 
     @property
     def nx(self) -> int:
@@ -589,7 +619,7 @@ class Scenario:
                     raise ConfigError(
                         f"airfields[{a.name}].position_km",
                         [c / KM for c in a.position_m],
-                        f"a point outside no-fly zone {k}",
+                        f"a point outside {self.map.zone_label(k)}",
                     )
 
     # -- derived ---------------------------------------------------------------------------

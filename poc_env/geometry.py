@@ -132,3 +132,10 @@ def covers_points(geom, points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     """Boolean mask: which of ``points`` (k, 2) lie in ``geom`` buffered by ``tol`` metres."""
     g = geom.buffer(tol) if tol > 0 else geom
     return shapely.covers(g, shapely.points(np.asarray(points, dtype=float)))
+
+
+def zone_label(i: int, names: Sequence[str] = ()) -> str:
+    """How every message names no-fly zone ``i``: counted from 0 (as ``no_fly_zones_km[i]``
+    and import errors count), with its name when it has one: ``no-fly zone 0 ('range R-12')``."""
+    name = names[i] if 0 <= i < len(names) and names[i] else ""
+    return f"no-fly zone {i}" + (f" ({name!r})" if name else "")

@@ -15,6 +15,7 @@ import numpy as np
 from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.plan import Plan, UavPlan, flight
 from poc_env.errors import ConfigError, as_number
+from poc_env.geometry import zone_label
 
 #: Altitude references: ``home`` (above the take-off field) or ``amsl`` (above mean sea level).
 ALTITUDE_REFS = ("home", "amsl")
@@ -138,8 +139,9 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
     area = plan.get("operating_area_m")
     if area:
         polys.append(("operating_area", "operating area (eq. 20)", area))
+    znames = plan.get("no_fly_zone_names") or ()
     for i, z in enumerate(plan.get("no_fly_zones_m") or []):
-        polys.append(("no_fly_zone", f"no-fly zone {i + 1}", z))
+        polys.append(("no_fly_zone", zone_label(i, znames), z))
     for kind, name, ring in polys:
         ccw = clockwise(ring)[::-1]
         out.append(

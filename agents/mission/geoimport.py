@@ -584,6 +584,7 @@ def import_scenario(
         raise ConfigError(f"{ffile} names", names, "distinct airfield names")
 
     zones = []
+    zone_names: list[str] = []
     if no_fly is not None:
         zfile, zfeats = read_features(no_fly, "no-fly zones: Polygons")
         for i, zr in _polygons(zfile, zfeats):
@@ -593,6 +594,7 @@ def import_scenario(
                     _near(zfile, i, v, np.array(to_geographic_one(v, crs)), poly, crs)
             ring = np.asarray(z.exterior.coords)[:-1]
             zones.append([[_km(x), _km(y)] for x, y in ring])
+            zone_names.append(str((zfeats[i][2] or {}).get("name") or ""))
 
     grid_prior, prior_report = _prior(prior, crs, grid, poly)
 
@@ -621,6 +623,8 @@ def import_scenario(
         new_map["utm_zone"] = int(crs["epsg"]) % 100
     if zones:
         new_map["no_fly_zones_km"] = zones
+        if any(zone_names):  # kept end to end: YAML -> plan.json -> every export
+            new_map["no_fly_names"] = zone_names
     if "threat_threshold" in old_map:
         new_map["threat_threshold"] = old_map["threat_threshold"]
     data["map"] = new_map

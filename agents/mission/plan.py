@@ -47,6 +47,8 @@ Optional fields of both schemas (a plan without them is read as before):
 - ``operating_area_m``: the operating area (eq. 20's boundary) as a polygon [[x, y], ...]; the
   QGC geofence's inclusion polygon. Without it the inclusion fence is left empty.
 - ``no_fly_zones_m``: a list of polygons; exclusion fences.
+- ``no_fly_zone_names``: one name per zone (from ``map.no_fly_names``); messages name zone
+  ``i`` as ``no-fly zone i ('name')``, counted from 0 (:func:`poc_env.geometry.zone_label`).
 - ``airfields``: [{``name``, ``position_m``}]; names in KML/GeoJSON.
 
 Planners add fields of their own (``objective``, ``history``, ``x``, ``planner``, ...); they are
@@ -197,6 +199,7 @@ class Plan(_PlanRequired, total=False):
     flight: Flight | None
     operating_area_m: list[list[float]] | None
     no_fly_zones_m: list[list[list[float]]] | None
+    no_fly_zone_names: list[str] | None
     airfields: list[Airfield] | None
 
 
@@ -345,6 +348,17 @@ def _check_optional(plan: dict[str, Any]) -> None:
             raise ConfigError("plan.no_fly_zones_m", zones, "a list of polygons")
         for i, z in enumerate(zones):
             _polygon(f"plan.no_fly_zones_m[{i}]", z)
+    znames = plan.get("no_fly_zone_names")
+    if znames is not None:
+        n_z = len(zones or [])
+        if (
+            not isinstance(znames, list)
+            or len(znames) != n_z
+            or not all(isinstance(z, str) and len(z) <= 200 for z in znames)
+        ):
+            raise ConfigError(
+                "plan.no_fly_zone_names", znames, f"one name per no-fly zone ({n_z}), strings"
+            )
     fields = plan.get("airfields")
     if fields is not None:
         if not isinstance(fields, list):

@@ -60,6 +60,7 @@ from poc_env.agents.mission.plan import SCHEMA
 from poc_env.agents.planning.geography import plan_geography
 from poc_env.agents.planning.refine import (
     Airspace,
+    fly_around,
     leg_coverage,
     refine_routes,
     route_fits,
@@ -68,7 +69,8 @@ from poc_env.agents.planning.refine import (
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import takeoff_heading
-from poc_env.theory.bound import cell_distances, honest_optimum, reach_bound, reach_optimum
+from poc_env.sim.routing import ZoneRouter
+from poc_env.theory.bound import cell_distances, reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage
 
@@ -422,6 +424,12 @@ def make_allocation_plan(
     grid = Grid.from_config(sc.map)
     prior = build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float)
     reason = _check(sc, prior, grid)
+    router = ZoneRouter.for_scenario(sc)
+    full_prior = prior
+    if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
+        prior = prior * router.reach_share(grid, sc.sensor.sweep_width_m)
+        if reason is None and float(prior.sum()) <= 0:
+            reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav
     w = sc.sensor.sweep_width_m
     law = sc.sensor.law
@@ -461,7 +469,22 @@ def make_allocation_plan(
         _trim(paths, idx, to_f, la_f, sc, v, takeoff_heading(g_f.bounds, to_f))
         if swap:
             paths = [[[q[1], q[0]] for q in path] for path in paths]
+        if router.active:
+            paths = [_around(k, paths[k]) if paths[k] else [] for k in range(n)]
         return paths, idx
+
+    heading0 = takeoff_heading(grid.bounds, takeoff)
+
+    def _around(k: int, wps) -> list[list[float]]:
+        """UAV ``k``'s waypoints made flyable around the zones, cut to fit eq. 18."""
+        path = fly_around(
+            router,
+            np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]]),
+            lambda p: route_fits(
+                p, v, u.max_turn_rate_rad_s, u.usable_endurance_s, _reserve(sc), heading0[k]
+            ),
+        )
+        return [[float(a), float(b)] for a, b in path[1:-1]]
 
     eta = 0.0
     chosen = 0
@@ -529,7 +552,10 @@ def make_allocation_plan(
                     RANGE_MARGIN * sc.comms.range_m,
                     sc.comms.min_neighbours,
                 ),
+                router=router,
             )
+            if router.active:  # moves keep 0.9 c from the zones; the route keeps c
+                routes = [_around(k, routes[k]) if routes[k] else [] for k in range(n)]
     covs = [
         _path_coverage([takeoff[k], *routes[k], landing[k]], grid, w)
         if routes[k]
@@ -580,8 +606,8 @@ def make_allocation_plan(
             }
         )
     runtime = time.perf_counter() - t0
-    rb = reach_bound(sc, prior).upper if reason is None or prior.sum() > 0 else 0.0
-    geo = plan_geography(sc, prior, crs)
+    geo = plan_geography(sc, full_prior, crs)
+    rb = geo.get("bounds", {}).get("reach", 0.0) if reason is None or prior.sum() > 0 else 0.0
     geo["flight"] = {  # the speeds this plan is flown at (plan_speeds)
         **geo["flight"],
         "cruise_speed_mps": v.home,
@@ -613,7 +639,6 @@ def make_allocation_plan(
         "posc": posc,
         "upper_bound": float(fleet.upper) if fleet is not None else 0.0,
         "bound_reach": float(rb),
-        "bounds": {"honest": float(honest_optimum(sc, prior).pos), "reach": float(rb)},
         "allocation_pos": alloc_pos,
         "eta": float(eta),
         "reason": reason,

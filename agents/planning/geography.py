@@ -36,6 +36,12 @@ def scenario_crs(
     return crs
 
 
+def probability(value: float) -> float:
+    """``value`` as a probability of plan.json: clamped to [0, 1] (sums of cell masses round
+    to ``1 + 2e-16``; the export checks [0, 1])."""
+    return float(min(max(float(value), 0.0), 1.0))
+
+
 def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
     """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
     the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
@@ -57,10 +63,12 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
             {"name": a.name, "position_m": [float(v) for v in a.position_m]} for a in sc.airfields
         ],
     }
+    if sc.map.no_fly_names:
+        out["no_fly_zone_names"] = list(sc.map.no_fly_names)
     if float(np.sum(prior)) > 0:  # an empty prior (a route plan's stated reason) has no bounds
-        out["bounds"] = {
-            "honest": float(honest_optimum(sc, prior).pos),
-            "reach": float(reach_bound(sc, prior).upper),
+        out["bounds"] = {  # probabilities: rounding may give 1 + 2e-16
+            "honest": probability(honest_optimum(sc, prior).pos),
+            "reach": probability(reach_bound(sc, prior).upper),
         }
     if crs is not None:
         out["crs"] = crs

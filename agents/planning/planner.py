@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -31,9 +31,19 @@ from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
 from poc_env.agents.planning.geography import plan_geography, scenario_crs
 from poc_env.agents.planning.objective import PlanObjective
 from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
+from poc_env.agents.planning.refine import route_time
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
-from poc_env.theory.probability_map import build_prior
+from poc_env.sim.routing import ZoneRouter
+from poc_env.theory.probability_map import Grid, build_prior
+
+
+class _Speeds(NamedTuple):
+    """Eq. 17's speeds of a DE plan's path (``route_time``): out, on the pattern, home."""
+
+    out: float
+    line: float
+    home: float
 
 
 def make_plan(
@@ -100,6 +110,10 @@ def make_plan(
     opt = get_optimizer(optimizer)
     if prior is None:
         prior = build_prior(sc.map)
+    full_prior = np.asarray(prior, dtype=float)
+    router = ZoneRouter.for_scenario(sc)
+    if router.active:  # POC inside a zone counts as far as the sensor reaches it from outside
+        prior = full_prior * router.reach_share(Grid.from_config(sc.map), sc.sensor.sweep_width_m)
     obj = PlanObjective(sc, prior, uavs=uavs)
     pl = preset_settings(preset, sc.planner)
     settings: dict[str, Any] = {
@@ -146,7 +160,15 @@ def make_plan(
     x = np.asarray(res.x, dtype=float)
     per_uav = obj.decode(x)
     uav_out = []
+    u_cfg = obj.scenario.uav
+    speeds = _Speeds(u_cfg.cruise_speed_mps, u_cfg.search_speed_mps, u_cfg.cruise_speed_mps)
     for u in per_uav:
+        if router.active:  # transit around the zones, search legs clipped to flyable airspace
+            path = router.reroute([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]])
+            u["waypoints_m"] = [[float(a), float(b)] for a, b in path[1:-1]]
+            u["track_length_m"] = float(np.hypot(*np.diff(path, axis=0).T).sum())
+            u["flight_time_s"] = route_time(path, speeds, u_cfg.max_turn_rate_rad_s)
+            u["feasible"] = bool(u["feasible"] and u["flight_time_s"] <= u_cfg.usable_endurance_s)
         uav_out.append(
             {
                 "id": u["id"] + 1,
@@ -184,7 +206,7 @@ def make_plan(
         "rectangle_rule": RECTANGLE_RULE,
         "uavs": uav_out,
         # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
-        **plan_geography(obj.scenario, prior, crs),
+        **plan_geography(obj.scenario, full_prior, crs),
     }
 
 

@@ -34,6 +34,7 @@ import numpy as np
 from poc_env.agents.planning import _kernels
 from poc_env.sim.comms import in_range, two_neighbour_ok
 from poc_env.sim.constraints import pairwise_distances, separation_violations
+from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage
 
@@ -199,6 +200,7 @@ def refine_routes(
     sweeps: int = 4,
     headings=None,
     airspace: Airspace | None = None,
+    router: ZoneRouter | None = None,
 ) -> tuple[list[list[list[float]]], float]:
     """Refined waypoints per UAV and their planned POS (module docstring). ``routes[k]`` are
     UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; a route that does not
@@ -206,7 +208,9 @@ def refine_routes(
     does, and every kept move keeps it fitting. ``headings`` (n,): the UAVs' headings at
     take-off (rad), or None. With ``airspace``, a move is kept only if it adds no
     :func:`swarm_violations` at the planned positions (the best-scoring candidates are tried in
-    turn, at most :data:`TRIES`)."""
+    turn, at most :data:`TRIES`). With ``router``, a move whose new legs enter a no-fly zone
+    grown by 0.9 of the clearance (:meth:`poc_env.sim.routing.ZoneRouter.crosses`) is not
+    tried, so routes made flyable stay flyable (eq. 20)."""
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     n = len(takeoff)
@@ -287,6 +291,11 @@ def refine_routes(
                     rows += [len(kinds)] * 2
                     kinds.append(1)
                 ok = np.array([fits(p, k) for p in cands])
+                if router is not None and router.active:
+                    hit = router.crosses(np.asarray(starts), np.asarray(ends))
+                    blocked = np.zeros(len(cands), dtype=bool)
+                    np.logical_or.at(blocked, np.asarray(rows), hit)
+                    ok &= ~blocked
                 new = leg_coverage(starts, ends, grid, w, np.asarray(rows))
                 old_a = leg_coverage(a, b, grid, w)[0]
                 old_b = leg_coverage(b, path[i + 1], grid, w)[0] if movable else 0.0
@@ -322,3 +331,26 @@ def refine_routes(
             break
     out = [[[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] for p in paths]
     return out, value
+
+
+def fly_around(router: ZoneRouter, path, fits) -> np.ndarray:
+    """``path`` (take-off, waypoints, landing) made flyable by ``router``
+    (:meth:`~poc_env.sim.routing.ZoneRouter.reroute`: search legs clipped to searchable
+    airspace, transit around the zones), keeping the longest prefix of its waypoints for which
+    ``fits(rerouted path)`` holds (bisection; none kept: take-off then landing, rerouted)."""
+    p = np.asarray(path, dtype=float).reshape(-1, 2)
+    full = router.reroute(p)
+    if len(p) <= 2 or fits(full):
+        return full
+
+    def cut(m: int) -> np.ndarray:
+        return router.reroute(np.vstack([p[: m + 1], p[-1:]]))
+
+    lo, hi = 0, len(p) - 3  # lo: inner waypoints known to fit (0 is the fallback)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if fits(cut(mid)):
+            lo = mid
+        else:
+            hi = mid - 1
+    return cut(lo)

@@ -8,6 +8,9 @@ levels the pitch to hold the cruise altitude. A waypoint counts as reached when 
 half a step. After the last waypoint -- or as soon as the remaining usable endurance (0.85 T,
 eq. 18) only just covers the flight home at cruise speed plus two steps -- the UAV heads for its
 landing field.
+With no-fly zones (eq. 20) the legs to the first waypoint and home follow the shortest path
+around them (:class:`poc_env.sim.routing.ZoneRouter`, the planners' router), and the return
+rule budgets that path's length.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 from poc_env.errors import ConfigError
 from poc_env.sim.core import Params
 from poc_env.sim.observations import decode_vector, split_observation
+from poc_env.sim.routing import ZoneRouter, clearance_m
 
 
 def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> np.ndarray:
@@ -112,6 +116,20 @@ class WaypointFollower:
                 )
         self.waypoints = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
         self.index = np.zeros(len(self.agents), dtype=int)
+        self.router = (
+            ZoneRouter(params.zones.polygons, params.bounds, clearance_m(params.scenario))
+            if len(params.zones)
+            else None
+        )
+
+    def _around(self, xy: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
+        """The next point on the way ``xy -> goal`` around the zones, and the way's length."""
+        if self.router is None:
+            return goal, float(np.hypot(*(goal - xy)))
+        path = self.router.path(xy, goal)
+        if path is None:
+            return goal, float(np.hypot(*(goal - xy)))
+        return path[1], float(np.hypot(*np.diff(path, axis=0).T).sum())
 
     def reset(self) -> None:
         self.index[:] = 0
@@ -133,7 +151,15 @@ class WaypointFollower:
             reach = 0.5 * q["speed"] * self.params.dt
             while self.index[k] < len(wps) and np.hypot(*(wps[self.index[k]] - q["xy"])) <= reach:
                 self.index[k] += 1
-            if must_return(self.params, q, k):
+            xy = np.asarray(q["xy"], dtype=float)
+            home_goal, home_len = self._around(xy, self.params.landing[k])
+            u = self.params.scenario.uav
+            if self.router is None:
+                back = must_return(self.params, q, k)
+            else:  # eq. 18's rule on the way around the zones
+                rule = home_len / u.cruise_speed_mps + 2 * self.params.dt
+                back = bool(q["usable"] * u.usable_endurance_s <= rule)
+            if back:
                 self.index[k] = len(wps)
             on_pattern = 0 < self.index[k] < len(wps)
             if on_pattern:  # pure pursuit along the leg: back onto the line, then along it
@@ -141,11 +167,17 @@ class WaypointFollower:
                     wps[self.index[k] - 1], wps[self.index[k]], q["xy"], float(2 * reach)
                 )
             elif self.index[k] < len(wps):
-                goal = wps[self.index[k]]
+                goal = self._around(xy, wps[self.index[k]])[0]
             else:
                 goal = self.params.landing[k]
             if self.index[k] >= len(wps):
-                actions[agent] = go_home(self.params, q, k)
+                if home_goal is not self.params.landing[k] and np.any(home_goal != goal):
+                    actions[agent] = steer(
+                        self.params, xy, q["heading"], q["speed"], q["pitch"], q["z"],
+                        home_goal, u.cruise_speed_mps,
+                    ).astype(np.float32)  # fmt: skip
+                else:
+                    actions[agent] = go_home(self.params, q, k)
                 continue
             v = self.pattern_speed if on_pattern else self.transit_speed
             actions[agent] = steer(

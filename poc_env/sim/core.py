@@ -108,6 +108,21 @@ class Params:
         )
 
 
+def operating_area(scenario: Scenario) -> tuple[float, float, float, float]:
+    """Eq. 20's operating area ``(x0, y0, x1, y1)``: the bounding box of the grid and the
+    airfields grown by ``episode.boundary_margin_km``."""
+    sc = scenario
+    pts = np.vstack([np.asarray(sc.takeoff_m), np.asarray(sc.landing_m)])
+    x0, y0, x1, y1 = Grid.from_config(sc.map).bounds
+    m = sc.episode.boundary_margin_m
+    return (
+        float(min(x0, pts[:, 0].min()) - m),
+        float(min(y0, pts[:, 1].min()) - m),
+        float(max(x1, pts[:, 0].max()) + m),
+        float(max(y1, pts[:, 1].max()) + m),
+    )
+
+
 def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
     """Derive the constants of :func:`step` from a scenario (and an optional prior)."""
     sc = scenario
@@ -117,15 +132,7 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
     dt = sc.episode.dt_s
     cutoff = sc.sensor.cutoff_sweep_widths * sc.sensor.sweep_width_m
     win = window_size(grid, s, u.max_speed_mps * dt, cutoff)
-    pts = np.vstack([np.asarray(sc.takeoff_m), np.asarray(sc.landing_m)])
-    x0, y0, x1, y1 = grid.bounds
-    m = sc.episode.boundary_margin_m
-    bounds = (
-        min(x0, pts[:, 0].min()) - m,
-        min(y0, pts[:, 1].min()) - m,
-        max(x1, pts[:, 0].max()) + m,
-        max(y1, pts[:, 1].max()) + m,
-    )
+    bounds = operating_area(sc)
     centers, lambdas = cons.threat_arrays(sc.map.threat_peaks)
     horizon = sc.horizon_steps
     switcher = None

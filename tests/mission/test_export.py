@@ -581,7 +581,7 @@ def test_a_mission_that_would_breach_its_own_geofence_is_refused(tmp_path):
     _, plan = _geo_plan(tmp_path)
     plan["uavs"][0]["waypoints_m"][:2] = [[70e3, 85e3], [100e3, 88e3]]  # across the zone
     path.write_text(json.dumps(plan))
-    with pytest.raises(ConfigError, match=r"uavs\[0\].*no-fly zone 1"):
+    with pytest.raises(ConfigError, match=r"uavs\[0\].*no-fly zone 0"):
         export_plan(path, "qgc", None, tmp_path / "p", geofence=False)
 
 

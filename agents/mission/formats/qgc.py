@@ -136,6 +136,8 @@ def check_fences(plan: Plan, area: list | None) -> None:
     ``area`` (by more than 1 m) or flies through a no-fly zone (more than 1 m of a leg)."""
     from shapely.geometry import LineString, Point, Polygon
 
+    from poc_env.geometry import zone_label
+
     inc = Polygon(area).buffer(1.0) if area else None
     zones = [Polygon(z) for z in plan.get("no_fly_zones_m") or []]
     for k, u in enumerate(plan["uavs"]):
@@ -158,7 +160,8 @@ def check_fences(plan: Plan, area: list | None) -> None:
             if z.is_valid and line.intersection(z).length > 1.0:
                 raise ConfigError(
                     f"plan.uavs[{k}]", u["id"],
-                    f"a mission outside no-fly zone {i + 1} (an exclusion geofence): re-plan",
+                    f"a mission outside {zone_label(i, plan.get('no_fly_zone_names') or ())}"
+                    " (an exclusion geofence): re-plan",
                 )  # fmt: skip
 
 

@@ -1,0 +1,251 @@
+"""Routes that keep eq. 20: shortest paths around no-fly zones inside the operating area.
+
+One implementation for every planner (allocation, DE, survey patterns) and for the waypoint
+follower's transit legs (:mod:`poc_env.sim.autopilot`).
+
+- The **keep-out** area is the union of the zones grown by a clearance ``c``
+  (:func:`clearance_m`): the follower cuts corners (a waypoint counts as reached half a step
+  away, then it turns at most ``omega_max``), so a route that keeps ``c`` from every zone is
+  flown without entering one.
+- **Shortest paths** (:meth:`ZoneRouter.path`): a visibility graph over the vertices of the
+  keep-out polygons (round joins, two segments per quarter circle), edges tested with shapely
+  against the zones grown by ``0.9 c`` (so paths may run along the keep-out boundary), all
+  pairs solved once with Dijkstra (``scipy.sparse.csgraph``); a query joins its two ends to the
+  visible vertices. Vertices outside the operating area (eq. 20's box, convex) are dropped, so
+  paths stay inside it.
+- **Clipping** (:meth:`ZoneRouter.reroute`): every leg of a polyline is cut to its parts
+  outside the keep-out area and consecutive parts are joined by shortest paths, so search legs
+  fly only searchable airspace and transit goes around.
+- **Reach** (:meth:`ZoneRouter.reach_share`): the share of each cell's area within ``W/2`` of
+  flyable airspace, i.e. the part of a zone's interior a sensor of sweep width ``W`` reaches from
+  outside; planners multiply the prior by it (the zone-interior mass discount).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.sparse.csgraph import shortest_path
+from shapely.geometry import LineString, Point
+
+from poc_env.geometry import as_polygon
+from poc_env.sim.constraints import NoFlyZones
+
+__all__ = ["ZoneRouter", "clearance_m"]
+
+#: visibility obstacle = zones grown by this share of the clearance.
+_SLACK = 0.9
+
+
+def clearance_m(scenario: Any) -> float:
+    """Clearance kept from every zone: half a step at ``v_max`` (the follower's reach) plus the
+    turn radius ``v_max / omega_max`` (metres)."""
+    u = scenario.uav
+    return 0.5 * u.max_speed_mps * scenario.episode.dt_s + u.max_speed_mps / u.max_turn_rate_rad_s
+
+
+class ZoneRouter:
+    """Shortest flyable paths around ``zones`` inside the box ``area`` (see the module doc).
+
+    Parameters
+    ----------
+    zones:
+        Polygons (vertex arrays, metres), e.g. ``MapConfig.no_fly_zones_m``.
+    area:
+        ``(x0, y0, x1, y1)``: eq. 20's operating area, or None (the plane).
+    clearance:
+        ``c`` in metres (:func:`clearance_m`).
+    """
+
+    def __init__(
+        self,
+        zones: Sequence[Any],
+        area: Sequence[float] | None,
+        clearance: float,
+    ) -> None:
+        self.zones = tuple(as_polygon(z, f"no_fly_zones[{i}]") for i, z in enumerate(zones))
+        self.clearance = float(clearance)
+        self.area = None if area is None else tuple(float(v) for v in area)
+        self.active = bool(self.zones)
+        if not self.active:
+            return
+        raw = shapely.union_all(self.zones)
+        self.keep_out = shapely.union_all(
+            [z.buffer(self.clearance, quad_segs=2) for z in self.zones]
+        )
+        self.obstacle = raw.buffer(_SLACK * self.clearance, quad_segs=4)
+        self.raw = raw.buffer(1.0)
+        for g in (self.keep_out, self.obstacle, self.raw):
+            shapely.prepare(g)
+        polys = list(getattr(self.keep_out, "geoms", [self.keep_out]))
+        nodes = [np.asarray(r.coords)[:-1, :2] for p in polys for r in (p.exterior, *p.interiors)]
+        pts = np.concatenate(nodes) if nodes else np.zeros((0, 2))
+        if self.area is not None:
+            x0, y0, x1, y1 = self.area
+            ok = (pts[:, 0] > x0) & (pts[:, 0] < x1) & (pts[:, 1] > y0) & (pts[:, 1] < y1)
+            pts = pts[ok]
+        self.nodes = pts
+        n = len(pts)
+        w = np.full((n, n), np.inf)
+        if n > 1:
+            i, j = np.triu_indices(n, 1)
+            vis = ~shapely.intersects(
+                shapely.linestrings(np.stack([pts[i], pts[j]], axis=1)), self.obstacle
+            )
+            d = np.hypot(*(pts[i] - pts[j]).T)
+            w[i[vis], j[vis]] = d[vis]
+            w[j[vis], i[vis]] = d[vis]
+        self.dist, self.pred = shortest_path(
+            np.where(np.isfinite(w), w, 0.0), method="D", directed=False, return_predecessors=True
+        )
+        self._edges = NoFlyZones([p for p in getattr(self.obstacle, "geoms", [self.obstacle])])
+
+    @classmethod
+    def for_scenario(cls, scenario: Any, area: Sequence[float] | None = None) -> ZoneRouter:
+        """The router of a scenario's zones, its operating area (eq. 20) and clearance."""
+        if area is None:
+            from poc_env.sim.core import operating_area
+
+            area = operating_area(scenario)
+        return cls(scenario.map.no_fly_zones_m, area, clearance_m(scenario))
+
+    # -- queries -----------------------------------------------------------------------------
+    def _visible(self, p: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        """Bool (T,): the straight segments p -> targets miss the obstacle (the zones grown by
+        0.9 c; from a point already inside that ring, the zones themselves)."""
+        if not len(targets):
+            return np.zeros(0, dtype=bool)
+        lines = shapely.linestrings(np.stack([np.broadcast_to(p, targets.shape), targets], axis=1))
+        hit = shapely.intersects(lines, self.obstacle)
+        # an end already inside the 0.9 c ring (a field near a zone, a UAV cutting a corner):
+        # only the zones themselves count for that segment
+        near = shapely.contains_xy(self.obstacle, targets[:, 0], targets[:, 1])
+        if self.obstacle.contains(Point(p)):
+            near[:] = True
+        if near.any():
+            hit[near] = shapely.intersects(lines[near], self.raw)
+        return ~hit
+
+    def path(self, a, b) -> np.ndarray | None:
+        """The shortest flyable polyline ``a -> b`` ((k, 2), ends included), or None."""
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+        if not self.active or self._visible(a, b[None])[0]:
+            return np.stack([a, b])
+        n = len(self.nodes)
+        if not n:
+            return None
+        va, vb = self._visible(a, self.nodes), self._visible(b, self.nodes)
+        da = np.where(va, np.hypot(*(self.nodes - a).T), np.inf)
+        db = np.where(vb, np.hypot(*(self.nodes - b).T), np.inf)
+        tot = da[:, None] + self.dist + db[None, :]
+        k = int(np.argmin(tot))
+        i, j = divmod(k, n)
+        if not np.isfinite(tot[i, j]):
+            return None
+        chain = [j]
+        while chain[-1] != i:
+            chain.append(int(self.pred[i, chain[-1]]))
+        return np.vstack([a, self.nodes[chain[::-1]], b])
+
+    def length(self, a, b) -> float:
+        """Length of :meth:`path` (``inf`` when there is none)."""
+        p = self.path(a, b)
+        return float(np.hypot(*np.diff(p, axis=0).T).sum()) if p is not None else np.inf
+
+    def crosses(self, starts, ends) -> np.ndarray:
+        """Bool (L,): legs ``starts -> ends`` ((L, 2) each) that enter the zones grown by 0.9 c
+        (vectorised, for local search)."""
+        if not self.active:
+            return np.zeros(len(np.asarray(starts).reshape(-1, 2)), dtype=bool)
+        return self._edges.segment_crosses(np.asarray(starts, float), np.asarray(ends, float))
+
+    def pieces(self, a, b) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The parts of the leg ``a -> b`` outside the keep-out area, in flight order."""
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+        if not self.active:
+            return [(a, b)]
+        seg = LineString([a, b]) if np.any(a != b) else None
+        if seg is None:
+            return [] if self.keep_out.contains(Point(a)) else [(a, b)]
+        if not seg.intersects(self.keep_out):
+            return [(a, b)]
+        rest = seg.difference(self.keep_out)
+        out = []
+        d = b - a
+        for g in getattr(rest, "geoms", [rest]):
+            if g.is_empty or g.length <= 1e-6:
+                continue
+            c = np.asarray(g.coords)[:, :2]
+            t = (c - a) @ d
+            c = c[np.argsort(t)]
+            out.append((np.asarray(c[0]), np.asarray(c[-1]), float(np.min(t))))
+        out.sort(key=lambda r: r[2])
+        return [(s, e) for s, e, _ in out]
+
+    def reroute(self, points) -> np.ndarray:
+        """``points`` (take-off, waypoints, landing) made flyable: each leg cut to its parts
+        outside the keep-out area, consecutive parts joined by :meth:`path` (a part that cannot
+        be reached is dropped). The first and last points are kept."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if not self.active or len(pts) < 2:
+            return pts
+        cur = pts[0]
+        out = [cur]
+        eps = 1e-6
+
+        def go(to) -> bool:
+            nonlocal cur
+            if float(np.hypot(*(to - cur))) <= eps:
+                return True
+            p = self.path(cur, to)
+            if p is None:
+                return False
+            out.extend(p[1:])
+            cur = out[-1]
+            return True
+
+        for p, q in itertools.pairwise(pts):
+            for s, e in self.pieces(p, q):
+                if go(s):
+                    out.append(e)
+                    cur = e
+        if not go(pts[-1]):
+            out.append(pts[-1])  # no flyable way: the straight leg (the caller checks)
+        res = np.asarray(out)
+        keep = np.ones(len(res), dtype=bool)
+        keep[1:] = np.hypot(*np.diff(res, axis=0).T) > eps
+        return res[keep]
+
+    def flyable(self, points) -> bool:
+        """Whether the polyline ``points`` enters no zone (eq. 20, every leg)."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if not self.active or len(pts) < 2:
+            return True
+        return not bool(shapely.intersects(LineString(pts), shapely.union_all(self.zones)))
+
+    def reach_share(self, grid: Any, sweep_width: float) -> np.ndarray:
+        """(ny, nx): the share of each cell's area within ``W/2`` of flyable airspace (1 away
+        from zones): the part of a zone's interior a sensor reaches from outside."""
+        share = np.ones(grid.shape)
+        if not self.active:
+            return share
+        hidden = self.keep_out.buffer(-0.5 * float(sweep_width))
+        if hidden.is_empty:
+            return share
+        ox, oy = grid.origin_m
+        c = grid.cell_m
+        x0, y0, x1, y1 = hidden.bounds
+        c0, c1 = max(int((x0 - ox) // c), 0), min(int((x1 - ox) // c) + 1, grid.nx)
+        r0, r1 = max(int((y0 - oy) // c), 0), min(int((y1 - oy) // c) + 1, grid.ny)
+        if c0 >= c1 or r0 >= r1:
+            return share
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        cells = shapely.box(ox + cc * c, oy + rr * c, ox + (cc + 1) * c, oy + (rr + 1) * c)
+        share[r0:r1, c0:c1] = 1.0 - shapely.area(shapely.intersection(cells, hidden)) / (c * c)
+        return np.clip(share, 0.0, 1.0)
