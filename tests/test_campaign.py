@@ -21,6 +21,8 @@ DEFAULT_CASES = {
     "cli": 40,
     "actions": 150,
     "geo": 60,
+    "text": 60,
+    "utm": 150,
 }
 
 

@@ -78,6 +78,44 @@ def utm_zone(origin: tuple[float, float]) -> int:
     return min(math.floor((origin[1] + 180.0) / 6.0) + 1, 60)
 
 
+#: Largest longitude difference (degrees) between a UTM zone's central meridian and the origin:
+#: the zone's own half width (3) plus the usual one-zone overlap (6). A zone farther off puts
+#: the map where the projection's scale error is large (about 19 % short at 180 degrees).
+UTM_MAX_OFFSET_DEG = 9.0
+
+
+def utm_zones_near(lon: float) -> list[int]:
+    """The UTM zones whose central meridian (``6 z - 183``) is within
+    :data:`UTM_MAX_OFFSET_DEG` of longitude ``lon`` (wrapping at the antimeridian)."""
+    return [z for z in range(1, 61) if _lon_gap(6.0 * z - 183.0, lon) <= UTM_MAX_OFFSET_DEG]
+
+
+def check_utm_zone(field: str, zone: int, origin: tuple[float, float], value: Any = None) -> None:
+    """Refuse a UTM ``zone`` whose central meridian is more than :data:`UTM_MAX_OFFSET_DEG`
+    from the origin's longitude (``value``: what the error shows, default the zone).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``field``, the zone and the zones allowed at the origin.
+    """
+    near = utm_zones_near(float(origin[1]))
+    if zone not in near:
+        gap = _lon_gap(6.0 * zone - 183.0, float(origin[1]))
+        raise ConfigError(
+            field,
+            zone if value is None else value,
+            f"a UTM zone whose central meridian is within {UTM_MAX_OFFSET_DEG:g} degrees of the "
+            f"origin's longitude {origin[1]:g} (zone {zone} is {gap:.1f} degrees away): one of "
+            + ", ".join(map(str, near)),
+        )
+
+
+def _lon_gap(a: float, b: float) -> float:
+    """The longitude difference |a - b| in degrees, wrapped to [0, 180]."""
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
 def make_crs(
     kind: str = "aeqd",
     origin: Any = None,
@@ -112,6 +150,7 @@ def make_crs(
         z = utm_zone((lat, lon)) if zone is None else zone
         if isinstance(z, bool) or not isinstance(z, int) or not 1 <= z <= 60:
             raise ConfigError("crs.zone", z, "a UTM zone 1-60")
+        check_utm_zone("crs.zone", z, (lat, lon))
         south = " +south" if lat < 0 else ""
         text = f"+proj=utm +zone={z}{south} +datum=WGS84 +units=m +no_defs"
         rec = {"kind": kind, "proj": text, "epsg": (32700 if south else 32600) + z}
@@ -171,7 +210,16 @@ def check_crs(field: str, rec: Any) -> dict[str, Any]:
         raise ConfigError(f"{field}.{key}", rec.get(key), "a projected CRS in metres")
     if kind in ("aeqd", "utm") and not re.search(rf"\+proj={kind}(\s|$)", str(rec["proj"])):
         raise ConfigError(f"{field}.proj", rec.get("proj"), f"+proj={kind} ... for kind {kind}")
+    zone = _utm_zone_of(crs)
+    if zone is not None:
+        check_utm_zone(f"{field}.{key}", zone, (float(o[0]), float(o[1])), rec.get(key))
     return rec
+
+
+def _utm_zone_of(crs: CRS) -> int | None:
+    """The zone of a UTM CRS (a ``+proj=utm`` string or an EPSG 326xx/327xx code), else None."""
+    m = re.match(r"(\d+)", crs.utm_zone or "")
+    return int(m.group(1)) if m else None
 
 
 @functools.lru_cache(maxsize=64)

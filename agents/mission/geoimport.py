@@ -126,7 +126,7 @@ def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
     """[(geometry type, coordinates, properties)] of a GeoJSON Feature, collection or geometry."""
     try:
         doc = json.loads(file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as err:
         raise ConfigError(str(file), f"not JSON ({err})", "a GeoJSON file (RFC 7946)") from None
     if not isinstance(doc, dict) or "type" not in doc:
         raise ConfigError(str(file), type(doc).__name__, "a GeoJSON object with a type member")
@@ -322,6 +322,16 @@ def _uniform_prior(grid: _Grid, area: Polygon) -> np.ndarray:
 def _read_csv(file: Path, crs: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x, y, probability) of a lat,lon,probability CSV (header required)."""
     allowed = "a CSV with a header row lat,lon,probability and numbers below it"
+    try:
+        return _read_csv_rows(file, crs, allowed)
+    except (UnicodeDecodeError, csv.Error) as err:
+        raise ConfigError(str(file), f"not UTF-8 CSV text ({err})", allowed) from None
+
+
+def _read_csv_rows(
+    file: Path, crs: dict, allowed: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_read_csv` on a file that decodes (decoding and CSV errors raised as they come)."""
     with open(file, newline="", encoding="utf-8") as fh:
         reader = csv.reader(fh)
         try:
@@ -368,13 +378,22 @@ def _read_geotiff(file: Path, crs: dict, grid: _Grid, area: Polygon) -> tuple[np
     """(x, y, mass) of the sub-pixel samples of a GeoTIFF (module docstring)."""
     require_extra("geo", "poc-env scenario import of a GeoTIFF", "rasterio")
     import rasterio
-    from pyproj import Transformer
-    from rasterio.errors import RasterioIOError
+    from rasterio.errors import RasterioError, RasterioIOError
 
     try:
         src = rasterio.open(file)
     except RasterioIOError as err:
         raise ConfigError(str(file), f"unreadable ({err})", "a GeoTIFF file") from None
+    try:
+        return _geotiff_samples(file, src, grid, area, crs)
+    except RasterioError as err:  # a truncated or corrupt raster fails when read
+        raise ConfigError(str(file), f"unreadable ({err})", "a complete GeoTIFF file") from None
+
+
+def _geotiff_samples(file: Path, src: Any, grid: _Grid, area: Polygon, crs: dict) -> tuple:
+    """:func:`_read_geotiff` on an opened raster ``src`` (closed on return)."""
+    from pyproj import Transformer
+
     with src:
         if src.crs is None:
             raise ConfigError(
@@ -470,9 +489,13 @@ def _prior(path: Any, crs: dict, grid: _Grid, area: Polygon) -> tuple[np.ndarray
         x, y, w = _read_csv(file, crs)
     else:
         x, y, w = _read_geotiff(file, crs, grid, area)
-    total = float(w.sum())
-    if total <= 0:
+    # scaled by the largest sample first (as probability_map.validate_map does): finite
+    # samples whose sum overflows (two of 1e308) keep their proportions
+    peak = float(np.max(w)) if len(w) else 0.0
+    if not peak > 0 or not math.isfinite(peak):
         raise ConfigError(str(file), "zero total probability", "positive probability mass")
+    w = w / peak
+    total = float(w.sum())
     inside = contains_xy(area, x, y)
     if file.suffix.lower() == ".csv" and inside.mean() < 0.5:
         swapped = np.array(to_local(np.column_stack(_swap_back(x, y, crs)), crs))
@@ -486,11 +509,11 @@ def _prior(path: Any, crs: dict, grid: _Grid, area: Polygon) -> tuple[np.ndarray
     if kept <= 0:
         raise ConfigError(str(file), "no probability mass inside the area", "a prior over it")
     outside = total - kept
-    report = {
+    report = {  # in the file's units (may overflow to inf; the share does not)
         "source": str(file),
-        "total": total,
-        "inside": kept,
-        "outside": outside,
+        "total": total * peak,
+        "inside": kept * peak,
+        "outside": outside * peak,
         "outside_share": outside / total,
         "samples": len(w),
     }
@@ -606,7 +629,7 @@ def import_scenario(
     old_map = data.get("map", {})
     data["name"] = name
     data["description"] = (
-        f"imported from {Path(file).name} (origin {origin[0]:.6f}, {origin[1]:.6f}; "
+        f"imported from {one_line(Path(file).name)} (origin {origin[0]:.6f}, {origin[1]:.6f}; "
         f"{crs['kind']}), base {base}"
     )
     new_map: dict[str, Any] = {
@@ -657,7 +680,7 @@ def scenario_yaml(result: dict[str, Any]) -> str:
     lat, lon = crs["origin_deg"]
     name = result["scenario"]["name"]
     head = [
-        f"# Imported by `poc-env scenario import` ({result['scenario']['description']}).",
+        f"# Imported by `poc-env scenario import` ({one_line(result['scenario']['description'])}).",
         f"# Geographic origin (local 0, 0): lat {lat!r}, lon {lon!r}; CRS {crs['kind']}:",
         f"#   {crs.get('proj', 'EPSG:' + str(crs.get('epsg')))}",
         f"# map.origin_deg/projection carry it (plan records the CRS: poc-env plan --scenario "
@@ -665,6 +688,19 @@ def scenario_yaml(result: dict[str, Any]) -> str:
         f"# The prior {name}.npy is read relative to this file's folder.",
     ]
     return "\n".join(head) + "\n" + yaml.safe_dump(result["scenario"], sort_keys=False)
+
+
+def one_line(text: str) -> str:
+    """``text`` with every character that is not printable on one line (line breaks, YAML's
+    NEL/LS/PS, controls, lone surrogates) written as a backslash escape: safe in a comment."""
+    out = []
+    for c in text:
+        if c.isprintable() and c not in "\x85\u2028\u2029\ufeff":
+            out.append(c)
+        else:
+            n = ord(c)
+            out.append(f"\\x{n:02x}" if n < 256 else f"\\u{n:04x}" if n < 65536 else f"\\U{n:08x}")
+    return "".join(out)
 
 
 def write_imported(result: dict[str, Any], out: str | os.PathLike[str]) -> list[Path]:

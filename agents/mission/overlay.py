@@ -26,16 +26,15 @@ holding it (nearest cell, no interpolation: each pixel shows one cell's POC). Pi
 grid are transparent. The colour is a fixed colormap (:data:`COLORMAP`, YlOrRd's five anchors,
 linear between them) of the cell value over the grid's largest cell value; the alpha rises from
 :data:`ALPHA_RANGE` ``[0]`` at zero to ``[1]`` at the maximum so the basemap shows through low
-values. The PNG is written with zlib and struct (:func:`png_bytes`): no matplotlib or pillow,
-so the report works from a wheel installed without extras.
+values. The PNG is written with Pillow (:func:`png_bytes`, a core dependency); the ramp's numbers
+come from matplotlib's YlOrRd data, kept as a small table so matplotlib stays optional.
 """
 
 from __future__ import annotations
 
+import io
 import math
 import os
-import struct
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,7 +46,10 @@ from poc_env.agents.mission.plan import Plan
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 
-#: YlOrRd (ColorBrewer) anchors, low to high: the overlay's colormap, linear between anchors.
+#: YlOrRd anchors, low to high: the overlay's colormap, linear between anchors. Taken once from
+#: matplotlib's colormap data (``matplotlib.colormaps["YlOrRd"]``, ColorBrewer's nine classes;
+#: every other one, times 255): tests/mission/test_report.py checks the equality when
+#: matplotlib is installed, so the core install needs no matplotlib.
 COLORMAP = np.array(
     [[255, 255, 204], [254, 217, 118], [253, 141, 60], [227, 26, 28], [128, 0, 38]], dtype=float
 )
@@ -68,23 +70,15 @@ class PriorOverlay:
 
 
 def png_bytes(rgba: np.ndarray) -> bytes:
-    """An RGBA image (H, W, 4) uint8 as PNG bytes (colour type 6, 8 bit, filter 0 rows)."""
+    """An RGBA image (H, W, 4) uint8 as PNG bytes (Pillow, zlib level 9)."""
+    from PIL import Image
+
     img = np.ascontiguousarray(rgba, dtype=np.uint8)
     if img.ndim != 3 or img.shape[2] != 4 or img.shape[0] < 1 or img.shape[1] < 1:
         raise ConfigError("image", getattr(img, "shape", None), "an (H, W, 4) RGBA array")
-    h, w = img.shape[:2]
-    raw = np.concatenate([np.zeros((h, 1), np.uint8), img.reshape(h, 4 * w)], axis=1).tobytes()
-
-    def chunk(tag: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
-
-    head = struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)
-    return (
-        b"\x89PNG\r\n\x1a\n"
-        + chunk(b"IHDR", head)
-        + chunk(b"IDAT", zlib.compress(raw, 9))
-        + chunk(b"IEND", b"")
-    )
+    buf = io.BytesIO()
+    Image.fromarray(img, "RGBA").save(buf, format="PNG", compress_level=9)
+    return buf.getvalue()
 
 
 def colorize(t: np.ndarray) -> np.ndarray:

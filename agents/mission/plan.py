@@ -240,6 +240,7 @@ def check_plan(plan: Any) -> Plan:
     """
     if not isinstance(plan, dict):
         raise ConfigError("plan", type(plan).__name__, "a JSON object")
+    check_text("plan", plan)
     schema = plan.get("schema")
     if isinstance(schema, bool) or schema not in READ_SCHEMAS:
         raise ConfigError("plan.schema", schema, " or ".join(map(str, READ_SCHEMAS)))
@@ -369,6 +370,43 @@ def _check_optional(plan: dict[str, Any]) -> None:
             if not isinstance(a["name"], str) or not 1 <= len(a["name"]) <= 64:
                 raise ConfigError(f"plan.airfields[{i}].name", a["name"], "1-64 characters")
             _point(f"plan.airfields[{i}].position_m", a["position_m"])
+
+
+#: Characters no plan text may hold: the C0 controls XML 1.0 forbids (all below U+0020 but
+#: tab, line feed and carriage return), U+FFFE, U+FFFF and lone UTF-16 surrogates (no UTF-8
+#: encoding exists for them). Every format writes plan text into XML, HTML, JSON or file names.
+_BAD_TEXT = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def check_text(field: str, value: Any) -> None:
+    """Refuse text that no export format can carry, anywhere in ``value`` (keys included).
+
+    Walks mappings and lists; every string (and mapping key) must be free of :data:`_BAD_TEXT`.
+
+    Raises
+    ------
+    ConfigError
+        Naming the field (``plan.uavs[0].flown_rectangle.rule``), the character's code point
+        and what is allowed.
+    """
+    if isinstance(value, str):
+        bad = _BAD_TEXT.search(value)
+        if bad is not None:
+            kind = "a lone surrogate" if "\ud800" <= bad.group() <= "\udfff" else "a control"
+            raise ConfigError(
+                field,
+                f"text with {kind} character U+{ord(bad.group()):04X} at {bad.start()}",
+                "text without C0 control characters (tab, line feed and carriage return are "
+                "allowed), U+FFFE, U+FFFF or lone surrogates",
+            )
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            if isinstance(k, str):
+                check_text(f"{field} key", k)
+            check_text(f"{field}.{k}", v)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            check_text(f"{field}[{i}]", v)
 
 
 def _point(field: str, value: Any) -> None:

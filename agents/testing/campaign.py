@@ -37,6 +37,7 @@ import traceback
 import warnings
 from collections import Counter
 from collections.abc import Callable
+from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
 
@@ -417,18 +418,62 @@ def _check_png(f: Path) -> None:
 
 
 def _check_json_file(f: Path) -> None:
-    data = json.loads(f.read_text(), parse_constant=_refuse_constant)
-    _check_coordinates(data, "geojson" if f.suffix == ".geojson" else "qgc")
+    """Strict JSON, coordinates on the globe; GeoJSON exterior rings closed and
+    counter-clockwise (RFC 7946); a QGC .plan valid by its JSON Schema."""
+    data = json.loads(f.read_text(encoding="utf-8"), parse_constant=_refuse_constant)
+    fmt = "geojson" if f.suffix == ".geojson" else "qgc"
+    _check_coordinates(data, fmt)
+    if fmt == "geojson":
+        from poc_env.agents.mission.formats.geojson import ring_area
+
+        for feat in data["features"]:
+            if feat["geometry"]["type"] == "Polygon":
+                ring = feat["geometry"]["coordinates"][0]
+                check(ring[0] == ring[-1], "GeoJSON ring not closed")
+                check(ring_area(ring) >= 0, "GeoJSON exterior ring clockwise (RFC 7946)")
+    else:
+        from poc_env.agents.mission.formats.qgc import validate_qgc
+
+        errs = validate_qgc(data)
+        check(not errs, f"QGC .plan not valid by its schema: {errs[:2]}")
 
 
 def _check_kml(f: Path) -> None:
-    low = f.read_text().lower()
-    check("nan" not in low and "inf" not in low, "KML with nan/inf")
+    """Valid by the OGC KML 2.2 XSD (lxml), and no nan/inf coordinates."""
+    from poc_env.agents.mission.formats.kml import validate_kml
+
+    errs = validate_kml(f)
+    check(not errs, f"KML not valid by ogckml22.xsd: {errs[:2]}")
+    low = f.read_text(encoding="utf-8").lower()
+    check("nan," not in low and "inf," not in low, "KML with nan/inf")
+
+
+#: The markup the text target injects into plan strings and file names: an exported HTML page
+#: must never contain it as an element (escaped in text, ``\\u003c`` in the script's JSON).
+INJECTED_TAG = "x-injected"
+
+
+class _Tags(HTMLParser):
+    """The start tags of a page (html.parser: script contents are not parsed as markup)."""
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.tags: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: Any) -> None:
+        self.tags.append(tag)
 
 
 def _check_html(f: Path) -> None:
-    """The map report: its plan data is strict JSON and every drawn point is on the globe."""
-    body = f.read_text()
+    """The map report: parsed by html.parser with no injected element and the page's own
+    structure intact; its plan data is strict JSON and every drawn point is on the globe."""
+    body = f.read_text(encoding="utf-8")
+    parser = _Tags()
+    parser.feed(body)
+    parser.close()
+    check(INJECTED_TAG not in parser.tags, "injected markup became an HTML element")
+    check(parser.tags.count("script") == 3, f"HTML scripts: {parser.tags.count('script')} != 3")
+    check(parser.tags.count("table") == 1, "HTML report without its one table")
     m = re.search(r'<script type="application/json" id="plan-data">(.*?)</script>', body, re.S)
     check(m is not None, "HTML report without its plan data")
     assert m is not None
@@ -475,6 +520,96 @@ def _check_coordinates(data: Any, fmt: str) -> None:
     for lat, lon in pairs:
         check(math.isfinite(lat) and math.isfinite(lon), "coordinate not finite")
         check(-90 <= lat <= 90 and -180 <= lon <= 180, f"coordinate off the globe: {lat}, {lon}")
+
+
+# --------------------------------------------------------------------------- target: text
+
+#: Hostile text for every string field of plan.json and for file names: newlines (YAML/CSV
+#: line injection), markup and entities (XML/HTML injection), quotes, C0 controls and lone
+#: surrogates (not encodable in XML 1.0 / UTF-8), bidi and line-separator characters.
+HOSTILE_TEXT = [
+    "line\nbreak: injected\nkey: 1",
+    "cr\r\nlf",
+    f"<{INJECTED_TAG} onload=alert(1)>x</{INJECTED_TAG}>",
+    f"</script><{INJECTED_TAG}>",
+    "]]>&amp;&lt;'\"",
+    "<!-- c --><![CDATA[x]]>",
+    "tab\there",
+    "\u2028\u2029\x85\u202e rtl",
+    "\x00nul",
+    "bell\x07",
+    "esc\x1b[31m",
+    "\ud800 lone",
+    "lone \udfff",
+    "\ufffe",
+    "x" * 70,
+    "ünïcödé 漢字 🚁",
+]
+
+#: The string fields of plan.json the text target writes hostile text into.
+_TEXT_PATHS = [
+    ("scenario",), ("map_source",), ("optimizer", "name"), ("optimizer", "settings", "note"),
+    ("rectangle_rule",), ("airfields", 0, "name"), ("uavs", 0, "id"), ("uavs", 1, "note"),
+]  # fmt: skip
+#: File names (plan stems) the text target exports under.
+_TEXT_STEMS = ["plan", "a\nb", f"<{INJECTED_TAG}>", "q'\"&", "sp ace", "ünï"]
+
+
+def text_strategy():
+    from hypothesis import strategies as st
+
+    from poc_env.agents.mission.formats import FORMATS
+
+    text = st.one_of(st.sampled_from(HOSTILE_TEXT), st.text(max_size=12))
+    edits = st.lists(st.tuples(st.sampled_from(_TEXT_PATHS), text), min_size=1, max_size=3)
+    return st.tuples(edits, st.sampled_from(list(FORMATS)), st.sampled_from(_TEXT_STEMS))
+
+
+def run_text(case: tuple[list, str, str]) -> None:
+    """Export a plan whose strings (and file name) are hostile: refused by name, or every
+    output is valid by its format's validator with the text escaped (:data:`OUTPUT_CHECKS`)."""
+    from poc_env.agents.mission.export import export_plan
+
+    edits, fmt, stem = case
+    plan = sample_plan()
+    plan["airfields"] = [{"name": "A", "position_m": [20e3, -60e3]}]
+    plan["rectangle_rule"] = "lines along theta"
+    for path, value in edits:
+        with contextlib.suppress(LookupError, TypeError):
+            _set_path(plan, path, value)
+    with tempfile.TemporaryDirectory() as d:
+        root = Path(d)
+        src = root / f"{stem}.json"
+        src.write_text(json.dumps(plan), encoding="utf-8")  # ASCII: \u escapes
+        files = export_plan(src, fmt, "45.75,126.65", root / "out")
+        for f in files:
+            check_output_file(f)
+
+
+# --------------------------------------------------------------------------- target: utm
+
+
+def utm_strategy():
+    from hypothesis import strategies as st
+
+    lat = st.one_of(st.floats(-80, 84), st.sampled_from([0.0, -0.0, 45.75, -33.9, 83.9]))
+    lon = st.one_of(st.floats(-180, 180), st.sampled_from([-180.0, 180.0, 179.99, -179.99, 0.0]))
+    zone = st.one_of(st.integers(1, 60), st.sampled_from([0, 61, -1, True, 2.5, None, "52"]))
+    return st.tuples(lat, lon, zone)
+
+
+def run_utm(case: tuple[float, float, Any]) -> None:
+    """A UTM zone across the globe from the origin: refused by name, or the map's distances
+    near the origin agree with the ellipsoid's to 2 % (a zone 9 degrees off: 1.2 %)."""
+    from pyproj import Geod
+
+    from poc_env.agents.mission.crs import make_crs, to_geographic
+
+    lat, lon, zone = case
+    crs = make_crs("utm", (lat, lon), zone=zone)
+    (a, b), (c, e) = to_geographic([(0.0, 0.0), (10e3, 0.0)], crs)
+    dist = Geod(ellps="WGS84").inv(b, a, e, c)[2]
+    check(abs(dist / 10e3 - 1.0) < 0.02, f"UTM zone {zone}: 10 km of map is {dist:.0f} m")
 
 
 # --------------------------------------------------------------------------- target: cli
@@ -645,43 +780,108 @@ def geo_strategy():
         st.sampled_from(["", "lat,lon\n45.8,126.9\n", "x,y,z\n1,2,3\n", "\x00\x01"]),
     )
     cell = st.one_of(st.just(5.0), st.just(5.0), st.floats(0.001, 500), hostile_scalars())
-    return st.tuples(ring, point, csv_text, cell, st.sampled_from(["aeqd", "utm", "merc"]))
+    # names and properties of the GIS files (HOSTILE_TEXT), and malformed bytes in their place
+    names = st.one_of(st.just("area"), st.just("area"), st.sampled_from(_GEO_STEMS))
+    field_name = st.one_of(st.just("A"), st.just("A"), st.sampled_from(HOSTILE_TEXT))
+    raw = st.one_of(st.none(), st.none(), st.none(), st.sampled_from(MALFORMED_GIS))
+    return st.tuples(
+        ring,
+        point,
+        st.one_of(csv_text, st.sampled_from(EXTREME_CSV)),
+        cell,
+        st.sampled_from(["aeqd", "utm", "merc"]),
+        names,
+        field_name,
+        raw,
+    )
+
+
+#: CSV priors at the ends of float range: sums past 1.8e308, subnormals, 1e400 (-> inf).
+EXTREME_CSV = [
+    "lat,lon,probability\n45.8,126.9,1e308\n45.76,126.98,1e308\n",
+    "lat,lon,probability\n45.8,126.9,1.7e308\n45.76,126.98,1.7e308\n45.72,127.05,1e308\n",
+    "lat,lon,probability\n45.8,126.9,5e-324\n45.76,126.98,5e-324\n",
+    "lat,lon,probability\n45.8,126.9,1e-308\n45.76,126.98,1e308\n",
+    "lat,lon,probability\n45.8,126.9,1e400\n",
+    "lat,lon,probability\n1e400,126.9,1\n",
+]
+#: Malformed bytes in place of one GIS file: (which file, its suffix, the bytes).
+MALFORMED_GIS = [
+    ("area", ".geojson", b"\x89PNG\r\n\x1a\n\x00\xff\xfe" * 20),
+    (
+        "area",
+        ".geojson",
+        b'{"type":"Polygon","coordinates":[[[1e400,45.4],[127.4,45.4],[127.4,46.2],[1e400,45.4]]]}',
+    ),
+    ("area", ".geojson", b'{"type":"Polygon","coordinates":' + b"[" * 50000 + b"]" * 50000 + b"}"),
+    ("area", ".geojson", b'{"type":"Polygon","coordinates":[[[126.2,45.4],[127.4'),
+    ("area", ".kml", b"\xff\xfe<\x00k\x00m\x00l\x00>"),
+    (
+        "area",
+        ".kml",
+        b"<kml><Placemark><Polygon><outerBoundaryIs><LinearRing><coordinates>"
+        b"1e400,45.4 127.4,45.4 127.4,46.2</coordinates></LinearRing></outerBoundaryIs></Polygon>"
+        b"</Placemark></kml>",
+    ),
+    ("prior", ".csv", b"\x00\x01\x02\xff\xfe\xfd" * 50),
+    ("prior", ".csv", "lat,lon,probability\n45.8,126.9,0.3\n# caf\xe9\n".encode("latin-1")),
+    ("prior", ".tif", b"II*\x00" + b"\xff" * 300),
+    ("prior", ".tif", b"MM\x00*\x00\x00\x00\x08" + b"\x00" * 40),
+    ("fields", ".geojson", b'\xef\xbb\xbf{"type": "FeatureCollection"}'),
+]
+_GEO_STEMS = ["a\nb: 1\nmap: {}", f"<{INJECTED_TAG}>", "q'\"&#", "ünï 漢", "x\u2028y"]
 
 
 def run_geo(case: tuple) -> None:
     """``scenario import`` of hostile GIS layers; an accepted scenario loads, its prior sums to
     1, and its airfields sit where pyproj puts them."""
+    import yaml
+
     from poc_env.agents.mission.geoimport import import_scenario, write_imported
     from poc_env.config import load_scenario
     from poc_env.theory.probability_map import build_prior
 
-    ring, point, csv_text, cell, projection = case
+    ring, point, csv_text, cell, projection, stem, field_name, raw = case
 
     def fc(features: list) -> str:
         return json.dumps({"type": "FeatureCollection", "features": features}, allow_nan=True)
 
     with tempfile.TemporaryDirectory() as d:
         root = Path(d)
-        (root / "area.geojson").write_text(
-            fc([{"type": "Feature", "properties": {},
-                 "geometry": {"type": "Polygon", "coordinates": [ring]}}])
+        paths = {
+            "area": root / f"{stem}.geojson",
+            "fields": root / "fields.geojson",
+            "prior": root / "prior.csv",
+        }
+        paths["area"].write_text(
+            fc([{"type": "Feature", "properties": {"name": field_name},
+                 "geometry": {"type": "Polygon", "coordinates": [ring]}}]), encoding="utf-8"
         )  # fmt: skip
-        (root / "fields.geojson").write_text(
-            fc([{"type": "Feature", "properties": {"name": "A"},
+        paths["fields"].write_text(
+            fc([{"type": "Feature", "properties": {"name": field_name},
                  "geometry": {"type": "Point", "coordinates": point}},
                 {"type": "Feature", "properties": {"name": "B"},
-                 "geometry": {"type": "Point", "coordinates": _FIELDS[1][1]}}])
+                 "geometry": {"type": "Point", "coordinates": _FIELDS[1][1]}}]),
+            encoding="utf-8",
         )  # fmt: skip
-        (root / "prior.csv").write_text(csv_text)
+        paths["prior"].write_text(csv_text, encoding="utf-8")
+        if raw is not None:
+            which, suffix, data = raw
+            paths[which] = root / f"bad_{which}{suffix}"
+            paths[which].write_bytes(data)
         res = import_scenario(
-            root / "area.geojson",
-            prior=root / "prior.csv",
-            airfields=root / "fields.geojson",
+            paths["area"],
+            prior=paths["prior"],
+            airfields=paths["fields"],
             cell_km=cell,
             name="fuzz",
             projection=projection,
         )
         write_imported(res, root / "fuzz.yaml")
+        with open(root / "fuzz.yaml", encoding="utf-8") as fh:
+            doc = yaml.safe_load(fh)
+        check(set(doc) == set(res["scenario"]), f"YAML keys changed: {sorted(doc)}")
+        check(doc == yaml.safe_load(yaml.safe_dump(res["scenario"])), "YAML differs")
         sc = load_scenario(str(root / "fuzz.yaml"))
         prior = build_prior(sc.map)
         check(abs(float(prior.sum()) - 1.0) < 1e-9, f"imported prior sums to {prior.sum()!r}")
@@ -699,9 +899,14 @@ TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
     "cli": (cli_strategy, run_cli),
     "actions": (actions_strategy, run_actions),
     "geo": (geo_strategy, run_geo),
+    "text": (text_strategy, run_text),
+    "utm": (utm_strategy, run_utm),
 }
 #: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
-WEIGHTS = {"overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1}
+WEIGHTS = {
+    "overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1,
+    "text": 2, "utm": 3,
+}  # fmt: skip
 
 
 def run_target(name: str, cases: int, seed: int = 0) -> tuple[Counter, list[tuple[str, Any]]]:

@@ -703,3 +703,67 @@ def test_allocation_missions_carry_the_speeds_the_plan_was_timed_at(tmp_path):
     items = json.loads(next((tmp_path / "o").iterdir()).read_text())["mission"]["items"]
     first = next(it["params"][1] for it in items if it["command"] == 178)
     assert first == pytest.approx(220 / 3.6, abs=1e-3)
+
+
+# --------------------------------------------------------------------------- issue 27
+@pytest.mark.parametrize("code", [c for c in range(32) if chr(c) not in "\t\n\r"])
+def test_every_c0_control_in_a_plan_string_is_refused_naming_the_field(tmp_path, code):
+    """XML 1.0 has no encoding for these: a KML with one is not well-formed."""
+    path, plan = _plan(tmp_path)
+    plan["uavs"][1]["id"] = "B"
+    plan["optimizer"]["name"] = f"de{chr(code)}x"
+    path.write_text(json.dumps(plan))
+    with pytest.raises(ConfigError, match=rf"plan\.optimizer\.name.*U\+{code:04X}"):
+        load_plan(path)
+
+
+@pytest.mark.parametrize("field", ["scenario", "optimizer.settings.note", "map_source"])
+def test_a_lone_surrogate_in_a_plan_string_is_refused_at_load(tmp_path, field):
+    path, plan = _plan(tmp_path)
+    _set(plan, field, "ab\ud800c")
+    path.write_text(json.dumps(plan))  # json escapes it as \ud800
+    with pytest.raises(ConfigError, match=rf"plan\.{re.escape(field)}.*surrogate"):
+        load_plan(path)
+
+
+def test_tabs_newlines_and_markup_in_plan_strings_still_load(tmp_path):
+    path, plan = _plan(tmp_path, scenario="a\tb\r\nc <b>&amp;</b> ]]> \u2028")
+    path.write_text(json.dumps(plan))
+    assert load_plan(path)["scenario"] == plan["scenario"]
+
+
+@pytest.mark.parametrize(
+    "origin, zone, ok",
+    [
+        (ORIGIN, 22, False),  # the issue: 177.7 degrees away, every distance 19 % short
+        (ORIGIN, 50, False),  # 9.65 degrees
+        (ORIGIN, 51, True),
+        (ORIGIN, 53, True),
+        ((10.0, 179.5), 1, True),  # across the antimeridian
+        ((10.0, 179.5), 59, True),
+        ((10.0, 179.5), 30, False),
+    ],
+)
+def test_a_utm_zone_far_from_the_origin_is_refused(tmp_path, origin, zone, ok):
+    if ok:
+        assert make_crs("utm", origin, zone=zone)["kind"] == "utm"
+        return
+    with pytest.raises(ConfigError, match=r"crs\.zone: got \d+; allowed: .*one of "):
+        make_crs("utm", origin, zone=zone)
+    # the same zone recorded in a plan, as a PROJ string or an EPSG code
+    proj = f"+proj=utm +zone={zone} +datum=WGS84 +units=m +no_defs"
+    for crs, field in (
+        ({"kind": "utm", "origin_deg": list(origin), "proj": proj}, "proj"),
+        ({"kind": "epsg", "origin_deg": list(origin), "epsg": 32600 + zone}, "epsg"),
+    ):
+        path, _ = _plan(tmp_path, crs=crs)
+        with pytest.raises(ConfigError, match=rf"plan\.crs\.{field}.*UTM zone"):
+            load_plan(path)
+
+
+def test_cli_plan_refuses_a_utm_zone_across_the_globe(tmp_path, capsys):
+    code = main(["plan", "--scenario", "small", "--planner", "allocation", "--quiet",
+                 "--origin", "45.75,126.65", "--projection", "utm", "--utm-zone", "22",
+                 "--out", str(tmp_path / "p.json")])  # fmt: skip
+    assert code != 0 and not (tmp_path / "p.json").exists()
+    assert "crs.zone" in capsys.readouterr().err

@@ -411,3 +411,83 @@ def test_geotiff_needs_the_geo_extra(tmp_path, layers, monkeypatch):
     # GeoJSON and CSV input need no rasterio
     (tmp_path / "p.csv").write_text("lat,lon,probability\n45.7,126.6,1\n")
     import_scenario(layers["area"], prior=tmp_path / "p.csv", airfields=layers["fields"])
+
+
+# ----------------------------------------------------------------- issue 27: hostile input
+def test_csv_prior_of_huge_probabilities_keeps_its_proportions(tmp_path, layers):
+    """Two 1e308 samples sum past float range: the prior is scaled by its largest sample first
+    (as probability_map.validate_map does), so it is not an all-zero (or NaN) grid."""
+    c = tmp_path / "big.csv"
+    c.write_text("lat,lon,probability\n45.7,126.6,1e308\n45.8,126.7,1e308\n")
+    res = import_scenario(layers["area"], prior=c, airfields=layers["fields"])
+    m = res["prior"]
+    assert np.all(np.isfinite(m)) and abs(m.sum() - 1.0) < 1e-12
+    assert sorted(m[m > 0].tolist()) == pytest.approx([0.5, 0.5])
+    assert res["report"]["prior"]["outside_share"] == 0.0
+
+
+@pytest.mark.parametrize(
+    "name, data",
+    [
+        ("binary.csv", b"\x89PNG\r\n\x1a\n\xff\xfe\x00\x00" * 40),
+        ("latin1.csv", "lat,lon,probability\n45.7,126.6,1\n# caf\xe9\n".encode("latin-1")),
+    ],
+)
+def test_binary_or_undecodable_csv_is_a_config_error(tmp_path, layers, name, data):
+    c = tmp_path / name
+    c.write_bytes(data)
+    _bad(tmp_path, layers, "UTF-8 CSV text", prior=c)
+
+
+def test_numbers_beyond_float_range_and_deep_nesting_in_gis_files(tmp_path, layers):
+    area = tmp_path / "huge.geojson"
+    area.write_text(
+        '{"type":"Polygon","coordinates":[[[1e400,45.3],[127.2,45.3],[127.2,46.1],[1e400,45.3]]]}'
+    )
+    _bad(tmp_path, layers, "finite", area=area)
+    kml = tmp_path / "huge.kml"
+    kml.write_text(
+        "<kml><Placemark><Polygon><outerBoundaryIs><LinearRing><coordinates>1e400,45.3 "
+        "127.2,45.3 127.2,46.1 1e400,45.3</coordinates></LinearRing></outerBoundaryIs>"
+        "</Polygon></Placemark></kml>"
+    )
+    _bad(tmp_path, layers, "finite", area=kml)
+    deep = tmp_path / "deep.geojson"
+    deep.write_text('{"type":"Polygon","coordinates":' + "[" * 100_000 + "]" * 100_000 + "}")
+    _bad(tmp_path, layers, "not JSON", area=deep)
+
+
+def test_truncated_geotiff_is_a_config_error(tmp_path, layers):
+    tif, _ = _tif(tmp_path / "full.tif")
+    raw = tif.read_bytes()
+    cut = tmp_path / "cut.tif"
+    cut.write_bytes(raw[: len(raw) // 2])
+    _bad(tmp_path, layers, "unreadable", prior=cut)
+
+
+@pytest.mark.parametrize(
+    "stem",
+    [
+        "evil\nname: 3\nmap: {}",
+        "a\rb\x85c\u2028d\u2029e",
+        "x\n- list\n# comment\n---\nother: doc",
+        "tab\there 'quoted' \"double\" #hash: colon",
+    ],
+)
+def test_area_file_name_in_the_yaml_header_adds_no_keys(tmp_path, layers, stem):
+    """The area file's name is written into the scenario YAML (comment header and
+    description): any name reads back as the same mapping, with no key added."""
+    area = tmp_path / f"{stem}.geojson"
+    area.write_text(layers["area"].read_text())
+    res = import_scenario(area, airfields=layers["fields"])
+    out = tmp_path / "imported.yaml"
+    write_imported(res, out)
+    import yaml
+
+    text = out.read_text(encoding="utf-8")
+    doc = yaml.safe_load(text)
+    assert doc == yaml.safe_load(yaml.safe_dump(res["scenario"]))
+    assert set(doc) == set(res["scenario"])
+    head = [ln for ln in text.splitlines() if not ln.startswith("#")]
+    assert yaml.safe_load("\n".join(head)) == doc  # the header is comments only
+    assert load_scenario(str(out)).name == "imported"

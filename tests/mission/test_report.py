@@ -297,3 +297,43 @@ def test_a_yaml_scenario_beside_the_plan_gives_the_overlay(tmp_path, monkeypatch
     hot = np.unravel_index(np.argmax(img[..., 3]), img.shape[:2])
     # the most opaque pixel lies in the north-west of the image (row 6 of 8 from the south)
     assert hot[0] < img.shape[0] / 2 and hot[1] < img.shape[1] / 2
+
+
+def test_overlay_ramp_is_matplotlibs_ylorrd_data():
+    """The overlay's colour anchors are matplotlib's YlOrRd data (every other of its nine
+    ColorBrewer classes), kept as a table so the core install needs no matplotlib."""
+    mpl = pytest.importorskip("matplotlib")
+    from poc_env.agents.mission.overlay import COLORMAP
+
+    seg = mpl.colormaps["YlOrRd"]._segmentdata
+    rgb = np.array([[seg[c][k][1] for c in ("red", "green", "blue")] for k in range(0, 9, 2)])
+    np.testing.assert_array_equal(COLORMAP, np.round(255 * rgb))
+
+
+def test_html_page_escapes_every_plan_string(tmp_path):
+    """Autoescaping template: markup in the scenario name is text in the title, the summary
+    and the note, and \\u003c-escaped in the script data; html.parser finds no injected tag."""
+    from html.parser import HTMLParser
+
+    from poc_env.agents.mission.formats.report import html_report
+
+    class Tags(HTMLParser):
+        tags: list = []
+
+        def handle_starttag(self, tag, attrs):
+            self.tags.append(tag)
+
+    plan = {
+        "schema": 1, "scenario": "<x-evil>&'\"</script>", "seed": 1, "map_source": "builtin",
+        "optimizer": {"name": "<x-evil>", "settings": {}}, "runtime_s": 0.4, "posc": 0.3,
+        "upper_bound": 0.5,
+        "uavs": [{"id": 1, "rectangle": None, "spacing_m": 5e3, "takeoff_m": [0.0, 0.0],
+                  "landing_m": [0.0, 0.0], "waypoints_m": [[1e3, 1e3], [2e3, 1e3]],
+                  "track_length_m": 1e3, "flight_time_s": 60.0, "pod": 0.5, "poc": 0.5,
+                  "pos": 0.25, "feasible": True}],
+    }  # fmt: skip
+    page = html_report(plan, ORIGIN, None, "<x-evil> note", 1000.0, "home", 0.0)
+    p = Tags()
+    p.feed(page)
+    assert "x-evil" not in p.tags and p.tags.count("script") == 3
+    assert "&lt;x-evil&gt;&amp;" in page and "\\u003cx-evil>" in page

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -57,7 +58,7 @@ def geojson(
             }
         )
         for kind, ring_m, ring_props in search_rings(u):
-            ring = [[r6(lon), r6(lat)] for lat, lon in to_geographic(ring_m, crs)]
+            ring = exterior_ring(to_geographic(ring_m, crs))
             feats.append(
                 {
                     "type": "Feature",
@@ -67,7 +68,7 @@ def geojson(
             )
     for o in overlays(plan, crs, alt, ground):
         if o["geometry"] == "Polygon":
-            coords: Any = [[[r6(lon), r6(lat)] for lat, lon in o["latlon"]]]
+            coords: Any = [exterior_ring(o["latlon"])]
         else:
             coords = [[r6(lon), r6(lat), z] for (lat, lon), z in zip(o["latlon"], o["z"])]
             coords = coords[0] if o["geometry"] == "Point" else coords
@@ -88,6 +89,24 @@ def geojson(
             "altitude_ref": altitude_ref,
         },
     }
+
+
+def exterior_ring(latlon: Any) -> list[list[float]]:
+    """A polygon's exterior ring as RFC 7946 wants it: [lon, lat] rounded to 1e-6 degree,
+    closed (last position = first) and counter-clockwise (section 3.1.6: exterior rings
+    follow the right-hand rule); a ring with no area keeps its order."""
+    ring = [[r6(lon), r6(lat)] for lat, lon in latlon]
+    if ring and ring[0] != ring[-1]:
+        ring.append(list(ring[0]))
+    if ring_area(ring) < 0:
+        ring.reverse()
+    return ring
+
+
+def ring_area(ring: list[list[float]]) -> float:
+    """Signed area (shoelace, in square degrees of [lon, lat]) of a closed ring: positive when
+    counter-clockwise."""
+    return 0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0, *_), (x1, y1, *_) in pairwise(ring))
 
 
 def write(job: ExportJob) -> list[Path]:

@@ -4,13 +4,20 @@ Beside the KML, ``<stem>_prior.png`` (:mod:`poc_env.agents.mission.overlay`) is 
 prior as a GroundOverlay: an image evenly spaced in latitude and longitude, drawn under
 everything else. Without a prior (the scenario cannot be rebuilt) the document's description
 says why.
+
+The document is built with lxml (every text escaped by the serialiser) in the element order of
+the OGC KML 2.2 schema (``ogckml22.xsd``: a Feature's ``name``, ``description``, ``styleUrl``,
+then a Document's ``Style`` selectors, then its Features); :func:`validate_kml` checks a file
+against that schema, vendored in ``agents/mission/assets/kml22`` so it works offline.
 """
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any
-from xml.sax.saxutils import escape
+
+from lxml import etree
 
 from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.features import altitudes, check_altitude_ref, overlays
@@ -21,6 +28,46 @@ from poc_env.io import write_bytes_atomic, write_text_atomic
 
 #: altitude reference -> KML altitudeMode
 ALTITUDE_MODES = {"home": "relativeToGround", "amsl": "absolute"}
+KML_NS = "http://www.opengis.net/kml/2.2"
+SCHEMA = Path(__file__).resolve().parents[1] / "assets" / "kml22" / "ogckml22.xsd"
+
+#: KML styles (colours aabbggrr): routes orange, approaches white, search rectangles and the
+#: operating area outlined, no-fly zones filled red, airfields as the default pin. Each is
+#: (id, [(sub-style, [(element, text)])]) in the schema's order.
+_STYLES: tuple[tuple[str, tuple[tuple[str, tuple[tuple[str, str], ...]], ...]], ...] = (
+    ("route", (("LineStyle", (("color", "ff00a5ff"), ("width", "2"))),)),
+    ("landing_approach", (("LineStyle", (("color", "ffffffff"), ("width", "2"))),)),
+    (
+        "rectangle",
+        (
+            ("LineStyle", (("color", "ffffff00"), ("width", "1.5"))),
+            ("PolyStyle", (("fill", "0"),)),
+        ),
+    ),
+    (
+        "operating_area",
+        (
+            ("LineStyle", (("color", "ff00ffff"), ("width", "1.5"))),
+            ("PolyStyle", (("fill", "0"),)),
+        ),
+    ),
+    (
+        "no_fly_zone",
+        (
+            ("LineStyle", (("color", "ff0000ff"), ("width", "1.5"))),
+            ("PolyStyle", (("color", "660000ff"),)),
+        ),
+    ),
+    ("airfield", (("IconStyle", (("scale", "1.1"),)),)),
+)
+
+
+def _el(parent: Any, tag: str, text: str | None = None, **attrib: str) -> Any:
+    """A KML element under ``parent`` (text escaped by lxml)."""
+    e = etree.SubElement(parent, f"{{{KML_NS}}}{tag}", attrib)
+    if text is not None:
+        e.text = text
+    return e
 
 
 def kml(
@@ -44,72 +91,83 @@ def kml(
     mode = ALTITUDE_MODES[check_altitude_ref(altitude_ref)]
     fl = flight(plan)
     extras = overlays(plan, crs, alt, ground)
-    folders = []
+    root = etree.Element(f"{{{KML_NS}}}kml", nsmap={None: KML_NS})
+    doc = _el(root, "Document")
+    _el(doc, "name", str(plan["scenario"]))
+    g = ground_overlay
+    if g is not None:
+        _el(doc, "description", str(g.get("note", "")))
+    for sid, subs in _STYLES:
+        style = _el(doc, "Style", id=sid)
+        for sub, fields in subs:
+            s = _el(style, sub)
+            for tag, text in fields:
+                _el(s, tag, text)
+    if g is not None and g.get("href"):
+        folder = _el(doc, "Folder")
+        _el(folder, "name", "Prior probability of containment")
+        ov = _el(folder, "GroundOverlay")
+        _el(ov, "name", "prior POC per cell")
+        _el(ov, "description", str(g.get("note", "")))
+        _el(ov, "drawOrder", "0")
+        _el(_el(ov, "Icon"), "href", str(g["href"]))
+        s, w, n, e = (f"{v:.8f}" for v in g["box"])
+        box = _el(ov, "LatLonBox")
+        for tag, text in (("north", n), ("south", s), ("east", e), ("west", w)):
+            _el(box, tag, text)
     for u in plan["uavs"]:
         pts = to_geographic(route(u), crs)
         zs = [ground, *[alt] * (len(pts) - 2), ground]
-        uid = escape(str(u["id"]))
-        placemark = (
-            f"<Placemark><name>UAV {uid} route</name><styleUrl>#route</styleUrl>"
-            f"<description>POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
+        uid = str(u["id"])
+        folder = _el(doc, "Folder")
+        _el(folder, "name", f"UAV {uid}")
+        pm = _placemark(
+            folder,
+            f"UAV {uid} route",
+            "route",
+            f"POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
             f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref}); out "
-            f"{3.6 * fl['transit_speed_mps']:.0f} km/h, search {3.6 * fl['search_speed_mps']:.0f}"
-            f" km/h, home {3.6 * fl['cruise_speed_mps']:.0f} km/h</description>"
-            f"<LineString><altitudeMode>{mode}</altitudeMode>"
-            f"<coordinates>{_kml_coords(pts, zs)}</coordinates></LineString></Placemark>"
+            f"{3.6 * fl['transit_speed_mps']:.0f} km/h, search "
+            f"{3.6 * fl['search_speed_mps']:.0f} km/h, home "
+            f"{3.6 * fl['cruise_speed_mps']:.0f} km/h",
         )
-        rect = "".join(
-            f"<Placemark><name>UAV {uid} {kind.replace('_', ' ')}</name>"
-            f"<styleUrl>#rectangle</styleUrl><description>{escape(_kml_props(props))}"
-            "</description><Polygon><outerBoundaryIs><LinearRing><coordinates>"
-            f"{_kml_coords(to_geographic(ring_m, crs))}</coordinates></LinearRing>"
-            "</outerBoundaryIs></Polygon></Placemark>"
-            for kind, ring_m, props in search_rings(u)
-        )
-        mine = [o for o in extras if o["properties"].get("id") == u["id"]]
-        extra = "".join(_kml_placemark(o, mode) for o in mine)
-        folders.append(f"<Folder><name>UAV {uid}</name>{placemark}{rect}{extra}</Folder>")
-    others = "".join(_kml_placemark(o, mode) for o in extras if "id" not in o["properties"])
-    name = escape(str(plan["scenario"]))
-    return (
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
-        f"<name>{name}</name>{_kml_ground_overlay(ground_overlay)}{_KML_STYLES}{''.join(folders)}"
-        f"<Folder><name>Area, airfields, no-fly zones</name>{others}</Folder></Document></kml>\n"
-    )
+        _line(pm, "LineString", mode, _kml_coords(pts, zs))
+        for kind, ring_m, props in search_rings(u):
+            pm = _placemark(
+                folder, f"UAV {uid} {kind.replace('_', ' ')}", "rectangle", _kml_props(props)
+            )
+            _polygon(pm, _kml_coords(to_geographic(ring_m, crs)))
+        for o in extras:
+            if o["properties"].get("id") == u["id"]:
+                _kml_placemark(folder, o, mode)
+    folder = _el(doc, "Folder")
+    _el(folder, "name", "Area, airfields, no-fly zones")
+    for o in extras:
+        if "id" not in o["properties"]:
+            _kml_placemark(folder, o, mode)
+    body = etree.tostring(root, encoding="unicode")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + body + "\n"
 
 
-#: KML styles (colours aabbggrr): routes orange, approaches white, search rectangles and the
-#: operating area outlined, no-fly zones filled red, airfields as the default pin.
-_KML_STYLES = (
-    '<Style id="route"><LineStyle><color>ff00a5ff</color><width>2</width></LineStyle></Style>'
-    '<Style id="landing_approach"><LineStyle><color>ffffffff</color><width>2</width></LineStyle>'
-    "</Style>"
-    '<Style id="rectangle"><LineStyle><color>ffffff00</color><width>1.5</width></LineStyle>'
-    "<PolyStyle><fill>0</fill></PolyStyle></Style>"
-    '<Style id="operating_area"><LineStyle><color>ff00ffff</color><width>1.5</width></LineStyle>'
-    "<PolyStyle><fill>0</fill></PolyStyle></Style>"
-    '<Style id="no_fly_zone"><LineStyle><color>ff0000ff</color><width>1.5</width></LineStyle>'
-    "<PolyStyle><color>660000ff</color></PolyStyle></Style>"
-    '<Style id="airfield"><IconStyle><scale>1.1</scale></IconStyle></Style>'
-)
+def _placemark(parent: Any, name: str, style: str, description: str | None = None) -> Any:
+    """A Placemark with its name, description and style in the schema's order."""
+    pm = _el(parent, "Placemark")
+    _el(pm, "name", name)
+    if description is not None:
+        _el(pm, "description", description)
+    _el(pm, "styleUrl", f"#{style}")
+    return pm
 
 
-def _kml_ground_overlay(g: dict[str, Any] | None) -> str:
-    """The prior's GroundOverlay folder (or the note why there is none) of :func:`kml`."""
-    if g is None:
-        return ""
-    note = f"<description>{escape(str(g.get('note', '')))}</description>"
-    if not g.get("href"):
-        return note
-    s, w, n, e = (f"{v:.8f}" for v in g["box"])
-    return (
-        f"{note}<Folder><name>Prior probability of containment</name><GroundOverlay>"
-        f"<name>prior POC per cell</name><description>{escape(str(g.get('note', '')))}"
-        f"</description><drawOrder>0</drawOrder><Icon><href>{escape(str(g['href']))}</href>"
-        f"</Icon><LatLonBox><north>{n}</north><south>{s}</south><east>{e}</east><west>{w}</west>"
-        "</LatLonBox></GroundOverlay></Folder>"
-    )
+def _line(parent: Any, tag: str, mode: str, coords: str) -> None:
+    geom = _el(parent, tag)
+    _el(geom, "altitudeMode", mode)
+    _el(geom, "coordinates", coords)
+
+
+def _polygon(parent: Any, coords: str) -> None:
+    ring = _el(_el(_el(parent, "Polygon"), "outerBoundaryIs"), "LinearRing")
+    _el(ring, "coordinates", coords)
 
 
 def _kml_props(props: dict[str, Any]) -> str:
@@ -123,21 +181,36 @@ def _kml_coords(latlon, zs=None) -> str:
     return " ".join(f"{lon:.8f},{lat:.8f},{z:g}" for (lat, lon), z in zip(latlon, zs))
 
 
-def _kml_placemark(o: dict, mode: str) -> str:
-    name = escape(str(o["properties"]["name"]))
-    head = f"<Placemark><name>{name}</name><styleUrl>#{o['properties']['kind']}</styleUrl>"
+def _kml_placemark(parent: Any, o: dict, mode: str) -> None:
+    pm = _placemark(parent, str(o["properties"]["name"]), str(o["properties"]["kind"]))
     if o["geometry"] == "Polygon":
-        geom = (
-            f"<Polygon><outerBoundaryIs><LinearRing><coordinates>{_kml_coords(o['latlon'])}"
-            "</coordinates></LinearRing></outerBoundaryIs></Polygon>"
-        )
+        _polygon(pm, _kml_coords(o["latlon"]))
     else:
-        tag = o["geometry"]
-        geom = (
-            f"<{tag}><altitudeMode>{mode}</altitudeMode><coordinates>"
-            f"{_kml_coords(o['latlon'], o['z'])}</coordinates></{tag}>"
-        )
-    return f"{head}{geom}</Placemark>"
+        _line(pm, o["geometry"], mode, _kml_coords(o["latlon"], o["z"]))
+
+
+@functools.lru_cache(maxsize=1)
+def _schema() -> Any:
+    return etree.XMLSchema(etree.parse(str(SCHEMA)))
+
+
+def validate_kml(data: bytes | str | Path) -> list[str]:
+    """The OGC KML 2.2 schema's complaints about a KML document (``[]``: valid).
+
+    ``data``: the document's bytes or text, or a path to it. A document that is not well-formed
+    XML is one complaint (lxml's parse error); no network access (the schema is vendored).
+    """
+    if isinstance(data, Path):
+        data = data.read_bytes()
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    try:
+        doc = etree.fromstring(raw, etree.XMLParser(resolve_entities=False, no_network=True))
+    except etree.XMLSyntaxError as err:
+        return [f"not well-formed XML: {err}"]
+    schema = _schema()
+    if schema.validate(doc):
+        return []
+    return [f"line {e.line}: {e.message}" for e in schema.error_log]
 
 
 def write(job: ExportJob) -> list[Path]:

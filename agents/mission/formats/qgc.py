@@ -190,3 +190,26 @@ def write(job: ExportJob) -> list[Path]:
         write_text_atomic(job.path(f"_uav{uid}.plan"), json.dumps(doc, indent=1, allow_nan=False))
         for uid, doc in docs
     ]
+
+
+SCHEMA = Path(__file__).resolve().parents[1] / "assets" / "qgc_plan.schema.json"
+
+
+def validate_qgc(doc: Any) -> list[str]:
+    """The complaints of :data:`SCHEMA` (QGroundControl's documented ``.plan`` format, for the
+    items this module writes) about a parsed ``.plan`` document, plus the one rule a schema
+    cannot state: ``doJumpId`` numbered 1, 2, ... in item order. ``[]``: valid."""
+    import jsonschema
+
+    schema = json.loads(SCHEMA.read_text(encoding="utf-8"))
+    v = jsonschema.Draft202012Validator(schema)
+    errs = [
+        f"{'/'.join(map(str, e.absolute_path)) or '(root)'}: {e.message}"
+        for e in sorted(v.iter_errors(doc), key=lambda e: list(map(str, e.absolute_path)))
+    ]
+    items = doc.get("mission", {}).get("items") if isinstance(doc, dict) else None
+    if not errs and isinstance(items, list):
+        ids = [it.get("doJumpId") for it in items]
+        if ids != list(range(1, len(items) + 1)):
+            errs.append(f"mission/items: doJumpId {ids}, not 1..{len(items)} in order")
+    return errs

@@ -21,12 +21,15 @@ layer, its script sets ``document.body.dataset.drawn`` to the number of overlay 
 from __future__ import annotations
 
 import base64
+import functools
 import html
 import json
 from pathlib import Path
 from typing import Any
 
+import jinja2
 import numpy as np
+from markupsafe import Markup
 
 from poc_env.agents.mission.crs import crs_text, to_geographic
 from poc_env.agents.mission.features import overlays, r6
@@ -227,52 +230,63 @@ def html_report(
         if b
         else ""
     )
-    title = html.escape(f"poc-env plan: {plan['scenario']}")
-    summary = html.escape(
+    title = f"poc-env plan: {plan['scenario']}"
+    summary = (
         f"scenario {plan['scenario']}, {len(plan['uavs'])} UAVs, POS_C "
         f"{100 * plan['posc']:.2f} %{bounds}; optimiser {plan['optimizer'].get('name')}, "
         f"seed {plan['seed']}; CRS {crs_text(crs) if isinstance(crs, dict) else crs}"
     )
-    return _PAGE.format(
+    return _template().render(
         title=title,
-        css=_inline_css(),
-        js=(ASSETS / "leaflet.js").read_text(encoding="utf-8"),
+        css=Markup(_inline_css()),
+        js=Markup((ASSETS / "leaflet.js").read_text(encoding="utf-8")),
         summary=summary,
-        note=html.escape(note),
-        table=_table(plan, alt, altitude_ref),
-        payload=payload,
-        script=_SCRIPT,
+        note=note,
+        table=Markup(_table(plan, alt, altitude_ref)),
+        payload=Markup(payload),
+        script=Markup(_SCRIPT),
     )
 
 
+@functools.lru_cache(maxsize=1)
+def _template() -> jinja2.Template:
+    """:data:`_PAGE` compiled once, with autoescaping on."""
+    env = jinja2.Environment(autoescape=True, keep_trailing_newline=True)
+    return env.from_string(_PAGE)
+
+
+#: The page (Jinja2, autoescaping on): ``title``, ``summary`` and ``note`` are plain text (escaped
+#: by the template); ``css``, ``js``, ``script``, ``table`` and ``payload`` are trusted markup
+#: (``Markup``: the vendored Leaflet, this module's script, the table whose cells are escaped
+#: one by one, the plan data with ``<`` written as ``\\u003c``).
 _PAGE = """<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
-<title>{title}</title>
-<style>{css}</style>
+<title>{{ title }}</title>
+<style>{{ css }}</style>
 <style>
-body {{ margin: 0; font: 13px/1.35 system-ui, sans-serif; color: #222; }}
-header, section {{ padding: 6px 10px; }}
-h1 {{ font-size: 16px; margin: 0 0 2px 0; }}
-#map {{ height: 480px; }}
-table {{ border-collapse: collapse; }}
-th, td {{ border: 1px solid #bbb; padding: 2px 6px; text-align: right; }}
-th {{ background: #eee; }}
-.swatch {{ display: inline-block; width: 14px; height: 4px; margin: 0 4px 2px 0; }}
-.small {{ color: #555; font-size: 12px; }}
-.legend {{ background: rgba(255,255,255,0.9); padding: 6px 8px; border-radius: 4px;
-  line-height: 1.5; }}
-.legend .ramp {{ width: 140px; height: 10px; }}
-.legend svg {{ vertical-align: middle; }}
+body { margin: 0; font: 13px/1.35 system-ui, sans-serif; color: #222; }
+header, section { padding: 6px 10px; }
+h1 { font-size: 16px; margin: 0 0 2px 0; }
+#map { height: 480px; }
+table { border-collapse: collapse; }
+th, td { border: 1px solid #bbb; padding: 2px 6px; text-align: right; }
+th { background: #eee; }
+.swatch { display: inline-block; width: 14px; height: 4px; margin: 0 4px 2px 0; }
+.small { color: #555; font-size: 12px; }
+.legend { background: rgba(255,255,255,0.9); padding: 6px 8px; border-radius: 4px;
+  line-height: 1.5; }
+.legend .ramp { width: 140px; height: 10px; }
+.legend svg { vertical-align: middle; }
 </style></head>
 <body>
-<header><h1>{title}</h1><div class="small">{summary}</div>
-<div class="small" id="prior-note">{note}</div></header>
+<header><h1>{{ title }}</h1><div class="small">{{ summary }}</div>
+<div class="small" id="prior-note">{{ note }}</div></header>
 <div id="map"></div>
-<section>{table}</section>
-<script type="application/json" id="plan-data">{payload}</script>
-<script>{js}</script>
-<script>{script}</script>
+<section>{{ table }}</section>
+<script type="application/json" id="plan-data">{{ payload }}</script>
+<script>{{ js }}</script>
+<script>{{ script }}</script>
 </body></html>
 """
 
