@@ -359,8 +359,15 @@ def test_without_random_airfields_the_fields_are_the_scenarios():
 def test_bad_random_airfields():
     with pytest.raises(ConfigError, match="random_airfields"):
         poc_env.parallel_env("small", random_airfields="yes")
-    full = {"map.no_fly_zones_km": [[[-1, -1], [41, -1], [41, 41], [-1, 41]]]}  # whole grid
-    env = poc_env.parallel_env("small", random_airfields=True, overrides=full)
+    # two zones that leave only a 0.2 km strip of the grid flyable: no room for an airfield
+    # (a zone over the whole grid is refused when the scenario loads, issue 24)
+    strips = [
+        [[-1, -1], [41, -1], [41, 19.9], [-1, 19.9]],
+        [[-1, 20.1], [41, 20.1], [41, 41], [-1, 41]],
+    ]
+    env = poc_env.parallel_env(
+        "small", random_airfields=True, overrides={"map.no_fly_zones_km": strips}
+    )
     with pytest.raises(ConfigError, match="random_airfields"):
         env.reset(seed=0)
 

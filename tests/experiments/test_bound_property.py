@@ -120,8 +120,9 @@ def test_no_policy_beats_the_bounds_on_a_short_horizon(counts, horizon, seed, la
 
 
 def _halve(monkeypatch, which: str) -> None:
-    """Halve the ``which`` bound (``honest`` or ``reach``) wherever it is computed."""
-    import poc_env.agents.planning.allocation as allocation
+    """Halve the ``which`` bound (``honest`` or ``reach``) wherever it is computed (the
+    planners take both from :func:`poc_env.agents.planning.geography.plan_geography`, which
+    reads them from the bound module at call time)."""
     import poc_env.theory.bound as bound
 
     if which == "honest":
@@ -132,7 +133,6 @@ def _halve(monkeypatch, which: str) -> None:
             return dataclasses.replace(b, pos=0.5 * b.pos)
 
         monkeypatch.setattr(bound, "honest_optimum", honest)
-        monkeypatch.setattr(allocation, "honest_optimum", honest)
     else:
         orig_r = bound.reach_bound
 
@@ -141,7 +141,6 @@ def _halve(monkeypatch, which: str) -> None:
             return dataclasses.replace(b, pos=0.5 * b.pos, upper=0.5 * b.upper)
 
         monkeypatch.setattr(bound, "reach_bound", reach)
-        monkeypatch.setattr(allocation, "reach_bound", reach)
 
 
 @pytest.mark.parametrize("which", ["honest", "reach"])
