@@ -56,7 +56,7 @@ from pathlib import Path
 from typing import Any
 
 from poc_env import tasks
-from poc_env.agents.rl.frameworks import GROUP, torchrl_env
+from poc_env.agents.rl.frameworks import torchrl_env
 from poc_env.errors import MissingExtraError
 
 try:
@@ -127,7 +127,7 @@ def _keep(spec: Composite, groups: list[str], key: str) -> Composite:
         for k in list(out[group].keys()):
             if k != key:
                 del out[group][k]
-    if "state" in out.keys():
+    if "state" in out:
         del out["state"]
     return out
 
@@ -170,7 +170,7 @@ class PocEnvTaskClass(TaskClass):
         return _keep(env.observation_spec, list(self.group_map(env)), "info")
 
     def state_spec(self, env: EnvBase) -> Composite | None:
-        if "state" not in env.observation_spec.keys():
+        if "state" not in env.observation_spec:
             return None
         return Composite({"state": env.observation_spec["state"].clone()})
 
@@ -222,7 +222,7 @@ class PocEnvTask(Task):
     @classmethod
     def from_id(cls, task_id: str) -> PocEnvTask:
         """The member of a registered task id (the ``poc_env/`` namespace may be left out)."""
-        return cls[member_name(task_id)]
+        return cls.__members__[member_name(task_id)]
 
     def get_task(self, config: dict[str, Any] | None = None) -> PocEnvTaskClass:
         """The task with ``config`` over the defaults (see the module docstring)."""

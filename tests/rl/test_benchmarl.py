@@ -14,7 +14,9 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("benchmarl", reason="needs the benchmarl extra: pip install 'poc-env[benchmarl]'")
+pytest.importorskip(
+    "benchmarl", reason="needs the benchmarl extra: pip install 'poc-env[benchmarl]'"
+)
 
 from poc_env import tasks
 from poc_env.agents.rl.frameworks import GROUP
@@ -102,7 +104,7 @@ def test_mappo_experiment(tmp_path):
     )
     assert exp.group_map == {GROUP: ["uav_0", "uav_1", "uav_2"]}
     assert exp.max_steps == 30
-    assert "state" in exp.state_spec.keys()
+    assert "state" in exp.state_spec
     exp.run()
     assert exp.total_frames == 400 and exp.n_iters_performed == 2
 
