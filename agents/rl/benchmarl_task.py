@@ -61,7 +61,6 @@ from poc_env.errors import MissingExtraError
 
 try:
     from benchmarl.environments.common import Task, TaskClass
-    from benchmarl.utils import _read_yaml_config
     from torchrl.data import Composite
     from torchrl.envs import EnvBase
 except ModuleNotFoundError as exc:  # pragma: no cover - exercised by the test's import check
@@ -240,4 +239,8 @@ class PocEnvTask(Task):
         """The defaults, or the YAML file ``path`` over them (BenchMARL has no YAML of ours)."""
         if path is None:
             return self.get_task()
-        return self.get_task(dict(_read_yaml_config(str(path))))
+        import yaml
+
+        config = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+        config.pop("defaults", None)  # a Hydra defaults list, as in BenchMARL's task files
+        return self.get_task(config)

@@ -34,7 +34,7 @@ def _quiet():
         yield
 
 
-def test_every_registered_task_is_a_member():
+def test_every_registered_task_is_a_member(tmp_path):
     from poc_env.agents.rl.benchmarl_task import PocEnvTask
 
     assert {m.task_id for m in PocEnvTask} == set(tasks.TASKS)
@@ -43,6 +43,13 @@ def test_every_registered_task_is_a_member():
     assert t is PocEnvTask.SMALL_RANDOM_WAYPOINT
     assert t.get_task().config["task"] == "poc_env/UAVSearch-Small-Random-Waypoint-v0"
     assert PocEnvTask.SMALL_HEADING.get_from_yaml() == PocEnvTask.SMALL_HEADING.get_task()
+    (tmp_path / "t.yaml").write_text("state: false\nenv_kwargs: {max_cycles: 9}\n")
+    cfg = PocEnvTask.SMALL_HEADING.get_from_yaml(tmp_path / "t.yaml").config
+    assert cfg == {
+        "task": "poc_env/UAVSearch-Small-Heading-v0",
+        "state": False,
+        "env_kwargs": {"max_cycles": 9},
+    }
     with pytest.raises(KeyError, match="unknown"):
         PocEnvTask.SMALL_HEADING.get_task({"n_uavs": 4})
 
