@@ -1,6 +1,6 @@
 """The documentation site's examples run as written: the Python blocks of the pages that show
 runnable code, and the GIS-to-ground-station walkthrough of docs/missions.md. (The examples of
-docs/FRAMEWORKS.md run in tests/rl/test_torchrl.py and tests/rl/test_supersuit.py; the
+docs/FRAMEWORKS.md run in tests/rl/test_torchrl.py, test_supersuit.py and test_benchmarl.py; the
 docstrings' examples in tests/test_doctests.py; the site itself builds in strict mode in
 `make test`.)"""
 
