@@ -148,3 +148,10 @@ def test_missing_ray_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)
     with pytest.raises(MissingExtraError, match=r"poc-env\[rllib\]"):
         cluster.require_ray("--ray")
+
+
+def test_the_probe_passes_a_real_ray_gcs(ray_local):
+    """The handshake probe (tests/rl/test_cluster.py refuses services that are not Ray)
+    accepts Ray's own GCS port."""
+    address = ray_local.get_runtime_context().gcs_address
+    cluster.probe(address, timeout_s=5.0)
