@@ -14,7 +14,8 @@ the opening of gRPC's HTTP/2 handshake, which both of Ray's ports (the GCS and t
 server) answer with a SETTINGS frame. An address where nothing answers, or where a service
 that is not Ray listens (a web server, a database, a silent socket), fails within
 :data:`PROBE_TIMEOUT_S` seconds with an error naming it, instead of ``ray.init``'s retry loop,
-which does not end against a service that accepts connections and never speaks gRPC. Ray comes with the ``rllib`` extra; without it a
+which does not end against a service that accepts connections and never speaks gRPC.
+Ray comes with the ``rllib`` extra; without it a
 :class:`~poc_env.errors.MissingExtraError` names the extra.
 """
 

@@ -137,7 +137,7 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
             seed=args.seed,
             obs_type="compass",
             random_priors=task.random_prior,
-            control=task.control,
+            control=task.kwargs["control"],  # the task version's rule (heading_clip at v1)
             agent_index=args.agent_index,
             return_autopilot=args.return_autopilot,
         )

@@ -137,11 +137,27 @@ def test_the_task_table_is_the_spec():
     assert tasks.VERSION == spec.TASK_VERSION
     parts = itertools.product(spec.SCENARIO_PARTS, spec.RANDOM_PARTS, spec.CONTROL_PARTS)
     want = {
-        tasks.task_id(s.text, c.text, bool(r.value)): (s.value, c.value, r.value)
+        tasks.task_id(s.text, c.text, bool(r.value), v.version): (
+            s.value, c.value, r.value, v.version, v.env_control
+        )
         for s, r, c in parts
+        for v in spec.versions_of(c.text)
+    }  # fmt: skip
+    got = {
+        t: (k.scenario, k.control, k.random_prior, k.version, k.kwargs["control"])
+        for t, k in tasks.TASKS.items()
     }
-    assert {t: (k.scenario, k.control, k.random_prior) for t, k in tasks.TASKS.items()} == want
-    assert all(t.endswith(f"-v{spec.TASK_VERSION}") for t in tasks.TASKS)
+    assert got == want
+    # every id of the first release stays registered (old ids keep their behaviour)
+    for s, r, c in itertools.product(spec.SCENARIO_PARTS, spec.RANDOM_PARTS, spec.CONTROL_PARTS):
+        assert tasks.task_id(s.text, c.text, bool(r.value), spec.TASK_VERSION) in tasks.TASKS
+    assert all(t.endswith(f"-v{tasks.TASKS[t].version}") for t in tasks.TASKS)
+
+
+def test_every_version_has_its_row_in_the_history():
+    text = spec.markdown("tasks")
+    for v in spec.TASK_VERSIONS:
+        assert f"| `{v.control}` | `v{v.version}` | `{v.env_control}` |" in text
 
 
 def test_the_task_table_text_reads_the_scenarios():
