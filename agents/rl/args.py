@@ -151,8 +151,6 @@ class TrainArgs:
                     "recipe", self.recipe, "shared (the default) with --task: the task's env "
                     "and an MLP on its compass observation replace the recipe",
                 )  # fmt: skip
-        if self.engine == "rllib" and self.resume is not None:
-            raise ConfigError("resume", self.resume, "sb3 runs only (an rllib run starts anew)")
         if self.address is not None and self.engine != "rllib":
             raise ConfigError("address", self.address, "an address with --engine rllib only")
         for name, lo, hi in (

@@ -278,8 +278,9 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
         p = Path(args.run_dir)
         if (p / "config.json").exists():
             raise ConfigError(
-                "run_dir", str(p), "a new or empty folder (this one holds a run: use --resume)"
-            )
+                "run_dir", str(p), f"a new or empty folder (this one holds a run: continue it "
+                f"with poc-env train --resume {p})",
+            )  # fmt: skip
         return p
     stamp = time.strftime("%Y%m%d-%H%M%S")
     # the scenario's name is the user's text: one safe component under runs/, never a path
@@ -297,6 +298,8 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
     ``callback``: an extra SB3 callback, called after the checkpointer and the progress bar.
     Needs the ``rl`` extra (checked before anything is written)."""
+    if args.resume is not None:  # the run's own config.json says which engine
+        return _resume(Path(args.resume), args.progress, callback)
     if args.engine == "rllib":
         from poc_env.agents.rl.rllib import train_rllib
 
@@ -304,8 +307,6 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         run_dir = _new_run_dir(args, Path(name).stem)
         return train_rllib(dataclasses.replace(args, run_dir=str(run_dir)), run_dir)
     require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
-    if args.resume is not None:
-        return _resume(Path(args.resume), args.progress, callback)
     from poc_env.config import load_scenario, save_scenario
 
     if args.task is not None:
@@ -323,24 +324,31 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
 
 def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Path:
-    from poc_env.config import load_scenario
+    """Continue ``run_dir`` from its newest checkpoint. A run killed before its first one
+    (even before it wrote scenario.yaml) trains again from step 0 in the same folder with its
+    config.json, so ``--resume`` and ``--run-dir`` never send the user to each other."""
+    from poc_env.config import load_scenario, save_scenario
 
     if not (run_dir / "config.json").is_file():
         raise ConfigError(
             "resume",
             str(run_dir),
-            "a run folder written by poc-env train (with config.json, scenario.yaml and "
-            "checkpoints/)",
+            "a run folder written by poc-env train (with config.json; a folder without one "
+            "starts a new run with --run-dir)",
         )
     args = TrainArgs.from_dict(read_json(run_dir / "config.json", "config.json"), "config.json")
     args = dataclasses.replace(args, run_dir=str(run_dir), resume=None, progress=progress)
-    if not (run_dir / "scenario.yaml").is_file():
-        raise ConfigError(
-            "resume",
-            str(run_dir),
-            "a run folder written by poc-env train (with config.json, scenario.yaml and "
-            "checkpoints/)",
-        )
+    if args.engine == "rllib":
+        return _resume_rllib(args, run_dir)
+    require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
+    if not (run_dir / "scenario.yaml").is_file():  # killed between config.json and it
+        if latest_checkpoint(run_dir) is not None:
+            raise ConfigError(
+                "resume", str(run_dir), "a run folder with its scenario.yaml beside its "
+                "checkpoints (this one lost it: its checkpoints cannot be matched to a scenario)",
+            )  # fmt: skip
+        sc = load_scenario(_scenario_of(args), parse_overrides(args.overrides))
+        save_scenario(sc, run_dir / "scenario.yaml")
     ck = latest_checkpoint(run_dir)
     if ck is None:  # killed before its first checkpoint: the same run again, from step 0
         warnings.warn(
@@ -349,6 +357,33 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
         )
     sc = load_scenario(run_dir / "scenario.yaml")
     return _run(args, sc, run_dir, callback, checkpoint=ck)
+
+
+def _scenario_of(args: TrainArgs) -> str:
+    """The scenario a run trains on: its task's, else ``args.scenario``."""
+    if args.task is not None:
+        from poc_env.tasks import get_task
+
+        return get_task(args.task).scenario
+    return args.scenario
+
+
+def _resume_rllib(args: TrainArgs, run_dir: Path) -> Path:
+    """``--resume`` of an RLlib run: one killed before its first checkpoint trains in its folder
+    from step 0; one with a checkpoint is complete up to it and is not continued (RLlib runs
+    start anew), and the error says what to do instead."""
+    from poc_env.agents.rl.rllib import train_rllib
+
+    if (run_dir / "checkpoint").exists():
+        raise ConfigError(
+            "resume", str(run_dir), "an sb3 run, or an rllib run killed before its first "
+            "checkpoint (this rllib run has one: fly it with evaluate --policies "
+            f"rllib:{run_dir}, or train a new run with --run-dir NEW)",
+        )  # fmt: skip
+    warnings.warn(
+        f"{run_dir}: no checkpoint; training again from step 0 with its config", stacklevel=2
+    )
+    return train_rllib(args, run_dir)
 
 
 def _run(

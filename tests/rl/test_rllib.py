@@ -155,3 +155,23 @@ def test_the_probe_passes_a_real_ray_gcs(ray_local):
     accepts Ray's own GCS port."""
     address = ray_local.get_runtime_context().gcs_address
     cluster.probe(address, timeout_s=5.0)
+
+
+def test_an_rllib_run_killed_before_its_first_checkpoint_resumes(ray_local, tmp_path):
+    """Issue 27: --resume refused rllib runs ("an rllib run starts anew") while --run-dir
+    refused the folder ("holds a run: use --resume"). A run with config.json and no checkpoint
+    now trains in its folder; one with a checkpoint gets an error saying what to do."""
+    from poc_env.agents.rl.checkpoint import write_json
+
+    args = _args(tmp_path, "early")
+    run = tmp_path / "early"
+    run.mkdir()
+    write_json(run / "config.json", dataclasses.asdict(args))  # a kill before any iteration
+    with pytest.raises(ConfigError, match="train --resume"):
+        train(args)
+    with pytest.warns(UserWarning, match="no checkpoint"):
+        train(TrainArgs(resume=str(run), progress=False))
+    assert (run / "checkpoint" / "learner_group").is_dir()
+    with pytest.raises(ConfigError, match=rf"rllib:{run}.*--run-dir NEW") as err:
+        train(TrainArgs(resume=str(run), progress=False))
+    assert err.value.field == "resume"

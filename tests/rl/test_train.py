@@ -223,10 +223,6 @@ def test_resume_on_a_folder_that_is_not_a_run(tmp_path):
     with pytest.raises(ConfigError, match=r"config\.json") as err:
         train(TrainArgs(resume=str(tmp_path / "nowhere")))
     assert err.value.field == "resume"
-    (tmp_path / "config.json").write_text(json.dumps({"scenario": "small"}))
-    with pytest.raises(ConfigError, match="checkpoint") as err:  # a run with no checkpoint
-        train(TrainArgs(resume=str(tmp_path)))
-    assert err.value.field == "resume"
     (tmp_path / "config.json").write_text(json.dumps({"scenario": "small", "lr": 1}))
     with pytest.raises(ConfigError, match="lr"):
         train(TrainArgs(resume=str(tmp_path)))
@@ -485,4 +481,22 @@ def test_a_run_killed_before_its_first_checkpoint_can_be_resumed(runs, tmp_path)
     assert checkpoint_steps(run) == [] and (run / "config.json").is_file()
     with pytest.warns(UserWarning, match="no complete checkpoint"):
         train(TrainArgs(resume=str(run), progress=False))
+    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+
+
+def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path):
+    """Issue 27: a kill between config.json and scenario.yaml left a folder that --resume
+    refused (no scenario.yaml) and --run-dir refused (it holds a run: use --resume). Now
+    --resume rebuilds scenario.yaml from config.json and trains in the folder from step 0,
+    ending where the uninterrupted run ends; --run-dir's refusal names the command."""
+    run = tmp_path / "early"
+    with pytest.raises(Interrupt):
+        train(_args("shared", run), callback=_killer(40))
+    (run / "scenario.yaml").unlink()
+    with pytest.raises(ConfigError, match=rf"train --resume {run}") as err:
+        train(_args("shared", run))
+    assert err.value.field == "run_dir"
+    with pytest.warns(UserWarning, match="no complete checkpoint"):
+        train(TrainArgs(resume=str(run), progress=False))
+    assert (run / "scenario.yaml").is_file()
     assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
