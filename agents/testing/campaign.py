@@ -45,6 +45,8 @@ import numpy as np
 from poc_env.errors import PocEnvError
 
 OUTCOMES = ("ok", "error", "unclear", "traceback", "silent")
+#: Most cases of one campaign (``--cases``): about a day on one core.
+MAX_CASES = 1_000_000
 
 
 class SilentWrong(AssertionError):
@@ -739,6 +741,10 @@ def main(argv: list[str] | None = None) -> dict[str, Counter]:
     p.add_argument("--targets", default=",".join(TARGETS))
     p.add_argument("--show", type=int, default=3, help="failing cases to print per target")
     args = p.parse_args(argv)
+    for name, lo, hi in (("cases", 1, MAX_CASES), ("show", 0, 10_000), ("seed", 0, 2**32 - 1)):
+        v = getattr(args, name)
+        if not lo <= v <= hi:  # 1e9 cases is days of work: refused up front
+            p.error(f"--{name}: got {v}; allowed: an integer in [{lo}, {hi}]")
     names = [t for t in args.targets.split(",") if t]
     for t in names:
         if t not in TARGETS:

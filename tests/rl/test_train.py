@@ -411,7 +411,8 @@ def test_cli_options_come_from_trainargs(tmp_path, capsys, monkeypatch):
             overrides=["reward.alpha=100", "reward.violation_penalty=0.5"],
         )
     ]
-    assert parse_train_args(["--net-arch", "64", "32", "--resume", "None"]).net_arch == [64, 32]
+    argv = ["--recipe", "central", "--net-arch", "64", "32", "--resume", "None"]
+    assert parse_train_args(argv).net_arch == [64, 32]
     assert parse_train_args(["--resume", "R", "--no-progress"]) == TrainArgs(
         resume="R", progress=False
     )
@@ -500,3 +501,24 @@ def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path):
         train(TrainArgs(resume=str(run), progress=False))
     assert (run / "scenario.yaml").is_file()
     assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+
+
+@pytest.mark.parametrize(
+    ("kw", "field", "said"),
+    [
+        ({"net_arch": [10**6, 10**6]}, "net_arch", "policy and value networks"),
+        ({"n_steps": 10**6, "n_envs": 1024, "batch_size": 64}, "n_steps", "rollout buffer"),
+        ({"batch_size": 10**7}, "batch_size", "at most the rollout"),
+        ({"recipe": "central", "n_steps": 1, "n_envs": 1, "batch_size": 2}, "n_steps", ">= 2"),
+    ],
+)
+def test_train_sizes_are_checked_before_anything_is_allocated(tmp_path, kw, field, said):
+    """Issue 27: sizes that passed validation and then allocated tens of GB (a huge network,
+    a rollout buffer of 10^9 transitions) or failed inside SB3 (an assertion on a rollout of
+    one transition; a minibatch larger than the rollout was silently cut) end in a ConfigError
+    naming the field, before the run folder is made."""
+    run = tmp_path / "r"
+    with pytest.raises(ConfigError, match=said) as err:
+        train(_args(kw.pop("recipe", "shared"), run, **kw))
+    assert err.value.field == field
+    assert not run.exists()
