@@ -175,3 +175,29 @@ def test_an_rllib_run_killed_before_its_first_checkpoint_resumes(ray_local, tmp_
     with pytest.raises(ConfigError, match=rf"rllib:{run}.*--run-dir NEW") as err:
         train(TrainArgs(resume=str(run), progress=False))
     assert err.value.field == "resume"
+
+
+@pytest.mark.parametrize(
+    "damage",
+    ["module_state.pkl", "no_modules", "config"],  # (RLlib reads the module from its state)
+)
+def test_a_damaged_checkpoint_is_a_clear_error(tmp_path, damage):
+    """Issue 27: a damaged RLlib checkpoint folder (a truncated pickle, garbage metadata, no
+    module, a config.json nested 1,000 deep) ends in a ConfigError naming the checkpoint,
+    not a traceback from deep inside RLlib."""
+    import shutil
+    from importlib import resources
+
+    src = resources.files("poc_env.agents") / "checkpoints" / "rllib_heading_paper_6_2"
+    run = tmp_path / "run"
+    shutil.copytree(str(src), run)
+    shared = run / "checkpoint" / "learner_group" / "learner" / "rl_module" / "shared"
+    if damage == "no_modules":
+        shutil.rmtree(shared)
+    elif damage == "config":
+        (run / "config.json").write_text("[" * 1000 + "]" * 1000)
+    else:
+        (shared / damage).write_bytes(b"\x80\x04garbage")
+    with pytest.raises(ConfigError) as err:
+        RLlibPolicy(run)
+    assert err.value.field in ("checkpoint", "config.json")
