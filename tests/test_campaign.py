@@ -21,6 +21,7 @@ DEFAULT_CASES = {
     "cli": 40,
     "actions": 150,
     "geo": 60,
+    "runtime": 40,
 }
 
 
