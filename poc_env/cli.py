@@ -135,7 +135,8 @@ def _add_overrides(p: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         metavar="KEY=VALUE",
-        help="scenario keys to change, YAML values (e.g. sensor.sweep_width_km=4 uav.count=3)",
+        help="scenario keys to change, YAML values (e.g. sensor.sweep_width_km=4 "
+        "episode.horizon_steps=50)",
     )
 
 
@@ -585,8 +586,11 @@ def _plan(
     from poc_env.theory.probability_map import build_prior
 
     overrides = parse_overrides(args.overrides or [])
-    if args.uavs is not None and "uav.count" in overrides:
-        raise ConfigError("uavs", args.uavs, "either --uavs or --overrides uav.count=..., not both")
+    if args.uavs is not None and any(k.split(".")[0] == "fleet" for k in overrides):
+        raise ConfigError(
+            "uavs", args.uavs, "either --uavs or --overrides fleet..., not both (--uavs "
+            "replaces the fleet)",
+        )  # fmt: skip
     planner = getattr(args, "planner", "de")
     if planner == "allocation":  # the optimiser's options do not apply to it
         for name in ("optimizer", "preset", "popsize", "maxiter"):

@@ -623,7 +623,7 @@ _CONFLICTS = [
     ["train", "--recipe", "central", "--approach-shaping", "1"],
     ["train", "--bc-epochs", "2"], ["train", "--rllib-policies", "per_uav"],
     ["evaluate", "--task", "UAVSearch-Small-Heading-v1", "--scenario", "small"],
-    ["plan", "--scenario", "small", "--uavs", "2", "--overrides", "uav.count=2"],
+    ["plan", "--scenario", "small", "--uavs", "2", "--overrides", "fleet=[{takeoff: A, count: 2}]"],
     ["plan", "--scenario", "small", "--planner", "allocation", "--optimizer", "cmaes"],
     ["plan", "--scenario", "small", "--planner", "allocation", "--popsize", "8"],
     ["render", "--scenario", "small", "--overrides", "episode.horizon_steps=10000000",

@@ -71,7 +71,8 @@ def test_map_over_a_file_prior_is_refused_and_plan_json_names_the_file(tmp_path,
 
 
 def test_plan_refuses_options_that_do_not_apply(capsys):
-    err = _err(capsys, ["plan", "--scenario", "small", "--uavs", "2", "--overrides", "uav.count=3"])
+    fleet = "fleet=[{takeoff: A, count: 3}]"
+    err = _err(capsys, ["plan", "--scenario", "small", "--uavs", "2", "--overrides", fleet])
     assert "error: uavs:" in err
     for opt, value in (("--optimizer", "cmaes"), ("--popsize", "8"), ("--preset", "tuned")):
         err = _err(capsys, ["plan", "--scenario", "small", "--planner", "allocation", opt, value])
@@ -89,3 +90,22 @@ def test_render_and_campaign_sizes_are_bounded_up_front(tmp_path, capsys):
         campaign(["--cases", "1000000000"])
     assert done.value.code == 2
     assert "--cases: got 1000000000; allowed: an integer in [1, 1000000]" in capsys.readouterr().err
+
+
+def test_every_overrides_example_in_the_help_parses():
+    """Issue 27: ``plan --help`` showed ``uav.count=3``, a key the scenario refuses. The
+    --overrides example of every subcommand's help loads on the built-in scenario."""
+    import re
+
+    from poc_env.cli import build_parser
+    from poc_env.config import load_scenario, parse_overrides
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    seen = 0
+    for p in sub.choices.values():  # type: ignore[union-attr]
+        text = " ".join(p.format_help().split())
+        for m in re.finditer(r"\(e\.g\. ((?:[\w.]+=\S+ ?)+)\)", text):
+            load_scenario("small", parse_overrides(m.group(1).split()))
+            seen += 1
+    assert seen >= 3
