@@ -135,7 +135,8 @@ def _add_overrides(p: argparse.ArgumentParser) -> None:
         nargs="+",
         default=None,
         metavar="KEY=VALUE",
-        help="scenario keys to change, YAML values (e.g. sensor.sweep_width_km=4 uav.count=3)",
+        help="scenario keys to change, YAML values (e.g. sensor.sweep_width_km=4 "
+        "episode.horizon_steps=50)",
     )
 
 
@@ -143,6 +144,27 @@ def _add_scenario(p: argparse.ArgumentParser, default: str | None) -> None:
     p.add_argument("--scenario", default=default, help="built-in name or YAML path")
     _add_overrides(p)
     p.add_argument("--map", dest="map_file", default=None, help="prior map (.npy or .csv)")
+
+
+def _check_map_option(sc, map_file) -> None:
+    """``--map`` replaces a scenario's prior; over a scenario whose prior already is a file it
+    would silently win over that file: refused, naming both."""
+    prior = sc.map.prior
+    if map_file is not None and prior.kind == "file":
+        raise ConfigError(
+            "map", os.fspath(map_file), f"no --map with scenario {sc.name!r}, whose prior is "
+            f"the file {prior.file} (map.prior.file): change that key with --overrides "
+            "map.prior.file=PATH, or leave --map out",
+        )  # fmt: skip
+
+
+def _map_source(sc, map_file) -> str:
+    """plan.json's ``map_source``: the ``--map`` file, else the scenario's prior file, else
+    ``builtin`` (a prior computed from the scenario's components)."""
+    if map_file is not None:
+        return os.fspath(map_file)
+    prior = sc.map.prior
+    return str(prior.file) if prior.kind == "file" else "builtin"
 
 
 def cmd_scenarios(args: argparse.Namespace) -> int:
@@ -224,6 +246,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
     from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
+    _check_map_option(sc, args.map_file)
     plan = load_regions(args.regions or f"{sc.name}_polygons")
     prior = build_prior(sc.map, args.map_file)
     if getattr(args, "optimise", False):
@@ -257,7 +280,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
             sc,
             plan,
             prior,
-            map_source=args.map_file or "builtin",
+            map_source=_map_source(sc, args.map_file),
             origin_deg=args.origin,
             projection=args.projection,
             zone=args.utm_zone,
@@ -314,6 +337,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     _check_int("every", args.every, 1, limits.MAX_STEPS)
     _check_out("out", args.out, "file")
     sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
+    _check_render_frames(args, sc)
     path = render_episode(
         sc,
         _state_policy(sc, args.policy, args.seed),
@@ -324,6 +348,26 @@ def cmd_render(args: argparse.Namespace) -> int:
     )
     print(f"wrote {path}")
     return 0
+
+
+#: Bytes of one rendered frame held until the GIF is written: 640 x 480 RGBA pixels (the
+#: renderer's default figure) plus the palette image the GIF writer makes of it.
+_FRAME_BYTES = 640 * 480 * 5
+
+
+def _check_render_frames(args: argparse.Namespace, sc) -> None:
+    """The frames ``render`` would hold fit the memory guard: the episode ends at its horizon,
+    so ``--max-steps`` beyond it costs nothing, but a horizon of 10^7 steps drawn every step
+    is ten million frames (tens of TB) -- refused up front, naming the field."""
+    steps = min(sc.horizon_steps, args.max_steps or sc.horizon_steps)
+    frames = steps // args.every + 2
+    field, value = (
+        ("every", args.every) if args.max_steps is None else ("max_steps", args.max_steps)
+    )
+    limits.check_memory(
+        field, value, float(frames) * _FRAME_BYTES,
+        f"animation ({frames:,} frames of 640 x 480; raise --every or lower --max-steps)",
+    )  # fmt: skip
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -429,6 +473,7 @@ def _evaluate(
                 print(f"note: {name} was trained on {_task_of(origin).id}; flown here on "
                       f"{task.id} (a transfer: same control level and observation)")  # fmt: skip
     sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
+    _check_map_option(sc, args.map_file)
     ev = evaluate(
         sc,
         names,
@@ -540,15 +585,30 @@ def _plan(
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
-    sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
+    overrides = parse_overrides(args.overrides or [])
+    if args.uavs is not None and any(k.split(".")[0] == "fleet" for k in overrides):
+        raise ConfigError(
+            "uavs", args.uavs, "either --uavs or --overrides fleet..., not both (--uavs "
+            "replaces the fleet)",
+        )  # fmt: skip
+    planner = getattr(args, "planner", "de")
+    if planner == "allocation":  # the optimiser's options do not apply to it
+        for name in ("optimizer", "preset", "popsize", "maxiter"):
+            if getattr(args, name, None) is not None:
+                raise ConfigError(
+                    name, getattr(args, name), "only with --planner de (the allocation "
+                    "planner has no optimiser: leave it out)",
+                )  # fmt: skip
+    sc = load_scenario(args.scenario, overrides)
     if args.uavs is not None:
         sc = sc.with_uavs(args.uavs)
+    _check_map_option(sc, args.map_file)
     prior = build_prior(sc.map, args.map_file)
     plan = make_plan(
         sc,
         prior=prior,
-        map_source=args.map_file or "builtin",
-        optimizer=args.optimizer,
+        map_source=_map_source(sc, args.map_file),
+        optimizer=args.optimizer or "adaptive_de",
         seed=args.seed,
         popsize=args.popsize,
         maxiter=args.maxiter,
@@ -556,8 +616,8 @@ def _plan(
         origin_deg=args.origin,
         projection=args.projection,
         zone=args.utm_zone,
-        preset=args.preset,
-        planner=getattr(args, "planner", "de"),
+        preset=args.preset or "paper",
+        planner=planner,
         speed=getattr(args, "speed", None),
         refine=getattr(args, "refine", None),
     )
@@ -813,8 +873,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--uavs", type=int, default=None, help="number of UAVs (default: fleet)")
     p.add_argument(
         "--optimizer",
-        default="adaptive_de",
-        help="adaptive_de, classic_de, chaotic_abc, grouped_pso, scipy_de, cmaes",
+        default=None,
+        help="--planner de: adaptive_de (the default), classic_de, chaotic_abc, grouped_pso, "
+        "scipy_de, cmaes",
     )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument(
@@ -831,7 +892,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--preset",
-        default="paper",
+        default=None,
         help="DE settings: paper (the scenario's, the paper's F0 0.2, CR 0.1; default) or "
         "tuned (same NP, G; F0 0.15, CR 0.9, measured in docs/PLANNER.md)",
     )

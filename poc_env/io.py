@@ -15,6 +15,7 @@ import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 _UNSAFE_IN_NAME = re.compile(r"[^A-Za-z0-9._+-]+")
 
@@ -202,3 +203,81 @@ def csv_text(rows: list[dict]) -> str:
     w.writeheader()
     w.writerows(rows)
     return buf.getvalue()
+
+
+# --------------------------------------------------------------------------- reading JSON
+#: Deepest nesting of arrays and objects :func:`loads_json` accepts: every JSON file poc-env
+#: reads is a few levels deep; Python's parser recurses once per level and ends in a
+#: RecursionError (a traceback) near 1,000.
+MAX_JSON_DEPTH = 64
+_JSON_STRING = re.compile(rb'"(?:[^"\\]|\\.)*"', re.DOTALL)
+
+
+def json_depth(text: str | bytes) -> int:
+    """The deepest nesting of ``[`` and ``{`` in JSON ``text`` (brackets inside strings not
+    counted), without recursion: a vectorised scan, linear in the text.
+
+    >>> json_depth('{"a": [1, {"b": "[[["}]}')
+    3
+    """
+    import numpy as np
+
+    data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else bytes(text)
+    data = _JSON_STRING.sub(b'""', data)
+    b = np.frombuffer(data, dtype=np.uint8)
+    step = np.zeros(len(b), dtype=np.int64)
+    step[(b == ord("[")) | (b == ord("{"))] = 1
+    step[(b == ord("]")) | (b == ord("}"))] = -1
+    return int(np.cumsum(step).max(initial=0))
+
+
+def _refuse_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not JSON (only finite numbers are)")
+
+
+def loads_json(text: str | bytes, field: str, value: object = None) -> Any:
+    """The JSON document ``text``, or a :class:`~poc_env.errors.ConfigError` naming ``field``
+    (and ``value``, default the text's start): malformed JSON, nesting deeper than
+    :data:`MAX_JSON_DEPTH`, and the non-standard constants ``NaN``, ``Infinity`` and
+    ``-Infinity`` that Python's parser takes by default are refused -- never a traceback.
+
+    >>> loads_json('{"a": [1, 2]}', "config")
+    {'a': [1, 2]}
+    >>> try:
+    ...     loads_json("[" * 100 + "]" * 100, "config")
+    ... except ValueError as err:
+    ...     print(err.allowed)
+    JSON nested at most 64 levels deep (this is 100)
+    """
+    import json
+
+    from poc_env.errors import ConfigError
+
+    shown = value if value is not None else _start(text)
+    depth = json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise ConfigError(
+            field, shown, f"JSON nested at most {MAX_JSON_DEPTH} levels deep (this is {depth})"
+        )
+    try:
+        return json.loads(text, parse_constant=_refuse_constant)
+    except (ValueError, RecursionError) as err:  # JSONDecodeError and UnicodeDecodeError too
+        raise ConfigError(field, shown, f"a valid JSON document ({err})") from None
+
+
+def read_json(path: str | os.PathLike[str], field: str) -> Any:
+    """The JSON document in the file ``path`` (:func:`loads_json`'s rules); a file that cannot
+    be read is a :class:`~poc_env.errors.ConfigError` naming ``field`` and the path too."""
+    from poc_env.errors import ConfigError
+
+    try:
+        data = Path(path).read_bytes()
+    except OSError as err:
+        allowed = f"a readable JSON file ({err.strerror})"
+        raise ConfigError(field, os.fspath(path), allowed) from None
+    return loads_json(data, field, os.fspath(path))
+
+
+def _start(text: str | bytes, n: int = 30) -> str:
+    s = text.decode("utf-8", "replace") if isinstance(text, bytes) else text
+    return s[:n] + ("..." if len(s) > n else "")

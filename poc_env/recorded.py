@@ -80,7 +80,18 @@ def draw_actions(task_id: str) -> np.ndarray:
         actions = (noise.reshape(len(noise), -1, 3) * NOISE_INCREMENTS).reshape(noise.shape)
     else:  # a fixed direction / point per UAV, jittered
         actions = rng.uniform(-1.0, 1.0, shape) + NOISE_TARGET * noise
-    return np.clip(actions, -1.0, 1.0).astype(np.float32)
+    wide = recorded_scale(task_id)  # a version whose rule acts outside the Box: drawn wider
+    return np.clip(actions * wide, -wide, wide).astype(np.float32)
+
+
+def recorded_scale(task_id: str) -> float:
+    """How much wider than the Box the recorded actions of ``task_id`` are drawn: its version's
+    :attr:`poc_env.spec.TaskVersion.recorded_scale` (1: inside the Box)."""
+    from poc_env import spec
+
+    task = tasks.get_task(task_id)
+    part = next(text for text, level in tasks.CONTROL_NAMES.items() if level == task.control)
+    return next(v.recorded_scale for v in spec.versions_of(part) if v.version == task.version)
 
 
 def _info_dtype(value: Any) -> Any:

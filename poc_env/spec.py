@@ -12,10 +12,12 @@ the committed page equals the generated text).
 * :data:`REWARD_TERMS`: the terms :func:`poc_env.sim.rewards.reward_terms` returns, in order.
 * :data:`VIOLATION_FLAGS` and :data:`INFOS`: the per-agent info keys (:func:`info_keys`).
 * :data:`SCENARIO_PARTS`, :data:`RANDOM_PARTS`, :data:`CONTROL_PARTS` and
-  :data:`TASK_VERSION`: the registered task ids (:mod:`poc_env.tasks`).
+  :data:`TASK_VERSIONS`: the registered task ids (:mod:`poc_env.tasks`), each with its own
+  version.
 
 Changing a row that changes what an agent observes or is rewarded, or how the swarm moves or
-ends, bumps :data:`TASK_VERSION` (the versioning rule of :mod:`poc_env.tasks`); the recorded
+ends, adds a row to :data:`TASK_VERSIONS` for the tasks it touches (the versioning rule of
+:mod:`poc_env.tasks`: the old ids stay registered with their old behaviour); the recorded
 episodes (:mod:`poc_env.recorded`) fail until then.
 """
 
@@ -31,7 +33,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-#: The version of every registered task id (``...-v<TASK_VERSION>``): the one place it lives.
+#: The first release's version, which every task id had until versions became per task
+#: (:data:`TASK_VERSIONS`); every id registered at it stays registered.
 TASK_VERSION = 0
 
 
@@ -321,6 +324,39 @@ CONTROL_PARTS = (
 )
 
 
+class TaskVersion(NamedTuple):
+    """One registered version of the tasks of a control part: every scenario and prior part is
+    registered at each version of its control part (the old versions stay registered)."""
+
+    #: The :data:`CONTROL_PARTS` text it versions (``"Heading"``).
+    control: str
+    version: int
+    #: The env's ``control`` argument at this version: the level itself, or a variant of it
+    #: (:data:`poc_env.sim.control.VARIANTS`) with the changed rule.
+    env_control: str
+    #: What changed at this version (the version history of the task table).
+    change: str
+    #: The recorded episode's actions (:mod:`poc_env.recorded`) are drawn this much wider than
+    #: the Box, so the recording pins a rule that acts outside it.
+    recorded_scale: float = 1.0
+
+
+#: Every registered version of every control part, oldest first: the version history.
+TASK_VERSIONS = (
+    TaskVersion("Increments", 0, "increments", "first release"),
+    TaskVersion("Heading", 0, "heading", "first release; an action outside the Box is "
+                "normalised as it is, so a component of 1e308 flies due east"),
+    TaskVersion("Heading", 1, "heading_clip", "each action component is clipped to [-1, 1] "
+                "before the direction is normalised, as the other levels clip", 3.0),
+    TaskVersion("Waypoint", 0, "waypoint", "first release"),
+)  # fmt: skip
+
+
+def versions_of(control: str) -> tuple[TaskVersion, ...]:
+    """The rows of :data:`TASK_VERSIONS` of the control part ``control`` (``"Heading"``)."""
+    return tuple(v for v in TASK_VERSIONS if v.control == control)
+
+
 # -- markdown ------------------------------------------------------------------------------
 def _table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
@@ -353,18 +389,31 @@ def task_parts_markdown() -> str:
     for p in RANDOM_PARTS:
         rows.append(("Random", f"`{p.text}`" if p.text else "(absent)", p.meaning))
     for p in CONTROL_PARTS:
-        rows.append(("Control", f"`{p.text}`", f"`{p.value}`: {p.meaning}"))
+        shown = ", ".join(f"`v{v.version}`" for v in versions_of(p.text))
+        rows.append(("Control", f"`{p.text}`", f"`{p.value}`: {p.meaning}; versions {shown}"))
     for p in MOTION_PARTS:
         ctl = MOTION_CONTROLS.get(str(p.value))
         only = f" (with {', '.join(ctl)} only, fixed prior)" if ctl else ""
         rows.append(("Motion", f"`{p.text}`" if p.text else "(absent)", p.meaning + only))
-    moving = sum(len(MOTION_CONTROLS[str(p.value)]) for p in MOTION_PARTS if p.text)
-    head = (
-        f"Ids: `poc_env/UAVSearch-<Scenario>[-Random][-<Motion>]-<Control>-v{TASK_VERSION}` "
-        f"({len(SCENARIO_PARTS) * (len(RANDOM_PARTS) * len(CONTROL_PARTS) + moving)} tasks; "
-        f"the version, {TASK_VERSION}, is `poc_env.spec.TASK_VERSION`).\n\n"
+    moving = sum(
+        len(versions_of(c)) for p in MOTION_PARTS if p.text for c in MOTION_CONTROLS[str(p.value)]
     )
-    return head + _table(("part", "values", "meaning"), rows)
+    n = len(SCENARIO_PARTS) * (len(RANDOM_PARTS) * len(TASK_VERSIONS) + moving)
+    head = (
+        f"Ids: `poc_env/UAVSearch-<Scenario>[-Random][-<Motion>]-<Control>-v<version>` ({n} "
+        "tasks: every scenario and prior at every version of its control part, "
+        "`poc_env.spec.TASK_VERSIONS`; moving targets with the fixed prior and the control "
+        "levels listed).\n\n"
+    )
+    history = _table(
+        ("control", "version", "env control", "what changed"),
+        [(f"`{v.control}`", f"`v{v.version}`", f"`{v.env_control}`", v.change)
+         for v in TASK_VERSIONS],
+    )  # fmt: skip
+    return (
+        head + _table(("part", "values", "meaning"), rows) + "\n\nVersion history (each old "
+        "version stays registered with its behaviour):\n\n" + history
+    )
 
 
 def raster_markdown() -> str:

@@ -30,8 +30,10 @@ rewarded, how the swarm moves or when an episode ends (observations, rewards, dy
 constraints, scenario files, the random-prior generator, the task's keyword arguments) bumps the
 version of every task it touches (``-v0`` to ``-v1``); scores are compared only between equal
 ids. Speed-ups that leave every transition bit-identical (the test suite's equivalence tests
-decide) keep the version. :data:`VERSION` is the current version; it lives in one place,
-:data:`poc_env.spec.TASK_VERSION`, and the CHANGELOG lists each bump.
+decide) keep the version. Each control part carries its own versions, in one place,
+:data:`poc_env.spec.TASK_VERSIONS` (the version history: ``...-Heading-v1`` clips out-of-Box
+headings, ``...-Heading-v0`` keeps normalising them); :data:`VERSION` is the first release's,
+at which every task is registered.
 
 The rule is mechanical: every registered id has a recorded episode (:mod:`poc_env.recorded`,
 ``tests/recorded/<id>.npz``: observations, rewards, terminations, truncations and infos of a
@@ -50,7 +52,8 @@ from typing import Any
 from poc_env import spec
 from poc_env.errors import ConfigError
 
-#: The version of every task below (see the versioning rule): :data:`poc_env.spec.TASK_VERSION`.
+#: The first release's version (every task is registered at it): :data:`poc_env.spec.TASK_VERSION`.
+#: Later versions: :data:`poc_env.spec.TASK_VERSIONS`.
 VERSION = spec.TASK_VERSION
 NAMESPACE = "poc_env"
 #: Task-name part -> built-in scenario (:data:`poc_env.spec.SCENARIO_PARTS`).
@@ -71,6 +74,8 @@ class Task:
     control: str
     random_prior: bool
     extra: dict[str, Any] = field(default_factory=dict)
+    #: The id's version (:data:`poc_env.spec.TASK_VERSIONS`).
+    version: int = VERSION
     #: how the target moves (:data:`poc_env.spec.MOTION_PARTS`; its scenario overrides are
     #: keyword overrides, ``target__model=...``, so a ``make(overrides=...)`` keeps them)
     motion: str = "static"
@@ -103,13 +108,20 @@ def _build() -> dict[str, Task]:
     for s_name, scenario in SCENARIOS.items():
         for rand in (bool(p.value) for p in spec.RANDOM_PARTS):
             for c_name, control in CONTROL_NAMES.items():
-                tid = task_id(s_name, c_name, rand)
-                out[tid] = Task(tid, scenario, control, rand)
+                for v in spec.versions_of(c_name):
+                    tid = task_id(s_name, c_name, rand, v.version)
+                    extra = {} if v.env_control == control else {"control": v.env_control}
+                    out[tid] = Task(tid, scenario, control, rand, extra, v.version)
     for m in spec.MOTION_PARTS[1:]:  # moving targets: the fixed prior, some control levels
         for s_name, scenario in SCENARIOS.items():
             for c_name in spec.MOTION_CONTROLS[str(m.value)]:
-                tid = task_id(s_name, c_name, False, motion=m.text)
-                out[tid] = Task(tid, scenario, CONTROL_NAMES[c_name], False, motion=str(m.value))
+                control = CONTROL_NAMES[c_name]
+                for v in spec.versions_of(c_name):
+                    tid = task_id(s_name, c_name, False, v.version, motion=m.text)
+                    extra = {} if v.env_control == control else {"control": v.env_control}
+                    out[tid] = Task(
+                        tid, scenario, control, False, extra, v.version, motion=str(m.value)
+                    )
     return out
 
 

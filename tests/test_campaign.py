@@ -23,6 +23,7 @@ DEFAULT_CASES = {
     "geo": 60,
     "text": 60,
     "utm": 150,
+    "runtime": 40,
 }
 
 

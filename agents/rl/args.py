@@ -145,14 +145,17 @@ class TrainArgs:
         if self.task is not None:
             from poc_env.tasks import get_task
 
-            get_task(self.task)
+            task_scenario = get_task(self.task).scenario
+            if self.scenario not in ("paper_6_2", task_scenario):  # the default, or the task's
+                raise ConfigError(
+                    "scenario", self.scenario, f"either --task or --scenario, not both (the "
+                    f"task {self.task} trains on its scenario, {task_scenario})",
+                )  # fmt: skip
             if self.engine == "sb3" and self.recipe != "shared":
                 raise ConfigError(
                     "recipe", self.recipe, "shared (the default) with --task: the task's env "
                     "and an MLP on its compass observation replace the recipe",
                 )  # fmt: skip
-        if self.engine == "rllib" and self.resume is not None:
-            raise ConfigError("resume", self.resume, "sb3 runs only (an rllib run starts anew)")
         if self.address is not None and self.engine != "rllib":
             raise ConfigError("address", self.address, "an address with --engine rllib only")
         for name, lo, hi in (
@@ -376,6 +379,52 @@ def given_options(argv: Sequence[str]) -> list[str]:
     return out
 
 
+#: When each option is used by a run (a predicate of its TrainArgs); an option given on the
+#: command line for a run that does not use it is refused, not silently ignored.
+USED_WHEN: dict[str, tuple[Any, str]] = {
+    "scenario": (lambda a: a.task is None, "without --task (a task brings its scenario)"),
+    "random_priors": (
+        lambda a: a.task is None,
+        "without --task (a task's id says whether its priors are random)",
+    ),
+    "recipe": (lambda a: a.engine == "sb3" and a.task is None, "with --engine sb3, no --task"),
+    "algo": (lambda a: a.engine == "sb3", "with --engine sb3"),
+    "n_envs": (lambda a: a.engine == "sb3", "with --engine sb3 (rllib: --num-env-runners)"),
+    "keep_checkpoints": (lambda a: a.engine == "sb3", "with --engine sb3"),
+    "approach_shaping": (
+        lambda a: a.engine == "sb3" and a.task is None and a.recipe == "pilot",
+        "with --recipe pilot",
+    ),
+    "net_arch": (
+        lambda a: not (a.engine == "sb3" and a.task is None and a.recipe == "shared"),
+        "with --task, --recipe central or pilot, or --engine rllib (the shared recipe's "
+        "network is the CNN of poc_env.agents.rl.networks)",
+    ),
+    "agent_index": (lambda a: a.engine == "sb3" and a.task is not None, "with --task, sb3"),
+    "return_autopilot": (
+        lambda a: a.engine == "sb3" and a.task is not None,
+        "with --task at the increments level, sb3",
+    ),
+    "rllib_policies": (lambda a: a.engine == "rllib", "with --engine rllib"),
+    "num_env_runners": (lambda a: a.engine == "rllib", "with --engine rllib"),
+    **{
+        f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
+        for k in ("episodes", "epochs", "batch_size", "log_std")
+    },
+}
+
+
+def check_used(args: TrainArgs, given: Sequence[str]) -> None:
+    """ConfigError for the first option in ``given`` that ``args``'s run would ignore
+    (:data:`USED_WHEN`)."""
+    for name in given:
+        rule = USED_WHEN.get(name)
+        if rule is not None and not rule[0](args):
+            raise ConfigError(
+                name, getattr(args, name), f"this option only {rule[1]}; this run would ignore it"
+            )
+
+
 def parse_train_args(argv: Sequence[str] | None = None) -> TrainArgs:
     """TrainArgs from ``poc-env train`` options (the rest: the dataclass defaults).
 
@@ -400,4 +449,6 @@ def parse_train_args(argv: Sequence[str] | None = None) -> TrainArgs:
                 values["resume"],
                 f"no other training options (a resumed run keeps its config.json); got {flags}",
             )
-    return TrainArgs(**values)
+    args = TrainArgs(**values)
+    check_used(args, given_options(argv))
+    return args

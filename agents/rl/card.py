@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from poc_env.errors import ConfigError
+from poc_env.io import read_json
 
 
 def make_card(
@@ -42,7 +43,7 @@ def make_card(
         cfg_path = run / "config.json"
         if not cfg_path.is_file():
             raise ConfigError("run", str(run), "a run folder of poc-env train (with config.json)")
-        config = json.loads(cfg_path.read_text())
+        config = read_json(cfg_path, "config.json")
     eps_path = evaluation / "episodes.csv"
     txt_path = evaluation / "evaluate.txt"
     if not eps_path.is_file() or not txt_path.is_file():

@@ -74,11 +74,11 @@ def write_json(path: Path, data: Any) -> Path:
 
 
 def read_json(path: Path, what: str) -> Any:
-    """The JSON in ``path``; a ConfigError names ``what`` if it cannot be read."""
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise ConfigError(what, str(path), f"a readable JSON file ({err})") from None
+    """The JSON in ``path``; a ConfigError names ``what`` if it cannot be read, is not JSON,
+    is nested too deep or holds NaN / Infinity (:func:`poc_env.io.read_json`)."""
+    from poc_env.io import read_json as _read
+
+    return _read(path, what)
 
 
 # -- generators and episodes in flight --------------------------------------------------------
@@ -354,8 +354,8 @@ def _complete(run_dir: Path, step: int) -> Checkpoint | None:
     if not (zpath.is_file() and spath.is_file()):
         return None
     try:
-        wants_env = bool(json.loads(spath.read_text(encoding="utf-8")).get("env", False))
-    except (OSError, ValueError, AttributeError):
+        wants_env = bool(read_json(spath, "checkpoint state").get("env", False))
+    except (ConfigError, AttributeError):
         return None
     if wants_env and not epath.is_file():
         return None

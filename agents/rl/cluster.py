@@ -9,9 +9,13 @@ dashboard) and stops it afterwards; with one it joins that cluster and leaves it
 - ``ray://host:10001``: the Ray Client port of a head node (the driver runs elsewhere);
 - ``auto``: the cluster already running on this machine.
 
-A ``host:port`` or ``ray://`` address is probed with a TCP connection first, so an address
-where nothing answers fails within :data:`PROBE_TIMEOUT_S` seconds with an error naming it,
-instead of Ray's long retry loop. Ray comes with the ``rllib`` extra; without it a
+A ``host:port`` or ``ray://`` address is probed first (:func:`probe`): a TCP connection, then
+the opening of gRPC's HTTP/2 handshake, which both of Ray's ports (the GCS and the Ray Client
+server) answer with a SETTINGS frame. An address where nothing answers, or where a service
+that is not Ray listens (a web server, a database, a silent socket), fails within
+:data:`PROBE_TIMEOUT_S` seconds with an error naming it, instead of ``ray.init``'s retry loop,
+which does not end against a service that accepts connections and never speaks gRPC.
+Ray comes with the ``rllib`` extra; without it a
 :class:`~poc_env.errors.MissingExtraError` names the extra.
 """
 
@@ -40,19 +44,60 @@ def _host_port(address: str) -> tuple[str, int]:
     return host.strip("[]"), int(port)
 
 
+#: The client's opening of an HTTP/2 connection (RFC 9113 3.4): the preface, then an empty
+#: SETTINGS frame (length 0, type 4, no flags, stream 0).
+_H2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+_H2_SETTINGS = 4
+
+
+def _read_frame_header(sock: socket.socket, deadline: float) -> bytes:
+    """Up to the 9 bytes of the first HTTP/2 frame header the peer sends (fewer if it closes
+    or ``deadline``, a ``time.monotonic()`` value, passes)."""
+    import time
+
+    got = b""
+    while len(got) < 9:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            break
+        sock.settimeout(left)
+        try:
+            chunk = sock.recv(9 - len(got))
+        except TimeoutError:
+            break
+        if not chunk:
+            break
+        got += chunk
+    return got
+
+
 def probe(address: str, timeout_s: float = PROBE_TIMEOUT_S) -> None:
-    """ConfigError unless something accepts a TCP connection at ``address`` within
-    ``timeout_s`` seconds."""
+    """ConfigError unless a gRPC server (Ray's GCS or Ray Client port) answers at ``address``
+    within ``timeout_s`` seconds: it must accept a TCP connection and answer the HTTP/2
+    preface with a SETTINGS frame, as every gRPC server does before any call."""
+    import time
+
     host, port = _host_port(address)
+    deadline = time.monotonic() + timeout_s
     try:
-        with socket.create_connection((host, port), timeout=timeout_s):
-            pass
+        with socket.create_connection((host, port), timeout=timeout_s) as sock:
+            sock.sendall(_H2_PREFACE)
+            head = _read_frame_header(sock, deadline)
     except OSError as exc:
         raise ConfigError(
             "address",
             address,
             f"{_ALLOWED}; nothing answered at {host}:{port} within {timeout_s:g} s ({exc})",
         ) from None
+    if len(head) < 9 or head[3] != _H2_SETTINGS:
+        what = "did not answer" if not head else f"answered {head[:9]!r}"
+        raise ConfigError(
+            "address",
+            address,
+            f"{_ALLOWED}; a service accepts connections at {host}:{port} but it is not Ray: it "
+            f"{what} to gRPC's HTTP/2 handshake within {timeout_s:g} s (Ray's GCS and Ray "
+            "Client ports speak gRPC)",
+        )
 
 
 def require_ray(what: str):

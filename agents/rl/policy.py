@@ -59,13 +59,14 @@ def _run_config(model: Path) -> dict[str, Any]:
     card: the run's config.json plus how it was evaluated), else the ``config.json`` of its
     run folder (the model's folder or up to two above it: ``model.zip``,
     ``checkpoints/step_N.zip``), or ``{}``."""
-    import json
+    from poc_env.errors import ConfigError
+    from poc_env.io import read_json
 
     for cfg in [model.with_suffix(".json")] + [f / "config.json" for f in model.parents[:3]]:
         if cfg.is_file():
             try:
-                data = json.loads(cfg.read_text())
-            except (ValueError, OSError):
+                data = read_json(cfg, "config.json")
+            except ConfigError:
                 return {}
             return data if isinstance(data, dict) else {}
     return {}

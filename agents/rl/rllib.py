@@ -286,11 +286,22 @@ class RLlibPolicy(Policy):
         kw = env_kwargs(self.args)
         self.control = kw.get("control", "increments")
         modules = self.dir / "learner_group" / "learner" / "rl_module"
-        self.modules = {
-            d.name: RLModule.from_checkpoint(str(d))
-            for d in sorted(modules.iterdir())
-            if d.is_dir()
-        }
+        allowed = (
+            "a complete RLlib checkpoint (learner_group/learner/rl_module/<policy>/ as "
+            "poc-env train --engine rllib writes it)"
+        )
+        folders = sorted(d for d in modules.iterdir() if d.is_dir()) if modules.is_dir() else []
+        if not folders:
+            raise ConfigError("checkpoint", str(path), f"{allowed}; it has no RLModule folder")
+        self.modules = {}
+        for d in folders:
+            try:
+                self.modules[d.name] = RLModule.from_checkpoint(str(d))
+            except Exception as err:  # a damaged file: RLlib fails deep inside (pickle, torch)
+                shown = f"{type(err).__name__}: {err}"[:200]
+                raise ConfigError(
+                    "checkpoint", str(path), f"{allowed}; {d.name} cannot be read ({shown})"
+                ) from None
         self._n = None
 
     def reset(self, env: Any, seed: int) -> None:

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import sys
 import time
 import typing
@@ -137,7 +138,7 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
             seed=args.seed,
             obs_type="compass",
             random_priors=task.random_prior,
-            control=task.control,
+            control=task.kwargs["control"],  # the task version's rule (heading_clip at v1)
             agent_index=args.agent_index,
             return_autopilot=args.return_autopilot,
         )
@@ -217,6 +218,72 @@ def seed_everything(seed: int) -> None:
     set_random_seed(seed)
 
 
+# -- sizes checked before anything is allocated ------------------------------------------------
+#: Bytes per float32 value of a rollout: SB3 keeps each observation, action, reward, value,
+#: log-probability, advantage and return as float32, and copies each minibatch to torch.
+_F32 = 4
+#: Bytes per network parameter: the weight, its gradient and Adam's two moments (float32).
+_PARAM_BYTES = 16
+
+
+def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
+    """``(slots, obs_size, act_size)`` of the training env of ``args`` on ``sc``: SB3 sees
+    ``slots`` envs of observations of ``obs_size`` float32 values (computed from the scenario,
+    without building the env)."""
+    from poc_env import spec
+
+    n = sc.n_uavs
+    cells = sc.map.nx * sc.map.ny
+    dict_obs = len(spec.RASTER) * cells + len(spec.VECTOR)
+    if args.task is not None:
+        from poc_env.sim.control import ACTION_DIMS
+        from poc_env.tasks import get_task
+
+        act = ACTION_DIMS[get_task(args.task).control]
+        return args.n_envs * n, spec.COMPASS_SIZE, act
+    if args.recipe == "central":
+        return args.n_envs, n * dict_obs, 3 * n
+    if args.recipe == "pilot":
+        return args.n_envs * n, spec.COMPASS_SIZE, 2  # about the pilot features' size
+    return args.n_envs * n, dict_obs, 3
+
+
+def check_sizes(args: TrainArgs, sc: Scenario) -> None:
+    """ConfigError naming the field before training starts, instead of a failure deep inside
+    SB3 or an allocation of tens of GB: a rollout of fewer than 2 transitions (SB3 asserts),
+    a minibatch larger than the rollout (SB3 would silently train on the whole rollout), and
+    a rollout buffer or network larger than the memory guard
+    (:func:`poc_env.limits.check_memory`)."""
+    import poc_env.limits as limits
+
+    slots, obs, act = slots_and_obs(args, sc)
+    rollout = args.n_steps * slots
+    if args.engine == "sb3":
+        if rollout < 2:
+            raise ConfigError(
+                "n_steps", args.n_steps, f"a rollout of at least 2 transitions: n_steps x "
+                f"{slots} slot(s) (n_envs {args.n_envs}) >= 2",
+            )  # fmt: skip
+        if args.batch_size > rollout:
+            raise ConfigError(
+                "batch_size", args.batch_size, f"at most the rollout, n_steps x slots = "
+                f"{args.n_steps} x {slots} = {rollout} transitions (n_envs {args.n_envs})",
+            )  # fmt: skip
+    per_transition = (obs + act + 8) * _F32
+    limits.check_memory(
+        "n_steps", args.n_steps, 2.0 * rollout * per_transition,
+        f"rollout buffer (n_steps x {slots} slots x {obs} observation values)",
+    )  # fmt: skip
+    widths = [obs, *args.net_arch, act]
+    params = 2 * sum(a * b + b for a, b in itertools.pairwise(widths))  # pi and vf
+    batch = min(args.batch_size, rollout)
+    activations = 3.0 * batch * sum(widths) * _F32  # forward values, gradients, a copy
+    limits.check_memory(
+        "net_arch", list(args.net_arch), params * _PARAM_BYTES + activations,
+        f"policy and value networks ({params:,} parameters, minibatches of {batch})",
+    )  # fmt: skip
+
+
 # -- progress ----------------------------------------------------------------------------------
 def _progress_callback(args: TrainArgs, env: VecEnv, run_dir: Path) -> BaseCallback:
     """tqdm bar over timesteps; postfix: mean POSC of the episodes in SB3's info buffer (the
@@ -278,8 +345,9 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
         p = Path(args.run_dir)
         if (p / "config.json").exists():
             raise ConfigError(
-                "run_dir", str(p), "a new or empty folder (this one holds a run: use --resume)"
-            )
+                "run_dir", str(p), f"a new or empty folder (this one holds a run: continue it "
+                f"with poc-env train --resume {p})",
+            )  # fmt: skip
         return p
     stamp = time.strftime("%Y%m%d-%H%M%S")
     # the scenario's name is the user's text: one safe component under runs/, never a path
@@ -297,15 +365,17 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
     ``callback``: an extra SB3 callback, called after the checkpointer and the progress bar.
     Needs the ``rl`` extra (checked before anything is written)."""
+    if args.resume is not None:  # the run's own config.json says which engine
+        return _resume(Path(args.resume), args.progress, callback)
     if args.engine == "rllib":
         from poc_env.agents.rl.rllib import train_rllib
+        from poc_env.config import load_scenario
 
         name = args.task.rsplit("/", 1)[-1] if args.task else args.scenario
+        check_sizes(args, load_scenario(_scenario_of(args), parse_overrides(args.overrides)))
         run_dir = _new_run_dir(args, Path(name).stem)
         return train_rllib(dataclasses.replace(args, run_dir=str(run_dir)), run_dir)
     require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
-    if args.resume is not None:
-        return _resume(Path(args.resume), args.progress, callback)
     from poc_env.config import load_scenario, save_scenario
 
     if args.task is not None:
@@ -313,6 +383,7 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
         args = dataclasses.replace(args, scenario=get_task(args.task).scenario)
     sc = load_scenario(args.scenario, parse_overrides(args.overrides))
+    check_sizes(args, sc)
     run_dir = _new_run_dir(args, args.task.rsplit("/", 1)[-1] if args.task else sc.name)
     args = dataclasses.replace(args, run_dir=str(run_dir))
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -323,24 +394,31 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
 
 def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Path:
-    from poc_env.config import load_scenario
+    """Continue ``run_dir`` from its newest checkpoint. A run killed before its first one
+    (even before it wrote scenario.yaml) trains again from step 0 in the same folder with its
+    config.json, so ``--resume`` and ``--run-dir`` never send the user to each other."""
+    from poc_env.config import load_scenario, save_scenario
 
     if not (run_dir / "config.json").is_file():
         raise ConfigError(
             "resume",
             str(run_dir),
-            "a run folder written by poc-env train (with config.json, scenario.yaml and "
-            "checkpoints/)",
+            "a run folder written by poc-env train (with config.json; a folder without one "
+            "starts a new run with --run-dir)",
         )
     args = TrainArgs.from_dict(read_json(run_dir / "config.json", "config.json"), "config.json")
     args = dataclasses.replace(args, run_dir=str(run_dir), resume=None, progress=progress)
-    if not (run_dir / "scenario.yaml").is_file():
-        raise ConfigError(
-            "resume",
-            str(run_dir),
-            "a run folder written by poc-env train (with config.json, scenario.yaml and "
-            "checkpoints/)",
-        )
+    if args.engine == "rllib":
+        return _resume_rllib(args, run_dir)
+    require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
+    if not (run_dir / "scenario.yaml").is_file():  # killed between config.json and it
+        if latest_checkpoint(run_dir) is not None:
+            raise ConfigError(
+                "resume", str(run_dir), "a run folder with its scenario.yaml beside its "
+                "checkpoints (this one lost it: its checkpoints cannot be matched to a scenario)",
+            )  # fmt: skip
+        sc = load_scenario(_scenario_of(args), parse_overrides(args.overrides))
+        save_scenario(sc, run_dir / "scenario.yaml")
     ck = latest_checkpoint(run_dir)
     if ck is None:  # killed before its first checkpoint: the same run again, from step 0
         warnings.warn(
@@ -349,6 +427,33 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
         )
     sc = load_scenario(run_dir / "scenario.yaml")
     return _run(args, sc, run_dir, callback, checkpoint=ck)
+
+
+def _scenario_of(args: TrainArgs) -> str:
+    """The scenario a run trains on: its task's, else ``args.scenario``."""
+    if args.task is not None:
+        from poc_env.tasks import get_task
+
+        return get_task(args.task).scenario
+    return args.scenario
+
+
+def _resume_rllib(args: TrainArgs, run_dir: Path) -> Path:
+    """``--resume`` of an RLlib run: one killed before its first checkpoint trains in its folder
+    from step 0; one with a checkpoint is complete up to it and is not continued (RLlib runs
+    start anew), and the error says what to do instead."""
+    from poc_env.agents.rl.rllib import train_rllib
+
+    if (run_dir / "checkpoint").exists():
+        raise ConfigError(
+            "resume", str(run_dir), "an sb3 run, or an rllib run killed before its first "
+            "checkpoint (this rllib run has one: fly it with evaluate --policies "
+            f"rllib:{run_dir}, or train a new run with --run-dir NEW)",
+        )  # fmt: skip
+    warnings.warn(
+        f"{run_dir}: no checkpoint; training again from step 0 with its config", stacklevel=2
+    )
+    return train_rllib(args, run_dir)
 
 
 def _run(

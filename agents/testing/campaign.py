@@ -46,6 +46,8 @@ import numpy as np
 from poc_env.errors import PocEnvError
 
 OUTCOMES = ("ok", "error", "unclear", "traceback", "silent")
+#: Most cases of one campaign (``--cases``): about a day on one core.
+MAX_CASES = 1_000_000
 
 
 class SilentWrong(AssertionError):
@@ -739,6 +741,163 @@ def run_actions(case: tuple[list, str]) -> None:
     check(bool(np.all(np.isfinite(st.pos))), "position not finite")
 
 
+# --------------------------------------------------------------------------- target: runtime
+# Issue 27's runtime classes: Ray addresses where something that is not Ray listens, run
+# folders in every state a kill leaves, oversized sizes, deeply nested JSON, options that
+# override each other, heading actions outside their Box.
+
+_REPLIES = [None, b"", b"HTTP/1.1 400 Bad Request\r\n\r\n", b"\x00" * 9, b"SSH-2.0-x\r\n"]
+_RESUME_STATES = ["empty", "config_only", "garbage_config", "nested_config", "nan_config",
+                  "unknown_key", "rllib_with_checkpoint", "rllib_without_checkpoint"]  # fmt: skip
+_TRAIN_SIZES = [("net_arch", [10**6, 10**6]), ("net_arch", [2**31]), ("n_steps", 10**6),
+                ("batch_size", 10**7), ("n_steps", 1)]  # fmt: skip
+_CONFLICTS = [
+    ["train", "--task", "UAVSearch-Small-Heading-v1", "--scenario", "paper_6_1"],
+    ["train", "--task", "UAVSearch-Small-Heading-v1", "--no-random-priors"],
+    ["train", "--net-arch", "8"], ["train", "--engine", "rllib", "--n-envs", "2"],
+    ["train", "--recipe", "central", "--approach-shaping", "1"],
+    ["train", "--bc-epochs", "2"], ["train", "--rllib-policies", "per_uav"],
+    ["evaluate", "--task", "UAVSearch-Small-Heading-v1", "--scenario", "small"],
+    ["plan", "--scenario", "small", "--uavs", "2", "--overrides", "fleet=[{takeoff: A, count: 2}]"],
+    ["plan", "--scenario", "small", "--planner", "allocation", "--optimizer", "cmaes"],
+    ["plan", "--scenario", "small", "--planner", "allocation", "--popsize", "8"],
+    ["render", "--scenario", "small", "--overrides", "episode.horizon_steps=10000000",
+     "--max-steps", "10000000"],
+]  # fmt: skip
+
+
+def runtime_strategy():
+    from hypothesis import strategies as st
+
+    wild = st.one_of(st.floats(-1e308, 1e308), st.sampled_from([1.8e307, -5.0, 3.0, 1e-300]))
+    return st.one_of(
+        st.tuples(st.just("ray"), st.sampled_from(_REPLIES), st.booleans()),
+        st.tuples(st.just("resume"), st.sampled_from(_RESUME_STATES)),
+        st.tuples(st.just("size"), st.sampled_from(_TRAIN_SIZES)),
+        st.tuples(st.just("json"), st.integers(1, 3000), st.sampled_from(["[", "{\"a\":"]),
+                  st.sampled_from(["1", "NaN", "Infinity", "-Infinity", "1e999", "\"x\""])),
+        st.tuples(st.just("conflict"), st.sampled_from(_CONFLICTS)),
+        st.tuples(st.just("heading"), st.lists(wild, min_size=6, max_size=6)),
+    )  # fmt: skip
+
+
+def run_runtime(case: tuple) -> None:
+    """One of issue 27's runtime classes: a clear error (within seconds) or a sane result."""
+    kind = case[0]
+    if kind == "ray":
+        _run_ray_address(case[1], case[2])
+    elif kind == "resume":
+        _run_resume_state(case[1])
+    elif kind == "size":
+        from poc_env.agents.rl.args import TrainArgs
+        from poc_env.agents.rl.train import check_sizes
+        from poc_env.config import load_scenario
+
+        field, value = case[1]
+        args = TrainArgs(scenario="small", recipe="central", **{field: value})
+        check_sizes(args, load_scenario("small"))  # must refuse each of these
+        raise SilentWrong(f"{field}={value!r} passed the size checks")
+    elif kind == "json":
+        _run_nested_json(*case[1:])
+    elif kind == "conflict":
+        run_cli((case[1], []))
+        raise SilentWrong(f"conflicting options accepted: {case[1]}")
+    else:
+        _run_heading(np.asarray(case[1], dtype=np.float64))
+
+
+def _run_ray_address(reply: bytes | None, client: bool) -> None:
+    import socket
+    import threading
+    import time
+
+    from poc_env.agents.rl.cluster import probe
+
+    srv = socket.create_server(("127.0.0.1", 0))
+    conns = []
+
+    def serve() -> None:
+        with contextlib.suppress(OSError):
+            conn, _ = srv.accept()
+            conns.append(conn)
+            if reply is not None:
+                conn.sendall(reply)
+
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    address = ("ray://" if client else "") + f"127.0.0.1:{srv.getsockname()[1]}"
+    t0 = time.perf_counter()
+    try:
+        probe(address, timeout_s=0.5)
+    finally:
+        srv.close()
+        t.join(2)
+        for c in conns:
+            c.close()
+        check(time.perf_counter() - t0 < 5, "the probe took more than 5 s")
+    raise SilentWrong(f"a service that is not Ray passed the probe ({reply!r})")
+
+
+def _run_resume_state(state: str) -> None:
+    from poc_env.agents.rl.args import TrainArgs
+    from poc_env.agents.rl.train import train
+
+    with tempfile.TemporaryDirectory() as d:
+        run = Path(d) / "run"
+        run.mkdir()
+        small = {"scenario": "small", "overrides": ["episode.horizon_steps=4"], "n_envs": 1,
+                 "n_steps": 4, "batch_size": 4, "n_epochs": 1, "total_timesteps": 12,
+                 "progress": False}  # fmt: skip
+        texts = {
+            "config_only": json.dumps(small),
+            "garbage_config": "{not json",
+            "nested_config": "[" * 5000 + "]" * 5000,
+            "nan_config": json.dumps({**small, "learning_rate": float("nan")}),
+            "unknown_key": json.dumps({**small, "lr": 1}),
+            "rllib_with_checkpoint": json.dumps({**small, "engine": "rllib"}),
+            "rllib_without_checkpoint": json.dumps({**small, "engine": "rllib", "n_envs": 1}),
+        }
+        if state in texts:
+            (run / "config.json").write_text(texts[state])
+        if state == "rllib_with_checkpoint":
+            (run / "checkpoint").mkdir()
+        if state == "rllib_without_checkpoint":
+            return  # trains on Ray: tests/rl/test_rllib.py covers it; not in a campaign
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = train(TrainArgs(resume=str(run), progress=False))
+        check((out / "model.zip").is_file(), f"resume of a {state} run wrote no model")
+
+
+def _run_nested_json(depth: int, opener: str, leaf: str) -> None:
+    from poc_env.io import MAX_JSON_DEPTH, loads_json
+
+    closer = "]" if opener == "[" else "}"
+    text = opener * depth + leaf + closer * depth
+    data = loads_json(text, "doc")  # a ConfigError, never a RecursionError
+    check(depth <= MAX_JSON_DEPTH, f"JSON {depth} deep accepted")
+    check(leaf not in ("NaN", "Infinity", "-Infinity"), f"{leaf} accepted as JSON")
+    check(data is not None, "nothing parsed")
+
+
+def _run_heading(actions: np.ndarray) -> None:
+    """``-Heading-v1`` flies an out-of-Box action as its clipped one (``-v0`` normalised it)."""
+    import gymnasium
+
+    import poc_env  # noqa: F401  (registers the tasks)
+
+    def first(a: np.ndarray) -> np.ndarray:
+        env = gymnasium.make("poc_env/UAVSearch-Small-Heading-v1", disable_env_checker=True)
+        env.reset(seed=5)
+        obs, *_ = env.step(a)
+        env.close()
+        return obs
+
+    got, want = first(actions), first(np.clip(actions, -1.0, 1.0))
+    check(bool(np.all(np.isfinite(got))), "observation not finite")
+    check(np.array_equal(got, want), "an out-of-Box heading flew unlike its clipped action")
+
+
 # --------------------------------------------------------------------------- target: geo
 
 _AREA = [[126.2, 45.4], [127.4, 45.4], [127.4, 46.2], [126.2, 46.2], [126.2, 45.4]]
@@ -901,11 +1060,12 @@ TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
     "geo": (geo_strategy, run_geo),
     "text": (text_strategy, run_text),
     "utm": (utm_strategy, run_utm),
+    "runtime": (runtime_strategy, run_runtime),
 }
 #: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
 WEIGHTS = {
     "overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1,
-    "text": 2, "utm": 3,
+    "text": 2, "utm": 3, "runtime": 1,
 }  # fmt: skip
 
 
@@ -944,6 +1104,10 @@ def main(argv: list[str] | None = None) -> dict[str, Counter]:
     p.add_argument("--targets", default=",".join(TARGETS))
     p.add_argument("--show", type=int, default=3, help="failing cases to print per target")
     args = p.parse_args(argv)
+    for name, lo, hi in (("cases", 1, MAX_CASES), ("show", 0, 10_000), ("seed", 0, 2**32 - 1)):
+        v = getattr(args, name)
+        if not lo <= v <= hi:  # 1e9 cases is days of work: refused up front
+            p.error(f"--{name}: got {v}; allowed: an integer in [{lo}, {hi}]")
     names = [t for t in args.targets.split(",") if t]
     for t in names:
         if t not in TARGETS:

@@ -14,6 +14,11 @@ waypoint       Box(-1, 1, (2,))    a target point: (-1, -1) is the operating are
                                    north-east one; flown like ``heading`` towards that point
 =============  ==================  ==========================================================
 
+``heading`` normalises the action as it is, so an action outside the Box still names a
+direction (a component of 1e308 flies due east); the variant ``heading_clip``
+(:data:`VARIANTS`, the ``...-Heading-v1`` tasks) clips each component to [-1, 1] first, as the
+``waypoint`` level clips its point, and is the same level otherwise.
+
 Every level other than ``increments`` is flown by :func:`poc_env.sim.autopilot.steer`, so every
 increment stays within its eq. 19 limit (|a| <= 1 before scaling). With ``auto_return`` (the
 default) the autopilot takes a UAV home and lands it as soon as eq. 18's usable endurance only
@@ -33,16 +38,20 @@ from poc_env.sim.core import Params, State
 from poc_env.sim.observations import decode_vector, vectors
 
 CONTROLS = ("increments", "heading", "waypoint")
-#: Action size per UAV of each control level.
-ACTION_DIMS = {"increments": 3, "heading": 2, "waypoint": 2}
+#: Variants of a level with a changed rule (a new task version, :data:`poc_env.spec.TASK_VERSIONS`)
+#: -> the level they vary: ``heading_clip`` clips each heading component to [-1, 1] first.
+VARIANTS = {"heading_clip": "heading"}
+#: Action size per UAV of each control level (and variant).
+ACTION_DIMS = {"increments": 3, "heading": 2, "waypoint": 2, "heading_clip": 2}
 #: How far ahead along a commanded heading the autopilot aims (m).
 LOOKAHEAD_M = 10e3
 
 
 def check_control(control: object) -> str:
-    """``control`` if it names a level of :data:`CONTROLS`, else a ConfigError."""
-    if not isinstance(control, str) or control not in CONTROLS:
-        raise ConfigError("control", control, "one of " + ", ".join(CONTROLS))
+    """``control`` if it names a level of :data:`CONTROLS` or a variant (:data:`VARIANTS`),
+    else a ConfigError."""
+    if not isinstance(control, str) or control not in (*CONTROLS, *VARIANTS):
+        raise ConfigError("control", control, "one of " + ", ".join((*CONTROLS, *VARIANTS)))
     return control
 
 
@@ -109,6 +118,9 @@ def to_increments(
         return np.asarray(action, dtype=float).reshape(-1, 3)
     if control == "heading":
         return heading_increments(params, q, action, k, auto_return)
+    if control == "heading_clip":
+        a = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)  # nan stays nan: as heading
+        return heading_increments(params, q, a, k, auto_return)
     return _fly_to(params, q, waypoint_goal(params, action), k, auto_return)
 
 

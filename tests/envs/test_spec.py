@@ -137,17 +137,34 @@ def test_the_task_table_is_the_spec():
     assert tasks.VERSION == spec.TASK_VERSION
     parts = itertools.product(spec.SCENARIO_PARTS, spec.RANDOM_PARTS, spec.CONTROL_PARTS)
     want = {
-        tasks.task_id(s.text, c.text, bool(r.value)): (s.value, c.value, r.value)
+        tasks.task_id(s.text, c.text, bool(r.value), v.version): (
+            s.value, c.value, r.value, v.version, v.env_control
+        )
         for s, r, c in parts
+        for v in spec.versions_of(c.text)
+    }  # fmt: skip
+    got = {
+        t: (k.scenario, k.control, k.random_prior, k.version, k.kwargs["control"])
+        for t, k in tasks.TASKS.items()
     }
     for m in spec.MOTION_PARTS[1:]:  # moving targets: fixed prior, the listed control levels
         for s in spec.SCENARIO_PARTS:
             for c in spec.MOTION_CONTROLS[str(m.value)]:
-                tid = tasks.task_id(s.text, c, False, motion=m.text)
-                want[tid] = (s.value, tasks.CONTROL_NAMES[c], False)
-    assert {t: (k.scenario, k.control, k.random_prior) for t, k in tasks.TASKS.items()} == want
+                for v in spec.versions_of(c):
+                    tid = tasks.task_id(s.text, c, False, v.version, motion=m.text)
+                    want[tid] = (s.value, tasks.CONTROL_NAMES[c], False, v.version, v.env_control)
     assert {t.motion for t in tasks.TASKS.values()} == {str(m.value) for m in spec.MOTION_PARTS}
-    assert all(t.endswith(f"-v{spec.TASK_VERSION}") for t in tasks.TASKS)
+    assert got == want
+    # every id of the first release stays registered (old ids keep their behaviour)
+    for s, r, c in itertools.product(spec.SCENARIO_PARTS, spec.RANDOM_PARTS, spec.CONTROL_PARTS):
+        assert tasks.task_id(s.text, c.text, bool(r.value), spec.TASK_VERSION) in tasks.TASKS
+    assert all(t.endswith(f"-v{tasks.TASKS[t].version}") for t in tasks.TASKS)
+
+
+def test_every_version_has_its_row_in_the_history():
+    text = spec.markdown("tasks")
+    for v in spec.TASK_VERSIONS:
+        assert f"| `{v.control}` | `v{v.version}` | `{v.env_control}` |" in text
 
 
 def test_the_task_table_text_reads_the_scenarios():

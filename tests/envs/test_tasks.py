@@ -24,8 +24,10 @@ ALL = list(tasks.TASKS)
 
 
 def test_the_table_of_tasks():
-    assert len(ALL) == 3 * 2 * 3 + 3  # plus the Drift-Heading tasks
+    # Increments v0, Heading v0 and v1, Waypoint v0; plus Drift-Heading v0 and v1
+    assert len(ALL) == 3 * 2 * 4 + 3 * 2
     assert f"poc_env/UAVSearch-Paper62-Drift-Heading-v{tasks.VERSION}" in ALL
+    assert "poc_env/UAVSearch-Paper62-Drift-Heading-v1" in ALL
     assert f"poc_env/UAVSearch-Paper62-Random-Heading-v{tasks.VERSION}" in ALL
     assert f"poc_env/UAVSearch-Small-Increments-v{tasks.VERSION}" in ALL
     for tid in ALL:
@@ -33,7 +35,7 @@ def test_the_table_of_tasks():
         spec = gymnasium.spec(tid)
         assert spec.vector_entry_point == tasks.VECTOR_ENTRY_POINT
         assert spec.kwargs == tasks.TASKS[tid].kwargs
-        assert tid.endswith(f"-v{tasks.VERSION}")
+        assert tid.endswith(f"-v{tasks.TASKS[tid].version}")
     rows = tasks.task_table()
     assert [r["id"] for r in rows] == ALL
     assert {(r["scenario"], r["n_uavs"]) for r in rows} == {
@@ -48,7 +50,7 @@ def test_every_task_passes_the_four_checkers(tid):
     task = tasks.TASKS[tid]
     kw = {"overrides": SHORT}
     par = pz_make("parallel", tid, **kw)
-    assert par.control == task.control and par.random_prior == task.random_prior
+    assert par.control == task.kwargs["control"] and par.random_prior == task.random_prior
     n = par.params.n_agents
     assert par.observation_space("uav_0").shape == (FEATURES,)
     assert par.action_space("uav_0").shape == (ACTION_DIMS[task.control],)
@@ -172,3 +174,26 @@ def test_vector_env_bad_actions_and_seeds():
         v.step(np.zeros((2, 9)))
     with pytest.raises(ConfigError, match="actions"):
         v.step(np.full((2, 6), np.nan))
+
+
+@pytest.mark.parametrize("wild", [1e308, 5.0, -3.0])
+def test_heading_v1_clips_out_of_box_actions_v0_keeps_normalising(wild):
+    """Issue 27: a heading action outside its Box was normalised (a component of 1e308
+    flies due east whatever the other says). ``-Heading-v1`` clips each component to [-1, 1]
+    first, as the other levels clip; ``-Heading-v0`` keeps its behaviour (an old id)."""
+    action = np.array([wild, 0.8], dtype=np.float64)
+    clipped = np.clip(action, -1.0, 1.0)
+
+    def first_step(tid, a):
+        env = gymnasium.make(tid, disable_env_checker=True)
+        env.reset(seed=3)
+        n = env.unwrapped.par.engine.n_agents
+        obs, *_ = env.step(np.tile(a, n).astype(np.float64))
+        env.close()
+        return obs
+
+    v1 = "poc_env/UAVSearch-Small-Heading-v1"
+    v0 = "poc_env/UAVSearch-Small-Heading-v0"
+    np.testing.assert_array_equal(first_step(v1, action), first_step(v1, clipped))
+    np.testing.assert_array_equal(first_step(v1, clipped), first_step(v0, clipped))
+    assert not np.array_equal(first_step(v0, action), first_step(v0, clipped))

@@ -148,3 +148,56 @@ def test_missing_ray_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)
     with pytest.raises(MissingExtraError, match=r"poc-env\[rllib\]"):
         cluster.require_ray("--ray")
+
+
+def test_the_probe_passes_a_real_ray_gcs(ray_local):
+    """The handshake probe (tests/rl/test_cluster.py refuses services that are not Ray)
+    accepts Ray's own GCS port."""
+    address = ray_local.get_runtime_context().gcs_address
+    cluster.probe(address, timeout_s=5.0)
+
+
+def test_an_rllib_run_killed_before_its_first_checkpoint_resumes(ray_local, tmp_path):
+    """Issue 27: --resume refused rllib runs ("an rllib run starts anew") while --run-dir
+    refused the folder ("holds a run: use --resume"). A run with config.json and no checkpoint
+    now trains in its folder; one with a checkpoint gets an error saying what to do."""
+    from poc_env.agents.rl.checkpoint import write_json
+
+    args = _args(tmp_path, "early")
+    run = tmp_path / "early"
+    run.mkdir()
+    write_json(run / "config.json", dataclasses.asdict(args))  # a kill before any iteration
+    with pytest.raises(ConfigError, match="train --resume"):
+        train(args)
+    with pytest.warns(UserWarning, match="no checkpoint"):
+        train(TrainArgs(resume=str(run), progress=False))
+    assert (run / "checkpoint" / "learner_group").is_dir()
+    with pytest.raises(ConfigError, match=rf"rllib:{run}.*--run-dir NEW") as err:
+        train(TrainArgs(resume=str(run), progress=False))
+    assert err.value.field == "resume"
+
+
+@pytest.mark.parametrize(
+    "damage",
+    ["module_state.pkl", "no_modules", "config"],  # (RLlib reads the module from its state)
+)
+def test_a_damaged_checkpoint_is_a_clear_error(tmp_path, damage):
+    """Issue 27: a damaged RLlib checkpoint folder (a truncated pickle, garbage metadata, no
+    module, a config.json nested 1,000 deep) ends in a ConfigError naming the checkpoint,
+    not a traceback from deep inside RLlib."""
+    import shutil
+    from importlib import resources
+
+    src = resources.files("poc_env.agents") / "checkpoints" / "rllib_heading_paper_6_2"
+    run = tmp_path / "run"
+    shutil.copytree(str(src), run)
+    shared = run / "checkpoint" / "learner_group" / "learner" / "rl_module" / "shared"
+    if damage == "no_modules":
+        shutil.rmtree(shared)
+    elif damage == "config":
+        (run / "config.json").write_text("[" * 1000 + "]" * 1000)
+    else:
+        (shared / damage).write_bytes(b"\x80\x04garbage")
+    with pytest.raises(ConfigError) as err:
+        RLlibPolicy(run)
+    assert err.value.field in ("checkpoint", "config.json")

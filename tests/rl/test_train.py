@@ -223,10 +223,6 @@ def test_resume_on_a_folder_that_is_not_a_run(tmp_path):
     with pytest.raises(ConfigError, match=r"config\.json") as err:
         train(TrainArgs(resume=str(tmp_path / "nowhere")))
     assert err.value.field == "resume"
-    (tmp_path / "config.json").write_text(json.dumps({"scenario": "small"}))
-    with pytest.raises(ConfigError, match="checkpoint") as err:  # a run with no checkpoint
-        train(TrainArgs(resume=str(tmp_path)))
-    assert err.value.field == "resume"
     (tmp_path / "config.json").write_text(json.dumps({"scenario": "small", "lr": 1}))
     with pytest.raises(ConfigError, match="lr"):
         train(TrainArgs(resume=str(tmp_path)))
@@ -415,7 +411,8 @@ def test_cli_options_come_from_trainargs(tmp_path, capsys, monkeypatch):
             overrides=["reward.alpha=100", "reward.violation_penalty=0.5"],
         )
     ]
-    assert parse_train_args(["--net-arch", "64", "32", "--resume", "None"]).net_arch == [64, 32]
+    argv = ["--recipe", "central", "--net-arch", "64", "32", "--resume", "None"]
+    assert parse_train_args(argv).net_arch == [64, 32]
     assert parse_train_args(["--resume", "R", "--no-progress"]) == TrainArgs(
         resume="R", progress=False
     )
@@ -486,3 +483,42 @@ def test_a_run_killed_before_its_first_checkpoint_can_be_resumed(runs, tmp_path)
     with pytest.warns(UserWarning, match="no complete checkpoint"):
         train(TrainArgs(resume=str(run), progress=False))
     assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+
+
+def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path):
+    """Issue 27: a kill between config.json and scenario.yaml left a folder that --resume
+    refused (no scenario.yaml) and --run-dir refused (it holds a run: use --resume). Now
+    --resume rebuilds scenario.yaml from config.json and trains in the folder from step 0,
+    ending where the uninterrupted run ends; --run-dir's refusal names the command."""
+    run = tmp_path / "early"
+    with pytest.raises(Interrupt):
+        train(_args("shared", run), callback=_killer(40))
+    (run / "scenario.yaml").unlink()
+    with pytest.raises(ConfigError, match=rf"train --resume {run}") as err:
+        train(_args("shared", run))
+    assert err.value.field == "run_dir"
+    with pytest.warns(UserWarning, match="no complete checkpoint"):
+        train(TrainArgs(resume=str(run), progress=False))
+    assert (run / "scenario.yaml").is_file()
+    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+
+
+@pytest.mark.parametrize(
+    ("kw", "field", "said"),
+    [
+        ({"net_arch": [10**6, 10**6]}, "net_arch", "policy and value networks"),
+        ({"n_steps": 10**6, "n_envs": 1024, "batch_size": 64}, "n_steps", "rollout buffer"),
+        ({"batch_size": 10**7}, "batch_size", "at most the rollout"),
+        ({"recipe": "central", "n_steps": 1, "n_envs": 1, "batch_size": 2}, "n_steps", ">= 2"),
+    ],
+)
+def test_train_sizes_are_checked_before_anything_is_allocated(tmp_path, kw, field, said):
+    """Issue 27: sizes that passed validation and then allocated tens of GB (a huge network,
+    a rollout buffer of 10^9 transitions) or failed inside SB3 (an assertion on a rollout of
+    one transition; a minibatch larger than the rollout was silently cut) end in a ConfigError
+    naming the field, before the run folder is made."""
+    run = tmp_path / "r"
+    with pytest.raises(ConfigError, match=said) as err:
+        train(_args(kw.pop("recipe", "shared"), run, **kw))
+    assert err.value.field == field
+    assert not run.exists()

@@ -75,16 +75,21 @@ def test_each_option_keeps_its_docstring_as_help(capsys, monkeypatch):
 
 
 def test_options_of_every_group_parse_into_one_flat_record():
-    argv = ["--seed", "3", "--n-steps", "8", "--recipe", "pilot", "--no-agent-index"]
-    argv += ["--rllib-policies", "per_uav", "--bc-epochs", "4", "--net-arch", "16", "16"]
+    task = "poc_env/UAVSearch-Small-Heading-v0"
+    argv = ["--seed", "3", "--n-steps", "8", "--task", task, "--no-agent-index"]
+    argv += ["--bc-teacher", "lawnmower", "--bc-epochs", "4", "--net-arch", "16", "16"]
     assert parse_train_args(argv) == TrainArgs(
         seed=3,
         n_steps=8,
-        recipe="pilot",
+        task=task,
         agent_index=False,
-        rllib_policies="per_uav",
+        bc_teacher="lawnmower",
         bc_epochs=4,
         net_arch=[16, 16],
+    )
+    argv = ["--engine", "rllib", "--rllib-policies", "per_uav", "--num-env-runners", "1"]
+    assert parse_train_args(argv) == TrainArgs(
+        engine="rllib", rllib_policies="per_uav", num_env_runners=1
     )
 
 
