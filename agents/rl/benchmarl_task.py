@@ -74,9 +74,11 @@ ENV_NAME = "poc_env"
 
 def member_name(task_id: str) -> str:
     """The :class:`PocEnvTask` member of a registered task id (``"SMALL_HEADING"``)."""
-    tid = tasks.get_task(task_id).id.split("/", 1)[1]  # UAVSearch-Small-Heading-v0
+    task = tasks.get_task(task_id)
+    tid = task.id.split("/", 1)[1]  # UAVSearch-Small-Heading-v0
     stem = tid.removeprefix("UAVSearch-").rsplit("-v", 1)[0]
-    return stem.upper().replace("-", "_")
+    version = "" if task.version == tasks.VERSION else f"_V{task.version}"  # first release: bare
+    return stem.upper().replace("-", "_") + version
 
 
 #: Member name -> registered task id, for every registered task.
@@ -184,28 +186,8 @@ class PocEnvTaskClass(TaskClass):
         return ENV_NAME
 
 
-class PocEnvTask(Task):
-    """One member per registered task; ``PocEnvTask.SMALL_HEADING.get_task()`` is a
-    :class:`PocEnvTaskClass` for ``poc_env/UAVSearch-Small-Heading-v0``."""
-
-    SMALL_INCREMENTS = None
-    SMALL_HEADING = None
-    SMALL_WAYPOINT = None
-    SMALL_RANDOM_INCREMENTS = None
-    SMALL_RANDOM_HEADING = None
-    SMALL_RANDOM_WAYPOINT = None
-    PAPER62_INCREMENTS = None
-    PAPER62_HEADING = None
-    PAPER62_WAYPOINT = None
-    PAPER62_RANDOM_INCREMENTS = None
-    PAPER62_RANDOM_HEADING = None
-    PAPER62_RANDOM_WAYPOINT = None
-    PAPER61_INCREMENTS = None
-    PAPER61_HEADING = None
-    PAPER61_WAYPOINT = None
-    PAPER61_RANDOM_INCREMENTS = None
-    PAPER61_RANDOM_HEADING = None
-    PAPER61_RANDOM_WAYPOINT = None
+class _PocEnvTasks(Task):
+    """The members' behaviour; :data:`PocEnvTask` holds one member per registered task."""
 
     @staticmethod
     def associated_class() -> type[PocEnvTaskClass]:
@@ -219,7 +201,7 @@ class PocEnvTask(Task):
         return TASK_IDS[self.name]
 
     @classmethod
-    def from_id(cls, task_id: str) -> PocEnvTask:
+    def from_id(cls, task_id: str) -> _PocEnvTasks:
         """The member of a registered task id (the ``poc_env/`` namespace may be left out)."""
         return cls.__members__[member_name(task_id)]
 
@@ -244,3 +226,16 @@ class PocEnvTask(Task):
         config = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
         config.pop("defaults", None)  # a Hydra defaults list, as in BenchMARL's task files
         return self.get_task(config)
+
+
+#: One member per registered task, named after its id (``SMALL_HEADING`` for
+#: ``poc_env/UAVSearch-Small-Heading-v0``, ``SMALL_HEADING_V1`` for its v1,
+#: ``PAPER62_DRIFT_HEADING`` for a moving-target task): made from the task registry, so a new
+#: task or version is a member without an edit here.
+#: ``PocEnvTask.SMALL_HEADING.get_task()`` is a :class:`PocEnvTaskClass`.
+PocEnvTask = _PocEnvTasks(  # type: ignore[call-arg]
+    "PocEnvTask",
+    [(name, k + 1) for k, name in enumerate(TASK_IDS)],
+    module=__name__,
+    qualname="PocEnvTask",
+)
