@@ -69,12 +69,20 @@ def cell_pixels(params: Params, xy: np.ndarray):
     return j, i, inside
 
 
-def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndarray):
-    """(E, N, C, ny, nx) float32 raster observations of every agent (``hazard`` is (ny, nx))."""
+def rasters(
+    params: Params,
+    state: State,
+    poc_scale: np.ndarray,
+    hazard: np.ndarray,
+    out: np.ndarray | None = None,
+):
+    """(E, N, C, ny, nx) float32 raster observations of every agent (``hazard`` is (ny, nx)),
+    written into ``out`` when given (a view of the flat observation)."""
     e, n = state.flying.shape
     g = params.grid
     s = params.s
-    out = np.empty((e, n, RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
+    if out is None:
+        out = np.empty((e, n, RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
     x0, y0, x1, y1 = g.bounds
     # the kernel sums sub-cells in numpy's order for rows of s < 8 points over several columns;
     # otherwise numpy's own sum (Grid.coarsen) is passed in
@@ -125,14 +133,16 @@ def coarse_poc(params: Params, state: State, poc_scale: np.ndarray) -> np.ndarra
 _NO_COARSE = np.zeros((1, 1, 1))
 
 
-def vectors(params: Params, state: State) -> np.ndarray:
-    """(E, N, VECTOR_SIZE) float32 state vectors of every agent."""
+def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.ndarray:
+    """(E, N, VECTOR_SIZE) float32 state vectors of every agent, written into ``out`` when
+    given (a view of the flat observation)."""
     sc = params.scenario
     u = sc.uav
     bx0, by0, bx1, by1 = params.bounds
     w, h = bx1 - bx0, by1 - by0
     n = state.flying.shape[1]
-    out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
+    if out is None:
+        out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
     _kernels.vectors(
         state.pos,
         state.speed,
@@ -305,12 +315,19 @@ def observe(
     ``"flat"`` (the raster raveled in C order, then the vector) and ``"compass"``
     (:class:`CompassFeatures`, pass one to reuse it) a float32 array ``(E, N, D)``. The one
     implementation the PettingZoo env, the Gymnasium views and the VecEnvs share."""
-    vec = vectors(params, state)
     if obs_type == "dict":
-        return {"raster": rasters(params, state, poc_scale, hazard), "vector": vec}
+        return {
+            "raster": rasters(params, state, poc_scale, hazard),
+            "vector": vectors(params, state),
+        }
     if obs_type == "compass":
         f = features if features is not None else CompassFeatures(params)
         return f.of_state(state, poc_scale)
-    ras = rasters(params, state, poc_scale, hazard)
-    e, n = vec.shape[:2]
-    return np.concatenate([ras.reshape(e, n, -1), vec], axis=2)
+    # flat: both written in place into one array (no concatenated copy)
+    e, n = state.flying.shape
+    g = params.grid
+    size = RASTER_CHANNELS * g.ny * g.nx
+    flat = np.empty((e, n, size + VECTOR_SIZE), dtype=np.float32)
+    rasters(params, state, poc_scale, hazard, flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx))
+    vectors(params, state, flat[:, :, size:])
+    return flat
