@@ -243,6 +243,112 @@ def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
 
 
 @_jit
+def _classify(dx, dy, edges, radius, n_sectors):
+    """Sector, ring and within-``radius`` flag of one offset: the decisions of :func:`_bins`'
+    loop body, spelled out once more for :func:`_grid_bins`, which calls it only next to a
+    boundary (a call per cell would cost more than the decision, hence the copy)."""
+    n_rings = edges.shape[0] + 1
+    tol = 1e-9
+    ax = abs(dx)
+    ay = abs(dy)
+    big = max(ax, ay)
+    if n_sectors == 8 and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
+        if dy > 0 and dx > 0:
+            sector = 0 if ay < ax else 1
+        elif dy > 0:
+            sector = 2 if ay > ax else 3
+        elif dx < 0:
+            sector = 4 if ay < ax else 5
+        else:
+            sector = 6 if ay > ax else 7
+    else:
+        ang = np.arctan2(dy, dx)
+        sector = int(np.floor((ang + np.pi) / (2.0 * np.pi) * n_sectors)) % n_sectors
+        sector = (sector + n_sectors // 2) % n_sectors
+    d2 = dx * dx + dy * dy
+    radius2 = radius * radius
+    exact = abs(d2 - radius2) <= tol * radius2
+    for r in range(n_rings - 1):
+        e2 = edges[r] * edges[r]
+        if abs(d2 - e2) <= tol * e2:
+            exact = True
+    ring = 0
+    if exact:
+        dist = np.hypot(dx, dy)
+        while ring < n_rings - 1 and edges[ring] <= dist:
+            ring += 1
+        inside = dist <= radius
+    else:
+        while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
+            ring += 1
+        inside = d2 <= radius2
+    return sector, ring, inside
+
+
+@_jit
+def _grid_bins(xs, ys, px, py, poc, others, edges, radius, n_sectors, mass, count, bps):
+    """:func:`_bins` over a grid of cell centres ``(xs[i], ys[j])`` (``xs`` increasing, cell
+    ``j * nx + i``), the same sums: walking each row, a cell takes the previous one's sector,
+    ring and radius flag unless a boundary (``dx`` = 0 or +-dy, a ring edge's or the radius'
+    circle) lies between them within a margin far wider than the exact formulas' 1e-9 band;
+    cells next to a boundary are decided by :func:`_classify`. The margin, 1e-4 of the
+    distances, covers the bands (at most ~3e-5 of a ring's radius wide in ``dx``, on a row
+    nearly tangent to it) as long as cells are wider than it. ``bps`` is scratch."""
+    nx = xs.shape[0]
+    ny = ys.shape[0]
+    n_rings = edges.shape[0] + 1
+    span = abs(xs[0] - px) + abs(xs[nx - 1] - px)
+    for j in range(ny):
+        dy = ys[j] - py
+        walk = n_sectors == 8 and abs(dy) > 1e-6 * (span + 1.0)
+        nb = 0
+        if walk:  # the row's boundaries, sorted
+            bps[0] = 0.0
+            bps[1] = dy
+            bps[2] = -dy
+            nb = 3
+            for r in range(n_rings):
+                e = radius if r == n_rings - 1 else edges[r]
+                h = e * e - dy * dy
+                if h >= 0.0:
+                    chord = math.sqrt(h)
+                    bps[nb] = chord
+                    bps[nb + 1] = -chord
+                    nb += 2
+            for a in range(1, nb):  # insertion sort
+                v = bps[a]
+                b = a - 1
+                while b >= 0 and bps[b] > v:
+                    bps[b + 1] = bps[b]
+                    b -= 1
+                bps[b + 1] = v
+        ptr = 0
+        have = False
+        last = 0.0
+        sector, ring, inside = 0, 0, False
+        for i in range(nx):
+            c = j * nx + i
+            q = poc[c]
+            w = others[c]
+            if q == 0.0 and w == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
+                continue
+            dx = xs[i] - px
+            near = True
+            if walk and have:
+                m = 1e-4 * (abs(last) + abs(dx) + abs(dy) + radius + edges[n_rings - 2])
+                while ptr < nb and bps[ptr] < last - m:
+                    ptr += 1
+                near = ptr < nb and bps[ptr] <= dx + m
+            if near:
+                sector, ring, inside = _classify(dx, dy, edges, radius, n_sectors)
+            have = True
+            last = dx
+            mass[sector * n_rings + ring] += q
+            if inside:
+                count[sector] += w
+
+
+@_jit
 def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
     """The compass observation's sums (:class:`poc_env.sim.observations.CompassFeatures`) in
     one pass over the cells: for each UAV ``i`` at ``(px[i], py[i])`` and each cell centre
@@ -260,7 +366,7 @@ def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
 
 
 @_jit
-def compass(poc, total, mean, vector, pos, flying, grid_box, area, cx, cy, edges, layout, out):
+def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
     """The compass observation of every UAV of every env into ``out (E, N, F)`` float32 (the
     blocks of :class:`poc_env.sim.observations.CompassFeatures`), computed straight from each
     env's raster channel 0 ``poc (E, P, ny, nx)`` (P = 1: shared by its UAVs; P = N: each UAV's
@@ -283,6 +389,7 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, cx, cy, edges
     mass = np.empty(n_sectors * n_rings)
     count = np.empty(n_sectors)
     others_cells = np.zeros(ny * nx)  # the "others" channel of one UAV, cleared after use
+    bps = np.empty(2 * n_rings + 3)
     rows = np.empty(n, dtype=np.intp)
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
@@ -301,9 +408,9 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, cx, cy, edges
                     others_cells[rows[m] * nx + cols[m]] = 1.0
             mass[:] = 0.0
             count[:] = 0.0
-            _bins(
-                cx,
-                cy,
+            _grid_bins(
+                xs,
+                ys,
                 px,
                 py,
                 poc[e, p].reshape(ny * nx),
@@ -313,6 +420,7 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, cx, cy, edges
                 n_sectors,
                 mass,
                 count,
+                bps,
             )
             for m in range(n):
                 if present[m]:

@@ -967,7 +967,9 @@ def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, s
     """The batched compass (from each env's coarse POC and the positions, no rasters) equals
     the features of the raster and vector observations exactly: UAVs inside and outside the
     grid, several in one cell, on cell centres, landed, with and without the agent index, and
-    each UAV's own belief under belief_sharing "comms"."""
+    each UAV's own belief under belief_sharing "comms"; for the kernel's row walk, UAVs placed
+    so that diagonals, ring edges and the others radius pass through cell centres (rows on or
+    tangent to a ring)."""
     params = sim.make_params(load_scenario(name, {"comms.belief_sharing": sharing}))
     rng = np.random.default_rng(11)
     hazard = obs.hazard_mask(params)
@@ -986,6 +988,15 @@ def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, s
             st.pos[..., :2] = c[rng.integers(0, len(c), st.pos.shape[:2])]
         if trial % 4 == 3:
             st.flying[:, 0] = False
+        if trial >= 4:  # boundaries through cell centres: diagonals, ring edges, tangent rows
+            c = params.grid.centers.reshape(-1, 2)
+            pick = c[rng.integers(0, len(c), st.pos.shape[:2])]
+            d = np.array([*obs.RING_EDGES_M, obs.OTHERS_RADIUS_M])[
+                rng.integers(0, 4, st.pos.shape[:2])
+            ]
+            shift = [(d, d), (d, 0 * d), (0 * d, d), (-d, 0.5 * d)][trial - 4]
+            st.pos[..., 0] = pick[..., 0] + shift[0]
+            st.pos[..., 1] = pick[..., 1] + shift[1]
         st.belief *= rng.random(st.belief.shape)
         scale = rng.uniform(0.5, 2.0, 3)
         ras = obs.rasters(params, st, scale, hazard)
