@@ -293,7 +293,7 @@ def _grid_bins(xs, ys, px, py, poc, others, edges, radius, n_sectors, mass, coun
     circle) lies between them within a margin far wider than the exact formulas' 1e-9 band;
     cells next to a boundary are decided by :func:`_classify`. The margin, 1e-4 of the
     distances, covers the bands (at most ~3e-5 of a ring's radius wide in ``dx``, on a row
-    nearly tangent to it) as long as cells are wider than it. ``bps`` is scratch."""
+    nearly tangent to it), whatever the cell size. ``bps`` is scratch."""
     nx = xs.shape[0]
     ny = ys.shape[0]
     n_rings = edges.shape[0] + 1
@@ -377,8 +377,9 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     "others" channel is 1 on each cell holding another present UAV, so such a cell counts once.
     A UAV's own position is decoded from its float32 vector as ``decode_vector`` does, ``area =
     (bx0, by0, w, h)``. ``layout = (v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index)``: the
-    block offsets, the index block's size, the sectors, whether to set the index;
-    ``edges``, ``radius`` and ``others`` (the count normaliser) come in ``area``'s tail."""
+    block offsets, the index block's size, the sectors, whether to set the index; ``area``'s
+    tail holds the others radius and the count normaliser. The cell centres are the grid
+    ``(xs[i], ys[j])``, walked row by row (:func:`_grid_bins`); ``edges``: the ring edges."""
     v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index = layout
     x0, y0, x1, y1, cell = grid_box
     bx0, by0, bw, bh, radius, others = area
