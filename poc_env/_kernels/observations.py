@@ -193,7 +193,6 @@ def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
     n_rings = edges.shape[0] + 1
     two_pi = 2.0 * np.pi
     half = n_sectors // 2
-    edges2 = edges * edges
     radius2 = radius * radius
     octants = n_sectors == 8
     tol = 1e-9  # relative margin around a boundary inside which the exact formula decides
@@ -225,7 +224,7 @@ def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
         ring = 0
         exact = False
         for r in range(n_rings - 1):  # squared distances decide unless next to an edge
-            if abs(d2 - edges2[r]) <= tol * edges2[r]:
+            if abs(d2 - (edges[r] * edges[r])) <= tol * (edges[r] * edges[r]):
                 exact = True
         near_radius = abs(d2 - radius2) <= tol * radius2
         if exact or near_radius:
@@ -234,7 +233,7 @@ def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
                 ring += 1
             inside = dist <= radius
         else:
-            while ring < n_rings - 1 and edges2[ring] <= d2:
+            while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
                 ring += 1
             inside = d2 <= radius2
         mass[sector * n_rings + ring] += q
@@ -391,6 +390,13 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     count = np.empty(n_sectors)
     others_cells = np.zeros(ny * nx)  # the "others" channel of one UAV, cleared after use
     bps = np.empty(2 * n_rings + 3)
+    short = nx < 16  # short rows: a row's boundaries would cost more than its cells' decisions
+    cx = np.empty(ny * nx)
+    cy = np.empty(ny * nx)
+    for j in range(ny):
+        for i in range(nx):
+            cx[j * nx + i] = xs[i]
+            cy[j * nx + i] = ys[j]
     rows = np.empty(n, dtype=np.intp)
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
@@ -409,20 +415,13 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
                     others_cells[rows[m] * nx + cols[m]] = 1.0
             mass[:] = 0.0
             count[:] = 0.0
-            _grid_bins(
-                xs,
-                ys,
-                px,
-                py,
-                poc[e, p].reshape(ny * nx),
-                others_cells,
-                edges,
-                radius,
-                n_sectors,
-                mass,
-                count,
-                bps,
-            )
+            row = poc[e, p].reshape(ny * nx)
+            if short:
+                _bins(cx, cy, px, py, row, others_cells, edges, radius, n_sectors, mass, count)
+            else:
+                _grid_bins(
+                    xs, ys, px, py, row, others_cells, edges, radius, n_sectors, mass, count, bps
+                )
             for m in range(n):
                 if present[m]:
                     others_cells[rows[m] * nx + cols[m]] = 0.0
