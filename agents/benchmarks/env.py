@@ -21,6 +21,11 @@ included; same start over the search area). When ``mpe2`` is importable
 with seeded random discrete actions (episodes of ``max_cycles`` steps, resets not timed), and
 the ratios of the single-env figures to it are printed.
 
+Peak memory per env (``--memory``, at each ``--envs`` of at least 16): the state's bytes per env
+and the peak of the Python-side allocations (numpy arrays, via :mod:`tracemalloc`; numba's own
+scratch inside the kernels is not seen) over a step of the episode engine with its observations
+(``--obs-type``, default the tasks' ``compass``) and infos, beyond the state, per env.
+
 ``main(argv)`` returns ``{figure: agent-steps/s, ...}``; ``--set KEY=VALUE`` applies scenario
 overrides (e.g. ``sensor.samples_per_cell=2``).
 """
@@ -200,6 +205,35 @@ def bench_motion(args: argparse.Namespace, overrides: dict, static: sim.Params) 
     return out
 
 
+def _state_bytes(state: sim.State) -> int:
+    return sum(v.nbytes for v in vars(state).values() if isinstance(v, np.ndarray))
+
+
+def peak_memory(scenario: str, overrides: dict, n_envs: int, obs_type: str) -> tuple[float, float]:
+    """(state bytes per env, peak step bytes per env): :func:`tracemalloc`'s peak over one step
+    of the episode engine (core, observation of kind ``obs_type``, infos) beyond the state."""
+    import tracemalloc
+
+    from poc_env.sim.engine import make_engine
+
+    seeds = list(range(n_envs))
+    eng = make_engine(
+        n_envs, scenario=scenario, obs_type=obs_type, overrides=overrides, seeds=seeds
+    )
+    eng.reset()
+    acts = np.zeros((n_envs, eng.params.n_agents, 3))
+    eng.step(acts)  # warm-up: compilation and caches outside the figure
+    state = _state_bytes(eng.current)
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    base = tracemalloc.get_traced_memory()[0]
+    tr = eng.step(acts)
+    peak = tracemalloc.get_traced_memory()[1] - base
+    tracemalloc.stop()
+    del tr
+    return state / n_envs, peak / n_envs
+
+
 def main(argv: list[str] | None = None) -> dict[str, float]:
     """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -207,6 +241,8 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     ap.add_argument("--envs", type=int, nargs="+", default=[1, 64, 256])
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--no-mpe", action="store_true", help="skip MPE2 simple_spread")
+    ap.add_argument("--no-memory", action="store_true", help="skip the peak memory per env")
+    ap.add_argument("--obs-type", default="compass", help="observation of the memory figure")
     ap.add_argument(
         "--set",
         nargs="*",
@@ -237,6 +273,16 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         out[f"core_{e}env"] = rate
         label = " ".join([args.scenario, *args.set])
         print(f"core {label} n_envs={e:<4d} N={n}: {rate:12,.0f} agent-steps/s", flush=True)
+    if not args.no_memory:
+        for e in (e for e in args.envs if e >= 16):
+            state, peak = peak_memory(args.scenario, overrides, e, args.obs_type)
+            out[f"state_bytes_per_env_{e}"] = state
+            out[f"step_peak_bytes_per_env_{e}"] = peak
+            print(
+                f"memory {args.scenario} {args.obs_type} n_envs={e:<4d}: state "
+                f"{state / 1024:8.1f} KiB/env, step peak {peak / 1024:8.1f} KiB/env",
+                flush=True,
+            )
     if 1 in args.envs:
         pz = bench_pettingzoo(args.scenario, overrides, args.runs)
         if pz is not None:

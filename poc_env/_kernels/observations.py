@@ -20,6 +20,62 @@ _jit = njit(cache=True, error_model="numpy")
 
 
 @_jit
+def _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols):
+    """Fill ``present``, ``rows``, ``cols (N,)`` for env ``e``: a UAV is present when flying
+    inside the grid ``[x0, x1] x [y0, y1]`` (``Grid.contains``); its cell is ``Grid.cell_of``'s,
+    ``floor((x - x0) / cell)`` clipped to the grid."""
+    for k in range(present.shape[0]):
+        x, y = pos[e, k, 0], pos[e, k, 1]
+        present[k] = flying[e, k] and x >= x0 and x <= x1 and y >= y0 and y <= y1
+        if present[k]:
+            rows[k] = min(max(math.floor((y - y0) / cell), 0), ny - 1)
+            cols[k] = min(max(math.floor((x - x0) / cell), 0), nx - 1)
+
+
+@_jit
+def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
+    """Fill ``poc (ny, nx)`` float32 with env ``e``'s coarse POC / ``scale`` clipped to [0, 1]:
+    cells summed as ``Grid.coarsen`` does with numpy (``own_sum``), or taken from ``coarse``;
+    ``poc_sum (ny, nx)`` is scratch."""
+    ny, nx = poc.shape
+    if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
+        for j in range(ny):
+            acc = poc_sum[j]
+            acc[:] = 0.0
+            for a in range(s):
+                row = belief[e, j * s + a]
+                if s == 2:
+                    for i in range(nx):
+                        acc[i] += row[2 * i] + row[2 * i + 1]
+                else:
+                    for i in range(nx):
+                        r = -0.0
+                        for b in range(s):
+                            r += row[i * s + b]
+                        acc[i] += r
+    else:
+        poc_sum[:] = coarse[e]
+    for j in range(ny):
+        for i in range(nx):
+            q = poc_sum[j, i] / scale
+            if q < 0.0:  # np.clip(q, 0.0, 1.0) with scalar bounds; NaN stays NaN
+                q = 0.0
+            elif q > 1.0:
+                q = 1.0
+            poc[j, i] = q
+
+
+@_jit
+def coarse_poc(belief, s, coarse, own_sum, scale, out):
+    """Fill ``out (E, ny, nx)`` float32 with each env's raster channel 0 (:func:`rasters`),
+    once per env rather than once per UAV."""
+    n_env, ny, nx = out.shape
+    poc_sum = np.empty((ny, nx))
+    for e in range(n_env):
+        _coarse_poc(belief, e, s, coarse, own_sum, scale[e], poc_sum, out[e])
+
+
+@_jit
 def rasters(belief, s, coarse, own_sum, scale, hazard, pos, flying, x0, y0, x1, y1, cell, out):
     """Fill ``out (E, N, C, ny, nx)``: channel 0 the coarse POC / ``scale`` clipped to [0, 1]
     (cells summed as ``Grid.coarsen`` does with numpy, or taken from ``coarse``), 1 the own
@@ -33,37 +89,8 @@ def rasters(belief, s, coarse, own_sum, scale, hazard, pos, flying, x0, y0, x1, 
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
     for e in range(n_env):
-        for k in range(n):
-            x, y = pos[e, k, 0], pos[e, k, 1]
-            present[k] = flying[e, k] and x >= x0 and x <= x1 and y >= y0 and y <= y1
-            if present[k]:
-                rows[k] = min(max(math.floor((y - y0) / cell), 0), ny - 1)
-                cols[k] = min(max(math.floor((x - x0) / cell), 0), nx - 1)
-        if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
-            for j in range(ny):
-                acc = poc_sum[j]
-                acc[:] = 0.0
-                for a in range(s):
-                    row = belief[e, j * s + a]
-                    if s == 2:
-                        for i in range(nx):
-                            acc[i] += row[2 * i] + row[2 * i + 1]
-                    else:
-                        for i in range(nx):
-                            r = -0.0
-                            for b in range(s):
-                                r += row[i * s + b]
-                            acc[i] += r
-        else:
-            poc_sum[:] = coarse[e]
-        for j in range(ny):
-            for i in range(nx):
-                q = poc_sum[j, i] / scale[e]
-                if q < 0.0:  # np.clip(q, 0.0, 1.0) with scalar bounds; NaN stays NaN
-                    q = 0.0
-                elif q > 1.0:
-                    q = 1.0
-                poc[j, i] = q
+        _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols)
+        _coarse_poc(belief, e, s, coarse, own_sum, scale[e], poc_sum, poc)
         for k in range(n):
             out[e, k, 0] = poc
             out[e, k, 1] = 0.0
@@ -158,6 +185,169 @@ def vectors(
 
 
 @_jit
+def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
+    """One UAV's row of :func:`compass_bins`: add ``poc[j]`` into ``mass`` per (sector, ring)
+    and ``others[j]`` into ``count`` per sector over the cells within ``radius``, the cells
+    visited in index order (those where both are zero add nothing and are skipped)."""
+    n_cells = cx.shape[0]
+    n_rings = edges.shape[0] + 1
+    two_pi = 2.0 * np.pi
+    half = n_sectors // 2
+    radius2 = radius * radius
+    octants = n_sectors == 8
+    tol = 1e-9  # relative margin around a boundary inside which the exact formula decides
+    for j in range(n_cells):
+        q = poc[j]
+        w = others[j]
+        if q == 0.0 and w == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
+            continue
+        dx = cx[j] - px
+        dy = cy[j] - py
+        ax = abs(dx)
+        ay = abs(dy)
+        big = max(ax, ay)
+        if octants and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
+            # clearly inside an octant: signs and |dy| vs |dx| name it, no arctan2 needed
+            if dy > 0 and dx > 0:
+                sector = 0 if ay < ax else 1
+            elif dy > 0:
+                sector = 2 if ay > ax else 3
+            elif dx < 0:
+                sector = 4 if ay < ax else 5
+            else:
+                sector = 6 if ay > ax else 7
+        else:  # on or next to a sector boundary: the defining formula, bit for bit
+            ang = np.arctan2(dy, dx)
+            sector = int(np.floor((ang + np.pi) / two_pi * n_sectors)) % n_sectors
+            sector = (sector + half) % n_sectors  # arctan2 + pi starts at west
+        d2 = dx * dx + dy * dy
+        ring = 0
+        exact = False
+        for r in range(n_rings - 1):  # squared distances decide unless next to an edge
+            if abs(d2 - (edges[r] * edges[r])) <= tol * (edges[r] * edges[r]):
+                exact = True
+        near_radius = abs(d2 - radius2) <= tol * radius2
+        if exact or near_radius:
+            dist = np.hypot(dx, dy)
+            while ring < n_rings - 1 and edges[ring] <= dist:
+                ring += 1
+            inside = dist <= radius
+        else:
+            while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
+                ring += 1
+            inside = d2 <= radius2
+        mass[sector * n_rings + ring] += q
+        if inside:
+            count[sector] += w
+
+
+@_jit
+def _classify(dx, dy, edges, radius, n_sectors):
+    """Sector, ring and within-``radius`` flag of one offset: the decisions of :func:`_bins`'
+    loop body, spelled out once more for :func:`_grid_bins`, which calls it only next to a
+    boundary (a call per cell would cost more than the decision, hence the copy)."""
+    n_rings = edges.shape[0] + 1
+    tol = 1e-9
+    ax = abs(dx)
+    ay = abs(dy)
+    big = max(ax, ay)
+    if n_sectors == 8 and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
+        if dy > 0 and dx > 0:
+            sector = 0 if ay < ax else 1
+        elif dy > 0:
+            sector = 2 if ay > ax else 3
+        elif dx < 0:
+            sector = 4 if ay < ax else 5
+        else:
+            sector = 6 if ay > ax else 7
+    else:
+        ang = np.arctan2(dy, dx)
+        sector = int(np.floor((ang + np.pi) / (2.0 * np.pi) * n_sectors)) % n_sectors
+        sector = (sector + n_sectors // 2) % n_sectors
+    d2 = dx * dx + dy * dy
+    radius2 = radius * radius
+    exact = abs(d2 - radius2) <= tol * radius2
+    for r in range(n_rings - 1):
+        e2 = edges[r] * edges[r]
+        if abs(d2 - e2) <= tol * e2:
+            exact = True
+    ring = 0
+    if exact:
+        dist = np.hypot(dx, dy)
+        while ring < n_rings - 1 and edges[ring] <= dist:
+            ring += 1
+        inside = dist <= radius
+    else:
+        while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
+            ring += 1
+        inside = d2 <= radius2
+    return sector, ring, inside
+
+
+@_jit
+def _grid_bins(xs, ys, px, py, poc, others, edges, radius, n_sectors, mass, count, bps):
+    """:func:`_bins` over a grid of cell centres ``(xs[i], ys[j])`` (``xs`` increasing, cell
+    ``j * nx + i``), the same sums: walking each row, a cell takes the previous one's sector,
+    ring and radius flag unless a boundary (``dx`` = 0 or +-dy, a ring edge's or the radius'
+    circle) lies between them within a margin far wider than the exact formulas' 1e-9 band;
+    cells next to a boundary are decided by :func:`_classify`. The margin, 1e-4 of the
+    distances, covers the bands (at most ~3e-5 of a ring's radius wide in ``dx``, on a row
+    nearly tangent to it), whatever the cell size. ``bps`` is scratch."""
+    nx = xs.shape[0]
+    ny = ys.shape[0]
+    n_rings = edges.shape[0] + 1
+    span = abs(xs[0] - px) + abs(xs[nx - 1] - px)
+    for j in range(ny):
+        dy = ys[j] - py
+        walk = n_sectors == 8 and abs(dy) > 1e-6 * (span + 1.0)
+        nb = 0
+        if walk:  # the row's boundaries, sorted
+            bps[0] = 0.0
+            bps[1] = dy
+            bps[2] = -dy
+            nb = 3
+            for r in range(n_rings):
+                e = radius if r == n_rings - 1 else edges[r]
+                h = e * e - dy * dy
+                if h >= 0.0:
+                    chord = math.sqrt(h)
+                    bps[nb] = chord
+                    bps[nb + 1] = -chord
+                    nb += 2
+            for a in range(1, nb):  # insertion sort
+                v = bps[a]
+                b = a - 1
+                while b >= 0 and bps[b] > v:
+                    bps[b + 1] = bps[b]
+                    b -= 1
+                bps[b + 1] = v
+        ptr = 0
+        have = False
+        last = 0.0
+        sector, ring, inside = 0, 0, False
+        for i in range(nx):
+            c = j * nx + i
+            q = poc[c]
+            w = others[c]
+            if q == 0.0 and w == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
+                continue
+            dx = xs[i] - px
+            near = True
+            if walk and have:
+                m = 1e-4 * (abs(last) + abs(dx) + abs(dy) + radius + edges[n_rings - 2])
+                while ptr < nb and bps[ptr] < last - m:
+                    ptr += 1
+                near = ptr < nb and bps[ptr] <= dx + m
+            if near:
+                sector, ring, inside = _classify(dx, dy, edges, radius, n_sectors)
+            have = True
+            last = dx
+            mass[sector * n_rings + ring] += q
+            if inside:
+                count[sector] += w
+
+
+@_jit
 def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
     """The compass observation's sums (:class:`poc_env.sim.observations.CompassFeatures`) in
     one pass over the cells: for each UAV ``i`` at ``(px[i], py[i])`` and each cell centre
@@ -167,54 +357,79 @@ def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
     and ``count (B, n_sectors)``, ``others[i, j]`` summed per sector over the cells within
     ``radius``. Cells are visited in index order, as ``np.bincount`` does."""
     b = px.shape[0]
-    n_cells = cx.shape[0]
-    n_rings = edges.shape[0] + 1
-    mass = np.zeros((b, n_sectors * n_rings))
+    mass = np.zeros((b, n_sectors * (edges.shape[0] + 1)))
     count = np.zeros((b, n_sectors))
-    two_pi = 2.0 * np.pi
-    half = n_sectors // 2
-    edges2 = edges * edges
-    radius2 = radius * radius
-    octants = n_sectors == 8
-    tol = 1e-9  # relative margin around a boundary inside which the exact formula decides
     for i in range(b):
-        for j in range(n_cells):
-            dx = cx[j] - px[i]
-            dy = cy[j] - py[i]
-            ax = abs(dx)
-            ay = abs(dy)
-            big = max(ax, ay)
-            if octants and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
-                # clearly inside an octant: signs and |dy| vs |dx| name it, no arctan2 needed
-                if dy > 0 and dx > 0:
-                    sector = 0 if ay < ax else 1
-                elif dy > 0:
-                    sector = 2 if ay > ax else 3
-                elif dx < 0:
-                    sector = 4 if ay < ax else 5
-                else:
-                    sector = 6 if ay > ax else 7
-            else:  # on or next to a sector boundary: the defining formula, bit for bit
-                ang = np.arctan2(dy, dx)
-                sector = int(np.floor((ang + np.pi) / two_pi * n_sectors)) % n_sectors
-                sector = (sector + half) % n_sectors  # arctan2 + pi starts at west
-            d2 = dx * dx + dy * dy
-            ring = 0
-            exact = False
-            for r in range(n_rings - 1):  # squared distances decide unless next to an edge
-                if abs(d2 - edges2[r]) <= tol * edges2[r]:
-                    exact = True
-            near_radius = abs(d2 - radius2) <= tol * radius2
-            if exact or near_radius:
-                dist = np.hypot(dx, dy)
-                while ring < n_rings - 1 and edges[ring] <= dist:
-                    ring += 1
-                inside = dist <= radius
-            else:
-                while ring < n_rings - 1 and edges2[ring] <= d2:
-                    ring += 1
-                inside = d2 <= radius2
-            mass[i, sector * n_rings + ring] += poc[i, j]
-            if inside:
-                count[i, sector] += others[i, j]
+        _bins(cx, cy, px[i], py[i], poc[i], others[i], edges, radius, n_sectors, mass[i], count[i])
     return mass, count
+
+
+@_jit
+def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
+    """The compass observation of every UAV of every env into ``out (E, N, F)`` float32 (the
+    blocks of :class:`poc_env.sim.observations.CompassFeatures`), computed straight from each
+    env's raster channel 0 ``poc (E, P, ny, nx)`` (P = 1: shared by its UAVs; P = N: each UAV's
+    own), its float64 ``total`` and ``mean (E, P)``, the state vectors ``vector (E, N, V)`` and
+    the positions: the sums :func:`compass_bins` makes from rasters, without building them.
+
+    ``grid_box = (x0, y0, x1, y1, cell)`` places the UAVs in cells as :func:`rasters` does; the
+    "others" channel is 1 on each cell holding another present UAV, so such a cell counts once.
+    A UAV's own position is decoded from its float32 vector as ``decode_vector`` does, ``area =
+    (bx0, by0, w, h)``. ``layout = (v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index)``: the
+    block offsets, the index block's size, the sectors, whether to set the index; ``area``'s
+    tail holds the others radius and the count normaliser. The cell centres are the grid
+    ``(xs[i], ys[j])``, walked row by row (:func:`_grid_bins`); ``edges``: the ring edges."""
+    v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index = layout
+    x0, y0, x1, y1, cell = grid_box
+    bx0, by0, bw, bh, radius, others = area
+    n_env, n = flying.shape
+    n_shared, ny, nx = poc.shape[1], poc.shape[2], poc.shape[3]
+    n_rings = edges.shape[0] + 1
+    n_vec = vector.shape[2]
+    mass = np.empty(n_sectors * n_rings)
+    count = np.empty(n_sectors)
+    others_cells = np.zeros(ny * nx)  # the "others" channel of one UAV, cleared after use
+    bps = np.empty(2 * n_rings + 3)
+    short = nx < 16  # short rows: a row's boundaries would cost more than its cells' decisions
+    cx = np.empty(ny * nx)
+    cy = np.empty(ny * nx)
+    for j in range(ny):
+        for i in range(nx):
+            cx[j * nx + i] = xs[i]
+            cy[j * nx + i] = ys[j]
+    rows = np.empty(n, dtype=np.intp)
+    cols = np.empty(n, dtype=np.intp)
+    present = np.empty(n, dtype=np.bool_)
+    for e in range(n_env):
+        _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols)
+        for k in range(n):
+            p = k if n_shared > 1 else 0
+            o = out[e, k]
+            o[:] = 0.0
+            for t in range(n_vec):
+                o[v0 + t] = vector[e, k, t]
+            px = bx0 + np.float64(vector[e, k, 0]) * bw
+            py = by0 + np.float64(vector[e, k, 1]) * bh
+            for m in range(n):
+                if m != k and present[m]:
+                    others_cells[rows[m] * nx + cols[m]] = 1.0
+            mass[:] = 0.0
+            count[:] = 0.0
+            row = poc[e, p].reshape(ny * nx)
+            if short:
+                _bins(cx, cy, px, py, row, others_cells, edges, radius, n_sectors, mass, count)
+            else:
+                _grid_bins(
+                    xs, ys, px, py, row, others_cells, edges, radius, n_sectors, mass, count, bps
+                )
+            for m in range(n):
+                if present[m]:
+                    others_cells[rows[m] * nx + cols[m]] = 0.0
+            tot = total[e, p]
+            for b in range(mass.size):
+                o[c0 + b] = mass[b] / tot if tot > 0 else 0.0
+            for b in range(n_sectors):
+                o[o0 + b] = min(count[b] / others, 1.0)
+            o[m0] = mean[e, p]
+            if agent_index:
+                o[i0 + k % n_ids] = 1.0

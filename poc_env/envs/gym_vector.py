@@ -33,7 +33,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
-from poc_env.envs.gymnasium_env import joint_observation, keep_rows, view_info
+from poc_env.envs.gymnasium_env import keep_rows, view_info
 from poc_env.envs.parallel import OBS_TYPES, check_seed
 from poc_env.errors import ConfigError
 from poc_env.sim import core as sim
@@ -150,17 +150,19 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
 
     # -- observations and infos --------------------------------------------------------------
     def _joint(self) -> Any:
+        # no copies: keep_rows never writes into arrays handed out (copy on write)
         obs = self._last
         if isinstance(obs, dict):
-            return joint_observation(obs)
-        return obs.reshape(obs.shape[0], -1).copy()
+            return dict(obs)
+        return obs.reshape(obs.shape[0], -1)
 
     def _infos(self) -> dict[str, Any]:
-        """The sync vector env's infos: every key batched, with its ``_key`` mask."""
-        out: dict[str, Any] = {}
-        for key, value in self._last_info.items():
-            out[key] = value.copy()
-            out[f"_{key}"] = np.ones(self.num_envs, dtype=bool)
+        """The sync vector env's infos: every key batched, with its ``_key`` mask (the arrays
+        themselves, which :func:`keep_rows` never writes into; one allocation for the masks)."""
+        out: dict[str, Any] = dict(self._last_info)
+        masks = np.ones((len(out), self.num_envs), dtype=bool)
+        for m, key in zip(masks, self._last_info):
+            out[f"_{key}"] = m
         return out
 
     # -- step --------------------------------------------------------------------------------
@@ -188,8 +190,8 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         if len(again):  # NEXT_STEP autoreset: these envs start afresh, their actions unused
             first, fresh_info = self.engine.reset(again)
             every = np.ones((len(again), self.n_agents), dtype=bool)
-            keep_rows(self._last, first, again, every)
-            keep_rows(self._last_info, fresh_info, again, every)
+            self._last = keep_rows(self._last, first, again, every)
+            self._last_info = keep_rows(self._last_info, fresh_info, again, every)
             self._live[again] = True
             self._autoreset[again] = False
         if len(going):
@@ -202,6 +204,6 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             finished = live & (tr.terminated | tr.truncated)
             self._live[going] = live & ~finished
             self._autoreset[going] = done
-            keep_rows(self._last, tr.obs, going, live)
-            keep_rows(self._last_info, tr.info, going, live)
+            self._last = keep_rows(self._last, tr.obs, going, live)
+            self._last_info = keep_rows(self._last_info, tr.info, going, live)
         return self._joint(), reward, terminated, truncated, self._infos()

@@ -46,20 +46,43 @@ def view_info(info: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: np.array(v) for k, v in info.items()}
 
 
-def keep_rows(last: Any, new: Any, envs: np.ndarray, rows: np.ndarray) -> None:
-    """Agents ``rows (len(envs), N)`` of ``envs`` take their entry of ``new`` (batched over
-    ``envs``) in ``last`` (batched over every env); the others keep theirs (finished agents
-    keep their last observation and info). ``last``/``new``: arrays or dicts of arrays."""
+def keep_rows(last: Any, new: Any, envs: np.ndarray, rows: np.ndarray) -> Any:
+    """``last`` (batched over every env) with agents ``rows (len(envs), N)`` of ``envs`` taking
+    their entry of ``new`` (batched over ``envs``); the others keep theirs (finished agents keep
+    their last observation and info). ``last``/``new``: arrays or dicts of arrays.
+
+    Copy on write: ``last`` is never modified, the result is a new array (or ``new`` itself when
+    it replaces every row), so arrays handed out earlier stay as they were."""
+    envs = np.asarray(envs)
+    rows = np.asarray(rows, dtype=bool)
+    whole = len(envs) == len(rows) and bool(rows.all())
     if isinstance(last, dict):
-        for key, dst in last.items():
-            keep_rows(dst, new[key], envs, rows)
-        return
-    if last.ndim == 1:  # a per-env entry (posc): never frozen
-        last[envs] = new
-        return
-    sub = last[envs]
-    sub[rows] = np.asarray(new)[rows]
-    last[envs] = sub
+        every = len(envs) == _rows_of(last) and bool((envs == np.arange(len(envs))).all())
+        return {k: _keep(v, new[k], envs, rows, every, whole) for k, v in last.items()}
+    every = len(envs) == len(last) and bool((envs == np.arange(len(envs))).all())
+    return _keep(last, new, envs, rows, every, whole)
+
+
+def _rows_of(last: dict[str, np.ndarray]) -> int:
+    return len(next(iter(last.values()))) if last else 0
+
+
+def _keep(last, new, envs, rows, every: bool, whole: bool) -> np.ndarray:
+    """:func:`keep_rows` of one array; ``every``: ``envs`` is every env in order; ``whole``:
+    every row of ``envs`` is replaced."""
+    new = np.asarray(new)
+    if every and (whole or last.ndim == 1):  # a per-env entry (posc) is never frozen
+        return new
+    if last.ndim == 1:
+        out = last.copy()
+        out[envs] = new
+        return out
+    mask = rows.reshape(rows.shape + (1,) * (new.ndim - 2))
+    if every:
+        return np.where(mask, new, last)
+    out = last.copy()
+    out[envs] = new if whole else np.where(mask, new, last[envs])
+    return out
 
 
 class UAVSearchGym(gym.Env):
@@ -111,8 +134,8 @@ class UAVSearchGym(gym.Env):
         truncated = done and bool(tr.truncated[0].any())
         terminated = done and not truncated
         everything = np.zeros(1, dtype=np.intp)
-        keep_rows(self._last, tr.obs, everything, live)
-        keep_rows(self._last_info, tr.info, everything, live)
+        self._last = keep_rows(self._last, tr.obs, everything, live)
+        self._last_info = keep_rows(self._last_info, tr.info, everything, live)
         return self._observation(), reward, terminated, truncated, self._joint_info()
 
     def _action_array(self, action) -> np.ndarray:

@@ -69,12 +69,20 @@ def cell_pixels(params: Params, xy: np.ndarray):
     return j, i, inside
 
 
-def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndarray):
-    """(E, N, C, ny, nx) float32 raster observations of every agent (``hazard`` is (ny, nx))."""
+def rasters(
+    params: Params,
+    state: State,
+    poc_scale: np.ndarray,
+    hazard: np.ndarray,
+    out: np.ndarray | None = None,
+):
+    """(E, N, C, ny, nx) float32 raster observations of every agent (``hazard`` is (ny, nx)),
+    written into ``out`` when given (a view of the flat observation)."""
     e, n = state.flying.shape
     g = params.grid
     s = params.s
-    out = np.empty((e, n, RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
+    if out is None:
+        out = np.empty((e, n, RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
     x0, y0, x1, y1 = g.bounds
     # the kernel sums sub-cells in numpy's order for rows of s < 8 points over several columns;
     # otherwise numpy's own sum (Grid.coarsen) is passed in
@@ -97,22 +105,44 @@ def rasters(params: Params, state: State, poc_scale: np.ndarray, hazard: np.ndar
         out,
     )
     if state.known is not None:  # belief_sharing "comms": each UAV sees its own belief
-        own = g.coarsen(state.agent_beliefs(), s) / np.asarray(poc_scale)[:, None, None, None]
-        out[:, :, 0] = np.clip(own, 0.0, 1.0)
+        out[:, :, 0] = _own_poc(params, state, poc_scale)
     return out
+
+
+def _own_poc(params: Params, state: State, poc_scale: np.ndarray) -> np.ndarray:
+    """(E, N, ny, nx) float64: each UAV's own coarse belief / POC scale, clipped to [0, 1]
+    (belief_sharing "comms")."""
+    own = params.grid.coarsen(state.agent_beliefs(), params.s)
+    return np.clip(own / np.asarray(poc_scale)[:, None, None, None], 0.0, 1.0)
+
+
+def coarse_poc(params: Params, state: State, poc_scale: np.ndarray) -> np.ndarray:
+    """(E, P, ny, nx) float32: raster channel 0 of every env, once per env (P = 1) when its
+    UAVs share the belief, else (belief_sharing "comms") each UAV's own (P = N)."""
+    if state.known is not None:
+        return _own_poc(params, state, poc_scale).astype(np.float32)
+    g = params.grid
+    s = params.s
+    own_sum = g.nx > 1 and s < 8  # as in :func:`rasters`
+    coarse = _NO_COARSE if own_sum else g.coarsen(state.belief, s)
+    out = np.empty((state.flying.shape[0], g.ny, g.nx), dtype=np.float32)
+    _kernels.coarse_poc(state.belief, s, coarse, own_sum, np.asarray(poc_scale, dtype=float), out)
+    return out[:, None]
 
 
 _NO_COARSE = np.zeros((1, 1, 1))
 
 
-def vectors(params: Params, state: State) -> np.ndarray:
-    """(E, N, VECTOR_SIZE) float32 state vectors of every agent."""
+def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.ndarray:
+    """(E, N, VECTOR_SIZE) float32 state vectors of every agent, written into ``out`` when
+    given (a view of the flat observation)."""
     sc = params.scenario
     u = sc.uav
     bx0, by0, bx1, by1 = params.bounds
     w, h = bx1 - bx0, by1 - by0
     n = state.flying.shape[1]
-    out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
+    if out is None:
+        out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
     _kernels.vectors(
         state.pos,
         state.speed,
@@ -202,8 +232,18 @@ class CompassFeatures:
         self.centers = params.grid.centers.reshape(-1, 2).astype(float)
         self._cx = np.ascontiguousarray(self.centers[:, 0])
         self._cy = np.ascontiguousarray(self.centers[:, 1])
+        grid = params.grid.centers
+        self._xs = np.ascontiguousarray(grid[0, :, 0], dtype=float)  # the kernel walks rows
+        self._ys = np.ascontiguousarray(grid[:, 0, 1], dtype=float)
+        assert (grid[..., 0] == self._xs).all() and (grid[..., 1] == self._ys[:, None]).all()
+        assert (np.diff(self._xs) > 0).all()
         self._edges = np.asarray(RING_EDGES_M, dtype=float)
         self.others = max(params.n_agents - 1, 1)
+        b = _BLOCK
+        self._layout = (
+            b["vector"].start, b["compass"].start, b["others"].start, b["mean_poc"].start,
+            b["index"].start, N_IDS, N_SECTORS, self.agent_index,
+        )  # fmt: skip
 
     def __call__(self, raster: np.ndarray, vector: np.ndarray, k) -> np.ndarray:
         """``raster (B, C, ny, nx)``, ``vector (B, VECTOR_SIZE)`` of UAVs ``k (B,)`` ->
@@ -231,6 +271,37 @@ class CompassFeatures:
             out[np.arange(b), _BLOCK["index"].start + np.asarray(k) % N_IDS] = 1.0
         return out
 
+    def of_state(self, state: State, poc_scale: np.ndarray) -> np.ndarray:
+        """``(E, N, FEATURES)``: every agent's features of ``state`` (POC scales ``poc_scale
+        (E,)``), equal to calling the instance on the raster and vector observations, but
+        computed from each env's coarse POC and the UAVs' positions without the rasters."""
+        params = self.params
+        g = params.grid
+        vec = vectors(params, state)
+        poc = coarse_poc(params, state, poc_scale)
+        flat = poc.reshape(*poc.shape[:2], -1).astype(float)  # (E, P, cells): numpy's sums
+        e, n = state.flying.shape
+        out = np.empty((e, n, FEATURES), dtype=np.float32)
+        bx0, by0, bx1, by1 = params.bounds
+        x0, y0, x1, y1 = g.bounds
+        _kernels.compass(
+            poc,
+            flat.sum(axis=2),
+            flat.mean(axis=2),
+            vec,
+            state.pos,
+            state.flying,
+            (float(x0), float(y0), float(x1), float(y1), float(g.cell_m)),
+            (float(bx0), float(by0), float(bx1 - bx0), float(by1 - by0),
+             float(OTHERS_RADIUS_M), float(self.others)),
+            self._xs,
+            self._ys,
+            self._edges,
+            self._layout,
+            out,
+        )  # fmt: skip
+        return out
+
 
 #: Observation kinds of every env (``obs_type``): raster + vector, the two raveled, the compass.
 OBS_TYPES = ("dict", "flat", "compass")
@@ -249,14 +320,19 @@ def observe(
     ``"flat"`` (the raster raveled in C order, then the vector) and ``"compass"``
     (:class:`CompassFeatures`, pass one to reuse it) a float32 array ``(E, N, D)``. The one
     implementation the PettingZoo env, the Gymnasium views and the VecEnvs share."""
-    ras = rasters(params, state, poc_scale, hazard)
-    vec = vectors(params, state)
     if obs_type == "dict":
-        return {"raster": ras, "vector": vec}
-    e, n = vec.shape[:2]
+        return {
+            "raster": rasters(params, state, poc_scale, hazard),
+            "vector": vectors(params, state),
+        }
     if obs_type == "compass":
         f = features if features is not None else CompassFeatures(params)
-        m = e * n
-        flat = f(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), np.arange(m) % n)
-        return flat.reshape(e, n, -1)
-    return np.concatenate([ras.reshape(e, n, -1), vec], axis=2)
+        return f.of_state(state, poc_scale)
+    # flat: both written in place into one array (no concatenated copy)
+    e, n = state.flying.shape
+    g = params.grid
+    size = RASTER_CHANNELS * g.ny * g.nx
+    flat = np.empty((e, n, size + VECTOR_SIZE), dtype=np.float32)
+    rasters(params, state, poc_scale, hazard, flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx))
+    vectors(params, state, flat[:, :, size:])
+    return flat

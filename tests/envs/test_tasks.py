@@ -116,9 +116,13 @@ def _run_both(tid, num_envs, steps, seed, **kw):
     keys = set(iv)
     rng = np.random.default_rng(seed)
     ends = 0
+    held: list = []  # what the previous step returned, and a copy of it
     for t in range(steps):
         a = rng.uniform(-1, 1, v.action_space.shape).astype(np.float32)
         got, want = v.step(a), s.step(a)
+        for arr, copy_ in held:  # arrays handed out are never written into later
+            np.testing.assert_array_equal(arr, copy_, err_msg=f"step {t}: an earlier array changed")
+        held = [(got[0], got[0].copy())] + [(x, np.array(x)) for x in got[4].values()]
         for j in range(4):
             np.testing.assert_array_equal(got[j], want[j], err_msg=f"step {t} item {j}")
         np.testing.assert_array_equal(got[4]["posc"], want[4]["posc"])

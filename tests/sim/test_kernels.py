@@ -958,3 +958,53 @@ def test_boundary_masses_equal_the_dense_fractions_and_shapely(seed):
                 assert abs(got - ref / grid.cell_area_m2) <= tol, (p, k)
     with pytest.raises(ConfigError):
         boundary_mass(grid, center, ln, wd, th, weights[:-1], exclusive=True)
+
+
+@pytest.mark.parametrize(
+    ("name", "sharing"), [("small", "global"), ("paper_6_2", "global"), ("small", "comms")]
+)
+def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, sharing):
+    """The batched compass (from each env's coarse POC and the positions, no rasters) equals
+    the features of the raster and vector observations exactly: UAVs inside and outside the
+    grid, several in one cell, on cell centres, landed, with and without the agent index, and
+    each UAV's own belief under belief_sharing "comms"; for the kernel's row walk, UAVs placed
+    so that diagonals, ring edges and the others radius pass through cell centres (rows on or
+    tangent to a ring)."""
+    params = sim.make_params(load_scenario(name, {"comms.belief_sharing": sharing}))
+    rng = np.random.default_rng(11)
+    hazard = obs.hazard_mask(params)
+    for trial in range(8):
+        rngs = [np.random.default_rng(trial + k) for k in range(3)]
+        st = sim.initial(params, rngs)
+        if sharing == "comms":  # the UAVs' beliefs part
+            st.pos[:, :, :2] = params.grid.centers.reshape(-1, 2)[: params.n_agents]
+            for _ in range(3):
+                sim.step(params, st, np.zeros((3, params.n_agents, 3)), rngs)
+        x0, y0, x1, y1 = params.grid.bounds
+        st.pos[..., 0] = rng.uniform(x0 - 30e3, x1 + 30e3, st.pos.shape[:2])
+        st.pos[..., 1] = rng.uniform(y0 - 30e3, y1 + 30e3, st.pos.shape[:2])
+        if trial % 2:  # on a few cell centres: shared cells, angle ties
+            c = params.grid.centers.reshape(-1, 2)[:4]
+            st.pos[..., :2] = c[rng.integers(0, len(c), st.pos.shape[:2])]
+        if trial % 4 == 3:
+            st.flying[:, 0] = False
+        if trial >= 4:  # boundaries through cell centres: diagonals, ring edges, tangent rows
+            c = params.grid.centers.reshape(-1, 2)
+            pick = c[rng.integers(0, len(c), st.pos.shape[:2])]
+            d = np.array([*obs.RING_EDGES_M, obs.OTHERS_RADIUS_M])[
+                rng.integers(0, 4, st.pos.shape[:2])
+            ]
+            shift = [(d, d), (d, 0 * d), (0 * d, d), (-d, 0.5 * d)][trial - 4]
+            st.pos[..., 0] = pick[..., 0] + shift[0]
+            st.pos[..., 1] = pick[..., 1] + shift[1]
+        st.belief *= rng.random(st.belief.shape)
+        scale = rng.uniform(0.5, 2.0, 3)
+        ras = obs.rasters(params, st, scale, hazard)
+        vec = obs.vectors(params, st)
+        m = ras.shape[0] * ras.shape[1]
+        k = np.arange(m) % params.n_agents
+        for index in (True, False):
+            feats = obs.CompassFeatures(params, index)
+            want = feats(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), k)
+            got = obs.observe(params, st, scale, hazard, "compass", feats)
+            np.testing.assert_array_equal(got.reshape(m, -1), want)
