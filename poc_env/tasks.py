@@ -28,10 +28,10 @@ Versioning rule
 A task id names a fixed MDP. Any change that can change what an agent observes, what it is
 rewarded, how the swarm moves or when an episode ends (observations, rewards, dynamics,
 constraints, scenario files, the random-prior generator, the task's keyword arguments) bumps the
-version of every task it touches (``-v0`` to ``-v1``); scores are compared only between equal
-ids. Speed-ups that leave every transition bit-identical (the test suite's equivalence tests
-decide) keep the version. :data:`VERSION` is the current version; it lives in one place,
-:data:`poc_env.spec.TASK_VERSION`, and the CHANGELOG lists each bump.
+version (``-v0`` to ``-v1``; one version for every task, so every id moves); scores are compared
+only between equal ids. Speed-ups that leave every transition bit-identical (the test suite's
+equivalence tests decide) keep the version. :data:`VERSION` is the current version; it lives in one
+place, :data:`poc_env.spec.TASK_VERSION`, and the CHANGELOG lists each bump.
 
 The rule is mechanical: every registered id has a recorded episode (:mod:`poc_env.recorded`,
 ``tests/recorded/<id>.npz``: observations, rewards, terminations, truncations and infos of a
