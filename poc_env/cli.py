@@ -771,7 +771,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_record)
 
     p = sub.add_parser(
-        "spec", help="check (or --write) docs/ENVIRONMENT.md's tables generated from poc_env.spec"
+        "spec", help="check (or --write) docs/environment.md's tables generated from poc_env.spec"
     )
     from poc_env.spec import add_arguments as spec_arguments
 

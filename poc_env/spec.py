@@ -2,7 +2,7 @@
 
 Every table of the environment's interface is a tuple here that the code reads (the observation
 builders and spaces, the reward terms, the infos, the task registry), the tests read, and the
-documentation is generated from (:func:`markdown`, written into ``docs/ENVIRONMENT.md`` between
+documentation is generated from (:func:`markdown`, written into ``docs/environment.md`` between
 ``<!-- spec:NAME -->`` markers by ``poc-env spec --write``; ``tests/envs/test_spec.py`` checks
 the committed page equals the generated text).
 
@@ -457,7 +457,7 @@ def info_markdown() -> str:
     )
 
 
-#: The generated sections of ``docs/ENVIRONMENT.md``, by marker name.
+#: The generated sections of ``docs/environment.md``, by marker name.
 SECTIONS = {
     "tasks": task_parts_markdown,
     "raster": raster_markdown,
@@ -466,7 +466,7 @@ SECTIONS = {
     "rewards": reward_markdown,
     "infos": info_markdown,
 }
-DOC = Path(__file__).resolve().parents[1] / "docs" / "ENVIRONMENT.md"
+DOC = Path(__file__).resolve().parents[1] / "docs" / "environment.md"
 
 
 def markdown(name: str) -> str:
@@ -494,7 +494,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_args(args: argparse.Namespace) -> int:
     """Check (exit status 1 if stale) or, with ``--write``, rewrite the generated sections of
-    ``docs/ENVIRONMENT.md``."""
+    ``docs/environment.md``."""
     path = Path(args.doc)
     old = path.read_text(encoding="utf-8")
     new = render_doc(old)

@@ -13,7 +13,7 @@ Ids: ``poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v<version>``. Scenario: `
 Gaussian-mixture prior at every reset (``random_prior=True``); Control: ``Increments`` (eq. 19),
 ``Heading`` or ``Waypoint`` (flown by the autopilot). The table of parts and their meanings is
 :data:`poc_env.spec.SCENARIO_PARTS`, :data:`~poc_env.spec.RANDOM_PARTS` and
-:data:`~poc_env.spec.CONTROL_PARTS`, which this module registers and ``docs/ENVIRONMENT.md``
+:data:`~poc_env.spec.CONTROL_PARTS`, which this module registers and ``docs/environment.md``
 renders with each scenario's size and fleet read from its file (``poc-env spec
 --write``).
 

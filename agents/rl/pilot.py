@@ -21,7 +21,7 @@ policy and hands the rest to the same flight layer the planned baselines use
   observation: the state vector, the belief compass (the share of the remaining POC in each of
   8 map-frame sectors x 4 distance rings), other UAVs per sector, the mean remaining POC and
   the UAV's index as a one-hot, block by block in :data:`poc_env.spec.COMPASS` (rendered in
-  ``docs/ENVIRONMENT.md``).
+  ``docs/environment.md``).
 
   The index matters: with parameter sharing, UAVs taking off together from one airfield see
   identical observations, so a deterministic policy without it flies them as one stacked

@@ -82,7 +82,7 @@ class UAVSearchParallelEnv(ParallelEnv):
     the remaining POC per 8 sectors x 4 distance rings, nearby UAVs per sector, the mean POC
     and the agent index). float32. The raster channels, vector entries and compass blocks
     (names, bounds, meanings) are the tables of :mod:`poc_env.spec` (``RASTER``, ``VECTOR``,
-    ``COMPASS``), rendered in ``docs/ENVIRONMENT.md``.
+    ``COMPASS``), rendered in ``docs/environment.md``.
 
     ``state()`` (centralised critics): the POC raster (ny x nx) then every agent's vector.
 
@@ -117,7 +117,7 @@ class UAVSearchParallelEnv(ParallelEnv):
     or a fixed-shape numpy array (for TorchRL-style specs; at reset nothing has happened yet:
     step quantities are 0/False). The keys, types, shapes and meanings are the table
     :data:`poc_env.spec.INFOS` (:func:`poc_env.spec.info_keys`, rendered in
-    ``docs/ENVIRONMENT.md``); a key missing from either side raises at ``reset``.
+    ``docs/environment.md``); a key missing from either side raises at ``reset``.
 
     The topology's name and the link list are attributes: ``env.unwrapped.topology``
     (``"auto"`` or a Table 2 letter) and ``env.unwrapped.links`` (pairs ``(i, j)``, ``i < j``).

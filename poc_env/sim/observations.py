@@ -2,7 +2,7 @@
 
 The layouts (raster channels, vector entries, compass blocks: names, bounds, meanings) are the
 tables of :mod:`poc_env.spec` (``RASTER``, ``VECTOR``, ``COMPASS``), rendered in
-``docs/ENVIRONMENT.md``; this module reads its names, sizes and bounds from there.
+``docs/environment.md``; this module reads its names, sizes and bounds from there.
 """
 
 from __future__ import annotations
@@ -220,7 +220,7 @@ _BLOCK = spec.compass_offsets()
 class CompassFeatures:
     """The ``compass`` observation (``obs_type="compass"``): the state vector, the belief
     compass, nearby UAVs per sector, the mean remaining POC and the agent index (the blocks of
-    :data:`poc_env.spec.COMPASS`, tabulated in ``docs/ENVIRONMENT.md``), computed from the
+    :data:`poc_env.spec.COMPASS`, tabulated in ``docs/environment.md``), computed from the
     raster and vector observations of any number of UAVs at once.
 
     ``agent_index=False`` leaves the index block at zero: the ablation of the credit-and-sharing

@@ -8,7 +8,7 @@ import pytest
 from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test
 
 import poc_env
-from poc_env import uav_search_v0
+from poc_env import spec, uav_search_v0
 from poc_env.envs.parallel import EpisodeOverError
 from poc_env.errors import ConfigError
 
@@ -116,7 +116,8 @@ def test_observations_are_in_their_spaces_and_documented_shape():
     env = poc_env.parallel_env("paper_6_2")
     obs, _ = env.reset(seed=0)
     o = obs["uav_0"]
-    assert o["raster"].shape == (4, 30, 40) and o["vector"].shape == (14,)
+    assert o["raster"].shape == (len(spec.RASTER), 30, 40)
+    assert o["vector"].shape == (len(spec.VECTOR),)
     assert env.observation_space("uav_0").contains(o)
     assert env.state().shape == env.state_space.shape
 

@@ -79,7 +79,7 @@ def test_recordings_exercise_the_episode():
 
 
 def test_the_recorder_writes_what_a_run_gives(tmp_path, capsys):
-    tid = "poc_env/UAVSearch-Small-Waypoint-v0"
+    tid = f"poc_env/UAVSearch-Small-Waypoint-v{tasks.VERSION}"  # moves with the version
     assert main(["record", "--task", tid, "--dir", str(tmp_path)]) == 0
     assert str(recorded.path_of(tid, tmp_path)) in capsys.readouterr().out
     assert [p.name for p in tmp_path.iterdir()] == [recorded.path_of(tid).name]  # no temp left

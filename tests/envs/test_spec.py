@@ -17,7 +17,7 @@ from poc_env.sim import rewards
 
 def test_the_docs_page_is_the_generated_text():
     text = spec.DOC.read_text(encoding="utf-8")
-    assert spec.render_doc(text) == text, "docs/ENVIRONMENT.md is stale: poc-env spec --write"
+    assert spec.render_doc(text) == text, "docs/environment.md is stale: poc-env spec --write"
     assert main(["spec"]) == 0
 
 
