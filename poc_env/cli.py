@@ -1035,6 +1035,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PocEnvError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # `poc-env tasks | head -3`: the reader had what it wanted
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
+        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
