@@ -7,8 +7,9 @@ The prior
 ---------
 plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
 ``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded by
-name (:func:`scenario_source`: a built-in scenario, or ``NAME.yaml`` beside the plan or in the
-current folder, as ``poc-env plan --scenario NAME.yaml`` records ``NAME``) and its prior built with
+name (:func:`scenario_source`: a built-in scenario, the YAML file the plan records as
+``scenario_file`` (``poc-env plan --scenario FILE.yaml``; else that file's name beside the plan),
+or ``NAME.yaml`` beside the plan or in the current folder) and its prior built with
 :func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
 (resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so the
 rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones and
