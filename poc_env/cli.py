@@ -285,7 +285,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
             projection=args.projection,
             zone=args.utm_zone,
         )
-        print(f"wrote {write_plan(doc, args.plan_out)}")
+        print(f"wrote {write_plan(_with_scenario_file(doc, args.scenario), args.plan_out)}")
     return 0
 
 
@@ -624,12 +624,20 @@ def _plan(
     print(plan_table(plan))
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
-    write_plan(plan, out)
+    write_plan(_with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
     print(f"wrote {shown_out}")
     if plot is not None:
         print(f"wrote {shown_plot}")
     return 0
+
+
+def _with_scenario_file(plan: dict, scenario: object) -> dict:
+    """``plan`` recording ``scenario_file`` (absolute) when the scenario came from a YAML file:
+    export finds the prior's scenario by it (its ``name:`` may differ from the file name)."""
+    if isinstance(scenario, str) and Path(scenario).is_file():
+        return {**plan, "scenario_file": str(Path(scenario).resolve())}
+    return plan
 
 
 def cmd_export(args: argparse.Namespace) -> int:

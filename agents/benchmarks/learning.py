@@ -23,7 +23,6 @@ curve with its min-max band over seeds, the reference as a line.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -31,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from poc_env.errors import ConfigError
+from poc_env.io import read_json
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
@@ -66,8 +66,8 @@ def checkpoints(run: Path) -> list[tuple[int, Path]]:
 def _task(run: Path) -> str:
     cfg = run / "config.json"
     try:
-        task = json.loads(cfg.read_text()).get("task")
-    except (OSError, ValueError, AttributeError):
+        task = read_json(cfg, "recipe").get("task")
+    except (ValueError, AttributeError):  # ConfigError (unreadable, not JSON) is a ValueError
         task = None
     if not task:
         raise ConfigError("recipe", str(run), "a run folder of poc-env train --task (config.json)")

@@ -124,10 +124,13 @@ def _geojson_crs(file: Path, doc: Any) -> None:
 
 def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
     """[(geometry type, coordinates, properties)] of a GeoJSON Feature, collection or geometry."""
-    try:
-        doc = json.loads(file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as err:
-        raise ConfigError(str(file), f"not JSON ({err})", "a GeoJSON file (RFC 7946)") from None
+    from poc_env.io import loads_json
+
+    try:  # the one JSON reader: NaN / Infinity and nesting too deep are refused too
+        doc = loads_json(file.read_bytes(), str(file))
+    except ConfigError as err:
+        why = f"not JSON ({err.allowed})"
+        raise ConfigError(str(file), why, "a GeoJSON file (RFC 7946)") from None
     if not isinstance(doc, dict) or "type" not in doc:
         raise ConfigError(str(file), type(doc).__name__, "a GeoJSON object with a type member")
     _geojson_crs(file, doc)

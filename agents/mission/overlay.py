@@ -7,8 +7,9 @@ The prior
 ---------
 plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
 ``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded by
-name (:func:`scenario_source`: a built-in scenario, or ``NAME.yaml`` beside the plan or in the
-current folder, as ``poc-env plan --scenario NAME.yaml`` records ``NAME``) and its prior built with
+name (:func:`scenario_source`: a built-in scenario, the YAML file the plan records as
+``scenario_file`` (``poc-env plan --scenario FILE.yaml``; else that file's name beside the plan),
+or ``NAME.yaml`` beside the plan or in the current folder) and its prior built with
 :func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
 (resolved as given, else beside the plan). Scenario overrides are not recorded in plan.json, so the
 rebuilt scenario is checked against what the plan does record (its airfields, no-fly zones and
@@ -174,9 +175,13 @@ def plan_prior(
     from poc_env.theory.probability_map import build_prior, load_map
 
     name = str(plan.get("scenario"))
-    where = scenario_source(name, plan_path)
+    where = scenario_source(name, plan_path, plan.get("scenario_file"))
     if where is None:
-        why = f"scenario {name!r} is neither built in nor a YAML file {name}.yaml beside the plan"
+        looked = ", ".join(str(c) for c in _scenario_candidates(name, plan_path, plan))
+        why = (
+            f"scenario {name!r} is not built in and no YAML file of it was found (looked for "
+            f"{looked}): copy the scenario's YAML file beside the plan as {name}.yaml"
+        )
         if prior is None:
             return None, f"no prior overlay: {why}"
         raise ConfigError("scenario", name, f"a scenario to place the prior on ({why})")
@@ -208,18 +213,32 @@ def plan_prior(
     return None, f"no prior overlay: map file {src!r} not found"
 
 
-def scenario_source(name: str, plan_path: str | os.PathLike[str]) -> str | None:
-    """Where the plan's scenario ``name`` is: a built-in name, a YAML path, or ``NAME.yaml``
-    beside the plan or in the current folder (``poc-env plan --scenario my.yaml`` records
-    ``my``); None if none exists."""
+def scenario_source(
+    name: str, plan_path: str | os.PathLike[str], scenario_file: Any = None
+) -> str | None:
+    """Where the plan's scenario ``name`` is: a built-in name, the YAML file the plan records
+    (``scenario_file``, written by ``poc-env plan --scenario FILE.yaml``: as recorded, else
+    its file name beside the plan), or ``NAME.yaml`` beside the plan or in the current folder
+    (plans without ``scenario_file``); None if none exists."""
     from poc_env.config import builtin_scenarios
 
     if name in builtin_scenarios():
         return name
-    cands = [Path(name)] if name.endswith((".yaml", ".yml")) else []
+    cands = _scenario_candidates(name, plan_path, {"scenario_file": scenario_file})
+    return next((str(c) for c in cands if c.is_file()), None)
+
+
+def _scenario_candidates(name: str, plan_path: str | os.PathLike[str], plan: Any) -> list[Path]:
+    """The YAML files :func:`scenario_source` tries, in order."""
+    recorded = plan.get("scenario_file") if isinstance(plan, dict) else None
+    cands = []
+    if isinstance(recorded, str) and recorded:
+        cands += [Path(recorded), Path(plan_path).parent / Path(recorded).name]
+    if name.endswith((".yaml", ".yml")):
+        cands.append(Path(name))
     for folder in (Path(plan_path).parent, Path.cwd()):
         cands += [folder / f"{name}.yaml", folder / f"{name}.yml"]
-    return next((str(c) for c in cands if c.is_file()), None)
+    return list(dict.fromkeys(cands))
 
 
 def _scenario_mismatch(plan: Plan, sc: Any) -> str:

@@ -68,11 +68,11 @@ import math
 import os
 import re
 from pathlib import Path
-from typing import Any, TypedDict
+from typing import Any, NoReturn, TypedDict
 
 from poc_env.agents.mission.crs import check_crs
 from poc_env.errors import ConfigError, as_number
-from poc_env.io import write_text_atomic
+from poc_env.io import read_json, write_text_atomic
 
 SCHEMA = 2
 #: The schemas :func:`load_plan` reads.
@@ -223,11 +223,29 @@ def load_plan(path: str | os.PathLike[str]) -> Plan:
     p = Path(path)
     if not p.is_file():
         raise ConfigError("plan", str(p), "an existing plan.json written by `poc-env plan`")
+    # the one JSON reader: malformed text, NaN / Infinity and nesting too deep for the parser
+    # are a ConfigError naming "plan", never a RecursionError
     try:
-        plan = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as err:
-        raise ConfigError("plan", str(p), f"valid JSON ({err})") from None
+        plan = read_json(p, "plan")
+    except ConfigError as err:
+        _name_the_field(p, err)
     return check_plan(plan)
+
+
+def _name_the_field(path: Path, err: ConfigError) -> NoReturn:
+    """Raise the field-level error for a plan.json refused as JSON only for a NaN / Infinity
+    (``plan.uavs[0].pod``, as the plan check names it); else ``err`` itself (a NaN in a field
+    the check does not read, malformed text, nesting too deep)."""
+    from poc_env.io import MAX_JSON_DEPTH, json_depth
+
+    try:
+        data = path.read_bytes()
+        lenient = json.loads(data) if json_depth(data) <= MAX_JSON_DEPTH else None
+    except (OSError, ValueError, RecursionError):
+        lenient = None
+    if lenient is not None:
+        check_plan(lenient)  # raises naming the field that holds the NaN, when it reads it
+    raise err
 
 
 def check_plan(plan: Any) -> Plan:

@@ -177,6 +177,10 @@ class UAVSearchParallelEnv(ParallelEnv):
     ) -> None:
         if render_mode not in (None, "rgb_array", "human"):
             raise ConfigError("render_mode", render_mode, "None, 'rgb_array' or 'human'")
+        if render_mode is not None:  # checked before the work, not at the first render()
+            from poc_env.errors import EXTRA_MODULES, require_extra
+
+            require_extra("plot", f"render_mode={render_mode!r}", *EXTRA_MODULES["plot"])
         #: The episode engine (one env) this adapter converts: :class:`poc_env.sim.engine.Engine`.
         self.engine = engine_mod.make_engine(
             1,
@@ -407,7 +411,11 @@ class UAVSearchParallelEnv(ParallelEnv):
         if self.render_mode is None:
             import warnings
 
-            warnings.warn("render() called with render_mode=None", stacklevel=2)
+            warnings.warn(
+                "render() called with render_mode=None: pass render_mode='rgb_array' or "
+                "'human' when making the env",
+                stacklevel=2,
+            )
             return None
         if self._renderer is None:
             from poc_env.viz.rendering import Renderer

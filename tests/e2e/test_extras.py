@@ -66,3 +66,35 @@ def test_plan_plot_without_the_plot_extra_fails_before_planning(tmp_path):
     assert done.returncode == 2, done.stderr
     assert "pip install 'poc-env[plot]'" in done.stderr and "Traceback" not in done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_env_checkers_pass_without_the_plot_extra():
+    """Issue 27: on an ``[rl]`` install (no matplotlib) SB3's ``check_env`` on the Gymnasium
+    view and PettingZoo's ``parallel_api_test`` pass when ``render_mode`` is None; asking for a
+    render mode names the ``plot`` extra when the env is made, and ``render()`` without one
+    warns and returns None (Gymnasium's convention), never a ModuleNotFoundError."""
+    code = HIDE.format(mods=["matplotlib", "PIL"]) + (
+        "import warnings\n"
+        "import poc_env\n"
+        "from pettingzoo.test import parallel_api_test\n"
+        "from stable_baselines3.common.env_checker import check_env\n"
+        "from poc_env.envs.gymnasium_env import UAVSearchGym\n"
+        "from poc_env.errors import MissingExtraError\n"
+        "check_env(UAVSearchGym(scenario='small', obs_type='flat'))\n"
+        "parallel_api_test(poc_env.parallel_env('small'), num_cycles=3)\n"
+        "for make in (poc_env.parallel_env, poc_env.env):\n"
+        "    try:\n"
+        "        make('small', render_mode='rgb_array')\n"
+        "    except MissingExtraError as err:\n"
+        "        assert err.extra == 'plot', err\n"
+        "    else:\n"
+        "        raise AssertionError('render_mode without matplotlib was accepted')\n"
+        "with warnings.catch_warnings(record=True) as caught:\n"
+        "    warnings.simplefilter('always')\n"
+        "    assert UAVSearchGym(scenario='small').render() is None\n"
+        "assert any('render_mode=None' in str(w.message) for w in caught), caught\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().endswith("ok")

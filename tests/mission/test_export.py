@@ -43,6 +43,22 @@ def _plan(tmp_path, **changes):
     return path, plan
 
 
+def test_hostile_plan_json_is_a_config_error_naming_the_plan(tmp_path):
+    """Issue 27: plan.json goes through the one JSON reader (poc_env.io.read_json): nested
+    10,000 deep it was a RecursionError; NaN, which Python's parser accepts, is refused as not
+    JSON even where the plan check would never look (an extra field)."""
+    deep = tmp_path / "deep.json"
+    deep.write_text('{"schema": 1, "uavs": ' + "[" * 10_000 + "]" * 10_000 + "}")
+    with pytest.raises(ConfigError, match=r"^plan: .*nested at most") as err:
+        load_plan(deep)
+    assert err.value.field == "plan"
+    path, _ = _plan(tmp_path, note=float("nan"))
+    assert "NaN" in path.read_text()
+    with pytest.raises(ConfigError, match=r"^plan: .*valid JSON.*NaN") as err:
+        load_plan(path)
+    assert err.value.field == "plan"
+
+
 def _positions(coords):
     """The [lon, lat(, z)] positions of a GeoJSON coordinates array of any depth."""
     if coords and isinstance(coords[0], (int, float)):

@@ -455,6 +455,9 @@ def test_numbers_beyond_float_range_and_deep_nesting_in_gis_files(tmp_path, laye
     deep = tmp_path / "deep.geojson"
     deep.write_text('{"type":"Polygon","coordinates":' + "[" * 100_000 + "]" * 100_000 + "}")
     _bad(tmp_path, layers, "not JSON", area=deep)
+    nan = tmp_path / "nan.geojson"  # Python's parser takes NaN; GeoJSON (RFC 8259) does not
+    nan.write_text('{"type":"Polygon","coordinates":[[[126.0,45.3],[127.2,45.3],[NaN,46.1]]]}')
+    _bad(tmp_path, layers, r"nan\.geojson: got 'not JSON \(.*NaN is not JSON", area=nan)
 
 
 def test_truncated_geotiff_is_a_config_error(tmp_path, layers):

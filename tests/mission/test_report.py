@@ -16,6 +16,7 @@ import os
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -154,6 +155,34 @@ def test_prior_is_rebuilt_only_when_the_plan_agrees(small_plan, tmp_path):
     (out,) = export_plan(path, "html")
     page = out.read_text(encoding="utf-8")
     assert _payload(page)["overlay"] is None and "no prior overlay" in page
+
+
+def test_export_html_of_a_custom_yaml_plan_finds_its_prior_or_says_why(tmp_path, capsys):
+    """Issue 27: a plan made from a YAML scenario whose ``name:`` is not its file name
+    (``custom.yaml`` holding ``name: harbin_day2``) records the file, so export draws the prior
+    from it; with the file gone, the command line (not only the page) says which files it
+    looked for and how to give it the scenario."""
+    import poc_env
+
+    src = tmp_path / "scenarios" / "custom.yaml"
+    src.parent.mkdir()
+    text = (Path(poc_env.__file__).parent / "configs" / "small.yaml").read_text()
+    src.write_text(text.replace("name: small", "name: harbin_day2", 1))
+    plan = tmp_path / "plans" / "plan.json"
+    assert main(["plan", "--scenario", str(src), "--popsize", "8", "--maxiter", "3", "--quiet",
+                 "--origin", "45.75,126.65", "--out", str(plan)]) == 0  # fmt: skip
+    assert json.loads(plan.read_text())["scenario_file"] == str(src.resolve())
+    capsys.readouterr()
+    assert main(["export", str(plan), "--format", "html", "--out", str(tmp_path / "a")]) == 0
+    said = capsys.readouterr().out
+    assert "no prior overlay" not in said, said
+    assert _payload((tmp_path / "a" / "plan.html").read_text())["overlay"] is not None
+    src.rename(tmp_path / "elsewhere.yaml")
+    assert main(["export", str(plan), "--format", "html", "--out", str(tmp_path / "b")]) == 0
+    said = capsys.readouterr().out
+    assert "note: no prior overlay" in said and str(src.resolve()) in said, said
+    assert "beside the plan as harbin_day2.yaml" in said, said
+    assert _payload((tmp_path / "b" / "plan.html").read_text())["overlay"] is None
 
 
 def test_cli_html_and_bad_input(small_plan, tmp_path, capsys):

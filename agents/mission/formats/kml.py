@@ -217,6 +217,8 @@ def write(job: ExportJob) -> list[Path]:
     """``<stem>.kml`` and, when the prior can be placed, ``<stem>_prior.png`` (written first:
     the KML names it)."""
     overlay, note = plan_prior(job.plan, job.plan_path, job.prior)
+    if overlay is None:  # said on the command line too, not only inside the file
+        print(f"note: {note}")
     written = []
     g: dict[str, Any] = {"note": note}
     if overlay is not None:

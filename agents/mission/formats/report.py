@@ -420,6 +420,8 @@ _SCRIPT = r"""
 def write(job: ExportJob) -> list[Path]:
     """``<stem>.html``: the map report, its prior overlay from :func:`plan_prior`."""
     overlay, note = plan_prior(job.plan, job.plan_path, job.prior)
+    if overlay is None:  # said on the command line too, not only inside the file
+        print(f"note: {note}")
     page = html_report(
         job.plan, job.crs, overlay, note, job.altitude_m, job.altitude_ref, job.ground_m
     )
