@@ -161,3 +161,24 @@ def test_plan_edits_do_not_alias_the_strategy_values():
     outcome, detail = classify(run_plans, (edits, "geojson", "45.5,126.6", False))
     assert outcome in ("ok", "error"), detail
     assert shared == [0.0]  # the strategy's value is not changed by an edit
+
+
+def test_cli_cases_keep_their_work_small():
+    # seed 63: `evaluate --episodes 1708` is valid and ran past the 60 s case limit (a "hang"
+    # that was honest work); work options now draw small integers or the huge refused ones
+    from hypothesis import given, settings
+
+    from poc_env.agents.testing.campaign import CLI_WORK_OPTIONS, MAX_CLI_WORK, cli_strategy
+
+    seen = []
+
+    @settings(max_examples=300, database=None, deadline=None)
+    @given(cli_strategy())
+    def draw(case):
+        for opt, val in case[1]:
+            if opt in CLI_WORK_OPTIONS and val.lstrip("-").isdigit():
+                seen.append(opt)
+                assert int(val) <= MAX_CLI_WORK or len(val) > 15, (opt, val)
+
+    draw()
+    assert seen  # the work options are still drawn
