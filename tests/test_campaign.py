@@ -8,9 +8,19 @@ The strategies and checks live in :mod:`poc_env.agents.testing.campaign` (one im
 
 from __future__ import annotations
 
+import contextlib
+
 import pytest
 
-from poc_env.agents.testing.campaign import TARGETS, SilentWrong, classify, run_target
+from poc_env.agents.testing.campaign import (
+    TAG_VAR,
+    TARGETS,
+    SilentWrong,
+    classify,
+    orphans,
+    run_target,
+    time_limit,
+)
 
 #: Cases per target in the default suite (the CLI and region cases cost most).
 DEFAULT_CASES = {
@@ -28,11 +38,14 @@ DEFAULT_CASES = {
 
 
 def _assert_clean(name: str, cases: int, seed: int) -> None:
+    before = set(orphans())  # another test's helper process (a fork server) is not ours
     counts, bad = run_target(name, cases, seed)
     assert sum(counts.values()) == cases
     shown = "\n".join(f"{d.strip()[-400:]}\n  case: {c!r:.300}" for d, c in bad[:3])
     assert not bad, f"{name}: {dict(counts)}\n{shown}"
     assert counts["error"] > 0  # the strategies do reach the validation
+    assert counts["hang"] == 0
+    assert set(orphans()) - before == set(), f"{name} left processes alive"
 
 
 @pytest.mark.parametrize("name", sorted(TARGETS))
@@ -71,3 +84,101 @@ def test_the_checks_catch_a_silent_wrong_map(monkeypatch):
 
     monkeypatch.setattr(pm, "validate_map", lambda values, grid, source="map": np.asarray(values))
     assert classify(run_maps, np.full((8, 8), 0.5))[0] == "silent"
+
+
+def test_a_case_past_its_time_limit_is_a_hang_and_leaves_nothing_behind():
+    import threading
+    import time
+
+    threads = threading.active_count()
+    t0 = time.perf_counter()
+    outcome, detail = classify(lambda _: time.sleep(30), 0, timeout_s=0.2)
+    assert (outcome, time.perf_counter() - t0 < 5) == ("hang", True), detail
+    assert threading.active_count() == threads  # the limit is a SIGALRM, not a watcher
+
+    def swallows(_):  # code under test that catches Exception must not hide the hang
+        with contextlib.suppress(Exception):
+            time.sleep(30)
+
+    assert classify(swallows, 0, timeout_s=0.2)[0] == "hang"
+    assert classify(lambda _: None, 0, timeout_s=0.2)[0] == "ok"
+    time.sleep(0.3)  # the timer is cancelled: nothing fires after the case
+    with time_limit(None):
+        time.sleep(0.01)
+
+
+def test_run_target_counts_hangs(monkeypatch):
+    import time
+
+    import poc_env.agents.testing.campaign as campaign
+
+    strategy, _ = campaign.TARGETS["utm"]
+    monkeypatch.setitem(campaign.TARGETS, "utm", (strategy, lambda _: time.sleep(30)))
+    counts, bad = run_target("utm", 2, seed=0, timeout_s=0.1)
+    assert counts["hang"] == 2 and len(bad) == 2
+
+
+def test_orphans_finds_children_and_reparented_grandchildren(monkeypatch):
+    import subprocess
+    import sys
+
+    assert orphans() == []
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        assert child.pid in orphans()
+    finally:
+        child.kill()
+        child.wait()
+    assert orphans() == []
+    # a child re-parented to init (its parent died) is no longer a descendant: the
+    # environment tag finds it -- seen here from a process that is not its parent
+    import poc_env.agents.testing.campaign as campaign
+
+    monkeypatch.setenv(TAG_VAR, "test-orphans")
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        monkeypatch.setattr(campaign.os, "getpid", lambda: -1)
+        assert orphans() == []
+        assert other.pid in orphans("test-orphans")
+        assert orphans("another-campaign") == []
+    finally:
+        monkeypatch.undo()
+        other.kill()
+        other.wait()
+    assert orphans() == []
+
+
+def test_plan_edits_do_not_alias_the_strategy_values():
+    # seed 62 of the 6,500-case campaign: one list object set at waypoints_m and then into
+    # its own element made the plan circular (json.dumps: "Circular reference detected")
+    from poc_env.agents.testing.campaign import run_plans
+
+    shared = [0.0]
+    edits = [
+        (("uavs", 0, "waypoints_m"), shared),
+        (("uavs", 0, "waypoints_m", 0), shared),
+    ]
+    outcome, detail = classify(run_plans, (edits, "geojson", "45.5,126.6", False))
+    assert outcome in ("ok", "error"), detail
+    assert shared == [0.0]  # the strategy's value is not changed by an edit
+
+
+def test_cli_cases_keep_their_work_small():
+    # seed 63: `evaluate --episodes 1708` is valid and ran past the 60 s case limit (a "hang"
+    # that was honest work); work options now draw small integers or the huge refused ones
+    from hypothesis import given, settings
+
+    from poc_env.agents.testing.campaign import CLI_WORK_OPTIONS, MAX_CLI_WORK, cli_strategy
+
+    seen = []
+
+    @settings(max_examples=300, database=None, deadline=None)
+    @given(cli_strategy())
+    def draw(case):
+        for opt, val in case[1]:
+            if opt in CLI_WORK_OPTIONS and val.lstrip("-").isdigit():
+                seen.append(opt)
+                assert int(val) <= MAX_CLI_WORK or len(val) > 15, (opt, val)
+
+    draw()
+    assert seen  # the work options are still drawn

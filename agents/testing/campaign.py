@@ -15,25 +15,35 @@ infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is ru
   line) whose message names what is allowed;
 * ``unclear``: a project error without ``allowed:`` or a field;
 * ``traceback``: any other exception;
-* ``silent``: a result that fails its check -- a silent wrong answer.
+* ``silent``: a result that fails its check -- a silent wrong answer;
+* ``hang``: a case still running after ``--case-timeout`` seconds (default 60), stopped by a
+  ``SIGALRM`` in the campaign's own thread (no watcher thread or process) and recorded.
 
-The last three must be 0. ``tests/test_campaign.py`` runs every target through hypothesis in
-the default suite (840 cases); this command runs a large campaign and prints the
-counts, the figure quoted in issue 15's closing note. Needs ``hypothesis`` (the ``dev`` extra).
+After each target the campaign counts its *orphans*: processes it started (its descendants, and
+any process carrying its ``POC_ENV_CAMPAIGN_TAG`` environment marker, which catches children
+re-parented to init) still alive. Unclear, traceback, silent, hang and orphan must be 0.
+``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,090
+cases, asserting no hang and no orphan); this command runs a large campaign and prints the
+counts, the figure quoted in issue 27's closing note (``docs/inputs.md``). Needs ``hypothesis``
+(the ``dev`` extra).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import copy
 import io
 import json
 import math
 import os
 import re
+import signal
 import sys
 import tempfile
+import threading
 import traceback
+import uuid
 import warnings
 from collections import Counter
 from collections.abc import Callable
@@ -45,7 +55,13 @@ import numpy as np
 
 from poc_env.errors import PocEnvError
 
-OUTCOMES = ("ok", "error", "unclear", "traceback", "silent")
+OUTCOMES = ("ok", "error", "unclear", "traceback", "silent", "hang")
+#: Outcomes that fail a campaign (with orphan processes, counted apart from the cases).
+BAD = ("unclear", "traceback", "silent", "hang")
+#: Seconds one case may run before it counts as a ``hang`` (``--case-timeout``).
+CASE_TIMEOUT_S = 60.0
+#: Environment variable that marks every process a campaign starts (see :func:`orphans`).
+TAG_VAR = "POC_ENV_CAMPAIGN_TAG"
 #: Most cases of one campaign (``--cases``): about a day on one core.
 MAX_CASES = 1_000_000
 
@@ -59,12 +75,47 @@ def check(cond: bool, what: str) -> None:
         raise SilentWrong(what)
 
 
-def classify(fn: Callable[[Any], None], case: Any) -> tuple[str, str]:
-    """Run ``fn(case)`` and return (outcome, detail)."""
+class CaseTimeout(BaseException):
+    """Raised in a case that ran past its time limit (a BaseException: ``except Exception`` in
+    the code under test must not swallow it)."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float | None):
+    """Raise :class:`CaseTimeout` in this thread after ``seconds`` (``SIGALRM``; no thread or
+    process is started). A no-op without a limit, off the main thread or without SIGALRM."""
+    usable = (
+        seconds is not None
+        and seconds > 0
+        and hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+    )
+    if not usable:
+        yield
+        return
+
+    def expire(signum: int, frame: Any) -> None:
+        raise CaseTimeout(f"case still running after {seconds:g} s")
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, float(seconds))  # type: ignore[arg-type]
     try:
-        with warnings.catch_warnings():
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def classify(
+    fn: Callable[[Any], None], case: Any, timeout_s: float | None = None
+) -> tuple[str, str]:
+    """Run ``fn(case)`` and return (outcome, detail); past ``timeout_s`` seconds it is a hang."""
+    try:
+        with warnings.catch_warnings(), time_limit(timeout_s):
             warnings.simplefilter("ignore")
             fn(case)
+    except CaseTimeout as err:
+        return "hang", str(err)
     except SilentWrong as err:
         return "silent", str(err)
     except PocEnvError as err:
@@ -375,10 +426,13 @@ def plans_strategy():
 
 
 def _set_path(doc: Any, path: tuple, value: Any) -> None:
+    """Set ``doc[path]`` to a copy of ``value``: a strategy's values are shared objects (the
+    same list in two edits, or across cases), and a later edit into one must not make the
+    document circular or change the strategy's constants."""
     node = doc
     for k in path[:-1]:
         node = node[k]
-    node[path[-1]] = value
+    node[path[-1]] = copy.deepcopy(value)
 
 
 def run_plans(case: tuple[list, str, str, bool]) -> None:
@@ -617,14 +671,24 @@ def run_utm(case: tuple[float, float, Any]) -> None:
 # --------------------------------------------------------------------------- target: cli
 
 
+_CLI_VALUES = ["-1", "0", "1", "1.5", "inf", "nan", "", "abc", "10**400", "1e308",
+               "999999999999999999999", "/dev/null", ".", "-45,7", "x/../../y"]  # fmt: skip
+#: Options whose value scales a command's work (episodes, generations, steps, frames).
+CLI_WORK_OPTIONS = frozenset(
+    ["--popsize", "--maxiter", "--episodes", "--max-steps", "--total-timesteps", "--n-steps",
+     "--uavs", "--workers", "--n-envs"]
+)  # fmt: skip
+#: Largest integer drawn for a work option (a case stays seconds, far below --case-timeout).
+MAX_CLI_WORK = 64
+
+
 def cli_strategy():
     from hypothesis import strategies as st
 
     values = st.one_of(
-        st.sampled_from(["-1", "0", "1", "1.5", "inf", "nan", "", "abc", "10**400", "1e308",
-                         "999999999999999999999", "/dev/null", ".", "-45,7", "x/../../y"]),
+        st.sampled_from(_CLI_VALUES),
         st.integers(-5, 5000).map(str),  # larger ones: the sampled 1e308, 10**21
-    )  # fmt: skip
+    )
     commands = st.sampled_from(
         [
             ["plan", "--scenario", "small", "--maxiter", "1", "--popsize", "4", "--quiet"],
@@ -644,7 +708,14 @@ def cli_strategy():
          "--max-memory-gb", "--regions", "--max-steps", "--learning-rate", "--gamma",
          "--n-envs", "--total-timesteps", "--n-steps", "--ent-coef", "--run-dir"]
     )  # fmt: skip
-    return st.tuples(commands, st.lists(st.tuples(options, values), max_size=2))
+    # A valid work size in the thousands is honest work, not a hang (seed 63: `evaluate
+    # --episodes 1708` ran past the 60 s limit): these options draw small integers, and the
+    # sampled 1e308, 10**400 and 10**21 still test their range checks.
+    small = st.one_of(st.sampled_from(_CLI_VALUES), st.integers(-5, MAX_CLI_WORK).map(str))
+    pair = options.flatmap(
+        lambda o: st.tuples(st.just(o), small if o in CLI_WORK_OPTIONS else values)
+    )
+    return st.tuples(commands, st.lists(pair, max_size=2))
 
 
 def run_cli(case: tuple[list[str], list[tuple[str, str]]]) -> None:
@@ -1069,8 +1140,55 @@ WEIGHTS = {
 }  # fmt: skip
 
 
-def run_target(name: str, cases: int, seed: int = 0) -> tuple[Counter, list[tuple[str, Any]]]:
-    """Run ``cases`` hypothesis cases of target ``name``; (outcome counts, failing cases)."""
+def _proc_stat(pid: int) -> tuple[int, str] | None:
+    """(parent pid, state letter) of a live process, from /proc; None if gone."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = stat[stat.rindex(")") + 2 :].split()  # the name in (...) may hold spaces
+    return int(fields[1]), fields[0]
+
+
+def orphans(tag: str | None = None) -> list[int]:
+    """Pids of processes this one started that are still alive (zombies are reaped first):
+    its descendants, and with ``tag`` any process whose environment carries
+    ``POC_ENV_CAMPAIGN_TAG=tag`` (children whose parent died are re-parented to init).
+    Reads /proc; an empty list where there is none."""
+    me = os.getpid()
+    with contextlib.suppress(ChildProcessError, OSError):
+        while os.waitpid(-1, os.WNOHANG)[0]:  # reap finished children (no zombies counted)
+            pass
+    proc = Path("/proc")
+    if not proc.is_dir():
+        return []
+    parents: dict[int, int] = {}
+    for entry in proc.iterdir():
+        if entry.name.isdigit() and (st := _proc_stat(int(entry.name))) and st[1] != "Z":
+            parents[int(entry.name)] = st[0]
+    found: set[int] = set()
+    for pid in parents:
+        p, seen = pid, set()
+        while p in parents and p not in seen and p > 1:
+            seen.add(p)
+            p = parents[p]
+            if p == me:
+                found.add(pid)
+                break
+    if tag:
+        marker = f"{TAG_VAR}={tag}".encode()
+        for pid in parents.keys() - found - {me}:
+            with contextlib.suppress(OSError):
+                if marker in Path(f"/proc/{pid}/environ").read_bytes().split(b"\0"):
+                    found.add(pid)
+    return sorted(found)
+
+
+def run_target(
+    name: str, cases: int, seed: int = 0, timeout_s: float | None = CASE_TIMEOUT_S
+) -> tuple[Counter, list[tuple[str, Any]]]:
+    """Run ``cases`` hypothesis cases of target ``name``; (outcome counts, failing cases).
+    A case still running after ``timeout_s`` seconds is stopped and counted as ``hang``."""
     from hypothesis import HealthCheck, Phase, given, settings
     from hypothesis import seed as hypothesis_seed
 
@@ -1088,9 +1206,9 @@ def run_target(name: str, cases: int, seed: int = 0) -> tuple[Counter, list[tupl
     )
     @given(strategy())
     def one(case: Any) -> None:
-        outcome, detail = classify(fn, case)
+        outcome, detail = classify(fn, case, timeout_s)
         counts[outcome] += 1
-        if outcome in ("traceback", "silent", "unclear"):
+        if outcome in BAD:
             bad.append((detail, case))
 
     one()
@@ -1098,38 +1216,70 @@ def run_target(name: str, cases: int, seed: int = 0) -> tuple[Counter, list[tupl
 
 
 def main(argv: list[str] | None = None) -> dict[str, Counter]:
+    """Run the campaign and print the counts; each target's Counter also holds ``orphan``
+    (processes it left alive) and ``seconds``."""
+    import time
+
     p = argparse.ArgumentParser(prog="poc-env bench campaign", description=__doc__.split("\n")[0])
     p.add_argument("--cases", type=int, default=5000, help="total cases over all targets")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--targets", default=",".join(TARGETS))
     p.add_argument("--show", type=int, default=3, help="failing cases to print per target")
+    p.add_argument(
+        "--case-timeout",
+        type=float,
+        default=CASE_TIMEOUT_S,
+        help="seconds one case may run before it counts as a hang (0: no limit)",
+    )
     args = p.parse_args(argv)
     for name, lo, hi in (("cases", 1, MAX_CASES), ("show", 0, 10_000), ("seed", 0, 2**32 - 1)):
         v = getattr(args, name)
         if not lo <= v <= hi:  # 1e9 cases is days of work: refused up front
             p.error(f"--{name}: got {v}; allowed: an integer in [{lo}, {hi}]")
+    if not (math.isfinite(args.case_timeout) and 0 <= args.case_timeout <= 86_400):
+        p.error(f"--case-timeout: got {args.case_timeout}; allowed: seconds in [0, 86400]")
     names = [t for t in args.targets.split(",") if t]
     for t in names:
         if t not in TARGETS:
             p.error(f"--targets: got {t!r}; allowed: {', '.join(TARGETS)}")
+    if not names:
+        p.error("--targets: got none; allowed: " + ", ".join(TARGETS))
+    tag = os.environ.setdefault(TAG_VAR, uuid.uuid4().hex)  # inherited by every child
     total_w = sum(WEIGHTS[t] for t in names)
     results: dict[str, Counter] = {}
-    print(f"{'target':<10} " + " ".join(f"{o:>9}" for o in ("tried", *OUTCOMES)))
+    cols = ("tried", *OUTCOMES, "orphan")
+    print(f"{'target':<10} " + " ".join(f"{o:>9}" for o in cols) + f" {'seconds':>8}")
     grand: Counter = Counter()
+
+    def row(label: str, c: Counter, tried: int) -> str:
+        return f"{label:<10} {tried:>9} " + " ".join(f"{c[o]:>9}" for o in (*OUTCOMES, "orphan"))
+
     for t in names:
         n = max(1, round(args.cases * WEIGHTS[t] / total_w))
-        counts, bad = run_target(t, n, args.seed)
+        t0 = time.perf_counter()
+        counts, bad = run_target(t, n, args.seed, args.case_timeout or None)
+        tried = sum(counts.values())
+        left = orphans(tag)
+        counts["orphan"] = len(left)
+        counts["seconds"] = round(time.perf_counter() - t0)
         results[t] = counts
         grand.update(counts)
-        tried = sum(counts.values())
-        print(f"{t:<10} {tried:>9} " + " ".join(f"{counts[o]:>9}" for o in OUTCOMES), flush=True)
+        print(row(t, counts, tried) + f" {counts['seconds']:>8}", flush=True)
         for detail, case in bad[: args.show]:
             print(f"    {detail.strip().splitlines()[-1][:200]}\n      case: {case!r:.300}")
-    tried = sum(grand.values())
-    print(f"{'all':<10} {tried:>9} " + " ".join(f"{grand[o]:>9}" for o in OUTCOMES))
+        for pid in left[: args.show]:
+            with contextlib.suppress(OSError):
+                cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(bytes(1), b" ")
+                print(f"    orphan {pid}: {cmd[:200]!r}")
+    tried = sum(grand[o] for o in OUTCOMES)
+    print(row("all", grand, tried) + f" {grand['seconds']:>8}")
     return results
 
 
+def failed(results: dict[str, Counter]) -> bool:
+    """True when a campaign's counts fail it (see :data:`BAD`, plus orphans)."""
+    return any(c[o] for c in results.values() for o in (*BAD, "orphan"))
+
+
 if __name__ == "__main__":  # pragma: no cover
-    res = main()
-    sys.exit(1 if any(c["traceback"] or c["silent"] for c in res.values()) else 0)
+    sys.exit(1 if failed(main()) else 0)
