@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from itertools import repeat
 from typing import Any
 
 import numpy as np
@@ -368,7 +369,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         eng = self.engine
         tr = eng.step(arr, with_info=False)  # the info arrays only when asked for (info_arrays)
         self._transition = tr
-        self._step_of = (eng.params, eng.state, tr.events, tr.terms)
+        self._step_of = (eng.params, eng.current, tr.events, tr.terms)
         self._info = None
         reward = tr.reward[0].tolist()
         terminal = tr.terminated[0].tolist()
@@ -399,15 +400,14 @@ class UAVSearchParallelEnv(ParallelEnv):
         n = self.engine.n_agents
         cols: list[list[Any]] = []
         for k, kind in zip(self._info_keys, self._info_kinds):
-            v = parts[k][0]
-            if kind == _COLUMN:
-                cols.append(v.tolist())
-            elif kind == _PER_ENV:
-                cols.append([v.item()] * n)
+            if kind == _COLUMN:  # (1, N): the env's row as Python numbers
+                cols.append(parts[k].tolist()[0])
+            elif kind == _PER_ENV:  # (1,): the env's value, for every agent
+                cols.append([parts[k].tolist()[0]] * n)
             else:  # links: each agent's row of the adjacency, its own (one copy, split)
-                cols.append(list(v.copy()))
+                cols.append(list(parts[k][0].copy()))
         keys = self._info_keys
-        rows = [dict(zip(keys, values)) for values in zip(*cols)]
+        rows = list(map(dict, map(zip, repeat(keys), zip(*cols))))
         index = self._index
         return {a: rows[index[a]] for a in agents}
 
