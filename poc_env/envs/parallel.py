@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from itertools import repeat
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,9 @@ REWARD_TERMS = spec.names(spec.REWARD_TERMS)
 VIOLATION_FLAGS = tuple(flag for flag, _ in spec.VIOLATION_FLAGS)
 #: Every per-agent info key, in order (:func:`poc_env.spec.info_keys`).
 INFO_KEYS = spec.info_keys()
+#: How an info row's value is made from :func:`poc_env.sim.engine.info_parts`: the agent's entry,
+#: its env's value, its row of ``links``.
+_COLUMN, _PER_ENV, _ROWS = 0, 1, 2
 
 __all__ = [
     "OBS_TYPES",
@@ -214,13 +218,32 @@ class UAVSearchParallelEnv(ParallelEnv):
         self._act_space = eng.action_space
         self.state_space = engine_mod.state_space(eng.params)
         self._renderer = None
-        self._info: dict[str, np.ndarray] = {}
+        self._info: dict[str, np.ndarray] | None = {}
+        self._transition: engine_mod.Transition | None = None
+        #: ``(params, state, events, terms)`` of the last step: its info arrays, made when asked.
+        self._step_of: tuple[Any, ...] = ()
+        #: The per-agent info keys in order and how each is made (set at reset).
+        self._info_keys: tuple[str, ...] = ()
+        self._info_kinds: tuple[int, ...] = ()
 
     @property
     def info_arrays(self) -> dict[str, np.ndarray]:
         """The engine's info arrays of the last reset or step (:func:`poc_env.sim.engine.infos`,
         batched over one env): what :meth:`step` and :meth:`reset` turn into per-agent infos."""
+        if self._info is None:  # a step's: made when first asked for
+            self._info = self.transition.info
         return self._info
+
+    @property
+    def transition(self) -> engine_mod.Transition:
+        """The engine's :class:`~poc_env.sim.engine.Transition` of the last step (arrays), its
+        ``info`` that step's info arrays. AttributeError before the first step."""
+        tr = self._transition
+        if tr is None:
+            raise AttributeError("transition: no step yet")
+        if not tr.info:  # the step's state is untouched until the next step (a reset replaces it)
+            tr.info = engine_mod.infos(*self._step_of)
+        return tr
 
     @property
     def params(self) -> sim.Params:
@@ -259,6 +282,16 @@ class UAVSearchParallelEnv(ParallelEnv):
         if options and "prior" in options:
             prior = validate_map(options["prior"], self.params.grid, "options['prior']")
         obs, self._info = self.engine.reset(priors=[prior])
+        parts = engine_mod.info_parts(self.params, self.sim_state)
+        missing = [k for k in INFO_KEYS if k not in parts]
+        if missing:  # a key of the spec that the engine does not produce: never dropped silently
+            raise RuntimeError(f"infos lack {missing} of the spec's keys {INFO_KEYS}")
+        keys = INFO_KEYS + tuple(e.name for e in spec.MOTION_INFOS if e.name in parts)
+        self._info_keys = keys
+        self._info_kinds = tuple(
+            _PER_ENV if k in engine_mod.PER_ENV_INFOS else _ROWS if k == "links" else _COLUMN
+            for k in keys
+        )
         if self.random_airfields and self._renderer is not None:
             # its background shows the airfields: draw afresh
             self._renderer.close()
@@ -267,7 +300,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         if self._renderer is not None:
             self._renderer.reset_history()
             self._renderer.record(self.sim_state)
-        return self._agent_obs(obs, self.agents), self._agent_infos(self.agents)
+        return self._agent_obs(obs, self.agents), self._agent_infos(parts, self.agents)
 
     def _observations(self) -> dict[str, Any]:
         """The current observations of the live agents."""
@@ -337,10 +370,11 @@ class UAVSearchParallelEnv(ParallelEnv):
         if not self.agents:
             raise EpisodeOverError("every agent has finished; call reset() before step()")
         arr = self._actions_array(actions)
-        tr = self.engine.step(arr)
-        #: The engine's :class:`~poc_env.sim.engine.Transition` of the last step (arrays).
-        self.transition = tr
-        self._info = tr.info
+        eng = self.engine
+        tr = eng.step(arr, with_info=False)  # the info arrays only when asked for (info_arrays)
+        self._transition = tr
+        self._step_of = (eng.params, eng.current, tr.events, tr.terms)
+        self._info = None
         reward = tr.reward[0].tolist()
         terminal = tr.terminated[0].tolist()
         truncated = tr.truncated[0].tolist()
@@ -351,7 +385,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             rewards[a] = reward[i]
             terminations[a] = terminal[i]
             truncations[a] = truncated[i]
-        infos = self._agent_infos(live)
+        infos = self._agent_infos(engine_mod.info_parts(*self._step_of), live)
         observations = self._agent_obs(tr.obs, live)  # agents finishing now get a last obs
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self._renderer is not None:
@@ -360,29 +394,26 @@ class UAVSearchParallelEnv(ParallelEnv):
             self.render()
         return observations, rewards, terminations, truncations, infos
 
-    def _agent_infos(self, agents: list[str]) -> dict[str, dict[str, Any]]:
-        """Per-agent infos from the engine's info arrays (:func:`poc_env.sim.engine.infos`):
-        the same keys at reset and at every step, every value a Python float/int/bool or a
-        fixed-shape numpy array."""
-        info = self._info
-        posc = float(info["posc"][0])
-        missing = [k for k in INFO_KEYS if k not in info]
-        if missing:  # a key of the spec that the engine does not produce: never dropped silently
-            raise RuntimeError(f"infos lack {missing} of the spec's keys {INFO_KEYS}")
-        keys = INFO_KEYS + tuple(e.name for e in spec.MOTION_INFOS if e.name in info)
-        cols = {k: info[k][0].tolist() for k in keys if k not in ("links", "posc")}
-        links = info["links"][0]
-        out = {}
-        for a in agents:
-            i = self._index[a]
-            row: dict[str, Any] = {}
-            for k in keys:  # the spec's order (poc_env.spec.info_keys, then MOTION_INFOS)
-                if k == "posc":
-                    row[k] = posc
-                else:
-                    row[k] = links[i].copy() if k == "links" else cols[k][i]
-            out[a] = row
-        return out
+    def _agent_infos(
+        self, parts: dict[str, np.ndarray], agents: list[str]
+    ) -> dict[str, dict[str, Any]]:
+        """Per-agent infos from the engine's :func:`~poc_env.sim.engine.info_parts` (the values
+        of :func:`poc_env.sim.engine.infos`): the same keys at reset and at every step, in the
+        spec's order (:func:`poc_env.spec.info_keys`, then ``MOTION_INFOS``), every value a
+        Python float/int/bool or a fixed-shape numpy array."""
+        n = self.engine.n_agents
+        cols: list[list[Any]] = []
+        for k, kind in zip(self._info_keys, self._info_kinds):
+            if kind == _COLUMN:  # (1, N): the env's row as Python numbers
+                cols.append(parts[k].tolist()[0])
+            elif kind == _PER_ENV:  # (1,): the env's value, for every agent
+                cols.append([parts[k].tolist()[0]] * n)
+            else:  # links: each agent's row of the adjacency, its own (one copy, split)
+                cols.append(list(parts[k][0].copy()))
+        keys = self._info_keys
+        rows = list(map(dict, map(zip, repeat(keys), zip(*cols))))
+        index = self._index
+        return {a: rows[index[a]] for a in agents}
 
     @property
     def topology(self) -> str:

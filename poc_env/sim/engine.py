@@ -157,26 +157,37 @@ def joint_space(space: Any, n: int):
 
 
 # ------------------------------------------------------------------------------------- infos
-def infos(
+#: Info keys with one value per env (every agent of the env gets its env's value).
+PER_ENV_INFOS = frozenset(
+    ("posc", "pos_team", "target_detected", "time_to_detection_s", "topology", "connected")
+).union(e.name for e in spec.MOTION_INFOS)
+#: Keys whose :func:`info_parts` array is the state's own array (:func:`infos` copies it).
+_STATE_ARRAYS = frozenset(("landed", "crashed", "links"))
+
+
+def info_parts(
     params: sim.Params,
     state: sim.State,
     events: sim.Events | None = None,
     terms: Mapping[str, np.ndarray] | None = None,
 ) -> dict[str, np.ndarray]:
-    """Every info of every env and agent, as arrays: ``posc (E,)`` and each key of
-    :data:`AGENT_INFO_KEYS` ``(E, N)`` (``links (E, N, N)``). ``events`` None: a reset
-    (nothing happened yet, step quantities are 0/False)."""
+    """Every info of every env, in :func:`infos`' order, before the per-env values are repeated
+    for each agent: ``(E,)`` for the keys of :data:`PER_ENV_INFOS`, ``(E, N)`` for the others
+    (``links (E, N, N)``). ``landed``, ``crashed`` and ``links`` are the state's own arrays (not
+    copies). The one place the info values are computed: :func:`infos` batches them, the single
+    PettingZoo env turns one env's into per-agent rows."""
     e, n = state.flying.shape
-    zeros = np.zeros((e, n))
+    if events is None or terms is None:
+        zeros = np.zeros((e, n))
     if events is None:
         no = np.zeros((e, n), dtype=bool)
-        pos, pos_team, shielded = zeros, zeros, no
+        pos, pos_team, shielded = zeros, np.zeros(e), no
         flags = {f: no for f in VIOLATION_FLAGS}
         both = state.flying[:, :, None] & state.flying[:, None, :]
         connected = np.all(comms_mod.reachable(state.links) | ~both, axis=(1, 2))
     else:
         pos = events.pos_agent
-        pos_team = _per_agent(np.asarray(events.pos_team, dtype=float), n)
+        pos_team = np.asarray(events.pos_team, dtype=float)
         shielded = events.shielded
         flags = {
             "out_of_bounds": events.out_of_bounds,
@@ -198,21 +209,40 @@ def infos(
     for f in VIOLATION_FLAGS:
         out[f"violation_{f}"] = flags[f]
     detected = state.detected
-    detect_time = np.where(detected, state.detect_step * params.dt, -1.0)
     out.update(
         shielded=shielded,
-        landed=state.landed.copy(),
-        crashed=state.crashed.copy(),
+        landed=state.landed,
+        crashed=state.crashed,
         flight_time_s=state.elapsed.astype(float),
-        target_detected=_per_agent(detected, n),
-        time_to_detection_s=_per_agent(detect_time, n),
-        topology=_per_agent(state.topology.astype(np.int64), n),
-        links=state.links.copy(),
-        connected=_per_agent(connected, n),
+        target_detected=detected,
+        time_to_detection_s=np.where(detected, state.detect_step * params.dt, -1.0),
+        topology=state.topology.astype(np.int64),
+        links=state.links,
+        connected=connected,
         violations=state.violations.astype(np.int64),
     )
     if state.mass_out is not None:  # moving targets (spec.MOTION_INFOS)
-        out["mass_out"] = _per_agent(state.mass_out.astype(float), n)
+        out["mass_out"] = state.mass_out.astype(float)
+    return out
+
+
+def infos(
+    params: sim.Params,
+    state: sim.State,
+    events: sim.Events | None = None,
+    terms: Mapping[str, np.ndarray] | None = None,
+) -> dict[str, np.ndarray]:
+    """Every info of every env and agent, as arrays: ``posc (E,)`` and each key of
+    :data:`AGENT_INFO_KEYS` ``(E, N)`` (``links (E, N, N)``). ``events`` None: a reset
+    (nothing happened yet, step quantities are 0/False). The values of :func:`info_parts`."""
+    n = state.flying.shape[1]
+    out: dict[str, np.ndarray] = {}
+    for k, v in info_parts(params, state, events, terms).items():
+        if k in PER_ENV_INFOS and k != "posc":
+            v = _per_agent(v, n)
+        elif k in _STATE_ARRAYS:
+            v = v.copy()
+        out[k] = v
     return out
 
 
@@ -350,6 +380,7 @@ class Engine:
         if len(seeds) != self.n_envs:
             raise ConfigError("seeds", seeds, f"{self.n_envs} seeds (one per env)")
         self.rngs = [np.random.default_rng(s) for s in seeds]
+        self._all_envs = np.arange(self.n_envs)
         self.state: sim.State | None = None
         prior0 = self.params.prior
         self.priors = np.broadcast_to(prior0, (self.n_envs, *prior0.shape)).copy()
@@ -385,7 +416,11 @@ class Engine:
         return np.asarray(envs, dtype=np.intp).reshape(-1)
 
     def _everything(self, idx: np.ndarray) -> bool:
-        return len(idx) == self.n_envs and bool(np.all(idx == np.arange(self.n_envs)))
+        if len(idx) != self.n_envs:
+            return False
+        if self.n_envs == 1:
+            return int(idx[0]) == 0
+        return bool((idx == self._all_envs).all())
 
     def seed(self, seeds: Sequence[Any], envs: Sequence[int] | np.ndarray | None = None) -> None:
         """New generators ``np.random.default_rng(seed)`` for ``envs`` (a None seed keeps the
@@ -464,10 +499,8 @@ class Engine:
     def observe_state(self, state: sim.State, envs: Sequence[int] | np.ndarray | None = None):
         """Every agent's observation of ``state``, a batch of the engine's envs ``envs``
         (default all: then ``state`` is the whole batch), with their POC scales."""
-        idx = self.envs(envs)
-        return obs_mod.observe(
-            self.params, state, self.poc_scale[idx], self.hazard, self.obs_type, self.features
-        )
+        scale = self.poc_scale if envs is None else self.poc_scale[self.envs(envs)]
+        return obs_mod.observe(self.params, state, scale, self.hazard, self.obs_type, self.features)
 
     def observe(self):
         """Every agent's observation of every env."""
@@ -491,21 +524,24 @@ class Engine:
         (E', N, ACTION_DIMS[control])`` (finished UAVs' actions are ignored by the core).
         ``with_info=False`` leaves ``Transition.info`` empty (an adapter that reads the few
         infos it needs from the state saves computing the full set)."""
-        idx = self.envs(envs)
-        whole = self._everything(idx)
+        if envs is None:  # every env (the common case: no index arrays)
+            idx, whole = None, True
+        else:
+            idx = self.envs(envs)
+            whole = self._everything(idx)
         p = self.params
-        st = self.current if whole else sim.take_envs(self.current, idx)
-        ks = idx.tolist()
+        st = self.current if idx is None or whole else sim.take_envs(self.current, idx)
+        rngs = self.rngs if idx is None else [self.rngs[k] for k in idx.tolist()]
         inc = swarm_increments(
             p, self.control, st, actions, self.auto_return, self.return_increments
         )
-        ev = sim.step(p, st, inc, [self.rngs[k] for k in ks])
+        ev = sim.step(p, st, inc, rngs)
         terms = reward_terms(self.scenario.reward, ev)
         reward = total_reward(terms)
         terminated = sim.terminal(p, st)
         truncated = sim.truncated(p, st)
-        over = sim.episode_over(p, st)
-        if not whole:
+        over = sim.episode_over(p, st, terminated)
+        if idx is not None and not whole:
             sim.scatter_envs(self.current, st, idx)
         obs = self.observe_state(st, idx)
         info = infos(p, st, ev, terms) if with_info else {}

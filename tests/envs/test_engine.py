@@ -9,7 +9,7 @@ import gymnasium
 import numpy as np
 import pytest
 
-import poc_env  # noqa: F401  (registers the tasks)
+import poc_env  # (also registers the tasks)
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.errors import ConfigError
 from poc_env.sim import core as sim
@@ -108,3 +108,39 @@ def test_sub_batch_reset_and_step_leave_the_other_envs_alone():
 def test_engine_bad_arguments(kw, field):
     with pytest.raises(ConfigError, match=field):
         Engine("small", **kw)
+
+
+@pytest.mark.parametrize(
+    ("scenario", "kw"),
+    [
+        ("paper_6_2", {}),
+        ("small", {"overrides": {"episode.detection_ends_episode": True}}),
+        ("small", {"random_airfields": True, "control": "waypoint", "target__model": "drift"}),
+    ],
+)
+def test_single_env_infos_are_the_info_arrays_row_by_row(scenario, kw):
+    """The PettingZoo env builds its per-agent infos from ``info_parts`` directly: each value is
+    the agent's entry of the engine's info arrays, with the type and key order of the spec."""
+    env = UAVSearchParallelEnv(scenario, **kw)
+    rng = np.random.default_rng(5)
+    for ep in range(2):
+        _, infos = env.reset(seed=ep)
+        arrays = env.info_arrays
+        for t in range(40):
+            for a, row in infos.items():
+                i = env._index[a]
+                assert list(row)[: len(engine_mod.AGENT_INFO_KEYS) + 1] == list(
+                    poc_env.spec.info_keys()
+                )
+                for k, v in row.items():
+                    want = arrays[k][0] if k == "posc" else arrays[k][0, i]
+                    if isinstance(v, np.ndarray):
+                        assert v.dtype == want.dtype and v.tobytes() == want.tobytes(), (t, k)
+                    else:
+                        assert type(v) is type(want.item()) and v == want.item(), (t, k)
+            if not env.agents:
+                break
+            acts = {a: rng.uniform(-1, 1, env.action_space(a).shape) for a in env.agents}
+            *_, infos = env.step(acts)
+            arrays = env.info_arrays
+            assert env.transition.info is arrays
