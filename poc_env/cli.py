@@ -30,6 +30,7 @@ from poc_env.errors import (
     require_extra,
     skipped_for_extra,
 )
+from poc_env.io import check_replaceable
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
 _EXTRA_OF = {
@@ -70,6 +71,7 @@ def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> N
         if kind == "file":
             if path.is_dir() or text.endswith(("/", os.sep)):
                 raise ConfigError(field, text, f"{what}; it is a folder")
+            check_replaceable(path, field)  # /dev/null, a FIFO: never swapped for a file
             start = path.parent
         else:
             if path.exists() and not path.is_dir():

@@ -36,8 +36,42 @@ def safe_stem(text: str, limit: int = 64) -> str:
     return stem[:limit] or "_"
 
 
+def check_replaceable(path: str | os.PathLike[str], field: str = "output") -> None:
+    """Refuse to replace anything but a regular file: an atomic write renames its temporary
+    file over ``path``, which would swap a device (``/dev/null``), a FIFO or a socket for a
+    plain file (as root, for everyone on the machine). A new path, or a regular file (through
+    symbolic links), passes.
+
+    Raises
+    ------
+    ConfigError
+        ``path`` exists and is not a regular file.
+    """
+    import stat
+
+    from poc_env.errors import ConfigError
+
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as err:  # a path poc-env cannot even look at
+        raise ConfigError(field, os.fspath(path), f"a path poc-env can write ({err})") from None
+    if stat.S_ISREG(mode):
+        return
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+             (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
+             (stat.S_ISSOCK, "a socket"))  # fmt: skip
+    kind = next((k for test, k in kinds if test(mode)), "not a regular file")
+    raise ConfigError(
+        field, os.fspath(path), f"a new path or a regular file to replace; it is {kind}"
+    )
+
+
 def publish_atomic(tmp: str | os.PathLike[str], path: str | os.PathLike[str]) -> None:
-    """Give a finished temporary file the usual permissions and rename it over ``path``."""
+    """Give a finished temporary file the usual permissions and rename it over ``path``
+    (never over anything but a regular file: :func:`check_replaceable`)."""
+    check_replaceable(path)
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
@@ -54,6 +88,7 @@ def atomic_path(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path
     killed process (its PID gone) is removed by the next atomic write into the same folder.
     """
     p = Path(path)
+    check_replaceable(p)  # before any work: never a device, FIFO or socket
     p.parent.mkdir(parents=True, exist_ok=True)
     clean_stale_temp_files(p.parent)
     fd, tmp = tempfile.mkstemp(
@@ -131,6 +166,17 @@ def _clean_stale_staging(dest: Path) -> None:
             shutil.rmtree(p, ignore_errors=True)
 
 
+def _check_merge(src: Path, dest: Path) -> None:
+    """Before :func:`_merge_into` moves anything: every file it would replace is a regular
+    file (:func:`check_replaceable`), so a merge is whole or not started."""
+    for entry in src.iterdir():
+        target = dest / entry.name
+        if entry.is_dir() and not entry.is_symlink() and target.is_dir():
+            _check_merge(entry, target)
+        elif not (target.is_dir() and not target.is_symlink()):
+            check_replaceable(target)
+
+
 def _merge_into(src: Path, dest: Path) -> None:
     """Move every file of ``src`` into ``dest`` (same file system), replacing same-named files."""
     for entry in sorted(src.iterdir()):
@@ -182,6 +228,7 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
         if not dest.exists():
             os.rename(stage, dest)
         else:
+            _check_merge(stage, dest)
             _merge_into(stage, dest)
         done = True
     finally:

@@ -340,3 +340,29 @@ def test_training_options_are_checked_before_training(field, value):
     with pytest.raises(ConfigError) as err:
         TrainArgs(**{field: value})
     assert err.value.field == field
+
+
+def test_an_output_path_that_is_not_a_regular_file_is_never_replaced(tmp_path):
+    """A fresh-clone CI run (as root) replaced /dev/null with a plain file: the campaign gave
+    `plan --out /dev/null` and the atomic write renamed its temporary file over the device.
+    Every atomic write and the CLI's output check refuse anything but a regular file; a FIFO
+    stands in for the device here."""
+    import os
+    import stat
+
+    from poc_env.cli import main
+    from poc_env.io import check_replaceable, write_text_atomic
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(ConfigError, match="FIFO"):
+        write_text_atomic(fifo, "x")
+    with pytest.raises(ConfigError, match=r"out.*FIFO"):
+        check_replaceable(fifo, "out")
+    argv = ["plan", "--scenario", "small", "--maxiter", "1", "--popsize", "4", "--quiet"]
+    assert main([*argv, "--out", str(fifo)]) == 2
+    assert main([*argv, "--out", str(tmp_path / "p.json"), "--plot", str(fifo)]) == 2
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    (tmp_path / "regular.json").write_text("old")  # a regular file is replaced as before
+    write_text_atomic(tmp_path / "regular.json", "new")
+    assert (tmp_path / "regular.json").read_text() == "new"

@@ -39,6 +39,7 @@ import math
 import os
 import re
 import signal
+import stat
 import sys
 import tempfile
 import threading
@@ -671,8 +672,11 @@ def run_utm(case: tuple[float, float, Any]) -> None:
 # --------------------------------------------------------------------------- target: cli
 
 
+# "SPECIAL" stands for a path that is not a regular file (a FIFO in the case's own folder):
+# never the machine's /dev/null, which an output path's atomic rename would replace (as root:
+# for everyone; a fresh-clone CI run did, before check_replaceable)
 _CLI_VALUES = ["-1", "0", "1", "1.5", "inf", "nan", "", "abc", "10**400", "1e308",
-               "999999999999999999999", "/dev/null", ".", "-45,7", "x/../../y"]  # fmt: skip
+               "999999999999999999999", "SPECIAL", ".", "-45,7", "x/../../y"]  # fmt: skip
 #: Options whose value scales a command's work (episodes, generations, steps, frames).
 CLI_WORK_OPTIONS = frozenset(
     ["--popsize", "--maxiter", "--episodes", "--max-steps", "--total-timesteps", "--n-steps",
@@ -729,9 +733,11 @@ def run_cli(case: tuple[list[str], list[tuple[str, str]]]) -> None:
         plan = root / "plan.json"
         plan.write_text(json.dumps(sample_plan()))
         argv = [str(plan) if b == "PLAN" else b for b in base]
+        special = root / "special"
+        os.mkfifo(special)  # not a regular file: must be refused as an output, never replaced
         for opt, val in opts:
             val = val.replace("x/../../y", str(root / "x" / ".." / "y"))
-            argv += [opt, val]
+            argv += [opt, str(special) if val == "SPECIAL" else val]
         if base[0] == "train" and "--run-dir" not in argv:
             argv += ["--run-dir", str(root / "run")]
         if "--out" not in argv and base[0] in ("plan", "render", "survey", "evaluate"):
@@ -748,6 +754,10 @@ def run_cli(case: tuple[list[str], list[tuple[str, str]]]) -> None:
                     code = int(exc.code or 0)
         finally:
             os.chdir(cwd)
+        if not stat.S_ISFIFO(os.lstat(special).st_mode):
+            raise SilentWrong(f"the FIFO given as a path was replaced by {argv}")
+        if not stat.S_ISCHR(os.stat("/dev/null").st_mode):
+            raise SilentWrong(f"/dev/null is no longer a device after {argv}")
         if code not in (0, 2):
             raise SilentWrong(f"exit status {code} for {argv}")
         if code == 2:
