@@ -531,8 +531,7 @@ class TargetConfig:
 
     def __post_init__(self) -> None:
         _coerce(self)
-        if not isinstance(self.model, str):
-            raise ConfigError("model", self.model, "a motion model name (a string)")
+        _choice("model", self.model, MOTION_MODEL_NAMES)  # a typo is refused at load
         for key in ("current_kmh", "wind_kmh"):
             u, v = _vec2(key, getattr(self, key), bound=400.0)
             object.__setattr__(self, key, (u, v))
@@ -543,6 +542,12 @@ class TargetConfig:
     def moves(self) -> bool:
         """The target moves (any model but ``static``)."""
         return self.model != "static"
+
+
+#: Names of the target motion models (``target.model``), checked when a scenario loads; the
+#: table of what each does is :data:`poc_env.theory.motion.MODELS`, which checks at import
+#: that it names exactly these (as the detection laws check ``LAW_CODES``).
+MOTION_MODEL_NAMES = ("static", "diffusion", "drift", "leeway")
 
 
 @dataclass(frozen=True)

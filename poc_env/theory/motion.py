@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 import poc_env._kernels.motion as _kernel
+from poc_env.config import MOTION_MODEL_NAMES
 from poc_env.errors import ConfigError
 
 KMH = 1000.0 / 3600.0
@@ -232,6 +233,8 @@ MODELS: dict[str, MotionModel] = {
     )
 }  # fmt: skip
 MODEL_NAMES = tuple(MODELS)
+if MODEL_NAMES != MOTION_MODEL_NAMES:  # the scenario loader's list and this table: one set
+    raise ImportError(f"motion models {MODEL_NAMES} differ from config's {MOTION_MODEL_NAMES}")
 
 
 def motion_model(name: Any, field: str = "target.model") -> MotionModel:

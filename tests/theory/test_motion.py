@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from poc_env.config import TargetConfig
+from poc_env.config import TargetConfig, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory import motion
 
@@ -179,8 +179,11 @@ def test_bad_inputs_name_the_field(tmp_path):
         assert err.value.field == "target.field_file", name
     with pytest.raises(ConfigError, match=r"target\.field_file"):
         motion.check(TargetConfig(model="drift", field_file=str(tmp_path / "no.npy")), (4, 4), 60.0)
-    with pytest.raises(ConfigError) as err:
-        motion.check(TargetConfig(model="teleport"), (4, 4), 60.0)
+    with pytest.raises(ConfigError) as err:  # refused when the scenario loads, not later
+        load_scenario("small", {"target.model": "teleport"})
+    assert err.value.field == "target.model"
+    with pytest.raises(ConfigError) as err:  # and by the table itself
+        motion.motion_model("teleport")
     assert err.value.field == "target.model"
     with pytest.raises(ConfigError) as err:
         motion.check(TargetConfig(model="leeway", leeway_class="submarine"), (4, 4), 60.0)
