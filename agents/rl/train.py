@@ -127,21 +127,35 @@ def _central_env(scenario: Scenario, random_priors: bool, seed_seq: np.random.Se
 def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
     """The training VecEnv of ``args.recipe``; env ``e``'s generators come from
     ``SeedSequence(args.seed).spawn(args.n_envs)[e]``."""
-    if args.task is not None:  # the task's env: its control level, the compass observation
+    if args.task is not None:  # the task's env: its control level and observation
         from poc_env.envs.vector import SwarmVecEnv
         from poc_env.tasks import get_task
 
-        task = get_task(args.task)
-        return SwarmVecEnv(
-            scenario,
-            n_envs=args.n_envs,
-            seed=args.seed,
-            obs_type="compass",
-            random_priors=task.random_prior,
-            control=task.kwargs["control"],  # the task version's rule (heading_clip at v1)
-            agent_index=args.agent_index,
-            return_autopilot=args.return_autopilot,
-        )
+        def task_env(tid: str, sc: Scenario, seed: int) -> SwarmVecEnv:
+            task = get_task(tid)
+            return SwarmVecEnv(
+                sc,
+                n_envs=args.n_envs,
+                seed=seed,
+                obs_type=task.obs,
+                random_priors=task.random_prior,
+                control=task.kwargs["control"],  # the task version's rule (heading_clip at v1)
+                agent_index=args.agent_index,
+                return_autopilot=args.return_autopilot,
+            )
+
+        first = task_env(args.task, scenario, args.seed)
+        if not args.also_task:
+            return first
+        from poc_env.agents.rl.mixed import MixedVecEnv
+        from poc_env.config import load_scenario
+
+        more = []  # each further task's envs: its own seed stream, (seed, k) for the k-th task
+        for k, tid in enumerate(args.also_task, start=1):
+            seed = int(np.random.SeedSequence([args.seed, k]).generate_state(1)[0])
+            sc = task_scenario(tid, load_scenario(get_task(tid).scenario, _overrides(args)))
+            more.append(task_env(tid, sc, seed))
+        return MixedVecEnv([first, *more])
     if args.recipe == "pilot":
         from poc_env.agents.rl.pilot import PilotVecEnv
 
@@ -171,6 +185,18 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
     )
 
 
+def _overrides(args: TrainArgs) -> dict[str, Any]:
+    return parse_overrides(args.overrides)
+
+
+def task_scenario(task_id: str, sc: Scenario) -> Scenario:
+    """``sc`` (the task's scenario with the run's overrides) with the task's fleet size."""
+    from poc_env.tasks import get_task
+
+    n = get_task(task_id).n_uavs
+    return sc if n is None else sc.with_uavs(n)
+
+
 # -- models ------------------------------------------------------------------------------------
 def make_model(args: TrainArgs, env: VecEnv, tb_dir: Path | None) -> PPO:
     """A fresh PPO of ``args`` on ``env`` (CPU)."""
@@ -181,6 +207,11 @@ def make_model(args: TrainArgs, env: VecEnv, tb_dir: Path | None) -> PPO:
         from poc_env.agents.rl.networks import SwarmExtractor
 
         policy, policy_kwargs = "MultiInputPolicy", {"features_extractor_class": SwarmExtractor}
+    elif args.task is not None and args.net == "set":
+        from poc_env.agents.rl.networks import SetExtractor
+
+        policy = "MlpPolicy"
+        policy_kwargs = {"features_extractor_class": SetExtractor, "net_arch": list(args.net_arch)}
     else:
         policy = "MlpPolicy"
         policy_kwargs = {"net_arch": list(args.net_arch)}
@@ -231,6 +262,7 @@ def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
     ``slots`` envs of observations of ``obs_size`` float32 values (computed from the scenario,
     without building the env)."""
     from poc_env import spec
+    from poc_env.config import load_scenario
 
     n = sc.n_uavs
     cells = sc.map.nx * sc.map.ny
@@ -239,8 +271,16 @@ def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
         from poc_env.sim.control import ACTION_DIMS
         from poc_env.tasks import get_task
 
-        act = ACTION_DIMS[get_task(args.task).control]
-        return args.n_envs * n, spec.COMPASS_SIZE, act
+        task = get_task(args.task)
+        act = ACTION_DIMS[task.control]
+        sizes = [n if task.n_uavs is None else task.n_uavs]
+        for tid in args.also_task:
+            other = get_task(tid).n_uavs
+            sizes.append(
+                other if other is not None else load_scenario(get_task(tid).scenario).n_uavs
+            )
+        obs = spec.SET_SIZE if task.obs == "set" else spec.COMPASS_SIZE
+        return args.n_envs * sum(sizes), obs, act
     if args.recipe == "central":
         return args.n_envs, n * dict_obs, 3 * n
     if args.recipe == "pilot":
@@ -383,6 +423,8 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 
         args = dataclasses.replace(args, scenario=get_task(args.task).scenario)
     sc = load_scenario(args.scenario, parse_overrides(args.overrides))
+    if args.task is not None:  # a fleet-size task: its fleet (saved in scenario.yaml)
+        sc = task_scenario(args.task, sc)
     check_sizes(args, sc)
     run_dir = _new_run_dir(args, args.task.rsplit("/", 1)[-1] if args.task else sc.name)
     args = dataclasses.replace(args, run_dir=str(run_dir))
