@@ -57,9 +57,9 @@ class TrainArgs:
     scenario, prior kind and control level, an MLP on its compass observation (sb3: shared over
     the UAVs by SwarmVecEnv). rllib without one: --scenario at the heading level."""
     also_task: Annotated[list[str], _arg(metavar="TASK_ID")] = field(default_factory=list)
-    """sb3, repeatable: more registered tasks (the same observation and control level as
-    --task, e.g. other fleet sizes) whose swarms fly in the same rollouts, n_envs swarms each,
-    so one parameter-shared policy learns all of them at once (--net set for any fleet size)."""
+    """sb3: more registered tasks, --also-task ID [ID ...] (the same observation and control
+    level as --task, e.g. other fleet sizes) whose swarms fly in the same rollouts, n_envs
+    swarms each, so one parameter-shared policy learns all of them at once (--net set)."""
     total_timesteps: int = 1_000_000
     """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts.
     PPO's only: a BC warm start (--bc-teacher) comes on top, and 0 saves the BC policy alone."""

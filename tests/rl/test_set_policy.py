@@ -75,3 +75,44 @@ def test_one_set_policy_trained_on_3_and_6_flies_6_and_24_uavs(tmp_path):
         sc = load_scenario("wide_400", {"episode.horizon_steps": 12}).with_uavs(n)
         ev = evaluate(sc, [f"ppo:{run}"], episodes=1, seed0=0, random_priors=True)
         assert 0.0 < ev.rows()[0]["posc_mean"] <= 1.0
+
+
+def _recipe() -> list[str]:
+    """The any-size recipe's ``poc-env train`` options, read from docs/rl.md."""
+    import re
+    import shlex
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "rl.md").read_text(encoding="utf-8")
+    block = re.search(r"<!-- recipe:any-size -->\n```bash\n(.*?)```", text, re.DOTALL)
+    assert block is not None
+    argv = shlex.split(block.group(1).replace("\\\n", " "))
+    assert argv[:2] == ["poc-env", "train"]
+    return argv[2:]
+
+
+def test_the_any_size_recipe_in_the_docs_is_a_valid_command():
+    from poc_env.agents.rl.args import parse_train_args
+
+    args = parse_train_args(_recipe())
+    sizes = {tasks.get_task(t).n_uavs for t in [args.task, *args.also_task]}
+    assert sizes == {3, 6, 12, 24} and args.net == "set"
+    slots = args.n_envs * sum(sizes)
+    assert args.total_timesteps % (args.n_steps * slots) == 0  # whole rollouts
+    assert (args.n_steps * slots) % args.batch_size == 0
+
+
+@pytest.mark.slow
+def test_the_any_size_recipe_trains_and_flies_6_and_24_uavs(tmp_path):
+    from poc_env.agents.rl.args import parse_train_args
+    from poc_env.cli import main
+
+    argv = _recipe()
+    k = argv.index("--total-timesteps")
+    argv[k + 1] = "46080"  # two rollouts of the recipe: the command runs end to end
+    argv += ["--run-dir", str(tmp_path / "run"), "--no-progress"]
+    run = train(parse_train_args(argv))
+    for n in (6, 24):
+        tid = f"UAVSearch-Wide-N{n}-Random-Set-Heading-v1"
+        assert main(["evaluate", "--task", tid, "--policies", f"ppo:{run}", "--episodes", "2",
+                     "--quiet"]) == 0  # fmt: skip
