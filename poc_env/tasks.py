@@ -91,6 +91,14 @@ class Task:
     #: override), None: the scenario's fleet
     n_uavs: int | None = None
 
+    def load_scenario(self, overrides: dict[str, Any] | None = None):
+        """The task's resolved :class:`~poc_env.config.Scenario` (its fleet for a size task),
+        with ``overrides`` (dotted keys) applied first."""
+        from poc_env.config import load_scenario
+
+        sc = load_scenario(self.scenario, overrides)
+        return sc if self.n_uavs is None else sc.with_uavs(self.n_uavs)
+
     @property
     def kwargs(self) -> dict[str, Any]:
         """Keyword arguments of the PettingZoo env / Gymnasium view for this task."""
@@ -227,13 +235,9 @@ def register_tasks() -> None:
 def task_table() -> list[dict[str, Any]]:
     """One row per task (id, scenario, control, random prior, agents, horizon): the rows of
     ``poc-env tasks``."""
-    from poc_env.config import load_scenario
-
     rows = []
     for tid, task in TASKS.items():
-        sc = load_scenario(task.scenario)
-        if task.n_uavs is not None:
-            sc = sc.with_uavs(task.n_uavs)
+        sc = task.load_scenario()
         rows.append(
             {
                 "id": tid,

@@ -148,12 +148,11 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
         if not args.also_task:
             return first
         from poc_env.agents.rl.mixed import MixedVecEnv
-        from poc_env.config import load_scenario
 
         more = []  # each further task's envs: its own seed stream, (seed, k) for the k-th task
         for k, tid in enumerate(args.also_task, start=1):
             seed = int(np.random.SeedSequence([args.seed, k]).generate_state(1)[0])
-            sc = task_scenario(tid, load_scenario(get_task(tid).scenario, _overrides(args)))
+            sc = get_task(tid).load_scenario(parse_overrides(args.overrides))
             more.append(task_env(tid, sc, seed))
         return MixedVecEnv([first, *more])
     if args.recipe == "pilot":
@@ -183,18 +182,6 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
     return DummyVecEnv(
         [functools.partial(_central_env, scenario, args.random_priors, s) for s in seqs]
     )
-
-
-def _overrides(args: TrainArgs) -> dict[str, Any]:
-    return parse_overrides(args.overrides)
-
-
-def task_scenario(task_id: str, sc: Scenario) -> Scenario:
-    """``sc`` (the task's scenario with the run's overrides) with the task's fleet size."""
-    from poc_env.tasks import get_task
-
-    n = get_task(task_id).n_uavs
-    return sc if n is None else sc.with_uavs(n)
 
 
 # -- models ------------------------------------------------------------------------------------
@@ -262,7 +249,6 @@ def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
     ``slots`` envs of observations of ``obs_size`` float32 values (computed from the scenario,
     without building the env)."""
     from poc_env import spec
-    from poc_env.config import load_scenario
 
     n = sc.n_uavs
     cells = sc.map.nx * sc.map.ny
@@ -274,11 +260,7 @@ def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
         task = get_task(args.task)
         act = ACTION_DIMS[task.control]
         sizes = [n if task.n_uavs is None else task.n_uavs]
-        for tid in args.also_task:
-            other = get_task(tid).n_uavs
-            sizes.append(
-                other if other is not None else load_scenario(get_task(tid).scenario).n_uavs
-            )
+        sizes += [get_task(tid).load_scenario().n_uavs for tid in args.also_task]
         obs = spec.SET_SIZE if task.obs == "set" else spec.COMPASS_SIZE
         return args.n_envs * sum(sizes), obs, act
     if args.recipe == "central":
@@ -409,10 +391,9 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         return _resume(Path(args.resume), args.progress, callback)
     if args.engine == "rllib":
         from poc_env.agents.rl.rllib import train_rllib
-        from poc_env.config import load_scenario
 
         name = args.task.rsplit("/", 1)[-1] if args.task else args.scenario
-        check_sizes(args, load_scenario(_scenario_of(args), parse_overrides(args.overrides)))
+        check_sizes(args, _scenario_of(args))
         run_dir = _new_run_dir(args, Path(name).stem)
         return train_rllib(dataclasses.replace(args, run_dir=str(run_dir)), run_dir)
     require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
@@ -422,9 +403,7 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         from poc_env.tasks import get_task
 
         args = dataclasses.replace(args, scenario=get_task(args.task).scenario)
-    sc = load_scenario(args.scenario, parse_overrides(args.overrides))
-    if args.task is not None:  # a fleet-size task: its fleet (saved in scenario.yaml)
-        sc = task_scenario(args.task, sc)
+    sc = _scenario_of(args)
     check_sizes(args, sc)
     run_dir = _new_run_dir(args, args.task.rsplit("/", 1)[-1] if args.task else sc.name)
     args = dataclasses.replace(args, run_dir=str(run_dir))
@@ -459,7 +438,7 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
                 "resume", str(run_dir), "a run folder with its scenario.yaml beside its "
                 "checkpoints (this one lost it: its checkpoints cannot be matched to a scenario)",
             )  # fmt: skip
-        sc = load_scenario(_scenario_of(args), parse_overrides(args.overrides))
+        sc = _scenario_of(args)
         save_scenario(sc, run_dir / "scenario.yaml")
     ck = latest_checkpoint(run_dir)
     if ck is None:  # killed before its first checkpoint: the same run again, from step 0
@@ -471,13 +450,17 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
     return _run(args, sc, run_dir, callback, checkpoint=ck)
 
 
-def _scenario_of(args: TrainArgs) -> str:
-    """The scenario a run trains on: its task's, else ``args.scenario``."""
+def _scenario_of(args: TrainArgs) -> Scenario:
+    """The scenario a run trains on, with the run's overrides: its task's (a fleet-size task's
+    fleet included), else ``args.scenario``."""
+    from poc_env.config import load_scenario
+
+    overrides = parse_overrides(args.overrides)
     if args.task is not None:
         from poc_env.tasks import get_task
 
-        return get_task(args.task).scenario
-    return args.scenario
+        return get_task(args.task).load_scenario(overrides)
+    return load_scenario(args.scenario, overrides)
 
 
 def _resume_rllib(args: TrainArgs, run_dir: Path) -> Path:
