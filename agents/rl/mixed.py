@@ -57,6 +57,12 @@ class MixedVecEnv(VecEnv):
             out += list(p.seed(s))
         return out
 
+    def set_options(self, options: list[dict] | dict | None = None) -> None:
+        """Each slot's reset options go to its part (a ``"prior"`` for a part's env)."""
+        opts = list(options) if isinstance(options, list) else [options or {}] * self.num_envs
+        for p, o in zip(self.parts, self._split(opts), strict=True):
+            p.set_options(o)
+
     def step_async(self, actions: np.ndarray) -> None:
         for p, a in zip(self.parts, self._split(np.asarray(actions)), strict=True):
             p.step_async(a)

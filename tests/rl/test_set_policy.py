@@ -57,6 +57,10 @@ def test_one_set_policy_trained_on_3_and_6_flies_6_and_24_uavs(tmp_path):
     )  # fmt: skip
     cfg = json.loads((run / "config.json").read_text())
     assert cfg["net"] == "set" and cfg["also_task"] == [N6]
+    # a mixed run's checkpoint restores onto its rebuilt mixed env (every part's generators)
+    state = json.loads(next((run / "checkpoints").glob("*.state.json")).read_text())
+    assert len(state["env_generators"]) == 2 and not state["env"]
+    assert train(TrainArgs(resume=str(run), progress=False)) == run
     pol = PPOPolicy(run)
     assert type(pol.model.policy.features_extractor).__name__ == "SetExtractor"
     assert pol.model.num_timesteps % (16 * 9) == 0  # whole rollouts of 3 + 6 slots
