@@ -474,7 +474,10 @@ def _evaluate(
             if origin is not None and _task_of(origin).id != task.id:
                 print(f"note: {name} was trained on {_task_of(origin).id}; flown here on "
                       f"{task.id} (a transfer: same control level and observation)")  # fmt: skip
-    sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
+    if args.task is not None:  # with a fleet-size task's fleet
+        sc = task.load_scenario(parse_overrides(args.overrides or []))
+    else:
+        sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
     _check_map_option(sc, args.map_file)
     ev = evaluate(
         sc,

@@ -136,7 +136,7 @@ COMPASS = (
 )
 
 
-def names(table: Sequence[Entry | Block | RewardTerm]) -> tuple[str, ...]:
+def names(table: Sequence[Entry | Block | SetBlock | RewardTerm]) -> tuple[str, ...]:
     """The names of a table's rows, in order."""
     return tuple(row.name for row in table)
 
@@ -168,6 +168,103 @@ def compass_offsets() -> dict[str, slice]:
 
 
 COMPASS_SIZE = sum(b.size for b in COMPASS)
+
+#: The ``set`` observation's neighbour set: the K nearest other flying UAVs, one row each.
+K_NEIGHBOURS = 8
+#: The values of one neighbour row, in order: (name, low, high, meaning).
+NEIGHBOUR_FIELDS = (
+    ("dx", -2.0, 2.0, "x of (its position - own position) / operating-area diagonal"),
+    ("dy", -2.0, 2.0, "y of the same"),
+    ("dvx", -2.0, 2.0, "x of (its ground velocity - own) / v_max"),
+    ("dvy", -2.0, 2.0, "y of the same"),
+    ("dist", 0.0, 2.0, "horizontal distance / operating-area diagonal"),
+    ("linked", 0.0, 1.0, "1 within communication range (eq. 24's in-range graph)"),
+    ("mask", 0.0, 1.0, "1 for a real neighbour, 0 for a padding row (all its values 0)"),
+)
+NEIGHBOUR_SIZE = len(NEIGHBOUR_FIELDS)
+
+
+class SetBlock(NamedTuple):
+    """A block of consecutive values of the set observation: bounds per value (None: the
+    compass observation's own)."""
+
+    name: str
+    size: int
+    low: float | None
+    high: float | None
+    meaning: str
+
+
+#: The ``set`` observation (``Box((SET_SIZE,))`` per UAV, the same size for any fleet): the
+#: compass blocks without the index one-hot, a size-free symmetry breaker and fleet cue, then
+#: the neighbour set, ``K_NEIGHBOURS`` rows of :data:`NEIGHBOUR_FIELDS` (nearest first, ties
+#: by UAV index; padding rows are zero with ``mask`` 0), for a permutation-invariant encoder.
+SET_BLOCKS = (
+    *(SetBlock(b.name, b.size, None, None, b.meaning) for b in COMPASS if b.name != "index"),
+    SetBlock(
+        "role",
+        1,
+        0.0,
+        1.0,
+        "(j + 0.5) / n_a: the UAV's rank j among the n_a UAVs taking off from its airfield "
+        "(fleet order); breaks the symmetry of UAVs that start at one point, for any fleet size",
+    ),
+    SetBlock(
+        "centroid",
+        2,
+        -2.0,
+        2.0,
+        "x, y of (centroid of the other flying UAVs - own position) / operating-area diagonal "
+        "(0 when none flies)",
+    ),
+    SetBlock(
+        "fleet",
+        2,
+        0.0,
+        1.0,
+        "1 - 1 / N (the fleet size, bounded for any N), then flying UAVs / N",
+    ),
+    SetBlock(
+        "neighbours",
+        K_NEIGHBOURS * NEIGHBOUR_SIZE,
+        None,
+        None,
+        f"the {K_NEIGHBOURS} nearest other flying UAVs, a row of {NEIGHBOUR_SIZE} each "
+        "(neighbour table below), nearest first; missing neighbours are zero rows",
+    ),
+)
+SET_SIZE = sum(b.size for b in SET_BLOCKS)
+#: The ego part of the set observation (everything before the neighbour rows).
+SET_EGO_SIZE = SET_SIZE - K_NEIGHBOURS * NEIGHBOUR_SIZE
+
+
+def set_offsets() -> dict[str, slice]:
+    """Each set-observation block's slice."""
+    out, k = {}, 0
+    for b in SET_BLOCKS:
+        out[b.name] = slice(k, k + b.size)
+        k += b.size
+    return out
+
+
+def set_bounds() -> tuple[np.ndarray, np.ndarray]:
+    """float32 (low, high) of the set observation, block by block."""
+    clow, chigh = compass_bounds()
+    coff = compass_offsets()
+    nlow = np.tile(np.array([f[1] for f in NEIGHBOUR_FIELDS], np.float32), K_NEIGHBOURS)
+    nhigh = np.tile(np.array([f[2] for f in NEIGHBOUR_FIELDS], np.float32), K_NEIGHBOURS)
+    lows, highs = [], []
+    for b in SET_BLOCKS:
+        if b.name == "neighbours":
+            lows.append(nlow)
+            highs.append(nhigh)
+        elif b.low is None:
+            lows.append(clow[coff[b.name]])
+            highs.append(chigh[coff[b.name]])
+        else:
+            lows.append(np.full(b.size, b.low, np.float32))
+            highs.append(np.full(b.size, b.high, np.float32))
+    return np.concatenate(lows), np.concatenate(highs)
 
 
 # -- rewards -------------------------------------------------------------------------------
@@ -323,6 +420,39 @@ CONTROL_PARTS = (
     Part("Waypoint", "waypoint", "a target point in the operating area, Box(-1, 1, (2,))"),
 )
 
+#: Observation parts: what each UAV observes. Absent: the compass observation every task had
+#: from the first release; ``Set``: the set observation, for any fleet size.
+OBS_PARTS = (
+    Part("", "compass", "the compass observation (its table below; index one-hot of k mod 8)"),
+    Part(
+        "Set",
+        "set",
+        "the set observation (its table below): no index width, the K nearest UAVs as a padded "
+        "set; one policy for any fleet size",
+    ),
+)
+#: The control parts each observation part other than the compass is registered with, and the
+#: first version of each (it is registered at that version and every later one).
+OBS_CONTROLS = {"set": {"Heading": 1}}
+#: The fleet-size tasks: one scenario flown by several fleet sizes (set observation, random
+#: prior, :data:`OBS_CONTROLS`' control parts): ``UAVSearch-Wide-N12-Random-Set-Heading-v1``.
+SIZE_SCENARIO = Part("Wide", "wide_400", "a large area with 3 airfields for the fleet sizes")
+#: The scenario's airfields, in file order: a fleet of n UAVs is spread over them round-robin
+#: (:meth:`poc_env.config.Scenario.with_uavs`; ``tests/envs/test_tasks.py`` checks the names).
+SIZE_AIRFIELDS = ("A", "B", "C")
+SIZE_PARTS = tuple(
+    Part(f"N{n}", str(n), f"{n} UAVs spread over the airfields round-robin") for n in (3, 6, 12, 24)
+)
+
+
+def fleet_of(n: int, airfields: Sequence[str] = SIZE_AIRFIELDS) -> list[dict[str, object]]:
+    """The ``fleet`` override of ``n`` UAVs over ``airfields`` round-robin (as
+    :meth:`poc_env.config.Scenario.with_uavs` spreads them)."""
+    counts = [0] * len(airfields)
+    for i in range(n):
+        counts[i % len(airfields)] += 1
+    return [{"takeoff": a, "count": c} for a, c in zip(airfields, counts, strict=True) if c]
+
 
 class TaskVersion(NamedTuple):
     """One registered version of the tasks of a control part: every scenario and prior part is
@@ -355,6 +485,13 @@ TASK_VERSIONS = (
 def versions_of(control: str) -> tuple[TaskVersion, ...]:
     """The rows of :data:`TASK_VERSIONS` of the control part ``control`` (``"Heading"``)."""
     return tuple(v for v in TASK_VERSIONS if v.control == control)
+
+
+def obs_versions(obs: str) -> tuple[TaskVersion, ...]:
+    """The rows of :data:`TASK_VERSIONS` the observation part value ``obs`` (``"set"``) is
+    registered at (:data:`OBS_CONTROLS`)."""
+    first = OBS_CONTROLS.get(obs, {})
+    return tuple(v for v in TASK_VERSIONS if v.control in first and v.version >= first[v.control])
 
 
 # -- markdown ------------------------------------------------------------------------------
@@ -395,15 +532,32 @@ def task_parts_markdown() -> str:
         ctl = MOTION_CONTROLS.get(str(p.value))
         only = f" (with {', '.join(ctl)} only, fixed prior)" if ctl else ""
         rows.append(("Motion", f"`{p.text}`" if p.text else "(absent)", p.meaning + only))
+    for p in OBS_PARTS:
+        first = OBS_CONTROLS.get(str(p.value), {})
+        only = ""
+        if first:
+            only = " (with " + ", ".join(f"{c} from v{v}" for c, v in first.items()) + " only)"
+        rows.append(("Observation", f"`{p.text}`" if p.text else "(absent)", p.meaning + only))
+    sizes = ", ".join(f"`{p.text}`" for p in SIZE_PARTS)
+    rows.append(
+        ("Size", sizes, f"with `{SIZE_SCENARIO.text}` ({_scenario_text(str(SIZE_SCENARIO.value))}"
+         f", {SIZE_SCENARIO.meaning}): the fleet size; random prior and `Set` only")
+    )  # fmt: skip
     moving = sum(
         len(versions_of(c)) for p in MOTION_PARTS if p.text for c in MOTION_CONTROLS[str(p.value)]
     )
     n = len(SCENARIO_PARTS) * (len(RANDOM_PARTS) * len(TASK_VERSIONS) + moving)
+    for p in OBS_PARTS[1:]:
+        n += len(obs_versions(str(p.value))) * (
+            len(SCENARIO_PARTS) * len(RANDOM_PARTS) + len(SIZE_PARTS)
+        )
     head = (
-        f"Ids: `poc_env/UAVSearch-<Scenario>[-Random][-<Motion>]-<Control>-v<version>` ({n} "
-        "tasks: every scenario and prior at every version of its control part, "
-        "`poc_env.spec.TASK_VERSIONS`; moving targets with the fixed prior and the control "
-        "levels listed).\n\n"
+        f"Ids: `poc_env/UAVSearch-<Scenario>[-<Size>][-Random][-<Motion>][-<Observation>]-"
+        f"<Control>-v<version>` ({n} tasks: every scenario and prior at every version of its "
+        "control part, `poc_env.spec.TASK_VERSIONS`; moving targets with the fixed prior and "
+        "the control levels listed; the set observation on every scenario and prior, and on "
+        f"`{SIZE_SCENARIO.text}` at each size with the random prior, at the control parts and "
+        "versions listed).\n\n"
     )
     history = _table(
         ("control", "version", "env control", "what changed"),
@@ -441,6 +595,32 @@ def compass_markdown() -> str:
     return head + _table(("index", "block", "meaning", "bounds"), rows)
 
 
+def set_markdown() -> str:
+    rows = []
+    for b in SET_BLOCKS:
+        s = set_offsets()[b.name]
+        idx = f"{s.start}" if b.size == 1 else f"{s.start}-{s.stop - 1}"
+        bnd = "the compass's" if b.low is None else _bounds_text(b.low, b.high)
+        if b.name == "neighbours":
+            bnd = "per field"
+        rows.append((idx, f"`{b.name}`", b.meaning, bnd))
+    head = (
+        f"`Box(({SET_SIZE},), float32)` per UAV, the same size on every map and for every "
+        f"fleet size: {SET_EGO_SIZE} ego values, then {K_NEIGHBOURS} neighbour rows of "
+        f"{NEIGHBOUR_SIZE} (`poc_env.spec.K_NEIGHBOURS`).\n\n"
+    )
+    fields = _table(
+        ("field", "meaning", "bounds"),
+        [(f"`{n}`", m, _bounds_text(lo, hi)) for n, lo, hi, m in NEIGHBOUR_FIELDS],
+    )
+    return (
+        head
+        + _table(("index", "block", "meaning", "bounds"), rows)
+        + f"\n\nNeighbour row (row r at offset {set_offsets()['neighbours'].start} + "
+        f"{NEIGHBOUR_SIZE} r):\n\n" + fields
+    )
+
+
 def reward_markdown() -> str:
     rows = [(f"`{t.name}`", f"`reward_{t.name}`", t.formula, t.meaning) for t in REWARD_TERMS]
     return _table(("term", "info key", "enters as", "per step and agent"), rows)
@@ -463,6 +643,7 @@ SECTIONS = {
     "raster": raster_markdown,
     "vector": vector_markdown,
     "compass": compass_markdown,
+    "set": set_markdown,
     "rewards": reward_markdown,
     "infos": info_markdown,
 }

@@ -7,19 +7,25 @@ batched :class:`~poc_env.envs.gym_vector.SwarmGymVectorEnv`) and with PettingZoo
 and :func:`make_aec` are the same without the registry. Keyword arguments given at ``make``
 override the task's (``obs_type="dict"``, ``overrides={...}``, ``max_cycles=...``).
 
-Ids: ``poc_env/UAVSearch-<Scenario>[-Random]-<Control>-v<version>``. Scenario: ``Small``
-(``small``, quick), ``Paper62`` (``paper_6_2``, the paper's section 6.2 case) or ``Paper61``
-(``paper_6_1``, section 6.1); ``-Random``: a fresh seeded
-Gaussian-mixture prior at every reset (``random_prior=True``); Control: ``Increments`` (eq. 19),
-``Heading`` or ``Waypoint`` (flown by the autopilot). The table of parts and their meanings is
-:data:`poc_env.spec.SCENARIO_PARTS`, :data:`~poc_env.spec.RANDOM_PARTS` and
-:data:`~poc_env.spec.CONTROL_PARTS`, which this module registers and ``docs/environment.md``
+Ids: ``poc_env/UAVSearch-<Scenario>[-<Size>][-Random][-<Motion>][-Set]-<Control>-v<version>``.
+Scenario: ``Small`` (``small``, quick), ``Paper62`` (``paper_6_2``, the paper's section 6.2
+case), ``Paper61`` (``paper_6_1``, section 6.1) or, with a size ``N3`` .. ``N24``, ``Wide``
+(``wide_400``); ``-Random``: a fresh seeded Gaussian-mixture prior at every reset
+(``random_prior=True``); Control: ``Increments`` (eq. 19), ``Heading`` or ``Waypoint`` (flown
+by the autopilot). The table of parts and their meanings is
+:data:`poc_env.spec.SCENARIO_PARTS`, :data:`~poc_env.spec.RANDOM_PARTS`,
+:data:`~poc_env.spec.CONTROL_PARTS`, :data:`~poc_env.spec.OBS_PARTS` and
+:data:`~poc_env.spec.SIZE_PARTS`, which this module registers and ``docs/environment.md``
 renders with each scenario's size and fleet read from its file (``poc-env spec
 --write``).
 
 Every task observes ``obs_type="compass"`` (a 63-value Box per UAV, the same size on every map:
 :class:`~poc_env.sim.observations.CompassFeatures`), which default MLP encoders of SB3 and RLlib
-take as they are, and flies with ``auto_return=True`` for the autopilot levels. The first
+take as they are, and flies with ``auto_return=True`` for the autopilot levels; the ``-Set``
+tasks observe ``obs_type="set"`` instead (:class:`~poc_env.sim.observations.SetFeatures`: no
+index width, the nearest UAVs as a padded set, for any fleet size), on every scenario and on
+``wide_400`` at the fleet sizes of :data:`poc_env.spec.SIZE_PARTS`
+(``UAVSearch-Wide-N24-Random-Set-Heading-v1``). The first
 release's id ``poc_env/UAVSearch-v0`` (``paper_6_2``, increments, the ``dict`` observation in
 PettingZoo, ``flat`` in Gymnasium) stays registered unchanged.
 
@@ -79,6 +85,19 @@ class Task:
     #: how the target moves (:data:`poc_env.spec.MOTION_PARTS`; its scenario overrides are
     #: keyword overrides, ``target__model=...``, so a ``make(overrides=...)`` keeps them)
     motion: str = "static"
+    #: what each UAV observes (:data:`poc_env.spec.OBS_PARTS`: ``"compass"`` or ``"set"``)
+    obs: str = "compass"
+    #: the fleet size of a size task (:data:`poc_env.spec.SIZE_PARTS`; its ``fleet`` keyword
+    #: override), None: the scenario's fleet
+    n_uavs: int | None = None
+
+    def load_scenario(self, overrides: dict[str, Any] | None = None):
+        """The task's resolved :class:`~poc_env.config.Scenario` (its fleet for a size task),
+        with ``overrides`` (dotted keys) applied first."""
+        from poc_env.config import load_scenario
+
+        sc = load_scenario(self.scenario, overrides)
+        return sc if self.n_uavs is None else sc.with_uavs(self.n_uavs)
 
     @property
     def kwargs(self) -> dict[str, Any]:
@@ -87,20 +106,31 @@ class Task:
             "scenario": self.scenario,
             "control": self.control,
             "random_prior": self.random_prior,
-            "obs_type": "compass",
+            "obs_type": self.obs,
         }
+        if self.n_uavs is not None:
+            out["fleet"] = spec.fleet_of(self.n_uavs)
         out.update(spec.MOTION_OVERRIDES[self.motion])
         out.update(self.extra)
         return out
 
 
 def task_id(
-    scenario: str, control: str, random_prior: bool, version: int = VERSION, motion: str = ""
+    scenario: str,
+    control: str,
+    random_prior: bool,
+    version: int = VERSION,
+    motion: str = "",
+    obs: str = "",
+    size: str = "",
 ) -> str:
-    """The id of a task from its name parts (``"Small"``, ``"Heading"``, ``"Drift"``, ...)."""
+    """The id of a task from its name parts (``"Small"``, ``"Heading"``, ``"Drift"``,
+    ``"Set"``, ``"N12"``, ...)."""
     rand = "-Random" if random_prior else ""
     move = f"-{motion}" if motion else ""
-    return f"{NAMESPACE}/UAVSearch-{scenario}{rand}{move}-{control}-v{version}"
+    seen = f"-{obs}" if obs else ""
+    fleet = f"-{size}" if size else ""
+    return f"{NAMESPACE}/UAVSearch-{scenario}{fleet}{rand}{move}{seen}-{control}-v{version}"
 
 
 def _build() -> dict[str, Task]:
@@ -122,6 +152,24 @@ def _build() -> dict[str, Task]:
                     out[tid] = Task(
                         tid, scenario, control, False, extra, v.version, motion=str(m.value)
                     )
+    for o in spec.OBS_PARTS[1:]:  # other observations: the control parts and versions listed
+        for v in spec.obs_versions(str(o.value)):
+            control = CONTROL_NAMES[v.control]
+            extra = {} if v.env_control == control else {"control": v.env_control}
+            for s_name, scenario in SCENARIOS.items():
+                for rand in (bool(p.value) for p in spec.RANDOM_PARTS):
+                    tid = task_id(s_name, v.control, rand, v.version, obs=o.text)
+                    out[tid] = Task(
+                        tid, scenario, control, rand, extra, v.version, obs=str(o.value)
+                    )
+            for size in spec.SIZE_PARTS:  # the fleet sizes: random priors on the size scenario
+                tid = task_id(
+                    spec.SIZE_SCENARIO.text, v.control, True, v.version, obs=o.text, size=size.text
+                )
+                out[tid] = Task(
+                    tid, str(spec.SIZE_SCENARIO.value), control, True, extra, v.version,
+                    obs=str(o.value), n_uavs=int(size.value),
+                )  # fmt: skip
     return out
 
 
@@ -187,11 +235,9 @@ def register_tasks() -> None:
 def task_table() -> list[dict[str, Any]]:
     """One row per task (id, scenario, control, random prior, agents, horizon): the rows of
     ``poc-env tasks``."""
-    from poc_env.config import load_scenario
-
     rows = []
     for tid, task in TASKS.items():
-        sc = load_scenario(task.scenario)
+        sc = task.load_scenario()
         rows.append(
             {
                 "id": tid,

@@ -81,7 +81,7 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
             )  # fmt: skip
         learned.append((label, only or None, pol))
     fixed = args.policies.split(",") if args.policies else None
-    cache: dict[tuple[str, bool, str], dict[str, Any]] = {}
+    cache: dict[tuple[str, int | None, bool, str], dict[str, Any]] = {}
     rows = []
     for task in chosen:
         names = list(fixed) if fixed else [FLOOR[task.control], *CLASSICAL]
@@ -91,10 +91,11 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
                 spelled = pol.replace("{Control}", controls[task.control])
                 names.append(spelled)
                 labels[spelled] = label
-        todo = [n for n in names if (task.scenario, task.random_prior, n) not in cache]
+        key = (task.scenario, task.n_uavs, task.random_prior)
+        todo = [n for n in names if (*key, n) not in cache]
         if todo:
             ev = evaluate(
-                task.scenario,
+                task.load_scenario(),  # a fleet-size task's fleet
                 todo,
                 episodes=episodes,
                 seed0=args.seed,
@@ -102,9 +103,9 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
                 random_priors=task.random_prior,
             )
             for r in ev.rows():
-                cache[(task.scenario, task.random_prior, r["policy"])] = r
+                cache[(*key, r["policy"])] = r
         for n in names:
-            r = cache[(task.scenario, task.random_prior, n)]
+            r = cache[(*key, n)]
             rows.append(
                 {
                     "task": task.id,

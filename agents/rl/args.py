@@ -37,6 +37,7 @@ from poc_env.errors import ConfigError, as_int, as_number
 ALGOS = ("ppo",)
 ENGINES = ("sb3", "rllib")
 RECIPES = ("shared", "central", "pilot")
+NETS = ("mlp", "set")
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,10 @@ class TrainArgs:
     """A registered task (poc-env tasks), e.g. poc_env/UAVSearch-Small-Random-Heading-v0: its
     scenario, prior kind and control level, an MLP on its compass observation (sb3: shared over
     the UAVs by SwarmVecEnv). rllib without one: --scenario at the heading level."""
+    also_task: Annotated[list[str], _arg(metavar="TASK_ID")] = field(default_factory=list)
+    """sb3: more registered tasks, --also-task ID [ID ...] (the same observation and control
+    level as --task, e.g. other fleet sizes) whose swarms fly in the same rollouts, n_envs
+    swarms each, so one parameter-shared policy learns all of them at once (--net set)."""
     total_timesteps: int = 1_000_000
     """Agent transitions (central: joint steps) to train for; rounded up to whole rollouts.
     PPO's only: a BC warm start (--bc-teacher) comes on top, and 0 saves the BC policy alone."""
@@ -98,6 +103,10 @@ class TrainArgs:
     """pilot: c of the approach term c (gamma Phi(s') - Phi(s)), Phi = -(km to the grid)."""
     n_envs: int = 4
     """Independent swarms simulated side by side (shared, pilot: n_envs x UAVs slots)."""
+    net: Annotated[str, _arg(metavar="|".join(NETS))] = "mlp"
+    """--task (sb3): the policy's encoder. mlp: SB3's MLP on the observation; set: DeepSets
+    over the neighbour set + the ego features (poc_env.agents.rl.networks.SetExtractor), for
+    the -Set tasks, one policy for any fleet size; net_arch is then its heads."""
     agent_index: bool = True
     """--task (sb3): the compass observation carries the UAV's index (one-hot), so a shared
     policy can tell UAVs of one airfield apart; --no-agent-index zeroes it (an ablation)."""
@@ -156,6 +165,7 @@ class TrainArgs:
                     "recipe", self.recipe, "shared (the default) with --task: the task's env "
                     "and an MLP on its compass observation replace the recipe",
                 )  # fmt: skip
+        self._check_net()
         if self.address is not None and self.engine != "rllib":
             raise ConfigError("address", self.address, "an address with --engine rllib only")
         for name, lo, hi in (
@@ -195,6 +205,37 @@ class TrainArgs:
                 raise ConfigError(name, getattr(self, name), "true or false")
         parse_overrides(self.overrides)
         self._check_bc()
+
+    def _check_net(self) -> None:
+        """--net and --also-task: a set network needs a -Set task; the tasks trained together
+        share one observation and control level."""
+        if self.net not in NETS:
+            raise ConfigError("net", self.net, "one of " + ", ".join(NETS))
+        if not isinstance(self.also_task, list | tuple) or not all(
+            isinstance(t, str) for t in self.also_task
+        ):
+            raise ConfigError("also_task", self.also_task, "a list of registered task ids")
+        if self.task is None:
+            if self.also_task:
+                raise ConfigError("also_task", self.also_task, "[] without --task")
+            return
+        from poc_env.tasks import get_task
+
+        task = get_task(self.task)
+        if self.net == "set" and task.obs != "set":
+            raise ConfigError(
+                "net", self.net, f"mlp with {self.task} (set needs a -Set task: its obs_type "
+                "'set' holds the neighbour rows the set network reads)",
+            )  # fmt: skip
+        for other in self.also_task:
+            o = get_task(other)
+            if (o.obs, o.kwargs["control"]) != (task.obs, task.kwargs["control"]):
+                raise ConfigError(
+                    "also_task", other, f"a task with the observation ({task.obs}) and control "
+                    f"({task.kwargs['control']}) of --task {self.task}",
+                )  # fmt: skip
+            if self.engine != "sb3":
+                raise ConfigError("also_task", other, "none with --engine rllib (sb3 only)")
 
     def _check_bc(self) -> None:
         """The behaviour-cloning fields (poc_env.agents.rl.bc)."""
@@ -279,6 +320,7 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
             "recipe",
             "approach_shaping",
             "n_envs",
+            "net",
             "agent_index",
             "return_autopilot",
             "keep_checkpoints",
@@ -401,6 +443,8 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
         "network is the CNN of poc_env.agents.rl.networks)",
     ),
     "agent_index": (lambda a: a.engine == "sb3" and a.task is not None, "with --task, sb3"),
+    "net": (lambda a: a.engine == "sb3" and a.task is not None, "with --task, sb3"),
+    "also_task": (lambda a: a.engine == "sb3" and a.task is not None, "with --task, sb3"),
     "return_autopilot": (
         lambda a: a.engine == "sb3" and a.task is not None,
         "with --task at the increments level, sb3",

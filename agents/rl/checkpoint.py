@@ -119,9 +119,10 @@ def set_global_rng_states(states: dict[str, Any]) -> None:
 def env_generators(env: VecEnv) -> list[list[np.random.Generator]]:
     """Every env's generators (per env: a list), for checkpoints.
 
-    ``env`` is a :class:`~poc_env.envs.vector.SwarmVecEnv` (one generator per env) or a
+    ``env`` is a :class:`~poc_env.envs.vector.SwarmVecEnv` (one generator per env), a
     ``DummyVecEnv`` whose envs offer ``generators()``
-    (:class:`poc_env.agents.rl.train.CentralEnv`)."""
+    (:class:`poc_env.agents.rl.train.CentralEnv`) or a
+    :class:`~poc_env.agents.rl.mixed.MixedVecEnv` of SwarmVecEnvs."""
     from stable_baselines3.common.vec_env import DummyVecEnv
 
     from poc_env.envs.vector import SwarmVecEnv
@@ -139,6 +140,9 @@ def env_generators(env: VecEnv) -> list[list[np.random.Generator]]:
                 ) from None
             out.append(list(generators()))
         return out
+    parts = getattr(env, "parts", None)
+    if parts is not None:  # poc_env.agents.rl.mixed.MixedVecEnv: its parts' generators in order
+        return [gs for p in parts for gs in env_generators(p)]
     raise ConfigError("env", env, "a VecEnv from poc_env.agents.rl.train.make_env")
 
 

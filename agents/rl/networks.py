@@ -1,5 +1,9 @@
 """Policy networks for the per-agent observation of poc-env.
 
+:class:`SetExtractor` (``poc-env train --task ...-Set-... --net set``) reads the ``set``
+observation (:data:`poc_env.spec.SET_BLOCKS`) of any fleet size: DeepSets over the neighbour
+rows, concatenated with the ego features (its docstring).
+
 :class:`SwarmExtractor` is an SB3 ``features_extractor_class`` for the ``Dict`` observation
 (``obs_type="dict"``) of :class:`poc_env.envs.parallel.UAVSearchParallelEnv` and
 :class:`poc_env.envs.vector.SwarmVecEnv`:
@@ -30,6 +34,7 @@ from gymnasium import spaces
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
+from poc_env import spec
 from poc_env.errors import ConfigError
 
 
@@ -86,3 +91,54 @@ class SwarmExtractor(BaseFeaturesExtractor):
         r = self.raster_head(self.cnn(observations["raster"]))
         v = self.vector_mlp(observations["vector"])
         return th.cat([r, v], dim=1)
+
+
+class SetExtractor(BaseFeaturesExtractor):
+    """A permutation-invariant encoder of the ``set`` observation: one policy for any N.
+
+    The observation (``Box((SET_SIZE,))``, :data:`poc_env.spec.SET_BLOCKS`) is split into the
+    ego features (the first :data:`~poc_env.spec.SET_EGO_SIZE` values: state vector, belief
+    compass, role, centroid, fleet size) and :data:`~poc_env.spec.K_NEIGHBOURS` neighbour rows
+    of :data:`~poc_env.spec.NEIGHBOUR_FIELDS` whose last field is the mask. DeepSets (Zaheer
+    et al., 2017): each row goes through the same MLP ``phi`` (two layers, ReLU), the rows are
+    pooled by a masked mean and a masked max (padding rows take no part), so permuting the
+    neighbours changes nothing and any number of them up to K is read the same way; the ego
+    features go through a linear layer (ReLU). ``features_dim = ego_features + 2 *
+    set_features``; SB3's policy and value heads (``net_arch``) sit on top. Parameter-shared
+    over the UAVs by :class:`poc_env.envs.vector.SwarmVecEnv`, so the same weights fly 3 or 24.
+
+    Usage::
+
+        PPO("MlpPolicy", vec_env, policy_kwargs=dict(features_extractor_class=SetExtractor))
+    """
+
+    def __init__(
+        self, observation_space: spaces.Box, ego_features: int = 128, set_features: int = 64
+    ) -> None:
+        shape = tuple(observation_space.shape or ())
+        if not isinstance(observation_space, spaces.Box) or shape != (spec.SET_SIZE,):
+            raise ConfigError(
+                "observation_space",
+                observation_space,
+                f"Box(({spec.SET_SIZE},)) (the env's obs_type='set', a -Set task)",
+            )
+        super().__init__(observation_space, features_dim=ego_features + 2 * set_features)
+        self.k = spec.K_NEIGHBOURS
+        self.width = spec.NEIGHBOUR_SIZE
+        self.ego = nn.Sequential(nn.Linear(spec.SET_EGO_SIZE, ego_features), nn.ReLU())
+        self.phi = nn.Sequential(
+            nn.Linear(self.width, set_features),
+            nn.ReLU(),
+            nn.Linear(set_features, set_features),
+            nn.ReLU(),
+        )
+
+    def forward(self, observations: th.Tensor) -> th.Tensor:
+        ego = self.ego(observations[:, : spec.SET_EGO_SIZE])
+        rows = observations[:, spec.SET_EGO_SIZE :].reshape(-1, self.k, self.width)
+        mask = rows[..., -1:]  # (B, K, 1): 1 for a real neighbour
+        h = self.phi(rows) * mask
+        count = mask.sum(dim=1).clamp(min=1.0)
+        mean = h.sum(dim=1) / count
+        top = h.max(dim=1).values  # h >= 0 (ReLU) and 0 on padding: the max of the real rows
+        return th.cat([ego, mean, top], dim=1)

@@ -15,7 +15,7 @@ import numpy as np
 from poc_env.agents.policies.base import Policy
 from poc_env.agents.rl.checkpoint import describe_space, load_policy, model_path
 from poc_env.errors import ConfigError
-from poc_env.sim.observations import split_observation
+from poc_env.sim.observations import SET_SIZE, SetFeatures, split_observation
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -123,7 +123,9 @@ class PPOPolicy(Policy):
     checkpoint) on the CPU; :meth:`reset` checks it against the env and picks the recipe from
     the model's spaces: ``compass`` (the compass features; actions at the control level of the
     task the run was trained on, from its ``config.json``, or ``heading`` for the ``pilot``
-    recipe, flown by :mod:`poc_env.sim.control`),
+    recipe, flown by :mod:`poc_env.sim.control`), ``set`` (a ``-Set`` task's policy: the set
+    observation of the env's swarm, :class:`~poc_env.sim.observations.SetFeatures`, so one
+    checkpoint flies any fleet size),
     ``shared`` (the per-agent space: the live agents' observations go through
     ``model.predict`` as one batch), ``shared_flat``, or ``central`` (the joint flat space:
     finished agents keep their last observation, as in ``UAVSearch-v0``). Actions are
@@ -168,6 +170,10 @@ class PPOPolicy(Policy):
             index = cfg.get("agent_index", True) is not False
             self._features = pilot.PilotFeatures(env.params, agent_index=index)
             self._return = self.control == "increments" and cfg.get("return_autopilot") is True
+        elif task is not None and task.obs == "set" and m_obs.shape == (SET_SIZE,):
+            # a -Set task's policy: the set observation of this env's swarm, any fleet size
+            self.mode, self.control = "set", task.control
+            self._set = SetFeatures(env.params)
         elif m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
             self.mode, self.control = "compass", "heading"  # the pilot recipe
             self._features = pilot.PilotFeatures(env.params)
@@ -215,6 +221,17 @@ class PPOPolicy(Policy):
                 from poc_env.sim.control import return_home
 
                 inc = return_home(self.env.params, q, inc, k).astype(np.float32)
+            return {a: inc[j] for j, a in enumerate(live)}, state
+        if self.mode == "set":  # computed from the swarm's state as the -Set tasks observe it
+            from poc_env.sim.control import to_increments
+            from poc_env.sim.observations import VECTOR_SIZE, decode_vector
+
+            eng = self.env.engine
+            k = np.array([self._agents.index(a) for a in live])
+            feats = self._set.of_state(eng.current, eng.poc_scale)[0, k]
+            act, _ = self.model.predict(feats, deterministic=deterministic)
+            q = decode_vector(self.env.params, feats[:, :VECTOR_SIZE])
+            inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "shared":
             batch = {

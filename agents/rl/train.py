@@ -127,21 +127,34 @@ def _central_env(scenario: Scenario, random_priors: bool, seed_seq: np.random.Se
 def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
     """The training VecEnv of ``args.recipe``; env ``e``'s generators come from
     ``SeedSequence(args.seed).spawn(args.n_envs)[e]``."""
-    if args.task is not None:  # the task's env: its control level, the compass observation
+    if args.task is not None:  # the task's env: its control level and observation
         from poc_env.envs.vector import SwarmVecEnv
         from poc_env.tasks import get_task
 
-        task = get_task(args.task)
-        return SwarmVecEnv(
-            scenario,
-            n_envs=args.n_envs,
-            seed=args.seed,
-            obs_type="compass",
-            random_priors=task.random_prior,
-            control=task.kwargs["control"],  # the task version's rule (heading_clip at v1)
-            agent_index=args.agent_index,
-            return_autopilot=args.return_autopilot,
-        )
+        def task_env(tid: str, sc: Scenario, seed: int) -> SwarmVecEnv:
+            task = get_task(tid)
+            return SwarmVecEnv(
+                sc,
+                n_envs=args.n_envs,
+                seed=seed,
+                obs_type=task.obs,
+                random_priors=task.random_prior,
+                control=task.kwargs["control"],  # the task version's rule (heading_clip at v1)
+                agent_index=args.agent_index,
+                return_autopilot=args.return_autopilot,
+            )
+
+        first = task_env(args.task, scenario, args.seed)
+        if not args.also_task:
+            return first
+        from poc_env.agents.rl.mixed import MixedVecEnv
+
+        more = []  # each further task's envs: its own seed stream, (seed, k) for the k-th task
+        for k, tid in enumerate(args.also_task, start=1):
+            seed = int(np.random.SeedSequence([args.seed, k]).generate_state(1)[0])
+            sc = get_task(tid).load_scenario(parse_overrides(args.overrides))
+            more.append(task_env(tid, sc, seed))
+        return MixedVecEnv([first, *more])
     if args.recipe == "pilot":
         from poc_env.agents.rl.pilot import PilotVecEnv
 
@@ -181,6 +194,11 @@ def make_model(args: TrainArgs, env: VecEnv, tb_dir: Path | None) -> PPO:
         from poc_env.agents.rl.networks import SwarmExtractor
 
         policy, policy_kwargs = "MultiInputPolicy", {"features_extractor_class": SwarmExtractor}
+    elif args.task is not None and args.net == "set":
+        from poc_env.agents.rl.networks import SetExtractor
+
+        policy = "MlpPolicy"
+        policy_kwargs = {"features_extractor_class": SetExtractor, "net_arch": list(args.net_arch)}
     else:
         policy = "MlpPolicy"
         policy_kwargs = {"net_arch": list(args.net_arch)}
@@ -239,8 +257,12 @@ def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
         from poc_env.sim.control import ACTION_DIMS
         from poc_env.tasks import get_task
 
-        act = ACTION_DIMS[get_task(args.task).control]
-        return args.n_envs * n, spec.COMPASS_SIZE, act
+        task = get_task(args.task)
+        act = ACTION_DIMS[task.control]
+        sizes = [n if task.n_uavs is None else task.n_uavs]
+        sizes += [get_task(tid).load_scenario().n_uavs for tid in args.also_task]
+        obs = spec.SET_SIZE if task.obs == "set" else spec.COMPASS_SIZE
+        return args.n_envs * sum(sizes), obs, act
     if args.recipe == "central":
         return args.n_envs, n * dict_obs, 3 * n
     if args.recipe == "pilot":
@@ -369,10 +391,9 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         return _resume(Path(args.resume), args.progress, callback)
     if args.engine == "rllib":
         from poc_env.agents.rl.rllib import train_rllib
-        from poc_env.config import load_scenario
 
         name = args.task.rsplit("/", 1)[-1] if args.task else args.scenario
-        check_sizes(args, load_scenario(_scenario_of(args), parse_overrides(args.overrides)))
+        check_sizes(args, _scenario_of(args))
         run_dir = _new_run_dir(args, Path(name).stem)
         return train_rllib(dataclasses.replace(args, run_dir=str(run_dir)), run_dir)
     require_extra("rl", "poc-env train", "torch", "stable_baselines3", "tensorboard")
@@ -382,7 +403,7 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         from poc_env.tasks import get_task
 
         args = dataclasses.replace(args, scenario=get_task(args.task).scenario)
-    sc = load_scenario(args.scenario, parse_overrides(args.overrides))
+    sc = _scenario_of(args)
     check_sizes(args, sc)
     run_dir = _new_run_dir(args, args.task.rsplit("/", 1)[-1] if args.task else sc.name)
     args = dataclasses.replace(args, run_dir=str(run_dir))
@@ -417,7 +438,7 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
                 "resume", str(run_dir), "a run folder with its scenario.yaml beside its "
                 "checkpoints (this one lost it: its checkpoints cannot be matched to a scenario)",
             )  # fmt: skip
-        sc = load_scenario(_scenario_of(args), parse_overrides(args.overrides))
+        sc = _scenario_of(args)
         save_scenario(sc, run_dir / "scenario.yaml")
     ck = latest_checkpoint(run_dir)
     if ck is None:  # killed before its first checkpoint: the same run again, from step 0
@@ -429,13 +450,17 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
     return _run(args, sc, run_dir, callback, checkpoint=ck)
 
 
-def _scenario_of(args: TrainArgs) -> str:
-    """The scenario a run trains on: its task's, else ``args.scenario``."""
+def _scenario_of(args: TrainArgs) -> Scenario:
+    """The scenario a run trains on, with the run's overrides: its task's (a fleet-size task's
+    fleet included), else ``args.scenario``."""
+    from poc_env.config import load_scenario
+
+    overrides = parse_overrides(args.overrides)
     if args.task is not None:
         from poc_env.tasks import get_task
 
-        return get_task(args.task).scenario
-    return args.scenario
+        return get_task(args.task).load_scenario(overrides)
+    return load_scenario(args.scenario, overrides)
 
 
 def _resume_rllib(args: TrainArgs, run_dir: Path) -> Path:

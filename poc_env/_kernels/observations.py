@@ -433,3 +433,95 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
             o[m0] = mean[e, p]
             if agent_index:
                 o[i0 + k % n_ids] = 1.0
+
+
+@_jit
+def _clip(q, lo, hi):
+    """``q`` clipped to [lo, hi] (NaN stays NaN, as ``np.clip``)."""
+    if q < lo:
+        return lo
+    if q > hi:
+        return hi
+    return q
+
+
+@_jit
+def swarm_set(pos, speed, heading, pitch, flying, role, scales, layout, out):
+    """The set observation's blocks after the compass ones (:data:`poc_env.spec.SET_BLOCKS`)
+    into ``out (E, N, F)`` for every UAV of every env, from the positions and velocities alone
+    (nothing per-UAV is copied: each env's arrays are read in place).
+
+    ``role (N,)``: each UAV's role cue; ``scales = (diag, v_max, range_m)``: the operating
+    area's diagonal, the top speed, the communication range; ``layout = (role0, centroid0,
+    fleet0, nb0, k_max, n_fields)``: the block offsets, the neighbour rows and their width.
+    Ground velocity: ``v (cos alpha cos beta, sin alpha cos beta)`` (eq. 19's horizontal part).
+    The centroid is the mean position of the other flying UAVs; neighbours are the ``k_max``
+    nearest other flying UAVs by horizontal distance, ties by index (fewer: zero rows)."""
+    role0, cen0, fleet0, nb0, k_max, n_fields = layout
+    diag, v_max, range_m = scales
+    n_env, n = flying.shape
+    best_d = np.empty(k_max)
+    best_j = np.empty(k_max, dtype=np.intp)
+    vx = np.empty(n)
+    vy = np.empty(n)
+    for e in range(n_env):
+        n_fly = 0
+        sx = 0.0
+        sy = 0.0
+        for j in range(n):
+            c = speed[e, j] * math.cos(pitch[e, j])
+            vx[j] = c * math.cos(heading[e, j])
+            vy[j] = c * math.sin(heading[e, j])
+            if flying[e, j]:
+                n_fly += 1
+                sx += pos[e, j, 0]
+                sy += pos[e, j, 1]
+        for i in range(n):
+            o = out[e, i]
+            x, y = pos[e, i, 0], pos[e, i, 1]
+            o[role0] = role[i]
+            others = n_fly - (1 if flying[e, i] else 0)
+            if others > 0:
+                ox = sx - (x if flying[e, i] else 0.0)
+                oy = sy - (y if flying[e, i] else 0.0)
+                o[cen0] = _clip((ox / others - x) / diag, -2.0, 2.0)
+                o[cen0 + 1] = _clip((oy / others - y) / diag, -2.0, 2.0)
+            else:
+                o[cen0] = 0.0
+                o[cen0 + 1] = 0.0
+            o[fleet0] = 1.0 - 1.0 / n
+            o[fleet0 + 1] = n_fly / n
+            m = 0  # neighbours found so far, kept sorted by (distance^2, index)
+            for j in range(n):
+                if j == i or not flying[e, j]:
+                    continue
+                dx = pos[e, j, 0] - x
+                dy = pos[e, j, 1] - y
+                d2 = dx * dx + dy * dy
+                if m == k_max and d2 >= best_d[m - 1]:
+                    continue  # not nearer than the farthest kept (ties: the lower index stays)
+                slot = m if m < k_max else k_max - 1
+                while slot > 0 and best_d[slot - 1] > d2:
+                    if slot < k_max:
+                        best_d[slot] = best_d[slot - 1]
+                        best_j[slot] = best_j[slot - 1]
+                    slot -= 1
+                best_d[slot] = d2
+                best_j[slot] = j
+                if m < k_max:
+                    m += 1
+            for r in range(k_max):
+                b = nb0 + r * n_fields
+                if r >= m:
+                    for f in range(n_fields):
+                        o[b + f] = 0.0
+                    continue
+                j = best_j[r]
+                dist = math.sqrt(best_d[r])
+                o[b] = _clip((pos[e, j, 0] - x) / diag, -2.0, 2.0)
+                o[b + 1] = _clip((pos[e, j, 1] - y) / diag, -2.0, 2.0)
+                o[b + 2] = _clip((vx[j] - vx[i]) / v_max, -2.0, 2.0)
+                o[b + 3] = _clip((vy[j] - vy[i]) / v_max, -2.0, 2.0)
+                o[b + 4] = _clip(dist / diag, 0.0, 2.0)
+                o[b + 5] = 1.0 if dist <= range_m else 0.0
+                o[b + 6] = 1.0

@@ -93,7 +93,9 @@ class UAVSearchGym(gym.Env):
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         obs_type = kwargs.setdefault("obs_type", "flat")
         if obs_type not in OBS_TYPES:
-            raise ConfigError("obs_type", obs_type, "'flat' (default), 'dict' or 'compass'")
+            raise ConfigError(
+                "obs_type", obs_type, "'flat' (default) or one of " + ", ".join(OBS_TYPES)
+            )
         self.par = UAVSearchParallelEnv(render_mode=render_mode, **kwargs)
         self.render_mode = render_mode
         self.obs_type = obs_type

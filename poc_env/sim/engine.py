@@ -107,7 +107,8 @@ class RandomPrior:
 # ------------------------------------------------------------------------------------ spaces
 def observation_space(params: sim.Params, obs_type: str):
     """One agent's observation space of kind ``obs_type`` (``gymnasium.spaces``, float32):
-    ``dict`` (raster + vector), ``flat`` (the two raveled, raster first) or ``compass``."""
+    ``dict`` (raster + vector), ``flat`` (the two raveled, raster first), ``compass`` or
+    ``set``."""
     from gymnasium import spaces
 
     g = params.grid
@@ -117,6 +118,8 @@ def observation_space(params: sim.Params, obs_type: str):
         return spaces.Dict({"raster": raster, "vector": vector})
     if obs_type == "compass":
         return spaces.Box(obs_mod.FEATURE_LOW, obs_mod.FEATURE_HIGH, dtype=np.float32)
+    if obs_type == "set":
+        return spaces.Box(obs_mod.SET_LOW, obs_mod.SET_HIGH, dtype=np.float32)
     if obs_type == "flat":
         low = np.concatenate([raster.low.ravel(), vector.low])
         high = np.concatenate([raster.high.ravel(), vector.high])
@@ -316,7 +319,8 @@ class Engine:
     prior_source:
         Where each episode's prior comes from (default :class:`FixedPrior`).
     obs_type:
-        ``"dict"``, ``"flat"`` or ``"compass"`` (:func:`~poc_env.sim.observations.observe`).
+        ``"dict"``, ``"flat"``, ``"compass"`` or ``"set"``
+        (:func:`~poc_env.sim.observations.observe`).
     control, auto_return, return_increments:
         The control level and its autopilot (:func:`~poc_env.sim.control.swarm_increments`).
     random_airfields:
@@ -392,7 +396,9 @@ class Engine:
         landing = [g.landing or g.takeoff for g in fleet]  # None only before __post_init__
         self._landing_field = np.array([names.index(a) for a in landing], dtype=np.intp)
 
-    def _features(self) -> obs_mod.CompassFeatures | None:
+    def _features(self) -> obs_mod.CompassFeatures | obs_mod.SetFeatures | None:
+        if self.obs_type == "set":
+            return obs_mod.SetFeatures(self.params)
         if self.obs_type != "compass":
             return None
         return obs_mod.CompassFeatures(self.params, self.agent_index)
@@ -572,7 +578,7 @@ def make_engine(
     ``random_prior`` a :class:`RandomPrior` source; ``return_increments``, ``agent_index`` and
     ``seeds`` are the :class:`Engine`'s."""
     if obs_type not in obs_mod.OBS_TYPES:
-        raise ConfigError("obs_type", obs_type, "'dict', 'flat' or 'compass'")
+        raise ConfigError("obs_type", obs_type, "one of " + ", ".join(obs_mod.OBS_TYPES))
     if map_file is not None and not isinstance(map_file, str | os.PathLike):
         raise ConfigError("map_file", map_file, "None or a path to a .npy or .csv prior map")
     for name, flag in (("random_prior", random_prior), ("random_airfields", random_airfields)):

@@ -271,17 +271,22 @@ class CompassFeatures:
             out[np.arange(b), _BLOCK["index"].start + np.asarray(k) % N_IDS] = 1.0
         return out
 
-    def of_state(self, state: State, poc_scale: np.ndarray) -> np.ndarray:
+    def of_state(
+        self, state: State, poc_scale: np.ndarray, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """``(E, N, FEATURES)``: every agent's features of ``state`` (POC scales ``poc_scale
         (E,)``), equal to calling the instance on the raster and vector observations, but
-        computed from each env's coarse POC and the UAVs' positions without the rasters."""
+        computed from each env's coarse POC and the UAVs' positions without the rasters.
+        ``out (E, N, F >= FEATURES)``: written in place (zeroed, then the compass blocks at
+        their offsets; the set observation's blocks follow them)."""
         params = self.params
         g = params.grid
         vec = vectors(params, state)
         poc = coarse_poc(params, state, poc_scale)
         flat = poc.reshape(*poc.shape[:2], -1).astype(float)  # (E, P, cells): numpy's sums
         e, n = state.flying.shape
-        out = np.empty((e, n, FEATURES), dtype=np.float32)
+        if out is None:
+            out = np.empty((e, n, FEATURES), dtype=np.float32)
         bx0, by0, bx1, by1 = params.bounds
         x0, y0, x1, y1 = g.bounds
         _kernels.compass(
@@ -303,8 +308,64 @@ class CompassFeatures:
         return out
 
 
-#: Observation kinds of every env (``obs_type``): raster + vector, the two raveled, the compass.
-OBS_TYPES = ("dict", "flat", "compass")
+# ----------------------------------------------------------------------- set observation
+
+SET_SIZE = spec.SET_SIZE
+SET_LOW, SET_HIGH = spec.set_bounds()
+_SET_BLOCK = spec.set_offsets()
+K_NEIGHBOURS = spec.K_NEIGHBOURS
+
+
+def roles(params: Params) -> np.ndarray:
+    """(N,) float: each UAV's ``role`` cue, ``(j + 0.5) / n_a`` for the UAV ranked ``j`` (fleet
+    order) among the ``n_a`` UAVs taking off from its airfield (:data:`poc_env.spec.SET_BLOCKS`)."""
+    fields = [g.takeoff for g in params.scenario.fleet for _ in range(g.count)]
+    out = np.empty(len(fields))
+    for k, name in enumerate(fields):
+        out[k] = (fields[:k].count(name) + 0.5) / fields.count(name)
+    return out
+
+
+class SetFeatures:
+    """The ``set`` observation (``obs_type="set"``; :data:`poc_env.spec.SET_BLOCKS`): the
+    compass blocks without the index one-hot (:class:`CompassFeatures` writes them), a role
+    cue, the offset to the other UAVs' centroid and the fleet size, then the
+    :data:`K_NEIGHBOURS` nearest other flying UAVs as padded rows with a mask. Nothing in it
+    depends on a fixed fleet width, so one policy reads any number of UAVs."""
+
+    def __init__(self, params: Params) -> None:
+        self.params = params
+        self.compass = CompassFeatures(params, agent_index=False)
+        self.role = roles(params)
+        u = params.scenario.uav
+        bx0, by0, bx1, by1 = params.bounds
+        self._scales = (
+            _diagonal(bx1 - bx0, by1 - by0),
+            float(u.max_speed_mps),
+            float(params.scenario.comms.range_m),
+        )
+        b = _SET_BLOCK
+        self._layout = (
+            b["role"].start, b["centroid"].start, b["fleet"].start, b["neighbours"].start,
+            K_NEIGHBOURS, spec.NEIGHBOUR_SIZE,
+        )  # fmt: skip
+        assert all(_SET_BLOCK[k] == _BLOCK[k] for k in ("vector", "compass", "others", "mean_poc"))
+
+    def of_state(self, state: State, poc_scale: np.ndarray) -> np.ndarray:
+        """``(E, N, SET_SIZE)`` float32: every agent's set observation of ``state``."""
+        e, n = state.flying.shape
+        out = np.empty((e, n, SET_SIZE), dtype=np.float32)
+        self.compass.of_state(state, poc_scale, out)
+        _kernels.swarm_set(
+            state.pos, state.speed, state.heading, state.pitch, state.flying, self.role,
+            self._scales, self._layout, out,
+        )  # fmt: skip
+        return out
+
+
+#: Observation kinds of every env (``obs_type``): raster + vector, the two raveled, the compass,
+#: the set.
+OBS_TYPES = ("dict", "flat", "compass", "set")
 
 
 def observe(
@@ -313,21 +374,25 @@ def observe(
     poc_scale: np.ndarray,
     hazard: np.ndarray,
     obs_type: str,
-    features: CompassFeatures | None = None,
+    features: CompassFeatures | SetFeatures | None = None,
 ):
     """Every agent's observation of kind ``obs_type``, batched over envs and agents: for
     ``"dict"`` a dict of ``raster (E, N, C, ny, nx)`` and ``vector (E, N, VECTOR_SIZE)``; for
-    ``"flat"`` (the raster raveled in C order, then the vector) and ``"compass"``
-    (:class:`CompassFeatures`, pass one to reuse it) a float32 array ``(E, N, D)``. The one
-    implementation the PettingZoo env, the Gymnasium views and the VecEnvs share."""
+    ``"flat"`` (the raster raveled in C order, then the vector), ``"compass"``
+    (:class:`CompassFeatures`, pass one to reuse it) and ``"set"`` (:class:`SetFeatures`) a
+    float32 array ``(E, N, D)``. The one implementation the PettingZoo env, the Gymnasium
+    views and the VecEnvs share."""
     if obs_type == "dict":
         return {
             "raster": rasters(params, state, poc_scale, hazard),
             "vector": vectors(params, state),
         }
     if obs_type == "compass":
-        f = features if features is not None else CompassFeatures(params)
+        f = features if isinstance(features, CompassFeatures) else CompassFeatures(params)
         return f.of_state(state, poc_scale)
+    if obs_type == "set":
+        sf = features if isinstance(features, SetFeatures) else SetFeatures(params)
+        return sf.of_state(state, poc_scale)
     # flat: both written in place into one array (no concatenated copy)
     e, n = state.flying.shape
     g = params.grid

@@ -85,10 +85,10 @@ def test_compass_blocks_carry_what_the_spec_says():
 
 
 def test_recorded_observations_lie_in_the_spec_bounds():
-    low, high = spec.compass_bounds()
-    for tid in tasks.TASKS:
+    for tid, task in tasks.TASKS.items():
+        low, high = spec.set_bounds() if task.obs == "set" else spec.compass_bounds()
         obs = recorded.load(tid)["observation"]
-        per_uav = obs.reshape(obs.shape[0], -1, spec.COMPASS_SIZE)
+        per_uav = obs.reshape(obs.shape[0], -1, low.size)
         assert (per_uav >= low).all() and (per_uav <= high).all(), tid
 
 
@@ -153,7 +153,21 @@ def test_the_task_table_is_the_spec():
                 for v in spec.versions_of(c):
                     tid = tasks.task_id(s.text, c, False, v.version, motion=m.text)
                     want[tid] = (s.value, tasks.CONTROL_NAMES[c], False, v.version, v.env_control)
+    for o in spec.OBS_PARTS[1:]:  # the set observation: the listed controls from their version
+        for v in spec.obs_versions(str(o.value)):
+            ctl = tasks.CONTROL_NAMES[v.control]
+            for s, r in itertools.product(spec.SCENARIO_PARTS, spec.RANDOM_PARTS):
+                tid = tasks.task_id(s.text, v.control, bool(r.value), v.version, obs=o.text)
+                want[tid] = (s.value, ctl, r.value, v.version, v.env_control)
+            for n in spec.SIZE_PARTS:
+                tid = tasks.task_id(
+                    spec.SIZE_SCENARIO.text, v.control, True, v.version, obs=o.text, size=n.text
+                )
+                want[tid] = (spec.SIZE_SCENARIO.value, ctl, True, v.version, v.env_control)
+                assert tasks.TASKS[tid].n_uavs == int(n.value)
+    assert spec.obs_versions("set") == (spec.TASK_VERSIONS[2],)  # Heading v1
     assert {t.motion for t in tasks.TASKS.values()} == {str(m.value) for m in spec.MOTION_PARTS}
+    assert {t.obs for t in tasks.TASKS.values()} == {str(o.value) for o in spec.OBS_PARTS}
     assert got == want
     # every id of the first release stays registered (old ids keep their behaviour)
     for s, r, c in itertools.product(spec.SCENARIO_PARTS, spec.RANDOM_PARTS, spec.CONTROL_PARTS):

@@ -17,15 +17,16 @@ from poc_env import tasks
 from poc_env.envs.gym_vector import SwarmGymVectorEnv
 from poc_env.errors import ConfigError
 from poc_env.sim.control import ACTION_DIMS
-from poc_env.sim.observations import FEATURES
+from poc_env.sim.observations import FEATURES, SET_SIZE
 
 SHORT = {"episode.horizon_steps": 25}
 ALL = list(tasks.TASKS)
 
 
 def test_the_table_of_tasks():
-    # Increments v0, Heading v0 and v1, Waypoint v0; plus Drift-Heading v0 and v1
-    assert len(ALL) == 3 * 2 * 4 + 3 * 2
+    # Increments v0, Heading v0 and v1, Waypoint v0; plus Drift-Heading v0 and v1; plus
+    # Set-Heading v1 on every scenario and prior and on Wide at 4 fleet sizes
+    assert len(ALL) == 3 * 2 * 4 + 3 * 2 + 3 * 2 + 4
     assert f"poc_env/UAVSearch-Paper62-Drift-Heading-v{tasks.VERSION}" in ALL
     assert "poc_env/UAVSearch-Paper62-Drift-Heading-v1" in ALL
     assert f"poc_env/UAVSearch-Paper62-Random-Heading-v{tasks.VERSION}" in ALL
@@ -42,6 +43,7 @@ def test_the_table_of_tasks():
         ("small", 3),
         ("paper_6_2", 6),
         ("paper_6_1", 6),
+        *(("wide_400", n) for n in (3, 6, 12, 24)),
     }
 
 
@@ -52,13 +54,14 @@ def test_every_task_passes_the_four_checkers(tid):
     par = pz_make("parallel", tid, **kw)
     assert par.control == task.kwargs["control"] and par.random_prior == task.random_prior
     n = par.params.n_agents
-    assert par.observation_space("uav_0").shape == (FEATURES,)
+    size = SET_SIZE if task.obs == "set" else FEATURES
+    assert par.observation_space("uav_0").shape == (size,)
     assert par.action_space("uav_0").shape == (ACTION_DIMS[task.control],)
     parallel_api_test(par, num_cycles=30)
     api_test(pz_make("aec", tid, **kw), num_cycles=30)
     parallel_seed_test(functools.partial(tasks.make_parallel, tid, **kw), num_cycles=20)
     env = gymnasium.make(tid, **kw)
-    assert env.observation_space.shape == (n * FEATURES,)
+    assert env.observation_space.shape == (n * size,)
     check_env(env.unwrapped, skip_render_check=True)
 
 

@@ -73,3 +73,32 @@ def test_ppo_trains_the_extractor_reproducibly():
     eps = list(m1.ep_info_buffer)  # horizon 10 in 16 steps: every agent's episode recorded
     assert len(eps) >= m1.n_envs
     assert all({"r", "l", "t", "posc"} <= set(ep) for ep in eps)
+
+
+def test_set_extractor_is_invariant_to_the_order_and_padding_of_the_neighbours():
+    import torch as th
+
+    from poc_env import spec
+    from poc_env.agents.rl.networks import SetExtractor
+
+    th.manual_seed(0)
+    vec = SwarmVecEnv("wide_400", n_envs=1, seed=0, obs_type="set", control="heading")
+    ext = SetExtractor(vec.observation_space)
+    obs = th.as_tensor(vec.reset())  # 12 UAVs: 8 real neighbour rows each
+    ego, k, w = spec.SET_EGO_SIZE, spec.K_NEIGHBOURS, spec.NEIGHBOUR_SIZE
+    rows = obs[:, ego:].reshape(-1, k, w)
+    out = ext(obs)
+    assert out.shape == (12, ext.features_dim)
+    perm = th.randperm(k)
+    shuffled = th.cat([obs[:, :ego], rows[:, perm].reshape(len(obs), -1)], dim=1)
+    th.testing.assert_close(ext(shuffled), out)  # a set: the row order does not matter
+    # padding rows (mask 0) take no part, whatever they hold; a real row does
+    few = rows.clone()
+    few[:, 5:] = 0.0
+    base = ext(th.cat([obs[:, :ego], few.reshape(len(obs), -1)], dim=1))
+    junk = few.clone()
+    junk[:, 5:, :-1] = 7.0
+    th.testing.assert_close(ext(th.cat([obs[:, :ego], junk.reshape(len(obs), -1)], dim=1)), base)
+    assert not th.allclose(base, out)
+    with pytest.raises(ConfigError, match="observation_space"):
+        SetExtractor(SwarmVecEnv("small", n_envs=1, obs_type="compass").observation_space)

@@ -13,7 +13,7 @@ import pytest
 
 from poc_env.agents.rl.args import GROUPS, TrainArgs, field_help, parse_train_args
 
-#: Every flag of `poc-env train --help` before the grouping (issue 23): none renamed or lost.
+#: Every flag of `poc-env train --help` since the grouping (issue 23): none renamed or lost.
 FLAGS = {
     "-h", "--help", "--address", "--agent-index", "--no-agent-index", "--algo",
     "--approach-shaping", "--batch-size", "--bc-batch-size", "--bc-episodes", "--bc-epochs",
@@ -23,6 +23,7 @@ FLAGS = {
     "--no-progress", "--random-priors", "--no-random-priors", "--recipe", "--resume",
     "--return-autopilot", "--no-return-autopilot", "--rllib-policies", "--run-dir",
     "--scenario", "--seed", "--task", "--torch-threads", "--total-timesteps",
+    "--net", "--also-task",  # issue 28: the set network and fleet sizes trained together
 }  # fmt: skip
 
 
