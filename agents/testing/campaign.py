@@ -231,7 +231,39 @@ def overrides_strategy():
             ("uav", "fast"),
         ]
     )
-    return st.lists(st.one_of(pairs, listy), min_size=1, max_size=4).map(dict)
+    return st.lists(st.one_of(pairs, listy, table_names()), min_size=1, max_size=4).map(dict)
+
+
+def _named_fields() -> dict[str, tuple[str, ...]]:
+    """Scenario keys whose value names an entry of a table, with the table's names."""
+    from poc_env._kernels.sensing import LAW_CODES
+    from poc_env.theory.motion import LEEWAY_CLASSES, MODELS
+
+    return {
+        "target.model": tuple(MODELS),
+        "target.leeway_class": tuple(LEEWAY_CLASSES),
+        "sensor.law": tuple(LAW_CODES),
+    }
+
+
+def table_names():
+    """(key, value) for the keys that name a table entry (target model, leeway class,
+    detection law): a name of the table or a near miss of one (case, spaces, a letter off,
+    another table's name), alone or beside the model that would use it."""
+    from hypothesis import strategies as st
+
+    fields = _named_fields()
+    every = sorted({n for names in fields.values() for n in names})
+
+    def near(name: str):
+        misses = [name.upper(), f" {name}", f"{name} ", name[:-1], name + "s"]
+        return st.sampled_from([name, *misses, name.replace("_", "-")])
+
+    return st.sampled_from(sorted(fields)).flatmap(
+        lambda k: st.tuples(
+            st.just(k), st.one_of(st.sampled_from(fields[k]).flatmap(near), st.sampled_from(every))
+        )
+    )
 
 
 def run_overrides(overrides: dict[str, Any]) -> None:
@@ -240,6 +272,11 @@ def run_overrides(overrides: dict[str, Any]) -> None:
     from poc_env.config import load_scenario
 
     sc = load_scenario("small", {**overrides, "episode.horizon_steps": 3})
+    named = sc.to_dict()
+    for key, names in _named_fields().items():  # a loaded scenario names only table entries
+        section, name = key.split(".")
+        value = named[section][name]
+        check(value in names, f"{key} {value!r} loaded but is not one of {names}")
     env = poc_env.parallel_env(sc, obs_type="flat")
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
