@@ -32,6 +32,7 @@ LAYERS = (
     ("poc_env.viz", 3),
     ("poc_env.envs", 4),
     ("poc_env.uav_search_v0", 4),
+    ("poc_env.uav_search_v1", 4),
     ("poc_env.recorded", 4),
     ("poc_env", 4),  # the package's __init__: parallel_env, env, registration
     # geography in, missions out: the plan model, the CRS, every export format, GIS import
