@@ -444,7 +444,7 @@ def _evaluate(
     """The evaluation of ``cmd_evaluate``, its files written into ``stage`` (shown as ``dest``)."""
     from poc_env.agents.experiments.evaluate import evaluate, plot_curves
     from poc_env.config import load_scenario, parse_overrides
-    from poc_env.io import csv_text, write_text_atomic
+    from poc_env.io import write_text_atomic
 
     scenario, random_priors, label = args.scenario, args.random_priors, None
     if args.task is not None:  # the task's scenario and prior kind (poc_env.tasks)
@@ -491,25 +491,55 @@ def _evaluate(
         f"{label or sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
         f"{args.seed + args.episodes - 1}{priors}"
     )
-    text = ev.table()
-    baselines = getattr(args, "baselines", [])
-    for b in baselines:
-        text += "\n\n" + ev.paired_table(b)
-    print(text)
+    summary = ev.summary_files(getattr(args, "baselines", []))  # what summarise rewrites
+    print(summary["evaluate.txt"], end="")
     if stage is not None:
-        files = [
-            write_text_atomic(stage / "evaluate.csv", ev.to_csv()),
-            write_text_atomic(stage / "episodes.csv", ev.episodes_csv()),
-            write_text_atomic(stage / "evaluate.txt", text + "\n"),
-        ]
+        files = [write_text_atomic(stage / "episodes.csv", ev.episodes_csv())]
+        files += [write_text_atomic(stage / name, text) for name, text in summary.items()]
         if has_extra("plot"):  # the tables never wait on, nor fail for, the figure
             files.append(plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s))
         else:
             print(skipped_for_extra("plot", "posc_over_time.png"))
-        if baselines:
-            paired = csv_text([row for b in baselines for row in ev.paired(b)])
-            files.append(write_text_atomic(stage / "paired.csv", paired))
         _wrote(tuple(files), stage, dest)
+    return 0
+
+
+def cmd_summarise(args: argparse.Namespace) -> int:
+    """Rewrite an evaluation folder's summary files from its episodes.csv, flying nothing."""
+    import csv
+
+    from poc_env.agents.experiments.evaluate import read_episodes
+    from poc_env.io import write_text_atomic
+
+    folder = Path(args.results_dir)
+    if not (folder / "episodes.csv").is_file():
+        raise ConfigError("results_dir", args.results_dir, "a folder of poc-env evaluate --out "
+                          "holding episodes.csv")  # fmt: skip
+    out = Path(args.out) if args.out else folder
+    _check_out("out", out, "folder")
+    old: dict[str, str] = {}  # the folder's evaluate.csv, for an older file's detection times
+    paired_baselines: list[str] = []
+    unreadable = (OSError, UnicodeDecodeError, csv.Error, KeyError)
+    with contextlib.suppress(*unreadable), (folder / "evaluate.csv").open(encoding="utf-8") as f:
+        old = {r["policy"]: r["time_to_detection_min"] for r in csv.DictReader(f)}
+    with contextlib.suppress(*unreadable), (folder / "paired.csv").open(encoding="utf-8") as f:
+        paired_baselines = list(dict.fromkeys(r["baseline"] for r in csv.DictReader(f)))
+    ttd = {p: float(v) if v else None for p, v in old.items()} if old else None
+    ev = read_episodes(folder / "episodes.csv", ttd)
+    given = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
+    baselines = given or [b for b in paired_baselines if b in ev.policies]
+    for b in baselines:
+        if b not in ev.policies:
+            raise ConfigError("baseline", b, "one or more of the folder's policies: "
+                              + ", ".join(ev.policies))  # fmt: skip
+    if ev.time_to_detection_min is not None:  # an episodes.csv of an older evaluate
+        source = "the folder's evaluate.csv" if old else "unknown (no evaluate.csv)"
+        print(f"note: episodes.csv has no time_to_detection_s column: t_det is {source}")
+    summary = ev.summary_files(baselines)
+    print(summary["evaluate.txt"], end="")
+    with _output_folder("out", out) as stage:
+        files = [write_text_atomic(stage / name, text) for name, text in summary.items()]
+        _wrote(tuple(files), stage, out)
     return 0
 
 
@@ -870,6 +900,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_ray(p)
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser(
+        "summarise",
+        help="rewrite an evaluate folder's evaluate.csv/.txt (and paired.csv) from its "
+        "episodes.csv, flying nothing",
+    )
+    p.add_argument("results_dir", help="folder of poc-env evaluate --out (holds episodes.csv)")
+    p.add_argument(
+        "--baseline",
+        default=None,
+        metavar="POLICY[,POLICY...]",
+        help="paired differences against these policies (default: the baselines of the "
+        "folder's paired.csv, if any)",
+    )
+    p.add_argument(
+        "--out", default=None, help="folder for the summary files (default: RESULTS_DIR)"
+    )
+    p.set_defaults(func=cmd_summarise)
 
     # train's options (and its --help) come from the TrainArgs dataclass: main() hands them to
     # poc_env.agents.rl.args.parse_train_args

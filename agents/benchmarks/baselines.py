@@ -7,7 +7,7 @@ Each task is scored with :func:`poc_env.agents.experiments.evaluate.evaluate` on
 every policy (seeds ``--seed .. --seed + episodes - 1``; on ``-Random-`` tasks each seed flies
 its own held-out prior, :func:`~poc_env.agents.experiments.evaluate.episode_prior`, a generator
 stream training never draws from). Columns: mean POSC with its 95 % interval over the seeds
-(1.96 standard errors), POSC normalised by each episode's reach-aware bound
+(Student's t, :func:`poc_env.stats.ci95`), POSC normalised by each episode's reach-aware bound
 (:func:`poc_env.theory.bound.reach_effort_bound`: the best POSC any swarm could reach with
 transit from its airfields at top speed), and the mean constraint-violation steps.
 

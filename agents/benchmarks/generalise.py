@@ -45,8 +45,8 @@ fixed-length vector whatever the grid's shape or cell size. So one checkpoint
 retraining; a checkpoint of a raster recipe (``shared``, ``central``) is tied to its grid and
 stops with a ``checkpoint`` error on the other shapes.
 
-Per condition and policy: mean POSC with its 95 % interval over the seeds (1.96 standard
-errors), the mean reach-aware bound of the condition's priors
+Per condition and policy: mean POSC with its 95 % interval over the seeds (Student's t,
+:func:`poc_env.stats.ci95`), the mean reach-aware bound of the condition's priors
 (:func:`poc_env.theory.bound.reach_bound`: the best POSC any swarm could reach with transit
 from its airfields at top speed), the normalised score (mean over episodes of POSC / the
 episode's reach-aware bound: a bigger or finer map changes the attainable POSC, the ratio
