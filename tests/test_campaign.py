@@ -34,6 +34,7 @@ DEFAULT_CASES = {
     "text": 60,
     "utm": 150,
     "runtime": 40,
+    "episodes": 150,
 }
 
 

@@ -351,7 +351,12 @@ def read_episodes(
         raise ConfigError(
             "episodes", where, f"an episodes.csv of poc-env evaluate ({why})"
         ) from None
-    rows = list(csv.DictReader(io.StringIO(text)))
+    try:
+        rows = list(csv.DictReader(io.StringIO(text)))
+    except csv.Error as err:  # a field past csv's size limit, a NUL byte, ...
+        raise ConfigError(
+            "episodes", where, f"an episodes.csv of poc-env evaluate ({err})"
+        ) from None
     if not rows:
         raise ConfigError("episodes", where, "an episodes.csv with a header and episode rows")
     missing = [c for c in EPISODE_COLUMNS if c not in rows[0]]
@@ -375,7 +380,9 @@ def read_episodes(
             raise ConfigError(field, value, "a number") from None
         if kind == "int":
             return as_int(field, number, 0, limits.MAX_SEED)
-        return as_number(field, number, 0.0)
+        if col == "time_to_detection_s":
+            return as_number(field, number, 0.0, 1e12)
+        return as_number(field, number, 0.0, 1.0)  # POSC and its bounds: probabilities
 
     episodes = []
     has_ttd = "time_to_detection_s" in rows[0]

@@ -4,8 +4,8 @@
 
 Each *target* is an input a user or a file can hand poc-env -- scenario overrides, prior maps
 (arrays and files), region files, ``plan.json`` for export, command lines, environment
-actions and GIS layers for ``scenario import`` -- with a hypothesis strategy that draws
-plausible values, typos and hostile values alike (strings for numbers, bools, NaN,
+actions, GIS layers for ``scenario import`` and the ``episodes.csv`` of ``summarise`` -- with
+a hypothesis strategy that draws plausible values, typos and hostile values alike (strings for numbers, bools, NaN,
 infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is run and classified:
 
 * ``ok``: a valid result, checked for what would make it silently wrong (finite numbers,
@@ -22,7 +22,7 @@ infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is ru
 After each target the campaign counts its *orphans*: processes it started (its descendants, and
 any process carrying its ``POC_ENV_CAMPAIGN_TAG`` environment marker, which catches children
 re-parented to init) still alive. Unclear, traceback, silent, hang and orphan must be 0.
-``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,090
+``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,240
 cases, asserting no hang and no orphan); this command runs a large campaign and prints the
 counts, the figure quoted in issue 27's closing note (``docs/inputs.md``). Needs ``hypothesis``
 (the ``dev`` extra).
@@ -680,6 +680,83 @@ def run_text(case: tuple[list, str, str]) -> None:
             check_output_file(f)
 
 
+# --------------------------------------------------------------------------- target: episodes
+
+
+def _episodes_header() -> list[str]:
+    from poc_env.agents.experiments.evaluate import EPISODE_COLUMNS
+
+    return [*EPISODE_COLUMNS, "time_to_detection_s", "steps", "random_prior"]
+
+
+def sample_episodes() -> list[list[Any]]:
+    """Rows of a valid episodes.csv (``evaluate --out``): two policies on the same 3 seeds."""
+    rows = []
+    for k, policy in enumerate(("lawnmower", "random")):
+        for s in range(3):
+            posc = 0.4 - 0.3 * k + 0.01 * s
+            rows.append([policy, 1000 + s, posc, 0.9, 0.85, posc / 0.85, s % 2 == 0, 2 * s, 0, 3,
+                         600.0 + 60 * s if s % 2 == 0 else "", 40 + s, False])  # fmt: skip
+    return rows
+
+
+def episodes_strategy():
+    """An episodes.csv as ``poc-env summarise`` reads it: a valid file with hostile cells
+    (numbers out of range, NaN, text, empty), a column dropped or renamed, rows cut short or
+    swapped between policies, or raw bytes."""
+    from hypothesis import strategies as st
+
+    width = len(_episodes_header())
+    cell = st.tuples(st.integers(0, 5), st.integers(0, width - 1), hostile_scalars())
+    return st.one_of(
+        st.tuples(st.just("cells"), st.lists(cell, max_size=4)),
+        st.tuples(st.just("drop"), st.integers(0, width - 1)),
+        st.tuples(st.just("short"), st.integers(0, 5)),
+        st.tuples(st.just("seed"), st.integers(0, 5)),
+        st.tuples(st.just("bytes"), st.binary(max_size=200)),
+    )
+
+
+def run_episodes(case: tuple[str, Any]) -> None:
+    """``summarise`` of a hostile episodes.csv: if it reads, the summary is finite and its
+    means and intervals are those of the file's POSC values."""
+    import csv as csv_mod
+
+    from poc_env.agents.experiments.evaluate import read_episodes
+    from poc_env.stats import ci95
+
+    kind, what = case
+    header, rows = _episodes_header(), sample_episodes()
+    if kind == "cells":
+        for r, c, value in what:
+            rows[r][c] = value
+    elif kind == "drop":
+        header = header[:what] + header[what + 1 :]
+        rows = [row[:what] + row[what + 1 :] for row in rows]
+    elif kind == "short":
+        rows[what] = rows[what][:-3]
+    elif kind == "seed":
+        rows[what][1] = 999  # a policy with another seed than the first policy's
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "episodes.csv"
+        if kind == "bytes":
+            path.write_bytes(what)
+        else:
+            with path.open("w", newline="", encoding="utf-8", errors="surrogatepass") as f:
+                w = csv_mod.writer(f)
+                w.writerow(header)
+                w.writerows(rows)
+        ev = read_episodes(path)
+        files = ev.summary_files([ev.policies[0]])
+    for row in ev.rows():
+        posc = [e.posc for e in ev.episodes if e.policy == row["policy"]]
+        check(math.isfinite(row["posc_mean"]) and 0 <= row["posc_mean"] <= 1, f"mean {row}")
+        check(abs(row["posc_ci95"] - ci95(posc)) <= 1e-12, f"interval {row}")
+        check(math.isfinite(row["posc_ci95"]), f"interval not finite: {row}")
+    check(all(math.isfinite(float(x)) for x in (ev.bound, ev.bound_reach or 0.0)), "bounds")
+    check(set(files) == {"evaluate.csv", "evaluate.txt", "paired.csv"}, f"files {set(files)}")
+
+
 # --------------------------------------------------------------------------- target: utm
 
 
@@ -1179,11 +1256,12 @@ TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
     "text": (text_strategy, run_text),
     "utm": (utm_strategy, run_utm),
     "runtime": (runtime_strategy, run_runtime),
+    "episodes": (episodes_strategy, run_episodes),
 }
 #: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
 WEIGHTS = {
     "overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1,
-    "text": 2, "utm": 3, "runtime": 1,
+    "text": 2, "utm": 3, "runtime": 1, "episodes": 2,
 }  # fmt: skip
 
 
