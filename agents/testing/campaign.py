@@ -5,8 +5,9 @@
 Each *target* is an input a user or a file can hand poc-env -- scenario overrides, prior maps
 (arrays and files), region files, ``plan.json`` for export, command lines, environment
 actions, GIS layers for ``scenario import`` and the ``episodes.csv`` of ``summarise`` -- with
-a hypothesis strategy that draws plausible values, typos and hostile values alike (strings for numbers, bools, NaN,
-infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is run and classified:
+a hypothesis strategy that draws plausible values, typos and hostile values alike (strings
+for numbers, bools, NaN, infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every
+case is run and classified:
 
 * ``ok``: a valid result, checked for what would make it silently wrong (finite numbers,
   probabilities in [0, 1], a map summing to 1, probability mass conserved by a step, mission
