@@ -27,6 +27,7 @@ LAYERS = (
     ("poc_env.limits", 0),
     ("poc_env.spec", 0),
     ("poc_env.stats", 0),
+    ("poc_env.helptext", 0),
     ("poc_env._kernels", 0),
     ("poc_env.theory", 1),
     ("poc_env.sim", 2),

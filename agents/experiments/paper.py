@@ -851,7 +851,7 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument(
         "--preset",
         default="paper",
-        help="DE settings of every plan: paper (default) or tuned (docs/PLANNER.md)",
+        help="DE settings of every plan: paper or tuned (docs/PLANNER.md)",
     )
 
 

@@ -1341,12 +1341,19 @@ def run_target(
     return counts, bad
 
 
-def main(argv: list[str] | None = None) -> dict[str, Counter]:
-    """Run the campaign and print the counts; each target's Counter also holds ``orphan``
-    (processes it left alive) and ``seconds``."""
-    import time
+def build_parser() -> argparse.ArgumentParser:
+    """The campaign's command line (``--help``: options, defaults, examples)."""
+    from poc_env.helptext import HelpFormatter, examples
 
-    p = argparse.ArgumentParser(prog="poc-env bench campaign", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(
+        prog="poc-env bench campaign",
+        description=__doc__.split("\n")[0],
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench campaign --cases 6500 --seed 72",
+            "poc-env bench campaign --cases 500 --targets overrides,episodes --case-timeout 30",
+        ),
+    )
     p.add_argument("--cases", type=int, default=5000, help="total cases over all targets")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--targets", default=",".join(TARGETS))
@@ -1357,6 +1364,15 @@ def main(argv: list[str] | None = None) -> dict[str, Counter]:
         default=CASE_TIMEOUT_S,
         help="seconds one case may run before it counts as a hang (0: no limit)",
     )
+    return p
+
+
+def main(argv: list[str] | None = None) -> dict[str, Counter]:
+    """Run the campaign and print the counts; each target's Counter also holds ``orphan``
+    (processes it left alive) and ``seconds``."""
+    import time
+
+    p = build_parser()
     args = p.parse_args(argv)
     for name, lo, hi in (("cases", 1, MAX_CASES), ("show", 0, 10_000), ("seed", 0, 2**32 - 1)):
         v = getattr(args, name)
