@@ -30,6 +30,7 @@ from poc_env.errors import (
     require_extra,
     skipped_for_extra,
 )
+from poc_env.helptext import examples, use_everywhere, walk
 from poc_env.io import check_replaceable
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
@@ -126,7 +127,7 @@ def _add_projection(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--projection",
         default="aeqd",
-        help="aeqd (azimuthal equidistant at the origin, the default) or utm",
+        help="aeqd (azimuthal equidistant at the origin) or utm",
     )
     p.add_argument("--utm-zone", type=int, default=None, help="UTM zone (default: the origin's)")
 
@@ -372,21 +373,26 @@ def _check_render_frames(args: argparse.Namespace, sc) -> None:
     )  # fmt: skip
 
 
+#: ``poc-env bench WHAT``: the module each benchmark runs (``python -m``); each has ``main`` and
+#: ``build_parser`` (its ``--help``).
+BENCHMARKS = {
+    "env": "poc_env.agents.benchmarks.env",
+    "plan": "poc_env.agents.benchmarks.plan",
+    "train": "poc_env.agents.benchmarks.train",
+    "campaign": "poc_env.agents.testing.campaign",
+    "baselines": "poc_env.agents.benchmarks.baselines",
+    "suite": "poc_env.agents.benchmarks.suite",
+    "learning": "poc_env.agents.benchmarks.learning",
+    "generalise": "poc_env.agents.benchmarks.generalise",
+}
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     """Run a benchmark in a fresh interpreter, so one-thread settings precede numpy's import."""
     import os
     import subprocess
 
-    modules = {
-        "env": "poc_env.agents.benchmarks.env",
-        "plan": "poc_env.agents.benchmarks.plan",
-        "train": "poc_env.agents.benchmarks.train",
-        "campaign": "poc_env.agents.testing.campaign",
-        "baselines": "poc_env.agents.benchmarks.baselines",
-        "suite": "poc_env.agents.benchmarks.suite",
-        "learning": "poc_env.agents.benchmarks.learning",
-        "generalise": "poc_env.agents.benchmarks.generalise",
-    }
+    modules = BENCHMARKS
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
     return subprocess.call(cmd, env=env)
@@ -444,7 +450,7 @@ def _evaluate(
     """The evaluation of ``cmd_evaluate``, its files written into ``stage`` (shown as ``dest``)."""
     from poc_env.agents.experiments.evaluate import evaluate, plot_curves
     from poc_env.config import load_scenario, parse_overrides
-    from poc_env.io import csv_text, write_text_atomic
+    from poc_env.io import write_text_atomic
 
     scenario, random_priors, label = args.scenario, args.random_priors, None
     if args.task is not None:  # the task's scenario and prior kind (poc_env.tasks)
@@ -494,25 +500,55 @@ def _evaluate(
         f"{label or sc.name}: {args.episodes} episodes per policy, seeds {args.seed}.."
         f"{args.seed + args.episodes - 1}{priors}"
     )
-    text = ev.table()
-    baselines = getattr(args, "baselines", [])
-    for b in baselines:
-        text += "\n\n" + ev.paired_table(b)
-    print(text)
+    summary = ev.summary_files(getattr(args, "baselines", []))  # what summarise rewrites
+    print(summary["evaluate.txt"], end="")
     if stage is not None:
-        files = [
-            write_text_atomic(stage / "evaluate.csv", ev.to_csv()),
-            write_text_atomic(stage / "episodes.csv", ev.episodes_csv()),
-            write_text_atomic(stage / "evaluate.txt", text + "\n"),
-        ]
+        files = [write_text_atomic(stage / "episodes.csv", ev.episodes_csv())]
+        files += [write_text_atomic(stage / name, text) for name, text in summary.items()]
         if has_extra("plot"):  # the tables never wait on, nor fail for, the figure
             files.append(plot_curves(ev, stage / "posc_over_time.png", sc.episode.dt_s))
         else:
             print(skipped_for_extra("plot", "posc_over_time.png"))
-        if baselines:
-            paired = csv_text([row for b in baselines for row in ev.paired(b)])
-            files.append(write_text_atomic(stage / "paired.csv", paired))
         _wrote(tuple(files), stage, dest)
+    return 0
+
+
+def cmd_summarise(args: argparse.Namespace) -> int:
+    """Rewrite an evaluation folder's summary files from its episodes.csv, flying nothing."""
+    import csv
+
+    from poc_env.agents.experiments.evaluate import read_episodes
+    from poc_env.io import write_text_atomic
+
+    folder = Path(args.results_dir)
+    if not (folder / "episodes.csv").is_file():
+        raise ConfigError("results_dir", args.results_dir, "a folder of poc-env evaluate --out "
+                          "holding episodes.csv")  # fmt: skip
+    out = Path(args.out) if args.out else folder
+    _check_out("out", out, "folder")
+    old: dict[str, str] = {}  # the folder's evaluate.csv, for an older file's detection times
+    paired_baselines: list[str] = []
+    unreadable = (OSError, UnicodeDecodeError, csv.Error, KeyError)
+    with contextlib.suppress(*unreadable), (folder / "evaluate.csv").open(encoding="utf-8") as f:
+        old = {r["policy"]: r["time_to_detection_min"] for r in csv.DictReader(f)}
+    with contextlib.suppress(*unreadable), (folder / "paired.csv").open(encoding="utf-8") as f:
+        paired_baselines = list(dict.fromkeys(r["baseline"] for r in csv.DictReader(f)))
+    ttd = {p: float(v) if v else None for p, v in old.items()} if old else None
+    ev = read_episodes(folder / "episodes.csv", ttd)
+    given = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
+    baselines = given or [b for b in paired_baselines if b in ev.policies]
+    for b in baselines:
+        if b not in ev.policies:
+            raise ConfigError("baseline", b, "one or more of the folder's policies: "
+                              + ", ".join(ev.policies))  # fmt: skip
+    if ev.time_to_detection_min is not None:  # an episodes.csv of an older evaluate
+        source = "the folder's evaluate.csv" if old else "unknown (no evaluate.csv)"
+        print(f"note: episodes.csv has no time_to_detection_s column: t_det is {source}")
+    summary = ev.summary_files(baselines)
+    print(summary["evaluate.txt"], end="")
+    with _output_folder("out", out) as stage:
+        files = [write_text_atomic(stage / name, text) for name, text in summary.items()]
+        _wrote(tuple(files), stage, out)
     return 0
 
 
@@ -752,6 +788,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="poc-env",
         description="UAV-swarm search over a probability-of-containment map (Fan et al. 2024).",
+        epilog=examples(
+            "poc-env --version",
+            "poc-env scenarios",
+            "poc-env --max-memory-gb 4 plan --scenario small --out out/plan.json",
+        )
+        + "\n\nEach command's --help lists its options, their defaults and examples.",
     )
     parser.add_argument(
         "--max-memory-gb",
@@ -766,17 +808,32 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     from poc_env.agents.policies.registry import registered
 
-    p = sub.add_parser("scenarios", help="list the built-in scenarios")
+    p = sub.add_parser(
+        "scenarios", help="list the built-in scenarios", epilog=examples("poc-env scenarios")
+    )
     p.set_defaults(func=cmd_scenarios)
 
-    p = sub.add_parser("policies", help="list the registered policies (evaluate --policies)")
+    p = sub.add_parser(
+        "policies",
+        help="list the registered policies (evaluate --policies)",
+        epilog=examples("poc-env policies"),
+    )
     p.set_defaults(func=cmd_policies)
 
-    p = sub.add_parser("tasks", help="list the registered benchmark tasks (poc_env.tasks)")
+    p = sub.add_parser(
+        "tasks",
+        help="list the registered benchmark tasks (poc_env.tasks)",
+        epilog=examples("poc-env tasks"),
+    )
     p.set_defaults(func=cmd_tasks)
 
     p = sub.add_parser(
-        "record", help="record the fixed episodes of registered tasks (poc_env.recorded)"
+        "record",
+        help="record the fixed episodes of registered tasks (poc_env.recorded)",
+        epilog=examples(
+            "poc-env record --task poc_env/UAVSearch-Small-Heading-v1 --dir out/recorded",
+            "poc-env record --all",
+        ),
     )
     from poc_env.recorded import add_arguments as record_arguments
 
@@ -784,7 +841,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_record)
 
     p = sub.add_parser(
-        "spec", help="check (or --write) docs/environment.md's tables generated from poc_env.spec"
+        "spec",
+        help="check (or --write) docs/environment.md's tables generated from poc_env.spec",
+        epilog=examples("poc-env spec", "poc-env spec --write"),
     )
     from poc_env.spec import add_arguments as spec_arguments
 
@@ -794,14 +853,29 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenario", help="scenario tools: import GIS layers as a scenario")
     scenario_sub = p.add_subparsers(dest="scenario_command", required=True)
     p = scenario_sub.add_parser(
-        "import", help="GeoJSON/KML area, airfields and no-fly zones, GeoTIFF/CSV prior -> YAML"
+        "import",
+        help="GeoJSON/KML area, airfields and no-fly zones, GeoTIFF/CSV prior -> YAML",
+        epilog=examples(
+            "poc-env scenario import area.geojson --airfields fields.geojson --prior prior.csv "
+            "--out my_area.yaml",
+            "poc-env scenario import area.kml --airfields fields.kml --no-fly zones.kml "
+            "--cell-km 2 --projection utm --base small --out my_area.yaml",
+        ),
     )
     from poc_env.agents.mission.geoimport import add_scenario_import_arguments, cmd_scenario_import
 
     add_scenario_import_arguments(p)
     p.set_defaults(func=cmd_scenario_import)
 
-    p = sub.add_parser("survey", help="score a region plan (Table 4 / 5 analog) with the bound")
+    p = sub.add_parser(
+        "survey",
+        help="score a region plan (Table 4 / 5 analog) with the bound",
+        epilog=examples(
+            "poc-env survey --scenario paper_6_1 --out out/survey",
+            "poc-env survey --optimise --plan-out out/survey_plan.json --origin -45.5,126.6",
+            "poc-env survey --overrides sensor.sweep_width_km=4",
+        ),
+    )
     _add_scenario(p, "paper_6_1")
     p.add_argument("--regions", default=None, help="region plan: built-in name or YAML path")
     p.add_argument("--out", default=None, help="folder for survey.csv / .txt / .png")
@@ -823,7 +897,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_projection(p)
     p.set_defaults(func=cmd_survey)
 
-    p = sub.add_parser("render", help="fly one episode and write it as an animated GIF")
+    p = sub.add_parser(
+        "render",
+        help="fly one episode and write it as an animated GIF",
+        epilog=examples(
+            "poc-env render --scenario small --policy greedy_bayes --out out/episode.gif",
+            "poc-env render --scenario paper_6_2 --policy de_plan --every 5 --seed 3",
+        ),
+    )
     p.add_argument("--scenario", default="small", help="built-in name or YAML path")
     _add_overrides(p)
     p.add_argument(
@@ -837,7 +918,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--every", type=int, default=1, help="draw a frame every N steps")
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("evaluate", help="score policies on the same episodes")
+    p = sub.add_parser(
+        "evaluate",
+        help="score policies on the same episodes",
+        epilog=examples(
+            "poc-env evaluate --scenario small --policies lawnmower,greedy_bayes --episodes 5 "
+            "--out out/eval",
+            "poc-env evaluate --task poc_env/UAVSearch-Paper62-Random-Heading-v0 --policies "
+            "greedy_bayes,ppo:ppo_heading_paper_6_2 --episodes 20 --baseline greedy_bayes "
+            "--workers 2",
+            "poc-env evaluate --overrides sensor.sweep_width_km=4 episode.horizon_steps=50 "
+            "--policies random,lawnmower",
+        ),
+    )
     _add_scenario(p, None)
     p.add_argument(
         "--task",
@@ -874,6 +967,28 @@ def build_parser() -> argparse.ArgumentParser:
     _add_ray(p)
     p.set_defaults(func=cmd_evaluate)
 
+    p = sub.add_parser(
+        "summarise",
+        help="rewrite an evaluate folder's evaluate.csv/.txt (and paired.csv) from its "
+        "episodes.csv, flying nothing",
+        epilog=examples(
+            "poc-env summarise results/learned",
+            "poc-env summarise out/eval --baseline lawnmower --out out/eval_paired",
+        ),
+    )
+    p.add_argument("results_dir", help="folder of poc-env evaluate --out (holds episodes.csv)")
+    p.add_argument(
+        "--baseline",
+        default=None,
+        metavar="POLICY[,POLICY...]",
+        help="paired differences against these policies (default: the baselines of the "
+        "folder's paired.csv, if any)",
+    )
+    p.add_argument(
+        "--out", default=None, help="folder for the summary files (default: RESULTS_DIR)"
+    )
+    p.set_defaults(func=cmd_summarise)
+
     # train's options (and its --help) come from the TrainArgs dataclass: main() hands them to
     # poc_env.agents.rl.args.parse_train_args
     p = sub.add_parser(
@@ -881,7 +996,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_train)
 
-    p = sub.add_parser("plan", help="the §6.2 time-limited plan (Table 6 analog) as plan.json")
+    p = sub.add_parser(
+        "plan",
+        help="the §6.2 time-limited plan (Table 6 analog) as plan.json",
+        epilog=examples(
+            "poc-env plan --out out/plan.json --plot out/plan.png --origin -45.5,126.6",
+            "poc-env plan --scenario small --planner allocation --out out/plan.json",
+            "poc-env plan --overrides sensor.sweep_width_km=4 --uavs 4 --optimizer cmaes "
+            "--maxiter 50",
+        ),
+    )
     _add_scenario(p, "paper_6_2")
     p.add_argument("--uavs", type=int, default=None, help="number of UAVs (default: fleet)")
     p.add_argument(
@@ -913,7 +1037,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--planner",
         default="de",
         choices=["de", "allocation"],
-        help="de: the paper's optimiser plan (default); allocation: routes from the reach-aware "
+        help="de: the paper's optimiser plan; allocation: routes from the reach-aware "
         "optimal allocation (docs/PLANNER.md)",
     )
     p.add_argument(
@@ -942,7 +1066,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     from poc_env.agents.mission.formats import FORMATS
 
-    p = sub.add_parser("export", help="a plan.json as GeoJSON, KML, QGroundControl missions, ...")
+    p = sub.add_parser(
+        "export",
+        help="a plan.json as GeoJSON, KML, QGroundControl missions, ...",
+        epilog=examples(
+            "poc-env export out/plan.json --format kml",
+            "poc-env export out/plan.json --format qgc --origin -45.5,126.6 --altitude-ref "
+            "amsl --field-elevation-m 120 --out out/missions",
+        ),
+    )
     p.add_argument("plan", help="plan.json (schema 2; schema-1 files still load)")
     p.add_argument(
         "--format",
@@ -975,32 +1107,42 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_export)
 
-    p = sub.add_parser("curve", help="plot a training run's POSC curve (TensorBoard logs) as PNG")
+    p = sub.add_parser(
+        "curve",
+        help="plot a training run's POSC curve (TensorBoard logs) as PNG",
+        epilog=examples("poc-env curve runs/small --out out/curve.png --until 20000"),
+    )
     p.add_argument("run_dir", help="run folder of poc-env train")
     p.add_argument("--out", default="training_curve.png")
     p.add_argument("--until", type=int, default=None, help="last timestep to plot")
     p.set_defaults(func=cmd_curve)
 
-    p = sub.add_parser("experiment", help="reproduce a §6 experiment of the paper (or all)")
+    p = sub.add_parser(
+        "experiment",
+        help="reproduce a §6 experiment of the paper (or all)",
+        epilog=examples(
+            "poc-env experiment table6 --quick --out out/table6",
+            "poc-env experiment all --workers 2 --preset tuned",
+        ),
+    )
     from poc_env.agents.experiments.paper import add_arguments as add_experiment_arguments
 
     add_experiment_arguments(p)
     _add_ray(p)
     p.set_defaults(func=cmd_experiment)
 
-    p = sub.add_parser("bench", help="speed benchmarks (one core; medians of several runs)")
+    p = sub.add_parser(
+        "bench",
+        help="speed benchmarks (one core; medians of several runs)",
+        epilog=examples(
+            "poc-env bench env --envs 1 64 --runs 3",
+            "poc-env bench campaign --cases 6500 --seed 72",
+        )
+        + "\n\nEach benchmark's own --help (poc-env bench plan --help) lists its options.",
+    )
     p.add_argument(
         "what",
-        choices=[
-            "env",
-            "plan",
-            "train",
-            "campaign",
-            "baselines",
-            "suite",
-            "learning",
-            "generalise",
-        ],
+        choices=list(BENCHMARKS),
         help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s; campaign: "
         "hostile-input cases and their outcomes (needs hypothesis, the dev extra); baselines: "
         "the baseline table of every registered task; suite: env-steps/s per control level and "
@@ -1011,21 +1153,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("figures", help="regenerate the README's figures")
+    p = sub.add_parser(
+        "figures",
+        help="regenerate the README's figures",
+        epilog=examples("poc-env figures --out results/img"),
+    )
     p.add_argument("--out", default="results/img")
     p.set_defaults(func=cmd_figures)
 
-    p = sub.add_parser("demo", help="run the main job on the built-in scenarios")
+    p = sub.add_parser(
+        "demo",
+        help="run the main job on the built-in scenarios",
+        epilog=examples("poc-env demo --out out/demo --episodes 2 --workers 1"),
+    )
     p.add_argument("--out", default="out/demo")
     p.add_argument("--episodes", type=int, default=5)
     p.add_argument("--workers", type=int, default=2)
     p.set_defaults(func=cmd_demo)
+    use_everywhere(p for _, p in walk(parser))  # defaults shown, examples kept as written
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def parse_command_line(argv: Sequence[str]) -> argparse.Namespace:
+    """``argv`` (without the program name) parsed as :func:`main` parses it: ``train``'s options
+    left in ``train_options`` for :func:`poc_env.agents.rl.args.parse_train_args`, ``bench``'s
+    in ``rest`` for the benchmark's own parser. A malformed line exits with status 2."""
     parser = build_parser()
-    argv = list(sys.argv[1:] if argv is None else argv)
+    argv = list(argv)
     for opt in _NEGATIVE_VALUE_OPTIONS:  # "--origin -45,7" -> "--origin=-45,7"
         while opt in argv[:-1]:
             i = argv.index(opt)
@@ -1035,6 +1189,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.train_options = rest
     elif rest:
         parser.error(f"unrecognized arguments: {' '.join(rest)}")
+    return args
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parse_command_line(sys.argv[1:] if argv is None else argv)
     try:
         try:
             if args.max_memory_gb is not None:

@@ -516,8 +516,10 @@ class TargetConfig:
     ``U(0, random_current_kmh)`` in a uniform direction drawn from the env's generator, plus
     (``drift``) the gridded field of ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or
     ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart; a relative path is read from the scenario's
-    folder). The model name, the leeway class and the field are checked against the table and
-    the map when the dynamics are built (:func:`poc_env.theory.motion.check`).
+    folder). The model name and the leeway class are checked against their tables when the
+    scenario loads (the class whatever the model: a scenario switched to ``leeway`` later must
+    not meet a typo then); the field against the map when the dynamics are built
+    (:func:`poc_env.theory.motion.check`).
     """
 
     model: str = _f(default="static")
@@ -532,6 +534,7 @@ class TargetConfig:
     def __post_init__(self) -> None:
         _coerce(self)
         _choice("model", self.model, MOTION_MODEL_NAMES)  # a typo is refused at load
+        _choice("leeway_class", self.leeway_class, LEEWAY_CLASS_NAMES)  # whatever the model
         for key in ("current_kmh", "wind_kmh"):
             u, v = _vec2(key, getattr(self, key), bound=400.0)
             object.__setattr__(self, key, (u, v))
@@ -548,6 +551,18 @@ class TargetConfig:
 #: table of what each does is :data:`poc_env.theory.motion.MODELS`, which checks at import
 #: that it names exactly these (as the detection laws check ``LAW_CODES``).
 MOTION_MODEL_NAMES = ("static", "diffusion", "drift", "leeway")
+
+#: Names of the leeway classes (``target.leeway_class``), checked when a scenario loads; the
+#: classes' coefficients are :data:`poc_env.theory.motion.LEEWAY_CLASSES`, which checks at
+#: import that it names exactly these.
+LEEWAY_CLASS_NAMES = (
+    "person_in_water",
+    "piw_vertical_pfd",
+    "life_raft_deep_ballast",
+    "life_raft_no_ballast",
+    "skiff",
+    "fishing_vessel",
+)
 
 
 @dataclass(frozen=True)

@@ -670,7 +670,7 @@ def render_doc(text: str) -> str:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``poc-env spec``."""
     p.add_argument("--write", action="store_true", help="rewrite the page's generated sections")
-    p.add_argument("--doc", default=str(DOC), help=f"the page (default {DOC})")
+    p.add_argument("--doc", default=str(DOC), help="the page")
 
 
 def main_args(args: argparse.Namespace) -> int:

@@ -34,6 +34,7 @@ DEFAULT_CASES = {
     "text": 60,
     "utm": 150,
     "runtime": 40,
+    "episodes": 150,
 }
 
 
@@ -84,6 +85,18 @@ def test_the_checks_catch_a_silent_wrong_map(monkeypatch):
 
     monkeypatch.setattr(pm, "validate_map", lambda values, grid, source="map": np.asarray(values))
     assert classify(run_maps, np.full((8, 8), 0.5))[0] == "silent"
+
+
+def test_the_checks_catch_a_scenario_naming_an_unknown_table_entry(monkeypatch):
+    # a loader that stopped checking target.leeway_class (issue 27: it checked only when leeway
+    # dynamics were built) must be caught as "silent": the override draws reach that key
+    import poc_env.config as config
+    from poc_env.agents.testing.campaign import run_overrides
+
+    monkeypatch.setattr(config, "LEEWAY_CLASS_NAMES", (*config.LEEWAY_CLASS_NAMES, "submarine"))
+    assert classify(run_overrides, {"target.leeway_class": "submarine"})[0] == "silent"
+    monkeypatch.undo()
+    assert classify(run_overrides, {"target.leeway_class": "submarine"})[0] == "error"
 
 
 def test_a_case_past_its_time_limit_is_a_hang_and_leaves_nothing_behind():

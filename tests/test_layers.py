@@ -26,12 +26,15 @@ LAYERS = (
     ("poc_env.config", 0),
     ("poc_env.limits", 0),
     ("poc_env.spec", 0),
+    ("poc_env.stats", 0),
+    ("poc_env.helptext", 0),
     ("poc_env._kernels", 0),
     ("poc_env.theory", 1),
     ("poc_env.sim", 2),
     ("poc_env.viz", 3),
     ("poc_env.envs", 4),
     ("poc_env.uav_search_v0", 4),
+    ("poc_env.uav_search_v1", 4),
     ("poc_env.recorded", 4),
     ("poc_env", 4),  # the package's __init__: parallel_env, env, registration
     # geography in, missions out: the plan model, the CRS, every export format, GIS import

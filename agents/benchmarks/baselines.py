@@ -7,7 +7,7 @@ Each task is scored with :func:`poc_env.agents.experiments.evaluate.evaluate` on
 every policy (seeds ``--seed .. --seed + episodes - 1``; on ``-Random-`` tasks each seed flies
 its own held-out prior, :func:`~poc_env.agents.experiments.evaluate.episode_prior`, a generator
 stream training never draws from). Columns: mean POSC with its 95 % interval over the seeds
-(1.96 standard errors), POSC normalised by each episode's reach-aware bound
+(Student's t, :func:`poc_env.stats.ci95`), POSC normalised by each episode's reach-aware bound
 (:func:`poc_env.theory.bound.reach_effort_bound`: the best POSC any swarm could reach with
 transit from its airfields at top speed), and the mean constraint-violation steps.
 
@@ -35,13 +35,23 @@ import sys
 from typing import Any
 
 from poc_env.errors import ConfigError
+from poc_env.helptext import HelpFormatter, examples
 
 CLASSICAL = ("lawnmower", "greedy_bayes", "de_plan", "allocation_plan")
 FLOOR = {"increments": "random", "heading": "random_heading", "waypoint": "random_waypoint"}
 
 
-def _parse(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="poc-env bench baselines", description=__doc__.split("\n")[0])
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
+    p = argparse.ArgumentParser(
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench baselines --quick",
+            "poc-env bench baselines --tasks poc_env/UAVSearch-Small-Heading-v1 --episodes 5",
+        ),
+        prog="poc-env bench baselines",
+        description=__doc__.split("\n")[0],
+    )
     p.add_argument("--tasks", nargs="*", default=None, help="task ids (default: every task)")
     p.add_argument("--episodes", type=int, default=20)
     p.add_argument("--seed", type=int, default=1000, help="first episode seed")
@@ -58,7 +68,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS")
     p.add_argument("--out", default=None, help="folder for baselines.csv and baselines.md")
     p.add_argument("--quick", action="store_true", help="2 episodes, Small tasks only")
-    return p.parse_args(argv)
+    return p
+
+
+def _parse(argv: list[str] | None) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
 
 
 def run(args: argparse.Namespace) -> list[dict[str, Any]]:

@@ -48,6 +48,7 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
 from poc_env.config import load_scenario  # noqa: E402
+from poc_env.helptext import HelpFormatter, examples  # noqa: E402
 from poc_env.sim import core as sim  # noqa: E402
 
 STEPS = 100  # steps per timed stretch (below paper_6_2's 180-step endurance)
@@ -234,9 +235,18 @@ def peak_memory(scenario: str, overrides: dict, n_envs: int, obs_type: str) -> t
     return state / n_envs, peak / n_envs
 
 
-def main(argv: list[str] | None = None) -> dict[str, float]:
-    """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
+    ap = argparse.ArgumentParser(
+        prog="poc-env bench env",
+        description=__doc__.splitlines()[0],
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench env --envs 1 64 --runs 3",
+            "poc-env bench env --scenario small --set sensor.samples_per_cell=2 --no-mpe",
+            "poc-env bench env --motion drift --envs 64 --no-memory",
+        ),
+    )
     ap.add_argument("--scenario", default="paper_6_2")
     ap.add_argument("--envs", type=int, nargs="+", default=[1, 64, 256])
     ap.add_argument("--runs", type=int, default=5)
@@ -257,7 +267,12 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         help="also time a moving target (the Drift tasks' current and diffusion, or that "
         "model), interleaved with the static one, and print the filter's share of the step",
     )
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
+    args = build_parser().parse_args(argv)
 
     overrides = {}
     for item in args.set:

@@ -45,8 +45,8 @@ fixed-length vector whatever the grid's shape or cell size. So one checkpoint
 retraining; a checkpoint of a raster recipe (``shared``, ``central``) is tied to its grid and
 stops with a ``checkpoint`` error on the other shapes.
 
-Per condition and policy: mean POSC with its 95 % interval over the seeds (1.96 standard
-errors), the mean reach-aware bound of the condition's priors
+Per condition and policy: mean POSC with its 95 % interval over the seeds (Student's t,
+:func:`poc_env.stats.ci95`), the mean reach-aware bound of the condition's priors
 (:func:`poc_env.theory.bound.reach_bound`: the best POSC any swarm could reach with transit
 from its airfields at top speed), the normalised score (mean over episodes of POSC / the
 episode's reach-aware bound: a bigger or finer map changes the attainable POSC, the ratio
@@ -69,6 +69,7 @@ import time
 from typing import Any
 
 from poc_env.errors import ConfigError
+from poc_env.helptext import HelpFormatter, examples
 
 #: condition name -> dotted-key overrides of the scenario (see the module docstring).
 CONDITIONS: dict[str, dict[str, Any]] = {
@@ -92,9 +93,15 @@ DEFAULT_POLICIES = (
 SEED0 = 1000
 
 
-def _parse(argv: list[str] | None) -> argparse.Namespace:
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
     p = argparse.ArgumentParser(
-        prog="poc-env bench generalise", description=(__doc__ or "").split("\n")[0]
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench generalise --episodes 5 --policies greedy_bayes,allocation_plan"
+        ),
+        prog="poc-env bench generalise",
+        description=(__doc__ or "").split("\n")[0],
     )
     p.add_argument("--scenario", default="paper_6_2", help="scenario the conditions change")
     p.add_argument(
@@ -112,7 +119,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--out", default=None, help="folder for generalise.csv and generalise.md")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    return p.parse_args(argv)
+    return p
+
+
+def _parse(argv: list[str] | None) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
 
 
 def _names(field: str, text: str) -> list[str]:

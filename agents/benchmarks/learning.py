@@ -30,11 +30,20 @@ from typing import Any
 import numpy as np
 
 from poc_env.errors import ConfigError
+from poc_env.helptext import HelpFormatter, examples
 from poc_env.io import read_json
 
 
-def _parse(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="poc-env bench learning", description=__doc__.split("\n")[0])
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
+    p = argparse.ArgumentParser(
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench learning --recipe heading=runs/s0,runs/s1 --episodes 5 --every 2"
+        ),
+        prog="poc-env bench learning",
+        description=__doc__.split("\n")[0],
+    )
     p.add_argument(
         "--recipe",
         action="append",
@@ -49,7 +58,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--every", type=int, default=1, help="evaluate every k-th checkpoint")
     p.add_argument("--out", default=None, help="folder for learning.csv, .md and .png")
     p.add_argument("--quiet", action="store_true")
-    return p.parse_args(argv)
+    return p
+
+
+def _parse(argv: list[str] | None) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
 
 
 def checkpoints(run: Path) -> list[tuple[int, Path]]:

@@ -62,10 +62,21 @@ from poc_env.agents.planning.optimizers import (  # noqa: E402
 )
 from poc_env.config import load_scenario  # noqa: E402
 from poc_env.errors import ConfigError  # noqa: E402
+from poc_env.helptext import HelpFormatter, examples  # noqa: E402
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="poc-env bench plan", description=__doc__.split("\n")[0])
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
+    p = argparse.ArgumentParser(
+        prog="poc-env bench plan",
+        description=__doc__.split("\n")[0],
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench plan --runs 3",
+            "poc-env bench plan --planner de --preset tuned --uavs 4",
+            "poc-env bench plan --sweep 100,300,0.2,0.1 60,200,0.15,0.9 --seeds 5",
+        ),
+    )
     p.add_argument("--scenario", default="paper_6_2", help="built-in name or YAML path")
     p.add_argument("--uavs", type=int, default=6, help="number of UAVs (paper: 6)")
     p.add_argument("--popsize", type=int, default=None, help="NP (default: the scenario's)")
@@ -73,7 +84,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--runs", type=int, default=3, help="timed runs per figure (median)")
     p.add_argument("--quality", action="store_true", help="adaptive vs classic DE (slow)")
     p.add_argument("--seeds", type=int, default=10, help="seeds for --quality and --sweep")
-    p.add_argument("--preset", default="paper", help="DE settings: paper (default) or tuned")
+    p.add_argument("--preset", default="paper", help="DE settings: paper or tuned")
     p.add_argument(
         "--sweep", nargs="+", default=None, metavar="NP,G,F0,CR", help="adaptive DE candidates"
     )
@@ -82,7 +93,7 @@ def _parser() -> argparse.ArgumentParser:
         "--planner",
         default="both",
         choices=["de", "allocation", "both"],
-        help="time adaptive DE, the allocation planner, or both (default)",
+        help="time adaptive DE, the allocation planner, or both",
     )
     return p
 
@@ -151,7 +162,7 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     sc = load_scenario(args.scenario)
     obj = PlanObjective(sc, uavs=args.uavs)
     if args.sweep:

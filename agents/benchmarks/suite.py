@@ -34,6 +34,8 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from poc_env.helptext import HelpFormatter, examples  # noqa: E402
+
 STEPS = 200  # joint steps per timed stretch
 
 
@@ -123,15 +125,27 @@ def _env_steps(result: dict[str, Any]) -> float:
     return float(result["num_env_steps_sampled_lifetime"])
 
 
-def main(argv: list[str] | None = None) -> dict[str, float]:
-    p = argparse.ArgumentParser(prog="poc-env bench suite", description=__doc__.split("\n")[0])
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
+    p = argparse.ArgumentParser(
+        prog="poc-env bench suite",
+        description=__doc__.split("\n")[0],
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench suite --scenario Small --envs 1 64 --runs 3 --skip-rllib",
+        ),
+    )
     p.add_argument("--scenario", default="Small", choices=["Small", "Paper62", "Paper61"])
     p.add_argument("--envs", type=int, nargs="+", default=[1, 64])
     p.add_argument("--runs", type=int, default=5)
     p.add_argument("--iterations", type=int, default=3)
     p.add_argument("--skip-rllib", action="store_true")
     p.add_argument("--skip-sb3", action="store_true")
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    args = build_parser().parse_args(argv)
     from poc_env import tasks
 
     out: dict[str, float] = {}

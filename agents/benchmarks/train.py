@@ -22,6 +22,7 @@ from typing import Any
 
 from poc_env.agents.rl.args import RECIPES, TrainArgs
 from poc_env.agents.rl.train import make_env, make_model, seed_everything
+from poc_env.helptext import HelpFormatter, examples
 
 
 def bench_train(
@@ -84,17 +85,27 @@ def bench_train(
     }
 
 
-def main(argv: Sequence[str] | None = None) -> dict[str, float]:
-    """``poc-env bench train``: print the figures of :func:`bench_train`."""
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
     ap = argparse.ArgumentParser(
         prog="poc-env bench train",
         description="PPO training speed: agent transitions/s and env vs network time shares",
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench train --scenario small --recipe pilot --iterations 1",
+            "poc-env bench train --n-envs 8",
+        ),
     )
     ap.add_argument("--scenario", default="paper_6_2")
     ap.add_argument("--recipe", default="shared", choices=RECIPES)
     ap.add_argument("--n-envs", type=int, default=None, help="default: TrainArgs.n_envs")
     ap.add_argument("--iterations", type=int, default=2, help="timed PPO iterations")
-    ns = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> dict[str, float]:
+    """``poc-env bench train``: print the figures of :func:`bench_train`."""
+    ns = build_parser().parse_args(argv)
     r = bench_train(ns.scenario, ns.recipe, ns.n_envs, ns.iterations)
     d = TrainArgs()
     print(

@@ -1,4 +1,5 @@
-"""Score policies on the same episodes: mean POSC with 95 % intervals, detection, violations.
+"""Score policies on the same episodes: mean POSC with Student's t 95 % intervals
+(:func:`poc_env.stats.ci95`), detection, violations.
 
 Every policy runs the same ``episodes`` seeds (``seed0 .. seed0 + episodes - 1``); each episode
 creates a fresh environment reset with its seed, so results do not depend on ``workers`` or on
@@ -27,6 +28,7 @@ from poc_env.agents.experiments.pool import process_pool, run_jobs  # noqa: F401
 from poc_env.agents.policies.registry import make_policy
 from poc_env.errors import ConfigError, as_int
 from poc_env.io import csv_text
+from poc_env.stats import ci95
 
 
 def check_policies(policies: Sequence[str]) -> None:
@@ -139,14 +141,20 @@ class Evaluation:
     #: reach-aware bound (mean over the episodes' priors with ``random_priors``); None if not
     #: computed (then ``bound_reach`` and ``normalised`` are left empty)
     bound_reach: float | None = None
+    #: mean time to detection (min) per policy, for episodes that do not record their own
+    #: (an episodes.csv written before it had ``time_to_detection_s``: :func:`summarise` takes
+    #: the folder's evaluate.csv column); None: computed from the episodes
+    time_to_detection_min: dict[str, float | None] | None = None
 
     def rows(self) -> list[dict[str, Any]]:
         out = []
         for p in self.policies:
             eps = [e for e in self.episodes if e.policy == p]
             x = np.array([e.posc for e in eps])
-            half = 1.96 * x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else 0.0
+            half = ci95(x)
             ttd = [e.time_to_detection_s for e in eps if e.time_to_detection_s is not None]
+            known = self.time_to_detection_min
+            t_det = (float(np.mean(ttd) / 60) if ttd else None) if known is None else known[p]
             norm = [e.normalised for e in eps]
             if any(v is None for v in norm) and self.bound_reach:
                 norm = [e.posc / self.bound_reach for e in eps]
@@ -157,7 +165,7 @@ class Evaluation:
                     "posc_mean": float(x.mean()),
                     "posc_ci95": float(half),
                     "detection_rate": float(np.mean([e.detected for e in eps])),
-                    "time_to_detection_min": float(np.mean(ttd) / 60) if ttd else None,
+                    "time_to_detection_min": t_det,
                     "violation_steps": float(np.mean([e.violation_steps for e in eps])),
                     "crashed": float(np.mean([e.crashed for e in eps])),
                     "landed": float(np.mean([e.landed for e in eps])),
@@ -200,8 +208,9 @@ class Evaluation:
 
     def paired(self, baseline: str) -> list[dict[str, Any]]:
         """Every other policy against ``baseline`` on the same seeds: the mean of the per-seed
-        POSC differences (policy - baseline), its 95 % interval (1.96 standard errors of the
-        differences), and the seeds the policy wins, ties (|difference| < 1e-12) and loses.
+        POSC differences (policy - baseline), its 95 % interval (Student's t over the seeds,
+        :func:`poc_env.stats.ci95`), and the seeds the policy wins, ties (|difference| <
+        1e-12) and loses.
 
         The seeds are shared, so the prior-to-prior spread that dominates each policy's own
         interval cancels: this is the comparison to quote when two policies' intervals overlap.
@@ -220,7 +229,7 @@ class Evaluation:
             if p == baseline:
                 continue
             d = np.array([e.posc - ref[e.seed] for e in self.episodes if e.policy == p])
-            half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else 0.0
+            half = ci95(d)
             out.append(
                 {
                     "policy": p,
@@ -269,6 +278,9 @@ class Evaluation:
                 "violation_steps": e.violation_steps,
                 "crashed": e.crashed,
                 "landed": e.landed,
+                "time_to_detection_s": e.time_to_detection_s,
+                "steps": e.steps,
+                "random_prior": self.random_priors,
             }
             for e in self.episodes
         ]
@@ -279,6 +291,145 @@ class Evaluation:
 
     def to_csv(self) -> str:
         return csv_text(self.rows())
+
+    def summary_files(self, baselines: Sequence[str] = ()) -> dict[str, str]:
+        """The summary files of an evaluation folder, name -> text: ``evaluate.csv``,
+        ``evaluate.txt`` (the table, then each baseline's paired table) and, with
+        ``baselines``, ``paired.csv``. ``poc-env evaluate --out`` writes them beside
+        ``episodes.csv``; ``poc-env summarise`` writes them again from ``episodes.csv`` alone
+        (:func:`read_episodes`)."""
+        text = self.table()
+        for b in baselines:
+            text += "\n\n" + self.paired_table(b)
+        files = {"evaluate.csv": self.to_csv(), "evaluate.txt": text + "\n"}
+        if baselines:
+            files["paired.csv"] = csv_text([row for b in baselines for row in self.paired(b)])
+        return files
+
+
+#: Columns every episodes.csv has (:meth:`Evaluation.episode_rows`); ``time_to_detection_s``,
+#: ``steps`` and ``random_prior`` came later and are optional when reading.
+EPISODE_COLUMNS = (
+    "policy", "seed", "posc", "bound", "bound_reach", "normalised", "detected",
+    "violation_steps", "crashed", "landed",
+)  # fmt: skip
+#: Largest episodes.csv :func:`read_episodes` reads (about 100 bytes a row).
+MAX_EPISODES_CSV_BYTES = 64 * 2**20
+
+
+def read_episodes(
+    path: str | os.PathLike[str], time_to_detection_min: dict[str, float | None] | None = None
+) -> Evaluation:
+    """The :class:`Evaluation` an ``episodes.csv`` records (its policies in order of first
+    appearance, the bounds as :func:`evaluate` computes them), whose summary equals the one
+    ``evaluate`` wrote beside it. The episodes' POSC curves are not in the file (the figure
+    cannot be redrawn from it). An older file without ``time_to_detection_s`` needs the
+    per-policy means ``time_to_detection_min`` (else they are reported as unknown); without
+    ``random_prior`` the priors count as random when the episodes' bounds differ.
+
+    Raises
+    ------
+    ConfigError
+        Field ``episodes`` for a missing, unreadable or oversized file, a missing column, a
+        value that is not what its column holds, or a policy with other seeds than the first.
+    """
+    import csv
+    import io
+
+    from poc_env.errors import as_number
+
+    where = os.fspath(path)
+    try:
+        size = os.path.getsize(where)
+        if size > MAX_EPISODES_CSV_BYTES:
+            raise ConfigError("episodes", where, f"an episodes.csv of at most "
+                              f"{MAX_EPISODES_CSV_BYTES} bytes (this one: {size})")  # fmt: skip
+        with open(where, encoding="utf-8", newline="") as f:
+            text = f.read()
+    except (OSError, UnicodeDecodeError) as err:
+        why = getattr(err, "strerror", None) or "not UTF-8 text"
+        raise ConfigError(
+            "episodes", where, f"an episodes.csv of poc-env evaluate ({why})"
+        ) from None
+    try:
+        rows = list(csv.DictReader(io.StringIO(text)))
+    except csv.Error as err:  # a field past csv's size limit, a NUL byte, ...
+        raise ConfigError(
+            "episodes", where, f"an episodes.csv of poc-env evaluate ({err})"
+        ) from None
+    if not rows:
+        raise ConfigError("episodes", where, "an episodes.csv with a header and episode rows")
+    missing = [c for c in EPISODE_COLUMNS if c not in rows[0]]
+    if missing:
+        columns = ", ".join(EPISODE_COLUMNS)
+        allowed = f"an episodes.csv with the columns {columns} (missing: {', '.join(missing)})"
+        raise ConfigError("episodes", where, allowed)
+
+    def cell(i: int, col: str, kind: str) -> Any:
+        value = rows[i].get(col)
+        field = f"episodes.csv row {i + 1} {col}"
+        if kind == "bool":
+            if value not in ("True", "False"):
+                raise ConfigError(field, value, "True or False")
+            return value == "True"
+        if value in ("", None) and kind == "float?":
+            return None
+        try:
+            number = float(value)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise ConfigError(field, value, "a number") from None
+        if kind == "int":
+            return as_int(field, number, 0, limits.MAX_SEED)
+        if col == "time_to_detection_s":
+            return as_number(field, number, 0.0, 1e12)
+        return as_number(field, number, 0.0, 1.0)  # POSC and its bounds: probabilities
+
+    episodes = []
+    has_ttd = "time_to_detection_s" in rows[0]
+    for i, r in enumerate(rows):
+        if not r.get("policy"):
+            raise ConfigError(f"episodes.csv row {i + 1} policy", r.get("policy"), "a policy name")
+        episodes.append(
+            Episode(
+                policy=r["policy"],
+                seed=cell(i, "seed", "int"),
+                posc=cell(i, "posc", "float"),
+                detected=cell(i, "detected", "bool"),
+                time_to_detection_s=cell(i, "time_to_detection_s", "float?") if has_ttd else None,
+                violation_steps=cell(i, "violation_steps", "int"),
+                crashed=cell(i, "crashed", "int"),
+                landed=cell(i, "landed", "int"),
+                steps=cell(i, "steps", "int") if "steps" in rows[0] else -1,
+                posc_curve=(),
+                bound=cell(i, "bound", "float"),
+                bound_reach=cell(i, "bound_reach", "float?"),
+            )
+        )
+    policies = tuple(dict.fromkeys(e.policy for e in episodes))
+    seeds = [e.seed for e in episodes if e.policy == policies[0]]
+    for p in policies:  # every policy flew the same seeds, in the same order (evaluate's)
+        if [e.seed for e in episodes if e.policy == p] != seeds:
+            raise ConfigError("episodes", where, f"every policy on the seeds of {policies[0]!r} "
+                              f"({len(seeds)} episodes); {p!r} has others")  # fmt: skip
+    first = [e for e in episodes if e.policy == policies[0]]
+    if "random_prior" in rows[0]:
+        random_priors = cell(0, "random_prior", "bool")
+    else:
+        random_priors = len({e.bound for e in first}) > 1
+    if random_priors:  # as evaluate: the mean over the first policy's episodes (same seeds)
+        bound = float(np.mean([float(e.bound or 0.0) for e in first]))
+        reach: float | None = float(np.mean([float(e.bound_reach or 0.0) for e in first]))
+    else:
+        bound, reach = float(first[0].bound or 0.0), first[0].bound_reach
+    if not has_ttd and time_to_detection_min is not None:
+        time_to_detection_min = {p: time_to_detection_min.get(p) for p in policies}
+    elif not has_ttd:
+        time_to_detection_min = dict.fromkeys(policies)
+    else:
+        time_to_detection_min = None
+    name = Path(where).parent.name
+    return Evaluation(name, tuple(episodes), bound, policies, random_priors, reach,
+                      time_to_detection_min)  # fmt: skip
 
 
 def effort_bound(
@@ -345,7 +496,7 @@ def evaluate(
 
 
 def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Path:
-    """POSC over time per policy (mean over episodes, shaded 95 % band)."""
+    """POSC over time per policy (mean over episodes, shaded Student's t 95 % band)."""
     from poc_env.viz.plots import _figure, save_figure_atomic
 
     fig = _figure((7.0, 4.5))
@@ -356,7 +507,7 @@ def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Pa
         arr = np.array([list(c) + [c[-1]] * (n - len(c)) for c in curves])
         t = (np.arange(n) + 1) * dt_s / 60
         m = arr.mean(axis=0)
-        h = 1.96 * arr.std(axis=0, ddof=1) / np.sqrt(len(arr)) if len(arr) > 1 else 0 * m
+        h = ci95(arr, axis=0)
         ax.plot(t, m, label=p)
         ax.fill_between(t, m - h, m + h, alpha=0.2)
     ax.axhline(ev.bound, color="k", ls="--", lw=0.8, label="physical optimum (plain)")

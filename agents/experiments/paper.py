@@ -187,9 +187,11 @@ def _plan_job(job: tuple[Scenario, dict[str, Any]]) -> dict[str, Any]:
 
 
 def _mean_ci(x: Sequence[float]) -> tuple[float, float]:
+    """Mean and Student's t 95 % half-width (:func:`poc_env.stats.ci95`)."""
+    from poc_env.stats import ci95
+
     a = np.asarray(x, dtype=float)
-    half = 1.96 * a.std(ddof=1) / np.sqrt(len(a)) if len(a) > 1 else 0.0
-    return float(a.mean()), float(half)
+    return float(a.mean()), ci95(a)
 
 
 def _fmt_table(rows: list[dict[str, Any]], cols: Sequence[tuple[str, str, str]]) -> str:
@@ -849,7 +851,7 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument(
         "--preset",
         default="paper",
-        help="DE settings of every plan: paper (default) or tuned (docs/PLANNER.md)",
+        help="DE settings of every plan: paper or tuned (docs/PLANNER.md)",
     )
 
 

@@ -747,8 +747,8 @@ def add_scenario_import_arguments(p: argparse.ArgumentParser) -> None:
         default=None,
         help="LAT,LON of local (0, 0) (default: the area's south-west lon/lat corner)",
     )
-    p.add_argument("--cell-km", type=float, default=5.0, help="cell side (default 5)")
-    p.add_argument("--projection", default="aeqd", help="aeqd (default) or utm")
+    p.add_argument("--cell-km", type=float, default=5.0, help="cell side, km")
+    p.add_argument("--projection", default="aeqd", help="aeqd or utm")
     p.add_argument("--base", default="paper_6_2", help="scenario giving UAV, sensor, fleet size")
     p.add_argument("--name", default=None, help="scenario name (default: the --out file's stem)")
 

@@ -33,6 +33,7 @@ from tyro.conf import arg as _arg
 import poc_env.limits as limits
 from poc_env.config import parse_overrides
 from poc_env.errors import ConfigError, as_int, as_number
+from poc_env.helptext import examples
 
 ALGOS = ("ppo",)
 ENGINES = ("sb3", "rllib")
@@ -291,7 +292,16 @@ PROG = "poc-env train"
 DESCRIPTION = (
     "Train PPO on a scenario; the run folder gets config.json, scenario.yaml, TensorBoard logs "
     "(tb/), atomic checkpoints and model.zip. Model files are pickle-based: load only trusted "
-    "files."
+    "files.\n\n"
+    + examples(
+        "poc-env train --task poc_env/UAVSearch-Small-Heading-v1 --total-timesteps 20000 "
+        "--run-dir runs/small",
+        "poc-env train --resume runs/small",
+        "poc-env train --scenario small --overrides episode.horizon_steps=40 --recipe pilot "
+        "--total-timesteps 4096 --n-envs 2",
+        "poc-env train --engine rllib --task poc_env/UAVSearch-Small-Heading-v1 "
+        "--total-timesteps 8000 --num-env-runners 0",
+    )
 )
 
 
@@ -383,7 +393,11 @@ def _parser_type() -> type:
             if f.default is not dataclasses.MISSING
             else field(default_factory=f.default_factory)
         )
-        return name, Annotated[hints[name], _arg(help=helps[name])], default
+        factory: Any = f.default_factory
+        made = f.default if f.default is not dataclasses.MISSING else factory()
+        hint = "" if made is None or made == [] else None  # no "(default: None)" noise
+        arg = _arg(help=helps[name], help_behavior_hint=hint)
+        return name, Annotated[hints[name], arg], default
 
     top = [option(n) for n in fields if n not in grouped]
     for group, (heading, names) in GROUPS.items():

@@ -12,9 +12,10 @@ and holds:
 * ``model_step``: the checkpoint's step (``checkpoints/step_N.zip``);
 * ``evaluation``: the held-out evaluation of the model as ``poc-env evaluate --out EVAL_DIR``
   wrote it for the run's task (the seeds, every episode's POSC for the row ``--policy``,
-  their mean, 95 % interval and minimum, the ``floor``). The shipped-checkpoint tests replay
-  the first of these episodes and require the recorded POSC, and fly a further unseen episode
-  that must reach the floor with every UAV landed.
+  their mean, Student's t 95 % interval (:func:`poc_env.stats.ci95`) and minimum, the
+  ``floor``). The shipped-checkpoint tests replay the first of these episodes and require the
+  recorded POSC, and fly a further unseen episode that must reach the floor with every UAV
+  landed.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import numpy as np
 
 from poc_env.errors import ConfigError
 from poc_env.io import read_json
+from poc_env.stats import ci95
 
 
 def make_card(
@@ -65,9 +67,7 @@ def make_card(
             "seeds": [int(r["seed"]) for r in rows],
             "posc": [float(x) for x in posc],
             "posc_mean": float(posc.mean()),
-            "posc_ci95": float(1.96 * posc.std(ddof=1) / np.sqrt(len(posc)))
-            if len(posc) > 1
-            else 0.0,  # one episode: no spread to estimate (as evaluate reports it)
+            "posc_ci95": ci95(posc),  # Student's t; one episode: 0 (as evaluate reports it)
             "normalised": float(np.mean([float(r["normalised"]) for r in rows])),
             "violation_steps": float(np.mean([float(r["violation_steps"]) for r in rows])),
             "floor": float(posc.min()),

@@ -4,9 +4,10 @@
 
 Each *target* is an input a user or a file can hand poc-env -- scenario overrides, prior maps
 (arrays and files), region files, ``plan.json`` for export, command lines, environment
-actions and GIS layers for ``scenario import`` -- with a hypothesis strategy that draws
-plausible values, typos and hostile values alike (strings for numbers, bools, NaN,
-infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is run and classified:
+actions, GIS layers for ``scenario import`` and the ``episodes.csv`` of ``summarise`` -- with
+a hypothesis strategy that draws plausible values, typos and hostile values alike (strings
+for numbers, bools, NaN, infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every
+case is run and classified:
 
 * ``ok``: a valid result, checked for what would make it silently wrong (finite numbers,
   probabilities in [0, 1], a map summing to 1, probability mass conserved by a step, mission
@@ -22,7 +23,7 @@ infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every case is ru
 After each target the campaign counts its *orphans*: processes it started (its descendants, and
 any process carrying its ``POC_ENV_CAMPAIGN_TAG`` environment marker, which catches children
 re-parented to init) still alive. Unclear, traceback, silent, hang and orphan must be 0.
-``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,090
+``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,240
 cases, asserting no hang and no orphan); this command runs a large campaign and prints the
 counts, the figure quoted in issue 27's closing note (``docs/inputs.md``). Needs ``hypothesis``
 (the ``dev`` extra).
@@ -231,7 +232,39 @@ def overrides_strategy():
             ("uav", "fast"),
         ]
     )
-    return st.lists(st.one_of(pairs, listy), min_size=1, max_size=4).map(dict)
+    return st.lists(st.one_of(pairs, listy, table_names()), min_size=1, max_size=4).map(dict)
+
+
+def _named_fields() -> dict[str, tuple[str, ...]]:
+    """Scenario keys whose value names an entry of a table, with the table's names."""
+    from poc_env._kernels.sensing import LAW_CODES
+    from poc_env.theory.motion import LEEWAY_CLASSES, MODELS
+
+    return {
+        "target.model": tuple(MODELS),
+        "target.leeway_class": tuple(LEEWAY_CLASSES),
+        "sensor.law": tuple(LAW_CODES),
+    }
+
+
+def table_names():
+    """(key, value) for the keys that name a table entry (target model, leeway class,
+    detection law): a name of the table or a near miss of one (case, spaces, a letter off,
+    another table's name), alone or beside the model that would use it."""
+    from hypothesis import strategies as st
+
+    fields = _named_fields()
+    every = sorted({n for names in fields.values() for n in names})
+
+    def near(name: str):
+        misses = [name.upper(), f" {name}", f"{name} ", name[:-1], name + "s"]
+        return st.sampled_from([name, *misses, name.replace("_", "-")])
+
+    return st.sampled_from(sorted(fields)).flatmap(
+        lambda k: st.tuples(
+            st.just(k), st.one_of(st.sampled_from(fields[k]).flatmap(near), st.sampled_from(every))
+        )
+    )
 
 
 def run_overrides(overrides: dict[str, Any]) -> None:
@@ -240,6 +273,11 @@ def run_overrides(overrides: dict[str, Any]) -> None:
     from poc_env.config import load_scenario
 
     sc = load_scenario("small", {**overrides, "episode.horizon_steps": 3})
+    named = sc.to_dict()
+    for key, names in _named_fields().items():  # a loaded scenario names only table entries
+        section, name = key.split(".")
+        value = named[section][name]
+        check(value in names, f"{key} {value!r} loaded but is not one of {names}")
     env = poc_env.parallel_env(sc, obs_type="flat")
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -641,6 +679,83 @@ def run_text(case: tuple[list, str, str]) -> None:
         files = export_plan(src, fmt, "45.75,126.65", root / "out")
         for f in files:
             check_output_file(f)
+
+
+# --------------------------------------------------------------------------- target: episodes
+
+
+def _episodes_header() -> list[str]:
+    from poc_env.agents.experiments.evaluate import EPISODE_COLUMNS
+
+    return [*EPISODE_COLUMNS, "time_to_detection_s", "steps", "random_prior"]
+
+
+def sample_episodes() -> list[list[Any]]:
+    """Rows of a valid episodes.csv (``evaluate --out``): two policies on the same 3 seeds."""
+    rows = []
+    for k, policy in enumerate(("lawnmower", "random")):
+        for s in range(3):
+            posc = 0.4 - 0.3 * k + 0.01 * s
+            rows.append([policy, 1000 + s, posc, 0.9, 0.85, posc / 0.85, s % 2 == 0, 2 * s, 0, 3,
+                         600.0 + 60 * s if s % 2 == 0 else "", 40 + s, False])  # fmt: skip
+    return rows
+
+
+def episodes_strategy():
+    """An episodes.csv as ``poc-env summarise`` reads it: a valid file with hostile cells
+    (numbers out of range, NaN, text, empty), a column dropped or renamed, rows cut short or
+    swapped between policies, or raw bytes."""
+    from hypothesis import strategies as st
+
+    width = len(_episodes_header())
+    cell = st.tuples(st.integers(0, 5), st.integers(0, width - 1), hostile_scalars())
+    return st.one_of(
+        st.tuples(st.just("cells"), st.lists(cell, max_size=4)),
+        st.tuples(st.just("drop"), st.integers(0, width - 1)),
+        st.tuples(st.just("short"), st.integers(0, 5)),
+        st.tuples(st.just("seed"), st.integers(0, 5)),
+        st.tuples(st.just("bytes"), st.binary(max_size=200)),
+    )
+
+
+def run_episodes(case: tuple[str, Any]) -> None:
+    """``summarise`` of a hostile episodes.csv: if it reads, the summary is finite and its
+    means and intervals are those of the file's POSC values."""
+    import csv as csv_mod
+
+    from poc_env.agents.experiments.evaluate import read_episodes
+    from poc_env.stats import ci95
+
+    kind, what = case
+    header, rows = _episodes_header(), sample_episodes()
+    if kind == "cells":
+        for r, c, value in what:
+            rows[r][c] = value
+    elif kind == "drop":
+        header = header[:what] + header[what + 1 :]
+        rows = [row[:what] + row[what + 1 :] for row in rows]
+    elif kind == "short":
+        rows[what] = rows[what][:-3]
+    elif kind == "seed":
+        rows[what][1] = 999  # a policy with another seed than the first policy's
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "episodes.csv"
+        if kind == "bytes":
+            path.write_bytes(what)
+        else:
+            with path.open("w", newline="", encoding="utf-8", errors="surrogatepass") as f:
+                w = csv_mod.writer(f)
+                w.writerow(header)
+                w.writerows(rows)
+        ev = read_episodes(path)
+        files = ev.summary_files([ev.policies[0]])
+    for row in ev.rows():
+        posc = [e.posc for e in ev.episodes if e.policy == row["policy"]]
+        check(math.isfinite(row["posc_mean"]) and 0 <= row["posc_mean"] <= 1, f"mean {row}")
+        check(abs(row["posc_ci95"] - ci95(posc)) <= 1e-12, f"interval {row}")
+        check(math.isfinite(row["posc_ci95"]), f"interval not finite: {row}")
+    check(all(math.isfinite(float(x)) for x in (ev.bound, ev.bound_reach or 0.0)), "bounds")
+    check(set(files) == {"evaluate.csv", "evaluate.txt", "paired.csv"}, f"files {set(files)}")
 
 
 # --------------------------------------------------------------------------- target: utm
@@ -1142,11 +1257,12 @@ TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
     "text": (text_strategy, run_text),
     "utm": (utm_strategy, run_utm),
     "runtime": (runtime_strategy, run_runtime),
+    "episodes": (episodes_strategy, run_episodes),
 }
 #: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
 WEIGHTS = {
     "overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1,
-    "text": 2, "utm": 3, "runtime": 1,
+    "text": 2, "utm": 3, "runtime": 1, "episodes": 2,
 }  # fmt: skip
 
 
@@ -1225,12 +1341,19 @@ def run_target(
     return counts, bad
 
 
-def main(argv: list[str] | None = None) -> dict[str, Counter]:
-    """Run the campaign and print the counts; each target's Counter also holds ``orphan``
-    (processes it left alive) and ``seconds``."""
-    import time
+def build_parser() -> argparse.ArgumentParser:
+    """The campaign's command line (``--help``: options, defaults, examples)."""
+    from poc_env.helptext import HelpFormatter, examples
 
-    p = argparse.ArgumentParser(prog="poc-env bench campaign", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(
+        prog="poc-env bench campaign",
+        description=__doc__.split("\n")[0],
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench campaign --cases 6500 --seed 72",
+            "poc-env bench campaign --cases 500 --targets overrides,episodes --case-timeout 30",
+        ),
+    )
     p.add_argument("--cases", type=int, default=5000, help="total cases over all targets")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--targets", default=",".join(TARGETS))
@@ -1241,6 +1364,15 @@ def main(argv: list[str] | None = None) -> dict[str, Counter]:
         default=CASE_TIMEOUT_S,
         help="seconds one case may run before it counts as a hang (0: no limit)",
     )
+    return p
+
+
+def main(argv: list[str] | None = None) -> dict[str, Counter]:
+    """Run the campaign and print the counts; each target's Counter also holds ``orphan``
+    (processes it left alive) and ``seconds``."""
+    import time
+
+    p = build_parser()
     args = p.parse_args(argv)
     for name, lo, hi in (("cases", 1, MAX_CASES), ("show", 0, 10_000), ("seed", 0, 2**32 - 1)):
         v = getattr(args, name)

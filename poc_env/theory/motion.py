@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 
 import poc_env._kernels.motion as _kernel
-from poc_env.config import MOTION_MODEL_NAMES
+from poc_env.config import LEEWAY_CLASS_NAMES, MOTION_MODEL_NAMES
 from poc_env.errors import ConfigError
 
 KMH = 1000.0 / 3600.0
@@ -131,6 +131,8 @@ LEEWAY_CLASSES: dict[str, LeewayClass] = {
         ),
     )
 }  # fmt: skip
+if tuple(LEEWAY_CLASSES) != LEEWAY_CLASS_NAMES:  # the scenario loader's list and this table
+    raise ImportError(f"leeway classes {tuple(LEEWAY_CLASSES)} differ from {LEEWAY_CLASS_NAMES}")
 
 
 # ------------------------------------------------------------------------ velocity fields

@@ -4,6 +4,7 @@ import csv
 
 import numpy as np
 import pytest
+import scipy.stats
 
 from poc_env.agents.experiments.evaluate import effort_bound, evaluate
 from poc_env.cli import main
@@ -131,10 +132,57 @@ def test_paired_differences_against_a_baseline(tmp_path, capsys):
         p, b = r["policy"], r["baseline"]
         d = np.array([posc[p, s] - posc[b, s] for s in (1000, 1001, 1002)])
         assert float(r["diff_mean"]) == pytest.approx(d.mean(), abs=1e-12)
-        assert float(r["diff_ci95"]) == pytest.approx(1.96 * d.std(ddof=1) / np.sqrt(3))
+        t = scipy.stats.t.ppf(0.975, 2)  # Student's t, 2 degrees of freedom (4.30, not 1.96)
+        assert float(r["diff_ci95"]) == pytest.approx(t * d.std(ddof=1) / np.sqrt(3))
         assert int(r["wins"]) + int(r["ties"]) + int(r["losses"]) == 3
         assert int(r["wins"]) == int((d > 1e-12).sum())
     bad = ["evaluate", "--scenario", "small", "--policies", "lawnmower", "--baseline", "random"]
     assert main([*bad, "--quiet", "--out", str(tmp_path / "none")]) == 2
     assert "baseline" in capsys.readouterr().err
     assert not (tmp_path / "none").exists()
+
+
+@pytest.mark.parametrize("priors", [[], ["--random-priors"]])
+def test_summarise_rewrites_the_summary_evaluate_wrote_from_episodes_csv(tmp_path, capsys, priors):
+    """``poc-env summarise`` (issue 27): the summary files from episodes.csv alone equal the
+    ones ``evaluate`` wrote (the paired tables of its baselines included); in place, the other
+    files of the folder are left as they were."""
+    out = tmp_path / "ev"
+    argv = ["evaluate", "--scenario", "small", "--policies", "lawnmower,random", "--episodes",
+            "3", "--quiet", "--baseline", "random", "--out", str(out), *priors]  # fmt: skip
+    assert main(argv) == 0
+    names = ("evaluate.csv", "evaluate.txt", "paired.csv")
+    wrote = {n: (out / n).read_bytes() for n in names}
+    again = tmp_path / "again"
+    assert main(["summarise", str(out), "--out", str(again)]) == 0
+    assert {n: (again / n).read_bytes() for n in names} == wrote
+    assert sorted(p.name for p in again.iterdir()) == sorted(names)
+    for n in ("evaluate.csv", "evaluate.txt"):  # in place: the same bytes again (paired.csv
+        (out / n).write_text("stale")  # names the baselines), episodes.csv untouched
+    episodes = (out / "episodes.csv").read_bytes()
+    assert main(["summarise", str(out)]) == 0
+    assert {n: (out / n).read_bytes() for n in names} == wrote
+    assert (out / "episodes.csv").read_bytes() == episodes
+    assert "±95%" in capsys.readouterr().out
+
+
+def test_summarise_refuses_a_bad_episodes_csv_and_writes_nothing(tmp_path, capsys):
+    folder = tmp_path / "ev"
+    folder.mkdir()
+    good = "policy,seed,posc,bound,bound_reach,normalised,detected,violation_steps,crashed,landed"
+    cases = {
+        "no file": None,
+        "a column short": good.rsplit(",", 1)[0] + "\nrandom,1,0.1,0.9,0.8,0.1,True,0,0\n",
+        "NaN": good + "\nrandom,1,nan,0.9,0.8,0.1,True,0,0,3\n",
+        "text": good + "\nrandom,1,0.1,0.9,0.8,0.1,maybe,0,0,3\n",
+        "seeds": good + "\na,1,0.1,0.9,0.8,0.1,True,0,0,3\nb,2,0.1,0.9,0.8,0.1,True,0,0,3\n",
+        "binary": "\udcff\x00",
+    }
+    for name, text in cases.items():
+        if text is not None:
+            (folder / "episodes.csv").write_bytes(text.encode("utf-8", "surrogateescape"))
+        assert main(["summarise", str(folder)]) == 2, name
+        err = capsys.readouterr().err
+        assert "error: " in err and "allowed: " in err, (name, err)
+        assert sorted(p.name for p in folder.iterdir()) == ([] if text is None else
+                                                            ["episodes.csv"]), name  # fmt: skip

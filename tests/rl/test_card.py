@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 import pytest
+import scipy.stats
 
 from poc_env.agents.rl.card import main, make_card
 from poc_env.cli import main as cli
@@ -36,7 +37,8 @@ def test_card_holds_the_config_and_the_policys_episodes(evaluation, tmp_path):
     ev = card["evaluation"]
     assert ev["seeds"] == [1000, 1001, 1002] and ev["posc"] == pytest.approx(posc)
     assert ev["floor"] == pytest.approx(min(posc))
-    assert ev["posc_ci95"] == pytest.approx(1.96 * np.std(posc, ddof=1) / np.sqrt(3))
+    t = scipy.stats.t.ppf(0.975, 2)  # Student's t over 3 episodes
+    assert ev["posc_ci95"] == pytest.approx(t * np.std(posc, ddof=1) / np.sqrt(3))
 
 
 def test_one_episode_and_bad_input(evaluation, tmp_path):

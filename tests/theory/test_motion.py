@@ -186,8 +186,20 @@ def test_bad_inputs_name_the_field(tmp_path):
         motion.motion_model("teleport")
     assert err.value.field == "target.model"
     with pytest.raises(ConfigError) as err:
-        motion.check(TargetConfig(model="leeway", leeway_class="submarine"), (4, 4), 60.0)
+        motion.leeway_class("submarine")
     assert err.value.field == "target.leeway_class"
+
+
+@pytest.mark.parametrize("model", ["static", "leeway", "drift"])
+def test_an_unknown_leeway_class_is_refused_when_the_scenario_loads(model):
+    """Issue 27: ``target.leeway_class`` was checked only when leeway dynamics were built, so
+    a typo loaded (and plan/survey ran) until the model was switched to ``leeway``."""
+    with pytest.raises(ConfigError) as err:
+        load_scenario("small", {"target.model": model, "target.leeway_class": "submarine"})
+    assert err.value.field == "target.leeway_class" and err.value.value == "submarine"
+    assert all(name in str(err.value) for name in motion.LEEWAY_CLASSES)  # what is allowed
+    for name in motion.LEEWAY_CLASSES:  # every class of the table loads
+        load_scenario("small", {"target.model": model, "target.leeway_class": name})
     with pytest.raises(ConfigError, match="diffusion_m2_s"):
         TargetConfig(model="diffusion", diffusion_m2_s=-1.0)
     with pytest.raises(ConfigError, match="field_file"):
