@@ -98,6 +98,32 @@ def r6(v: float) -> float:
     return round(float(v), 6)
 
 
+def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[float]], list[float]]]:
+    """Each UAV's route as flown, ``(points in local metres, altitudes)``: one implementation
+    for GeoJSON and KML.
+
+    Without terrain: take-off field, ``waypoints_m``, landing field at ``alt`` (fields at
+    ``ground``). With the plan's ``terrain``: the take-off field on the ground, the
+    :func:`~poc_env.agents.mission.terrain.profile` points (the climb over the field, the
+    waypoints and the points the clearance needs, the landing approach point) at their AMSL
+    altitudes, the landing field on the ground.
+    """
+    from poc_env.agents.mission.plan import route
+    from poc_env.agents.mission.terrain import plan_profiles
+
+    profs = plan_profiles(plan)
+    out = []
+    for k, u in enumerate(plan["uavs"]):
+        if profs is None:
+            pts = route(u)
+            out.append((pts, [ground, *[alt] * (len(pts) - 2), ground]))
+            continue
+        p = profs[k]
+        pts = [list(u["takeoff_m"]), *p.points_m.tolist(), list(u["landing_m"])]
+        out.append((pts, [p.field_m, *p.amsl_m.tolist(), p.landing_field_m]))
+    return out
+
+
 def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, Any]]:
     """What GeoJSON, KML and the map report draw beside the routes and search areas.
 
@@ -110,13 +136,20 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
         Each: ``geometry`` (GeoJSON type), ``latlon``, ``z`` (None for polygons, drawn on the
         ground) and ``properties``.
     """
+    from poc_env.agents.mission.terrain import from_record, plan_profiles
+
     out: list[dict[str, Any]] = []
-    for u in plan["uavs"]:
+    profs = plan_profiles(plan)
+    terrain = from_record(plan["terrain"]) if plan.get("terrain") is not None else None
+    for k, u in enumerate(plan["uavs"]):
+        z = [approach_altitude(alt, ground), ground]
+        if profs is not None:  # from the terrain profile's last point to the field
+            z = [float(profs[k].amsl_m[-1]), profs[k].landing_field_m]
         out.append(
             {
                 "geometry": "LineString",
                 "latlon": to_geographic([approach_point(u), u["landing_m"]], crs),
-                "z": [approach_altitude(alt, ground), ground],
+                "z": z,
                 "properties": {
                     "id": u["id"],
                     "kind": "landing_approach",
@@ -131,7 +164,7 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             {
                 "geometry": "Point",
                 "latlon": to_geographic([a["position_m"]], crs),
-                "z": [ground],
+                "z": [ground if terrain is None else terrain.field_elevation(a["position_m"])],
                 "properties": {"kind": "airfield", "name": a["name"]},
             }
         )

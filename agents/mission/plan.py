@@ -50,6 +50,12 @@ Optional fields of both schemas (a plan without them is read as before):
 - ``no_fly_zone_names``: one name per zone (from ``map.no_fly_names``); messages name zone
   ``i`` as ``no-fly zone i ('name')``, counted from 0 (:func:`poc_env.geometry.zone_label`).
 - ``airfields``: [{``name``, ``position_m``}]; names in KML/GeoJSON.
+- ``terrain``: the scenario's DEM resampled onto a grid over the operating area and the
+  clearance rules (:func:`poc_env.agents.mission.terrain.terrain_record`: ``origin_m``,
+  ``cell_m``, ``ground_m`` and ``ground_max_m`` rows from the south in metres AMSL, ``fields``
+  [{``name``, ``position_m``, ``elevation_m``}], ``min_clearance_m``, ``search_height_m``,
+  ``ceiling_m``, ``max_pitch_deg``, ``source``). With it every export flies AMSL altitudes
+  that clear the ground (:func:`poc_env.agents.mission.terrain.profile`).
 
 Planners add fields of their own (``objective``, ``history``, ``x``, ``planner``, ...); they are
 kept as written and not read by any export.
@@ -201,6 +207,7 @@ class Plan(_PlanRequired, total=False):
     no_fly_zones_m: list[list[list[float]]] | None
     no_fly_zone_names: list[str] | None
     airfields: list[Airfield] | None
+    terrain: dict[str, Any] | None
 
 
 def write_plan(plan: Any, path: str | os.PathLike[str]) -> Path:
@@ -378,6 +385,10 @@ def _check_optional(plan: dict[str, Any]) -> None:
             raise ConfigError(
                 "plan.no_fly_zone_names", znames, f"one name per no-fly zone ({n_z}), strings"
             )
+    if plan.get("terrain") is not None:
+        from poc_env.agents.mission.terrain import check_record
+
+        check_record("plan.terrain", plan["terrain"])
     fields = plan.get("airfields")
     if fields is not None:
         if not isinstance(fields, list):

@@ -394,7 +394,7 @@ def survey_plan(
     """
     from poc_env.agents.mission.crs import make_crs
     from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
-    from poc_env.agents.planning.geography import plan_geography
+    from poc_env.agents.planning.geography import check_terrain, plan_geography
 
     crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     uavs = []
@@ -420,7 +420,7 @@ def survey_plan(
                 "pos_flown": float(row.pos_flown),
             }
         )
-    return {
+    return check_terrain({
         "schema": SCHEMA,
         "scenario": scenario.name,
         "seed": 0,
@@ -432,4 +432,4 @@ def survey_plan(
         "rectangle_rule": RECTANGLE_RULE,
         "uavs": uavs,
         **plan_geography(scenario, prior, crs),
-    }
+    })
