@@ -366,6 +366,10 @@ class UAVConfig:
         return self.usable_fraction * self.endurance_s
 
 
+#: ``sensor.sweep_width_km``'s default, the paper's §6 W = 5 km (metres).
+DEFAULT_SWEEP_WIDTH_M = 5 * KM
+
+
 @dataclass(frozen=True)
 class SensorConfig:
     """The downward sensor: sweep width W and the detection law.
@@ -376,7 +380,11 @@ class SensorConfig:
     """
 
     sweep_width_m: float = _f(
-        "sweep_width_km", KM, default=5 * KM, lo=limits.MIN_POSITIVE, hi=limits.MAX_SWEEP_WIDTH_KM
+        "sweep_width_km",
+        KM,
+        default=DEFAULT_SWEEP_WIDTH_M,
+        lo=limits.MIN_POSITIVE,
+        hi=limits.MAX_SWEEP_WIDTH_KM,
     )
     #: ``inverse_cube`` (Koopman, composes to eq. 10), ``exponential`` (random search) or
     #: ``definite_range`` (cookie cutter).
@@ -387,7 +395,7 @@ class SensorConfig:
     samples_per_cell: int = _f(default=2, lo=1, hi=16)
     #: lateral cut-off of the inverse-cube tail, in sweep widths (see sensing.cutoff_error).
     cutoff_sweep_widths: float = _f(default=4.0, lo=0.5, hi=100.0)
-    #: where W comes from (:mod:`poc_env.theory.sweep`): ``fixed`` (``sweep_width_km``, the
+    #: where W comes from (:meth:`sweep_width_at`): ``fixed`` (``sweep_width_km``, the
     #: paper's; default) or ``camera`` (the footprint of a downward camera of cross-track field
     #: of view ``fov_deg`` at the search height ``uav.cruise_altitude_m`` above ground, times
     #: ``detection_factor``). With ``camera`` the scenario's ``sweep_width_km`` is the model's
@@ -402,8 +410,28 @@ class SensorConfig:
         _choice("law", self.law, tuple(LAW_CODES))
         _choice("model", self.model, SENSOR_MODELS)
 
+    def sweep_width_at(self, height_m: float) -> float:
+        """The sweep width W (m) at ``height_m`` above the ground: the sensor model (issue 24),
+        the one implementation (:meth:`Scenario._resolve_sweep_width` reads it once at load).
 
-#: The sensor models of ``sensor.model`` (:mod:`poc_env.theory.sweep`).
+        ``fixed``: ``sweep_width_km`` whatever the height (the paper's §6, W = 5 km; the
+        default, which every registered task keeps). ``camera``: a nadir sensor of cross-track
+        field of view ``fov`` sees a footprint ``2 h tan(fov / 2)`` wide at height ``h``; the
+        effective sweep width is ``W = k 2 h tan(fov / 2)``, ``k = detection_factor`` in
+        (0, 1] the share of the footprint over which the target class is detected as the
+        detection law assumes (1: all of it; less for small targets or poor resolution at the
+        edges). ``h`` is ``uav.cruise_altitude_m``: over a DEM the missions fly that height
+        above the ground where eq. 19's climb limit allows, higher over ridges (the footprint
+        is wider there; :mod:`poc_env.agents.mission.terrain`).
+        """
+        if self.model == "fixed":
+            return float(self.sweep_width_m)
+        if not height_m > 0:
+            raise ConfigError("uav.cruise_altitude_m", height_m, "a height > 0 m")
+        return self.detection_factor * 2.0 * height_m * math.tan(math.radians(self.fov_deg) / 2)
+
+
+#: The sensor models of ``sensor.model`` (:meth:`SensorConfig.sweep_width_at`).
 SENSOR_MODELS = ("fixed", "camera")
 
 
@@ -700,14 +728,12 @@ class Scenario:
                     )
 
     def _resolve_sweep_width(self) -> None:
-        """``sensor.sweep_width_m`` from ``sensor.model`` (:func:`poc_env.theory.sweep.sweep_width`)
+        """``sensor.sweep_width_m`` from ``sensor.model`` (:meth:`SensorConfig.sweep_width_at`)
         at the search height: the one W the planner, the bounds and the environment read."""
-        from poc_env.theory.sweep import DEFAULT_SWEEP_WIDTH_M, sweep_width
-
         s = self.sensor
         if s.model == "fixed":
             return
-        w = sweep_width(s, self.uav.cruise_altitude_m)
+        w = s.sweep_width_at(self.uav.cruise_altitude_m)
         given = s.sweep_width_m
         if abs(given - DEFAULT_SWEEP_WIDTH_M) > 1e-6 and abs(given - w) > 1e-6 * max(w, 1.0):
             raise ConfigError(

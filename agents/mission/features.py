@@ -109,7 +109,6 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     altitudes, the landing field on the ground.
     """
     from poc_env.agents.mission.plan import route
-    from poc_env.agents.mission.terrain import plan_profiles
 
     profs = plan_profiles(plan)
     out = []
@@ -136,20 +135,21 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
         Each: ``geometry`` (GeoJSON type), ``latlon``, ``z`` (None for polygons, drawn on the
         ground) and ``properties``.
     """
-    from poc_env.agents.mission.terrain import from_record, plan_profiles
+    from poc_env.agents.mission.terrain import from_record
 
     out: list[dict[str, Any]] = []
     profs = plan_profiles(plan)
-    terrain = from_record(plan["terrain"]) if plan.get("terrain") is not None else None
+    rec = plan.get("terrain")
+    terrain = from_record(rec) if rec is not None else None
     for k, u in enumerate(plan["uavs"]):
-        z = [approach_altitude(alt, ground), ground]
+        app_z = [approach_altitude(alt, ground), ground]
         if profs is not None:  # from the terrain profile's last point to the field
-            z = [float(profs[k].amsl_m[-1]), profs[k].landing_field_m]
+            app_z = [float(profs[k].amsl_m[-1]), profs[k].landing_field_m]
         out.append(
             {
                 "geometry": "LineString",
                 "latlon": to_geographic([approach_point(u), u["landing_m"]], crs),
-                "z": z,
+                "z": app_z,
                 "properties": {
                     "id": u["id"],
                     "kind": "landing_approach",
@@ -186,3 +186,29 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             }
         )
     return out
+
+
+def mission_path(u: Any) -> list[list[float]]:
+    """Take-off field, ``waypoints_m``, landing approach point: the path a profile covers."""
+    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u)]
+
+
+def plan_profiles(plan: Any) -> list[Any] | None:
+    """Every UAV's :func:`~poc_env.agents.mission.terrain.profile` over the plan's recorded
+    terrain; None without terrain.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``plan.uavs[k]``: clearance impossible within the ceiling.
+    """
+    from poc_env.agents.mission.terrain import from_record, profile
+
+    rec = plan.get("terrain")
+    if rec is None:
+        return None
+    t = from_record(rec)
+    return [
+        profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
+        for k, u in enumerate(plan["uavs"])
+    ]

@@ -118,8 +118,9 @@ def bilinear(grid: np.ndarray, origin: Any, cell: float, xy: Any) -> np.ndarray:
     ny, nx = grid.shape
     fx = np.clip((pts[:, 0] - origin[0]) / cell - 0.5, 0, nx - 1)
     fy = np.clip((pts[:, 1] - origin[1]) / cell - 0.5, 0, ny - 1)
-    i0, j0 = np.minimum(fx.astype(int), nx - 2 if nx > 1 else 0), np.minimum(
-        fy.astype(int), ny - 2 if ny > 1 else 0
+    i0, j0 = (
+        np.minimum(fx.astype(int), nx - 2 if nx > 1 else 0),
+        np.minimum(fy.astype(int), ny - 2 if ny > 1 else 0),
     )
     i1, j1 = np.minimum(i0 + 1, nx - 1), np.minimum(j0 + 1, ny - 1)
     tx, ty = fx - i0, fy - j0
@@ -428,10 +429,13 @@ def from_record(rec: dict[str, Any]) -> Terrain:
         ground_m=np.asarray(rec["ground_m"], dtype=float),
         ground_max_m=np.asarray(rec["ground_max_m"], dtype=float),
         fields=tuple(
-            (str(f["name"]), (float(f["position_m"][0]), float(f["position_m"][1])),
-             float(f["elevation_m"]))
+            (
+                str(f["name"]),
+                (float(f["position_m"][0]), float(f["position_m"][1])),
+                float(f["elevation_m"]),
+            )
             for f in rec["fields"]
-        ),  # fmt: skip
+        ),
         min_clearance_m=float(rec["min_clearance_m"]),
         search_height_m=float(rec["search_height_m"]),
         ceiling_m=float(rec["ceiling_m"]),
@@ -539,31 +543,6 @@ def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.nda
         keep.append(j)
         i = j
     return keep
-
-
-def mission_path(u: Any) -> list[list[float]]:
-    """Take-off field, ``waypoints_m``, landing approach point: the path a profile covers."""
-    from poc_env.agents.mission.features import approach_point
-
-    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u)]
-
-
-def plan_profiles(plan: Any) -> list[Profile] | None:
-    """Every UAV's :func:`profile` over the plan's recorded terrain; None without terrain.
-
-    Raises
-    ------
-    ConfigError
-        Naming ``plan.uavs[k]``: clearance impossible within the ceiling.
-    """
-    rec = plan.get("terrain")
-    if rec is None:
-        return None
-    t = from_record(rec)
-    return [
-        profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
-        for k, u in enumerate(plan["uavs"])
-    ]
 
 
 def clearance_violations(t: Terrain, prof: Profile, step_m: float | None = None) -> int:

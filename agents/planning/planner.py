@@ -193,23 +193,25 @@ def make_plan(
                 "feasible": u["feasible"],
             }
         )
-    return check_terrain({
-        "schema": SCHEMA,
-        "scenario": sc.name,
-        "seed": int(seed),
-        "map_source": map_source,
-        "optimizer": {"name": optimizer, "settings": settings},
-        "runtime_s": runtime,
-        "posc": float(sum(u["pos"] for u in uav_out)),
-        "upper_bound": float(obj.upper_bound(x)),
-        "objective": float(res.fun),
-        "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
-        "x": [float(v) for v in x],
-        "rectangle_rule": RECTANGLE_RULE,
-        "uavs": uav_out,
-        # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
-        **plan_geography(obj.scenario, full_prior, crs),
-    })
+    return check_terrain(
+        {
+            "schema": SCHEMA,
+            "scenario": sc.name,
+            "seed": int(seed),
+            "map_source": map_source,
+            "optimizer": {"name": optimizer, "settings": settings},
+            "runtime_s": runtime,
+            "posc": float(sum(u["pos"] for u in uav_out)),
+            "upper_bound": float(obj.upper_bound(x)),
+            "objective": float(res.fun),
+            "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
+            "x": [float(v) for v in x],
+            "rectangle_rule": RECTANGLE_RULE,
+            "uavs": uav_out,
+            # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
+            **plan_geography(obj.scenario, full_prior, crs),
+        }
+    )
 
 
 def plan_table(plan: dict[str, Any]) -> str:

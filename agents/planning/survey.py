@@ -420,16 +420,18 @@ def survey_plan(
                 "pos_flown": float(row.pos_flown),
             }
         )
-    return check_terrain({
-        "schema": SCHEMA,
-        "scenario": scenario.name,
-        "seed": 0,
-        "map_source": map_source,
-        "optimizer": {"name": "survey", "settings": {"regions": regions.name}},
-        "runtime_s": 0.0,
-        "posc": float(result.posc),
-        "upper_bound": float(result.bound),
-        "rectangle_rule": RECTANGLE_RULE,
-        "uavs": uavs,
-        **plan_geography(scenario, prior, crs),
-    })
+    return check_terrain(
+        {
+            "schema": SCHEMA,
+            "scenario": scenario.name,
+            "seed": 0,
+            "map_source": map_source,
+            "optimizer": {"name": "survey", "settings": {"regions": regions.name}},
+            "runtime_s": 0.0,
+            "posc": float(result.posc),
+            "upper_bound": float(result.bound),
+            "rectangle_rule": RECTANGLE_RULE,
+            "uavs": uavs,
+            **plan_geography(scenario, prior, crs),
+        }
+    )

@@ -235,7 +235,7 @@ def check_fences(plan: Plan, area: list | None) -> None:
 def write(job: ExportJob) -> list[Path]:
     """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` (the operating area as the
     inclusion fence unless ``job.geofence`` is false)."""
-    from poc_env.agents.mission.terrain import plan_profiles
+    from poc_env.agents.mission.features import plan_profiles
 
     plan = job.plan
     fl = flight(plan)
