@@ -114,8 +114,7 @@ def _terrain_altitudes(
 ) -> tuple[str, float]:
     """(``amsl``, the first take-off field's DEM elevation) for a plan with terrain, after
     refusing the flat-map options and checking every UAV's clearance (nothing written)."""
-    from poc_env.agents.mission.features import plan_profiles
-    from poc_env.agents.mission.terrain import from_record
+    from poc_env.agents.mission.terrain import from_record, plan_profiles
 
     why = "nothing: a plan with terrain flies AMSL altitudes that clear its DEM"
     if altitude_m is not None:

@@ -13,17 +13,19 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.mission.crs import to_geographic
-from poc_env.agents.mission.plan import Plan, UavPlan, flight
+from poc_env.agents.mission.plan import (
+    APPROACH_DISTANCE_M,
+    APPROACH_HEIGHT_M,
+    Plan,
+    approach_point,
+    flight,
+)
+from poc_env.agents.mission.terrain import from_record, plan_profiles
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
 
 #: Altitude references: ``home`` (above the take-off field) or ``amsl`` (above mean sea level).
 ALTITUDE_REFS = ("home", "amsl")
-
-#: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
-#: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
-APPROACH_DISTANCE_M = 4000.0
-APPROACH_HEIGHT_M = 300.0
 
 
 def check_altitude_ref(altitude_ref: str) -> str:
@@ -68,17 +70,6 @@ def altitudes(
     if alt - ground > top:
         raise ConfigError("altitude_m", alt, f"at most the UAV ceiling {top:g} m above the field")
     return float(alt), ground
-
-
-def approach_point(u: UavPlan) -> list[float]:
-    """The fixed-wing approach waypoint of a UAV plan (metres): :data:`APPROACH_DISTANCE_M` from
-    the landing field towards the last search point (east of the field if they coincide)."""
-    end = np.asarray(u["landing_m"], dtype=float)
-    wps = u["waypoints_m"]
-    d = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float) - end
-    norm = float(np.hypot(*d))
-    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
-    return [float(v) for v in end + APPROACH_DISTANCE_M * unit]
 
 
 def approach_altitude(altitude_m: float, ground_m: float) -> float:
@@ -135,8 +126,6 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
         Each: ``geometry`` (GeoJSON type), ``latlon``, ``z`` (None for polygons, drawn on the
         ground) and ``properties``.
     """
-    from poc_env.agents.mission.terrain import from_record
-
     out: list[dict[str, Any]] = []
     profs = plan_profiles(plan)
     rec = plan.get("terrain")
@@ -186,29 +175,3 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             }
         )
     return out
-
-
-def mission_path(u: Any) -> list[list[float]]:
-    """Take-off field, ``waypoints_m``, landing approach point: the path a profile covers."""
-    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u)]
-
-
-def plan_profiles(plan: Any) -> list[Any] | None:
-    """Every UAV's :func:`~poc_env.agents.mission.terrain.profile` over the plan's recorded
-    terrain; None without terrain.
-
-    Raises
-    ------
-    ConfigError
-        Naming ``plan.uavs[k]``: clearance impossible within the ceiling.
-    """
-    from poc_env.agents.mission.terrain import from_record, profile
-
-    rec = plan.get("terrain")
-    if rec is None:
-        return None
-    t = from_record(rec)
-    return [
-        profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
-        for k, u in enumerate(plan["uavs"])
-    ]

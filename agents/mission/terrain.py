@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from poc_env.agents.mission.plan import approach_point
 from poc_env.errors import ConfigError
 
 #: How far the straight legs between kept profile points may sag below the profile (metres);
@@ -287,7 +288,7 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
         bad = ~np.isfinite(out[name])
         if bad.any():
             raise ConfigError(
-                field, f"{path}: nodata or NaN over {bad.mean():.1%} of the operating area",
+                field, f"nodata or NaN over {bad.mean():.1%} of the operating area ({path.name})",
                 "a DEM with a height at every point of the operating area (fill the voids)",
             )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
@@ -312,12 +313,12 @@ def _check_dem_covers(
     )
     to_src = Transformer.from_crs(dst_crs, src.crs, always_xy=True)
     sx, sy = to_src.transform(ring[:, 0] + px0, ring[:, 1] + py0)
-    cols, rows = ~src.transform * (np.asarray(sx), np.asarray(sy))
+    cols, rows = ~src.transform @ (np.asarray(sx), np.asarray(sy))
     cols, rows = np.asarray(cols), np.asarray(rows)
     ok = np.isfinite(cols) & (cols >= 0) & (cols <= src.width) & (rows >= 0) & (rows <= src.height)
     if not ok.all():
         raise ConfigError(
-            field, f"{path}: a DEM covering {ok.mean():.0%} of the operating area's boundary",
+            field, f"a DEM covering {ok.mean():.0%} of the operating area's boundary ({path.name})",
             "a DEM covering the whole operating area (eq. 20: the map and the airfields, "
             "grown by episode.boundary_margin_km) x0, y0, x1, y1 = "
             f"{[round(v / 1e3, 3) for v in need]} km",
@@ -335,7 +336,7 @@ def _sample_fields(field: str, sc: Any, band: np.ndarray, src: Any, rec: dict) -
     out = []
     for a, (lat, lon) in zip(sc.airfields, ll):
         sx, sy = to_src.transform(lon, lat)
-        c, r = ~src.transform * (sx, sy)
+        c, r = ~src.transform @ (sx, sy)
         value = float(bilinear(band[::-1], (0.0, 0.0), 1.0, [[c, band.shape[0] - r]])[0])
         if not math.isfinite(value):
             raise ConfigError(
@@ -365,60 +366,6 @@ def terrain_record(t: Terrain) -> dict[str, Any]:
         "max_pitch_deg": math.degrees(t.max_pitch_rad),
         "source": t.source,
     }
-
-
-def check_record(field: str, rec: Any) -> None:
-    """A plan's ``terrain`` record, checked field by field (ConfigError naming it)."""
-    from poc_env.errors import as_number
-
-    keys = sorted(
-        ["origin_m", "cell_m", "ground_m", "ground_max_m", "fields", "min_clearance_m",
-         "search_height_m", "ceiling_m", "max_pitch_deg", "source"]
-    )  # fmt: skip
-    if not isinstance(rec, dict) or sorted(rec) != keys:
-        raise ConfigError(field, rec if not isinstance(rec, dict) else sorted(rec), ", ".join(keys))
-    o = rec["origin_m"]
-    if not isinstance(o, list) or len(o) != 2:
-        raise ConfigError(f"{field}.origin_m", o, "[x, y] in metres")
-    for v in o:
-        as_number(f"{field}.origin_m", v, -2e6, 2e6)
-    as_number(f"{field}.cell_m", rec["cell_m"], 1.0, 1e6)
-    shape = None
-    for key in ("ground_m", "ground_max_m"):
-        g = rec[key]
-        ok = isinstance(g, list) and len(g) >= 1 and all(isinstance(r, list) for r in g)
-        arr = None
-        if ok:
-            try:
-                arr = np.asarray(g, dtype=float)
-            except (TypeError, ValueError):
-                arr = None
-        if arr is None or arr.ndim != 2 or arr.size > MAX_TERRAIN_CELLS:
-            raise ConfigError(f"{field}.{key}", "not a grid", "equal rows of heights in metres")
-        if not np.isfinite(arr).all() or np.abs(arr).max() > 12_000:
-            raise ConfigError(f"{field}.{key}", "a NaN or a height beyond 12 km", "heights (m)")
-        if shape is not None and arr.shape != shape:
-            raise ConfigError(f"{field}.{key}", list(arr.shape), f"the shape {list(shape)}")
-        shape = arr.shape
-    for key, hi in (("min_clearance_m", 30_000), ("search_height_m", 30_000),
-                    ("ceiling_m", 30_000), ("max_pitch_deg", 89)):  # fmt: skip
-        as_number(f"{field}.{key}", rec[key], 0.0, hi)
-    if not isinstance(rec["source"], str) or len(rec["source"]) > 200:
-        raise ConfigError(f"{field}.source", rec["source"], "a text of <= 200 characters")
-    fl = rec["fields"]
-    if not isinstance(fl, list):
-        raise ConfigError(f"{field}.fields", fl, "a list of {name, position_m, elevation_m}")
-    for i, f in enumerate(fl):
-        if not isinstance(f, dict) or sorted(f) != ["elevation_m", "name", "position_m"]:
-            raise ConfigError(f"{field}.fields[{i}]", f, "{name, position_m, elevation_m}")
-        if not isinstance(f["name"], str) or len(f["name"]) > 64:
-            raise ConfigError(f"{field}.fields[{i}].name", f["name"], "1-64 characters")
-        p = f["position_m"]
-        if not isinstance(p, list) or len(p) != 2:
-            raise ConfigError(f"{field}.fields[{i}].position_m", p, "[x, y] in metres")
-        for v in p:
-            as_number(f"{field}.fields[{i}].position_m", v, -2e6, 2e6)
-        as_number(f"{field}.fields[{i}].elevation_m", f["elevation_m"], -12_000, 12_000)
 
 
 def from_record(rec: dict[str, Any]) -> Terrain:
@@ -558,3 +505,27 @@ def clearance_violations(t: Terrain, prof: Profile, step_m: float | None = None)
         zz = prof.amsl_m[k - 1] + (prof.amsl_m[k] - prof.amsl_m[k - 1]) * s
         bad += int(np.sum(zz - t.ground_at(xy) < t.min_clearance_m - 1e-6))
     return bad
+
+
+def mission_path(u: Any) -> list[list[float]]:
+    """Take-off field, ``waypoints_m``, landing approach point: the path a profile covers."""
+    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u)]
+
+
+def plan_profiles(plan: Any) -> list[Profile] | None:
+    """Every UAV's :func:`~poc_env.agents.mission.terrain.profile` over the plan's recorded
+    terrain; None without terrain.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``plan.uavs[k]``: clearance impossible within the ceiling.
+    """
+    rec = plan.get("terrain")
+    if rec is None:
+        return None
+    t = from_record(rec)
+    return [
+        profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
+        for k, u in enumerate(plan["uavs"])
+    ]

@@ -92,7 +92,7 @@ def check_terrain(plan: dict[str, Any]) -> dict[str, Any]:
     ConfigError
         Naming the UAV: clearance impossible within the UAV's ceiling.
     """
-    from poc_env.agents.mission.features import plan_profiles
+    from poc_env.agents.mission.terrain import plan_profiles
 
     plan_profiles(plan)
     return plan

@@ -235,13 +235,14 @@ def check_fences(plan: Plan, area: list | None) -> None:
 def write(job: ExportJob) -> list[Path]:
     """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` (the operating area as the
     inclusion fence unless ``job.geofence`` is false)."""
-    from poc_env.agents.mission.features import plan_profiles
+    from poc_env.agents.mission.terrain import plan_profiles
 
     plan = job.plan
     fl = flight(plan)
     area = plan.get("operating_area_m") if job.geofence else None
     check_fences(plan, area)
-    profiles = plan_profiles(plan) or [None] * len(plan["uavs"])
+    found = plan_profiles(plan)
+    profiles: list[Any] = [None] * len(plan["uavs"]) if found is None else list(found)
     docs = [
         (
             u["id"],

@@ -187,7 +187,7 @@ def _inline_css() -> str:
 
 
 def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
-    from poc_env.agents.mission.features import plan_profiles
+    from poc_env.agents.mission.terrain import plan_profiles
 
     fl = flight(plan)
     profs = plan_profiles(plan)
