@@ -210,8 +210,11 @@ def test_profile_climbs_within_the_pitch_bound_and_keeps_the_clearance():
                                                 "origin_km": [-40, -30]}))  # fmt: skip
     t = load_terrain(sc)
     p = profile(t, [[-10e3, 20e3], [0.0, 0.0], [60e3, 0.0], [60e3, 40e3], [0.0, 40e3]])
-    grad = np.abs(np.diff(p.amsl_m)) / np.hypot(*np.diff(p.points_m, axis=0).T)
-    assert grad.max() <= math.tan(sc.uav.max_pitch_rad) + 1e-9
+    # turns just before and just after the wall: the climb and the descent are both limited
+    q = profile(t, [[-10e3, 20e3], [27e3, 0.0], [33e3, 0.0], [33e3, 2e3], [26e3, 2e3]])
+    for prof in (p, q):
+        grad = np.abs(np.diff(prof.amsl_m)) / np.hypot(*np.diff(prof.points_m, axis=0).T)
+        assert grad.max() <= math.tan(sc.uav.max_pitch_rad) + 1e-9
     assert clearance_violations(t, p, step_m=50.0) == 0
     assert p.amsl_m.max() >= RIDGE_M + 150.0
     assert p.amsl_m[0] == pytest.approx(VALLEY_M + sc.uav.cruise_altitude_m)  # over the field
