@@ -116,7 +116,7 @@ MAX_EXTENT_M = 2.0e6
 #: Largest speed (m/s) and altitude (m) a plan's ``flight`` section may hold.
 MAX_SPEED_MPS = 1000.0
 MAX_ALTITUDE_M = 30_000.0
-#: Largest terrain grid (cells) a plan may record.
+#: Largest terrain grid (cells) a scenario may resample onto or a plan may record.
 MAX_TERRAIN_CELLS = 1_000_000
 _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 

@@ -41,14 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.mission.plan import approach_point
+from poc_env.agents.mission.plan import MAX_TERRAIN_CELLS, approach_point
 from poc_env.errors import ConfigError
 
 #: How far the straight legs between kept profile points may sag below the profile (metres);
 #: never below the required clearance.
 PROFILE_TOLERANCE_M = 25.0
-#: Largest terrain grid (cells) a scenario may resample onto or a plan may record.
-MAX_TERRAIN_CELLS = 1_000_000
 #: Finest default terrain cell (metres) when ``terrain.cell_km`` is not given.
 DEFAULT_TERRAIN_CELL_M = 1000.0
 
@@ -439,6 +437,15 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
             vtx.append(k if s == n else -1)
     p = np.asarray(pts)
     vertex = np.asarray(vtx)
+    x0, y0, x1, y1 = t.bounds
+    out = (p[:, 0] < x0 - 1) | (p[:, 0] > x1 + 1) | (p[:, 1] < y0 - 1) | (p[:, 1] > y1 + 1)
+    if out.any():
+        x, y = p[int(np.argmax(out))]
+        raise ConfigError(
+            where, f"a point at ({x / 1e3:.1f}, {y / 1e3:.1f}) km",
+            "a route over the terrain grid (the operating area, x0, y0, x1, y1 = "
+            f"{[round(v / 1e3, 3) for v in t.bounds]} km): re-plan inside it",
+        )  # fmt: skip
     ground = t.ground_at(p)
     req = ground + t.min_clearance_m
     worst = int(np.argmax(req))

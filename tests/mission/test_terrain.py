@@ -220,6 +220,8 @@ def test_profile_climbs_within_the_pitch_bound_and_keeps_the_clearance():
     assert p.amsl_m[0] == pytest.approx(VALLEY_M + sc.uav.cruise_altitude_m)  # over the field
     flat = profile(t, [[-10e3, 20e3], [0.0, 0.0], [5e3, 0.0]])
     assert np.allclose(flat.amsl_m, VALLEY_M + sc.uav.cruise_altitude_m)  # far from the wall
+    with pytest.raises(ConfigError, match=r"UAV 7.*a route over the terrain grid"):
+        profile(t, [[-10e3, 20e3], [-45e3, 0.0]], "UAV 7")  # off the grid: no ground known
     # the check itself sees a violation: a straight route at 1,600 m AMSL through the wall
     flown = type(p)(p.points_m, np.full(len(p.amsl_m), 1600.0), p.ground_m, p.vertex, 0, 0)
     assert clearance_violations(t, flown) > 0
