@@ -19,6 +19,7 @@ from poc_env.agents.mission.plan import (
     Plan,
     approach_point,
     flight,
+    route,
 )
 from poc_env.agents.mission.terrain import from_record, plan_profiles
 from poc_env.errors import ConfigError, as_number
@@ -99,8 +100,6 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     waypoints and the points the clearance needs, the landing approach point) at their AMSL
     altitudes, the landing field on the ground.
     """
-    from poc_env.agents.mission.plan import route
-
     profs = plan_profiles(plan)
     out = []
     for k, u in enumerate(plan["uavs"]):

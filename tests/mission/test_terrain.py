@@ -395,4 +395,4 @@ def test_random_scenarios_with_terrain_clear_it_and_export(tmp_path):
 
 @pytest.mark.slow
 def test_random_scenarios_with_terrain_clear_it_and_export_many(tmp_path):
-    _property(40, 11, tmp_path)
+    _property(200, 11, tmp_path)
