@@ -1093,11 +1093,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--altitude-m", type=float, default=None, help="flight altitude (default: plan)")
     p.add_argument(
         "--altitude-ref",
-        default="home",
-        help="home (relative to the take-off field) or amsl (above mean sea level)",
+        default=None,
+        help="home (relative to the take-off field; default) or amsl (above mean sea level); "
+        "a plan with terrain is always amsl, from its DEM",
     )
     p.add_argument(
-        "--field-elevation-m", type=float, default=0.0, help="airfield elevation above MSL"
+        "--field-elevation-m",
+        type=float,
+        default=None,
+        help="airfield elevation above MSL (default 0; a plan with terrain takes it from its DEM)",
     )
     p.add_argument(
         "--no-geofence",

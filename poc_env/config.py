@@ -366,6 +366,10 @@ class UAVConfig:
         return self.usable_fraction * self.endurance_s
 
 
+#: ``sensor.sweep_width_km``'s default, the paper's §6 W = 5 km (metres).
+DEFAULT_SWEEP_WIDTH_M = 5 * KM
+
+
 @dataclass(frozen=True)
 class SensorConfig:
     """The downward sensor: sweep width W and the detection law.
@@ -376,7 +380,11 @@ class SensorConfig:
     """
 
     sweep_width_m: float = _f(
-        "sweep_width_km", KM, default=5 * KM, lo=limits.MIN_POSITIVE, hi=limits.MAX_SWEEP_WIDTH_KM
+        "sweep_width_km",
+        KM,
+        default=DEFAULT_SWEEP_WIDTH_M,
+        lo=limits.MIN_POSITIVE,
+        hi=limits.MAX_SWEEP_WIDTH_KM,
     )
     #: ``inverse_cube`` (Koopman, composes to eq. 10), ``exponential`` (random search) or
     #: ``definite_range`` (cookie cutter).
@@ -387,10 +395,100 @@ class SensorConfig:
     samples_per_cell: int = _f(default=2, lo=1, hi=16)
     #: lateral cut-off of the inverse-cube tail, in sweep widths (see sensing.cutoff_error).
     cutoff_sweep_widths: float = _f(default=4.0, lo=0.5, hi=100.0)
+    #: where W comes from (:meth:`sweep_width_at`): ``fixed`` (``sweep_width_km``, the
+    #: paper's; default) or ``camera`` (the footprint of a downward camera of cross-track field
+    #: of view ``fov_deg`` at the search height ``uav.cruise_altitude_m`` above ground, times
+    #: ``detection_factor``). With ``camera`` the scenario's ``sweep_width_km`` is the model's
+    #: value, resolved once when the scenario loads, so the planner, the bounds and the
+    #: environment all read the same W.
+    model: str = _f(default="fixed")
+    fov_deg: float = _f(default=60.0, lo=0.1, hi=170.0)
+    detection_factor: float = _f(default=1.0, lo=limits.MIN_POSITIVE, hi=1.0)
 
     def __post_init__(self) -> None:
         _coerce(self)
         _choice("law", self.law, tuple(LAW_CODES))
+        _choice("model", self.model, SENSOR_MODELS)
+
+    def sweep_width_at(self, height_m: float) -> float:
+        """The sweep width W (m) at ``height_m`` above the ground: the sensor model (issue 24),
+        the one implementation (:meth:`Scenario._resolve_sweep_width` reads it once at load).
+
+        ``fixed``: ``sweep_width_km`` whatever the height (the paper's §6, W = 5 km; the
+        default, which every registered task keeps). ``camera``: a nadir sensor of cross-track
+        field of view ``fov`` sees a footprint ``2 h tan(fov / 2)`` wide at height ``h``; the
+        effective sweep width is ``W = k 2 h tan(fov / 2)``, ``k = detection_factor`` in
+        (0, 1] the share of the footprint over which the target class is detected as the
+        detection law assumes (1: all of it; less for small targets or poor resolution at the
+        edges). ``h`` is ``uav.cruise_altitude_m``: over a DEM the missions fly that height
+        above the ground where eq. 19's climb limit allows, higher over ridges (the footprint
+        is wider there; :mod:`poc_env.agents.mission.terrain`).
+        """
+        if self.model == "fixed":
+            return float(self.sweep_width_m)
+        if not height_m > 0:
+            raise ConfigError("uav.cruise_altitude_m", height_m, "a height > 0 m")
+        return self.detection_factor * 2.0 * height_m * math.tan(math.radians(self.fov_deg) / 2)
+
+
+#: The sensor models of ``sensor.model`` (:meth:`SensorConfig.sweep_width_at`).
+SENSOR_MODELS = ("fixed", "camera")
+
+
+@dataclass(frozen=True)
+class TerrainConfig:
+    """The ground under the operating area (issue 24): a DEM, or none (the paper's flat map).
+
+    ``dem``: a GeoTIFF of ground heights above mean sea level in metres, in any CRS rasterio
+    reads (a relative path is read from the scenario YAML's folder); it is resampled onto a
+    grid of ``cell_km`` cells (default the map's cell, at most 1 km) aligned with the map and
+    covering eq. 20's operating area, by
+    :func:`poc_env.agents.mission.terrain.load_terrain` (the scenario needs
+    ``map.origin_deg``). ``elevation_m``: the same grid given directly, rows from the south,
+    ``[ny][nx]`` metres AMSL, its south-west corner at ``origin_km`` (default the operating
+    area's) in ``cell_km`` cells. Missions fly ``uav.cruise_altitude_m`` above the ground where
+    the climb limit of eq. 19 allows, never less than ``min_clearance_m`` above it, never above
+    ``uav.max_altitude_m`` (read as AMSL when a DEM is given).
+    """
+
+    dem: str | None = _f(default=None)
+    elevation_m: tuple[tuple[float, ...], ...] | None = _f(default=None)
+    origin_m: tuple[float, float] | None = _f("origin_km", KM, default=None)
+    cell_m: float | None = _f("cell_km", KM, default=None, lo=0.01, hi=_KM_MAX)
+    #: least height above the highest ground near any point of a mission (not the take-off
+    #: climb or the final glide to the field, flown by the airfield's procedures).
+    min_clearance_m: float = _f(default=150.0, lo=0.0, hi=limits.MAX_ALTITUDE_M)
+
+    def __post_init__(self) -> None:
+        _coerce(self)
+        if self.dem is not None and self.elevation_m is not None:
+            raise ConfigError("dem", self.dem, "null when elevation_m is given (one source)")
+        if self.origin_m is not None:
+            object.__setattr__(self, "origin_m", _vec2("origin_km", self.origin_m))
+        if self.elevation_m is not None:
+            rows = self.elevation_m
+            allowed = "a list of equal rows of finite heights in metres (at least 2 x 2)"
+            if not isinstance(rows, (list, tuple)) or len(rows) < 2:
+                raise ConfigError("elevation_m", rows, allowed)
+            try:
+                arr = np.asarray(rows, dtype=float)
+            except (TypeError, ValueError):
+                raise ConfigError("elevation_m", "ragged or non-numeric rows", allowed) from None
+            if arr.ndim != 2 or arr.shape[1] < 2:
+                raise ConfigError("elevation_m", f"shape {arr.shape}", allowed)
+            bad = ~np.isfinite(arr) | (np.abs(arr) > 12_000.0)
+            if bad.any():
+                i, j = (int(v) for v in np.argwhere(bad)[0])
+                raise ConfigError(
+                    f"elevation_m[{i}][{j}]", rows[i][j], "a finite height in [-12000, 12000] m"
+                )
+            limits.check_memory("elevation_m", arr.shape, arr.nbytes, "terrain grid")
+            object.__setattr__(self, "elevation_m", tuple(tuple(map(float, r)) for r in arr))
+
+    @property
+    def given(self) -> bool:
+        """A DEM or an elevation grid is given."""
+        return self.dem is not None or self.elevation_m is not None
 
 
 @dataclass(frozen=True)
@@ -607,9 +705,11 @@ class Scenario:
     episode: EpisodeConfig = _f(default_factory=EpisodeConfig)
     planner: PlannerConfig = _f(default_factory=PlannerConfig)
     target: TargetConfig = _f(default_factory=TargetConfig)
+    terrain: TerrainConfig = _f(default_factory=TerrainConfig)
 
     def __post_init__(self) -> None:
         _coerce(self)
+        self._resolve_sweep_width()
         if not self.airfields:
             raise ConfigError("airfields", [], "at least one airfield")
         names = [a.name for a in self.airfields]
@@ -641,6 +741,28 @@ class Scenario:
                         [c / KM for c in a.position_m],
                         f"a point outside {self.map.zone_label(k)}",
                     )
+
+    def _resolve_sweep_width(self) -> None:
+        """``sensor.sweep_width_m`` from ``sensor.model`` (:meth:`SensorConfig.sweep_width_at`)
+        at the search height: the one W the planner, the bounds and the environment read."""
+        s = self.sensor
+        if s.model == "fixed":
+            return
+        w = s.sweep_width_at(self.uav.cruise_altitude_m)
+        given = s.sweep_width_m
+        if abs(given - DEFAULT_SWEEP_WIDTH_M) > 1e-6 and abs(given - w) > 1e-6 * max(w, 1.0):
+            raise ConfigError(
+                "sensor.sweep_width_km", given / KM,
+                f"absent when sensor.model is {s.model!r} (the model gives {w / KM:.6g} km at "
+                f"cruise_altitude_m {self.uav.cruise_altitude_m:g} m)",
+            )  # fmt: skip
+        if not limits.MIN_POSITIVE <= w / KM <= limits.MAX_SWEEP_WIDTH_KM:
+            raise ConfigError(
+                "sensor.model", s.model,
+                f"a model giving a sweep width in (0, {limits.MAX_SWEEP_WIDTH_KM:g}] km (it "
+                f"gives {w / KM:.6g} km)",
+            )  # fmt: skip
+        object.__setattr__(self, "sensor", dataclasses.replace(s, sweep_width_m=w))
 
     # -- derived ---------------------------------------------------------------------------
     @property
@@ -956,6 +1078,11 @@ def _resolve_prior_file(data: dict[str, Any], folder: Path) -> None:
         f = Path(prior["file"])
         if not f.is_absolute():
             prior["file"] = str(folder / f)
+    terrain = data.get("terrain")
+    if isinstance(terrain, dict) and isinstance(terrain.get("dem"), str):
+        f = Path(terrain["dem"])
+        if not f.is_absolute():
+            terrain["dem"] = str(folder / f)
     target = data.get("target")
     if isinstance(target, dict) and isinstance(target.get("field_file"), str):
         f = Path(target["field_file"])

@@ -53,7 +53,11 @@ NAMES = {0: "base", 1: "theory", 2: "sim", 3: "viz", 4: "envs", 5: "mission", 6:
 NAMES |= {7: "policies", 8: "rl", 9: "experiments", 10: "cli"}
 
 #: What the planners may use of the mission package: the plan model and the CRS, no exporter.
-PLANNING_MAY_IMPORT = ("poc_env.agents.mission.plan", "poc_env.agents.mission.crs")
+PLANNING_MAY_IMPORT = (
+    "poc_env.agents.mission.plan",
+    "poc_env.agents.mission.crs",
+    "poc_env.agents.mission.terrain",  # the ground under the plan, as the CRS places it
+)
 
 
 def layer(module: str) -> int:

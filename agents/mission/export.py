@@ -31,8 +31,8 @@ def export_plan(
     projection: str = "aeqd",
     zone: int | None = None,
     altitude_m: float | None = None,
-    altitude_ref: str = "home",
-    field_elevation_m: float = 0.0,
+    altitude_ref: str | None = None,
+    field_elevation_m: float | None = None,
     geofence: bool = True,
     prior: Any = None,
 ) -> list[Path]:
@@ -52,8 +52,11 @@ def export_plan(
         The folder (default: the plan's).
     altitude_m : float, optional
         Default the plan's ``flight.altitude_m`` (above the field), in the reference
-        ``altitude_ref`` (``home`` or ``amsl``; ``field_elevation_m`` is the fields' AMSL
-        height).
+        ``altitude_ref`` (``home``, the default, or ``amsl``; ``field_elevation_m`` is the
+        fields' AMSL height, default 0). A plan with ``terrain`` takes none of the three: it
+        flies AMSL altitudes that clear its DEM
+        (:func:`poc_env.agents.mission.terrain.plan_profiles`, checked here before anything
+        is written) from fields at the DEM's elevations.
     geofence : bool
         QGC missions that would breach their own geofence (a point outside the operating area,
         a leg through a no-fly zone) are refused; ``geofence=False`` leaves the inclusion fence
@@ -79,9 +82,16 @@ def export_plan(
         check_origin(origin)
     if projection not in ("aeqd", "utm"):
         raise ConfigError("projection", projection, "aeqd or utm")
-    check_altitude_ref(altitude_ref)
+    if altitude_ref is not None:
+        check_altitude_ref(altitude_ref)
     plan = load_plan(plan_path)
     crs = plan_crs(plan.get("crs"), origin, projection, zone)
+    if plan.get("terrain") is not None:
+        altitude_ref, field_elevation_m = _terrain_altitudes(
+            plan, altitude_m, altitude_ref, field_elevation_m
+        )
+    altitude_ref = altitude_ref or "home"
+    field_elevation_m = 0.0 if field_elevation_m is None else field_elevation_m
     alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     elevation = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
     job = ExportJob(
@@ -97,3 +107,22 @@ def export_plan(
         out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
     )
     return FORMATS[fmt].write(job)
+
+
+def _terrain_altitudes(
+    plan: Any, altitude_m: float | None, altitude_ref: str | None, field_elevation_m: Any
+) -> tuple[str, float]:
+    """(``amsl``, the first take-off field's DEM elevation) for a plan with terrain, after
+    refusing the flat-map options and checking every UAV's clearance (nothing written)."""
+    from poc_env.agents.mission.terrain import from_record, plan_profiles
+
+    why = "nothing: a plan with terrain flies AMSL altitudes that clear its DEM"
+    if altitude_m is not None:
+        raise ConfigError("altitude_m", altitude_m, why)
+    if field_elevation_m is not None:
+        raise ConfigError("field_elevation_m", field_elevation_m, why + " (fields from it)")
+    if altitude_ref not in (None, "amsl"):
+        raise ConfigError("altitude_ref", altitude_ref, "amsl (or nothing) for a plan with terrain")
+    plan_profiles(plan)  # clearance impossible within the ceiling: refused, naming the UAV
+    t = from_record(plan["terrain"])
+    return "amsl", t.field_elevation(plan["uavs"][0]["takeoff_m"])

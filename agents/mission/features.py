@@ -13,17 +13,20 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.mission.crs import to_geographic
-from poc_env.agents.mission.plan import Plan, UavPlan, flight
+from poc_env.agents.mission.plan import (
+    APPROACH_DISTANCE_M,
+    APPROACH_HEIGHT_M,
+    Plan,
+    approach_point,
+    flight,
+    route,
+)
+from poc_env.agents.mission.terrain import from_record, plan_profiles
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
 
 #: Altitude references: ``home`` (above the take-off field) or ``amsl`` (above mean sea level).
 ALTITUDE_REFS = ("home", "amsl")
-
-#: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
-#: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
-APPROACH_DISTANCE_M = 4000.0
-APPROACH_HEIGHT_M = 300.0
 
 
 def check_altitude_ref(altitude_ref: str) -> str:
@@ -70,17 +73,6 @@ def altitudes(
     return float(alt), ground
 
 
-def approach_point(u: UavPlan) -> list[float]:
-    """The fixed-wing approach waypoint of a UAV plan (metres): :data:`APPROACH_DISTANCE_M` from
-    the landing field towards the last search point (east of the field if they coincide)."""
-    end = np.asarray(u["landing_m"], dtype=float)
-    wps = u["waypoints_m"]
-    d = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float) - end
-    norm = float(np.hypot(*d))
-    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
-    return [float(v) for v in end + APPROACH_DISTANCE_M * unit]
-
-
 def approach_altitude(altitude_m: float, ground_m: float) -> float:
     """:data:`APPROACH_HEIGHT_M` above the field (lower if the cruise altitude is lower)."""
     return ground_m + min(APPROACH_HEIGHT_M, altitude_m - ground_m)
@@ -98,6 +90,29 @@ def r6(v: float) -> float:
     return round(float(v), 6)
 
 
+def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[float]], list[float]]]:
+    """Each UAV's route as flown, ``(points in local metres, altitudes)``: one implementation
+    for GeoJSON and KML.
+
+    Without terrain: take-off field, ``waypoints_m``, landing field at ``alt`` (fields at
+    ``ground``). With the plan's ``terrain``: the take-off field on the ground, the
+    :func:`~poc_env.agents.mission.terrain.profile` points (the climb over the field, the
+    waypoints and the points the clearance needs, the landing approach point) at their AMSL
+    altitudes, the landing field on the ground.
+    """
+    profs = plan_profiles(plan)
+    out = []
+    for k, u in enumerate(plan["uavs"]):
+        if profs is None:
+            pts = route(u)
+            out.append((pts, [ground, *[alt] * (len(pts) - 2), ground]))
+            continue
+        p = profs[k]
+        pts = [list(u["takeoff_m"]), *p.points_m.tolist(), list(u["landing_m"])]
+        out.append((pts, [p.field_m, *p.amsl_m.tolist(), p.landing_field_m]))
+    return out
+
+
 def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, Any]]:
     """What GeoJSON, KML and the map report draw beside the routes and search areas.
 
@@ -111,12 +126,18 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
         ground) and ``properties``.
     """
     out: list[dict[str, Any]] = []
-    for u in plan["uavs"]:
+    profs = plan_profiles(plan)
+    rec = plan.get("terrain")
+    terrain = from_record(rec) if rec is not None else None
+    for k, u in enumerate(plan["uavs"]):
+        app_z = [approach_altitude(alt, ground), ground]
+        if profs is not None:  # from the terrain profile's last point to the field
+            app_z = [float(profs[k].amsl_m[-1]), profs[k].landing_field_m]
         out.append(
             {
                 "geometry": "LineString",
                 "latlon": to_geographic([approach_point(u), u["landing_m"]], crs),
-                "z": [approach_altitude(alt, ground), ground],
+                "z": app_z,
                 "properties": {
                     "id": u["id"],
                     "kind": "landing_approach",
@@ -131,7 +152,7 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             {
                 "geometry": "Point",
                 "latlon": to_geographic([a["position_m"]], crs),
-                "z": [ground],
+                "z": [ground if terrain is None else terrain.field_elevation(a["position_m"])],
                 "properties": {"kind": "airfield", "name": a["name"]},
             }
         )

@@ -566,8 +566,14 @@ def import_scenario(
     name: str = "imported",
     base: str = "paper_6_2",
     projection: str = "aeqd",
+    dem: str | os.PathLike[str] | None = None,
 ) -> dict[str, Any]:
     """Build a scenario from GIS layers; nothing is written (see :func:`write_imported`).
+
+    ``dem``: a GeoTIFF of ground heights (m AMSL) recorded as ``terrain.dem`` (its absolute
+    path) after :func:`poc_env.agents.mission.terrain.load_terrain` has read it over the
+    scenario's operating area: a DEM without a CRS, not covering the area or with nodata over
+    it is refused here, naming ``terrain.dem``.
 
     Returns {``scenario``: the YAML mapping (``prior: {kind: file, file: <name>.npy}``),
     ``prior``: the (ny, nx) grid summing to 1, ``crs``: the :func:`make_crs` record,
@@ -656,7 +662,13 @@ def import_scenario(
     data["map"] = new_map
     data["airfields"] = fields
     data["fleet"] = [{"takeoff": f["name"], "count": c} for f, c in zip(fields, counts) if c]
-    load_scenario(data)  # every section checked as the loader will check it
+    if dem is not None:
+        data["terrain"] = {**(data.get("terrain") or {}), "dem": str(Path(dem).resolve())}
+    sc = load_scenario(data)  # every section checked as the loader will check it
+    if dem is not None:
+        from poc_env.agents.mission.terrain import load_terrain
+
+        load_terrain(sc)  # the DEM read over the operating area: refused before any write
     return {
         "scenario": data,
         "prior": grid_prior,
@@ -741,6 +753,12 @@ def add_scenario_import_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--airfields", required=True, help="GeoJSON/KML Points with a name")
     p.add_argument("--no-fly", default=None, help="GeoJSON/KML Polygons: no-fly zones")
+    p.add_argument(
+        "--dem",
+        default=None,
+        help="GeoTIFF of ground heights (m AMSL, any CRS; needs the geo extra) covering the "
+        "operating area: recorded as terrain.dem, missions then clear it",
+    )
     p.add_argument("--out", required=True, help="scenario YAML (the .npy and .crs.json go beside)")
     p.add_argument(
         "--origin",
@@ -770,6 +788,7 @@ def cmd_scenario_import(args: argparse.Namespace) -> int:
             name=args.name or out.stem,
             base=args.base,
             projection=args.projection,
+            dem=args.dem,
         )
     for w in caught:
         print(f"warning: {w.message}")

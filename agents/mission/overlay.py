@@ -101,8 +101,9 @@ def _inverse_mercator(y: np.ndarray) -> np.ndarray:
     return np.degrees(2 * np.arctan(np.exp(y)) - np.pi / 2)
 
 
-def overlay_bounds(grid: Grid, crs: Any) -> tuple[float, float, float, float]:
-    """(south, west, north, east) degrees enclosing the grid (its outline sampled densely)."""
+def overlay_bounds(grid: Any, crs: Any) -> tuple[float, float, float, float]:
+    """(south, west, north, east) degrees enclosing the grid (its outline sampled densely;
+    ``grid``: anything with ``bounds`` (x0, y0, x1, y1) in local metres)."""
     x0, y0, x1, y1 = grid.bounds
     s = np.linspace(0.0, 1.0, 65)
     edge = np.concatenate(
@@ -159,6 +160,60 @@ def warp_prior(
     rgba = colorize(t)
     rgba[~ov.grid.contains(xy)] = 0
     return rgba, (south, west, north, east)
+
+
+def contour_interval(lo: float, hi: float) -> float:
+    """A round contour interval (1, 2 or 5 times a power of ten metres) giving about ten
+    contours between heights ``lo`` and ``hi``."""
+    span = max(hi - lo, 1.0) / 10.0
+    mag = 10.0 ** math.floor(math.log10(span))
+    return next(m * mag for m in (1.0, 2.0, 5.0, 10.0) if m * mag >= span)
+
+
+def warp_terrain(t: Any, crs: Any) -> tuple[np.ndarray, tuple[float, float, float, float], float]:
+    """A plan's terrain (:class:`poc_env.agents.mission.terrain.Terrain`) as a shaded-relief
+    RGBA image with contour lines on a Web Mercator lat/lon box (Leaflet's imageOverlay):
+    ``(rgba, (south, west, north, east), contour interval in metres)``.
+
+    Hill shading: the bilinear ground's slope lit from the north-west at 45 degrees, in
+    grey (dark on shadowed slopes, transparent on lit flat ground); contours: the pixels where
+    the ground crosses a multiple of :func:`contour_interval`, in brown.
+    """
+    south, west, north, east = overlay_bounds(t, crs)
+    top, bottom = float(_mercator(np.array(north))), float(_mercator(np.array(south)))
+    width_units, height_units = math.radians(east - west), top - bottom
+    ny, nx = t.ground_m.shape
+    longest = int(min(MAX_OVERLAY_PX, max(MIN_OVERLAY_PX, 3 * max(nx, ny))))
+    scale = longest / max(width_units, height_units, 1e-12)
+    w, h = max(2, round(width_units * scale)), max(2, round(height_units * scale))
+    lat = _inverse_mercator(top + (np.arange(h) + 0.5) / h * (bottom - top))
+    lon = west + (np.arange(w) + 0.5) / w * (east - west)
+    glat, glon = np.meshgrid(lat, lon, indexing="ij")
+    xy = np.array(to_local(np.stack([glat.ravel(), glon.ravel()], 1), crs)).reshape(-1, 2)
+    from poc_env.agents.mission.terrain import bilinear
+
+    g = t.ground_m
+    gy, gx = np.gradient(g, t.cell_m)  # rows from the south: gy is d/d(north)
+    az, alt = math.radians(315.0), math.radians(45.0)
+    slope = np.arctan(np.hypot(gx, gy))
+    aspect = np.arctan2(-gx, -gy)  # direction the slope faces, clockwise from north
+    lit = np.sin(alt) * np.cos(slope) + np.cos(alt) * np.sin(slope) * np.cos(az - aspect)
+    shade = bilinear(lit, t.origin_m, t.cell_m, xy).reshape(h, w)
+    z = bilinear(g, t.origin_m, t.cell_m, xy).reshape(h, w)
+    interval = contour_interval(float(g.min()), float(g.max()))
+    band = np.floor(z / interval)
+    edge = np.zeros_like(band, dtype=bool)
+    edge[:-1, :] |= band[:-1, :] != band[1:, :]
+    edge[:, :-1] |= band[:, :-1] != band[:, 1:]
+    rgba = np.zeros((h, w, 4), dtype=np.uint8)
+    dark = np.clip((np.sin(alt) - shade) / np.sin(alt), 0.0, 1.0)  # 0 lit flat .. 1 shadow
+    rgba[..., :3] = 40
+    rgba[..., 3] = np.round(170 * dark).astype(np.uint8)
+    rgba[edge] = (120, 70, 20, 200)
+    x0, y0, x1, y1 = t.bounds
+    inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+    rgba[~inside.reshape(h, w)] = 0
+    return rgba, (south, west, north, east), interval
 
 
 def plan_prior(

@@ -50,6 +50,12 @@ Optional fields of both schemas (a plan without them is read as before):
 - ``no_fly_zone_names``: one name per zone (from ``map.no_fly_names``); messages name zone
   ``i`` as ``no-fly zone i ('name')``, counted from 0 (:func:`poc_env.geometry.zone_label`).
 - ``airfields``: [{``name``, ``position_m``}]; names in KML/GeoJSON.
+- ``terrain``: the scenario's DEM resampled onto a grid over the operating area and the
+  clearance rules (:func:`poc_env.agents.mission.terrain.terrain_record`: ``origin_m``,
+  ``cell_m``, ``ground_m`` and ``ground_max_m`` rows from the south in metres AMSL, ``fields``
+  [{``name``, ``position_m``, ``elevation_m``}], ``min_clearance_m``, ``search_height_m``,
+  ``ceiling_m``, ``max_pitch_deg``, ``source``). With it every export flies AMSL altitudes
+  that clear the ground (:func:`poc_env.agents.mission.terrain.profile`).
 
 Planners add fields of their own (``objective``, ``history``, ``x``, ``planner``, ...); they are
 kept as written and not read by any export.
@@ -110,7 +116,14 @@ MAX_EXTENT_M = 2.0e6
 #: Largest speed (m/s) and altitude (m) a plan's ``flight`` section may hold.
 MAX_SPEED_MPS = 1000.0
 MAX_ALTITUDE_M = 30_000.0
+#: Largest terrain grid (cells) a scenario may resample onto or a plan may record.
+MAX_TERRAIN_CELLS = 1_000_000
 _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
+
+#: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
+#: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
+APPROACH_DISTANCE_M = 4000.0
+APPROACH_HEIGHT_M = 300.0
 
 
 class Rectangle(TypedDict):
@@ -201,6 +214,7 @@ class Plan(_PlanRequired, total=False):
     no_fly_zones_m: list[list[list[float]]] | None
     no_fly_zone_names: list[str] | None
     airfields: list[Airfield] | None
+    terrain: dict[str, Any] | None
 
 
 def write_plan(plan: Any, path: str | os.PathLike[str]) -> Path:
@@ -378,6 +392,8 @@ def _check_optional(plan: dict[str, Any]) -> None:
             raise ConfigError(
                 "plan.no_fly_zone_names", znames, f"one name per no-fly zone ({n_z}), strings"
             )
+    if plan.get("terrain") is not None:
+        _check_terrain("plan.terrain", plan["terrain"])
     fields = plan.get("airfields")
     if fields is not None:
         if not isinstance(fields, list):
@@ -494,3 +510,71 @@ def search_rings(u: UavPlan) -> list[tuple[str, list[list[float]], dict[str, Any
             ring.append(ring[0])
         out.append(("search_area", ring, {"spacing_km": round(u["spacing_m"] / 1e3, 3)}))
     return out
+
+
+def approach_point(u: UavPlan) -> list[float]:
+    """The fixed-wing approach waypoint of a UAV plan (metres): :data:`APPROACH_DISTANCE_M` from
+    the landing field towards the last search point (east of the field if they coincide)."""
+    import numpy as np
+
+    end = np.asarray(u["landing_m"], dtype=float)
+    wps = u["waypoints_m"]
+    d = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float) - end
+    norm = float(np.hypot(*d))
+    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
+    return [float(v) for v in end + APPROACH_DISTANCE_M * unit]
+
+
+def _check_terrain(field: str, rec: Any) -> None:
+    """A plan's ``terrain`` record (:func:`poc_env.agents.mission.terrain.terrain_record`),
+    checked field by field (ConfigError naming it)."""
+    import numpy as np
+
+    keys = sorted(
+        ["origin_m", "cell_m", "ground_m", "ground_max_m", "fields", "min_clearance_m",
+         "search_height_m", "ceiling_m", "max_pitch_deg", "source"]
+    )  # fmt: skip
+    if not isinstance(rec, dict) or sorted(rec) != keys:
+        raise ConfigError(field, rec if not isinstance(rec, dict) else sorted(rec), ", ".join(keys))
+    o = rec["origin_m"]
+    if not isinstance(o, list) or len(o) != 2:
+        raise ConfigError(f"{field}.origin_m", o, "[x, y] in metres")
+    for v in o:
+        as_number(f"{field}.origin_m", v, -2e6, 2e6)
+    as_number(f"{field}.cell_m", rec["cell_m"], 1.0, 1e6)
+    shape = None
+    for key in ("ground_m", "ground_max_m"):
+        g = rec[key]
+        ok = isinstance(g, list) and len(g) >= 1 and all(isinstance(r, list) for r in g)
+        arr = None
+        if ok:
+            try:
+                arr = np.asarray(g, dtype=float)
+            except (TypeError, ValueError):
+                arr = None
+        if arr is None or arr.ndim != 2 or arr.size > MAX_TERRAIN_CELLS:
+            raise ConfigError(f"{field}.{key}", "not a grid", "equal rows of heights in metres")
+        if not np.isfinite(arr).all() or np.abs(arr).max() > 12_000:
+            raise ConfigError(f"{field}.{key}", "a NaN or a height beyond 12 km", "heights (m)")
+        if shape is not None and arr.shape != shape:
+            raise ConfigError(f"{field}.{key}", list(arr.shape), f"the shape {list(shape)}")
+        shape = arr.shape
+    for key, hi in (("min_clearance_m", 30_000), ("search_height_m", 30_000),
+                    ("ceiling_m", 30_000), ("max_pitch_deg", 89)):  # fmt: skip
+        as_number(f"{field}.{key}", rec[key], 0.0, hi)
+    if not isinstance(rec["source"], str) or len(rec["source"]) > 200:
+        raise ConfigError(f"{field}.source", rec["source"], "a text of <= 200 characters")
+    fl = rec["fields"]
+    if not isinstance(fl, list):
+        raise ConfigError(f"{field}.fields", fl, "a list of {name, position_m, elevation_m}")
+    for i, f in enumerate(fl):
+        if not isinstance(f, dict) or sorted(f) != ["elevation_m", "name", "position_m"]:
+            raise ConfigError(f"{field}.fields[{i}]", f, "{name, position_m, elevation_m}")
+        if not isinstance(f["name"], str) or len(f["name"]) > 64:
+            raise ConfigError(f"{field}.fields[{i}].name", f["name"], "1-64 characters")
+        p = f["position_m"]
+        if not isinstance(p, list) or len(p) != 2:
+            raise ConfigError(f"{field}.fields[{i}].position_m", p, "[x, y] in metres")
+        for v in p:
+            as_number(f"{field}.fields[{i}].position_m", v, -2e6, 2e6)
+        as_number(f"{field}.fields[{i}].elevation_m", f["elevation_m"], -12_000, 12_000)

@@ -1,5 +1,6 @@
 """The geography every plan records: its CRS, the UAV's flight, the operating area, the no-fly
-zones, the airfields and the environment's two bounds (the optional fields of
+zones, the airfields, the terrain (a DEM resampled onto the scenario) and the environment's two
+bounds (the optional fields of
 :mod:`poc_env.agents.mission.plan`), one implementation for the DE planner
 (:mod:`~poc_env.agents.planning.planner`), the allocation planner
 (:mod:`~poc_env.agents.planning.allocation`) and region surveys
@@ -72,4 +73,26 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
         }
     if crs is not None:
         out["crs"] = crs
+    if sc.terrain.given:  # the DEM resampled onto the scenario: exports need no DEM
+        from poc_env.agents.mission.terrain import load_terrain, terrain_record
+
+        t = load_terrain(sc)
+        assert t is not None
+        out["terrain"] = terrain_record(t)
     return out
+
+
+def check_terrain(plan: dict[str, Any]) -> dict[str, Any]:
+    """``plan``, after checking that every UAV's mission keeps the terrain clearance within
+    the ceiling (:func:`poc_env.agents.mission.terrain.plan_profiles`, the export's own
+    profile): a plan the planner writes is one the export accepts.
+
+    Raises
+    ------
+    ConfigError
+        Naming the UAV: clearance impossible within the UAV's ceiling.
+    """
+    from poc_env.agents.mission.terrain import plan_profiles
+
+    plan_profiles(plan)
+    return plan

@@ -28,7 +28,7 @@ import numpy as np
 
 import poc_env.limits as limits
 from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
-from poc_env.agents.planning.geography import plan_geography, scenario_crs
+from poc_env.agents.planning.geography import check_terrain, plan_geography, scenario_crs
 from poc_env.agents.planning.objective import PlanObjective
 from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.agents.planning.refine import route_time
@@ -93,15 +93,17 @@ def make_plan(
     if planner == "allocation":
         from poc_env.agents.planning.allocation import REFINE, SPEED, make_allocation_plan
 
-        return make_allocation_plan(
-            scenario,
-            prior=prior,
-            map_source=map_source,
-            uavs=uavs,
-            seed=seed,
-            crs=crs,
-            speed=SPEED if speed is None else speed,
-            refine=REFINE if refine is None else refine,
+        return check_terrain(
+            make_allocation_plan(
+                scenario,
+                prior=prior,
+                map_source=map_source,
+                uavs=uavs,
+                seed=seed,
+                crs=crs,
+                speed=SPEED if speed is None else speed,
+                refine=REFINE if refine is None else refine,
+            )
         )
     for name, value in (("speed", speed), ("refine", refine)):
         if value is not None:
@@ -191,23 +193,25 @@ def make_plan(
                 "feasible": u["feasible"],
             }
         )
-    return {
-        "schema": SCHEMA,
-        "scenario": sc.name,
-        "seed": int(seed),
-        "map_source": map_source,
-        "optimizer": {"name": optimizer, "settings": settings},
-        "runtime_s": runtime,
-        "posc": float(sum(u["pos"] for u in uav_out)),
-        "upper_bound": float(obj.upper_bound(x)),
-        "objective": float(res.fun),
-        "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
-        "x": [float(v) for v in x],
-        "rectangle_rule": RECTANGLE_RULE,
-        "uavs": uav_out,
-        # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
-        **plan_geography(obj.scenario, full_prior, crs),
-    }
+    return check_terrain(
+        {
+            "schema": SCHEMA,
+            "scenario": sc.name,
+            "seed": int(seed),
+            "map_source": map_source,
+            "optimizer": {"name": optimizer, "settings": settings},
+            "runtime_s": runtime,
+            "posc": float(sum(u["pos"] for u in uav_out)),
+            "upper_bound": float(obj.upper_bound(x)),
+            "objective": float(res.fun),
+            "history": [float(v) for v in np.asarray(getattr(res, "history", []), dtype=float)],
+            "x": [float(v) for v in x],
+            "rectangle_rule": RECTANGLE_RULE,
+            "uavs": uav_out,
+            # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
+            **plan_geography(obj.scenario, full_prior, crs),
+        }
+    )
 
 
 def plan_table(plan: dict[str, Any]) -> str:

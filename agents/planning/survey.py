@@ -394,7 +394,7 @@ def survey_plan(
     """
     from poc_env.agents.mission.crs import make_crs
     from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
-    from poc_env.agents.planning.geography import plan_geography
+    from poc_env.agents.planning.geography import check_terrain, plan_geography
 
     crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
     uavs = []
@@ -420,16 +420,18 @@ def survey_plan(
                 "pos_flown": float(row.pos_flown),
             }
         )
-    return {
-        "schema": SCHEMA,
-        "scenario": scenario.name,
-        "seed": 0,
-        "map_source": map_source,
-        "optimizer": {"name": "survey", "settings": {"regions": regions.name}},
-        "runtime_s": 0.0,
-        "posc": float(result.posc),
-        "upper_bound": float(result.bound),
-        "rectangle_rule": RECTANGLE_RULE,
-        "uavs": uavs,
-        **plan_geography(scenario, prior, crs),
-    }
+    return check_terrain(
+        {
+            "schema": SCHEMA,
+            "scenario": scenario.name,
+            "seed": 0,
+            "map_source": map_source,
+            "optimizer": {"name": "survey", "settings": {"regions": regions.name}},
+            "runtime_s": 0.0,
+            "posc": float(result.posc),
+            "upper_bound": float(result.bound),
+            "rectangle_rule": RECTANGLE_RULE,
+            "uavs": uavs,
+            **plan_geography(scenario, prior, crs),
+        }
+    )

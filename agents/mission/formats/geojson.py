@@ -8,9 +8,9 @@ from pathlib import Path
 from typing import Any
 
 from poc_env.agents.mission.crs import crs_text, to_geographic
-from poc_env.agents.mission.features import altitudes, overlays, r6
+from poc_env.agents.mission.features import altitudes, overlays, r6, routes_3d
 from poc_env.agents.mission.job import ExportJob
-from poc_env.agents.mission.plan import Plan, flight, route, search_rings
+from poc_env.agents.mission.plan import Plan, flight, search_rings
 from poc_env.io import write_text_atomic
 
 
@@ -30,9 +30,8 @@ def geojson(
     alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     fl = flight(plan)
     feats = []
-    for u in plan["uavs"]:
-        pts = to_geographic(route(u), crs)
-        zs = [ground, *[alt] * (len(pts) - 2), ground]
+    for u, (xy, zs) in zip(plan["uavs"], routes_3d(plan, alt, ground)):
+        pts = to_geographic(xy, crs)
         line = [[r6(lon), r6(lat), z] for (lat, lon), z in zip(pts, zs)]
         props = {
             "id": u["id"],

@@ -20,10 +20,10 @@ from typing import Any
 from lxml import etree
 
 from poc_env.agents.mission.crs import to_geographic
-from poc_env.agents.mission.features import altitudes, check_altitude_ref, overlays
+from poc_env.agents.mission.features import altitudes, check_altitude_ref, overlays, routes_3d
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import plan_prior, png_bytes, warp_prior
-from poc_env.agents.mission.plan import Plan, flight, route, search_rings
+from poc_env.agents.mission.plan import Plan, flight, search_rings
 from poc_env.io import write_bytes_atomic, write_text_atomic
 
 #: altitude reference -> KML altitudeMode
@@ -115,9 +115,8 @@ def kml(
         box = _el(ov, "LatLonBox")
         for tag, text in (("north", n), ("south", s), ("east", e), ("west", w)):
             _el(box, tag, text)
-    for u in plan["uavs"]:
-        pts = to_geographic(route(u), crs)
-        zs = [ground, *[alt] * (len(pts) - 2), ground]
+    for u, (xy, zs) in zip(plan["uavs"], routes_3d(plan, alt, ground)):
+        pts = to_geographic(xy, crs)
         uid = str(u["id"])
         folder = _el(doc, "Folder")
         _el(folder, "name", f"UAV {uid}")
@@ -126,7 +125,7 @@ def kml(
             f"UAV {uid} route",
             "route",
             f"POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
-            f", {u['flight_time_s'] / 60:.0f} min, {alt:g} m ({altitude_ref}); out "
+            f", {u['flight_time_s'] / 60:.0f} min, {_alt_text(plan, alt, altitude_ref)}; out "
             f"{3.6 * fl['transit_speed_mps']:.0f} km/h, search "
             f"{3.6 * fl['search_speed_mps']:.0f} km/h, home "
             f"{3.6 * fl['cruise_speed_mps']:.0f} km/h",
@@ -147,6 +146,17 @@ def kml(
             _kml_placemark(folder, o, mode)
     body = etree.tostring(root, encoding="unicode")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + body + "\n"
+
+
+def _alt_text(plan: Plan, alt: float, altitude_ref: str) -> str:
+    """The route's altitude rule in words: flat, or following the plan's terrain."""
+    t = plan.get("terrain")
+    if t is None:
+        return f"{alt:g} m ({altitude_ref})"
+    return (
+        f"{t['search_height_m']:g} m above ground where the climb allows, at least "
+        f"{t['min_clearance_m']:g} m, altitudes AMSL from {t['source']}"
+    )
 
 
 def _placemark(parent: Any, name: str, style: str, description: str | None = None) -> Any:

@@ -73,6 +73,7 @@ def qgc_plan(
     home_amsl_m: float = 0.0,
     operating_area_m: list | None = None,
     no_fly_zones_m: list | None = None,
+    profile: Any = None,
 ) -> dict:
     """A QGroundControl ``.plan`` for a fixed-wing UAV (PX4, ``vehicleType`` 1).
 
@@ -85,7 +86,18 @@ def qgc_plan(
     rally points at the take-off and landing fields. ``altitude_ref`` ``home`` writes
     MAV_FRAME_GLOBAL_RELATIVE_ALT (3), ``amsl`` MAV_FRAME_GLOBAL (0) with ``ground_m`` the
     field elevation; ``home_amsl_m`` is the planned home position's AMSL altitude.
+
+    ``profile`` (a :class:`poc_env.agents.mission.terrain.Profile`, for a plan with terrain):
+    every altitude is AMSL (MAV_FRAME_GLOBAL) from the profile, which clears the DEM; the
+    take-off climbs to the profile's first altitude over the field, the profile's intermediate
+    points become waypoints, the approach waypoint is its last point, NAV_LAND and the planned
+    home position are at the fields' DEM elevations.
     """
+    if profile is not None:
+        return _terrain_plan(
+            u, crs, profile, cruise_speed_mps, search_speed_mps, transit_speed_mps,
+            operating_area_m, no_fly_zones_m,
+        )  # fmt: skip
     ref = check_altitude_ref(altitude_ref)
     wps = [list(w) for w in u["waypoints_m"]]
     start, end = list(u["takeoff_m"]), list(u["landing_m"])
@@ -103,6 +115,61 @@ def qgc_plan(
     items.append(_do(MAV_CMD_DO_LAND_START, [0, 0, 0, 0, 0, 0, 0]))
     items.append(_nav(MAV_CMD_NAV_WAYPOINT, *a_ll, app_alt, ref))
     items.append(_nav(MAV_CMD_NAV_LAND, *l_ll, ground_m, ref))
+    return _document(
+        items, u, crs, ref, cruise_speed_mps, t_ll, home_amsl_m, operating_area_m, no_fly_zones_m
+    )
+
+
+def _terrain_plan(
+    u: UavPlan,
+    crs: Any,
+    prof: Any,
+    cruise_speed_mps: float,
+    search_speed_mps: float,
+    transit_speed_mps: float | None,
+    operating_area_m: list | None,
+    no_fly_zones_m: list | None,
+) -> dict:
+    """:func:`qgc_plan` of a plan with terrain (its docstring)."""
+    n_wps = len(u["waypoints_m"])
+    pts = prof.points_m.tolist()
+    ll = to_geographic([*pts, list(u["landing_m"])], crs)
+    ref = "amsl"
+    z = [round(float(v), 1) for v in prof.amsl_m]
+    items = [_nav(MAV_CMD_NAV_TAKEOFF, *ll[0], z[0], ref, (15, 0, 0, None))]
+    items.append(_speed(cruise_speed_mps if transit_speed_mps is None else transit_speed_mps))
+    last = len(pts) - 1  # the approach point
+    for k in range(1, last):
+        items.append(_nav(MAV_CMD_NAV_WAYPOINT, *ll[k], z[k], ref))
+        v = int(prof.vertex[k])
+        if v == 1:
+            items.append(_speed(search_speed_mps))
+        if v == n_wps:
+            items.append(_speed(cruise_speed_mps))
+    if n_wps == 0:
+        items.append(_speed(cruise_speed_mps))
+    items.append(_do(MAV_CMD_DO_LAND_START, [0, 0, 0, 0, 0, 0, 0]))
+    items.append(_nav(MAV_CMD_NAV_WAYPOINT, *ll[last], z[last], ref))
+    items.append(_nav(MAV_CMD_NAV_LAND, *ll[-1], round(prof.landing_field_m, 1), ref))
+    return _document(
+        items, u, crs, ref, cruise_speed_mps, ll[0], round(prof.field_m, 1), operating_area_m,
+        no_fly_zones_m,
+    )  # fmt: skip
+
+
+def _document(
+    items: list,
+    u: UavPlan,
+    crs: Any,
+    ref: str,
+    cruise_speed_mps: float,
+    t_ll: Any,
+    home_amsl_m: float,
+    operating_area_m: list | None,
+    no_fly_zones_m: list | None,
+) -> dict:
+    """The ``.plan`` document around mission ``items``: jump ids, geofence, rally points."""
+    start, end = list(u["takeoff_m"]), list(u["landing_m"])
     for k, it in enumerate(items):
         it["doJumpId"] = k + 1
     polygons = []
@@ -168,10 +235,14 @@ def check_fences(plan: Plan, area: list | None) -> None:
 def write(job: ExportJob) -> list[Path]:
     """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` (the operating area as the
     inclusion fence unless ``job.geofence`` is false)."""
+    from poc_env.agents.mission.terrain import plan_profiles
+
     plan = job.plan
     fl = flight(plan)
     area = plan.get("operating_area_m") if job.geofence else None
     check_fences(plan, area)
+    found = plan_profiles(plan)
+    profiles: list[Any] = [None] * len(plan["uavs"]) if found is None else list(found)
     docs = [
         (
             u["id"],
@@ -181,10 +252,10 @@ def write(job: ExportJob) -> list[Path]:
                 transit_speed_mps=fl["transit_speed_mps"], altitude_ref=job.altitude_ref,
                 ground_m=job.ground_m, home_amsl_m=job.field_elevation_m,
                 operating_area_m=area,
-                no_fly_zones_m=plan.get("no_fly_zones_m"),
+                no_fly_zones_m=plan.get("no_fly_zones_m"), profile=prof,
             ),
         )
-        for u in plan["uavs"]
+        for u, prof in zip(plan["uavs"], profiles)
     ]  # fmt: skip
     return [
         write_text_atomic(job.path(f"_uav{uid}.plan"), json.dumps(doc, indent=1, allow_nan=False))

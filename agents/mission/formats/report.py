@@ -111,6 +111,20 @@ def report_data(
             "peak": float(np.max(overlay.values)),
             "source": overlay.source,
         }
+    terrain_doc = None
+    rec = plan.get("terrain")
+    if rec is not None:  # shaded relief and contours of the plan's DEM
+        from poc_env.agents.mission.overlay import warp_terrain
+        from poc_env.agents.mission.terrain import from_record
+
+        t = from_record(rec)
+        rgba, (s, w, n, e), interval = warp_terrain(t, crs)
+        terrain_doc = {
+            "url": "data:image/png;base64," + base64.b64encode(png_bytes(rgba)).decode("ascii"),
+            "bounds": [[s, w], [n, e]],
+            "name": f"Terrain ({t.source}; contours every {interval:g} m, "
+            f"{float(t.ground_m.min()):.0f}-{float(t.ground_m.max()):.0f} m AMSL)",
+        }
     polys = {"no_fly_zone": [], "operating_area": []}  # type: dict[str, list[Any]]
     for o in extra:
         kind = o["properties"]["kind"]
@@ -139,6 +153,7 @@ def report_data(
         "no_fly_zones": polys["no_fly_zone"],
         "operating_area": polys["operating_area"],
         "overlay": overlay_doc,
+        "terrain": terrain_doc,
         "colormap": [[int(c) for c in row] for row in COLORMAP],
         "alpha": list(ALPHA_RANGE),
         "tiles": {"url": TILE_URL, "attribution": TILE_ATTRIBUTION},
@@ -147,11 +162,13 @@ def report_data(
 
 def expected_layers(plan: Plan, overlay: bool) -> int:
     """How many overlay layers the page adds (the ``data-drawn`` marker): the prior (if
-    drawn), one per UAV route, the search areas, the airfields, the no-fly zones and the
-    operating area (each when the plan has them; airfields always: take-off points stand in)."""
+    drawn), the terrain (if the plan has one), one per UAV route, the search areas, the
+    airfields, the no-fly zones and the operating area (each when the plan has them; airfields
+    always: take-off points stand in)."""
     rings = any(search_rings(u) for u in plan["uavs"])
     return (
         int(overlay)
+        + int(plan.get("terrain") is not None)
         + len(plan["uavs"])
         + int(rings)
         + 1
@@ -170,9 +187,19 @@ def _inline_css() -> str:
 
 
 def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
+    from poc_env.agents.mission.terrain import plan_profiles
+
     fl = flight(plan)
+    profs = plan_profiles(plan)
     rows = []
     for k, u in enumerate(plan["uavs"]):
+        alt_text = f"{alt:g} ({altitude_ref})"
+        if profs is not None:  # the terrain profile: AMSL range and the least height
+            p = profs[k]
+            alt_text = (
+                f"{float(p.amsl_m.min()):.0f}-{float(p.amsl_m.max()):.0f} (amsl), at least "
+                f"{float((p.amsl_m - p.ground_m).min()):.0f} above ground"
+            )
         pts = np.asarray(route(u), dtype=float)
         route_km = float(np.sum(np.hypot(*np.diff(pts, axis=0).T))) / 1e3
         t = u["flight_time_s"]
@@ -188,7 +215,7 @@ def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
             f"{100 * u['pod']:.1f}",
             f"{100 * u['poc']:.1f}",
             f"{100 * u['pos']:.2f}",
-            f"{alt:g} ({altitude_ref})",
+            html.escape(alt_text),
             "yes" if u["feasible"] else "NO",
         ]
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
@@ -310,6 +337,9 @@ _SCRIPT = r"""
     var span = document.createElement("span");
     span.textContent = text;
     return span;
+  }
+  if (data.terrain) {
+    add(data.terrain.name, L.imageOverlay(data.terrain.url, data.terrain.bounds, {opacity: 1.0}));
   }
   var image = null;
   if (data.overlay) {

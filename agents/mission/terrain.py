@@ -1,0 +1,538 @@
+"""Terrain: a DEM resampled onto the scenario, and mission altitudes that clear it (issue 24).
+
+:func:`load_terrain` builds a :class:`Terrain` from a scenario's ``terrain`` section
+(:class:`poc_env.config.TerrainConfig`): a GeoTIFF read through rasterio and resampled by
+``rasterio.warp.reproject`` onto a grid aligned with the map that covers eq. 20's operating
+area (the scenario's own projected CRS, the local metres of
+:mod:`poc_env.agents.mission.crs`), or an elevation grid given in the scenario. Two layers: the
+bilinear ground (``ground_m``, drawn by the map report) and the highest ground of each cell
+(``ground_max_m``, ``Resampling.max``), which the clearance reads; the airfields' elevations
+are sampled bilinearly from the DEM itself. A DEM without a CRS, one that does not cover the
+operating area, or nodata/NaN over it is refused naming ``terrain.dem``.
+
+A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
+:func:`terrain_record`), so an export needs no DEM. :func:`profile` gives a UAV's altitudes
+(AMSL) along its mission, take-off field -> ``waypoints_m`` -> landing approach point:
+
+- the wanted altitude is ``search_height_m`` (the UAV's cruise altitude) above the highest
+  ground near each point (:meth:`Terrain.ground_at`: the cells within half a cell), at most the
+  ceiling ``ceiling_m``;
+- the required altitude is ``min_clearance_m`` above that ground; a required altitude above the
+  ceiling is "clearance impossible within the UAV's ceiling", a ConfigError naming the UAV,
+  the point and the ground;
+- eq. 19 bounds the pitch by ``beta_max`` (``uav.max_pitch_deg``), so the altitude changes by at
+  most ``tan(beta_max)`` per metre flown: the profile is the least such function above the
+  wanted one (a forward and a backward pass), raised where a climb must start early;
+- legs are sampled every half cell; the profile keeps the route's vertices and, between them,
+  the fewest intermediate points whose straight altitude legs stay above the required altitude
+  and within :data:`PROFILE_TOLERANCE_M` below the profile.
+
+The take-off climb and the final glide to the field are flown over the field by its own
+procedures: the take-off item climbs to the profile's first altitude over the field, and the
+landing approach point is the profile's last point.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from poc_env.agents.mission.plan import MAX_TERRAIN_CELLS, approach_point
+from poc_env.errors import ConfigError
+
+#: How far the straight legs between kept profile points may sag below the profile (metres);
+#: never below the required clearance.
+PROFILE_TOLERANCE_M = 25.0
+#: Finest default terrain cell (metres) when ``terrain.cell_km`` is not given.
+DEFAULT_TERRAIN_CELL_M = 1000.0
+
+
+@dataclass(frozen=True)
+class Terrain:
+    """The ground under the operating area on a regular grid (rows from the south).
+
+    Attributes
+    ----------
+    origin_m : (float, float)
+        South-west corner of cell (0, 0), local metres.
+    cell_m : float
+    ground_m, ground_max_m : ndarray, shape (ny, nx)
+        Bilinear ground and the highest ground of each cell, metres AMSL.
+    fields : tuple of (name, (x, y), elevation_m)
+        The airfields and their elevations (AMSL).
+    min_clearance_m, search_height_m, ceiling_m, max_pitch_rad : float
+        The clearance, the wanted height above ground, the UAV's ceiling (AMSL) and eq. 19's
+        pitch bound.
+    source : str
+        Where the ground came from (the DEM's file name, or ``scenario``).
+    """
+
+    origin_m: tuple[float, float]
+    cell_m: float
+    ground_m: np.ndarray
+    ground_max_m: np.ndarray
+    fields: tuple[tuple[str, tuple[float, float], float], ...]
+    min_clearance_m: float
+    search_height_m: float
+    ceiling_m: float
+    max_pitch_rad: float
+    source: str
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1) of the grid, local metres."""
+        ny, nx = self.ground_m.shape
+        x0, y0 = self.origin_m
+        return (x0, y0, x0 + nx * self.cell_m, y0 + ny * self.cell_m)
+
+    def ground_at(self, xy: Any) -> np.ndarray:
+        """The highest ground (``ground_max_m``) of the cells within half a cell of each point
+        (the 2 x 2 cells around it): a bound on the ground anywhere near it."""
+        pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+        ny, nx = self.ground_max_m.shape
+        fx = (pts[:, 0] - self.origin_m[0]) / self.cell_m - 0.5
+        fy = (pts[:, 1] - self.origin_m[1]) / self.cell_m - 0.5
+        i0 = np.clip(np.floor(fx).astype(int), 0, nx - 1)
+        j0 = np.clip(np.floor(fy).astype(int), 0, ny - 1)
+        i1, j1 = np.clip(i0 + 1, 0, nx - 1), np.clip(j0 + 1, 0, ny - 1)
+        g = self.ground_max_m
+        return np.maximum.reduce([g[j0, i0], g[j0, i1], g[j1, i0], g[j1, i1]])
+
+    def field_elevation(self, xy: Any) -> float:
+        """The elevation of the airfield at ``xy`` (within 1 m), else the bilinear ground."""
+        x, y = (float(v) for v in xy)
+        for _, (fx, fy), elev in self.fields:
+            if math.hypot(fx - x, fy - y) <= 1.0:
+                return float(elev)
+        return float(bilinear(self.ground_m, self.origin_m, self.cell_m, [[x, y]])[0])
+
+
+def bilinear(grid: np.ndarray, origin: Any, cell: float, xy: Any) -> np.ndarray:
+    """Bilinear interpolation of a cell-centred grid (rows from the south) at local points."""
+    pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+    ny, nx = grid.shape
+    fx = np.clip((pts[:, 0] - origin[0]) / cell - 0.5, 0, nx - 1)
+    fy = np.clip((pts[:, 1] - origin[1]) / cell - 0.5, 0, ny - 1)
+    i0, j0 = (
+        np.minimum(fx.astype(int), nx - 2 if nx > 1 else 0),
+        np.minimum(fy.astype(int), ny - 2 if ny > 1 else 0),
+    )
+    i1, j1 = np.minimum(i0 + 1, nx - 1), np.minimum(j0 + 1, ny - 1)
+    tx, ty = fx - i0, fy - j0
+    return (
+        grid[j0, i0] * (1 - tx) * (1 - ty)
+        + grid[j0, i1] * tx * (1 - ty)
+        + grid[j1, i0] * (1 - tx) * ty
+        + grid[j1, i1] * tx * ty
+    )
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def load_terrain(sc: Any) -> Terrain | None:
+    """The scenario's terrain (module docstring), or None when its ``terrain`` gives none.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``terrain.dem`` / ``terrain.elevation_m``: no CRS, not covering the operating
+        area, nodata or NaN over it, unreadable; or a scenario without ``map.origin_deg``.
+    """
+    t = sc.terrain
+    if not t.given:
+        return None
+    from poc_env.sim.core import operating_area
+
+    area = operating_area(sc)
+    if t.elevation_m is not None:
+        grid = np.asarray(t.elevation_m, dtype=float)
+        cell = t.cell_m or sc.map.cell_m
+        origin = t.origin_m or (area[0], area[1])
+        ny, nx = grid.shape
+        have = (origin[0], origin[1], origin[0] + nx * cell, origin[1] + ny * cell)
+        _check_covers("terrain.elevation_m", have, area)
+        gmax, gmean, source = grid, grid, "scenario"
+        fields = tuple(
+            (a.name, a.position_m, float(_cell_value(grid, origin, cell, a.position_m)))
+            for a in sc.airfields
+        )
+    else:
+        cell = t.cell_m or min(sc.map.cell_m, DEFAULT_TERRAIN_CELL_M)
+        origin, shape = _aligned_grid(sc, area, cell)
+        gmean, gmax, elev = _read_dem(sc, Path(str(t.dem)), origin, shape, cell)
+        source = Path(str(t.dem)).name
+        fields = tuple((a.name, a.position_m, e) for a, e in zip(sc.airfields, elev))
+    return Terrain(
+        origin_m=(float(origin[0]), float(origin[1])),
+        cell_m=float(cell),
+        ground_m=gmean,
+        ground_max_m=gmax,
+        fields=tuple((n, (float(p[0]), float(p[1])), float(e)) for n, p, e in fields),
+        min_clearance_m=float(t.min_clearance_m),
+        search_height_m=float(sc.uav.cruise_altitude_m),
+        ceiling_m=float(sc.uav.max_altitude_m),
+        max_pitch_rad=float(sc.uav.max_pitch_rad),
+        source=source,
+    )
+
+
+def _cell_value(grid: np.ndarray, origin: Any, cell: float, xy: Any) -> float:
+    ny, nx = grid.shape
+    i = min(max(int((xy[0] - origin[0]) // cell), 0), nx - 1)
+    j = min(max(int((xy[1] - origin[1]) // cell), 0), ny - 1)
+    return float(grid[j, i])
+
+
+def _check_covers(field: str, have: tuple, need: tuple, value: Any = None) -> None:
+    eps = 1e-6
+    if not (
+        have[0] <= need[0] + eps
+        and have[1] <= need[1] + eps
+        and have[2] >= need[2] - eps
+        and have[3] >= need[3] - eps
+    ):
+        km = [round(v / 1e3, 3) for v in need]
+        got = [round(v / 1e3, 3) for v in have]
+        raise ConfigError(
+            field,
+            value if value is not None else f"a grid over x, y = {got} km",
+            f"ground covering the whole operating area (eq. 20) x0, y0, x1, y1 = {km} km",
+        )
+
+
+def _aligned_grid(sc: Any, area: tuple, cell: float) -> tuple[tuple[float, float], tuple]:
+    """South-west corner and (ny, nx) of the grid of ``cell`` aligned with the map's origin
+    that covers ``area``."""
+    mx, my = sc.map.origin_m
+    i0 = math.floor((area[0] - mx) / cell + 1e-9)
+    j0 = math.floor((area[1] - my) / cell + 1e-9)
+    i1 = math.ceil((area[2] - mx) / cell - 1e-9)
+    j1 = math.ceil((area[3] - my) / cell - 1e-9)
+    ny, nx = j1 - j0, i1 - i0
+    if nx * ny > MAX_TERRAIN_CELLS:
+        raise ConfigError(
+            "terrain.cell_km", cell / 1e3,
+            f"a cell giving at most {MAX_TERRAIN_CELLS} terrain cells over the operating area "
+            f"(it gives {nx} x {ny})",
+        )  # fmt: skip
+    return (mx + i0 * cell, my + j0 * cell), (ny, nx)
+
+
+def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> tuple:
+    """(bilinear ground, cell-max ground, airfield elevations) from the GeoTIFF ``path``."""
+    from poc_env.errors import require_extra
+
+    require_extra("geo", "a terrain.dem GeoTIFF", "rasterio")
+    import rasterio
+    from pyproj import Transformer
+    from rasterio.errors import RasterioError, RasterioIOError
+    from rasterio.transform import Affine
+    from rasterio.warp import Resampling, reproject
+
+    from poc_env.agents.mission.crs import crs_text, make_crs
+
+    field = "terrain.dem"
+    m = sc.map
+    if m.origin_deg is None:
+        raise ConfigError(
+            field, str(path), "a DEM in a scenario with map.origin_deg (the map's (0, 0) in "
+            "lat, lon places it)",
+        )  # fmt: skip
+    if not path.is_file():
+        raise ConfigError(field, str(path), "an existing GeoTIFF file of ground heights (m AMSL)")
+    rec = make_crs(m.projection, m.origin_deg, zone=m.utm_zone)
+    dst_crs = crs_text(rec)
+    lat0, lon0 = m.origin_deg
+    fwd = Transformer.from_crs("EPSG:4326", dst_crs, always_xy=True)
+    px0, py0 = fwd.transform(lon0, lat0)
+    ny, nx = shape
+    dst_transform = Affine(cell, 0.0, origin[0] + px0, 0.0, -cell, origin[1] + ny * cell + py0)
+    need = (origin[0], origin[1], origin[0] + nx * cell, origin[1] + ny * cell)
+    try:
+        src = rasterio.open(path)
+    except RasterioIOError as err:
+        raise ConfigError(field, f"{path} unreadable ({err})", "a GeoTIFF file") from None
+    try:
+        with src:
+            if src.crs is None:
+                raise ConfigError(
+                    field, str(path),
+                    "a GeoTIFF with a coordinate reference system (georeference it in your GIS)",
+                )  # fmt: skip
+            from poc_env import limits
+
+            limits.check_memory(field, str(path), 8.0 * src.width * src.height, "DEM band")
+            band = src.read(1, masked=True).astype(float).filled(np.nan)
+            band[~np.isfinite(band)] = np.nan
+            _check_dem_covers(field, path, src, dst_crs, px0, py0, need)
+            out = {}
+            for name, how in (("mean", Resampling.bilinear), ("max", Resampling.max)):
+                dst = np.full((ny, nx), np.nan)
+                reproject(
+                    band, dst, src_transform=src.transform, src_crs=src.crs, src_nodata=np.nan,
+                    dst_transform=dst_transform, dst_crs=dst_crs, dst_nodata=np.nan,
+                    resampling=how,
+                )  # fmt: skip
+                out[name] = dst[::-1].copy()  # rows from the south
+            elev = _sample_fields(field, sc, band, src, rec)
+    except RasterioError as err:
+        raise ConfigError(field, f"{path} unreadable ({err})", "a complete GeoTIFF") from None
+    for name in ("mean", "max"):
+        bad = ~np.isfinite(out[name])
+        if bad.any():
+            raise ConfigError(
+                field, f"nodata or NaN over {bad.mean():.1%} of the operating area ({path.name})",
+                "a DEM with a height at every point of the operating area (fill the voids)",
+            )  # fmt: skip
+    gmax = np.maximum(out["max"], out["mean"])
+    return out["mean"], gmax, elev
+
+
+def _check_dem_covers(
+    field: str, path: Path, src: Any, dst_crs: str, px0: float, py0: float, need: tuple
+) -> None:
+    """The operating area's densified boundary, taken into the DEM's pixels, lies on it."""
+    from pyproj import Transformer
+
+    x0, y0, x1, y1 = need
+    t = np.linspace(0.0, 1.0, 41)
+    ring = np.concatenate(
+        [
+            np.column_stack([x0 + (x1 - x0) * t, np.full_like(t, y0)]),
+            np.column_stack([np.full_like(t, x1), y0 + (y1 - y0) * t]),
+            np.column_stack([x1 - (x1 - x0) * t, np.full_like(t, y1)]),
+            np.column_stack([np.full_like(t, x0), y1 - (y1 - y0) * t]),
+        ]
+    )
+    to_src = Transformer.from_crs(dst_crs, src.crs, always_xy=True)
+    sx, sy = to_src.transform(ring[:, 0] + px0, ring[:, 1] + py0)
+    cols, rows = ~src.transform @ (np.asarray(sx), np.asarray(sy))
+    cols, rows = np.asarray(cols), np.asarray(rows)
+    ok = np.isfinite(cols) & (cols >= 0) & (cols <= src.width) & (rows >= 0) & (rows <= src.height)
+    if not ok.all():
+        raise ConfigError(
+            field, f"a DEM covering {ok.mean():.0%} of the operating area's boundary ({path.name})",
+            "a DEM covering the whole operating area (eq. 20: the map and the airfields, "
+            "grown by episode.boundary_margin_km) x0, y0, x1, y1 = "
+            f"{[round(v / 1e3, 3) for v in need]} km",
+        )  # fmt: skip
+
+
+def _sample_fields(field: str, sc: Any, band: np.ndarray, src: Any, rec: dict) -> list[float]:
+    """Each airfield's elevation, bilinear from the DEM's own pixels."""
+    from pyproj import Transformer
+
+    from poc_env.agents.mission.crs import to_geographic
+
+    ll = to_geographic([a.position_m for a in sc.airfields], rec)
+    to_src = Transformer.from_crs("EPSG:4326", src.crs, always_xy=True)
+    out = []
+    for a, (lat, lon) in zip(sc.airfields, ll):
+        sx, sy = to_src.transform(lon, lat)
+        c, r = ~src.transform @ (sx, sy)
+        value = float(bilinear(band[::-1], (0.0, 0.0), 1.0, [[c, band.shape[0] - r]])[0])
+        if not math.isfinite(value):
+            raise ConfigError(
+                field, f"nodata at airfield {a.name!r}", "a DEM with a height at every airfield"
+            )
+        out.append(value)
+    return out
+
+
+# --------------------------------------------------------------------------- plan record
+
+
+def terrain_record(t: Terrain) -> dict[str, Any]:
+    """The plan.json ``terrain`` record of ``t`` (heights rounded to 0.1 m)."""
+    return {
+        "origin_m": [t.origin_m[0], t.origin_m[1]],
+        "cell_m": t.cell_m,
+        "ground_m": np.round(t.ground_m, 1).tolist(),
+        "ground_max_m": np.round(np.ceil(t.ground_max_m * 10) / 10, 1).tolist(),
+        "fields": [
+            {"name": n, "position_m": [p[0], p[1]], "elevation_m": round(e, 1)}
+            for n, p, e in t.fields
+        ],
+        "min_clearance_m": t.min_clearance_m,
+        "search_height_m": t.search_height_m,
+        "ceiling_m": t.ceiling_m,
+        "max_pitch_deg": math.degrees(t.max_pitch_rad),
+        "source": t.source,
+    }
+
+
+def from_record(rec: dict[str, Any]) -> Terrain:
+    """The :class:`Terrain` a plan records (:func:`terrain_record`)."""
+    return Terrain(
+        origin_m=(float(rec["origin_m"][0]), float(rec["origin_m"][1])),
+        cell_m=float(rec["cell_m"]),
+        ground_m=np.asarray(rec["ground_m"], dtype=float),
+        ground_max_m=np.asarray(rec["ground_max_m"], dtype=float),
+        fields=tuple(
+            (
+                str(f["name"]),
+                (float(f["position_m"][0]), float(f["position_m"][1])),
+                float(f["elevation_m"]),
+            )
+            for f in rec["fields"]
+        ),
+        min_clearance_m=float(rec["min_clearance_m"]),
+        search_height_m=float(rec["search_height_m"]),
+        ceiling_m=float(rec["ceiling_m"]),
+        max_pitch_rad=math.radians(float(rec["max_pitch_deg"])),
+        source=str(rec["source"]),
+    )
+
+
+# --------------------------------------------------------------------------- profiles
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A UAV's mission altitudes (module docstring).
+
+    Attributes
+    ----------
+    points_m : ndarray, shape (n, 2)
+        Take-off field, then the route's points (``waypoints_m`` and the intermediate points
+        the profile needs), then the landing approach point.
+    amsl_m, ground_m : ndarray, shape (n,)
+        Altitude and the highest ground near each point, metres AMSL.
+    vertex : ndarray of int, shape (n,)
+        The index of the mission vertex (0 field, 1.. ``waypoints_m``, last the approach) a
+        point is, or -1 for an intermediate point.
+    field_m : float
+        The take-off field's elevation (AMSL); ``landing_field_m`` the landing field's.
+    """
+
+    points_m: np.ndarray
+    amsl_m: np.ndarray
+    ground_m: np.ndarray
+    vertex: np.ndarray
+    field_m: float
+    landing_field_m: float
+
+
+def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = None) -> Profile:
+    """The altitudes along ``path_xy`` (take-off field, waypoints, approach point) over ``t``.
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named: clearance impossible within the UAV's ceiling.
+    """
+    path = np.asarray(path_xy, dtype=float).reshape(-1, 2)
+    step = t.cell_m / 2.0
+    pts, vtx = [path[0]], [0]
+    for k in range(1, len(path)):
+        a, b = path[k - 1], path[k]
+        n = max(1, math.ceil(float(np.hypot(*(b - a))) / step))
+        for s in range(1, n + 1):
+            pts.append(a + (b - a) * (s / n))
+            vtx.append(k if s == n else -1)
+    p = np.asarray(pts)
+    vertex = np.asarray(vtx)
+    x0, y0, x1, y1 = t.bounds
+    out = (p[:, 0] < x0 - 1) | (p[:, 0] > x1 + 1) | (p[:, 1] < y0 - 1) | (p[:, 1] > y1 + 1)
+    if out.any():
+        x, y = p[int(np.argmax(out))]
+        raise ConfigError(
+            where, f"a point at ({x / 1e3:.1f}, {y / 1e3:.1f}) km",
+            "a route over the terrain grid (the operating area, x0, y0, x1, y1 = "
+            f"{[round(v / 1e3, 3) for v in t.bounds]} km): re-plan inside it",
+        )  # fmt: skip
+    ground = t.ground_at(p)
+    req = ground + t.min_clearance_m
+    worst = int(np.argmax(req))
+    if req[worst] > t.ceiling_m + 1e-6:
+        x, y = p[worst]
+        raise ConfigError(
+            where, f"ground {ground[worst]:.0f} m AMSL near ({x / 1e3:.1f}, {y / 1e3:.1f}) km",
+            f"a route that keeps the clearance terrain.min_clearance_m = {t.min_clearance_m:g} m "
+            f"within the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g} m AMSL (clearance "
+            "impossible: re-plan around the high ground, or raise the ceiling if the UAV can)",
+        )  # fmt: skip
+    base = np.maximum(np.minimum(ground + t.search_height_m, t.ceiling_m), req)
+    dist = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
+    grad = math.tan(t.max_pitch_rad)
+    z = base.copy()
+    for i in range(1, len(z)):  # eq. 19: |dz| <= tan(beta_max) per metre flown
+        z[i] = max(z[i], z[i - 1] - grad * (dist[i] - dist[i - 1]))
+    for i in range(len(z) - 2, -1, -1):
+        z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
+    keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
+    land = path[-1] if landing_xy is None else landing_xy
+    return Profile(
+        points_m=p[keep],
+        amsl_m=z[keep],
+        ground_m=ground[keep],
+        vertex=vertex[keep],
+        field_m=t.field_elevation(path[0]),
+        landing_field_m=t.field_elevation(land),
+    )
+
+
+def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.ndarray) -> list:
+    """Indices kept: every vertex, and between vertices the fewest points whose straight
+    altitude legs stay at or above ``floor`` at every sample (greedy, farthest first)."""
+    keep = [0]
+    i = 0
+    n = len(z)
+    while i < n - 1:
+        j = i + 1
+        while j + 1 < n and vertex[j] < 0:  # try to reach farther, never past a vertex
+            cand = j + 1
+            seg = slice(i, cand + 1)
+            frac = (dist[seg] - dist[i]) / max(dist[cand] - dist[i], 1e-9)
+            line = z[i] + (z[cand] - z[i]) * frac
+            if np.all(line >= floor[seg] - 1e-6):
+                j = cand
+            else:
+                break
+        keep.append(j)
+        i = j
+    return keep
+
+
+def clearance_violations(t: Terrain, prof: Profile, step_m: float | None = None) -> int:
+    """Points, sampled every ``step_m`` (default a tenth of a cell) along the straight legs
+    between a profile's points, that fly less than the clearance above the ground near them."""
+    step = step_m or t.cell_m / 10.0
+    bad = 0
+    for k in range(1, len(prof.points_m)):
+        a, b = prof.points_m[k - 1], prof.points_m[k]
+        n = max(1, math.ceil(float(np.hypot(*(b - a))) / step))
+        s = np.linspace(0.0, 1.0, n + 1)
+        xy = a[None, :] + (b - a)[None, :] * s[:, None]
+        zz = prof.amsl_m[k - 1] + (prof.amsl_m[k] - prof.amsl_m[k - 1]) * s
+        bad += int(np.sum(zz - t.ground_at(xy) < t.min_clearance_m - 1e-6))
+    return bad
+
+
+def mission_path(u: Any) -> list[list[float]]:
+    """Take-off field, ``waypoints_m``, landing approach point: the path a profile covers."""
+    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u)]
+
+
+def plan_profiles(plan: Any) -> list[Profile] | None:
+    """Every UAV's :func:`~poc_env.agents.mission.terrain.profile` over the plan's recorded
+    terrain; None without terrain.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``plan.uavs[k]``: clearance impossible within the ceiling.
+    """
+    rec = plan.get("terrain")
+    if rec is None:
+        return None
+    t = from_record(rec)
+    return [
+        profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
+        for k, u in enumerate(plan["uavs"])
+    ]

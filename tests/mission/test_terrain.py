@@ -1,0 +1,398 @@
+"""Terrain and sensors (issue 24, deliverable 2): a DEM in the scenario and in `scenario import`,
+mission altitudes that clear it within eq. 19's pitch bound and the ceiling, QGC/KML altitudes
+AMSL from it, the home altitude from it, the camera sensor model used alike by the planner, the
+bounds and the environment, and the bad-input cases.
+
+Every fixture is generated here (tmp_path): an Alps-like search area near 46.5 N 7.9 E with a
+synthetic 4,000 m ridge written by rasterio and an airfield in a 600 m valley.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from lxml import etree
+
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.formats.qgc import validate_qgc
+from poc_env.agents.mission.plan import load_plan, write_plan
+from poc_env.agents.mission.terrain import (
+    clearance_violations,
+    from_record,
+    load_terrain,
+    plan_profiles,
+    profile,
+)
+from poc_env.agents.planning.planner import make_plan
+from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
+
+rasterio = pytest.importorskip("rasterio")
+
+ORIGIN = (46.5, 7.9)  # lat, lon of local (0, 0)
+RIDGE_X_KM = 30.0  # the ridge runs north-south 30 km east of the origin
+VALLEY_M, RIDGE_M = 600.0, 4000.0
+KM_PER_DEG_LON = 111.32 * math.cos(math.radians(ORIGIN[0]))
+
+
+def _height(lon: np.ndarray, lat: np.ndarray) -> np.ndarray:
+    x_km = (lon - ORIGIN[1]) * KM_PER_DEG_LON
+    return VALLEY_M + (RIDGE_M - VALLEY_M) * np.exp(-(((x_km - RIDGE_X_KM) / 5.0) ** 2))
+
+
+def _dem(path: Path, *, crs: str | None = "EPSG:4326", lon=(7.0, 9.3), lat=(45.9, 47.1),
+         res=0.005, void: tuple | None = None) -> Path:  # fmt: skip
+    from rasterio.transform import from_origin
+
+    nx, ny = round((lon[1] - lon[0]) / res), round((lat[1] - lat[0]) / res)
+    lons = lon[0] + (np.arange(nx) + 0.5) * res
+    lats = lat[1] - (np.arange(ny) + 0.5) * res
+    z = _height(*np.meshgrid(lons, lats)).astype("float32")
+    if void is not None:
+        z[void] = -9999.0
+    kw = {"crs": crs} if crs else {}
+    with rasterio.open(
+        path, "w", driver="GTiff", width=nx, height=ny, count=1, dtype="float32",
+        transform=from_origin(lon[0], lat[1], res, res), nodata=-9999.0, **kw,
+    ) as dst:  # fmt: skip
+        dst.write(z, 1)
+    return path
+
+
+def _scenario(dem: Path | None, **over) -> dict:
+    data = {
+        "name": "alps",
+        "map": {
+            "width_km": 60, "height_km": 40, "cell_km": 5, "origin_deg": list(ORIGIN),
+            "prior": {"components": [{"mean_km": [32, 20], "sigma_km": [10, 8]}]},
+        },
+        "airfields": [{"name": "valley", "position_km": [-10, 20]}],
+        "fleet": [{"takeoff": "valley", "count": 2}],
+        "uav": {"max_altitude_m": 6000},
+    }  # fmt: skip
+    if dem is not None:
+        data["terrain"] = {"dem": str(dem)}
+    for k, v in over.items():
+        data[k] = v
+    return data
+
+
+def _dem_at(dem: Path, latlon: np.ndarray) -> np.ndarray:
+    """Heights of the DEM itself at (lat, lon) points: the max of the 2 x 2 pixels around."""
+    with rasterio.open(dem) as src:
+        band = src.read(1)
+        cols, rows = ~src.transform @ (latlon[:, 1], latlon[:, 0])
+    c0 = np.clip(np.floor(np.asarray(cols) - 0.5).astype(int), 0, band.shape[1] - 2)
+    r0 = np.clip(np.floor(np.asarray(rows) - 0.5).astype(int), 0, band.shape[0] - 2)
+    return np.maximum.reduce(
+        [band[r0, c0], band[r0 + 1, c0], band[r0, c0 + 1], band[r0 + 1, c0 + 1]]
+    ).astype(float)
+
+
+def _qgc_clearance(doc: dict, dem: Path, clearance: float) -> tuple[float, int]:
+    """(least height above the DEM, legs checked) along a QGC mission from the take-off item
+    to the approach waypoint, legs sampled every ~100 m, altitudes linear between items."""
+    nav = [it for it in doc["mission"]["items"] if it["command"] in (16, 22)]
+    pts = np.array([[it["params"][4], it["params"][5], it["params"][6]] for it in nav])
+    least, legs = math.inf, 0
+    for a, b in itertools.pairwise(pts):
+        n = max(2, int(np.hypot((b[0] - a[0]) * 111.0, (b[1] - a[1]) * KM_PER_DEG_LON) * 10))
+        s = np.linspace(0.0, 1.0, n)[:, None]
+        p = a[None, :] + (b - a)[None, :] * s
+        least = min(least, float(np.min(p[:, 2] - _dem_at(dem, p[:, :2]))))
+        legs += 1
+    return least, legs
+
+
+# --------------------------------------------------------------------------- the Alps case
+
+
+def test_alps_import_plan_export_clears_the_ridge(tmp_path):
+    """Imported with --dem, planned (allocation, small budget), exported to QGC and KML: every
+    mission clears the DEM by the clearance, home altitude and landing at the valley's 600 m,
+    altitudes AMSL (MAV_FRAME_GLOBAL) and KML absolute."""
+    from poc_env.agents.mission.geoimport import (
+        add_scenario_import_arguments,
+        cmd_scenario_import,
+    )
+
+    dem = _dem(tmp_path / "alps_dem.tif")
+    lon0, lat0 = 7.9, 46.5
+    dlon, dlat = 60 / KM_PER_DEG_LON, 40 / 111.2
+    area = [[lon0, lat0], [lon0 + dlon, lat0], [lon0 + dlon, lat0 + dlat], [lon0, lat0 + dlat]]
+    (tmp_path / "area.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {},
+         "geometry": {"type": "Polygon", "coordinates": [[*area, area[0]]]}}]}))  # fmt: skip
+    (tmp_path / "fields.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"name": "valley"},
+         "geometry": {"type": "Point", "coordinates": [lon0 - 0.1, lat0 + 0.2]}}]}))  # fmt: skip
+    p = argparse.ArgumentParser()
+    add_scenario_import_arguments(p)
+    out = tmp_path / "alps.yaml"
+    argv = [str(tmp_path / "area.geojson"), "--airfields", str(tmp_path / "fields.geojson")]
+    args = p.parse_args([*argv, "--dem", str(dem), "--out", str(out)])
+    assert cmd_scenario_import(args) == 0
+    sc = load_scenario(out)
+    assert sc.terrain.dem == str(dem.resolve())
+    # the base UAV's ceiling (4,000 m AMSL) is below ridge + clearance: refused, named
+    with pytest.raises(ConfigError, match="clearance impossible") as err:
+        make_plan(sc, planner="allocation", uavs=2, refine=0)
+    assert "uav.max_altitude_m = 4000" in str(err.value)
+    sc = load_scenario(out, {"uav.max_altitude_m": 6000})
+    plan = make_plan(sc, planner="allocation", uavs=2, refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    t = from_record(load_plan(tmp_path / "plan.json")["terrain"])
+    assert t.field_elevation(sc.airfields[0].position_m) == pytest.approx(VALLEY_M, abs=1.0)
+    assert t.ground_max_m.max() == pytest.approx(RIDGE_M, abs=5.0)
+    files = export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "qgc")
+    crossed = 0
+    for f in files:
+        doc = json.loads(f.read_text())
+        assert validate_qgc(doc) == []
+        m = doc["mission"]
+        assert m["plannedHomePosition"][2] == pytest.approx(VALLEY_M, abs=1.0)
+        assert m["globalPlanAltitudeMode"] == 2
+        assert {it["frame"] for it in m["items"] if it["command"] in (16, 21, 22)} == {0}
+        assert m["items"][-1]["params"][6] == pytest.approx(VALLEY_M, abs=1.0)  # NAV_LAND
+        least, legs = _qgc_clearance(doc, dem, 150.0)
+        assert legs > 0 and least >= 150.0 - 1e-6, (f.name, least)
+        alts = [it["params"][6] for it in m["items"] if it["command"] == 16]
+        crossed += max(alts) > RIDGE_M  # some mission flies over the ridge
+    assert crossed >= 1
+    kml_files = export_plan(tmp_path / "plan.json", "kml", out_dir=tmp_path / "kml")
+    (kml_file,) = [f for f in kml_files if f.suffix == ".kml"]
+    root = etree.parse(str(kml_file))
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    routes = [pm for pm in root.iterfind(".//k:Placemark", ns)
+              if pm.findtext("k:name", namespaces=ns).endswith(" route")]  # fmt: skip
+    assert len(routes) == 2
+    for pm in routes:
+        assert pm.findtext(".//k:LineString/k:altitudeMode", namespaces=ns) == "absolute"
+        xyz = np.array([[float(v) for v in c.split(",")] for c in
+                        pm.findtext(".//k:coordinates", namespaces=ns).split()])  # fmt: skip
+        assert xyz[0, 2] == pytest.approx(VALLEY_M, abs=1.0)  # the field, on the ground
+        above = xyz[1:-1, 2] - _dem_at(dem, xyz[1:-1, [1, 0]])
+        assert above.min() >= 150.0 - 1e-6
+    # a flat-map altitude option is refused for a plan with terrain, nothing written
+    with pytest.raises(ConfigError, match="altitude_m"):
+        export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "x", altitude_m=1000)
+    assert not (tmp_path / "x").exists()
+
+
+def test_html_report_shades_the_terrain(tmp_path):
+    from poc_env.agents.mission.formats.report import expected_layers
+
+    plan = make_plan(load_scenario(_scenario(_dem(tmp_path / "d.tif"))), planner="allocation",
+                     refine=0)  # fmt: skip
+    write_plan(plan, tmp_path / "plan.json")
+    (page,) = export_plan(tmp_path / "plan.json", "html", out_dir=tmp_path / "h")
+    text = page.read_text()
+    assert '"terrain": {"url": "data:image/png;base64,' in text
+    assert "contours every 500 m" in text
+    flat = dict(plan)
+    del flat["terrain"]
+    assert expected_layers(plan, False) == expected_layers(flat, False) + 1
+
+
+# --------------------------------------------------------------------------- profiles
+
+
+def test_profile_climbs_within_the_pitch_bound_and_keeps_the_clearance():
+    """A route across a 4,000 m wall: eq. 19's gradient tan(beta_max) never exceeded, the
+    clearance kept at every sample, the wanted height above ground kept away from the wall."""
+    sc = load_scenario(_scenario(None, terrain={"elevation_m": _wall(), "cell_km": 1.0,
+                                                "origin_km": [-40, -30]}))  # fmt: skip
+    t = load_terrain(sc)
+    p = profile(t, [[-10e3, 20e3], [0.0, 0.0], [60e3, 0.0], [60e3, 40e3], [0.0, 40e3]])
+    # turns just before and just after the wall: the climb and the descent are both limited
+    q = profile(t, [[-10e3, 20e3], [27e3, 0.0], [33e3, 0.0], [33e3, 2e3], [26e3, 2e3]])
+    for prof in (p, q):
+        grad = np.abs(np.diff(prof.amsl_m)) / np.hypot(*np.diff(prof.points_m, axis=0).T)
+        assert grad.max() <= math.tan(sc.uav.max_pitch_rad) + 1e-9
+    assert clearance_violations(t, p, step_m=50.0) == 0
+    assert p.amsl_m.max() >= RIDGE_M + 150.0
+    assert p.amsl_m[0] == pytest.approx(VALLEY_M + sc.uav.cruise_altitude_m)  # over the field
+    flat = profile(t, [[-10e3, 20e3], [0.0, 0.0], [5e3, 0.0]])
+    assert np.allclose(flat.amsl_m, VALLEY_M + sc.uav.cruise_altitude_m)  # far from the wall
+    with pytest.raises(ConfigError, match=r"UAV 7.*a route over the terrain grid"):
+        profile(t, [[-10e3, 20e3], [-45e3, 0.0]], "UAV 7")  # off the grid: no ground known
+    # the check itself sees a violation: a straight route at 1,600 m AMSL through the wall
+    flown = type(p)(p.points_m, np.full(len(p.amsl_m), 1600.0), p.ground_m, p.vertex, 0, 0)
+    assert clearance_violations(t, flown) > 0
+
+
+def _wall() -> list:
+    """A 120 x 100 km grid of 1 km cells from (-40, -30) km: 600 m, a 4,000 m wall at x = 30 km."""
+    x = -40 + np.arange(120) + 0.5
+    row = np.where(np.abs(x - RIDGE_X_KM) < 2.0, RIDGE_M, VALLEY_M)
+    return np.tile(row, (100, 1)).tolist()
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_dem_without_crs_is_refused_by_import_nothing_written(tmp_path):
+    from poc_env.agents.mission.geoimport import import_scenario
+
+    dem = _dem(tmp_path / "nocrs.tif", crs=None)
+    (tmp_path / "a.geojson").write_text(json.dumps({"type": "Polygon", "coordinates": [[
+        [7.9, 46.5], [8.6, 46.5], [8.6, 46.8], [7.9, 46.8], [7.9, 46.5]]]}))  # fmt: skip
+    (tmp_path / "f.geojson").write_text(json.dumps({"type": "Feature", "properties": {
+        "name": "valley"}, "geometry": {"type": "Point", "coordinates": [7.8, 46.7]}}))  # fmt: skip
+    before = sorted(tmp_path.iterdir())
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*coordinate reference system"):
+        import_scenario(tmp_path / "a.geojson", airfields=tmp_path / "f.geojson", dem=dem)
+    assert sorted(tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"lon": (7.6, 8.5)}, r"terrain\.dem.*covering .* of the operating area"),
+        ({"void": (slice(150, 160), slice(150, 160))}, r"terrain\.dem.*nodata or NaN"),
+    ],
+    ids=["not-covering", "void"],
+)
+def test_dem_not_covering_or_with_voids_is_refused(tmp_path, kwargs, match):
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif", **kwargs)))
+    with pytest.raises(ConfigError, match=match):
+        make_plan(sc, planner="allocation", refine=0)
+
+
+def test_dem_needs_the_scenario_origin(tmp_path):
+    data = _scenario(_dem(tmp_path / "d.tif"))
+    del data["map"]["origin_deg"]
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*map\.origin_deg"):
+        load_terrain(load_scenario(data))
+
+
+def test_elevation_grid_not_covering_the_area_is_refused():
+    sc = load_scenario(_scenario(None, terrain={"elevation_m": [[0, 0], [0, 0]]}))
+    with pytest.raises(ConfigError, match=r"terrain\.elevation_m.*whole operating area"):
+        load_terrain(sc)
+
+
+def test_export_refuses_a_plan_whose_clearance_the_ceiling_cannot_give(tmp_path):
+    plan = make_plan(load_scenario(_scenario(_dem(tmp_path / "d.tif"))), planner="allocation",
+                     refine=0)  # fmt: skip
+    plan["terrain"]["ceiling_m"] = 3500.0  # below the ridge + clearance
+    crossing = [k for k, p in enumerate(plan_profiles({**plan, "terrain": {
+        **plan["terrain"], "ceiling_m": 6000.0}})) if p.ground_m.max() > 3350]  # fmt: skip
+    assert crossing
+    write_plan(plan, tmp_path / "plan.json")
+    for fmt in ("qgc", "kml", "geojson", "html"):
+        with pytest.raises(
+            ConfigError, match=rf"plan\.uavs\[{crossing[0]}\].*clearance impossible"
+        ):
+            export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / fmt)
+        assert not (tmp_path / fmt).exists()
+
+
+# --------------------------------------------------------------------------- sensor model
+
+
+def test_camera_sweep_width_is_the_footprint_and_everyone_reads_it():
+    """W = k 2 h tan(fov / 2); the environment, the bound and the planner's objective use the
+    model's W exactly as they use the same fixed width."""
+    from poc_env.agents.planning.objective import PlanObjective
+    from poc_env.sim.core import make_params
+    from poc_env.theory.bound import honest_optimum
+    from poc_env.theory.probability_map import build_prior
+
+    over = {"sensor.model": "camera", "sensor.fov_deg": 90.0, "sensor.detection_factor": 0.8,
+            "uav.cruise_altitude_m": 1500.0}  # fmt: skip
+    cam = load_scenario("paper_6_2", over)
+    w = 0.8 * 2 * 1500.0 * math.tan(math.radians(45.0))
+    assert cam.sensor.sweep_width_m == pytest.approx(w, rel=1e-12)
+    fixed = load_scenario("paper_6_2", {"sensor.sweep_width_km": w / 1e3,
+                                        "uav.cruise_altitude_m": 1500.0})  # fmt: skip
+    prior = build_prior(cam.map)
+    assert make_params(cam).cutoff_m == pytest.approx(make_params(fixed).cutoff_m)
+    assert make_params(cam).cutoff_m != pytest.approx(
+        make_params(load_scenario("paper_6_2")).cutoff_m
+    )
+    assert honest_optimum(cam, prior).pos == pytest.approx(honest_optimum(fixed, prior).pos)
+    assert PlanObjective(cam, prior).sweep_width_m == pytest.approx(w)
+    # the model's W round-trips; a different explicit width beside a model is refused
+    assert load_scenario(cam.to_dict()).sensor.sweep_width_m == pytest.approx(w)
+    with pytest.raises(ConfigError, match=r"sensor\.sweep_width_km.*absent when sensor\.model"):
+        load_scenario("paper_6_2", {**over, "sensor.sweep_width_km": 3})
+    with pytest.raises(ConfigError, match=r"model.*one of 'fixed', 'camera'"):
+        load_scenario("paper_6_2", {"sensor.model": "iamsar"})
+
+
+def test_default_sensor_keeps_every_builtin_width():
+    from poc_env.config import builtin_scenarios
+
+    for name in builtin_scenarios():
+        sc = load_scenario(name)
+        assert sc.sensor.model == "fixed"
+        assert sc.sensor.sweep_width_at(123.0) == sc.sensor.sweep_width_m
+
+
+# --------------------------------------------------------------------------- property test
+
+
+def _random_case(rng: np.random.Generator) -> dict:
+    """A small random scenario with a smooth random elevation grid (1 km cells) and a zone."""
+    w, h = (int(v) * 10 for v in rng.integers(3, 6, size=2))
+    fx, fy = float(rng.uniform(-15, w + 15)), float(rng.choice([-8.0, h + 8.0]))
+    x0, y0 = min(0.0, fx) - 20, min(0.0, fy) - 20
+    nx, ny = int(max(w, fx) + 20 - x0) + 2, int(max(h, fy) + 20 - y0) + 2
+    gx, gy = np.meshgrid(x0 + np.arange(nx) + 0.5, y0 + np.arange(ny) + 0.5)
+    z = np.full(gx.shape, float(rng.uniform(0, 800)))
+    for _ in range(int(rng.integers(1, 5))):
+        cx, cy = rng.uniform(0, w), rng.uniform(0, h)
+        z += rng.uniform(300, 2500) * np.exp(
+            -((gx - cx) ** 2 + (gy - cy) ** 2) / rng.uniform(4, 60) ** 2
+        )
+    z = z * min(1.0, 4500.0 / float(z.max()))  # peaks below the ceiling (6,000 m) - clearance
+    zx, zy = float(rng.uniform(5, w - 15)), float(rng.uniform(5, h - 15))
+    mean = [float(rng.uniform(0, w)), float(rng.uniform(0, h))]
+    return _scenario(
+        None,
+        name="prop",
+        map={"width_km": w, "height_km": h, "cell_km": 5,
+             "prior": {"components": [{"mean_km": mean, "sigma_km": [8, 6]}]},
+             "no_fly_zones_km": [[[zx, zy], [zx + 8, zy], [zx + 8, zy + 6], [zx, zy + 6]]]},
+        airfields=[{"name": "base", "position_km": [fx, fy]}],
+        fleet=[{"takeoff": "base", "count": int(rng.integers(1, 4))}],
+        terrain={"elevation_m": np.round(z, 1).tolist(), "cell_km": 1.0, "origin_km": [x0, y0]},
+    )  # fmt: skip
+
+
+def _property(n: int, seed: int, tmp_path: Path) -> None:
+    rng = np.random.default_rng(seed)
+    refused, violations = 0, 0
+    for k in range(n):
+        sc = load_scenario(_random_case(rng))
+        plan = make_plan(sc, planner="allocation", refine=0, seed=k)
+        path = tmp_path / f"p{k}" / "plan.json"
+        path.parent.mkdir()
+        write_plan(plan, path)
+        t = from_record(plan["terrain"])
+        for prof in plan_profiles(plan) or []:
+            violations += clearance_violations(t, prof)
+        for fmt in ("qgc", "kml"):
+            try:
+                export_plan(path, fmt, origin="46.5,7.9", out_dir=path.parent / fmt)
+            except ConfigError:
+                refused += 1
+    assert (violations, refused) == (0, 0)
+
+
+def test_random_scenarios_with_terrain_clear_it_and_export(tmp_path):
+    """Smoke-sized: 0 clearance violations and 0 refused exports over random small scenarios
+    with a zone and an elevation grid."""
+    _property(3, 7, tmp_path)
+
+
+@pytest.mark.slow
+def test_random_scenarios_with_terrain_clear_it_and_export_many(tmp_path):
+    _property(200, 11, tmp_path)
