@@ -386,6 +386,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         "suite": "poc_env.agents.benchmarks.suite",
         "learning": "poc_env.agents.benchmarks.learning",
         "generalise": "poc_env.agents.benchmarks.generalise",
+        "peers": "poc_env.agents.benchmarks.peers",
     }
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
@@ -997,13 +998,15 @@ def build_parser() -> argparse.ArgumentParser:
             "suite",
             "learning",
             "generalise",
+            "peers",
         ],
         help="env: agent-steps/s; plan: DE plan wall time; train: PPO transitions/s; campaign: "
         "hostile-input cases and their outcomes (needs hypothesis, the dev extra); baselines: "
         "the baseline table of every registered task; suite: env-steps/s per control level and "
         "PPO transitions/s in SB3 and RLlib; learning: held-out learning curves of training "
         "runs over seeds and the transitions to reach a planner; generalise: policies on "
-        "held-out geometries and comms-limited beliefs",
+        "held-out geometries and comms-limited beliefs; peers: our envs against MPE2, VMAS and "
+        "DSSE (the peers extra), interleaved, with ratios",
     )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)
