@@ -263,11 +263,20 @@ def measure(keys: list[str], s: Settings, rounds: int) -> dict[str, list[float]]
     """Agent-steps/s of each runnable contender per round, interleaved (rotating order)."""
     runnable = [k for k in keys if installed(CONTENDERS[k])]
     rates: dict[str, list[float]] = {k: [] for k in runnable}
+    broken: set[str] = set()  # a peer found but failing to import (e.g. a missing dependency)
     for r in range(rounds):
         shift = r % len(runnable) if runnable else 0
         for k in runnable[shift:] + runnable[:shift]:
-            rates[k].append(CONTENDERS[k].run(s, r))
-    return rates
+            if k in broken:
+                continue
+            try:
+                rates[k].append(CONTENDERS[k].run(s, r))
+            except ImportError as exc:
+                if CONTENDERS[k].module is None:
+                    raise
+                print(f"{k}: {NOT_INSTALLED} ({exc})", flush=True)
+                broken.add(k)
+    return {k: v for k, v in rates.items() if k not in broken}
 
 
 def speed_rows(keys: list[str], s: Settings, rates: dict[str, list[float]]) -> list[dict]:

@@ -83,13 +83,27 @@ def test_ratio_is_the_ratio_of_median_env_steps(tmp_path, monkeypatch):
         "peer_fake",
         peers.Contender("peer_fake", "peer", 2, lambda s: 1, run(theirs, "p"), "none", "math"),
     )
-    monkeypatch.setattr(
-        peers, "TARGETS", [("ours_fake", "peer_fake", 9.0), ("ours_fake", "x", 1.0)]
+
+    def broken(s, seed):
+        calls.append("b")
+        raise ImportError("a dependency of the peer is missing")
+
+    # found by importlib but failing on import: 'not installed' too, tried once
+    monkeypatch.setitem(
+        peers.CONTENDERS,
+        "broken_fake",
+        peers.Contender("broken_fake", "broken", 1, lambda s: 1, broken, "none", "math"),
     )
+    targets = [("ours_fake", "peer_fake", 9.0), ("ours_fake", "x", 1.0)]
+    monkeypatch.setattr(peers, "TARGETS", [*targets, ("ours_fake", "broken_fake", 1.0)])
     out = tmp_path / "o"
-    rows = peers.main(["--rounds", "3", "--only", "ours_fake", "peer_fake", "--out", str(out)])
-    assert calls == ["o", "p", "p", "o", "o", "p"]  # interleaved, order rotating
-    ratio = [r for r in rows if r["kind"] == "ratio"]
+    keys = ["ours_fake", "peer_fake", "broken_fake"]
+    rows = peers.main(["--rounds", "3", "--only", *keys, "--out", str(out)])
+    assert calls == ["o", "p", "b", "p", "o", "o", "p"]  # interleaved, order rotating
+    status = {r["key"]: r["status"] for r in rows}
+    assert status["broken_fake"] == peers.NOT_INSTALLED
+    assert status["ours_fake/broken_fake"] == f"{peers.NOT_INSTALLED}: broken_fake"
+    ratio = [r for r in rows if r["kind"] == "ratio" and r["key"] == "ours_fake/peer_fake"]
     assert len(ratio) == 1
     assert ratio[0]["ratio"] == pytest.approx(10.0)
     assert ratio[0]["ratio"] != pytest.approx(statistics.median([5.0, 30.0, 200 / 30]))
