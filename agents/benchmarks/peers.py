@@ -94,6 +94,13 @@ def _small_scenario() -> str:
     return tasks.get_task(_heading_task("Small")).scenario
 
 
+def _task_agents(scenario: str) -> int:
+    """UAVs of the ``scenario`` family's tasks (``"Small"``: 3)."""
+    from poc_env import tasks
+
+    return _core_params(tasks.get_task(_heading_task(scenario)).scenario).n_agents
+
+
 def _core_params(scenario: str):
     from poc_env.config import load_scenario
     from poc_env.sim import core as sim
@@ -109,11 +116,8 @@ def _single(s: Settings, seed: int) -> float:
 
 def _vector(scenario: str, envs: Callable[[Settings], int]) -> Callable[[Settings, int], float]:
     def run(s: Settings, seed: int) -> float:
-        from poc_env import tasks
-
         tid = _heading_task(scenario)
-        agents = _core_params(tasks.get_task(tid).scenario).n_agents
-        return agents * suite.bench_vector(tid, envs(s), 1, seed, s.vector_steps)
+        return _task_agents(scenario) * suite.bench_vector(tid, envs(s), 1, seed, s.vector_steps)
 
     return run
 

@@ -129,3 +129,16 @@ def test_bad_input_names_the_field_and_writes_nothing(tmp_path):
 def test_bench_peers_is_a_bench_subcommand():
     args = build_parser().parse_args(["bench", "peers", "--smoke"])
     assert args.what == "peers" and args.rest == ["--smoke"]
+
+
+def test_declared_agents_are_the_scenarios():
+    """Env-steps/s = agent-steps/s / the contender's agents: each of ours declares its task's
+    UAV count (a scenario that changed it would skew every ratio)."""
+    assert peers.CONTENDERS["single"].agents == peers._core_params("paper_6_2").n_agents
+    for key, family in (
+        ("make_vec_paper62", "Paper62"),
+        ("make_vec_small", "Small"),
+        ("core_small_reset", "Small"),
+        ("core_small_area", "Small"),
+    ):
+        assert peers.CONTENDERS[key].agents == peers._task_agents(family), key
