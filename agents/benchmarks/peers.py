@@ -407,13 +407,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     for k in keys:
         if k not in CONTENDERS:
             raise ConfigError("only", k, "contender keys: " + ", ".join(CONTENDERS))
-    from pathlib import Path
-
     from poc_env.agents.benchmarks import write_table_set
-    from poc_env.cli import _check_out
 
-    args.out = str(Path(args.out))
-    _check_out("out", args.out, "folder")
     s = Settings(args.heading_envs, args.small_envs, args.vmas_envs)
     if args.smoke:
         s = Settings(
