@@ -384,6 +384,7 @@ BENCHMARKS = {
     "suite": "poc_env.agents.benchmarks.suite",
     "learning": "poc_env.agents.benchmarks.learning",
     "generalise": "poc_env.agents.benchmarks.generalise",
+    "peers": "poc_env.agents.benchmarks.peers",
 }
 
 
@@ -1152,7 +1153,8 @@ def build_parser() -> argparse.ArgumentParser:
         "the baseline table of every registered task; suite: env-steps/s per control level and "
         "PPO transitions/s in SB3 and RLlib; learning: held-out learning curves of training "
         "runs over seeds and the transitions to reach a planner; generalise: policies on "
-        "held-out geometries and comms-limited beliefs",
+        "held-out geometries and comms-limited beliefs; peers: our envs against MPE2, VMAS and "
+        "DSSE (the peers extra), interleaved, with ratios",
     )
     p.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (--help)")
     p.set_defaults(func=cmd_bench)

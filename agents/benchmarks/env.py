@@ -19,7 +19,8 @@ exists, the PettingZoo parallel env over the same core (its dicts, observations 
 included; same start over the search area). When ``mpe2`` is importable
 (``pip install -e .[bench]``), ``simple_spread_v3.parallel_env(N=6)`` is timed in the same run
 with seeded random discrete actions (episodes of ``max_cycles`` steps, resets not timed), and
-the ratios of the single-env figures to it are printed.
+the ratios of the single-env figures to it are printed. Every peer (MPE2, VMAS, DSSE),
+interleaved: ``poc-env bench peers`` (:mod:`poc_env.agents.benchmarks.peers`).
 
 Peak memory per env (``--memory``, at each ``--envs`` of at least 16): the state's bytes per env
 and the peak of the Python-side allocations (numpy arrays, via :mod:`tracemalloc`; numba's own
@@ -72,11 +73,25 @@ def _actions(params: sim.Params, n_envs: int, seed: int) -> np.ndarray:
     return acts
 
 
-def bench_core(params: sim.Params, n_envs: int, runs: int, seed: int = 0) -> float:
-    """Median agent-steps/s of :func:`poc_env.sim.core.step` over ``runs`` timed runs."""
-    state0, rngs0 = _start_state(params, n_envs, seed)
+def bench_core(
+    params: sim.Params,
+    n_envs: int,
+    runs: int,
+    seed: int = 0,
+    *,
+    over_area: bool = True,
+    agent_steps: int = AGENT_STEPS_PER_RUN,
+) -> float:
+    """Median agent-steps/s of :func:`poc_env.sim.core.step` over ``runs`` timed runs of about
+    ``agent_steps`` each. ``over_area`` False: the UAVs start where :func:`~poc_env.sim.core.
+    initial` puts them (their airfields), as a vector env's reset does."""
+    if over_area:
+        state0, rngs0 = _start_state(params, n_envs, seed)
+    else:
+        rngs0 = [np.random.default_rng(seed + k) for k in range(n_envs)]
+        state0 = sim.initial(params, rngs0)
     acts = _actions(params, n_envs, seed + 1)
-    stretches = max(1, round(AGENT_STEPS_PER_RUN / (STEPS * n_envs * params.n_agents)))
+    stretches = max(1, round(agent_steps / (STEPS * n_envs * params.n_agents)))
 
     def one_run(n_stretches: int) -> float:
         elapsed = 0.0
@@ -92,7 +107,13 @@ def bench_core(params: sim.Params, n_envs: int, runs: int, seed: int = 0) -> flo
     return statistics.median(one_run(stretches) for _ in range(runs))
 
 
-def bench_pettingzoo(scenario: str, overrides: dict, runs: int, seed: int = 0) -> float | None:
+def bench_pettingzoo(
+    scenario: str,
+    overrides: dict,
+    runs: int,
+    seed: int = 0,
+    agent_steps: int = AGENT_STEPS_PER_RUN,
+) -> float | None:
     """Median agent-steps/s of our PettingZoo parallel env (``poc_env.parallel_env``), or None.
 
     Same start as the core (UAVs moved over the search area after ``reset``), so the figure
@@ -107,7 +128,7 @@ def bench_pettingzoo(scenario: str, overrides: dict, runs: int, seed: int = 0) -
     env = poc_env.parallel_env(scenario, **overrides)
     rng = np.random.default_rng(seed)
     n = len(env.possible_agents)
-    stretches = max(1, round(AGENT_STEPS_PER_RUN / (4 * STEPS * n)))
+    stretches = max(1, round(agent_steps / (4 * STEPS * n)))
 
     def one_run(n_stretches: int) -> float:
         elapsed, count = 0.0, 0
@@ -134,17 +155,37 @@ def bench_pettingzoo(scenario: str, overrides: dict, runs: int, seed: int = 0) -
     return statistics.median(one_run(stretches) for _ in range(runs))
 
 
-def bench_mpe(n_agents: int, runs: int, seed: int = 0, max_cycles: int = 100) -> float | None:
+def bench_mpe(
+    n_agents: int,
+    runs: int,
+    seed: int = 0,
+    max_cycles: int = 100,
+    agent_steps: int = AGENT_STEPS_PER_RUN,
+) -> float | None:
     """Median agent-steps/s of MPE2 ``simple_spread_v3.parallel_env(N=n_agents)``, or None."""
     try:
         from mpe2 import simple_spread_v3
     except ImportError:
         return None
     env = simple_spread_v3.parallel_env(N=n_agents, max_cycles=max_cycles)
+    return bench_discrete_parallel(env, runs, seed, max_cycles, agent_steps)
+
+
+def bench_discrete_parallel(
+    env: Any,
+    runs: int,
+    seed: int = 0,
+    max_cycles: int = 100,
+    agent_steps: int = AGENT_STEPS_PER_RUN,
+) -> float:
+    """Median agent-steps/s of a PettingZoo parallel ``env`` with ``Discrete`` actions (MPE2,
+    DSSE): seeded uniform random actions, episodes of up to ``max_cycles`` steps, each from a
+    seeded ``reset`` (resets and drawing the actions not timed)."""
     env.reset(seed=seed)
     rng = np.random.default_rng(seed)
     n_actions = env.action_space(env.agents[0]).n
-    episodes = max(1, round(AGENT_STEPS_PER_RUN / (4 * max_cycles * n_agents)))
+    n_agents = len(env.possible_agents)
+    episodes = max(1, round(agent_steps / (4 * max_cycles * n_agents)))
 
     def one_run(n_episodes: int) -> float:
         elapsed, count = 0.0, 0

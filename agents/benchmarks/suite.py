@@ -39,8 +39,9 @@ from poc_env.helptext import HelpFormatter, examples  # noqa: E402
 STEPS = 200  # joint steps per timed stretch
 
 
-def bench_vector(task: str, num_envs: int, runs: int, seed: int = 0) -> float:
-    """Env-steps/s (joint steps x num_envs) of ``gymnasium.make_vec(task, num_envs)``."""
+def bench_vector(task: str, num_envs: int, runs: int, seed: int = 0, steps: int = STEPS) -> float:
+    """Env-steps/s (joint steps x num_envs) of ``gymnasium.make_vec(task, num_envs)``: the
+    median of ``runs`` stretches of ``steps`` joint steps after a warm-up one."""
     import gymnasium
 
     import poc_env  # noqa: F401  (registers the tasks)
@@ -48,14 +49,14 @@ def bench_vector(task: str, num_envs: int, runs: int, seed: int = 0) -> float:
     env = gymnasium.make_vec(task, num_envs=num_envs, vectorization_mode="vector_entry_point")
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
-    acts = rng.uniform(-1, 1, (STEPS, *(env.action_space.shape or ()))).astype(np.float32)
+    acts = rng.uniform(-1, 1, (steps, *(env.action_space.shape or ()))).astype(np.float32)
     rates = []
     for r in range(runs + 1):
         t0 = time.perf_counter()
         for a in acts:
             env.step(a)
         if r:  # the first stretch is the warm-up
-            rates.append(STEPS * num_envs / (time.perf_counter() - t0))
+            rates.append(steps * num_envs / (time.perf_counter() - t0))
     env.close()
     return statistics.median(rates)
 

@@ -92,6 +92,7 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         self._last: Any = None
         self._last_info: dict[str, np.ndarray] = {}
         self._autoreset = np.zeros(e, dtype=bool)
+        self._mask_keys: list[str] = []
 
     @property
     def params(self) -> sim.Params:
@@ -160,9 +161,9 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         """The sync vector env's infos: every key batched, with its ``_key`` mask (the arrays
         themselves, which :func:`keep_rows` never writes into; one allocation for the masks)."""
         out: dict[str, Any] = dict(self._last_info)
-        masks = np.ones((len(out), self.num_envs), dtype=bool)
-        for m, key in zip(masks, self._last_info):
-            out[f"_{key}"] = m
+        if len(self._mask_keys) != len(out):  # the info keys are fixed by the first reset
+            self._mask_keys = [f"_{key}" for key in out]
+        out.update(zip(self._mask_keys, np.ones((len(out), self.num_envs), dtype=bool)))
         return out
 
     # -- step --------------------------------------------------------------------------------
@@ -181,29 +182,41 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         if self.engine.state is None:
             raise gym.error.ResetNeeded("call reset() before step()")
         a = self._actions(actions)
+        if not self._autoreset.any():  # the common step: every env goes on (no index arrays)
+            reward, terminated, truncated = self._advance(a, None)
+            return self._joint(), reward, terminated, truncated, self._infos()
         e = self.num_envs
         reward = np.zeros(e)
         terminated = np.zeros(e, dtype=bool)
         truncated = np.zeros(e, dtype=bool)
         again = np.flatnonzero(self._autoreset)
         going = np.flatnonzero(~self._autoreset)
-        if len(again):  # NEXT_STEP autoreset: these envs start afresh, their actions unused
-            first, fresh_info = self.engine.reset(again)
-            every = np.ones((len(again), self.n_agents), dtype=bool)
-            self._last = keep_rows(self._last, first, again, every)
-            self._last_info = keep_rows(self._last_info, fresh_info, again, every)
-            self._live[again] = True
-            self._autoreset[again] = False
+        # NEXT_STEP autoreset: these envs start afresh, their actions unused
+        first, fresh_info = self.engine.reset(again)
+        every = np.ones((len(again), self.n_agents), dtype=bool)
+        self._last = keep_rows(self._last, first, again, every)
+        self._last_info = keep_rows(self._last_info, fresh_info, again, every)
+        self._live[again] = True
+        self._autoreset[again] = False
         if len(going):
-            live = self._live[going]
-            tr = self.engine.step(a[going], going)  # finished agents' actions: ignored
-            reward[going] = engine_mod.mean_over(tr.reward, live)
-            done = tr.over
-            truncated[going] = done & tr.truncated.any(axis=1)
-            terminated[going] = done & ~truncated[going]
-            finished = live & (tr.terminated | tr.truncated)
-            self._live[going] = live & ~finished
-            self._autoreset[going] = done
-            self._last = keep_rows(self._last, tr.obs, going, live)
-            self._last_info = keep_rows(self._last_info, tr.info, going, live)
+            reward[going], terminated[going], truncated[going] = self._advance(a[going], going)
         return self._joint(), reward, terminated, truncated, self._infos()
+
+    def _advance(self, a: np.ndarray, going: np.ndarray | None):
+        """Step the envs ``going`` (None: every env) under ``a``; update which agents are live,
+        which envs reset next, the last observations and infos; return their (reward,
+        terminated, truncated), each ``(len(going),)``, as arrays over those envs."""
+        whole = going is None
+        live = self._live.copy() if whole else self._live[going]
+        tr = self.engine.step(a, going)  # finished agents' actions: ignored
+        reward = engine_mod.mean_over(tr.reward, live)
+        done = tr.over
+        truncated = done & tr.truncated.any(axis=1)
+        terminated = done & ~truncated
+        finished = live & (tr.terminated | tr.truncated)
+        envs = self.engine.envs(going)
+        self._live[envs] = live & ~finished
+        self._autoreset[envs] = done
+        self._last = keep_rows(self._last, tr.obs, envs, live)
+        self._last_info = keep_rows(self._last_info, tr.info, envs, live)
+        return reward, terminated, truncated

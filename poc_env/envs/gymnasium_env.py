@@ -58,6 +58,20 @@ def keep_rows(last: Any, new: Any, envs: np.ndarray, rows: np.ndarray) -> Any:
     whole = len(envs) == len(rows) and bool(rows.all())
     if isinstance(last, dict):
         every = len(envs) == _rows_of(last) and bool((envs == np.arange(len(envs))).all())
+        if every and whole:  # the common step: every row of every env is new
+            return dict(new)
+        if every:  # some agents finished: one mask per rank, shared by the keys
+            masks: dict[int, np.ndarray] = {}
+            out = {}
+            for k, v in last.items():
+                if v.ndim == 1:  # a per-env entry (posc) is never frozen
+                    out[k] = new[k]
+                    continue
+                m = masks.get(v.ndim)
+                if m is None:
+                    m = masks[v.ndim] = rows.reshape(rows.shape + (1,) * (v.ndim - 2))
+                out[k] = np.where(m, new[k], v)
+            return out
         return {k: _keep(v, new[k], envs, rows, every, whole) for k, v in last.items()}
     every = len(envs) == len(last) and bool((envs == np.arange(len(envs))).all())
     return _keep(last, new, envs, rows, every, whole)

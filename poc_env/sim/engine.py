@@ -262,8 +262,13 @@ def mean_over(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
     those values (the same floating-point sums as a mean of the row's live values alone)."""
     values = np.asarray(values, dtype=float)
     mask = np.asarray(mask, dtype=bool)
-    out = np.zeros(values.shape[0])
+    if mask.all():  # every agent live: the same rows, the same sums
+        return values.mean(axis=1)
     count = mask.sum(axis=1)
+    c0 = int(count[0])
+    if c0 and bool((count == c0).all()):  # one group (always so with one env)
+        return values[mask].reshape(-1, c0).mean(axis=1)
+    out = np.zeros(values.shape[0])
     for c in np.unique(count[count > 0]).tolist():
         rows = count == c
         out[rows] = values[rows][mask[rows]].reshape(-1, c).mean(axis=1)

@@ -29,9 +29,9 @@ _TERMS = spec.names(spec.REWARD_TERMS)
 def reward_terms(cfg: RewardConfig, events: Events) -> dict[str, np.ndarray]:
     """Each term of the reward, shaped (E, N), with the sign it enters the reward with."""
     n = events.pos_agent.shape[1]
-    if cfg.credit == "team":
-        pos = np.broadcast_to(events.pos_team[:, None], events.pos_agent.shape)
-        time = np.broadcast_to(events.time_term.sum(axis=1, keepdims=True) / n, pos.shape)
+    if cfg.credit == "team":  # each env's value for its n agents (np.repeat: no Python wrapper)
+        pos = np.repeat(events.pos_team[:, None], n, axis=1)
+        time = np.repeat(events.time_term.sum(axis=1, keepdims=True) / n, n, axis=1)
     else:
         pos = events.pos_agent
         time = events.time_term / n

@@ -58,13 +58,17 @@ def test_mean_over_is_numpys_mean_of_the_live_values():
     rng = np.random.default_rng(0)
     for n in (3, 8, 9, 17):
         values = rng.normal(size=(40, n)) * 10.0 ** rng.integers(-6, 3, (40, n))
-        mask = rng.random((40, n)) < 0.7
-        mask[0] = False
-        got = engine_mod.mean_over(values, mask)
-        want = [
-            float(np.mean(values[k][mask[k]].tolist())) if mask[k].any() else 0.0 for k in range(40)
-        ]
-        assert got.tolist() == want
+        some = rng.random((40, n)) < 0.7
+        some[0] = False
+        two = np.argsort(rng.random((40, n)), axis=1) < 2  # two live agents in every row
+        # the general grouping, every agent live, one count for every row
+        for mask in (some, np.ones((40, n), dtype=bool), two):
+            got = engine_mod.mean_over(values, mask)
+            want = [
+                float(np.mean(values[k][mask[k]].tolist())) if mask[k].any() else 0.0
+                for k in range(40)
+            ]
+            assert got.tolist() == want
 
 
 def test_engine_seeds_give_the_parallel_envs_episodes():

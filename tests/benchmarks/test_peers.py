@@ -1,0 +1,144 @@
+"""poc-env bench peers: our envs against MPE2, VMAS and DSSE (agents/benchmarks/peers.py)."""
+
+from __future__ import annotations
+
+import csv
+import statistics
+
+import pytest
+
+from poc_env.agents.benchmarks import peers
+from poc_env.cli import build_parser
+from poc_env.errors import ConfigError
+
+
+def _rows(out):
+    with open(out / "peers.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_smoke_run_writes_the_table_and_reports_missing_peers(tmp_path, monkeypatch):
+    """Every contender gets a row and every target whose sides were asked for a ratio row;
+    a peer that does not import is 'not installed' (its row and its ratios), not a traceback.
+    MPE2 is made missing here so the path runs whatever the venv holds."""
+    gone = peers.Contender(
+        "mpe2", "MPE2 (hidden)", 6, lambda s: 1, peers._mpe, "mpe2", "no_such_peer_xyz"
+    )
+    monkeypatch.setitem(peers.CONTENDERS, "mpe2", gone)
+    out = tmp_path / "peers"
+    keys = ["single", "make_vec_small", "core_small_reset", "mpe2", "vmas", "dsse"]
+    rows = peers.main(["--smoke", "--rounds", "1", "--only", *keys, "--out", str(out)])
+    table = _rows(out)
+    assert [r["key"] for r in table] == [str(r["key"]) for r in rows]
+    speed = {r["key"]: r for r in table if r["kind"] == "speed"}
+    assert list(speed) == keys
+    for k, r in speed.items():
+        if peers.installed(peers.CONTENDERS[k]):
+            assert r["status"] == "ok"
+            assert float(r["env_steps_per_s"]) > 0
+            agents = peers.CONTENDERS[k].agents
+            assert float(r["agent_steps_per_s"]) == pytest.approx(
+                agents * float(r["env_steps_per_s"]), rel=1e-3
+            )
+        else:
+            assert r["status"] == peers.NOT_INSTALLED
+            assert r["env_steps_per_s"] == ""
+    assert speed["mpe2"]["status"] == peers.NOT_INSTALLED
+    ratios = {r["key"]: r for r in table if r["kind"] == "ratio"}
+    # the targets with both sides among the keys (make_vec_paper62 and core_small_area left out)
+    assert list(ratios) == ["single/dsse", "single/mpe2", "make_vec_small/core_small_reset"]
+    assert ratios["single/mpe2"]["status"] == f"{peers.NOT_INSTALLED}: mpe2"
+    assert ratios["make_vec_small/core_small_reset"]["status"] == "ok"
+    assert float(ratios["make_vec_small/core_small_reset"]["ratio"]) > 0
+    for r in table:
+        assert float(r["load_before"]) >= 0 and float(r["load_after"]) >= 0
+    md = (out / "peers.md").read_text()
+    assert "not installed" in md and "pip install -e .[peers]" in md
+    assert "load average" in md
+    assert md.count("\n| MPE2 (hidden) |") == 1
+
+
+def test_ratio_is_the_ratio_of_median_env_steps(tmp_path, monkeypatch):
+    """A stand-in peer and a stand-in of ours, registered in the same table: the ratio is
+    median(ours env-steps/s) / median(peer env-steps/s) (agent-steps / agents), not the
+    median of the per-round ratios; the rounds are interleaved, each contender once a round."""
+    ours = [100.0, 300.0, 200.0]  # agent-steps/s per round, 1 agent: env medians 200
+    theirs = [40.0, 20.0, 60.0]  # 2 agents: env-steps 20, 10, 30, median 20
+    calls: list[str] = []
+
+    def run(rates, key):
+        def f(s, seed):
+            calls.append(key)
+            return rates[seed]
+
+        return f
+
+    monkeypatch.setitem(
+        peers.CONTENDERS,
+        "ours_fake",
+        peers.Contender("ours_fake", "ours", 1, lambda s: 4, run(ours, "o")),
+    )
+    monkeypatch.setitem(
+        peers.CONTENDERS,
+        "peer_fake",
+        peers.Contender("peer_fake", "peer", 2, lambda s: 1, run(theirs, "p"), "none", "math"),
+    )
+
+    def broken(s, seed):
+        calls.append("b")
+        raise ImportError("a dependency of the peer is missing")
+
+    # found by importlib but failing on import: 'not installed' too, tried once
+    monkeypatch.setitem(
+        peers.CONTENDERS,
+        "broken_fake",
+        peers.Contender("broken_fake", "broken", 1, lambda s: 1, broken, "none", "math"),
+    )
+    targets = [("ours_fake", "peer_fake", 9.0), ("ours_fake", "x", 1.0)]
+    monkeypatch.setattr(peers, "TARGETS", [*targets, ("ours_fake", "broken_fake", 1.0)])
+    out = tmp_path / "o"
+    keys = ["ours_fake", "peer_fake", "broken_fake"]
+    rows = peers.main(["--rounds", "3", "--only", *keys, "--out", str(out)])
+    assert calls == ["o", "p", "b", "p", "o", "o", "p"]  # interleaved, order rotating
+    status = {r["key"]: r["status"] for r in rows}
+    assert status["broken_fake"] == peers.NOT_INSTALLED
+    assert status["ours_fake/broken_fake"] == f"{peers.NOT_INSTALLED}: broken_fake"
+    ratio = [r for r in rows if r["kind"] == "ratio" and r["key"] == "ours_fake/peer_fake"]
+    assert len(ratio) == 1
+    assert ratio[0]["ratio"] == pytest.approx(10.0)
+    assert ratio[0]["ratio"] != pytest.approx(statistics.median([5.0, 30.0, 200 / 30]))
+    assert ratio[0]["per_round"] == "5.00 30.00 6.67"
+    assert ratio[0]["met"] == "yes"
+    speed = {r["key"]: r for r in rows if r["kind"] == "speed"}
+    assert speed["peer_fake"]["env_steps_per_s"] == 20.0
+    assert speed["ours_fake"]["envs"] == 4
+    assert (
+        "| ours / peer | 10.00 | 5.00 30.00 6.67 | >= 9.0 | yes |" in (out / "peers.md").read_text()
+    )
+
+
+def test_bad_input_names_the_field_and_writes_nothing(tmp_path):
+    out = tmp_path / "o"
+    with pytest.raises(ConfigError, match="only"):
+        peers.main(["--only", "nosuch", "--out", str(out)])
+    with pytest.raises(ConfigError, match="rounds"):
+        peers.main(["--rounds", "0", "--out", str(out)])
+    assert not out.exists()
+
+
+def test_bench_peers_is_a_bench_subcommand():
+    args = build_parser().parse_args(["bench", "peers", "--smoke"])
+    assert args.what == "peers" and args.rest == ["--smoke"]
+
+
+def test_declared_agents_are_the_scenarios():
+    """Env-steps/s = agent-steps/s / the contender's agents: each of ours declares its task's
+    UAV count (a scenario that changed it would skew every ratio)."""
+    assert peers.CONTENDERS["single"].agents == peers._core_params("paper_6_2").n_agents
+    for key, family in (
+        ("make_vec_paper62", "Paper62"),
+        ("make_vec_small", "Small"),
+        ("core_small_reset", "Small"),
+        ("core_small_area", "Small"),
+    ):
+        assert peers.CONTENDERS[key].agents == peers._task_agents(family), key
