@@ -213,7 +213,8 @@ def cli_main(args: Any) -> int:
     from poc_env.theory.probability_map import build_prior
 
     plans = [dict(load_plan(p)) for p in args.plan]
-    sc = load_scenario(args.scenario or plans[0]["scenario"], parse_overrides(args.overrides or []))
+    name = args.scenario or str(plans[0]["scenario"])
+    sc = load_scenario(name, parse_overrides(args.overrides or []))
     prior = build_prior(sc.map, args.map_file)
     tracks = None
     if args.tracks:
