@@ -106,20 +106,23 @@ def _best_box(remaining, grid: Grid, widths, heights, w, v, turn, budget, takeof
             n_lines = max(1, math.ceil(short / w - 1e-9))
             search = (n_lines * long_ + (n_lines - 1) * short / n_lines) / v.line
             search += (n_lines - 1) * turn
-            xlo = ox + h * np.arange(grid.nx - nw + 1)
-            ylo = oy + h * np.arange(grid.ny - nh + 1)
+            if search > budget:  # no position can fit it
+                continue
+            jj, ii = np.nonzero(mass > best_mass)  # only boxes that would beat the best
+            xlo = ox + h * ii
+            ylo = oy + h * jj
 
             def dist(p, xlo=xlo, ylo=ylo, lx=lx, ly=ly):
                 dx = np.maximum(np.maximum(xlo - p[0], p[0] - xlo - lx), 0.0)
                 dy = np.maximum(np.maximum(ylo - p[1], p[1] - ylo - ly), 0.0)
-                return np.hypot(dy[:, None], dx[None, :])
+                return np.hypot(dx, dy)
 
             t = dist(takeoff) / v.out + dist(landing) / v.home + search
-            ok = np.where(t <= budget, mass, -1.0)
-            j, i = np.unravel_index(int(np.argmax(ok)), ok.shape)
-            if ok[j, i] > best_mass:
-                best_mass = float(ok[j, i])
-                lo = (ox + i * h, oy + j * h)
+            ok = np.where(t <= budget, mass[jj, ii], -1.0)
+            m = int(np.argmax(ok))
+            if ok[m] > best_mass:
+                best_mass = float(ok[m])
+                lo = (ox + ii[m] * h, oy + jj[m] * h)
                 best = (lo, (lo[0] + lx, lo[1] + ly))
     return best
 
