@@ -62,18 +62,19 @@ the sampled model, the refined plan flew worse on ``small`` (0.627 against 0.646
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
+from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
+from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
+from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
-    leg_coverage,
     refine_routes,
     route_fits,
     route_time,
@@ -95,47 +96,12 @@ COVER_CAP = 3.0
 FAN_DEG = 20.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
 ETAS = (0.3, 0.4, 0.5, 0.65)
-#: the default speed rule of :func:`plan_speeds`.
-SPEED = "max"
 #: margins on d_s (eq. 21) and the communication range (eq. 24) for the refinement's airspace
 #: check: the follower flies the planned route, not the planned timing, to the second.
 SEPARATION_MARGIN = 2.0
 RANGE_MARGIN = 0.9
 #: passes of :func:`poc_env.agents.planning.refine.refine_routes` over the chosen routes (0: none).
 REFINE = 4
-
-
-@dataclass(frozen=True)
-class Speeds:
-    """Ground speeds (m/s) a route is planned and flown at: ``out`` from take-off to the first
-    waypoint, ``line`` on the route (search lines and the connections between them), ``home``
-    from the last waypoint to the landing field."""
-
-    out: float
-    line: float
-    home: float
-
-    def as_dict(self) -> dict[str, float]:
-        return {"out": self.out, "line": self.line, "home": self.home}
-
-
-def plan_speeds(sc: Scenario, rule: str = SPEED) -> Speeds:
-    """The speeds of a route plan under ``rule``.
-
-    ``"paper"``: eq. 17's speeds, transit at the cruise speed ``v_c`` and search at ``v_s``.
-    ``"max"``: out and on the route at the eq. 19 maximum ``v_max``, home at ``v_c``. In the
-    environment the sweep width W does not depend on speed (eq. 10 per unit length flown), so a
-    route flown at ``v_max`` sweeps ``v_max / v_s`` (4/3 on the paper's UAV) as much ground per
-    second. Home stays at ``v_c`` because eq. 18's return rule (the follower's and the
-    environment's) budgets the flight home at ``v_c``. A sensor whose sweep width falls with
-    speed should be planned with ``"paper"``.
-    """
-    u = sc.uav
-    if rule == "paper":
-        return Speeds(u.cruise_speed_mps, u.search_speed_mps, u.cruise_speed_mps)
-    if rule == "max":
-        return Speeds(u.max_speed_mps, u.max_speed_mps, u.cruise_speed_mps)
-    raise ConfigError("speed", rule, "max or paper")
 
 
 def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
@@ -387,22 +353,6 @@ def _trim(routes, pieces, takeoff, landing, sc: Scenario, v: Speeds, headings) -
             del routes[k][-2:]
         if not idx:
             routes[k].clear()
-
-
-def _reserve(sc: Scenario) -> float:
-    """Time in hand at every waypoint: the two steps of eq. 18's return rule
-    (:func:`poc_env.sim.autopilot.returning`) and one more, because the follower sees its
-    position once a step and may pass a waypoint up to a step later than planned."""
-    return 3.0 * sc.episode.dt_s
-
-
-def _path_coverage(path, grid: Grid, w: float) -> np.ndarray:
-    """Coverage W x (length of the polyline ``path`` inside each cell) / area (eq. 10 per cell),
-    every leg counted (transit too; :func:`poc_env.agents.planning.refine.leg_coverage`)."""
-    pts = np.asarray(path, dtype=float).reshape(-1, 2)
-    if len(pts) < 2:
-        return np.zeros(grid.shape)
-    return leg_coverage(pts[:-1], pts[1:], grid, w)[0].reshape(grid.shape)
 
 
 def _cell_pos(paths, takeoff, landing, prior, grid: Grid, w: float, law: str) -> float:

@@ -5,7 +5,7 @@ Each UAV in fleet order takes the axis-aligned rectangle of whole cells that hol
 0.85 T (eq. 18), flies it as a lawnmower (parallel lines ``W`` apart along the rectangle's
 longer side, boustrophedon, from the end nearer its take-off field), and the rectangle's cells
 are then taken out of the remaining mass. Speeds are the allocation planner's
-(:func:`poc_env.agents.planning.allocation.plan_speeds`, ``max``: out and on the lines at
+(:func:`poc_env.agents.planning.flight_rules.plan_speeds`, ``max``: out and on the lines at
 ``v_max``, home at ``v_c``).
 
 The rectangles are searched over every position of a set of side lengths (every length up to
@@ -30,11 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.planning.allocation import (
-    _path_coverage,
-    _reserve,
-    plan_speeds,
-)
+from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
+from poc_env.agents.planning.flight_rules import plan_speeds
+from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.refine import fly_around, route_fits
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
@@ -136,7 +134,7 @@ def make_greedy_rectangles_plan(
     speed: str = "max",
 ) -> dict[str, Any]:
     """The greedy rectangle plan of ``scenario`` on ``prior`` (module docstring); ``speed`` the
-    rule of :func:`~poc_env.agents.planning.allocation.plan_speeds`. Deterministic (``seed`` is
+    rule of :func:`~poc_env.agents.planning.flight_rules.plan_speeds`. Deterministic (``seed`` is
     recorded only)."""
     t0 = time.perf_counter()
     sc = load_scenario(scenario)

@@ -481,7 +481,7 @@ def rule_bound(scenario: Scenario, prior) -> ReachBound:
     """The rule-aware bound of ``scenario`` on ``prior``: the reach-aware bound for a flight
     that keeps the plan rules -- out and searching at ``v_max``, back on the ground within the
     usable endurance 0.85 T (eq. 18), the way home flown at the cruise speed ``v_c`` (eq. 18's
-    return rule budgets it at ``v_c``, :func:`poc_env.agents.planning.allocation.plan_speeds`).
+    return rule budgets it at ``v_c``, :func:`poc_env.agents.planning.flight_rules.plan_speeds`).
 
     *Claim:* the track a UAV flies at points at least ``d_o`` from its take-off field and
     ``d_l`` from its landing field is at most ``v_max (T_u - d_o / v_max - d_l / v_c)^+``.
