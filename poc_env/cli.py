@@ -603,6 +603,15 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return code
 
 
+def cmd_replan(args: argparse.Namespace) -> int:
+    """The next sortie (:mod:`poc_env.agents.planning.replan`)."""
+    from poc_env.agents.planning.replan import cli_main
+
+    _check_int("seed", args.seed, 0, limits.MAX_SEED)
+    _check_out("out", args.out, "file")
+    return cli_main(args)
+
+
 def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("seed", args.seed, 0, limits.MAX_SEED)
     _check_int("uavs", args.uavs, 1, 64)
@@ -1064,6 +1073,30 @@ def build_parser() -> argparse.ArgumentParser:
     _add_projection(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_plan)
+
+    p = sub.add_parser(
+        "replan",
+        help="the next sortie: eq. 14 along a plan's flights (or flown tracks), replanned",
+        epilog=examples(
+            "poc-env replan --plan out/p1.json --out out/p2.json",
+            "poc-env replan --plan out/p1.json --plan out/p2.json --out out/p3.json",
+            "poc-env replan --plan out/p1.json --tracks flown.geojson --planner de --out out/p2.json",
+        ),
+    )
+    _add_scenario(p, None)
+    p.add_argument(
+        "--plan", required=True, action="append", help="each previous sortie's plan.json, in order"
+    )
+    p.add_argument(
+        "--tracks", action="append", default=None, help="flown tracks: GeoJSON LineStrings (WGS 84)"
+    )
+    p.add_argument("--origin", default=None, help="LAT,LON of (0, 0) if the plan has no crs")
+    p.add_argument(
+        "--planner", default="allocation", choices=["allocation", "de"], help="the next sortie's"
+    )
+    p.add_argument("--seed", type=int, default=0, help="the planner's generator seed")
+    p.add_argument("--out", default="next_plan.json", help="the next sortie's plan.json")
+    p.set_defaults(func=cmd_replan)
 
     from poc_env.agents.mission.formats import FORMATS
 

@@ -387,15 +387,47 @@ def markdown(rows: list[dict], s: Settings, rounds: int, load: tuple, command: s
     return "\n".join(lines) + "\n"
 
 
-def main(argv: list[str] | None = None) -> list[dict]:
-    p = argparse.ArgumentParser(prog="poc-env bench peers", description=__doc__.split("\n")[0])
-    p.add_argument("--rounds", type=int, default=5)
+def build_parser() -> argparse.ArgumentParser:
+    """This benchmark's command line (``--help``: options, defaults, examples)."""
+    from poc_env.helptext import HelpFormatter, examples
+
+    p = argparse.ArgumentParser(
+        prog="poc-env bench peers",
+        description=__doc__.split("\n")[0],
+        formatter_class=HelpFormatter,
+        epilog=examples(
+            "poc-env bench peers --rounds 5 --out results/peers",
+            "poc-env bench peers --only single mpe2 --rounds 3",
+            "poc-env bench peers --smoke --rounds 1 --out /tmp/peers",
+        ),
+    )
+    p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (medians over them)")
     p.add_argument("--out", default="results/peers", help="folder for peers.csv and peers.md")
-    p.add_argument("--only", nargs="+", default=None, metavar="KEY", help="contenders to time")
-    p.add_argument("--heading-envs", type=int, default=Settings.heading_envs)
-    p.add_argument("--small-envs", type=int, default=Settings.small_envs)
-    p.add_argument("--vmas-envs", type=int, default=Settings.vmas_envs)
+    p.add_argument(
+        "--only",
+        nargs="+",
+        default=None,
+        metavar="KEY",
+        help="contenders to time (default: all): " + ", ".join(CONTENDERS),
+    )
+    p.add_argument(
+        "--heading-envs",
+        type=int,
+        default=Settings.heading_envs,
+        help="envs of make_vec Paper62-Heading",
+    )
+    p.add_argument(
+        "--small-envs", type=int, default=Settings.small_envs, help="envs of make_vec Small"
+    )
+    p.add_argument(
+        "--vmas-envs", type=int, default=Settings.vmas_envs, help="envs of VMAS discovery"
+    )
     p.add_argument("--smoke", action="store_true", help="tiny sizes (the test suite's run)")
+    return p
+
+
+def main(argv: list[str] | None = None) -> list[dict]:
+    p = build_parser()
     args = p.parse_args(argv)
     if args.rounds < 1 or args.rounds > 1000:
         raise ConfigError("rounds", args.rounds, "an integer from 1 to 1000")

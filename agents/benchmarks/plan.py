@@ -35,6 +35,11 @@ with each candidate on seeds ``--seed0 .. --seed0 + --seeds - 1`` and prints one
 candidate (mean and sd of the final eq. 26 objective, mean POS_C, median plan time): the sweep
 behind the ``tuned`` preset (docs/PLANNER.md section 4).
 
+``--scale`` runs issue 24's figures instead (:mod:`poc_env.agents.benchmarks.plan_scale`):
+flown ``allocation_plan`` against ``greedy_rectangles`` as shares of the rule-aware bound on
+``--episodes`` random priors of ``paper_6_2`` and ``large_400``, planned against flown POS at
+2.5, 5 and 10 km cells, and planning time for 24 UAVs on 160 x 160 cells.
+
 ``main(argv)`` returns ``{figure: value, ...}``.
 """
 
@@ -94,6 +99,17 @@ def build_parser() -> argparse.ArgumentParser:
         default="both",
         choices=["de", "allocation", "both"],
         help="time adaptive DE, the allocation planner, or both",
+    )
+    p.add_argument(
+        "--scale",
+        action="store_true",
+        help="issue 24's figures instead: flown allocation_plan vs greedy_rectangles over the "
+        "rule-aware bound, planned vs flown across cell sizes, planning time up to 160 x 160 "
+        "cells and 24 UAVs (poc_env.agents.benchmarks.plan_scale)",
+    )
+    p.add_argument("--episodes", type=int, default=10, help="random priors per map (--scale)")
+    p.add_argument(
+        "--scale-maps", nargs="+", default=None, help="maps of --scale (paper_6_2 large_400)"
     )
     return p
 
@@ -163,6 +179,11 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
     args = build_parser().parse_args(argv)
+    if args.scale:
+        from poc_env.agents.benchmarks import plan_scale
+
+        maps = args.scale_maps or plan_scale.MAPS
+        return plan_scale.main(maps, args.episodes, args.seed0, args.runs)
     sc = load_scenario(args.scenario)
     obj = PlanObjective(sc, uavs=args.uavs)
     if args.sweep:

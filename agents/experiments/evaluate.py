@@ -65,11 +65,18 @@ class Episode:
     bound: float | None = None
     #: reach-aware bound of this episode's prior (:func:`reach_effort_bound`)
     bound_reach: float | None = None
+    #: rule-aware bound of this episode's prior (:func:`rule_effort_bound`)
+    bound_rule: float | None = None
 
     @property
     def normalised(self) -> float | None:
         """POSC / reach-aware bound (None without the bound)."""
         return None if not self.bound_reach else self.posc / self.bound_reach
+
+    @property
+    def normalised_rule(self) -> float | None:
+        """POSC / rule-aware bound (None without the bound)."""
+        return None if not self.bound_rule else self.posc / self.bound_rule
 
 
 #: Second entropy word of the evaluation priors' generators: ``default_rng([seed, STREAM])``.
@@ -124,6 +131,7 @@ def run_episode(
         posc_curve=tuple(curve),
         bound=effort_bound(env.scenario, map_file, prior) if random_priors else None,
         bound_reach=reach_effort_bound(env.scenario, map_file, prior) if random_priors else None,
+        bound_rule=rule_effort_bound(env.scenario, map_file, prior) if random_priors else None,
     )
 
 
@@ -145,6 +153,9 @@ class Evaluation:
     #: (an episodes.csv written before it had ``time_to_detection_s``: :func:`summarise` takes
     #: the folder's evaluate.csv column); None: computed from the episodes
     time_to_detection_min: dict[str, float | None] | None = None
+    #: rule-aware bound (:func:`rule_effort_bound`; the mean over the episodes' priors with
+    #: ``random_priors``); None if not computed
+    bound_rule: float | None = None
 
     def rows(self) -> list[dict[str, Any]]:
         out = []
@@ -158,6 +169,9 @@ class Evaluation:
             norm = [e.normalised for e in eps]
             if any(v is None for v in norm) and self.bound_reach:
                 norm = [e.posc / self.bound_reach for e in eps]
+            rule = [e.normalised_rule for e in eps]
+            if any(v is None for v in rule) and self.bound_rule:
+                rule = [e.posc / self.bound_rule for e in eps]
             out.append(
                 {
                     "policy": p,
@@ -174,6 +188,10 @@ class Evaluation:
                     "normalised": None
                     if any(v is None for v in norm)
                     else float(np.mean(np.asarray(norm, dtype=float))),
+                    "bound_rule": self.bound_rule,
+                    "normalised_rule": None
+                    if any(v is None for v in rule)
+                    else float(np.mean(np.asarray(rule, dtype=float))),
                 }
             )
         return out
@@ -182,16 +200,17 @@ class Evaluation:
         width = max(14, *(len(p) for p in self.policies))
         head = (
             f"{'policy':<{width}} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
-            f"{'viol.steps':>10} {'crashed':>8} {'landed':>7} {'POSC/reach':>10}"
+            f"{'viol.steps':>10} {'crashed':>8} {'landed':>7} {'POSC/reach':>10} {'POSC/rule':>9}"
         )
         lines = [head, "-" * len(head)]
         for r in self.rows():
             t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
             nrm = "-" if r["normalised"] is None else f"{r['normalised']:.4f}"
+            nrl = "-" if r["normalised_rule"] is None else f"{r['normalised_rule']:.4f}"
             lines.append(
                 f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
                 f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
-                f"{r['crashed']:>8.2f} {r['landed']:>7.2f} {nrm:>10}"
+                f"{r['crashed']:>8.2f} {r['landed']:>7.2f} {nrm:>10} {nrl:>9}"
             )
         lines.append("-" * len(head))
         mean = "mean over the episodes' random priors of the " if self.random_priors else ""
@@ -203,6 +222,11 @@ class Evaluation:
             lines.append(
                 f"{mean}reach-aware bound (transit from the airfields at max speed; normalises "
                 f"POSC/reach): {self.bound_reach:.4f}"
+            )
+        if self.bound_rule is not None:
+            lines.append(
+                f"{mean}rule-aware bound (back by 0.85 T, home at v_c; normalises POSC/rule): "
+                f"{self.bound_rule:.4f}"
             )
         return "\n".join(lines)
 
@@ -274,6 +298,10 @@ class Evaluation:
                 "normalised": e.normalised
                 if e.normalised is not None
                 else (e.posc / reach if reach else None),
+                "bound_rule": e.bound_rule if e.bound_rule is not None else self.bound_rule,
+                "normalised_rule": e.normalised_rule
+                if e.normalised_rule is not None
+                else (e.posc / self.bound_rule if self.bound_rule else None),
                 "detected": e.detected,
                 "violation_steps": e.violation_steps,
                 "crashed": e.crashed,
@@ -386,6 +414,7 @@ def read_episodes(
 
     episodes = []
     has_ttd = "time_to_detection_s" in rows[0]
+    has_rule = "bound_rule" in rows[0]  # written since the rule-aware bound (issue 24)
     for i, r in enumerate(rows):
         if not r.get("policy"):
             raise ConfigError(f"episodes.csv row {i + 1} policy", r.get("policy"), "a policy name")
@@ -403,6 +432,7 @@ def read_episodes(
                 posc_curve=(),
                 bound=cell(i, "bound", "float"),
                 bound_reach=cell(i, "bound_reach", "float?"),
+                bound_rule=cell(i, "bound_rule", "float?") if has_rule else None,
             )
         )
     policies = tuple(dict.fromkeys(e.policy for e in episodes))
@@ -419,8 +449,12 @@ def read_episodes(
     if random_priors:  # as evaluate: the mean over the first policy's episodes (same seeds)
         bound = float(np.mean([float(e.bound or 0.0) for e in first]))
         reach: float | None = float(np.mean([float(e.bound_reach or 0.0) for e in first]))
+        rule: float | None = (
+            float(np.mean([float(e.bound_rule or 0.0) for e in first])) if has_rule else None
+        )
     else:
         bound, reach = float(first[0].bound or 0.0), first[0].bound_reach
+        rule = first[0].bound_rule
     if not has_ttd and time_to_detection_min is not None:
         time_to_detection_min = {p: time_to_detection_min.get(p) for p in policies}
     elif not has_ttd:
@@ -429,7 +463,7 @@ def read_episodes(
         time_to_detection_min = None
     name = Path(where).parent.name
     return Evaluation(name, tuple(episodes), bound, policies, random_priors, reach,
-                      time_to_detection_min)  # fmt: skip
+                      time_to_detection_min=time_to_detection_min, bound_rule=rule)  # fmt: skip
 
 
 def effort_bound(
@@ -463,6 +497,21 @@ def reach_effort_bound(
     return reach_bound(sc, prior).upper
 
 
+def rule_effort_bound(
+    scenario: Any, map_file: str | None = None, prior: np.ndarray | None = None
+) -> float:
+    """Rule-aware bound (:func:`poc_env.theory.bound.rule_bound`, its certified upper value)
+    on ``prior`` (default: the scenario's prior or ``map_file``)."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import rule_bound
+    from poc_env.theory.probability_map import build_prior
+
+    sc = load_scenario(scenario)
+    if prior is None:
+        prior = build_prior(sc.map, map_file)
+    return rule_bound(sc, prior).upper
+
+
 def evaluate(
     scenario: Any,
     policies: Sequence[str],
@@ -488,11 +537,17 @@ def evaluate(
     if random_priors:  # each episode's own prior; the same seeds for every policy
         bound = float(np.mean([float(e.bound or 0.0) for e in results[:episodes]]))
         reach = float(np.mean([float(e.bound_reach or 0.0) for e in results[:episodes]]))
+        rule = float(np.mean([float(e.bound_rule or 0.0) for e in results[:episodes]]))
     else:
         bound = effort_bound(sc, map_file)
         reach = reach_effort_bound(sc, map_file)
-        results = tuple(replace(e, bound=bound, bound_reach=reach) for e in results)
-    return Evaluation(sc.name, results, bound, tuple(policies), random_priors, reach)
+        rule = rule_effort_bound(sc, map_file)
+        results = tuple(
+            replace(e, bound=bound, bound_reach=reach, bound_rule=rule) for e in results
+        )
+    return Evaluation(
+        sc.name, results, bound, tuple(policies), random_priors, reach, bound_rule=rule
+    )
 
 
 def plot_curves(ev: Evaluation, path: str | os.PathLike[str], dt_s: float) -> Path:

@@ -32,6 +32,13 @@
 5. **Effort scale.** Turns, connections and the cut into pieces cost time the allocation does
    not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and each ``K`` and the plan keeps
    the one of highest planned POS (lines no UAV can fit are left unflown).
+6. **Second start.** On large maps, one route chained over the whole map and cut into pieces
+   spends much of each UAV's time in transit; the greedy rectangle plan
+   (:mod:`poc_env.agents.planning.greedy_rectangles`: each UAV the best remaining rectangle it
+   can search) is planned too, and the start of higher planned POS goes on to the refinement
+   (``start`` records which; ``greedy_start=False`` keeps the allocation's). The refined
+   routes are kept only if the environment's model (:func:`sampled_sweep`) scores them above
+   the start's (``refined`` records whether they were).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -42,26 +49,32 @@ wide, for maps and exports) and ``spacing_m`` the finest line spacing it flies
 (``"allocation"``), ``bound_reach`` (:func:`poc_env.theory.bound.reach_bound`, the environment's
 reach-aware bound; also as ``bounds`` {``honest``, ``reach``} with
 :func:`poc_env.theory.bound.honest_optimum`), ``allocation_pos`` (the allocation's own POS),
-``eta`` and ``reason`` (why a plan is empty, else null). ``posc`` is the planned POS: each
-cell's coverage from the length of the whole flight path inside it (eq. 10 per cell; transit
-and connections sweep too, as in the environment), which also picks ``eta``.
+``eta`` and ``reason`` (why a plan is empty, else null). ``posc`` is the planned POS: the
+whole flight paths (transit and connections sweep too) swept over the prior's sample points
+with the environment's own detection law and cut-off (:func:`sampled_sweep`). It does not
+depend on the cell size as W x length per cell (eq. 10 per cell) did: planned 0.4864 at 2.5 km
+cells and 0.6097 at 5 km on ``paper_6_2`` where 0.5934 and 0.5861 were flown (figures now:
+``poc-env bench plan --scale``, docs/PLANNER.md). ``eta``, ``K``, the line direction and the
+start are still picked by W x length per cell, the score the refinement improves: picked by
+the sampled model, the refined plan flew worse on ``small`` (0.627 against 0.646).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
+from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
+from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
+from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
-    leg_coverage,
     refine_routes,
     route_fits,
     route_time,
@@ -72,7 +85,7 @@ from poc_env.sim.core import takeoff_heading
 from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.bound import cell_distances, reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
-from poc_env.theory.search_theory import pod_from_coverage
+from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
 #: the numbers of coverage layers (K) tried and the share of 0.85 T a route may fill.
 LEVELS = (3, 4, 6)
@@ -83,47 +96,12 @@ COVER_CAP = 3.0
 FAN_DEG = 20.0
 #: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
 ETAS = (0.3, 0.4, 0.5, 0.65)
-#: the default speed rule of :func:`plan_speeds`.
-SPEED = "max"
 #: margins on d_s (eq. 21) and the communication range (eq. 24) for the refinement's airspace
 #: check: the follower flies the planned route, not the planned timing, to the second.
 SEPARATION_MARGIN = 2.0
 RANGE_MARGIN = 0.9
 #: passes of :func:`poc_env.agents.planning.refine.refine_routes` over the chosen routes (0: none).
 REFINE = 4
-
-
-@dataclass(frozen=True)
-class Speeds:
-    """Ground speeds (m/s) a route is planned and flown at: ``out`` from take-off to the first
-    waypoint, ``line`` on the route (search lines and the connections between them), ``home``
-    from the last waypoint to the landing field."""
-
-    out: float
-    line: float
-    home: float
-
-    def as_dict(self) -> dict[str, float]:
-        return {"out": self.out, "line": self.line, "home": self.home}
-
-
-def plan_speeds(sc: Scenario, rule: str = SPEED) -> Speeds:
-    """The speeds of a route plan under ``rule``.
-
-    ``"paper"``: eq. 17's speeds, transit at the cruise speed ``v_c`` and search at ``v_s``.
-    ``"max"``: out and on the route at the eq. 19 maximum ``v_max``, home at ``v_c``. In the
-    environment the sweep width W does not depend on speed (eq. 10 per unit length flown), so a
-    route flown at ``v_max`` sweeps ``v_max / v_s`` (4/3 on the paper's UAV) as much ground per
-    second. Home stays at ``v_c`` because eq. 18's return rule (the follower's and the
-    environment's) budgets the flight home at ``v_c``. A sensor whose sweep width falls with
-    speed should be planned with ``"paper"``.
-    """
-    u = sc.uav
-    if rule == "paper":
-        return Speeds(u.cruise_speed_mps, u.search_speed_mps, u.cruise_speed_mps)
-    if rule == "max":
-        return Speeds(u.max_speed_mps, u.max_speed_mps, u.cruise_speed_mps)
-    raise ConfigError("speed", rule, "max or paper")
 
 
 def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
@@ -377,20 +355,46 @@ def _trim(routes, pieces, takeoff, landing, sc: Scenario, v: Speeds, headings) -
             routes[k].clear()
 
 
-def _reserve(sc: Scenario) -> float:
-    """Time in hand at every waypoint: the two steps of eq. 18's return rule
-    (:func:`poc_env.sim.autopilot.returning`) and one more, because the follower sees its
-    position once a step and may pass a waypoint up to a step later than planned."""
-    return 3.0 * sc.episode.dt_s
+def _cell_pos(paths, takeoff, landing, prior, grid: Grid, w: float, law: str) -> float:
+    """The POS the refinement scores routes by (:func:`poc_env.agents.planning.refine.
+    refine_routes`): W x length per cell, eq. 10 per cell; it picks the start to refine."""
+    cov = sum(
+        (
+            _path_coverage([takeoff[j], *paths[j], landing[j]], grid, w)
+            for j in range(len(paths))
+            if paths[j]
+        ),
+        np.zeros(grid.shape),
+    )
+    return float(np.sum(prior * pod_from_coverage(cov, law)))
 
 
-def _path_coverage(path, grid: Grid, w: float) -> np.ndarray:
-    """Coverage W x (length of the polyline ``path`` inside each cell) / area (eq. 10 per cell),
-    every leg counted (transit too; :func:`poc_env.agents.planning.refine.leg_coverage`)."""
-    pts = np.asarray(path, dtype=float).reshape(-1, 2)
-    if len(pts) < 2:
-        return np.zeros(grid.shape)
-    return leg_coverage(pts[:-1], pts[1:], grid, w)[0].reshape(grid.shape)
+def sampled_sweep(
+    sc: Scenario, grid: Grid, prior: np.ndarray, paths
+) -> tuple[list[float], list[np.ndarray]]:
+    """The environment's detection model over whole flight paths: each path (take-off,
+    waypoints, landing) swept in turn over the prior spread on the scenario's sample points
+    (:func:`poc_env.theory.search_theory.sweep_track`, eq. 14 with the sensor's own lateral law
+    and cut-off, the same compiled formula the environment steps with). Returns each path's POS
+    (§3.1.6: a point is credited to the first path that finds it) and the mass each path finds
+    per cell. Unlike W x length per cell (eq. 10 per cell), it does not depend on the cell size:
+    a line sweeps the sample points within its lateral reach, whatever cells they lie in."""
+    s = sc.sensor.samples_per_cell
+    belief = np.ascontiguousarray(grid.refine(prior, s))
+    w = sc.sensor.sweep_width_m
+    cutoff = sc.sensor.cutoff_sweep_widths * w
+    pos: list[float] = []
+    found: list[np.ndarray] = []
+    for path in paths:
+        pts = np.asarray(path, dtype=float).reshape(-1, 2)
+        if len(pts) < 2:
+            pos.append(0.0)
+            found.append(np.zeros(grid.shape))
+            continue
+        before = belief.copy()
+        pos.append(sweep_track(belief, grid, s, pts, w, sc.sensor.law, cutoff, grid.cell_m))
+        found.append(grid.coarsen(before - belief, s))
+    return pos, found
 
 
 def make_allocation_plan(
@@ -405,9 +409,14 @@ def make_allocation_plan(
     speed: str = SPEED,
     refine: int = REFINE,
     crs: dict[str, Any] | None = None,
+    greedy_start: bool = True,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
+
+    ``greedy_start``: also start from the greedy rectangle plan
+    (:func:`poc_env.agents.planning.greedy_rectangles.make_greedy_rectangles_plan`) and refine
+    whichever start has the higher planned POS (``start`` in the plan says which).
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -505,33 +514,46 @@ def make_allocation_plan(
             for swap in (False, True):
                 res = build(alloc, k, swap)
                 paths, _ = fly(res)
-                cov = sum(
-                    (
-                        _path_coverage([takeoff[j], *paths[j], landing[j]], grid, w)
-                        for j in range(n)
-                        if paths[j]
-                    ),
-                    np.zeros(grid.shape),
-                )
-                val = float(np.sum(prior * pod_from_coverage(cov, law)))
+                val = _cell_pos(paths, takeoff, landing, prior, grid, w, law)
                 if val > best_val:
                     best, best_val, eta, chosen = res, val, cand, k
         fleet = reach_optimum(prior, grid.cell_area_m2, tau, np.full(n, w * v.line), budget, law)
         if best is None or not any(best[2]):
             reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
             best = None
+    start = "allocation"
+    greedy_routes: list[list[list[float]]] | None = None
+    if best is not None and greedy_start:
+        from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
+
+        gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed)
+        g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
+        g_val = _cell_pos(g_routes, takeoff, landing, prior, grid, w, law)
+        if g_val > best_val:  # the better start is refined
+            greedy_routes, start = g_routes, "greedy_rectangles"
     routes: list[list[list[float]]] = [[] for _ in range(n)]
     pieces: list[list[int]] = [[] for _ in range(n)]
     alloc_pos = 0.0
     along = "x"
     spacing = w
     posc = 0.0
+    refined = bool(refine)
+
+    def _sampled_total(rs) -> float:
+        paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
+        return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
+
     if best is not None:
         alloc_pos = float(best[0].pos)
         routes, pieces = fly(best)
         along = "y" if best[5] else "x"
         spacing = w / max(float(np.minimum(best[0].coverage, COVER_CAP).max()), 1e-12)
+        if greedy_routes is not None:  # lawnmower lines W apart, a line = two waypoints
+            routes = greedy_routes
+            pieces = [list(range(len(r) // 2)) for r in routes]
+            spacing = w
         if refine:
+            unrefined = routes
             routes, posc = refine_routes(
                 routes,
                 takeoff,
@@ -556,15 +578,20 @@ def make_allocation_plan(
             )
             if router.active:  # moves keep 0.9 c from the zones; the route keeps c
                 routes = [_around(k, routes[k]) if routes[k] else [] for k in range(n)]
-    covs = [
-        _path_coverage([takeoff[k], *routes[k], landing[k]], grid, w)
-        if routes[k]
-        else np.zeros(grid.shape)
-        for k in range(n)
-    ]
-    cov_total = np.sum(covs, axis=0) if covs else np.zeros(grid.shape)
-    pod_total = pod_from_coverage(cov_total, law)
-    posc = float(np.sum(prior * pod_total))
+            # the refinement scores W x length per cell; kept only if the environment's model
+            # agrees (on cells wider than W it can lose: large_400 at 10 km, 0.463 -> 0.416)
+            if _sampled_total(unrefined) > _sampled_total(routes):
+                routes, refined = unrefined, False
+    # the planned POS by the environment's own detection model (sampled_sweep), not by W x
+    # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
+    # little where cells are narrower than W, too much where they are wider)
+    flown_pos, flown_found = sampled_sweep(
+        sc,
+        grid,
+        full_prior,
+        [[takeoff[k], *routes[k], landing[k]] if routes[k] else [] for k in range(n)],
+    )
+    posc = float(sum(flown_pos))
     x0, y0, x1, y1 = grid.bounds
     heading_k = takeoff_heading(grid.bounds, takeoff)
     uav_out = []
@@ -583,10 +610,8 @@ def make_allocation_plan(
             legs = arr[lead:].reshape(-1, 2, 2)
         path = np.vstack([takeoff[k], arr, landing[k]])
         t_k = _flight_time(wps, takeoff[k], landing[k], sc, v, heading_k[k])
-        ck = covs[k]
-        share = np.divide(ck, cov_total, out=np.zeros_like(ck), where=cov_total > 0)
-        pos_k = float(np.sum(prior * pod_total * share))
-        poc_k = float(np.sum(prior * (ck > 0)))
+        pos_k = float(flown_pos[k])
+        poc_k = float(np.sum(full_prior * (flown_found[k] > 0)))
         uav_out.append(
             {
                 "id": k + 1,
@@ -641,6 +666,8 @@ def make_allocation_plan(
         "bound_reach": float(rb),
         "allocation_pos": alloc_pos,
         "eta": float(eta),
+        "start": start,
+        "refined": refined,
         "reason": reason,
         "objective": -posc,
         "history": [],

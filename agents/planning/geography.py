@@ -46,9 +46,10 @@ def probability(value: float) -> float:
 def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
     """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
     the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
-    and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value)."""
+    and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value) and the rule-aware
+    bound (``bound_rule``: :func:`~poc_env.theory.bound.rule_bound`'s certified upper value)."""
     from poc_env.sim.core import make_params
-    from poc_env.theory.bound import honest_optimum, reach_bound
+    from poc_env.theory.bound import honest_optimum, reach_bound, rule_bound
 
     x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)  # eq. 20's boundary
     out: dict[str, Any] = {
@@ -71,6 +72,9 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
             "honest": probability(honest_optimum(sc, prior).pos),
             "reach": probability(reach_bound(sc, prior).upper),
         }
+        # the rule-aware bound (plan rules: back by 0.85 T, home at v_c) beside them; its own
+        # field, as plan.json's ``bounds`` holds the environment's two
+        out["bound_rule"] = probability(rule_bound(sc, prior).upper)
     if crs is not None:
         out["crs"] = crs
     if sc.terrain.given:  # the DEM resampled onto the scenario: exports need no DEM

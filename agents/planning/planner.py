@@ -247,6 +247,12 @@ def plan_table(plan: dict[str, Any]) -> str:
             f"bounds for the environment: honest {b['honest']:.4f}, "
             f"reach-aware {b['reach']:.4f}{ratio}"
         )
+    rule = plan.get("bound_rule")
+    if rule:
+        lines.append(
+            f"rule-aware bound (back by 0.85 T, home at v_c): {rule:.4f} "
+            f"(POS_C / rule {plan['posc'] / rule:.3f})"
+        )
     return "\n".join(lines)
 
 

@@ -221,6 +221,11 @@ register(
     summary="routes from the reach-aware optimal allocation, refined, then flown (best planner)",
 )
 register(
+    "greedy_rectangles",
+    "poc_env.agents.policies.greedy_rectangles:GreedyRectanglesPolicy",
+    summary="each UAV the best remaining axis-aligned rectangle it can search, flown as lines",
+)
+register(
     "optimizer_plan",
     "poc_env.agents.policies.de_plan:DEPlanPolicy",
     argument="optimizer",

@@ -484,6 +484,11 @@ def rectangle_fractions(
 
 # ---------------------------------------------------- rectangle masses by boundary integrals
 
+#: Above this many earlier rectangles meeting one rectangle, :func:`rectangle_masses` leaves
+#: inclusion-exclusion (up to ``2^n`` terms: 42 UAVs from one airfield took minutes) for the
+#: per-cell exclusive areas of :func:`rectangle_fractions` (the same numbers, to rounding).
+MAX_TERMS_OVERLAP = 12
+
 
 @_jit_inline
 def _edge_mass(xa, ya, xb, yb, gx, gy, xref, iref, w, pre, ny, nx):
@@ -653,7 +658,9 @@ def _minus_rects_mass(
 
 
 @_jit
-def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, exclusive, mass):
+def rectangle_masses(
+    cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, exclusive, mass, max_overlap=-1
+):
     """Weighted mass of rotated rectangles over a grid, by boundary integrals (no per-cell areas).
 
     ``weights (ny, nx)``: the mass of each ``h x h`` cell of the grid at origin ``(x0, y0)``,
@@ -664,9 +671,13 @@ def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, e
     gets the mass of ``Q_k`` minus the union of ``Q_0 .. Q_{k-1}`` of its individual (§3.1.6).
 
     Per rectangle, in cell units about its centre: the rectangle clipped to the map, minus the
-    earlier rectangles whose bounding circles meet it (cut into disjoint convex pieces,
+    earlier rectangles whose bounding circles meet it (by inclusion-exclusion over convex pieces,
     :func:`_minus_rects_mass`), and each convex piece's mass by Green's theorem on the row-wise
     cumulative weights (:func:`_polygon_mass`): O(grid lines its edges cross), not O(cells).
+    An individual in which a rectangle meets more than ``max_overlap`` earlier ones
+    (default, ``-1``: :data:`MAX_TERMS_OVERLAP`; 0: always) is computed by the per-cell
+    exclusive areas instead (:func:`rectangle_fractions`; the same numbers, to rounding):
+    polynomial where inclusion-exclusion is exponential.
     """
     n_ind, n_uav = mass.shape
     ny, nx = weights.shape
@@ -688,8 +699,11 @@ def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, e
     ae = np.empty(max(n_uav, 1))
     be = np.empty(max(n_uav, 1))
     inv_h = 1.0 / h
+    limit = MAX_TERMS_OVERLAP if max_overlap < 0 else max_overlap
     tiny = 1e-14  # pieces under this area (cells) are dropped, as in rectangle_fractions
+    no_cells = np.zeros((0, 0, 0, 0))
     for p in range(n_ind):
+        dense = False
         for k in range(n_uav):
             r = p * n_uav + k
             c = cos_t[r]
@@ -725,6 +739,9 @@ def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, e
                         ce[n_e], se[n_e] = cos_t[q], sin_t[q]
                         ae[n_e], be[n_e] = a_q, b_q
                         n_e += 1
+            if n_e > limit:  # inclusion-exclusion would cost up to 2^n_e terms
+                dense = True
+                break
             if n_e == 0:
                 mass[p, k] = _polygon_mass(px, py, n, gx, gy, weights, pre, ny, nx, tiny)
             else:
@@ -732,3 +749,12 @@ def rectangle_masses(cx, cy, half_l, half_w, cos_t, sin_t, x0, y0, h, weights, e
                     n, n_e, rx, ry, ce, se, ae, be, sx, sy, sn, sp, qx, qy,
                     (gx, gy, weights, pre, ny, nx, tiny),
                 )  # fmt: skip
+        if dense:  # the whole individual by the per-cell exclusive areas: polynomial
+            row = np.zeros((1, n_uav))
+            lo = p * n_uav
+            hi = lo + n_uav
+            rectangle_fractions(
+                cx[lo:hi], cy[lo:hi], half_l[lo:hi], half_w[lo:hi], cos_t[lo:hi], sin_t[lo:hi],
+                x0, y0, h, ny, nx, True, False, weights, no_cells, row,
+            )  # fmt: skip
+            mass[p, :] = row[0]

@@ -1,4 +1,4 @@
-"""Upper bounds on the POS of a search: the physical optimum, honest and reach-aware.
+"""Upper bounds on the POS of a search: the physical optimum, honest, reach-aware, rule-aware.
 
 **The allocation bound.** For a prior (cell masses ``m_j``, cell areas ``a_j``), a detection
 law ``POD(C)`` as a function of the coverage ``C`` (:func:`poc_env.theory.search_theory.
@@ -72,6 +72,12 @@ back (it may sense until it crashes at T), so the default bound has no return le
 ``tau = 2 (min(d(take-off, j), d(landing, j)) - rho)^+ / v`` and the usable endurance: the UAV
 must also be back, so the track at distance ``>= d`` from both fields is at most
 ``v T_usable - 2 d``.
+
+**The rule-aware bound** (:func:`rule_bound`). The plan rules on top: back within 0.85 T and
+the way home at the cruise speed ``v_c`` (eq. 18's return rule), so ``tau = (d(take-off, j) -
+rho)^+ / v_max + (d(landing, j) - rho)^+ / v_c`` with the usable endurance as budget. It bounds
+what a plan that keeps the rules can reach and normalises plans (``plan`` and ``evaluate`` print
+it beside the honest and reach-aware bounds).
 
 The solver (:func:`reach_optimum`) is exact: the feasible efforts form a polymatroid (its rank is
 ``g(A) = sum_i r (t_i - min_{j in A} tau_ij)^+``) and the decomposition algorithm for separable
@@ -469,6 +475,37 @@ def reach_optimum(
         best += float(np.sum(run * (cap - np.append(cap[1:], 0.0))))
     upper = max(pos, pos - float(p @ x) + best)
     return ReachBound(pos, upper, cov.reshape(m.shape), float(x.sum()), entry.name)
+
+
+def rule_bound(scenario: Scenario, prior) -> ReachBound:
+    """The rule-aware bound of ``scenario`` on ``prior``: the reach-aware bound for a flight
+    that keeps the plan rules -- out and searching at ``v_max``, back on the ground within the
+    usable endurance 0.85 T (eq. 18), the way home flown at the cruise speed ``v_c`` (eq. 18's
+    return rule budgets it at ``v_c``, :func:`poc_env.agents.planning.flight_rules.plan_speeds`).
+
+    *Claim:* the track a UAV flies at points at least ``d_o`` from its take-off field and
+    ``d_l`` from its landing field is at most ``v_max (T_u - d_o / v_max - d_l / v_c)^+``.
+    *Proof:* it reaches such a point no earlier than ``d_o / v_max`` and must leave the last
+    one at least ``d_l / v_c`` before ``T_u`` to land in time; in between it flies at most
+    ``v_max`` per second. So the transit to cell j is ``tau_j = (d_o - rho)^+ / v_max +
+    (d_l - rho)^+ / v_c`` (``rho`` the detection spill, as in :func:`reach_bound`) with budget
+    ``T_u`` and rate ``W v_max``, solved by :func:`reach_optimum`. With ``v_c = v_max`` it is
+    :func:`reach_bound` with ``round_trip=True``; a slower way home only lowers it. Plans that
+    keep the rules (the allocation planner's, the greedy rectangles') stay below it; the
+    environment itself lets a UAV sense until T, so :func:`reach_bound` stays the bound of any
+    policy.
+    """
+    lim = env_limits(scenario)
+    grid = Grid.from_config(scenario.map)
+    v_home = min(float(scenario.uav.cruise_speed_mps), lim.speed_mps)
+    out = np.maximum(cell_distances(grid, lim.takeoff_m) - lim.spill_m, 0.0) / lim.speed_mps
+    home = np.maximum(cell_distances(grid, lim.landing_m) - lim.spill_m, 0.0) / v_home
+    n = len(lim.takeoff_m)
+    budget = scenario.uav.usable_endurance_s
+    return reach_optimum(
+        prior, grid.cell_area_m2, out + home, np.full(n, lim.rate_m2_s), np.full(n, budget),
+        lim.law,
+    )  # fmt: skip
 
 
 def reach_bound(scenario: Scenario, prior, round_trip: bool = False) -> ReachBound:

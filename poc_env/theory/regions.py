@@ -329,7 +329,15 @@ def rectangle_mass(
 
 
 def boundary_mass(
-    grid: Grid, center, length, width, theta, weights: np.ndarray, *, exclusive: bool
+    grid: Grid,
+    center,
+    length,
+    width,
+    theta,
+    weights: np.ndarray,
+    *,
+    exclusive: bool,
+    max_overlap: int | None = None,
 ) -> np.ndarray:
     """Weighted mass of rotated rectangles, ``sum area(cell ∩ Q) / cell_area * weights``, by
     boundary integrals (:func:`poc_env._kernels.rectangles.rectangle_masses`).
@@ -339,7 +347,10 @@ def boundary_mass(
     not the cells it covers. ``center`` (..., 2), the others (...), ``weights`` (ny, nx);
     returns (...). With ``exclusive`` the last leading axis holds one individual's
     rectangles, each less the union of the ones before it (§3.1.6, exactly, down to slivers
-    of cells). The map ends at the grid.
+    of cells). The map ends at the grid. ``max_overlap``: above this many earlier rectangles
+    meeting one, its individual goes by the per-cell exclusive areas instead of
+    inclusion-exclusion (default :data:`poc_env._kernels.rectangles.MAX_TERMS_OVERLAP`; the
+    same numbers to rounding, polynomial where inclusion-exclusion is exponential).
     """
     c = np.asarray(center, dtype=float)
     if c.ndim < 1 or c.shape[-1] != 2:
@@ -358,6 +369,7 @@ def boundary_mass(
         w,
         bool(exclusive),
         mass.reshape(-1, group),
+        -1 if max_overlap is None else int(max_overlap),
     )
     return mass
 

@@ -39,6 +39,15 @@ def test_plan_is_reproducible(plan):
     assert other["uavs"] != plan["uavs"]
 
 
+def test_plan_with_many_overlapping_uavs_finishes():
+    """42 UAVs from one airfield on the small map (issue 24: the exclusive masses went by
+    inclusion-exclusion, 2^n terms, and this took minutes): the plan is made with a tiny
+    budget, one rectangle per UAV, its POC at most the prior's mass."""
+    plan = make_plan("small", uavs=42, seed=0, popsize=4, maxiter=1)
+    assert len(plan["uavs"]) == 42
+    assert sum(u["poc"] for u in plan["uavs"]) <= 1.0 + 1e-9
+
+
 def test_cli_plan_writes_a_plan_that_exports(tmp_path, capsys):
     out = tmp_path / "plan.json"
     argv = [

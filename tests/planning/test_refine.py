@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 
 import poc_env
-from poc_env.agents.planning.allocation import _path_coverage, make_allocation_plan, plan_speeds
+from poc_env.agents.planning.allocation import (
+    _path_coverage,
+    make_allocation_plan,
+    plan_speeds,
+    sampled_sweep,
+)
 from poc_env.agents.planning.refine import (
     Airspace,
     arrival_times,
@@ -69,7 +74,10 @@ def test_refinement_never_lowers_the_planned_pos_and_reports_it():
     routes = [x["waypoints_m"] for x in base["uavs"]]
     w, law = sc.sensor.sweep_width_m, sc.sensor.law
     before = _planned(routes, takeoff, landing, prior, grid, w, law)
-    assert before == pytest.approx(base["posc"], abs=1e-12)
+    # the plan reports the environment's model over the whole paths (sampled_sweep); the
+    # refinement scores W x length per cell (_planned)
+    paths = [[takeoff[k], *r, landing[k]] if r else [] for k, r in enumerate(routes)]
+    assert sum(sampled_sweep(sc, grid, prior, paths)[0]) == pytest.approx(base["posc"], abs=1e-12)
     args = (takeoff, landing, prior, grid, w, law, v, u.usable_endurance_s)
     refined, value = refine_routes(routes, *args, u.max_turn_rate_rad_s, 120.0, sweeps=2)
     assert value == pytest.approx(_planned(refined, takeoff, landing, prior, grid, w, law))

@@ -14,6 +14,7 @@ BUILTIN = (
     "de_plan",
     "de_receding",
     "greedy_bayes",
+    "greedy_rectangles",
     "lawnmower",
     "potential_game",
     "random",

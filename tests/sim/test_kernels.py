@@ -960,6 +960,56 @@ def test_boundary_masses_equal_the_dense_fractions_and_shapely(seed):
         boundary_mass(grid, center, ln, wd, th, weights[:-1], exclusive=True)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_boundary_masses_dense_fallback_equals_inclusion_exclusion(seed):
+    """Many overlapping rectangles (issue 24: 42 UAVs from one airfield took minutes):
+    ``rectangle_masses``' per-cell fallback (forced with ``max_overlap=0``) gives the
+    inclusion-exclusion numbers (forced with a limit above the rectangle count) to 1e-12 of
+    the plain mass, on random small clusters where both apply; beyond the default limit the
+    fallback is what runs (the default equals the forced fallback bit for bit)."""
+    from poc_env._kernels.rectangles import MAX_TERMS_OVERLAP
+    from poc_env.theory.probability_map import Grid
+    from poc_env.theory.regions import boundary_mass
+
+    grid = Grid.from_config(load_scenario("small").map)
+    h = grid.cell_m
+    rng = np.random.default_rng(300 + seed)
+    n_uav = 9
+    centre = np.array([grid.bounds[0] + 4 * h, grid.bounds[1] + 4 * h])
+    center = centre + rng.normal(0, 0.6 * h, (4, n_uav, 2))
+    ln = h * rng.uniform(0.5, 5, (4, n_uav))
+    wd = h * rng.uniform(0.5, 5, (4, n_uav))
+    th = rng.uniform(0, np.pi, (4, n_uav))
+    center[:, 3] = center[:, 2]  # a copy of the rectangle before
+    ln[:, 3], wd[:, 3], th[:, 3] = ln[:, 2], wd[:, 2], th[:, 2]
+    weights = rng.random(grid.shape)
+    plain = boundary_mass(grid, center, ln, wd, th, weights, exclusive=False)
+    terms = boundary_mass(grid, center, ln, wd, th, weights, exclusive=True, max_overlap=64)
+    dense = boundary_mass(grid, center, ln, wd, th, weights, exclusive=True, max_overlap=0)
+    assert np.any(terms < plain - 0.1 * plain.max())  # they do overlap
+    assert np.all(np.abs(dense - terms) <= 1e-12 * plain)
+    # a cluster larger than the default limit: the fallback runs (bit for bit), and quickly
+    many = MAX_TERMS_OVERLAP + 30
+    center = centre + rng.normal(0, 0.3 * h, (1, many, 2))
+    ln = h * rng.uniform(3, 6, (1, many))
+    wd = h * rng.uniform(3, 6, (1, many))
+    th = rng.uniform(0, np.pi, (1, many))
+    default = boundary_mass(grid, center, ln, wd, th, weights, exclusive=True)
+    dense = boundary_mass(grid, center, ln, wd, th, weights, exclusive=True, max_overlap=0)
+    np.testing.assert_array_equal(default, dense)
+    # and it is right: the exclusive masses add up to the union's mass (shapely)
+    import shapely
+
+    from poc_env.geometry import rectangle_polygon
+
+    union = shapely.union_all(
+        [rectangle_polygon(center[0, k], ln[0, k], wd[0, k], th[0, k]) for k in range(many)]
+    )
+    boxes = np.array(grid.cell_boxes(), dtype=object)
+    ref = np.sum(shapely.area(shapely.intersection(union, boxes)) * weights.ravel())
+    assert default.sum() == pytest.approx(ref / grid.cell_area_m2, rel=1e-9)
+
+
 @pytest.mark.parametrize(
     ("name", "sharing"), [("small", "global"), ("paper_6_2", "global"), ("small", "comms")]
 )

@@ -18,6 +18,7 @@ from poc_env.theory.bound import (
     physical_optimum,
     reach_bound,
     reach_optimum,
+    rule_bound,
     sensing_time_s,
 )
 from poc_env.theory.probability_map import Grid, build_prior
@@ -161,6 +162,40 @@ def test_scenario_bounds_are_ordered(name):
     assert old < honest <= 1.0
     assert plan.upper <= reach.upper + 1e-9 <= honest + 1e-7
     assert reach.gap <= 1e-9 and plan.gap <= 1e-9
+
+
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_rule_bound_is_the_round_trip_bound_with_the_way_home_at_cruise_speed(name):
+    """rule_bound (issue 24): home at v_c. With v_c = v_max it is the round-trip reach-aware
+    bound (the same transit, the same budget); a slower way home lowers it; it stays below the
+    environment's reach-aware bound, with a certified gap."""
+    sc = load_scenario(name)
+    prior = build_prior(sc.map)
+    fast = load_scenario(name, {"uav.cruise_speed_kmh": sc.uav.max_speed_mps * 3.6})
+    trip = reach_bound(fast, prior, round_trip=True)
+    assert rule_bound(fast, prior).upper == pytest.approx(trip.upper, abs=1e-9)
+    rule = rule_bound(sc, prior)
+    slow = load_scenario(name, {"uav.cruise_speed_kmh": 150})
+    assert rule.gap <= 1e-9
+    assert rule_bound(slow, prior).upper < rule.upper - 1e-4
+    assert rule.upper < trip.upper and rule.upper <= reach_bound(sc, prior).upper
+
+
+def test_rule_bound_is_above_what_rule_keeping_plans_fly():
+    """The allocation and greedy rectangle plans keep the rules (back by 0.85 T, home at v_c):
+    flown in the environment on small, their POSC stays below the rule-aware bound."""
+    import poc_env
+    from poc_env.agents.policies.registry import make_policy
+
+    for name in ("allocation_plan", "greedy_rectangles"):
+        env = poc_env.parallel_env("small")
+        obs, _ = env.reset(seed=0)
+        pol = make_policy(name)
+        pol.reset(env, 0)
+        while env.agents:
+            obs, *_ = env.step(pol.predict(obs)[0])
+        bound = rule_bound(env.scenario, build_prior(env.scenario.map)).upper
+        assert 0.5 * bound < float(env.sim_state.posc[0]) <= bound
 
 
 def test_two_row_search_by_blocks_and_the_large_grid_relaxation(monkeypatch):

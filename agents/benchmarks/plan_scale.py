@@ -1,0 +1,142 @@
+"""Issue 24's "any size" figures: ``poc-env bench plan --scale`` (called by
+:mod:`poc_env.agents.benchmarks.plan`).
+
+* **Quality**, per map (``--scale-maps``, default ``paper_6_2`` and ``large_400``: 400 x 400 km,
+  12 UAVs from 3 airfields): ``allocation_plan`` and ``greedy_rectangles`` flown in the
+  environment on the same random priors (episode seeds ``--seed0 ..``, the priors of
+  :func:`poc_env.agents.experiments.evaluate.episode_prior`), the two policies interleaved per
+  seed; each episode's POSC over its prior's rule-aware bound
+  (:func:`poc_env.theory.bound.rule_bound`). Figures: the mean share of each policy
+  (target: allocation >= 0.90), the allocation's paired lead and its wins over the seeds.
+* **Cell size**: the allocation plan of the scenario's own prior on ``paper_6_2`` with 2.5, 5
+  and 10 km cells, planned POS_C and flown POSC (target: planned within 3 % of flown).
+* **Planning time**: :func:`poc_env.agents.planning.allocation.make_allocation_plan`, median
+  of ``--runs`` after a warm-up, on ``paper_6_2`` (target <= 2 s) and on ``large_400`` with
+  2.5 km cells (160 x 160) and 24 UAVs (target <= 10 s), one core.
+
+Figures are quoted in docs/PLANNER.md with the command; the machine's load changes the times.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+
+from poc_env.stats import ci95
+
+#: the maps of the quality figures.
+MAPS = ("paper_6_2", "large_400")
+#: the cell sizes (km) of the planned-vs-flown figures.
+CELLS_KM = (2.5, 5.0, 10.0)
+
+
+def _line(name: str, value: float, note: str = "") -> None:
+    print(f"{name:34s} {value:12.4g}  {note}".rstrip(), flush=True)
+
+
+def _flown(sc, policy: str, seed: int, prior: np.ndarray | None) -> tuple[float, dict]:
+    """POSC of ``policy`` flown on ``sc`` with ``prior`` (None: the scenario's), and its plan."""
+    from poc_env.agents.policies.registry import make_policy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    env = UAVSearchParallelEnv(scenario=sc)
+    pol = make_policy(policy)
+    obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
+    pol.reset(env, seed)
+    while env.agents:
+        actions, _ = pol.predict(obs)
+        obs, *_ = env.step(actions)
+    return float(env.sim_state.posc[0]), getattr(pol, "plan", {})
+
+
+def quality(maps, episodes: int, seed0: int) -> dict[str, float]:
+    """Flown ``allocation_plan`` and ``greedy_rectangles`` over the rule-aware bound."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import rule_bound
+
+    out: dict[str, float] = {}
+    for name in maps:
+        sc = load_scenario(name)
+        share: dict[str, list[float]] = {"allocation_plan": [], "greedy_rectangles": []}
+        planned: list[float] = []
+        for seed in range(seed0, seed0 + episodes):
+            prior = episode_prior(sc, seed)
+            bound = rule_bound(sc, prior).upper
+            for pol in share:  # interleaved per seed
+                posc, plan = _flown(sc, pol, seed, prior)
+                share[pol].append(posc / bound)
+                if pol == "allocation_plan":
+                    planned.append(float(plan["posc"]) / bound)
+        a = np.array(share["allocation_plan"])
+        g = np.array(share["greedy_rectangles"])
+        n = len(a)
+        for pol, x in share.items():
+            out[f"{name}_{pol}_rule"] = float(np.mean(x))
+            note = f"flown POSC / rule bound, {n} priors"
+            _line(f"{name} {pol}", out[f"{name}_{pol}_rule"], note)
+        out[f"{name}_allocation_planned_rule"] = float(np.mean(planned))
+        _line(f"{name} allocation planned", float(np.mean(planned)), "planned POS_C / rule bound")
+        d = a - g
+        half = ci95(d)
+        out[f"{name}_lead"] = float(d.mean())
+        out[f"{name}_wins"] = float(np.sum(d > 0))
+        _line(f"{name} lead", float(d.mean()), f"allocation - greedy, +- {half:.4f} (95 %)")
+        _line(f"{name} wins", float(np.sum(d > 0)), f"of {n} priors (allocation ahead)")
+    return out
+
+
+def cells(name: str = "paper_6_2") -> dict[str, float]:
+    """Planned and flown POS of the allocation plan at each cell size of :data:`CELLS_KM`."""
+    from poc_env.config import load_scenario
+
+    out: dict[str, float] = {}
+    for km in CELLS_KM:
+        sc = load_scenario(name, {"map.cell_km": km})
+        posc, plan = _flown(sc, "allocation_plan", 0, None)
+        out[f"cells_{km:g}km_planned"] = float(plan["posc"])
+        out[f"cells_{km:g}km_flown"] = posc
+        _line(
+            f"{name} {km:g} km cells",
+            float(plan["posc"]) / posc - 1.0 if posc > 0 else float("nan"),
+            f"planned {plan['posc']:.4f} / flown {posc:.4f} - 1 (target within 3 %)",
+        )
+    return out
+
+
+def timing(runs: int) -> dict[str, float]:
+    """Allocation planning time on ``paper_6_2`` and on 160 x 160 cells with 24 UAVs."""
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.config import load_scenario
+
+    cases = {
+        "paper_6_2": (load_scenario("paper_6_2"), None, 2.0),
+        "large_400_160x160_24uav": (load_scenario("large_400", {"map.cell_km": 2.5}), 24, 10.0),
+    }
+    out: dict[str, float] = {}
+    for label, (sc, uavs, target) in cases.items():
+        make_allocation_plan(sc, uavs=uavs, refine=0)  # warm-up (JIT)
+        times = []
+        for _ in range(runs):
+            t0 = time.perf_counter()
+            make_allocation_plan(sc, uavs=uavs)
+            times.append(time.perf_counter() - t0)
+        out[f"{label}_plan_s"] = statistics.median(times)
+        _line(f"{label} plan_s", out[f"{label}_plan_s"], f"median of {runs} (target <= {target} s)")
+    return out
+
+
+def main(maps, episodes: int, seed0: int, runs: int) -> dict[str, Any]:
+    print(
+        f"# issue 24 scale figures: {episodes} random priors per map (seeds {seed0}..), one "
+        "core; allocation_plan and greedy_rectangles interleaved per seed",
+        flush=True,
+    )
+    out: dict[str, Any] = {}
+    out.update(quality(maps, episodes, seed0))
+    out.update(cells())
+    out.update(timing(runs))
+    return out

@@ -1,0 +1,219 @@
+"""The greedy rectangle planner: a simple baseline for the allocation planner (issue 24).
+
+Each UAV in fleet order takes the axis-aligned rectangle of whole cells that holds the most
+*remaining* prior mass among those it can search and still be home within the usable endurance
+0.85 T (eq. 18), flies it as a lawnmower (parallel lines ``W`` apart along the rectangle's
+longer side, boustrophedon, from the end nearer its take-off field), and the rectangle's cells
+are then taken out of the remaining mass. Speeds are the allocation planner's
+(:func:`poc_env.agents.planning.flight_rules.plan_speeds`, ``max``: out and on the lines at
+``v_max``, home at ``v_c``).
+
+The rectangles are searched over every position of a set of side lengths (every length up to
+:data:`SIDES` cells, a geometric series above) with summed-area tables; a rectangle is kept
+when a lower bound of its flight time (straight transit to its nearest point and back from it,
+the lines, a half-turn per line end) fits; the route it gives is then checked with eq. 18's
+return rule (:func:`poc_env.agents.planning.refine.route_fits`) and its last lines dropped until
+it fits. No-fly zones are flown around as the allocation planner does
+(:func:`poc_env.agents.planning.refine.fly_around`).
+
+:func:`make_greedy_rectangles_plan` returns the fields a
+:class:`~poc_env.agents.policies.base.PlanPolicy` flies (``uavs[*].waypoints_m``,
+``speeds_mps``) and the planned POS (``posc``: eq. 10 per cell over the whole flight path, as
+the allocation planner counts it); the ``greedy_rectangles`` policy flies it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
+from poc_env.agents.planning.flight_rules import plan_speeds
+from poc_env.agents.planning.flight_rules import reserve_s as _reserve
+from poc_env.agents.planning.refine import fly_around, route_fits
+from poc_env.config import Scenario, load_scenario
+from poc_env.errors import ConfigError, as_int
+from poc_env.sim.core import takeoff_heading
+from poc_env.sim.routing import ZoneRouter
+from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.search_theory import pod_from_coverage
+
+#: every side length up to this many cells is tried, a geometric series (x 1.25) above it.
+SIDES = 12
+#: shares of the time budget the box search is run with, in turn, until the route it gives
+#: keeps at least half its lines under eq. 18.
+SCALES = (1.0, 0.9, 0.8, 0.7, 0.6, 0.5)
+
+
+def _side_lengths(n: int) -> np.ndarray:
+    """Side lengths (cells) tried on an axis of ``n`` cells."""
+    sides = set(range(1, min(n, SIDES) + 1))
+    s = float(SIDES)
+    while s < n:
+        s *= 1.25
+        sides.add(min(round(s), n))
+    return np.array(sorted(sides))
+
+
+def _lines(lo, hi, w: float, start) -> np.ndarray:
+    """Boustrophedon waypoints over the box ``lo``-``hi`` (x, y): lines ``w`` apart along its
+    longer side, centred across it, from the corner nearest ``start``."""
+    lo = np.asarray(lo, dtype=float)
+    hi = np.asarray(hi, dtype=float)
+    size = hi - lo
+    along = 0 if size[0] >= size[1] else 1
+    across = 1 - along
+    n = max(1, math.ceil(size[across] / w - 1e-9))
+    offsets = lo[across] + (np.arange(n) + 0.5) * size[across] / n
+    if abs(start[across] - hi[across]) < abs(start[across] - lo[across]):
+        offsets = offsets[::-1]
+    ends = [lo[along], hi[along]]
+    if abs(start[along] - hi[along]) < abs(start[along] - lo[along]):
+        ends = ends[::-1]
+    pts = []
+    for m, off in enumerate(offsets):
+        a, b = ends if m % 2 == 0 else ends[::-1]
+        for t in (a, b):
+            p = [0.0, 0.0]
+            p[along], p[across] = t, off
+            pts.append(p)
+    return np.array(pts)
+
+
+def _best_box(remaining, grid: Grid, widths, heights, w, v, turn, budget, takeoff, landing):
+    """The box (``lo``, ``hi`` corners, m) of whole cells of most ``remaining`` mass whose
+    flight time estimate (straight to its nearest point and back from it, the lines and a
+    half-turn per line end) is within ``budget``; None when none is."""
+    h = grid.cell_m
+    ox, oy = grid.origin_m
+    table = np.zeros((grid.ny + 1, grid.nx + 1))
+    table[1:, 1:] = remaining.cumsum(0).cumsum(1)
+    best_mass, best = 0.0, None
+    for nw in widths:
+        for nh in heights:
+            mass = (
+                table[nh:, nw:] - table[:-nh, nw:] - table[nh:, :-nw] + table[:-nh, :-nw]
+            )  # (ny - nh + 1, nx - nw + 1): boxes by lower-left cell
+            if mass.max(initial=0.0) <= best_mass:
+                continue
+            lx, ly = nw * h, nh * h
+            long_, short = max(lx, ly), min(lx, ly)
+            n_lines = max(1, math.ceil(short / w - 1e-9))
+            search = (n_lines * long_ + (n_lines - 1) * short / n_lines) / v.line
+            search += (n_lines - 1) * turn
+            if search > budget:  # no position can fit it
+                continue
+            jj, ii = np.nonzero(mass > best_mass)  # only boxes that would beat the best
+            xlo = ox + h * ii
+            ylo = oy + h * jj
+
+            def dist(p, xlo=xlo, ylo=ylo, lx=lx, ly=ly):
+                dx = np.maximum(np.maximum(xlo - p[0], p[0] - xlo - lx), 0.0)
+                dy = np.maximum(np.maximum(ylo - p[1], p[1] - ylo - ly), 0.0)
+                return np.hypot(dx, dy)
+
+            t = dist(takeoff) / v.out + dist(landing) / v.home + search
+            ok = np.where(t <= budget, mass[jj, ii], -1.0)
+            m = int(np.argmax(ok))
+            if ok[m] > best_mass:
+                best_mass = float(ok[m])
+                lo = (ox + ii[m] * h, oy + jj[m] * h)
+                best = (lo, (lo[0] + lx, lo[1] + ly))
+    return best
+
+
+def make_greedy_rectangles_plan(
+    scenario: Scenario | str = "paper_6_2",
+    *,
+    prior: np.ndarray | None = None,
+    uavs: int | None = None,
+    seed: int = 0,
+    speed: str = "max",
+) -> dict[str, Any]:
+    """The greedy rectangle plan of ``scenario`` on ``prior`` (module docstring); ``speed`` the
+    rule of :func:`~poc_env.agents.planning.flight_rules.plan_speeds`. Deterministic (``seed`` is
+    recorded only)."""
+    t0 = time.perf_counter()
+    sc = load_scenario(scenario)
+    if uavs is not None:
+        sc = sc.with_uavs(as_int("uavs", uavs, 1, 64))
+    grid = Grid.from_config(sc.map)
+    prior = build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float)
+    if prior.shape != grid.shape:
+        raise ConfigError("prior", prior.shape, f"an array of the grid's shape {grid.shape}")
+    if not np.all(np.isfinite(prior)) or np.any(prior < 0):
+        raise ConfigError("prior", "array", "finite cell masses >= 0")
+    router = ZoneRouter.for_scenario(sc)
+    if router.active:
+        prior = prior * router.reach_share(grid, sc.sensor.sweep_width_m)
+    u = sc.uav
+    w = sc.sensor.sweep_width_m
+    v = plan_speeds(sc, speed)
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    heading0 = takeoff_heading(grid.bounds, takeoff)
+    budget = u.usable_endurance_s - _reserve(sc)
+    turn = math.pi / u.max_turn_rate_rad_s  # a half-turn at a line end
+    remaining = prior.copy()
+    widths = _side_lengths(grid.nx)
+    heights = _side_lengths(grid.ny)
+    routes: list[list[list[float]]] = []
+    for k in range(len(takeoff)):
+
+        def fits(p, k=k):
+            return route_fits(
+                p, v, u.max_turn_rate_rad_s, u.usable_endurance_s, _reserve(sc), heading0[k]
+            )
+
+        wps: np.ndarray = np.zeros((0, 2))
+        for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
+            box = _best_box(remaining, grid, widths, heights, w, v, turn, scale * budget,
+                            takeoff[k], landing[k])  # fmt: skip
+            if box is None:
+                break
+            wps = _lines(box[0], box[1], w, takeoff[k])
+            full = len(wps)
+            while len(wps):
+                path = np.vstack([takeoff[k], wps, landing[k]])
+                if router.active:
+                    path = fly_around(router, path, fits)
+                if fits(path):
+                    wps = path[1:-1]
+                    break
+                wps = wps[:-2]  # drop the last line
+            if len(wps) >= full // 2:
+                break
+        if len(wps):  # the cells its lines cover are taken
+            cov = _path_coverage(wps, grid, w)
+            remaining[cov >= 0.5] = 0.0
+        routes.append([[float(a), float(b)] for a, b in wps])
+    cov = sum(
+        (
+            _path_coverage([takeoff[k], *routes[k], landing[k]], grid, w)
+            for k in range(len(routes))
+            if routes[k]
+        ),
+        np.zeros(grid.shape),
+    )
+    posc = float(np.sum(prior * pod_from_coverage(cov, sc.sensor.law)))
+    return {
+        "planner": "greedy_rectangles",
+        "scenario": sc.name,
+        "seed": int(seed),
+        "route": True,
+        "speeds_mps": v.as_dict(),
+        "posc": posc,
+        "runtime_s": time.perf_counter() - t0,
+        "uavs": [
+            {
+                "id": k + 1,
+                "takeoff_m": [float(c) for c in takeoff[k]],
+                "landing_m": [float(c) for c in landing[k]],
+                "waypoints_m": routes[k],
+            }
+            for k in range(len(routes))
+        ],
+    }
