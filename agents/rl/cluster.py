@@ -84,10 +84,20 @@ def _not_ray(field: str, address: str, host: str, port: int, what: str) -> Confi
     )
 
 
+#: How Ray refuses a call without its token when token authentication is on (the default for
+#: a cluster started by Ray 2.60): the GCS (C++), and the Python servers' interceptor. The probe
+#: never sends the token; ray.init does, once the address answered as Ray.
+_RAY_AUTH_REFUSALS = (
+    "InvalidAuthToken: Authentication token is missing or incorrect",
+    "Invalid or missing authentication token",
+)
+
+
 def _ray_call(host: str, port: int, client: bool, timeout_s: float) -> str | None:
     """None when the gRPC server at ``host:port`` answers a call of Ray's API as Ray does
     (the GCS: ``GetClusterId`` with status OK and a cluster id; the Ray Client server: the
-    ``ClusterInfo`` ping), else what it did instead. Without grpcio or Ray's generated
+    ``ClusterInfo`` ping; either: Ray's refusal of a call without its authentication token),
+    else what it did instead. Without grpcio or Ray's generated
     messages (both come with ray) there is no call to make: None."""
     import importlib
 
@@ -116,6 +126,11 @@ def _ray_call(host: str, port: int, client: bool, timeout_s: float) -> str | Non
         except grpc.RpcError as err:
             code = err.code() if callable(getattr(err, "code", None)) else None
             name = getattr(code, "name", "an error")
+            details = err.details() if callable(getattr(err, "details", None)) else ""
+            if code == grpc.StatusCode.UNAUTHENTICATED and any(
+                m in str(details) for m in _RAY_AUTH_REFUSALS
+            ):
+                return None  # Ray with token authentication (ray.init sends the token)
             if code == grpc.StatusCode.DEADLINE_EXCEEDED:
                 return f"did not answer Ray's {method} call within {timeout_s:g} s"
             return f"answered Ray's {method} call with gRPC status {name}"

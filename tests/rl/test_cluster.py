@@ -117,9 +117,11 @@ def test_a_grpc_service_that_is_not_ray_is_refused():
 
 def test_a_server_answering_rays_api_passes():
     """What passes: Ray's GCS call answered with a cluster id (a real GCS passes in
-    tests/rl/test_rllib.py) and, with ray://, the Ray Client server's ping; a GCS answer without
-    a cluster id does not."""
+    tests/rl/test_rllib.py) or refused as Ray refuses a call without its token (Ray 2.60 turns
+    token authentication on by default) and, with ray://, the Ray Client server's ping; a GCS
+    answer without a cluster id, or another service's UNAUTHENTICATED, does not."""
     _needs_ray_grpc()
+    import grpc
     from ray.core.generated import (
         gcs_service_pb2,
         gcs_service_pb2_grpc,
@@ -132,6 +134,8 @@ def test_a_server_answering_rays_api_passes():
             self.cluster_id = cluster_id
 
         def GetClusterId(self, request, context):
+            if self.cluster_id.startswith(b"refuse:"):
+                context.abort(grpc.StatusCode.UNAUTHENTICATED, self.cluster_id[7:].decode())
             return gcs_service_pb2.GetClusterIdReply(cluster_id=self.cluster_id)
 
     class Client(ray_client_pb2_grpc.RayletDriverServicer):
@@ -143,11 +147,15 @@ def test_a_server_answering_rays_api_passes():
     with grpc_server((add_gcs, Gcs(b"\x01" * 28)), (add_client, Client())) as address:
         cluster.probe(address, timeout_s=5.0)
         cluster.probe("ray://" + address, timeout_s=5.0)
-    with (
-        grpc_server((add_gcs, Gcs(b""))) as address,
-        pytest.raises(ConfigError, match="without a cluster id"),
-    ):
+    ray_refusal = b"refuse:InvalidAuthToken: Authentication token is missing or incorrect"
+    with grpc_server((add_gcs, Gcs(ray_refusal))) as address:
         cluster.probe(address, timeout_s=5.0)
+    for reply, said in [(b"", "without a cluster id"), (b"refuse:who are you", "UNAUTHENTICATED")]:
+        with (
+            grpc_server((add_gcs, Gcs(reply))) as address,
+            pytest.raises(ConfigError, match=said),
+        ):
+            cluster.probe(address, timeout_s=5.0)
 
 
 def test_the_cli_names_the_address(capsys):
