@@ -70,8 +70,15 @@ def plot_training_curve(
     from poc_env.viz.plots import _figure, save_figure_atomic
 
     data = training_curve(run_dir)["rollout/posc_mean"]
+    data = data[np.isfinite(data).all(axis=1)]  # a damaged log's NaN or infinite values
     if until is not None:
+        if len(data) and until < data[0, 0]:
+            raise ConfigError(
+                "until", until, f"a step at or after the run's first logged one, {data[0, 0]:g}"
+            )
         data = data[data[:, 0] <= until]
+    if not len(data):
+        raise ConfigError("run_dir", str(run_dir), "a run whose logs hold finite POSC values")
     fig = _figure((7.0, 4.0))
     ax = fig.add_subplot()
     ax.plot(data[:, 0] / 1e6, data[:, 1], lw=0.8, alpha=0.5, color="C0", label="per rollout")

@@ -360,6 +360,9 @@ def test_curve_reads_the_runs_logs_and_plots_them(runs, tmp_path, capsys):
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["curve", str(tmp_path)]) == 2  # no TensorBoard logs
     assert "run_dir" in capsys.readouterr().err
+    # before the first logged step nothing is left to plot: a clear error (was a ValueError)
+    assert main(["curve", str(runs["pilot"]), "--out", str(out), "--until", "95"]) == 2
+    assert "until: got 95" in capsys.readouterr().err
 
 
 # -- command line -----------------------------------------------------------------------------
