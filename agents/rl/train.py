@@ -389,6 +389,10 @@ def _what_holds(run_dir: Path) -> str:
         )
     if _has_checkpoint(run_dir):
         return f"this one holds a run: continue it with poc-env train --resume {q}"
+    try:
+        TrainArgs.from_dict(read_json(run_dir / "config.json", "config.json"), "config.json")
+    except ConfigError as err:
+        return f"this one holds a config.json that is not a run's ({err}): pick a new folder"
     return (
         "this one holds a run killed before its first checkpoint, with other options than "
         f"these: poc-env train --resume {q} trains it again from step 0 with its own options "
