@@ -197,3 +197,28 @@ def test_cli_cases_keep_their_work_small():
 
     draw()
     assert seen  # the work options are still drawn
+
+
+def test_the_runtime_generators_catch_issue_27s_runtime_regressions(monkeypatch):
+    """Each runtime class issue 27 left open, as the campaign generates it, is a clear error
+    with the fix and a failing outcome without it: a gRPC server that is not Ray passing the
+    probe, a rerun with other options training over a run killed before its first
+    checkpoint, ``poc-env curve --until`` before the first logged step."""
+    pytest.importorskip("ray", reason="the rllib extra is not installed")
+    from poc_env.agents.rl import cluster
+    from poc_env.agents.rl import train as train_mod
+    from poc_env.agents.testing.campaign import _SETTINGS, run_runtime
+
+    cases = [
+        ("grpc", "no_service", False),
+        ("grpc", "other_unauthenticated", True),
+        ("ray", _SETTINGS, False),
+        ("rerun", "config_only", False),
+        ("curve", "none", [(96, 0.5)], 1),
+    ]
+    assert [classify(run_runtime, c)[0] for c in cases] == ["error"] * len(cases)
+    assert classify(run_runtime, ("rerun", "config_only", True))[0] == "ok"  # its own command
+    monkeypatch.setattr(cluster, "_ray_call", lambda *a: None)  # the handshake alone
+    assert [classify(run_runtime, c)[0] for c in cases[:3]] == ["silent"] * 3
+    monkeypatch.setattr(train_mod, "_same_run_killed_early", lambda args: True)
+    assert classify(run_runtime, cases[3])[0] == "silent"  # trained over other options

@@ -15,8 +15,10 @@ default, an existing cluster with ``--address``; ``--num-env-runners K`` samples
 ``agent_steps`` is env steps x UAVs, an upper bound once UAVs land) and ``checkpoint/`` (RLlib's
 ``save_to_path``, written into a temporary folder and renamed when complete); both are
 rewritten every ``--checkpoint-every`` env steps and at the end, so a stopped run keeps its
-newest checkpoint and curve. ``--total-timesteps`` counts env steps here (each holds one
-transition of every UAV still flying).
+newest checkpoint and curve. ``tb/rllib_K/`` holds TensorBoard scalars under the tags SB3 runs
+log, so ``poc-env curve`` reads either (:func:`_log_iteration`; flushed every iteration).
+``--total-timesteps`` counts env steps here (each holds one transition of every UAV still
+flying).
 :class:`RLlibPolicy` (``rllib:PATH`` in ``poc-env evaluate``) flies such a checkpoint.
 Needs the ``rllib`` extra (``ray[rllib]``).
 """
@@ -46,7 +48,7 @@ POLICY_LAYOUTS = ("shared", "per_uav")
 
 
 def _require() -> None:
-    for m in ("ray", "torch"):
+    for m in ("ray", "torch", "tensorboardX"):  # tensorboardX comes with ray[rllib]
         try:
             __import__(m)
         except ModuleNotFoundError as exc:
@@ -129,8 +131,26 @@ def ppo_config(args: TrainArgs, kw: dict[str, Any], n_agents: int):
             lambda_=args.gae_lambda,
             entropy_coeff=args.ent_coef,
         )
+        .callbacks(on_episode_end=record_posc)
         .debugging(seed=args.seed)
     )
+
+
+def record_posc(*, episode: Any, metrics_logger: Any = None, **kwargs: Any) -> None:
+    """RLlib's ``on_episode_end`` callback: logs the episode's final POSC (the team's value,
+    which every UAV's last info carries; the largest of them, since POSC never decreases
+    within an episode) as the metric ``posc`` (``result["env_runners"]["posc"]``)."""
+    values = []
+    for agent_episode in episode.agent_episodes.values():
+        try:
+            info = agent_episode.get_infos(-1)
+        except IndexError:  # an agent without any step
+            continue
+        v = info.get("posc") if isinstance(info, dict) else None
+        if isinstance(v, int | float | np.floating) and np.isfinite(v):
+            values.append(float(v))
+    if values and metrics_logger is not None:
+        metrics_logger.log_value("posc", max(values), reduce="mean")
 
 
 def _metric(result: dict[str, Any], *keys: str) -> float:
@@ -145,66 +165,108 @@ def _metric(result: dict[str, Any], *keys: str) -> float:
         return float("nan")
 
 
+def _tb_dir(run_dir: Path) -> Path:
+    """``run_dir/tb/rllib_K``, K one more than any earlier run's in the folder (a run restarted
+    in its folder after a kill logs beside the killed attempt, as SB3's ``ppo_K`` do)."""
+    ks = [
+        int(d.name.removeprefix("rllib_"))
+        for d in (run_dir / "tb").glob("rllib_*")
+        if d.name.removeprefix("rllib_").isdigit()
+    ]
+    return run_dir / "tb" / f"rllib_{max(ks, default=0) + 1}"
+
+
+def _log_iteration(writer: Any, result: dict[str, Any], agent_steps: int) -> None:
+    """One training iteration's TensorBoard scalars, at step ``agent_steps`` (env steps x UAVs,
+    the x axis of SB3's curves): ``rollout/posc_mean``, the mean final POSC of the episodes
+    RLlib reports for the iteration (:func:`record_posc`), and ``rollout/ep_rew_mean``, the
+    mean episode return per UAV (SB3's is per slot, i.e. per UAV); an iteration that finished
+    no episode logs neither, as SB3 logs nothing without one."""
+    runners = result.get("env_runners", {})
+    posc = _metric(result, "env_runners", "posc")
+    per_uav = runners.get("agent_episode_returns_mean") if isinstance(runners, dict) else None
+    returns = [_metric(per_uav, k) for k in per_uav] if isinstance(per_uav, dict) else []
+    ret = float(np.mean(returns)) if returns else float("nan")
+    for tag, value in (("rollout/posc_mean", posc), ("rollout/ep_rew_mean", ret)):
+        if np.isfinite(value):
+            writer.add_scalar(tag, value, agent_steps)
+    writer.flush()  # a killed run keeps its curve up to its last iteration
+
+
 def train_rllib(args: TrainArgs, run_dir: Path) -> Path:
     """Train ``args`` with RLlib into ``run_dir`` (module docstring); returns the run folder."""
     _require()
     import torch as th
-    from ray.tune.registry import register_env
 
     from poc_env.agents.rl.cluster import ray_session
     from poc_env.sim.engine import make_engine
 
     kw = env_kwargs(args)
     n_agents = make_engine(1, **kw).n_agents  # validates the env's arguments
-    run_dir.mkdir(parents=True, exist_ok=True)
-    write_json(run_dir / "config.json", dataclasses.asdict(args))
-    threads = th.get_num_threads()
-    th.set_num_threads(args.torch_threads)
-    rows: list[dict[str, float]] = []
     cpus = max(2, args.num_env_runners + 1)
-    try:
-        with ray_session(args.address, num_cpus=cpus, what="poc-env train --engine rllib"):
-            register_env(ENV_NAME, make_env)
-            algo = ppo_config(args, kw, n_agents).build_algo()
-            try:
-                t0 = time.perf_counter()
-                steps = 0
-                next_save = args.checkpoint_every
-                while steps < args.total_timesteps:
-                    result = algo.train()
-                    steps = int(_metric(result, "num_env_steps_sampled_lifetime"))
-                    agent_steps = steps * n_agents  # upper bound: UAVs that landed act no more
-                    rows.append(
-                        {
-                            "iteration": len(rows) + 1,
-                            "env_steps": steps,
-                            "agent_steps": agent_steps,
-                            "seconds": round(time.perf_counter() - t0, 3),
-                            "episode_return_mean": _metric(
-                                result, "env_runners", "episode_return_mean"
-                            ),
-                        }
-                    )
-                    if args.progress:
-                        r = rows[-1]
-                        print(
-                            f"iteration {r['iteration']}: {steps} env steps, "
-                            f"return {r['episode_return_mean']:.4f}",
-                            flush=True,
-                        )
-                    if steps >= next_save and steps < args.total_timesteps:
-                        # a long run keeps its newest checkpoint and curve (a kill loses at
-                        # most checkpoint_every env steps)
-                        _save(algo, run_dir / "checkpoint")
-                        write_text_atomic(run_dir / "metrics.csv", csv_text(rows))
-                        next_save = (steps // args.checkpoint_every + 1) * args.checkpoint_every
-                _save(algo, run_dir / "checkpoint")
-            finally:
-                algo.stop()
-    finally:
-        th.set_num_threads(threads)
+    # Ray first: a bad --address is refused before the run folder is written
+    with ray_session(args.address, num_cpus=cpus, what="poc-env train --engine rllib"):
+        run_dir.mkdir(parents=True, exist_ok=True)
+        write_json(run_dir / "config.json", dataclasses.asdict(args))
+        from tensorboardX import SummaryWriter
+
+        threads = th.get_num_threads()
+        th.set_num_threads(args.torch_threads)
+        writer = SummaryWriter(str(_tb_dir(run_dir)))
+        try:
+            rows = _train_loop(args, kw, n_agents, run_dir, writer)
+        finally:
+            writer.close()
+            th.set_num_threads(threads)
     write_text_atomic(run_dir / "metrics.csv", csv_text(rows))
     return run_dir
+
+
+def _train_loop(
+    args: TrainArgs, kw: dict[str, Any], n_agents: int, run_dir: Path, writer: Any
+) -> list[dict[str, float]]:
+    """Build the algorithm, train it up to ``args.total_timesteps`` env steps (checkpoints,
+    metrics rows, TensorBoard scalars) and save it; returns the metrics rows."""
+    from ray.tune.registry import register_env
+
+    register_env(ENV_NAME, make_env)
+    algo = ppo_config(args, kw, n_agents).build_algo()
+    rows: list[dict[str, float]] = []
+    try:
+        t0 = time.perf_counter()
+        steps = 0
+        next_save = args.checkpoint_every
+        while steps < args.total_timesteps:
+            result = algo.train()
+            steps = int(_metric(result, "num_env_steps_sampled_lifetime"))
+            agent_steps = steps * n_agents  # upper bound: UAVs that landed act no more
+            _log_iteration(writer, result, agent_steps)
+            rows.append(
+                {
+                    "iteration": len(rows) + 1,
+                    "env_steps": steps,
+                    "agent_steps": agent_steps,
+                    "seconds": round(time.perf_counter() - t0, 3),
+                    "episode_return_mean": _metric(result, "env_runners", "episode_return_mean"),
+                }
+            )
+            if args.progress:
+                r = rows[-1]
+                print(
+                    f"iteration {r['iteration']}: {steps} env steps, "
+                    f"return {r['episode_return_mean']:.4f}",
+                    flush=True,
+                )
+            if steps >= next_save and steps < args.total_timesteps:
+                # a long run keeps its newest checkpoint and curve (a kill loses at most
+                # checkpoint_every env steps)
+                _save(algo, run_dir / "checkpoint")
+                write_text_atomic(run_dir / "metrics.csv", csv_text(rows))
+                next_save = (steps // args.checkpoint_every + 1) * args.checkpoint_every
+        _save(algo, run_dir / "checkpoint")
+    finally:
+        algo.stop()
+    return rows
 
 
 def _save(algo: Any, dest: Path) -> None:

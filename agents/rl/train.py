@@ -44,6 +44,11 @@ Resume
 same learning-rate and clip-range schedule, the same TensorBoard run, and the checkpoint
 numbering continues. With the shared and pilot recipes the resumed run is bit-identical to an
 uninterrupted one (:mod:`poc_env.agents.rl.checkpoint` says what is restored).
+
+A run killed before its first checkpoint (SB3 or RLlib) trains again from step 0 in its folder
+with its ``config.json``: with ``--resume RUN_DIR``, or by rerunning its own command (the same
+options and ``--run-dir``). ``--run-dir`` on a folder holding any other run is refused with the
+command that continues or flies it.
 """
 
 from __future__ import annotations
@@ -51,6 +56,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
+import shlex
 import sys
 import time
 import typing
@@ -366,10 +372,7 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
     if args.run_dir is not None:
         p = Path(args.run_dir)
         if (p / "config.json").exists():
-            raise ConfigError(
-                "run_dir", str(p), f"a new or empty folder (this one holds a run: continue it "
-                f"with poc-env train --resume {p})",
-            )  # fmt: skip
+            raise ConfigError("run_dir", str(p), f"a new or empty folder ({_what_holds(p)})")
         return p
     stamp = time.strftime("%Y%m%d-%H%M%S")
     # the scenario's name is the user's text: one safe component under runs/, never a path
@@ -382,6 +385,66 @@ def _new_run_dir(args: TrainArgs, scenario_name: str) -> Path:
     return p
 
 
+def _has_checkpoint(run_dir: Path) -> bool:
+    """True when ``run_dir`` holds a model or checkpoint of either engine (a damaged
+    ``latest.json`` counts as one: never restarted over)."""
+    if (run_dir / "checkpoint").exists() or (run_dir / "model.zip").exists():
+        return True
+    try:
+        return latest_checkpoint(run_dir) is not None
+    except ConfigError:
+        return True
+
+
+def _what_holds(run_dir: Path) -> str:
+    """What the run folder ``run_dir`` holds, and the command that continues or uses it."""
+    q = shlex.quote(str(run_dir))
+    if (run_dir / "checkpoint").exists():
+        return (
+            "this one holds an rllib run with a checkpoint, which is not continued: fly it "
+            f"with poc-env evaluate --policies rllib:{q}, or train into a new folder"
+        )
+    if (run_dir / "model.zip").exists():
+        return (
+            f"this one holds a finished run: fly it with poc-env evaluate --policies ppo:{q}, "
+            "or train into a new folder"
+        )
+    if _has_checkpoint(run_dir):
+        return f"this one holds a run: continue it with poc-env train --resume {q}"
+    try:
+        TrainArgs.from_dict(read_json(run_dir / "config.json", "config.json"), "config.json")
+    except ConfigError as err:
+        return f"this one holds a config.json that is not a run's ({err}): pick a new folder"
+    return (
+        "this one holds a run killed before its first checkpoint, with other options than "
+        f"these: poc-env train --resume {q} trains it again from step 0 with its own options "
+        "(so does its own command with this --run-dir)"
+    )
+
+
+def _same_run_killed_early(args: TrainArgs) -> bool:
+    """True when ``args.run_dir`` holds a run of exactly these options (its config.json) that
+    was killed before its first checkpoint: rerunning its command trains it again in place."""
+    if args.run_dir is None:
+        return False
+    p = Path(args.run_dir)
+    if not (p / "config.json").is_file() or _has_checkpoint(p):
+        return False
+    try:
+        stored = TrainArgs.from_dict(read_json(p / "config.json", "config.json"), "config.json")
+    except ConfigError:
+        return False
+
+    def comparable(a: TrainArgs) -> TrainArgs:
+        if a.task is not None and a.engine == "sb3":  # train() records the task's scenario
+            from poc_env.tasks import get_task
+
+            a = dataclasses.replace(a, scenario=get_task(a.task).scenario)
+        return dataclasses.replace(a, run_dir=str(p), resume=None, progress=False)
+
+    return comparable(stored) == comparable(args)
+
+
 def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
     """Train according to ``args`` (or resume ``args.resume``); return the run folder.
 
@@ -389,6 +452,8 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
     Needs the ``rl`` extra (checked before anything is written)."""
     if args.resume is not None:  # the run's own config.json says which engine
         return _resume(Path(args.resume), args.progress, callback)
+    if _same_run_killed_early(args):  # the same command again after a kill: as --resume does
+        return _resume(Path(str(args.run_dir)), args.progress, callback)
     if args.engine == "rllib":
         from poc_env.agents.rl.rllib import train_rllib
 
@@ -417,7 +482,8 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
 def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Path:
     """Continue ``run_dir`` from its newest checkpoint. A run killed before its first one
     (even before it wrote scenario.yaml) trains again from step 0 in the same folder with its
-    config.json, so ``--resume`` and ``--run-dir`` never send the user to each other."""
+    config.json, so ``--resume`` and ``--run-dir`` never send the user to each other; rerunning
+    the run's own command (the same options and ``--run-dir``) does the same."""
     from poc_env.config import load_scenario, save_scenario
 
     if not (run_dir / "config.json").is_file():
@@ -523,7 +589,7 @@ def _run(
                 bar.close()  # type: ignore[attr-defined]
                 print(
                     f"\ninterrupted at step {model.num_timesteps}; continue with: "
-                    f"poc-env train --resume {run_dir}",
+                    f"poc-env train --resume {shlex.quote(str(run_dir))}",
                     file=sys.stderr,
                 )
                 raise

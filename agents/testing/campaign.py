@@ -34,6 +34,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import copy
+import importlib
 import io
 import json
 import math
@@ -938,11 +939,19 @@ def run_actions(case: tuple[list, str]) -> None:
 
 
 # --------------------------------------------------------------------------- target: runtime
-# Issue 27's runtime classes: Ray addresses where something that is not Ray listens, run
-# folders in every state a kill leaves, oversized sizes, deeply nested JSON, options that
-# override each other, heading actions outside their Box.
+# Issue 27's runtime classes: Ray addresses where something that is not Ray listens (raw TCP,
+# a bare HTTP/2 answer, gRPC servers that are not Ray's), run folders in every state a kill
+# leaves (resumed, or their own command rerun), damaged or hostile TensorBoard logs for
+# `poc-env curve`, oversized sizes, deeply nested JSON, options that override each other,
+# heading actions outside their Box.
 
-_REPLIES = [None, b"", b"HTTP/1.1 400 Bad Request\r\n\r\n", b"\x00" * 9, b"SSH-2.0-x\r\n"]
+_SETTINGS = bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])  # an HTTP/2 SETTINGS frame: any gRPC server's
+_REPLIES = [None, b"", b"HTTP/1.1 400 Bad Request\r\n\r\n", b"\x00" * 9, b"SSH-2.0-x\r\n",
+            _SETTINGS, _SETTINGS + b"\x00" * 64]  # fmt: skip
+#: gRPC servers that are not Ray: no service of Ray's, a GCS answer without a cluster id, an
+#: UNAUTHENTICATED refusal that is not Ray's.
+_GRPC_FAKES = ["no_service", "no_cluster_id", "other_unauthenticated"]
+_CURVE_DAMAGE = ["none", "truncated", "garbage", "empty", "flipped"]
 _RESUME_STATES = ["empty", "config_only", "garbage_config", "nested_config", "nan_config",
                   "unknown_key", "rllib_with_checkpoint", "rllib_without_checkpoint"]  # fmt: skip
 _TRAIN_SIZES = [("net_arch", [10**6, 10**6]), ("net_arch", [2**31]), ("n_steps", 10**6),
@@ -969,6 +978,11 @@ def runtime_strategy():
     return st.one_of(
         st.tuples(st.just("ray"), st.sampled_from(_REPLIES), st.booleans()),
         st.tuples(st.just("resume"), st.sampled_from(_RESUME_STATES)),
+        st.tuples(st.just("rerun"), st.sampled_from(_RESUME_STATES), st.booleans()),
+        st.tuples(st.just("grpc"), st.sampled_from(_GRPC_FAKES), st.booleans()),
+        st.tuples(st.just("curve"), st.sampled_from(_CURVE_DAMAGE),
+                  st.lists(st.tuples(st.integers(-(2**62), 2**62), wild), min_size=0, max_size=6),
+                  st.one_of(st.none(), st.integers(-5, 2**62))),
         st.tuples(st.just("size"), st.sampled_from(_TRAIN_SIZES)),
         st.tuples(st.just("json"), st.integers(1, 3000), st.sampled_from(["[", "{\"a\":"]),
                   st.sampled_from(["1", "NaN", "Infinity", "-Infinity", "1e999", "\"x\""])),
@@ -984,6 +998,12 @@ def run_runtime(case: tuple) -> None:
         _run_ray_address(case[1], case[2])
     elif kind == "resume":
         _run_resume_state(case[1])
+    elif kind == "rerun":
+        _run_resume_state(case[1], rerun=True, same=case[2])
+    elif kind == "grpc":
+        _run_grpc_fake(case[1], case[2])
+    elif kind == "curve":
+        _run_curve(*case[1:])
     elif kind == "size":
         from poc_env.agents.rl.args import TrainArgs
         from poc_env.agents.rl.train import check_sizes
@@ -1034,16 +1054,21 @@ def _run_ray_address(reply: bytes | None, client: bool) -> None:
     raise SilentWrong(f"a service that is not Ray passed the probe ({reply!r})")
 
 
-def _run_resume_state(state: str) -> None:
+def _run_resume_state(state: str, rerun: bool = False, same: bool = True) -> None:
+    """A run folder as a kill leaves it, continued with ``--resume`` or (``rerun``) by running
+    a command again with ``--run-dir`` on it: its own (``same``) or one of other options. A
+    model, or a clear error; never a run over another run's options."""
     from poc_env.agents.rl.args import TrainArgs
     from poc_env.agents.rl.train import train
 
     with tempfile.TemporaryDirectory() as d:
         run = Path(d) / "run"
         run.mkdir()
-        small = {"scenario": "small", "overrides": ["episode.horizon_steps=4"], "n_envs": 1,
-                 "n_steps": 4, "batch_size": 4, "n_epochs": 1, "total_timesteps": 12,
-                 "progress": False}  # fmt: skip
+        small: dict[str, Any] = {
+            "scenario": "small", "overrides": ["episode.horizon_steps=4"], "n_envs": 1,
+            "n_steps": 4, "batch_size": 4, "n_epochs": 1, "total_timesteps": 12,
+            "progress": False, "run_dir": str(run),
+        }  # fmt: skip
         texts = {
             "config_only": json.dumps(small),
             "garbage_config": "{not json",
@@ -1059,10 +1084,82 @@ def _run_resume_state(state: str) -> None:
             (run / "checkpoint").mkdir()
         if state == "rllib_without_checkpoint":
             return  # trains on Ray: tests/rl/test_rllib.py covers it; not in a campaign
+        before = (run / "config.json").read_bytes() if state in texts else None
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            out = train(TrainArgs(resume=str(run), progress=False))
+            if not rerun:
+                out = train(TrainArgs(resume=str(run), progress=False))
+            else:
+                try:
+                    out = train(TrainArgs(**{**small, "seed": 0 if same else 1}))
+                except PocEnvError:
+                    now = (run / "config.json").read_bytes() if before is not None else None
+                    check(now == before, f"a refused rerun changed a {state} run's config.json")
+                    raise
+                ok = state == "empty" or (state == "config_only" and same)
+                check(ok, f"a rerun of {'its' if same else 'other'} options trained over a "
+                      f"{state} run")  # fmt: skip
         check((out / "model.zip").is_file(), f"resume of a {state} run wrote no model")
+
+
+def _run_grpc_fake(fake: str, client: bool) -> None:
+    """A gRPC server on 127.0.0.1 that is not Ray (:data:`_GRPC_FAKES`): the probe refuses it."""
+    from concurrent import futures
+
+    try:
+        import grpc
+
+        # Ray's generated modules (untyped: their attributes are made at import)
+        gcs_service_pb2 = importlib.import_module("ray.core.generated.gcs_service_pb2")
+        gcs_service_pb2_grpc = importlib.import_module("ray.core.generated.gcs_service_pb2_grpc")
+    except ImportError:
+        return  # no grpcio or Ray: the probe's gRPC stage does not run (the rllib extra)
+    from poc_env.agents.rl.cluster import probe
+
+    servicer: Any = gcs_service_pb2_grpc.NodeInfoGcsServiceServicer
+
+    class Gcs(servicer):  # type: ignore[misc,valid-type]
+        def GetClusterId(self, request: Any, context: Any) -> Any:
+            if fake == "other_unauthenticated":
+                context.abort(grpc.StatusCode.UNAUTHENTICATED, "token required")
+            return gcs_service_pb2.GetClusterIdReply()
+
+    srv = grpc.server(futures.ThreadPoolExecutor(1))
+    if fake != "no_service":
+        gcs_service_pb2_grpc.add_NodeInfoGcsServiceServicer_to_server(Gcs(), srv)
+    port = srv.add_insecure_port("127.0.0.1:0")
+    srv.start()
+    try:
+        probe(("ray://" if client else "") + f"127.0.0.1:{port}", timeout_s=1.0)
+    finally:
+        srv.stop(0)
+    raise SilentWrong(f"a gRPC server that is not Ray ({fake}) passed the probe")
+
+
+def _run_curve(damage: str, points: list[tuple[int, float]], until: int | None) -> None:
+    """``poc-env curve`` of a run folder whose TensorBoard log holds hostile steps and values,
+    damaged or not: a PNG, or a clear error."""
+    from torch.utils.tensorboard import SummaryWriter
+
+    from poc_env.agents.rl.curve import plot_training_curve
+
+    with tempfile.TemporaryDirectory() as d:
+        run = Path(d)
+        with SummaryWriter(str(run / "tb" / "ppo_1")) as w:
+            for step, value in points:
+                w.add_scalar("rollout/posc_mean", value, step)
+        log = next((run / "tb" / "ppo_1").glob("events.out.tfevents.*"))
+        data = log.read_bytes()
+        damaged = {
+            "none": data,
+            "truncated": data[: max(0, len(data) - 7)],
+            "garbage": bytes(range(256)) * 2,
+            "empty": b"",
+            "flipped": data[:60] + bytes([data[60] ^ 0xFF]) + data[61:] if len(data) > 61 else data,
+        }
+        log.write_bytes(damaged[damage])
+        out = plot_training_curve(run, run / "curve.png", until)
+        check(out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", "curve wrote no PNG")
 
 
 def _run_nested_json(depth: int, opener: str, leaf: str) -> None:

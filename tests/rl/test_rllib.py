@@ -65,6 +65,20 @@ def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
     ev = evaluate("small", [f"rllib:{run}"], episodes=2, seed0=0)
     posc = [r["posc_mean"] for r in ev.rows()]
     assert 0.0 <= posc[0] <= 1.0
+    # issue 27: TensorBoard scalars under SB3's tags, one per iteration at its agent steps, so
+    # poc-env curve reads an RLlib run as it reads an SB3 run
+    from poc_env.agents.rl.curve import training_curve
+    from poc_env.cli import main
+
+    curve = training_curve(run)
+    assert [p.name for p in (run / "tb").iterdir()] == ["rllib_1"]
+    steps = [float(r["agent_steps"]) for r in rows]  # every iteration (horizon 30) ends episodes
+    for tag in ("rollout/posc_mean", "rollout/ep_rew_mean"):
+        np.testing.assert_array_equal(curve[tag][:, 0], steps)
+    assert np.all((curve["rollout/posc_mean"][:, 1] > 0) & (curve["rollout/posc_mean"][:, 1] <= 1))
+    png = tmp_path / "curve.png"
+    assert main(["curve", str(run), "--out", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_one_policy_per_uav(ray_local, tmp_path, monkeypatch):
@@ -135,7 +149,7 @@ def test_cli_errors(tmp_path, capsys):
     from poc_env.cli import main
 
     assert main(["evaluate", "--scenario", "small", "--episodes", "1", "--ray", "127.0.0.1:1"]) != 0
-    assert "address: got '127.0.0.1:1'" in capsys.readouterr().err
+    assert "ray: got '127.0.0.1:1'" in capsys.readouterr().err  # the option evaluate takes
     with pytest.raises(ConfigError, match="task: got 'poc_env/Nope-v0'"):
         _args(tmp_path, "x", task="poc_env/Nope-v0")
     with pytest.raises(ConfigError, match=r"recipe: got 'pilot'.*with --task"):
@@ -160,21 +174,35 @@ def test_the_probe_passes_a_real_ray_gcs(ray_local):
 def test_an_rllib_run_killed_before_its_first_checkpoint_resumes(ray_local, tmp_path):
     """Issue 27: --resume refused rllib runs ("an rllib run starts anew") while --run-dir
     refused the folder ("holds a run: use --resume"). A run with config.json and no checkpoint
-    now trains in its folder; one with a checkpoint gets an error saying what to do."""
+    now trains in its folder when its own command is run again (or with --resume, the same
+    code); other options get an error naming --resume; once it has a checkpoint, each
+    refusal names what to do instead."""
+    from tensorboardX import SummaryWriter
+
     from poc_env.agents.rl.checkpoint import write_json
+    from poc_env.agents.rl.curve import training_curve
 
     args = _args(tmp_path, "early")
     run = tmp_path / "early"
     run.mkdir()
-    write_json(run / "config.json", dataclasses.asdict(args))  # a kill before any iteration
-    with pytest.raises(ConfigError, match="train --resume"):
-        train(args)
+    write_json(run / "config.json", dataclasses.asdict(args))  # a kill after one iteration:
+    with SummaryWriter(str(run / "tb" / "rllib_1")) as killed:  # its scalars, and no checkpoint
+        killed.add_scalar("rollout/posc_mean", 5.0, 300)
+    with pytest.raises(ConfigError, match=rf"train --resume {run}") as err:
+        train(dataclasses.replace(args, seed=1))  # other options than the folder's run
+    assert err.value.field == "run_dir"
     with pytest.warns(UserWarning, match="no checkpoint"):
-        train(TrainArgs(resume=str(run), progress=False))
+        assert train(args) == run  # its own command again: trains in place from step 0
     assert (run / "checkpoint" / "learner_group").is_dir()
+    curve = training_curve(run)["rollout/posc_mean"]  # the new attempt's, not the killed one's
+    assert sorted(p.name for p in (run / "tb").iterdir()) == ["rllib_1", "rllib_2"]
+    assert np.all(curve[:, 1] <= 1.0) and curve[0, 0] > 0
     with pytest.raises(ConfigError, match=rf"rllib:{run}.*--run-dir NEW") as err:
         train(TrainArgs(resume=str(run), progress=False))
     assert err.value.field == "resume"
+    with pytest.raises(ConfigError, match=rf"evaluate --policies rllib:{run}") as err:
+        train(args)
+    assert err.value.field == "run_dir"
 
 
 @pytest.mark.parametrize(

@@ -179,6 +179,12 @@ def test_resume_continues_bit_identically(runs, tmp_path, recipe):
     # the step count continued from the checkpoint (96 -> 192 -> 288), not from 0
     assert checkpoint_steps(run) == [2 * ROLLOUT[recipe], 3 * ROLLOUT[recipe]]
     assert [p.name for p in (run / "tb").iterdir()] == ["ppo_1"]  # the same TensorBoard run
+    # its curve joins the killed attempt's event file (up to the checkpoint) and the resumed
+    # one's (issue 27: poc-env curve showed the resumed part alone)
+    from poc_env.agents.rl.curve import training_curve
+
+    steps = training_curve(run)["rollout/posc_mean"][:, 0]
+    np.testing.assert_array_equal(steps, [ROLLOUT[recipe] * k for k in (1, 2, 3)])
     # model, optimiser, env state and generators restored: the uninterrupted run's parameters
     assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
     # resuming a finished run changes nothing
@@ -354,6 +360,9 @@ def test_curve_reads_the_runs_logs_and_plots_them(runs, tmp_path, capsys):
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["curve", str(tmp_path)]) == 2  # no TensorBoard logs
     assert "run_dir" in capsys.readouterr().err
+    # before the first logged step nothing is left to plot: a clear error (was a ValueError)
+    assert main(["curve", str(runs["pilot"]), "--out", str(out), "--until", "95"]) == 2
+    assert "until: got 95" in capsys.readouterr().err
 
 
 # -- command line -----------------------------------------------------------------------------
@@ -495,12 +504,43 @@ def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path):
         train(_args("shared", run), callback=_killer(40))
     (run / "scenario.yaml").unlink()
     with pytest.raises(ConfigError, match=rf"train --resume {run}") as err:
-        train(_args("shared", run))
+        train(_args("shared", run, seed=1))  # other options (its own command restarts it)
     assert err.value.field == "run_dir"
     with pytest.warns(UserWarning, match="no complete checkpoint"):
         train(TrainArgs(resume=str(run), progress=False))
     assert (run / "scenario.yaml").is_file()
     assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+
+
+def test_rerunning_the_command_of_a_run_killed_before_its_first_checkpoint(runs, tmp_path):
+    """Issue 27, the documented way: the same command (options and --run-dir) after a kill
+    before the first checkpoint trains the run again in its folder from step 0, ending where
+    the uninterrupted run ends; other options, or a folder holding a finished run, are refused
+    with the command that continues or flies it."""
+    run = tmp_path / "early run"  # a space: the command shown is shell-quoted
+    with pytest.raises(Interrupt):
+        train(_args("shared", run), callback=_killer(40))
+    with pytest.raises(ConfigError, match=r"train --resume '.*early run'") as err:
+        train(_args("shared", run, seed=1))
+    assert err.value.field == "run_dir"
+    with pytest.warns(UserWarning, match="no complete checkpoint"):
+        assert train(_args("shared", run)) == run
+    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+    assert sorted(p.name for p in (run / "tb").iterdir()) == ["ppo_1", "ppo_2"]
+    with pytest.raises(ConfigError, match=r"finished run.*evaluate --policies ppo:'"):
+        train(_args("shared", run))
+
+
+def test_curve_takes_the_newest_run_folder(tmp_path):
+    """tb/ppo_10 is newer than tb/ppo_9 (a restart in place logs into the next K)."""
+    from torch.utils.tensorboard import SummaryWriter
+
+    from poc_env.agents.rl.curve import training_curve
+
+    for k, value in ((9, 0.25), (10, 0.5)):
+        with SummaryWriter(str(tmp_path / "tb" / f"ppo_{k}")) as w:
+            w.add_scalar("rollout/posc_mean", value, 96)
+    np.testing.assert_array_equal(training_curve(tmp_path)["rollout/posc_mean"], [[96, 0.5]])
 
 
 @pytest.mark.parametrize(
