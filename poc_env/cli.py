@@ -1080,7 +1080,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=examples(
             "poc-env replan --plan out/p1.json --out out/p2.json",
             "poc-env replan --plan out/p1.json --plan out/p2.json --out out/p3.json",
-            "poc-env replan --plan out/p1.json --tracks flown.geojson --planner de --out out/p2.json",
+            "poc-env replan --plan out/p1.json --tracks flown.geojson --planner de "
+            "--out out/p2.json",
         ),
     )
     _add_scenario(p, None)
