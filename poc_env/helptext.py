@@ -44,7 +44,7 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         value = shown_default(action)
         if action.help is None and value is not None:  # argparse would print no help line
             action = copy.copy(action)
-            action.help = "default: " + value.replace("%", "%%")
+            action.help = "(default: " + value.replace("%", "%%") + ")"
         super().add_argument(action)
 
     def _get_help_string(self, action: argparse.Action) -> str | None:
@@ -53,7 +53,10 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         if value is None or "%(default)" in text:
             return action.help
         escaped = value.replace("%", "%%")
-        return f"{text} (default: {escaped})" if text else f"default: {escaped}"
+        shown = f"(default: {escaped})"
+        if text in ("", shown):  # no help of its own (add_argument gave it just the default)
+            return shown
+        return f"{text} {shown}"
 
 
 def examples(*lines: str) -> str:

@@ -58,6 +58,8 @@ def test_every_option_shows_its_default():
             if value is not None:
                 shown = "".join(f"(default: {value})".split())
                 assert shown in text, f"{path} {action.option_strings}: {shown} not in its help"
+                once = "".join(f"default: {value}".split())
+                assert once + shown not in text, f"{path} {action.option_strings}: shown twice"
         assert "(default:None)" not in text and "==SUPPRESS==" not in text, path
     train = _train_help()
     assert "(default: None)" not in train and "(default: )" not in train
