@@ -63,6 +63,9 @@ class Episode:
     bound: float | None = None
     #: reach-aware bound of this episode's prior (:func:`reach_effort_bound`)
     bound_reach: float | None = None
+    #: moving-target bound of this episode (:func:`moving_effort_bound`; None when the
+    #: scenario's target stands still)
+    bound_moving: float | None = None
 
     @property
     def normalised(self) -> float | None:
@@ -166,6 +169,7 @@ class Evaluation:
                     "normalised": None
                     if any(v is None for v in norm)
                     else float(np.mean(np.asarray(norm, dtype=float))),
+                    **_moving_columns(eps),
                 }
             )
         return out
@@ -176,6 +180,8 @@ class Evaluation:
             f"{'policy':<{width}} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
             f"{'viol.steps':>10} {'crashed':>8} {'landed':>7} {'POSC/reach':>10}"
         )
+        moving = any(e.bound_moving is not None for e in self.episodes)
+        head += f" {'POSC/moving':>11}" if moving else ""
         lines = [head, "-" * len(head)]
         for r in self.rows():
             t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
@@ -184,6 +190,7 @@ class Evaluation:
                 f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
                 f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
                 f"{r['crashed']:>8.2f} {r['landed']:>7.2f} {nrm:>10}"
+                + (f" {r['normalised_moving']:>11.4f}" if moving else "")
             )
         lines.append("-" * len(head))
         mean = "mean over the episodes' random priors of the " if self.random_priors else ""
@@ -195,6 +202,12 @@ class Evaluation:
             lines.append(
                 f"{mean}reach-aware bound (transit from the airfields at max speed; normalises "
                 f"POSC/reach): {self.bound_reach:.4f}"
+            )
+        if moving:
+            mb = [e.bound_moving for e in self.episodes[: len(self.episodes) // len(self.policies)]]
+            lines.append(
+                "mean over the episodes of the moving-target bound (poc_env.theory.moving_bound; "
+                f"the target moves, so the static bounds do not hold): {np.mean(mb):.4f}"
             )
         return "\n".join(lines)
 
@@ -269,6 +282,7 @@ class Evaluation:
                 "violation_steps": e.violation_steps,
                 "crashed": e.crashed,
                 "landed": e.landed,
+                "bound_moving": e.bound_moving,
             }
             for e in self.episodes
         ]
@@ -279,6 +293,38 @@ class Evaluation:
 
     def to_csv(self) -> str:
         return csv_text(self.rows())
+
+
+def _moving_columns(eps: Sequence[Episode]) -> dict[str, Any]:
+    """The moving-target bound's columns of one policy's row (empty for a static target)."""
+    if any(e.bound_moving is None for e in eps):
+        return {}
+    mb = np.array([float(e.bound_moving or 0.0) for e in eps])
+    x = np.array([e.posc for e in eps])
+    ratio = np.divide(x, mb, out=np.zeros_like(x), where=mb > 0)
+    return {"bound_moving": float(mb.mean()), "normalised_moving": float(ratio.mean())}
+
+
+def moving_effort_bound(
+    scenario: Any, seed: int, map_file: str | None = None, random_priors: bool = False
+) -> float | None:
+    """The moving-target bound (:func:`poc_env.theory.moving_bound.moving_bound`) of episode
+    ``seed``: its prior and its drift velocity, read from an environment reset with the seed;
+    None when the scenario's target stands still."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.theory.moving_bound import moving_bound
+
+    env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
+    if env.params.motion is None:
+        return None
+    prior = episode_prior(env.scenario, seed) if random_priors else None
+    env.reset(seed=seed, options=None if prior is None else {"prior": prior})
+    st = env.sim_state
+    return moving_bound(env.scenario, st.belief[0], st.drift[0], env.params.s).upper
+
+
+def _moving(args):
+    return moving_effort_bound(*args)
 
 
 def effort_bound(
@@ -341,6 +387,10 @@ def evaluate(
         bound = effort_bound(sc, map_file)
         reach = reach_effort_bound(sc, map_file)
         results = tuple(replace(e, bound=bound, bound_reach=reach) for e in results)
+    seeds = [(sc, seed0 + k, map_file, random_priors) for k in range(episodes)]
+    if sc.target.model != "static":  # the moving-target bound of each seed's episode
+        moving = dict(zip(range(seed0, seed0 + episodes), run_jobs(_moving, seeds, workers)))
+        results = tuple(replace(e, bound_moving=moving[e.seed]) for e in results)
     return Evaluation(sc.name, results, bound, tuple(policies), random_priors, reach)
 
 

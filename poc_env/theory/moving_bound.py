@@ -79,7 +79,7 @@ from poc_env.theory.probability_map import Grid
 Op = Callable[[np.ndarray], np.ndarray]
 
 #: The coverage scales tried for laws other than the exponential (the bound takes the best).
-KAPPAS = (1.25, 1.5, 2.0, 2.5, 3.0, 4.0)
+KAPPAS = (1.5, 1.75, 2.0)
 
 
 @dataclass(frozen=True)
@@ -130,7 +130,7 @@ def brown_optimum(
     adjoint: Op,
     budgets: np.ndarray,
     reach: np.ndarray,
-    sweeps: int = 6,
+    sweeps: int = 4,
 ) -> BrownResult:
     """Certified optimum of ``1 - E[exp(-sum_t c_t(X_t))]`` (module docstring).
 
@@ -199,7 +199,7 @@ def moving_bound(
     prior_fine: np.ndarray,
     velocity,
     s: int | None = None,
-    sweeps: int = 6,
+    sweeps: int = 4,
     kappas: tuple[float, ...] | None = None,
 ) -> MovingBound:
     """The moving-target bound of ``scenario`` for one episode (module docstring).
