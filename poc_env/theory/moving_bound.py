@@ -51,7 +51,7 @@ step effort on its best reachable cell. The bound reported is
 
 **Brown's algorithm** only supplies a good ``c``: sweeps of coordinate ascent over the steps,
 each step's effort water-filled (:func:`poc_env.theory.bound.physical_optimum`, exponential law)
-on the weights ``alpha_t beta_t`` over the cells some UAV reaches (a relaxation of the per-UAV
+(in closed form, :func:`water_fill`) on the weights ``alpha_t beta_t`` over the cells some UAV reaches (a relaxation of the per-UAV
 reach: it does not matter, the certificate is valid at any ``c``).
 
 **The adjoint.** For a uniform velocity ``v`` (the registered Drift tasks), ``M^T`` is the same
@@ -72,7 +72,7 @@ import numpy as np
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
 from poc_env.theory import motion as motion_mod
-from poc_env.theory.bound import cell_distances, env_limits, physical_optimum
+from poc_env.theory.bound import cell_distances, env_limits
 from poc_env.theory.detection import detection_law
 from poc_env.theory.probability_map import Grid
 
@@ -123,6 +123,25 @@ def law_slack(law: str, kappa: float, c_max: float = 40.0, n: int = 400_001) -> 
     return max(float(gap.max()) + lip * (c[1] - c[0]) / 2.0, float(np.exp(-kappa * c_max)), 0.0)
 
 
+def water_fill(w: np.ndarray, a: np.ndarray, effort: float) -> np.ndarray:
+    """The exponential law's optimal coverage of the weights ``w`` (cell areas ``a``) for
+    ``effort`` m^2: :func:`poc_env.theory.bound.physical_optimum` with ``law="exponential"``
+    (``C_j = ln(w_j / (a_j lambda))^+``), with ``lambda`` in closed form instead of by root
+    finding: over the densest ``k`` cells ``ln lambda = (sum a_j ln d_j - effort) / sum a_j``
+    (``d = w / a``), for the ``k`` that leaves ``d_k >= lambda > d_{k+1}``."""
+    d = w / a
+    order = np.argsort(-d, kind="stable")
+    ld = np.log(d[order])
+    aa = a[order]
+    sa = np.cumsum(aa)
+    loglam = (np.cumsum(aa * ld) - effort) / sa
+    nxt = np.append(ld[1:], -np.inf)
+    k = int(np.argmax(loglam >= nxt))  # the first k whose lambda lies above the next density
+    cov = np.zeros_like(d)
+    cov[order[: k + 1]] = np.maximum(ld[: k + 1] - loglam[k], 0.0)
+    return cov
+
+
 def brown_optimum(
     prior: np.ndarray,
     area: np.ndarray,
@@ -167,7 +186,7 @@ def brown_optimum(
             cells = union[t] & (alpha * beta[t] > 0)
             if total[t] > 0 and cells.any():
                 w = alpha[cells] * beta[t][cells]
-                c[t][cells] = physical_optimum(w, a[cells], total[t], "exponential").coverage
+                c[t][cells] = water_fill(w, a[cells], total[t])
             alpha = alpha * np.exp(-c[t])
     # the certificate at c: N(c), its gradient, and the best feasible linear step
     beta = backward()

@@ -147,3 +147,20 @@ def test_bad_prior_shape_refused():
     sc = load_scenario("small", {"target.model": "drift"})
     with pytest.raises(ConfigError, match="prior_fine"):
         moving_bound(sc, np.ones((5, 7)), (0.0, 0.0), s=2)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_water_fill_is_physical_optimum(seed):
+    """The closed-form exponential water-filling equals the static bound's root finding."""
+    from poc_env.theory.bound import physical_optimum
+    from poc_env.theory.moving_bound import water_fill
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 300))
+    w = rng.random(n) ** 4 + 1e-12
+    a = rng.uniform(0.5, 2.0, n)
+    effort = float(rng.uniform(1e-3, 3.0) * n ** rng.uniform(0, 1))
+    ref = physical_optimum(w, a, effort, "exponential").coverage
+    got = water_fill(w, a, effort)
+    np.testing.assert_allclose(got, ref, atol=1e-9)
+    assert float(a @ got) == pytest.approx(effort, rel=1e-12)
