@@ -204,7 +204,8 @@ class Evaluation:
                 f"POSC/reach): {self.bound_reach:.4f}"
             )
         if moving:
-            mb = [e.bound_moving for e in self.episodes[: len(self.episodes) // len(self.policies)]]
+            first = self.episodes[: len(self.episodes) // len(self.policies)]
+            mb = [float(e.bound_moving or 0.0) for e in first]
             lines.append(
                 "mean over the episodes of the moving-target bound (poc_env.theory.moving_bound; "
                 f"the target moves, so the static bounds do not hold): {np.mean(mb):.4f}"
@@ -320,6 +321,7 @@ def moving_effort_bound(
     prior = episode_prior(env.scenario, seed) if random_priors else None
     env.reset(seed=seed, options=None if prior is None else {"prior": prior})
     st = env.sim_state
+    assert st.drift is not None
     return moving_bound(env.scenario, st.belief[0], st.drift[0], env.params.s).upper
 
 

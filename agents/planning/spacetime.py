@@ -52,7 +52,7 @@ def comoving_poc(
     motion = motion_mod.check(sc.target, (grid.ny, grid.nx), sc.horizon_steps * dt)
     b = np.array(belief_fine, dtype=float)[None]
     vel = np.asarray(velocity, dtype=float).reshape(1, 2)
-    n = max(1, int(round(duration_s / dt)))
+    n = max(1, round(duration_s / dt))
     acc = np.zeros(grid.shape)
     h = grid.cell_m / s
     for k in range(n):

@@ -43,7 +43,12 @@ class SpacetimePlanPolicy(PlanPolicy):
         speed: str = SPEED,
         refine: int = REFINE,
     ) -> None:
-        self.alloc = {"levels": levels, "margin": margin, "speed": speed, "refine": refine}
+        self.alloc: dict[str, Any] = {
+            "levels": levels,
+            "margin": margin,
+            "speed": speed,
+            "refine": refine,
+        }
 
     def make(self, env: Any, prior: np.ndarray, seed: int) -> dict:
         belief = np.array(env.sim_state.belief[0], dtype=float)
@@ -68,7 +73,12 @@ class SpacetimeRecedingPolicy(Policy):
         if not (isinstance(replan_min, int | float) and 1.0 <= float(replan_min) <= 1e4):
             raise ConfigError("replan_min", replan_min, "minutes between re-plans in [1, 1e4]")
         self.replan_s = float(replan_min) * 60.0
-        self.alloc = {"levels": levels, "margin": margin, "speed": speed, "refine": refine}
+        self.alloc: dict[str, Any] = {
+            "levels": levels,
+            "margin": margin,
+            "speed": speed,
+            "refine": refine,
+        }
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)

@@ -50,9 +50,10 @@ step effort on its best reachable cell. The bound reported is
 ``min(1, min_kappa [upper(kappa) + delta(kappa)])`` (:class:`MovingBound`).
 
 **Brown's algorithm** only supplies a good ``c``: sweeps of coordinate ascent over the steps,
-each step's effort water-filled (:func:`poc_env.theory.bound.physical_optimum`, exponential law)
-(in closed form, :func:`water_fill`) on the weights ``alpha_t beta_t`` over the cells some UAV reaches (a relaxation of the per-UAV
-reach: it does not matter, the certificate is valid at any ``c``).
+each step's effort water-filled (:func:`poc_env.theory.bound.physical_optimum`'s exponential
+law, in closed form: :func:`water_fill`) on the weights ``alpha_t beta_t`` over the cells some
+UAV reaches (a relaxation of the per-UAV reach: it does not matter, the certificate is valid at
+any ``c``).
 
 **The adjoint.** For a uniform velocity ``v`` (the registered Drift tasks), ``M^T`` is the same
 scheme run with ``-v`` (upwind fluxes from cell ``i`` to ``i + 1`` with weights ``a = u^+ c +
@@ -144,7 +145,7 @@ def water_fill(w: np.ndarray, a: np.ndarray, effort: float) -> np.ndarray:
 
 def brown_optimum(
     prior: np.ndarray,
-    area: np.ndarray,
+    area: np.ndarray | float,
     step: Op,
     adjoint: Op,
     budgets: np.ndarray,
@@ -165,7 +166,7 @@ def brown_optimum(
     g_n, t_n = budgets.shape
     if reach.shape != (g_n, t_n, m.size):
         raise ConfigError("reach", reach.shape, f"(groups, steps, cells) = {(g_n, t_n, m.size)}")
-    union = reach.any(axis=0)
+    union: np.ndarray = np.asarray(reach, dtype=bool).any(axis=0)
     total = budgets.sum(axis=0)
     c = np.zeros((t_n, m.size))
     exit_ = 1.0 - adjoint(np.ones_like(m))
@@ -254,7 +255,7 @@ def moving_bound(
         return apply
 
     lim = env_limits(sc)
-    sense = int(round(lim.time_s / dt))
+    sense = round(lim.time_s / dt)
     pts, counts = np.unique(lim.takeoff_m, axis=0, return_counts=True)
     dist = cell_distances(fine, pts).reshape(len(pts), -1)
     t_end = (np.arange(steps) + 1.0) * dt

@@ -31,7 +31,7 @@ def test_intercept_meets_the_drifting_points():
     np.testing.assert_allclose(g - v * t[:, None], wps, atol=1e-6)
     legs = np.hypot(*np.diff(np.vstack([start, g]), axis=0).T)
     np.testing.assert_allclose(legs, np.diff(np.r_[0.0, t]) * speeds, rtol=1e-12)
-    g0, t0 = intercept(start, wps, (0.0, 0.0), speeds)  # no drift: the points themselves
+    g0, _ = intercept(start, wps, (0.0, 0.0), speeds)  # no drift: the points themselves
     np.testing.assert_allclose(g0, wps)
     with pytest.raises(ValueError, match="drift"):
         intercept(start, wps, (70.0, 0.0), speeds)

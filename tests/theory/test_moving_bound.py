@@ -139,7 +139,7 @@ def test_gridded_field_refused(tmp_path):
     f = tmp_path / "v.npy"
     np.save(f, np.zeros((2, 8, 8)))
     sc = load_scenario("small", {"target.model": "drift", "target.field_file": str(f)})
-    with pytest.raises(ConfigError, match="target.field_file"):
+    with pytest.raises(ConfigError, match=r"target\.field_file"):
         moving_bound(sc, np.full((16, 16), 1 / 256), (0.0, 0.0), s=2)
 
 
