@@ -166,7 +166,7 @@ def brown_optimum(
     g_n, t_n = budgets.shape
     if reach.shape != (g_n, t_n, m.size):
         raise ConfigError("reach", reach.shape, f"(groups, steps, cells) = {(g_n, t_n, m.size)}")
-    union: np.ndarray = np.asarray(reach, dtype=bool).any(axis=0)
+    union = np.asarray(np.asarray(reach, dtype=bool).any(axis=0))
     total = budgets.sum(axis=0)
     c = np.zeros((t_n, m.size))
     exit_ = 1.0 - adjoint(np.ones_like(m))
