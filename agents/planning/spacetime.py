@@ -136,7 +136,8 @@ def airborne_scenario(
     scenario: Scenario, positions, elapsed_s: float, agents: list[int]
 ) -> Scenario:
     """``scenario`` with the UAVs ``agents`` taking off from ``positions (len(agents), 2)``
-    (metres) with ``elapsed_s`` of their endurance spent, each still landing where it would."""
+    (metres) with ``elapsed_s`` of their endurance spent (the usable endurance left is eq. 18's
+``0.85 T - elapsed``), each still landing where it would."""
     sc = scenario
     land_names = []
     for g in sc.fleet:
@@ -148,7 +149,9 @@ def airborne_scenario(
         x, y = (float(c) for c in positions[j])
         fields.append(Airfield(name=name, position_m=(x, y)))
         fleet.append(FleetGroup(takeoff=name, count=1, landing=land_names[k]))
-    uav = replace(sc.uav, endurance_s=max(sc.uav.endurance_s - elapsed_s, 1.0))
+    # the usable endurance left is 0.85 T - elapsed (eq. 18), so T' = T - elapsed / 0.85
+    left = sc.uav.endurance_s - elapsed_s / sc.uav.usable_fraction
+    uav = replace(sc.uav, endurance_s=max(left, 60.0))
     return replace(sc, airfields=tuple(fields), fleet=tuple(fleet), uav=uav)
 
 

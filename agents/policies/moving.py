@@ -64,7 +64,7 @@ class SpacetimeRecedingPolicy(Policy):
 
     def __init__(
         self,
-        replan_min: float = 30.0,
+        replan_min: float = 20.0,
         levels: int | tuple[int, ...] = LEVELS,
         margin: float = MARGIN,
         speed: str = SPEED,

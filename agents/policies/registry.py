@@ -251,6 +251,6 @@ register(
 register(
     "spacetime_receding",
     "poc_env.agents.policies.moving:SpacetimeRecedingPolicy",
-    summary="spacetime_plan re-planned every 30 min from the current belief, from where the "
+    summary="spacetime_plan re-planned every 20 min from the current belief, from where the "
     "UAVs are",
 )

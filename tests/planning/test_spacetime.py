@@ -87,7 +87,7 @@ def test_replan_takes_off_from_where_the_uavs_are():
     pos = np.array([[10e3, 10e3], [30e3, 20e3]])
     air = airborne_scenario(sc, pos, 600.0, [0, 2])
     np.testing.assert_allclose(air.takeoff_m, pos)
-    assert air.uav.endurance_s == sc.uav.endurance_s - 600.0
+    assert air.uav.usable_endurance_s == pytest.approx(sc.uav.usable_endurance_s - 600.0)
     prior = build_prior(sc.map)
     plan = replan(sc, _fine(prior, 4), (0.0, 0.0), 4, pos, 600.0, [0, 2])
     assert len(plan["uavs"]) == 2
