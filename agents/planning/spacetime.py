@@ -93,7 +93,8 @@ def intercept(start, waypoints, velocity, speeds) -> tuple[np.ndarray, np.ndarra
 
 def ground_plan(plan: dict, starts, velocity) -> dict:
     """The plan with every UAV's ``waypoints_m`` mapped to the ground (step 3); each UAV's
-    ``meet_times_s`` records when it meets them (from the plan's start)."""
+    ``meet_times_s`` records when it meets them (from the plan's start). The plan's POS
+    figures (``posc``, per-UAV ``pos``) stay those of the co-moving POC it was made on."""
     v = plan.get("speeds_mps") or {}
     out = dict(plan)
     uavs = []
@@ -136,8 +137,8 @@ def airborne_scenario(
     scenario: Scenario, positions, elapsed_s: float, agents: list[int]
 ) -> Scenario:
     """``scenario`` with the UAVs ``agents`` taking off from ``positions (len(agents), 2)``
-    (metres) with ``elapsed_s`` of their endurance spent (the usable endurance left is eq. 18's
-``0.85 T - elapsed``), each still landing where it would."""
+        (metres) with ``elapsed_s`` of their endurance spent (the usable endurance left is eq. 18's
+    ``0.85 T - elapsed``), each still landing where it would."""
     sc = scenario
     land_names = []
     for g in sc.fleet:

@@ -30,3 +30,13 @@ def test_no_moving_bound_for_a_static_target():
     assert ev.episodes[0].bound_moving is None
     assert "normalised_moving" not in ev.rows()[0]
     assert "POSC/moving" not in ev.table()
+
+
+def test_no_moving_bound_for_a_gridded_field(tmp_path):
+    """The bound covers uniform drift only: a gridded field leaves the column out (no crash)."""
+    f = tmp_path / "v.npy"
+    np.save(f, np.full((2, 8, 8), 0.5))
+    sc = load_scenario("small", {"target.model": "drift", "target.field_file": str(f)})
+    assert moving_effort_bound(sc, 0) is None
+    ev = evaluate(sc, ["lawnmower"], episodes=1)
+    assert "POSC/moving" not in ev.table()
