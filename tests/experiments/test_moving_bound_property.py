@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -60,16 +61,28 @@ def violations(sc: Scenario, seed: int, policies=POLICIES) -> list[str]:
     return out
 
 
-@settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    counts=st.tuples(st.integers(1, 3), st.integers(0, 2)),
-    speed=st.floats(0.0, 60.0),
-    angle=st.floats(0.0, 2 * math.pi),
-    diffusion=st.sampled_from([0.0, 50.0, 300.0]),
-    law=st.sampled_from(LAWS),
-    seed=st.integers(0, 10_000),
-)
+EPISODES = {
+    "counts": st.tuples(st.integers(1, 3), st.integers(0, 2)),
+    "speed": st.floats(0.0, 60.0),
+    "angle": st.floats(0.0, 2 * math.pi),
+    "diffusion": st.sampled_from([0.0, 50.0, 300.0]),
+    "law": st.sampled_from(LAWS),
+    "seed": st.integers(0, 10_000),
+}
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**EPISODES)
 def test_no_policy_beats_the_moving_bound(counts, speed, angle, diffusion, law, seed):
+    sc = drifting(counts, speed, angle, diffusion, law)
+    assert violations(sc, seed) == []
+
+
+@pytest.mark.slow
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**EPISODES)
+def test_no_policy_beats_the_moving_bound_many(counts, speed, angle, diffusion, law, seed):
+    """The same property on more episodes (slow)."""
     sc = drifting(counts, speed, angle, diffusion, law)
     assert violations(sc, seed) == []
 
