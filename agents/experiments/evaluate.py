@@ -67,6 +67,9 @@ class Episode:
     bound_reach: float | None = None
     #: rule-aware bound of this episode's prior (:func:`rule_effort_bound`)
     bound_rule: float | None = None
+    #: moving-target bound of this episode (:func:`moving_effort_bound`; None when the
+    #: scenario's target stands still)
+    bound_moving: float | None = None
 
     @property
     def normalised(self) -> float | None:
@@ -192,6 +195,7 @@ class Evaluation:
                     "normalised_rule": None
                     if any(v is None for v in rule)
                     else float(np.mean(np.asarray(rule, dtype=float))),
+                    **_moving_columns(eps),
                 }
             )
         return out
@@ -202,6 +206,8 @@ class Evaluation:
             f"{'policy':<{width}} {'POSC':>8} {'±95%':>7} {'detected':>9} {'t_det/min':>10} "
             f"{'viol.steps':>10} {'crashed':>8} {'landed':>7} {'POSC/reach':>10} {'POSC/rule':>9}"
         )
+        moving = any(e.bound_moving is not None for e in self.episodes)
+        head += f" {'POSC/moving':>11}" if moving else ""
         lines = [head, "-" * len(head)]
         for r in self.rows():
             t = f"{r['time_to_detection_min']:.1f}" if r["time_to_detection_min"] else "-"
@@ -211,6 +217,7 @@ class Evaluation:
                 f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
                 f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
                 f"{r['crashed']:>8.2f} {r['landed']:>7.2f} {nrm:>10} {nrl:>9}"
+                + (f" {r['normalised_moving']:>11.4f}" if moving else "")
             )
         lines.append("-" * len(head))
         mean = "mean over the episodes' random priors of the " if self.random_priors else ""
@@ -227,6 +234,13 @@ class Evaluation:
             lines.append(
                 f"{mean}rule-aware bound (back by 0.85 T, home at v_c; normalises POSC/rule): "
                 f"{self.bound_rule:.4f}"
+            )
+        if moving:
+            first = self.episodes[: len(self.episodes) // len(self.policies)]
+            mb = [float(e.bound_moving or 0.0) for e in first]
+            lines.append(
+                "mean over the episodes of the moving-target bound (poc_env.theory.moving_bound; "
+                f"the target moves, so the static bounds do not hold): {np.mean(mb):.4f}"
             )
         return "\n".join(lines)
 
@@ -309,6 +323,7 @@ class Evaluation:
                 "time_to_detection_s": e.time_to_detection_s,
                 "steps": e.steps,
                 "random_prior": self.random_priors,
+                "bound_moving": e.bound_moving,
             }
             for e in self.episodes
         ]
@@ -415,6 +430,7 @@ def read_episodes(
     episodes = []
     has_ttd = "time_to_detection_s" in rows[0]
     has_rule = "bound_rule" in rows[0]  # written since the rule-aware bound (issue 24)
+    has_moving = "bound_moving" in rows[0]  # since the moving-target bound (issue 25)
     for i, r in enumerate(rows):
         if not r.get("policy"):
             raise ConfigError(f"episodes.csv row {i + 1} policy", r.get("policy"), "a policy name")
@@ -433,6 +449,7 @@ def read_episodes(
                 bound=cell(i, "bound", "float"),
                 bound_reach=cell(i, "bound_reach", "float?"),
                 bound_rule=cell(i, "bound_rule", "float?") if has_rule else None,
+                bound_moving=cell(i, "bound_moving", "float?") if has_moving else None,
             )
         )
     policies = tuple(dict.fromkeys(e.policy for e in episodes))
@@ -464,6 +481,39 @@ def read_episodes(
     name = Path(where).parent.name
     return Evaluation(name, tuple(episodes), bound, policies, random_priors, reach,
                       time_to_detection_min=time_to_detection_min, bound_rule=rule)  # fmt: skip
+
+
+def _moving_columns(eps: Sequence[Episode]) -> dict[str, Any]:
+    """The moving-target bound's columns of one policy's row (empty for a static target)."""
+    if any(e.bound_moving is None for e in eps):
+        return {}
+    mb = np.array([float(e.bound_moving or 0.0) for e in eps])
+    x = np.array([e.posc for e in eps])
+    ratio = np.divide(x, mb, out=np.zeros_like(x), where=mb > 0)
+    return {"bound_moving": float(mb.mean()), "normalised_moving": float(ratio.mean())}
+
+
+def moving_effort_bound(
+    scenario: Any, seed: int, map_file: str | None = None, random_priors: bool = False
+) -> float | None:
+    """The moving-target bound (:func:`poc_env.theory.moving_bound.moving_bound`) of episode
+    ``seed``: its prior and its drift velocity, read from an environment reset with the seed;
+    None when the scenario's target stands still or moves in a gridded field."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.theory.moving_bound import moving_bound
+
+    env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
+    if env.params.motion is None or env.params.motion.field is not None:
+        return None  # a gridded velocity field: not covered by the bound (its docstring)
+    prior = episode_prior(env.scenario, seed) if random_priors else None
+    env.reset(seed=seed, options=None if prior is None else {"prior": prior})
+    st = env.sim_state
+    assert st.drift is not None
+    return moving_bound(env.scenario, st.belief[0], st.drift[0], env.params.s).upper
+
+
+def _moving(args):
+    return moving_effort_bound(*args)
 
 
 def effort_bound(
@@ -545,6 +595,10 @@ def evaluate(
         results = tuple(
             replace(e, bound=bound, bound_reach=reach, bound_rule=rule) for e in results
         )
+    seeds = [(sc, seed0 + k, map_file, random_priors) for k in range(episodes)]
+    if sc.target.model != "static":  # the moving-target bound of each seed's episode
+        moving = dict(zip(range(seed0, seed0 + episodes), run_jobs(_moving, seeds, workers)))
+        results = tuple(replace(e, bound_moving=moving[e.seed]) for e in results)
     return Evaluation(
         sc.name, results, bound, tuple(policies), random_priors, reach, bound_rule=rule
     )

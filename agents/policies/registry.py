@@ -247,3 +247,15 @@ register(
     argument_help="a run folder of poc-env train --engine rllib",
     summary="an RLlib multi-agent PPO checkpoint (the rllib extra)",
 )
+register(
+    "spacetime_plan",
+    "poc_env.agents.policies.moving:SpacetimePlanPolicy",
+    summary="moving targets: the allocation planner on the co-moving predicted POC, routes "
+    "that meet the drifting mass",
+)
+register(
+    "spacetime_receding",
+    "poc_env.agents.policies.moving:SpacetimeRecedingPolicy",
+    summary="spacetime_plan re-planned every 20 min from the current belief, from where the "
+    "UAVs are",
+)

@@ -20,6 +20,8 @@ BUILTIN = (
     "random",
     "random_heading",
     "random_waypoint",
+    "spacetime_plan",
+    "spacetime_receding",
     "optimizer_plan:OPTIMIZER",
     "ppo:PATH",
     "rllib:PATH",

@@ -1,0 +1,179 @@
+"""Space-time allocation for a drifting target: plan where the mass will be, fly to meet it.
+
+For a target drifting with a uniform velocity ``v`` (the registered Drift tasks; the velocity
+the environment's filter uses, :mod:`poc_env.theory.motion`), the belief in the frame moving
+with the current only diffuses (and loses the mass that leaves the map). The planner
+
+1. predicts the belief without search over the flight (the filter's own predict step,
+   :func:`poc_env.theory.motion.predict`, on the fine belief), shifts each step's coarse map
+   back by ``v t`` (bilinear) into the co-moving frame, and averages it over the flight: the
+   co-moving POC (mass that has drifted out of the map, or diffused away, weighs less);
+2. plans on it with the allocation planner (:func:`poc_env.agents.planning.allocation.
+   make_allocation_plan`: reach-aware allocation, tracks, routes within the usable endurance);
+3. maps every route to the ground: waypoint ``x_k`` of the co-moving frame is met at the time
+   ``t_k`` the UAV reaches it and flown to ``x_k + v t_k`` -- each leg's ``t_{k+1} - t_k``
+   solves ``|d + v dt| = u dt`` (the intercept of a point drifting with ``v`` at ground speed
+   ``u``: transit speed to the first waypoint, search speed along the route).
+
+With ``v = 0`` and no diffusion, step 1 returns the prior and step 3 the static routes.
+:func:`replan` makes the same plan mid-flight from the current belief: every UAV takes off
+from where it is with the endurance it has left (the receding-horizon policy,
+:mod:`poc_env.agents.policies.moving`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from scipy.ndimage import shift as nd_shift
+
+from poc_env.agents.planning.allocation import make_allocation_plan
+from poc_env.config import Airfield, FleetGroup, Scenario
+from poc_env.theory import motion as motion_mod
+from poc_env.theory.probability_map import Grid
+
+
+def comoving_poc(
+    scenario: Scenario,
+    belief_fine: np.ndarray,
+    velocity,
+    s: int,
+    duration_s: float,
+    start_s: float = 0.0,
+) -> np.ndarray:
+    """Step 1 of the module docstring: the coarse ``(ny, nx)`` POC of ``belief_fine`` predicted
+    over ``duration_s`` from ``start_s`` (episode time), in the frame moving with ``velocity``
+    (m/s), averaged over the steps."""
+    sc = scenario
+    grid = Grid.from_config(sc.map)
+    dt = sc.episode.dt_s
+    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), sc.horizon_steps * dt)
+    b = np.array(belief_fine, dtype=float)[None]
+    vel = np.asarray(velocity, dtype=float).reshape(1, 2)
+    n = max(1, round(duration_s / dt))
+    acc = np.zeros(grid.shape)
+    h = grid.cell_m / s
+    for k in range(n):
+        t = (k + 1) * dt
+        if motion.moves:
+            motion_mod.predict(motion, b, vel, start_s + k * dt, dt, h, s)
+        coarse = grid.coarsen(b[0], s)
+        off = (-vel[0, 1] * t / grid.cell_m, -vel[0, 0] * t / grid.cell_m)  # (rows, cols)
+        acc += nd_shift(coarse, off, order=1, mode="constant", cval=0.0, prefilter=False)
+    return np.maximum(acc / n, 0.0)
+
+
+def intercept(start, waypoints, velocity, speeds) -> tuple[np.ndarray, np.ndarray]:
+    """Step 3: ground waypoints ``(k, 2)`` and times ``(k,)`` meeting the co-moving
+    ``waypoints`` from ``start`` (ground position at time 0), leg ``k`` flown at
+    ``speeds[k]`` (m/s) relative to the ground."""
+    wps = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+    v = np.asarray(velocity, dtype=float)
+    vv = float(v @ v)
+    out = np.empty_like(wps)
+    times = np.empty(len(wps))
+    pos, t = np.asarray(start, dtype=float), 0.0
+    here = pos.copy()  # co-moving position of the UAV (equals the ground one at t = 0)
+    for k, x in enumerate(wps):
+        d = x - here
+        u = float(speeds[k])
+        a = u * u - vv
+        if a <= 0:
+            raise ValueError(f"ground speed {u} m/s not above the drift {np.sqrt(vv)} m/s")
+        dv = float(d @ v)
+        dt = (dv + np.sqrt(dv * dv + a * float(d @ d))) / a
+        t += dt
+        out[k] = x + v * t
+        times[k] = t
+        here = x
+    return out, times
+
+
+def ground_plan(plan: dict, starts, velocity) -> dict:
+    """The plan with every UAV's ``waypoints_m`` mapped to the ground (step 3); each UAV's
+    ``meet_times_s`` records when it meets them (from the plan's start). The plan's POS
+    figures (``posc``, per-UAV ``pos``) stay those of the co-moving POC it was made on."""
+    v = plan.get("speeds_mps") or {}
+    out = dict(plan)
+    uavs = []
+    for k, u in enumerate(plan["uavs"]):
+        wps = np.asarray(u["waypoints_m"], dtype=float).reshape(-1, 2)
+        u2 = dict(u)
+        if len(wps):
+            speeds = [v.get("out", 0.0)] + [v.get("line", 0.0)] * (len(wps) - 1)
+            g, times = intercept(starts[k], wps, velocity, speeds)
+            u2["waypoints_m"] = g.tolist()
+            u2["meet_times_s"] = times.tolist()
+        uavs.append(u2)
+    out["uavs"] = uavs
+    out["planner"] = "spacetime"
+    out["drift_mps"] = [float(x) for x in np.asarray(velocity, dtype=float)]
+    return out
+
+
+def spacetime_plan(
+    scenario: Scenario,
+    belief_fine: np.ndarray,
+    velocity,
+    s: int,
+    seed: int = 0,
+    start_s: float = 0.0,
+    **allocation: Any,
+) -> dict:
+    """The space-time plan (module docstring) of ``scenario`` from the fine belief at episode
+    time ``start_s``, from the scenario's airfields (use :func:`replan` mid-flight)."""
+    sc = scenario
+    window = sc.uav.usable_endurance_s
+    poc = comoving_poc(sc, belief_fine, velocity, s, window, start_s)
+    if poc.sum() <= 0:  # nothing left to find in the map: plan on the belief as it is
+        poc = Grid.from_config(sc.map).coarsen(np.asarray(belief_fine, dtype=float), s)
+    plan = make_allocation_plan(sc, prior=poc, seed=seed, **allocation)
+    return ground_plan(plan, np.asarray(sc.takeoff_m, dtype=float), velocity)
+
+
+def airborne_scenario(
+    scenario: Scenario, positions, elapsed_s: float, agents: list[int]
+) -> Scenario:
+    """``scenario`` with the UAVs ``agents`` taking off from ``positions (len(agents), 2)``
+        (metres) with ``elapsed_s`` of their endurance spent (the usable endurance left is eq. 18's
+    ``0.85 T - elapsed``), each still landing where it would."""
+    sc = scenario
+    land_names = []
+    for g in sc.fleet:
+        land_names += [g.landing] * g.count
+    fields = list(sc.airfields)
+    fleet = []
+    for j, k in enumerate(agents):
+        name = f"_uav{k}"
+        x, y = (float(c) for c in positions[j])
+        fields.append(Airfield(name=name, position_m=(x, y)))
+        fleet.append(FleetGroup(takeoff=name, count=1, landing=land_names[k]))
+    # the usable endurance left is 0.85 T - elapsed (eq. 18), so T' = T - elapsed / 0.85
+    left = sc.uav.endurance_s - elapsed_s / sc.uav.usable_fraction
+    uav = replace(sc.uav, endurance_s=max(left, 60.0))
+    return replace(sc, airfields=tuple(fields), fleet=tuple(fleet), uav=uav)
+
+
+def replan(
+    scenario: Scenario,
+    belief_fine: np.ndarray,
+    velocity,
+    s: int,
+    positions,
+    elapsed_s: float,
+    agents: list[int],
+    seed: int = 0,
+    **allocation: Any,
+) -> dict:
+    """The space-time plan of the UAVs ``agents`` (indices into the fleet) from where they are
+    (``positions``, metres) at episode time ``elapsed_s``, on the current fine belief; the
+    plan's ``uavs`` follow ``agents``' order."""
+    sc = airborne_scenario(scenario, positions, elapsed_s, agents)
+    window = sc.uav.usable_endurance_s
+    poc = comoving_poc(sc, belief_fine, velocity, s, window, elapsed_s)
+    if poc.sum() <= 0:
+        poc = Grid.from_config(sc.map).coarsen(np.asarray(belief_fine, dtype=float), s)
+    plan = make_allocation_plan(sc, prior=poc, seed=seed, **allocation)
+    return ground_plan(plan, np.asarray(positions, dtype=float), velocity)

@@ -1,0 +1,93 @@
+"""The space-time allocation planner (poc_env.agents.planning.spacetime)."""
+
+import numpy as np
+import pytest
+
+from poc_env.agents.planning.allocation import make_allocation_plan
+from poc_env.agents.planning.spacetime import (
+    airborne_scenario,
+    comoving_poc,
+    intercept,
+    replan,
+    spacetime_plan,
+)
+from poc_env.config import load_scenario
+from poc_env.theory.probability_map import Grid, build_prior
+
+
+def _fine(prior, s):
+    return np.repeat(np.repeat(prior, s, axis=0), s, axis=1) / (s * s)
+
+
+def test_intercept_meets_the_drifting_points():
+    """Each ground waypoint is the co-moving one carried by v for the time it is reached, and
+    every leg is flown at its speed."""
+    rng = np.random.default_rng(0)
+    wps = rng.uniform(-5e4, 5e4, (6, 2))
+    v = np.array([5.0, -3.0])
+    speeds = [60.0] + [50.0] * 5
+    start = np.array([1000.0, -2000.0])
+    g, t = intercept(start, wps, v, speeds)
+    np.testing.assert_allclose(g - v * t[:, None], wps, atol=1e-6)
+    legs = np.hypot(*np.diff(np.vstack([start, g]), axis=0).T)
+    np.testing.assert_allclose(legs, np.diff(np.r_[0.0, t]) * speeds, rtol=1e-12)
+    g0, _ = intercept(start, wps, (0.0, 0.0), speeds)  # no drift: the points themselves
+    np.testing.assert_allclose(g0, wps)
+    with pytest.raises(ValueError, match="drift"):
+        intercept(start, wps, (70.0, 0.0), speeds)
+
+
+def test_comoving_poc_of_a_static_target_is_the_prior():
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    poc = comoving_poc(sc, _fine(prior, 4), (0.0, 0.0), 4, 1800.0)
+    np.testing.assert_allclose(poc, prior, atol=1e-15)
+
+
+def test_comoving_poc_follows_a_pure_drift():
+    """No diffusion, a drift of 5 m/s: in the co-moving frame the mass stays where it was, up to
+    the upwind scheme's smearing (none leaves the map here)."""
+    sc = load_scenario("small", {"target.model": "drift", "target.current_kmh": [18.0, 0.0],
+                                 "target.diffusion_m2_s": 0.0})  # fmt: skip
+    grid = Grid.from_config(sc.map)
+    prior = np.zeros(grid.shape)
+    prior[4, 1] = 1.0
+    poc = comoving_poc(sc, _fine(prior, 4), (5.0, 0.0), 4, 1800.0)  # 9 km: two cells east
+    assert np.unravel_index(np.argmax(poc), poc.shape) == (4, 1)
+    assert poc[4, 3] < 0.1 * poc[4, 1]  # where the mass is at the end, in the fixed frame
+
+
+def test_spacetime_plan_without_drift_is_the_allocation_plan():
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    st = spacetime_plan(sc, _fine(prior, 4), (0.0, 0.0), 4)
+    al = make_allocation_plan(sc, prior=prior)
+    for a, b in zip(st["uavs"], al["uavs"], strict=True):
+        np.testing.assert_allclose(a["waypoints_m"], b["waypoints_m"], atol=1e-6)
+    assert st["planner"] == "spacetime"
+
+
+def test_spacetime_plan_moves_the_routes_downstream():
+    """An eastward drift: every ground waypoint lies east of its co-moving point, by v t."""
+    sc = load_scenario("small", {"target.model": "drift", "target.current_kmh": [30.0, 0.0]})
+    prior = build_prior(sc.map)
+    v = (30.0 / 3.6, 0.0)
+    plan = spacetime_plan(sc, _fine(prior, 4), v, 4)
+    co = make_allocation_plan(sc, prior=comoving_poc(sc, _fine(prior, 4), v, 4,
+                                                     sc.uav.usable_endurance_s))  # fmt: skip
+    for u, c in zip(plan["uavs"], co["uavs"], strict=True):
+        t = np.asarray(u["meet_times_s"])
+        assert np.all(np.diff(t) > 0) and len(t) > 0
+        shift = np.asarray(u["waypoints_m"]) - np.asarray(c["waypoints_m"])
+        np.testing.assert_allclose(shift, np.outer(t, v), atol=1e-6)
+
+
+def test_replan_takes_off_from_where_the_uavs_are():
+    sc = load_scenario("small", {"target.model": "drift"})
+    pos = np.array([[10e3, 10e3], [30e3, 20e3]])
+    air = airborne_scenario(sc, pos, 600.0, [0, 2])
+    np.testing.assert_allclose(air.takeoff_m, pos)
+    assert air.uav.usable_endurance_s == pytest.approx(sc.uav.usable_endurance_s - 600.0)
+    prior = build_prior(sc.map)
+    plan = replan(sc, _fine(prior, 4), (0.0, 0.0), 4, pos, 600.0, [0, 2])
+    assert len(plan["uavs"]) == 2
