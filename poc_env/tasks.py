@@ -92,11 +92,15 @@ class Task:
     n_uavs: int | None = None
 
     def load_scenario(self, overrides: dict[str, Any] | None = None):
-        """The task's resolved :class:`~poc_env.config.Scenario` (its fleet for a size task),
-        with ``overrides`` (dotted keys) applied first."""
+        """The task's resolved :class:`~poc_env.config.Scenario`: its own scenario overrides
+        (a moving-target task's ``target`` section, :data:`~poc_env.spec.MOTION_OVERRIDES`),
+        then ``overrides`` (dotted keys), and a size task's fleet -- the scenario its
+        environments fly, so ``evaluate --task`` and ``train --task`` fly the task itself."""
         from poc_env.config import load_scenario
+        from poc_env.sim.engine import resolve_overrides
 
-        sc = load_scenario(self.scenario, overrides)
+        own = {k: v for k, v in self.kwargs.items() if "__" in k}  # the env's keyword overrides
+        sc = load_scenario(self.scenario, {**resolve_overrides(None, own), **(overrides or {})})
         return sc if self.n_uavs is None else sc.with_uavs(self.n_uavs)
 
     @property

@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
             )  # fmt: skip
         learned.append((label, only or None, pol))
     fixed = args.policies.split(",") if args.policies else None
-    cache: dict[tuple[str, int | None, bool, str], dict[str, Any]] = {}
+    cache: dict[tuple[str, int | None, bool, str, str], dict[str, Any]] = {}
     rows = []
     for task in chosen:
         names = list(fixed) if fixed else [FLOOR[task.control], *CLASSICAL]
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
                 spelled = pol.replace("{Control}", controls[task.control])
                 names.append(spelled)
                 labels[spelled] = label
-        key = (task.scenario, task.n_uavs, task.random_prior)
+        key = (task.scenario, task.n_uavs, task.random_prior, task.motion)  # what it flies
         todo = [n for n in names if (*key, n) not in cache]
         if todo:
             ev = evaluate(

@@ -204,3 +204,16 @@ def test_heading_v1_clips_out_of_box_actions_v0_keeps_normalising(wild):
     np.testing.assert_array_equal(first_step(v1, action), first_step(v1, clipped))
     np.testing.assert_array_equal(first_step(v1, clipped), first_step(v0, clipped))
     assert not np.array_equal(first_step(v0, action), first_step(v0, clipped))
+
+
+@pytest.mark.parametrize("tid", list(tasks.TASKS))
+def test_a_tasks_scenario_is_the_one_its_environment_flies(tid):
+    """``Task.load_scenario`` (what ``evaluate --task``, ``train --task`` and the baselines fly
+    the task's policies on) is the scenario of the task's registered environment: a Drift
+    task's moving target included (it was the static scenario, so ``evaluate --task
+    ...-Drift-...`` scored a target standing still)."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    task = tasks.get_task(tid)
+    env = UAVSearchParallelEnv(**task.kwargs)
+    assert task.load_scenario() == env.scenario
