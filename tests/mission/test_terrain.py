@@ -20,6 +20,7 @@ import pytest
 from lxml import etree
 
 from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.formats.kml import validate_kml
 from poc_env.agents.mission.formats.qgc import validate_qgc
 from poc_env.agents.mission.plan import load_plan, write_plan
 from poc_env.agents.mission.terrain import (
@@ -167,6 +168,7 @@ def test_alps_import_plan_export_clears_the_ridge(tmp_path):
     assert crossed >= 1
     kml_files = export_plan(tmp_path / "plan.json", "kml", out_dir=tmp_path / "kml")
     (kml_file,) = [f for f in kml_files if f.suffix == ".kml"]
+    assert validate_kml(kml_file) == []  # absolute altitudes too, by the OGC KML 2.2 XSD
     root = etree.parse(str(kml_file))
     ns = {"k": "http://www.opengis.net/kml/2.2"}
     routes = [pm for pm in root.iterfind(".//k:Placemark", ns)
