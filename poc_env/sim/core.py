@@ -357,7 +357,14 @@ def predict(params: Params, state: State) -> None:
     assert state.target_out is not None and state.target_noise is not None
     h = params.grid.cell_m / params.s
     dt = params.dt
-    varying = motion.field is not None and len(motion.field.frames) > 1
+    if motion.field is None:  # one velocity per env: belief and targets in one compiled call
+        motion_mod.predict_uniform(
+            motion, state.belief, state.drift, state.mass_out, state.target, state.target_out,
+            state.target_noise, state.step, dt, h, params.grid.origin_m, params.grid.cell_m,
+            (params.grid.ny, params.grid.nx),
+        )  # fmt: skip
+        return
+    varying = len(motion.field.frames) > 1
     if not varying:  # one velocity per env for the whole batch: in place, no copies
         state.mass_out += motion_mod.predict(
             motion, state.belief, state.drift, 0.0, dt, h, params.s

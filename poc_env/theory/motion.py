@@ -327,8 +327,7 @@ def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
 # ----------------------------------------------------------------------------- numerics
 def substeps(u_max: float, v_max: float, diffusion: float, dt: float, h: float) -> int:
     """Sub-steps of one ``dt`` keeping ``(|u| + |v|) tau / h + 4 D tau / h^2 <= 1``."""
-    rate = (u_max + v_max) / h + 4.0 * diffusion / (h * h)
-    return max(1, math.ceil(rate * dt - 1e-9))
+    return int(_kernel.substeps(float(u_max), float(v_max), float(diffusion), dt, h))
 
 
 def advect_diffuse(
@@ -353,7 +352,11 @@ def advect_diffuse(
     # the largest face speed is at most the largest cell speed
     n = substeps(float(np.abs(u3).max()), float(np.abs(v3).max()), diffusion, dt, h)
     out = np.zeros(e)
-    _kernel.advect_diffuse(mass, u3, v3, float(diffusion), dt / n, float(h), n, out)
+    if u3.shape[1:] == v3.shape[1:] == (1, 1):  # one velocity per env: the stencil kernel
+        uk, vk = u3[:, 0, 0].copy(), v3[:, 0, 0].copy()
+        _kernel.advect_diffuse_uniform(mass, uk, vk, float(diffusion), dt / n, float(h), n, out)
+    else:
+        _kernel.advect_diffuse(mass, u3, v3, float(diffusion), dt / n, float(h), n, out)
     return out
 
 
@@ -394,6 +397,35 @@ def predict(
     ``[t, t + dt]``; returns the mass ``(E,)`` that left the map."""
     u, v = cell_velocity(motion, uniform, t, s)
     return advect_diffuse(belief, u, v, motion.diffusion, dt, h)
+
+
+def predict_uniform(
+    motion: Motion,
+    belief: np.ndarray,
+    drift: np.ndarray,
+    mass_out: np.ndarray,
+    target: np.ndarray,
+    target_out: np.ndarray,
+    noise: np.ndarray,
+    step: np.ndarray,
+    dt: float,
+    h: float,
+    origin: tuple[float, float],
+    cell: float,
+    shape: tuple[int, int],
+) -> None:
+    """The filter's whole predict step when every env has one velocity (no gridded field): as
+    :func:`predict` then :func:`move_targets` (``noise (E, T, 2)`` read at ``min(step, T - 1)``),
+    bit-identical to them, in one compiled call (:func:`poc_env._kernels.motion.
+    predict_uniform`); everything in place, ``mass_out`` accumulated."""
+    if motion.field is not None:
+        raise ValueError("predict_uniform: the motion has a gridded field; use predict")
+    ny, nx = shape
+    x0, y0 = origin
+    _kernel.predict_uniform(
+        belief, drift, float(motion.diffusion), float(dt), float(h), mass_out, target,
+        target_out, noise, step, float(x0), float(y0), x0 + nx * cell, y0 + ny * cell,
+    )  # fmt: skip
 
 
 def move_targets(
