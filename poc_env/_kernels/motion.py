@@ -8,9 +8,9 @@ nothing of the project (the cache rule of :mod:`poc_env._kernels`).
 
 from __future__ import annotations
 
-import numpy as np
 import math
 
+import numpy as np
 from numba import njit
 
 _jit = njit(cache=True, error_model="numpy")
@@ -82,17 +82,21 @@ def advect_diffuse(mass, u, v, diffusion, tau, h, n_sub, out):
 def advect_diffuse_uniform(mass, u, v, diffusion, tau, h, n_sub, out):
     """:func:`advect_diffuse` for one velocity per env (``u, v`` (E,) m/s), bit-identical to
     it: the same fluxes in the same order of operations, as a branch-free five-point stencil
-    (rows padded with zeros) that the compiler vectorises. A cell's new mass is
-    ``((m + f_left) - f_right) + g_low - g_high`` with the face fluxes ``f = a L + b R``,
-    ``a = max(u, 0) c + k``, ``b = min(u, 0) c - k`` (``c = tau / h``, ``k = D tau / h^2``);
-    the mass leaving through the edge is summed face by face in :func:`advect_diffuse`'s
-    order (rows' west then east faces, then the south row, then the north row)."""
+    over three rotating row buffers padded with zeros, which the compiler vectorises.
+
+    A cell's new mass is ``((m + f_left) - f_right) + g_low - g_high``, each face flux
+    ``f = a L + b R`` with ``a = max(u, 0) c + k``, ``b = min(u, 0) c - k``, ``c = tau / h``,
+    ``k = D tau / h^2``. The mass leaving through the edge is summed face by face in
+    :func:`advect_diffuse`'s order (rows' west then east faces, then the south row, then the
+    north row)."""
     e, ny, nx = mass.shape
     c = tau / h
     kd = diffusion * tau / (h * h)
-    cur = np.zeros(nx + 2)  # the sub-step's starting row j, one zero either side
-    prev = np.zeros(nx)  # the starting row j - 1 (zeros below the map)
-    zero = np.zeros(nx)
+    # the sub-step's starting rows j - 1, j, j + 1, a zero either side (zero rows off the map);
+    # rotated row by row, so the map is read once and written once
+    ra = np.zeros(nx + 2)
+    rb = np.zeros(nx + 2)
+    rc = np.zeros(nx + 2)
     for k in range(e):
         ax = max(u[k], 0.0) * c + kd
         bx = min(u[k], 0.0) * c - kd
@@ -109,21 +113,24 @@ def advect_diffuse_uniform(mass, u, v, diffusion, tau, h, n_sub, out):
             for i in range(nx):
                 acc += ay * m[ny - 1, i] + by * 0.0
             out[k] = acc
-            prev[:] = 0.0
-            cur[1 : nx + 1] = m[0]
+            lo, mid, hi = ra, rb, rc
+            lo[:] = 0.0
+            for i in range(nx):
+                mid[i + 1] = m[0, i]
             for j in range(ny):
-                up = m[j + 1] if j + 1 < ny else zero  # not yet overwritten
-                row = m[j]
-                for i in range(nx):
-                    mc = cur[i + 1]
-                    fl = ax * cur[i] + bx * mc
-                    fr = ax * mc + bx * cur[i + 2]
-                    gl = ay * prev[i] + by * mc
-                    gh = ay * mc + by * up[i]
-                    row[i] = (((mc + fl) - fr) + gl) - gh
-                prev[:] = cur[1 : nx + 1]
                 if j + 1 < ny:
-                    cur[1 : nx + 1] = up
+                    for i in range(nx):
+                        hi[i + 1] = m[j + 1, i]
+                else:
+                    hi[:] = 0.0
+                for i in range(nx):
+                    mc = mid[i + 1]
+                    fl = ax * mid[i] + bx * mc
+                    fr = ax * mc + bx * mid[i + 2]
+                    gl = ay * lo[i + 1] + by * mc
+                    gh = ay * mc + by * hi[i + 1]
+                    m[j, i] = (((mc + fl) - fr) + gl) - gh
+                lo, mid, hi = mid, hi, lo
 
 
 @_jit
