@@ -515,9 +515,11 @@ class TargetConfig:
     diffusion). The current is ``current_kmh`` (east, north), plus at each reset one of speed
     ``U(0, random_current_kmh)`` in a uniform direction drawn from the env's generator, plus
     (``drift``) the gridded field of ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or
-    ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart; a relative path is read from the scenario's
-    folder). The model name, the leeway class and the field are checked against the table and
-    the map when the dynamics are built (:func:`poc_env.theory.motion.check`).
+    ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart, or a ``.csv`` / CF NetCDF ``.nc`` current
+    interpolated onto the cells and the episode from ``field_start``,
+    :mod:`poc_env.theory.fields`; a relative path is read from the scenario's folder). The
+    model name, the leeway class and the field are checked against the table and the map
+    when the dynamics are built (:func:`poc_env.theory.motion.check`).
     """
 
     model: str = _f(default="static")
@@ -528,6 +530,9 @@ class TargetConfig:
     leeway_class: str = _f(default="person_in_water")
     field_file: str | None = _f(default=None)
     field_dt_s: float | None = _f(default=None, lo=limits.MIN_POSITIVE, lo_open=False, hi=1e9)
+    #: the episode's start on a dated ``.csv``/``.nc`` field's time axis (ISO 8601, UTC);
+    #: default the file's first time (:mod:`poc_env.theory.fields`)
+    field_start: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
         _coerce(self)

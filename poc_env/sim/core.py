@@ -140,7 +140,7 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
         switcher = comms_mod.Table2Switcher(
             n_agents=sc.n_uavs, min_neighbours=sc.comms.min_neighbours
         )
-    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), horizon * dt)
+    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), horizon * dt, sc.map)
     if motion.moves and sc.comms.belief_sharing == "comms":
         raise ConfigError(
             "target.model", sc.target.model, "'static' with comms.belief_sharing: comms (the "

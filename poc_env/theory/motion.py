@@ -142,11 +142,24 @@ class VelocityField:
 
     frames: np.ndarray
     dt_s: float
+    #: the frames' times (s from the episode's start; a file's own times, :mod:`poc_env.theory.
+    #: fields`), or None: ``k dt_s``
+    times_s: np.ndarray | None = None
 
     def at(self, t: float) -> np.ndarray:
-        """The field ``(2, ny, nx)`` at time ``t`` (s), linear between frames."""
+        """The field ``(2, ny, nx)`` at time ``t`` (s), linear between frames (the first and
+        last frames before and after them)."""
         if len(self.frames) == 1:
             return self.frames[0]
+        if self.times_s is not None:
+            ts = self.times_s
+            if t <= ts[0]:
+                return self.frames[0]
+            if t >= ts[-1]:
+                return self.frames[-1]
+            k = int(np.searchsorted(ts, t, side="right")) - 1
+            w = (t - ts[k]) / (ts[k + 1] - ts[k])
+            return (1.0 - w) * self.frames[k] + w * self.frames[k + 1]
         x = min(max(t / self.dt_s, 0.0), len(self.frames) - 1.0)
         k = min(int(x), len(self.frames) - 2)
         w = x - k
@@ -159,7 +172,7 @@ def load_field(
     """Read and check a ``.npy`` velocity field for a map of ``shape`` (ny, nx) cells and an
     episode of ``span_s`` seconds: ConfigError naming ``field`` for a missing or unreadable
     file, a wrong shape, NaN or infinite values, speeds beyond :data:`MAX_FIELD_MPS` (wrong
-    unit) or frames that end before the episode does."""
+    unit) or frames that end before the episode does. Other formats: :func:`load_any_field`."""
     p = Path(path)
     if p.suffix != ".npy":
         raise ConfigError(field, path, "a .npy file of velocities (2, ny, nx) or (T, 2, ny, nx)")
@@ -175,11 +188,7 @@ def load_field(
     arr = np.asarray(arr, dtype=float)
     if not np.all(np.isfinite(arr)):
         raise ConfigError(field, f"{path} with NaN or infinite values", "finite velocities")
-    top = float(np.hypot(arr[:, 0], arr[:, 1]).max())
-    if top > MAX_FIELD_MPS:
-        raise ConfigError(
-            field, f"{path} with speeds up to {top:g}", f"m/s, at most {MAX_FIELD_MPS:g} (km/h?)"
-        )
+    _check_speeds(arr, path, field)
     if len(arr) > 1:
         if dt_s is None:
             raise ConfigError("target.field_dt_s", dt_s, "the time between frames (s)")
@@ -190,6 +199,34 @@ def load_field(
                 f"frames covering the episode's {span_s:g} s",
             )
     return VelocityField(arr, float(dt_s or 1.0))
+
+
+def _check_speeds(arr: np.ndarray, path: str, field: str) -> None:
+    top = float(np.hypot(arr[:, 0], arr[:, 1]).max())
+    if top > MAX_FIELD_MPS:
+        raise ConfigError(
+            field, f"{path} with speeds up to {top:g}", f"m/s, at most {MAX_FIELD_MPS:g} (km/h?)"
+        )
+
+
+def load_any_field(target: Any, map_cfg: Any, shape: tuple[int, int], span_s: float):
+    """The :class:`VelocityField` of ``target.field_file`` on a map of ``shape`` cells: a
+    ``.npy`` on the map's cells (:func:`load_field`) or a ``.csv`` / CF ``.nc`` file read and
+    interpolated onto the cells and the episode's span (:mod:`poc_env.theory.fields`)."""
+    path = target.field_file
+    field = "target.field_file"
+    if Path(path).suffix.lower() == ".npy":
+        if target.field_start is not None:
+            raise ConfigError("target.field_start", target.field_start, "null for a .npy field")
+        return load_field(path, shape, span_s, target.field_dt_s, field)
+    from poc_env.theory import fields
+
+    if target.field_dt_s is not None:
+        raise ConfigError("target.field_dt_s", target.field_dt_s, "null: the file has its times")
+    raw = fields.read_field(path)
+    frames, times = fields.regrid(raw, map_cfg, shape, span_s, target.field_start)
+    _check_speeds(frames, path, field)
+    return VelocityField(frames, 1.0, times)
 
 
 # ----------------------------------------------------------------------------- the table
@@ -302,9 +339,10 @@ def leeway_velocity(cls: LeewayClass, wind: tuple[float, float], side: float) ->
     return dw * down + cw * right
 
 
-def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
+def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = None) -> Motion:
     """The :class:`Motion` of a scenario's ``target`` section (:class:`~poc_env.config.
-    TargetConfig`) on a map of ``shape`` cells and an episode of ``span_s`` seconds;
+    TargetConfig`) on a map of ``shape`` cells and an episode of ``span_s`` seconds (``map_cfg``:
+    the scenario's :class:`~poc_env.config.MapConfig`, where a ``.csv``/``.nc`` field is placed);
     ConfigError naming the field for an unknown model or leeway class or a bad field file."""
     model = motion_model(target.model)
     cls = leeway_class(target.leeway_class) if model.uses_wind else None
@@ -312,7 +350,7 @@ def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
     if target.field_file is not None:
         if not model.uses_field:
             raise ConfigError("target.field_file", target.field_file, "null unless model is drift")
-        field = load_field(target.field_file, shape, span_s, target.field_dt_s, "target.field_file")
+        field = load_any_field(target, map_cfg, shape, span_s)
     return Motion(
         model=model,
         diffusion=float(target.diffusion_m2_s) if model.moves else 0.0,
