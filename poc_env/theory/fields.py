@@ -116,7 +116,7 @@ def read_field(path: str) -> RawField:
     raise ConfigError(FIELD, path, "a .npy, .csv or .nc (CF NetCDF) velocity field")
 
 
-def _epoch_seconds(values: Any, field: str, shown: Any) -> np.ndarray:
+def epoch_seconds(values: Any, field: str, shown: Any) -> np.ndarray:
     """datetime64 values (or ISO 8601 texts) -> float seconds since 1970-01-01 (UTC)."""
     vals = np.asarray(values)
     if vals.dtype.kind in "UO":  # texts: UTC only ('Z' or '+00:00' accepted and dropped)
@@ -174,7 +174,7 @@ def _read_csv(p: Path) -> RawField:
 
     u, v = numbers("u_mps"), numbers("v_mps")
     if tcol == "time":
-        t = _epoch_seconds([r[col["time"]] for r in data], f"{FIELD} time", str(p))
+        t = epoch_seconds([r[col["time"]] for r in data], f"{FIELD} time", str(p))
     elif tcol == "t_s":
         t = numbers("t_s")
     else:
@@ -359,7 +359,7 @@ def _read_netcdf(p: Path) -> RawField:
                     str(tc.attrs.get("units", None)),
                     "a CF time coordinate with units, e.g. 'seconds since 2024-05-01 00:00'",
                 )
-            times = _epoch_seconds(tc.values, f"{FIELD} {tdim}", str(p))
+            times = epoch_seconds(tc.values, f"{FIELD} {tdim}", str(p))
             dated = True
         xs = ys = None
         frame, crs = "local", None
@@ -475,7 +475,7 @@ def _bilinear(xs: np.ndarray, ys: np.ndarray, f: np.ndarray, px: np.ndarray, py:
 
 def parse_start(text: Any) -> float:
     """``target.field_start`` (ISO 8601, UTC) -> seconds since 1970."""
-    return float(_epoch_seconds([str(text)], "target.field_start", text)[0])
+    return float(epoch_seconds([str(text)], "target.field_start", text)[0])
 
 
 def regrid(
