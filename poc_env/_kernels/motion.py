@@ -97,6 +97,7 @@ def advect_diffuse_uniform(mass, u, v, diffusion, tau, h, n_sub, out):
     ra = np.zeros(nx + 2)
     rb = np.zeros(nx + 2)
     rc = np.zeros(nx + 2)
+    first = np.zeros(nx)  # the starting row 0 (its south faces are summed last)
     for k in range(e):
         ax = max(u[k], 0.0) * c + kd
         bx = min(u[k], 0.0) * c - kd
@@ -105,19 +106,15 @@ def advect_diffuse_uniform(mass, u, v, diffusion, tau, h, n_sub, out):
         m = mass[k]
         for _ in range(n_sub):
             acc = out[k]
-            for j in range(ny):
-                acc -= ax * 0.0 + bx * m[j, 0]
-                acc += ax * m[j, nx - 1] + bx * 0.0
-            for i in range(nx):
-                acc -= ay * 0.0 + by * m[0, i]
-            for i in range(nx):
-                acc += ay * m[ny - 1, i] + by * 0.0
-            out[k] = acc
             lo, mid, hi = ra, rb, rc
             lo[:] = 0.0
             for i in range(nx):
                 mid[i + 1] = m[0, i]
+                first[i] = m[0, i]
             for j in range(ny):
+                # the row's west and east edge faces, in the face kernel's order
+                acc -= ax * 0.0 + bx * mid[1]
+                acc += ax * mid[nx] + bx * 0.0
                 if j + 1 < ny:
                     for i in range(nx):
                         hi[i + 1] = m[j + 1, i]
@@ -131,6 +128,13 @@ def advect_diffuse_uniform(mass, u, v, diffusion, tau, h, n_sub, out):
                     gh = ay * mc + by * hi[i + 1]
                     m[j, i] = (((mc + fl) - fr) + gl) - gh
                 lo, mid, hi = mid, hi, lo
+            # then the south edge (the starting row 0) and the north edge (the starting last
+            # row, now in lo)
+            for i in range(nx):
+                acc -= ay * 0.0 + by * first[i]
+            for i in range(nx):
+                acc += ay * lo[i + 1] + by * 0.0
+            out[k] = acc
 
 
 @_jit
