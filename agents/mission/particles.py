@@ -75,9 +75,16 @@ def _wgs84_mapping(ds: Any, var: Any, file: Path) -> None:
     ):
         raise ConfigError(
             f"{file} grid_mapping",
-            crs.name,
+            _describe(crs),
             "longitude/latitude on WGS84 (as OpenDrift writes them); reproject the particles",
         )
+
+
+def _describe(crs: Any) -> str:
+    """A CRS's name and ellipsoid, for messages (a CF grid mapping often has no name)."""
+    e = crs.ellipsoid
+    ell = f"ellipsoid a = {e.semi_major_metre:.1f} m, 1/f = {e.inverse_flattening:.4f}" if e else ""
+    return f"{crs.name} ({ell})" if ell else str(crs.name)
 
 
 def read_particles(path: str | Path, time: str | None = None) -> Particles:

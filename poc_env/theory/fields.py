@@ -370,9 +370,12 @@ def _read_netcdf(p: Path) -> RawField:
             if kinds[xdim] == "lon":
                 frame = "lonlat"
                 if gcrs is not None and not _wgs84(gcrs):
+                    e = gcrs.ellipsoid
                     raise ConfigError(
                         f"{FIELD} grid_mapping",
-                        gcrs.name,
+                        f"{gcrs.name} (ellipsoid a = {e.semi_major_metre:.1f} m)"
+                        if e
+                        else gcrs.name,
                         "longitude/latitude on WGS84 (reproject the file, e.g. with cdo/gdal)",
                     )
             else:
