@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import datetime
 import functools
 import importlib.resources
 import math
@@ -535,6 +536,12 @@ class TargetConfig:
     field_start: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
+        if isinstance(self.field_start, (datetime.date, datetime.datetime)):
+            # YAML reads an unquoted ISO 8601 time as a datetime: back to UTC text
+            t = self.field_start
+            if isinstance(t, datetime.datetime) and t.tzinfo is not None:
+                t = t.astimezone(datetime.timezone.utc).replace(tzinfo=None)
+            object.__setattr__(self, "field_start", t.isoformat())
         _coerce(self)
         _choice("model", self.model, MOTION_MODEL_NAMES)  # a typo is refused at load
         for key in ("current_kmh", "wind_kmh"):

@@ -257,3 +257,28 @@ def test_bad_fields_are_refused_naming_the_field(tmp_path):
     with pytest.raises(ConfigError) as err:
         check(str(tmp_path / "missing.nc"), m)
     assert err.value.field == "target.field_file"
+
+
+def test_a_scenario_file_with_a_netcdf_field_and_an_unquoted_start(tmp_path):
+    import yaml
+
+    from poc_env.sim import core as sim
+
+    write(lonlat_dataset(), tmp_path, "cur.nc")
+    data = load_scenario("small").to_dict()
+    data["map"]["origin_deg"] = list(ORIGIN)
+    data["target"] = {"model": "drift", "field_file": "cur.nc"}
+    text = yaml.safe_dump(data)
+    text = text.replace(
+        "field_file: cur.nc", "field_file: cur.nc\n  field_start: 2024-05-01T02:30:00+02:00"
+    )
+    path = tmp_path / "moving.yaml"
+    path.write_text(text)
+    sc = load_scenario(str(path))  # YAML reads the time as a datetime: back to UTC text
+    assert sc.target.field_start == "2024-05-01T00:30:00"
+    assert sc.target.field_file == str(tmp_path / "cur.nc")  # relative to the YAML
+    sc = load_scenario(str(path), {"episode.horizon_steps": 60})  # 30 min of 30 s steps
+    params = sim.make_params(sc)
+    assert params.motion is not None and params.motion.field is not None
+    assert params.motion.field.times_s is not None
+    np.testing.assert_array_equal(params.motion.field.times_s, [-1800.0, 1800.0])
