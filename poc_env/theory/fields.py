@@ -33,7 +33,7 @@ Formats (by suffix):
     current.
 
 Interpolation: bilinear in space at each cell centre (projected to the file's coordinates by
-pyproj, :mod:`poc_env.agents.mission.crs`, through the map's ``origin_deg`` and
+pyproj, :mod:`poc_env.crs`, through the map's ``origin_deg`` and
 ``projection``), linear in time between the file's own times (kept, not resampled). The
 episode starts at ``target.field_start`` (ISO 8601, UTC) or, by default, at the file's first
 time; undated times (``t_s``) start at 0.
@@ -432,7 +432,7 @@ def _map_crs(map_cfg: Any, why: str) -> dict[str, Any]:
             None,
             f"[lat, lon] of the map's (0, 0) to place {why} (or give the field in local x_m, y_m)",
         )
-    from poc_env.agents.mission.crs import make_crs
+    from poc_env.crs import make_crs
 
     return make_crs(map_cfg.projection, map_cfg.origin_deg, zone=map_cfg.utm_zone)
 
@@ -441,7 +441,7 @@ def _to_file_frame(raw: RawField, x: np.ndarray, y: np.ndarray, map_cfg: Any) ->
     """The cell centres ``x, y`` in the file's coordinates."""
     if raw.frame == "local":
         return x, y
-    from poc_env.agents.mission.crs import to_geographic
+    from poc_env.crs import to_geographic
 
     rec = _map_crs(map_cfg, f"the {raw.frame} field {raw.path}")
     latlon = np.asarray(to_geographic(np.column_stack([x.ravel(), y.ravel()]), rec))
