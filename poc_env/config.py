@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import datetime
 import functools
 import importlib.resources
 import math
@@ -613,10 +614,12 @@ class TargetConfig:
     diffusion). The current is ``current_kmh`` (east, north), plus at each reset one of speed
     ``U(0, random_current_kmh)`` in a uniform direction drawn from the env's generator, plus
     (``drift``) the gridded field of ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or
-    ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart; a relative path is read from the scenario's
-    folder). The model name and the leeway class are checked against their tables when the
-    scenario loads (the class whatever the model: a scenario switched to ``leeway`` later must
-    not meet a typo then); the field against the map when the dynamics are built
+    ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart, or a ``.csv`` / CF NetCDF ``.nc`` current
+    interpolated onto the cells and the episode from ``field_start``,
+    :mod:`poc_env.theory.fields`; a relative path is read from the scenario's folder). The
+    model name and the leeway class are checked against their tables when the scenario loads
+    (the class whatever the model: a scenario switched to ``leeway`` later must not meet a typo
+    then); the field against the map when the dynamics are built
     (:func:`poc_env.theory.motion.check`).
     """
 
@@ -628,8 +631,17 @@ class TargetConfig:
     leeway_class: str = _f(default="person_in_water")
     field_file: str | None = _f(default=None)
     field_dt_s: float | None = _f(default=None, lo=limits.MIN_POSITIVE, lo_open=False, hi=1e9)
+    #: the episode's start on a dated ``.csv``/``.nc`` field's time axis (ISO 8601, UTC);
+    #: default the file's first time (:mod:`poc_env.theory.fields`)
+    field_start: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
+        if isinstance(self.field_start, (datetime.date, datetime.datetime)):
+            # YAML reads an unquoted ISO 8601 time as a datetime: back to UTC text
+            t = self.field_start
+            if isinstance(t, datetime.datetime) and t.tzinfo is not None:
+                t = t.astimezone(datetime.timezone.utc).replace(tzinfo=None)
+            object.__setattr__(self, "field_start", t.isoformat())
         _coerce(self)
         _choice("model", self.model, MOTION_MODEL_NAMES)  # a typo is refused at load
         _choice("leeway_class", self.leeway_class, LEEWAY_CLASS_NAMES)  # whatever the model

@@ -68,7 +68,11 @@ class MissingExtraError(PocEnvError, ImportError):
 
 
 #: the modules of each optional dependency group that a feature checks before it starts
-EXTRA_MODULES = {"plot": ("matplotlib", "PIL"), "rl": ("torch", "stable_baselines3")}
+EXTRA_MODULES = {
+    "plot": ("matplotlib", "PIL"),
+    "rl": ("torch", "stable_baselines3"),
+    "ocean": ("xarray", "h5netcdf"),
+}
 
 
 def has_extra(extra: str) -> bool:

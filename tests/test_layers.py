@@ -23,6 +23,7 @@ LAYERS = (
     ("poc_env.errors", 0),
     ("poc_env.io", 0),
     ("poc_env.geometry", 0),
+    ("poc_env.crs", 0),  # local metres <-> lat/lon (pyproj): export, import, velocity fields
     ("poc_env.config", 0),
     ("poc_env.limits", 0),
     ("poc_env.spec", 0),

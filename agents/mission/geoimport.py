@@ -482,16 +482,36 @@ def _on(col: np.ndarray, row: np.ndarray, w: int, h: int) -> np.ndarray:
     return ok & (col >= -eps) & (col <= w + eps) & (row >= -eps) & (row <= h + eps)
 
 
-def _prior(path: Any, crs: dict, grid: _Grid, area: Polygon) -> tuple[np.ndarray, dict]:
-    """The normalised prior grid and a report {total, outside, outside_share, samples}."""
-    if path is None:
+def _prior(
+    path: Any,
+    crs: dict,
+    grid: _Grid,
+    area: Polygon,
+    particles: Any = None,
+    particles_time: str | None = None,
+) -> tuple[np.ndarray, dict]:
+    """The normalised prior grid and a report {total, outside, outside_share, samples}: from
+    the ``path`` (GeoTIFF, CSV), or the ``particles`` of a trajectory NetCDF at
+    ``particles_time`` (:mod:`poc_env.agents.mission.particles`, one equal mass each), or
+    uniform over the area."""
+    extra: dict[str, Any] = {}
+    if particles is not None:
+        from poc_env.agents.mission.particles import read_particles
+
+        file = Path(particles)
+        parts = read_particles(file, particles_time)
+        xy = np.array(to_local(np.column_stack([parts.lat, parts.lon]), crs))
+        x, y, w = xy[:, 0], xy[:, 1], np.ones(len(xy))
+        extra = {"time": parts.time, "particles": parts.total, "inactive": parts.inactive}
+    elif path is None:
         m = _uniform_prior(grid, area)
         return m / m.sum(), {"source": "uniform over the area", "outside_share": 0.0}
-    file = _check_file(path, "prior", PRIOR_SUFFIXES)
-    if file.suffix.lower() == ".csv":
-        x, y, w = _read_csv(file, crs)
     else:
-        x, y, w = _read_geotiff(file, crs, grid, area)
+        file = _check_file(path, "prior", PRIOR_SUFFIXES)
+        if file.suffix.lower() == ".csv":
+            x, y, w = _read_csv(file, crs)
+        else:
+            x, y, w = _read_geotiff(file, crs, grid, area)
     # scaled by the largest sample first (as probability_map.validate_map does): finite
     # samples whose sum overflows (two of 1e308) keep their proportions
     peak = float(np.max(w)) if len(w) else 0.0
@@ -519,6 +539,7 @@ def _prior(path: Any, crs: dict, grid: _Grid, area: Polygon) -> tuple[np.ndarray
         "outside": outside * peak,
         "outside_share": outside / total,
         "samples": len(w),
+        **extra,
     }
     if outside / total > OUTSIDE_WARN:
         warnings.warn(
@@ -567,8 +588,13 @@ def import_scenario(
     base: str = "paper_6_2",
     projection: str = "aeqd",
     dem: str | os.PathLike[str] | None = None,
+    particles: str | os.PathLike[str] | None = None,
+    particles_time: str | None = None,
 ) -> dict[str, Any]:
     """Build a scenario from GIS layers; nothing is written (see :func:`write_imported`).
+
+    The prior is ``prior`` (GeoTIFF, CSV), or the ``particles`` of an OpenDrift trajectory
+    file at ``particles_time`` (default its last time), or uniform over the area.
 
     ``dem``: a GeoTIFF of ground heights (m AMSL) recorded as ``terrain.dem`` (its absolute
     path) after :func:`poc_env.agents.mission.terrain.load_terrain` has read it over the
@@ -586,6 +612,10 @@ def import_scenario(
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]{1,64}", name):
         raise ConfigError("name", name, "1-64 characters A-Z a-z 0-9 _ . -")
     cell_km = as_number("cell_km", cell_km, limits.MIN_CELL_KM, limits.MAX_EXTENT_KM)
+    if prior is not None and particles is not None:
+        raise ConfigError("particles", str(particles), "either --prior or --particles, not both")
+    if particles_time is not None and particles is None:
+        raise ConfigError("particles_time", particles_time, "only with --particles")
     if airfields is None:
         raise ConfigError(
             "airfields", None,
@@ -628,7 +658,7 @@ def import_scenario(
             zones.append([[_km(x), _km(y)] for x, y in ring])
             zone_names.append(str((zfeats[i][2] or {}).get("name") or ""))
 
-    grid_prior, prior_report = _prior(prior, crs, grid, poly)
+    grid_prior, prior_report = _prior(prior, crs, grid, poly, particles, particles_time)
 
     data = _base_mapping(base)
     n_uavs = sum(int(g.get("count", 1)) for g in data.get("fleet", [])) or len(fields)
@@ -751,6 +781,17 @@ def add_scenario_import_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--prior", default=None, help="GeoTIFF (needs the geo extra) or CSV lat,lon,probability"
     )
+    p.add_argument(
+        "--particles",
+        default=None,
+        help="OpenDrift output (CF trajectory NetCDF, lon/lat): its particles as the prior "
+        "(needs the ocean extra)",
+    )
+    p.add_argument(
+        "--particles-time",
+        default=None,
+        help="ISO 8601 time of the particles to use (default the file's last time)",
+    )
     p.add_argument("--airfields", required=True, help="GeoJSON/KML Points with a name")
     p.add_argument("--no-fly", default=None, help="GeoJSON/KML Polygons: no-fly zones")
     p.add_argument(
@@ -789,6 +830,8 @@ def cmd_scenario_import(args: argparse.Namespace) -> int:
             base=args.base,
             projection=args.projection,
             dem=args.dem,
+            particles=args.particles,
+            particles_time=args.particles_time,
         )
     for w in caught:
         print(f"warning: {w.message}")
@@ -807,6 +850,11 @@ def cmd_scenario_import(args: argparse.Namespace) -> int:
             f"prior {pr['source']}: {pr['samples']} samples, mass outside the area "
             f"{pr['outside_share']:.3%} (dropped; the rest normalised to 1)"
         )
+        if "particles" in pr:
+            print(
+                f"particles at {pr['time']}: {pr['particles'] - pr['inactive']} active of "
+                f"{pr['particles']} ({pr['inactive']} inactive, not counted)"
+            )
     else:
         print(f"prior: {pr['source']}")
     for path in write_imported(result, out):

@@ -140,7 +140,7 @@ def make_params(scenario: Scenario, prior: np.ndarray | None = None) -> Params:
         switcher = comms_mod.Table2Switcher(
             n_agents=sc.n_uavs, min_neighbours=sc.comms.min_neighbours
         )
-    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), horizon * dt)
+    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), horizon * dt, sc.map)
     if motion.moves and sc.comms.belief_sharing == "comms":
         raise ConfigError(
             "target.model", sc.target.model, "'static' with comms.belief_sharing: comms (the "
@@ -357,7 +357,14 @@ def predict(params: Params, state: State) -> None:
     assert state.target_out is not None and state.target_noise is not None
     h = params.grid.cell_m / params.s
     dt = params.dt
-    varying = motion.field is not None and len(motion.field.frames) > 1
+    if motion.field is None:  # one velocity per env: belief and targets in one compiled call
+        motion_mod.predict_uniform(
+            motion, state.belief, state.drift, state.mass_out, state.target, state.target_out,
+            state.target_noise, state.step, dt, h, params.grid.origin_m, params.grid.cell_m,
+            (params.grid.ny, params.grid.nx),
+        )  # fmt: skip
+        return
+    varying = len(motion.field.frames) > 1
     if not varying:  # one velocity per env for the whole batch: in place, no copies
         state.mass_out += motion_mod.predict(
             motion, state.belief, state.drift, 0.0, dt, h, params.s

@@ -144,11 +144,24 @@ class VelocityField:
 
     frames: np.ndarray
     dt_s: float
+    #: the frames' times (s from the episode's start; a file's own times, :mod:`poc_env.theory.
+    #: fields`), or None: ``k dt_s``
+    times_s: np.ndarray | None = None
 
     def at(self, t: float) -> np.ndarray:
-        """The field ``(2, ny, nx)`` at time ``t`` (s), linear between frames."""
+        """The field ``(2, ny, nx)`` at time ``t`` (s), linear between frames (the first and
+        last frames before and after them)."""
         if len(self.frames) == 1:
             return self.frames[0]
+        if self.times_s is not None:
+            ts = self.times_s
+            if t <= ts[0]:
+                return self.frames[0]
+            if t >= ts[-1]:
+                return self.frames[-1]
+            k = int(np.searchsorted(ts, t, side="right")) - 1
+            w = (t - ts[k]) / (ts[k + 1] - ts[k])
+            return (1.0 - w) * self.frames[k] + w * self.frames[k + 1]
         x = min(max(t / self.dt_s, 0.0), len(self.frames) - 1.0)
         k = min(int(x), len(self.frames) - 2)
         w = x - k
@@ -161,7 +174,7 @@ def load_field(
     """Read and check a ``.npy`` velocity field for a map of ``shape`` (ny, nx) cells and an
     episode of ``span_s`` seconds: ConfigError naming ``field`` for a missing or unreadable
     file, a wrong shape, NaN or infinite values, speeds beyond :data:`MAX_FIELD_MPS` (wrong
-    unit) or frames that end before the episode does."""
+    unit) or frames that end before the episode does. Other formats: :func:`load_any_field`."""
     p = Path(path)
     if p.suffix != ".npy":
         raise ConfigError(field, path, "a .npy file of velocities (2, ny, nx) or (T, 2, ny, nx)")
@@ -177,11 +190,7 @@ def load_field(
     arr = np.asarray(arr, dtype=float)
     if not np.all(np.isfinite(arr)):
         raise ConfigError(field, f"{path} with NaN or infinite values", "finite velocities")
-    top = float(np.hypot(arr[:, 0], arr[:, 1]).max())
-    if top > MAX_FIELD_MPS:
-        raise ConfigError(
-            field, f"{path} with speeds up to {top:g}", f"m/s, at most {MAX_FIELD_MPS:g} (km/h?)"
-        )
+    _check_speeds(arr, path, field)
     if len(arr) > 1:
         if dt_s is None:
             raise ConfigError("target.field_dt_s", dt_s, "the time between frames (s)")
@@ -192,6 +201,34 @@ def load_field(
                 f"frames covering the episode's {span_s:g} s",
             )
     return VelocityField(arr, float(dt_s or 1.0))
+
+
+def _check_speeds(arr: np.ndarray, path: str, field: str) -> None:
+    top = float(np.hypot(arr[:, 0], arr[:, 1]).max())
+    if top > MAX_FIELD_MPS:
+        raise ConfigError(
+            field, f"{path} with speeds up to {top:g}", f"m/s, at most {MAX_FIELD_MPS:g} (km/h?)"
+        )
+
+
+def load_any_field(target: Any, map_cfg: Any, shape: tuple[int, int], span_s: float):
+    """The :class:`VelocityField` of ``target.field_file`` on a map of ``shape`` cells: a
+    ``.npy`` on the map's cells (:func:`load_field`) or a ``.csv`` / CF ``.nc`` file read and
+    interpolated onto the cells and the episode's span (:mod:`poc_env.theory.fields`)."""
+    path = target.field_file
+    field = "target.field_file"
+    if Path(path).suffix.lower() == ".npy":
+        if target.field_start is not None:
+            raise ConfigError("target.field_start", target.field_start, "null for a .npy field")
+        return load_field(path, shape, span_s, target.field_dt_s, field)
+    from poc_env.theory import fields
+
+    if target.field_dt_s is not None:
+        raise ConfigError("target.field_dt_s", target.field_dt_s, "null: the file has its times")
+    raw = fields.read_field(path)
+    frames, times = fields.regrid(raw, map_cfg, shape, span_s, target.field_start)
+    _check_speeds(frames, path, field)
+    return VelocityField(frames, 1.0, times)
 
 
 # ----------------------------------------------------------------------------- the table
@@ -304,9 +341,10 @@ def leeway_velocity(cls: LeewayClass, wind: tuple[float, float], side: float) ->
     return dw * down + cw * right
 
 
-def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
+def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = None) -> Motion:
     """The :class:`Motion` of a scenario's ``target`` section (:class:`~poc_env.config.
-    TargetConfig`) on a map of ``shape`` cells and an episode of ``span_s`` seconds;
+    TargetConfig`) on a map of ``shape`` cells and an episode of ``span_s`` seconds (``map_cfg``:
+    the scenario's :class:`~poc_env.config.MapConfig`, where a ``.csv``/``.nc`` field is placed);
     ConfigError naming the field for an unknown model or leeway class or a bad field file."""
     model = motion_model(target.model)
     cls = leeway_class(target.leeway_class) if model.uses_wind else None
@@ -314,7 +352,7 @@ def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
     if target.field_file is not None:
         if not model.uses_field:
             raise ConfigError("target.field_file", target.field_file, "null unless model is drift")
-        field = load_field(target.field_file, shape, span_s, target.field_dt_s, "target.field_file")
+        field = load_any_field(target, map_cfg, shape, span_s)
     return Motion(
         model=model,
         diffusion=float(target.diffusion_m2_s) if model.moves else 0.0,
@@ -329,8 +367,7 @@ def check(target: Any, shape: tuple[int, int], span_s: float) -> Motion:
 # ----------------------------------------------------------------------------- numerics
 def substeps(u_max: float, v_max: float, diffusion: float, dt: float, h: float) -> int:
     """Sub-steps of one ``dt`` keeping ``(|u| + |v|) tau / h + 4 D tau / h^2 <= 1``."""
-    rate = (u_max + v_max) / h + 4.0 * diffusion / (h * h)
-    return max(1, math.ceil(rate * dt - 1e-9))
+    return int(_kernel.substeps(float(u_max), float(v_max), float(diffusion), dt, h))
 
 
 def advect_diffuse(
@@ -355,7 +392,11 @@ def advect_diffuse(
     # the largest face speed is at most the largest cell speed
     n = substeps(float(np.abs(u3).max()), float(np.abs(v3).max()), diffusion, dt, h)
     out = np.zeros(e)
-    _kernel.advect_diffuse(mass, u3, v3, float(diffusion), dt / n, float(h), n, out)
+    if u3.shape[1:] == v3.shape[1:] == (1, 1):  # one velocity per env: the stencil kernel
+        uk, vk = u3[:, 0, 0].copy(), v3[:, 0, 0].copy()
+        _kernel.advect_diffuse_uniform(mass, uk, vk, float(diffusion), dt / n, float(h), n, out)
+    else:
+        _kernel.advect_diffuse(mass, u3, v3, float(diffusion), dt / n, float(h), n, out)
     return out
 
 
@@ -396,6 +437,35 @@ def predict(
     ``[t, t + dt]``; returns the mass ``(E,)`` that left the map."""
     u, v = cell_velocity(motion, uniform, t, s)
     return advect_diffuse(belief, u, v, motion.diffusion, dt, h)
+
+
+def predict_uniform(
+    motion: Motion,
+    belief: np.ndarray,
+    drift: np.ndarray,
+    mass_out: np.ndarray,
+    target: np.ndarray,
+    target_out: np.ndarray,
+    noise: np.ndarray,
+    step: np.ndarray,
+    dt: float,
+    h: float,
+    origin: tuple[float, float],
+    cell: float,
+    shape: tuple[int, int],
+) -> None:
+    """The filter's whole predict step when every env has one velocity (no gridded field): as
+    :func:`predict` then :func:`move_targets` (``noise (E, T, 2)`` read at ``min(step, T - 1)``),
+    bit-identical to them, in one compiled call (:func:`poc_env._kernels.motion.
+    predict_uniform`); everything in place, ``mass_out`` accumulated."""
+    if motion.field is not None:
+        raise ValueError("predict_uniform: the motion has a gridded field; use predict")
+    ny, nx = shape
+    x0, y0 = origin
+    _kernel.predict_uniform(
+        belief, drift, float(motion.diffusion), float(dt), float(h), mass_out, target,
+        target_out, noise, step, float(x0), float(y0), x0 + nx * cell, y0 + ny * cell,
+    )  # fmt: skip
 
 
 def move_targets(

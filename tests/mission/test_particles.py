@@ -1,0 +1,216 @@
+"""Particle files in (issue 25): OpenDrift-style trajectory NetCDF as the prior of an imported
+scenario, checked against the grid filter on particles our own drift model moved; every bad
+file named. Fixtures: small synthetic files written by xarray."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+import pytest
+
+from poc_env.agents.mission import geoimport
+from poc_env.agents.mission.crs import make_crs, to_geographic, to_local
+from poc_env.agents.mission.particles import read_particles
+from poc_env.config import TargetConfig
+from poc_env.errors import ConfigError
+from poc_env.theory import motion
+
+xr = pytest.importorskip("xarray")
+pytest.importorskip("h5netcdf")
+
+T0 = np.datetime64("2024-05-01T00:00:00", "ns")
+AREA = [[126.0, 45.3], [127.2, 45.3], [127.2, 46.1], [126.0, 46.1], [126.0, 45.3]]
+FIELDS = [("Harbin", 126.25, 45.62), ("Acheng", 126.95, 45.25)]
+
+
+def trajectory_file(path, lon, lat, every_s=600.0, **attrs):
+    """An OpenDrift-like output: lon/lat (trajectory, time), CF featureType trajectory."""
+    n, t = lon.shape
+    times = T0 + (np.arange(t) * every_s * 1e9).astype("timedelta64[ns]")
+    ds = xr.Dataset(
+        {
+            "lon": (("trajectory", "time"), lon,
+                    {"standard_name": "longitude", "units": "degrees_east"}),
+            "lat": (("trajectory", "time"), lat,
+                    {"standard_name": "latitude", "units": "degrees_north"}),
+        },
+        coords={"trajectory": np.arange(n), "time": ("time", times)},
+        attrs={"featureType": "trajectory", "Conventions": "CF-1.6", **attrs},
+    )  # fmt: skip
+    ds.to_netcdf(path, engine="h5netcdf")
+    return path
+
+
+def test_particles_moved_by_the_drift_model_match_the_grid_filter(tmp_path):
+    """N particles moved by the drift model's own law (motion.move_targets, seeded) and the grid
+    filter started from the same particles: the centres of mass agree within their sampling
+    error, and the spreads differ by exactly the upwind scheme's numerical diffusion
+    ``D_num = |u| h / 2 (1 - |u| tau / h)`` per axis (the documented difference of the grid
+    filter; particles carry none), within sampling error."""
+    rng = np.random.default_rng(2024)
+    n, h, dt, steps, every = 20_000, 1000.0, 60.0, 120, 10
+    shape = (80, 80)  # 80 km x 80 km, 1 km cells, local origin (0, 0)
+    vel = np.array([0.5, -0.3])
+    d = 20.0
+    mot = motion.check(TargetConfig(model="drift", diffusion_m2_s=d), shape, steps * dt)
+    pos = rng.normal([30e3, 45e3], 3e3, (n, 2))
+    out = np.zeros(n, dtype=bool)
+    uniform = np.broadcast_to(vel, (n, 2))
+    rec = make_crs("aeqd", (45.0, 10.0))
+    track = [pos.copy()]
+    for k in range(steps):
+        motion.move_targets(
+            mot, pos, out, uniform, rng.standard_normal((n, 2)), k * dt, dt, (0.0, 0.0), h, shape
+        )
+        if (k + 1) % every == 0:
+            track.append(pos.copy())
+    assert not out.any()
+    ll = np.array([to_geographic(p, rec) for p in track])  # (T, n, 2) lat, lon
+    path = trajectory_file(tmp_path / "run.nc", ll[..., 1].T, ll[..., 0].T, every * dt)
+
+    def binned(time):
+        p = read_particles(path, time)
+        xy = np.array(to_local(np.column_stack([p.lat, p.lon]), rec))
+        m, _, _ = np.histogram2d(xy[:, 1], xy[:, 0], bins=shape, range=[[0, 80e3], [0, 80e3]])
+        return m / n
+
+    start, end = binned("2024-05-01T00:00:00Z"), binned(None)  # None: the last time
+    belief = start[None].copy()
+    mass_out = np.zeros(1)
+    for _ in range(steps):
+        mass_out += motion.advect_diffuse(belief, vel[0], vel[1], d, dt, h)
+    assert mass_out[0] < 1e-9  # the whole cloud stays on the map: moments are exact
+
+    def moments(m):
+        y, x = (np.mgrid[: shape[0], : shape[1]] + 0.5) * h
+        mx, my = (m * x).sum(), (m * y).sum()
+        return np.array([mx, my]), np.array([(m * x * x).sum() - mx**2, (m * y * y).sum() - my**2])
+
+    (m0, v0), (mg, vg), (mp, vp) = moments(start), moments(belief[0]), moments(end)
+    t = steps * dt
+    np.testing.assert_allclose(mg - m0, vel * t, atol=1e-6)  # the filter's mean: exact v t
+    # centre of mass: the particles' noise mean (sd sqrt(2 D t / n)) and two binnings
+    # (sd h / sqrt(12 n) each)
+    se = np.sqrt(2 * d * t / n + 2 * h * h / (12 * n))
+    assert np.all(np.abs(mp - mg) < 5 * se), (mp - mg, se)
+    # spread: grid = 2 (D + D_num) t, particles = 2 D t (+ sampling error of the change)
+    d_num = np.abs(vel) * h / 2 * (1 - np.abs(vel) * dt / h)
+    np.testing.assert_allclose(vg - v0, 2 * (d + d_num) * t, rtol=1e-9)
+    se_v = 2 * np.sqrt(v0 * 2 * d * t / n) + 2 * d * t * np.sqrt(2 / n) + h * h / np.sqrt(n)
+    assert np.all(np.abs((vg - vp) - 2 * d_num * t) < 5 * se_v), (vg - vp, 2 * d_num * t, se_v)
+    assert np.all(2 * d_num * t > 20 * se_v)  # and the test can tell D_num apart
+
+
+def _gis(tmp_path):
+    feat = {"type": "Feature", "properties": {},
+            "geometry": {"type": "Polygon", "coordinates": [AREA]}}  # fmt: skip
+    (tmp_path / "area.geojson").write_text(json.dumps(feat))
+    pts = [
+        {"type": "Feature", "properties": {"name": nm},
+         "geometry": {"type": "Point", "coordinates": [lon, lat]}}
+        for nm, lon, lat in FIELDS
+    ]  # fmt: skip
+    (tmp_path / "fields.geojson").write_text(
+        json.dumps({"type": "FeatureCollection", "features": pts})
+    )
+    return str(tmp_path / "area.geojson"), str(tmp_path / "fields.geojson")
+
+
+def _cloud(tmp_path, name="p.nc", n=500, **attrs):
+    rng = np.random.default_rng(3)
+    lon = rng.normal(126.7, 0.15, (n, 4))
+    lat = rng.normal(45.7, 0.1, (n, 4))
+    lon[:5, -1] = np.nan  # stranded / deactivated at the last time
+    lat[:5, -1] = np.nan
+    lon[5:9, -1] = 128.5  # drifted out of the area
+    return trajectory_file(tmp_path / name, lon, lat, **attrs), lon, lat
+
+
+def test_scenario_import_takes_the_particles_as_the_prior(tmp_path):
+    area, fields = _gis(tmp_path)
+    path, lon, lat = _cloud(tmp_path)
+    res = geoimport.import_scenario(area, airfields=fields, particles=str(path), name="p")
+    rep = res["report"]["prior"]
+    assert rep["particles"] == 500 and rep["inactive"] == 5 and rep["samples"] == 495
+    assert rep["time"] == "2024-05-01T00:30:00"
+    assert rep["outside_share"] == pytest.approx(4 / 495)
+    # the prior: the active particles inside the area, one equal mass each, in their cells
+    m = res["scenario"]["map"]
+    xy = np.array(to_local(np.column_stack([lat[9:, -1], lon[9:, -1]]), res["crs"]))
+    ny, nx = res["prior"].shape
+    x0, y0 = (v * 1000 for v in m["origin_km"])
+    c = m["cell_km"] * 1000
+    want, _, _ = np.histogram2d(
+        xy[:, 1], xy[:, 0], bins=(ny, nx), range=[[y0, y0 + ny * c], [x0, x0 + nx * c]]
+    )
+    np.testing.assert_allclose(res["prior"], want / want.sum(), atol=1e-15)
+    # an earlier time of the run: all 500 active
+    early = geoimport.import_scenario(
+        area, airfields=fields, particles=str(path), particles_time="2024-05-01T00:10:00", name="p"
+    )
+    assert early["report"]["prior"]["inactive"] == 0
+    # the command writes the three files
+    p = argparse.ArgumentParser()
+    geoimport.add_scenario_import_arguments(p)
+    out = tmp_path / "out" / "drift.yaml"
+    out.parent.mkdir()
+    args = p.parse_args([area, "--airfields", fields, "--particles", str(path), "--out", str(out)])
+    assert geoimport.cmd_scenario_import(args) == 0
+    assert sorted(f.name for f in out.parent.iterdir()) == [
+        "drift.crs.json", "drift.npy", "drift.yaml"
+    ]  # fmt: skip
+    np.testing.assert_allclose(np.load(out.parent / "drift.npy"), res["prior"], atol=1e-15)
+
+
+def test_bad_particle_files_are_refused_naming_what_is_wrong(tmp_path):
+    area, fields = _gis(tmp_path)
+    good = _cloud(tmp_path)[0]
+    cases = {}
+    cases["feature type"] = (_cloud(tmp_path, "ts.nc", featureType="timeSeries")[0], "featureType")
+    ds = xr.open_dataset(good).load()
+    xy = ds.rename({"lon": "x", "lat": "y"})
+    for v in ("x", "y"):
+        xy[v].attrs = {"units": "m"}
+    xy.to_netcdf(tmp_path / "xy.nc", engine="h5netcdf")
+    cases["no lon/lat"] = (tmp_path / "xy.nc", "another CRS")
+    bad = ds.copy()
+    bad["lon"].attrs["units"] = "m"
+    bad.to_netcdf(tmp_path / "units.nc", engine="h5netcdf")
+    cases["units"] = (tmp_path / "units.nc", "lon.units")
+    nad = ds.copy()
+    clarke = {"grid_mapping_name": "latitude_longitude", "semi_major_axis": 6378206.4,
+              "inverse_flattening": 294.9786982}  # fmt: skip
+    nad["crs"] = ((), 0, clarke)
+    nad["lon"].attrs["grid_mapping"] = "crs"
+    nad.to_netcdf(tmp_path / "nad.nc", engine="h5netcdf")
+    cases["datum"] = (tmp_path / "nad.nc", "WGS84")
+    empty = ds.copy()
+    empty["lon"][:, -1] = np.nan
+    empty.to_netcdf(tmp_path / "empty.nc", engine="h5netcdf")
+    cases["no active"] = (tmp_path / "empty.nc", "no active particle")
+    (tmp_path / "junk.nc").write_bytes(b"not netcdf")
+    cases["junk"] = (tmp_path / "junk.nc", "unreadable")
+    cases["missing"] = (tmp_path / "none.nc", "an existing NetCDF")
+    for name, (path, text) in cases.items():
+        with pytest.raises(ConfigError) as err:
+            geoimport.import_scenario(area, airfields=fields, particles=str(path))
+        assert text in str(err.value), (name, str(err.value))
+    with pytest.raises(ConfigError) as err:
+        read_particles(good, "2024-06-01T00:00:00")
+    assert err.value.field == "particles_time"
+    with pytest.raises(ConfigError) as err:
+        geoimport.import_scenario(area, airfields=fields, particles=str(good), prior="x.csv")
+    assert err.value.field == "particles"
+    # nothing written by a refused command
+    p = argparse.ArgumentParser()
+    geoimport.add_scenario_import_arguments(p)
+    out = tmp_path / "o" / "s.yaml"
+    out.parent.mkdir()
+    args = p.parse_args(
+        [area, "--airfields", fields, "--particles", str(tmp_path / "ts.nc"), "--out", str(out)]
+    )
+    with pytest.raises(ConfigError):
+        geoimport.cmd_scenario_import(args)
+    assert list(out.parent.iterdir()) == []
