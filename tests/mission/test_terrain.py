@@ -372,3 +372,18 @@ def test_random_scenarios_with_terrain_clear_it_and_export(tmp_path):
 @pytest.mark.slow
 def test_random_scenarios_with_terrain_clear_it_and_export_many(tmp_path):
     _property(200, 11, tmp_path)
+
+
+@pytest.mark.parametrize("height", [3e38, -2e4, 15_000.0])  # float32: 3e38 near its top
+def test_dem_heights_beyond_the_earths_are_refused_by_import_nothing_written(tmp_path, height):
+    """Issue 27's campaign (datafiles target): a DEM with 1e308 m (3e38 in float32) or 20 km
+    below sea level was imported, and only the plan then refused it; the import refuses it,
+    naming terrain.dem."""
+    dem = _dem(tmp_path / "d.tif")
+    with rasterio.open(dem, "r+") as ds:
+        z = ds.read(1)
+        z[100:104, 200:204] = height
+        ds.write(z, 1)
+    with pytest.raises(ConfigError, match="within \\+-12000 m") as err:
+        load_terrain(load_scenario(_scenario(dem)))
+    assert err.value.field == "terrain.dem"
