@@ -130,7 +130,7 @@ def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.nd
             f = f"{field}.coordinates" + (f"[{p}]" if g["type"] == "MultiLineString" else "")
             try:
                 arr = np.asarray(coords, dtype=float)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):  # 10**400 is a JSON integer
                 arr = np.zeros((0,))
             if arr.ndim != 2 or arr.shape[1] < 2 or len(arr) < 2:
                 raise ConfigError(f, coords if arr.size < 6 else "array", "2 or more [lon, lat]")

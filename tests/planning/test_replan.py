@@ -107,11 +107,16 @@ def test_bad_tracks_name_the_field_and_write_nothing(first, tmp_path, capsys):
         ('{"type": "FeatureCollection", "crs": {"properties": 3}, "features": []}', "tracks.crs"),
         ('{"type": "FeatureCollection", "crs": {"properties": {"name": []}}}', "tracks.crs"),
         ('{"type": "LineString", "coordinates": [[NaN, 45], [126, 45]]}', "tracks"),
+        (
+            '{"type": "LineString", "coordinates": [[1' + "0" * 400 + ", 45], [126, 45]]}",
+            "tracks.coordinates",
+        ),
     ],
 )
 def test_hostile_tracks_are_a_clear_error_nothing_written(first, tmp_path, text, field):
-    """Issue 27's campaign (datafiles target): deep nesting was a RecursionError and a crs
-    member that is not an object an AttributeError; both name the field now."""
+    """Issue 27's campaign (datafiles target): deep nesting was a RecursionError, a crs member
+    that is not an object an AttributeError and an integer beyond float range (seed 74) an
+    OverflowError; each names the field now."""
     _, p1 = first
     bad = tmp_path / "flown.geojson"
     bad.write_text(text)
