@@ -58,6 +58,7 @@ from typing import Any
 
 import numpy as np
 
+from poc_env.agents.testing.hostile import SilentWrong, check, hostile_scalars
 from poc_env.errors import PocEnvError
 
 OUTCOMES = ("ok", "error", "unclear", "traceback", "silent", "hang")
@@ -69,15 +70,6 @@ CASE_TIMEOUT_S = 60.0
 TAG_VAR = "POC_ENV_CAMPAIGN_TAG"
 #: Most cases of one campaign (``--cases``): about a day on one core.
 MAX_CASES = 1_000_000
-
-
-class SilentWrong(AssertionError):
-    """A result that passed without an error but is wrong (a check failed)."""
-
-
-def check(cond: bool, what: str) -> None:
-    if not cond:
-        raise SilentWrong(what)
 
 
 class CaseTimeout(BaseException):
@@ -132,47 +124,6 @@ def classify(
 
 
 # --------------------------------------------------------------------------- hostile values
-
-
-def hostile_scalars():
-    """Values that break naive parsers: every JSON/YAML scalar type and the float extremes."""
-    from hypothesis import strategies as st
-
-    return st.one_of(
-        st.sampled_from(
-            [
-                None,
-                True,
-                False,
-                "",
-                "5",
-                "1e3",
-                "nan",
-                "no",
-                "abc",
-                [],
-                {},
-                [1, 2],
-                float("nan"),
-                float("inf"),
-                -float("inf"),
-                1e308,
-                -1e308,
-                5e-324,
-                0,
-                0.0,
-                -1,
-                2**63,
-                10**400,
-                -(10**30),
-                3.0,
-                2.5,
-            ]
-        ),
-        st.integers(min_value=-(10**6), max_value=10**6),
-        st.floats(allow_nan=True, allow_infinity=True),
-        st.text(max_size=8),
-    )
 
 
 def _near(default: Any):

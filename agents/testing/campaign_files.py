@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.testing.campaign import check, check_output_file, hostile_scalars
+from poc_env.agents.testing.hostile import check, hostile_scalars
 from poc_env.errors import ConfigError, PocEnvError
 
 # ------------------------------------------------------------------------ velocity fields
@@ -443,6 +443,8 @@ def run_dem(variant: str, value: Any, fmt: str) -> None:
     """``scenario import --dem``: a clear error with nothing written, or a scenario planned
     on and exported to QGC whose every mission clears the DEM's own pixels by the clearance."""
     from poc_env.agents.mission.export import export_plan
+    from poc_env.agents.mission.formats.kml import validate_kml
+    from poc_env.agents.mission.formats.qgc import validate_qgc
     from poc_env.agents.mission.plan import write_plan
     from poc_env.agents.mission.terrain import qgc_clearance
     from poc_env.agents.planning.planner import make_plan
@@ -466,10 +468,12 @@ def run_dem(variant: str, value: Any, fmt: str) -> None:
         clearance = float(sc.terrain.min_clearance_m)
         missions = 0
         for f in files:
-            check_output_file(f)
+            if f.suffix == ".kml":  # valid by the OGC KML 2.2 XSD
+                check(validate_kml(f) == [], f"{f.name}: {validate_kml(f)[:2]}")
             if f.suffix != ".plan":
                 continue
             doc = json.loads(f.read_text(encoding="utf-8"))
+            check(validate_qgc(doc) == [], f"{f.name}: {validate_qgc(doc)[:2]}")
             least, legs = qgc_clearance(doc, dem)
             missions += legs > 0
             check(least >= clearance - 1e-6, f"{f.name} flies {least:.1f} m above the DEM")

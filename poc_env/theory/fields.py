@@ -345,11 +345,11 @@ def _read_netcdf(p: Path) -> RawField:
         xdim = next((d for d, k in kinds.items() if k in ("lon", "x")), None)
         ydim = next((d for d, k in kinds.items() if k in ("lat", "y")), None)
         want = [d for d in (tdim, ydim, xdim) if d is not None]
-        from poc_env import limits
+        from poc_env.limits import check_memory
 
         # a file's declared size, before its data are read (a chunked file of a few kB can
         # declare terabytes): the pair in float64 plus the interpolation's copies
-        limits.check_memory(FIELD, str(p), 4 * 8.0 * u.size, "velocity field (u and v)")
+        check_memory(FIELD, str(p), 4 * 8.0 * u.size, "velocity field (u and v)")
         uu = np.asarray(u.squeeze([d for d in u.dims if d not in kinds]).transpose(*want))
         vv = np.asarray(v.squeeze([d for d in v.dims if d not in kinds]).transpose(*want))
         del order

@@ -194,9 +194,9 @@ def load_field(
         arr = arr[None]
     if arr.ndim != 4 or arr.shape[1:] != (2, *shape) or arr.dtype.kind not in "iuf":
         raise ConfigError(field, f"{path} of shape {arr.shape}", want + "m/s on the map's cells")
-    from poc_env import limits
+    from poc_env.limits import check_memory
 
-    limits.check_memory(field, path, 8.0 * arr.size, "velocity field")
+    check_memory(field, path, 8.0 * arr.size, "velocity field")
     arr = np.array(arr, dtype=float)  # read from the file now (a copy, not the memory map)
     if not np.all(np.isfinite(arr)):
         raise ConfigError(field, f"{path} with NaN or infinite values", "finite velocities")
