@@ -35,6 +35,7 @@ DEFAULT_CASES = {
     "utm": 150,
     "runtime": 40,
     "episodes": 150,
+    "datafiles": 40,
 }
 
 
@@ -222,3 +223,38 @@ def test_the_runtime_generators_catch_issue_27s_runtime_regressions(monkeypatch)
     assert [classify(run_runtime, c)[0] for c in cases[:3]] == ["silent"] * 3
     monkeypatch.setattr(train_mod, "_same_run_killed_early", lambda args: True)
     assert classify(run_runtime, cases[3])[0] == "silent"  # trained over other options
+
+
+def test_the_datafile_generators_catch_broken_checks(monkeypatch):
+    """The ``datafiles`` target's oracles (issue 27's rule for issue 25's inputs): each class
+    is a clear error with the checks in place, and a failing outcome when one is broken -- a
+    field reader without its speed check (the belief blows up: silent), a DEM reader without
+    its height range (the import accepts ground no plan can record: silent), a tracks reader
+    without the depth-limited JSON parser (RecursionError: traceback)."""
+    pytest.importorskip("xarray")
+    pytest.importorskip("rasterio")
+    import json
+    from pathlib import Path
+
+    import poc_env.agents.mission.terrain as terrain
+    import poc_env.agents.planning.replan as replan
+    import poc_env.theory.motion as motion
+    from poc_env.agents.testing.campaign import run_datafiles
+    from poc_env.io import loads_json
+
+    field = ("field", "speed", "m s-1", 1e308, None)
+    dem = ("dem", "absurd", 1e308, "qgc")
+    deep = ("tracks", "deep", 0.0, 0)
+    cases = [field, dem, deep, ("particles", "huge", "m", None)]
+    assert [classify(run_datafiles, c)[0] for c in cases] == ["error"] * len(cases)
+    valid = [("field", "good", "m s-1", 0.3, None), ("particles", "good", "m", None),
+             ("dem", "good", 0.0, "qgc"), ("tracks", "good", 0.0, 0)]  # fmt: skip
+    assert [classify(run_datafiles, c)[0] for c in valid] == ["ok"] * len(valid)
+    monkeypatch.setattr(motion, "_check_speeds", lambda *a: None)
+    assert classify(run_datafiles, field)[0] == "silent"
+    monkeypatch.setattr(terrain, "MAX_GROUND_M", float("inf"))
+    assert classify(run_datafiles, dem)[0] == "silent"
+    monkeypatch.setattr(replan, "read_json", lambda path, field: json.loads(Path(path).read_text()))
+    assert classify(run_datafiles, deep)[0] == "traceback"
+    monkeypatch.undo()
+    assert loads_json("[1]", "x") == [1]

@@ -134,6 +134,11 @@ def read_particles(path: str | Path, time: str | None = None) -> Particles:
         )
         if tdim is None and "time" in lon_v.dims:
             tdim = "time"
+        from poc_env import limits
+
+        # the declared size, before the data are read (a chunked file of a few kB can
+        # declare terabytes): lon and lat in float64
+        limits.check_memory(FIELD, str(file), 2 * 8.0 * lon_v.size, "particle positions")
         lon = np.asarray(lon_v.values, dtype=float)
         lat = np.asarray(lat_v.values, dtype=float)
         when: str | None = None

@@ -118,6 +118,9 @@ MAX_SPEED_MPS = 1000.0
 MAX_ALTITUDE_M = 30_000.0
 #: Largest terrain grid (cells) a scenario may resample onto or a plan may record.
 MAX_TERRAIN_CELLS = 1_000_000
+#: Highest and (negated) lowest ground height (m AMSL) a DEM, a scenario or a plan may hold:
+#: the Earth's surface lies within about +-11 km of sea level.
+MAX_GROUND_M = 12_000.0
 _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 #: Fixed-wing landing pattern: the approach waypoint lies this far from the landing field, on
@@ -554,8 +557,10 @@ def _check_terrain(field: str, rec: Any) -> None:
                 arr = None
         if arr is None or arr.ndim != 2 or arr.size > MAX_TERRAIN_CELLS:
             raise ConfigError(f"{field}.{key}", "not a grid", "equal rows of heights in metres")
-        if not np.isfinite(arr).all() or np.abs(arr).max() > 12_000:
-            raise ConfigError(f"{field}.{key}", "a NaN or a height beyond 12 km", "heights (m)")
+        if not np.isfinite(arr).all() or np.abs(arr).max() > MAX_GROUND_M:
+            raise ConfigError(
+                f"{field}.{key}", f"a NaN or a height beyond {MAX_GROUND_M:g} m", "heights (m)"
+            )
         if shape is not None and arr.shape != shape:
             raise ConfigError(f"{field}.{key}", list(arr.shape), f"the shape {list(shape)}")
         shape = arr.shape
@@ -577,4 +582,4 @@ def _check_terrain(field: str, rec: Any) -> None:
             raise ConfigError(f"{field}.fields[{i}].position_m", p, "[x, y] in metres")
         for v in p:
             as_number(f"{field}.fields[{i}].position_m", v, -2e6, 2e6)
-        as_number(f"{field}.fields[{i}].elevation_m", f["elevation_m"], -12_000, 12_000)
+        as_number(f"{field}.fields[{i}].elevation_m", f["elevation_m"], -MAX_GROUND_M, MAX_GROUND_M)

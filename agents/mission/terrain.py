@@ -34,6 +34,7 @@ landing approach point is the profile's last point.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.mission.plan import MAX_TERRAIN_CELLS, approach_point
+from poc_env.agents.mission.plan import MAX_GROUND_M, MAX_TERRAIN_CELLS, approach_point
 from poc_env.errors import ConfigError
 
 #: How far the straight legs between kept profile points may sag below the profile (metres);
@@ -167,6 +168,15 @@ def load_terrain(sc: Any) -> Terrain | None:
         gmean, gmax, elev = _read_dem(sc, Path(str(t.dem)), origin, shape, cell)
         source = Path(str(t.dem)).name
         fields = tuple((a.name, a.position_m, e) for a, e in zip(sc.airfields, elev))
+    key = "terrain.elevation_m" if t.elevation_m is not None else "terrain.dem"
+    heights = np.concatenate([np.ravel(gmax), np.ravel(gmean), [e for _, _, e in fields]])
+    worst = float(np.max(np.abs(heights))) if heights.size else 0.0
+    if not worst <= MAX_GROUND_M:  # a plan could not record it (NaN is refused too)
+        raise ConfigError(
+            key, f"{source}: a height of {worst:g} m over the operating area",
+            f"ground heights within +-{MAX_GROUND_M:g} m of sea level (metres AMSL; feet or "
+            "a nodata value not declared?)",
+        )  # fmt: skip
     return Terrain(
         origin_m=(float(origin[0]), float(origin[1])),
         cell_m=float(cell),
@@ -536,3 +546,46 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
         profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
         for k, u in enumerate(plan["uavs"])
     ]
+
+
+# --------------------------------------------------------------------------- checking exports
+
+
+def dem_heights_at(dem: str | Path, latlon: Any) -> np.ndarray:
+    """Heights of the GeoTIFF ``dem`` itself at ``(lat, lon)`` points (WGS84): the highest of
+    the 2 x 2 pixels around each point (an independent check of exported altitudes, read from
+    the DEM's own pixels rather than the resampled :class:`Terrain`)."""
+    import rasterio
+    from pyproj import Transformer
+
+    pts = np.asarray(latlon, dtype=float).reshape(-1, 2)
+    with rasterio.open(dem) as src:
+        band = src.read(1).astype(float)
+        to_src = Transformer.from_crs("EPSG:4326", src.crs, always_xy=True)
+        sx, sy = to_src.transform(pts[:, 1], pts[:, 0])
+        cols, rows = ~src.transform @ (np.asarray(sx), np.asarray(sy))
+    c0 = np.clip(np.floor(np.asarray(cols) - 0.5).astype(int), 0, band.shape[1] - 2)
+    r0 = np.clip(np.floor(np.asarray(rows) - 0.5).astype(int), 0, band.shape[0] - 2)
+    return np.maximum.reduce(
+        [band[r0, c0], band[r0 + 1, c0], band[r0, c0 + 1], band[r0 + 1, c0 + 1]]
+    )
+
+
+def qgc_clearance(doc: dict[str, Any], dem: str | Path, step_m: float = 100.0) -> tuple[float, int]:
+    """(least height above the DEM, legs checked) along a QGC ``.plan`` mission ``doc`` from
+    its take-off item to its last waypoint (commands 22 and 16, altitudes AMSL, linear between
+    items), legs sampled about every ``step_m`` metres (:func:`dem_heights_at`)."""
+    from pyproj import Geod
+
+    nav = [it for it in doc["mission"]["items"] if it.get("command") in (16, 22)]
+    pts = np.array([[it["params"][4], it["params"][5], it["params"][6]] for it in nav], float)
+    geod = Geod(ellps="WGS84")
+    least, legs = math.inf, 0
+    for a, b in itertools.pairwise(pts):
+        dist = geod.inv(a[1], a[0], b[1], b[0])[2]
+        n = max(2, math.ceil(dist / step_m) + 1)
+        s = np.linspace(0.0, 1.0, n)[:, None]
+        p = a[None, :] + (b - a)[None, :] * s
+        least = min(least, float(np.min(p[:, 2] - dem_heights_at(dem, p[:, :2]))))
+        legs += 1
+    return least, legs

@@ -22,15 +22,14 @@ map.
 
 from __future__ import annotations
 
-import json
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
+from poc_env.io import read_json
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
@@ -96,14 +95,13 @@ def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.nd
     from poc_env.agents.mission.crs import to_local
 
     where = "tracks"
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise ConfigError(where, os.fspath(path), f"a readable GeoJSON file ({err})") from None
+    data = read_json(path, where)  # malformed, NaN constants, deep nesting: a ConfigError
     if not isinstance(data, dict):
         raise ConfigError(where, type(data).__name__, "a GeoJSON object")
-    name = (data.get("crs") or {}).get("properties", {}).get("name") if "crs" in data else None
-    if "crs" in data and name not in WGS84_NAMES:
+    crs_member = data.get("crs")
+    props = crs_member.get("properties") if isinstance(crs_member, dict) else None
+    name = props.get("name") if isinstance(props, dict) else None
+    if "crs" in data and (not isinstance(name, str) or name not in WGS84_NAMES):
         raise ConfigError(
             f"{where}.crs",
             name if name is not None else data.get("crs"),
@@ -132,7 +130,7 @@ def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.nd
             f = f"{field}.coordinates" + (f"[{p}]" if g["type"] == "MultiLineString" else "")
             try:
                 arr = np.asarray(coords, dtype=float)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):  # 10**400 is a JSON integer
                 arr = np.zeros((0,))
             if arr.ndim != 2 or arr.shape[1] < 2 or len(arr) < 2:
                 raise ConfigError(f, coords if arr.size < 6 else "array", "2 or more [lon, lat]")

@@ -4,7 +4,9 @@
 
 Each *target* is an input a user or a file can hand poc-env -- scenario overrides, prior maps
 (arrays and files), region files, ``plan.json`` for export, command lines, environment
-actions, GIS layers for ``scenario import`` and the ``episodes.csv`` of ``summarise`` -- with
+actions, GIS layers for ``scenario import``, the ``episodes.csv`` of ``summarise`` and the
+data files of drift and terrain (velocity fields, particle files, DEMs, ``replan`` tracks:
+:mod:`poc_env.agents.testing.campaign_files`) -- with
 a hypothesis strategy that draws plausible values, typos and hostile values alike (strings
 for numbers, bools, NaN, infinities, 1e308, 10**400, nulls, wrong shapes, random bytes). Every
 case is run and classified:
@@ -23,7 +25,7 @@ case is run and classified:
 After each target the campaign counts its *orphans*: processes it started (its descendants, and
 any process carrying its ``POC_ENV_CAMPAIGN_TAG`` environment marker, which catches children
 re-parented to init) still alive. Unclear, traceback, silent, hang and orphan must be 0.
-``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,240
+``tests/test_campaign.py`` runs every target through hypothesis in the default suite (1,280
 cases, asserting no hang and no orphan); this command runs a large campaign and prints the
 counts, the figure quoted in issue 27's closing note (``docs/inputs.md``). Needs ``hypothesis``
 (the ``dev`` extra).
@@ -56,6 +58,7 @@ from typing import Any
 
 import numpy as np
 
+from poc_env.agents.testing.hostile import SilentWrong, check, hostile_scalars
 from poc_env.errors import PocEnvError
 
 OUTCOMES = ("ok", "error", "unclear", "traceback", "silent", "hang")
@@ -67,15 +70,6 @@ CASE_TIMEOUT_S = 60.0
 TAG_VAR = "POC_ENV_CAMPAIGN_TAG"
 #: Most cases of one campaign (``--cases``): about a day on one core.
 MAX_CASES = 1_000_000
-
-
-class SilentWrong(AssertionError):
-    """A result that passed without an error but is wrong (a check failed)."""
-
-
-def check(cond: bool, what: str) -> None:
-    if not cond:
-        raise SilentWrong(what)
 
 
 class CaseTimeout(BaseException):
@@ -130,47 +124,6 @@ def classify(
 
 
 # --------------------------------------------------------------------------- hostile values
-
-
-def hostile_scalars():
-    """Values that break naive parsers: every JSON/YAML scalar type and the float extremes."""
-    from hypothesis import strategies as st
-
-    return st.one_of(
-        st.sampled_from(
-            [
-                None,
-                True,
-                False,
-                "",
-                "5",
-                "1e3",
-                "nan",
-                "no",
-                "abc",
-                [],
-                {},
-                [1, 2],
-                float("nan"),
-                float("inf"),
-                -float("inf"),
-                1e308,
-                -1e308,
-                5e-324,
-                0,
-                0.0,
-                -1,
-                2**63,
-                10**400,
-                -(10**30),
-                3.0,
-                2.5,
-            ]
-        ),
-        st.integers(min_value=-(10**6), max_value=10**6),
-        st.floats(allow_nan=True, allow_infinity=True),
-        st.text(max_size=8),
-    )
 
 
 def _near(default: Any):
@@ -1341,6 +1294,22 @@ def run_geo(case: tuple) -> None:
             check(all(math.isfinite(v) for v in a.position_m), "airfield not finite")
 
 
+# --------------------------------------------------------------------------- target: datafiles
+
+
+def datafiles_strategy():
+    """Velocity fields, particle files, DEMs and replan tracks (:mod:`.campaign_files`)."""
+    from poc_env.agents.testing.campaign_files import datafiles_strategy as strategy
+
+    return strategy()
+
+
+def run_datafiles(case: tuple) -> None:
+    from poc_env.agents.testing.campaign_files import run_datafiles as run
+
+    run(case)
+
+
 # --------------------------------------------------------------------------- the campaign
 
 TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
@@ -1355,11 +1324,12 @@ TARGETS: dict[str, tuple[Callable[[], Any], Callable[[Any], None]]] = {
     "utm": (utm_strategy, run_utm),
     "runtime": (runtime_strategy, run_runtime),
     "episodes": (episodes_strategy, run_episodes),
+    "datafiles": (datafiles_strategy, run_datafiles),
 }
 #: Share of a campaign's cases per target (the CLI and region cases are the slow ones).
 WEIGHTS = {
     "overrides": 3, "maps": 3, "regions": 1, "plans": 3, "cli": 1, "actions": 3, "geo": 1,
-    "text": 2, "utm": 3, "runtime": 1, "episodes": 2,
+    "text": 2, "utm": 3, "runtime": 1, "episodes": 2, "datafiles": 1,
 }  # fmt: skip
 
 

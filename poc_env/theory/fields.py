@@ -217,8 +217,10 @@ def _find_pair(ds: Any, p: Path) -> tuple[str, str]:
     for east, north in CURRENT_STANDARD_NAMES:
         if east in names and north in names:
             return names[east], names[north]
-    for east, north in CURRENT_VARIABLES:
-        if east in ds.data_vars and north in ds.data_vars:
+    winds = {n for pair in WIND_STANDARD_NAMES for n in pair}
+    for east, north in CURRENT_VARIABLES:  # by name, unless the standard name says a wind
+        pair = (east in ds.data_vars) and (north in ds.data_vars)
+        if pair and not {_std(ds[east]), _std(ds[north])} & winds:
             return east, north
     for east, north in WIND_STANDARD_NAMES:
         if east in names and north in names:
@@ -343,6 +345,11 @@ def _read_netcdf(p: Path) -> RawField:
         xdim = next((d for d, k in kinds.items() if k in ("lon", "x")), None)
         ydim = next((d for d, k in kinds.items() if k in ("lat", "y")), None)
         want = [d for d in (tdim, ydim, xdim) if d is not None]
+        from poc_env.limits import check_memory
+
+        # a file's declared size, before its data are read (a chunked file of a few kB can
+        # declare terabytes): the pair in float64 plus the interpolation's copies
+        check_memory(FIELD, str(p), 4 * 8.0 * u.size, "velocity field (u and v)")
         uu = np.asarray(u.squeeze([d for d in u.dims if d not in kinds]).transpose(*want))
         vv = np.asarray(v.squeeze([d for d in v.dims if d not in kinds]).transpose(*want))
         del order

@@ -46,6 +46,7 @@ tests (``tests/theory/test_motion.py``).
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -179,15 +180,24 @@ def load_field(
     if p.suffix != ".npy":
         raise ConfigError(field, path, "a .npy file of velocities (2, ny, nx) or (T, 2, ny, nx)")
     try:
-        arr = np.load(p, allow_pickle=False)
+        arr = np.load(p, allow_pickle=False, mmap_mode="r")  # the header, not yet the data
     except (OSError, ValueError) as err:
         raise ConfigError(field, path, f"a readable .npy file ({err})") from None
     want = f"(2, {shape[0]}, {shape[1]}) or (T, 2, {shape[0]}, {shape[1]}): east and north "
+    if not isinstance(arr, np.ndarray):  # np.load reads a .npz archive by its content
+        with contextlib.suppress(AttributeError):
+            arr.close()
+        raise ConfigError(
+            field, f"{path}: a .npz archive ({type(arr).__name__})", want + "m/s (np.save)"
+        )
     if arr.ndim == 3:
         arr = arr[None]
     if arr.ndim != 4 or arr.shape[1:] != (2, *shape) or arr.dtype.kind not in "iuf":
         raise ConfigError(field, f"{path} of shape {arr.shape}", want + "m/s on the map's cells")
-    arr = np.asarray(arr, dtype=float)
+    from poc_env.limits import check_memory
+
+    check_memory(field, path, 8.0 * arr.size, "velocity field")
+    arr = np.array(arr, dtype=float)  # read from the file now (a copy, not the memory map)
     if not np.all(np.isfinite(arr)):
         raise ConfigError(field, f"{path} with NaN or infinite values", "finite velocities")
     _check_speeds(arr, path, field)

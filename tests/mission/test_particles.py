@@ -214,3 +214,23 @@ def test_bad_particle_files_are_refused_naming_what_is_wrong(tmp_path):
     with pytest.raises(ConfigError):
         geoimport.cmd_scenario_import(args)
     assert list(out.parent.iterdir()) == []
+
+
+def test_a_particle_file_declaring_more_than_the_memory_limit_is_refused_unread(tmp_path):
+    """Issue 27's campaign (datafiles target): a chunked NetCDF of a few kB may declare
+    terabytes of positions; its declared size is refused before anything is read."""
+    import h5netcdf
+
+    p = tmp_path / "huge.nc"
+    with h5netcdf.File(p, "w") as f:
+        f.dimensions = {"trajectory": 1_000_000, "time": 100_000}
+        f.attrs["featureType"] = "trajectory"
+        for name, std, un in (("lon", "longitude", "degrees_east"),
+                              ("lat", "latitude", "degrees_north")):  # fmt: skip
+            v = f.create_variable(name, ("trajectory", "time"), float, chunks=(1000, 100),
+                                  fillvalue=np.nan)  # fmt: skip
+            v.attrs.update({"standard_name": std, "units": un})
+    assert p.stat().st_size < 1_000_000
+    with pytest.raises(ConfigError, match="memory limit") as err:
+        read_particles(p)
+    assert err.value.field == "particles"

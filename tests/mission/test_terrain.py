@@ -10,7 +10,6 @@ synthetic 4,000 m ridge written by rasterio and an airfield in a 600 m valley.
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 import math
 from pathlib import Path
@@ -25,10 +24,12 @@ from poc_env.agents.mission.formats.qgc import validate_qgc
 from poc_env.agents.mission.plan import load_plan, write_plan
 from poc_env.agents.mission.terrain import (
     clearance_violations,
+    dem_heights_at,
     from_record,
     load_terrain,
     plan_profiles,
     profile,
+    qgc_clearance,
 )
 from poc_env.agents.planning.planner import make_plan
 from poc_env.config import load_scenario
@@ -84,33 +85,6 @@ def _scenario(dem: Path | None, **over) -> dict:
     return data
 
 
-def _dem_at(dem: Path, latlon: np.ndarray) -> np.ndarray:
-    """Heights of the DEM itself at (lat, lon) points: the max of the 2 x 2 pixels around."""
-    with rasterio.open(dem) as src:
-        band = src.read(1)
-        cols, rows = ~src.transform @ (latlon[:, 1], latlon[:, 0])
-    c0 = np.clip(np.floor(np.asarray(cols) - 0.5).astype(int), 0, band.shape[1] - 2)
-    r0 = np.clip(np.floor(np.asarray(rows) - 0.5).astype(int), 0, band.shape[0] - 2)
-    return np.maximum.reduce(
-        [band[r0, c0], band[r0 + 1, c0], band[r0, c0 + 1], band[r0 + 1, c0 + 1]]
-    ).astype(float)
-
-
-def _qgc_clearance(doc: dict, dem: Path, clearance: float) -> tuple[float, int]:
-    """(least height above the DEM, legs checked) along a QGC mission from the take-off item
-    to the approach waypoint, legs sampled every ~100 m, altitudes linear between items."""
-    nav = [it for it in doc["mission"]["items"] if it["command"] in (16, 22)]
-    pts = np.array([[it["params"][4], it["params"][5], it["params"][6]] for it in nav])
-    least, legs = math.inf, 0
-    for a, b in itertools.pairwise(pts):
-        n = max(2, int(np.hypot((b[0] - a[0]) * 111.0, (b[1] - a[1]) * KM_PER_DEG_LON) * 10))
-        s = np.linspace(0.0, 1.0, n)[:, None]
-        p = a[None, :] + (b - a)[None, :] * s
-        least = min(least, float(np.min(p[:, 2] - _dem_at(dem, p[:, :2]))))
-        legs += 1
-    return least, legs
-
-
 # --------------------------------------------------------------------------- the Alps case
 
 
@@ -161,7 +135,7 @@ def test_alps_import_plan_export_clears_the_ridge(tmp_path):
         assert m["globalPlanAltitudeMode"] == 2
         assert {it["frame"] for it in m["items"] if it["command"] in (16, 21, 22)} == {0}
         assert m["items"][-1]["params"][6] == pytest.approx(VALLEY_M, abs=1.0)  # NAV_LAND
-        least, legs = _qgc_clearance(doc, dem, 150.0)
+        least, legs = qgc_clearance(doc, dem)
         assert legs > 0 and least >= 150.0 - 1e-6, (f.name, least)
         alts = [it["params"][6] for it in m["items"] if it["command"] == 16]
         crossed += max(alts) > RIDGE_M  # some mission flies over the ridge
@@ -179,7 +153,7 @@ def test_alps_import_plan_export_clears_the_ridge(tmp_path):
         xyz = np.array([[float(v) for v in c.split(",")] for c in
                         pm.findtext(".//k:coordinates", namespaces=ns).split()])  # fmt: skip
         assert xyz[0, 2] == pytest.approx(VALLEY_M, abs=1.0)  # the field, on the ground
-        above = xyz[1:-1, 2] - _dem_at(dem, xyz[1:-1, [1, 0]])
+        above = xyz[1:-1, 2] - dem_heights_at(dem, xyz[1:-1, [1, 0]])
         assert above.min() >= 150.0 - 1e-6
     # a flat-map altitude option is refused for a plan with terrain, nothing written
     with pytest.raises(ConfigError, match="altitude_m"):
@@ -398,3 +372,18 @@ def test_random_scenarios_with_terrain_clear_it_and_export(tmp_path):
 @pytest.mark.slow
 def test_random_scenarios_with_terrain_clear_it_and_export_many(tmp_path):
     _property(200, 11, tmp_path)
+
+
+@pytest.mark.parametrize("height", [3e38, -2e4, 15_000.0])  # float32: 3e38 near its top
+def test_dem_heights_beyond_the_earths_are_refused_by_import_nothing_written(tmp_path, height):
+    """Issue 27's campaign (datafiles target): a DEM with 1e308 m (3e38 in float32) or 20 km
+    below sea level was imported, and only the plan then refused it; the import refuses it,
+    naming terrain.dem."""
+    dem = _dem(tmp_path / "d.tif")
+    with rasterio.open(dem, "r+") as ds:
+        z = ds.read(1)
+        z[100:104, 200:204] = height
+        ds.write(z, 1)
+    with pytest.raises(ConfigError, match="within \\+-12000 m") as err:
+        load_terrain(load_scenario(_scenario(dem)))
+    assert err.value.field == "terrain.dem"

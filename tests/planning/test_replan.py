@@ -10,6 +10,7 @@ from poc_env.agents.mission.plan import load_plan
 from poc_env.agents.planning.replan import searched_belief
 from poc_env.cli import main
 from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import build_prior
 
 
@@ -96,3 +97,35 @@ def test_bad_tracks_name_the_field_and_write_nothing(first, tmp_path, capsys):
     assert main(["replan", "--scenario", "paper_6_2", "--plan", str(p1), "--out", str(out)]) == 2
     assert "plan.scenario" in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "text, field",
+    [
+        ('{"type": "FeatureCollection", "features": ' + "[" * 5000 + "]" * 5000 + "}", "tracks"),
+        ('{"type": "FeatureCollection", "crs": "EPSG:4326", "features": []}', "tracks.crs"),
+        ('{"type": "FeatureCollection", "crs": {"properties": 3}, "features": []}', "tracks.crs"),
+        ('{"type": "FeatureCollection", "crs": {"properties": {"name": []}}}', "tracks.crs"),
+        ('{"type": "LineString", "coordinates": [[NaN, 45], [126, 45]]}', "tracks"),
+        (
+            '{"type": "LineString", "coordinates": [[1' + "0" * 400 + ", 45], [126, 45]]}",
+            "tracks.coordinates",
+        ),
+    ],
+)
+def test_hostile_tracks_are_a_clear_error_nothing_written(first, tmp_path, text, field):
+    """Issue 27's campaign (datafiles target): deep nesting was a RecursionError, a crs member
+    that is not an object an AttributeError and an integer beyond float range (seed 74) an
+    OverflowError; each names the field now."""
+    _, p1 = first
+    bad = tmp_path / "flown.geojson"
+    bad.write_text(text)
+    out = tmp_path / "out" / "p2.json"
+    argv = ["replan", "--plan", str(p1), "--tracks", str(bad), "--out", str(out)]
+    assert main(argv) == 2
+    assert not out.parent.exists() or not any(out.parent.iterdir())
+    from poc_env.agents.planning.replan import read_tracks
+
+    with pytest.raises(ConfigError) as err:
+        read_tracks(bad, (46.5, 7.9))
+    assert err.value.field == field

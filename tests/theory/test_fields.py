@@ -282,3 +282,41 @@ def test_a_scenario_file_with_a_netcdf_field_and_an_unquoted_start(tmp_path):
     assert params.motion is not None and params.motion.field is not None
     assert params.motion.field.times_s is not None
     np.testing.assert_array_equal(params.motion.field.times_s, [-1800.0, 1800.0])
+
+
+def test_campaign_found_field_files_are_refused_naming_the_field(tmp_path):
+    """Issue 27's campaign (datafiles target): a .npz archive named .npy (an AttributeError
+    before), a wind whose variables are named uo/vo (read as a current before), and a chunked
+    file declaring terabytes (read into memory before) are ConfigErrors naming the field."""
+    m = small_map()
+    npz = tmp_path / "cur.npy"
+    with open(npz, "wb") as fh:
+        np.savez(fh, a=np.zeros((2, *SHAPE)))
+    with pytest.raises(ConfigError, match="npz archive") as err:
+        check(str(npz), m)
+    assert err.value.field == "target.field_file"
+    ds = lonlat_dataset()
+    ds["uo"].attrs["standard_name"] = "x_wind"
+    ds["vo"].attrs["standard_name"] = "y_wind"
+    with pytest.raises(ConfigError, match="a current") as err:
+        check(write(ds, tmp_path, "wind.nc"), m)
+    assert err.value.field == "target.field_file"
+    import h5netcdf
+
+    huge = tmp_path / "huge.nc"
+    with h5netcdf.File(huge, "w") as f:
+        f.dimensions = {"time": 100_000, "latitude": 1000, "longitude": 1000}
+        for name, std in (("uo", "eastward"), ("vo", "northward")):
+            v = f.create_variable(name, ("time", "latitude", "longitude"), float,
+                                  chunks=(1, 100, 100), fillvalue=0.0)  # fmt: skip
+            v.attrs["standard_name"] = f"{std}_sea_water_velocity"
+            v.attrs["units"] = "m s-1"
+        for d, std, units in (("latitude", "latitude", "degrees_north"),
+                              ("longitude", "longitude", "degrees_east")):  # fmt: skip
+            c = f.create_variable(d, (d,), float, data=np.linspace(44, 46, 1000))
+            c.attrs.update({"standard_name": std, "units": units})
+        t = f.create_variable("time", ("time",), float, data=np.arange(100_000.0))
+        t.attrs["units"] = "seconds since 2024-05-01"
+    with pytest.raises(ConfigError, match="memory limit") as err:
+        check(str(huge), m)
+    assert err.value.field == "target.field_file"
