@@ -54,17 +54,14 @@ _DIRS = np.array(
 )  # unit steps of the move
 
 
-def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = None) -> np.ndarray:
-    """Coverage (eq. 10 per cell) of legs ``starts -> ends`` (L, 2), sampled at a quarter cell,
-    summed per row of ``rows`` (L,) (default: all in one row): an array (rows, ny * nx).
-    Nothing outside the map counts."""
+def leg_samples(starts, ends, grid: Grid, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coverage samples of :func:`leg_coverage`: per sample inside the map, the leg it lies
+    on (index into ``starts``), its flat cell index and its coverage (eq. 10 per cell), in the
+    order :func:`leg_coverage` sums them (a leg's samples from its start)."""
     starts = np.asarray(starts, dtype=float).reshape(-1, 2)
     ends = np.asarray(ends, dtype=float).reshape(-1, 2)
-    rows = np.zeros(len(starts), dtype=np.int64) if rows is None else np.asarray(rows)
-    n_rows = int(rows.max()) + 1 if rows.size else 1
-    ncell = grid.ny * grid.nx
     if not len(starts):
-        return np.zeros((n_rows, ncell))
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
     c = grid.cell_m
     d = ends - starts
     length = np.hypot(d[:, 0], d[:, 1])
@@ -78,8 +75,21 @@ def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = N
     row = np.floor((xy[:, 1] - oy) / c).astype(np.int64)
     ok = (col >= 0) & (col < grid.nx) & (row >= 0) & (row < grid.ny)
     weight = w * length[leg] / m[leg] / grid.cell_area_m2
-    idx = rows[leg] * ncell + row * grid.nx + col
-    out = np.bincount(idx[ok], weights=weight[ok], minlength=n_rows * ncell)
+    return leg[ok], (row * grid.nx + col)[ok], weight[ok]
+
+
+def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = None) -> np.ndarray:
+    """Coverage (eq. 10 per cell) of legs ``starts -> ends`` (L, 2), sampled at a quarter cell,
+    summed per row of ``rows`` (L,) (default: all in one row): an array (rows, ny * nx).
+    Nothing outside the map counts."""
+    n_legs = len(np.asarray(starts, dtype=float).reshape(-1, 2))
+    rows = np.zeros(n_legs, dtype=np.int64) if rows is None else np.asarray(rows)
+    n_rows = int(rows.max()) + 1 if rows.size else 1
+    ncell = grid.ny * grid.nx
+    if not n_legs:
+        return np.zeros((n_rows, ncell))
+    leg, cell, weight = leg_samples(starts, ends, grid, w)
+    out = np.bincount(rows[leg] * ncell + cell, weights=weight, minlength=n_rows * ncell)
     return out.reshape(n_rows, ncell)
 
 
@@ -247,7 +257,7 @@ def refine_routes(
         viol = airspace.violations(pos, act)
 
     covs = [path_cov(p) for p in paths]
-    total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)
+    total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)  # a fresh array, updated in place
     value = float(p_flat @ pod_from_coverage(total, law))
     radii = np.asarray(RADII) * c
     offsets = (radii[:, None, None] * _DIRS[None]).reshape(-1, 2)
@@ -296,14 +306,38 @@ def refine_routes(
                     blocked = np.zeros(len(cands), dtype=bool)
                     np.logical_or.at(blocked, np.asarray(rows), hit)
                     ok &= ~blocked
-                new = leg_coverage(starts, ends, grid, w, np.asarray(rows))
-                old_a = leg_coverage(a, b, grid, w)[0]
-                old_b = leg_coverage(b, path[i + 1], grid, w)[0] if movable else 0.0
-                base0 = total - old_a - old_b
-                base1 = total - old_a
+                # only the cells the old and new legs touch change (the rest of the swarm's
+                # POS is common to every candidate): score the change there
+                leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
+                _, cell_a, wt_a = leg_samples(a, b, grid, w)
+                if movable:
+                    _, cell_b, wt_b = leg_samples(b, path[i + 1], grid, w)
+                else:
+                    cell_b, wt_b = cell_a[:0], wt_a[:0]
+                cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+                nu = len(cells)
+                row_n = np.asarray(rows)[leg_n]
+                new = np.bincount(
+                    row_n * nu + np.searchsorted(cells, cell_n),
+                    weights=wt_n,
+                    minlength=len(kinds) * nu,
+                ).reshape(len(kinds), nu)
+                old_a = np.bincount(np.searchsorted(cells, cell_a), weights=wt_a, minlength=nu)
+                old_b = (
+                    np.bincount(np.searchsorted(cells, cell_b), weights=wt_b, minlength=nu)
+                    if movable
+                    else 0.0
+                )
+                here = total[cells]
+                base0 = here - old_a - old_b
+                base1 = here - old_a
                 kinds_arr = np.asarray(kinds)
-                cand_total = np.where(kinds_arr[:, None] == 0, base0, base1) + new
-                vals = pod_from_coverage(cand_total, law) @ p_flat
+                cand_here = np.where(kinds_arr[:, None] == 0, base0, base1) + new
+                p_here = p_flat[cells]
+                gain = (
+                    pod_from_coverage(cand_here, law) - pod_from_coverage(here, law)[None]
+                ) @ p_here
+                vals = value + gain
                 vals = np.where(ok, vals, -np.inf)
                 j = -1
                 for c_j in np.argsort(-vals, kind="stable")[:TRIES]:
@@ -321,7 +355,7 @@ def refine_routes(
                     pos[:, k], act[:, k] = old
                 if j >= 0:
                     paths[k] = cands[j]
-                    total = cand_total[j]
+                    total[cells] = cand_here[j]
                     value = float(vals[j])
                     kept += 1
                     if kinds[j] == 0 and len(cands[j]) < len(path):
@@ -330,7 +364,7 @@ def refine_routes(
         if not kept:
             break
     out = [[[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] for p in paths]
-    return out, value
+    return out, float(p_flat @ pod_from_coverage(total, law))
 
 
 def fly_around(router: ZoneRouter, path, fits) -> np.ndarray:
