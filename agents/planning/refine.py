@@ -168,13 +168,16 @@ def track(path, speeds, turn_rate: float, times, heading0: float | None = None):
     return pos, act
 
 
-def swarm_violations(pos, act, separation_m: float, range_m: float, min_neighbours: int) -> int:
+def swarm_violations(
+    pos, act, separation_m: float, range_m: float, min_neighbours: int, dist=None
+) -> int:
     """UAV-steps in violation at sampled positions ``pos (S, n, 2)`` of the flying UAVs ``act
     (S, n)``: closer than ``separation_m`` to another (eq. 21) or with fewer than
     ``min_neighbours`` others within ``range_m`` (eq. 24, §3.2.4) -- the environment's own
     checks (:func:`poc_env.sim.constraints.separation_violations`,
-    :func:`poc_env.sim.comms.two_neighbour_ok`)."""
-    dist = pairwise_distances(pos)
+    :func:`poc_env.sim.comms.two_neighbour_ok`). ``dist``: their
+    :func:`~poc_env.sim.constraints.pairwise_distances`, when already known."""
+    dist = pairwise_distances(pos) if dist is None else dist
     close, _ = separation_violations(pos, separation_m, act, dist)
     ok = two_neighbour_ok(in_range(pos, range_m, act, dist), min_neighbours, act)
     return int(close.sum() + (~ok & act).sum())
@@ -191,8 +194,58 @@ class Airspace:
     range_m: float
     min_neighbours: int
 
-    def violations(self, pos, act) -> int:
-        return swarm_violations(pos, act, self.separation_m, self.range_m, self.min_neighbours)
+    def violations(self, pos, act, dist=None) -> int:
+        return swarm_violations(
+            pos, act, self.separation_m, self.range_m, self.min_neighbours, dist
+        )
+
+
+def update_distances(pos: np.ndarray, dist: np.ndarray, k: int) -> None:
+    """Row and column ``k`` of ``dist (S, n, n)``, the
+    :func:`~poc_env.sim.constraints.pairwise_distances` of ``pos (S, n, 2)``, recomputed in
+    place after UAV ``k`` moved (the same sums as the kernel's, so the same bits)."""
+    c = pos - pos[:, k : k + 1]
+    d = np.sqrt(c[..., 0] * c[..., 0] + c[..., 1] * c[..., 1])
+    dist[:, k, :] = d
+    dist[:, :, k] = d
+
+
+def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old):
+    """Candidate moves of one waypoint scored on the cells they change only.
+
+    ``total`` (ny * nx): the swarm's coverage; ``p_flat``: the prior; candidate ``r`` replaces
+    the leg ``old[0] -> old[1]`` (``kinds[r]`` 1) or the legs ``old[0] -> old[1] -> old[2]``
+    (``kinds[r]`` 0) by its new legs ``starts[l] -> ends[l]`` with ``rows[l] == r``. Returns
+    the cells touched (flat indices, ascending), the candidates' coverage there (R, cells) and
+    their gain in planned POS ``sum_j p_j (POD(C'_j) - POD(C_j))`` (R,): the full score's change,
+    since every other cell keeps its coverage. The coverage equals the full
+    ``total - old legs + new legs`` of :func:`leg_coverage` bit for bit (same samples, summed in
+    the same order)."""
+    leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
+    _, cell_a, wt_a = leg_samples(old[0], old[1], grid, w)
+    movable = len(old) > 2
+    if movable:
+        _, cell_b, wt_b = leg_samples(old[1], old[2], grid, w)
+    else:
+        cell_b, wt_b = cell_a[:0], wt_a[:0]
+    cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+    nu = len(cells)
+    n_rows = len(kinds)
+    new = np.bincount(
+        np.asarray(rows, dtype=np.int64)[leg_n] * nu + np.searchsorted(cells, cell_n),
+        weights=wt_n,
+        minlength=n_rows * nu,
+    ).reshape(n_rows, nu)
+    old_a = np.bincount(np.searchsorted(cells, cell_a), weights=wt_a, minlength=nu)
+    old_b = (
+        np.bincount(np.searchsorted(cells, cell_b), weights=wt_b, minlength=nu) if movable else 0.0
+    )
+    here = total[cells]
+    base0 = here - old_a - old_b
+    base1 = here - old_a
+    cand = np.where(np.asarray(kinds)[:, None] == 0, base0, base1) + new
+    gain = (pod_from_coverage(cand, law) - pod_from_coverage(here, law)[None]) @ p_flat[cells]
+    return cells, cand, gain
 
 
 def refine_routes(
@@ -254,7 +307,8 @@ def refine_routes(
         act = np.empty((len(times), n), dtype=bool)
         for k in range(n):
             pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
-        viol = airspace.violations(pos, act)
+        dist = pairwise_distances(pos)  # kept up to date as UAVs move (update_distances)
+        viol = airspace.violations(pos, act, dist)
 
     covs = [path_cov(p) for p in paths]
     total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)  # a fresh array, updated in place
@@ -306,37 +360,9 @@ def refine_routes(
                     blocked = np.zeros(len(cands), dtype=bool)
                     np.logical_or.at(blocked, np.asarray(rows), hit)
                     ok &= ~blocked
-                # only the cells the old and new legs touch change (the rest of the swarm's
-                # POS is common to every candidate): score the change there
-                leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
-                _, cell_a, wt_a = leg_samples(a, b, grid, w)
-                if movable:
-                    _, cell_b, wt_b = leg_samples(b, path[i + 1], grid, w)
-                else:
-                    cell_b, wt_b = cell_a[:0], wt_a[:0]
-                cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
-                nu = len(cells)
-                row_n = np.asarray(rows)[leg_n]
-                new = np.bincount(
-                    row_n * nu + np.searchsorted(cells, cell_n),
-                    weights=wt_n,
-                    minlength=len(kinds) * nu,
-                ).reshape(len(kinds), nu)
-                old_a = np.bincount(np.searchsorted(cells, cell_a), weights=wt_a, minlength=nu)
-                old_b = (
-                    np.bincount(np.searchsorted(cells, cell_b), weights=wt_b, minlength=nu)
-                    if movable
-                    else 0.0
+                cells, cand_here, gain = move_gains(
+                    total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2]
                 )
-                here = total[cells]
-                base0 = here - old_a - old_b
-                base1 = here - old_a
-                kinds_arr = np.asarray(kinds)
-                cand_here = np.where(kinds_arr[:, None] == 0, base0, base1) + new
-                p_here = p_flat[cells]
-                gain = (
-                    pod_from_coverage(cand_here, law) - pod_from_coverage(here, law)[None]
-                ) @ p_here
                 vals = value + gain
                 vals = np.where(ok, vals, -np.inf)
                 j = -1
@@ -346,13 +372,16 @@ def refine_routes(
                     if airspace is None:
                         j = int(c_j)
                         break
-                    old = pos[:, k].copy(), act[:, k].copy()
+                    old = pos[:, k].copy(), act[:, k].copy(), dist[:, k].copy()
                     pos[:, k], act[:, k] = track(cands[c_j], speeds, turn_rate, times, h0[k])
-                    v_new = airspace.violations(pos, act)
+                    update_distances(pos, dist, k)
+                    v_new = airspace.violations(pos, act, dist)
                     if v_new <= viol:
                         j, viol = int(c_j), v_new
                         break
-                    pos[:, k], act[:, k] = old
+                    pos[:, k], act[:, k] = old[0], old[1]
+                    dist[:, k, :] = old[2]
+                    dist[:, :, k] = old[2]
                 if j >= 0:
                     paths[k] = cands[j]
                     total[cells] = cand_here[j]
