@@ -9,7 +9,8 @@ are then taken out of the remaining mass. Speeds are the allocation planner's
 ``v_max``, home at ``v_c``).
 
 The rectangles are searched over every position of a set of side lengths (every length up to
-:data:`SIDES` cells, a geometric series above) with summed-area tables; a rectangle is kept
+:data:`SIDES` cells, a geometric series above) with summed-area tables, in one compiled pass
+(:func:`poc_env.agents.planning._kernels.best_box`); a rectangle is kept
 when a lower bound of its flight time (straight transit to its nearest point and back from it,
 the lines, a half-turn per line end) fits; the route it gives is then checked with eq. 18's
 return rule (:func:`poc_env.agents.planning.refine.route_fits`) and its last lines dropped until

@@ -22,6 +22,10 @@ after a pass without a kept move, so a refinement is deterministic (no clock, no
 
 Coverage is sampled at four points per cell along each leg (as the allocation planner's
 ``_path_coverage``), so the score equals the allocation planner's ``posc`` of the same routes.
+A move changes the coverage of the cells its old and new legs cross only, so the candidates are
+scored there (:func:`move_gains`: the swarm's coverage per cell is kept and updated in place
+when a move is kept), and the airspace check updates the moved UAV's distances to the others
+only (:func:`update_distances`); both give the full computation's numbers.
 """
 
 from __future__ import annotations
