@@ -126,8 +126,8 @@ def test_compiled_box_search_is_the_exhaustive_one():
         budget = float(rng.uniform(300.0, 3000.0))
         widths, heights = _side_lengths(grid.nx), _side_lengths(grid.ny)
         best, best_key = 0.0, None
-        for a, nw in enumerate(widths):
-            for b, nh in enumerate(heights):
+        for nw in widths:
+            for nh in heights:
                 lx, ly = nw * h, nh * h
                 n = max(1, math.ceil(min(lx, ly) / w - 1e-9))
                 search = (n * max(lx, ly) + (n - 1) * min(lx, ly) / n) / v.line + (n - 1) * turn
