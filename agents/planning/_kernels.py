@@ -4,7 +4,8 @@
 :mod:`poc_env.agents.planning.objective` for a population in one pass (the prior masses then
 come from :func:`poc_env._kernels.rectangles.rectangle_masses`, called by the objective);
 :func:`route_timeline` and :func:`route_sample` time and sample a flight along a path
-(:mod:`poc_env.agents.planning.refine`).
+(:mod:`poc_env.agents.planning.refine`); :func:`best_box` is the greedy rectangle planner's box
+search (:mod:`poc_env.agents.planning.greedy_rectangles`).
 
 A kernel module under the cache rule of :mod:`poc_env._kernels`: it imports nothing of the
 project, so the planner composes its kernels with the environment's in Python.
@@ -171,3 +172,55 @@ def route_sample(p, arrive, dep, times, out, act):
             f = (tau - dep[j]) / (arrive[j + 1] - dep[j])
             out[s, 0] = p[j, 0] + f * (p[j + 1, 0] - p[j, 0])
             out[s, 1] = p[j, 1] + f * (p[j + 1, 1] - p[j, 1])
+
+
+# ------------------------------------------------------------------------- the greedy box search
+
+
+@_jit
+def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, landing):
+    """The box search of ``poc_env.agents.planning.greedy_rectangles._best_box`` in one pass.
+
+    ``table (ny + 1, nx + 1)``: the summed-area table of the remaining mass; boxes of ``nw x nh``
+    cells (``widths`` x ``heights``, in that nesting) at every lower-left cell ``(j, i)``,
+    mass ``T[j + nh, i + nw] - T[j, i + nw] - T[j + nh, i] + T[j, i]``; a box is kept when its
+    flight-time estimate (``speeds = (out, line, home)``: straight from ``takeoff`` to its
+    nearest point at ``out``, from it to ``landing`` at ``home``, its lines ``w`` apart along
+    the longer side at ``line`` and a ``turn`` per line end; ``orig`` the map's lower-left
+    corner, ``h`` the cell size) is within ``budget`` and its mass beats the best so far (ties:
+    the first in this order, lower-left cells row by row). Returns ``(mass, i, j, nw, nh)``;
+    mass 0 and ``nw = 0`` when no box has mass and fits."""
+    ny = table.shape[0] - 1
+    nx = table.shape[1] - 1
+    best = 0.0
+    bi = bj = bw = bh = 0
+    for a in range(widths.shape[0]):
+        nw = widths[a]
+        for b in range(heights.shape[0]):
+            nh = heights[b]
+            lx = nw * h
+            ly = nh * h
+            long_ = max(lx, ly)
+            short = min(lx, ly)
+            n_lines = max(1.0, math.ceil(short / w - 1e-9))
+            search = (n_lines * long_ + (n_lines - 1.0) * short / n_lines) / speeds[1]
+            search += (n_lines - 1.0) * turn
+            if search > budget:  # no position can fit it
+                continue
+            cur = best
+            for j in range(ny - nh + 1):
+                ylo = orig[1] + h * j
+                dyt = max(max(ylo - takeoff[1], takeoff[1] - ylo - ly), 0.0)
+                dyl = max(max(ylo - landing[1], landing[1] - ylo - ly), 0.0)
+                for i in range(nx - nw + 1):
+                    mass = table[j + nh, i + nw] - table[j, i + nw] - table[j + nh, i] + table[j, i]
+                    if not mass > cur:
+                        continue
+                    xlo = orig[0] + h * i
+                    dxt = max(max(xlo - takeoff[0], takeoff[0] - xlo - lx), 0.0)
+                    dxl = max(max(xlo - landing[0], landing[0] - xlo - lx), 0.0)
+                    t = math.hypot(dxt, dyt) / speeds[0] + math.hypot(dxl, dyl) / speeds[2]
+                    if t + search <= budget:
+                        cur, bi, bj, bw, bh = mass, i, j, nw, nh
+            best = cur
+    return best, bi, bj, bw, bh

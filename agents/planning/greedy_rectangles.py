@@ -9,7 +9,8 @@ are then taken out of the remaining mass. Speeds are the allocation planner's
 ``v_max``, home at ``v_c``).
 
 The rectangles are searched over every position of a set of side lengths (every length up to
-:data:`SIDES` cells, a geometric series above) with summed-area tables; a rectangle is kept
+:data:`SIDES` cells, a geometric series above) with summed-area tables, in one compiled pass
+(:func:`poc_env.agents.planning._kernels.best_box`); a rectangle is kept
 when a lower bound of its flight time (straight transit to its nearest point and back from it,
 the lines, a half-turn per line end) fits; the route it gives is then checked with eq. 18's
 return rule (:func:`poc_env.agents.planning.refine.route_fits`) and its last lines dropped until
@@ -30,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from poc_env.agents.planning import _kernels
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import plan_speeds
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -91,38 +93,23 @@ def _best_box(remaining, grid: Grid, widths, heights, w, v, turn, budget, takeof
     ox, oy = grid.origin_m
     table = np.zeros((grid.ny + 1, grid.nx + 1))
     table[1:, 1:] = remaining.cumsum(0).cumsum(1)
-    best_mass, best = 0.0, None
-    for nw in widths:
-        for nh in heights:
-            mass = (
-                table[nh:, nw:] - table[:-nh, nw:] - table[nh:, :-nw] + table[:-nh, :-nw]
-            )  # (ny - nh + 1, nx - nw + 1): boxes by lower-left cell
-            if mass.max(initial=0.0) <= best_mass:
-                continue
-            lx, ly = nw * h, nh * h
-            long_, short = max(lx, ly), min(lx, ly)
-            n_lines = max(1, math.ceil(short / w - 1e-9))
-            search = (n_lines * long_ + (n_lines - 1) * short / n_lines) / v.line
-            search += (n_lines - 1) * turn
-            if search > budget:  # no position can fit it
-                continue
-            jj, ii = np.nonzero(mass > best_mass)  # only boxes that would beat the best
-            xlo = ox + h * ii
-            ylo = oy + h * jj
-
-            def dist(p, xlo=xlo, ylo=ylo, lx=lx, ly=ly):
-                dx = np.maximum(np.maximum(xlo - p[0], p[0] - xlo - lx), 0.0)
-                dy = np.maximum(np.maximum(ylo - p[1], p[1] - ylo - ly), 0.0)
-                return np.hypot(dx, dy)
-
-            t = dist(takeoff) / v.out + dist(landing) / v.home + search
-            ok = np.where(t <= budget, mass[jj, ii], -1.0)
-            m = int(np.argmax(ok))
-            if ok[m] > best_mass:
-                best_mass = float(ok[m])
-                lo = (ox + ii[m] * h, oy + jj[m] * h)
-                best = (lo, (lo[0] + lx, lo[1] + ly))
-    return best
+    mass, i, j, nw, nh = _kernels.best_box(
+        table,
+        np.asarray(widths, dtype=np.int64),
+        np.asarray(heights, dtype=np.int64),
+        np.array([ox, oy]),
+        float(h),
+        float(w),
+        np.array([v.out, v.line, v.home]),
+        float(turn),
+        float(budget),
+        np.asarray(takeoff, dtype=float),
+        np.asarray(landing, dtype=float),
+    )
+    if not mass > 0.0:
+        return None
+    lo = (ox + i * h, oy + j * h)
+    return lo, (lo[0] + nw * h, lo[1] + nh * h)
 
 
 def make_greedy_rectangles_plan(

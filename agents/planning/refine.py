@@ -22,6 +22,10 @@ after a pass without a kept move, so a refinement is deterministic (no clock, no
 
 Coverage is sampled at four points per cell along each leg (as the allocation planner's
 ``_path_coverage``), so the score equals the allocation planner's ``posc`` of the same routes.
+A move changes the coverage of the cells its old and new legs cross only, so the candidates are
+scored there (:func:`move_gains`: the swarm's coverage per cell is kept and updated in place
+when a move is kept), and the airspace check updates the moved UAV's distances to the others
+only (:func:`update_distances`); both give the full computation's numbers.
 """
 
 from __future__ import annotations
@@ -54,17 +58,14 @@ _DIRS = np.array(
 )  # unit steps of the move
 
 
-def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = None) -> np.ndarray:
-    """Coverage (eq. 10 per cell) of legs ``starts -> ends`` (L, 2), sampled at a quarter cell,
-    summed per row of ``rows`` (L,) (default: all in one row): an array (rows, ny * nx).
-    Nothing outside the map counts."""
+def leg_samples(starts, ends, grid: Grid, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coverage samples of :func:`leg_coverage`: per sample inside the map, the leg it lies
+    on (index into ``starts``), its flat cell index and its coverage (eq. 10 per cell), in the
+    order :func:`leg_coverage` sums them (a leg's samples from its start)."""
     starts = np.asarray(starts, dtype=float).reshape(-1, 2)
     ends = np.asarray(ends, dtype=float).reshape(-1, 2)
-    rows = np.zeros(len(starts), dtype=np.int64) if rows is None else np.asarray(rows)
-    n_rows = int(rows.max()) + 1 if rows.size else 1
-    ncell = grid.ny * grid.nx
     if not len(starts):
-        return np.zeros((n_rows, ncell))
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
     c = grid.cell_m
     d = ends - starts
     length = np.hypot(d[:, 0], d[:, 1])
@@ -78,8 +79,21 @@ def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = N
     row = np.floor((xy[:, 1] - oy) / c).astype(np.int64)
     ok = (col >= 0) & (col < grid.nx) & (row >= 0) & (row < grid.ny)
     weight = w * length[leg] / m[leg] / grid.cell_area_m2
-    idx = rows[leg] * ncell + row * grid.nx + col
-    out = np.bincount(idx[ok], weights=weight[ok], minlength=n_rows * ncell)
+    return leg[ok], (row * grid.nx + col)[ok], weight[ok]
+
+
+def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = None) -> np.ndarray:
+    """Coverage (eq. 10 per cell) of legs ``starts -> ends`` (L, 2), sampled at a quarter cell,
+    summed per row of ``rows`` (L,) (default: all in one row): an array (rows, ny * nx).
+    Nothing outside the map counts."""
+    n_legs = len(np.asarray(starts, dtype=float).reshape(-1, 2))
+    rows = np.zeros(n_legs, dtype=np.int64) if rows is None else np.asarray(rows)
+    n_rows = int(rows.max()) + 1 if rows.size else 1
+    ncell = grid.ny * grid.nx
+    if not n_legs:
+        return np.zeros((n_rows, ncell))
+    leg, cell, weight = leg_samples(starts, ends, grid, w)
+    out = np.bincount(rows[leg] * ncell + cell, weights=weight, minlength=n_rows * ncell)
     return out.reshape(n_rows, ncell)
 
 
@@ -158,13 +172,16 @@ def track(path, speeds, turn_rate: float, times, heading0: float | None = None):
     return pos, act
 
 
-def swarm_violations(pos, act, separation_m: float, range_m: float, min_neighbours: int) -> int:
+def swarm_violations(
+    pos, act, separation_m: float, range_m: float, min_neighbours: int, dist=None
+) -> int:
     """UAV-steps in violation at sampled positions ``pos (S, n, 2)`` of the flying UAVs ``act
     (S, n)``: closer than ``separation_m`` to another (eq. 21) or with fewer than
     ``min_neighbours`` others within ``range_m`` (eq. 24, §3.2.4) -- the environment's own
     checks (:func:`poc_env.sim.constraints.separation_violations`,
-    :func:`poc_env.sim.comms.two_neighbour_ok`)."""
-    dist = pairwise_distances(pos)
+    :func:`poc_env.sim.comms.two_neighbour_ok`). ``dist``: their
+    :func:`~poc_env.sim.constraints.pairwise_distances`, when already known."""
+    dist = pairwise_distances(pos) if dist is None else dist
     close, _ = separation_violations(pos, separation_m, act, dist)
     ok = two_neighbour_ok(in_range(pos, range_m, act, dist), min_neighbours, act)
     return int(close.sum() + (~ok & act).sum())
@@ -181,8 +198,58 @@ class Airspace:
     range_m: float
     min_neighbours: int
 
-    def violations(self, pos, act) -> int:
-        return swarm_violations(pos, act, self.separation_m, self.range_m, self.min_neighbours)
+    def violations(self, pos, act, dist=None) -> int:
+        return swarm_violations(
+            pos, act, self.separation_m, self.range_m, self.min_neighbours, dist
+        )
+
+
+def update_distances(pos: np.ndarray, dist: np.ndarray, k: int) -> None:
+    """Row and column ``k`` of ``dist (S, n, n)``, the
+    :func:`~poc_env.sim.constraints.pairwise_distances` of ``pos (S, n, 2)``, recomputed in
+    place after UAV ``k`` moved (the same sums as the kernel's, so the same bits)."""
+    c = pos - pos[:, k : k + 1]
+    d = np.sqrt(c[..., 0] * c[..., 0] + c[..., 1] * c[..., 1])
+    dist[:, k, :] = d
+    dist[:, :, k] = d
+
+
+def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old):
+    """Candidate moves of one waypoint scored on the cells they change only.
+
+    ``total`` (ny * nx): the swarm's coverage; ``p_flat``: the prior; candidate ``r`` replaces
+    the leg ``old[0] -> old[1]`` (``kinds[r]`` 1) or the legs ``old[0] -> old[1] -> old[2]``
+    (``kinds[r]`` 0) by its new legs ``starts[l] -> ends[l]`` with ``rows[l] == r``. Returns
+    the cells touched (flat indices, ascending), the candidates' coverage there (R, cells) and
+    their gain in planned POS ``sum_j p_j (POD(C'_j) - POD(C_j))`` (R,): the full score's change,
+    since every other cell keeps its coverage. The coverage equals the full
+    ``total - old legs + new legs`` of :func:`leg_coverage` bit for bit (same samples, summed in
+    the same order)."""
+    leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
+    _, cell_a, wt_a = leg_samples(old[0], old[1], grid, w)
+    movable = len(old) > 2
+    if movable:
+        _, cell_b, wt_b = leg_samples(old[1], old[2], grid, w)
+    else:
+        cell_b, wt_b = cell_a[:0], wt_a[:0]
+    cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+    nu = len(cells)
+    n_rows = len(kinds)
+    new = np.bincount(
+        np.asarray(rows, dtype=np.int64)[leg_n] * nu + np.searchsorted(cells, cell_n),
+        weights=wt_n,
+        minlength=n_rows * nu,
+    ).reshape(n_rows, nu)
+    old_a = np.bincount(np.searchsorted(cells, cell_a), weights=wt_a, minlength=nu)
+    old_b = (
+        np.bincount(np.searchsorted(cells, cell_b), weights=wt_b, minlength=nu) if movable else 0.0
+    )
+    here = total[cells]
+    base0 = here - old_a - old_b
+    base1 = here - old_a
+    cand = np.where(np.asarray(kinds)[:, None] == 0, base0, base1) + new
+    gain = (pod_from_coverage(cand, law) - pod_from_coverage(here, law)[None]) @ p_flat[cells]
+    return cells, cand, gain
 
 
 def refine_routes(
@@ -244,10 +311,11 @@ def refine_routes(
         act = np.empty((len(times), n), dtype=bool)
         for k in range(n):
             pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
-        viol = airspace.violations(pos, act)
+        dist = pairwise_distances(pos)  # kept up to date as UAVs move (update_distances)
+        viol = airspace.violations(pos, act, dist)
 
     covs = [path_cov(p) for p in paths]
-    total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)
+    total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)  # a fresh array, updated in place
     value = float(p_flat @ pod_from_coverage(total, law))
     radii = np.asarray(RADII) * c
     offsets = (radii[:, None, None] * _DIRS[None]).reshape(-1, 2)
@@ -296,14 +364,10 @@ def refine_routes(
                     blocked = np.zeros(len(cands), dtype=bool)
                     np.logical_or.at(blocked, np.asarray(rows), hit)
                     ok &= ~blocked
-                new = leg_coverage(starts, ends, grid, w, np.asarray(rows))
-                old_a = leg_coverage(a, b, grid, w)[0]
-                old_b = leg_coverage(b, path[i + 1], grid, w)[0] if movable else 0.0
-                base0 = total - old_a - old_b
-                base1 = total - old_a
-                kinds_arr = np.asarray(kinds)
-                cand_total = np.where(kinds_arr[:, None] == 0, base0, base1) + new
-                vals = pod_from_coverage(cand_total, law) @ p_flat
+                cells, cand_here, gain = move_gains(
+                    total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2]
+                )
+                vals = value + gain
                 vals = np.where(ok, vals, -np.inf)
                 j = -1
                 for c_j in np.argsort(-vals, kind="stable")[:TRIES]:
@@ -312,16 +376,19 @@ def refine_routes(
                     if airspace is None:
                         j = int(c_j)
                         break
-                    old = pos[:, k].copy(), act[:, k].copy()
+                    old = pos[:, k].copy(), act[:, k].copy(), dist[:, k].copy()
                     pos[:, k], act[:, k] = track(cands[c_j], speeds, turn_rate, times, h0[k])
-                    v_new = airspace.violations(pos, act)
+                    update_distances(pos, dist, k)
+                    v_new = airspace.violations(pos, act, dist)
                     if v_new <= viol:
                         j, viol = int(c_j), v_new
                         break
-                    pos[:, k], act[:, k] = old
+                    pos[:, k], act[:, k] = old[0], old[1]
+                    dist[:, k, :] = old[2]
+                    dist[:, :, k] = old[2]
                 if j >= 0:
                     paths[k] = cands[j]
-                    total = cand_total[j]
+                    total[cells] = cand_here[j]
                     value = float(vals[j])
                     kept += 1
                     if kinds[j] == 0 and len(cands[j]) < len(path):
@@ -330,7 +397,7 @@ def refine_routes(
         if not kept:
             break
     out = [[[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] for p in paths]
-    return out, value
+    return out, float(p_flat @ pod_from_coverage(total, law))
 
 
 def fly_around(router: ZoneRouter, path, fits) -> np.ndarray:

@@ -230,12 +230,14 @@ def separation_violations(
     Returns ``(per_agent, pairs)``: ``pairs (n_envs, n, n)`` is True where two distinct active
     UAVs are closer than ``d_s`` metres (symmetric, False on the diagonal); ``per_agent
     (n_envs, n)`` is True for a UAV with at least one such partner. ``active (n_envs, n)``
-    excludes landed or crashed UAVs (they neither violate nor cause violations). Apply it to
-    ``x(k)`` and to ``x(k+1)`` for the two lines of eq. 21.
+    excludes landed or crashed UAVs (they neither violate nor cause violations). ``dist``
+    optionally passes the already computed ``pairwise_distances(xy)``. Apply it to ``x(k)``
+    and to ``x(k+1)`` for the two lines of eq. 21.
     """
     p = np.asarray(xy, dtype=float)
     n = p.shape[-2]
-    pairs = pairwise_distances(p) < float(d_s)
+    d = pairwise_distances(p) if dist is None else np.asarray(dist, dtype=float)
+    pairs = d < float(d_s)
     pairs &= ~np.eye(n, dtype=bool)
     if active is not None:
         act = np.asarray(active, dtype=bool)

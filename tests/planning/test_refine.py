@@ -185,3 +185,70 @@ def test_refinement_adds_no_planned_airspace_violation():
     )
     assert planned_violations(kept) <= planned_violations(trimmed)
     assert planned_violations(free) > planned_violations(kept)  # the check is what holds it
+
+
+def test_move_gains_equal_full_scoring_on_random_moves():
+    """The refinement scores a waypoint's candidate moves on the cells they touch only
+    (``move_gains``); the coverage there must be the full grid's ``total - old legs + new
+    legs`` bit for bit and the gain the full planned POS's change, on random paths and moves
+    (moved, deleted and inserted waypoints, legs leaving the map)."""
+    from poc_env.agents.planning.refine import leg_coverage, move_gains
+
+    sc, grid, prior, *_ = _setup("small")
+    w, law = sc.sensor.sweep_width_m, sc.sensor.law
+    p_flat = prior.ravel() / prior.sum()
+    x0, y0, x1, y1 = grid.bounds
+    span = np.array([x1 - x0, y1 - y0])
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        pts = np.array([x0, y0]) - 0.1 * span + rng.random((6, 2)) * 1.2 * span
+        others = np.array([x0, y0]) + rng.random((4, 2)) * span
+        total = leg_coverage(pts[:-1], pts[1:], grid, w)[0]
+        total += leg_coverage(others[:-1], others[1:], grid, w)[0]
+        i = int(rng.integers(1, 6))  # i == 5: the last point, only insertions
+        old = pts[i - 1 : i + 2]
+        starts, ends, rows, kinds = [], [], [], []
+        for r in range(int(rng.integers(1, 8))):
+            if len(old) > 2 and r % 3 != 2:
+                q = old[1] + rng.normal(0, 0.2, 2) * span
+                legs = [(old[0], q), (q, old[2])] if r % 3 == 0 else [(old[0], old[2])]
+                kinds.append(0)
+            else:
+                q = 0.5 * (old[0] + old[1]) + rng.normal(0, 0.2, 2) * span
+                legs = [(old[0], q), (q, old[1])]
+                kinds.append(1)
+            for s, e in legs:
+                starts.append(s)
+                ends.append(e)
+                rows.append(r)
+        cells, cand, gain = move_gains(total, p_flat, grid, w, law, starts, ends, rows, kinds, old)
+        full_new = leg_coverage(starts, ends, grid, w, np.asarray(rows))
+        old_a = leg_coverage(old[0], old[1], grid, w)[0]
+        old_b = leg_coverage(old[1], old[2], grid, w)[0] if len(old) > 2 else 0.0
+        base = np.where(np.asarray(kinds)[:, None] == 0, total - old_a - old_b, total - old_a)
+        full = base + full_new
+        changed = np.flatnonzero(np.any(full != total[None], axis=0))
+        assert np.all(np.isin(changed, cells)), trial
+        assert np.array_equal(full[:, cells], cand), trial
+        value = p_flat @ pod_from_coverage(total, law)
+        np.testing.assert_allclose(value + gain, pod_from_coverage(full, law) @ p_flat, atol=1e-12)
+
+
+def test_update_distances_equals_the_full_pairwise_distances():
+    """The refinement's airspace check keeps the swarm's distances up to date by recomputing
+    the moved UAV's row and column only; they must equal the full recomputation bit for bit,
+    and the violation count from them the count from scratch."""
+    from poc_env.agents.planning.refine import update_distances
+    from poc_env.sim.constraints import pairwise_distances
+
+    rng = np.random.default_rng(3)
+    pos = rng.normal(0, 3000.0, (50, 7, 2))
+    act = rng.random((50, 7)) > 0.2
+    dist = pairwise_distances(pos)
+    for k in (0, 4, 6, 4):
+        pos[:, k] = rng.normal(0, 3000.0, (50, 2))
+        update_distances(pos, dist, k)
+        assert np.array_equal(dist, pairwise_distances(pos))
+        assert swarm_violations(pos, act, 1500.0, 5000.0, 2, dist) == swarm_violations(
+            pos, act, 1500.0, 5000.0, 2
+        )

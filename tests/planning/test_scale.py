@@ -101,3 +101,53 @@ def test_no_uav_is_left_idle_on_the_large_map_at_5_km_cells():
     plan = make_allocation_plan("large_400")
     pos = np.array([u["pos"] for u in plan["uavs"]])
     assert pos.min() > 0.3 * pos.mean()
+
+
+def test_compiled_box_search_is_the_exhaustive_one():
+    """The greedy planner's compiled box search (``_kernels.best_box``) returns the box an
+    exhaustive search over every size and position finds: the most mass among the boxes whose
+    flight-time estimate fits, the first in the search order on ties (masses drawn from few
+    values, so ties happen)."""
+    import math
+
+    from poc_env.agents.planning.greedy_rectangles import _best_box, _side_lengths
+
+    sc = load_scenario("small")
+    grid = Grid.from_config(sc.map)
+    v = type("V", (), {"out": 40.0, "line": 30.0, "home": 25.0})()
+    w, turn = 900.0, 40.0
+    rng = np.random.default_rng(11)
+    x0, y0, x1, y1 = grid.bounds
+    h = grid.cell_m
+    for trial in range(6):
+        remaining = rng.integers(0, 4, grid.shape).astype(float) * (rng.random(grid.shape) < 0.5)
+        takeoff = np.array([x0, y0]) + rng.random(2) * np.array([x1 - x0, y1 - y0]) * 1.4
+        landing = takeoff if trial % 2 else np.array([x0, y1])
+        budget = float(rng.uniform(300.0, 3000.0))
+        widths, heights = _side_lengths(grid.nx), _side_lengths(grid.ny)
+        best, best_key = 0.0, None
+        for nw in widths:
+            for nh in heights:
+                lx, ly = nw * h, nh * h
+                n = max(1, math.ceil(min(lx, ly) / w - 1e-9))
+                search = (n * max(lx, ly) + (n - 1) * min(lx, ly) / n) / v.line + (n - 1) * turn
+                for j in range(grid.ny - nh + 1):
+                    for i in range(grid.nx - nw + 1):
+                        m = float(remaining[j : j + nh, i : i + nw].sum())
+                        xlo, ylo = x0 + i * h, y0 + j * h
+                        dt = [
+                            math.hypot(
+                                max(xlo - p[0], p[0] - xlo - lx, 0.0),
+                                max(ylo - p[1], p[1] - ylo - ly, 0.0),
+                            )
+                            for p in (takeoff, landing)
+                        ]
+                        if dt[0] / v.out + dt[1] / v.home + search <= budget and m > best:
+                            best, best_key = m, (x0 + i * h, y0 + j * h, lx, ly)
+        box = _best_box(remaining, grid, widths, heights, w, v, turn, budget, takeoff, landing)
+        if best_key is None:
+            assert box is None
+            continue
+        lo, hi = box
+        got = (lo[0], lo[1], hi[0] - lo[0], hi[1] - lo[1])
+        np.testing.assert_allclose(got, best_key, rtol=0, atol=1e-6 * h)
