@@ -306,12 +306,14 @@ def next_sortie(
     *,
     planner: str = "allocation",
     seed: int = 0,
+    refine: int | None = None,
 ) -> dict[str, Any]:
     """The plan of the next sortie after ``plans`` (the sorties so far, in order: their routes,
     or the flown ``tracks`` of all of them when given) on ``prior``: eq. 14 along every flight
     (:func:`searched_belief`), then the planner on what is left. Extra fields: ``sortie``
     (``len(plans) + 1``), ``searched_pos`` (what the flights so far found, eq. 13) and
-    ``cumulative_posc`` (that plus the new plan's ``posc``)."""
+    ``cumulative_posc`` (that plus the new plan's ``posc``). ``refine``: the allocation
+    planner's refinement passes (``None``: its default)."""
     from poc_env.agents.planning.planner import make_plan
 
     names: list[str] = []
@@ -330,7 +332,7 @@ def next_sortie(
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
     paths = check_paths(sc, prior, flights, names)
     belief, searched = searched_belief(sc, prior, paths)
-    nxt = make_plan(sc, prior=belief, planner=planner, seed=seed)
+    nxt = make_plan(sc, prior=belief, planner=planner, seed=seed, refine=refine)
     if plans and plans[-1].get("crs") is not None:
         nxt["crs"] = plans[-1]["crs"]  # the same map, the same frame
     nxt["sortie"] = len(plans) + 1
