@@ -94,8 +94,15 @@ def test_sar_walkthrough_runs_as_written(tmp_path):
     gj = json.loads((tmp_path / "sortie1" / "p1.geojson").read_text())
     routes = [f for f in gj["features"] if f["properties"].get("kind") == "route"]
     assert len(routes) == 3
-    for f in routes:
-        assert not shapely_geometry.shape(f["geometry"]).intersects(zone), f["properties"]["id"]
+    lines = [shapely_geometry.shape(f["geometry"]) for f in routes]
+    for f, line in zip(routes, lines):
+        assert not line.intersects(zone), f["properties"]["id"]
+    # not vacuous: the zone lies on the straight way from the airfield to the likeliest position
+    field = json.loads((tmp_path / "airfield.geojson").read_text())["features"][0]["geometry"]
+    rows = (tmp_path / "prior.csv").read_text().split()[1:]
+    lat, lon, _ = max((tuple(map(float, r.split(","))) for r in rows), key=lambda r: r[2])
+    way = shapely_geometry.LineString([field["coordinates"], (lon, lat)])
+    assert way.intersects(zone)
     assert any(zone_name in str(f["properties"].get("name")) for f in gj["features"])
 
     # QGC: valid, AMSL, clear of the DEM itself along every leg (both sorties)
