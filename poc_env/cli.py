@@ -1082,6 +1082,8 @@ def build_parser() -> argparse.ArgumentParser:
             "poc-env replan --plan out/p1.json --plan out/p2.json --out out/p3.json",
             "poc-env replan --plan out/p1.json --tracks flown.geojson --planner de "
             "--out out/p2.json",
+            "poc-env replan --plan out/p1.json --tracks uav1.gpx --tracks uav2.kml "
+            "--out out/p2.json",
         ),
     )
     _add_scenario(p, None)
@@ -1089,7 +1091,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--plan", required=True, action="append", help="each previous sortie's plan.json, in order"
     )
     p.add_argument(
-        "--tracks", action="append", default=None, help="flown tracks: GeoJSON LineStrings (WGS 84)"
+        "--tracks",
+        action="append",
+        default=None,
+        help="flown tracks (WGS 84): GeoJSON or KML LineStrings, GPX tracks; repeatable",
     )
     p.add_argument("--origin", default=None, help="LAT,LON of (0, 0) if the plan has no crs")
     p.add_argument(

@@ -234,10 +234,8 @@ def test_the_datafile_generators_catch_broken_checks(monkeypatch):
     pytest.importorskip("xarray")
     pytest.importorskip("rasterio")
     import json
-    from pathlib import Path
 
     import poc_env.agents.mission.terrain as terrain
-    import poc_env.agents.planning.replan as replan
     import poc_env.theory.motion as motion
     from poc_env.agents.testing.campaign import run_datafiles
     from poc_env.io import loads_json
@@ -254,7 +252,10 @@ def test_the_datafile_generators_catch_broken_checks(monkeypatch):
     assert classify(run_datafiles, field)[0] == "silent"
     monkeypatch.setattr(terrain, "MAX_GROUND_M", float("inf"))
     assert classify(run_datafiles, dem)[0] == "silent"
-    monkeypatch.setattr(replan, "read_json", lambda path, field: json.loads(Path(path).read_text()))
+    import poc_env.io
+
+    # the tracks reader's JSON through Python's own parser (no depth limit)
+    monkeypatch.setattr(poc_env.io, "loads_json", lambda text, field, value=None: json.loads(text))
     assert classify(run_datafiles, deep)[0] == "traceback"
     monkeypatch.undo()
     assert loads_json("[1]", "x") == [1]

@@ -20,6 +20,7 @@ fig23      POS against the sweep width W x 0.6 .. 1.4
 fig24      POS against the task area's length and width x 0.5 .. 1.5
 fig25      adaptive DE with G = 230, 270, 300 generations
 fig26      adaptive DE with NP, 1.5 NP, 2 NP individuals
+sorties    3 sorties in a row (poc-env replan), cumulative POS against the bound (issue 24)
 all        everything above
 =========  ==================================================================================
 
@@ -756,6 +757,94 @@ def exp_fig26(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
     return _parameter("fig26", budget, runner, out, seed, "popsize", values, "NP")
 
 
+# -- beyond the paper: the next sortie (issue 24) ----------------------------------------------
+#: Scenarios and number of sorties of :func:`exp_sorties`.
+SORTIE_SCENARIOS = ("small", "paper_6_2")
+SORTIES = 3
+
+
+def _sorties_job(job: tuple[str, int, int | None]) -> list[dict[str, Any]]:
+    """One random prior (:func:`~poc_env.agents.experiments.evaluate.episode_prior` of
+    ``seed``), :data:`SORTIES` allocation plans in a row (``poc-env replan``'s
+    :func:`~poc_env.agents.planning.replan.next_sortie`), and after each sortie ``k`` the
+    cumulative POS beside the honest bound for ``k`` sorties."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.planning.planner import make_plan
+    from poc_env.agents.planning.replan import next_sortie
+    from poc_env.theory.bound import honest_optimum
+
+    name, seed, refine = job
+    sc = load_scenario(name)
+    prior = episode_prior(name, seed)
+    plans = [make_plan(sc, prior=prior, planner="allocation", seed=seed, refine=refine)]
+    while len(plans) < SORTIES:
+        plans.append(next_sortie(sc, prior, plans, seed=seed, refine=refine))
+    rows = []
+    for k, plan in enumerate(plans, start=1):
+        cum = float(plan.get("cumulative_posc", plan["posc"]))
+        bound = honest_optimum(sc, prior, sorties=k).pos
+        rows.append({"scenario": name, "seed": seed, "sortie": k, "sortie_posc": plan["posc"],
+                     "posc": cum, "bound": bound, "ratio": cum / bound})  # fmt: skip
+    return rows
+
+
+def exp_sorties(budget: Budget, runner: Runner, out: Path, seed: int) -> Result:
+    """Three sorties in a row (``poc-env replan``) on ``small`` and ``paper_6_2``, random priors
+    (episode priors ``seed .. seed + seeds - 1``): the cumulative POS after each sortie ``k``
+    against the honest bound for ``k`` sorties, :func:`poc_env.theory.bound.honest_optimum`
+    with ``sorties=k`` -- the static honest bound with ``k`` times the endurance. It is a valid
+    upper bound: each sortie spends at most one sortie's effort, and by eq. 14 the sorties
+    together detect what one flight made of all their tracks (``k`` times the effort at most)
+    would, which the allocation bound for that effort caps (the argument in full is in
+    ``honest_optimum``'s docstring). ``--quick`` plans without the waypoint refinement."""
+    jobs = [(n, seed + k, 0 if budget.quick else None) for n in SORTIE_SCENARIOS
+            for k in range(budget.seeds)]  # fmt: skip
+    per_seed = [r for rows in runner.map(_sorties_job, jobs, "sorties") for r in rows]
+    rows = []
+    for name in SORTIE_SCENARIOS:
+        for k in range(1, SORTIES + 1):
+            rs = [r for r in per_seed if r["scenario"] == name and r["sortie"] == k]
+            mean, ci = _mean_ci([r["posc"] for r in rs])
+            ratios = [r["ratio"] for r in rs]
+            rows.append({
+                "scenario": name, "sortie": k, "seeds": len(rs),
+                "sortie_posc_mean": float(np.mean([r["sortie_posc"] for r in rs])),
+                "posc_mean": mean, "posc_ci95": ci,
+                "bound": float(np.mean([r["bound"] for r in rs])),
+                "ratio_mean": float(np.mean(ratios)), "ratio_min": float(np.min(ratios)),
+            })  # fmt: skip
+    cols = [
+        ("scenario", "scenario", "s"),
+        ("sortie", "sortie", "d"),
+        ("sortie_posc_mean", "this sortie", ".4f"),
+        ("posc_mean", "cumulative", ".4f"),
+        ("posc_ci95", "+-95%", ".4f"),
+        ("bound", "bound(k)", ".4f"),
+        ("ratio_mean", "cum/bound", ".3f"),
+        ("ratio_min", "min", ".3f"),
+    ]
+    table = _fmt_table(rows, cols) + (
+        f"\n{budget.seeds} random priors per scenario; allocation planner, sortie k+1 planned "
+        "by poc-env replan on the prior less what sorties 1..k searched (eq. 14); bound(k): "
+        "the honest bound for k x the fleet's endurance (theory.bound.honest_optimum)."
+    )
+    fig = _figure()
+    ax = fig.subplots()
+    for name, style in zip(SORTIE_SCENARIOS, ("o-", "s-")):
+        rs = [r for r in rows if r["scenario"] == name]
+        ks = [r["sortie"] for r in rs]
+        line = ax.plot(ks, [r["posc_mean"] for r in rs], style, label=f"{name}: cumulative POS")
+        ax.plot(ks, [r["bound"] for r in rs], "--", color=line[0].get_color(),
+                label=f"{name}: honest bound, k x endurance")  # fmt: skip
+    ax.set_xlabel("sortie k")
+    ax.set_ylabel("POS (mean over random priors)")
+    ax.set_xticks(range(1, SORTIES + 1))
+    ax.set_ylim(0, 1.02)
+    ax.legend(loc="lower right", fontsize=8)
+    path = _save(fig, out / "sorties.png")
+    return Result("sorties", rows, table, [path])
+
+
 EXPERIMENTS: dict[str, Callable[[Budget, Runner, Path, int], Result]] = {
     "table4": exp_table4,
     "table5": exp_table5,
@@ -767,6 +856,7 @@ EXPERIMENTS: dict[str, Callable[[Budget, Runner, Path, int], Result]] = {
     "fig24": exp_fig24,
     "fig25": exp_fig25,
     "fig26": exp_fig26,
+    "sorties": exp_sorties,
 }
 
 

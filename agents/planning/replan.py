@@ -6,8 +6,9 @@ updates it by eq. 14 (:func:`poc_env.theory.search_theory.sweep_track`, the envi
 detection law and cut-off, the one implementation of the update); :func:`next_sortie` plans
 the next sortie on what is left (the allocation planner by default). The flown paths are
 either the previous plan's routes (take-off, waypoints, landing: what the plan said would be
-flown) or the tracks actually flown, as GeoJSON LineStrings in WGS 84 longitude/latitude
-(RFC 7946), put into the map's metres with the previous plan's CRS record (or ``--origin``)
+flown) or the tracks actually flown -- GeoJSON LineStrings (RFC 7946), KML LineStrings or
+``gx:Track``, GPX 1.1 track segments, all WGS 84 longitude/latitude -- put into the map's
+metres with the previous plan's CRS record (or ``--origin``)
 (:func:`read_tracks`).
 
 The belief is not renormalised: the next plan's POS is then a share of the original prior, and
@@ -15,21 +16,23 @@ the sorties' POS add up to the cumulative POS (eq. 13) -- ``searched`` plus the 
 ``posc``.
 
 Bad input is a :class:`~poc_env.errors.ConfigError` naming the field: a track point outside
-the operating area (the map grown to its airfields, eq. 20's boundary), a GeoJSON ``crs``
-member that is not WGS 84, a geometry that is not a LineString, a plan of another scenario's
-map.
+the operating area (the map grown to its airfields, eq. 20's boundary), NaN or out of range, a
+GeoJSON ``crs`` member that is not WGS 84, a geometry that is not a LineString, nesting deeper
+than the JSON reader's limit or :data:`MAX_XML_DEPTH`, a DTD or entity in KML/GPX (the XML is
+parsed with no entity resolution and no network), a file above :data:`MAX_TRACK_BYTES`, a plan
+of another scenario's map. Nothing is written then.
 """
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
-from poc_env.io import read_json
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
@@ -88,14 +91,68 @@ def plan_paths(plan: dict[str, Any]) -> list[np.ndarray]:
     return out
 
 
+#: Track files larger than this are refused before they are parsed (a day of 1 Hz GPS fixes
+#: from 24 aircraft is about 60 MB of GPX).
+MAX_TRACK_BYTES = 128 * 1024 * 1024
+#: Element nesting deeper than this in a KML or GPX file is refused (GPX 1.1 needs 4 levels,
+#: KML Documents in Folders a few more).
+MAX_XML_DEPTH = 64
+TRACK_SUFFIXES = (".geojson", ".json", ".kml", ".gpx")
+GPX_NAMESPACES = ("http://www.topografix.com/GPX/1/1", "http://www.topografix.com/GPX/1/0")
+KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://earth.google.com/kml/2.2",
+                  "http://earth.google.com/kml/2.1")  # fmt: skip
+
+
 def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.ndarray]]:
-    """The LineStrings of a GeoJSON file (WGS 84 lon/lat) in map metres, by ``crs`` (a plan's
-    CRS record or a (lat, lon) origin, :func:`poc_env.agents.mission.crs.to_local`), each with
-    the field that holds its coordinates."""
+    """The flown tracks of a GeoJSON (LineString / MultiLineString), KML (``LineString`` and
+    ``gx:Track`` placemarks) or GPX 1.1 (``trk/trkseg/trkpt``) file, in WGS 84 longitude/
+    latitude, put into map metres by ``crs`` (a plan's CRS record or a (lat, lon) origin,
+    :func:`poc_env.agents.mission.crs.to_local`); each with the field that holds its points
+    (``tracks.features[1].geometry.coordinates``, ``tracks.Placemark[0].LineString``,
+    ``tracks.trk[0].trkseg[1]``). The format is the file's suffix."""
+    file = Path(path)
+    suffix = file.suffix.lower()
+    if suffix not in TRACK_SUFFIXES:
+        raise ConfigError("tracks", os.fspath(path), "a " + " / ".join(TRACK_SUFFIXES) + " file")
+    try:
+        size = file.stat().st_size
+        if size > MAX_TRACK_BYTES:
+            raise ConfigError("tracks", f"{os.fspath(path)} ({size} bytes)",
+                              f"a track file of at most {MAX_TRACK_BYTES} bytes")  # fmt: skip
+        raw = file.read_bytes()
+    except OSError as err:
+        raise ConfigError("tracks", os.fspath(path), f"a readable track file ({err})") from None
+    if suffix == ".kml":
+        parts = _kml_tracks(raw, path)
+    elif suffix == ".gpx":
+        parts = _gpx_tracks(raw, path)
+    else:
+        parts = _geojson_tracks(raw, path)
+    lines = [(f, _to_map(f, arr, crs)) for f, arr in parts]
+    if not lines:
+        raise ConfigError("tracks", os.fspath(path), "at least one track of 2 or more points")
+    return lines
+
+
+def _to_map(field: str, arr: np.ndarray, crs: Any) -> np.ndarray:
+    """(n, 2) lon/lat (checked: finite, in range, 2 or more points) -> map metres."""
     from poc_env.agents.mission.crs import to_local
 
+    if arr.ndim != 2 or arr.shape[1] < 2 or len(arr) < 2:
+        raise ConfigError(field, arr.tolist() if arr.size < 6 else "array", "2 or more [lon, lat]")
+    lon, lat = arr[:, 0], arr[:, 1]
+    ok = np.isfinite(arr[:, :2]).all(axis=1) & (np.abs(lat) <= 90) & (np.abs(lon) <= 180)
+    if not ok.all():
+        j = int(np.argmin(ok))
+        raise ConfigError(f"{field}[{j}]", arr[j, :2].tolist(), "[lon, lat] in WGS 84 degrees")
+    return np.array(to_local(np.stack([lat, lon], axis=1), crs))
+
+
+def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
+    from poc_env.io import loads_json
+
     where = "tracks"
-    data = read_json(path, where)  # malformed, NaN constants, deep nesting: a ConfigError
+    data = loads_json(raw, where, os.fspath(path))  # NaN, Infinity, deep nesting refused
     if not isinstance(data, dict):
         raise ConfigError(where, type(data).__name__, "a GeoJSON object")
     crs_member = data.get("crs")
@@ -120,7 +177,7 @@ def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.nd
         geoms = [(f"{where}.geometry", data.get("geometry"))]
     else:
         geoms = [(where, data)]
-    lines = []
+    out = []
     for field, g in geoms:
         if not isinstance(g, dict) or g.get("type") not in ("LineString", "MultiLineString"):
             kind = g.get("type") if isinstance(g, dict) else g
@@ -131,19 +188,99 @@ def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.nd
             try:
                 arr = np.asarray(coords, dtype=float)
             except (TypeError, ValueError, OverflowError):  # 10**400 is a JSON integer
-                arr = np.zeros((0,))
-            if arr.ndim != 2 or arr.shape[1] < 2 or len(arr) < 2:
-                raise ConfigError(f, coords if arr.size < 6 else "array", "2 or more [lon, lat]")
-            lon, lat = arr[:, 0], arr[:, 1]
-            ok = np.isfinite(arr[:, :2]).all(axis=1) & (np.abs(lat) <= 90) & (np.abs(lon) <= 180)
-            bad = ~ok
-            if bad.any():
-                j = int(np.argmax(bad))
-                raise ConfigError(f"{f}[{j}]", arr[j, :2].tolist(), "[lon, lat] in WGS 84 degrees")
-            lines.append((f, np.array(to_local(np.stack([lat, lon], axis=1), crs))))
-    if not lines:
-        raise ConfigError(where, os.fspath(path), "at least one LineString")
-    return lines
+                shown = coords if len(str(coords)) < 200 else "array"
+                raise ConfigError(f, shown, "2 or more [lon, lat] number pairs") from None
+            out.append((f, arr))
+    return out
+
+
+def _xml_root(raw: bytes, path: Any, kind: str, namespaces: tuple[str, ...]) -> Any:
+    """The root element of a KML or GPX document, parsed safely: no DTD (so no entity of any
+    kind), no network, no huge-tree mode, nesting at most :data:`MAX_XML_DEPTH`; and a root in
+    one of ``namespaces``."""
+    from lxml import etree
+
+    where = "tracks"
+    if b"<!DOCTYPE" in raw or b"<!ENTITY" in raw:
+        raise ConfigError(where, "a DOCTYPE/ENTITY declaration", f"plain {kind} (no DTD)")
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
+                             huge_tree=False, remove_comments=True)  # fmt: skip
+    try:
+        root = etree.fromstring(raw, parser)
+    except etree.XMLSyntaxError as err:
+        raise ConfigError(where, f"{os.fspath(path)}: not XML ({err})", f"a {kind} file") from None
+    depth = max((sum(1 for _ in e.iterancestors()) for e in root.iter()), default=0) + 1
+    if depth > MAX_XML_DEPTH:
+        raise ConfigError(where, f"elements nested {depth} deep",
+                          f"{kind} nested at most {MAX_XML_DEPTH} levels deep")  # fmt: skip
+    ns = etree.QName(root).namespace
+    if ns not in namespaces:
+        allowed = f"a {kind} root element in namespace " + " or ".join(namespaces)
+        raise ConfigError(f"{where}.{etree.QName(root).localname}", ns or "(no namespace)", allowed)
+    return root
+
+
+def _number(text: str | None, field: str) -> float:
+    try:
+        return float(text)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ConfigError(field, text, "a number (decimal degrees, WGS 84)") from None
+
+
+def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
+    """Every ``LineString`` (its ``coordinates``: ``lon,lat[,alt]`` tuples) and ``gx:Track``
+    (its ``gx:coord``: ``lon lat alt``) of every Placemark. KML is WGS 84 longitude/latitude by
+    definition (OGC KML 2.2, section 6.2)."""
+    root = _xml_root(raw, path, "KML", KML_NAMESPACES)
+    out = []
+    placemarks = [e for e in root.iter() if isinstance(e.tag, str) and e.tag.endswith("}Placemark")]
+    for i, pm in enumerate(placemarks):
+        n = 0
+        for e in pm.iter():
+            if not isinstance(e.tag, str):
+                continue
+            name = e.tag.rsplit("}", 1)[-1]
+            if name == "LineString":
+                field = f"tracks.Placemark[{i}].LineString" + (f"[{n}]" if n else "")
+                c = next((x for x in e if str(x.tag).endswith("}coordinates")), None)
+                toks = (c.text or "").split() if c is not None else []
+                rows = [[_number(v, f"{field}.coordinates[{j}]") for v in tok.split(",")[:2]]
+                        for j, tok in enumerate(toks)]  # fmt: skip
+            elif name == "Track":
+                field = f"tracks.Placemark[{i}].Track" + (f"[{n}]" if n else "")
+                coords = [x for x in e if str(x.tag).endswith("}coord")]
+                rows = [[_number(v, f"{field}.coord[{j}]") for v in (x.text or "").split()[:2]]
+                        for j, x in enumerate(coords)]  # fmt: skip
+            else:
+                continue
+            n += 1
+            if any(len(r) != 2 for r in rows):
+                j = next(k for k, r in enumerate(rows) if len(r) != 2)
+                raise ConfigError(f"{field}[{j}]", rows[j], "lon,lat[,alt]")
+            out.append((field, np.array(rows, dtype=float).reshape(-1, 2)))
+    if not out:
+        raise ConfigError("tracks", os.fspath(path), "a KML file with LineString placemarks")
+    return out
+
+
+def _gpx_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
+    """Every track segment (``trk/trkseg/trkpt`` with ``lat`` and ``lon`` attributes) of a GPX
+    1.1 (or 1.0) file; GPX is WGS 84 by definition. Routes (``rte``) and waypoints are not
+    flown tracks and are ignored."""
+    root = _xml_root(raw, path, "GPX", GPX_NAMESPACES)
+    ns = root.nsmap.get(None) or GPX_NAMESPACES[0]
+    out = []
+    for i, trk in enumerate(root.findall(f"{{{ns}}}trk")):
+        for k, seg in enumerate(trk.findall(f"{{{ns}}}trkseg")):
+            field = f"tracks.trk[{i}].trkseg[{k}]"
+            pts = seg.findall(f"{{{ns}}}trkpt")
+            rows = [[_number(p.get("lon"), f"{field}.trkpt[{j}].lon"),
+                     _number(p.get("lat"), f"{field}.trkpt[{j}].lat")]
+                    for j, p in enumerate(pts)]  # fmt: skip
+            out.append((f"{field}.trkpt", np.array(rows, dtype=float).reshape(-1, 2)))
+    if not out:
+        raise ConfigError("tracks", os.fspath(path), "a GPX file with trk/trkseg/trkpt tracks")
+    return out
 
 
 def searched_belief(sc: Scenario, prior: np.ndarray, paths) -> tuple[np.ndarray, float]:
@@ -170,12 +307,14 @@ def next_sortie(
     *,
     planner: str = "allocation",
     seed: int = 0,
+    refine: int | None = None,
 ) -> dict[str, Any]:
     """The plan of the next sortie after ``plans`` (the sorties so far, in order: their routes,
     or the flown ``tracks`` of all of them when given) on ``prior``: eq. 14 along every flight
     (:func:`searched_belief`), then the planner on what is left. Extra fields: ``sortie``
     (``len(plans) + 1``), ``searched_pos`` (what the flights so far found, eq. 13) and
-    ``cumulative_posc`` (that plus the new plan's ``posc``)."""
+    ``cumulative_posc`` (that plus the new plan's ``posc``). ``refine``: the allocation
+    planner's refinement passes (``None``: its default)."""
     from poc_env.agents.planning.planner import make_plan
 
     names: list[str] = []
@@ -194,7 +333,7 @@ def next_sortie(
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
     paths = check_paths(sc, prior, flights, names)
     belief, searched = searched_belief(sc, prior, paths)
-    nxt = make_plan(sc, prior=belief, planner=planner, seed=seed)
+    nxt = make_plan(sc, prior=belief, planner=planner, seed=seed, refine=refine)
     if plans and plans[-1].get("crs") is not None:
         nxt["crs"] = plans[-1]["crs"]  # the same map, the same frame
     nxt["sortie"] = len(plans) + 1

@@ -263,12 +263,26 @@ def env_limits(scenario: Scenario) -> EnvLimits:
     )
 
 
-def honest_optimum(scenario: Scenario, prior) -> Bound:
+def honest_optimum(scenario: Scenario, prior, sorties: int = 1) -> Bound:
     """The plain bound with the environment's limits: :func:`physical_optimum` for the effort
-    of every UAV sweeping at ``max_speed`` for its whole sensing time (:func:`env_limits`)."""
+    of every UAV sweeping at ``max_speed`` for its whole sensing time (:func:`env_limits`).
+
+    ``sorties = k``: the bound on the cumulative POS of ``k`` sorties of the fleet on
+    ``prior`` (``poc-env replan``), the same bound for ``k`` times the effort (every UAV with
+    ``k`` times the endurance). Why it holds: each sortie's effort is at most ``Z`` (the
+    argument above, per sortie), so the sorties together spend at most ``k Z``; the belief
+    update of eq. 14 is multiplicative (a point's non-detection probabilities multiply, and so
+    do the cells' ``1 - POD`` under the exponential law; the definite range detects the union of
+    the swept areas), so the cumulative POS of the sorties is the POS of one flight made of all
+    their tracks, whose effort is at most ``k Z``; and the allocation bound holds for any flight
+    of that effort (with the same caveat for the inverse-cube law as above). Take-offs,
+    landings and turnarounds between sorties only use up effort, so the bound is not tight.
+    """
+    if isinstance(sorties, bool) or not isinstance(sorties, int) or sorties < 1:
+        raise ConfigError("sorties", sorties, "an integer >= 1")
     lim = env_limits(scenario)
     grid = Grid.from_config(scenario.map)
-    return physical_optimum(prior, grid.cell_area_m2, lim.effort_m2, lim.law)
+    return physical_optimum(prior, grid.cell_area_m2, sorties * lim.effort_m2, lim.law)
 
 
 # ------------------------------------------------------------------- the reach-aware bound

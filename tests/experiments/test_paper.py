@@ -86,6 +86,45 @@ def test_table4_reproduces_the_paper_and_table8_grows(quick_all):
     assert best[-1] > best[0]
 
 
+def test_sorties_add_up_below_the_bound_for_their_effort(quick_all):
+    """``experiment sorties`` (issue 24): after each of 3 sorties the cumulative POS grows,
+    every seed stays below the honest bound for k x the endurance, and that bound grows with k
+    (a bound that ignored the sorties would be passed by the third sortie on ``small``)."""
+    from poc_env.agents.experiments.paper import SORTIE_SCENARIOS, SORTIES
+
+    _, results = quick_all
+    rows = results[list(EXPERIMENTS).index("sorties")].rows
+    assert len(rows) == len(SORTIE_SCENARIOS) * SORTIES
+    for name in SORTIE_SCENARIOS:
+        rs = sorted((r for r in rows if r["scenario"] == name), key=lambda r: r["sortie"])
+        assert [r["sortie"] for r in rs] == [1, 2, 3]
+        assert rs[0]["sortie_posc_mean"] == pytest.approx(rs[0]["posc_mean"], abs=1e-12)
+        cum = [r["posc_mean"] for r in rs]
+        bound = [r["bound"] for r in rs]
+        assert cum[0] < cum[1] < cum[2] <= 1.0
+        assert bound[0] < bound[1] < bound[2] <= 1.0
+        assert all(0.0 < r["ratio_min"] <= r["ratio_mean"] <= 1.0 for r in rs)
+        # a later sortie adds what is left, less than the first found
+        assert all(0.0 < r["sortie_posc_mean"] < rs[0]["posc_mean"] for r in rs[1:])
+
+
+def test_sortie_bound_is_the_honest_bound_for_k_times_the_effort():
+    from poc_env.theory.bound import env_limits, honest_optimum, physical_optimum
+    from poc_env.theory.probability_map import Grid
+
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    lim = env_limits(sc)
+    area = Grid.from_config(sc.map).cell_area_m2
+    three = honest_optimum(sc, prior, sorties=3)
+    assert three.effort_m2 == pytest.approx(3 * lim.effort_m2)
+    assert three.pos == pytest.approx(physical_optimum(prior, area, 3 * lim.effort_m2, lim.law).pos)
+    assert honest_optimum(sc, prior).pos < three.pos
+    for bad in (0, 1.5, True):
+        with pytest.raises(ConfigError, match="sorties"):
+            honest_optimum(sc, prior, sorties=bad)
+
+
 def test_table8_each_seed_chain_increases_below_its_bound():
     sc = load_scenario("paper_6_2")
     chain = _fleet_job((sc, {"popsize": 20, "maxiter": 30, "seed": 5}, [4, 5, 6]))

@@ -129,3 +129,130 @@ def test_hostile_tracks_are_a_clear_error_nothing_written(first, tmp_path, text,
     with pytest.raises(ConfigError) as err:
         read_tracks(bad, (46.5, 7.9))
     assert err.value.field == field
+
+
+# --------------------------------------------------------------------------- KML and GPX tracks
+
+
+def _lonlat_lines(plan):
+    return [
+        [(lon, lat) for lat, lon in to_geographic(
+            [u["takeoff_m"], *u["waypoints_m"], u["landing_m"]], plan["crs"])]
+        for u in plan["uavs"] if u["waypoints_m"]
+    ]  # fmt: skip
+
+
+def _kml(path, lines, *, head="", coord=lambda lon, lat: f"{lon!r},{lat!r},1500"):
+    marks = "".join(
+        f"<Placemark><name>UAV {k}</name><LineString><coordinates>"
+        + " ".join(coord(lon, lat) for lon, lat in line)
+        + "</coordinates></LineString></Placemark>"
+        for k, line in enumerate(lines)
+    )
+    path.write_text(
+        f'<?xml version="1.0"?>{head}<kml xmlns="http://www.opengis.net/kml/2.2">'
+        f"<Document><Folder>{marks}</Folder></Document></kml>"
+    )
+
+
+def _gpx(path, lines, *, point=lambda lon, lat: f'<trkpt lat="{lat!r}" lon="{lon!r}"/>'):
+    trks = "".join(
+        f"<trk><name>UAV {k}</name><trkseg>{''.join(point(lon, lat) for lon, lat in line)}"
+        "</trkseg></trk>"
+        for k, line in enumerate(lines)
+    )
+    path.write_text(
+        '<?xml version="1.0"?><gpx version="1.1" creator="test" '
+        f'xmlns="http://www.topografix.com/GPX/1/1">{trks}</gpx>'
+    )
+
+
+@pytest.mark.parametrize("fmt", ["kml", "gpx"])
+def test_flown_tracks_as_kml_or_gpx_give_the_same_belief(first, tmp_path, fmt):
+    """The routes written as KML LineStrings or GPX track segments sweep what the plan's own
+    routes sweep (the same tolerance as GeoJSON: lon/lat rounding at the cut-off)."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = _lonlat_lines(plan)
+    f = tmp_path / f"t.{fmt}"
+    (_kml if fmt == "kml" else _gpx)(f, lines)
+    from poc_env.agents.planning.replan import read_tracks
+
+    got = read_tracks(f, plan["crs"])
+    assert len(got) == len(lines) and all(len(a) == len(b) for (_, a), b in zip(got, lines))
+    out = tmp_path / "next.json"
+    argv = ["replan", "--scenario", "small", "--plan", str(p1), "--tracks", str(f)]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["searched_pos"] == pytest.approx(plan["posc"], rel=1e-3)
+
+
+def test_tracks_from_several_files_and_formats_add_up(first, tmp_path):
+    """UAV 1 from a GPX logger, the others from KML: together the plan's whole sweep."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = _lonlat_lines(plan)
+    _gpx(tmp_path / "a.gpx", lines[:1])
+    _kml(tmp_path / "b.kml", lines[1:])
+    out = tmp_path / "next.json"
+    argv = ["replan", "--plan", str(p1), "--tracks", str(tmp_path / "a.gpx"), "--tracks"]
+    assert main([*argv, str(tmp_path / "b.kml"), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["searched_pos"] == pytest.approx(plan["posc"], rel=1e-3)
+    _gpx(tmp_path / "a.gpx", lines[:1])
+    assert main([*argv[:-1], "--out", str(out)]) == 0  # one UAV's track alone finds less
+    assert json.loads(out.read_text())["searched_pos"] < plan["posc"] * 0.9
+
+
+def _bad_cases():
+    far = lambda lon, lat: f"{lon + 1.6!r},{lat!r}"  # ~120 km east: off the map  # noqa: E731
+    nan = lambda lon, lat: f'<trkpt lat="NaN" lon="{lon!r}"/>'  # noqa: E731
+    bomb = '<!DOCTYPE kml [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;">]>'
+    return [
+        ("kml", {"coord": far}, "tracks.Placemark[0].LineString[0]", "operating area"),
+        ("gpx", {"point": nan}, "tracks.trk[0].trkseg[0].trkpt[0]", "WGS 84 degrees"),
+        ("kml", {"head": bomb}, "tracks", "no DTD"),
+        (
+            "kml",
+            {"coord": lambda lon, lat: f"{lon!r}"},
+            "tracks.Placemark[0].LineString[0]",
+            "lon,lat",
+        ),
+    ]
+
+
+@pytest.mark.parametrize(("fmt", "kw", "field", "allowed"), _bad_cases(),
+                         ids=["kml-off-map", "gpx-nan", "kml-entities", "kml-no-lat"])  # fmt: skip
+def test_bad_kml_or_gpx_tracks_name_the_field_and_write_nothing(
+    first, tmp_path, capsys, fmt, kw, field, allowed
+):
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    f = tmp_path / f"t.{fmt}"
+    (_kml if fmt == "kml" else _gpx)(f, _lonlat_lines(plan), **kw)
+    out = tmp_path / "next.json"
+    assert main(["replan", "--plan", str(p1), "--tracks", str(f), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert field in err and allowed in err, err
+    assert not out.exists()
+
+
+def test_deeply_nested_or_foreign_xml_tracks_are_refused(first, tmp_path, capsys):
+    from poc_env.agents.planning.replan import MAX_XML_DEPTH
+
+    _, p1 = first
+    out = tmp_path / "next.json"
+    deep = tmp_path / "deep.kml"
+    n = MAX_XML_DEPTH + 5
+    deep.write_text('<kml xmlns="http://www.opengis.net/kml/2.2">' + "<Folder>" * n
+                    + "</Folder>" * n + "</kml>")  # fmt: skip
+    assert main(["replan", "--plan", str(p1), "--tracks", str(deep), "--out", str(out)]) == 2
+    assert f"at most {MAX_XML_DEPTH} levels deep" in capsys.readouterr().err
+    foreign = tmp_path / "t.gpx"
+    foreign.write_text('<gpx xmlns="http://example.com/not-gpx"><trk/></gpx>')
+    assert main(["replan", "--plan", str(p1), "--tracks", str(foreign), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "tracks.gpx" in err and "topografix" in err
+    nested = tmp_path / "t.geojson"
+    nested.write_text("[" * 200 + "]" * 200)
+    assert main(["replan", "--plan", str(p1), "--tracks", str(nested), "--out", str(out)]) == 2
+    assert "levels deep" in capsys.readouterr().err
+    assert not out.exists()
