@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import shift as nd_shift
 
-from poc_env.agents.planning.allocation import make_allocation_plan
+from poc_env.agents.planning.allocation import make_allocation_plan, sampled_sweep
 from poc_env.config import Airfield, FleetGroup, Scenario
 from poc_env.theory import motion as motion_mod
 from poc_env.theory.probability_map import Grid
@@ -89,6 +89,19 @@ def intercept(start, waypoints, velocity, speeds) -> tuple[np.ndarray, np.ndarra
         times[k] = t
         here = x
     return out, times
+
+
+def comoving_route(start, waypoints, velocity, speeds) -> np.ndarray:
+    """The inverse of :func:`intercept`: the co-moving waypoints ``(k, 2)`` of the ground
+    ``waypoints`` flown from ``start`` (ground position at time 0), leg ``k`` at ground speed
+    ``speeds[k]`` (m/s): ``x_k = g_k - v t_k`` with ``t_k`` the sum of leg lengths over speeds."""
+    g = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+    v = np.asarray(velocity, dtype=float)
+    if not len(g):
+        return g.copy()
+    legs = np.diff(np.vstack([np.asarray(start, dtype=float), g]), axis=0)
+    times = np.cumsum(np.hypot(legs[:, 0], legs[:, 1]) / np.asarray(speeds, dtype=float)[: len(g)])
+    return g - times[:, None] * v
 
 
 def ground_plan(plan: dict, starts, velocity) -> dict:
@@ -156,6 +169,16 @@ def airborne_scenario(
     return replace(sc, airfields=tuple(fields), fleet=tuple(fleet), uav=uav)
 
 
+def airborne_poc(
+    scenario: Scenario, belief_fine: np.ndarray, velocity, s: int, positions, elapsed_s, agents
+) -> np.ndarray:
+    """The co-moving POC (:func:`comoving_poc`) of the current belief over the usable endurance
+    the UAVs ``agents`` have left at ``elapsed_s``: what :func:`replan` plans on and
+    :func:`choose_routes` scores with."""
+    sc = airborne_scenario(scenario, positions, elapsed_s, agents)
+    return comoving_poc(sc, belief_fine, velocity, s, sc.uav.usable_endurance_s, elapsed_s)
+
+
 def replan(
     scenario: Scenario,
     belief_fine: np.ndarray,
@@ -165,15 +188,54 @@ def replan(
     elapsed_s: float,
     agents: list[int],
     seed: int = 0,
+    poc: np.ndarray | None = None,
     **allocation: Any,
 ) -> dict:
     """The space-time plan of the UAVs ``agents`` (indices into the fleet) from where they are
     (``positions``, metres) at episode time ``elapsed_s``, on the current fine belief; the
-    plan's ``uavs`` follow ``agents``' order."""
+    plan's ``uavs`` follow ``agents``' order. ``poc``: the co-moving POC if already computed
+    (:func:`airborne_poc`)."""
     sc = airborne_scenario(scenario, positions, elapsed_s, agents)
-    window = sc.uav.usable_endurance_s
-    poc = comoving_poc(sc, belief_fine, velocity, s, window, elapsed_s)
+    if poc is None:
+        poc = airborne_poc(scenario, belief_fine, velocity, s, positions, elapsed_s, agents)
     if poc.sum() <= 0:
         poc = Grid.from_config(sc.map).coarsen(np.asarray(belief_fine, dtype=float), s)
     plan = make_allocation_plan(sc, prior=poc, seed=seed, **allocation)
     return ground_plan(plan, np.asarray(positions, dtype=float), velocity)
+
+
+def choose_routes(
+    scenario: Scenario,
+    belief_fine: np.ndarray,
+    velocity,
+    s: int,
+    positions,
+    elapsed_s: float,
+    agents: list[int],
+    candidates: list[tuple[list, list]],
+    margin: float,
+    poc: np.ndarray | None = None,
+) -> tuple[int, list[float]]:
+    """The switch rule (module docstring). ``candidates[i]`` is ``(routes, speeds)``: per UAV of
+    ``agents`` (at ``positions``) its remaining ground waypoints and the ground speed of each leg;
+    candidate 0 is the set being flown. Each is scored by the predicted POS of its routes over
+    the endurance left (:func:`sampled_sweep` on :func:`comoving_poc` of the current belief, each
+    route from the UAV's position in the co-moving frame). Returns the index to fly -- the best
+    candidate if it scores more than candidate 0 by ``margin``, else 0 -- and the scores.
+    ``poc``: :func:`airborne_poc` if already computed."""
+    if not candidates:
+        raise ValueError("choose_routes needs at least the routes being flown")
+    sc = airborne_scenario(scenario, positions, elapsed_s, agents)
+    grid = Grid.from_config(sc.map)
+    if poc is None:
+        poc = airborne_poc(scenario, belief_fine, velocity, s, positions, elapsed_s, agents)
+    pos = np.asarray(positions, dtype=float).reshape(-1, 2)
+    scores = []
+    for routes, speeds in candidates:
+        paths = [
+            np.vstack([pos[j], comoving_route(pos[j], routes[j], velocity, speeds[j])])
+            for j in range(len(pos))
+        ]
+        scores.append(float(sum(sampled_sweep(sc, grid, poc, paths)[0])))
+    best = int(np.argmax(scores))
+    return (best if scores[best] > scores[0] + margin else 0), scores

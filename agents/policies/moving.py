@@ -6,7 +6,10 @@ the mass where it will be) and flies it with the waypoint follower, as ``allocat
 flies its plan. ``spacetime_receding`` does the same and then, every ``replan_min`` minutes,
 re-plans from the environment's current belief (the filter's, its detections included) for the
 UAVs still searching, each from where it is with the endurance it has left
-(:func:`~poc_env.agents.planning.spacetime.replan`). Both read the episode's drift velocity from
+(:func:`~poc_env.agents.planning.spacetime.replan`), and flies the re-plan only if it scores
+more than the routes being flown by ``switch_margin`` (POS), both scored by the planner's model
+on the current belief (:func:`~poc_env.agents.planning.spacetime.choose_routes`); otherwise
+every UAV keeps its route. Both read the episode's drift velocity from
 the environment (the velocity its filter predicts with; zero for a static target, when the
 plans are ``allocation_plan``'s).
 """
@@ -18,11 +21,20 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.planning.allocation import LEVELS, MARGIN, REFINE, SPEED
-from poc_env.agents.planning.spacetime import replan, spacetime_plan
+from poc_env.agents.planning.spacetime import (
+    airborne_poc,
+    choose_routes,
+    replan,
+    spacetime_plan,
+)
 from poc_env.agents.policies.base import PlanPolicy, Policy
 from poc_env.errors import ConfigError
 from poc_env.sim.autopilot import WaypointFollower, must_return
 from poc_env.sim.observations import decode_vector, split_observation
+
+#: how much more POS (the planner's model, :func:`~poc_env.agents.planning.spacetime.
+#: choose_routes`) a re-plan must promise over the routes being flown to be taken.
+SWITCH_MARGIN = 0.005
 
 
 def drift_of(env: Any) -> np.ndarray:
@@ -65,6 +77,7 @@ class SpacetimeRecedingPolicy(Policy):
     def __init__(
         self,
         replan_min: float = 20.0,
+        switch_margin: float = SWITCH_MARGIN,
         levels: int | tuple[int, ...] = LEVELS,
         margin: float = MARGIN,
         speed: str = SPEED,
@@ -73,6 +86,9 @@ class SpacetimeRecedingPolicy(Policy):
         if not (isinstance(replan_min, int | float) and 1.0 <= float(replan_min) <= 1e4):
             raise ConfigError("replan_min", replan_min, "minutes between re-plans in [1, 1e4]")
         self.replan_s = float(replan_min) * 60.0
+        if not (isinstance(switch_margin, int | float) and 0.0 <= float(switch_margin) <= 1.0):
+            raise ConfigError("switch_margin", switch_margin, "a POS margin in [0, 1]")
+        self.margin = float(switch_margin)
         self.alloc: dict[str, Any] = {
             "levels": levels,
             "margin": margin,
@@ -92,6 +108,8 @@ class SpacetimeRecedingPolicy(Policy):
         self._fly([u["waypoints_m"] for u in plan["uavs"]], plan)
         self.last = 0.0
         self.plans = 1
+        self.switches = 0
+        self.scores: list[list[float]] = []
 
     def _fly(self, waypoints: list, plan: dict) -> None:
         v = plan.get("speeds_mps") or {}
@@ -117,21 +135,55 @@ class SpacetimeRecedingPolicy(Policy):
         left = self.env.scenario.uav.endurance_s - now
         if not ks or left < 0.2 * self.env.scenario.uav.endurance_s:
             return
+        sc, drift, xy = self.env.scenario, drift_of(self.env), np.array(pos)
         belief = np.array(self.env.sim_state.belief[0], dtype=float)
+        poc = airborne_poc(sc, belief, drift, p.s, xy, now, ks)
         plan = replan(
-            self.env.scenario, belief, drift_of(self.env), p.s, np.array(pos), now, ks,
-            seed=self.seed + self.plans, **self.alloc,
-        )  # fmt: skip
+            sc, belief, drift, p.s, xy, now, ks, seed=self.seed + self.plans, poc=poc, **self.alloc
+        )
+        self.plans += 1
+        old = self.follower
+        kept, kept_v = [], []
+        for k in ks:  # the routes being flown, from where each UAV is, at the follower's speeds
+            i = int(old.index[k])
+            kept.append(old.waypoints[k][i:])
+            kept_v.append(
+                [old.transit_speed if i == 0 else old.pattern_speed]
+                + [old.pattern_speed] * (len(old.waypoints[k]) - i)
+            )
+        v = plan.get("speeds_mps") or {}
+        new = [
+            np.asarray(plan["uavs"][j]["waypoints_m"], dtype=float).reshape(-1, 2)
+            for j in range(len(ks))
+        ]
+        new_v = [
+            [v.get("out", old.transit_speed)] + [v.get("line", old.pattern_speed)] * len(w)
+            for w in new
+        ]
+        pick, scores = choose_routes(
+            sc,
+            belief,
+            drift,
+            p.s,
+            xy,
+            now,
+            ks,
+            [(kept, kept_v), (new, new_v)],
+            self.margin,
+            poc=poc,
+        )
+        self.scores.append(scores)
+        if pick == 0:
+            return  # keep every route: the re-plan does not promise enough more
+        self.switches += 1
         wps: list = [np.zeros((0, 2))] * len(self.agents)
         for j, k in enumerate(ks):
-            wps[k] = plan["uavs"][j]["waypoints_m"]
-        old = self.follower
+            wps[k] = new[j]
         self._fly(wps, plan)
         for k in range(len(self.agents)):  # UAVs not re-planned keep flying their route
             if k not in ks:
                 self.follower.waypoints[k] = old.waypoints[k]
                 self.follower.index[k] = old.index[k]
-        self.plans += 1
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         now = float(self.env.sim_state.step[0]) * self.params.dt

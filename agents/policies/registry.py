@@ -257,5 +257,5 @@ register(
     "spacetime_receding",
     "poc_env.agents.policies.moving:SpacetimeRecedingPolicy",
     summary="spacetime_plan re-planned every 20 min from the current belief, from where the "
-    "UAVs are",
+    "UAVs are; a re-plan is flown only if it scores more than the routes being flown",
 )

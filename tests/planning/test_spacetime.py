@@ -5,8 +5,11 @@ import pytest
 
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.spacetime import (
+    airborne_poc,
     airborne_scenario,
+    choose_routes,
     comoving_poc,
+    comoving_route,
     intercept,
     replan,
     spacetime_plan,
@@ -91,3 +94,41 @@ def test_replan_takes_off_from_where_the_uavs_are():
     prior = build_prior(sc.map)
     plan = replan(sc, _fine(prior, 4), (0.0, 0.0), 4, pos, 600.0, [0, 2])
     assert len(plan["uavs"]) == 2
+
+
+def test_comoving_route_inverts_the_intercept():
+    rng = np.random.default_rng(1)
+    wps = rng.uniform(-5e4, 5e4, (5, 2))
+    v, speeds, start = np.array([-4.0, 6.0]), [60.0] + [45.0] * 4, np.array([3e3, 1e3])
+    g, _ = intercept(start, wps, v, speeds)
+    np.testing.assert_allclose(comoving_route(start, g, v, speeds), wps, atol=1e-6)
+    assert comoving_route(start, np.zeros((0, 2)), v, speeds).shape == (0, 2)
+
+
+def test_switch_rule_never_takes_a_worse_scored_plan():
+    """The routes being flown are candidate 0; a re-plan is taken only if it scores more by the
+    margin. A real re-plan against no routes at all, in either role."""
+    sc = load_scenario("small", {"target.model": "drift"})
+    pos = np.array([[12e3, 15e3], [25e3, 22e3]])
+    ks, v, s = [0, 2], np.array([6.0, 1.0]), 4
+    fine = _fine(build_prior(sc.map), s)
+    poc = airborne_poc(sc, fine, v, s, pos, 900.0, ks)
+    plan = replan(sc, fine, v, s, pos, 900.0, ks, poc=poc)
+    u = plan["speeds_mps"]
+    good = [np.asarray(x["waypoints_m"]).reshape(-1, 2) for x in plan["uavs"]]
+    good_v = [[u["out"]] + [u["line"]] * len(w) for w in good]
+    none = [np.zeros((0, 2))] * 2
+    none_v: list[list[float]] = [[], []]
+
+    def pick(cands, margin=0.0):
+        return choose_routes(sc, fine, v, s, pos, 900.0, ks, cands, margin, poc=poc)
+
+    i, scores = pick([(none, none_v), (good, good_v)])
+    assert scores[1] > scores[0] + 0.01  # the re-plan finds something, no routes nothing
+    assert i == 1
+    i, scores2 = pick([(good, good_v), (none, none_v)])  # flying the better routes: keep them
+    assert i == 0 and scores2 == [scores[1], scores[0]]
+    gap = scores[1] - scores[0]
+    assert pick([(none, none_v), (good, good_v)], margin=gap + 1e-6)[0] == 0
+    assert pick([(none, none_v), (good, good_v)], margin=gap - 1e-6)[0] == 1
+    assert pick([(good, good_v)])[0] == 0

@@ -42,6 +42,19 @@ def test_receding_replans_from_the_belief():
     assert not st.crashed[0].any()
     assert pol.plans >= 3  # 40 min of endurance, a plan at take-off and every 10 min
     assert st.posc[0] > 0
+    assert len(pol.scores) == pol.plans - 1  # every re-plan scored against the routes flown
+    taken = [sc for sc in pol.scores if sc[1] > sc[0] + pol.margin]
+    assert pol.switches == len(taken)
+
+
+def test_receding_keeps_the_plan_unless_a_replan_scores_more():
+    """With a margin no re-plan can clear, the receding policy flies the take-off plan:
+    the same episode as spacetime_plan."""
+    keep = make_policy("spacetime_receding", replan_min=10, switch_margin=1.0)
+    env, _ = _fly(keep, seed=1)
+    ref, _ = _fly(make_policy("spacetime_plan"), seed=1)
+    assert keep.plans >= 3 and keep.switches == 0
+    assert env.sim_state.posc[0] == ref.sim_state.posc[0]
 
 
 def test_receding_refuses_a_bad_interval():
@@ -50,5 +63,12 @@ def test_receding_refuses_a_bad_interval():
             SpacetimeRecedingPolicy(replan_min=bad)  # type: ignore[arg-type]
         except ConfigError as err:
             assert err.field == "replan_min"
+        else:
+            raise AssertionError(bad)
+    for bad in (-0.1, 2.0, "x", float("nan")):
+        try:
+            SpacetimeRecedingPolicy(switch_margin=bad)  # type: ignore[arg-type]
+        except ConfigError as err:
+            assert err.field == "switch_margin"
         else:
             raise AssertionError(bad)
