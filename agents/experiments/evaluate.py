@@ -516,20 +516,25 @@ def _moving(args):
     return moving_effort_bound(*args)
 
 
+def _scenario_and_prior(scenario: Any, map_file: str | None, prior: np.ndarray | None):
+    """The resolved scenario and the prior a bound is computed on: ``prior``, else the
+    scenario's prior or ``map_file``."""
+    from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import build_prior
+
+    sc = load_scenario(scenario)
+    return sc, (build_prior(sc.map, map_file) if prior is None else prior)
+
+
 def effort_bound(
     scenario: Any, map_file: str | None = None, prior: np.ndarray | None = None
 ) -> float:
     """Plain physical optimum for every UAV sweeping at ``max_speed`` for as long as the
     environment lets it sense (:func:`poc_env.theory.bound.honest_optimum`), on ``prior``
     (default: the scenario's prior or ``map_file``)."""
-    from poc_env.config import load_scenario
     from poc_env.theory.bound import honest_optimum
-    from poc_env.theory.probability_map import build_prior
 
-    sc = load_scenario(scenario)
-    if prior is None:
-        prior = build_prior(sc.map, map_file)
-    return honest_optimum(sc, prior).pos
+    return honest_optimum(*_scenario_and_prior(scenario, map_file, prior)).pos
 
 
 def reach_effort_bound(
@@ -537,14 +542,9 @@ def reach_effort_bound(
 ) -> float:
     """Reach-aware bound (:func:`poc_env.theory.bound.reach_bound`, its certified upper value)
     on ``prior`` (default: the scenario's prior or ``map_file``)."""
-    from poc_env.config import load_scenario
     from poc_env.theory.bound import reach_bound
-    from poc_env.theory.probability_map import build_prior
 
-    sc = load_scenario(scenario)
-    if prior is None:
-        prior = build_prior(sc.map, map_file)
-    return reach_bound(sc, prior).upper
+    return reach_bound(*_scenario_and_prior(scenario, map_file, prior)).upper
 
 
 def rule_effort_bound(
@@ -552,14 +552,9 @@ def rule_effort_bound(
 ) -> float:
     """Rule-aware bound (:func:`poc_env.theory.bound.rule_bound`, its certified upper value)
     on ``prior`` (default: the scenario's prior or ``map_file``)."""
-    from poc_env.config import load_scenario
     from poc_env.theory.bound import rule_bound
-    from poc_env.theory.probability_map import build_prior
 
-    sc = load_scenario(scenario)
-    if prior is None:
-        prior = build_prior(sc.map, map_file)
-    return rule_bound(sc, prior).upper
+    return rule_bound(*_scenario_and_prior(scenario, map_file, prior)).upper
 
 
 def evaluate(
