@@ -642,6 +642,9 @@ class TargetConfig:
     wind_file: str | None = _f(default=None)
     wind_dt_s: float | None = _f(default=None, lo=limits.MIN_POSITIVE, lo_open=False, hi=1e9)
     wind_start: str | None = _f(default=None)
+    #: (``particles``) the ``.npz`` of particle tracks that move the belief and the target
+    #: (:mod:`poc_env.theory.particles`; ``poc-env scenario import --particle-motion``)
+    particles_file: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
         for key in ("field_start", "wind_start"):
@@ -663,6 +666,13 @@ class TargetConfig:
             )
         if self.wind_file is not None and self.model != "leeway":
             raise ConfigError("wind_file", self.wind_file, "null unless model is 'leeway'")
+        if (self.particles_file is None) == (self.model == "particles"):
+            raise ConfigError(
+                "particles_file",
+                self.particles_file,
+                "the .npz of particle tracks with model 'particles' (poc-env scenario import "
+                "--particle-motion), null otherwise",
+            )
 
     @property
     def moves(self) -> bool:
@@ -673,7 +683,7 @@ class TargetConfig:
 #: Names of the target motion models (``target.model``), checked when a scenario loads; the
 #: table of what each does is :data:`poc_env.theory.motion.MODELS`, which checks at import
 #: that it names exactly these (as the detection laws check ``LAW_CODES``).
-MOTION_MODEL_NAMES = ("static", "diffusion", "drift", "leeway")
+MOTION_MODEL_NAMES = ("static", "diffusion", "drift", "leeway", "particles")
 
 #: Names of the leeway classes (``target.leeway_class``), checked when a scenario loads; the
 #: classes' coefficients are :data:`poc_env.theory.motion.LEEWAY_CLASSES`, which checks at
@@ -1109,7 +1119,7 @@ def _resolve_prior_file(data: dict[str, Any], folder: Path) -> None:
         if not f.is_absolute():
             terrain["dem"] = str(folder / f)
     target = data.get("target")
-    for key in ("field_file", "wind_file"):
+    for key in ("field_file", "wind_file", "particles_file"):
         if isinstance(target, dict) and isinstance(target.get(key), str):
             f = Path(target[key])
             if not f.is_absolute():

@@ -203,6 +203,7 @@ class State:
     target_out: np.ndarray | None = None  # (E,) bool: the hidden target has left the map
     target_noise: np.ndarray | None = None  # (E, H, 2) the target's random-walk draws
     leeway_side: np.ndarray | None = None  # (E,) +1/-1 crosswind side (leeway wind files only)
+    target_particle: np.ndarray | None = None  # (E,) int: the particle the target follows, or -1
 
     @property
     def n_envs(self) -> int:
@@ -343,6 +344,18 @@ def _initial_motion(params: Params, state: State, rngs) -> None:
     state.drift = np.stack([v for v, _ in drawn]) if e else np.zeros((0, 2))
     if motion.wind_field is not None:  # a wind file: the leeway varies, its side is kept
         state.leeway_side = np.array([side for _, side in drawn], dtype=float)
+    if motion.particles is not None:  # the target follows a particle of its fine cell
+        from poc_env.theory.particles import pick_particle
+
+        h = params.grid.cell_m / params.s
+        origin = np.asarray(params.grid.origin_m, dtype=float)
+        state.target_particle = np.array(
+            [
+                pick_particle(motion.particles, state.target[k] - origin, h, params.fine_shape, r)
+                for k, r in enumerate(rngs)
+            ],
+            dtype=np.int64,
+        )
     state.target_out = np.zeros(e, dtype=bool)
     noise = np.zeros((e, max(params.horizon, 1), 2))
     if motion.diffusion > 0:
@@ -370,7 +383,7 @@ def predict(params: Params, state: State) -> None:
         )  # fmt: skip
         return
     fields = [f for f in (motion.field, motion.wind_field) if f is not None]
-    varying = any(len(f.frames) > 1 for f in fields)
+    varying = motion.particles is not None or any(len(f.frames) > 1 for f in fields)
     if not varying:  # one velocity per env for the whole batch: in place, no copies
         state.mass_out += motion_mod.predict(
             motion, state.belief, state.drift, 0.0, dt, h, params.s, side
@@ -394,10 +407,11 @@ def predict(params: Params, state: State) -> None:
         target, out = state.target[rows], state.target_out[rows]
         idx = np.minimum(state.step[rows], state.target_noise.shape[1] - 1)
         noise = state.target_noise[rows][np.arange(len(idx)), idx]
+        which = None if state.target_particle is None else state.target_particle[rows]
         motion_mod.move_targets(
             motion, target, out, state.drift[rows], noise, t, dt, params.grid.origin_m,
             params.grid.cell_m, (params.grid.ny, params.grid.nx),
-            None if side is None else side[rows],
+            None if side is None else side[rows], which,
         )  # fmt: skip
         state.target[rows], state.target_out[rows] = target, out
 

@@ -300,6 +300,10 @@ MODELS: dict[str, MotionModel] = {
             "v = current + field(x, t) + (a_d |W| + b_d) W/|W| + s (a_c |W| + b_c) W_perp, "
             "W = wind(x, t); + D lap p",
         ),
+        MotionModel(
+            "particles", True, False, False, False,
+            "b' = P_k b: the particles' cell-to-cell transition (poc_env.theory.particles)",
+        ),
     )
 }  # fmt: skip
 MODEL_NAMES = tuple(MODELS)
@@ -338,6 +342,8 @@ class Motion:
     leeway: LeewayClass | None
     field: VelocityField | None
     wind_field: VelocityField | None = None
+    #: ``particles``: the trajectories that move the belief and the target
+    particles: Any = None
 
     @property
     def moves(self) -> bool:
@@ -345,8 +351,9 @@ class Motion:
 
     @property
     def gridded(self) -> bool:
-        """The velocity varies over the map (a current or a wind file): not one per episode."""
-        return self.field is not None or self.wind_field is not None
+        """The motion varies over the map (a current or a wind file, or particles): not one
+        velocity per episode."""
+        return self.field is not None or self.wind_field is not None or self.particles is not None
 
     def draw(self, rng: np.random.Generator) -> np.ndarray:
         """The episode's uniform velocity (2,) m/s (:meth:`draw_episode`)."""
@@ -423,6 +430,17 @@ def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = Non
                 "target.wind_kmh", list(target.wind_kmh), "[0, 0] with target.wind_file"
             )
         lee = load_any_field(target, map_cfg, shape, span_s, "wind")
+    tracks = None
+    if model.name == "particles":
+        from poc_env.theory import particles
+
+        if target.diffusion_m2_s:
+            raise ConfigError(
+                "target.diffusion_m2_s", target.diffusion_m2_s, "0: particles carry their spread"
+            )
+        if map_cfg is None:
+            raise ValueError("target.particles_file: particles need the map (check's map_cfg)")
+        tracks = particles.load_tracks(target.particles_file, map_cfg, span_s)
     return Motion(
         model=model,
         diffusion=float(target.diffusion_m2_s) if model.moves else 0.0,
@@ -432,6 +450,7 @@ def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = Non
         leeway=cls,
         field=field,
         wind_field=lee,
+        particles=tracks,
     )
 
 
@@ -524,6 +543,10 @@ def predict(
     """The predict step of the filter on the fine belief ``(E, NY, NX)`` (in place) over
     ``[t, t + dt]`` (``side (E,)``: each env's crosswind side, for a wind file); returns the
     mass ``(E,)`` that left the map."""
+    if motion.particles is not None:  # the particles' transition (uniform is 0)
+        from poc_env.theory import particles
+
+        return particles.predict(motion.particles, belief, t, dt, h)
     u, v = cell_velocity(motion, uniform, t, s, side)
     return advect_diffuse(belief, u, v, motion.diffusion, dt, h)
 
@@ -569,14 +592,20 @@ def move_targets(
     cell: float,
     shape: tuple[int, int],
     side: Any = None,
+    which: Any = None,
 ) -> None:
     """Move the hidden targets ``target (E, 2)`` (in place) over ``[t, t + dt]``: ``x += v(x,
     t) dt + sqrt(2 D dt) noise`` (``noise (E, 2)`` standard normal; ``side (E,)`` each env's
-    crosswind side, for a wind file); a target outside the map (``out (E,)``, updated) no
-    longer moves."""
+    crosswind side, for a wind file), or (``particles``) by the displacement of the particle
+    ``which (E,)`` each follows; a target outside the map (``out (E,)``, updated) no longer
+    moves."""
     vel = np.array(uniform, dtype=float)
     ny, nx = shape
-    if motion.gridded:
+    if motion.particles is not None:
+        from poc_env.theory import particles
+
+        step = particles.displacement(motion.particles, np.asarray(which), t, t + dt)
+    elif motion.gridded:
         i = np.clip(((target[:, 0] - origin[0]) // cell).astype(int), 0, nx - 1)
         j = np.clip(((target[:, 1] - origin[1]) // cell).astype(int), 0, ny - 1)
         if motion.field is not None:
@@ -584,7 +613,8 @@ def move_targets(
         if motion.wind_field is not None:
             lw = _leeway_at(motion, t, side)
             vel += lw[np.arange(len(vel)), :, j, i]
-    step = vel * dt + math.sqrt(2.0 * motion.diffusion * dt) * noise
+    if motion.particles is None:
+        step = vel * dt + math.sqrt(2.0 * motion.diffusion * dt) * noise
     target += np.where(out[:, None], 0.0, step)
     x0, y0 = origin
     outside = (
