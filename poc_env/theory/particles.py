@@ -195,7 +195,7 @@ def tracks_from_lonlat(
     lon = np.asarray(lon, dtype=float)
     lat = np.asarray(lat, dtype=float)
     t = np.asarray(t_s, dtype=float).ravel()
-    shown = path or "particles"
+    shown = path or "particle tracks"
     if lon.ndim != 2 or lon.shape != lat.shape or lon.shape[1] != len(t) or not len(t):
         raise ConfigError(
             FIELD,
@@ -227,7 +227,7 @@ def tracks_from_lonlat(
         from poc_env.crs import to_local
         from poc_env.theory.fields import _map_crs
 
-        rec = _map_crs(map_cfg, f"the particles {shown}")
+        rec = _map_crs(map_cfg, shown)
         xy = np.asarray(to_local(np.column_stack([lat.ravel(), lon.ravel()]), rec), dtype=float)
     x0, y0 = map_cfg.origin_m
     x = (xy[:, 0] - x0).reshape(lon.shape)
