@@ -240,7 +240,7 @@ def _drifting(tmp_path, name="run.nc", n=400, hours=1.5, every=600.0, seed=4):
     """An OpenDrift-like run of ``n`` particles drifting east at ~1 m/s from around the area's
     centre, outputs ``every`` seconds for ``hours``; a few stranded (NaN) after 40 min."""
     rng = np.random.default_rng(seed)
-    t = int(round(hours * 3600 / every)) + 1
+    t = round(hours * 3600 / every) + 1
     rec = make_crs("aeqd", (45.7, 126.6))
     x0 = rng.normal(0.0, 4e3, n)
     y0 = rng.normal(0.0, 4e3, n)
@@ -258,7 +258,7 @@ def test_particle_motion_import_writes_the_tracks_and_the_environment_runs_them(
     from poc_env.sim.engine import Engine
 
     area, fields = _gis(tmp_path)
-    path, lon, lat = _drifting(tmp_path)
+    path, lon, _ = _drifting(tmp_path)
     p = argparse.ArgumentParser()
     geoimport.add_scenario_import_arguments(p)
     out = tmp_path / "out" / "moving.yaml"
