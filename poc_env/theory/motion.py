@@ -502,8 +502,13 @@ def _cells(vel: np.ndarray, e: int, ny: int, nx: int) -> np.ndarray:
 def _leeway_at(motion: Motion, t: float, side: Any) -> np.ndarray:
     """The leeway ``(E, 2, ny, nx)`` on the map's cells at time ``t`` of envs whose crosswind
     sides are ``side (E,)`` (the wind-file case)."""
-    if side is None:
-        raise ValueError("a leeway with a wind file needs each env's crosswind side")
+    if side is None:  # a caller that knows one velocity per episode (a bound, a planner)
+        raise ConfigError(
+            "target.wind_file",
+            "a gridded wind",
+            "wind_kmh (a uniform wind) here: this use takes one velocity per episode, not each "
+            "env's leeway side",
+        )
     assert motion.wind_field is not None and motion.leeway is not None
     wind = motion.wind_field.at(t)  # the wind interpolated in time, then its leeway
     right, left = (leeway_velocity(motion.leeway, wind, k) for k in (1.0, -1.0))

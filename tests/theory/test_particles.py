@@ -205,3 +205,19 @@ def test_bad_tracks_are_refused_naming_the_key(tmp_path):
     with pytest.raises(ConfigError) as err:
         Engine(sc, 1)
     assert err.value.field == "target.diffusion_m2_s"
+
+
+def test_the_space_time_planner_predicts_with_the_particles(tmp_path):
+    """``spacetime_plan``'s predicted POC (agents.planning.spacetime.comoving_poc, drift 0: the
+    ground frame) moves with the particles' transition, not the prior standing still."""
+    from poc_env.agents.planning.spacetime import comoving_poc
+
+    vel = np.array([4.0, 0.0])
+    tracks = uniform_cloud(vel, slice(8, 24), slice(4, 12), per=4, span=1200.0, every=300.0)
+    sc = _scenario(tmp_path, tracks)
+    start = histogram(tracks, 0.0)[0]
+    poc = comoving_poc(sc, start, np.zeros(2), 4, 1200.0)
+    want = np.zeros((8, 8))
+    for k in range(40):  # the average over the steps of the particles' coarse histograms
+        want += histogram(tracks, (k + 1) * 30.0)[0].reshape(8, 4, 8, 4).sum(axis=(1, 3))
+    np.testing.assert_allclose(poc, want / 40, rtol=0, atol=1e-12)

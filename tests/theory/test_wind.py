@@ -96,8 +96,9 @@ def test_a_gridded_time_varying_wind_gives_each_cell_its_leeway(tmp_path):
     # the other side's field: the crosswind to the other side
     u2, _ = motion.cell_velocity(mo, uniform[None], t, s, np.array([-side]))
     assert not np.allclose(u2, u)
-    with pytest.raises(ValueError, match="side"):
+    with pytest.raises(ConfigError, match="side") as err:  # one velocity per episode: refused
         motion.cell_velocity(mo, uniform[None], t, s)
+    assert err.value.field == "target.wind_file"
 
 
 def test_a_cf_netcdf_wind_and_a_current_given_as_wind(tmp_path):
