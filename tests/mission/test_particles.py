@@ -303,7 +303,25 @@ def test_bad_particle_motion_inputs_are_refused_and_nothing_is_written(tmp_path)
     few = _drifting(tmp_path, "few.nc", n=60)[0]
     ds = xr.open_dataset(_drifting(tmp_path)[0]).load()
     ds.isel(time=0).drop_vars("time").to_netcdf(tmp_path / "untimed.nc", engine="h5netcdf")
+    xy = ds.rename({"lon": "x", "lat": "y"})
+    for v in ("x", "y"):
+        xy[v].attrs = {"units": "m"}
+    xy.to_netcdf(tmp_path / "xy.nc", engine="h5netcdf")
+    nad = ds.copy()
+    nad["crs"] = (
+        (),
+        0,
+        {
+            "grid_mapping_name": "latitude_longitude",
+            "semi_major_axis": 6378206.4,
+            "inverse_flattening": 294.9786982,
+        },
+    )
+    nad["lon"].attrs["grid_mapping"] = "crs"
+    nad.to_netcdf(tmp_path / "nad.nc", engine="h5netcdf")
     cases = {
+        "no lonlat": (tmp_path / "xy.nc", [], "another CRS"),
+        "datum": (tmp_path / "nad.nc", [], "WGS84"),
         "short": (short, [], "covering the episode"),
         "few": (few, [], "at least 100 particles"),
         "no time": (tmp_path / "untimed.nc", [], "no CF time coordinate"),
