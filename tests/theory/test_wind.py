@@ -217,3 +217,27 @@ def test_wind_file_keys_are_checked_when_the_scenario_loads(tmp_path):
     (tmp_path / "sc.yaml").write_text(yaml.safe_dump(data))
     sc = load_scenario(str(tmp_path / "sc.yaml"))
     assert sc.target.wind_file == path
+
+
+def test_a_time_varying_wind_moves_the_targets_by_each_steps_leeway(tmp_path):
+    """The engine's time-varying branch (envs grouped by their time): with a wind turning from
+    east to north over 20 min, each hidden target moves by the sum over steps of its side's
+    leeway in the wind of that step's start (no diffusion), and mass is conserved."""
+    frames = np.zeros((3, 2, *SHAPE))
+    frames[0, 0], frames[1, 0], frames[1, 1], frames[2, 1] = 12.0, 6.0, 6.0, 12.0
+    over = {"target.model": "leeway", "target.leeway_class": CLASS, "target.wind_dt_s": 600.0}
+    eng, out = run({**over, "target.wind_file": npy(tmp_path, frames)}, steps=40)
+    st = eng.current
+    cls = motion.LEEWAY_CLASSES[CLASS]
+    dt = eng.params.dt
+    for k, side in enumerate(st.leeway_side):
+        if st.target_out[k]:
+            continue
+        want = out[0][3][k].copy()
+        for step in range(40):
+            w = min(step * dt / 600.0, 2.0)
+            i = min(int(w), 1)
+            wind = (1 - (w - i)) * frames[i, :, 0, 0] + (w - i) * frames[i + 1, :, 0, 0]
+            want += motion.leeway_velocity(cls, wind, side) * dt
+        np.testing.assert_allclose(st.target[k], want, rtol=0, atol=1e-6)
+    assert np.all(np.abs(st.target - out[0][3]).max(axis=1) > 200.0)  # ~ 0.1 m/s for 20 min
