@@ -148,9 +148,14 @@ def predict(
     particles' transition; return the mass ``(E,)`` that left the map."""
     e, ny, nx = belief.shape
     tr = tracks.transition(t, dt, h, (ny, nx))
-    flat = belief.reshape(e, ny * nx)
+    from poc_env._kernels.motion import csr_apply
+
+    flat = np.ascontiguousarray(belief.reshape(e, ny * nx), dtype=float)
     out = flat @ tr.out
-    belief[...] = (tr.matrix @ flat.T).T.reshape(e, ny, nx)
+    moved = np.empty_like(flat)
+    m = tr.matrix  # every env's belief times the same CSR matrix, compiled
+    csr_apply(m.indptr, m.indices, m.data, flat, moved)
+    belief[...] = moved.reshape(e, ny, nx)
     return np.asarray(out, dtype=float)
 
 
