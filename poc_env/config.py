@@ -610,13 +610,14 @@ class TargetConfig:
 
     ``model`` ``static`` (the paper, default: nothing moves), ``diffusion`` (a random walk of
     coefficient ``diffusion_m2_s``), ``drift`` (advection by the current plus diffusion) or
-    ``leeway`` (current plus the leeway of ``leeway_class`` in the 10 m wind ``wind_kmh``, plus
-    diffusion). The current is ``current_kmh`` (east, north), plus at each reset one of speed
-    ``U(0, random_current_kmh)`` in a uniform direction drawn from the env's generator, plus
-    (``drift``) the gridded field of ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or
-    ``(T, 2, ny, nx)`` frames ``field_dt_s`` apart, or a ``.csv`` / CF NetCDF ``.nc`` current
-    interpolated onto the cells and the episode from ``field_start``,
-    :mod:`poc_env.theory.fields`; a relative path is read from the scenario's folder). The
+    ``leeway`` (current plus the leeway of ``leeway_class`` in the 10 m wind ``wind_kmh`` or
+    the gridded wind of ``wind_file``, plus diffusion). The current is ``current_kmh`` (east,
+    north), plus at each reset one of speed ``U(0, random_current_kmh)`` in a uniform direction
+    drawn from the env's generator, plus (``drift``, ``leeway``) the gridded field of
+    ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or ``(T, 2, ny, nx)`` frames
+    ``field_dt_s`` apart, or a ``.csv`` / CF NetCDF ``.nc`` current interpolated onto the
+    cells and the episode from ``field_start``, :mod:`poc_env.theory.fields`; a relative path
+    is read from the scenario's folder). The
     model name and the leeway class are checked against their tables when the scenario loads
     (the class whatever the model: a scenario switched to ``leeway`` later must not meet a typo
     then); the field against the map when the dynamics are built
@@ -634,22 +635,44 @@ class TargetConfig:
     #: the episode's start on a dated ``.csv``/``.nc`` field's time axis (ISO 8601, UTC);
     #: default the file's first time (:mod:`poc_env.theory.fields`)
     field_start: str | None = _f(default=None)
+    #: (``leeway``) a gridded, time-varying 10 m wind instead of ``wind_kmh``: a ``.npy`` of m/s
+    #: on the map's cells (frames ``wind_dt_s`` apart) or a ``.csv`` / CF ``.nc`` wind
+    #: (``eastward_wind``/``northward_wind``), read as ``field_file`` is; its episode start
+    #: ``wind_start``
+    wind_file: str | None = _f(default=None)
+    wind_dt_s: float | None = _f(default=None, lo=limits.MIN_POSITIVE, lo_open=False, hi=1e9)
+    wind_start: str | None = _f(default=None)
+    #: (``particles``) the ``.npz`` of particle tracks that move the belief and the target
+    #: (:mod:`poc_env.theory.particles`; ``poc-env scenario import --particle-motion``)
+    particles_file: str | None = _f(default=None)
 
     def __post_init__(self) -> None:
-        if isinstance(self.field_start, (datetime.date, datetime.datetime)):
-            # YAML reads an unquoted ISO 8601 time as a datetime: back to UTC text
-            t = self.field_start
-            if isinstance(t, datetime.datetime) and t.tzinfo is not None:
-                t = t.astimezone(datetime.timezone.utc).replace(tzinfo=None)
-            object.__setattr__(self, "field_start", t.isoformat())
+        for key in ("field_start", "wind_start"):
+            t = getattr(self, key)
+            if isinstance(t, (datetime.date, datetime.datetime)):
+                # YAML reads an unquoted ISO 8601 time as a datetime: back to UTC text
+                if isinstance(t, datetime.datetime) and t.tzinfo is not None:
+                    t = t.astimezone(datetime.timezone.utc).replace(tzinfo=None)
+                object.__setattr__(self, key, t.isoformat())
         _coerce(self)
         _choice("model", self.model, MOTION_MODEL_NAMES)  # a typo is refused at load
         _choice("leeway_class", self.leeway_class, LEEWAY_CLASS_NAMES)  # whatever the model
         for key in ("current_kmh", "wind_kmh"):
             u, v = _vec2(key, getattr(self, key), bound=400.0)
             object.__setattr__(self, key, (u, v))
-        if self.field_file is not None and self.model != "drift":
-            raise ConfigError("field_file", self.field_file, "null unless model is 'drift'")
+        if self.field_file is not None and self.model not in ("drift", "leeway"):
+            raise ConfigError(
+                "field_file", self.field_file, "null unless model is 'drift' or 'leeway'"
+            )
+        if self.wind_file is not None and self.model != "leeway":
+            raise ConfigError("wind_file", self.wind_file, "null unless model is 'leeway'")
+        if (self.particles_file is None) == (self.model == "particles"):
+            raise ConfigError(
+                "particles_file",
+                self.particles_file,
+                "the .npz of particle tracks with model 'particles' (poc-env scenario import "
+                "--particle-motion), null otherwise",
+            )
 
     @property
     def moves(self) -> bool:
@@ -660,7 +683,7 @@ class TargetConfig:
 #: Names of the target motion models (``target.model``), checked when a scenario loads; the
 #: table of what each does is :data:`poc_env.theory.motion.MODELS`, which checks at import
 #: that it names exactly these (as the detection laws check ``LAW_CODES``).
-MOTION_MODEL_NAMES = ("static", "diffusion", "drift", "leeway")
+MOTION_MODEL_NAMES = ("static", "diffusion", "drift", "leeway", "particles")
 
 #: Names of the leeway classes (``target.leeway_class``), checked when a scenario loads; the
 #: classes' coefficients are :data:`poc_env.theory.motion.LEEWAY_CLASSES`, which checks at
@@ -1096,10 +1119,11 @@ def _resolve_prior_file(data: dict[str, Any], folder: Path) -> None:
         if not f.is_absolute():
             terrain["dem"] = str(folder / f)
     target = data.get("target")
-    if isinstance(target, dict) and isinstance(target.get("field_file"), str):
-        f = Path(target["field_file"])
-        if not f.is_absolute():
-            target["field_file"] = str(folder / f)
+    for key in ("field_file", "wind_file", "particles_file"):
+        if isinstance(target, dict) and isinstance(target.get(key), str):
+            f = Path(target[key])
+            if not f.is_absolute():
+                target[key] = str(folder / f)
 
 
 def save_scenario(scenario: Scenario, path: str | os.PathLike[str]) -> Path:

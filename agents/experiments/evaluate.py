@@ -503,7 +503,7 @@ def moving_effort_bound(
     from poc_env.theory.moving_bound import moving_bound
 
     env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
-    if env.params.motion is None or env.params.motion.field is not None:
+    if env.params.motion is None or env.params.motion.gridded:
         return None  # a gridded velocity field: not covered by the bound (its docstring)
     prior = episode_prior(env.scenario, seed) if random_priors else None
     env.reset(seed=seed, options=None if prior is None else {"prior": prior})

@@ -590,11 +590,18 @@ def import_scenario(
     dem: str | os.PathLike[str] | None = None,
     particles: str | os.PathLike[str] | None = None,
     particles_time: str | None = None,
+    particle_motion: bool = False,
 ) -> dict[str, Any]:
     """Build a scenario from GIS layers; nothing is written (see :func:`write_imported`).
 
     The prior is ``prior`` (GeoTIFF, CSV), or the ``particles`` of an OpenDrift trajectory
     file at ``particles_time`` (default its last time), or uniform over the area.
+
+    ``particle_motion``: the particles' trajectories also move the target
+    (``target.model: particles``, :mod:`poc_env.theory.particles`): the episode starts at
+    ``particles_time`` (default the file's *first* time), the prior is the particles there,
+    and their tracks from then on (``result["tracks"]``, written as ``<stem>.particles.npz``)
+    must cover the episode (the base scenario's horizon).
 
     ``dem``: a GeoTIFF of ground heights (m AMSL) recorded as ``terrain.dem`` (its absolute
     path) after :func:`poc_env.agents.mission.terrain.load_terrain` has read it over the
@@ -616,6 +623,15 @@ def import_scenario(
         raise ConfigError("particles", str(particles), "either --prior or --particles, not both")
     if particles_time is not None and particles is None:
         raise ConfigError("particles_time", particles_time, "only with --particles")
+    if particle_motion and particles is None:
+        raise ConfigError("particle_motion", True, "only with --particles FILE.nc")
+    tracks = None
+    if particle_motion:
+        from poc_env.agents.mission.particles import read_tracks
+
+        assert particles is not None
+        tracks = read_tracks(Path(particles), particles_time)
+        particles_time = tracks.start  # the prior: the same particles at the same time
     if airfields is None:
         raise ConfigError(
             "airfields", None,
@@ -694,7 +710,18 @@ def import_scenario(
     data["fleet"] = [{"takeoff": f["name"], "count": c} for f, c in zip(fields, counts) if c]
     if dem is not None:
         data["terrain"] = {**(data.get("terrain") or {}), "dem": str(Path(dem).resolve())}
+    if tracks is not None:
+        data["target"] = {"model": "particles", "particles_file": f"{name}.particles.npz"}
     sc = load_scenario(data)  # every section checked as the loader will check it
+    if tracks is not None:
+        from poc_env.theory.particles import tracks_from_lonlat
+
+        # the checks the environment will make (enough particles, the episode covered)
+        tracks_from_lonlat(
+            tracks.lon, tracks.lat, tracks.t_s, sc.map, sc.horizon_steps * sc.episode.dt_s,
+            str(particles),
+        )  # fmt: skip
+        prior_report["stranded"] = tracks.stranded
     if dem is not None:
         from poc_env.agents.mission.terrain import load_terrain
 
@@ -703,6 +730,7 @@ def import_scenario(
         "scenario": data,
         "prior": grid_prior,
         "crs": crs,
+        "tracks": tracks,
         "report": {
             "prior": prior_report,
             "area_km2": poly.area / KM**2,
@@ -749,29 +777,51 @@ def one_line(text: str) -> str:
 
 
 def write_imported(result: dict[str, Any], out: str | os.PathLike[str]) -> list[Path]:
-    """Write ``out`` (YAML), ``<stem>.npy`` and ``<stem>.crs.json`` as a set.
+    """Write ``out`` (YAML), ``<stem>.npy`` and ``<stem>.crs.json`` (and, with particle
+    motion, ``<stem>.particles.npz``) as a set.
 
     Every file is staged as a temporary file beside its destination and published only after
-    all three are complete (the .npy first, the YAML last, so a YAML never points at a missing
-    prior); an error while staging leaves no file behind and any old files untouched.
+    all are complete (the .npz and .npy first, the YAML last, so a YAML never points at a
+    missing file); an error while staging leaves no file behind and any old files untouched.
     """
+    import contextlib
+
     p = Path(out)
     if p.suffix.lower() not in (".yaml", ".yml"):
         raise ConfigError("out", str(p), "a .yaml or .yml path")
     stem = p.stem
-    if result["scenario"]["map"]["prior"]["file"] != f"{stem}.npy":
+    tracks = result.get("tracks")
+    if result["scenario"]["map"]["prior"]["file"] != f"{stem}.npy" or (
+        tracks is not None
+        and result["scenario"]["target"]["particles_file"] != f"{stem}.particles.npz"
+    ):
         result = dict(result, scenario=dict(result["scenario"]))
         result["scenario"]["map"] = dict(result["scenario"]["map"])
         result["scenario"]["map"]["prior"] = {"kind": "file", "file": f"{stem}.npy"}
+        if tracks is not None:
+            result["scenario"]["target"] = {
+                "model": "particles",
+                "particles_file": f"{stem}.particles.npz",
+            }
     npy, crs_json = p.with_name(f"{stem}.npy"), p.with_name(f"{stem}.crs.json")
+    npz = p.with_name(f"{stem}.particles.npz")
     text = scenario_yaml(result)
     crs_text = json.dumps(result["crs"], indent=2) + "\n"
-    with atomic_path(p) as ty, atomic_path(crs_json) as tc, atomic_path(npy) as tn:
+    with contextlib.ExitStack() as stack:
+        ty = stack.enter_context(atomic_path(p))
+        tc = stack.enter_context(atomic_path(crs_json))
+        tn = stack.enter_context(atomic_path(npy))
+        if tracks is not None:  # published first (the innermost)
+            tz = stack.enter_context(atomic_path(npz))
+            with open(tz, "wb") as fh:
+                np.savez_compressed(
+                    fh, lon=tracks.lon, lat=tracks.lat, t_s=tracks.t_s, start=np.str_(tracks.start)
+                )
         with open(tn, "wb") as fh:
             np.save(fh, np.asarray(result["prior"], dtype=np.float64), allow_pickle=False)
         tc.write_text(crs_text, encoding="utf-8")
         ty.write_text(text, encoding="utf-8")
-    return [p, npy, crs_json]
+    return [p, npy, crs_json] + ([npz] if tracks is not None else [])
 
 
 # --------------------------------------------------------------------------- command line
@@ -790,7 +840,14 @@ def add_scenario_import_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--particles-time",
         default=None,
-        help="ISO 8601 time of the particles to use (default the file's last time)",
+        help="ISO 8601 time of the particles to use (default the file's last time; with "
+        "--particle-motion the episode's start, default the file's first time)",
+    )
+    p.add_argument(
+        "--particle-motion",
+        action="store_true",
+        help="the particles' trajectories also move the target and the belief (target.model "
+        "particles; their tracks written beside the scenario as <stem>.particles.npz)",
     )
     p.add_argument("--airfields", required=True, help="GeoJSON/KML Points with a name")
     p.add_argument("--no-fly", default=None, help="GeoJSON/KML Polygons: no-fly zones")
@@ -832,6 +889,7 @@ def cmd_scenario_import(args: argparse.Namespace) -> int:
             dem=args.dem,
             particles=args.particles,
             particles_time=args.particles_time,
+            particle_motion=args.particle_motion,
         )
     for w in caught:
         print(f"warning: {w.message}")
@@ -854,6 +912,11 @@ def cmd_scenario_import(args: argparse.Namespace) -> int:
             print(
                 f"particles at {pr['time']}: {pr['particles'] - pr['inactive']} active of "
                 f"{pr['particles']} ({pr['inactive']} inactive, not counted)"
+            )
+        if "stranded" in pr:
+            print(
+                f"particle motion: {pr['stranded']} of them deactivated later (hold their "
+                "last position)"
             )
     else:
         print(f"prior: {pr['source']}")

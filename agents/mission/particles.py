@@ -87,12 +87,12 @@ def _describe(crs: Any) -> str:
     return f"{crs.name} ({ell})" if ell else str(crs.name)
 
 
-def read_particles(path: str | Path, time: str | None = None) -> Particles:
-    """The active particles of the trajectory file ``path`` at ``time`` (ISO 8601, UTC; one of
-    the file's times to the second; default its last time)."""
-    file = Path(path)
+def _open_tracks(file: Path) -> tuple[np.ndarray, np.ndarray, Any, str | None, str]:
+    """``(lon, lat, times, tdim, lat name)`` of the trajectory file: ``lon, lat`` with the time
+    axis last (``(N, T)``, or ``(N,)`` without one), ``times`` the time coordinate's values (or
+    None); every check of the module docstring but the time's."""
     if not file.is_file() or file.suffix.lower() not in (".nc", ".nc4"):
-        raise ConfigError(FIELD, str(path), "an existing NetCDF (.nc) trajectory file")
+        raise ConfigError(FIELD, str(file), "an existing NetCDF (.nc) trajectory file")
     require_extra("ocean", f"particles {file.name} (NetCDF)", "xarray", "h5netcdf")
     import xarray as xr
 
@@ -141,43 +141,112 @@ def read_particles(path: str | Path, time: str | None = None) -> Particles:
         limits.check_memory(FIELD, str(file), 2 * 8.0 * lon_v.size, "particle positions")
         lon = np.asarray(lon_v.values, dtype=float)
         lat = np.asarray(lat_v.values, dtype=float)
-        when: str | None = None
+        times = None
         if tdim is not None:
             axis = lon_v.dims.index(tdim)
             lon, lat = np.moveaxis(lon, axis, -1), np.moveaxis(lat, axis, -1)
             times = ds[tdim].values if tdim in ds.coords else None
-            k = lon.shape[-1] - 1
-            if time is not None:
-                if times is None or not np.issubdtype(times.dtype, np.datetime64):
-                    raise ConfigError("particles_time", time, "null: the file has no CF times")
-                from poc_env.theory.fields import epoch_seconds
+            if lon.ndim == 1:  # one particle: (T,) -> (1, T)
+                lon, lat = lon[None], lat[None]
+    return lon, lat, times, None if tdim is None else str(tdim), str(names["lat"])
 
-                want_s = epoch_seconds([time], "particles_time", time)[0]
-                have = epoch_seconds(times, f"{file} {tdim}", str(file))
-                hits = np.flatnonzero(np.abs(have - want_s) < 0.5)
-                if not len(hits):
-                    raise ConfigError(
-                        "particles_time",
-                        time,
-                        f"one of the file's {len(have)} times, "
-                        f"{np.datetime_as_string(times[0], 's')} to "
-                        f"{np.datetime_as_string(times[-1], 's')}",
-                    )
-                k = int(hits[0])
-            lon, lat = lon[..., k], lat[..., k]
-            if times is not None and np.issubdtype(times.dtype, np.datetime64):
-                when = str(np.datetime_as_string(times[k], "s"))
-        elif time is not None:
-            raise ConfigError("particles_time", time, "null: the file has no time dimension")
+
+def _time_index(file: Path, times: Any, tdim: str | None, time: str, field: str) -> int:
+    """The index of ``time`` (ISO 8601) among the file's ``times`` (to the second)."""
+    if times is None or not np.issubdtype(times.dtype, np.datetime64):
+        raise ConfigError(field, time, "null: the file has no CF times")
+    from poc_env.theory.fields import epoch_seconds
+
+    want_s = epoch_seconds([time], field, time)[0]
+    have = epoch_seconds(times, f"{file} {tdim}", str(file))
+    hits = np.flatnonzero(np.abs(have - want_s) < 0.5)
+    if not len(hits):
+        raise ConfigError(
+            field,
+            time,
+            f"one of the file's {len(have)} times, {np.datetime_as_string(times[0], 's')} to "
+            f"{np.datetime_as_string(times[-1], 's')}",
+        )
+    return int(hits[0])
+
+
+def read_particles(path: str | Path, time: str | None = None) -> Particles:
+    """The active particles of the trajectory file ``path`` at ``time`` (ISO 8601, UTC; one of
+    the file's times to the second; default its last time)."""
+    file = Path(path)
+    lon, lat, times, tdim, lat_name = _open_tracks(file)
+    when: str | None = None
+    if tdim is not None:
+        k = lon.shape[-1] - 1
+        if time is not None:
+            k = _time_index(file, times, tdim, time, "particles_time")
+        lon, lat = lon[..., k], lat[..., k]
+        if times is not None and np.issubdtype(times.dtype, np.datetime64):
+            when = str(np.datetime_as_string(times[k], "s"))
+    elif time is not None:
+        raise ConfigError("particles_time", time, "null: the file has no time dimension")
     lon, lat = lon.ravel(), lat.ravel()
     active = np.isfinite(lon) & np.isfinite(lat)
     if not active.any():
         raise ConfigError(str(file), f"no active particle at {when}", "finite lon/lat positions")
     if np.any(np.abs(lat[active]) > 90.0) or np.any(np.abs(lon[active]) > 360.0):
         raise ConfigError(
-            f"{file} {names['lat']}",
+            f"{file} {lat_name}",
             "values beyond 90 degrees",
             "WGS84 degrees (lat, lon swapped?)",
         )
     lon_a = np.where(lon[active] > 180.0, lon[active] - 360.0, lon[active])
     return Particles(lon_a, lat[active], when, int(lon.size), int((~active).sum()))
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """The trajectories of the particles active at ``start`` (ISO 8601): ``lon, lat (n, T)``
+    degrees (WGS84; a particle deactivated later holds its last position), at ``t_s (T,)``
+    seconds from ``start`` (from the last output time at or before it to the file's end)."""
+
+    lon: np.ndarray
+    lat: np.ndarray
+    t_s: np.ndarray
+    start: str
+    total: int
+    stranded: int
+
+
+def read_tracks(path: str | Path, start: str | None = None) -> Tracks:
+    """The trajectories of the file ``path`` from ``start`` (ISO 8601, UTC; one of the file's
+    times; default its first), for the ``particles`` motion model
+    (:mod:`poc_env.theory.particles`): ConfigError for a file without a CF time coordinate,
+    no active particle at ``start`` and every check of :func:`read_particles`."""
+    file = Path(path)
+    lon, lat, times, tdim, lat_name = _open_tracks(file)
+    if tdim is None or times is None or not np.issubdtype(times.dtype, np.datetime64):
+        raise ConfigError(
+            str(file),
+            "no CF time coordinate",
+            "trajectories over time (dimension time with units 'seconds since ...') to move "
+            "the target",
+        )
+    k = 0 if start is None else _time_index(file, times, tdim, start, "particles_time")
+    from poc_env.theory.fields import epoch_seconds
+
+    secs = epoch_seconds(times, f"{file} {tdim}", str(file))
+    if np.any(np.diff(secs) <= 0):
+        raise ConfigError(f"{file} {tdim}", "times not increasing", "strictly increasing times")
+    lon, lat = lon.reshape(-1, lon.shape[-1])[:, k:], lat.reshape(-1, lat.shape[-1])[:, k:]
+    active = np.isfinite(lon[:, 0]) & np.isfinite(lat[:, 0])
+    when = str(np.datetime_as_string(times[k], "s"))
+    if not active.any():
+        raise ConfigError(str(file), f"no active particle at {when}", "finite lon/lat positions")
+    lon, lat = lon[active], lat[active]
+    if np.any(np.abs(lat[np.isfinite(lat)]) > 90.0) or np.any(np.abs(lon[np.isfinite(lon)]) > 360):
+        raise ConfigError(f"{file} {lat_name}", "values beyond 90 degrees", "WGS84 degrees")
+    gone = ~(np.isfinite(lon) & np.isfinite(lat))
+    stranded = int(gone.any(axis=1).sum())
+    # a particle deactivated (stranded) later holds its last position: forward fill in time
+    idx = np.where(~gone, np.arange(lon.shape[1])[None], 0)
+    np.maximum.accumulate(idx, axis=1, out=idx)
+    rows = np.arange(len(lon))[:, None]
+    lon, lat = lon[rows, idx], lat[rows, idx]
+    lon = np.where(lon > 180.0, lon - 360.0, lon)
+    return Tracks(lon, lat, secs[k:] - secs[k], when, int(active.size), stranded)

@@ -49,7 +49,7 @@ def comoving_poc(
     sc = scenario
     grid = Grid.from_config(sc.map)
     dt = sc.episode.dt_s
-    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), sc.horizon_steps * dt)
+    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), sc.horizon_steps * dt, sc.map)
     b = np.array(belief_fine, dtype=float)[None]
     vel = np.asarray(velocity, dtype=float).reshape(1, 2)
     n = max(1, round(duration_s / dt))

@@ -168,3 +168,17 @@ def predict_uniform(
         y = target[k, 1]
         if x < x0 or x >= x1 or y < y0 or y >= y1:
             target_out[k] = True
+
+
+@_jit
+def csr_apply(indptr, indices, data, x, out):
+    """``out[k] = A @ x[k]`` for every env ``k``: ``A`` the CSR matrix ``(indptr, indices,
+    data)`` (n, n), ``x, out (E, n)`` (the particles' transition,
+    :func:`poc_env.theory.particles.predict`)."""
+    e, n = x.shape
+    for k in range(e):
+        for r in range(n):
+            acc = 0.0
+            for p in range(indptr[r], indptr[r + 1]):
+                acc += data[p] * x[k, indices[p]]
+            out[k, r] = acc

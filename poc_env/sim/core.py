@@ -202,6 +202,8 @@ class State:
     drift: np.ndarray | None = None  # (E, 2) the episode's uniform velocity (m/s)
     target_out: np.ndarray | None = None  # (E,) bool: the hidden target has left the map
     target_noise: np.ndarray | None = None  # (E, H, 2) the target's random-walk draws
+    leeway_side: np.ndarray | None = None  # (E,) +1/-1 crosswind side (leeway wind files only)
+    target_particle: np.ndarray | None = None  # (E,) int: the particle the target follows, or -1
 
     @property
     def n_envs(self) -> int:
@@ -338,7 +340,22 @@ def _initial_motion(params: Params, state: State, rngs) -> None:
     assert motion is not None
     e = len(rngs)
     state.mass_out = np.zeros(e)
-    state.drift = np.stack([motion.draw(rng) for rng in rngs]) if e else np.zeros((0, 2))
+    drawn = [motion.draw_episode(rng) for rng in rngs]
+    state.drift = np.stack([v for v, _ in drawn]) if e else np.zeros((0, 2))
+    if motion.wind_field is not None:  # a wind file: the leeway varies, its side is kept
+        state.leeway_side = np.array([side for _, side in drawn], dtype=float)
+    if motion.particles is not None:  # the target follows a particle of its fine cell
+        from poc_env.theory.particles import pick_particle
+
+        h = params.grid.cell_m / params.s
+        origin = np.asarray(params.grid.origin_m, dtype=float)
+        state.target_particle = np.array(
+            [
+                pick_particle(motion.particles, state.target[k] - origin, h, params.fine_shape, r)
+                for k, r in enumerate(rngs)
+            ],
+            dtype=np.int64,
+        )
     state.target_out = np.zeros(e, dtype=bool)
     noise = np.zeros((e, max(params.horizon, 1), 2))
     if motion.diffusion > 0:
@@ -357,23 +374,25 @@ def predict(params: Params, state: State) -> None:
     assert state.target_out is not None and state.target_noise is not None
     h = params.grid.cell_m / params.s
     dt = params.dt
-    if motion.field is None:  # one velocity per env: belief and targets in one compiled call
+    side = state.leeway_side
+    if not motion.gridded:  # one velocity per env: belief and targets in one compiled call
         motion_mod.predict_uniform(
             motion, state.belief, state.drift, state.mass_out, state.target, state.target_out,
             state.target_noise, state.step, dt, h, params.grid.origin_m, params.grid.cell_m,
             (params.grid.ny, params.grid.nx),
         )  # fmt: skip
         return
-    varying = len(motion.field.frames) > 1
+    fields = [f for f in (motion.field, motion.wind_field) if f is not None]
+    varying = motion.particles is not None or any(len(f.frames) > 1 for f in fields)
     if not varying:  # one velocity per env for the whole batch: in place, no copies
         state.mass_out += motion_mod.predict(
-            motion, state.belief, state.drift, 0.0, dt, h, params.s
+            motion, state.belief, state.drift, 0.0, dt, h, params.s, side
         )
         idx = np.minimum(state.step, state.target_noise.shape[1] - 1)
         noise = state.target_noise[np.arange(len(idx)), idx]
         motion_mod.move_targets(
             motion, state.target, state.target_out, state.drift, noise, 0.0, dt,
-            params.grid.origin_m, params.grid.cell_m, (params.grid.ny, params.grid.nx),
+            params.grid.origin_m, params.grid.cell_m, (params.grid.ny, params.grid.nx), side,
         )  # fmt: skip
         return
     for k in np.unique(state.step).tolist():  # a time-varying field: envs grouped by their time
@@ -381,15 +400,18 @@ def predict(params: Params, state: State) -> None:
         t = k * dt
         belief = state.belief[rows]
         state.mass_out[rows] += motion_mod.predict(
-            motion, belief, state.drift[rows], t, dt, h, params.s
-        )
+            motion, belief, state.drift[rows], t, dt, h, params.s,
+            None if side is None else side[rows],
+        )  # fmt: skip
         state.belief[rows] = belief
         target, out = state.target[rows], state.target_out[rows]
         idx = np.minimum(state.step[rows], state.target_noise.shape[1] - 1)
         noise = state.target_noise[rows][np.arange(len(idx)), idx]
+        which = None if state.target_particle is None else state.target_particle[rows]
         motion_mod.move_targets(
             motion, target, out, state.drift[rows], noise, t, dt, params.grid.origin_m,
             params.grid.cell_m, (params.grid.ny, params.grid.nx),
+            None if side is None else side[rows], which,
         )  # fmt: skip
         state.target[rows], state.target_out[rows] = target, out
 

@@ -32,6 +32,13 @@ Formats (by suffix):
     dropped. ``x_wind``/``y_wind`` are recognised and refused for ``drift``: a wind is not a
     current.
 
+The same reader reads the 10 m wind of a ``leeway`` target (``target.wind_file``,
+``target.wind_start``; kind ``"wind"`` of :func:`read_field`, errors naming those keys): the
+pair with ``standard_name`` ``eastward_wind`` / ``northward_wind`` (or ``x_wind`` /
+``y_wind``), else variables ``u10``/``v10``, ``uwnd``/``vwnd`` or ``u``/``v``; the same units,
+coordinates and checks, speeds up to :data:`~poc_env.theory.motion.MAX_WIND_MPS`; a current
+given as the wind is refused.
+
 Interpolation: bilinear in space at each cell centre (projected to the file's coordinates by
 pyproj, :mod:`poc_env.crs`, through the map's ``origin_deg`` and
 ``projection``), linear in time between the file's own times (kept, not resampled). The
@@ -79,6 +86,20 @@ SPEED_UNITS = {
 }  # fmt: skip
 LENGTH_UNITS = {"m": 1.0, "meter": 1.0, "meters": 1.0, "metre": 1.0, "metres": 1.0, "km": 1e3}
 FIELD = "target.field_file"
+#: the kinds of field a file may hold: (file key, start key, what it is) of the scenario; one
+#: reader for both (:func:`read_field`), told apart by their standard names.
+KINDS = {
+    "current": ("target.field_file", "target.field_start", "a current"),
+    "wind": ("target.wind_file", "target.wind_start", "a 10 m wind"),
+}
+#: (east, north) variable names of a wind when no standard name matches (ERA5, NCEP, generic).
+WIND_VARIABLES = (("u10", "v10"), ("uwnd", "vwnd"), ("u", "v"))
+
+
+def _kind(kind: str) -> tuple[str, str, str]:
+    if kind not in KINDS:
+        raise ValueError(f"field kind {kind!r}: one of {tuple(KINDS)}")
+    return KINDS[kind]
 
 
 @dataclass(frozen=True)
@@ -101,19 +122,24 @@ class RawField:
     times: np.ndarray | None
     dated: bool
     path: str
+    #: ``"current"`` or ``"wind"`` (:data:`KINDS`): which scenario keys its errors name
+    kind: str = "current"
 
 
 # ------------------------------------------------------------------------------ reading
-def read_field(path: str) -> RawField:
-    """Read the ``.csv`` or ``.nc`` velocity field ``path`` (module docstring)."""
+def read_field(path: str, kind: str = "current") -> RawField:
+    """Read the ``.csv`` or ``.nc`` velocity field ``path`` (module docstring) holding a
+    ``kind`` of field (:data:`KINDS`: a ``"current"`` or a ``"wind"``); errors name the
+    scenario key of that kind."""
+    field = _kind(kind)[0]
     p = Path(path)
     if not p.is_file():
-        raise ConfigError(FIELD, path, "an existing .npy, .csv or .nc file")
+        raise ConfigError(field, path, "an existing .npy, .csv or .nc file")
     if p.suffix.lower() == ".csv":
-        return _read_csv(p)
+        return _read_csv(p, kind)
     if p.suffix.lower() in (".nc", ".nc4", ".netcdf"):
-        return _read_netcdf(p)
-    raise ConfigError(FIELD, path, "a .npy, .csv or .nc (CF NetCDF) velocity field")
+        return _read_netcdf(p, kind)
+    raise ConfigError(field, path, "a .npy, .csv or .nc (CF NetCDF) velocity field")
 
 
 def epoch_seconds(values: Any, field: str, shown: Any) -> np.ndarray:
@@ -133,7 +159,8 @@ def epoch_seconds(values: Any, field: str, shown: Any) -> np.ndarray:
     return t.astype("int64").astype(float) / 1e9
 
 
-def _read_csv(p: Path) -> RawField:
+def _read_csv(p: Path, kind: str = "current") -> RawField:
+    FIELD = _kind(kind)[0]
     try:
         with p.open(newline="", encoding="utf-8") as fh:
             rows = list(csv.reader(fh))
@@ -205,6 +232,7 @@ def _read_csv(p: Path) -> RawField:
         times=ts if tcol else None,
         dated=tcol == "time",
         path=str(p),
+        kind=kind,
     )
 
 
@@ -212,33 +240,55 @@ def _std(var: Any) -> str:
     return str(var.attrs.get("standard_name", "")).strip()
 
 
-def _find_pair(ds: Any, p: Path) -> tuple[str, str]:
+def _find_pair(ds: Any, p: Path, kind: str = "current") -> tuple[str, str]:
+    """The (east, north) variables of a ``kind`` of field: by standard name, else by variable
+    name unless a standard name says the other kind; a file of the other kind is refused."""
+    FIELD = _kind(kind)[0]
     names = {_std(ds[k]): k for k in ds.data_vars}
-    for east, north in CURRENT_STANDARD_NAMES:
+    mine, other = (
+        (CURRENT_STANDARD_NAMES, WIND_STANDARD_NAMES)
+        if kind == "current"
+        else (WIND_STANDARD_NAMES, CURRENT_STANDARD_NAMES)
+    )
+    for east, north in mine:
         if east in names and north in names:
             return names[east], names[north]
-    winds = {n for pair in WIND_STANDARD_NAMES for n in pair}
-    for east, north in CURRENT_VARIABLES:  # by name, unless the standard name says a wind
+    theirs = {n for pair in other for n in pair}
+    for east, north in CURRENT_VARIABLES if kind == "current" else WIND_VARIABLES:
+        # by name, unless the standard name says the other kind
         pair = (east in ds.data_vars) and (north in ds.data_vars)
-        if pair and not {_std(ds[east]), _std(ds[north])} & winds:
+        if pair and not {_std(ds[east]), _std(ds[north])} & theirs:
             return east, north
-    for east, north in WIND_STANDARD_NAMES:
+    for east, north in other:
         if east in names and north in names:
+            if kind == "current":
+                raise ConfigError(
+                    FIELD,
+                    f"{p} (a wind: {east}/{north})",
+                    "a current (eastward_sea_water_velocity / northward_sea_water_velocity): "
+                    "target.model drift is advected by the current; a wind drives the leeway "
+                    "model (target.wind_file)",
+                )
             raise ConfigError(
                 FIELD,
-                f"{p} (a wind: {east}/{north})",
-                "a current (eastward_sea_water_velocity / northward_sea_water_velocity): "
-                "target.model drift is advected by the current; a wind drives the leeway model",
+                f"{p} (a current: {east}/{north})",
+                "a 10 m wind (eastward_wind / northward_wind or x_wind / y_wind): the leeway "
+                "is driven by the wind; a current goes in target.field_file",
             )
-    raise ConfigError(
-        FIELD,
-        f"{p} with variables {sorted(map(str, ds.data_vars))}",
-        "a pair with standard_name eastward_sea_water_velocity / northward_sea_water_velocity "
-        "(or variables u/v, uo/vo, water_u/water_v)",
-    )
+    if kind == "current":
+        want = (
+            "a pair with standard_name eastward_sea_water_velocity / "
+            "northward_sea_water_velocity (or variables u/v, uo/vo, water_u/water_v)"
+        )
+    else:
+        want = (
+            "a pair with standard_name eastward_wind / northward_wind or x_wind / y_wind "
+            "(or variables u10/v10, uwnd/vwnd, u/v)"
+        )
+    raise ConfigError(FIELD, f"{p} with variables {sorted(map(str, ds.data_vars))}", want)
 
 
-def _units(var: Any, name: str, p: Path) -> float:
+def _units(var: Any, name: str, p: Path, FIELD: str = FIELD) -> float:
     units = str(var.attrs.get("units", "")).strip()
     factor = SPEED_UNITS.get(units) or SPEED_UNITS.get(units.lower())
     if factor is None:
@@ -276,7 +326,7 @@ def _axis_kind(ds: Any, dim: str) -> str | None:
     return None
 
 
-def _grid_crs(ds: Any, var: Any, p: Path) -> Any:
+def _grid_crs(ds: Any, var: Any, p: Path, FIELD: str = FIELD) -> Any:
     """The pyproj CRS of ``var``'s CF ``grid_mapping``, or None."""
     gm = var.attrs.get("grid_mapping")
     if not gm:
@@ -295,7 +345,8 @@ def _grid_crs(ds: Any, var: Any, p: Path) -> Any:
         ) from None
 
 
-def _read_netcdf(p: Path) -> RawField:
+def _read_netcdf(p: Path, kind: str = "current") -> RawField:
+    FIELD = _kind(kind)[0]
     require_extra("ocean", f"{FIELD} {p.name} (NetCDF)", "xarray", "h5netcdf")
     import xarray as xr
 
@@ -304,11 +355,11 @@ def _read_netcdf(p: Path) -> RawField:
     except Exception as err:
         raise ConfigError(FIELD, str(p), f"a readable CF NetCDF file ({err})") from None
     with ds:
-        ue, vn = _find_pair(ds, p)
+        ue, vn = _find_pair(ds, p, kind)
         u, v = ds[ue], ds[vn]
         if u.dims != v.dims:
             raise ConfigError(FIELD, f"{p}: {ue}{u.dims}, {vn}{v.dims}", "the same dimensions")
-        fu, fv = _units(u, ue, p), _units(v, vn, p)
+        fu, fv = _units(u, ue, p, FIELD), _units(v, vn, p, FIELD)
         kinds: dict[str, str] = {}
         for d in u.dims:
             k = _axis_kind(ds, str(d))
@@ -373,7 +424,7 @@ def _read_netcdf(p: Path) -> RawField:
         if xdim is not None and ydim is not None:
             xs = np.array(ds.coords[xdim].values, dtype=float)
             ys = np.array(ds.coords[ydim].values, dtype=float)
-            gcrs = _grid_crs(ds, u, p)
+            gcrs = _grid_crs(ds, u, p, FIELD)
             if kinds[xdim] == "lon":
                 frame = "lonlat"
                 if gcrs is not None and not _wgs84(gcrs):
@@ -409,7 +460,7 @@ def _read_netcdf(p: Path) -> RawField:
                 raise ConfigError(FIELD, f"{p}: coordinates not monotonic", "a monotonic grid")
     if times is not None and np.any(np.diff(times) <= 0):
         raise ConfigError(FIELD, f"{p}: times not increasing", "strictly increasing times")
-    return RawField(uu, vv, xs, ys, frame, crs, times, dated, str(p))
+    return RawField(uu, vv, xs, ys, frame, crs, times, dated, str(p), kind)
 
 
 def _wgs84(crs: Any) -> bool:
@@ -483,9 +534,9 @@ def _bilinear(xs: np.ndarray, ys: np.ndarray, f: np.ndarray, px: np.ndarray, py:
     )
 
 
-def parse_start(text: Any) -> float:
-    """``target.field_start`` (ISO 8601, UTC) -> seconds since 1970."""
-    return float(epoch_seconds([str(text)], "target.field_start", text)[0])
+def parse_start(text: Any, field: str = "target.field_start") -> float:
+    """``target.field_start`` (or ``field``; ISO 8601, UTC) -> seconds since 1970."""
+    return float(epoch_seconds([str(text)], field, text)[0])
 
 
 def regrid(
@@ -495,6 +546,7 @@ def regrid(
     or None)`` of ``raw`` over an episode of ``span_s`` seconds starting at ``start`` (ISO 8601;
     default the file's first time). ConfigError for a field not covering the map or the span,
     NaN at a cell centre, or ``start`` with an undated field (module docstring)."""
+    FIELD, START, _ = _kind(raw.kind)
     x, y = cell_centres(map_cfg, shape)
     if raw.xs is None or raw.ys is None:
         frames_u = np.broadcast_to(raw.u[:, :1, :1], (len(raw.u), *shape))
@@ -522,14 +574,14 @@ def regrid(
     times = None
     if raw.times is not None and len(raw.times) > 1:
         if start is not None and not raw.dated:
-            raise ConfigError("target.field_start", start, "null for a field timed in t_s")
-        t0 = parse_start(start) if start is not None else float(raw.times[0])
+            raise ConfigError(START, start, "null for a field timed in t_s")
+        t0 = parse_start(start, START) if start is not None else float(raw.times[0])
         rel = raw.times - t0
         if rel[0] > 0 or rel[-1] < span_s:
             raise ConfigError(
                 FIELD,
                 f"{raw.path} times from {rel[0]:g} s to {rel[-1]:g} s of the episode's start",
-                f"times covering the episode: 0 to {span_s:g} s (target.field_start)",
+                f"times covering the episode: 0 to {span_s:g} s ({START})",
             )
         first = max(int(np.searchsorted(rel, 0.0, side="right")) - 1, 0)
         last = min(int(np.searchsorted(rel, span_s, side="left")), len(rel) - 1)
@@ -539,11 +591,9 @@ def regrid(
         start is not None
         and raw.times is not None
         and raw.dated
-        and (parse_start(start) != float(raw.times[0]))
+        and (parse_start(start, START) != float(raw.times[0]))
     ):
-        raise ConfigError(
-            "target.field_start", start, "the single time of a one-frame field, or null"
-        )
+        raise ConfigError(START, start, "the single time of a one-frame field, or null")
     frames = np.stack([frames_u, frames_v], axis=1).astype(float)
     bad = ~np.isfinite(frames)
     if bad.any():

@@ -23,7 +23,9 @@ Models (:data:`MODELS`; ``target.model`` of the scenario, :class:`~poc_env.confi
     ``v`` = the current plus the leeway of the target class in the 10 m wind ``W``
     (``wind_kmh``): downwind ``a_d |W| + b_d`` along the wind, crosswind ``a_c |W| + b_c`` to
     its right or left (the side drawn once per episode, 50/50); plus diffusion ``D``. The
-    classes are :data:`LEEWAY_CLASSES`.
+    classes are :data:`LEEWAY_CLASSES`. The wind may be gridded and time-varying
+    (``wind_file``, read as the current is; the leeway is then that of each cell's wind at
+    each time, the side still one per episode), and the current may be a gridded field too.
 
 Numerics (:func:`advect_diffuse`): a finite-volume step on the fine grid, first-order upwind
 fluxes for advection and centred fluxes for diffusion, explicit, sub-stepped so that
@@ -62,6 +64,9 @@ KMH = 1000.0 / 3600.0
 #: Largest speed a velocity field may hold, m/s: ocean surface currents stay below ~3 m/s; a
 #: field above this is in the wrong unit (km/h, cm/s).
 MAX_FIELD_MPS = 10.0
+#: Largest 10 m wind a wind file may hold, m/s: above the strongest sustained winds measured
+#: (~ 80 m/s in tropical cyclones); a file above this is in the wrong unit.
+MAX_WIND_MPS = 90.0
 
 
 @dataclass(frozen=True)
@@ -170,12 +175,19 @@ class VelocityField:
 
 
 def load_field(
-    path: str, shape: tuple[int, int], span_s: float, dt_s: float | None, field: str
+    path: str,
+    shape: tuple[int, int],
+    span_s: float,
+    dt_s: float | None,
+    field: str,
+    dt_key: str = "target.field_dt_s",
+    top: float = MAX_FIELD_MPS,
 ) -> VelocityField:
     """Read and check a ``.npy`` velocity field for a map of ``shape`` (ny, nx) cells and an
     episode of ``span_s`` seconds: ConfigError naming ``field`` for a missing or unreadable
     file, a wrong shape, NaN or infinite values, speeds beyond :data:`MAX_FIELD_MPS` (wrong
-    unit) or frames that end before the episode does. Other formats: :func:`load_any_field`."""
+    unit; ``top`` for a wind) or frames that end before the episode does (their spacing is
+    ``dt_key``). Other formats: :func:`load_any_field`."""
     p = Path(path)
     if p.suffix != ".npy":
         raise ConfigError(field, path, "a .npy file of velocities (2, ny, nx) or (T, 2, ny, nx)")
@@ -200,10 +212,10 @@ def load_field(
     arr = np.array(arr, dtype=float)  # read from the file now (a copy, not the memory map)
     if not np.all(np.isfinite(arr)):
         raise ConfigError(field, f"{path} with NaN or infinite values", "finite velocities")
-    _check_speeds(arr, path, field)
+    _check_speeds(arr, path, field, top)
     if len(arr) > 1:
         if dt_s is None:
-            raise ConfigError("target.field_dt_s", dt_s, "the time between frames (s)")
+            raise ConfigError(dt_key, dt_s, "the time between frames (s)")
         if (len(arr) - 1) * dt_s < span_s:
             raise ConfigError(
                 field,
@@ -213,31 +225,39 @@ def load_field(
     return VelocityField(arr, float(dt_s or 1.0))
 
 
-def _check_speeds(arr: np.ndarray, path: str, field: str) -> None:
+def _check_speeds(arr: np.ndarray, path: str, field: str, limit: float = MAX_FIELD_MPS) -> None:
     top = float(np.hypot(arr[:, 0], arr[:, 1]).max())
-    if top > MAX_FIELD_MPS:
+    if top > limit:
         raise ConfigError(
-            field, f"{path} with speeds up to {top:g}", f"m/s, at most {MAX_FIELD_MPS:g} (km/h?)"
+            field, f"{path} with speeds up to {top:g}", f"m/s, at most {limit:g} (km/h?)"
         )
 
 
-def load_any_field(target: Any, map_cfg: Any, shape: tuple[int, int], span_s: float):
-    """The :class:`VelocityField` of ``target.field_file`` on a map of ``shape`` cells: a
-    ``.npy`` on the map's cells (:func:`load_field`) or a ``.csv`` / CF ``.nc`` file read and
-    interpolated onto the cells and the episode's span (:mod:`poc_env.theory.fields`)."""
-    path = target.field_file
-    field = "target.field_file"
+def load_any_field(
+    target: Any, map_cfg: Any, shape: tuple[int, int], span_s: float, kind: str = "current"
+) -> VelocityField:
+    """The :class:`VelocityField` of ``target.field_file`` (``kind`` ``"current"``) or of
+    ``target.wind_file`` (``"wind"``, the 10 m wind of ``leeway``) on a map of ``shape`` cells:
+    a ``.npy`` on the map's cells (:func:`load_field`) or a ``.csv`` / CF ``.nc`` file read and
+    interpolated onto the cells and the episode's span (:mod:`poc_env.theory.fields`: one
+    reader for both kinds, which refuses a file of the other kind)."""
+    pre = "field" if kind == "current" else "wind"
+    path, start, dt_s = (getattr(target, f"{pre}_{k}") for k in ("file", "start", "dt_s"))
+    field, start_key, dt_key = (f"target.{pre}_{k}" for k in ("file", "start", "dt_s"))
+    top = MAX_FIELD_MPS if kind == "current" else MAX_WIND_MPS
     if Path(path).suffix.lower() == ".npy":
-        if target.field_start is not None:
-            raise ConfigError("target.field_start", target.field_start, "null for a .npy field")
-        return load_field(path, shape, span_s, target.field_dt_s, field)
+        if start is not None:
+            raise ConfigError(start_key, start, "null for a .npy field")
+        return load_field(path, shape, span_s, dt_s, field, dt_key, top)
     from poc_env.theory import fields
 
-    if target.field_dt_s is not None:
-        raise ConfigError("target.field_dt_s", target.field_dt_s, "null: the file has its times")
-    raw = fields.read_field(path)
-    frames, times = fields.regrid(raw, map_cfg, shape, span_s, target.field_start)
-    _check_speeds(frames, path, field)
+    if dt_s is not None:
+        raise ConfigError(dt_key, dt_s, "null: the file has its times")
+    if map_cfg is None:
+        raise ValueError(f"{field} {path}: a .csv/.nc field needs the map (check's map_cfg)")
+    raw = fields.read_field(path, kind)
+    frames, times = fields.regrid(raw, map_cfg, shape, span_s, start)
+    _check_speeds(frames, path, field, top)
     return VelocityField(frames, 1.0, times)
 
 
@@ -276,8 +296,13 @@ MODELS: dict[str, MotionModel] = {
             "v = current + field(x, t); dp/dt = -div(v p) + D lap p",
         ),
         MotionModel(
-            "leeway", True, True, False, True,
-            "v = current + (a_d |W| + b_d) W/|W| + s (a_c |W| + b_c) W_perp; + D lap p",
+            "leeway", True, True, True, True,
+            "v = current + field(x, t) + (a_d |W| + b_d) W/|W| + s (a_c |W| + b_c) W_perp, "
+            "W = wind(x, t); + D lap p",
+        ),
+        MotionModel(
+            "particles", True, False, False, False,
+            "b' = P_k b: the particles' cell-to-cell transition (poc_env.theory.particles)",
         ),
     )
 }  # fmt: skip
@@ -305,8 +330,9 @@ def leeway_class(name: Any, field: str = "target.leeway_class") -> LeewayClass:
 @dataclass(frozen=True)
 class Motion:
     """The checked motion of one scenario: its model, ``D`` (m^2/s), the fixed uniform
-    current (m/s), the random current's largest speed (m/s), the wind (m/s), the leeway class
-    and the gridded field (or None)."""
+    current (m/s), the random current's largest speed (m/s), the wind (m/s), the leeway class,
+    the gridded current (or None) and the gridded 10 m wind (``target.wind_file``, m/s on the
+    map's cells, or None: the uniform ``wind``)."""
 
     model: MotionModel
     diffusion: float
@@ -315,17 +341,34 @@ class Motion:
     wind: tuple[float, float]
     leeway: LeewayClass | None
     field: VelocityField | None
+    wind_field: VelocityField | None = None
+    #: ``particles``: the trajectories that move the belief and the target
+    particles: Any = None
 
     @property
     def moves(self) -> bool:
         return self.model.moves
 
+    @property
+    def gridded(self) -> bool:
+        """The motion varies over the map (a current or a wind file, or particles): not one
+        velocity per episode."""
+        return self.field is not None or self.wind_field is not None or self.particles is not None
+
     def draw(self, rng: np.random.Generator) -> np.ndarray:
-        """The episode's uniform velocity (2,) m/s: the fixed current, plus a random current
-        (speed ``U(0, max)``, direction ``U(0, 2 pi)``) when ``random_current > 0``, plus the
-        leeway with its crosswind side drawn 50/50 (leeway). Draws from ``rng`` only what the
-        model uses."""
+        """The episode's uniform velocity (2,) m/s (:meth:`draw_episode`)."""
+        return self.draw_episode(rng)[0]
+
+    def draw_episode(self, rng: np.random.Generator) -> tuple[np.ndarray, float]:
+        """The episode's uniform velocity (2,) m/s and crosswind side: the fixed current, plus
+        a random current (speed ``U(0, max)``, direction ``U(0, 2 pi)``) when
+        ``random_current > 0``, plus (leeway) the leeway with its crosswind side drawn 50/50.
+        With a wind file the leeway is not uniform: the velocity leaves it out and the side
+        (+1 right, -1 left; 0 without leeway) picks the leeway field (:func:`cell_velocity`).
+        Draws from ``rng`` only what the model uses, in the same order with or without a wind
+        file."""
         v = np.zeros(2)
+        side = 0.0
         if self.model.uses_current:
             v += self.current
             if self.random_current > 0:
@@ -334,21 +377,33 @@ class Motion:
                 v += speed * np.array([np.cos(angle), np.sin(angle)])
         if self.model.uses_wind and self.leeway is not None:
             side = 1.0 if rng.random() < 0.5 else -1.0
-            v += leeway_velocity(self.leeway, self.wind, side)
-        return v
+            if self.wind_field is None:
+                v += leeway_velocity(self.leeway, self.wind, side)
+        return v, side
 
 
-def leeway_velocity(cls: LeewayClass, wind: tuple[float, float], side: float) -> np.ndarray:
-    """The leeway (2,) m/s of class ``cls`` in the 10 m ``wind`` (east, north; m/s): downwind
-    along the wind, crosswind perpendicular to its right (``side`` +1) or left (-1)."""
+def leeway_velocity(cls: LeewayClass, wind: Any, side: float) -> np.ndarray:
+    """The leeway m/s of class ``cls`` in the 10 m ``wind`` (east, north; m/s; ``(2,)`` or
+    ``(..., 2, ny, nx)`` frames, the result of the same shape): downwind along the wind,
+    crosswind perpendicular to its right (``side`` +1) or left (-1); zero where there is no
+    wind."""
     w = np.asarray(wind, dtype=float)
-    speed = float(np.hypot(*w))
-    if speed == 0.0:
-        return np.zeros(2)
-    down = w / speed
-    right = np.array([down[1], -down[0]])  # the downwind direction turned 90 deg clockwise
-    dw, cw = cls.leeway(speed, side)
-    return dw * down + cw * right
+    if w.ndim == 1:
+        speed = float(np.hypot(*w))
+        if speed == 0.0:
+            return np.zeros(2)
+        down = w / speed
+        right = np.array([down[1], -down[0]])  # the downwind direction turned 90 deg clockwise
+        dw, cw = cls.leeway(speed, side)
+        return dw * down + cw * right
+    we, wn = w[..., 0, :, :], w[..., 1, :, :]
+    speed = np.hypot(we, wn)
+    calm = speed == 0.0
+    safe = np.where(calm, 1.0, speed)
+    de, dn = we / safe, wn / safe  # the downwind direction; right of it: (dn, -de)
+    dw, cw = cls.leeway(speed, side)  # elementwise (the same formula as one wind)
+    out = np.stack([dw * de + cw * dn, dw * dn - cw * de], axis=-3)
+    return np.where(calm[..., None, :, :], 0.0, out)
 
 
 def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = None) -> Motion:
@@ -361,8 +416,31 @@ def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = Non
     field = None
     if target.field_file is not None:
         if not model.uses_field:
-            raise ConfigError("target.field_file", target.field_file, "null unless model is drift")
+            raise ConfigError(
+                "target.field_file", target.field_file, "null unless model is drift or leeway"
+            )
         field = load_any_field(target, map_cfg, shape, span_s)
+    lee = None
+    wind_file = getattr(target, "wind_file", None)
+    if wind_file is not None:
+        if cls is None:
+            raise ConfigError("target.wind_file", wind_file, "null unless model is leeway")
+        if any(target.wind_kmh):
+            raise ConfigError(
+                "target.wind_kmh", list(target.wind_kmh), "[0, 0] with target.wind_file"
+            )
+        lee = load_any_field(target, map_cfg, shape, span_s, "wind")
+    tracks = None
+    if model.name == "particles":
+        from poc_env.theory import particles
+
+        if target.diffusion_m2_s:
+            raise ConfigError(
+                "target.diffusion_m2_s", target.diffusion_m2_s, "0: particles carry their spread"
+            )
+        if map_cfg is None:
+            raise ValueError("target.particles_file: particles need the map (check's map_cfg)")
+        tracks = particles.load_tracks(target.particles_file, map_cfg, span_s)
     return Motion(
         model=model,
         diffusion=float(target.diffusion_m2_s) if model.moves else 0.0,
@@ -371,6 +449,8 @@ def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = Non
         wind=(target.wind_kmh[0] * KMH, target.wind_kmh[1] * KMH),
         leeway=cls,
         field=field,
+        wind_field=lee,
+        particles=tracks,
     )
 
 
@@ -419,18 +499,39 @@ def _cells(vel: np.ndarray, e: int, ny: int, nx: int) -> np.ndarray:
     return np.ascontiguousarray(a)
 
 
+def _leeway_at(motion: Motion, t: float, side: Any) -> np.ndarray:
+    """The leeway ``(E, 2, ny, nx)`` on the map's cells at time ``t`` of envs whose crosswind
+    sides are ``side (E,)`` (the wind-file case)."""
+    if side is None:  # a caller that knows one velocity per episode (a bound, a planner)
+        raise ConfigError(
+            "target.wind_file",
+            "a gridded wind",
+            "wind_kmh (a uniform wind) here: this use takes one velocity per episode, not each "
+            "env's leeway side",
+        )
+    assert motion.wind_field is not None and motion.leeway is not None
+    wind = motion.wind_field.at(t)  # the wind interpolated in time, then its leeway
+    right, left = (leeway_velocity(motion.leeway, wind, k) for k in (1.0, -1.0))
+    return np.where((np.asarray(side) >= 0)[:, None, None, None], right[None], left[None])
+
+
 def cell_velocity(
-    motion: Motion, uniform: np.ndarray, t: float, s: int
+    motion: Motion, uniform: np.ndarray, t: float, s: int, side: Any = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """The velocities ``u, v`` of every env on the fine grid (``s`` fine cells per map cell):
-    the episode's uniform velocity ``uniform (E, 2)`` plus the gridded field at time ``t``."""
+    the episode's uniform velocity ``uniform (E, 2)`` plus the gridded current at time ``t``,
+    plus (a wind file) the leeway of each env's crosswind ``side (E,)``."""
     u = uniform[:, 0, None, None]
     v = uniform[:, 1, None, None]
     if motion.field is not None:
         f = motion.field.at(t)
         fu = np.repeat(np.repeat(f[0], s, axis=0), s, axis=1)
         fv = np.repeat(np.repeat(f[1], s, axis=0), s, axis=1)
-        return u + fu[None], v + fv[None]
+        u, v = u + fu[None], v + fv[None]
+    if motion.wind_field is not None:
+        lw = _leeway_at(motion, t, side)
+        u = u + np.repeat(np.repeat(lw[:, 0], s, axis=1), s, axis=2)
+        v = v + np.repeat(np.repeat(lw[:, 1], s, axis=1), s, axis=2)
     return u, v
 
 
@@ -442,10 +543,16 @@ def predict(
     dt: float,
     h: float,
     s: int,
+    side: Any = None,
 ) -> np.ndarray:
     """The predict step of the filter on the fine belief ``(E, NY, NX)`` (in place) over
-    ``[t, t + dt]``; returns the mass ``(E,)`` that left the map."""
-    u, v = cell_velocity(motion, uniform, t, s)
+    ``[t, t + dt]`` (``side (E,)``: each env's crosswind side, for a wind file); returns the
+    mass ``(E,)`` that left the map."""
+    if motion.particles is not None:  # the particles' transition (uniform is 0)
+        from poc_env.theory import particles
+
+        return particles.predict(motion.particles, belief, t, dt, h)
+    u, v = cell_velocity(motion, uniform, t, s, side)
     return advect_diffuse(belief, u, v, motion.diffusion, dt, h)
 
 
@@ -468,7 +575,7 @@ def predict_uniform(
     :func:`predict` then :func:`move_targets` (``noise (E, T, 2)`` read at ``min(step, T - 1)``),
     bit-identical to them, in one compiled call (:func:`poc_env._kernels.motion.
     predict_uniform`); everything in place, ``mass_out`` accumulated."""
-    if motion.field is not None:
+    if motion.gridded:
         raise ValueError("predict_uniform: the motion has a gridded field; use predict")
     ny, nx = shape
     x0, y0 = origin
@@ -489,18 +596,30 @@ def move_targets(
     origin: tuple[float, float],
     cell: float,
     shape: tuple[int, int],
+    side: Any = None,
+    which: Any = None,
 ) -> None:
     """Move the hidden targets ``target (E, 2)`` (in place) over ``[t, t + dt]``: ``x += v(x,
-    t) dt + sqrt(2 D dt) noise`` (``noise (E, 2)`` standard normal); a target outside the map
-    (``out (E,)``, updated) no longer moves."""
+    t) dt + sqrt(2 D dt) noise`` (``noise (E, 2)`` standard normal; ``side (E,)`` each env's
+    crosswind side, for a wind file), or (``particles``) by the displacement of the particle
+    ``which (E,)`` each follows; a target outside the map (``out (E,)``, updated) no longer
+    moves."""
     vel = np.array(uniform, dtype=float)
     ny, nx = shape
-    if motion.field is not None:
-        f = motion.field.at(t)
+    if motion.particles is not None:
+        from poc_env.theory import particles
+
+        step = particles.displacement(motion.particles, np.asarray(which), t, t + dt)
+    elif motion.gridded:
         i = np.clip(((target[:, 0] - origin[0]) // cell).astype(int), 0, nx - 1)
         j = np.clip(((target[:, 1] - origin[1]) // cell).astype(int), 0, ny - 1)
-        vel += f[:, j, i].T
-    step = vel * dt + math.sqrt(2.0 * motion.diffusion * dt) * noise
+        if motion.field is not None:
+            vel += motion.field.at(t)[:, j, i].T
+        if motion.wind_field is not None:
+            lw = _leeway_at(motion, t, side)
+            vel += lw[np.arange(len(vel)), :, j, i]
+    if motion.particles is None:
+        step = vel * dt + math.sqrt(2.0 * motion.diffusion * dt) * noise
     target += np.where(out[:, None], 0.0, step)
     x0, y0 = origin
     outside = (

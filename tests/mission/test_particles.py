@@ -234,3 +234,110 @@ def test_a_particle_file_declaring_more_than_the_memory_limit_is_refused_unread(
     with pytest.raises(ConfigError, match="memory limit") as err:
         read_particles(p)
     assert err.value.field == "particles"
+
+
+def _drifting(tmp_path, name="run.nc", n=400, hours=1.5, every=600.0, seed=4):
+    """An OpenDrift-like run of ``n`` particles drifting east at ~1 m/s from around the area's
+    centre, outputs ``every`` seconds for ``hours``; a few stranded (NaN) after 40 min."""
+    rng = np.random.default_rng(seed)
+    t = round(hours * 3600 / every) + 1
+    rec = make_crs("aeqd", (45.7, 126.6))
+    x0 = rng.normal(0.0, 4e3, n)
+    y0 = rng.normal(0.0, 4e3, n)
+    times = np.arange(t) * every
+    x = x0[:, None] + 1.0 * times[None] + rng.normal(0, 50.0, (n, t)).cumsum(axis=1)
+    y = y0[:, None] + 0.2 * times[None]
+    ll = np.array(to_geographic(np.column_stack([x.ravel(), y.ravel()]), rec)).reshape(n, t, 2)
+    lon, lat = ll[..., 1].copy(), ll[..., 0].copy()
+    lon[:7, 5:], lat[:7, 5:] = np.nan, np.nan  # stranded: deactivated from the 5th output
+    return trajectory_file(tmp_path / name, lon, lat, every), lon, lat
+
+
+def test_particle_motion_import_writes_the_tracks_and_the_environment_runs_them(tmp_path):
+    from poc_env.config import load_scenario
+    from poc_env.sim.engine import Engine
+
+    area, fields = _gis(tmp_path)
+    path, lon, _ = _drifting(tmp_path)
+    p = argparse.ArgumentParser()
+    geoimport.add_scenario_import_arguments(p)
+    out = tmp_path / "out" / "moving.yaml"
+    args = p.parse_args(
+        [area, "--airfields", fields, "--particles", str(path), "--particle-motion",
+         "--base", "small", "--cell-km", "5", "--out", str(out)]
+    )  # fmt: skip
+    assert geoimport.cmd_scenario_import(args) == 0
+    assert sorted(f.name for f in out.parent.iterdir()) == [
+        "moving.crs.json", "moving.npy", "moving.particles.npz", "moving.yaml"
+    ]  # fmt: skip
+    sc = load_scenario(str(out))
+    assert sc.target.model == "particles"
+    assert sc.target.particles_file == str(out.parent / "moving.particles.npz")
+    with np.load(sc.target.particles_file) as z:
+        assert str(z["start"]) == "2024-05-01T00:00:00"  # default: the run's first time
+        np.testing.assert_array_equal(z["t_s"], np.arange(10) * 600.0)
+        np.testing.assert_array_equal(z["lon"][:, 0], lon[:, 0])
+        np.testing.assert_array_equal(z["lon"][:7, 5:], lon[:7, 4:5].repeat(5, axis=1))  # held
+    eng = Engine(sc, 2, control="heading", seeds=[0, 1])
+    eng.reset()
+    st = eng.current
+    b0 = st.belief.copy()
+    for _ in range(60):
+        eng.step(np.zeros((2, eng.n_agents, eng.action_dim)))
+        total = st.belief.sum(axis=(1, 2)) + st.posc + st.mass_out
+        np.testing.assert_allclose(total, st.initial_mass, rtol=0, atol=1e-9)
+    # the belief moved east with the particles (~1 m/s for 30 min: ~1.8 km)
+    x = np.arange(b0.shape[2])
+    east = ((st.belief.sum(axis=1) * x).sum(axis=1) / st.belief.sum(axis=(1, 2))) - (
+        (b0.sum(axis=1) * x).sum(axis=1) / b0.sum(axis=(1, 2))
+    )
+    h = sc.map.cell_m / sc.sensor.samples_per_cell
+    assert np.all(east * h > 1000.0), east * h
+
+
+def test_bad_particle_motion_inputs_are_refused_and_nothing_is_written(tmp_path):
+    area, fields = _gis(tmp_path)
+    p = argparse.ArgumentParser()
+    geoimport.add_scenario_import_arguments(p)
+    short = _drifting(tmp_path, "short.nc", hours=0.5)[0]  # small's episode: 40.5 min
+    few = _drifting(tmp_path, "few.nc", n=60)[0]
+    ds = xr.open_dataset(_drifting(tmp_path)[0]).load()
+    ds.isel(time=0).drop_vars("time").to_netcdf(tmp_path / "untimed.nc", engine="h5netcdf")
+    xy = ds.rename({"lon": "x", "lat": "y"})
+    for v in ("x", "y"):
+        xy[v].attrs = {"units": "m"}
+    xy.to_netcdf(tmp_path / "xy.nc", engine="h5netcdf")
+    nad = ds.copy()
+    nad["crs"] = (
+        (),
+        0,
+        {
+            "grid_mapping_name": "latitude_longitude",
+            "semi_major_axis": 6378206.4,
+            "inverse_flattening": 294.9786982,
+        },
+    )
+    nad["lon"].attrs["grid_mapping"] = "crs"
+    nad.to_netcdf(tmp_path / "nad.nc", engine="h5netcdf")
+    cases = {
+        "no lonlat": (tmp_path / "xy.nc", [], "another CRS"),
+        "datum": (tmp_path / "nad.nc", [], "WGS84"),
+        "short": (short, [], "covering the episode"),
+        "few": (few, [], "at least 100 particles"),
+        "no time": (tmp_path / "untimed.nc", [], "no CF time coordinate"),
+        "late start": (short, ["--particles-time", "2024-05-01T00:30:00"], "covering"),
+        "bad start": (short, ["--particles-time", "2024-06-01T00:00:00"], "one of the file's"),
+    }
+    for name, (path, extra, text) in cases.items():
+        out = tmp_path / name.replace(" ", "_") / "s.yaml"
+        out.parent.mkdir()
+        args = p.parse_args(
+            [area, "--airfields", fields, "--particles", str(path), "--particle-motion",
+             "--base", "small", "--out", str(out), *extra]
+        )  # fmt: skip
+        with pytest.raises(ConfigError, match=text):
+            geoimport.cmd_scenario_import(args)
+        assert list(out.parent.iterdir()) == [], name
+    with pytest.raises(ConfigError) as err:
+        geoimport.import_scenario(area, airfields=fields, particle_motion=True)
+    assert err.value.field == "particle_motion"

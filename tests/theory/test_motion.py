@@ -39,9 +39,17 @@ def test_every_model_conserves_mass_over_many_steps(model, tmp_path):
         path = tmp_path / "field.npy"
         np.save(path, rng.uniform(-1.0, 1.0, (5, 2, 8, 8)))
         field = str(path)
+    tracks = None
+    if model == "particles":  # 2000 random walkers over the map, 10-min outputs
+        tracks = str(tmp_path / "tracks.npz")
+        walk = rng.normal(0.0, 600.0, (2000, 11, 2)) + np.array([300.0, -200.0])
+        walk[:, 0] = 0.0  # the start
+        xy = rng.uniform(0, 40e3, (2000, 1, 2)) + walk.cumsum(axis=1)
+        np.savez(tracks, x_m=xy[..., 0], y_m=xy[..., 1], t_s=600.0 * np.arange(11))
     cfg = TargetConfig(
         model=model,
-        diffusion_m2_s=200.0,
+        diffusion_m2_s=0.0 if tracks else 200.0,
+        particles_file=tracks,
         current_kmh=(7.0, -3.0),
         random_current_kmh=10.0,
         wind_kmh=(30.0, 20.0),
@@ -49,7 +57,7 @@ def test_every_model_conserves_mass_over_many_steps(model, tmp_path):
         field_file=field,
         field_dt_s=600.0 if field else None,
     )
-    mo = motion.check(cfg, (8, 8), 2400.0)
+    mo = motion.check(cfg, (8, 8), 6000.0 if tracks else 2400.0, load_scenario("small").map)
     m = rng.random((3, 32, 32))
     m /= m.sum(axis=(1, 2), keepdims=True)
     uniform = np.stack([mo.draw(rng) for _ in range(3)])
