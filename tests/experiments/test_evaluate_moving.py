@@ -32,11 +32,30 @@ def test_no_moving_bound_for_a_static_target():
     assert "POSC/moving" not in ev.table()
 
 
-def test_no_moving_bound_for_a_gridded_field(tmp_path):
-    """The bound covers uniform drift only: a gridded field leaves the column out (no crash)."""
+@pytest.mark.parametrize("varying", [False, True])
+def test_moving_bound_for_a_gridded_field(tmp_path, varying):
+    """A gridded (stationary or time-varying) field gets the moving bound too (the sparse
+    adjoint of the filter, poc_env.theory.moving_bound), above every flown POSC."""
     f = tmp_path / "v.npy"
-    np.save(f, np.full((2, 8, 8), 0.5))
-    sc = load_scenario("small", {"target.model": "drift", "target.field_file": str(f)})
-    assert moving_effort_bound(sc, 0) is None
+    rng = np.random.default_rng(0)
+    frames = rng.normal(0.0, 2.0, (4 if varying else 1, 2, 8, 8))
+    np.save(f, frames)
+    over = {"target.model": "drift", "target.field_file": str(f), "target.diffusion_m2_s": 30.0}
+    if varying:
+        over["target.field_dt_s"] = 1200.0
+    sc = load_scenario("small", over)
+    ev = evaluate(sc, ["lawnmower", "greedy_bayes"], episodes=1)
+    for e in ev.episodes:
+        assert e.bound_moving is not None and e.bound_moving == moving_effort_bound(sc, e.seed)
+        assert e.posc <= e.bound_moving
+    assert "POSC/moving" in ev.table()
+
+
+def test_moving_bound_for_leeway():
+    """Leeway in a uniform wind is a uniform drift per episode: reported as well."""
+    over = {"target.model": "leeway", "target.wind_kmh": [30.0, 0.0]}
+    sc = load_scenario("small", over)
     ev = evaluate(sc, ["lawnmower"], episodes=1)
-    assert "POSC/moving" not in ev.table()
+    assert ev.episodes[0].bound_moving is not None
+    assert ev.episodes[0].posc <= ev.episodes[0].bound_moving
+    assert "POSC/moving" in ev.table()
