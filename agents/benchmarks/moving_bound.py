@@ -156,6 +156,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         env = UAVSearchParallelEnv(scenario=scs["uniform"])
         env.reset(seed=args.seed)
         st = env.sim_state
+        assert st.drift is not None
         belief, velocity, s = st.belief[0].copy(), st.drift[0].copy(), env.params.s
         ny, nx = belief.shape
         print(
