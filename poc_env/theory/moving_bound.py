@@ -64,8 +64,9 @@ kernel (one implementation of the scheme), so ``M_t^T = (S_t^T)^{n_t}`` is the e
 for a uniform drift, a gridded field and a time-varying one alike
 (``tests/theory/test_moving_bound.py`` checks ``<M x, y> = <x, M^T y>`` and ``M x`` against
 the filter); one matrix per distinct velocity slice (a uniform drift or a stationary field:
-one for the episode). For a uniform drift it agrees to 1e-12 with the earlier adjoint, the
-scheme run at ``-v`` (tested).
+one for the episode), each checked against the filter's predict when built (a motion it does
+not reproduce is a ValueError, never a silently wrong bound). For a uniform drift it agrees
+to 1e-12 with the earlier adjoint, the scheme run at ``-v`` (tested).
 
 **What the bound covers** (every model of :mod:`poc_env.theory.motion` whose belief the
 filter moves): ``static`` (no predict: the reach-aware problem, step by step), ``diffusion``
@@ -263,7 +264,9 @@ def predict_operators(
             ).digest()
             keys[t] = key
         if key not in cache:
-            cache[key] = motion_mod.substep_matrix(motion, vel[0], t * dt, dt, h, s, shape)
+            mat, n = motion_mod.substep_matrix(motion, vel[0], t * dt, dt, h, s, shape)
+            _check_against_filter(mat, n, motion, vel, t * dt, dt, h, s, shape)
+            cache[key] = mat, n
         return cache[key]
 
     def step(t: int, x: np.ndarray) -> np.ndarray:
@@ -284,6 +287,25 @@ def predict_operators(
         return y
 
     return step, adjoint
+
+
+def _check_against_filter(mat, n, motion, vel, t, dt, h, s, shape) -> None:
+    """``S^n x`` against the filter's own predict (:func:`poc_env.theory.motion.predict`) on
+    a fixed positive ``x``: a motion the matrix does not reproduce (a model whose predict is
+    not the advection-diffusion scheme of :func:`~poc_env.theory.motion.substep_matrix`) is an
+    error, never a silently wrong bound."""
+    x = 1.0 + (np.arange(shape[0] * shape[1]) % 7) / 7.0
+    y = x.copy()
+    for _ in range(n):
+        y = mat @ y
+    ref = x.reshape(1, *shape).copy()
+    motion_mod.predict(motion, ref, vel, t, dt, h, s)
+    err = float(np.abs(y - ref.ravel()).max())
+    if not err <= 1e-10:
+        raise ValueError(
+            f"moving bound: the predict matrix of model {motion.model.name!r} at t = {t:g} s "
+            f"differs from the filter by {err:.3g}: this motion is not covered"
+        )
 
 
 def moving_bound(

@@ -313,3 +313,22 @@ def test_water_fill_is_physical_optimum(seed):
     got = water_fill(w, a, effort)
     np.testing.assert_allclose(got, ref, atol=1e-9)
     assert float(a @ got) == pytest.approx(effort, rel=1e-12)
+
+
+def test_a_matrix_that_is_not_the_filter_is_an_error(monkeypatch):
+    """Each assembled matrix is checked against the filter's predict: a motion the matrix does
+    not reproduce (here: a stand-in that moves the mass upstream) is refused, not bounded."""
+    from scipy import sparse
+
+    sc = load_scenario("small", {"target.model": "drift", "target.current_kmh": [40.0, 0.0]})
+    fine = np.full((16, 16), 1.0 / 256)
+    moving_bound(sc, fine, (11.0, 0.0), s=2, sweeps=1)  # the filter's matrix passes
+    real = motion_mod.substep_matrix
+
+    def upstream(*args, **kw):
+        mat, n = real(*args, **kw)
+        return sparse.csr_array(mat.T), n
+
+    monkeypatch.setattr(motion_mod, "substep_matrix", upstream)
+    with pytest.raises(ValueError, match="not covered"):
+        moving_bound(sc, fine, (11.0, 0.0), s=2, sweeps=1)
