@@ -64,7 +64,7 @@ kernel (one implementation of the scheme), so ``M_t^T = (S_t^T)^{n_t}`` is the e
 for a uniform drift, a gridded field and a time-varying one alike
 (``tests/theory/test_moving_bound.py`` checks ``<M x, y> = <x, M^T y>`` and ``M x`` against
 the filter); one matrix per distinct velocity slice (a uniform drift or a stationary field:
-one for the episode), each checked against the filter's predict when built (a motion it does
+one for the episode), checked against the filter's predict at every step (a motion it does
 not reproduce is a ValueError, never a silently wrong bound). For a uniform drift it agrees
 to 1e-12 with the earlier adjoint, the scheme run at ``-v`` (tested).
 
@@ -252,22 +252,22 @@ def predict_operators(
     sparse sub-step matrix (:func:`poc_env.theory.motion.substep_matrix`) per distinct slice
     of the cells' velocities, built when first asked for. A static target: the identity."""
     vel = np.asarray(velocity, dtype=float).reshape(1, 2)
-    cache: dict[bytes, tuple[Any, int]] = {}
-    keys: dict[int, bytes] = {}
+    cache: dict[bytes, tuple[Any, int]] = {}  # by the cells' velocities
+    steps: dict[int, tuple[Any, int]] = {}  # by step, each checked against the filter once
 
     def matrix(t: int) -> tuple[Any, int]:
-        key = keys.get(t)
-        if key is None:
+        got = steps.get(t)
+        if got is None:
             u, v = motion_mod.cell_velocity(motion, vel, t * dt, s)
             key = hashlib.sha1(
                 np.ascontiguousarray(u).tobytes() + b"|" + np.ascontiguousarray(v).tobytes()
             ).digest()
-            keys[t] = key
-        if key not in cache:
-            mat, n = motion_mod.substep_matrix(motion, vel[0], t * dt, dt, h, s, shape)
-            _check_against_filter(mat, n, motion, vel, t * dt, dt, h, s, shape)
-            cache[key] = mat, n
-        return cache[key]
+            if key not in cache:
+                cache[key] = motion_mod.substep_matrix(motion, vel[0], t * dt, dt, h, s, shape)
+            got = cache[key]
+            _check_against_filter(*got, motion, vel, t * dt, dt, h, s, shape)
+            steps[t] = got
+        return got
 
     def step(t: int, x: np.ndarray) -> np.ndarray:
         y = np.array(x, dtype=float).ravel()

@@ -332,3 +332,20 @@ def test_a_matrix_that_is_not_the_filter_is_an_error(monkeypatch):
     monkeypatch.setattr(motion_mod, "substep_matrix", upstream)
     with pytest.raises(ValueError, match="not covered"):
         moving_bound(sc, fine, (11.0, 0.0), s=2, sweeps=1)
+
+
+def test_a_matrix_reused_at_another_step_is_checked_there(monkeypatch, tmp_path):
+    """The check runs at every step, not only when a matrix is built: if the cache took two
+    slices of a time-varying field for one (here: every key made equal), the step where the
+    reused matrix is not the filter's is refused."""
+    import types
+
+    import poc_env.theory.moving_bound as mb
+
+    sc = _gridded(tmp_path, _vortex(6, np.random.default_rng(2)), d=20.0)
+    fine = np.full((16, 16), 1.0 / 256)
+    moving_bound(sc, fine, (0.0, 0.0), s=2, sweeps=1)
+    same = types.SimpleNamespace(digest=lambda: b"one key")
+    monkeypatch.setattr(mb.hashlib, "sha1", lambda data: same)
+    with pytest.raises(ValueError, match="not covered"):
+        moving_bound(sc, fine, (0.0, 0.0), s=2, sweeps=1)
