@@ -250,7 +250,9 @@ def predict_operators(
     on the fine grid of ``shape``, ``adjoint(t, y)`` its transpose; ``velocity (2,)`` the
     episode's uniform velocity (m/s), the gridded field (if any) read from ``motion``. One
     sparse sub-step matrix (:func:`poc_env.theory.motion.substep_matrix`) per distinct slice
-    of the cells' velocities, built when first asked for. A static target: the identity."""
+    of the cells' velocities, built when first asked for (a time-varying field keeps one per
+    step: ``5 F`` values each); at each step's first use, ``M_t`` is checked against the
+    filter's predict (ValueError if it differs). A static target: the identity."""
     vel = np.asarray(velocity, dtype=float).reshape(1, 2)
     cache: dict[bytes, tuple[Any, int]] = {}  # by the cells' velocities
     steps: dict[int, tuple[Any, int]] = {}  # by step, each checked against the filter once
