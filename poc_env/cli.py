@@ -385,6 +385,7 @@ BENCHMARKS = {
     "learning": "poc_env.agents.benchmarks.learning",
     "generalise": "poc_env.agents.benchmarks.generalise",
     "peers": "poc_env.agents.benchmarks.peers",
+    "moving-bound": "poc_env.agents.benchmarks.moving_bound",
 }
 
 

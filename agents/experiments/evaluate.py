@@ -497,19 +497,21 @@ def moving_effort_bound(
     scenario: Any, seed: int, map_file: str | None = None, random_priors: bool = False
 ) -> float | None:
     """The moving-target bound (:func:`poc_env.theory.moving_bound.moving_bound`) of episode
-    ``seed``: its prior and its drift velocity, read from an environment reset with the seed;
-    None when the scenario's target stands still or moves in a gridded field."""
+    ``seed``: its prior and its uniform velocity (the gridded field, if any, from the
+    scenario), read from an environment reset with the seed; None when the target stands
+    still."""
     from poc_env.envs.parallel import UAVSearchParallelEnv
     from poc_env.theory.moving_bound import moving_bound
 
     env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
-    if env.params.motion is None or env.params.motion.gridded:
-        return None  # a gridded velocity field: not covered by the bound (its docstring)
+    if env.params.motion is None:
+        return None
     prior = episode_prior(env.scenario, seed) if random_priors else None
     env.reset(seed=seed, options=None if prior is None else {"prior": prior})
     st = env.sim_state
     assert st.drift is not None
-    return moving_bound(env.scenario, st.belief[0], st.drift[0], env.params.s).upper
+    side = None if st.leeway_side is None else float(st.leeway_side[0])
+    return moving_bound(env.scenario, st.belief[0], st.drift[0], env.params.s, side=side).upper
 
 
 def _moving(args):

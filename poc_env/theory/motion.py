@@ -629,3 +629,53 @@ def move_targets(
         | (target[:, 1] >= y0 + ny * cell)
     )
     out |= outside
+
+
+# ------------------------------------------------------------------ the predict as a matrix
+def substep_matrix(
+    motion: Motion,
+    uniform: np.ndarray,
+    t: float,
+    dt: float,
+    h: float,
+    s: int,
+    shape,
+    side: float | None = None,
+) -> tuple[Any, int]:
+    """The predict step of one env over ``[t, t + dt]`` (:func:`predict`, ``uniform (2,)`` its
+    velocity) as a matrix: ``(S, n)`` with ``predict(x) = S^n x`` up to rounding, ``S`` the
+    scipy CSR matrix ``(F, F)`` of one sub-step on the fine grid of ``shape`` (NY, NX),
+    columns the cells the mass comes from (``1 - S^T 1`` leaves the map), ``n`` the sub-steps.
+
+    ``S`` is *probed* from the filter's own kernel (:func:`advect_diffuse`, one sub-step), not
+    re-derived: a sub-step moves mass only to the four neighbours, so the cells of one colour
+    ``(i + 2 j) mod 5`` have disjoint neighbourhoods and five runs of the kernel (a one on
+    every cell of a colour) give every column. Its transpose is the exact adjoint
+    ``<S x, y> = <x, S^T y>`` for any field (:mod:`poc_env.theory.moving_bound`). ``side``:
+    the episode's crosswind side (a wind file's leeway). For ``particles`` the step's
+    transition matrix itself (``n == 1``, :mod:`poc_env.theory.particles`)."""
+    from scipy import sparse
+
+    ny, nx = shape
+    if motion.particles is not None:
+        return motion.particles.transition(t, dt, h, tuple(shape)).matrix, 1
+    sides = None if side is None else np.array([side], dtype=float)
+    u, v = cell_velocity(motion, np.asarray(uniform, dtype=float).reshape(1, 2), t, s, sides)
+    u3, v3 = _cells(u, 5, ny, nx), _cells(v, 5, ny, nx)
+    n = substeps(float(np.abs(u3).max()), float(np.abs(v3).max()), motion.diffusion, dt, h)
+    jj, ii = np.mgrid[0:ny, 0:nx]
+    colour = (ii + 2 * jj) % 5
+    probe = (colour[None] == np.arange(5)[:, None, None]).astype(float)
+    advect_diffuse(probe, u3, v3, motion.diffusion, dt / n, h)  # n == 1 sub-step of dt / n
+    rows, cols, vals = [], [], []
+    for dj, di in ((0, 0), (0, -1), (0, 1), (-1, 0), (1, 0)):
+        ok = (jj + dj >= 0) & (jj + dj < ny) & (ii + di >= 0) & (ii + di < nx)
+        j, i = jj[ok], ii[ok]
+        rows.append((j + dj) * nx + i + di)
+        cols.append(j * nx + i)
+        vals.append(probe[colour[ok], j + dj, i + di])
+    f = ny * nx
+    coo = sparse.coo_array(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(f, f)
+    )
+    return coo.tocsr(), n

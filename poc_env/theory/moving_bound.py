@@ -44,9 +44,9 @@ for any ``c >= 0`` (feasible or not) and the optimum ``c*``
 
 and ``1 - N(c) - min_y grad N(c) . (y - c)`` is a certified upper bound (a Frank-Wolfe duality
 gap). The gradient is ``-alpha_t(f) exp(-c_t(f)) beta_t(f)`` with the forward (undetected,
-predicted) mass ``alpha_t`` and the backward survival ``beta_t = M^T (exp(-c_{t+1}) beta_{t+1})
-+ (1 - M^T 1)`` (paths leaving the map are never detected); the linear minimum puts each UAV's
-step effort on its best reachable cell. The bound reported is
+predicted) mass ``alpha_t`` and the backward survival ``beta_t = M_{t+1}^T (exp(-c_{t+1})
+beta_{t+1}) + (1 - M_{t+1}^T 1)`` (paths leaving the map are never detected); the linear
+minimum puts each UAV's step effort on its best reachable cell. The bound reported is
 ``min(1, min_kappa [upper(kappa) + delta(kappa)])`` (:class:`MovingBound`).
 
 **Brown's algorithm** only supplies a good ``c``: sweeps of coordinate ascent over the steps,
@@ -55,18 +55,39 @@ law, in closed form: :func:`water_fill`) on the weights ``alpha_t beta_t`` over 
 UAV reaches (a relaxation of the per-UAV reach: it does not matter, the certificate is valid at
 any ``c``).
 
-**The adjoint.** For a uniform velocity ``v`` (the registered Drift tasks), ``M^T`` is the same
-scheme run with ``-v`` (upwind fluxes from cell ``i`` to ``i + 1`` with weights ``a = u^+ c +
-k``, ``b = u^- c - k`` transpose to those of ``-u``, the edges absorbing both ways; the x and y
-passes are taken from the same start so ``(I + L_x + L_y)^T = I + L_x^T + L_y^T``; the sub-step
-count depends on ``|v|`` only). A gridded field is refused (its transpose is not a velocity
-reversal); ``tests/theory/test_moving_bound.py`` checks ``<M x, y> = <x, M^T y>``.
+**The adjoint** (any velocity field). Step ``t``'s predict is ``M_t = S_t^{n_t}``, ``S_t`` one
+sub-step of the filter's finite-volume scheme for the velocities of ``[t dt, (t + 1) dt]`` (the
+episode's uniform velocity plus the gridded field at ``t dt``, as the environment's
+:func:`~poc_env.theory.motion.predict`) and ``n_t`` its sub-steps. ``S_t`` is assembled as a
+sparse matrix by :func:`poc_env.theory.motion.substep_matrix`, probed from the filter's own
+kernel (one implementation of the scheme), so ``M_t^T = (S_t^T)^{n_t}`` is the exact adjoint
+for a uniform drift, a gridded field and a time-varying one alike
+(``tests/theory/test_moving_bound.py`` checks ``<M x, y> = <x, M^T y>`` and ``M x`` against
+the filter); one matrix per distinct velocity slice (a uniform drift or a stationary field:
+one for the episode), checked against the filter's predict at every step (a motion it does
+not reproduce is a ValueError, never a silently wrong bound). For a uniform drift it agrees
+to 1e-12 with the earlier adjoint, the scheme run at ``-v`` (tested).
+
+**What the bound covers** (every model of :mod:`poc_env.theory.motion` whose belief the
+filter moves): ``static`` (no predict: the reach-aware problem, step by step), ``diffusion``
+(``v = 0``), ``drift`` with a uniform current, a random current, a gridded field (``.npy``,
+CSV, CF NetCDF) stationary or time-varying, plus diffusion, and ``leeway`` (current plus the
+class's leeway in the uniform wind: a uniform drift per episode, its crosswind side drawn at
+reset). It bounds the POS of the *belief's* model, the filter's Markov chain: the hidden target
+moves by the continuous random walk (:func:`~poc_env.theory.motion.move_targets`), whose
+detections the filter approximates (upwind numerical diffusion). Not covered: a filter the
+environment does not have (a gridded wind field, particles); a batch of environments whose
+uniform velocities differ takes its sub-steps from the batch's fastest
+(:func:`~poc_env.theory.motion.predict_uniform`), a finer discretisation of the same motion
+than the single episode's the bound uses.
 """
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -77,7 +98,8 @@ from poc_env.theory.bound import cell_distances, env_limits
 from poc_env.theory.detection import detection_law
 from poc_env.theory.probability_map import Grid
 
-Op = Callable[[np.ndarray], np.ndarray]
+#: ``op(t, x)``: step ``t``'s predict ``M_t x`` (or its adjoint ``M_t^T x``), a new array
+Op = Callable[[int, np.ndarray], np.ndarray]
 
 #: The coverage scales tried for laws other than the exponential (the bound takes the best).
 KAPPAS = (1.5, 1.75, 2.0)
@@ -155,10 +177,11 @@ def brown_optimum(
     """Certified optimum of ``1 - E[exp(-sum_t c_t(X_t))]`` (module docstring).
 
     ``prior (F,)`` the cell masses at the start (total <= 1; the rest is never detected),
-    ``area (F,)`` the cell areas; ``step(x)`` returns ``M x`` and ``adjoint(y)`` ``M^T y``
-    (the same every step; new arrays); ``budgets (G, T)`` the effort (m^2) each group of
-    searchers may spend at step ``t``; ``reach (G, T, F)`` bool, the cells group ``g`` may
-    search at step ``t``. ``sweeps`` passes of Brown's coordinate ascent.
+    ``area (F,)`` the cell areas; ``step(t, x)`` returns step ``t``'s predict ``M_t x`` and
+    ``adjoint(t, y)`` ``M_t^T y`` (new arrays; :func:`predict_operators`); ``budgets (G, T)``
+    the effort (m^2) each group of searchers may spend at step ``t``; ``reach (G, T, F)``
+    bool, the cells group ``g`` may search at step ``t``. ``sweeps`` passes of Brown's
+    coordinate ascent.
     """
     m = np.asarray(prior, dtype=float).ravel()
     a = np.broadcast_to(np.asarray(area, dtype=float), m.shape)
@@ -169,20 +192,20 @@ def brown_optimum(
     union = np.asarray(np.asarray(reach, dtype=bool).any(axis=0))
     total = budgets.sum(axis=0)
     c = np.zeros((t_n, m.size))
-    exit_ = 1.0 - adjoint(np.ones_like(m))
 
     def backward() -> np.ndarray:
+        # beta_{t-1} = M_t^T (exp(-c_t) beta_t) + (1 - M_t^T 1): the paths leaving survive
         beta = np.empty((t_n, m.size))
         beta[-1] = 1.0
         for t in range(t_n - 1, 0, -1):
-            beta[t - 1] = adjoint(np.exp(-c[t]) * beta[t]) + exit_
+            beta[t - 1] = 1.0 + adjoint(t, np.exp(-c[t]) * beta[t] - 1.0)
         return beta
 
     for _ in range(sweeps):
         beta = backward()
         alpha = m.copy()
         for t in range(t_n):
-            alpha = step(alpha)
+            alpha = step(t, alpha)
             c[t] = 0.0
             cells = union[t] & (alpha * beta[t] > 0)
             if total[t] > 0 and cells.any():
@@ -196,7 +219,7 @@ def brown_optimum(
     dot = 0.0  # -grad N . c
     pos = 0.0  # the mass detected: 1 - N(c) over the prior's mass
     for t in range(t_n):
-        alpha = step(alpha)
+        alpha = step(t, alpha)
         pos += float(alpha @ -np.expm1(-c[t]))
         grad = alpha * np.exp(-c[t]) * beta[t]  # -dN/dc_t
         dot += float(grad @ c[t])
@@ -214,6 +237,88 @@ def fine_grid(grid: Grid, s: int) -> Grid:
     return Grid(grid.nx * s, grid.ny * s, grid.cell_m / s, grid.origin_m)
 
 
+def predict_operators(
+    motion: motion_mod.Motion,
+    velocity,
+    dt: float,
+    h: float,
+    s: int,
+    shape: tuple[int, int],
+    side: float | None = None,
+) -> tuple[Op, Op]:
+    """``(step, adjoint)`` of the filter of one episode (module docstring): ``step(t, x)`` is
+    the predict of step ``t`` (over ``[t dt, (t + 1) dt]``) of the fine cell masses ``x (F,)``
+    on the fine grid of ``shape``, ``adjoint(t, y)`` its transpose; ``velocity (2,)`` the
+    episode's uniform velocity (m/s), the gridded field (if any) read from ``motion``. One
+    sparse sub-step matrix (:func:`poc_env.theory.motion.substep_matrix`) per distinct slice
+    of the cells' velocities, built when first asked for (a time-varying field keeps one per
+    step: ``5 F`` values each); at each step's first use, ``M_t`` is checked against the
+    filter's predict (ValueError if it differs). A static target: the identity. ``side``:
+    the episode's crosswind side (``sim_state.leeway_side``), for a wind file's leeway;
+    ``particles``: one matrix per step (its transition varies with time)."""
+    vel = np.asarray(velocity, dtype=float).reshape(1, 2)
+    sides = None if side is None else np.array([side], dtype=float)
+    cache: dict[bytes, tuple[Any, int]] = {}  # by the cells' velocities
+    steps: dict[int, tuple[Any, int]] = {}  # by step, each checked against the filter once
+
+    def matrix(t: int) -> tuple[Any, int]:
+        got = steps.get(t)
+        if got is None:
+            if motion.particles is not None:  # the transition varies with time
+                key = repr(float(t * dt)).encode()
+            else:
+                u, v = motion_mod.cell_velocity(motion, vel, t * dt, s, sides)
+                key = hashlib.sha1(
+                    np.ascontiguousarray(u).tobytes() + b"|" + np.ascontiguousarray(v).tobytes()
+                ).digest()
+            if key not in cache:
+                cache[key] = motion_mod.substep_matrix(
+                    motion, vel[0], t * dt, dt, h, s, shape, side
+                )
+            got = cache[key]
+            _check_against_filter(*got, motion, vel, t * dt, dt, h, s, shape, sides)
+            steps[t] = got
+        return got
+
+    def step(t: int, x: np.ndarray) -> np.ndarray:
+        y = np.array(x, dtype=float).ravel()
+        if motion.moves:
+            mat, n = matrix(t)
+            for _ in range(n):
+                y = mat @ y
+        return y
+
+    def adjoint(t: int, x: np.ndarray) -> np.ndarray:
+        y = np.array(x, dtype=float).ravel()
+        if motion.moves:
+            mat, n = matrix(t)
+            tr = mat.T
+            for _ in range(n):
+                y = tr @ y
+        return y
+
+    return step, adjoint
+
+
+def _check_against_filter(mat, n, motion, vel, t, dt, h, s, shape, sides=None) -> None:
+    """``S^n x`` against the filter's own predict (:func:`poc_env.theory.motion.predict`) on
+    a fixed positive ``x``: a motion the matrix does not reproduce (a model whose predict is
+    not the advection-diffusion scheme of :func:`~poc_env.theory.motion.substep_matrix`) is an
+    error, never a silently wrong bound."""
+    x = 1.0 + (np.arange(shape[0] * shape[1]) % 7) / 7.0
+    y = x.copy()
+    for _ in range(n):
+        y = mat @ y
+    ref = x.reshape(1, *shape).copy()
+    motion_mod.predict(motion, ref, vel, t, dt, h, s, sides)
+    err = float(np.abs(y - ref.ravel()).max())
+    if not err <= 1e-10:
+        raise ValueError(
+            f"moving bound: the predict matrix of model {motion.model.name!r} at t = {t:g} s "
+            f"differs from the filter by {err:.3g}: this motion is not covered"
+        )
+
+
 def moving_bound(
     scenario: Scenario,
     prior_fine: np.ndarray,
@@ -221,13 +326,17 @@ def moving_bound(
     s: int | None = None,
     sweeps: int = 4,
     kappas: tuple[float, ...] | None = None,
+    side: float | None = None,
 ) -> MovingBound:
     """The moving-target bound of ``scenario`` for one episode (module docstring).
 
     ``prior_fine (NY, NX)`` the episode's prior on the fine grid (the environment's
     ``sim_state.prior_fine[k]`` or its belief at reset), ``velocity (2,)`` the episode's
-    uniform drift (m/s; ``sim_state.drift[k]``), ``s`` sub-cells per cell (default from the
-    prior's shape). ConfigError for a gridded velocity field (not supported).
+    uniform velocity (m/s; ``sim_state.drift[k]``: the current, the random current, the
+    leeway), to which the scenario's gridded field (``target.field_file``) is added as the
+    environment does; ``s`` sub-cells per cell (default from the prior's shape); ``side``
+    the episode's crosswind side (``sim_state.leeway_side[k]``) where a wind file gives the
+    leeway (ignored otherwise).
     """
     sc = scenario
     grid = Grid.from_config(sc.map)
@@ -238,21 +347,11 @@ def moving_bound(
         raise ConfigError("prior_fine", p.shape, f"the fine grid {(grid.ny * s, grid.nx * s)}")
     dt = sc.episode.dt_s
     steps = sc.horizon_steps
-    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), steps * dt)
-    if motion.field is not None:
-        raise ConfigError("target.field_file", sc.target.field_file, "null for the moving bound")
+    motion = motion_mod.check(sc.target, (grid.ny, grid.nx), steps * dt, sc.map)
     fine = fine_grid(grid, s)
     h = fine.cell_m
-    vel = np.asarray(velocity, dtype=float).reshape(1, 2) if motion.moves else np.zeros((1, 2))
-
-    def op(sign: float) -> Op:
-        def apply(x: np.ndarray) -> np.ndarray:
-            y = np.array(x, dtype=float).reshape(1, *p.shape)
-            if motion.moves:
-                motion_mod.predict(motion, y, sign * vel, 0.0, dt, h, s)
-            return y.ravel()
-
-        return apply
+    vel = np.asarray(velocity, dtype=float).reshape(2) if motion.moves else np.zeros(2)
+    step, adjoint = predict_operators(motion, vel, dt, h, s, p.shape, side)
 
     lim = env_limits(sc)
     sense = round(lim.time_s / dt)
@@ -267,7 +366,7 @@ def moving_bound(
         kappas = (1.0,) if entry.name == "exponential" else KAPPAS
     best: MovingBound | None = None
     for kappa in kappas:
-        res = brown_optimum(p.ravel(), h * h, op(1.0), op(-1.0), kappa * budgets, reach, sweeps)
+        res = brown_optimum(p.ravel(), h * h, step, adjoint, kappa * budgets, reach, sweeps)
         slack = law_slack(entry.name, kappa)
         up = min(1.0, res.upper + slack)
         if best is None or up < best.upper:
