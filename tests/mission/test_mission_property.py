@@ -49,9 +49,10 @@ ORIGIN = (46.5, 7.9)  # lat, lon of the mapping cases' (0, 0)
 KM_PER_DEG_LAT = 111.2
 KM_PER_DEG_LON = 111.32 * math.cos(math.radians(ORIGIN[0]))
 #: the planners whose plans are checked: those that write plan.json (``poc-env plan
-#: --planner``, ``poc-env replan``) are written, exported and flown; the greedy rectangle
-#: baseline (a policy: no plan.json) is flown and its profiles checked.
-PLANNERS = ("allocation", "de", "replan", "greedy_rectangles")
+#: --planner``, ``poc-env replan``, ``poc-env survey --plan-out``) are written, exported and
+#: flown; the greedy rectangle baseline (a policy: no plan.json) is flown and its profiles
+#: checked.
+PLANNERS = ("allocation", "de", "replan", "survey", "greedy_rectangles")
 
 
 # --------------------------------------------------------------------------- random cases
@@ -246,6 +247,19 @@ def _greedy(sc, seed: int) -> dict:
     return {**g, "terrain": terrain_record(load_terrain(sc))}
 
 
+def _regions(lay: dict[str, Any], folder: Path) -> Path:
+    """A region plan for ``poc-env survey``: the area cut into one strip per UAV (west to
+    east), parallel lines 5 km apart, north-south and east-west in turn, from the UAVs' fields
+    in fleet order."""
+    n, w, h = lay["uavs"], lay["w"], lay["h"]
+    regs = [{"id": k + 1, "kind": "polygon", "spacing_km": 5.0, "direction_deg": 90.0 * (k % 2),
+             "vertices_km": [[k * w / n, 0.0], [(k + 1) * w / n, 0.0], [(k + 1) * w / n, h],
+                             [k * w / n, h]]} for k in range(n)]  # fmt: skip
+    path = folder / "strips.yaml"
+    path.write_text(yaml.safe_dump({"name": "strips", "scenario": "prop", "regions": regs}))
+    return path
+
+
 def check_case(fly, seed: int, folder: Path, planners: tuple[str, ...] = PLANNERS) -> Counter:
     """One random case of ``seed``, planned, written and exported through the command line as a
     user would: counts of ``plans``, ``flown``, ``nofly_steps``, ``oob_steps``, ``clearance``
@@ -262,18 +276,22 @@ def check_case(fly, seed: int, folder: Path, planners: tuple[str, ...] = PLANNER
         yml, dem = _imported_case(rng, lay, folder), folder / "dem.tif"
     sc = load_scenario(yml)
     c["zones"] += len(sc.map.no_fly_zones_m)
+    s = ["--seed", str(seed), "--out"]
     argv = {
-        "allocation": ["plan", "--scenario", str(yml), "--planner", "allocation", "--refine", "1"],
+        "allocation": ["plan", "--scenario", str(yml), "--planner", "allocation", "--refine", "1",
+                       *s],
         "de": ["plan", "--scenario", str(yml), "--planner", "de", "--popsize", "8",
-               "--maxiter", "4"],
-        "replan": ["replan", "--plan", str(folder / "allocation" / "plan.json")],
+               "--maxiter", "4", *s],
+        "replan": ["replan", "--plan", str(folder / "allocation" / "plan.json"), *s],
+        "survey": ["survey", "--scenario", str(yml), "--regions", str(_regions(lay, folder)),
+                   "--plan-out"],
     }  # fmt: skip
     assert "replan" not in planners or "allocation" in planners[: planners.index("replan")]
     for name in planners:
         c["plans"] += 1
         if name in argv:
             out = folder / name
-            error = _cli([*argv[name], "--seed", str(seed), "--out", str(out / "plan.json")])
+            error = _cli([*argv[name], str(out / "plan.json")])
             if error:
                 c["refused"] += 1
                 c[f"refused:{name}.plan: {error}"] += 1
@@ -345,7 +363,7 @@ def _assert_clean(total: Counter, failed: dict) -> None:
 
 @pytest.mark.parametrize(
     ("seed", "planners"),
-    [(2, ("allocation", "replan")), (1, ("de", "greedy_rectangles"))],
+    [(2, ("allocation", "replan")), (1, ("de", "survey", "greedy_rectangles"))],
     ids=["imported-geotiff", "elevation-grid"],
 )
 def test_random_missions_fly_clear_and_export(tmp_path, fly, seed, planners):
@@ -411,3 +429,24 @@ def _lonlat_zone(plan: dict, i: int) -> list:
     from poc_env.agents.mission.crs import to_geographic
 
     return [[lon, lat] for lat, lon in to_geographic(plan["no_fly_zones_m"][i], plan["crs"])]
+
+
+def test_survey_plan_keeps_out_of_zones_and_records_the_scenario_crs(tmp_path):
+    """Found by the property test: `survey --plan-out` flew its patterns straight through a
+    no-fly zone (QGC refused the plan, the environment counted no-fly steps) and ignored the
+    scenario's map.origin_deg (export asked for --origin). The pattern's legs are cut at the
+    zone and joined round it; the plan records the scenario's CRS, as `plan` does."""
+    import shapely
+
+    zone = [[60, 40], [100, 40], [100, 70], [60, 70]]  # inside region 1 of paper_6_1_polygons
+    over = [f"map.no_fly_zones_km={json.dumps([zone])}", "map.origin_deg=[45,7]"]
+    out = tmp_path / "sp.json"
+    assert _cli(["survey", "--scenario", "paper_6_1", "--overrides", *over,
+                 "--plan-out", str(out)]) == ""  # fmt: skip
+    plan = load_plan(out)
+    assert plan["crs"]["origin_deg"] == [45.0, 7.0]
+    poly = shapely.Polygon(plan["no_fly_zones_m"][0])
+    for u in plan["uavs"]:
+        line = shapely.LineString([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]])
+        assert line.intersection(poly).length <= 1.0, u["id"]
+    assert _cli(["export", str(out), "--format", "qgc", "--out", str(tmp_path / "q")]) == ""
