@@ -136,7 +136,9 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
         out.append(
             {
                 "geometry": "LineString",
-                "latlon": to_geographic([approach_point(u), u["landing_m"]], crs),
+                "latlon": to_geographic(
+                    [approach_point(u, plan.get("no_fly_zones_m")), u["landing_m"]], crs
+                ),
                 "z": app_z,
                 "properties": {
                     "id": u["id"],

@@ -515,17 +515,46 @@ def search_rings(u: UavPlan) -> list[tuple[str, list[list[float]], dict[str, Any
     return out
 
 
-def approach_point(u: UavPlan) -> list[float]:
+def approach_point(u: UavPlan, zones: Any = ()) -> list[float]:
     """The fixed-wing approach waypoint of a UAV plan (metres): :data:`APPROACH_DISTANCE_M` from
-    the landing field towards the last search point (east of the field if they coincide)."""
+    the landing field towards the last search point (east of the field if they coincide).
+
+    ``zones``: the plan's ``no_fly_zones_m``. When the approach from that side would fly through
+    one (more than 1 m of the legs last search point -> approach -> field, the QGC geofence's
+    test), the side is turned in 15 degree steps, nearest first, to the first clear one (a
+    field beside a zone, issue 24); if none is clear, the first side (the geofence then names
+    the zone)."""
     import numpy as np
 
     end = np.asarray(u["landing_m"], dtype=float)
     wps = u["waypoints_m"]
-    d = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float) - end
-    norm = float(np.hypot(*d))
-    unit = d / norm if norm > 1.0 else np.array([1.0, 0.0])
-    return [float(v) for v in end + APPROACH_DISTANCE_M * unit]
+    last = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float)
+    d = last - end
+    first = math.atan2(d[1], d[0]) if float(np.hypot(*d)) > 1.0 else 0.0
+    polys = _valid_polygons(zones)
+    for step in (0, *(s * k for k in range(1, 13) for s in (1, -1))) if polys else (0,):
+        a = first + math.radians(15.0 * step)
+        p = end + APPROACH_DISTANCE_M * np.array([math.cos(a), math.sin(a)])
+        if not polys or _clear([last, p, end], polys):
+            return [float(v) for v in p]
+    return [
+        float(v) for v in end + APPROACH_DISTANCE_M * np.array([math.cos(first), math.sin(first)])
+    ]
+
+
+def _valid_polygons(zones: Any) -> list:
+    from shapely.geometry import Polygon
+
+    polys = [Polygon(z) for z in zones or ()]
+    return [z for z in polys if z.is_valid]
+
+
+def _clear(points: list, polys: list) -> bool:
+    """The path through ``points`` flies at most 1 m inside each polygon of ``polys``."""
+    from shapely.geometry import LineString
+
+    line = LineString(points)
+    return all(line.intersection(z).length <= 1.0 for z in polys)
 
 
 def _check_terrain(field: str, rec: Any) -> None:

@@ -524,9 +524,10 @@ def clearance_violations(t: Terrain, prof: Profile, step_m: float | None = None)
     return bad
 
 
-def mission_path(u: Any) -> list[list[float]]:
-    """Take-off field, ``waypoints_m``, landing approach point: the path a profile covers."""
-    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u)]
+def mission_path(u: Any, zones: Any = ()) -> list[list[float]]:
+    """Take-off field, ``waypoints_m``, landing approach point (clear of the plan's no-fly
+    ``zones``): the path a profile covers."""
+    return [list(u["takeoff_m"]), *[list(w) for w in u["waypoints_m"]], approach_point(u, zones)]
 
 
 def plan_profiles(plan: Any) -> list[Profile] | None:
@@ -542,8 +543,9 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
     if rec is None:
         return None
     t = from_record(rec)
+    zones = plan.get("no_fly_zones_m") or ()
     return [
-        profile(t, mission_path(u), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
+        profile(t, mission_path(u, zones), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
         for k, u in enumerate(plan["uavs"])
     ]
 
@@ -580,12 +582,13 @@ def qgc_clearance(doc: dict[str, Any], dem: str | Path, step_m: float = 100.0) -
     nav = [it for it in doc["mission"]["items"] if it.get("command") in (16, 22)]
     pts = np.array([[it["params"][4], it["params"][5], it["params"][6]] for it in nav], float)
     geod = Geod(ellps="WGS84")
-    least, legs = math.inf, 0
+    legs = []
     for a, b in itertools.pairwise(pts):
         dist = geod.inv(a[1], a[0], b[1], b[0])[2]
         n = max(2, math.ceil(dist / step_m) + 1)
         s = np.linspace(0.0, 1.0, n)[:, None]
-        p = a[None, :] + (b - a)[None, :] * s
-        least = min(least, float(np.min(p[:, 2] - dem_heights_at(dem, p[:, :2]))))
-        legs += 1
-    return least, legs
+        legs.append(a[None, :] + (b - a)[None, :] * s)
+    if not legs:
+        return math.inf, 0
+    p = np.concatenate(legs)  # every leg's samples read from the DEM at once
+    return float(np.min(p[:, 2] - dem_heights_at(dem, p[:, :2]))), len(legs)

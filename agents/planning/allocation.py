@@ -71,7 +71,7 @@ from poc_env.agents.mission.plan import SCHEMA
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
-from poc_env.agents.planning.geography import plan_geography
+from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -624,9 +624,9 @@ def make_allocation_plan(
                 "transit_waypoints": lead if wps else 0,
                 "track_length_m": float(np.hypot(*np.diff(path, axis=0).T).sum()) if wps else 0.0,
                 "flight_time_s": t_k,
-                "pod": pos_k / poc_k if poc_k > 0 else 0.0,
-                "poc": poc_k,
-                "pos": pos_k,
+                "pod": probability(pos_k / poc_k) if poc_k > 0 else 0.0,  # sums round to 1 + 2e-16
+                "poc": probability(poc_k),
+                "pos": probability(pos_k),
                 "feasible": bool(t_k <= u.usable_endurance_s),
             }
         )

@@ -87,6 +87,7 @@ import shapely
 
 from poc_env._kernels import rectangles
 from poc_env.agents.planning import _kernels
+from poc_env.agents.planning.geography import probability
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.geometry import rectangle_polygon
@@ -508,9 +509,9 @@ class PlanObjective:
                     "feasible": bool(
                         is_feasible(sc.time_s[0, i], self.endurance_s, self.usable_fraction)
                     ),
-                    "pod": float(sc.pod[0, i]),
-                    "poc": float(sc.poc[0, i]),
-                    "pos": float(sc.pos[0, i]),
+                    "pod": probability(sc.pod[0, i]),  # sums may round to 1 + 2e-16
+                    "poc": probability(sc.poc[0, i]),
+                    "pos": probability(sc.pos[0, i]),
                 }
             )
         return out

@@ -344,13 +344,21 @@ def next_sortie(
 
 def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
+    from poc_env.agents.mission.overlay import scenario_source
     from poc_env.agents.mission.plan import load_plan, write_plan
     from poc_env.agents.planning.planner import plan_table
+    from poc_env.cli import _with_scenario_file
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
     plans = [dict(load_plan(p)) for p in args.plan]
-    name = args.scenario or str(plans[0]["scenario"])
+    # the scenario the first plan was made on: by name, or its recorded YAML file (plan
+    # --scenario FILE.yaml records scenario_file; issue 24: replan looked for the name only)
+    name = (
+        args.scenario
+        or scenario_source(str(plans[0]["scenario"]), args.plan[0], plans[0].get("scenario_file"))
+        or str(plans[0]["scenario"])
+    )
     sc = load_scenario(name, parse_overrides(args.overrides or []))
     prior = build_prior(sc.map, args.map_file)
     tracks = None
@@ -370,6 +378,6 @@ def cli_main(args: Any) -> int:
         f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "
         f"{nxt['posc']:.4f}; cumulative {nxt['cumulative_posc']:.4f}"
     )
-    write_plan(nxt, args.out)
+    write_plan(_with_scenario_file(nxt, name), args.out)  # export finds the prior by it
     print(f"wrote {args.out}")
     return 0

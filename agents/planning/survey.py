@@ -271,15 +271,20 @@ def run_survey(
     w = sc.sensor.sweep_width_m
     law = sc.sensor.law
     s = sc.sensor.samples_per_cell
+    from poc_env.sim.routing import ZoneRouter
     from poc_env.theory.regions import cell_overlap
 
     takeoffs, landings = _airfields_for(sc, plan)
+    router = ZoneRouter.for_scenario(sc)
     tracks, pods, members, lengths, legs = [], [], [], [], []
     taken = None
-    for spec, start in zip(plan.regions, takeoffs):
+    for spec, start, end in zip(plan.regions, takeoffs, landings):
         region = spec.region()
         tr = spec.track(start=start)
-        tracks.append(tr.waypoints)
+        # eq. 20: the pattern's legs cut to the parts outside the no-fly zones, joined by the
+        # shortest way round (issue 24: survey plans flew through them); timed and scored so
+        tracks.append(router.reroute([start, *tr.waypoints, end])[1:-1] if router.active
+                      else tr.waypoints)  # fmt: skip
         lengths.append(tr.length_m)
         legs.append(tr.search_length_m)
         geom = region.geometry  # exclusive part: what earlier UAVs' regions do not hold
@@ -392,11 +397,16 @@ def survey_plan(
     no-fly zones, airfields, bounds and, with ``origin_deg``, the ``crs``) as
     :func:`poc_env.agents.planning.planner.make_plan` records it.
     """
-    from poc_env.agents.mission.crs import make_crs
     from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
-    from poc_env.agents.planning.geography import check_terrain, plan_geography
+    from poc_env.agents.planning.geography import (
+        check_terrain,
+        plan_geography,
+        probability,
+        scenario_crs,
+    )
 
-    crs = None if origin_deg is None else make_crs(projection, origin_deg, zone=zone)
+    # the scenario's map.origin_deg as `poc-env plan` reads it (issue 24: ignored here)
+    crs = scenario_crs(scenario, origin_deg, projection, zone)
     uavs = []
     for k, (spec, row) in enumerate(zip(regions.regions, result.rows)):
         geom = spec.region().geometry
@@ -411,13 +421,13 @@ def survey_plan(
                 "waypoints_m": np.asarray(result.tracks[k], dtype=float).tolist(),
                 "track_length_m": float(row.track_length_km * KM),
                 "flight_time_s": float(row.flight_time_h * 3600.0),
-                "pod": float(row.pod),
-                "poc": float(row.poc),
-                "pos": float(row.pos),
+                "pod": probability(row.pod),
+                "poc": probability(row.poc),
+                "pos": probability(row.pos),
                 "feasible": bool(row.feasible),
                 "areas_m": [outline],
                 "pattern": row.pattern,
-                "pos_flown": float(row.pos_flown),
+                "pos_flown": probability(row.pos_flown),
             }
         )
     return check_terrain(
@@ -428,8 +438,8 @@ def survey_plan(
             "map_source": map_source,
             "optimizer": {"name": "survey", "settings": {"regions": regions.name}},
             "runtime_s": 0.0,
-            "posc": float(result.posc),
-            "upper_bound": float(result.bound),
+            "posc": probability(result.posc),
+            "upper_bound": probability(result.bound),
             "rectangle_rule": RECTANGLE_RULE,
             "uavs": uavs,
             **plan_geography(scenario, prior, crs),

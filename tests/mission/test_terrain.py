@@ -312,68 +312,6 @@ def test_default_sensor_keeps_every_builtin_width():
         assert sc.sensor.sweep_width_at(123.0) == sc.sensor.sweep_width_m
 
 
-# --------------------------------------------------------------------------- property test
-
-
-def _random_case(rng: np.random.Generator) -> dict:
-    """A small random scenario with a smooth random elevation grid (1 km cells) and a zone."""
-    w, h = (int(v) * 10 for v in rng.integers(3, 6, size=2))
-    fx, fy = float(rng.uniform(-15, w + 15)), float(rng.choice([-8.0, h + 8.0]))
-    x0, y0 = min(0.0, fx) - 20, min(0.0, fy) - 20
-    nx, ny = int(max(w, fx) + 20 - x0) + 2, int(max(h, fy) + 20 - y0) + 2
-    gx, gy = np.meshgrid(x0 + np.arange(nx) + 0.5, y0 + np.arange(ny) + 0.5)
-    z = np.full(gx.shape, float(rng.uniform(0, 800)))
-    for _ in range(int(rng.integers(1, 5))):
-        cx, cy = rng.uniform(0, w), rng.uniform(0, h)
-        z += rng.uniform(300, 2500) * np.exp(
-            -((gx - cx) ** 2 + (gy - cy) ** 2) / rng.uniform(4, 60) ** 2
-        )
-    z = z * min(1.0, 4500.0 / float(z.max()))  # peaks below the ceiling (6,000 m) - clearance
-    zx, zy = float(rng.uniform(5, w - 15)), float(rng.uniform(5, h - 15))
-    mean = [float(rng.uniform(0, w)), float(rng.uniform(0, h))]
-    return _scenario(
-        None,
-        name="prop",
-        map={"width_km": w, "height_km": h, "cell_km": 5,
-             "prior": {"components": [{"mean_km": mean, "sigma_km": [8, 6]}]},
-             "no_fly_zones_km": [[[zx, zy], [zx + 8, zy], [zx + 8, zy + 6], [zx, zy + 6]]]},
-        airfields=[{"name": "base", "position_km": [fx, fy]}],
-        fleet=[{"takeoff": "base", "count": int(rng.integers(1, 4))}],
-        terrain={"elevation_m": np.round(z, 1).tolist(), "cell_km": 1.0, "origin_km": [x0, y0]},
-    )  # fmt: skip
-
-
-def _property(n: int, seed: int, tmp_path: Path) -> None:
-    rng = np.random.default_rng(seed)
-    refused, violations = 0, 0
-    for k in range(n):
-        sc = load_scenario(_random_case(rng))
-        plan = make_plan(sc, planner="allocation", refine=0, seed=k)
-        path = tmp_path / f"p{k}" / "plan.json"
-        path.parent.mkdir()
-        write_plan(plan, path)
-        t = from_record(plan["terrain"])
-        for prof in plan_profiles(plan) or []:
-            violations += clearance_violations(t, prof)
-        for fmt in ("qgc", "kml"):
-            try:
-                export_plan(path, fmt, origin="46.5,7.9", out_dir=path.parent / fmt)
-            except ConfigError:
-                refused += 1
-    assert (violations, refused) == (0, 0)
-
-
-def test_random_scenarios_with_terrain_clear_it_and_export(tmp_path):
-    """Smoke-sized: 0 clearance violations and 0 refused exports over random small scenarios
-    with a zone and an elevation grid."""
-    _property(3, 7, tmp_path)
-
-
-@pytest.mark.slow
-def test_random_scenarios_with_terrain_clear_it_and_export_many(tmp_path):
-    _property(200, 11, tmp_path)
-
-
 @pytest.mark.parametrize("height", [3e38, -2e4, 15_000.0])  # float32: 3e38 near its top
 def test_dem_heights_beyond_the_earths_are_refused_by_import_nothing_written(tmp_path, height):
     """Issue 27's campaign (datafiles target): a DEM with 1e308 m (3e38 in float32) or 20 km

@@ -256,3 +256,25 @@ def test_deeply_nested_or_foreign_xml_tracks_are_refused(first, tmp_path, capsys
     assert main(["replan", "--plan", str(p1), "--tracks", str(nested), "--out", str(out)]) == 2
     assert "levels deep" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_replan_of_a_yaml_scenario_finds_it_by_the_plan(tmp_path, monkeypatch, capsys):
+    """Issue 24's property test: `replan --plan p1.json` of a plan made on a YAML scenario
+    looked for the scenario by name only (an error unless the YAML lay in the current folder);
+    it reads the plan's scenario_file, and the next plan records it for export's prior."""
+    import yaml
+
+    data = load_scenario("small").to_dict()
+    data["name"] = "mine"
+    data["map"]["origin_deg"] = [46.5, 7.9]
+    (tmp_path / "scen").mkdir()
+    yml = tmp_path / "scen" / "mine.yaml"
+    yml.write_text(yaml.safe_dump(data))
+    monkeypatch.chdir(tmp_path)  # neither the plans' folders nor this one hold mine.yaml
+    p1, p2 = tmp_path / "s1" / "p1.json", tmp_path / "s2" / "p2.json"
+    argv = ["plan", "--scenario", str(yml), "--planner", "allocation", "--refine", "0"]
+    assert main([*argv, "--quiet", "--out", str(p1)]) == 0
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0, capsys.readouterr().err
+    assert load_plan(p2)["scenario_file"] == str(yml.resolve())
+    assert main(["export", str(p2), "--format", "kml"]) == 0
+    assert (tmp_path / "s2" / "p2_prior.png").is_file()  # the prior placed on the map

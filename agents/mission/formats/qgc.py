@@ -101,7 +101,7 @@ def qgc_plan(
     ref = check_altitude_ref(altitude_ref)
     wps = [list(w) for w in u["waypoints_m"]]
     start, end = list(u["takeoff_m"]), list(u["landing_m"])
-    approach = approach_point(u)
+    approach = approach_point(u, no_fly_zones_m)
     ll = to_geographic([start, *wps, approach, end], crs)
     t_ll, w_ll, a_ll, l_ll = ll[0], ll[1:-2], ll[-2], ll[-1]
     app_alt = approach_altitude(altitude_m, ground_m)
@@ -208,7 +208,7 @@ def check_fences(plan: Plan, area: list | None) -> None:
     inc = Polygon(area).buffer(1.0) if area else None
     zones = [Polygon(z) for z in plan.get("no_fly_zones_m") or []]
     for k, u in enumerate(plan["uavs"]):
-        pts = [*route(u)[:-1], approach_point(u), list(u["landing_m"])]
+        pts = [*route(u)[:-1], approach_point(u, plan.get("no_fly_zones_m")), list(u["landing_m"])]
         names = [
             "takeoff_m", *(f"waypoints_m[{i}]" for i in range(len(pts) - 3)), "approach",
             "landing_m",
