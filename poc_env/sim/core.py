@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import poc_env._kernels.autopilot as _autopilot
 import poc_env._kernels.sensing as _sensing
 import poc_env._kernels.swarm as _swarm
 import poc_env.limits as limits
@@ -97,6 +98,30 @@ class Params:
             max_speed_mps=u.max_speed_mps,
             max_altitude_m=u.max_altitude_m,
         )
+
+    @functools.cached_property
+    def autopilot_constants(self) -> np.ndarray:
+        """The scalars of the compiled autopilot (:data:`poc_env._kernels.autopilot.
+        CONSTANTS`), packed once per Params."""
+        u = self.scenario.uav
+        bx0, by0, bx1, by1 = self.bounds
+        gx0, gy0, gx1, gy1 = self.grid.bounds
+        return _autopilot.constants(
+            dt_s=self.dt,
+            bx0=bx0, by0=by0, bx1=bx1, by1=by1,
+            gx0=gx0, gy0=gy0, gx1=gx1, gy1=gy1,
+            max_altitude_m=u.max_altitude_m,
+            min_speed_mps=u.min_speed_mps,
+            max_speed_mps=u.max_speed_mps,
+            max_pitch_rad=u.max_pitch_rad,
+            max_turn_rate_rad_s=u.max_turn_rate_rad_s,
+            max_accel_mps2=u.max_accel_mps2,
+            max_pitch_rate_rad_s=u.max_pitch_rate_rad_s,
+            cruise_altitude_m=u.cruise_altitude_m,
+            cruise_speed_mps=u.cruise_speed_mps,
+            search_speed_mps=u.search_speed_mps,
+            usable_endurance_s=u.usable_endurance_s,
+        )  # fmt: skip
 
     @functools.cached_property
     def step_constants(self) -> np.ndarray:

@@ -551,6 +551,54 @@ def test_kinematics_kernel_equals_numpy_bit_for_bit(name):
             np.testing.assert_array_equal(getattr(st, key), kept[key])
 
 
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_autopilot_kernel_equals_the_numpy_autopilot(name):
+    """The compiled autopilot (control.swarm_increments of the heading, heading_clip and
+    waypoint levels) against the numpy rules it copies (decode_vector, heading_increments,
+    waypoint_goal, steer, return_home): UAVs inside and outside the grid, with and without the
+    return rule, many of them due home, zero, tiny, out-of-range and NaN actions, finished
+    UAVs. The increments are float32-rounded, and numpy's AVX-512 arctan2 may differ from the C
+    library's in the last bit, which can move a rounding by one float32 unit: hence the atol
+    (with numpy's baseline dispatch the two are bit-equal) and the share that must be exact."""
+    from poc_env.sim import control
+
+    params = sim.make_params(load_scenario(name))
+    rng = np.random.default_rng(9)
+    u = params.scenario.uav
+    exact = total = 0
+    for trial in range(6):
+        st = sim.initial(params, [np.random.default_rng(trial + k) for k in range(16)])
+        x0, y0, x1, y1 = params.bounds
+        shape = st.flying.shape
+        st.pos[..., 0] = rng.uniform(x0 - 1e4, x1 + 1e4, shape)
+        st.pos[..., 1] = rng.uniform(y0 - 1e4, y1 + 1e4, shape)
+        st.pos[..., 2] = rng.uniform(0, u.max_altitude_m, shape)
+        st.heading = rng.uniform(-np.pi, np.pi, shape)
+        st.pitch = rng.uniform(-u.max_pitch_rad, u.max_pitch_rad, shape)
+        st.speed = rng.uniform(u.min_speed_mps, u.max_speed_mps, shape)
+        st.elapsed = rng.uniform(0, u.endurance_s, shape)
+        st.flying = rng.random(shape) < 0.9
+        action = rng.uniform(-1.5, 1.5, (*shape, 2)).astype(np.float32)
+        action[0, 0] = 0.0
+        action[1, 0] = 1e-7
+        action[2, 0, 0] = np.nan
+        e, n = shape
+        q = obs.decode_vector(params, obs.vectors(params, st).reshape(e * n, -1))
+        k = np.tile(np.arange(n), e)
+        for level in ("heading", "heading_clip", "waypoint"):
+            for auto_return in (True, False):
+                inc = control.to_increments(
+                    params, level, q, action.reshape(e * n, 2).astype(float), k, auto_return
+                )
+                want = np.where(st.flying[..., None], inc.reshape(e, n, 3), 0.0)
+                got = control.swarm_increments(params, level, st, action, auto_return)
+                assert got.shape == want.shape and got.dtype == want.dtype
+                np.testing.assert_allclose(got, want, rtol=0, atol=1.2e-7)
+                exact += int(np.sum((got == want) | (np.isnan(got) & np.isnan(want))))
+                total += got.size
+    assert exact >= 0.999 * total
+
+
 def test_target_pod_kernel_matches_segment_pod():
     """sensing.target_pod against search_theory.segment_pod (numpy path), every law."""
     rng = np.random.default_rng(4)
