@@ -211,8 +211,12 @@ def _sb3_args(s: Settings, seed: int):
     from poc_env.agents.rl.args import TrainArgs
 
     args = TrainArgs(task=SB3_TASK, seed=seed, progress=False)
-    sizes = {"n_steps": s.sb3_n_steps, "batch_size": s.sb3_batch_size, "n_envs": s.sb3_n_envs}
-    return dataclasses.replace(args, **{k: v for k, v in sizes.items() if v is not None})
+    return dataclasses.replace(
+        args,
+        n_steps=args.n_steps if s.sb3_n_steps is None else s.sb3_n_steps,
+        batch_size=args.batch_size if s.sb3_batch_size is None else s.sb3_batch_size,
+        n_envs=args.n_envs if s.sb3_n_envs is None else s.sb3_n_envs,
+    )
 
 
 def _sb3_rate(args, env, seed: int, iterations: int) -> float:
