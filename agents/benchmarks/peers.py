@@ -1,6 +1,6 @@
 """Our envs against their peers, interleaved in one run: ``poc-env bench peers``.
 
-    poc-env bench peers [--rounds 5] [--out results/peers] [--only KEY ...]
+    poc-env bench peers [--rounds 5] [--out results/peers] [--only KEY ...] [--sb3]
                         [--heading-envs 64] [--small-envs 256] [--vmas-envs 256] [--smoke]
 
 Every contender of :data:`CONTENDERS` is timed once per round, the rounds interleaved (the
@@ -19,7 +19,11 @@ rounds, a ratio is the ratio of two medians (with the range of the per-round rat
   ``DroneSwarmSearch`` (grid 40, 6 drones), random discrete actions, resets not timed
   (:func:`~poc_env.agents.benchmarks.env.bench_discrete_parallel`); VMAS's ``discovery``
   scenario (6 agents, ``--vmas-envs`` envs, CPU, continuous random actions in
-  ``[-u_range, u_range]``, no resets: VMAS envs run on without a horizon).
+  ``[-u_range, u_range]``, no resets: VMAS envs run on without a horizon);
+- with ``--sb3`` (slow: PPO runs): SB3 PPO agent transitions/s through ``poc-env train --task``
+  on :data:`SB3_TASK` against SB3 PPO with the same settings (``TrainArgs``: hyper-parameters,
+  MLP, ``n_envs`` swarms) on MPE2 ``simple_spread_v3`` N=6 through SuperSuit (one warm-up
+  iteration, then ``sb3_iterations`` timed ones, one torch thread).
 
 A peer whose package is not importable is reported as ``not installed`` (its row and every
 ratio that needs it), never a traceback. :data:`TARGETS` are the ratios issue 26 asks for;
@@ -66,6 +70,10 @@ class Settings:
     vmas_steps: int = 50  # joint steps per VMAS stretch
     agent_steps: int = env_bench.AGENT_STEPS_PER_RUN  # per single-env / core round
     peer_cycles: int = 100  # episode length of MPE2 and DSSE
+    sb3_iterations: int = 2  # timed PPO iterations of each SB3 contender (after a warm-up one)
+    sb3_n_steps: int | None = None  # PPO n_steps / batch_size (None: TrainArgs' defaults)
+    sb3_batch_size: int | None = None
+    sb3_n_envs: int | None = None  # swarms (MPE2 worlds) side by side (None: TrainArgs')
 
 
 @dataclass(frozen=True)
@@ -190,6 +198,90 @@ def _vmas(s: Settings, seed: int) -> float:
     return statistics.median(rates)
 
 
+#: The task of the SB3 pair (issue 26: ``poc-env train --task`` on Paper62-Random-Heading).
+SB3_TASK = "UAVSearch-Paper62-Random-Heading-v0"
+
+
+def _sb3_args(s: Settings, seed: int):
+    """The PPO settings both SB3 contenders share: ``poc-env train --task SB3_TASK``'s
+    :class:`~poc_env.agents.rl.args.TrainArgs` (the shipped hyper-parameters and MLP), sized
+    by ``s``."""
+    import dataclasses
+
+    from poc_env.agents.rl.args import TrainArgs
+
+    args = TrainArgs(task=SB3_TASK, seed=seed, progress=False)
+    return dataclasses.replace(
+        args,
+        n_steps=args.n_steps if s.sb3_n_steps is None else s.sb3_n_steps,
+        batch_size=args.batch_size if s.sb3_batch_size is None else s.sb3_batch_size,
+        n_envs=args.n_envs if s.sb3_n_envs is None else s.sb3_n_envs,
+    )
+
+
+def _sb3_rate(args, env, seed: int, iterations: int) -> float:
+    """Agent transitions/s of SB3 PPO (:func:`poc_env.agents.rl.train.make_model`: the policy,
+    network and hyper-parameters of ``args``) on the VecEnv ``env``, one torch thread: one
+    warm-up iteration, then ``iterations`` timed ones (rollouts and updates). SB3 counts a
+    transition per slot; a slot is one agent in both contenders."""
+    import torch as th
+
+    from poc_env.agents.rl.train import make_model, seed_everything
+
+    th.set_num_threads(1)
+    seed_everything(seed)
+    model = make_model(args, env, None)
+    rollout = args.n_steps * env.num_envs
+    model.learn(rollout)
+    t0 = time.perf_counter()
+    model.learn(iterations * rollout, reset_num_timesteps=False)
+    rate = iterations * rollout / (time.perf_counter() - t0)
+    env.close()
+    return rate
+
+
+def _sb3_task(s: Settings, seed: int) -> float:
+    """SB3 PPO through ``poc-env train --task SB3_TASK``'s env (:func:`~poc_env.agents.rl.
+    train.make_env`: the batched SwarmVecEnv, one slot per UAV, shared policy)."""
+    from poc_env.agents.rl.train import make_env
+    from poc_env.tasks import get_task
+
+    args = _sb3_args(s, seed)
+    env = make_env(args, get_task(SB3_TASK).load_scenario())
+    return _sb3_rate(args, env, seed, s.sb3_iterations)
+
+
+def _sb3_mpe(s: Settings, seed: int) -> float:
+    """SB3 PPO with the same settings on MPE2 ``simple_spread_v3`` N=6 (continuous actions:
+    the same Gaussian policy) through SuperSuit, the way PettingZoo's SB3 tutorial trains it:
+    ``pettingzoo_env_to_vec_env_v1`` (one slot per agent, shared policy) and
+    ``concat_vec_envs_v1`` (``n_envs`` worlds, in this process)."""
+    import supersuit as ss
+    from mpe2 import simple_spread_v3
+
+    args = _sb3_args(s, seed)
+    par = simple_spread_v3.parallel_env(N=N_UAVS, max_cycles=s.peer_cycles, continuous_actions=True)
+    par.reset(seed=seed)
+    env = ss.concat_vec_envs_v1(
+        ss.pettingzoo_env_to_vec_env_v1(par),
+        args.n_envs,
+        num_cpus=0,
+        base_class="stable_baselines3",
+    )
+
+    def seed_all(seed: int | None = None) -> list[int | None]:
+        """VecEnv.seed, which PPO(seed=...) calls and SuperSuit's wrapper lacks: seeds the
+        worlds through a reset of the wrapped ConcatVecEnv (world ``i`` gets ``seed + i``)."""
+        env.venv.reset(seed=seed)
+        return [seed] * env.num_envs
+
+    env.seed = seed_all  # type: ignore[method-assign]
+    return _sb3_rate(args, env, seed, s.sb3_iterations)
+
+
+#: Contenders timed only with ``--sb3`` (or named in ``--only``): a PPO run each, slow.
+SB3_KEYS = ("sb3_task", "sb3_mpe2")
+
 #: Every contender, by key (a test registers a stand-in peer here).
 CONTENDERS: dict[str, Contender] = {
     c.key: c
@@ -236,6 +328,24 @@ CONTENDERS: dict[str, Contender] = {
         Contender(
             "dsse", "DSSE DroneSwarmSearch grid 40", N_UAVS, lambda s: 1, _dsse, "dsse", "DSSE"
         ),
+        Contender(
+            "sb3_task",
+            f"SB3 PPO, train --task {SB3_TASK}",
+            N_UAVS,
+            lambda s: _sb3_args(s, 0).n_envs,
+            _sb3_task,
+            "stable-baselines3",
+            "stable_baselines3",
+        ),
+        Contender(
+            "sb3_mpe2",
+            "SB3 PPO, MPE2 simple_spread_v3 N=6 (SuperSuit)",
+            N_UAVS,
+            lambda s: _sb3_args(s, 0).n_envs,
+            _sb3_mpe,
+            "mpe2",
+            "mpe2",
+        ),
     )
 }
 
@@ -246,6 +356,7 @@ TARGETS: list[tuple[str, str, float]] = [
     ("single", "mpe2", 10.0),
     ("make_vec_small", "core_small_reset", 0.6),
     ("make_vec_small", "core_small_area", 0.6),
+    ("sb3_task", "sb3_mpe2", 3.0),  # PPO agent transitions/s, the same settings
 ]
 
 
@@ -387,6 +498,14 @@ def markdown(rows: list[dict], s: Settings, rounds: int, load: tuple, command: s
     return "\n".join(lines) + "\n"
 
 
+def chosen_keys(only: list[str] | None, sb3: bool) -> list[str]:
+    """The contenders to time: ``only`` as given, else every contender but the SB3 pair
+    (:data:`SB3_KEYS`) unless ``sb3``."""
+    if only is not None:
+        return list(only)
+    return [k for k in CONTENDERS if sb3 or k not in SB3_KEYS]
+
+
 def build_parser() -> argparse.ArgumentParser:
     """This benchmark's command line (``--help``: options, defaults, examples)."""
     from poc_env.helptext import HelpFormatter, examples
@@ -399,6 +518,7 @@ def build_parser() -> argparse.ArgumentParser:
             "poc-env bench peers --rounds 5 --out results/peers",
             "poc-env bench peers --only single mpe2 --rounds 3",
             "poc-env bench peers --smoke --rounds 1 --out /tmp/peers",
+            "poc-env bench peers --only sb3_task sb3_mpe2 --rounds 3",
         ),
     )
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (medians over them)")
@@ -422,6 +542,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--vmas-envs", type=int, default=Settings.vmas_envs, help="envs of VMAS discovery"
     )
+    p.add_argument(
+        "--sb3",
+        action="store_true",
+        help="also time SB3 PPO on "
+        + SB3_TASK
+        + " against MPE2 (slow: "
+        + ", ".join(SB3_KEYS)
+        + ")",
+    )
     p.add_argument("--smoke", action="store_true", help="tiny sizes (the test suite's run)")
     return p
 
@@ -435,7 +564,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
         v = getattr(args, field)
         if v < 1 or v > 4096:
             raise ConfigError(field, v, "an integer from 1 to 4096")
-    keys = list(CONTENDERS) if args.only is None else args.only
+    keys = chosen_keys(args.only, args.sb3)
     for k in keys:
         if k not in CONTENDERS:
             raise ConfigError("only", k, "contender keys: " + ", ".join(CONTENDERS))
@@ -451,6 +580,10 @@ def main(argv: list[str] | None = None) -> list[dict]:
             vmas_steps=3,
             agent_steps=200,
             peer_cycles=10,
+            sb3_iterations=1,
+            sb3_n_steps=8,
+            sb3_batch_size=16,
+            sb3_n_envs=1,
         )
     load0 = os.getloadavg()[0]
     rates = measure(keys, s, args.rounds)

@@ -7,8 +7,11 @@ module              kernels (the public functions that call them)
                     and the fused sensing sweep of eq. 12-14 (:mod:`poc_env.theory.search_theory`),
                     the hidden target's POD (:mod:`poc_env.sim.core`)
 ``swarm``           pairwise distances, the eq. 20-21 checks (:mod:`poc_env.sim.constraints`),
-                    the eq. 24 graphs and the auto topology (:mod:`poc_env.sim.comms`), and the
-                    simulator step's bookkeeping that applies them (:mod:`poc_env.sim.core`)
+                    the eq. 24 graphs and the auto topology (:mod:`poc_env.sim.comms`), the
+                    eq. 19 kinematics and the simulator step's bookkeeping that applies them
+                    (:mod:`poc_env.sim.core`)
+``autopilot``       the heading and waypoint levels' autopilot and eq. 18 return rule
+                    (:func:`poc_env.sim.control.swarm_increments`)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells
                     (:mod:`poc_env.theory.regions`, the planner's objective)

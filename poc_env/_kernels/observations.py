@@ -241,11 +241,12 @@ def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
             count[sector] += w
 
 
-@_jit
+@njit(cache=True, error_model="numpy", inline="always")
 def _classify(dx, dy, edges, radius, n_sectors):
     """Sector, ring and within-``radius`` flag of one offset: the decisions of :func:`_bins`'
-    loop body, spelled out once more for :func:`_grid_bins`, which calls it only next to a
-    boundary (a call per cell would cost more than the decision, hence the copy)."""
+    loop body, spelled out once more for :func:`_grid_bins`, which calls it once per run of
+    cells and next to a boundary (a call per cell would cost more than the decision, hence the
+    copy)."""
     n_rings = edges.shape[0] + 1
     tol = 1e-9
     ax = abs(dx)
@@ -285,66 +286,90 @@ def _classify(dx, dy, edges, radius, n_sectors):
 
 
 @_jit
-def _grid_bins(xs, ys, px, py, poc, others, edges, radius, n_sectors, mass, count, bps):
-    """:func:`_bins` over a grid of cell centres ``(xs[i], ys[j])`` (``xs`` increasing, cell
-    ``j * nx + i``), the same sums: walking each row, a cell takes the previous one's sector,
-    ring and radius flag unless a boundary (``dx`` = 0 or +-dy, a ring edge's or the radius'
-    circle) lies between them within a margin far wider than the exact formulas' 1e-9 band;
-    cells next to a boundary are decided by :func:`_classify`. The margin, 1e-4 of the
-    distances, covers the bands (at most ~3e-5 of a ring's radius wide in ``dx``, on a row
-    nearly tangent to it), whatever the cell size. ``bps`` is scratch."""
+def _grid_bins(xs, ys, px, py, poc, edges, radius, n_sectors, mass, bps, pos):
+    """The POC sums of :func:`_bins` (``mass``; each bin summed in cell order) over a grid of
+    cell centres ``(xs[i], ys[j])`` (``xs`` increasing, cell ``j * nx + i``), row by row: a
+    row's boundaries (``dx`` = 0 or +-dy, a ring edge's circle) cut it into runs of cells that
+    share a sector and ring; the first cell of a run is decided by :func:`_classify`, the
+    others take its bin and are added in order, and every cell within a margin of a boundary
+    is decided on its own. The margin, 2e-4 of the row's largest offsets, is far wider than the
+    exact formulas' 1e-9 bands (at most ~3e-5 of a ring's radius wide in ``dx``, on a row
+    nearly tangent to it), whatever the cell size. Rows too
+    close to the UAV's own (``dy`` ~ 0) are decided cell by cell. ``bps``, ``pos``: scratch."""
     nx = xs.shape[0]
     ny = ys.shape[0]
     n_rings = edges.shape[0] + 1
     span = abs(xs[0] - px) + abs(xs[nx - 1] - px)
     for j in range(ny):
         dy = ys[j] - py
-        walk = n_sectors == 8 and abs(dy) > 1e-6 * (span + 1.0)
-        nb = 0
-        if walk:  # the row's boundaries, sorted
-            bps[0] = 0.0
-            bps[1] = dy
-            bps[2] = -dy
-            nb = 3
-            for r in range(n_rings):
-                e = radius if r == n_rings - 1 else edges[r]
-                h = e * e - dy * dy
-                if h >= 0.0:
-                    chord = math.sqrt(h)
-                    bps[nb] = chord
-                    bps[nb + 1] = -chord
-                    nb += 2
-            for a in range(1, nb):  # insertion sort
-                v = bps[a]
-                b = a - 1
-                while b >= 0 and bps[b] > v:
-                    bps[b + 1] = bps[b]
-                    b -= 1
-                bps[b + 1] = v
+        base = j * nx
+        if not (n_sectors == 8 and abs(dy) > 1e-6 * (span + 1.0)):
+            for i in range(nx):
+                q = poc[base + i]
+                if q == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
+                    continue
+                sector, ring, _inside = _classify(xs[i] - px, dy, edges, radius, n_sectors)
+                mass[sector * n_rings + ring] += q
+            continue
+        # the row's boundaries, sorted: -P reversed, 0, P, where P is |dy| merged into the
+        # chords of the ring edges the row reaches (ascending with the edges; the radius
+        # decides no POC sum)
+        ady = abs(dy)
+        npos = 0
+        placed = False
+        for r in range(n_rings - 1):
+            h = edges[r] * edges[r] - dy * dy
+            if h >= 0.0:
+                chord = math.sqrt(h)
+                if not placed and ady <= chord:
+                    pos[npos] = ady
+                    npos += 1
+                    placed = True
+                pos[npos] = chord
+                npos += 1
+        if not placed:
+            pos[npos] = ady
+            npos += 1
+        bps[npos] = 0.0
+        for a in range(npos):
+            bps[npos - 1 - a] = -pos[a]
+            bps[npos + 1 + a] = pos[a]
+        nb = 2 * npos + 1
+        m = 2e-4 * (span + ady + radius + edges[n_rings - 2])
         ptr = 0
-        have = False
-        last = 0.0
-        sector, ring, inside = 0, 0, False
-        for i in range(nx):
-            c = j * nx + i
-            q = poc[c]
-            w = others[c]
-            if q == 0.0 and w == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
-                continue
+        i = 0
+        while i < nx:
             dx = xs[i] - px
-            near = True
-            if walk and have:
-                m = 1e-4 * (abs(last) + abs(dx) + abs(dy) + radius + edges[n_rings - 2])
-                while ptr < nb and bps[ptr] < last - m:
-                    ptr += 1
-                near = ptr < nb and bps[ptr] <= dx + m
-            if near:
-                sector, ring, inside = _classify(dx, dy, edges, radius, n_sectors)
-            have = True
-            last = dx
-            mass[sector * n_rings + ring] += q
-            if inside:
-                count[sector] += w
+            while ptr < nb and bps[ptr] < dx - m:
+                ptr += 1
+            if ptr < nb and bps[ptr] <= dx + m:  # next to a boundary: this cell alone
+                sector, ring, _inside = _classify(dx, dy, edges, radius, n_sectors)
+                mass[sector * n_rings + ring] += poc[base + i]
+                i += 1
+                continue
+            # a run, farther than the margin from every boundary: there :func:`_classify`
+            # takes its octant branch and squared distances (dx and |dx| - |dy| are far from
+            # 0, no ring edge is near; near the radius alone hypot and the squares agree)
+            ax = abs(dx)
+            if dy > 0 and dx > 0:
+                sector = 0 if ady < ax else 1
+            elif dy > 0:
+                sector = 2 if ady > ax else 3
+            elif dx < 0:
+                sector = 4 if ady < ax else 5
+            else:
+                sector = 6 if ady > ax else 7
+            d2 = dx * dx + dy * dy
+            ring = 0
+            while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
+                ring += 1
+            bin_ = sector * n_rings + ring
+            limit = bps[ptr] - m if ptr < nb else np.inf
+            acc = mass[bin_]  # up to the next boundary's margin: one bin, in order
+            while i < nx and xs[i] - px < limit:
+                acc += poc[base + i]
+                i += 1
+            mass[bin_] = acc
 
 
 @_jit
@@ -390,6 +415,7 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     count = np.empty(n_sectors)
     others_cells = np.zeros(ny * nx)  # the "others" channel of one UAV, cleared after use
     bps = np.empty(2 * n_rings + 3)
+    chords = np.empty(n_rings)
     short = nx < 16  # short rows: a row's boundaries would cost more than its cells' decisions
     cx = np.empty(ny * nx)
     cy = np.empty(ny * nx)
@@ -410,18 +436,25 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
                 o[v0 + t] = vector[e, k, t]
             px = bx0 + np.float64(vector[e, k, 0]) * bw
             py = by0 + np.float64(vector[e, k, 1]) * bh
-            for m in range(n):
-                if m != k and present[m]:
-                    others_cells[rows[m] * nx + cols[m]] = 1.0
             mass[:] = 0.0
             count[:] = 0.0
             row = poc[e, p].reshape(ny * nx)
             if short:
+                for m in range(n):
+                    if m != k and present[m]:
+                        others_cells[rows[m] * nx + cols[m]] = 1.0
                 _bins(cx, cy, px, py, row, others_cells, edges, radius, n_sectors, mass, count)
             else:
-                _grid_bins(
-                    xs, ys, px, py, row, others_cells, edges, radius, n_sectors, mass, count, bps
-                )
+                _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
+                for m in range(n):  # each cell holding another UAV counts once (a 1.0)
+                    c = rows[m] * nx + cols[m]
+                    if m != k and present[m] and others_cells[c] == 0.0:
+                        others_cells[c] = 1.0
+                        sector, _ring, inside = _classify(
+                            xs[cols[m]] - px, ys[rows[m]] - py, edges, radius, n_sectors
+                        )
+                        if inside:
+                            count[sector] += 1.0
             for m in range(n):
                 if present[m]:
                     others_cells[rows[m] * nx + cols[m]] = 0.0

@@ -32,10 +32,11 @@ from __future__ import annotations
 
 import numpy as np
 
+import poc_env._kernels.autopilot as _autopilot
 from poc_env.errors import ConfigError
 from poc_env.sim.autopilot import homing, returning, steer
 from poc_env.sim.core import Params, State
-from poc_env.sim.observations import decode_vector, vectors
+from poc_env.sim.observations import VECTOR_INDEX, decode_vector, vectors
 
 CONTROLS = ("increments", "heading", "waypoint")
 #: Variants of a level with a changed rule (a new task version, :data:`poc_env.spec.TASK_VERSIONS`)
@@ -45,6 +46,14 @@ VARIANTS = {"heading_clip": "heading"}
 ACTION_DIMS = {"increments": 3, "heading": 2, "waypoint": 2, "heading_clip": 2}
 #: How far ahead along a commanded heading the autopilot aims (m).
 LOOKAHEAD_M = 10e3
+#: The compiled autopilot's code of each level it flies (:func:`swarm_increments`).
+_LEVEL_CODES = {
+    "heading": _autopilot.HEADING,
+    "heading_clip": _autopilot.HEADING_CLIP,
+    "waypoint": _autopilot.WAYPOINT,
+}
+#: Where the compiled autopilot finds its entries in the state vector.
+_VECTOR_ENTRIES = np.array([VECTOR_INDEX[k] for k in _autopilot.VECTOR_ENTRIES], dtype=np.intp)
 
 
 def check_control(control: object) -> str:
@@ -136,8 +145,10 @@ def swarm_increments(
     ``control`` level's actions ``action (E, N, ACTION_DIMS[control])``: the one conversion the
     PettingZoo env and the batched VecEnvs share. ``increments`` pass through unchanged; the
     autopilot levels read each UAV's state from its observation vector and give 0 to UAVs that
-    no longer fly. ``return_increments`` applies :func:`return_home` to the ``increments`` level
-    too (off in every registered task: their increments pass through; a training option)."""
+    no longer fly, in one compiled pass (:func:`poc_env._kernels.autopilot.fly`: this module's
+    and :mod:`~poc_env.sim.autopilot`'s rules, to which the tests pin it).
+    ``return_increments`` applies :func:`return_home` to the ``increments`` level too (off in
+    every registered task: their increments pass through; a training option)."""
     e, n = state.flying.shape
     a = np.asarray(action, dtype=float).reshape(e, n, ACTION_DIMS[control])
     if control == "increments" and not return_increments:
@@ -146,7 +157,9 @@ def swarm_increments(
         q = decode_vector(params, vectors(params, state).reshape(e * n, -1))
         inc = return_home(params, q, a.reshape(e * n, 3), np.tile(np.arange(n), e))
         return np.where(state.flying[..., None], inc.reshape(e, n, 3), a)
-    q = decode_vector(params, vectors(params, state).reshape(e * n, -1))
-    k = np.tile(np.arange(n), e)
-    inc = to_increments(params, control, q, a.reshape(e * n, -1), k, auto_return)
-    return np.where(state.flying[..., None], inc.reshape(e, n, 3), 0.0)
+    out = np.empty((e, n, 3), dtype=np.float32)  # as the numpy autopilot rounds them
+    _autopilot.fly(
+        _LEVEL_CODES[control], vectors(params, state), a, state.flying, params.landing,
+        _VECTOR_ENTRIES, params.autopilot_constants, LOOKAHEAD_M, auto_return, out,
+    )  # fmt: skip
+    return out

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import poc_env._kernels.autopilot as _autopilot
 import poc_env._kernels.sensing as _sensing
 import poc_env._kernels.swarm as _swarm
 import poc_env.limits as limits
@@ -81,6 +82,46 @@ class Params:
     @property
     def fine_shape(self) -> tuple[int, int]:
         return (self.grid.ny * self.s, self.grid.nx * self.s)
+
+    @functools.cached_property
+    def motion_constants(self) -> np.ndarray:
+        """The UAV limits of the compiled eq. 19 kinematics (:data:`poc_env._kernels.swarm.
+        MOTION_CONSTANTS`), packed once per Params."""
+        u = self.scenario.uav
+        return _swarm.motion_constants(
+            dt_s=self.dt,
+            max_accel_mps2=u.max_accel_mps2,
+            max_turn_rate_rad_s=u.max_turn_rate_rad_s,
+            max_pitch_rate_rad_s=u.max_pitch_rate_rad_s,
+            max_pitch_rad=u.max_pitch_rad,
+            min_speed_mps=u.min_speed_mps,
+            max_speed_mps=u.max_speed_mps,
+            max_altitude_m=u.max_altitude_m,
+        )
+
+    @functools.cached_property
+    def autopilot_constants(self) -> np.ndarray:
+        """The scalars of the compiled autopilot (:data:`poc_env._kernels.autopilot.
+        CONSTANTS`), packed once per Params."""
+        u = self.scenario.uav
+        bx0, by0, bx1, by1 = self.bounds
+        gx0, gy0, gx1, gy1 = self.grid.bounds
+        return _autopilot.constants(
+            dt_s=self.dt,
+            bx0=bx0, by0=by0, bx1=bx1, by1=by1,
+            gx0=gx0, gy0=gy0, gx1=gx1, gy1=gy1,
+            max_altitude_m=u.max_altitude_m,
+            min_speed_mps=u.min_speed_mps,
+            max_speed_mps=u.max_speed_mps,
+            max_pitch_rad=u.max_pitch_rad,
+            max_turn_rate_rad_s=u.max_turn_rate_rad_s,
+            max_accel_mps2=u.max_accel_mps2,
+            max_pitch_rate_rad_s=u.max_pitch_rate_rad_s,
+            cruise_altitude_m=u.cruise_altitude_m,
+            cruise_speed_mps=u.cruise_speed_mps,
+            search_speed_mps=u.search_speed_mps,
+            usable_endurance_s=u.usable_endurance_s,
+        )  # fmt: skip
 
     @functools.cached_property
     def step_constants(self) -> np.ndarray:
@@ -478,32 +519,28 @@ def _update_topology(
 
 def scale_actions(params: Params, actions: np.ndarray):
     """Normalised actions (E, N, 3) in [-1, 1] -> increments (dv, d alpha, d beta)."""
-    u = params.scenario.uav
-    a = np.clip(actions, -1.0, 1.0)
-    dt = params.dt
-    return (
-        a[..., 0] * u.max_accel_mps2 * dt,
-        a[..., 1] * u.max_turn_rate_rad_s * dt,
-        a[..., 2] * u.max_pitch_rate_rad_s * dt,
-    )
+    a = np.asarray(actions, dtype=float)
+    out = np.empty((3, *a.shape[:-1]))
+    _swarm.scale_actions(a, params.motion_constants, out)
+    return out[0], out[1], out[2]
 
 
-def kinematics(params: Params, state: State, dv, dalpha, dbeta, moving):
-    """Eq. 19 for the ``moving`` UAVs; returns the new position array (E, N, 3)."""
-    u = params.scenario.uav
-    alpha = np.where(moving, state.heading + dalpha, state.heading)
-    alpha = (alpha + np.pi) % TWO_PI - np.pi
-    beta = np.where(moving, np.clip(state.pitch + dbeta, -u.max_pitch_rad, u.max_pitch_rad), 0.0)
-    step = np.where(moving, state.speed * params.dt, 0.0)
-    new = state.pos.copy()
-    new[..., 0] += step * np.cos(alpha) * np.cos(beta)
-    new[..., 1] += step * np.sin(alpha) * np.cos(beta)
-    new[..., 2] = np.minimum(new[..., 2] + step * np.sin(beta), u.max_altitude_m)
+def kinematics(params: Params, state: State, actions, moving, turn=None):
+    """Eq. 19 for the ``moving`` UAVs under normalised ``actions (E, N, 3)`` (``turn (E, N)``:
+    heading increments replacing the actions', the shield's); updates heading, pitch and
+    speed and returns the new position array (E, N, 3). One compiled pass
+    (:func:`poc_env._kernels.swarm.kinematics`)."""
+    new = np.empty_like(state.pos)
+    alpha = np.empty_like(state.heading)
+    beta = np.empty_like(state.pitch)
+    speed = np.empty_like(state.speed)
+    _swarm.kinematics(
+        actions, turn, moving, state.pos, state.heading, state.pitch, state.speed,
+        params.motion_constants, (new, alpha, beta, speed),
+    )  # fmt: skip
     state.heading = alpha
     state.pitch = beta
-    state.speed = np.where(
-        moving, np.clip(state.speed + dv, u.min_speed_mps, u.max_speed_mps), state.speed
-    )
+    state.speed = speed
     return new
 
 
@@ -532,9 +569,11 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     u = sc.uav
     moving = state.flying.copy()
     e, n = moving.shape
-    dv, dalpha, dbeta = scale_actions(params, np.asarray(actions, dtype=float))
+    actions = np.asarray(actions, dtype=float)
     shielded = np.zeros((e, n), dtype=bool)
+    turn = None
     if sc.constraints.violation == "shield":
+        dalpha = scale_actions(params, actions)[1]
         res = cons.shield_heading(
             state.pos[..., :2],
             state.heading,
@@ -551,11 +590,11 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
             else None,
         )
         shielded = res.shielded & moving
-        dalpha = np.where(moving, res.turn, dalpha)
+        turn = np.where(moving, res.turn, dalpha)
     if params.motion is not None:  # the filter's predict step; static targets skip it
         predict(params, state)
     a2 = state.pos[..., :2].copy()
-    new = kinematics(params, state, dv, dalpha, dbeta, moving)
+    new = kinematics(params, state, actions, moving, turn)
     b2 = new[..., :2]
     found = sense(params, state, a2, b2)
     state.pos = new

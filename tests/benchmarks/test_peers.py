@@ -126,6 +126,42 @@ def test_bad_input_names_the_field_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
+def test_sb3_pair_smoke_run(tmp_path):
+    """The SB3 PPO pair (``--sb3``): PPO through ``train --task`` against PPO with the same
+    settings on MPE2; each side runs where its packages import (SB3, and MPE2 with SuperSuit,
+    the ``peers`` extra) and is 'not installed' otherwise, and the ratio row says which."""
+    out = tmp_path / "sb3"
+    keys = list(peers.SB3_KEYS)
+    peers.main(["--smoke", "--rounds", "1", "--only", *keys, "--out", str(out)])
+    table = _rows(out)
+    speed = {r["key"]: r for r in table if r["kind"] == "speed"}
+    assert list(speed) == keys
+    ran = []
+    for k, r in speed.items():
+        if r["status"] == "ok":
+            ran.append(k)
+            assert float(r["agent_steps_per_s"]) > 0
+            assert r["envs"] == "1"  # --smoke: one swarm (one MPE2 world)
+        else:
+            assert r["status"] == peers.NOT_INSTALLED
+    (ratio,) = [r for r in table if r["kind"] == "ratio"]
+    assert ratio["key"] == "sb3_task/sb3_mpe2" and float(ratio["target"]) == 3.0
+    if len(ran) == 2:
+        assert ratio["status"] == "ok" and float(ratio["ratio"]) > 0
+    else:
+        assert ratio["status"].startswith(peers.NOT_INSTALLED)
+
+
+def test_sb3_pair_only_on_request():
+    """The slow PPO pair is left out of a default run and added by ``--sb3`` (or ``--only``)."""
+    default = peers.chosen_keys(None, False)
+    assert not set(peers.SB3_KEYS) & set(default)
+    assert peers.chosen_keys(None, True) == default + list(peers.SB3_KEYS)
+    assert peers.chosen_keys(["sb3_task"], False) == ["sb3_task"]
+    args = peers.build_parser().parse_args(["--sb3"])
+    assert args.sb3 and peers.chosen_keys(args.only, args.sb3)[-2:] == list(peers.SB3_KEYS)
+
+
 def test_bench_peers_is_a_bench_subcommand():
     args = build_parser().parse_args(["bench", "peers", "--smoke"])
     assert args.what == "peers" and args.rest == ["--smoke"]

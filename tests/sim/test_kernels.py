@@ -494,6 +494,111 @@ def test_step_kernel_matches_numpy_references(name, overrides):
             assert_same(ev.connected, np.asarray(topo.connected))
 
 
+def ref_kinematics(params, state, actions, moving, turn=None):
+    """Eq. 19 in plain numpy (the formulation the compiled kinematics replaced): the actions
+    clipped and scaled to their per-step limits, the heading wrapped, the pitch clipped (0 when
+    not moving), the position moved with the old speed, then the speed clipped."""
+    u = params.scenario.uav
+    a = np.clip(actions, -1.0, 1.0)
+    dt = params.dt
+    dv = a[..., 0] * u.max_accel_mps2 * dt
+    dalpha = a[..., 1] * u.max_turn_rate_rad_s * dt if turn is None else turn
+    dbeta = a[..., 2] * u.max_pitch_rate_rad_s * dt
+    alpha = np.where(moving, state.heading + dalpha, state.heading)
+    alpha = (alpha + np.pi) % (2.0 * np.pi) - np.pi
+    beta = np.where(moving, np.clip(state.pitch + dbeta, -u.max_pitch_rad, u.max_pitch_rad), 0.0)
+    step = np.where(moving, state.speed * dt, 0.0)
+    new = state.pos.copy()
+    new[..., 0] += step * np.cos(alpha) * np.cos(beta)
+    new[..., 1] += step * np.sin(alpha) * np.cos(beta)
+    new[..., 2] = np.minimum(new[..., 2] + step * np.sin(beta), u.max_altitude_m)
+    speed = np.clip(state.speed + dv, u.min_speed_mps, u.max_speed_mps)
+    scaled = (dv, a[..., 1] * u.max_turn_rate_rad_s * dt, dbeta)
+    return new, alpha, beta, np.where(moving, speed, state.speed), scaled
+
+
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_kinematics_kernel_equals_numpy_bit_for_bit(name):
+    """The compiled eq. 19 step (sim.core.kinematics, scale_actions) gives the numpy
+    formulation's positions, headings, pitches, speeds and increments exactly: actions
+    outside [-1, 1], headings to wrap, pitches and speeds at their limits, UAVs that do not
+    move, a NaN action and speed (NaN stays NaN, as np.clip), and a shield's turn."""
+    params = sim.make_params(load_scenario(name))
+    rng = np.random.default_rng(2)
+    for trial in range(6):
+        st = sim.initial(params, [np.random.default_rng(trial + k) for k in range(8)])
+        st.heading = rng.uniform(-10, 10, st.heading.shape)
+        st.pitch = rng.uniform(-1, 1, st.pitch.shape)
+        st.speed = rng.uniform(0, 100, st.speed.shape)
+        st.pos[..., 2] = rng.uniform(-100, 2 * params.scenario.uav.max_altitude_m, st.pos.shape[:2])
+        moving = rng.random(st.flying.shape) < 0.8
+        actions = rng.uniform(-2, 2, (*moving.shape, 3))
+        actions[0, 0, 1] = np.nan
+        st.speed[1, 0] = np.nan
+        turn = rng.uniform(-0.3, 0.3, moving.shape) if trial % 2 else None
+        kept = {key: getattr(st, key).copy() for key in ("pos", "heading", "pitch", "speed")}
+        *want, inc = ref_kinematics(params, st, actions, moving, turn)
+        got_state = dataclasses.replace(st)
+        new = sim.kinematics(params, got_state, actions, moving, turn)
+        got = (new, got_state.heading, got_state.pitch, got_state.speed)
+        for w, g in zip(want, got, strict=True):
+            assert g.dtype == w.dtype
+            np.testing.assert_array_equal(g, w)
+        for w, g in zip(inc, sim.scale_actions(params, actions), strict=True):
+            np.testing.assert_array_equal(g, w)
+        # the inputs are not written: new arrays replace them (the previous state stays valid)
+        for key in ("pos", "heading", "pitch", "speed"):
+            np.testing.assert_array_equal(getattr(st, key), kept[key])
+
+
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_autopilot_kernel_equals_the_numpy_autopilot(name):
+    """The compiled autopilot (control.swarm_increments of the heading, heading_clip and
+    waypoint levels) against the numpy rules it copies (decode_vector, heading_increments,
+    waypoint_goal, steer, return_home): UAVs inside and outside the grid, with and without the
+    return rule, many of them due home, zero, tiny, out-of-range and NaN actions, finished
+    UAVs. The increments are float32-rounded, and numpy's AVX-512 arctan2 may differ from the C
+    library's in the last bit, which can move a rounding by one float32 unit: hence the atol
+    (with numpy's baseline dispatch the two are bit-equal) and the share that must be exact."""
+    from poc_env.sim import control
+
+    params = sim.make_params(load_scenario(name))
+    rng = np.random.default_rng(9)
+    u = params.scenario.uav
+    exact = total = 0
+    for trial in range(6):
+        st = sim.initial(params, [np.random.default_rng(trial + k) for k in range(16)])
+        x0, y0, x1, y1 = params.bounds
+        shape = st.flying.shape
+        st.pos[..., 0] = rng.uniform(x0 - 1e4, x1 + 1e4, shape)
+        st.pos[..., 1] = rng.uniform(y0 - 1e4, y1 + 1e4, shape)
+        st.pos[..., 2] = rng.uniform(0, u.max_altitude_m, shape)
+        st.heading = rng.uniform(-np.pi, np.pi, shape)
+        st.pitch = rng.uniform(-u.max_pitch_rad, u.max_pitch_rad, shape)
+        st.speed = rng.uniform(u.min_speed_mps, u.max_speed_mps, shape)
+        st.elapsed = rng.uniform(0, u.endurance_s, shape)
+        st.flying = rng.random(shape) < 0.9
+        action = rng.uniform(-1.5, 1.5, (*shape, 2)).astype(np.float32)
+        action[0, 0] = 0.0
+        action[1, 0] = 1e-7
+        action[2, 0, 0] = np.nan
+        e, n = shape
+        q = obs.decode_vector(params, obs.vectors(params, st).reshape(e * n, -1))
+        k = np.tile(np.arange(n), e)
+        for level in ("heading", "heading_clip", "waypoint"):
+            for auto_return in (True, False):
+                inc = control.to_increments(
+                    params, level, q, action.reshape(e * n, 2).astype(float), k, auto_return
+                )
+                want = np.where(st.flying[..., None], inc.reshape(e, n, 3), 0.0)
+                got = control.swarm_increments(params, level, st, action, auto_return)
+                assert got.shape == want.shape and got.dtype == want.dtype
+                np.testing.assert_allclose(got, want, rtol=0, atol=1.2e-7)
+                exact += int(np.sum((got == want) | (np.isnan(got) & np.isnan(want))))
+                total += got.size
+    assert exact >= 0.999 * total
+
+
 def test_target_pod_kernel_matches_segment_pod():
     """sensing.target_pod against search_theory.segment_pod (numpy path), every law."""
     rng = np.random.default_rng(4)
