@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from poc_env.agents.policies.base import Policy
+from poc_env.agents.policies.base import PlanPolicy, Policy
 from poc_env.agents.rl.checkpoint import describe_space, load_policy, model_path
 from poc_env.errors import ConfigError
 from poc_env.sim.observations import SET_SIZE, SetFeatures, split_observation
@@ -171,7 +171,9 @@ class PPOPolicy(Policy):
             from poc_env.agents.rl.residual import check_residual_teacher
 
             self.mode, self.control = "residual", "increments"
-            self._teacher = make_policy(check_residual_teacher(cfg["residual_teacher"]))
+            teacher = make_policy(check_residual_teacher(cfg["residual_teacher"]))
+            assert isinstance(teacher, PlanPolicy)
+            self._teacher = teacher
             self._teacher.reset(env, seed)
             if task.obs == "set":
                 self._set = SetFeatures(env.params)
