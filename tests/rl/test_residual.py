@@ -137,3 +137,30 @@ def test_bad_residual_options_name_the_field(tmp_path, kw, field):
     with pytest.raises(ConfigError) as err:
         _args(tmp_path / "bad", **kw)
     assert err.value.field == field
+
+
+def test_a_killed_residual_run_resumes_from_its_checkpoint(tmp_path):
+    """Killed after its first checkpoint, ``--resume`` continues to the total (new episodes:
+    the followers in flight are not checkpointed), with the teacher's env again."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from poc_env.agents.rl.checkpoint import checkpoint_steps
+
+    rollout = 64 * 6  # n_steps x (2 swarms x 3 UAVs)
+
+    class Interrupt(Exception):
+        pass
+
+    class Kill(BaseCallback):
+        def _on_step(self) -> bool:
+            if self.model.num_timesteps >= rollout + 100:
+                raise Interrupt
+            return True
+
+    run = tmp_path / "killed"
+    with pytest.raises(Interrupt):
+        train(_args(run, total_timesteps=3 * rollout, checkpoint_every=1), callback=Kill())
+    assert checkpoint_steps(run) == [rollout]
+    assert not (run / "checkpoints" / f"step_{rollout}.env.npz").exists()
+    train(TrainArgs(resume=str(run), progress=False))
+    assert load_policy(run / "model.zip").num_timesteps == 3 * rollout
