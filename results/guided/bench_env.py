@@ -18,11 +18,19 @@ sc = task.load_scenario({})
 
 def make(kind):
     if kind == "set task env":
-        return SwarmVecEnv(sc, n_envs=4, seed=0, obs_type="set", random_priors=True,
-                           control=task.kwargs["control"])
+        return SwarmVecEnv(
+            sc, n_envs=4, seed=0, obs_type="set", random_priors=True, control=task.kwargs["control"]
+        )
     pool = {"residual, pool 4 (plans cached)": 4, "residual, pool 0 (plan every episode)": 0}[kind]
-    return ResidualVecEnv(sc, n_envs=4, seed=0, obs_type="set", random_priors=True,
-                          teacher="allocation_plan", pool=pool)
+    return ResidualVecEnv(
+        sc,
+        n_envs=4,
+        seed=0,
+        obs_type="set",
+        random_priors=True,
+        teacher="allocation_plan",
+        pool=pool,
+    )
 
 
 kinds = ["set task env", "residual, pool 4 (plans cached)", "residual, pool 0 (plan every episode)"]
