@@ -277,8 +277,6 @@ class TrainArgs:
         as_number("residual_log_std", self.residual_log_std, -20.0, 2.0)
         if self.residual_teacher is None:
             return
-        from poc_env.agents.rl.residual import check_residual_teacher
-
         check_residual_teacher(self.residual_teacher)
         for name, bad, allowed in (
             ("task", self.task is None, "a task (the residual flies a task's scenario)"),
@@ -326,6 +324,19 @@ def check_teacher(name: Any, field: str = "bc_teacher") -> str:
         raise ConfigError(
             field, name, "a registered classical policy (not ppo:/rllib:): " + ", ".join(allowed)
         )
+    return name
+
+
+def check_residual_teacher(name: Any, field: str = "residual_teacher") -> str:
+    """``name`` if it is a registered plan-then-fly policy (a
+    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower), else a
+    ConfigError naming ``field``."""
+    from poc_env.agents.policies.base import PlanPolicy
+    from poc_env.agents.policies.registry import make_policy
+
+    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy)]
+    if not isinstance(name, str) or name not in plans:
+        raise ConfigError(field, name, "a registered plan-then-fly policy: " + ", ".join(plans))
     return name
 
 

@@ -168,7 +168,7 @@ class PPOPolicy(Policy):
             # a residual on a planner (poc_env.agents.rl.residual): the teacher flies, the
             # model adds (dv, d turn) from the task's observation plus the teacher's action
             from poc_env.agents.policies.registry import make_policy
-            from poc_env.agents.rl.residual import check_residual_teacher
+            from poc_env.agents.rl.args import check_residual_teacher
 
             self.mode, self.control = "residual", "increments"
             teacher = make_policy(check_residual_teacher(cfg["residual_teacher"]))

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from gymnasium import spaces
 
+from poc_env.agents.rl.args import check_residual_teacher
 from poc_env.envs.vector import SwarmVecEnv
 from poc_env.errors import ConfigError
 
@@ -55,20 +56,6 @@ RESIDUAL_DIMS = 2
 TEACHER_DIMS = 3
 #: Spawn key of the SeedSequence of the training prior pool.
 POOL_KEY = (0xAE, 0)
-
-
-def check_residual_teacher(name: Any, field: str = "residual_teacher") -> str:
-    """``name`` if it is a registered plan-then-fly policy (a
-    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower), else a
-    ConfigError naming ``field``."""
-    from poc_env.agents.policies.base import PlanPolicy
-    from poc_env.agents.policies.registry import make_policy
-    from poc_env.agents.rl.args import teachers
-
-    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy)]
-    if not isinstance(name, str) or name not in plans:
-        raise ConfigError(field, name, "a registered plan-then-fly policy: " + ", ".join(plans))
-    return name
 
 
 def combine(teacher: np.ndarray, residual: np.ndarray, homing: np.ndarray) -> np.ndarray:
