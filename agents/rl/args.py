@@ -149,7 +149,7 @@ class TrainArgs:
     its mean starts at 0, i.e. at the teacher. ppo:RUN flies the checkpoint the same way."""
     residual_pool: int = 64
     """Residual: training priors come from a pool of this many random priors whose plans are
-    made once (planning costs ~1-2 s per episode on paper_6_2); 0: a fresh prior and plan
+    made once (planning costs ~30x an episode's simulation on paper_6_2); 0: a fresh prior and plan
     every episode."""
     residual_log_std: float = -3.0
     """Residual: the policy's initial log standard deviation (-3.0: std 0.05; the residual is

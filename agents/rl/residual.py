@@ -23,13 +23,13 @@ observation; the run's ``config.json`` records ``residual_teacher`` and
 teacher (the registered task ids keep their meaning).
 
 Training env: :class:`ResidualVecEnv`, a :class:`~poc_env.envs.vector.SwarmVecEnv` at the
-increments level. Planning costs about 1-2 s per episode on ``paper_6_2`` (against ~0.1 s for
-the episode itself), so with ``residual_pool > 0`` the training priors come from a pool of
-``residual_pool`` random priors (drawn once from stream :data:`POOL_KEY` of the run's seed;
-each env draws its next pool index from its own generator) whose plans are made once and
-reused; ``residual_pool=0`` draws a fresh prior and plans every episode. Evaluation always
-plans on the evaluation prior. A resumed run starts new episodes (the followers in flight are
-not checkpointed).
+increments level. Planning costs about 30 times an episode's simulation on ``paper_6_2``
+(``results/guided/bench_env.py``), so with ``residual_pool > 0`` the training priors come
+from a pool of ``residual_pool`` random priors (drawn once from stream :data:`POOL_KEY` of the
+run's seed; each env draws its next pool index from its own generator) whose plans are made
+once and reused; ``residual_pool=0`` draws a fresh prior and plans every episode. Evaluation
+always plans on the evaluation prior. A resumed run starts new episodes (the followers in
+flight are not checkpointed).
 """
 
 from __future__ import annotations
