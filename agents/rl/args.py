@@ -141,6 +141,20 @@ class TrainArgs:
     bc_log_std: float = -1.0
     """BC: the policy's log standard deviation after the fit (PPO explores around the teacher;
     -1.0: std 0.37)."""
+    # -- residual: a residual policy on a planner (sb3 with --task) ----------------------------
+    residual_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
+    """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
+    ...; poc_env.agents.rl.residual): it plans each episode and flies its routes, the policy
+    sees the task's observation plus the teacher's eq. 19 action and adds (dv, d turn) to it;
+    its mean starts at 0, i.e. at the teacher. ppo:RUN flies the checkpoint the same way."""
+    residual_pool: int = 64
+    """Residual: training priors come from a pool of this many random priors whose plans are
+    made once (planning costs ~30x an episode's simulation on paper_6_2); 0: a fresh prior and plan
+    every episode."""
+    residual_log_std: float = -3.0
+    """Residual: the policy's initial log standard deviation (-3.0: std 0.05; the residual is
+    a fraction of eq. 19's per-step limits, 180 degrees of turn per step on paper_6_2, so BC's
+    std 0.37 zigzags the teacher's routes: training episodes fell from 0.69 to 0.31-0.35)."""
 
     def __post_init__(self) -> None:
         if self.algo not in ALGOS:
@@ -170,7 +184,7 @@ class TrainArgs:
         if self.address is not None and self.engine != "rllib":
             raise ConfigError("address", self.address, "an address with --engine rllib only")
         for name, lo, hi in (
-            ("total_timesteps", 0 if self.bc_teacher is not None else 1, 10**12),
+            ("total_timesteps", 0 if (self.bc_teacher or self.residual_teacher) else 1, 10**12),
             ("seed", 0, limits.MAX_SEED),
             ("n_envs", 1, limits.N_ENVS_MAX),
             ("checkpoint_every", 1, 10**12),
@@ -206,6 +220,7 @@ class TrainArgs:
                 raise ConfigError(name, getattr(self, name), "true or false")
         parse_overrides(self.overrides)
         self._check_bc()
+        self._check_residual()
 
     def _check_net(self) -> None:
         """--net and --also-task: a set network needs a -Set task; the tasks trained together
@@ -256,6 +271,31 @@ class TrainArgs:
                 "bc_teacher", self.bc_teacher, "None with --engine rllib (BC is for sb3 runs)"
             )
 
+    def _check_residual(self) -> None:
+        """The residual fields (poc_env.agents.rl.residual)."""
+        as_int("residual_pool", self.residual_pool, 0, 100_000)
+        as_number("residual_log_std", self.residual_log_std, -20.0, 2.0)
+        if self.residual_teacher is None:
+            return
+        check_residual_teacher(self.residual_teacher)
+        for name, bad, allowed in (
+            ("task", self.task is None, "a task (the residual flies a task's scenario)"),
+            ("engine", self.engine != "sb3", "sb3 with --residual-teacher"),
+            ("net", self.net != "mlp", "mlp with --residual-teacher"),
+            ("also_task", bool(self.also_task), "[] with --residual-teacher"),
+            ("bc_teacher", self.bc_teacher is not None, "None with --residual-teacher"),
+        ):
+            if bad:
+                raise ConfigError(name, getattr(self, name), allowed)
+        from poc_env.tasks import get_task
+
+        task = get_task(str(self.task))
+        if task.obs not in ("compass", "set"):
+            raise ConfigError(
+                "residual_teacher", self.residual_teacher, f"None with {self.task} (a residual "
+                f"needs a compass or set observation, not {task.obs})",
+            )  # fmt: skip
+
     @classmethod
     def from_dict(cls, data: Any, where: str = "config") -> TrainArgs:
         """TrainArgs from a mapping (``config.json``); unknown keys are an error."""
@@ -284,6 +324,19 @@ def check_teacher(name: Any, field: str = "bc_teacher") -> str:
         raise ConfigError(
             field, name, "a registered classical policy (not ppo:/rllib:): " + ", ".join(allowed)
         )
+    return name
+
+
+def check_residual_teacher(name: Any, field: str = "residual_teacher") -> str:
+    """``name`` if it is a registered plan-then-fly policy (a
+    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower), else a
+    ConfigError naming ``field``."""
+    from poc_env.agents.policies.base import PlanPolicy
+    from poc_env.agents.policies.registry import make_policy
+
+    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy)]
+    if not isinstance(name, str) or name not in plans:
+        raise ConfigError(field, name, "a registered plan-then-fly policy: " + ", ".join(plans))
     return name
 
 
@@ -344,6 +397,10 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
     "bc": (
         "Behaviour-cloning warm start before PPO (sb3 with --task; poc_env.agents.rl.bc).",
         ("bc_teacher", "bc_episodes", "bc_epochs", "bc_batch_size", "bc_log_std"),
+    ),
+    "residual": (
+        "A residual policy on a planner (sb3 with --task; poc_env.agents.rl.residual).",
+        ("residual_teacher", "residual_pool", "residual_log_std"),
     ),
 }
 
@@ -468,6 +525,10 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
     **{
         f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
         for k in ("episodes", "epochs", "batch_size", "log_std")
+    },
+    **{
+        f"residual_{k}": (lambda a: a.residual_teacher is not None, "with --residual-teacher")
+        for k in ("pool", "log_std")
     },
 }
 

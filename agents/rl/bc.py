@@ -10,12 +10,15 @@ SB3 ``MlpPolicy`` to what it did, and hands the fitted policy to ordinary PPO fi
    :class:`poc_env.envs.parallel.UAVSearchParallelEnv` (increments control, dict observations)
    exactly as :func:`poc_env.agents.experiments.evaluate.run_episode` does (``env.reset(seed,
    prior)``, ``policy.reset(env, seed)``, ``predict(obs)`` every step) and records, for every
-   step and every UAV still flying, the ``compass`` features the trained policy sees
-   (:class:`~poc_env.sim.observations.CompassFeatures` over
+   step and every UAV still flying, the observation the trained policy sees, a label at the
+   task's control level and the UAV's env reward. The observation is the task's: the
+   ``compass`` features (:class:`~poc_env.sim.observations.CompassFeatures` over
    :func:`~poc_env.sim.observations.split_observation`, as
-   :class:`poc_env.agents.rl.policy.PPOPolicy`
-   computes them; the same values :class:`~poc_env.envs.vector.SwarmVecEnv` observes), a label
-   at the task's control level and the UAV's env reward.
+   :class:`poc_env.agents.rl.policy.PPOPolicy` computes them; the same values
+   :class:`~poc_env.envs.vector.SwarmVecEnv` observes), or for a ``-Set`` task the ``set``
+   observation, computed by :func:`poc_env.sim.observations.observe` (the one observation path
+   of every env) from the env's engine state, so any network (``--net mlp`` or ``set``) is
+   fitted on what it will read.
 2. :func:`pretrain` fits the policy's Gaussian mean to the labels and its value head to the
    discounted returns (both mean squared errors, one Adam), then sets the policy's
    ``log_std`` (default -1, std 0.37) so PPO explores near the teacher.
@@ -82,11 +85,11 @@ FIT_KEY = (0xBC, 1)
 class Demos:
     """Demonstrations of a teacher: one row per (step, flying UAV) that has a label.
 
-    ``obs (M, FEATURES)`` the compass features, ``labels (M, ACTION_DIMS[control])`` the
-    targets of the control level (module docstring), ``rewards (M,)`` the UAV's env reward of
-    the step, ``returns (M,)`` its discounted return from the step, ``episode (M,)`` and
-    ``uav (M,)`` whose step it is (a UAV's rows are consecutive, in step order); ``posc`` and
-    ``seeds``: one per episode."""
+    ``obs (M, D)`` the task's observation (the compass features or the set observation),
+    ``labels (M, ACTION_DIMS[control])`` the targets of the control level (module docstring),
+    ``rewards (M,)`` the UAV's env reward of the step, ``returns (M,)`` its discounted return
+    from the step, ``episode (M,)`` and ``uav (M,)`` whose step it is (a UAV's rows are
+    consecutive, in step order); ``posc`` and ``seeds``: one per episode."""
 
     teacher: str
     control: str
@@ -150,7 +153,14 @@ def collect_demos(
     from poc_env.envs.parallel import UAVSearchParallelEnv
     from poc_env.sim.control import ACTION_DIMS
     from poc_env.sim.engine import RandomPrior
-    from poc_env.sim.observations import FEATURES, CompassFeatures, split_observation
+    from poc_env.sim.observations import (
+        FEATURES,
+        SET_SIZE,
+        CompassFeatures,
+        SetFeatures,
+        observe,
+        split_observation,
+    )
     from poc_env.tasks import get_task
 
     check_teacher(teacher, "teacher")
@@ -161,6 +171,8 @@ def collect_demos(
     params = env.params
     shape = params.grid.shape
     features = CompassFeatures(params, agent_index)
+    set_features = SetFeatures(params) if t.obs == "set" else None
+    width = SET_SIZE if t.obs == "set" else FEATURES
     index = {a: i for i, a in enumerate(env.possible_agents)}
     rng = np.random.default_rng(seed_seq)
     obs_rows: list[np.ndarray] = []
@@ -183,8 +195,13 @@ def collect_demos(
         while env.agents:
             live = list(env.agents)
             k = np.array([index[a] for a in live])
-            ras, vec = zip(*(split_observation(obs[a], shape) for a in live), strict=True)
-            feats = features(np.stack(ras), np.stack(vec), k)
+            if set_features is not None:  # the set tasks' observation, as their envs compute it
+                eng = env.engine
+                feats = observe(params, eng.current, eng.poc_scale, eng.hazard, "set",
+                                set_features)[0, k]  # fmt: skip
+            else:
+                ras, vec = zip(*(split_observation(obs[a], shape) for a in live), strict=True)
+                feats = features(np.stack(ras), np.stack(vec), k)
             actions, _ = policy.predict(obs)
             xy0 = np.array(env.sim_state.pos[0, :, :2], dtype=float)
             obs, rewards, *_ = env.step(actions)
@@ -212,7 +229,7 @@ def collect_demos(
         teacher=teacher,
         control=control,
         gamma=float(gamma),
-        obs=np.array(obs_rows, dtype=np.float32).reshape(-1, FEATURES),
+        obs=np.array(obs_rows, dtype=np.float32).reshape(-1, width),
         labels=np.array(lab_rows, dtype=np.float32).reshape(-1, dim),
         rewards=np.array(rew_rows, dtype=np.float32),
         returns=np.array(ret_rows, dtype=np.float32),

@@ -319,7 +319,9 @@ def save_checkpoint(model: BaseAlgorithm, env: VecEnv, run_dir: Path, keep: int 
     }
     with atomic_path(zpath, suffix=".zip") as tmp:
         model.save(tmp)
+    # a SwarmVecEnv's episodes in flight (not a residual env's: its followers are not saved)
     has_env = isinstance(env, SwarmVecEnv) and env.state is not None
+    has_env = has_env and getattr(env, "snapshots", True)
     if has_env:
         with atomic_path(epath, suffix=".npz") as tmp, open(tmp, "wb") as fh:
             np.savez(fh, allow_pickle=False, **env_snapshot(env))

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from poc_env.agents.policies.base import Policy
+from poc_env.agents.policies.base import PlanPolicy, Policy
 from poc_env.agents.rl.checkpoint import describe_space, load_policy, model_path
 from poc_env.errors import ConfigError
 from poc_env.sim.observations import SET_SIZE, SetFeatures, split_observation
@@ -163,7 +163,25 @@ class PPOPolicy(Policy):
         one_act = spaces.Box(-1.0, 1.0, (3,), np.float32)
         joint_act = spaces.Box(-1.0, 1.0, (3 * len(agents),), np.float32)
         task = _run_task(self.path)
-        if task is not None and m_obs == pilot.OBSERVATION_SPACE:
+        cfg = _run_config(self.path) if task is not None else {}
+        if task is not None and cfg.get("residual_teacher"):
+            # a residual on a planner (poc_env.agents.rl.residual): the teacher flies, the
+            # model adds (dv, d turn) from the task's observation plus the teacher's action
+            from poc_env.agents.policies.registry import make_policy
+            from poc_env.agents.rl.args import check_residual_teacher
+
+            self.mode, self.control = "residual", "increments"
+            teacher = make_policy(check_residual_teacher(cfg["residual_teacher"]))
+            assert isinstance(teacher, PlanPolicy)
+            self._teacher = teacher
+            self._teacher.reset(env, seed)
+            if task.obs == "set":
+                self._set = SetFeatures(env.params)
+            else:
+                index = cfg.get("agent_index", True) is not False
+                self._features = pilot.PilotFeatures(env.params, agent_index=index)
+            self._obs = task.obs
+        elif task is not None and m_obs == pilot.OBSERVATION_SPACE:
             # trained on a task: its control level flies the compass-observation policy
             self.mode, self.control = "compass", task.control
             cfg = _run_config(self.path)
@@ -232,6 +250,22 @@ class PPOPolicy(Policy):
             act, _ = self.model.predict(feats, deterministic=deterministic)
             q = decode_vector(self.env.params, feats[:, :VECTOR_SIZE])
             inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
+            return {a: inc[j] for j, a in enumerate(live)}, state
+        if self.mode == "residual":
+            from poc_env.agents.rl.residual import augment, combine, teacher_actions
+
+            k = np.array([self._agents.index(a) for a in live])
+            t_inc, homing = teacher_actions(self._teacher, observations, live)
+            if self._obs == "set":
+                eng = self.env.engine
+                feats = self._set.of_state(eng.current, eng.poc_scale)[0, k]
+            else:
+                shape = self.env.params.grid.shape
+                pairs = (split_observation(observations[a], shape) for a in live)
+                ras, vec = zip(*pairs, strict=True)
+                feats = self._features(np.stack(ras), np.stack(vec), k)
+            act, _ = self.model.predict(augment(feats, t_inc), deterministic=deterministic)
+            inc = combine(t_inc, np.asarray(act), homing).astype(np.float32)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "shared":
             batch = {

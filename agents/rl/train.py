@@ -139,6 +139,19 @@ def make_env(args: TrainArgs, scenario: Scenario) -> VecEnv:
 
         def task_env(tid: str, sc: Scenario, seed: int) -> SwarmVecEnv:
             task = get_task(tid)
+            if args.residual_teacher is not None:  # the planner flies, the policy adds to it
+                from poc_env.agents.rl.residual import ResidualVecEnv
+
+                return ResidualVecEnv(
+                    sc,
+                    n_envs=args.n_envs,
+                    seed=seed,
+                    obs_type=task.obs,
+                    random_priors=task.random_prior,
+                    teacher=args.residual_teacher,
+                    pool=args.residual_pool,
+                    agent_index=args.agent_index,
+                )
             return SwarmVecEnv(
                 sc,
                 n_envs=args.n_envs,
@@ -268,6 +281,10 @@ def slots_and_obs(args: TrainArgs, sc: Scenario) -> tuple[int, int, int]:
         sizes = [n if task.n_uavs is None else task.n_uavs]
         sizes += [get_task(tid).load_scenario().n_uavs for tid in args.also_task]
         obs = spec.SET_SIZE if task.obs == "set" else spec.COMPASS_SIZE
+        if args.residual_teacher is not None:
+            from poc_env.agents.rl.residual import RESIDUAL_DIMS, TEACHER_DIMS
+
+            obs, act = obs + TEACHER_DIMS, RESIDUAL_DIMS
         return args.n_envs * sum(sizes), obs, act
     if args.recipe == "central":
         return args.n_envs, n * dict_obs, 3 * n
@@ -568,6 +585,10 @@ def _run(
                 from poc_env.agents.rl.bc import warm_start
 
                 warm_start(args, sc, model, run_dir)
+            if args.residual_teacher is not None:  # the residual starts at 0: at the teacher
+                from poc_env.agents.rl.residual import init_policy
+
+                init_policy(model, args.residual_log_std)
         else:
             model = restore_checkpoint(checkpoint, env, run_dir)
         start = int(model.num_timesteps)

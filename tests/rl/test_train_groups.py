@@ -24,6 +24,7 @@ FLAGS = {
     "--return-autopilot", "--no-return-autopilot", "--rllib-policies", "--run-dir",
     "--scenario", "--seed", "--task", "--torch-threads", "--total-timesteps",
     "--net", "--also-task",  # issue 28: the set network and fleet sizes trained together
+    "--residual-teacher", "--residual-pool", "--residual-log-std",  # issue 28: residual policy
 }  # fmt: skip
 
 
