@@ -68,6 +68,7 @@ import numpy as np
 from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
+from poc_env.agents.planning.coverage_boxes import box_routes
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -410,6 +411,7 @@ def make_allocation_plan(
     refine: int = REFINE,
     crs: dict[str, Any] | None = None,
     greedy_start: bool = True,
+    box_start: bool = True,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
@@ -530,7 +532,26 @@ def make_allocation_plan(
         g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
         g_val = _cell_pos(g_routes, takeoff, landing, prior, grid, w, law)
         if g_val > best_val:  # the better start is refined
-            greedy_routes, start = g_routes, "greedy_rectangles"
+            greedy_routes, start, best_val = g_routes, "greedy_rectangles", g_val
+    if best is not None and box_start:
+        b_routes = box_routes(
+            prior,
+            grid,
+            w,
+            law,
+            v,
+            takeoff,
+            landing,
+            u.usable_endurance_s,
+            u.max_turn_rate_rad_s,
+            _reserve(sc),
+            heading0,
+        )
+        if router.active:
+            b_routes = [_around(k, b_routes[k]) if b_routes[k] else [] for k in range(n)]
+        b_val = _cell_pos(b_routes, takeoff, landing, prior, grid, w, law)
+        if b_val > best_val:
+            greedy_routes, start, best_val = b_routes, "boxes", b_val
     routes: list[list[list[float]]] = [[] for _ in range(n)]
     pieces: list[list[int]] = [[] for _ in range(n)]
     alloc_pos = 0.0
