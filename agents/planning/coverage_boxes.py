@@ -12,15 +12,20 @@ assigns each UAV its own region of the map and its own coverage there, as the al
 2. **Best box per UAV.** For every UAV the compiled box search of the greedy rectangles
    (:func:`poc_env.agents.planning._kernels.best_box`: every position of a set of side lengths,
    kept when a lower bound of its flight time fits 0.85 T) finds the box of most gain at each
-   spacing; its lawnmower (:func:`poc_env.agents.planning.greedy_rectangles._lines`, lines
-   ``s`` apart along the longer side) is cut until it keeps eq. 18's return rule
+   spacing (boxes of whole blocks of ``f x f`` cells, ``f`` the least that leaves at most
+   :data:`MAX_CELLS` blocks a side); its lawnmower
+   (:func:`poc_env.agents.planning.greedy_rectangles._lines`, lines ``s`` apart along the
+   longer side) is cut until it keeps eq. 18's return rule
    (:func:`poc_env.agents.planning.refine.route_fits`), and the spacing whose route gains most
    (whole flight path counted, transit too) is the UAV's candidate. UAVs sharing both fields
    have the same candidate (computed once).
 3. **Assignment.** Of all UAVs not yet assigned, the one whose candidate gains most takes it
    (ties: the lower index); its coverage is added and steps 1-3 repeat until every UAV has a
-   route or none gains anything. Greedy on a monotone submodular gain over a partition (one
-   route per UAV) is within 1/2 of the best choice among these candidates.
+   route or none gains anything. Candidates are recomputed lazily: added coverage only lowers
+   the gains (POD is concave), so a field's last candidate value bounds its new one, and only
+   the field on top is recomputed until the one on top is fresh. Greedy on a monotone
+   submodular gain over a partition (one route per UAV) is within 1/2 of the best choice
+   among these candidates.
 4. **Exchange.** Each UAV in turn drops its route and takes the best candidate against all the
    others' coverage (steps 1-2), if it gains more; :data:`ROUNDS` passes or until none moves.
 
@@ -44,6 +49,9 @@ from poc_env.theory.search_theory import pod_from_coverage
 
 #: line spacings tried, in sweep widths (coverage W / s: 1 to 1/4 of a sweep width's).
 SPACINGS = (1.0, 1.5, 2.0, 3.0, 4.0)
+#: boxes are searched on blocks of cells so that the map has at most this many blocks a side
+#: (160 x 160 cells: 2 x 2 blocks; the box search's cost grows as the fourth power of the side).
+MAX_CELLS = 80
 #: passes of the exchange step (4).
 ROUNDS = 2
 
@@ -60,26 +68,32 @@ def box_routes(
     turn_rate: float,
     reserve: float,
     headings=None,
-    spacings: tuple[float, ...] = SPACINGS,
-    rounds: int = ROUNDS,
+    spacings: tuple[float, ...] | None = None,
+    rounds: int | None = None,
 ) -> list[list[list[float]]]:
     """Each UAV's waypoints (between ``takeoff[k]`` and ``landing[k]``): one lawnmower box per
     UAV (module docstring). ``budget`` the usable endurance 0.85 T and ``reserve`` the time kept
     in hand at every waypoint (:func:`~poc_env.agents.planning.refine.route_fits`), ``turn_rate``
     the maximum turn rate (rad/s), ``headings`` the take-off headings (rad) or None. A UAV that
     can search nothing gets an empty list."""
+    spacings = SPACINGS if spacings is None else tuple(spacings)
+    rounds = ROUNDS if rounds is None else int(rounds)
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     prior = np.asarray(prior, dtype=float)
     n = len(takeoff)
     h0 = [None] * n if headings is None else [float(x) for x in headings]
-    widths = _side_lengths(grid.nx).astype(np.int64)
-    heights = _side_lengths(grid.ny).astype(np.int64)
+    f = max(1, math.ceil(max(grid.nx, grid.ny) / MAX_CELLS))  # boxes on f x f blocks of cells
+    mx, my = math.ceil(grid.nx / f), math.ceil(grid.ny / f)
+    widths = _side_lengths(mx).astype(np.int64)
+    heights = _side_lengths(my).astype(np.int64)
     orig = np.array(grid.origin_m, dtype=float)
+    hi_map = np.array(grid.bounds[2:], dtype=float)
+    block = np.zeros((my * f, mx * f))
     speed_arr = np.array([speeds.out, speeds.line, speeds.home])
     half_turn = math.pi / turn_rate  # a half-turn at a line end (the box search's estimate)
     est_budget = budget - reserve
-    table = np.zeros((grid.ny + 1, grid.nx + 1))
+    table = np.zeros((my + 1, mx + 1))
 
     def candidate(k: int, cov: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """UAV ``k``'s best lawnmower against the coverage ``cov``: (gain, waypoints, its
@@ -87,18 +101,19 @@ def box_routes(
         base = pod_from_coverage(cov, law)
         best: tuple[float, np.ndarray, np.ndarray] = (0.0, np.zeros((0, 2)), np.zeros(grid.shape))
         for s in spacings:
-            gain = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
+            block[: grid.ny, : grid.nx] = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
+            gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
             table[1:, 1:] = gain.cumsum(0).cumsum(1)
             wps: np.ndarray = np.zeros((0, 2))
             for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
                 mass, i, j, nw, nh = _kernels.best_box(
-                    table, widths, heights, orig, float(grid.cell_m), float(s * w), speed_arr,
+                    table, widths, heights, orig, float(f * grid.cell_m), float(s * w), speed_arr,
                     float(half_turn), float(scale * est_budget), takeoff[k], landing[k],
                 )  # fmt: skip
                 if not mass > 0.0:
                     break
-                lo = orig + np.array([i, j]) * grid.cell_m
-                hi = lo + np.array([nw, nh]) * grid.cell_m
+                lo = orig + np.array([i, j]) * f * grid.cell_m
+                hi = np.minimum(lo + np.array([nw, nh]) * f * grid.cell_m, hi_map)
                 wps = _lines(lo, hi, s * w, takeoff[k])
                 full = len(wps)
                 while len(wps) and not route_fits(
@@ -125,18 +140,26 @@ def box_routes(
     covs = [np.zeros(grid.shape) for _ in range(n)]
     total = np.zeros(grid.shape)
     left = list(range(n))
+    # lazy greedy: a field's candidate is recomputed only when it may no longer be the best
+    # (its gain can only fall as coverage is added: POD is concave)
+    cache: dict[tuple, tuple[float, np.ndarray, np.ndarray]] = {}
+    fresh: set[tuple] = set()
     while left:
-        cache: dict[tuple, tuple[float, np.ndarray, np.ndarray]] = {}
-        for k in left:
-            if keys[k] not in cache:
-                cache[keys[k]] = candidate(k, total)
+        for key in {keys[j] for j in left} - set(cache):
+            cache[key] = candidate(keys.index(key), total)
+            fresh.add(key)
         k = min(left, key=lambda j: (-cache[keys[j]][0], j))
+        if keys[k] not in fresh:
+            cache[keys[k]] = candidate(k, total)
+            fresh.add(keys[k])
+            continue
         val, wps, c = cache[keys[k]]
         if not val > 0.0:
             break
         routes[k], covs[k] = wps, c
         total = total + c
         left.remove(k)
+        fresh.clear()
     for _ in range(max(0, int(rounds))):
         moved = False
         for k in range(n):

@@ -24,8 +24,8 @@ Coverage is sampled at four points per cell along each leg (as the allocation pl
 ``_path_coverage``), so the score equals the allocation planner's ``posc`` of the same routes.
 A move changes the coverage of the cells its old and new legs cross only, so the candidates are
 scored there (:func:`move_gains`: the swarm's coverage per cell is kept and updated in place
-when a move is kept), and the airspace check updates the moved UAV's distances to the others
-only (:func:`update_distances`); both give the full computation's numbers.
+when a move is kept), and the airspace check counts the moved UAV's pairs with the others
+only (:class:`AirspaceCount`); both give the full computation's numbers.
 """
 
 from __future__ import annotations
@@ -204,14 +204,64 @@ class Airspace:
         )
 
 
-def update_distances(pos: np.ndarray, dist: np.ndarray, k: int) -> None:
-    """Row and column ``k`` of ``dist (S, n, n)``, the
-    :func:`~poc_env.sim.constraints.pairwise_distances` of ``pos (S, n, 2)``, recomputed in
-    place after UAV ``k`` moved (the same sums as the kernel's, so the same bits)."""
-    c = pos - pos[:, k : k + 1]
-    d = np.sqrt(c[..., 0] * c[..., 0] + c[..., 1] * c[..., 1])
-    dist[:, k, :] = d
-    dist[:, :, k] = d
+class AirspaceCount:
+    """:meth:`Airspace.violations` of a swarm kept up to date as one UAV at a time moves.
+
+    Per sampled step ``s`` and UAV ``i`` it keeps the number of flying others closer than
+    ``separation_m`` (eq. 21) and within ``range_m`` (eq. 24) and the number of UAVs flying;
+    moving UAV ``k`` (:meth:`move`) changes the pairs ``(k, j)`` only, so the counts are
+    updated from UAV ``k``'s distances to the others (O(steps x n) instead of the full pass's
+    O(steps x n^2)). The count is :func:`swarm_violations`'s exactly: a flying UAV-step with a
+    partner too close, plus one with fewer than ``min(min_neighbours, flying - 1)`` others in
+    range (:func:`poc_env.sim.comms.two_neighbour_ok` with the flying UAVs)."""
+
+    def __init__(self, airspace: Airspace, pos: np.ndarray, act: np.ndarray) -> None:
+        self.air = airspace
+        self.pos = np.array(pos, dtype=float)  # (S, n, 2)
+        self.act = np.array(act, dtype=bool)  # (S, n)
+        n = self.pos.shape[1]
+        d = pairwise_distances(self.pos)
+        both = self.act[:, :, None] & self.act[:, None, :] & ~np.eye(n, dtype=bool)[None]
+        self.close = np.sum(both & (d < airspace.separation_m), axis=2)
+        self.near = np.sum(both & (d <= airspace.range_m), axis=2)
+        self.flying = self.act.sum(axis=1)
+        self.value = self._total(self.close, self.near, self.flying, self.act)
+
+    def _total(self, close, near, flying, act) -> int:
+        need = np.minimum(self.air.min_neighbours, flying - 1)[:, None]
+        return int(np.sum(act & (close > 0)) + np.sum(act & (near < need)))
+
+    def _pairs(self, k: int, pos_k: np.ndarray, act_k: np.ndarray):
+        """UAV ``k``'s pairs with the others at positions ``pos_k (S, 2)``, flying ``act_k``:
+        (too close, in range), each (S, n) with column ``k`` False."""
+        c = self.pos - pos_k[:, None, :]
+        d = np.sqrt(c[..., 0] * c[..., 0] + c[..., 1] * c[..., 1])
+        both = act_k[:, None] & self.act
+        both[:, k] = False
+        return both & (d < self.air.separation_m), both & (d <= self.air.range_m)
+
+    def move(self, k: int, pos_k, act_k) -> tuple[int, tuple]:
+        """The count with UAV ``k`` at ``pos_k (S, 2)``, flying ``act_k (S,)``, and the state
+        that :meth:`keep` makes current (the counts are not changed until then)."""
+        pos_k = np.asarray(pos_k, dtype=float)
+        act_k = np.asarray(act_k, dtype=bool)
+        old_c, old_n = self._pairs(k, self.pos[:, k], self.act[:, k])
+        new_c, new_n = self._pairs(k, pos_k, act_k)
+        close = self.close + new_c - old_c
+        near = self.near + new_n - old_n
+        close[:, k] = new_c.sum(axis=1)
+        near[:, k] = new_n.sum(axis=1)
+        flying = self.flying + act_k.astype(np.int64) - self.act[:, k]
+        act = self.act.copy()
+        act[:, k] = act_k
+        value = self._total(close, near, flying, act)
+        return value, (k, pos_k, act, close, near, flying, value)
+
+    def keep(self, state: tuple) -> None:
+        """Make the move of :meth:`move`'s ``state`` current."""
+        k, pos_k, act, close, near, flying, value = state
+        self.pos[:, k] = pos_k
+        self.act, self.close, self.near, self.flying, self.value = act, close, near, flying, value
 
 
 def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old):
@@ -311,8 +361,7 @@ def refine_routes(
         act = np.empty((len(times), n), dtype=bool)
         for k in range(n):
             pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
-        dist = pairwise_distances(pos)  # kept up to date as UAVs move (update_distances)
-        viol = airspace.violations(pos, act, dist)
+        count = AirspaceCount(airspace, pos, act)  # kept up to date as UAVs move
 
     covs = [path_cov(p) for p in paths]
     total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)  # a fresh array, updated in place
@@ -376,16 +425,13 @@ def refine_routes(
                     if airspace is None:
                         j = int(c_j)
                         break
-                    old = pos[:, k].copy(), act[:, k].copy(), dist[:, k].copy()
-                    pos[:, k], act[:, k] = track(cands[c_j], speeds, turn_rate, times, h0[k])
-                    update_distances(pos, dist, k)
-                    v_new = airspace.violations(pos, act, dist)
-                    if v_new <= viol:
-                        j, viol = int(c_j), v_new
+                    v_new, state = count.move(
+                        k, *track(cands[c_j], speeds, turn_rate, times, h0[k])
+                    )
+                    if v_new <= count.value:
+                        j = int(c_j)
+                        count.keep(state)
                         break
-                    pos[:, k], act[:, k] = old[0], old[1]
-                    dist[:, k, :] = old[2]
-                    dist[:, :, k] = old[2]
                 if j >= 0:
                     paths[k] = cands[j]
                     total[cells] = cand_here[j]
