@@ -348,6 +348,28 @@ def refine_routes(
     def fits(path: np.ndarray, k: int) -> bool:
         return route_fits(path, speeds, turn_rate, budget, reserve, h0[k])
 
+    turn_cost = TURN_SHARE / turn_rate
+
+    def fits_all(path: np.ndarray, i: int, qs, ops, k: int) -> np.ndarray:
+        """:func:`route_fits` of each candidate edit of ``path`` at ``i`` (``ops`` 0 move to,
+        1 delete, 2 insert before it ``qs``), in one compiled pass."""
+        ok = np.empty(len(ops), dtype=bool)
+        _kernels.fits_batch(
+            np.ascontiguousarray(path),
+            i,
+            np.ascontiguousarray(np.array(qs, dtype=float).reshape(-1, 2)),
+            np.asarray(ops, dtype=np.int64),
+            speeds.out,
+            speeds.line,
+            speeds.home,
+            turn_cost,
+            budget,
+            reserve,
+            np.nan if h0[k] is None else float(h0[k]),
+            ok,
+        )
+        return ok
+
     for k in range(n):
         while len(paths[k]) > 2 and not fits(paths[k], k):
             paths[k] = np.delete(paths[k], -2, axis=0)
@@ -375,7 +397,8 @@ def refine_routes(
             i = 1
             while i < len(paths[k]):  # i: the waypoint moved/deleted, or inserted before
                 path = paths[k]
-                cands: list[np.ndarray] = []
+                qs: list[np.ndarray] = []  # the candidates: ops 0 move, 1 delete, 2 insert
+                ops: list[int] = []
                 starts: list[np.ndarray] = []
                 ends: list[np.ndarray] = []
                 rows: list[int] = []
@@ -387,12 +410,14 @@ def refine_routes(
                     nxt = path[i + 1]
                     for off in offsets:
                         q = np.clip(b + off, lo, hi)
-                        cands.append(np.vstack([path[:i], q, path[i + 1 :]]))
+                        qs.append(q)
+                        ops.append(0)
                         starts += [a, q]
                         ends += [q, nxt]
                         rows += [len(kinds)] * 2
                         kinds.append(0)
-                    cands.append(np.vstack([path[:i], path[i + 1 :]]))
+                    qs.append(b)
+                    ops.append(1)
                     starts.append(a)
                     ends.append(nxt)
                     rows.append(len(kinds))
@@ -402,17 +427,21 @@ def refine_routes(
                 normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
                 for s in across:
                     q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
-                    cands.append(np.vstack([path[:i], q, path[i:]]))
+                    qs.append(q)
+                    ops.append(2)
                     starts += [a, q]
                     ends += [q, b]
                     rows += [len(kinds)] * 2
                     kinds.append(1)
-                ok = np.array([fits(p, k) for p in cands])
-                if router is not None and router.active:
-                    hit = router.crosses(np.asarray(starts), np.asarray(ends))
-                    blocked = np.zeros(len(cands), dtype=bool)
-                    np.logical_or.at(blocked, np.asarray(rows), hit)
-                    ok &= ~blocked
+
+                def cand(c: int, path=path, i=i, qs=qs, ops=ops) -> np.ndarray:
+                    if ops[c] == 0:
+                        return np.vstack([path[:i], qs[c], path[i + 1 :]])
+                    if ops[c] == 1:
+                        return np.vstack([path[:i], path[i + 1 :]])
+                    return np.vstack([path[:i], qs[c], path[i:]])
+
+                ok = fits_all(path, i, qs, ops, k)
                 cells, cand_here, gain = move_gains(
                     total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2]
                 )
@@ -426,18 +455,18 @@ def refine_routes(
                         j = int(c_j)
                         break
                     v_new, state = count.move(
-                        k, *track(cands[c_j], speeds, turn_rate, times, h0[k])
+                        k, *track(cand(int(c_j)), speeds, turn_rate, times, h0[k])
                     )
                     if v_new <= count.value:
                         j = int(c_j)
                         count.keep(state)
                         break
                 if j >= 0:
-                    paths[k] = cands[j]
+                    paths[k] = cand(j)
                     total[cells] = cand_here[j]
                     value = float(vals[j])
                     kept += 1
-                    if kinds[j] == 0 and len(cands[j]) < len(path):
+                    if ops[j] == 1:
                         continue  # deleted: the next waypoint is now at i
                 i += 1
         if not kept:
