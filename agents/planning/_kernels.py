@@ -4,8 +4,10 @@
 :mod:`poc_env.agents.planning.objective` for a population in one pass (the prior masses then
 come from :func:`poc_env._kernels.rectangles.rectangle_masses`, called by the objective);
 :func:`route_timeline` and :func:`route_sample` time and sample a flight along a path and
-:func:`fits_batch` times a waypoint's candidate edits (:mod:`poc_env.agents.planning.refine`); :func:`best_box` is the greedy rectangle planner's box
-search (:mod:`poc_env.agents.planning.greedy_rectangles`).
+:func:`fits_batch` times a waypoint's candidate edits (:mod:`poc_env.agents.planning.refine`);
+:func:`best_box` is the greedy rectangle planner's box search
+(:mod:`poc_env.agents.planning.greedy_rectangles`) and the coverage boxes'
+(:mod:`poc_env.agents.planning.coverage_boxes`).
 
 A kernel module under the cache rule of :mod:`poc_env._kernels`: it imports nothing of the
 project, so the planner composes its kernels with the environment's in Python.
