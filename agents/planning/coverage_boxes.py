@@ -52,6 +52,8 @@ SPACINGS = (1.0, 1.5, 2.0, 3.0, 4.0)
 #: boxes are searched on blocks of cells so that the map has at most this many blocks a side
 #: (160 x 160 cells: 2 x 2 blocks; the box search's cost grows as the fourth power of the side).
 MAX_CELLS = 80
+#: recompute candidates lazily (step 3); False recomputes every field's each round (same routes).
+LAZY = True
 #: passes of the exchange step (4).
 ROUNDS = 2
 
@@ -145,7 +147,9 @@ def box_routes(
     cache: dict[tuple, tuple[float, np.ndarray, np.ndarray]] = {}
     fresh: set[tuple] = set()
     while left:
-        for key in {keys[j] for j in left} - set(cache):
+        if not LAZY:
+            cache.clear()
+        for key in sorted({keys[j] for j in left} - set(cache)):
             cache[key] = candidate(keys.index(key), total)
             fresh.add(key)
         k = min(left, key=lambda j: (-cache[keys[j]][0], j))
