@@ -115,8 +115,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--scale-parts",
         nargs="+",
         default=None,
-        choices=["quality", "cells", "timing"],
-        help="parts of --scale to run (default: all three)",
+        choices=["quality", "cells", "timing", "single"],
+        help="parts of --scale to run (default: quality cells timing; single: each airfield's "
+        "UAV alone against its own rule-aware bound)",
     )
     p.add_argument(
         "--scale-out",

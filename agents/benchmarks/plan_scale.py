@@ -106,6 +106,39 @@ def quality(maps, episodes: int, seed0: int, records: list | None = None) -> dic
     return out
 
 
+def single(maps, episodes: int, seed0: int) -> dict[str, float]:
+    """Where the routes lose: each airfield's first UAV alone (the rest of the fleet removed),
+    its planned POS over its own rule-aware bound, on the same random priors. A plan of one
+    UAV has no other UAV to share the mass with, so what it misses of its bound is the route's
+    (or the bound's) alone."""
+    import dataclasses
+
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import rule_bound
+
+    out: dict[str, float] = {}
+    for name in maps:
+        sc = load_scenario(name)
+        shares = []
+        for g in sc.fleet:
+            one = dataclasses.replace(sc, fleet=(dataclasses.replace(g, count=1),))
+            for seed in range(seed0, seed0 + episodes):
+                prior = episode_prior(sc, seed)
+                shares.append(
+                    make_allocation_plan(one, prior=prior)["posc"] / rule_bound(one, prior).upper
+                )
+        out[f"{name}_single_rule"] = float(np.mean(shares))
+        _line(
+            f"{name} one UAV alone",
+            out[f"{name}_single_rule"],
+            f"planned / its rule bound, mean of {len(shares)} (min {min(shares):.3f}, "
+            f"max {max(shares):.3f})",
+        )
+    return out
+
+
 def cells(name: str = "paper_6_2") -> dict[str, float]:
     """Planned and flown POS of the allocation plan at each cell size of :data:`CELLS_KM`."""
     from poc_env.config import load_scenario
@@ -152,7 +185,7 @@ def main(
     """The ``parts`` (default: quality, cells, timing); ``out_path``: a JSON file of every
     episode's figures (map, seed, policy, POSC, rule-aware bound, planned POS_C, the start the
     allocation plan kept, planning time, load average), written atomically at the end."""
-    parts = ("quality", "cells", "timing") if parts is None else tuple(parts)
+    parts = ("quality", "cells", "timing") if parts is None else tuple(parts)  # "single": asked
     print(
         f"# issue 24 scale figures: {episodes} random priors per map (seeds {seed0}..), one "
         f"core; allocation_plan and greedy_rectangles interleaved per seed; load average "
@@ -163,6 +196,8 @@ def main(
     records: list[dict[str, Any]] = []
     if "quality" in parts:
         out.update(quality(maps, episodes, seed0, records))
+    if "single" in parts:
+        out.update(single(maps, episodes, seed0))
     if "cells" in parts:
         out.update(cells())
     if "timing" in parts:
