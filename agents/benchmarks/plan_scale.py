@@ -75,6 +75,11 @@ def quality(maps, episodes: int, seed0: int, records: list | None = None) -> dic
                 if pol == "allocation_plan":
                     planned.append(float(plan["posc"]) / bound)
                 if records is not None:
+                    print(
+                        f"  {name} seed {seed} {pol}: {posc / bound:.4f} of the rule bound "
+                        f"({plan.get('start', '')})",
+                        flush=True,
+                    )
                     records.append(
                         {
                             "map": name,
