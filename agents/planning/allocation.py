@@ -619,16 +619,15 @@ def make_allocation_plan(
                 r_routes = [_around(k, r_routes[k]) if r_routes[k] else [] for k in range(n)]
             # the refinement scores W x length per cell; kept only if the environment's model
             # agrees (on cells wider than W it can lose: large_400 at 10 km, 0.463 -> 0.416)
-            for cand, was_refined in ((r_routes, True), (s_routes, False)):
-                val = _sampled_total(cand)
-                if val > best_sampled:
-                    best_sampled, routes, pieces, start, refined = (
-                        val,
-                        cand,
-                        s_pieces,
-                        name,
-                        was_refined,
-                    )
+            for was_refined in (True, False):
+                trial: list[list[list[float]]] = r_routes if was_refined else s_routes
+                score = _sampled_total(trial)
+                if score > best_sampled:
+                    best_sampled = score
+                    routes = trial
+                    pieces = s_pieces
+                    start = name
+                    refined = was_refined
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)

@@ -354,6 +354,7 @@ def refine_routes(
         """:func:`route_fits` of each candidate edit of ``path`` at ``i`` (``ops`` 0 move to,
         1 delete, 2 insert before it ``qs``), in one compiled pass."""
         ok = np.empty(len(ops), dtype=bool)
+        hk = h0[k]
         _kernels.fits_batch(
             np.ascontiguousarray(path),
             i,
@@ -365,7 +366,7 @@ def refine_routes(
             turn_cost,
             budget,
             reserve,
-            np.nan if h0[k] is None else float(h0[k]),
+            np.nan if hk is None else float(hk),
             ok,
         )
         return ok
