@@ -35,10 +35,13 @@
 6. **Second start.** On large maps, one route chained over the whole map and cut into pieces
    spends much of each UAV's time in transit; the greedy rectangle plan
    (:mod:`poc_env.agents.planning.greedy_rectangles`: each UAV the best remaining rectangle it
-   can search) is planned too, and the start of higher planned POS goes on to the refinement
-   (``start`` records which; ``greedy_start=False`` keeps the allocation's). The refined
-   routes are kept only if the environment's model (:func:`sampled_sweep`) scores them above
-   the start's (``refined`` records whether they were).
+   can search) is planned too, and so are the coverage boxes
+   (:mod:`poc_env.agents.planning.coverage_boxes`: each UAV its own box and line spacing by
+   the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out). The starts
+   within :data:`REFINE_WITHIN` of the best one's planned POS (at most ``refine_starts``) are
+   refined and the plan keeps the best of them, refined or not, by the environment's model
+   (:func:`sampled_sweep`); ``start`` records which start and ``refined`` whether the
+   refined routes were kept.
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -431,8 +434,11 @@ def make_allocation_plan(
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
 
     ``greedy_start``: also start from the greedy rectangle plan
-    (:func:`poc_env.agents.planning.greedy_rectangles.make_greedy_rectangles_plan`) and refine
-    whichever start has the higher planned POS (``start`` in the plan says which).
+    (:func:`poc_env.agents.planning.greedy_rectangles.make_greedy_rectangles_plan`);
+    ``box_start``: also from the coverage boxes
+    (:func:`poc_env.agents.planning.coverage_boxes.box_routes`); ``refine_starts``: how many of
+    the best starts may be refined (module docstring, step 6; ``start`` in the plan says which
+    was kept).
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
