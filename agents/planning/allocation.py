@@ -307,6 +307,13 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
         [[float(x), float(route[j][0])] for j in idx for x in (route[j][1], route[j][2])]
         for idx in pieces
     ]
+    return _spread(wps, takeoff, sc)
+
+
+def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
+    """``wps`` (waypoints per UAV) with field-mates' outbound bearings spread by dog-legs
+    (:func:`_fan_out`); lists are copied, ``wps`` is not changed."""
+    wps = [list(w) for w in wps]
     keys = [tuple(np.round(t, 3)) for t in takeoff]
     d_out = 8000.0 + 2 * sc.constraints.safety_distance_m
     for field in set(keys):
@@ -582,6 +589,21 @@ def make_allocation_plan(
             _reserve(sc),
             heading0,
         )
+        # field-mates fanned out as the allocation's routes are (eq. 21 on the way out), the
+        # last lines dropped until each route keeps eq. 18 again
+        b_routes = _spread(b_routes, takeoff, sc)
+        for k in range(n):
+            while b_routes[k] and not route_fits(
+                np.vstack([takeoff[k], np.asarray(b_routes[k]).reshape(-1, 2), landing[k]]),
+                v,
+                u.max_turn_rate_rad_s,
+                u.usable_endurance_s,
+                _reserve(sc),
+                heading0[k],
+            ):
+                del b_routes[k][-2:]
+            if len(b_routes[k]) < 2:
+                b_routes[k] = []
         if router.active:
             b_routes = [_around(k, b_routes[k]) if b_routes[k] else [] for k in range(n)]
         b_val = _cell_pos(b_routes, takeoff, landing, prior, grid, w, law)
