@@ -111,6 +111,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--scale-maps", nargs="+", default=None, help="maps of --scale (paper_6_2 large_400)"
     )
+    p.add_argument(
+        "--scale-parts",
+        nargs="+",
+        default=None,
+        choices=["quality", "cells", "timing", "single"],
+        help="parts of --scale to run (default: quality cells timing; single: each airfield's "
+        "UAV alone against its own rule-aware bound)",
+    )
+    p.add_argument(
+        "--scale-out",
+        default=None,
+        help="--scale: also write every episode's figures (per map, seed and policy) to this "
+        "JSON file",
+    )
     return p
 
 
@@ -183,7 +197,9 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         from poc_env.agents.benchmarks import plan_scale
 
         maps = args.scale_maps or plan_scale.MAPS
-        return plan_scale.main(maps, args.episodes, args.seed0, args.runs)
+        return plan_scale.main(
+            maps, args.episodes, args.seed0, args.runs, args.scale_parts, args.scale_out
+        )
     sc = load_scenario(args.scenario)
     obj = PlanObjective(sc, uavs=args.uavs)
     if args.sweep:

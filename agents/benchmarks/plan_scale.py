@@ -19,6 +19,8 @@ Figures are quoted in docs/PLANNER.md with the command; the machine's load chang
 
 from __future__ import annotations
 
+import json
+import os
 import statistics
 import time
 from typing import Any
@@ -52,8 +54,9 @@ def _flown(sc, policy: str, seed: int, prior: np.ndarray | None) -> tuple[float,
     return float(env.sim_state.posc[0]), getattr(pol, "plan", {})
 
 
-def quality(maps, episodes: int, seed0: int) -> dict[str, float]:
-    """Flown ``allocation_plan`` and ``greedy_rectangles`` over the rule-aware bound."""
+def quality(maps, episodes: int, seed0: int, records: list | None = None) -> dict[str, float]:
+    """Flown ``allocation_plan`` and ``greedy_rectangles`` over the rule-aware bound; each
+    episode's figures are appended to ``records`` when given."""
     from poc_env.agents.experiments.evaluate import episode_prior
     from poc_env.config import load_scenario
     from poc_env.theory.bound import rule_bound
@@ -71,6 +74,25 @@ def quality(maps, episodes: int, seed0: int) -> dict[str, float]:
                 share[pol].append(posc / bound)
                 if pol == "allocation_plan":
                     planned.append(float(plan["posc"]) / bound)
+                if records is not None:
+                    print(
+                        f"  {name} seed {seed} {pol}: {posc / bound:.4f} of the rule bound "
+                        f"({plan.get('start', '')})",
+                        flush=True,
+                    )
+                    records.append(
+                        {
+                            "map": name,
+                            "seed": seed,
+                            "policy": pol,
+                            "posc": posc,
+                            "rule_bound": bound,
+                            "planned_posc": float(plan.get("posc", float("nan"))),
+                            "start": plan.get("start"),
+                            "plan_s": float(plan.get("runtime_s", float("nan"))),
+                            "load": os.getloadavg()[0],
+                        }
+                    )
         a = np.array(share["allocation_plan"])
         g = np.array(share["greedy_rectangles"])
         n = len(a)
@@ -86,6 +108,39 @@ def quality(maps, episodes: int, seed0: int) -> dict[str, float]:
         out[f"{name}_wins"] = float(np.sum(d > 0))
         _line(f"{name} lead", float(d.mean()), f"allocation - greedy, +- {half:.4f} (95 %)")
         _line(f"{name} wins", float(np.sum(d > 0)), f"of {n} priors (allocation ahead)")
+    return out
+
+
+def single(maps, episodes: int, seed0: int) -> dict[str, float]:
+    """Where the routes lose: each airfield's first UAV alone (the rest of the fleet removed),
+    its planned POS over its own rule-aware bound, on the same random priors. A plan of one
+    UAV has no other UAV to share the mass with, so what it misses of its bound is the route's
+    (or the bound's) alone."""
+    import dataclasses
+
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.config import load_scenario
+    from poc_env.theory.bound import rule_bound
+
+    out: dict[str, float] = {}
+    for name in maps:
+        sc = load_scenario(name)
+        shares = []
+        for g in sc.fleet:
+            one = dataclasses.replace(sc, fleet=(dataclasses.replace(g, count=1),))
+            for seed in range(seed0, seed0 + episodes):
+                prior = episode_prior(sc, seed)
+                shares.append(
+                    make_allocation_plan(one, prior=prior)["posc"] / rule_bound(one, prior).upper
+                )
+        out[f"{name}_single_rule"] = float(np.mean(shares))
+        _line(
+            f"{name} one UAV alone",
+            out[f"{name}_single_rule"],
+            f"planned / its rule bound, mean of {len(shares)} (min {min(shares):.3f}, "
+            f"max {max(shares):.3f})",
+        )
     return out
 
 
@@ -129,14 +184,32 @@ def timing(runs: int) -> dict[str, float]:
     return out
 
 
-def main(maps, episodes: int, seed0: int, runs: int) -> dict[str, Any]:
+def main(
+    maps, episodes: int, seed0: int, runs: int, parts=None, out_path: str | None = None
+) -> dict[str, Any]:
+    """The ``parts`` (default: quality, cells, timing); ``out_path``: a JSON file of every
+    episode's figures (map, seed, policy, POSC, rule-aware bound, planned POS_C, the start the
+    allocation plan kept, planning time, load average), written atomically at the end."""
+    parts = ("quality", "cells", "timing") if parts is None else tuple(parts)  # "single": asked
     print(
         f"# issue 24 scale figures: {episodes} random priors per map (seeds {seed0}..), one "
-        "core; allocation_plan and greedy_rectangles interleaved per seed",
+        f"core; allocation_plan and greedy_rectangles interleaved per seed; load average "
+        f"{os.getloadavg()[0]:.1f} at the start",
         flush=True,
     )
     out: dict[str, Any] = {}
-    out.update(quality(maps, episodes, seed0))
-    out.update(cells())
-    out.update(timing(runs))
+    records: list[dict[str, Any]] = []
+    if "quality" in parts:
+        out.update(quality(maps, episodes, seed0, records))
+    if "single" in parts:
+        out.update(single(maps, episodes, seed0))
+    if "cells" in parts:
+        out.update(cells())
+    if "timing" in parts:
+        out.update(timing(runs))
+    _line("load average", os.getloadavg()[0], "at the end (1 min)")
+    if out_path is not None:
+        from poc_env.io import write_text_atomic
+
+        write_text_atomic(out_path, json.dumps({"summary": out, "episodes": records}, indent=1))
     return out

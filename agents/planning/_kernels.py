@@ -3,9 +3,11 @@
 :func:`plan_rectangles` is the map repair, lawnmower and transit of
 :mod:`poc_env.agents.planning.objective` for a population in one pass (the prior masses then
 come from :func:`poc_env._kernels.rectangles.rectangle_masses`, called by the objective);
-:func:`route_timeline` and :func:`route_sample` time and sample a flight along a path
-(:mod:`poc_env.agents.planning.refine`); :func:`best_box` is the greedy rectangle planner's box
-search (:mod:`poc_env.agents.planning.greedy_rectangles`).
+:func:`route_timeline` and :func:`route_sample` time and sample a flight along a path and
+:func:`fits_batch` times a waypoint's candidate edits (:mod:`poc_env.agents.planning.refine`);
+:func:`best_box` is the greedy rectangle planner's box search
+(:mod:`poc_env.agents.planning.greedy_rectangles`) and the coverage boxes'
+(:mod:`poc_env.agents.planning.coverage_boxes`).
 
 A kernel module under the cache rule of :mod:`poc_env._kernels`: it imports nothing of the
 project, so the planner composes its kernels with the environment's in Python.
@@ -146,6 +148,38 @@ def route_timeline(p, v_out, v_line, v_home, turn_cost, budget, reserve, heading
     if t > budget + 1e-9:
         fits = False
     return fits
+
+
+@_jit
+def fits_batch(p, i, qs, ops, v_out, v_line, v_home, turn_cost, budget, reserve, heading0, ok):
+    """:func:`route_timeline`'s fit of candidate edits of the path ``p`` (m, 2) at point ``i``
+    into ``ok`` (C,): candidate ``c`` moves point ``i`` to ``qs[c]`` (``ops[c]`` 0), deletes it
+    (1) or inserts ``qs[c]`` before it (2)."""
+    m = p.shape[0]
+    buf = np.empty((m + 1, 2))
+    out = np.empty(m + 1)
+    dep = np.empty(m + 1)
+    for c in range(ops.shape[0]):
+        op = ops[c]
+        k = 0
+        for j in range(m):
+            if j == i:
+                if op == 0:
+                    buf[k, 0] = qs[c, 0]
+                    buf[k, 1] = qs[c, 1]
+                    k += 1
+                    continue
+                if op == 1:
+                    continue
+                buf[k, 0] = qs[c, 0]
+                buf[k, 1] = qs[c, 1]
+                k += 1
+            buf[k, 0] = p[j, 0]
+            buf[k, 1] = p[j, 1]
+            k += 1
+        ok[c] = route_timeline(
+            buf[:k], v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out[:k], dep[:k]
+        )
 
 
 @_jit

@@ -35,10 +35,13 @@
 6. **Second start.** On large maps, one route chained over the whole map and cut into pieces
    spends much of each UAV's time in transit; the greedy rectangle plan
    (:mod:`poc_env.agents.planning.greedy_rectangles`: each UAV the best remaining rectangle it
-   can search) is planned too, and the start of higher planned POS goes on to the refinement
-   (``start`` records which; ``greedy_start=False`` keeps the allocation's). The refined
-   routes are kept only if the environment's model (:func:`sampled_sweep`) scores them above
-   the start's (``refined`` records whether they were).
+   can search) is planned too, and so are the coverage boxes
+   (:mod:`poc_env.agents.planning.coverage_boxes`: each UAV its own box and line spacing by
+   the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out). The starts
+   within :data:`REFINE_WITHIN` of the best one's planned POS (at most ``refine_starts``) are
+   refined and the plan keeps the best of them, refined or not, by the environment's model
+   (:func:`sampled_sweep`); ``start`` records which start and ``refined`` whether the
+   refined routes were kept.
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -68,6 +71,7 @@ import numpy as np
 from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
+from poc_env.agents.planning.coverage_boxes import box_routes
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -102,6 +106,19 @@ SEPARATION_MARGIN = 2.0
 RANGE_MARGIN = 0.9
 #: passes of :func:`poc_env.agents.planning.refine.refine_routes` over the chosen routes (0: none).
 REFINE = 4
+#: the starts refined (best first by W x length per cell); the plan keeps the best of them,
+#: refined or not, by the environment's model (:func:`sampled_sweep`).
+REFINE_STARTS = 2
+#: a start is refined too only if its W x length per cell score is within this share of the
+#: best start's (on paper_6_2's own prior the allocation start, 0.935 of the boxes' unrefined,
+#: refines to 0.5853 against the boxes' 0.5748; on random priors the boxes lead by 4-20 %
+#: and win refined).
+REFINE_WITHIN = 0.9
+
+
+def _lines_of(routes) -> list[list[int]]:
+    """Line indices per UAV of lawnmower routes (a line = two waypoints)."""
+    return [list(range(len(r) // 2)) for r in routes]
 
 
 def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
@@ -290,6 +307,13 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
         [[float(x), float(route[j][0])] for j in idx for x in (route[j][1], route[j][2])]
         for idx in pieces
     ]
+    return _spread(wps, takeoff, sc)
+
+
+def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
+    """``wps`` (waypoints per UAV) with field-mates' outbound bearings spread by dog-legs
+    (:func:`_fan_out`); lists are copied, ``wps`` is not changed."""
+    wps = [list(w) for w in wps]
     keys = [tuple(np.round(t, 3)) for t in takeoff]
     d_out = 8000.0 + 2 * sc.constraints.safety_distance_m
     for field in set(keys):
@@ -410,13 +434,18 @@ def make_allocation_plan(
     refine: int = REFINE,
     crs: dict[str, Any] | None = None,
     greedy_start: bool = True,
+    box_start: bool = True,
+    refine_starts: int = REFINE_STARTS,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
 
     ``greedy_start``: also start from the greedy rectangle plan
-    (:func:`poc_env.agents.planning.greedy_rectangles.make_greedy_rectangles_plan`) and refine
-    whichever start has the higher planned POS (``start`` in the plan says which).
+    (:func:`poc_env.agents.planning.greedy_rectangles.make_greedy_rectangles_plan`);
+    ``box_start``: also from the coverage boxes
+    (:func:`poc_env.agents.planning.coverage_boxes.box_routes`); ``refine_starts``: how many of
+    the best starts may be refined (module docstring, step 6; ``start`` in the plan says which
+    was kept).
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -521,41 +550,79 @@ def make_allocation_plan(
         if best is None or not any(best[2]):
             reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
             best = None
-    start = "allocation"
-    greedy_routes: list[list[list[float]]] | None = None
+
+    def _sampled_total(rs) -> float:
+        paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
+        return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
+
+    # the starts: (W x length per cell score, name, routes, line pieces)
+    starts: list[tuple[float, str, list, list]] = []
+    routes: list[list[list[float]]] = [[] for _ in range(n)]
+    pieces: list[list[int]] = [[] for _ in range(n)]
+    alloc_pos = 0.0
+    along = "x"
+    spacing = w
+    if best is not None:
+        alloc_pos = float(best[0].pos)
+        a_routes, a_pieces = fly(best)
+        along = "y" if best[5] else "x"
+        spacing = w / max(float(np.minimum(best[0].coverage, COVER_CAP).max()), 1e-12)
+        starts.append((best_val, "allocation", a_routes, a_pieces))
     if best is not None and greedy_start:
         from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
 
         gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed)
         g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
         g_val = _cell_pos(g_routes, takeoff, landing, prior, grid, w, law)
-        if g_val > best_val:  # the better start is refined
-            greedy_routes, start = g_routes, "greedy_rectangles"
-    routes: list[list[list[float]]] = [[] for _ in range(n)]
-    pieces: list[list[int]] = [[] for _ in range(n)]
-    alloc_pos = 0.0
-    along = "x"
-    spacing = w
-    posc = 0.0
+        starts.append((g_val, "greedy_rectangles", g_routes, _lines_of(g_routes)))
+    if best is not None and box_start:
+        b_routes = box_routes(
+            prior,
+            grid,
+            w,
+            law,
+            v,
+            takeoff,
+            landing,
+            u.usable_endurance_s,
+            u.max_turn_rate_rad_s,
+            _reserve(sc),
+            heading0,
+        )
+        # field-mates fanned out as the allocation's routes are (eq. 21 on the way out), the
+        # last lines dropped until each route keeps eq. 18 again
+        b_routes = _spread(b_routes, takeoff, sc)
+        for k in range(n):
+            while b_routes[k] and not route_fits(
+                np.vstack([takeoff[k], np.asarray(b_routes[k]).reshape(-1, 2), landing[k]]),
+                v,
+                u.max_turn_rate_rad_s,
+                u.usable_endurance_s,
+                _reserve(sc),
+                heading0[k],
+            ):
+                del b_routes[k][-2:]
+            if len(b_routes[k]) < 2:
+                b_routes[k] = []
+        if router.active:
+            b_routes = [_around(k, b_routes[k]) if b_routes[k] else [] for k in range(n)]
+        b_val = _cell_pos(b_routes, takeoff, landing, prior, grid, w, law)
+        starts.append((b_val, "boxes", b_routes, _lines_of(b_routes)))
+    # the best starts by W x length per cell (stable: allocation, greedy, boxes on ties)
+    starts.sort(key=lambda t: -t[0])
+    start = starts[0][1] if starts else "allocation"
     refined = bool(refine)
 
-    def _sampled_total(rs) -> float:
-        paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
-        return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
-
-    if best is not None:
-        alloc_pos = float(best[0].pos)
-        routes, pieces = fly(best)
-        along = "y" if best[5] else "x"
-        spacing = w / max(float(np.minimum(best[0].coverage, COVER_CAP).max()), 1e-12)
-        if greedy_routes is not None:  # lawnmower lines W apart, a line = two waypoints
-            routes = greedy_routes
-            pieces = [list(range(len(r) // 2)) for r in routes]
+    if starts:
+        routes, pieces = starts[0][2], starts[0][3]
+        if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
-        if refine:
-            unrefined = routes
-            routes, posc = refine_routes(
-                routes,
+    if starts and refine:
+        best_sampled = -1.0
+        tried = [t for t in starts[: max(1, refine_starts)] if t[0] >= REFINE_WITHIN * starts[0][0]]
+        for _, name, s_routes, s_pieces in tried:
+            r_routes, _ = refine_routes(
+                s_routes,
                 takeoff,
                 landing,
                 prior,
@@ -577,11 +644,18 @@ def make_allocation_plan(
                 router=router,
             )
             if router.active:  # moves keep 0.9 c from the zones; the route keeps c
-                routes = [_around(k, routes[k]) if routes[k] else [] for k in range(n)]
+                r_routes = [_around(k, r_routes[k]) if r_routes[k] else [] for k in range(n)]
             # the refinement scores W x length per cell; kept only if the environment's model
             # agrees (on cells wider than W it can lose: large_400 at 10 km, 0.463 -> 0.416)
-            if _sampled_total(unrefined) > _sampled_total(routes):
-                routes, refined = unrefined, False
+            for was_refined in (True, False):
+                trial: list[list[list[float]]] = r_routes if was_refined else s_routes
+                score = _sampled_total(trial)
+                if score > best_sampled:
+                    best_sampled = score
+                    routes = trial
+                    pieces = s_pieces
+                    start = name
+                    refined = was_refined
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)

@@ -24,8 +24,8 @@ Coverage is sampled at four points per cell along each leg (as the allocation pl
 ``_path_coverage``), so the score equals the allocation planner's ``posc`` of the same routes.
 A move changes the coverage of the cells its old and new legs cross only, so the candidates are
 scored there (:func:`move_gains`: the swarm's coverage per cell is kept and updated in place
-when a move is kept), and the airspace check updates the moved UAV's distances to the others
-only (:func:`update_distances`); both give the full computation's numbers.
+when a move is kept), and the airspace check counts the moved UAV's pairs with the others
+only (:class:`AirspaceCount`); both give the full computation's numbers.
 """
 
 from __future__ import annotations
@@ -204,14 +204,64 @@ class Airspace:
         )
 
 
-def update_distances(pos: np.ndarray, dist: np.ndarray, k: int) -> None:
-    """Row and column ``k`` of ``dist (S, n, n)``, the
-    :func:`~poc_env.sim.constraints.pairwise_distances` of ``pos (S, n, 2)``, recomputed in
-    place after UAV ``k`` moved (the same sums as the kernel's, so the same bits)."""
-    c = pos - pos[:, k : k + 1]
-    d = np.sqrt(c[..., 0] * c[..., 0] + c[..., 1] * c[..., 1])
-    dist[:, k, :] = d
-    dist[:, :, k] = d
+class AirspaceCount:
+    """:meth:`Airspace.violations` of a swarm kept up to date as one UAV at a time moves.
+
+    Per sampled step ``s`` and UAV ``i`` it keeps the number of flying others closer than
+    ``separation_m`` (eq. 21) and within ``range_m`` (eq. 24) and the number of UAVs flying;
+    moving UAV ``k`` (:meth:`move`) changes the pairs ``(k, j)`` only, so the counts are
+    updated from UAV ``k``'s distances to the others (O(steps x n) instead of the full pass's
+    O(steps x n^2)). The count is :func:`swarm_violations`'s exactly: a flying UAV-step with a
+    partner too close, plus one with fewer than ``min(min_neighbours, flying - 1)`` others in
+    range (:func:`poc_env.sim.comms.two_neighbour_ok` with the flying UAVs)."""
+
+    def __init__(self, airspace: Airspace, pos: np.ndarray, act: np.ndarray) -> None:
+        self.air = airspace
+        self.pos = np.array(pos, dtype=float)  # (S, n, 2)
+        self.act = np.array(act, dtype=bool)  # (S, n)
+        n = self.pos.shape[1]
+        d = pairwise_distances(self.pos)
+        both = self.act[:, :, None] & self.act[:, None, :] & ~np.eye(n, dtype=bool)[None]
+        self.close = np.sum(both & (d < airspace.separation_m), axis=2)
+        self.near = np.sum(both & (d <= airspace.range_m), axis=2)
+        self.flying = self.act.sum(axis=1)
+        self.value = self._total(self.close, self.near, self.flying, self.act)
+
+    def _total(self, close, near, flying, act) -> int:
+        need = np.minimum(self.air.min_neighbours, flying - 1)[:, None]
+        return int(np.sum(act & (close > 0)) + np.sum(act & (near < need)))
+
+    def _pairs(self, k: int, pos_k: np.ndarray, act_k: np.ndarray):
+        """UAV ``k``'s pairs with the others at positions ``pos_k (S, 2)``, flying ``act_k``:
+        (too close, in range), each (S, n) with column ``k`` False."""
+        c = self.pos - pos_k[:, None, :]
+        d = np.sqrt(c[..., 0] * c[..., 0] + c[..., 1] * c[..., 1])
+        both = act_k[:, None] & self.act
+        both[:, k] = False
+        return both & (d < self.air.separation_m), both & (d <= self.air.range_m)
+
+    def move(self, k: int, pos_k, act_k) -> tuple[int, tuple]:
+        """The count with UAV ``k`` at ``pos_k (S, 2)``, flying ``act_k (S,)``, and the state
+        that :meth:`keep` makes current (the counts are not changed until then)."""
+        pos_k = np.asarray(pos_k, dtype=float)
+        act_k = np.asarray(act_k, dtype=bool)
+        old_c, old_n = self._pairs(k, self.pos[:, k], self.act[:, k])
+        new_c, new_n = self._pairs(k, pos_k, act_k)
+        close = self.close + new_c - old_c
+        near = self.near + new_n - old_n
+        close[:, k] = new_c.sum(axis=1)
+        near[:, k] = new_n.sum(axis=1)
+        flying = self.flying + act_k.astype(np.int64) - self.act[:, k]
+        act = self.act.copy()
+        act[:, k] = act_k
+        value = self._total(close, near, flying, act)
+        return value, (k, pos_k, act, close, near, flying, value)
+
+    def keep(self, state: tuple) -> None:
+        """Make the move of :meth:`move`'s ``state`` current."""
+        k, pos_k, act, close, near, flying, value = state
+        self.pos[:, k] = pos_k
+        self.act, self.close, self.near, self.flying, self.value = act, close, near, flying, value
 
 
 def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old):
@@ -298,6 +348,29 @@ def refine_routes(
     def fits(path: np.ndarray, k: int) -> bool:
         return route_fits(path, speeds, turn_rate, budget, reserve, h0[k])
 
+    turn_cost = TURN_SHARE / turn_rate
+
+    def fits_all(path: np.ndarray, i: int, qs, ops, k: int) -> np.ndarray:
+        """:func:`route_fits` of each candidate edit of ``path`` at ``i`` (``ops`` 0 move to,
+        1 delete, 2 insert before it ``qs``), in one compiled pass."""
+        ok = np.empty(len(ops), dtype=bool)
+        hk = h0[k]
+        _kernels.fits_batch(
+            np.ascontiguousarray(path),
+            i,
+            np.ascontiguousarray(np.array(qs, dtype=float).reshape(-1, 2)),
+            np.asarray(ops, dtype=np.int64),
+            speeds.out,
+            speeds.line,
+            speeds.home,
+            turn_cost,
+            budget,
+            reserve,
+            np.nan if hk is None else float(hk),
+            ok,
+        )
+        return ok
+
     for k in range(n):
         while len(paths[k]) > 2 and not fits(paths[k], k):
             paths[k] = np.delete(paths[k], -2, axis=0)
@@ -311,8 +384,7 @@ def refine_routes(
         act = np.empty((len(times), n), dtype=bool)
         for k in range(n):
             pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
-        dist = pairwise_distances(pos)  # kept up to date as UAVs move (update_distances)
-        viol = airspace.violations(pos, act, dist)
+        count = AirspaceCount(airspace, pos, act)  # kept up to date as UAVs move
 
     covs = [path_cov(p) for p in paths]
     total = np.sum(covs, axis=0) if n else np.zeros(p_flat.size)  # a fresh array, updated in place
@@ -326,7 +398,8 @@ def refine_routes(
             i = 1
             while i < len(paths[k]):  # i: the waypoint moved/deleted, or inserted before
                 path = paths[k]
-                cands: list[np.ndarray] = []
+                qs: list[np.ndarray] = []  # the candidates: ops 0 move, 1 delete, 2 insert
+                ops: list[int] = []
                 starts: list[np.ndarray] = []
                 ends: list[np.ndarray] = []
                 rows: list[int] = []
@@ -338,12 +411,14 @@ def refine_routes(
                     nxt = path[i + 1]
                     for off in offsets:
                         q = np.clip(b + off, lo, hi)
-                        cands.append(np.vstack([path[:i], q, path[i + 1 :]]))
+                        qs.append(q)
+                        ops.append(0)
                         starts += [a, q]
                         ends += [q, nxt]
                         rows += [len(kinds)] * 2
                         kinds.append(0)
-                    cands.append(np.vstack([path[:i], path[i + 1 :]]))
+                    qs.append(b)
+                    ops.append(1)
                     starts.append(a)
                     ends.append(nxt)
                     rows.append(len(kinds))
@@ -353,17 +428,21 @@ def refine_routes(
                 normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
                 for s in across:
                     q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
-                    cands.append(np.vstack([path[:i], q, path[i:]]))
+                    qs.append(q)
+                    ops.append(2)
                     starts += [a, q]
                     ends += [q, b]
                     rows += [len(kinds)] * 2
                     kinds.append(1)
-                ok = np.array([fits(p, k) for p in cands])
-                if router is not None and router.active:
-                    hit = router.crosses(np.asarray(starts), np.asarray(ends))
-                    blocked = np.zeros(len(cands), dtype=bool)
-                    np.logical_or.at(blocked, np.asarray(rows), hit)
-                    ok &= ~blocked
+
+                def cand(c: int, path=path, i=i, qs=qs, ops=ops) -> np.ndarray:
+                    if ops[c] == 0:
+                        return np.vstack([path[:i], qs[c], path[i + 1 :]])
+                    if ops[c] == 1:
+                        return np.vstack([path[:i], path[i + 1 :]])
+                    return np.vstack([path[:i], qs[c], path[i:]])
+
+                ok = fits_all(path, i, qs, ops, k)
                 cells, cand_here, gain = move_gains(
                     total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2]
                 )
@@ -376,22 +455,19 @@ def refine_routes(
                     if airspace is None:
                         j = int(c_j)
                         break
-                    old = pos[:, k].copy(), act[:, k].copy(), dist[:, k].copy()
-                    pos[:, k], act[:, k] = track(cands[c_j], speeds, turn_rate, times, h0[k])
-                    update_distances(pos, dist, k)
-                    v_new = airspace.violations(pos, act, dist)
-                    if v_new <= viol:
-                        j, viol = int(c_j), v_new
+                    v_new, state = count.move(
+                        k, *track(cand(int(c_j)), speeds, turn_rate, times, h0[k])
+                    )
+                    if v_new <= count.value:
+                        j = int(c_j)
+                        count.keep(state)
                         break
-                    pos[:, k], act[:, k] = old[0], old[1]
-                    dist[:, k, :] = old[2]
-                    dist[:, :, k] = old[2]
                 if j >= 0:
-                    paths[k] = cands[j]
+                    paths[k] = cand(j)
                     total[cells] = cand_here[j]
                     value = float(vals[j])
                     kept += 1
-                    if kinds[j] == 0 and len(cands[j]) < len(path):
+                    if ops[j] == 1:
                         continue  # deleted: the next waypoint is now at i
                 i += 1
         if not kept:

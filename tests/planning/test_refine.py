@@ -234,21 +234,27 @@ def test_move_gains_equal_full_scoring_on_random_moves():
         np.testing.assert_allclose(value + gain, pod_from_coverage(full, law) @ p_flat, atol=1e-12)
 
 
-def test_update_distances_equals_the_full_pairwise_distances():
-    """The refinement's airspace check keeps the swarm's distances up to date by recomputing
-    the moved UAV's row and column only; they must equal the full recomputation bit for bit,
-    and the violation count from them the count from scratch."""
-    from poc_env.agents.planning.refine import update_distances
-    from poc_env.sim.constraints import pairwise_distances
+def test_airspace_count_equals_the_full_count_after_moves():
+    """The refinement's airspace check counts only the moved UAV's pairs with the others; after
+    every move (positions and flying steps changed, UAVs landing early or late) its count must
+    equal the full count from scratch, and a move not kept must change nothing."""
+    from poc_env.agents.planning.refine import AirspaceCount
 
     rng = np.random.default_rng(3)
+    air = Airspace(60.0, 1500.0, 5000.0, 2)
     pos = rng.normal(0, 3000.0, (50, 7, 2))
     act = rng.random((50, 7)) > 0.2
-    dist = pairwise_distances(pos)
-    for k in (0, 4, 6, 4):
-        pos[:, k] = rng.normal(0, 3000.0, (50, 2))
-        update_distances(pos, dist, k)
-        assert np.array_equal(dist, pairwise_distances(pos))
-        assert swarm_violations(pos, act, 1500.0, 5000.0, 2, dist) == swarm_violations(
-            pos, act, 1500.0, 5000.0, 2
-        )
+    count = AirspaceCount(air, pos, act)
+    assert count.value == swarm_violations(pos, act, 1500.0, 5000.0, 2)
+    for trial, k in enumerate((0, 4, 6, 4, 1, 1)):
+        new_pos = rng.normal(0, 3000.0, (50, 2))
+        new_act = rng.random(50) > 0.3 * (trial % 3)
+        value, state = count.move(k, new_pos, new_act)
+        assert count.value == swarm_violations(pos, act, 1500.0, 5000.0, 2)  # not kept yet
+        pos[:, k], act[:, k] = new_pos, new_act
+        assert value == swarm_violations(pos, act, 1500.0, 5000.0, 2), trial
+        if trial % 2:  # kept
+            count.keep(state)
+        else:  # dropped: the swarm goes back
+            pos, act = count.pos.copy(), count.act.copy()
+        assert count.value == swarm_violations(pos, act, 1500.0, 5000.0, 2), trial

@@ -1,0 +1,180 @@
+"""Coverage boxes: each UAV its own rectangle, line spacing and share of the mass (issue 24).
+
+A start for the allocation planner's refinement (:mod:`poc_env.agents.planning.allocation`) on
+maps where one chained route cut into pieces spends much of each UAV's time in transit. It
+assigns each UAV its own region of the map and its own coverage there, as the allocation asks
+(thin coverage where the mass is thin or far, dense where it is dense and near):
+
+1. **Marginal gain per spacing.** With the swarm's coverage ``C`` so far (eq. 10 per cell, the
+   refinement's score), a lawnmower of lines ``s`` apart adds ``W / s`` to the cells it crosses
+   (eq. 10: ``C = W / d``), so cell ``j`` gains ``p_j (POD(C_j + W / s) - POD(C_j))``. For each
+   spacing of :data:`SPACINGS` (in sweep widths) these gains go in a summed-area table.
+2. **Best box per UAV.** For every UAV the compiled box search of the greedy rectangles
+   (:func:`poc_env.agents.planning._kernels.best_box`: every position of a set of side lengths,
+   kept when a lower bound of its flight time fits 0.85 T) finds the box of most gain at each
+   spacing (boxes of whole blocks of ``f x f`` cells, ``f`` the least that leaves at most
+   :data:`MAX_CELLS` blocks a side); its lawnmower
+   (:func:`poc_env.agents.planning.greedy_rectangles._lines`, lines ``s`` apart along the
+   longer side) is cut until it keeps eq. 18's return rule
+   (:func:`poc_env.agents.planning.refine.route_fits`), and the spacing whose route gains most
+   (whole flight path counted, transit too) is the UAV's candidate. UAVs sharing both fields
+   have the same candidate (computed once).
+3. **Assignment.** Of all UAVs not yet assigned, the one whose candidate gains most takes it
+   (ties: the lower index); its coverage is added and steps 1-3 repeat until every UAV has a
+   route or none gains anything. Candidates are recomputed lazily: added coverage only lowers
+   the gains (POD is concave), so a field's last candidate value bounds its new one, and only
+   the field on top is recomputed until the one on top is fresh. Greedy on a monotone
+   submodular gain over a partition (one route per UAV) is within 1/2 of the best choice
+   among these candidates.
+4. **Exchange.** Each UAV in turn drops its route and takes the best candidate against all the
+   others' coverage (steps 1-2), if it gains more; :data:`ROUNDS` passes or until none moves.
+
+Deterministic: no clock, no random draw. No-fly zones: the start is flown around them by the
+allocation planner like its other starts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from poc_env.agents.planning import _kernels
+from poc_env.agents.planning.flight_rules import Speeds
+from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
+from poc_env.agents.planning.greedy_rectangles import SCALES, _lines, _side_lengths
+from poc_env.agents.planning.refine import route_fits
+from poc_env.theory.probability_map import Grid
+from poc_env.theory.search_theory import pod_from_coverage
+
+#: line spacings tried, in sweep widths (coverage W / s: 1 to 1/4 of a sweep width's).
+SPACINGS = (1.0, 1.5, 2.0, 3.0, 4.0)
+#: boxes are searched on blocks of cells so that the map has at most this many blocks a side
+#: (160 x 160 cells: 2 x 2 blocks; the box search's cost grows as the fourth power of the side).
+MAX_CELLS = 80
+#: recompute candidates lazily (step 3); False recomputes every field's each round (same routes).
+LAZY = True
+#: passes of the exchange step (4).
+ROUNDS = 2
+
+
+def box_routes(
+    prior: np.ndarray,
+    grid: Grid,
+    w: float,
+    law: str,
+    speeds: Speeds,
+    takeoff,
+    landing,
+    budget: float,
+    turn_rate: float,
+    reserve: float,
+    headings=None,
+    spacings: tuple[float, ...] | None = None,
+    rounds: int | None = None,
+) -> list[list[list[float]]]:
+    """Each UAV's waypoints (between ``takeoff[k]`` and ``landing[k]``): one lawnmower box per
+    UAV (module docstring). ``budget`` the usable endurance 0.85 T and ``reserve`` the time kept
+    in hand at every waypoint (:func:`~poc_env.agents.planning.refine.route_fits`), ``turn_rate``
+    the maximum turn rate (rad/s), ``headings`` the take-off headings (rad) or None. A UAV that
+    can search nothing gets an empty list."""
+    spacings = SPACINGS if spacings is None else tuple(spacings)
+    rounds = ROUNDS if rounds is None else int(rounds)
+    takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
+    landing = np.asarray(landing, dtype=float).reshape(-1, 2)
+    prior = np.asarray(prior, dtype=float)
+    n = len(takeoff)
+    h0 = [None] * n if headings is None else [float(x) for x in headings]
+    f = max(1, math.ceil(max(grid.nx, grid.ny) / MAX_CELLS))  # boxes on f x f blocks of cells
+    mx, my = math.ceil(grid.nx / f), math.ceil(grid.ny / f)
+    widths = _side_lengths(mx).astype(np.int64)
+    heights = _side_lengths(my).astype(np.int64)
+    orig = np.array(grid.origin_m, dtype=float)
+    hi_map = np.array(grid.bounds[2:], dtype=float)
+    block = np.zeros((my * f, mx * f))
+    speed_arr = np.array([speeds.out, speeds.line, speeds.home])
+    half_turn = math.pi / turn_rate  # a half-turn at a line end (the box search's estimate)
+    est_budget = budget - reserve
+    table = np.zeros((my + 1, mx + 1))
+
+    def candidate(k: int, cov: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        """UAV ``k``'s best lawnmower against the coverage ``cov``: (gain, waypoints, its
+        coverage)."""
+        base = pod_from_coverage(cov, law)
+        best: tuple[float, np.ndarray, np.ndarray] = (0.0, np.zeros((0, 2)), np.zeros(grid.shape))
+        for s in spacings:
+            block[: grid.ny, : grid.nx] = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
+            gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
+            table[1:, 1:] = gain.cumsum(0).cumsum(1)
+            wps: np.ndarray = np.zeros((0, 2))
+            for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
+                mass, i, j, nw, nh = _kernels.best_box(
+                    table, widths, heights, orig, float(f * grid.cell_m), float(s * w), speed_arr,
+                    float(half_turn), float(scale * est_budget), takeoff[k], landing[k],
+                )  # fmt: skip
+                if not mass > 0.0:
+                    break
+                lo = orig + np.array([i, j]) * f * grid.cell_m
+                hi = np.minimum(lo + np.array([nw, nh]) * f * grid.cell_m, hi_map)
+                wps = _lines(lo, hi, s * w, takeoff[k])
+                full = len(wps)
+                while len(wps) and not route_fits(
+                    np.vstack([takeoff[k], wps, landing[k]]),
+                    speeds,
+                    turn_rate,
+                    budget,
+                    reserve,
+                    h0[k],
+                ):
+                    wps = wps[:-2]  # drop the last line
+                if len(wps) >= full // 2:
+                    break
+            if not len(wps):
+                continue
+            c = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
+            val = float(np.sum(prior * (pod_from_coverage(cov + c, law) - base)))
+            if val > best[0]:
+                best = (val, wps, c)
+        return best
+
+    keys = [tuple(np.round(np.concatenate([takeoff[k], landing[k]]), 3)) for k in range(n)]
+    routes: list[np.ndarray] = [np.zeros((0, 2)) for _ in range(n)]
+    covs = [np.zeros(grid.shape) for _ in range(n)]
+    total = np.zeros(grid.shape)
+    left = list(range(n))
+    # lazy greedy: a field's candidate is recomputed only when it may no longer be the best
+    # (its gain can only fall as coverage is added: POD is concave)
+    cache: dict[tuple, tuple[float, np.ndarray, np.ndarray]] = {}
+    fresh: set[tuple] = set()
+    while left:
+        if not LAZY:
+            cache.clear()
+        for key in sorted({keys[j] for j in left} - set(cache)):
+            cache[key] = candidate(keys.index(key), total)
+            fresh.add(key)
+        k = min(left, key=lambda j: (-cache[keys[j]][0], j))
+        if keys[k] not in fresh:
+            cache[keys[k]] = candidate(k, total)
+            fresh.add(keys[k])
+            continue
+        val, wps, c = cache[keys[k]]
+        if not val > 0.0:
+            break
+        routes[k], covs[k] = wps, c
+        total = total + c
+        left.remove(k)
+        fresh.clear()
+    for _ in range(max(0, int(rounds))):
+        moved = False
+        for k in range(n):
+            others = total - covs[k]
+            base = pod_from_coverage(others, law)
+            now = float(np.sum(prior * (pod_from_coverage(total, law) - base)))
+            val, wps, c = candidate(k, others)
+            if val > now + 1e-9:
+                routes[k], covs[k] = wps, c
+                total = others + c
+                moved = True
+        if not moved:
+            break
+    return [[[float(a), float(b)] for a, b in r] for r in routes]

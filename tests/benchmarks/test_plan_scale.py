@@ -1,0 +1,29 @@
+"""`poc-env bench plan --scale`: the parts run on request and every episode is recorded."""
+
+import json
+
+import pytest
+
+from poc_env.agents.benchmarks import plan as bench_plan
+
+
+def test_scale_quality_records_every_episode(tmp_path, capsys):
+    out = tmp_path / "scale.json"
+    summary = bench_plan.main(
+        ["--scale", "--episodes", "1", "--seed0", "1", "--scale-maps", "small",
+         "--scale-parts", "quality", "--scale-out", str(out)]
+    )  # fmt: skip
+    data = json.loads(out.read_text())
+    eps = data["episodes"]
+    assert [(e["seed"], e["policy"]) for e in eps] == [
+        (1, "allocation_plan"),
+        (1, "greedy_rectangles"),
+    ]
+    a, g = (e["posc"] / e["rule_bound"] for e in eps)
+    assert summary["small_allocation_plan_rule"] == pytest.approx(a)
+    assert summary["small_lead"] == pytest.approx(a - g)
+    assert data["summary"] == pytest.approx(summary)
+    assert all(0 < e["posc"] <= e["rule_bound"] * 1.05 for e in eps)
+    printed = capsys.readouterr().out
+    assert "small seed 1 greedy_rectangles" in printed
+    assert "cells" not in printed  # only the part asked for

@@ -1,0 +1,140 @@
+"""Coverage boxes: one lawnmower box per UAV, its own spacing, within the flight rules."""
+
+import numpy as np
+
+from poc_env.agents.planning import coverage_boxes
+from poc_env.agents.planning.allocation import make_allocation_plan, sampled_sweep
+from poc_env.agents.planning.coverage_boxes import box_routes
+from poc_env.agents.planning.flight_rules import path_coverage, plan_speeds, reserve_s
+from poc_env.agents.planning.refine import route_fits
+from poc_env.config import load_scenario
+from poc_env.sim.core import takeoff_heading
+from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.search_theory import pod_from_coverage
+
+
+def _inputs(name="paper_6_2", prior=None, **over):
+    sc = load_scenario(name, over or None)
+    grid = Grid.from_config(sc.map)
+    prior = build_prior(sc.map) if prior is None else prior
+    to = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    la = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    return sc, grid, prior, to, la
+
+
+def _routes(sc, grid, prior, to, la, **kw):
+    u = sc.uav
+    return box_routes(
+        prior,
+        grid,
+        sc.sensor.sweep_width_m,
+        sc.sensor.law,
+        plan_speeds(sc),
+        to,
+        la,
+        u.usable_endurance_s,
+        u.max_turn_rate_rad_s,
+        reserve_s(sc),
+        takeoff_heading(grid.bounds, to),
+        **kw,
+    )
+
+
+def test_every_uav_finds_mass_and_keeps_the_flight_rules():
+    """paper_6_2: every UAV is given a box that finds mass (the prior has mass within every
+    UAV's reach); every route fits 0.85 T with eq. 18's return rule at every waypoint; the
+    lines lie inside the map."""
+    sc, grid, prior, to, la = _inputs()
+    routes = _routes(sc, grid, prior, to, la)
+    v = plan_speeds(sc)
+    heading = takeoff_heading(grid.bounds, to)
+    x0, y0, x1, y1 = grid.bounds
+    paths = [[to[k], *routes[k], la[k]] for k in range(len(routes))]
+    pos, _ = sampled_sweep(sc, grid, prior, paths)
+    for k, r in enumerate(routes):
+        wps = np.asarray(r).reshape(-1, 2)
+        assert len(wps) >= 2, k
+        assert pos[k] > 0.0, k
+        assert route_fits(
+            np.vstack([to[k], wps, la[k]]),
+            v,
+            sc.uav.max_turn_rate_rad_s,
+            sc.uav.usable_endurance_s,
+            reserve_s(sc),
+            heading[k],
+        ), k
+        assert np.all((wps[:, 0] >= x0) & (wps[:, 0] <= x1)), k
+        assert np.all((wps[:, 1] >= y0) & (wps[:, 1] <= y1)), k
+
+
+def test_boxes_are_deterministic_and_thin_where_mass_is_thin():
+    """The same input gives the same routes; with a flat prior the boxes take wider spacings
+    than W somewhere (coverage below 1 is worth more per line where mass is thin)."""
+    sc, grid, _, to, la = _inputs()
+    flat = np.full(grid.shape, 1.0 / grid.nx / grid.ny)
+    a = _routes(sc, grid, flat, to, la)
+    assert a == _routes(sc, grid, flat, to, la)
+    w = sc.sensor.sweep_width_m
+    gaps = []
+    for r in a:
+        lines = np.asarray(r).reshape(-1, 2, 2)  # (start, end) per line
+        if len(lines) < 2:
+            continue
+        across = 1 - int(np.argmax(np.abs(lines[0, 1] - lines[0, 0])))  # lines run along x or y
+        gaps += list(np.abs(np.diff(lines[:, 0, across])))
+    assert max(gaps) > 1.2 * w
+
+
+def test_more_gain_than_single_width_boxes():
+    """Choosing the spacing per UAV finds at least as much (eq. 10 per cell) as boxes at
+    spacing W only, on the scenario prior."""
+    sc, grid, prior, to, la = _inputs()
+    law = sc.sensor.law
+    w = sc.sensor.sweep_width_m
+
+    def score(routes):
+        cov = sum(path_coverage([to[k], *r, la[k]], grid, w) for k, r in enumerate(routes) if r)
+        return float(np.sum(prior * pod_from_coverage(cov, law)))
+
+    one = score(_routes(sc, grid, prior, to, la, spacings=(1.0,)))
+    assert score(_routes(sc, grid, prior, to, la)) >= one - 1e-12
+
+
+def test_uav_out_of_reach_gets_no_route_and_the_others_still_do():
+    """Mass only in the map's top row: UAVs from a far field with a short endurance reach
+    none of it and get empty routes; with the paper's endurance every UAV gets one."""
+    sc, grid, _, to, la = _inputs()
+    prior = np.zeros(grid.shape)
+    prior[-1, :] = 1.0 / grid.nx
+    short = load_scenario("paper_6_2", {"uav.endurance_h": 0.5})
+    assert all(r == [] for r in _routes(short, grid, prior, to, la))
+    assert all(len(r) >= 2 for r in _routes(sc, grid, prior, to, la))
+
+
+def test_lazy_greedy_gives_the_eager_greedys_routes(monkeypatch):
+    """Recomputing every field's candidate each round (eager) gives the same routes as the lazy
+    recomputation (gains only fall as coverage is added)."""
+    sc, grid, prior, to, la = _inputs("large_400", None, **{"map.cell_km": 20})
+    lazy = _routes(sc, grid, prior, to, la, rounds=0)
+    monkeypatch.setattr(coverage_boxes, "LAZY", False)
+    assert _routes(sc, grid, prior, to, la, rounds=0) == lazy
+
+
+def test_allocation_plan_records_its_start():
+    plan = make_allocation_plan("small")
+    assert plan["start"] in ("allocation", "greedy_rectangles", "boxes")
+    without = make_allocation_plan("small", box_start=False)
+    assert without["start"] != "boxes"
+
+
+def test_allocation_plan_takes_the_boxes_when_they_win():
+    """On a random prior where the boxes' start wins, the plan says so and reaches at least
+    the planned POS without the boxes (the refined best of a superset of starts)."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+
+    sc = load_scenario("paper_6_2")
+    prior = episode_prior(sc, 4)
+    plan = make_allocation_plan(sc, prior=prior, refine=1)
+    old = make_allocation_plan(sc, prior=prior, refine=1, box_start=False)
+    assert plan["start"] == "boxes"
+    assert plan["posc"] > old["posc"]
