@@ -275,7 +275,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
         shown = prior if figure else None
         _wrote(write_survey(result, stage, prior=shown, scenario=sc, plan=plan), stage, dest)
     if getattr(args, "plan_out", None):
-        from poc_env.agents.mission.plan import write_plan
+        from poc_env.agents.mission.plan import with_scenario_file, write_plan
         from poc_env.agents.planning.survey import survey_plan
 
         doc = survey_plan(
@@ -288,7 +288,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
             projection=args.projection,
             zone=args.utm_zone,
         )
-        print(f"wrote {write_plan(_with_scenario_file(doc, args.scenario), args.plan_out)}")
+        print(f"wrote {write_plan(with_scenario_file(doc, args.scenario), args.plan_out)}")
     return 0
 
 
@@ -632,7 +632,7 @@ def _plan(
 
     ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
     """
-    from poc_env.agents.mission.plan import write_plan
+    from poc_env.agents.mission.plan import with_scenario_file, write_plan
     from poc_env.agents.planning.planner import make_plan, plan_table, plot_plan
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
@@ -676,20 +676,12 @@ def _plan(
     print(plan_table(plan))
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
-    write_plan(_with_scenario_file(plan, args.scenario), out)
+    write_plan(with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
     print(f"wrote {shown_out}")
     if plot is not None:
         print(f"wrote {shown_plot}")
     return 0
-
-
-def _with_scenario_file(plan: dict, scenario: object) -> dict:
-    """``plan`` recording ``scenario_file`` (absolute) when the scenario came from a YAML file:
-    export finds the prior's scenario by it (its ``name:`` may differ from the file name)."""
-    if isinstance(scenario, str) and Path(scenario).is_file():
-        return {**plan, "scenario_file": str(Path(scenario).resolve())}
-    return plan
 
 
 def cmd_export(args: argparse.Namespace) -> int:

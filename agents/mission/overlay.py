@@ -7,7 +7,8 @@ The prior
 ---------
 plan.json records the scenario's name and ``map_source`` (``builtin`` or the map file given to
 ``poc-env plan --map``), not the grid, so :func:`plan_prior` rebuilds it: the scenario is loaded by
-name (:func:`scenario_source`: a built-in scenario, the YAML file the plan records as
+name (:func:`~poc_env.agents.mission.plan.scenario_source`: a built-in scenario, the YAML
+file the plan records as
 ``scenario_file`` (``poc-env plan --scenario FILE.yaml``; else that file's name beside the plan),
 or ``NAME.yaml`` beside the plan or in the current folder) and its prior built with
 :func:`poc_env.theory.probability_map.build_prior`, from the recorded map file when there is one
@@ -43,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.mission.crs import to_geographic, to_local
-from poc_env.agents.mission.plan import Plan
+from poc_env.agents.mission.plan import Plan, _scenario_candidates, scenario_source
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 
@@ -266,34 +267,6 @@ def plan_prior(
             except MapFileError as err:
                 return None, f"no prior overlay: {err}"
     return None, f"no prior overlay: map file {src!r} not found"
-
-
-def scenario_source(
-    name: str, plan_path: str | os.PathLike[str], scenario_file: Any = None
-) -> str | None:
-    """Where the plan's scenario ``name`` is: a built-in name, the YAML file the plan records
-    (``scenario_file``, written by ``poc-env plan --scenario FILE.yaml``: as recorded, else
-    its file name beside the plan), or ``NAME.yaml`` beside the plan or in the current folder
-    (plans without ``scenario_file``); None if none exists."""
-    from poc_env.config import builtin_scenarios
-
-    if name in builtin_scenarios():
-        return name
-    cands = _scenario_candidates(name, plan_path, {"scenario_file": scenario_file})
-    return next((str(c) for c in cands if c.is_file()), None)
-
-
-def _scenario_candidates(name: str, plan_path: str | os.PathLike[str], plan: Any) -> list[Path]:
-    """The YAML files :func:`scenario_source` tries, in order."""
-    recorded = plan.get("scenario_file") if isinstance(plan, dict) else None
-    cands = []
-    if isinstance(recorded, str) and recorded:
-        cands += [Path(recorded), Path(plan_path).parent / Path(recorded).name]
-    if name.endswith((".yaml", ".yml")):
-        cands.append(Path(name))
-    for folder in (Path(plan_path).parent, Path.cwd()):
-        cands += [folder / f"{name}.yaml", folder / f"{name}.yml"]
-    return list(dict.fromkeys(cands))
 
 
 def _scenario_mismatch(plan: Plan, sc: Any) -> str:

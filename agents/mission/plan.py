@@ -612,3 +612,39 @@ def _check_terrain(field: str, rec: Any) -> None:
         for v in p:
             as_number(f"{field}.fields[{i}].position_m", v, -2e6, 2e6)
         as_number(f"{field}.fields[{i}].elevation_m", f["elevation_m"], -MAX_GROUND_M, MAX_GROUND_M)
+
+
+def scenario_source(
+    name: str, plan_path: str | os.PathLike[str], scenario_file: Any = None
+) -> str | None:
+    """Where the plan's scenario ``name`` is: a built-in name, the YAML file the plan records
+    (``scenario_file``, written by ``poc-env plan --scenario FILE.yaml``: as recorded, else
+    its file name beside the plan), or ``NAME.yaml`` beside the plan or in the current folder
+    (plans without ``scenario_file``); None if none exists."""
+    from poc_env.config import builtin_scenarios
+
+    if name in builtin_scenarios():
+        return name
+    cands = _scenario_candidates(name, plan_path, {"scenario_file": scenario_file})
+    return next((str(c) for c in cands if c.is_file()), None)
+
+
+def _scenario_candidates(name: str, plan_path: str | os.PathLike[str], plan: Any) -> list[Path]:
+    """The YAML files :func:`scenario_source` tries, in order."""
+    recorded = plan.get("scenario_file") if isinstance(plan, dict) else None
+    cands = []
+    if isinstance(recorded, str) and recorded:
+        cands += [Path(recorded), Path(plan_path).parent / Path(recorded).name]
+    if name.endswith((".yaml", ".yml")):
+        cands.append(Path(name))
+    for folder in (Path(plan_path).parent, Path.cwd()):
+        cands += [folder / f"{name}.yaml", folder / f"{name}.yml"]
+    return list(dict.fromkeys(cands))
+
+
+def with_scenario_file(plan: dict, scenario: object) -> dict:
+    """``plan`` recording ``scenario_file`` (absolute) when the scenario came from a YAML file:
+    export finds the prior's scenario by it (its ``name:`` may differ from the file name)."""
+    if isinstance(scenario, str) and Path(scenario).is_file():
+        return {**plan, "scenario_file": str(Path(scenario).resolve())}
+    return plan

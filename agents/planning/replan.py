@@ -344,10 +344,13 @@ def next_sortie(
 
 def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
-    from poc_env.agents.mission.overlay import scenario_source
-    from poc_env.agents.mission.plan import load_plan, write_plan
+    from poc_env.agents.mission.plan import (
+        load_plan,
+        scenario_source,
+        with_scenario_file,
+        write_plan,
+    )
     from poc_env.agents.planning.planner import plan_table
-    from poc_env.cli import _with_scenario_file
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -378,6 +381,6 @@ def cli_main(args: Any) -> int:
         f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "
         f"{nxt['posc']:.4f}; cumulative {nxt['cumulative_posc']:.4f}"
     )
-    write_plan(_with_scenario_file(nxt, name), args.out)  # export finds the prior by it
+    write_plan(with_scenario_file(nxt, name), args.out)  # export finds the prior by it
     print(f"wrote {args.out}")
     return 0

@@ -74,10 +74,10 @@ filter moves): ``static`` (no predict: the reach-aware problem, step by step), `
 CSV, CF NetCDF) stationary or time-varying, plus diffusion, and ``leeway`` (current plus the
 class's leeway in the uniform wind: a uniform drift per episode, its crosswind side drawn at
 reset; or in a gridded, time-varying wind file, for the episode's crosswind side), and
-``particles`` (each step's transition matrix, :mod:`poc_env.theory.particles`). It bounds the POS of the *belief's* model, the filter's Markov chain: the hidden target
-moves by the continuous random walk (:func:`~poc_env.theory.motion.move_targets`), whose
-detections the filter approximates (upwind numerical diffusion). Not covered: a batch of
-environments whose
+``particles`` (each step's transition matrix, :mod:`poc_env.theory.particles`). It bounds
+the POS of the *belief's* model, the filter's Markov chain: the hidden target moves by the
+continuous random walk (:func:`~poc_env.theory.motion.move_targets`), whose detections the
+filter approximates (upwind numerical diffusion). Not covered: a batch of environments whose
 uniform velocities differ takes its sub-steps from the batch's fastest
 (:func:`~poc_env.theory.motion.predict_uniform`), a finer discretisation of the same motion
 than the single episode's the bound uses.
