@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
+from poc_env.agents.benchmarks.moving_bound import reversal_operators
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory import motion as motion_mod
@@ -160,20 +161,6 @@ def test_adjoint_of_a_uniform_drift_is_the_reversed_velocity(vel, d):
     np.testing.assert_allclose(adjoint(0, y.ravel()), rev.ravel(), rtol=1e-13, atol=1e-16)
 
 
-def _reversal_ops(motion, vel, dt, h, s, shape, side=None):
-    """The earlier operators (uniform drift only): the filter at +v, its adjoint at -v."""
-
-    def op(sign):
-        def apply(t, x):
-            y = np.array(x, dtype=float).reshape(1, *shape)
-            motion_mod.predict(motion, y, sign * np.reshape(vel, (1, 2)), 0.0, dt, h, s)
-            return y.ravel()
-
-        return apply
-
-    return op(1.0), op(-1.0)
-
-
 @pytest.mark.parametrize("law", ["inverse_cube", "exponential"])
 def test_uniform_drift_bound_unchanged_by_the_sparse_adjoint(monkeypatch, law):
     """The bound of a uniform drift with the sparse operators agrees to 1e-12 with the earlier
@@ -186,7 +173,7 @@ def test_uniform_drift_bound_unchanged_by_the_sparse_adjoint(monkeypatch, law):
     fine = np.repeat(np.repeat(prior, 2, axis=0), 2, axis=1) / 4.0
     vel = (5.5, -2.0)
     new = moving_bound(sc, fine, vel, s=2, sweeps=2)
-    monkeypatch.setattr(mb, "predict_operators", _reversal_ops)
+    monkeypatch.setattr(mb, "predict_operators", reversal_operators)
     old = moving_bound(sc, fine, vel, s=2, sweeps=2)
     assert new.upper == pytest.approx(old.upper, abs=1e-12)
     assert new.pos == pytest.approx(old.pos, abs=1e-12)
