@@ -1014,6 +1014,45 @@ def test_compass_bins_on_boundaries_equal_the_defining_formula():
         np.testing.assert_array_equal(count[i], want_c)
 
 
+@pytest.mark.parametrize("n_sectors", [8, 6])
+def test_short_row_compass_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_sectors):
+    """The short-row compass sums (``_cell_bins``: branch-free bins, then the sums) equal the
+    cell-by-cell kernel (``compass_bins``) bit for bit on an 8 x 8 grid: UAVs at random, on
+    cell centres, on the grid's diagonals and axes through cell centres, at ring edges and at
+    the others radius from a cell centre (and 1e-12 off them), POC with zeros, ties and -0.0;
+    and with sectors other than octants (every cell by the defining formula)."""
+    from poc_env.sim.observations import OTHERS_RADIUS_M, RING_EDGES_M
+
+    xs = np.arange(8) * 5000.0 + 2500.0
+    cx, cy = np.tile(xs, 8), np.repeat(xs, 8)
+    rng = np.random.default_rng(5)
+    px = list(rng.uniform(-40e3, 80e3, 300))
+    py = list(rng.uniform(-40e3, 80e3, 300))
+    for d in (*RING_EDGES_M, OTHERS_RADIUS_M, 5000.0, 0.0):
+        for eps in (0.0, 1e-12, -1e-12):
+            for ux, uy in ((1, 0), (0, 1), (1, 1), (-1, 1), (0.6, 0.8)):
+                j = rng.integers(0, 64)
+                px.append(cx[j] + ux * d * (1 + eps))
+                py.append(cy[j] + uy * d * (1 + eps))
+    px, py = np.array(px), np.array(py)
+    poc = rng.random((len(px), 64))
+    poc[rng.random(poc.shape) < 0.3] = 0.0
+    poc[:, 5] = -0.0
+    poc[::7, :] = 0.25  # equal values: any change of summation order would show
+    edges = np.asarray(RING_EDGES_M, dtype=float)
+    radius = float(OTHERS_RADIUS_M)
+    want, _count = obs_kernels.compass_bins(
+        cx, cy, px, py, poc, np.zeros_like(poc), edges, radius, n_sectors
+    )
+    bins, d2s = np.empty(64, dtype=np.intp), np.empty(64)
+    for i in range(len(px)):
+        mass = np.zeros(n_sectors * (len(edges) + 1))
+        obs_kernels._cell_bins(
+            cx, cy, px[i], py[i], poc[i], edges, radius, n_sectors, mass, bins, d2s
+        )
+        np.testing.assert_array_equal(mass, want[i], err_msg=f"UAV {i} at {px[i]}, {py[i]}")
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_boundary_masses_equal_the_dense_fractions_and_shapely(seed):
     """``rectangle_masses`` (Green's theorem on the row-wise cumulative weights, no per-cell
