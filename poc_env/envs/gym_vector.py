@@ -214,9 +214,16 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         truncated = done & tr.truncated.any(axis=1)
         terminated = done & ~truncated
         finished = live & (tr.terminated | tr.truncated)
+        if whole:
+            self._live[:] = live & ~finished
+            self._autoreset[:] = done
+            if live.all():  # every row is new (keep_rows would return the new arrays)
+                self._last, self._last_info = tr.obs, tr.info
+                return reward, terminated, truncated
         envs = self.engine.envs(going)
-        self._live[envs] = live & ~finished
-        self._autoreset[envs] = done
+        if not whole:
+            self._live[envs] = live & ~finished
+            self._autoreset[envs] = done
         self._last = keep_rows(self._last, tr.obs, envs, live)
         self._last_info = keep_rows(self._last_info, tr.info, envs, live)
         return reward, terminated, truncated
