@@ -1202,3 +1202,29 @@ def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, s
             want = feats(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), k)
             got = obs.observe(params, st, scale, hazard, "compass", feats)
             np.testing.assert_array_equal(got.reshape(m, -1), want)
+
+
+@pytest.mark.parametrize("s", [1, 2, 3, 4, 5, 7])
+def test_coarse_poc_is_numpys_coarsening_bit_for_bit(s):
+    """Raster channel 0 from the kernel's own sub-cell sums (s < 8; unrolled for s = 2 and 4)
+    is the float32 of ``Grid.coarsen`` / scale clipped to [0, 1], bit for bit (what the
+    recorded episodes saw), on a belief with partly searched, zero and tiny cells."""
+    params = sim.make_params(
+        load_scenario("small", {"sensor.samples_per_cell": s, "map.cell_km": 5})
+    )
+    rng = np.random.default_rng(40 + s)
+    st = _obs_state(params, rng)
+    st.belief *= rng.random(st.belief.shape) ** 3
+    st.belief[:, :s, :] = 0.0
+    st.belief[:, -1, :] *= 1e-300
+    scale = np.array([0.01, 0.3])
+    want = np.clip(params.grid.coarsen(st.belief, s) / scale[:, None, None], 0.0, 1.0)
+    got = obs.coarse_poc(params, st, scale)[:, 0]
+    np.testing.assert_array_equal(got, want.astype(np.float32))
+    sums, poc = np.empty(params.grid.shape), np.empty(params.grid.shape, dtype=np.float32)
+    for e in range(2):  # the float64 sums themselves (the kernel's scratch)
+        obs_kernels._coarse_poc(st.belief, e, s, obs._NO_COARSE, True, scale[e], sums, poc)
+        np.testing.assert_array_equal(sums, params.grid.coarsen(st.belief[e], s))
+    np.testing.assert_array_equal(
+        obs.rasters(params, st, scale, obs.hazard_mask(params))[:, 0, 0], got
+    )
