@@ -519,6 +519,7 @@ def build_parser() -> argparse.ArgumentParser:
             "poc-env bench peers --only single mpe2 --rounds 3",
             "poc-env bench peers --smoke --rounds 1 --out /tmp/peers",
             "poc-env bench peers --only sb3_task sb3_mpe2 --rounds 3",
+            "poc-env bench peers --breakdown make_vec_small --out /tmp/peers",
         ),
     )
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (medians over them)")
@@ -552,6 +553,14 @@ def build_parser() -> argparse.ArgumentParser:
         + ")",
     )
     p.add_argument("--smoke", action="store_true", help="tiny sizes (the test suite's run)")
+    p.add_argument(
+        "--breakdown",
+        default=None,
+        metavar="KEY",
+        help="instead of timing, print where one of our contenders' step goes (CPU time of "
+        "its parts; agents/benchmarks/breakdown.py): make_vec_small, make_vec_paper62, "
+        "single, sb3_task",
+    )
     return p
 
 
@@ -564,6 +573,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
         v = getattr(args, field)
         if v < 1 or v > 4096:
             raise ConfigError(field, v, "an integer from 1 to 4096")
+    if args.breakdown is not None:
+        return _breakdown(args.breakdown, args.out, 40 if args.smoke else 400)
     keys = chosen_keys(args.only, args.sb3)
     for k in keys:
         if k not in CONTENDERS:
@@ -596,6 +607,19 @@ def main(argv: list[str] | None = None) -> list[dict]:
     command = "poc-env bench peers " + " ".join(sys.argv[1:] if argv is None else argv)
     text = markdown(rows, s, args.rounds, (load0, load1), command.strip())
     write_table_set(args.out, "peers", rows, text)
+    print(text, end="", flush=True)
+    return rows
+
+
+def _breakdown(key: str, out: str, steps: int) -> list[dict]:
+    """``--breakdown KEY``: :func:`~poc_env.agents.benchmarks.breakdown.breakdown`'s rows,
+    printed and written as ``breakdown_<KEY>.csv``/``.md`` into ``out``."""
+    from poc_env.agents.benchmarks import breakdown, write_table_set
+
+    load0 = os.getloadavg()[0]
+    rows = breakdown.breakdown(key, steps)
+    text = breakdown.markdown(key, rows, (load0, os.getloadavg()[0]))
+    write_table_set(out, f"breakdown_{key}", rows, text)
     print(text, end="", flush=True)
     return rows
 
