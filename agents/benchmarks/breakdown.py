@@ -143,11 +143,12 @@ def _single(steps: int, seed: int) -> Callable[[], int]:
     return lambda: go(plan[50:])
 
 
-def breakdown(key: str, steps: int = 400, seed: int = 0) -> list[dict]:
+def breakdown(key: str, steps: int = 400, seed: int = 0, envs: int | None = None) -> list[dict]:
     """The parts of contender ``key``'s step (:data:`PARTS`): rows ``{"part", "ms_per_step",
     "share"}``, CPU milliseconds per env step (per joint step of the batch; per environment
     step of SB3's VecEnv) and the share of the first part, over ``steps`` steps after a
-    warm-up (SB3: one PPO iteration, then two)."""
+    warm-up (SB3: one PPO iteration, then two). ``envs``: the batch of ``make_vec`` (default
+    ``bench peers``' sizes)."""
     if key not in PARTS:
         raise ConfigError("breakdown", key, "one of " + ", ".join(PARTS))
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
@@ -167,7 +168,7 @@ def breakdown(key: str, steps: int = 400, seed: int = 0) -> list[dict]:
             _single(steps, seed)
             if key == "single"
             else _make_vec(
-                "Small" if key == "make_vec_small" else "Paper62", _envs(key), steps, seed
+                "Small" if key == "make_vec_small" else "Paper62", envs or _envs(key), steps, seed
             )
         )
         with timed(parts, totals):

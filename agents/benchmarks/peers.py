@@ -574,7 +574,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
         if v < 1 or v > 4096:
             raise ConfigError(field, v, "an integer from 1 to 4096")
     if args.breakdown is not None:
-        return _breakdown(args.breakdown, args.out, 40 if args.smoke else 400)
+        return _breakdown(args.breakdown, args.out, 40 if args.smoke else 400, args.smoke)
     keys = chosen_keys(args.only, args.sb3)
     for k in keys:
         if k not in CONTENDERS:
@@ -611,13 +611,13 @@ def main(argv: list[str] | None = None) -> list[dict]:
     return rows
 
 
-def _breakdown(key: str, out: str, steps: int) -> list[dict]:
+def _breakdown(key: str, out: str, steps: int, smoke: bool) -> list[dict]:
     """``--breakdown KEY``: :func:`~poc_env.agents.benchmarks.breakdown.breakdown`'s rows,
     printed and written as ``breakdown_<KEY>.csv``/``.md`` into ``out``."""
     from poc_env.agents.benchmarks import breakdown, write_table_set
 
     load0 = os.getloadavg()[0]
-    rows = breakdown.breakdown(key, steps)
+    rows = breakdown.breakdown(key, steps, envs=2 if smoke else None)
     text = breakdown.markdown(key, rows, (load0, os.getloadavg()[0]))
     write_table_set(out, f"breakdown_{key}", rows, text)
     print(text, end="", flush=True)
