@@ -220,3 +220,13 @@ def markdown(key: str, rows: list[dict], load: tuple[float, float]) -> str:
     return head + "".join(
         f"| {r['part']} | {r['ms_per_step']:.4f} | {r['share']} % |\n" for r in rows
     )
+
+
+if __name__ == "__main__":  # python agents/benchmarks/breakdown.py KEY: any tree's package
+    import os
+    import sys
+
+    _key = sys.argv[1] if len(sys.argv) > 1 else "make_vec_small"
+    _load0 = os.getloadavg()[0]
+    _rows = breakdown(_key)
+    print(markdown(_key, _rows, (_load0, os.getloadavg()[0])), end="")
