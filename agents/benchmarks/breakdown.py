@@ -1,6 +1,6 @@
 """Where a step's time goes: ``poc-env bench peers --breakdown KEY``.
 
-Runs one of our contenders of :mod:`~poc_env.agents.benchmarks.peers` (``make_vec_small``,
+Runs one of our contenders of ``poc-env bench peers`` (``make_vec_small``,
 ``make_vec_paper62``, ``single`` or ``sb3_task``) with the functions of :data:`PARTS` wrapped
 by timers of the process's CPU time (``time.process_time``: what other processes on a loaded
 machine take is not counted, unlike wall time; one thread), and returns each part's CPU time
@@ -57,6 +57,17 @@ PARTS: dict[str, list[tuple[str, str, str]]] = {
     ],
 }
 PARTS["make_vec_paper62"] = PARTS["make_vec_small"]
+#: The ``make_vec`` batch of each key when none is given (``bench peers``' default sizes).
+ENVS = {"make_vec_small": 256, "make_vec_paper62": 64}
+#: The task of the SB3 pair (issue 26: ``poc-env train --task`` on Paper62-Random-Heading).
+SB3_TASK = "UAVSearch-Paper62-Random-Heading-v0"
+
+
+def heading_task(scenario: str) -> str:
+    """The newest ``UAVSearch-<scenario>-Heading`` task id."""
+    from poc_env import spec, tasks
+
+    return tasks.task_id(scenario, "Heading", False, spec.versions_of("Heading")[-1].version)
 
 
 @contextlib.contextmanager
@@ -97,10 +108,9 @@ def _make_vec(scenario: str, envs: int, steps: int, seed: int) -> Callable[[], i
     import gymnasium
 
     import poc_env  # noqa: F401  (registers the tasks)
-    from poc_env.agents.benchmarks.peers import _heading_task
 
     env = gymnasium.make_vec(
-        _heading_task(scenario), num_envs=envs, vectorization_mode="vector_entry_point"
+        heading_task(scenario), num_envs=envs, vectorization_mode="vector_entry_point"
     )
     env.reset(seed=seed)
     shape = (steps + 20, *(env.action_space.shape or ()))
@@ -156,9 +166,7 @@ def breakdown(key: str, steps: int = 400, seed: int = 0, envs: int | None = None
     parts = PARTS[key]
     totals: dict[str, float] = defaultdict(float)
     if key == "sb3_task":
-        from poc_env.agents.benchmarks import peers
-
-        run = _sb3(peers, seed)
+        run = _sb3(seed)
         with timed(parts, totals):
             t0 = time.process_time()
             n = run()
@@ -168,7 +176,7 @@ def breakdown(key: str, steps: int = 400, seed: int = 0, envs: int | None = None
             _single(steps, seed)
             if key == "single"
             else _make_vec(
-                "Small" if key == "make_vec_small" else "Paper62", envs or _envs(key), steps, seed
+                "Small" if key == "make_vec_small" else "Paper62", envs or ENVS[key], steps, seed
             )
         )
         with timed(parts, totals):
@@ -184,22 +192,18 @@ def breakdown(key: str, steps: int = 400, seed: int = 0, envs: int | None = None
     ]
 
 
-def _envs(key: str) -> int:
-    from poc_env.agents.benchmarks.peers import Settings
-
-    return Settings.small_envs if key == "make_vec_small" else Settings.heading_envs
-
-
-def _sb3(peers: Any, seed: int) -> Callable[[], int]:
-    """Two timed PPO iterations of the ``sb3_task`` contender after a warm-up one."""
+def _sb3(seed: int) -> Callable[[], int]:
+    """Two timed PPO iterations of ``bench peers``' ``sb3_task`` contender (``poc-env train
+    --task SB3_TASK``'s env and model, the shipped settings) after a warm-up one."""
     import torch as th
 
+    from poc_env.agents.rl.args import TrainArgs
     from poc_env.agents.rl.train import make_env, make_model, seed_everything
     from poc_env.tasks import get_task
 
     th.set_num_threads(1)
-    args = peers._sb3_args(peers.Settings(), seed)
-    env = make_env(args, get_task(peers.SB3_TASK).load_scenario())
+    args = TrainArgs(task=SB3_TASK, seed=seed, progress=False)
+    env = make_env(args, get_task(SB3_TASK).load_scenario())
     seed_everything(seed)
     model = make_model(args, env, None)
     model.learn(args.n_steps * env.num_envs)

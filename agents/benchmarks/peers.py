@@ -52,6 +52,7 @@ import numpy as np  # noqa: E402
 
 from poc_env.agents.benchmarks import env as env_bench  # noqa: E402
 from poc_env.agents.benchmarks import suite  # noqa: E402
+from poc_env.agents.benchmarks.breakdown import SB3_TASK, heading_task  # noqa: E402
 from poc_env.errors import ConfigError  # noqa: E402
 
 NOT_INSTALLED = "not installed"
@@ -89,11 +90,8 @@ class Contender:
     module: str | None = None  # what must import for it to run
 
 
-def _heading_task(scenario: str) -> str:
-    """The newest ``UAVSearch-<scenario>-Heading`` task id."""
-    from poc_env import spec, tasks
-
-    return tasks.task_id(scenario, "Heading", False, spec.versions_of("Heading")[-1].version)
+#: The newest ``UAVSearch-<scenario>-Heading`` task id (:func:`breakdown.heading_task`).
+_heading_task = heading_task
 
 
 def _small_scenario() -> str:
@@ -196,10 +194,6 @@ def _vmas(s: Settings, seed: int) -> float:
         if r:
             rates.append(s.vmas_steps * e * N_UAVS / (time.perf_counter() - t0))
     return statistics.median(rates)
-
-
-#: The task of the SB3 pair (issue 26: ``poc-env train --task`` on Paper62-Random-Heading).
-SB3_TASK = "UAVSearch-Paper62-Random-Heading-v0"
 
 
 def _sb3_args(s: Settings, seed: int):
@@ -617,7 +611,8 @@ def _breakdown(key: str, out: str, steps: int, smoke: bool) -> list[dict]:
     from poc_env.agents.benchmarks import breakdown, write_table_set
 
     load0 = os.getloadavg()[0]
-    rows = breakdown.breakdown(key, steps, envs=2 if smoke else None)
+    sizes = {"make_vec_small": Settings.small_envs, "make_vec_paper62": Settings.heading_envs}
+    rows = breakdown.breakdown(key, steps, envs=2 if smoke else sizes.get(key))
     text = breakdown.markdown(key, rows, (load0, os.getloadavg()[0]))
     write_table_set(out, f"breakdown_{key}", rows, text)
     print(text, end="", flush=True)
