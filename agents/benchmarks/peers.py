@@ -52,6 +52,7 @@ import numpy as np  # noqa: E402
 
 from poc_env.agents.benchmarks import env as env_bench  # noqa: E402
 from poc_env.agents.benchmarks import suite  # noqa: E402
+from poc_env.agents.benchmarks.breakdown import SB3_TASK, heading_task  # noqa: E402
 from poc_env.errors import ConfigError  # noqa: E402
 
 NOT_INSTALLED = "not installed"
@@ -89,11 +90,8 @@ class Contender:
     module: str | None = None  # what must import for it to run
 
 
-def _heading_task(scenario: str) -> str:
-    """The newest ``UAVSearch-<scenario>-Heading`` task id."""
-    from poc_env import spec, tasks
-
-    return tasks.task_id(scenario, "Heading", False, spec.versions_of("Heading")[-1].version)
+#: The newest ``UAVSearch-<scenario>-Heading`` task id (:func:`breakdown.heading_task`).
+_heading_task = heading_task
 
 
 def _small_scenario() -> str:
@@ -196,10 +194,6 @@ def _vmas(s: Settings, seed: int) -> float:
         if r:
             rates.append(s.vmas_steps * e * N_UAVS / (time.perf_counter() - t0))
     return statistics.median(rates)
-
-
-#: The task of the SB3 pair (issue 26: ``poc-env train --task`` on Paper62-Random-Heading).
-SB3_TASK = "UAVSearch-Paper62-Random-Heading-v0"
 
 
 def _sb3_args(s: Settings, seed: int):
@@ -519,6 +513,7 @@ def build_parser() -> argparse.ArgumentParser:
             "poc-env bench peers --only single mpe2 --rounds 3",
             "poc-env bench peers --smoke --rounds 1 --out /tmp/peers",
             "poc-env bench peers --only sb3_task sb3_mpe2 --rounds 3",
+            "poc-env bench peers --breakdown make_vec_small --out /tmp/peers",
         ),
     )
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (medians over them)")
@@ -552,6 +547,14 @@ def build_parser() -> argparse.ArgumentParser:
         + ")",
     )
     p.add_argument("--smoke", action="store_true", help="tiny sizes (the test suite's run)")
+    p.add_argument(
+        "--breakdown",
+        default=None,
+        metavar="KEY",
+        help="instead of timing, print where one of our contenders' step goes (CPU time of "
+        "its parts; agents/benchmarks/breakdown.py): make_vec_small, make_vec_paper62, "
+        "single, sb3_task",
+    )
     return p
 
 
@@ -564,6 +567,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
         v = getattr(args, field)
         if v < 1 or v > 4096:
             raise ConfigError(field, v, "an integer from 1 to 4096")
+    if args.breakdown is not None:
+        return _breakdown(args.breakdown, args.out, 40 if args.smoke else 400, args.smoke)
     keys = chosen_keys(args.only, args.sb3)
     for k in keys:
         if k not in CONTENDERS:
@@ -596,6 +601,20 @@ def main(argv: list[str] | None = None) -> list[dict]:
     command = "poc-env bench peers " + " ".join(sys.argv[1:] if argv is None else argv)
     text = markdown(rows, s, args.rounds, (load0, load1), command.strip())
     write_table_set(args.out, "peers", rows, text)
+    print(text, end="", flush=True)
+    return rows
+
+
+def _breakdown(key: str, out: str, steps: int, smoke: bool) -> list[dict]:
+    """``--breakdown KEY``: :func:`~poc_env.agents.benchmarks.breakdown.breakdown`'s rows,
+    printed and written as ``breakdown_<KEY>.csv``/``.md`` into ``out``."""
+    from poc_env.agents.benchmarks import breakdown, write_table_set
+
+    load0 = os.getloadavg()[0]
+    sizes = {"make_vec_small": Settings.small_envs, "make_vec_paper62": Settings.heading_envs}
+    rows = breakdown.breakdown(key, steps, envs=2 if smoke else sizes.get(key))
+    text = breakdown.markdown(key, rows, (load0, os.getloadavg()[0]))
+    write_table_set(out, f"breakdown_{key}", rows, text)
     print(text, end="", flush=True)
     return rows
 

@@ -47,6 +47,10 @@ def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
                 if s == 2:
                     for i in range(nx):
                         acc[i] += row[2 * i] + row[2 * i + 1]
+                elif s == 4:  # the loop below with its sub-cells unrolled (it vectorises)
+                    for i in range(nx):
+                        k = 4 * i
+                        acc[i] += (((-0.0 + row[k]) + row[k + 1]) + row[k + 2]) + row[k + 3]
                 else:
                     for i in range(nx):
                         r = -0.0
@@ -285,6 +289,57 @@ def _classify(dx, dy, edges, radius, n_sectors):
     return sector, ring, inside
 
 
+#: Octant of an offset clearly inside one (the branches of :func:`_classify`), indexed by
+#: ``4 * (dy > 0) + 2 * (dx > 0) + (|dy| < |dx|)``.
+_OCTANT = np.array([5, 4, 6, 7, 2, 3, 1, 0], dtype=np.intp)
+
+
+@_jit
+def _cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
+    """The POC sums of :func:`_bins` (``mass``; each bin summed in cell order) without its
+    "others" counts, for short rows, in passes over the cells without branches (so that they
+    vectorise). First each cell's bin: a cell clearly inside an octant and away from every
+    ring edge and from ``radius`` (:func:`_classify`'s fast branch) takes its octant from
+    :data:`_OCTANT` and its ring from how many squared edges (``edges`` ascending) its squared
+    distance reaches; any other cell gets -1. Then the sums in cell order, the -1 cells decided
+    by :func:`_classify`. Adding a zero to a sum started at +0.0 changes nothing, so zero cells
+    are not skipped (but a zero cell is never classified). ``bins``, ``d2s (cells,)``:
+    scratch."""
+    n_cells = cx.shape[0]
+    n_rings = edges.shape[0] + 1
+    tol = 1e-9
+    radius2 = radius * radius
+    if n_sectors != 8:  # no octants: every cell by the defining formula
+        bins[:n_cells] = -1
+    else:
+        for j in range(n_cells):
+            dx = cx[j] - px
+            dy = cy[j] - py
+            ax = abs(dx)
+            ay = abs(dy)
+            tb = tol * max(ax, ay)
+            d2 = dx * dx + dy * dy
+            d2s[j] = d2
+            clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb)
+            clear &= abs(d2 - radius2) > tol * radius2
+            k = 4 * np.intp(dy > 0) + 2 * np.intp(dx > 0) + np.intp(ay < ax)
+            bins[j] = _OCTANT[k] * n_rings if clear else -n_cells * n_rings
+        for r in range(n_rings - 1):
+            e2 = edges[r] * edges[r]
+            band = tol * e2
+            for j in range(n_cells):  # a cell next to an edge is pushed below zero for good
+                d2 = d2s[j]
+                bins[j] += np.intp(d2 >= e2) - np.intp(abs(d2 - e2) <= band) * n_cells * n_rings
+    for j in range(n_cells):
+        q = poc[j]
+        b = bins[j]
+        if b >= 0:
+            mass[b] += q
+        elif q != 0.0:
+            sector, ring, _inside = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
+            mass[sector * n_rings + ring] += q
+
+
 @_jit
 def _grid_bins(xs, ys, px, py, poc, edges, radius, n_sectors, mass, bps, pos):
     """The POC sums of :func:`_bins` (``mass``; each bin summed in cell order) over a grid of
@@ -419,6 +474,8 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     short = nx < 16  # short rows: a row's boundaries would cost more than its cells' decisions
     cx = np.empty(ny * nx)
     cy = np.empty(ny * nx)
+    cell_bin = np.empty(ny * nx if short else 0, dtype=np.intp)
+    cell_d2 = np.empty(ny * nx if short else 0)
     for j in range(ny):
         for i in range(nx):
             cx[j * nx + i] = xs[i]
@@ -440,21 +497,18 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
             count[:] = 0.0
             row = poc[e, p].reshape(ny * nx)
             if short:
-                for m in range(n):
-                    if m != k and present[m]:
-                        others_cells[rows[m] * nx + cols[m]] = 1.0
-                _bins(cx, cy, px, py, row, others_cells, edges, radius, n_sectors, mass, count)
+                _cell_bins(cx, cy, px, py, row, edges, radius, n_sectors, mass, cell_bin, cell_d2)
             else:
                 _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
-                for m in range(n):  # each cell holding another UAV counts once (a 1.0)
-                    c = rows[m] * nx + cols[m]
-                    if m != k and present[m] and others_cells[c] == 0.0:
-                        others_cells[c] = 1.0
-                        sector, _ring, inside = _classify(
-                            xs[cols[m]] - px, ys[rows[m]] - py, edges, radius, n_sectors
-                        )
-                        if inside:
-                            count[sector] += 1.0
+            for m in range(n):  # each cell holding another UAV counts once (a 1.0)
+                c = rows[m] * nx + cols[m]
+                if m != k and present[m] and others_cells[c] == 0.0:
+                    others_cells[c] = 1.0
+                    sector, _ring, inside = _classify(
+                        xs[cols[m]] - px, ys[rows[m]] - py, edges, radius, n_sectors
+                    )
+                    if inside:
+                        count[sector] += 1.0
             for m in range(n):
                 if present[m]:
                     others_cells[rows[m] * nx + cols[m]] = 0.0

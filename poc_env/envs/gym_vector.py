@@ -93,6 +93,7 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         self._last_info: dict[str, np.ndarray] = {}
         self._autoreset = np.zeros(e, dtype=bool)
         self._mask_keys: list[str] = []
+        self._all = np.arange(e)
 
     @property
     def params(self) -> sim.Params:
@@ -214,9 +215,28 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         truncated = done & tr.truncated.any(axis=1)
         terminated = done & ~truncated
         finished = live & (tr.terminated | tr.truncated)
+        if whole:
+            self._live[:] = live & ~finished
+            self._autoreset[:] = done
+            if live.all():  # every row is new (keep_rows would return the new arrays)
+                self._last, self._last_info = tr.obs, tr.info
+                return reward, terminated, truncated
+            # the engine's observations are fresh arrays of this step, not handed out yet: the
+            # finished agents' rows are written into them (keep_rows' values, no full copy)
+            dead = ~live
+            obs = tr.obs
+            if isinstance(obs, dict):
+                for key, v in obs.items():
+                    v[dead] = self._last[key][dead]
+            else:
+                obs[dead] = self._last[dead]
+            self._last = obs
+            self._last_info = keep_rows(self._last_info, tr.info, self._all, live)
+            return reward, terminated, truncated
         envs = self.engine.envs(going)
-        self._live[envs] = live & ~finished
-        self._autoreset[envs] = done
+        if not whole:
+            self._live[envs] = live & ~finished
+            self._autoreset[envs] = done
         self._last = keep_rows(self._last, tr.obs, envs, live)
         self._last_info = keep_rows(self._last_info, tr.info, envs, live)
         return reward, terminated, truncated

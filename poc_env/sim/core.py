@@ -286,10 +286,33 @@ class Events:
         return self.out_of_bounds | self.no_fly | self.collision | self.threat | ~self.comms_ok
 
 
-def _draw_target(prior_fine: np.ndarray, h: float, origin, rng: np.random.Generator):
-    """A target position drawn from the fine prior: a sub-cell by mass, uniform inside it."""
+def target_cdf(prior_fine: np.ndarray) -> np.ndarray | None:
+    """The cumulative distribution over the sub-cells of the fine prior that
+    ``Generator.choice(size, p=flat / flat.sum())`` builds (``p.cumsum()``, then divided by its
+    last value), or None when ``choice`` would refuse ``p`` (negative, NaN, not summing to 1):
+    computed once per prior rather than once per draw."""
     flat = prior_fine.ravel()
-    k = int(rng.choice(flat.size, p=flat / flat.sum()))
+    p = flat / flat.sum()
+    cdf = p.cumsum()
+    if not (np.isfinite(cdf[-1]) and abs(cdf[-1] - 1.0) <= 1e-8 and p.min() >= 0.0):
+        return None
+    cdf /= cdf[-1]
+    return cdf
+
+
+def _draw_target(
+    prior_fine: np.ndarray, h: float, origin, rng: np.random.Generator, cdf: np.ndarray | None
+):
+    """A target position drawn from the fine prior: a sub-cell by mass, uniform inside it.
+
+    The sub-cell is ``rng.choice(size, p=flat / flat.sum())``'s draw: one uniform placed in
+    ``cdf`` (:func:`target_cdf`, the same draw from the same stream; a test pins it to
+    ``choice``); ``cdf`` None falls back to ``choice`` itself (which raises on a bad prior)."""
+    if cdf is None:
+        flat = prior_fine.ravel()
+        k = int(rng.choice(flat.size, p=flat / flat.sum()))
+    else:
+        k = int(cdf.searchsorted(rng.random(), side="right"))
     j, i = divmod(k, prior_fine.shape[1])
     du, dv = rng.random(2)
     return (origin[0] + (i + du) * h, origin[1] + (j + dv) * h)
@@ -323,6 +346,7 @@ def initial(
     limits.check_memory(
         "n_envs", e, limits.env_bytes(cells, s, n, e, comms), f"{e} envs x {cells} cells"
     )
+    priors_given = priors
     if priors is None:
         priors = np.broadcast_to(params.prior, (e, *params.prior.shape))
     belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, axis=1), s, axis=2) / (s * s)
@@ -333,8 +357,10 @@ def initial(
     h = params.grid.cell_m / s
     target = np.zeros((e, 2))
     threshold = np.zeros(e)
+    shared = target_cdf(belief[0]) if priors_given is None and e else None
     for k, rng in enumerate(rngs):
-        target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng)
+        cdf = shared if priors_given is None else target_cdf(belief[k])
+        target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng, cdf)
         threshold[k] = -np.log1p(-rng.random())
     links = np.zeros((e, n, n), dtype=bool)
     topology = np.full(e, -1, dtype=int)

@@ -245,3 +245,41 @@ def test_episode_over_with_an_adapters_own_finished_mask():
     finished = np.array([[True, True, True], [True, False, True]])
     assert sim.episode_over(p, st, finished).tolist() == [True, False]
     assert sim.episode_over(p, st).tolist() == [False, False]  # default: terminal()
+
+
+@pytest.mark.parametrize("name", ["small", "paper_6_2"])
+def test_targets_are_drawn_as_generator_choice_draws_them(name):
+    """The hidden target and threshold of a reset (one cumulative distribution per prior,
+    :func:`sim.target_cdf`) are the draws of ``rng.choice(size, p=flat / flat.sum())`` and
+    the stream is left where ``choice`` leaves it: the scenario's prior shared by every env,
+    and a random prior per env; a prior ``choice`` refuses still raises its error."""
+    from poc_env.theory.probability_map import random_gaussian_mixture
+
+    params = sim.make_params(load_scenario(name))
+    s, h = params.s, params.grid.cell_m / params.s
+
+    def reference(priors, rngs):
+        belief = np.repeat(np.repeat(priors, s, axis=1), s, axis=2) / (s * s)
+        out = []
+        for k, rng in enumerate(rngs):
+            flat = belief[k].ravel()
+            idx = int(rng.choice(flat.size, p=flat / flat.sum()))
+            j, i = divmod(idx, belief.shape[2])
+            du, dv = rng.random(2)
+            x0, y0 = params.grid.origin_m
+            out.append((x0 + (i + du) * h, y0 + (j + dv) * h, -np.log1p(-rng.random())))
+        return np.array(out)
+
+    rng = np.random.default_rng(4)
+    shared = np.broadcast_to(params.prior, (40, *params.prior.shape))
+    drawn = np.stack([random_gaussian_mixture(params.grid, rng) for _ in range(40)])
+    for priors, given in ((shared, None), (drawn, drawn)):
+        st = sim.initial(params, [np.random.default_rng(k) for k in range(40)], given)
+        rngs = [np.random.default_rng(k) for k in range(40)]
+        want = reference(priors, rngs)
+        np.testing.assert_array_equal(st.target, want[:, :2])
+        np.testing.assert_array_equal(st.target_threshold, want[:, 2])
+    bad = drawn[:2].copy()
+    bad[:, 0, 0] = -1.0
+    with pytest.raises(ValueError, match=r"(?i)probabilities"):
+        sim.initial(params, [np.random.default_rng(k) for k in range(2)], bad)

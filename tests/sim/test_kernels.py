@@ -1014,6 +1014,45 @@ def test_compass_bins_on_boundaries_equal_the_defining_formula():
         np.testing.assert_array_equal(count[i], want_c)
 
 
+@pytest.mark.parametrize("n_sectors", [8, 6])
+def test_short_row_compass_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_sectors):
+    """The short-row compass sums (``_cell_bins``: branch-free bins, then the sums) equal the
+    cell-by-cell kernel (``compass_bins``) bit for bit on an 8 x 8 grid: UAVs at random, on
+    cell centres, on the grid's diagonals and axes through cell centres, at ring edges and at
+    the others radius from a cell centre (and 1e-12 off them), POC with zeros, ties and -0.0;
+    and with sectors other than octants (every cell by the defining formula)."""
+    from poc_env.sim.observations import OTHERS_RADIUS_M, RING_EDGES_M
+
+    xs = np.arange(8) * 5000.0 + 2500.0
+    cx, cy = np.tile(xs, 8), np.repeat(xs, 8)
+    rng = np.random.default_rng(5)
+    px = list(rng.uniform(-40e3, 80e3, 300))
+    py = list(rng.uniform(-40e3, 80e3, 300))
+    for d in (*RING_EDGES_M, OTHERS_RADIUS_M, 5000.0, 0.0):
+        for eps in (0.0, 1e-12, -1e-12):
+            for ux, uy in ((1, 0), (0, 1), (1, 1), (-1, 1), (0.6, 0.8)):
+                j = rng.integers(0, 64)
+                px.append(cx[j] + ux * d * (1 + eps))
+                py.append(cy[j] + uy * d * (1 + eps))
+    px, py = np.array(px), np.array(py)
+    poc = rng.random((len(px), 64))
+    poc[rng.random(poc.shape) < 0.3] = 0.0
+    poc[:, 5] = -0.0
+    poc[::7, :] = 0.25  # equal values: any change of summation order would show
+    edges = np.asarray(RING_EDGES_M, dtype=float)
+    radius = float(OTHERS_RADIUS_M)
+    want, _count = obs_kernels.compass_bins(
+        cx, cy, px, py, poc, np.zeros_like(poc), edges, radius, n_sectors
+    )
+    bins, d2s = np.empty(64, dtype=np.intp), np.empty(64)
+    for i in range(len(px)):
+        mass = np.zeros(n_sectors * (len(edges) + 1))
+        obs_kernels._cell_bins(
+            cx, cy, px[i], py[i], poc[i], edges, radius, n_sectors, mass, bins, d2s
+        )
+        np.testing.assert_array_equal(mass, want[i], err_msg=f"UAV {i} at {px[i]}, {py[i]}")
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_boundary_masses_equal_the_dense_fractions_and_shapely(seed):
     """``rectangle_masses`` (Green's theorem on the row-wise cumulative weights, no per-cell
@@ -1163,3 +1202,29 @@ def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, s
             want = feats(ras.reshape(m, *ras.shape[2:]), vec.reshape(m, -1), k)
             got = obs.observe(params, st, scale, hazard, "compass", feats)
             np.testing.assert_array_equal(got.reshape(m, -1), want)
+
+
+@pytest.mark.parametrize("s", [1, 2, 3, 4, 5, 7])
+def test_coarse_poc_is_numpys_coarsening_bit_for_bit(s):
+    """Raster channel 0 from the kernel's own sub-cell sums (s < 8; unrolled for s = 2 and 4)
+    is the float32 of ``Grid.coarsen`` / scale clipped to [0, 1], bit for bit (what the
+    recorded episodes saw), on a belief with partly searched, zero and tiny cells."""
+    params = sim.make_params(
+        load_scenario("small", {"sensor.samples_per_cell": s, "map.cell_km": 5})
+    )
+    rng = np.random.default_rng(40 + s)
+    st = _obs_state(params, rng)
+    st.belief *= rng.random(st.belief.shape) ** 3
+    st.belief[:, :s, :] = 0.0
+    st.belief[:, -1, :] *= 1e-300
+    scale = np.array([0.01, 0.3])
+    want = np.clip(params.grid.coarsen(st.belief, s) / scale[:, None, None], 0.0, 1.0)
+    got = obs.coarse_poc(params, st, scale)[:, 0]
+    np.testing.assert_array_equal(got, want.astype(np.float32))
+    sums, poc = np.empty(params.grid.shape), np.empty(params.grid.shape, dtype=np.float32)
+    for e in range(2):  # the float64 sums themselves (the kernel's scratch)
+        obs_kernels._coarse_poc(st.belief, e, s, obs._NO_COARSE, True, scale[e], sums, poc)
+        np.testing.assert_array_equal(sums, params.grid.coarsen(st.belief[e], s))
+    np.testing.assert_array_equal(
+        obs.rasters(params, st, scale, obs.hazard_mask(params))[:, 0, 0], got
+    )
