@@ -63,6 +63,8 @@ CHAIN: tuple[float, ...] = (0.35, 0.55)
 CHAIN_EARLY = False
 #: final exchange passes with chains.
 CHAIN_ROUNDS = 2
+#: line spacings (sweep widths) tried for the second chained lawnmower; () all of ``spacings``.
+CHAIN_SPACINGS: tuple[float, ...] = ()
 #: a route that does not fit flies its first dropped line in part (True) or drops it whole.
 PART = True
 #: halvings of the bisection for the part of a line that fits.
@@ -200,7 +202,10 @@ def box_routes(
                 path = np.vstack([takeoff[k], wps, landing[k]])
                 t_end = float(arrival_times(path, speeds, turn_rate, h0[k])[-2])
                 c1 = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
-                more = [lawn(k, s2, cov + c1, wps[-1], wps, budget - t_end) for s2 in spacings]
+                more = [
+                    lawn(k, s2, cov + c1, wps[-1], wps, budget - t_end)
+                    for s2 in (CHAIN_SPACINGS or spacings)
+                ]
                 more = [m for m in more if len(m)]
                 if not more:
                     continue
