@@ -661,6 +661,15 @@ def make_allocation_plan(
                     pieces = s_pieces
                     start = name
                     refined = was_refined
+        # the starts not refined are kept as they are if the environment's model scores them
+        # higher (W x length per cell ranks the starts, and misjudges cells wider than W)
+        for _, name, s_routes, s_pieces in starts:
+            if any(name == t[1] for t in tried):
+                continue
+            score = _sampled_total(s_routes)
+            if score > best_sampled:
+                best_sampled, routes, pieces = score, s_routes, s_pieces
+                start, refined = name, False
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)

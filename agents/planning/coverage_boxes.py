@@ -16,7 +16,8 @@ assigns each UAV its own region of the map and its own coverage there, as the al
    :data:`MAX_CELLS` blocks a side); its lawnmower
    (:func:`poc_env.agents.planning.greedy_rectangles._lines`, lines ``s`` apart along the
    longer side) is cut until it keeps eq. 18's return rule
-   (:func:`poc_env.agents.planning.refine.route_fits`), and the spacing whose route gains most
+   (:func:`poc_env.agents.planning.refine.route_fits`; the first line dropped is flown in
+   part, as far as still fits, :func:`cut_lines`), and the spacing whose route gains most
    (whole flight path counted, transit too) is the UAV's candidate. UAVs sharing both fields
    have the same candidate (computed once).
 3. **Assignment.** Of all UAVs not yet assigned, the one whose candidate gains most takes it
@@ -28,6 +29,15 @@ assigns each UAV its own region of the map and its own coverage there, as the al
    among these candidates.
 4. **Exchange.** Each UAV in turn drops its route and takes the best candidate against all the
    others' coverage (steps 1-2), if it gains more; :data:`ROUNDS` passes or until none moves.
+5. **Two lawnmowers per UAV.** :data:`CHAIN_ROUNDS` more exchange passes (until none moves)
+   in which a UAV's candidates also include two chained lawnmowers: the first searched as
+   in step 2 with a share (:data:`CHAIN`) of 0.85 T, the second from the first's last
+   waypoint with the time left there, its gains against the first's coverage added (so it
+   may lie over the first: a denser core inside a sparse box, or a second blob). The whole
+   route is cut to eq. 18 as in step 2. One box per UAV spends its time on one region; on
+   priors with several blobs, or a core denser than its surroundings, the allocation asks
+   for more than one (issue 24, docs/PLANNER.md). Chains only enter after the single-box
+   exchange, so they never lower the start's gain (each pass takes a move only if it gains).
 
 Deterministic: no clock, no random draw. No-fly zones: the start is flown around them by the
 allocation planner like its other starts.
