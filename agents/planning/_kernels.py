@@ -246,6 +246,8 @@ def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, 
                 ylo = orig[1] + h * j
                 dyt = max(max(ylo - takeoff[1], takeoff[1] - ylo - ly), 0.0)
                 dyl = max(max(ylo - landing[1], landing[1] - ylo - ly), 0.0)
+                if dyt / speeds[0] + dyl / speeds[2] + search > budget:
+                    continue  # the row alone is too far (hypot >= its y part): no box fits
                 for i in range(nx - nw + 1):
                     mass = table[j + nh, i + nw] - table[j, i + nw] - table[j + nh, i] + table[j, i]
                     if not mass > cur:

@@ -71,7 +71,7 @@ import numpy as np
 from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
-from poc_env.agents.planning.coverage_boxes import box_routes
+from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -593,17 +593,22 @@ def make_allocation_plan(
         # last lines dropped until each route keeps eq. 18 again
         b_routes = _spread(b_routes, takeoff, sc)
         for k in range(n):
-            while b_routes[k] and not route_fits(
-                np.vstack([takeoff[k], np.asarray(b_routes[k]).reshape(-1, 2), landing[k]]),
-                v,
-                u.max_turn_rate_rad_s,
-                u.usable_endurance_s,
-                _reserve(sc),
-                heading0[k],
-            ):
-                del b_routes[k][-2:]
-            if len(b_routes[k]) < 2:
-                b_routes[k] = []
+            arr = np.asarray(b_routes[k], dtype=float).reshape(-1, 2)
+            lead = len(arr) % 2  # the dog-leg's waypoint before the lines
+
+            def fits(q, k=k, arr=arr, lead=lead) -> bool:
+                return route_fits(
+                    np.vstack([takeoff[k], arr[:lead], q, landing[k]]),
+                    v,
+                    u.max_turn_rate_rad_s,
+                    u.usable_endurance_s,
+                    _reserve(sc),
+                    heading0[k],
+                )
+
+            if len(arr) and not fits(arr[lead:]):  # the last line cut short, or dropped
+                arr = np.vstack([arr[:lead], cut_lines(arr[lead:], fits, w)[0]])
+            b_routes[k] = [] if len(arr) - lead < 2 else arr.tolist()
         if router.active:
             b_routes = [_around(k, b_routes[k]) if b_routes[k] else [] for k in range(n)]
         b_val = _cell_pos(b_routes, takeoff, landing, prior, grid, w, law)
@@ -656,6 +661,15 @@ def make_allocation_plan(
                     pieces = s_pieces
                     start = name
                     refined = was_refined
+        # the starts not refined are kept as they are if the environment's model scores them
+        # higher (W x length per cell ranks the starts, and misjudges cells wider than W)
+        for _, name, s_routes, s_pieces in starts:
+            if any(name == t[1] for t in tried):
+                continue
+            score = _sampled_total(s_routes)
+            if score > best_sampled:
+                best_sampled, routes, pieces = score, s_routes, s_pieces
+                start, refined = name, False
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)

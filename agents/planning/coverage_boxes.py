@@ -16,7 +16,8 @@ assigns each UAV its own region of the map and its own coverage there, as the al
    :data:`MAX_CELLS` blocks a side); its lawnmower
    (:func:`poc_env.agents.planning.greedy_rectangles._lines`, lines ``s`` apart along the
    longer side) is cut until it keeps eq. 18's return rule
-   (:func:`poc_env.agents.planning.refine.route_fits`), and the spacing whose route gains most
+   (:func:`poc_env.agents.planning.refine.route_fits`; the first line dropped is flown in
+   part, as far as still fits, :func:`cut_lines`), and the spacing whose route gains most
    (whole flight path counted, transit too) is the UAV's candidate. UAVs sharing both fields
    have the same candidate (computed once).
 3. **Assignment.** Of all UAVs not yet assigned, the one whose candidate gains most takes it
@@ -28,6 +29,15 @@ assigns each UAV its own region of the map and its own coverage there, as the al
    among these candidates.
 4. **Exchange.** Each UAV in turn drops its route and takes the best candidate against all the
    others' coverage (steps 1-2), if it gains more; :data:`ROUNDS` passes or until none moves.
+5. **Two lawnmowers per UAV.** :data:`CHAIN_ROUNDS` more exchange passes (until none moves)
+   in which a UAV's candidates also include two chained lawnmowers: the first searched as
+   in step 2 with a share (:data:`CHAIN`) of 0.85 T, the second from the first's last
+   waypoint with the time left there, its gains against the first's coverage added (so it
+   may lie over the first: a denser core inside a sparse box, or a second blob). The whole
+   route is cut to eq. 18 as in step 2. One box per UAV spends its time on one region; on
+   priors with several blobs, or a core denser than its surroundings, the allocation asks
+   for more than one (issue 24, docs/PLANNER.md). Chains only enter after the single-box
+   exchange, so they never lower the start's gain (each pass takes a move only if it gains).
 
 Deterministic: no clock, no random draw. No-fly zones: the start is flown around them by the
 allocation planner like its other starts.
@@ -43,7 +53,7 @@ from poc_env.agents.planning import _kernels
 from poc_env.agents.planning.flight_rules import Speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.greedy_rectangles import SCALES, _lines, _side_lengths
-from poc_env.agents.planning.refine import route_fits
+from poc_env.agents.planning.refine import arrival_times, route_fits
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage
 
@@ -56,6 +66,48 @@ MAX_CELLS = 80
 LAZY = True
 #: passes of the exchange step (4).
 ROUNDS = 2
+#: shares of the budget the first of two chained lawnmowers is searched with (the second
+#: gets the time left); () leaves one lawnmower per UAV.
+CHAIN: tuple[float, ...] = (0.35, 0.55)
+#: chains tried in the greedy and exchange steps too (True) or only in final passes (False).
+CHAIN_EARLY = False
+#: final exchange passes with chains.
+CHAIN_ROUNDS = 2
+#: line spacings (sweep widths) tried for the second chained lawnmower; () all of ``spacings``.
+CHAIN_SPACINGS: tuple[float, ...] = ()
+#: a route that does not fit flies its first dropped line in part (True) or drops it whole.
+PART = True
+#: halvings of the bisection for the part of a line that fits.
+PART_STEPS = 12
+
+
+def cut_lines(wps, fits, min_part: float = 0.0) -> tuple[np.ndarray, int]:
+    """A lawnmower ``wps`` (a line = two waypoints) cut until ``fits(waypoints)``: its last lines
+    dropped, then the first dropped line flown in part, as far as still fits (bisection to
+    :data:`PART_STEPS` halvings of its length), if that part is at least ``min_part`` long.
+    Returns the waypoints and the number of whole lines' waypoints kept."""
+    wps = np.asarray(wps, dtype=float).reshape(-1, 2)
+    kept = len(wps) - len(wps) % 2
+    while kept and not fits(wps[:kept]):
+        kept -= 2
+    out = wps[:kept]
+    if PART and kept + 1 < len(wps):
+        a, b = wps[kept], wps[kept + 1]
+
+        def part(t: float) -> np.ndarray:
+            return np.vstack([out, a, a + t * (b - a)])
+
+        if fits(part(0.0)):
+            lo, hi = 0.0, 1.0
+            for _ in range(PART_STEPS):
+                mid = 0.5 * (lo + hi)
+                if fits(part(mid)):
+                    lo = mid
+                else:
+                    hi = mid
+            if lo * float(np.hypot(*(b - a))) >= max(min_part, 1e-9):
+                out = part(lo)
+    return out, kept
 
 
 def box_routes(
@@ -72,6 +124,7 @@ def box_routes(
     headings=None,
     spacings: tuple[float, ...] | None = None,
     rounds: int | None = None,
+    chain: tuple[float, ...] | None = None,
 ) -> list[list[list[float]]]:
     """Each UAV's waypoints (between ``takeoff[k]`` and ``landing[k]``): one lawnmower box per
     UAV (module docstring). ``budget`` the usable endurance 0.85 T and ``reserve`` the time kept
@@ -80,6 +133,8 @@ def box_routes(
     can search nothing gets an empty list."""
     spacings = SPACINGS if spacings is None else tuple(spacings)
     rounds = ROUNDS if rounds is None else int(rounds)
+    chain = CHAIN if chain is None else tuple(chain)
+    early = chain if CHAIN_EARLY else ()
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     prior = np.asarray(prior, dtype=float)
@@ -94,45 +149,81 @@ def box_routes(
     block = np.zeros((my * f, mx * f))
     speed_arr = np.array([speeds.out, speeds.line, speeds.home])
     half_turn = math.pi / turn_rate  # a half-turn at a line end (the box search's estimate)
-    est_budget = budget - reserve
     table = np.zeros((my + 1, mx + 1))
 
-    def candidate(k: int, cov: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-        """UAV ``k``'s best lawnmower against the coverage ``cov``: (gain, waypoints, its
-        coverage)."""
+    def lawn(k: int, s: float, cov: np.ndarray, frm, lead: np.ndarray, left: float) -> np.ndarray:
+        """UAV ``k``'s lawnmower of lines ``s`` sweep widths apart of most gain against ``cov``,
+        flown from ``frm`` after the waypoints ``lead`` with ``left`` seconds of the budget
+        left there; its last lines dropped until the whole route keeps eq. 18."""
         base = pod_from_coverage(cov, law)
-        best: tuple[float, np.ndarray, np.ndarray] = (0.0, np.zeros((0, 2)), np.zeros(grid.shape))
-        for s in spacings:
-            block[: grid.ny, : grid.nx] = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
-            gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
-            table[1:, 1:] = gain.cumsum(0).cumsum(1)
-            wps: np.ndarray = np.zeros((0, 2))
-            for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
-                mass, i, j, nw, nh = _kernels.best_box(
-                    table, widths, heights, orig, float(f * grid.cell_m), float(s * w), speed_arr,
-                    float(half_turn), float(scale * est_budget), takeoff[k], landing[k],
-                )  # fmt: skip
-                if not mass > 0.0:
-                    break
-                lo = orig + np.array([i, j]) * f * grid.cell_m
-                hi = np.minimum(lo + np.array([nw, nh]) * f * grid.cell_m, hi_map)
-                wps = _lines(lo, hi, s * w, takeoff[k])
-                full = len(wps)
-                while len(wps) and not route_fits(
-                    np.vstack([takeoff[k], wps, landing[k]]),
+        block[: grid.ny, : grid.nx] = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
+        gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
+        table[1:, 1:] = gain.cumsum(0).cumsum(1)
+        sp = speed_arr if not len(lead) else np.array([speeds.line, speeds.line, speeds.home])
+        wps: np.ndarray = np.zeros((0, 2))
+        for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
+            mass, i, j, nw, nh = _kernels.best_box(
+                table, widths, heights, orig, float(f * grid.cell_m), float(s * w), sp,
+                float(half_turn), float(scale * (left - reserve)), np.asarray(frm, dtype=float),
+                landing[k],
+            )  # fmt: skip
+            if not mass > 0.0:
+                break
+            lo = orig + np.array([i, j]) * f * grid.cell_m
+            hi = np.minimum(lo + np.array([nw, nh]) * f * grid.cell_m, hi_map)
+            wps = _lines(lo, hi, s * w, frm)
+            full = len(wps)
+            wps, kept = cut_lines(
+                wps,
+                lambda q: route_fits(
+                    np.vstack([takeoff[k], lead, q, landing[k]]),
                     speeds,
                     turn_rate,
                     budget,
                     reserve,
                     h0[k],
-                ):
-                    wps = wps[:-2]  # drop the last line
-                if len(wps) >= full // 2:
-                    break
+                ),
+                w,
+            )
+            if kept >= full // 2:
+                break
+        return wps
+
+    def candidate(
+        k: int, cov: np.ndarray, shares: tuple[float, ...] = ()
+    ) -> tuple[float, np.ndarray, np.ndarray]:
+        """UAV ``k``'s best route against the coverage ``cov``: one lawnmower, or two chained
+        (:data:`CHAIN`): (gain, waypoints, its coverage)."""
+        base = pod_from_coverage(cov, law)
+        best: tuple[float, np.ndarray, np.ndarray] = (0.0, np.zeros((0, 2)), np.zeros(grid.shape))
+        none = np.zeros((0, 2))
+
+        def score(wps: np.ndarray) -> tuple[float, np.ndarray]:
+            c = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
+            return float(np.sum(prior * (pod_from_coverage(cov + c, law) - base))), c
+
+        firsts = [(s, budget) for s in spacings]
+        firsts += [(s, x * budget) for x in shares for s in spacings]
+        for s, share in firsts:
+            wps = lawn(k, s, cov, takeoff[k], none, share)
             if not len(wps):
                 continue
-            c = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
-            val = float(np.sum(prior * (pod_from_coverage(cov + c, law) - base)))
+            if share < budget:  # a second lawnmower after this one, with the time left
+                path = np.vstack([takeoff[k], wps, landing[k]])
+                t_end = float(arrival_times(path, speeds, turn_rate, h0[k])[-2])
+                c1 = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
+                more = [
+                    lawn(k, s2, cov + c1, wps[-1], wps, budget - t_end)
+                    for s2 in (CHAIN_SPACINGS or spacings)
+                ]
+                more = [m for m in more if len(m)]
+                if not more:
+                    continue
+                scored = [(*score(np.vstack([wps, m])), m) for m in more]
+                val, c, m = max(scored, key=lambda t: t[0])
+                wps = np.vstack([wps, m])
+            else:
+                val, c = score(wps)
             if val > best[0]:
                 best = (val, wps, c)
         return best
@@ -150,11 +241,11 @@ def box_routes(
         if not LAZY:
             cache.clear()
         for key in sorted({keys[j] for j in left} - set(cache)):
-            cache[key] = candidate(keys.index(key), total)
+            cache[key] = candidate(keys.index(key), total, early)
             fresh.add(key)
         k = min(left, key=lambda j: (-cache[keys[j]][0], j))
         if keys[k] not in fresh:
-            cache[keys[k]] = candidate(k, total)
+            cache[keys[k]] = candidate(k, total, early)
             fresh.add(keys[k])
             continue
         val, wps, c = cache[keys[k]]
@@ -164,17 +255,21 @@ def box_routes(
         total = total + c
         left.remove(k)
         fresh.clear()
-    for _ in range(max(0, int(rounds))):
+    passes = [early] * max(0, int(rounds)) + [chain] * (CHAIN_ROUNDS if chain and not early else 0)
+    done: tuple[float, ...] | None = None  # a kind of pass that moved nothing: not again
+    for shares in passes:
+        if shares == done:
+            continue
         moved = False
         for k in range(n):
             others = total - covs[k]
             base = pod_from_coverage(others, law)
             now = float(np.sum(prior * (pod_from_coverage(total, law) - base)))
-            val, wps, c = candidate(k, others)
+            val, wps, c = candidate(k, others, shares)
             if val > now + 1e-9:
                 routes[k], covs[k] = wps, c
                 total = others + c
                 moved = True
         if not moved:
-            break
+            done = shares
     return [[[float(a), float(b)] for a, b in r] for r in routes]

@@ -131,7 +131,9 @@ def test_cli_plan_with_the_allocation_planner(tmp_path, capsys):
 
 
 def test_lines_follow_an_elongated_prior():
-    """Step 2 (the lines, before any refinement) lays straight lines along the prior."""
+    """Step 2 (the lines of the allocation's start, before any refinement) lays straight lines
+    along the prior. (The boxes' start may chain a short box across the row before its lines
+    along it: test_coverage_boxes.py.)"""
     sc = _small()
     grid = Grid.from_config(sc.map)
     for axis in (0, 1):
@@ -141,7 +143,8 @@ def test_lines_follow_an_elongated_prior():
         else:
             prior[:, 3] = 1.0  # one column: lines along y
         prior /= prior.sum()
-        plan = make_allocation_plan(sc, prior=prior, refine=0)
+        plan = make_allocation_plan(sc, prior=prior, refine=0, greedy_start=False, box_start=False)
+        assert plan["start"] == "allocation"
         assert plan["lines_along"] == ("x" if axis == 0 else "y")
         for u in plan["uavs"]:
             lines = np.asarray(u["waypoints_m"][u["transit_waypoints"] :]).reshape(-1, 2, 2)

@@ -138,3 +138,79 @@ def test_allocation_plan_takes_the_boxes_when_they_win():
     old = make_allocation_plan(sc, prior=prior, refine=1, box_start=False)
     assert plan["start"] == "boxes"
     assert plan["posc"] > old["posc"]
+
+
+def test_cut_lines_flies_the_first_dropped_line_in_part():
+    """A lawnmower of four 10 km lines 1 km apart under a 35 km path budget: three whole lines
+    (32 km with the two 1 km steps) and 2 km of the fourth (1 km step, then the part), to the
+    bisection's resolution; with ``PART`` off the fourth line is dropped whole."""
+    lines = []
+    for i in range(4):
+        ends = [[0.0, i * 1000.0], [10_000.0, i * 1000.0]]
+        lines += ends if i % 2 == 0 else ends[::-1]
+    wps = np.array(lines)
+
+    def length(q):
+        return float(np.hypot(*np.diff(q, axis=0).T).sum()) if len(q) > 1 else 0.0
+
+    def fits(q):
+        return length(q) <= 35_000.0
+
+    out, kept = coverage_boxes.cut_lines(wps, fits)
+    assert kept == 6
+    np.testing.assert_allclose(out[:6], wps[:6])
+    assert fits(out)
+    step = 10_000.0 / 2**coverage_boxes.PART_STEPS
+    assert 35_000.0 - step <= length(out) <= 35_000.0
+    # a part shorter than min_part is not flown
+    short, _ = coverage_boxes.cut_lines(wps, fits, min_part=2500.0)
+    assert len(short) == 6
+    # every line fits: nothing cut
+    same, kept = coverage_boxes.cut_lines(wps, lambda q: True)
+    assert kept == 8 and np.array_equal(same, wps)
+
+
+def test_cut_lines_without_parts_drops_whole_lines(monkeypatch):
+    monkeypatch.setattr(coverage_boxes, "PART", False)
+    wps = np.array([[0.0, 0.0], [10_000.0, 0.0], [10_000.0, 1000.0], [0.0, 1000.0]])
+    out, kept = coverage_boxes.cut_lines(
+        wps, lambda q: float(np.hypot(*np.diff(q, axis=0).T).sum()) <= 15_000.0
+    )
+    assert kept == 2 and len(out) == 2
+
+
+def test_chained_lawnmowers_reach_two_blobs():
+    """One UAV, two small blobs at the same height 120 km apart: a single box over both wastes
+    its lines on the empty ground between them, two chained lawnmowers do not; the chained
+    route gains more (eq. 10 per cell), keeps eq. 18 and visits both blobs."""
+    sc, grid, _, to, la = _inputs()
+    one = sc.with_uavs(1)
+    to1, la1 = to[:1], la[:1]
+    prior = np.zeros(grid.shape)
+    row = grid.ny // 2
+    a, b = 6, grid.nx - 7  # cells 6 and nx - 7: 115 km apart on paper_6_2's 5 km cells
+    prior[row - 1 : row + 2, a - 1 : a + 2] = 1.0
+    prior[row - 1 : row + 2, b - 1 : b + 2] = 1.0
+    prior /= prior.sum()
+    w = sc.sensor.sweep_width_m
+    law = sc.sensor.law
+
+    def score(routes):
+        cov = path_coverage([to1[0], *routes[0], la1[0]], grid, w)
+        return float(np.sum(prior * pod_from_coverage(cov, law)))
+
+    single = _routes(one, grid, prior, to1, la1, chain=())
+    chained = _routes(one, grid, prior, to1, la1)
+    assert score(chained) > score(single) + 0.05
+    wps = np.asarray(chained[0]).reshape(-1, 2)
+    cx = grid.origin_m[0] + (np.array([a, b]) + 0.5) * grid.cell_m
+    assert np.min(np.abs(wps[:, 0] - cx[0])) < 2 * grid.cell_m
+    assert np.min(np.abs(wps[:, 0] - cx[1])) < 2 * grid.cell_m
+    assert route_fits(
+        np.vstack([to1[0], wps, la1[0]]),
+        plan_speeds(sc),
+        sc.uav.max_turn_rate_rad_s,
+        sc.uav.usable_endurance_s,
+        reserve_s(sc),
+        takeoff_heading(grid.bounds, to1)[0],
+    )

@@ -109,11 +109,10 @@ def test_no_uav_is_left_idle_on_the_large_map_at_5_km_cells():
     assert pos.min() > 0.3 * pos.mean()
 
 
-def test_compiled_box_search_is_the_exhaustive_one():
-    """The greedy planner's compiled box search (``_kernels.best_box``) returns the box an
-    exhaustive search over every size and position finds: the most mass among the boxes whose
-    flight-time estimate fits, the first in the search order on ties (masses drawn from few
-    values, so ties happen)."""
+def _exhaustive_box_search_agrees(rng, place, trials: int) -> None:
+    """``_kernels.best_box`` (through the greedy planner's ``_best_box``) against an exhaustive
+    search over every size and position, on ``small`` with random masses; ``place(trial)``
+    gives (takeoff, landing, budget)."""
     import math
 
     from poc_env.agents.planning.greedy_rectangles import _best_box, _side_lengths
@@ -122,14 +121,11 @@ def test_compiled_box_search_is_the_exhaustive_one():
     grid = Grid.from_config(sc.map)
     v = type("V", (), {"out": 40.0, "line": 30.0, "home": 25.0})()
     w, turn = 900.0, 40.0
-    rng = np.random.default_rng(11)
-    x0, y0, x1, y1 = grid.bounds
+    x0, y0 = grid.bounds[:2]
     h = grid.cell_m
-    for trial in range(6):
+    for trial in range(trials):
         remaining = rng.integers(0, 4, grid.shape).astype(float) * (rng.random(grid.shape) < 0.5)
-        takeoff = np.array([x0, y0]) + rng.random(2) * np.array([x1 - x0, y1 - y0]) * 1.4
-        landing = takeoff if trial % 2 else np.array([x0, y1])
-        budget = float(rng.uniform(300.0, 3000.0))
+        takeoff, landing, budget = place(trial)
         widths, heights = _side_lengths(grid.nx), _side_lengths(grid.ny)
         best, best_key = 0.0, None
         for nw in widths:
@@ -157,3 +153,36 @@ def test_compiled_box_search_is_the_exhaustive_one():
         lo, hi = box
         got = (lo[0], lo[1], hi[0] - lo[0], hi[1] - lo[1])
         np.testing.assert_allclose(got, best_key, rtol=0, atol=1e-6 * h)
+
+
+def test_compiled_box_search_is_the_exhaustive_one():
+    """The greedy planner's compiled box search (``_kernels.best_box``) returns the box an
+    exhaustive search over every size and position finds: the most mass among the boxes whose
+    flight-time estimate fits, the first in the search order on ties (masses drawn from few
+    values, so ties happen)."""
+    sc = load_scenario("small")
+    x0, y0, x1, y1 = Grid.from_config(sc.map).bounds
+    rng = np.random.default_rng(11)
+
+    def place(trial):
+        takeoff = np.array([x0, y0]) + rng.random(2) * np.array([x1 - x0, y1 - y0]) * 1.4
+        landing = takeoff if trial % 2 else np.array([x0, y1])
+        return takeoff, landing, float(rng.uniform(300.0, 3000.0))
+
+    _exhaustive_box_search_agrees(rng, place, 6)
+
+
+def test_compiled_box_search_skips_only_rows_out_of_reach():
+    """Fields below the map with a budget that reaches part of it (the large maps' case): the
+    kernel skips rows whose distance along y alone exceeds the budget, and still finds the
+    exhaustive search's box (fails if rows within reach are skipped)."""
+    sc = load_scenario("small")
+    x0, y0, x1, _ = Grid.from_config(sc.map).bounds
+    rng = np.random.default_rng(12)
+
+    def place(trial):
+        takeoff = np.array([x0 + rng.random() * (x1 - x0), y0 - rng.uniform(5_000.0, 40_000.0)])
+        landing = takeoff if trial % 2 else takeoff + np.array([rng.uniform(-5e3, 5e3), 0.0])
+        return takeoff, landing, float(rng.uniform(2000.0, 5000.0))
+
+    _exhaustive_box_search_agrees(rng, place, 10)
