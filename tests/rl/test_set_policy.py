@@ -95,13 +95,18 @@ def _recipe() -> list[str]:
     return argv[2:]
 
 
+def _size(task_id: str) -> int:
+    """A task's fleet size (a -Wide-N task's own, else its scenario's)."""
+    return tasks.get_task(task_id).load_scenario().n_uavs
+
+
 def test_the_any_size_recipe_in_the_docs_is_a_valid_command():
     from poc_env.agents.rl.args import parse_train_args
 
     args = parse_train_args(_recipe())
-    sizes = {tasks.get_task(t).n_uavs for t in [args.task, *args.also_task]}
-    assert sizes == {3, 6, 12, 24} and args.net == "set"
-    slots = args.n_envs * sum(sizes)
+    sizes = [_size(t) for t in [args.task, *args.also_task]]
+    assert set(sizes) == {3, 6, 12, 24} and args.net == "set"
+    slots = args.n_envs * sum(sizes)  # every task's swarms, two tasks of one size included
     assert args.total_timesteps % (args.n_steps * slots) == 0  # whole rollouts
     assert (args.n_steps * slots) % args.batch_size == 0
 
@@ -113,7 +118,9 @@ def test_the_any_size_recipe_trains_and_flies_6_and_24_uavs(tmp_path):
 
     argv = _recipe()
     k = argv.index("--total-timesteps")
-    argv[k + 1] = "46080"  # two rollouts of the recipe: the command runs end to end
+    args = parse_train_args(argv)
+    slots = args.n_envs * sum(_size(t) for t in [args.task, *args.also_task])
+    argv[k + 1] = str(2 * args.n_steps * slots)  # two rollouts: the command runs end to end
     argv += ["--run-dir", str(tmp_path / "run"), "--no-progress"]
     run = train(parse_train_args(argv))
     for n in (6, 24):
