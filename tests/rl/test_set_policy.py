@@ -127,3 +127,21 @@ def test_the_any_size_recipe_trains_and_flies_6_and_24_uavs(tmp_path):
         tid = f"UAVSearch-Wide-N{n}-Random-Set-Heading-v1"
         assert main(["evaluate", "--task", tid, "--policies", f"ppo:{run}", "--episodes", "2",
                      "--quiet"]) == 0  # fmt: skip
+
+
+def test_the_shipped_any_size_policy_flies_24_uavs_home():
+    """ppo_set_anysize (its card's replay is in tests/rl/test_pilot.py) flies an unseen 24-UAV
+    episode of wide_400 (a seed and prior neither training nor its evaluations used) with
+    every UAV back and a POSC its 50 evaluation episodes at 24 UAVs never fell below."""
+    import csv
+    from pathlib import Path
+
+    from poc_env.agents.experiments.evaluate import run_episode
+
+    sc = tasks.get_task(N24).load_scenario()
+    ep = run_episode(sc, "ppo:ppo_set_anysize", 987_654, random_priors=True)
+    assert ep.landed == 24 and ep.crashed == 0
+    rows = Path(__file__).resolve().parents[2] / "results/anysize/eval_wide_n24/episodes.csv"
+    floor = min(float(r["posc"]) for r in csv.DictReader(rows.open())
+                if r["policy"] == "ppo:ppo_set_anysize")  # fmt: skip
+    assert ep.posc >= floor > 0.0
