@@ -178,6 +178,7 @@ SHIPPED = [
     "ppo_heading_individual_paper_6_2",
     "ppo_increments_paper_6_2",
     "rllib_heading_paper_6_2",
+    "ppo_set_anysize",  # the set observation, one policy for 3 to 24 UAVs (docs/rl.md)
 ]
 
 

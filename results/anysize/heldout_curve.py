@@ -1,0 +1,109 @@
+"""Held-out learning curves of set-policy runs: every checkpoint of each run flies the same
+validation priors (seeds 5000-5019 by default: the validation stream of docs/BENCHMARKS.md,
+never the test seeds 1000-1049 nor this issue's evaluation stream 28000-28049) on each task,
+and the mean POSC per checkpoint is written to CSV and plotted. The curves select the shipped
+checkpoint; the evaluation stream only scores it.
+
+    python results/anysize/heldout_curve.py runs/anysize_s1 --every 4 \
+        --out results/anysize/heldout
+
+Appends to ``OUT/curve.csv`` (a (run, step, task, seed) already there is not flown again), so
+it can run while training goes on and pick up new checkpoints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+
+from poc_env.agents.experiments.evaluate import run_episode
+from poc_env.io import write_text_atomic
+from poc_env.tasks import get_task
+
+TASKS = {
+    "paper62": "UAVSearch-Paper62-Random-Set-Heading-v1",
+    "wide_n6": "UAVSearch-Wide-N6-Random-Set-Heading-v1",
+    "wide_n12": "UAVSearch-Wide-N12-Random-Set-Heading-v1",
+    "wide_n24": "UAVSearch-Wide-N24-Random-Set-Heading-v1",
+}
+FIELDS = ["run", "step", "task", "seed", "posc"]
+
+
+def checkpoints(run: Path) -> list[tuple[int, Path]]:
+    out = []
+    for p in (run / "checkpoints").glob("step_*.zip"):
+        m = re.fullmatch(r"step_(\d+)\.zip", p.name)
+        if m:
+            out.append((int(m.group(1)), p))
+    return sorted(out)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("runs", nargs="+", type=Path)
+    ap.add_argument("--tasks", default=",".join(TASKS), help="keys of " + ", ".join(TASKS))
+    ap.add_argument("--every", type=int, default=1, help="every k-th checkpoint (and the last)")
+    ap.add_argument("--seed", type=int, default=5000)
+    ap.add_argument("--episodes", type=int, default=20)
+    ap.add_argument("--out", type=Path, required=True)
+    a = ap.parse_args()
+    a.out.mkdir(parents=True, exist_ok=True)
+    path = a.out / "curve.csv"
+    rows: list[dict[str, str]] = []
+    if path.is_file():
+        rows = list(csv.DictReader(path.open(newline="")))
+    done = {(r["run"], r["step"], r["task"], r["seed"]) for r in rows}
+    for run in a.runs:
+        ck = checkpoints(run)
+        pick = [c for k, c in enumerate(ck) if k % a.every == a.every - 1 or k == len(ck) - 1]
+        for step, model in pick:
+            for key in a.tasks.split(","):
+                sc = get_task(TASKS[key]).load_scenario()
+                for seed in range(a.seed, a.seed + a.episodes):
+                    if (run.name, str(step), key, str(seed)) in done:
+                        continue
+                    ep = run_episode(sc, f"ppo:{model}", seed, random_priors=True)
+                    rows.append({"run": run.name, "step": str(step), "task": key,
+                                 "seed": str(seed), "posc": f"{ep.posc:.6f}"})  # fmt: skip
+                buf = io.StringIO()
+                w = csv.DictWriter(buf, fieldnames=FIELDS, lineterminator="\n")
+                w.writeheader()
+                w.writerows(rows)
+                write_text_atomic(path, buf.getvalue())  # after each (checkpoint, task)
+                here = (run.name, str(step), key)
+                got = [float(r["posc"]) for r in rows if (r["run"], r["step"], r["task"]) == here]
+                print(f"{run.name} {step:>9} {key:<9} {np.mean(got):.4f} ({len(got)} priors)")
+    plot(rows, a.out / "curve.png")
+
+
+def plot(rows: list[dict[str, str]], out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    keys = sorted({(r["run"], r["task"]) for r in rows})
+    for run, task in keys:
+        steps = sorted({int(r["step"]) for r in rows if (r["run"], r["task"]) == (run, task)})
+        pts = {s: [float(r["posc"]) for r in rows
+                   if (r["run"], r["task"], r["step"]) == (run, task, str(s))]
+               for s in steps}  # fmt: skip
+        means = [np.mean(pts[s]) for s in steps]
+        ax.plot(np.array(steps) / 1e6, means, marker="o", label=f"{run}: {task}")
+    ax.set_xlabel("PPO agent transitions (M)")
+    ax.set_ylabel("mean POSC, validation priors")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
