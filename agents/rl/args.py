@@ -329,12 +329,14 @@ def check_teacher(name: Any, field: str = "bc_teacher") -> str:
 
 def check_residual_teacher(name: Any, field: str = "residual_teacher") -> str:
     """``name`` if it is a registered plan-then-fly policy (a
-    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower), else a
-    ConfigError naming ``field``."""
+    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower) or a
+    re-planning one (:data:`poc_env.agents.rl.residual.ROUTE_TEACHERS`), else a ConfigError
+    naming ``field``."""
     from poc_env.agents.policies.base import PlanPolicy
     from poc_env.agents.policies.registry import make_policy
+    from poc_env.agents.rl.residual import ROUTE_TEACHERS
 
-    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy)]
+    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy) or t in ROUTE_TEACHERS]
     if not isinstance(name, str) or name not in plans:
         raise ConfigError(field, name, "a registered plan-then-fly policy: " + ", ".join(plans))
     return name
