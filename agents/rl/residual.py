@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from gymnasium import spaces
 
-from poc_env.agents.rl.args import check_residual_teacher
+from poc_env.agents.rl.args import ROUTE_TEACHERS, check_residual_teacher
 from poc_env.envs.vector import SwarmVecEnv
 from poc_env.errors import ConfigError
 
@@ -62,9 +62,6 @@ RESIDUAL_DIMS = 2
 TEACHER_DIMS = 3
 #: Spawn key of the SeedSequence of the training prior pool.
 POOL_KEY = (0xAE, 0)
-#: Teachers that are not a plan made once but fly routes with a waypoint follower (``follower``)
-#: and re-plan from the environment's state (module docstring).
-ROUTE_TEACHERS = ("spacetime_receding",)
 
 
 def combine(teacher: np.ndarray, residual: np.ndarray, homing: np.ndarray) -> np.ndarray:
