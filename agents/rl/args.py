@@ -337,8 +337,7 @@ ROUTE_TEACHERS = ("spacetime_receding",)
 def check_residual_teacher(name: Any, field: str = "residual_teacher") -> str:
     """``name`` if it is a registered plan-then-fly policy (a
     :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower) or a
-    re-planning one (:data:`ROUTE_TEACHERS`), else a ConfigError
-    naming ``field``."""
+    re-planning one (:data:`ROUTE_TEACHERS`), else a ConfigError naming ``field``."""
     from poc_env.agents.policies.base import PlanPolicy
     from poc_env.agents.policies.registry import make_policy
 
