@@ -146,11 +146,13 @@ class TrainArgs:
     """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
     ...; poc_env.agents.rl.residual): it plans each episode and flies its routes, the policy
     sees the task's observation plus the teacher's eq. 19 action and adds (dv, d turn) to it;
-    its mean starts at 0, i.e. at the teacher. ppo:RUN flies the checkpoint the same way."""
+    its mean starts at 0, i.e. at the teacher. ppo:RUN flies the checkpoint the same way. On a
+    -Drift- task: spacetime_plan or spacetime_receding (the moving-target planners)."""
     residual_pool: int = 64
     """Residual: training priors come from a pool of this many random priors whose plans are
     made once (planning costs ~30x an episode's simulation on paper_6_2); 0: a fresh prior and plan
-    every episode."""
+    every episode. Not used on a moving target or with spacetime_receding (a plan depends on
+    the episode's drift: the teacher plans every episode)."""
     residual_log_std: float = -3.0
     """Residual: the policy's initial log standard deviation (-3.0: std 0.05; the residual is
     a fraction of eq. 19's per-step limits, 180 degrees of turn per step on paper_6_2, so BC's
@@ -327,14 +329,19 @@ def check_teacher(name: Any, field: str = "bc_teacher") -> str:
     return name
 
 
+#: Residual teachers that are not a plan made once but fly routes with a waypoint follower
+#: (``follower``) and re-plan from the environment's state (:mod:`poc_env.agents.rl.residual`).
+ROUTE_TEACHERS = ("spacetime_receding",)
+
+
 def check_residual_teacher(name: Any, field: str = "residual_teacher") -> str:
     """``name`` if it is a registered plan-then-fly policy (a
-    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower), else a
-    ConfigError naming ``field``."""
+    :class:`~poc_env.agents.policies.base.PlanPolicy`: it has routes and a follower) or a
+    re-planning one (:data:`ROUTE_TEACHERS`), else a ConfigError naming ``field``."""
     from poc_env.agents.policies.base import PlanPolicy
     from poc_env.agents.policies.registry import make_policy
 
-    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy)]
+    plans = [t for t in teachers() if isinstance(make_policy(t), PlanPolicy) or t in ROUTE_TEACHERS]
     if not isinstance(name, str) or name not in plans:
         raise ConfigError(field, name, "a registered plan-then-fly policy: " + ", ".join(plans))
     return name

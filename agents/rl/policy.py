@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from poc_env.agents.policies.base import PlanPolicy, Policy
+from poc_env.agents.policies.base import Policy
 from poc_env.agents.rl.checkpoint import describe_space, load_policy, model_path
 from poc_env.errors import ConfigError
 from poc_env.sim.observations import SET_SIZE, SetFeatures, split_observation
@@ -172,8 +172,7 @@ class PPOPolicy(Policy):
 
             self.mode, self.control = "residual", "increments"
             teacher = make_policy(check_residual_teacher(cfg["residual_teacher"]))
-            assert isinstance(teacher, PlanPolicy)
-            self._teacher = teacher
+            self._teacher = teacher  # a PlanPolicy or a re-planner with a follower
             self._teacher.reset(env, seed)
             if task.obs == "set":
                 self._set = SetFeatures(env.params)

@@ -30,6 +30,13 @@ run's seed; each env draws its next pool index from its own generator) whose pla
 once and reused; ``residual_pool=0`` draws a fresh prior and plans every episode. Evaluation
 always plans on the evaluation prior. A resumed run starts new episodes (the followers in
 flight are not checkpointed).
+
+Moving targets (the ``-Drift-`` tasks): the teacher may be a moving-target planner,
+``spacetime_plan`` (a plan) or ``spacetime_receding`` (a plan re-made every 20 min from the
+current belief: :data:`ROUTE_TEACHERS`). Each env's teacher reads that env's live state through
+:class:`EnvView` (its belief, step and drift velocity), as it reads the environment's when it
+flies alone. A plan depends on the episode's drift, so on a moving target (and with a re-planning
+teacher) no plan is pooled: the teacher plans every episode.
 """
 
 from __future__ import annotations
@@ -41,14 +48,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from gymnasium import spaces
 
-from poc_env.agents.rl.args import check_residual_teacher
+from poc_env.agents.rl.args import ROUTE_TEACHERS, check_residual_teacher
 from poc_env.envs.vector import SwarmVecEnv
 from poc_env.errors import ConfigError
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
 
-    from poc_env.agents.policies.base import PlanPolicy
 
 #: Residual action per UAV: (dv, d turn), added to the teacher's eq. 19 action.
 RESIDUAL_DIMS = 2
@@ -86,9 +92,10 @@ ACTION_SPACE = spaces.Box(-1.0, 1.0, (RESIDUAL_DIMS,), np.float32)
 
 
 def teacher_actions(
-    teacher: PlanPolicy, observations: dict, agents: list[str]
+    teacher: Any, observations: dict, agents: list[str]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The teacher's eq. 19 actions ``(len(agents), 3)`` for the live ``agents`` (those in
+    """The ``teacher``'s (a PlanPolicy or a :data:`ROUTE_TEACHERS` policy, reset: both fly
+    with a ``follower``) eq. 19 actions ``(len(agents), 3)`` for the live ``agents`` (those in
     ``observations``) and whether its follower is taking each home (``(len(agents),)``)."""
     acts, _ = teacher.predict(observations)
     follower = teacher.follower
@@ -110,6 +117,29 @@ def init_policy(model: PPO, log_std: float) -> None:
         net.weight.zero_()  # type: ignore[operator]
         net.bias.zero_()  # type: ignore[operator]
         model.policy.log_std.fill_(float(log_std))  # type: ignore[operator]
+
+
+class EnvView:
+    """What a teacher reads of env ``k`` of a vectorised ``engine`` (the attributes a policy's
+    ``reset`` and a re-planning teacher's ``predict`` read of a parallel env): ``sim_state``
+    holds that env's rows (``belief``, ``step``, ``drift``) at the time it is read."""
+
+    def __init__(self, venv: SwarmVecEnv, k: int) -> None:
+        self.params = venv.params
+        self.scenario = venv.scenario
+        self.possible_agents = venv.possible_agents
+        self._engine = venv.engine
+        self._k = k
+
+    @property
+    def sim_state(self) -> SimpleNamespace:
+        cur, k = self._engine.current, self._k
+        drift = getattr(cur, "drift", None)
+        return SimpleNamespace(
+            belief=cur.belief[k : k + 1],
+            step=cur.step[k : k + 1],
+            drift=None if drift is None else drift[k : k + 1],
+        )
 
 
 class ResidualVecEnv(SwarmVecEnv):
@@ -159,6 +189,11 @@ class ResidualVecEnv(SwarmVecEnv):
         self._homing = np.ones((e, n), dtype=bool)
         self.plans_made = 0
 
+    @property
+    def pooled(self) -> bool:
+        """Whether plans are reused (a plan-once teacher on a static target)."""
+        return self.teacher not in ROUTE_TEACHERS and self.params.motion is None
+
     def _plan(self, k: int, key: int) -> Any:
         """A teacher reset on env ``k``'s new episode (its prior); pooled plans reused."""
         from poc_env.agents.policies.registry import make_policy
@@ -168,16 +203,11 @@ class ResidualVecEnv(SwarmVecEnv):
             t.follower = copy.copy(t.follower)
             t.follower.index = np.zeros_like(t.follower.index)
             return t
-        shim = SimpleNamespace(
-            params=self.params,
-            scenario=self.scenario,
-            possible_agents=self.possible_agents,
-            sim_state=SimpleNamespace(belief=self.engine.current.belief[k : k + 1]),
-        )
         t = make_policy(self.teacher)
-        t.reset(shim, int(max(key, 0)))
+        # pooled: the pool index seeds the plan (as before); else one seed per plan made
+        t.reset(EnvView(self, k), int(max(key, 0)) if self.pooled else self.plans_made)
         self.plans_made += 1
-        if key >= 0 or not self.random_priors:
+        if self.pooled and (key >= 0 or not self.random_priors):
             self._plans[key] = t
             return self._plan(k, key)
         return t
@@ -187,14 +217,14 @@ class ResidualVecEnv(SwarmVecEnv):
         keys = []
         for k in np.asarray(envs).tolist():
             key = -1
-            if self.random_priors and self.pool > 0:
+            if self.random_priors and self.pool > 0 and self.pooled:
                 key = int(self.rngs[k].integers(self.pool))
                 self._options[k * n] = {**self._options[k * n], "prior": self._pool[key]}
             keys.append(key)
         obs = super()._new_episodes(envs)
         for k, key in zip(np.asarray(envs).tolist(), keys, strict=True):
             self._teachers[k] = self._plan(k, key)
-            if self.random_priors and self.pool > 0:
+            if self.random_priors and self.pool > 0 and self.pooled:
                 self._options[k * n] = {}
         return obs
 
@@ -210,7 +240,9 @@ class ResidualVecEnv(SwarmVecEnv):
             if not len(live):
                 continue
             agents = [self.possible_agents[i] for i in live]
-            obs = {a: {"vector": vec[e, i]} for a, i in zip(agents, live, strict=True)}
+            obs = {  # the vector alone: the follower and the re-planner read nothing else
+                a: {"raster": None, "vector": vec[e, i]} for a, i in zip(agents, live, strict=True)
+            }
             inc, hom = teacher_actions(self._teachers[e], obs, agents)
             self._teacher_inc[e, live] = inc
             self._homing[e, live] = hom

@@ -164,3 +164,85 @@ def test_a_killed_residual_run_resumes_from_its_checkpoint(tmp_path):
     assert not (run / "checkpoints" / f"step_{rollout}.env.npz").exists()
     train(TrainArgs(resume=str(run), progress=False))
     assert load_policy(run / "model.zip").num_timesteps == 3 * rollout
+
+
+DRIFT = "UAVSearch-Small-Drift-Heading-v1"
+
+
+def _drift_scenario():
+    from poc_env.tasks import get_task
+
+    return get_task(DRIFT).load_scenario()
+
+
+def _fly_alone(policy: str, scenario, seed: int, plan_seed: int) -> float:
+    """``policy``'s POSC flown alone on ``scenario``'s parallel env reset with ``seed``."""
+    from poc_env.agents.policies.registry import make_policy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    env = UAVSearchParallelEnv(scenario)
+    obs, _ = env.reset(seed=seed)
+    pol = make_policy(policy)
+    pol.reset(env, plan_seed)
+    while env.agents:
+        actions, _ = pol.predict(obs)
+        obs, *_ = env.step(actions)
+    return float(env.sim_state.posc[0])
+
+
+@pytest.mark.parametrize("teacher", ["spacetime_plan", "spacetime_receding"])
+def test_a_moving_target_teacher_flies_its_episode_in_the_zero_residual_env(teacher):
+    """On a Drift task the teacher reads its env's drift, belief and clock (EnvView): the zero
+    residual scores what the teacher scores alone on the same episode (same generator), and
+    plans are made per episode (none pooled: a plan depends on the drift)."""
+    sc = _drift_scenario()
+    env = ResidualVecEnv(
+        sc, n_envs=1, seed=0, obs_type="compass", random_priors=False, teacher=teacher
+    )
+    env.engine.seed([11])  # the generator the parallel env's reset(seed=11) makes
+    env._seeds = [None]  # keep it through reset
+    env.reset()
+    assert np.linalg.norm(env.engine.current.drift[0]) > 0.1  # a moving target
+    posc = None
+    while posc is None:
+        _, _, _, infos = env.step(np.zeros((env.num_envs, 2)))
+        if "episode" in infos[0]:
+            posc = infos[0]["posc"]
+    assert env.plans_made == 2  # the first episode's and the next one's (auto-reset)
+    assert posc == pytest.approx(_fly_alone(teacher, sc, 11, plan_seed=0), abs=1e-9)
+
+
+def test_a_receding_residual_at_zero_flies_the_receding_planner_through_ppo(tmp_path):
+    """--residual-teacher spacetime_receding on a Drift task, --total-timesteps 0: ppo:RUN
+    flies spacetime_receding's episode action for action (its re-plans included)."""
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    run = train(
+        _args(
+            tmp_path / "zero_drift",
+            task=DRIFT,
+            residual_teacher="spacetime_receding",
+            total_timesteps=0,
+        )
+    )
+    sc = _drift_scenario()
+    flights = []
+    for policy in (f"ppo:{run}", "spacetime_receding"):
+        from poc_env.agents.policies.registry import make_policy
+
+        env = UAVSearchParallelEnv(sc)
+        obs, _ = env.reset(seed=12)
+        pol = make_policy(policy)
+        pol.reset(env, 12)
+        steps = []
+        while env.agents:
+            actions, _ = pol.predict(obs)
+            steps.append({a: np.asarray(v, dtype=float) for a, v in actions.items()})
+            obs, *_ = env.step(actions)
+        flights.append((steps, float(env.sim_state.posc[0])))
+    (ours, p_ours), (teach, p_teach) = flights
+    assert len(ours) == len(teach) and p_ours == p_teach
+    for a, b in zip(ours, teach, strict=True):
+        assert a.keys() == b.keys()
+        for k in a:
+            np.testing.assert_array_equal(a[k], b[k])
