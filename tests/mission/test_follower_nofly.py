@@ -119,3 +119,21 @@ def test_router_paths_and_refinement_legs_keep_the_full_clearance():
     assert router.crosses(np.array([[5_000.0, y]]), np.array([[35_000.0, y]]))[0]
     y = 10_000 - 1.01 * c
     assert not router.crosses(np.array([[5_000.0, y]]), np.array([[35_000.0, y]]))[0]
+
+
+def test_router_vertices_keep_the_clearance_where_zones_overlap():
+    """Found by the property run (seed 734423511, a triangle over an L): with the keep-out
+    polygons grown only 0.1 % beyond c, GEOS's buffer fell 0.2 % short of it at a vertex
+    where the two zones' keep-out areas meet; the vertex lay inside the obstacle, the graph
+    lost its edges there and a UAV's way home was a straight leg through both zones."""
+    tri = np.array([[11.3043, 2.7528], [18.7036, 2.7528], [12.2333, 13.9570]]) * 1000.0
+    ell = np.array([[6.0223, 0.2909], [17.7181, 0.2909], [17.7181, 12.3268], [14.5577, 12.3268],
+                    [14.5577, 3.4513], [9.1826, 3.4513], [9.1826, 12.3268],
+                    [6.0223, 12.3268]]) * 1000.0  # fmt: skip
+    c = clearance_m(load_scenario("small"))
+    router = ZoneRouter([tri, ell], (-20_000, -26_000, 60_000, 50_000), c)
+    both = shapely.union_all([shapely.Polygon(tri), shapely.Polygon(ell)])
+    assert min(both.distance(shapely.Point(p)) for p in router.nodes) >= c
+    path = router.path((17_023.0, 14_647.0), (1_253.0, -6_000.0))
+    assert path is not None
+    assert shapely.LineString(path).distance(both) >= c * (1 - 1e-9)
