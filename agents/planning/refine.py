@@ -326,8 +326,8 @@ def refine_routes(
     take-off (rad), or None. With ``airspace``, a move is kept only if it adds no
     :func:`swarm_violations` at the planned positions (the best-scoring candidates are tried in
     turn, at most :data:`TRIES`). With ``router``, a move whose new legs enter a no-fly zone
-    grown by 0.9 of the clearance (:meth:`poc_env.sim.routing.ZoneRouter.crosses`) is not
-    tried, so routes made flyable stay flyable (eq. 20)."""
+    grown by the clearance c (:meth:`poc_env.sim.routing.ZoneRouter.crosses`) is not tried, so
+    routes made flyable stay flyable (eq. 20) and keep c."""
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     n = len(takeoff)

@@ -5,12 +5,18 @@ environment: each step it turns towards the current waypoint as far as the turn 
 holds the pattern speed on the pattern and the transit speed on the way to the first waypoint
 (by default eq. 17's search speed v_s and cruise speed v_c; a route plan may fly faster), and
 levels the pitch to hold the cruise altitude. A waypoint counts as reached when it is within
-half a step. After the last waypoint -- or as soon as the remaining usable endurance (0.85 T,
-eq. 18) only just covers the flight home at cruise speed plus two steps -- the UAV heads for its
-landing field.
+half a step, or as passed at its closest approach: when the distance to it, having shrunk,
+starts to grow while the last step ended within the capture radius ``v dt / 2 + v / omega_max``
+(half a step plus the turn radius: the closest the turn-rate bound lets a UAV come to a point
+beside it without an orbit). Without that second rule a UAV that comes round at the wrong
+phase orbits the waypoint until the return rule sends it home (issue 24). After the last
+waypoint -- or as soon as the remaining usable endurance (0.85 T, eq. 18) only just covers the
+flight home at cruise speed plus two steps -- the UAV heads for its landing field.
 With no-fly zones (eq. 20) the legs to the first waypoint and home follow the shortest path
 around them (:class:`poc_env.sim.routing.ZoneRouter`, the planners' router), and the return
-rule budgets that path's length.
+rule budgets that path's length. Near a zone every step is also checked before it is flown
+(:func:`zone_guard`): a turn whose step would enter a zone, or leave no step after it that
+keeps out, is replaced by the admissible turn closest to it that keeps out for two steps.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from poc_env.errors import ConfigError
+from poc_env.sim.constraints import NoFlyZones
 from poc_env.sim.core import Params
 from poc_env.sim.observations import decode_vector, split_observation
 from poc_env.sim.routing import ZoneRouter, clearance_m
@@ -75,6 +82,39 @@ def go_home(params: Params, q: dict, k: int) -> np.ndarray:
     return homing(params, q, k)
 
 
+def capture_radius(params: Params, speed) -> np.ndarray:
+    """The follower's capture radius at ``speed`` (m/s): half a step plus the turn radius
+    ``v / omega_max`` (eq. 19's turn-rate bound), the same sum as the router's clearance
+    (:func:`poc_env.sim.routing.clearance_m`, which takes it at ``v_max``)."""
+    v = np.asarray(speed, dtype=float)
+    return 0.5 * v * params.dt + v / params.scenario.uav.max_turn_rate_rad_s
+
+
+def zone_guard(
+    zones: NoFlyZones, xy, heading: float, step: float, turn: float, max_turn: float, n: int = 15
+) -> float:
+    """The heading increment to fly instead of ``turn`` so that no-fly ``zones`` (eq. 20) are
+    kept: ``turn`` itself when its step (``step`` metres along ``heading + turn``) enters no
+    zone and some step after it (any turn within ``max_turn``) enters none either; else the
+    admissible turn (``turn`` or one of ``n`` evenly spaced in ``[-max_turn, max_turn]``)
+    closest to it with that property, or failing that the closest whose own step keeps out
+    (the least bad: the proposal when none does)."""
+    p0 = np.asarray(xy, dtype=float)
+    t1 = np.concatenate([[float(np.clip(turn, -max_turn, max_turn))],
+                         np.linspace(-max_turn, max_turn, n)])  # fmt: skip
+    a1 = heading + t1
+    p1 = p0 + step * np.stack([np.cos(a1), np.sin(a1)], axis=-1)  # (C, 2)
+    bad1 = np.asarray(zones.segment_crosses(np.broadcast_to(p0, p1.shape), p1))
+    a2 = a1[:, None] + np.linspace(-max_turn, max_turn, n)[None, :]
+    p2 = p1[:, None, :] + step * np.stack([np.cos(a2), np.sin(a2)], axis=-1)  # (C, n, 2)
+    hit2 = np.asarray(zones.segment_crosses(np.broadcast_to(p1[:, None, :], p2.shape), p2))
+    bad2 = np.all(hit2, axis=1)
+    if not (bad1[0] or bad2[0]):
+        return float(t1[0])
+    cost = 4.0 * bad1 + 2.0 * bad2 + np.abs(t1 - t1[0]) / (2 * max_turn + 1e-12)
+    return float(t1[int(np.argmin(cost))])
+
+
 def _lookahead(p, q, xy, ahead: float) -> np.ndarray:
     """The point ``ahead`` metres beyond the projection of ``xy`` on the leg p -> q (<= q)."""
     d = q - p
@@ -100,8 +140,14 @@ class WaypointFollower:
         *,
         transit_speed_mps: float | None = None,
         pattern_speed_mps: float | None = None,
+        closest_approach: bool = True,
+        guard_zones: bool = True,
     ):
         u = params.scenario.uav
+        #: the closest-approach rule and the zone guard (module docstring); both off is the
+        #: follower before issue 24's fixes (kept to measure them against)
+        self.closest_approach = bool(closest_approach)
+        self.guard_zones = bool(guard_zones)
         self.params = params
         self.agents = list(agents)
         self.transit_speed = u.cruise_speed_mps if transit_speed_mps is None else transit_speed_mps
@@ -116,6 +162,10 @@ class WaypointFollower:
                 )
         self.waypoints = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
         self.index = np.zeros(len(self.agents), dtype=int)
+        # the closest-approach rule's memory: the last distance to the current waypoint and
+        # whether it has shrunk since the waypoint became current
+        self._last = np.full(len(self.agents), np.inf)
+        self._closing = np.zeros(len(self.agents), dtype=bool)
         self.router = (
             ZoneRouter(params.zones.polygons, params.bounds, clearance_m(params.scenario))
             if len(params.zones)
@@ -133,6 +183,45 @@ class WaypointFollower:
 
     def reset(self) -> None:
         self.index[:] = 0
+        self._last[:] = np.inf
+        self._closing[:] = False
+
+    def _advance(self, k: int, xy: np.ndarray, speed: float) -> None:
+        """Move UAV ``k`` past every waypoint it has reached (within half a step) or passed
+        (its closest approach, within :func:`capture_radius`; module docstring)."""
+        wps = self.waypoints[k]
+        reach = 0.5 * speed * self.params.dt
+        capture = float(capture_radius(self.params, speed))
+        while self.index[k] < len(wps):
+            d = float(np.hypot(*(wps[self.index[k]] - xy)))
+            passed = (
+                self.closest_approach
+                and self._closing[k]
+                and d > self._last[k]
+                and self._last[k] <= capture
+            )
+            if d > reach and not passed:
+                self._closing[k] |= d < self._last[k]
+                self._last[k] = d
+                return
+            self.index[k] += 1
+            self._last[k] = np.inf
+            self._closing[k] = False
+
+    def _guarded(self, q: dict, action: np.ndarray) -> np.ndarray:
+        """``action`` with its turn replaced by :func:`zone_guard`'s near a zone."""
+        zones = self.params.zones
+        if not (self.guard_zones and len(zones)):
+            return action
+        step = float(q["speed"]) * self.params.dt * float(np.cos(q["pitch"]))
+        xy = np.asarray(q["xy"], dtype=float)
+        if float(zones.distance(xy)) > 2.0 * step + 1.0:
+            return action
+        m = self.params.scenario.uav.max_turn_rate_rad_s * self.params.dt
+        turn = zone_guard(zones, xy, float(q["heading"]), step, float(action[1]) * m, m)
+        out = np.array(action, dtype=np.float32)
+        out[1] = np.float32(np.clip(turn / m, -1.0, 1.0))
+        return out
 
     def _vector(self, obs) -> np.ndarray:
         """The state vector of one agent's ``dict`` or ``flat`` observation (a ``dict`` may
@@ -149,9 +238,8 @@ class WaypointFollower:
             q = decode_vector(self.params, self._vector(observations[agent]))
             wps = self.waypoints[k]
             reach = 0.5 * q["speed"] * self.params.dt
-            while self.index[k] < len(wps) and np.hypot(*(wps[self.index[k]] - q["xy"])) <= reach:
-                self.index[k] += 1
             xy = np.asarray(q["xy"], dtype=float)
+            self._advance(k, xy, float(q["speed"]))
             home_goal, home_len = self._around(xy, self.params.landing[k])
             u = self.params.scenario.uav
             if self.router is None:
@@ -161,6 +249,8 @@ class WaypointFollower:
                 back = bool(q["usable"] * u.usable_endurance_s <= rule)
             if back:
                 self.index[k] = len(wps)
+                self._last[k] = np.inf
+                self._closing[k] = False
             on_pattern = 0 < self.index[k] < len(wps)
             if on_pattern:  # pure pursuit along the leg: back onto the line, then along it
                 goal = _lookahead(
@@ -172,15 +262,17 @@ class WaypointFollower:
                 goal = self.params.landing[k]
             if self.index[k] >= len(wps):
                 if home_goal is not self.params.landing[k] and np.any(home_goal != goal):
-                    actions[agent] = steer(
+                    act = steer(
                         self.params, xy, q["heading"], q["speed"], q["pitch"], q["z"],
                         home_goal, u.cruise_speed_mps,
                     ).astype(np.float32)  # fmt: skip
                 else:
-                    actions[agent] = go_home(self.params, q, k)
+                    act = go_home(self.params, q, k)
+                actions[agent] = self._guarded(q, act)
                 continue
             v = self.pattern_speed if on_pattern else self.transit_speed
-            actions[agent] = steer(
+            act = steer(
                 self.params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v
             ).astype(np.float32)
+            actions[agent] = self._guarded(q, act)
         return actions, state

@@ -5,14 +5,20 @@ follower's transit legs (:mod:`poc_env.sim.autopilot`).
 
 - The **keep-out** area is the union of the zones grown by a clearance ``c``
   (:func:`clearance_m`): the follower cuts corners (a waypoint counts as reached half a step
-  away, then it turns at most ``omega_max``), so a route that keeps ``c`` from every zone is
-  flown without entering one.
+  away, or passed at its closest approach within half a step plus the turn radius, then it
+  turns at most ``omega_max``), so a route that keeps ``c`` from every zone is flown without
+  entering one. Its polygons (round joins, :data:`QUAD_SEGS` segments per quarter circle) are
+  grown a little further, to ``c / cos(pi / (4 QUAD_SEGS))`` (+1 %), so that their chords,
+  not only their vertices, keep ``c``.
 - **Shortest paths** (:meth:`ZoneRouter.path`): a visibility graph over the vertices of the
-  keep-out polygons (round joins, two segments per quarter circle), edges tested with shapely
-  against the zones grown by ``0.9 c`` (so paths may run along the keep-out boundary), all
-  pairs solved once with Dijkstra (``scipy.sparse.csgraph``); a query joins its two ends to the
-  visible vertices. Vertices outside the operating area (eq. 20's box, convex) are dropped, so
-  paths stay inside it.
+  keep-out polygons, edges tested with shapely against the **obstacle**, the zones grown by
+  ``c`` itself (a finer round buffer, inside the keep-out polygons, so paths may run along the
+  keep-out boundary), all pairs solved once with Dijkstra (``scipy.sparse.csgraph``); a query
+  joins its two ends to the visible vertices. Every path and every leg the refinement accepts
+  (:meth:`ZoneRouter.crosses`) therefore keeps ``c`` from every zone (issue 24: with the
+  obstacle at ``0.9 c`` and two segments per quarter circle, routes passed 0.90-0.92 c from
+  zones). Vertices outside the operating area (eq. 20's box, convex) are dropped, so paths stay
+  inside it.
 - **Clipping** (:meth:`ZoneRouter.reroute`): every leg of a polyline is cut to its parts
   outside the keep-out area and consecutive parts are joined by shortest paths, so search legs
   fly only searchable airspace and transit goes around.
@@ -37,8 +43,12 @@ from poc_env.sim.constraints import NoFlyZones
 
 __all__ = ["ZoneRouter", "clearance_m"]
 
-#: visibility obstacle = zones grown by this share of the clearance.
-_SLACK = 0.9
+#: segments per quarter circle of the keep-out polygons' round joins (the graph's vertices).
+QUAD_SEGS = 4
+#: the keep-out polygons' growth over ``c``: their chords keep ``c`` (+1 %: GEOS's buffer
+#: came 0.2 % short of its distance where two zones' keep-out areas meet), so the obstacle
+#: (the zones grown by ``c``, finely rounded) lies strictly inside them.
+_GROW = 1.01 / float(np.cos(np.pi / (4 * QUAD_SEGS)))
 
 
 def clearance_m(scenario: Any) -> float:
@@ -75,9 +85,9 @@ class ZoneRouter:
             return
         raw = shapely.union_all(self.zones)
         self.keep_out = shapely.union_all(
-            [z.buffer(self.clearance, quad_segs=2) for z in self.zones]
+            [z.buffer(_GROW * self.clearance, quad_segs=QUAD_SEGS) for z in self.zones]
         )
-        self.obstacle = raw.buffer(_SLACK * self.clearance, quad_segs=4)
+        self.obstacle = raw.buffer(self.clearance, quad_segs=16)
         self.raw = raw.buffer(1.0)
         for g in (self.keep_out, self.obstacle, self.raw):
             shapely.prepare(g)
@@ -116,12 +126,12 @@ class ZoneRouter:
     # -- queries -----------------------------------------------------------------------------
     def _visible(self, p: np.ndarray, targets: np.ndarray) -> np.ndarray:
         """Bool (T,): the straight segments p -> targets miss the obstacle (the zones grown by
-        0.9 c; from a point already inside that ring, the zones themselves)."""
+        c; from a point already inside that ring, the zones themselves)."""
         if not len(targets):
             return np.zeros(0, dtype=bool)
         lines = shapely.linestrings(np.stack([np.broadcast_to(p, targets.shape), targets], axis=1))
         hit = shapely.intersects(lines, self.obstacle)
-        # an end already inside the 0.9 c ring (a field near a zone, a UAV cutting a corner):
+        # an end already inside the c ring (a field near a zone, a UAV cutting a corner):
         # only the zones themselves count for that segment
         near = shapely.contains_xy(self.obstacle, targets[:, 0], targets[:, 1])
         if self.obstacle.contains(Point(p)):
@@ -158,8 +168,8 @@ class ZoneRouter:
         return float(np.hypot(*np.diff(p, axis=0).T).sum()) if p is not None else np.inf
 
     def crosses(self, starts, ends) -> np.ndarray:
-        """Bool (L,): legs ``starts -> ends`` ((L, 2) each) that enter the zones grown by 0.9 c
-        (vectorised, for local search)."""
+        """Bool (L,): legs ``starts -> ends`` ((L, 2) each) that enter the zones grown by c
+        (the obstacle; vectorised, for local search)."""
         if not self.active:
             return np.zeros(len(np.asarray(starts).reshape(-1, 2)), dtype=bool)
         return self._edges.segment_crosses(np.asarray(starts, float), np.asarray(ends, float))

@@ -455,15 +455,21 @@ def test_survey_plan_keeps_out_of_zones_and_records_the_scenario_crs(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="known (issue 24, property test seed 880072468): the waypoint follower orbits a "
-    "waypoint it cannot capture (reach half a step, turn-rate bound) 2.1 km from an L-shaped "
-    "zone's corner, inside the router's clearance c = 2.27 km but outside the local search's "
-    "0.9 c, and the orbit cuts the corner: 2 no-fly steps on the replan plan",
+@pytest.mark.parametrize(
+    ("seed", "planners"),
+    [(880072468, ("allocation", "replan")), (2004701267, ("greedy_rectangles",))],
 )
-def test_known_orbit_near_a_zone_corner(tmp_path, fly):
-    total, failed = run_cases(fly, [880072468], tmp_path, ("allocation", "replan"))
+def test_known_orbit_near_a_zone_corner(tmp_path, fly, seed, planners):
+    """Found by the 200-case run: the waypoint follower orbited a waypoint it could not
+    capture (reached only within half a step; the turn-rate bound) 2.1 km from an L-shaped
+    zone's corner, inside the router's clearance c = 2.27 km but outside the refinement's
+    0.9 c, and the orbit cut the corner (seed 880072468, the replan plan, 2 no-fly steps); on
+    seed 2004701267 the greedy rectangles' UAV 2 orbited a route vertex until the return rule
+    sent it home, and the first step of its turn home entered the zone (2 steps). Fixed by the
+    closest-approach rule, the follower's zone guard and routes keeping c (the mechanisms'
+    smoke-sized tests: test_follower_nofly.py). The first no longer reproduced before the fix
+    (the plans changed with the coverage-boxes start); the second did."""
+    total, failed = run_cases(fly, [seed], tmp_path, planners)
     _assert_clean(total, failed)
 
 
