@@ -228,6 +228,9 @@ def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, 
     nx = table.shape[1] - 1
     best = 0.0
     bi = bj = bw = bh = 0
+    # a box's mass <= its row band's, up to the rounding of the table's sums (slack: far above
+    # it, so the rows skipped are exactly those where no box would beat the best)
+    slack = 1e-12 * np.abs(table).max()
     for a in range(widths.shape[0]):
         nw = widths[a]
         for b in range(heights.shape[0]):
@@ -242,13 +245,30 @@ def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, 
             if search > budget:  # no position can fit it
                 continue
             cur = best
+            # the columns whose distance along x alone fits (hypot >= its x part): no box
+            # outside [i0, i1] fits, so only those are searched and bound
+            i0 = nx - nw + 1
+            i1 = -1
+            for i in range(nx - nw + 1):
+                xlo = orig[0] + h * i
+                dxt = max(max(xlo - takeoff[0], takeoff[0] - xlo - lx), 0.0)
+                dxl = max(max(xlo - landing[0], landing[0] - xlo - lx), 0.0)
+                if dxt / speeds[0] + dxl / speeds[2] + search <= budget:
+                    i0 = min(i0, i)
+                    i1 = i
+            if i1 < 0:
+                continue
             for j in range(ny - nh + 1):
                 ylo = orig[1] + h * j
                 dyt = max(max(ylo - takeoff[1], takeoff[1] - ylo - ly), 0.0)
                 dyl = max(max(ylo - landing[1], landing[1] - ylo - ly), 0.0)
                 if dyt / speeds[0] + dyl / speeds[2] + search > budget:
                     continue  # the row alone is too far (hypot >= its y part): no box fits
-                for i in range(nx - nw + 1):
+                e = i1 + nw
+                band = table[j + nh, e] - table[j, e] - table[j + nh, i0] + table[j, i0]
+                if band + slack < cur:
+                    continue  # the row's band (masses >= 0) cannot beat the best
+                for i in range(i0, i1 + 1):
                     mass = table[j + nh, i + nw] - table[j, i + nw] - table[j + nh, i] + table[j, i]
                     if not mass > cur:
                         continue

@@ -46,6 +46,7 @@ allocation planner like its other starts.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -79,6 +80,9 @@ CHAIN_SPACINGS: tuple[float, ...] = ()
 PART = True
 #: halvings of the bisection for the part of a line that fits.
 PART_STEPS = 12
+#: share one coverage's gain tables among the lawnmowers searched against it (False: each
+#: lawnmower recomputes its own; same routes bit for bit, slower; kept for the tests).
+_SHARE_TABLES = True
 
 
 def cut_lines(wps, fits, min_part: float = 0.0) -> tuple[np.ndarray, int]:
@@ -149,16 +153,38 @@ def box_routes(
     block = np.zeros((my * f, mx * f))
     speed_arr = np.array([speeds.out, speeds.line, speeds.home])
     half_turn = math.pi / turn_rate  # a half-turn at a line end (the box search's estimate)
-    table = np.zeros((my + 1, mx + 1))
 
-    def lawn(k: int, s: float, cov: np.ndarray, frm, lead: np.ndarray, left: float) -> np.ndarray:
-        """UAV ``k``'s lawnmower of lines ``s`` sweep widths apart of most gain against ``cov``,
-        flown from ``frm`` after the waypoints ``lead`` with ``left`` seconds of the budget
-        left there; its last lines dropped until the whole route keeps eq. 18."""
-        base = pod_from_coverage(cov, law)
+    def gain_table(cov: np.ndarray, base: np.ndarray, s: float) -> np.ndarray:
+        """Step 1: the summed-area table (on ``f x f`` blocks) of the gains of lines ``s`` sweep
+        widths apart against the coverage ``cov`` (``base`` its POD)."""
         block[: grid.ny, : grid.nx] = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
         gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
+        table = np.zeros((my + 1, mx + 1))
         table[1:, 1:] = gain.cumsum(0).cumsum(1)
+        return table
+
+    def tables(cov: np.ndarray, base: np.ndarray | None = None) -> Callable[[float], np.ndarray]:
+        """The gain tables against ``cov`` by spacing, each computed on first use (the
+        lawnmowers of all shares, and all second lawnmowers after one first, share one
+        coverage; :data:`_SHARE_TABLES` False recomputes them per lawnmower, same routes)."""
+        pod0 = pod_from_coverage(cov, law) if base is None else base
+        done: dict[float, np.ndarray] = {}
+
+        def get(s: float) -> np.ndarray:
+            if s not in done or not _SHARE_TABLES:
+                done[s] = gain_table(cov, pod0, s)
+            return done[s]
+
+        return get
+
+    def lawn(
+        k: int, s: float, tab: Callable[[float], np.ndarray], frm, lead: np.ndarray, left: float
+    ) -> np.ndarray:
+        """UAV ``k``'s lawnmower of lines ``s`` sweep widths apart of most gain in the gain
+        tables ``tab`` (:func:`tables`), flown from ``frm`` after the waypoints ``lead`` with
+        ``left`` seconds of the budget left there; its last lines dropped until the whole
+        route keeps eq. 18."""
+        table = tab(s)
         sp = speed_arr if not len(lead) else np.array([speeds.line, speeds.line, speeds.home])
         wps: np.ndarray = np.zeros((0, 2))
         for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
@@ -204,16 +230,18 @@ def box_routes(
 
         firsts = [(s, budget) for s in spacings]
         firsts += [(s, x * budget) for x in shares for s in spacings]
+        tab = tables(cov, base)
         for s, share in firsts:
-            wps = lawn(k, s, cov, takeoff[k], none, share)
+            wps = lawn(k, s, tab, takeoff[k], none, share)
             if not len(wps):
                 continue
             if share < budget:  # a second lawnmower after this one, with the time left
                 path = np.vstack([takeoff[k], wps, landing[k]])
                 t_end = float(arrival_times(path, speeds, turn_rate, h0[k])[-2])
                 c1 = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
+                tab2 = tables(cov + c1)
                 more = [
-                    lawn(k, s2, cov + c1, wps[-1], wps, budget - t_end)
+                    lawn(k, s2, tab2, wps[-1], wps, budget - t_end)
                     for s2 in (CHAIN_SPACINGS or spacings)
                 ]
                 more = [m for m in more if len(m)]

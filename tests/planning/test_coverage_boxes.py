@@ -214,3 +214,19 @@ def test_chained_lawnmowers_reach_two_blobs():
         reserve_s(sc),
         takeoff_heading(grid.bounds, to1)[0],
     )
+
+
+def test_shared_gain_tables_give_the_per_lawnmower_routes(monkeypatch):
+    """The gain tables shared among the lawnmowers searched against one coverage (all shares,
+    all second lawnmowers after one first) give bit for bit the routes of tables recomputed per
+    lawnmower (df0f3b3's path), chains included: paper_6_2's prior, a random prior (seeded) and
+    large_400 on 20 km cells."""
+    rng = np.random.default_rng(24)
+    cases = [_inputs(), _inputs("large_400", None, **{"map.cell_km": 20})]
+    sc, grid, _, to, la = cases[0]
+    rand = rng.gamma(0.3, size=grid.shape)
+    cases.append((sc, grid, rand / rand.sum(), to, la))
+    shared = [_routes(*c, rounds=1) for c in cases]
+    monkeypatch.setattr(coverage_boxes, "_SHARE_TABLES", False)
+    for c, got in zip(cases, shared, strict=True):
+        assert _routes(*c, rounds=1) == got

@@ -186,3 +186,21 @@ def test_compiled_box_search_skips_only_rows_out_of_reach():
         return takeoff, landing, float(rng.uniform(2000.0, 5000.0))
 
     _exhaustive_box_search_agrees(rng, place, 10)
+
+
+def test_compiled_box_search_bounds_only_columns_out_of_reach():
+    """Fields beside the map (left or right) with a budget that reaches part of it: the kernel
+    searches only the columns whose distance along x alone fits, bounds each row by that band's
+    mass, and still finds the exhaustive search's box (fails if columns within reach are left
+    out or a row is skipped that holds the best box)."""
+    sc = load_scenario("small")
+    x0, y0, x1, y1 = Grid.from_config(sc.map).bounds
+    rng = np.random.default_rng(13)
+
+    def place(trial):
+        side = x0 - rng.uniform(5_000.0, 40_000.0) if trial % 2 else x1 + rng.uniform(5e3, 4e4)
+        takeoff = np.array([side, y0 + rng.random() * (y1 - y0)])
+        landing = takeoff if trial % 3 else takeoff + np.array([0.0, rng.uniform(-5e3, 5e3)])
+        return takeoff, landing, float(rng.uniform(2000.0, 5000.0))
+
+    _exhaustive_box_search_agrees(rng, place, 10)
