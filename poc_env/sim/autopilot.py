@@ -29,7 +29,7 @@ from poc_env.errors import ConfigError
 from poc_env.sim.constraints import NoFlyZones
 from poc_env.sim.core import Params
 from poc_env.sim.observations import decode_vector, split_observation
-from poc_env.sim.routing import ZoneRouter, clearance_m
+from poc_env.sim.routing import ZoneRouter, clearance_m, reach_and_turn_m
 
 
 def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> np.ndarray:
@@ -84,10 +84,9 @@ def go_home(params: Params, q: dict, k: int) -> np.ndarray:
 
 def capture_radius(params: Params, speed) -> np.ndarray:
     """The follower's capture radius at ``speed`` (m/s): half a step plus the turn radius
-    ``v / omega_max`` (eq. 19's turn-rate bound), the same sum as the router's clearance
-    (:func:`poc_env.sim.routing.clearance_m`, which takes it at ``v_max``)."""
-    v = np.asarray(speed, dtype=float)
-    return 0.5 * v * params.dt + v / params.scenario.uav.max_turn_rate_rad_s
+    ``v / omega_max`` (eq. 19's turn-rate bound): :func:`poc_env.sim.routing.reach_and_turn_m`,
+    which the router's clearance takes at ``v_max``."""
+    return np.asarray(reach_and_turn_m(params.scenario, speed))
 
 
 def zone_guard(

@@ -51,11 +51,17 @@ QUAD_SEGS = 4
 _GROW = 1.01 / float(np.cos(np.pi / (4 * QUAD_SEGS)))
 
 
+def reach_and_turn_m(scenario: Any, speed: Any) -> Any:
+    """Half a step at ``speed`` (m/s; the follower's reach) plus the turn radius
+    ``speed / omega_max`` (eq. 19's turn-rate bound), in metres: the follower's capture radius
+    at ``speed`` and, at ``v_max``, the clearance kept from every zone (:func:`clearance_m`)."""
+    v = np.asarray(speed, dtype=float)
+    return 0.5 * v * scenario.episode.dt_s + v / scenario.uav.max_turn_rate_rad_s
+
+
 def clearance_m(scenario: Any) -> float:
-    """Clearance kept from every zone: half a step at ``v_max`` (the follower's reach) plus the
-    turn radius ``v_max / omega_max`` (metres)."""
-    u = scenario.uav
-    return 0.5 * u.max_speed_mps * scenario.episode.dt_s + u.max_speed_mps / u.max_turn_rate_rad_s
+    """Clearance kept from every zone: :func:`reach_and_turn_m` at ``v_max`` (metres)."""
+    return float(reach_and_turn_m(scenario, scenario.uav.max_speed_mps))
 
 
 class ZoneRouter:
