@@ -70,26 +70,27 @@ def _run_on_ray(fn: Callable[[Any], Any], jobs: Sequence[Any], bar: Any) -> list
     refs = [remote.remote(fn, job) for job in jobs]
     timeout = worker_timeout_s()
     out = []
-    try:
-        for k, ref in enumerate(refs):
-            try:
-                out.append(ray.get(ref, timeout=timeout))
-            except GetTimeoutError:
-                raise WorkerTimeoutError(
-                    f"job {k} of {len(jobs)} on Ray gave no result within {timeout:g} s; "
-                    f"allowed: jobs that finish within {_ENV_VAR} seconds"
-                ) from None
-            except RayTaskError as exc:  # the job's own error, as a local run would raise it
-                cause = getattr(exc, "cause", None)
-                if isinstance(cause, BaseException):
-                    raise cause from None
-                raise
-            if bar is not None:
-                bar.update(1)
-    except BaseException:
-        for ref in refs:
-            ray.cancel(ref, force=True)
-        raise
+    # No ray.cancel of the other jobs when one fails: in Ray 2.60 a cancel (forced or not) that
+    # races with the reply of a task that is finishing aborts the driver process
+    # ("task_manager.cc: Check failed: it != submissible_tasks_.end() Tried to complete task that
+    # was not pending", ray-project/ray#54846; the crashed CI worker of stop 32). The other jobs
+    # run out: a local instance stops them when its ray_session ends, a cluster finishes them
+    # and their results are dropped.
+    for k, ref in enumerate(refs):
+        try:
+            out.append(ray.get(ref, timeout=timeout))
+        except GetTimeoutError:
+            raise WorkerTimeoutError(
+                f"job {k} of {len(jobs)} on Ray gave no result within {timeout:g} s; "
+                f"allowed: jobs that finish within {_ENV_VAR} seconds"
+            ) from None
+        except RayTaskError as exc:  # the job's own error, as a local run would raise it
+            cause = getattr(exc, "cause", None)
+            if isinstance(cause, BaseException):
+                raise cause from None
+            raise
+        if bar is not None:
+            bar.update(1)
     return out
 
 
