@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from itertools import repeat
+from operator import itemgetter
 from typing import Any
 
 import numpy as np
@@ -15,6 +16,7 @@ from poc_env.errors import ConfigError, PocEnvError
 from poc_env.sim import core as sim
 from poc_env.sim import engine as engine_mod
 from poc_env.sim import observations as obs_mod
+from poc_env.sim import single as single_mod
 from poc_env.sim.engine import check_seed, resolve_overrides
 from poc_env.theory.probability_map import validate_map
 
@@ -31,6 +33,9 @@ INFO_KEYS = spec.info_keys()
 #: How an info row's value is made from :func:`poc_env.sim.engine.info_parts`: the agent's entry,
 #: its env's value, its row of ``links``.
 _COLUMN, _PER_ENV, _ROWS = 0, 1, 2
+#: The info keys of a :class:`poc_env.sim.single.Step`, in the order its values are joined:
+#: its float, bool and int groups, then the adjacency row.
+_GROUPED_KEYS = (*single_mod.FLOAT_INFOS, *single_mod.BOOL_INFOS, *single_mod.INT_INFOS, "links")
 
 __all__ = [
     "OBS_TYPES",
@@ -225,6 +230,12 @@ class UAVSearchParallelEnv(ParallelEnv):
         #: The per-agent info keys in order and how each is made (set at reset).
         self._info_keys: tuple[str, ...] = ()
         self._info_kinds: tuple[int, ...] = ()
+        #: The step with its end compiled (:mod:`poc_env.sim.single`), or None: the engine's.
+        self._single = single_mod.SingleStep(eng) if single_mod.SingleStep.supports(eng) else None
+        self._last: single_mod.Step | None = None
+        #: Picks a :class:`~poc_env.sim.single.Step`'s grouped info values in ``_info_keys``'
+        #: order (set at reset), or None when the keys differ (moving targets' ``mass_out``).
+        self._info_order: itemgetter | None = None
 
     @property
     def info_arrays(self) -> dict[str, np.ndarray]:
@@ -239,6 +250,14 @@ class UAVSearchParallelEnv(ParallelEnv):
         """The engine's :class:`~poc_env.sim.engine.Transition` of the last step (arrays), its
         ``info`` that step's info arrays. AttributeError before the first step."""
         tr = self._transition
+        if tr is None and self._last is not None:  # the fast step's, made when asked for
+            last = self._last
+            tr = engine_mod.Transition(
+                last.obs, last.reward, last.terms_dict(), last.events, last.terminated,
+                last.truncated, last.over, {},
+            )  # fmt: skip
+            self._transition = tr
+            self._step_of = (self.engine.params, self.engine.current, tr.events, tr.terms)
         if tr is None:
             raise AttributeError("transition: no step yet")
         if not tr.info:  # the step's state is untouched until the next step (a reset replaces it)
@@ -278,6 +297,8 @@ class UAVSearchParallelEnv(ParallelEnv):
             raise ConfigError("options", options, "None or a dict (key 'prior': a map)")
         if seed is not None:
             self.engine.seed([seed])
+        if self._last is not None and self._transition is None:
+            self.transition  # noqa: B018 (the last step's, of the state the reset replaces)
         prior = None
         if options and "prior" in options:
             prior = validate_map(options["prior"], self.params.grid, "options['prior']")
@@ -292,6 +313,9 @@ class UAVSearchParallelEnv(ParallelEnv):
             _PER_ENV if k in engine_mod.PER_ENV_INFOS else _ROWS if k == "links" else _COLUMN
             for k in keys
         )
+        self._info_order = None
+        if sorted(keys) == sorted(_GROUPED_KEYS):
+            self._info_order = itemgetter(*(_GROUPED_KEYS.index(k) for k in keys))
         if self.random_airfields and self._renderer is not None:
             # its background shows the airfields: draw afresh
             self._renderer.close()
@@ -370,9 +394,50 @@ class UAVSearchParallelEnv(ParallelEnv):
         if not self.agents:
             raise EpisodeOverError("every agent has finished; call reset() before step()")
         arr = self._actions_array(actions)
+        if self._single is None:
+            return self._step_engine(arr)
+        eng = self.engine
+        last = self._single.step(arr)
+        self._last = last
+        self._transition = None
+        self._info = None
+        live = self.agents
+        index = self._index
+        reward = last.reward[0].tolist()
+        terminal = last.terminated[0].tolist()
+        truncated = last.truncated[0].tolist()
+        order = self._info_order
+        if order is None:  # keys beyond the grouped ones: the engine's info values
+            self.transition  # noqa: B018 (sets _step_of)
+            infos = self._agent_infos(engine_mod.info_parts(*self._step_of), live)
+        else:
+            fl, bl, il = last.finfo[0].tolist(), last.binfo[0].tolist(), last.iinfo[0].tolist()
+            links = list(eng.current.links[0].copy())  # each agent's row, its own
+            keys = self._info_keys
+            infos = {
+                a: dict(zip(keys, order(fl[i] + bl[i] + il[i] + [links[i]])))
+                for a, i in zip(live, map(index.__getitem__, live))
+            }
+        rewards, terminations, truncations = {}, {}, {}
+        for a in live:
+            i = index[a]
+            rewards[a] = reward[i]
+            terminations[a] = terminal[i]
+            truncations[a] = truncated[i]
+        observations = self._agent_obs(last.obs, live)  # agents finishing now get a last obs
+        self.agents = [a for a in live if not (terminations[a] or truncations[a])]
+        if self._renderer is not None:
+            self._renderer.record(self.sim_state)
+        if self.render_mode == "human":
+            self.render()
+        return observations, rewards, terminations, truncations, infos
+
+    def _step_engine(self, arr: np.ndarray):
+        """:meth:`step` through the engine's step (per-UAV beliefs)."""
         eng = self.engine
         tr = eng.step(arr, with_info=False)  # the info arrays only when asked for (info_arrays)
         self._transition = tr
+        self._last = None
         self._step_of = (eng.params, eng.current, tr.events, tr.terms)
         self._info = None
         reward = tr.reward[0].tolist()
