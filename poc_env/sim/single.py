@@ -21,9 +21,17 @@ from typing import Any
 
 import numpy as np
 
+import poc_env._kernels.observations as _obs_kernels
 import poc_env._kernels.rewards as _rewards
+import poc_env._kernels.sensing as _sensing
+import poc_env._kernels.swarm as _swarm
+from poc_env.sim import comms as comms_mod
+from poc_env.sim import constraints as cons
 from poc_env.sim import core as sim
+from poc_env.sim import observations as obs_mod
 from poc_env.sim.control import swarm_increments
+from poc_env.theory.detection import detection_law
+from poc_env.theory.search_theory import _reach
 
 #: The per-agent info keys of :attr:`Step.finfo`, :attr:`Step.binfo` and :attr:`Step.iinfo`.
 FLOAT_INFOS = _rewards.FLOAT_INFOS
@@ -57,6 +65,50 @@ class Step:
         return {t: self.terms[k] for k, t in enumerate(TERMS)}
 
 
+class _Constants:
+    """What the kernels of one :class:`~poc_env.sim.core.Params` take besides the state: the
+    arguments the numpy-facing wrappers (:func:`poc_env.sim.core.sense`,
+    :func:`~poc_env.sim.core._update_topology`, :func:`poc_env.sim.observations.rasters` and
+    :func:`~poc_env.sim.observations.vectors`) form at each call, formed once."""
+
+    def __init__(self, p: sim.Params) -> None:
+        sc = p.scenario
+        sensor, cc, u = sc.sensor, sc.comms, sc.uav
+        g = p.grid
+        self.params = p
+        self.origin = np.asarray(g.origin_m, dtype=np.float64)
+        law = detection_law(sensor.law)
+        self.sweep = (
+            law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
+            float(_reach(g, sensor.law, sensor.sweep_width_m, p.cutoff_m)), float(g.cell_m),
+            0.0, 0.0, g.cell_m / p.s,
+        )  # fmt: skip
+        ox, oy = g.origin_m
+        self.target = (
+            float(ox), float(oy), law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
+            float(g.cell_m),
+        )  # fmt: skip
+        #: the common topology: in-range graph and the auto rule, one kernel
+        self.auto = cc.link_failure_prob <= 0 and p.switcher is None
+        self.range_m = float(cc.range_m)
+        self.k_nearest = comms_mod.nearest_count(cc.min_neighbours, p.n_agents)
+        self.zones = len(p.zones) > 0
+        self.threat = len(p.threat_lambdas) > 0
+        x0, y0, x1, y1 = g.bounds
+        self.own_sum = g.nx > 1 and p.s < 8  # as observations.rasters
+        self.raster = (float(x0), float(y0), float(x1), float(y1), float(g.cell_m))
+        bx0, by0, bx1, by1 = p.bounds
+        w, h = bx1 - bx0, by1 - by0
+        n = p.n_agents
+        self.vector = (
+            float(bx0), float(by0), float(w), float(h), obs_mod._diagonal(w, h),
+            float(u.max_altitude_m), float(u.min_speed_mps),
+            float(u.max_speed_mps - u.min_speed_mps), float(u.max_pitch_rad),
+            float(u.endurance_s), float(u.usable_endurance_s), float(p.horizon),
+            float(cc.range_m), float(max(n - 1, 1)), obs_mod._LOW, obs_mod._HIGH,
+        )  # fmt: skip
+
+
 class SingleStep:
     """The step of ``engine`` (every env) with its end compiled; see the module docstring.
 
@@ -73,6 +125,9 @@ class SingleStep:
         self._team = r.credit == "team"
         self._ends = bool(sc.episode.detection_ends_episode)
         self._coef: np.ndarray | None = None
+        self._k: _Constants | None = None
+        self._shield = sc.constraints.violation == "shield"
+        self._hazard = comms_mod._shaped(engine.hazard, engine.params.grid.shape, np.float32)
         self._coef_dt: float | None = None
 
     @staticmethod
@@ -91,15 +146,24 @@ class SingleStep:
             self._coef, self._coef_dt = c, dt
         return self._coef
 
+    def _constants(self, p: sim.Params) -> _Constants:
+        k = self._k
+        if k is None or k.params is not p:  # random_airfields: new Params at each reset
+            k = self._k = _Constants(p)
+        return k
+
     def step(self, actions: np.ndarray) -> Step:
         """Advance every env by one step under ``actions (E, N, ACTION_DIMS[control])``:
         :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with ``with_info=False``."""
         eng = self.engine
         p = eng.params
         st = eng.current
+        k = self._constants(p)
         inc = swarm_increments(p, eng.control, st, actions, eng.auto_return, eng.return_increments)
-        ev = sim.step(p, st, inc, eng.rngs)
-        connected = np.asarray(ev.connected, dtype=bool)
+        if self._shield:
+            ev = sim.step(p, st, inc, eng.rngs)
+        else:
+            ev = self._core_step(p, k, st, np.asarray(inc, dtype=float))
         e, n = st.flying.shape
         terms = np.empty((5, e, n))
         reward = np.empty((e, n))
@@ -109,6 +173,7 @@ class SingleStep:
         finfo = np.empty((e, n, len(_rewards.FLOAT_INFOS)))
         binfo = np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool)
         iinfo = np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64)
+        connected = np.asarray(ev.connected, dtype=bool)
         _rewards.end_step(
             (ev.pos_agent, ev.pos_team, ev.time_term, ev.overtime, ev.out_of_bounds, ev.no_fly,
              ev.collision, ev.threat, ev.comms_ok, ev.crashed_now, ev.shielded, connected),
@@ -117,5 +182,118 @@ class SingleStep:
             self._coefficients(p.dt), p.horizon, self._ends, self._team,
             (terms, reward, terminated, truncated, over, finfo, binfo, iinfo),
         )  # fmt: skip
-        obs = eng.observe_state(st)
+        obs = self._observe(p, k, st)
         return Step(obs, reward, terms, ev, terminated, truncated, over, finfo, binfo, iinfo)
+
+    def _core_step(self, p: sim.Params, k: _Constants, st: sim.State, actions) -> sim.Events:
+        """:func:`poc_env.sim.core.step` without the shield (which keeps that function), its
+        kernels called with the arguments of :class:`_Constants`, in the same order."""
+        moving = st.flying.copy()
+        e, n = moving.shape
+        if p.motion is not None:  # the filter's predict step; static targets skip it
+            sim.predict(p, st)
+        a2 = st.pos[..., :2].copy()
+        new = np.empty_like(st.pos)
+        alpha = np.empty((e, n))
+        beta = np.empty((e, n))
+        speed = np.empty((e, n))
+        _swarm.kinematics(
+            actions, None, moving, st.pos, st.heading, st.pitch, st.speed, p.motion_constants,
+            (new, alpha, beta, speed),
+        )  # fmt: skip
+        st.heading = alpha
+        st.pitch = beta
+        st.speed = speed
+        b2 = new[..., :2]
+        found = np.empty((e, n))
+        _sensing.sweep(st.belief, a2 - k.origin, b2 - k.origin, *k.sweep, found)
+        st.pos = new
+        p_t = np.empty((e, n))
+        if _sensing.target_pod(st.target, a2, b2, moving, *k.target, p_t):
+            if st.target_out is not None:  # a target that left the map is beyond the search
+                p_t[st.target_out] = 0.0
+            with np.errstate(divide="ignore"):
+                st.target_exponent += -np.log1p(-p_t).sum(axis=1)
+        if k.zones:
+            nofly = moving & p.zones.segment_crosses(a2, b2)
+        else:
+            nofly = np.zeros((e, n), dtype=bool)
+        if k.threat:
+            sc = p.scenario
+            threat = moving & cons.threat_violation(
+                new[..., :2], p.threat_centers, p.threat_lambdas, sc.map.threat_threshold
+            )
+        else:
+            threat = np.zeros((e, n), dtype=bool)
+        team = np.empty(e)
+        flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
+        time_term = np.empty((e, n))
+        detected_now = np.empty(e, dtype=bool)
+        dist = np.empty((e, n, n))
+        detect_step = st.detect_step.copy()
+        _swarm.step(
+            (
+                st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
+                st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
+                st.crashed, st.flying, st.violations,
+            ),
+            (found, moving, nofly, threat),
+            (team, detected_now, time_term, flags, dist),
+            p.landing,
+            p.step_constants,
+        )  # fmt: skip
+        st.detect_step = detect_step
+        if k.auto:
+            links = np.empty((e, n, n), dtype=bool)
+            n_comp = np.empty(e, dtype=np.int64)
+            _swarm.auto_links(dist, k.range_m, st.flying, k.k_nearest, links, n_comp)
+            st.links = links
+            connected = n_comp <= 1
+        else:
+            connected = np.asarray(sim._update_topology(p, st, self.engine.rngs, dist).connected)
+        return sim.Events(
+            pos_agent=found,
+            pos_team=team,
+            time_term=time_term,
+            overtime=flags[_swarm.OVERTIME],
+            out_of_bounds=flags[_swarm.OOB],
+            no_fly=nofly,
+            collision=flags[_swarm.COLLISION],
+            threat=threat,
+            comms_ok=flags[_swarm.COMMS_OK],
+            shielded=np.zeros((e, n), dtype=bool),
+            landed_now=flags[_swarm.LANDED],
+            crashed_now=flags[_swarm.CRASHED],
+            detected_now=detected_now,
+            connected=connected,
+        )
+
+    def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
+        """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and
+        ``flat`` through their kernels with the arguments of :class:`_Constants`."""
+        eng = self.engine
+        kind = eng.obs_type
+        if kind not in ("dict", "flat"):
+            return eng.observe_state(st)
+        e, n = st.flying.shape
+        g = p.grid
+        size = obs_mod.RASTER_CHANNELS * g.ny * g.nx
+        if kind == "dict":
+            raster = np.empty((e, n, obs_mod.RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
+            vector = np.empty((e, n, obs_mod.VECTOR_SIZE), dtype=np.float32)
+        else:
+            flat = np.empty((e, n, size + obs_mod.VECTOR_SIZE), dtype=np.float32)
+            raster = flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx)
+            vector = flat[:, :, size:]
+        coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
+        _obs_kernels.rasters(
+            st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
+            *k.raster, raster,
+        )  # fmt: skip
+        _obs_kernels.vectors(
+            st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
+            st.flying, st.step, p.landing, *k.vector, vector,
+        )  # fmt: skip
+        if kind == "dict":
+            return {"raster": raster, "vector": vector}
+        return flat
