@@ -434,7 +434,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             terminations = dict(zip(live, terminal))
             truncations = dict(zip(live, truncated))
         else:
-            idx = list(map(self._index.get, live))
+            idx = list(map(self._index.__getitem__, live))
             rewards = {a: reward[i] for a, i in zip(live, idx)}
             terminations = {a: terminal[i] for a, i in zip(live, idx)}
             truncations = {a: truncated[i] for a, i in zip(live, idx)}
@@ -458,8 +458,8 @@ class UAVSearchParallelEnv(ParallelEnv):
         links = list(self.engine.current.links[0].copy())  # each agent's row, its own
         if len(live) == len(fl):  # every agent: in index order
             return dict(zip(live, map(row, fl, bl, il, links)))
-        index = self._index
-        return {a: row(fl[i], bl[i], il[i], links[i]) for a, i in zip(live, map(index.get, live))}
+        idx = map(self._index.__getitem__, live)
+        return {a: row(fl[i], bl[i], il[i], links[i]) for a, i in zip(live, idx)}
 
     def _step_engine(self, arr: np.ndarray):
         """:meth:`step` through the engine's step (per-UAV beliefs)."""
