@@ -21,6 +21,10 @@ from numba import njit
 
 _jit = njit(cache=True, error_model="numpy")
 
+#: Rows of the core step's ``flags`` (the swarm kernels' ``OVERTIME, OOB, ...``: this module
+#: may not import them; a test pins them equal).
+OVERTIME, OOB, COLLISION, COMMS_OK, LANDED, CRASHED = range(6)
+
 #: The per-agent float info keys, in the order of ``finfo``'s last axis.
 FLOAT_INFOS = (
     "pos", "pos_team", "posc", "reward_pos", "reward_time", "reward_violation",
@@ -126,23 +130,23 @@ def end_step(events, state, coef, horizon, detection_ends, team_credit, out):
     """The reward terms, reward, episode end and info values of a step, for ``E`` envs of ``N``
     UAVs.
 
-    ``events`` (read): ``(found (E, N), team (E,), time_term (E, N), overtime, out_of_bounds,
-    no_fly, collision, threat, comms_ok, crashed_now, shielded (E, N), connected (E,))``, the
-    core step's :class:`~poc_env.sim.core.Events`; ``state`` (read, after the
-    step): ``(posc, elapsed, detected, detect_step, topology, violations, landed, crashed,
-    step_count)``; ``coef``: :data:`COEFFICIENTS`; ``horizon``: ``episode.horizon_steps``;
-    ``detection_ends``: ``episode.detection_ends_episode``; ``team_credit``: ``reward.credit ==
-    "team"``. ``out`` (written): ``(terms (5, E, N), reward (E, N), terminated (E, N),
-    truncated (E, N), over (E,), finfo (E, N, 10), binfo (E, N, 11), iinfo (E, N, 2))``.
+    ``events`` (read): ``(found (E, N), team (E,), time_term (E, N), flags (6, E, N), no_fly,
+    threat, shielded (E, N), detected_now, connected (E,))``, the core step's
+    :class:`~poc_env.sim.core.Events` (``flags``: its rows :data:`OVERTIME` ...);
+    ``state`` (read, after the step): ``(posc, elapsed, detected, detect_step, topology,
+    violations, landed, crashed, step_count)``; ``coef``: :data:`COEFFICIENTS`; ``horizon``:
+    ``episode.horizon_steps``; ``detection_ends``: ``episode.detection_ends_episode``;
+    ``team_credit``: ``reward.credit == "team"``. ``out`` (written): ``(terms (5, E, N),
+    reward (E, N), terminated (E, N), truncated (E, N), over (E,), finfo (E, N, 10),
+    binfo (E, N, 11), iinfo (E, N, 2))``.
 
     Each term is ``coefficient * value`` as :func:`~poc_env.sim.rewards.reward_terms` computes
     it (the team's time term the numpy sum of the row divided by ``N``); the reward is
     ``0.0 + pos + time + violation + overtime + crash`` in that order (Python's ``sum``).
     """
-    (
-        found, team, time_term, overtime, oob, nofly, collision, threat, comms_ok, crashed_now,
-        shielded, connected,
-    ) = events  # fmt: skip
+    found, team, time_term, flags, nofly, threat, shielded, _, connected = events
+    overtime, oob, collision = flags[OVERTIME], flags[OOB], flags[COLLISION]
+    comms_ok, crashed_now = flags[COMMS_OK], flags[CRASHED]
     posc, elapsed, detected, detect_step, topology, violations, landed, crashed, step_count = state
     terms, reward, terminated, truncated, over, finfo, binfo, iinfo = out
     alpha, nbeta, nvp, nop, ncp, dt = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]

@@ -42,23 +42,67 @@ INT_INFOS = _rewards.INT_INFOS
 TERMS = ("pos", "time", "violation", "overtime", "crash")
 
 
+def events_of(parts: tuple[np.ndarray, ...]) -> sim.Events:
+    """The :class:`~poc_env.sim.core.Events` of a step's ``parts`` ``(found, team, time_term,
+    flags, no_fly, threat, shielded, detected_now, connected)``, ``flags`` the core step's
+    ``(6, E, N)`` rows (:data:`poc_env._kernels.swarm.OVERTIME` ...)."""
+    found, team, time_term, flags, nofly, threat, shielded, detected_now, connected = parts
+    return sim.Events(
+        pos_agent=found,
+        pos_team=team,
+        time_term=time_term,
+        overtime=flags[_swarm.OVERTIME],
+        out_of_bounds=flags[_swarm.OOB],
+        no_fly=nofly,
+        collision=flags[_swarm.COLLISION],
+        threat=threat,
+        comms_ok=flags[_swarm.COMMS_OK],
+        shielded=shielded,
+        landed_now=flags[_swarm.LANDED],
+        crashed_now=flags[_swarm.CRASHED],
+        detected_now=detected_now,
+        connected=connected,
+    )
+
+
+def parts_of(ev: sim.Events) -> tuple[np.ndarray, ...]:
+    """The inverse of :func:`events_of`."""
+    flags = np.empty((_swarm.N_FLAGS, *ev.pos_agent.shape), dtype=bool)
+    flags[_swarm.OVERTIME] = ev.overtime
+    flags[_swarm.OOB] = ev.out_of_bounds
+    flags[_swarm.COLLISION] = ev.collision
+    flags[_swarm.COMMS_OK] = ev.comms_ok
+    flags[_swarm.LANDED] = ev.landed_now
+    flags[_swarm.CRASHED] = ev.crashed_now
+    return (
+        ev.pos_agent, ev.pos_team, ev.time_term, flags, ev.no_fly, ev.threat, ev.shielded,
+        ev.detected_now, np.asarray(ev.connected, dtype=bool),
+    )  # fmt: skip
+
+
 @dataclass
 class Step:
     """One step of :class:`SingleStep`: the engine's :class:`~poc_env.sim.engine.Transition`
-    fields (``terms`` as a ``(5, E, N)`` array in :data:`TERMS` order) and the info values
-    grouped by type: ``finfo (E, N, len(FLOAT_INFOS))``, ``binfo``, ``iinfo`` (the keys of
-    :data:`poc_env._kernels.rewards.FLOAT_INFOS`, ``BOOL_INFOS``, ``INT_INFOS``)."""
+    fields (``terms`` as a ``(5, E, N)`` array in :data:`TERMS` order, the events as their
+    ``parts``: :func:`events_of`) and the info values grouped by type: ``finfo (E, N,
+    len(FLOAT_INFOS))``, ``binfo``, ``iinfo`` (the keys of :data:`FLOAT_INFOS`,
+    :data:`BOOL_INFOS`, :data:`INT_INFOS`; scratch arrays, valid until the next step)."""
 
     obs: Any
     reward: np.ndarray
     terms: np.ndarray
-    events: sim.Events
+    parts: tuple[np.ndarray, ...]
     terminated: np.ndarray
     truncated: np.ndarray
     over: np.ndarray
     finfo: np.ndarray
     binfo: np.ndarray
     iinfo: np.ndarray
+
+    @property
+    def events(self) -> sim.Events:
+        """The step's :class:`~poc_env.sim.core.Events` (made when asked for)."""
+        return events_of(self.parts)
 
     def terms_dict(self) -> dict[str, np.ndarray]:
         """The reward terms as :func:`~poc_env.sim.rewards.reward_terms` returns them."""
@@ -126,6 +170,7 @@ class SingleStep:
         self._ends = bool(sc.episode.detection_ends_episode)
         self._coef: np.ndarray | None = None
         self._k: _Constants | None = None
+        self._scratch: tuple[np.ndarray, ...] | None = None
         self._shield = sc.constraints.violation == "shield"
         self._hazard = comms_mod._shaped(engine.hazard, engine.params.grid.shape, np.float32)
         self._coef_dt: float | None = None
@@ -160,34 +205,42 @@ class SingleStep:
         st = eng.current
         k = self._constants(p)
         inc = swarm_increments(p, eng.control, st, actions, eng.auto_return, eng.return_increments)
-        if self._shield:
-            ev = sim.step(p, st, inc, eng.rngs)
-        else:
-            ev = self._core_step(p, k, st, np.asarray(inc, dtype=float))
         e, n = st.flying.shape
+        scratch = self._scratch
+        if scratch is None or scratch[0].shape[:2] != (e, n):
+            scratch = self._scratch = (
+                np.empty((e, n, len(_rewards.FLOAT_INFOS))),
+                np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool),
+                np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64),
+                np.empty((e, n, n)),
+                np.empty((e, n)),
+            )
+        finfo, binfo, iinfo, dist, p_t = scratch
+        if self._shield:
+            parts = parts_of(sim.step(p, st, inc, eng.rngs))
+        else:
+            parts = self._core_step(p, k, st, np.asarray(inc, dtype=float), dist, p_t)
         terms = np.empty((5, e, n))
         reward = np.empty((e, n))
         terminated = np.empty((e, n), dtype=bool)
         truncated = np.empty((e, n), dtype=bool)
         over = np.empty(e, dtype=bool)
-        finfo = np.empty((e, n, len(_rewards.FLOAT_INFOS)))
-        binfo = np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool)
-        iinfo = np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64)
-        connected = np.asarray(ev.connected, dtype=bool)
         _rewards.end_step(
-            (ev.pos_agent, ev.pos_team, ev.time_term, ev.overtime, ev.out_of_bounds, ev.no_fly,
-             ev.collision, ev.threat, ev.comms_ok, ev.crashed_now, ev.shielded, connected),
+            parts,
             (st.posc, st.elapsed, st.detected, st.detect_step, st.topology, st.violations,
              st.landed, st.crashed, st.step),
             self._coefficients(p.dt), p.horizon, self._ends, self._team,
             (terms, reward, terminated, truncated, over, finfo, binfo, iinfo),
         )  # fmt: skip
         obs = self._observe(p, k, st)
-        return Step(obs, reward, terms, ev, terminated, truncated, over, finfo, binfo, iinfo)
+        return Step(obs, reward, terms, parts, terminated, truncated, over, finfo, binfo, iinfo)
 
-    def _core_step(self, p: sim.Params, k: _Constants, st: sim.State, actions) -> sim.Events:
+    def _core_step(
+        self, p: sim.Params, k: _Constants, st: sim.State, actions, dist, p_t
+    ) -> tuple[np.ndarray, ...]:
         """:func:`poc_env.sim.core.step` without the shield (which keeps that function), its
-        kernels called with the arguments of :class:`_Constants`, in the same order."""
+        kernels called with the arguments of :class:`_Constants`, in the same order; returns
+        the events' parts (:func:`events_of`). ``dist (E, N, N)``, ``p_t (E, N)``: scratch."""
         moving = st.flying.copy()
         e, n = moving.shape
         if p.motion is not None:  # the filter's predict step; static targets skip it
@@ -208,12 +261,14 @@ class SingleStep:
         found = np.empty((e, n))
         _sensing.sweep(st.belief, a2 - k.origin, b2 - k.origin, *k.sweep, found)
         st.pos = new
-        p_t = np.empty((e, n))
         if _sensing.target_pod(st.target, a2, b2, moving, *k.target, p_t):
             if st.target_out is not None:  # a target that left the map is beyond the search
                 p_t[st.target_out] = 0.0
-            with np.errstate(divide="ignore"):
-                st.target_exponent += -np.log1p(-p_t).sum(axis=1)
+            if np.maximum.reduce(p_t, axis=None) < 1.0:  # no log1p(-1): no warning to silence
+                st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+            else:
+                with np.errstate(divide="ignore"):
+                    st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
         if k.zones:
             nofly = moving & p.zones.segment_crosses(a2, b2)
         else:
@@ -229,7 +284,6 @@ class SingleStep:
         flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
         time_term = np.empty((e, n))
         detected_now = np.empty(e, dtype=bool)
-        dist = np.empty((e, n, n))
         detect_step = st.detect_step.copy()
         _swarm.step(
             (
@@ -250,23 +304,10 @@ class SingleStep:
             st.links = links
             connected = n_comp <= 1
         else:
-            connected = np.asarray(sim._update_topology(p, st, self.engine.rngs, dist).connected)
-        return sim.Events(
-            pos_agent=found,
-            pos_team=team,
-            time_term=time_term,
-            overtime=flags[_swarm.OVERTIME],
-            out_of_bounds=flags[_swarm.OOB],
-            no_fly=nofly,
-            collision=flags[_swarm.COLLISION],
-            threat=threat,
-            comms_ok=flags[_swarm.COMMS_OK],
-            shielded=np.zeros((e, n), dtype=bool),
-            landed_now=flags[_swarm.LANDED],
-            crashed_now=flags[_swarm.CRASHED],
-            detected_now=detected_now,
-            connected=connected,
-        )
+            topo = sim._update_topology(p, st, self.engine.rngs, dist)
+            connected = np.asarray(topo.connected, dtype=bool)
+        shielded = np.zeros((e, n), dtype=bool)
+        return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
 
     def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
         """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and

@@ -12,6 +12,8 @@ transition arrays must be identical: equal floats, not close ones.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -60,6 +62,9 @@ def _same(a, b, path="") -> None:
         assert list(a) == list(b), f"{path}: keys {list(a)} != {list(b)}"
         for k in a:
             _same(a[k], b[k], f"{path}[{k}]")
+    elif dataclasses.is_dataclass(a):
+        for f in dataclasses.fields(a):
+            _same(getattr(a, f.name), getattr(b, f.name), f"{path}.{f.name}")
     elif isinstance(a, tuple | list):
         assert len(a) == len(b), f"{path}: {len(a)} != {len(b)}"
         for k, (x, y) in enumerate(zip(a, b, strict=True)):
@@ -104,7 +109,8 @@ def test_fast_step_equals_the_engines_step(name, kwargs):
             assert fast.agents == ref.agents
             if steps % 7 == 0:  # the arrays behind the dicts, made when asked for
                 tf, tr = fast.transition, ref.transition
-                for field in ("reward", "terms", "terminated", "truncated", "over", "info"):
+                fields = ("reward", "terms", "events", "terminated", "truncated", "over", "info")
+                for field in fields:
                     _same(getattr(tf, field), getattr(tr, field), field)
                 _same(fast.info_arrays, ref.info_arrays, "info_arrays")
             steps += 1
@@ -129,6 +135,14 @@ def test_fast_step_covers_terminations_truncations_and_violations():
                 seen["crash"] = seen.get("crash", False) or info["reward_crash"] < 0
                 seen["time"] = seen.get("time", False) or info["reward_time"] < 0
     assert all(seen.values()) and len(seen) == 5, seen
+
+
+def test_flag_rows_are_the_swarm_kernels():
+    from poc_env._kernels import swarm
+
+    names = ("OVERTIME", "OOB", "COLLISION", "COMMS_OK", "LANDED", "CRASHED")
+    assert [getattr(kernel, k) for k in names] == [getattr(swarm, k) for k in names]
+    assert len(names) == swarm.N_FLAGS
 
 
 def test_numpy_sum_is_numpys_pairwise_sum():
@@ -203,9 +217,10 @@ def test_end_step_kernel_equals_the_numpy_rules(credit, ends):
         fi = np.empty((e, n, len(kernel.FLOAT_INFOS)))
         bi = np.empty((e, n, len(kernel.BOOL_INFOS)), bool)
         ii = np.empty((e, n, len(kernel.INT_INFOS)), np.int64)
+        parts = single.parts_of(ev)
+        _same(single.events_of(parts), ev, "events")
         kernel.end_step(
-            (ev.pos_agent, ev.pos_team, ev.time_term, ev.overtime, ev.out_of_bounds, ev.no_fly,
-             ev.collision, ev.threat, ev.comms_ok, ev.crashed_now, ev.shielded, ev.connected),
+            parts,
             (state.posc, state.elapsed, state.detected, state.detect_step, state.topology,
              state.violations, state.landed, state.crashed, state.step),
             step._coefficients(p.dt), p.horizon, ends, credit == "team",
