@@ -171,6 +171,7 @@ class SingleStep:
         self._coef: np.ndarray | None = None
         self._k: _Constants | None = None
         self._scratch: tuple[np.ndarray, ...] | None = None
+        self._pass_through = engine.control == "increments" and not engine.return_increments
         self._shield = sc.constraints.violation == "shield"
         self._hazard = comms_mod._shaped(engine.hazard, engine.params.grid.shape, np.float32)
         self._coef_dt: float | None = None
@@ -204,8 +205,13 @@ class SingleStep:
         p = eng.params
         st = eng.current
         k = self._constants(p)
-        inc = swarm_increments(p, eng.control, st, actions, eng.auto_return, eng.return_increments)
         e, n = st.flying.shape
+        if self._pass_through:  # swarm_increments' increments level: the actions as floats
+            inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
+        else:
+            inc = swarm_increments(
+                p, eng.control, st, actions, eng.auto_return, eng.return_increments
+            )
         scratch = self._scratch
         if scratch is None or scratch[0].shape[:2] != (e, n):
             scratch = self._scratch = (
@@ -219,7 +225,7 @@ class SingleStep:
         if self._shield:
             parts = parts_of(sim.step(p, st, inc, eng.rngs))
         else:
-            parts = self._core_step(p, k, st, np.asarray(inc, dtype=float), dist, p_t)
+            parts = self._core_step(p, k, st, inc.astype(float, copy=False), dist, p_t)
         terms = np.empty((5, e, n))
         reward = np.empty((e, n))
         terminated = np.empty((e, n), dtype=bool)
