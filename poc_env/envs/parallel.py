@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import math
+import functools
 from collections.abc import Mapping
 from itertools import repeat
 from typing import Any
@@ -48,6 +48,7 @@ __all__ = [
 ]
 
 
+@functools.lru_cache(maxsize=16)
 def _row_builder(keys: tuple[str, ...]) -> Any:
     """A function ``row(f, b, i, links) -> dict`` making one agent's info dict with ``keys``
     in order from its :class:`~poc_env.sim.single.Step` values: ``f``, ``b``, ``i`` its rows
@@ -251,10 +252,9 @@ class UAVSearchParallelEnv(ParallelEnv):
         #: The step with its end compiled (:mod:`poc_env.sim.single`), or None: the engine's.
         self._single = single_mod.SingleStep(eng) if single_mod.SingleStep.supports(eng) else None
         self._last: single_mod.Step | None = None
-        #: Makes an agent's info dict from a :class:`~poc_env.sim.single.Step`'s grouped
-        #: values in ``_info_keys``' order (:func:`_row_builder`, set at reset), or None when
-        #: the keys differ (moving targets' ``mass_out``).
-        self._info_row: Any = None
+        #: Whether :func:`_row_builder` makes the infos of a :class:`~poc_env.sim.single.Step`
+        #: (set at reset): not when the keys differ (moving targets' ``mass_out``).
+        self._grouped_infos = False
 
     @property
     def info_arrays(self) -> dict[str, np.ndarray]:
@@ -332,9 +332,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             _PER_ENV if k in engine_mod.PER_ENV_INFOS else _ROWS if k == "links" else _COLUMN
             for k in keys
         )
-        self._info_row = None
-        if sorted(keys) == sorted(_GROUPED_KEYS):
-            self._info_row = _row_builder(keys)
+        self._grouped_infos = sorted(keys) == sorted(_GROUPED_KEYS)
         if self.random_airfields and self._renderer is not None:
             # its background shows the airfields: draw afresh
             self._renderer.close()
@@ -376,8 +374,7 @@ class UAVSearchParallelEnv(ParallelEnv):
                 arr is not None
                 and arr.dtype.kind in _NUMERIC_KINDS
                 and arr.shape == (len(agents), self._dim)
-                # finite entries have a finite sum (one that overflows takes the checked path)
-                and math.isfinite(np.add.reduce(arr, axis=None))
+                and np.logical_and.reduce(np.isfinite(arr), axis=None)
             ):
                 if len(agents) == self.params.n_agents:
                     return arr.astype(float, copy=False)[None]
@@ -450,12 +447,12 @@ class UAVSearchParallelEnv(ParallelEnv):
         """Per-agent infos of a :class:`~poc_env.sim.single.Step`: its grouped values, one
         ``tolist()`` per group, joined and put in ``_info_keys``' order (the values and types of
         :meth:`_agent_infos`, which builds them when keys beyond the groups exist)."""
-        row = self._info_row
-        if row is None:  # keys beyond the grouped ones: the engine's info values
+        if not self._grouped_infos:  # keys beyond the grouped ones: the engine's info values
             self.transition  # noqa: B018 (sets _step_of)
             return self._agent_infos(engine_mod.info_parts(*self._step_of), live)
         fl, bl, il = last.finfo[0].tolist(), last.binfo[0].tolist(), last.iinfo[0].tolist()
         links = list(self.engine.current.links[0].copy())  # each agent's row, its own
+        row = _row_builder(self._info_keys)  # (a function made by exec: not kept, not pickled)
         if len(live) == len(fl):  # every agent: in index order
             return dict(zip(live, map(row, fl, bl, il, links)))
         idx = map(self._index.__getitem__, live)

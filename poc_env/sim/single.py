@@ -29,6 +29,7 @@ from poc_env.sim import comms as comms_mod
 from poc_env.sim import constraints as cons
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
+from poc_env.sim import rewards as rewards_mod
 from poc_env.sim.control import swarm_increments
 from poc_env.theory.detection import detection_law
 from poc_env.theory.search_theory import _reach
@@ -201,6 +202,9 @@ class SingleStep:
     def step(self, actions: np.ndarray) -> Step:
         """Advance every env by one step under ``actions (E, N, ACTION_DIMS[control])``:
         :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with ``with_info=False``."""
+        spec_terms = rewards_mod._TERMS
+        if spec_terms != TERMS:  # as reward_terms: the spec's terms are the kernel's
+            raise RuntimeError(f"reward terms {TERMS} differ from poc_env.spec {spec_terms}")
         eng = self.engine
         p = eng.params
         st = eng.current
