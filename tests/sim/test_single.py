@@ -50,6 +50,8 @@ CASES = [
     ("small", {"overrides": {"comms.link_failure_prob": 0.3}, "max_cycles": 12}),
     ("small", {"control": "heading", "obs_type": "compass", "random_airfields": True}),
     ("small", {"control": "waypoint", "target__model": "drift", "target__random_current_kmh": 25}),
+    # a current that carries the hidden target out of the map within the episode
+    ("small", {"target__model": "drift", "target__random_current_kmh": 100}),
     ("small", {"overrides": {"fleet": [{"takeoff": "A", "count": 9}], "reward.beta": 1}}),
 ]
 
@@ -246,3 +248,45 @@ def test_end_step_kernel_equals_the_numpy_rules(credit, ends):
                 want = np.repeat(want[:, None], n, axis=1) if want.ndim == 1 else want
                 _same(arr[..., j], want.astype(arr.dtype), key)
                 assert want.dtype.kind == arr.dtype.kind, key
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {"target.model": "drift", "target.random_current_kmh": 25},  # a target off the map
+        {"sensor.law": "definite_range", "sensor.samples_per_cell": 1},  # a POD of 1: log1p(-1)
+        {**NOFLY, **THREAT, "comms.topology": "table2", "fleet": [{"takeoff": "A", "count": 5}]},
+    ],
+    ids=["target-out", "pod-1", "zones-table2"],
+)
+def test_core_step_equals_sim_step_on_crafted_states(overrides):
+    """The single step's core (:meth:`SingleStep._core_step`) against :func:`core.step` on
+    states the random episodes rarely reach: a UAV flying over a hidden target that has left
+    the map, a detection probability of exactly 1, no-fly zones, threats and Table 2."""
+    import copy
+
+    sc = load_scenario("small", overrides)
+    eng = engine_mod.Engine(sc, 1, seeds=[0])
+    eng.reset()
+    st = eng.current
+    rng = np.random.default_rng(1)
+    x0, y0, x1, y1 = eng.params.grid.bounds
+    st.pos[0, :, 0] = rng.uniform(x0, x1, st.pos.shape[1])
+    st.pos[0, :, 1] = rng.uniform(y0, y1, st.pos.shape[1])
+    st.pos[0, 0, :2] = st.target[0]  # UAV 0 sweeps the target
+    if st.target_out is not None:
+        st.target_out[:] = True
+    fast_step = single.SingleStep(eng)
+    for _ in range(3):
+        acts = rng.uniform(-1, 1, (1, st.flying.shape[1], 3))
+        want_state, got_state = copy.deepcopy(st), copy.deepcopy(st)
+        want = sim.step(eng.params, want_state, acts, [np.random.default_rng(5)])
+        eng.rngs = [np.random.default_rng(5)]
+        k = fast_step._constants(eng.params)
+        e, n = st.flying.shape
+        parts = fast_step._core_step(
+            eng.params, k, got_state, acts.astype(float), np.empty((e, n, n)), np.empty((e, n))
+        )
+        _same(single.events_of(parts), want, "events")
+        _same(got_state, want_state, "state")
+        st = eng.state = got_state
