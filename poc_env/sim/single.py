@@ -230,10 +230,10 @@ class SingleStep:
             parts = parts_of(sim.step(p, st, inc, eng.rngs))
         else:
             parts = self._core_step(p, k, st, inc.astype(float, copy=False), dist, p_t)
-        terms = np.empty((5, e, n))
-        reward = np.empty((e, n))
-        terminated = np.empty((e, n), dtype=bool)
-        truncated = np.empty((e, n), dtype=bool)
+        values = np.empty((6, e, n))  # fresh each step: the transition's arrays are views
+        terms, reward = values[:5], values[5]
+        ends = np.empty((2, e, n), dtype=bool)
+        terminated, truncated = ends[0], ends[1]
         over = np.empty(e, dtype=bool)
         _rewards.end_step(
             parts,
