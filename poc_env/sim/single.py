@@ -1,17 +1,24 @@
 """The single environment's step: :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with
-its end in one compiled call.
+its glue formed once and its end in one compiled call.
 
 The PettingZoo env steps one env of a few UAVs, where a dozen numpy calls on ``(1, N)`` arrays
-cost more than the arithmetic they do. :class:`SingleStep` runs the same step as the engine
-(the autopilot, :func:`poc_env.sim.core.step`, the observations) and then, in place of the
-reward terms and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.
-terminal`, :func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and
-the info values (:func:`~poc_env.sim.engine.info_parts`), one call of the kernel
+cost more than the arithmetic they do. :class:`SingleStep` runs the engine's step in the same
+order: the autopilot (:func:`~poc_env.sim.control.swarm_increments`), the core step
+(:func:`poc_env.sim.core.step`'s kernels called with the arguments :class:`_Constants` forms
+once per scenario; the shield keeps that function) and the ``dict`` and ``flat`` observations
+(the kernels of :func:`poc_env.sim.observations.observe`); then, in place of the reward terms
+and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
+:func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and the info values
+(:func:`~poc_env.sim.engine.info_parts`), one call of the kernel
 :func:`poc_env._kernels.rewards.end_step`, which also groups the per-agent info values by
 Python type so that the adapter builds its per-agent info dicts from three ``tolist()`` calls.
+The step's :class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
 
 Every value is the engine's, bit for bit: ``tests/sim/test_single.py`` runs both on random
-actions over several tasks and options and compares every array and info.
+actions over several tasks and options (and the core step on crafted states) and compares
+every array and info. (One compiled call for the whole step would also save the kernels'
+dispatch, but the cache rule of :mod:`poc_env._kernels` keeps each group's kernels in its
+own module.)
 """
 
 from __future__ import annotations
