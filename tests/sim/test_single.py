@@ -290,3 +290,23 @@ def test_core_step_equals_sim_step_on_crafted_states(overrides):
         _same(single.events_of(parts), want, "events")
         _same(got_state, want_state, "state")
         st = eng.state = got_state
+
+
+def test_returned_values_are_not_changed_by_later_steps():
+    """What a step returns (observations, infos with their adjacency rows, the transition's
+    arrays) stays as it was when the env steps on: the fast step reuses only scratch arrays
+    that never leave it."""
+    import copy
+
+    env = poc_env.parallel_env("small", overrides={"comms.range_km": 12})
+    env.reset(seed=3)
+    rng = np.random.default_rng(3)
+    kept = []
+    while env.agents and len(kept) < 8:
+        out = env.step({a: rng.uniform(-1, 1, 3) for a in env.agents})
+        tr = env.transition
+        arrays = (tr.reward, tr.terms, tr.terminated, tr.truncated, tr.over, tr.events)
+        kept.append(((out, arrays), copy.deepcopy((out, arrays))))
+    assert len(kept) == 8
+    for got, want in kept:
+        _same(got, want, "kept")
