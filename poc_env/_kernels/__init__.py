@@ -13,6 +13,8 @@ module              kernels (the public functions that call them)
 ``autopilot``       the heading and waypoint levels' autopilot and eq. 18 return rule
                     (:func:`poc_env.sim.control.swarm_increments`)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
+``rewards``         the single env's end of step: reward terms and total, episode end, info
+                    values (:mod:`poc_env.sim.single`), sums in numpy's pairwise order
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells
                     (:mod:`poc_env.theory.regions`, the planner's objective)
 ==================  ==========================================================================

@@ -95,11 +95,13 @@ def rasters(belief, s, coarse, own_sum, scale, hazard, pos, flying, x0, y0, x1, 
     for e in range(n_env):
         _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols)
         _coarse_poc(belief, e, s, coarse, own_sum, scale[e], poc_sum, poc)
-        for k in range(n):
-            out[e, k, 0] = poc
-            out[e, k, 1] = 0.0
-            out[e, k, 2] = 0.0
-            out[e, k, 3] = hazard
+        for k in range(n):  # element by element: 2.5 times numba's slice assignments
+            for j in range(ny):
+                for i in range(nx):
+                    out[e, k, 0, j, i] = poc[j, i]
+                    out[e, k, 1, j, i] = 0.0
+                    out[e, k, 2, j, i] = 0.0
+                    out[e, k, 3, j, i] = hazard[j, i]
         for k in range(n):
             if present[k]:
                 rj, ci = rows[k], cols[k]

@@ -8,33 +8,33 @@ from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test
 
 import poc_env
+import poc_env._kernels.swarm as _swarm
 from poc_env.envs.gymnasium_env import UAVSearchGym
 from poc_env.errors import ConfigError
 from poc_env.sim import control as ctl
-from poc_env.sim import core as sim
 from poc_env.sim.observations import CompassFeatures
 
 
 def _fly(env, seed, policy):
     """Fly one episode with ``policy(rng, agents)``; record the increments the core received."""
     seen = []
-    real_step = sim.step
+    real_kinematics = _swarm.kinematics  # what every step (the engine's, the single env's) flies
 
-    def spy(params, state, actions, rngs):
+    def spy(actions, *args):
         seen.append(np.asarray(actions).copy())
-        return real_step(params, state, actions, rngs)
+        return real_kinematics(actions, *args)
 
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
     infos: dict = {}
     posc = 0.0
-    sim_step, sim.step = sim.step, spy
+    _swarm.kinematics = spy
     try:
         while env.agents:
             _, _, _, _, infos = env.step(policy(rng, env.agents))
             posc = max([posc, *(i["posc"] for i in infos.values())])
     finally:
-        sim.step = sim_step
+        _swarm.kinematics = real_kinematics
     return np.concatenate(seen), env.sim_state, posc
 
 

@@ -1,0 +1,357 @@
+"""The single environment's step: :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with
+its glue formed once and its end in one compiled call.
+
+The PettingZoo env steps one env of a few UAVs, where a dozen numpy calls on ``(1, N)`` arrays
+cost more than the arithmetic they do. :class:`SingleStep` runs the engine's step in the same
+order: the autopilot (:func:`~poc_env.sim.control.swarm_increments`), the core step
+(:func:`poc_env.sim.core.step`'s kernels called with the arguments :class:`_Constants` forms
+once per scenario; the shield keeps that function) and the ``dict`` and ``flat`` observations
+(the kernels of :func:`poc_env.sim.observations.observe`); then, in place of the reward terms
+and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
+:func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and the info values
+(:func:`~poc_env.sim.engine.info_parts`), one call of the kernel
+:func:`poc_env._kernels.rewards.end_step`, which also groups the per-agent info values by
+Python type so that the adapter builds its per-agent info dicts from three ``tolist()`` calls.
+The step's :class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
+
+Every value is the engine's, bit for bit: ``tests/sim/test_single.py`` runs both on random
+actions over several tasks and options (and the core step on crafted states) and compares
+every array and info. (One compiled call for the whole step would also save the kernels'
+dispatch, but the cache rule of :mod:`poc_env._kernels` keeps each group's kernels in its
+own module.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import poc_env._kernels.observations as _obs_kernels
+import poc_env._kernels.rewards as _rewards
+import poc_env._kernels.sensing as _sensing
+import poc_env._kernels.swarm as _swarm
+from poc_env.sim import comms as comms_mod
+from poc_env.sim import constraints as cons
+from poc_env.sim import core as sim
+from poc_env.sim import observations as obs_mod
+from poc_env.sim import rewards as rewards_mod
+from poc_env.sim.control import swarm_increments
+from poc_env.theory.detection import detection_law
+from poc_env.theory.search_theory import _reach
+
+#: The per-agent info keys of :attr:`Step.finfo`, :attr:`Step.binfo` and :attr:`Step.iinfo`.
+FLOAT_INFOS = _rewards.FLOAT_INFOS
+BOOL_INFOS = _rewards.BOOL_INFOS
+INT_INFOS = _rewards.INT_INFOS
+#: The reward terms in the order of ``end_step``'s ``terms`` rows (:data:`poc_env.spec.
+#: REWARD_TERMS`; the engine's test pins them).
+TERMS = ("pos", "time", "violation", "overtime", "crash")
+
+
+def events_of(parts: tuple[np.ndarray, ...]) -> sim.Events:
+    """The :class:`~poc_env.sim.core.Events` of a step's ``parts`` ``(found, team, time_term,
+    flags, no_fly, threat, shielded, detected_now, connected)``, ``flags`` the core step's
+    ``(6, E, N)`` rows (:data:`poc_env._kernels.swarm.OVERTIME` ...)."""
+    found, team, time_term, flags, nofly, threat, shielded, detected_now, connected = parts
+    return sim.Events(
+        pos_agent=found,
+        pos_team=team,
+        time_term=time_term,
+        overtime=flags[_swarm.OVERTIME],
+        out_of_bounds=flags[_swarm.OOB],
+        no_fly=nofly,
+        collision=flags[_swarm.COLLISION],
+        threat=threat,
+        comms_ok=flags[_swarm.COMMS_OK],
+        shielded=shielded,
+        landed_now=flags[_swarm.LANDED],
+        crashed_now=flags[_swarm.CRASHED],
+        detected_now=detected_now,
+        connected=connected,
+    )
+
+
+def parts_of(ev: sim.Events) -> tuple[np.ndarray, ...]:
+    """The inverse of :func:`events_of`."""
+    flags = np.empty((_swarm.N_FLAGS, *ev.pos_agent.shape), dtype=bool)
+    flags[_swarm.OVERTIME] = ev.overtime
+    flags[_swarm.OOB] = ev.out_of_bounds
+    flags[_swarm.COLLISION] = ev.collision
+    flags[_swarm.COMMS_OK] = ev.comms_ok
+    flags[_swarm.LANDED] = ev.landed_now
+    flags[_swarm.CRASHED] = ev.crashed_now
+    return (
+        ev.pos_agent, ev.pos_team, ev.time_term, flags, ev.no_fly, ev.threat, ev.shielded,
+        ev.detected_now, np.asarray(ev.connected, dtype=bool),
+    )  # fmt: skip
+
+
+@dataclass
+class Step:
+    """One step of :class:`SingleStep`: the engine's :class:`~poc_env.sim.engine.Transition`
+    fields (``terms`` as a ``(5, E, N)`` array in :data:`TERMS` order, the events as their
+    ``parts``: :func:`events_of`) and the info values grouped by type: ``finfo (E, N,
+    len(FLOAT_INFOS))``, ``binfo``, ``iinfo`` (the keys of :data:`FLOAT_INFOS`,
+    :data:`BOOL_INFOS`, :data:`INT_INFOS`; scratch arrays, valid until the next step)."""
+
+    obs: Any
+    reward: np.ndarray
+    terms: np.ndarray
+    parts: tuple[np.ndarray, ...]
+    terminated: np.ndarray
+    truncated: np.ndarray
+    over: np.ndarray
+    finfo: np.ndarray
+    binfo: np.ndarray
+    iinfo: np.ndarray
+
+    @property
+    def events(self) -> sim.Events:
+        """The step's :class:`~poc_env.sim.core.Events` (made when asked for)."""
+        return events_of(self.parts)
+
+    def terms_dict(self) -> dict[str, np.ndarray]:
+        """The reward terms as :func:`~poc_env.sim.rewards.reward_terms` returns them."""
+        return {t: self.terms[k] for k, t in enumerate(TERMS)}
+
+
+class _Constants:
+    """What the kernels of one :class:`~poc_env.sim.core.Params` take besides the state: the
+    arguments the numpy-facing wrappers (:func:`poc_env.sim.core.sense`,
+    :func:`~poc_env.sim.core._update_topology`, :func:`poc_env.sim.observations.rasters` and
+    :func:`~poc_env.sim.observations.vectors`) form at each call, formed once."""
+
+    def __init__(self, p: sim.Params) -> None:
+        sc = p.scenario
+        sensor, cc, u = sc.sensor, sc.comms, sc.uav
+        g = p.grid
+        self.params = p
+        self.origin = np.asarray(g.origin_m, dtype=np.float64)
+        law = detection_law(sensor.law)
+        self.sweep = (
+            law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
+            float(_reach(g, sensor.law, sensor.sweep_width_m, p.cutoff_m)), float(g.cell_m),
+            0.0, 0.0, g.cell_m / p.s,
+        )  # fmt: skip
+        ox, oy = g.origin_m
+        self.target = (
+            float(ox), float(oy), law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
+            float(g.cell_m),
+        )  # fmt: skip
+        #: the common topology: in-range graph and the auto rule, one kernel
+        self.auto = cc.link_failure_prob <= 0 and p.switcher is None
+        self.range_m = float(cc.range_m)
+        self.k_nearest = comms_mod.nearest_count(cc.min_neighbours, p.n_agents)
+        self.zones = len(p.zones) > 0
+        self.threat = len(p.threat_lambdas) > 0
+        x0, y0, x1, y1 = g.bounds
+        self.own_sum = g.nx > 1 and p.s < 8  # as observations.rasters
+        self.raster = (float(x0), float(y0), float(x1), float(y1), float(g.cell_m))
+        bx0, by0, bx1, by1 = p.bounds
+        w, h = bx1 - bx0, by1 - by0
+        n = p.n_agents
+        self.vector = (
+            float(bx0), float(by0), float(w), float(h), obs_mod._diagonal(w, h),
+            float(u.max_altitude_m), float(u.min_speed_mps),
+            float(u.max_speed_mps - u.min_speed_mps), float(u.max_pitch_rad),
+            float(u.endurance_s), float(u.usable_endurance_s), float(p.horizon),
+            float(cc.range_m), float(max(n - 1, 1)), obs_mod._LOW, obs_mod._HIGH,
+        )  # fmt: skip
+
+
+class SingleStep:
+    """The step of ``engine`` (every env) with its end compiled; see the module docstring.
+
+    Only for engines whose every env is stepped at once (the PettingZoo env) and whose UAVs
+    share one belief (``comms.belief_sharing: global``): :meth:`supports`."""
+
+    def __init__(self, engine: Any) -> None:
+        self.engine = engine
+        sc = engine.scenario
+        r = sc.reward
+        # the signed coefficients exactly as reward_terms forms them (-0 of an int is 0)
+        self._coef_of = (r.alpha, -r.beta, -r.violation_penalty, -r.overtime_penalty)
+        self._crash = -r.crash_penalty
+        self._team = r.credit == "team"
+        self._ends = bool(sc.episode.detection_ends_episode)
+        self._coef: np.ndarray | None = None
+        self._k: _Constants | None = None
+        self._scratch: tuple[np.ndarray, ...] | None = None
+        self._pass_through = engine.control == "increments" and not engine.return_increments
+        self._shield = sc.constraints.violation == "shield"
+        self._hazard = comms_mod._shaped(engine.hazard, engine.params.grid.shape, np.float32)
+        self._coef_dt: float | None = None
+
+    @staticmethod
+    def supports(engine: Any) -> bool:
+        """Whether :meth:`step` can run ``engine``: global beliefs (per-UAV ones keep the
+        engine's step)."""
+        return engine.scenario.comms.belief_sharing != "comms"
+
+    def _coefficients(self, dt: float) -> np.ndarray:
+        if self._coef is None or self._coef_dt != dt:
+            c = np.empty(len(_rewards.COEFFICIENTS))
+            for k, v in enumerate((*self._coef_of, self._crash)):
+                # reward_terms multiplies an array by this Python number: the same float64
+                c[k] = np.float64(v)
+            c[5] = dt
+            self._coef, self._coef_dt = c, dt
+        return self._coef
+
+    def _constants(self, p: sim.Params) -> _Constants:
+        k = self._k
+        if k is None or k.params is not p:  # random_airfields: new Params at each reset
+            k = self._k = _Constants(p)
+        return k
+
+    def step(self, actions: np.ndarray) -> Step:
+        """Advance every env by one step under ``actions (E, N, ACTION_DIMS[control])``:
+        :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with ``with_info=False``."""
+        spec_terms = rewards_mod._TERMS
+        if spec_terms != TERMS:  # as reward_terms: the spec's terms are the kernel's
+            raise RuntimeError(f"reward terms {TERMS} differ from poc_env.spec {spec_terms}")
+        eng = self.engine
+        p = eng.params
+        st = eng.current
+        k = self._constants(p)
+        e, n = st.flying.shape
+        if self._pass_through:  # swarm_increments' increments level: the actions as floats
+            inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
+        else:
+            inc = swarm_increments(
+                p, eng.control, st, actions, eng.auto_return, eng.return_increments
+            )
+        scratch = self._scratch
+        if scratch is None or scratch[0].shape[:2] != (e, n):
+            scratch = self._scratch = (
+                np.empty((e, n, len(_rewards.FLOAT_INFOS))),
+                np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool),
+                np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64),
+                np.empty((e, n, n)),
+                np.empty((e, n)),
+            )
+        finfo, binfo, iinfo, dist, p_t = scratch
+        if self._shield:
+            parts = parts_of(sim.step(p, st, inc, eng.rngs))
+        else:
+            parts = self._core_step(p, k, st, inc.astype(float, copy=False), dist, p_t)
+        values = np.empty((6, e, n))  # fresh each step: the transition's arrays are views
+        terms, reward = values[:5], values[5]
+        ends = np.empty((2, e, n), dtype=bool)
+        terminated, truncated = ends[0], ends[1]
+        over = np.empty(e, dtype=bool)
+        _rewards.end_step(
+            parts,
+            (st.posc, st.elapsed, st.detected, st.detect_step, st.topology, st.violations,
+             st.landed, st.crashed, st.step),
+            self._coefficients(p.dt), p.horizon, self._ends, self._team,
+            (terms, reward, terminated, truncated, over, finfo, binfo, iinfo),
+        )  # fmt: skip
+        obs = self._observe(p, k, st)
+        return Step(obs, reward, terms, parts, terminated, truncated, over, finfo, binfo, iinfo)
+
+    def _core_step(
+        self, p: sim.Params, k: _Constants, st: sim.State, actions, dist, p_t
+    ) -> tuple[np.ndarray, ...]:
+        """:func:`poc_env.sim.core.step` without the shield (which keeps that function), its
+        kernels called with the arguments of :class:`_Constants`, in the same order; returns
+        the events' parts (:func:`events_of`). ``dist (E, N, N)``, ``p_t (E, N)``: scratch."""
+        moving = st.flying.copy()
+        e, n = moving.shape
+        if p.motion is not None:  # the filter's predict step; static targets skip it
+            sim.predict(p, st)
+        a2 = st.pos[..., :2].copy()
+        new = np.empty_like(st.pos)
+        alpha = np.empty((e, n))
+        beta = np.empty((e, n))
+        speed = np.empty((e, n))
+        _swarm.kinematics(
+            actions, None, moving, st.pos, st.heading, st.pitch, st.speed, p.motion_constants,
+            (new, alpha, beta, speed),
+        )  # fmt: skip
+        st.heading = alpha
+        st.pitch = beta
+        st.speed = speed
+        b2 = new[..., :2]
+        found = np.empty((e, n))
+        _sensing.sweep(st.belief, a2 - k.origin, b2 - k.origin, *k.sweep, found)
+        st.pos = new
+        if _sensing.target_pod(st.target, a2, b2, moving, *k.target, p_t):
+            if st.target_out is not None:  # a target that left the map is beyond the search
+                p_t[st.target_out] = 0.0
+            if np.maximum.reduce(p_t, axis=None) < 1.0:  # no log1p(-1): no warning to silence
+                st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+            else:
+                with np.errstate(divide="ignore"):
+                    st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+        if k.zones:
+            nofly = moving & p.zones.segment_crosses(a2, b2)
+        else:
+            nofly = np.zeros((e, n), dtype=bool)
+        if k.threat:
+            sc = p.scenario
+            threat = moving & cons.threat_violation(
+                new[..., :2], p.threat_centers, p.threat_lambdas, sc.map.threat_threshold
+            )
+        else:
+            threat = np.zeros((e, n), dtype=bool)
+        team = np.empty(e)
+        flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
+        time_term = np.empty((e, n))
+        detected_now = np.empty(e, dtype=bool)
+        detect_step = st.detect_step.copy()
+        _swarm.step(
+            (
+                st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
+                st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
+                st.crashed, st.flying, st.violations,
+            ),
+            (found, moving, nofly, threat),
+            (team, detected_now, time_term, flags, dist),
+            p.landing,
+            p.step_constants,
+        )  # fmt: skip
+        st.detect_step = detect_step
+        if k.auto:
+            links = np.empty((e, n, n), dtype=bool)
+            n_comp = np.empty(e, dtype=np.int64)
+            _swarm.auto_links(dist, k.range_m, st.flying, k.k_nearest, links, n_comp)
+            st.links = links
+            connected = n_comp <= 1
+        else:
+            topo = sim._update_topology(p, st, self.engine.rngs, dist)
+            connected = np.asarray(topo.connected, dtype=bool)
+        shielded = np.zeros((e, n), dtype=bool)
+        return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
+
+    def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
+        """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and
+        ``flat`` through their kernels with the arguments of :class:`_Constants`."""
+        eng = self.engine
+        kind = eng.obs_type
+        if kind not in ("dict", "flat"):
+            return eng.observe_state(st)
+        e, n = st.flying.shape
+        g = p.grid
+        size = obs_mod.RASTER_CHANNELS * g.ny * g.nx
+        if kind == "dict":
+            raster = np.empty((e, n, obs_mod.RASTER_CHANNELS, g.ny, g.nx), dtype=np.float32)
+            vector = np.empty((e, n, obs_mod.VECTOR_SIZE), dtype=np.float32)
+        else:
+            flat = np.empty((e, n, size + obs_mod.VECTOR_SIZE), dtype=np.float32)
+            raster = flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx)
+            vector = flat[:, :, size:]
+        coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
+        _obs_kernels.rasters(
+            st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
+            *k.raster, raster,
+        )  # fmt: skip
+        _obs_kernels.vectors(
+            st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
+            st.flying, st.step, p.landing, *k.vector, vector,
+        )  # fmt: skip
+        if kind == "dict":
+            return {"raster": raster, "vector": vector}
+        return flat
