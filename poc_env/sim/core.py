@@ -509,6 +509,14 @@ def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) ->
     known[reach] = np.broadcast_to(own[:, None], known.shape)[reach]
 
 
+def step_draws(params: Params) -> bool:
+    """Whether :func:`step` draws from the env generators (link failures, eq. 24's failure
+    model, in :func:`_update_topology`) or keeps state outside the batch (a topology switcher).
+    When it does not, stepping an env whose episode has ended changes nothing but its own
+    state, which a batched autoreset then replaces (``gymnasium.make_vec``)."""
+    return params.scenario.comms.link_failure_prob > 0 or params.switcher is not None
+
+
 def _update_topology(
     params: Params, state: State, rngs, dist: np.ndarray | None = None
 ) -> comms_mod.CommsTopology:
