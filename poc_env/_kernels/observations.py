@@ -305,32 +305,9 @@ def _cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
     by :func:`_classify`. Adding a zero to a sum started at +0.0 changes nothing, so zero cells
     are not skipped (but a zero cell is never classified). ``bins``, ``d2s (cells,)``:
     scratch."""
-    n_cells = cx.shape[0]
     n_rings = edges.shape[0] + 1
-    tol = 1e-9
-    radius2 = radius * radius
-    if n_sectors != 8:  # no octants: every cell by the defining formula
-        bins[:n_cells] = -1
-    else:
-        for j in range(n_cells):
-            dx = cx[j] - px
-            dy = cy[j] - py
-            ax = abs(dx)
-            ay = abs(dy)
-            tb = tol * max(ax, ay)
-            d2 = dx * dx + dy * dy
-            d2s[j] = d2
-            clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb)
-            clear &= abs(d2 - radius2) > tol * radius2
-            k = 4 * np.intp(dy > 0) + 2 * np.intp(dx > 0) + np.intp(ay < ax)
-            bins[j] = _OCTANT[k] * n_rings if clear else -n_cells * n_rings
-        for r in range(n_rings - 1):
-            e2 = edges[r] * edges[r]
-            band = tol * e2
-            for j in range(n_cells):  # a cell next to an edge is pushed below zero for good
-                d2 = d2s[j]
-                bins[j] += np.intp(d2 >= e2) - np.intp(abs(d2 - e2) <= band) * n_cells * n_rings
-    for j in range(n_cells):
+    _cell_bin_ids(cx, cy, px, py, edges, radius, n_sectors, bins, d2s)
+    for j in range(cx.shape[0]):
         q = poc[j]
         b = bins[j]
         if b >= 0:
@@ -338,6 +315,60 @@ def _cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
         elif q != 0.0:
             sector, ring, _inside = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
             mass[sector * n_rings + ring] += q
+
+
+@_jit
+def _cell_bin_ids(cx, cy, px, py, edges, radius, n_sectors, bins, d2s):
+    """The first pass of :func:`_cell_bins`: each cell's bin (``sector * n_rings + ring``) into
+    ``bins``, or a negative number for a cell :func:`_classify` must decide."""
+    n_cells = cx.shape[0]
+    n_rings = edges.shape[0] + 1
+    tol = 1e-9
+    radius2 = radius * radius
+    if n_sectors != 8:  # no octants: every cell by the defining formula
+        bins[:n_cells] = -1
+        return
+    for j in range(n_cells):
+        dx = cx[j] - px
+        dy = cy[j] - py
+        ax = abs(dx)
+        ay = abs(dy)
+        tb = tol * max(ax, ay)
+        d2 = dx * dx + dy * dy
+        d2s[j] = d2
+        clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb)
+        clear &= abs(d2 - radius2) > tol * radius2
+        k = 4 * np.intp(dy > 0) + 2 * np.intp(dx > 0) + np.intp(ay < ax)
+        bins[j] = _OCTANT[k] * n_rings if clear else -n_cells * n_rings
+    for r in range(n_rings - 1):
+        e2 = edges[r] * edges[r]
+        band = tol * e2
+        for j in range(n_cells):  # a cell next to an edge is pushed below zero for good
+            d2 = d2s[j]
+            bins[j] += np.intp(d2 >= e2) - np.intp(abs(d2 - e2) <= band) * n_cells * n_rings
+
+
+@_jit
+def _shared_cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
+    """:func:`_cell_bins` of several UAVs over one shared row ``poc``: ``px``, ``py (B,)``,
+    ``mass (B, bins)``, ``bins (B, cells)``. The same sums in the same order per UAV (each
+    UAV's bins summed in cell order), the UAVs' additions interleaved cell by cell so that
+    their chains of additions overlap."""
+    b_n = px.shape[0]
+    n_rings = edges.shape[0] + 1
+    for k in range(b_n):
+        _cell_bin_ids(cx, cy, px[k], py[k], edges, radius, n_sectors, bins[k], d2s)
+    for j in range(cx.shape[0]):
+        q = poc[j]
+        for k in range(b_n):
+            b = bins[k, j]
+            if b >= 0:
+                mass[k, b] += q
+            elif q != 0.0:
+                sector, ring, _inside = _classify(
+                    cx[j] - px[k], cy[j] - py[k], edges, radius, n_sectors
+                )
+                mass[k, sector * n_rings + ring] += q
 
 
 @_jit
@@ -483,23 +514,42 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     rows = np.empty(n, dtype=np.intp)
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
+    together = short and n_shared == 1  # the UAVs' sums over their env's row, interleaved
+    all_mass = np.empty((n if together else 0, n_sectors * n_rings))
+    all_bins = np.empty((n if together else 0, ny * nx), dtype=np.intp)
+    pxs = np.empty(n)
+    pys = np.empty(n)
     for e in range(n_env):
         _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols)
+        for k in range(n):
+            pxs[k] = bx0 + np.float64(vector[e, k, 0]) * bw
+            pys[k] = by0 + np.float64(vector[e, k, 1]) * bh
+        if together:
+            all_mass[:] = 0.0
+            row = poc[e, 0].reshape(ny * nx)
+            _shared_cell_bins(
+                cx, cy, pxs, pys, row, edges, radius, n_sectors, all_mass, all_bins, cell_d2
+            )
         for k in range(n):
             p = k if n_shared > 1 else 0
             o = out[e, k]
             o[:] = 0.0
             for t in range(n_vec):
                 o[v0 + t] = vector[e, k, t]
-            px = bx0 + np.float64(vector[e, k, 0]) * bw
-            py = by0 + np.float64(vector[e, k, 1]) * bh
-            mass[:] = 0.0
+            px = pxs[k]
+            py = pys[k]
             count[:] = 0.0
-            row = poc[e, p].reshape(ny * nx)
-            if short:
-                _cell_bins(cx, cy, px, py, row, edges, radius, n_sectors, mass, cell_bin, cell_d2)
+            if together:
+                mass[:] = all_mass[k]
             else:
-                _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
+                mass[:] = 0.0
+                row = poc[e, p].reshape(ny * nx)
+                if short:
+                    _cell_bins(
+                        cx, cy, px, py, row, edges, radius, n_sectors, mass, cell_bin, cell_d2
+                    )
+                else:
+                    _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
             for m in range(n):  # each cell holding another UAV counts once (a 1.0)
                 c = rows[m] * nx + cols[m]
                 if m != k and present[m] and others_cells[c] == 0.0:

@@ -1051,6 +1051,21 @@ def test_short_row_compass_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_sect
             cx, cy, px[i], py[i], poc[i], edges, radius, n_sectors, mass, bins, d2s
         )
         np.testing.assert_array_equal(mass, want[i], err_msg=f"UAV {i} at {px[i]}, {py[i]}")
+    # several UAVs over one shared row (an env's), their additions interleaved: the same sums
+    for group in (1, 3, 6):
+        for start in range(0, len(px) - group + 1, group):
+            k = np.arange(start, start + group)
+            row = poc[start]
+            shared_want, _c = obs_kernels.compass_bins(
+                cx, cy, px[k], py[k], np.tile(row, (group, 1)), np.zeros((group, 64)), edges,
+                radius, n_sectors,
+            )  # fmt: skip
+            mass = np.zeros((group, n_sectors * (len(edges) + 1)))
+            obs_kernels._shared_cell_bins(
+                cx, cy, px[k], py[k], row, edges, radius, n_sectors, mass,
+                np.empty((group, 64), dtype=np.intp), d2s,
+            )  # fmt: skip
+            np.testing.assert_array_equal(mass, shared_want, err_msg=f"UAVs {k}")
 
 
 @pytest.mark.parametrize("seed", [0, 1])
