@@ -476,12 +476,49 @@ def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
 
 
 @_jit
-def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
+def np_sum(a):
+    """numpy's ``a.sum()`` of a contiguous float64 vector, bit for bit: its pairwise sum
+    (numpy's ``pairwise_sum``: below 8 values one running sum from -0.0; up to 128 eight
+    running sums, combined as ``((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))``, then the
+    tail in order; above 128 the two halves, split at a multiple of 8, summed apart)."""
+    n = a.shape[0]
+    if n < 8:
+        res = -0.0
+        for i in range(n):
+            res += a[i]
+        return res
+    if n <= 128:
+        r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
+        r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
+        i = 8
+        while i < n - n % 8:
+            r0 += a[i]
+            r1 += a[i + 1]
+            r2 += a[i + 2]
+            r3 += a[i + 3]
+            r4 += a[i + 4]
+            r5 += a[i + 5]
+            r6 += a[i + 6]
+            r7 += a[i + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[i]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return np_sum(a[:n2]) + np_sum(a[n2:])
+
+
+@_jit
+def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
     """The compass observation of every UAV of every env into ``out (E, N, F)`` float32 (the
     blocks of :class:`poc_env.sim.observations.CompassFeatures`), computed straight from each
     env's raster channel 0 ``poc (E, P, ny, nx)`` (P = 1: shared by its UAVs; P = N: each UAV's
-    own), its float64 ``total`` and ``mean (E, P)``, the state vectors ``vector (E, N, V)`` and
-    the positions: the sums :func:`compass_bins` makes from rasters, without building them.
+    own), its float64 total and mean (numpy's, :func:`np_sum`), the state vectors
+    ``vector (E, N, V)`` and the positions: the sums :func:`compass_bins` makes from rasters,
+    without building them.
 
     ``grid_box = (x0, y0, x1, y1, cell)`` places the UAVs in cells as :func:`rasters` does; the
     "others" channel is 1 on each cell holding another present UAV, so such a cell counts once.
@@ -519,8 +556,17 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     all_bins = np.empty((n if together else 0, ny * nx), dtype=np.intp)
     pxs = np.empty(n)
     pys = np.empty(n)
+    wide = np.empty(ny * nx)  # a channel 0 in float64, for numpy's sums
+    totals = np.empty(n_shared)
+    means = np.empty(n_shared)
     for e in range(n_env):
         _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols)
+        for p in range(n_shared):
+            flat = poc[e, p].reshape(ny * nx)
+            for c in range(ny * nx):
+                wide[c] = flat[c]
+            totals[p] = np_sum(wide)
+            means[p] = totals[p] / (ny * nx)
         for k in range(n):
             pxs[k] = bx0 + np.float64(vector[e, k, 0]) * bw
             pys[k] = by0 + np.float64(vector[e, k, 1]) * bh
@@ -562,12 +608,12 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
             for m in range(n):
                 if present[m]:
                     others_cells[rows[m] * nx + cols[m]] = 0.0
-            tot = total[e, p]
+            tot = totals[p]
             for b in range(mass.size):
                 o[c0 + b] = mass[b] / tot if tot > 0 else 0.0
             for b in range(n_sectors):
                 o[o0 + b] = min(count[b] / others, 1.0)
-            o[m0] = mean[e, p]
+            o[m0] = means[p]
             if agent_index:
                 o[i0 + k % n_ids] = 1.0
 
