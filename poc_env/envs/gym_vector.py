@@ -187,11 +187,11 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             reward, terminated, truncated = self._advance(a, None)
             return self._joint(), reward, terminated, truncated, self._infos()
         again = np.flatnonzero(self._autoreset)
-        if sim.step_draws(self.params):  # the step would draw from the resetting envs' streams
+        if not sim.step_is_per_env(self.params):  # the ended envs would draw or weigh in
             return self._step_around(a, again)
         # NEXT_STEP autoreset: every env is stepped (the ended ones to no effect: their step
-        # draws nothing, and their state, observations and infos are replaced), then the ended
-        # envs start afresh, drawing from their generators what the sync env's reset draws
+        # touches only their own state, which is replaced with their observations and infos),
+        # then the ended envs start afresh, drawing what the sync env's reset draws
         self._live[again] = True
         reward, terminated, truncated = self._advance(a, None)
         first, fresh_info = self.engine.reset(again)
@@ -212,7 +212,8 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
 
     def _step_around(self, a: np.ndarray, again: np.ndarray):
         """The autoreset step that resets ``again`` first and steps only the other envs (when
-        the step draws from the env generators, :func:`~poc_env.sim.core.step_draws`)."""
+        stepping them could change the others or their streams,
+        :func:`~poc_env.sim.core.step_is_per_env`)."""
         e = self.num_envs
         reward = np.zeros(e)
         terminated = np.zeros(e, dtype=bool)

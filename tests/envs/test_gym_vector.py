@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 import poc_env  # (also registers the tasks)
-from poc_env.envs import gym_vector
 from poc_env.sim import core as sim
 
 TID = "poc_env/UAVSearch-Small-Heading-v1"
@@ -56,12 +55,19 @@ def test_autoreset_of_some_envs_equals_the_sync_vector_env(failures):
         "comms.link_failure_prob": failures,
     }
     params = sim.make_params(poc_env.config.load_scenario("small", overrides))
-    assert sim.step_draws(params) == (failures > 0)
+    assert sim.step_is_per_env(params) == (failures == 0)
     assert _same_episodes(overrides) >= 2
 
 
-def test_the_autoreset_step_without_draws_steps_every_env(monkeypatch):
-    """Without link failures the autoreset step steps the whole batch once (no sub-batch)."""
+@pytest.mark.parametrize(
+    ("task", "steps"),
+    [("poc_env/UAVSearch-Small-Heading-v1", [4, 4, 4, 4]),  # every env stepped once
+     ("poc_env/UAVSearch-Small-Drift-Heading-v1", [4, 4, 4])],  # ended envs only reset
+)  # fmt: skip
+def test_the_autoreset_step_steps_every_env_when_the_step_is_per_env(monkeypatch, task, steps):
+    """The autoreset step (here of every env) steps the whole batch once when the step changes
+    each env by what it holds alone; with a moving target (its filter sub-steps by the batch's
+    fastest current) the ended envs are reset without being stepped."""
     calls: list = []
     step = sim.step
 
@@ -70,11 +76,10 @@ def test_the_autoreset_step_without_draws_steps_every_env(monkeypatch):
         return step(params, state, actions, rngs)
 
     monkeypatch.setattr(sim, "step", counted)
-    v = gym_vector.SwarmGymVectorEnv(
-        4, scenario="small", control="heading_clip", obs_type="compass", max_cycles=3
-    )
+    v = gymnasium.make_vec(task, num_envs=4, vectorization_mode="vector_entry_point", max_cycles=3)
+    assert sim.step_is_per_env(v.unwrapped.params) == ("Drift" not in task)
     v.reset(seed=1)
     a = np.zeros(v.action_space.shape, dtype=np.float32)
     for _ in range(4):  # the fourth step autoresets every env
         v.step(a)
-    assert calls == [4, 4, 4, 4]
+    assert calls == steps
