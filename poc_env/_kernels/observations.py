@@ -307,32 +307,9 @@ def _cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
     by :func:`_classify`. Adding a zero to a sum started at +0.0 changes nothing, so zero cells
     are not skipped (but a zero cell is never classified). ``bins``, ``d2s (cells,)``:
     scratch."""
-    n_cells = cx.shape[0]
     n_rings = edges.shape[0] + 1
-    tol = 1e-9
-    radius2 = radius * radius
-    if n_sectors != 8:  # no octants: every cell by the defining formula
-        bins[:n_cells] = -1
-    else:
-        for j in range(n_cells):
-            dx = cx[j] - px
-            dy = cy[j] - py
-            ax = abs(dx)
-            ay = abs(dy)
-            tb = tol * max(ax, ay)
-            d2 = dx * dx + dy * dy
-            d2s[j] = d2
-            clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb)
-            clear &= abs(d2 - radius2) > tol * radius2
-            k = 4 * np.intp(dy > 0) + 2 * np.intp(dx > 0) + np.intp(ay < ax)
-            bins[j] = _OCTANT[k] * n_rings if clear else -n_cells * n_rings
-        for r in range(n_rings - 1):
-            e2 = edges[r] * edges[r]
-            band = tol * e2
-            for j in range(n_cells):  # a cell next to an edge is pushed below zero for good
-                d2 = d2s[j]
-                bins[j] += np.intp(d2 >= e2) - np.intp(abs(d2 - e2) <= band) * n_cells * n_rings
-    for j in range(n_cells):
+    _cell_bin_ids(cx, cy, px, py, edges, radius, n_sectors, bins, d2s)
+    for j in range(cx.shape[0]):
         q = poc[j]
         b = bins[j]
         if b >= 0:
@@ -340,6 +317,60 @@ def _cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
         elif q != 0.0:
             sector, ring, _inside = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
             mass[sector * n_rings + ring] += q
+
+
+@_jit
+def _cell_bin_ids(cx, cy, px, py, edges, radius, n_sectors, bins, d2s):
+    """The first pass of :func:`_cell_bins`: each cell's bin (``sector * n_rings + ring``) into
+    ``bins``, or a negative number for a cell :func:`_classify` must decide."""
+    n_cells = cx.shape[0]
+    n_rings = edges.shape[0] + 1
+    tol = 1e-9
+    radius2 = radius * radius
+    if n_sectors != 8:  # no octants: every cell by the defining formula
+        bins[:n_cells] = -1
+        return
+    for j in range(n_cells):
+        dx = cx[j] - px
+        dy = cy[j] - py
+        ax = abs(dx)
+        ay = abs(dy)
+        tb = tol * max(ax, ay)
+        d2 = dx * dx + dy * dy
+        d2s[j] = d2
+        clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb)
+        clear &= abs(d2 - radius2) > tol * radius2
+        k = 4 * np.intp(dy > 0) + 2 * np.intp(dx > 0) + np.intp(ay < ax)
+        bins[j] = _OCTANT[k] * n_rings if clear else -n_cells * n_rings
+    for r in range(n_rings - 1):
+        e2 = edges[r] * edges[r]
+        band = tol * e2
+        for j in range(n_cells):  # a cell next to an edge is pushed below zero for good
+            d2 = d2s[j]
+            bins[j] += np.intp(d2 >= e2) - np.intp(abs(d2 - e2) <= band) * n_cells * n_rings
+
+
+@_jit
+def _shared_cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
+    """:func:`_cell_bins` of several UAVs over one shared row ``poc``: ``px``, ``py (B,)``,
+    ``mass (B, bins)``, ``bins (B, cells)``. The same sums in the same order per UAV (each
+    UAV's bins summed in cell order), the UAVs' additions interleaved cell by cell so that
+    their chains of additions overlap."""
+    b_n = px.shape[0]
+    n_rings = edges.shape[0] + 1
+    for k in range(b_n):
+        _cell_bin_ids(cx, cy, px[k], py[k], edges, radius, n_sectors, bins[k], d2s)
+    for j in range(cx.shape[0]):
+        q = poc[j]
+        for k in range(b_n):
+            b = bins[k, j]
+            if b >= 0:
+                mass[k, b] += q
+            elif q != 0.0:
+                sector, ring, _inside = _classify(
+                    cx[j] - px[k], cy[j] - py[k], edges, radius, n_sectors
+                )
+                mass[k, sector * n_rings + ring] += q
 
 
 @_jit
@@ -447,12 +478,49 @@ def compass_bins(cx, cy, px, py, poc, others, edges, radius, n_sectors):
 
 
 @_jit
-def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
+def np_sum(a):
+    """numpy's ``a.sum()`` of a contiguous float64 vector, bit for bit: its pairwise sum
+    (numpy's ``pairwise_sum``: below 8 values one running sum from -0.0; up to 128 eight
+    running sums, combined as ``((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))``, then the
+    tail in order; above 128 the two halves, split at a multiple of 8, summed apart)."""
+    n = a.shape[0]
+    if n < 8:
+        res = -0.0
+        for i in range(n):
+            res += a[i]
+        return res
+    if n <= 128:
+        r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
+        r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
+        i = 8
+        while i < n - n % 8:
+            r0 += a[i]
+            r1 += a[i + 1]
+            r2 += a[i + 2]
+            r3 += a[i + 3]
+            r4 += a[i + 4]
+            r5 += a[i + 5]
+            r6 += a[i + 6]
+            r7 += a[i + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[i]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return np_sum(a[:n2]) + np_sum(a[n2:])
+
+
+@_jit
+def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
     """The compass observation of every UAV of every env into ``out (E, N, F)`` float32 (the
     blocks of :class:`poc_env.sim.observations.CompassFeatures`), computed straight from each
     env's raster channel 0 ``poc (E, P, ny, nx)`` (P = 1: shared by its UAVs; P = N: each UAV's
-    own), its float64 ``total`` and ``mean (E, P)``, the state vectors ``vector (E, N, V)`` and
-    the positions: the sums :func:`compass_bins` makes from rasters, without building them.
+    own), its float64 total and mean (numpy's, :func:`np_sum`), the state vectors
+    ``vector (E, N, V)`` and the positions: the sums :func:`compass_bins` makes from rasters,
+    without building them.
 
     ``grid_box = (x0, y0, x1, y1, cell)`` places the UAVs in cells as :func:`rasters` does; the
     "others" channel is 1 on each cell holding another present UAV, so such a cell counts once.
@@ -485,23 +553,51 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
     rows = np.empty(n, dtype=np.intp)
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
+    together = short and n_shared == 1  # the UAVs' sums over their env's row, interleaved
+    all_mass = np.empty((n if together else 0, n_sectors * n_rings))
+    all_bins = np.empty((n if together else 0, ny * nx), dtype=np.intp)
+    pxs = np.empty(n)
+    pys = np.empty(n)
+    wide = np.empty(ny * nx)  # a channel 0 in float64, for numpy's sums
+    totals = np.empty(n_shared)
+    means = np.empty(n_shared)
     for e in range(n_env):
         _cells(pos, flying, e, x0, y0, x1, y1, cell, ny, nx, present, rows, cols)
+        for p in range(n_shared):
+            flat = poc[e, p].reshape(ny * nx)
+            for c in range(ny * nx):
+                wide[c] = flat[c]
+            totals[p] = np_sum(wide)
+            means[p] = totals[p] / (ny * nx)
+        for k in range(n):
+            pxs[k] = bx0 + np.float64(vector[e, k, 0]) * bw
+            pys[k] = by0 + np.float64(vector[e, k, 1]) * bh
+        if together:
+            all_mass[:] = 0.0
+            row = poc[e, 0].reshape(ny * nx)
+            _shared_cell_bins(
+                cx, cy, pxs, pys, row, edges, radius, n_sectors, all_mass, all_bins, cell_d2
+            )
         for k in range(n):
             p = k if n_shared > 1 else 0
             o = out[e, k]
             o[:] = 0.0
             for t in range(n_vec):
                 o[v0 + t] = vector[e, k, t]
-            px = bx0 + np.float64(vector[e, k, 0]) * bw
-            py = by0 + np.float64(vector[e, k, 1]) * bh
-            mass[:] = 0.0
+            px = pxs[k]
+            py = pys[k]
             count[:] = 0.0
-            row = poc[e, p].reshape(ny * nx)
-            if short:
-                _cell_bins(cx, cy, px, py, row, edges, radius, n_sectors, mass, cell_bin, cell_d2)
+            if together:
+                mass[:] = all_mass[k]
             else:
-                _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
+                mass[:] = 0.0
+                row = poc[e, p].reshape(ny * nx)
+                if short:
+                    _cell_bins(
+                        cx, cy, px, py, row, edges, radius, n_sectors, mass, cell_bin, cell_d2
+                    )
+                else:
+                    _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
             for m in range(n):  # each cell holding another UAV counts once (a 1.0)
                 c = rows[m] * nx + cols[m]
                 if m != k and present[m] and others_cells[c] == 0.0:
@@ -514,12 +610,12 @@ def compass(poc, total, mean, vector, pos, flying, grid_box, area, xs, ys, edges
             for m in range(n):
                 if present[m]:
                     others_cells[rows[m] * nx + cols[m]] = 0.0
-            tot = total[e, p]
+            tot = totals[p]
             for b in range(mass.size):
                 o[c0 + b] = mass[b] / tot if tot > 0 else 0.0
             for b in range(n_sectors):
                 o[o0 + b] = min(count[b] / others, 1.0)
-            o[m0] = mean[e, p]
+            o[m0] = means[p]
             if agent_index:
                 o[i0 + k % n_ids] = 1.0
 

@@ -186,11 +186,38 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         if not self._autoreset.any():  # the common step: every env goes on (no index arrays)
             reward, terminated, truncated = self._advance(a, None)
             return self._joint(), reward, terminated, truncated, self._infos()
+        again = np.flatnonzero(self._autoreset)
+        if not sim.step_is_per_env(self.params):  # the ended envs would draw or weigh in
+            return self._step_around(a, again)
+        # NEXT_STEP autoreset: every env is stepped (the ended ones to no effect: their step
+        # touches only their own state, which is replaced with their observations and infos),
+        # then the ended envs start afresh, drawing what the sync env's reset draws
+        self._live[again] = True
+        reward, terminated, truncated = self._advance(a, None)
+        first, fresh_info = self.engine.reset(again)
+        # the arrays _advance left are this step's own (not handed out yet): rows written in
+        if isinstance(self._last, dict):
+            for key, v in self._last.items():
+                v[again] = first[key]
+        else:
+            self._last[again] = first
+        for key, v in self._last_info.items():
+            v[again] = fresh_info[key]
+        reward[again] = 0.0
+        terminated[again] = False
+        truncated[again] = False
+        self._live[again] = True
+        self._autoreset[again] = False
+        return self._joint(), reward, terminated, truncated, self._infos()
+
+    def _step_around(self, a: np.ndarray, again: np.ndarray):
+        """The autoreset step that resets ``again`` first and steps only the other envs (when
+        stepping them could change the others or their streams,
+        :func:`~poc_env.sim.core.step_is_per_env`)."""
         e = self.num_envs
         reward = np.zeros(e)
         terminated = np.zeros(e, dtype=bool)
         truncated = np.zeros(e, dtype=bool)
-        again = np.flatnonzero(self._autoreset)
         going = np.flatnonzero(~self._autoreset)
         # NEXT_STEP autoreset: these envs start afresh, their actions unused
         first, fresh_info = self.engine.reset(again)

@@ -509,6 +509,19 @@ def share_beliefs(params: Params, state: State, a: np.ndarray, b: np.ndarray) ->
     known[reach] = np.broadcast_to(own[:, None], known.shape)[reach]
 
 
+def step_is_per_env(params: Params) -> bool:
+    """Whether :func:`step` changes each env by what that env holds alone: it draws nothing from
+    the env generators (no link failures, eq. 24's failure model in :func:`_update_topology`),
+    keeps no state outside the batch (no topology switcher) and sub-steps no moving target by
+    the batch's fastest current. Then stepping an env whose episode has ended changes nothing
+    but its own state, which a batched autoreset replaces (``gymnasium.make_vec``)."""
+    return (
+        params.scenario.comms.link_failure_prob <= 0
+        and params.switcher is None
+        and params.motion is None
+    )
+
+
 def _update_topology(
     params: Params, state: State, rngs, dist: np.ndarray | None = None
 ) -> comms_mod.CommsTopology:

@@ -283,7 +283,6 @@ class CompassFeatures:
         g = params.grid
         vec = vectors(params, state)
         poc = coarse_poc(params, state, poc_scale)
-        flat = poc.reshape(*poc.shape[:2], -1).astype(float)  # (E, P, cells): numpy's sums
         e, n = state.flying.shape
         if out is None:
             out = np.empty((e, n, FEATURES), dtype=np.float32)
@@ -291,8 +290,6 @@ class CompassFeatures:
         x0, y0, x1, y1 = g.bounds
         _kernels.compass(
             poc,
-            flat.sum(axis=2),
-            flat.mean(axis=2),
             vec,
             state.pos,
             state.flying,

@@ -1,0 +1,85 @@
+"""``gymnasium.make_vec``'s batched step (:mod:`poc_env.envs.gym_vector`): the autoreset step of
+some envs (every env stepped, the ended ones then reset; or, when the step draws from the env
+generators, the ended ones reset first and the others stepped apart) returns exactly what the
+sync vector env returns, and never writes into arrays it handed out."""
+
+from __future__ import annotations
+
+import gymnasium
+import numpy as np
+import pytest
+
+import poc_env  # (also registers the tasks)
+from poc_env.sim import core as sim
+
+TID = "poc_env/UAVSearch-Small-Heading-v1"
+
+
+def _same_episodes(overrides: dict, num_envs: int = 6, steps: int = 40, seed: int = 3) -> int:
+    """Step both vector envs under the same random actions; return how many steps reset some
+    but not all envs (every item compared at every step)."""
+    kw = {"num_envs": num_envs, "overrides": overrides}
+    v = gymnasium.make_vec(TID, vectorization_mode="vector_entry_point", **kw)
+    s = gymnasium.make_vec(TID, vectorization_mode="sync", **kw)
+    got, want = v.reset(seed=seed), s.reset(seed=seed)
+    np.testing.assert_array_equal(got[0], want[0])
+    rng = np.random.default_rng(seed)
+    partial = 0
+    held: list = []
+    for t in range(steps):
+        some = v.unwrapped._autoreset.copy()
+        partial += int(0 < some.sum() < num_envs)
+        a = rng.uniform(-1, 1, v.action_space.shape).astype(np.float32)
+        got, want = v.step(a), s.step(a)
+        for arr, copy_ in held:  # arrays handed out are never written into later
+            np.testing.assert_array_equal(arr, copy_, err_msg=f"step {t}: an earlier array changed")
+        held = [(got[0], got[0].copy())] + [(x, np.array(x)) for x in got[4].values()]
+        for j in range(4):
+            np.testing.assert_array_equal(got[j], want[j], err_msg=f"step {t} item {j}")
+        assert set(got[4]) == set(want[4])
+        for key, w in want[4].items():
+            g = np.asarray(got[4][key])
+            assert g.dtype == np.asarray(w).dtype, key
+            np.testing.assert_array_equal(g, w, err_msg=f"step {t} {key}")
+    return partial
+
+
+@pytest.mark.parametrize("failures", [0.0, 0.3])
+def test_autoreset_of_some_envs_equals_the_sync_vector_env(failures):
+    """Envs that end at different steps (violations terminate the UAVs) reset while the others
+    go on; with link failures (the step draws from each env's generator) the ended envs are
+    reset apart, without the step."""
+    overrides = {
+        "constraints.violation": "terminate",
+        "episode.horizon_steps": 14,
+        "comms.link_failure_prob": failures,
+    }
+    params = sim.make_params(poc_env.config.load_scenario("small", overrides))
+    assert sim.step_is_per_env(params) == (failures == 0)
+    assert _same_episodes(overrides) >= 2
+
+
+@pytest.mark.parametrize(
+    ("task", "steps"),
+    [("poc_env/UAVSearch-Small-Heading-v1", [4, 4, 4, 4]),  # every env stepped once
+     ("poc_env/UAVSearch-Small-Drift-Heading-v1", [4, 4, 4])],  # ended envs only reset
+)  # fmt: skip
+def test_the_autoreset_step_steps_every_env_when_the_step_is_per_env(monkeypatch, task, steps):
+    """The autoreset step (here of every env) steps the whole batch once when the step changes
+    each env by what it holds alone; with a moving target (its filter sub-steps by the batch's
+    fastest current) the ended envs are reset without being stepped."""
+    calls: list = []
+    step = sim.step
+
+    def counted(params, state, actions, rngs):
+        calls.append(state.flying.shape[0])
+        return step(params, state, actions, rngs)
+
+    monkeypatch.setattr(sim, "step", counted)
+    v = gymnasium.make_vec(task, num_envs=4, vectorization_mode="vector_entry_point", max_cycles=3)
+    assert sim.step_is_per_env(v.unwrapped.params) == ("Drift" not in task)
+    v.reset(seed=1)
+    a = np.zeros(v.action_space.shape, dtype=np.float32)
+    for _ in range(4):  # the fourth step autoresets every env
+        v.step(a)
+    assert calls == steps
