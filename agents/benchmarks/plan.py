@@ -115,9 +115,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--scale-parts",
         nargs="+",
         default=None,
-        choices=["quality", "cells", "timing", "single"],
+        choices=["quality", "cells", "timing", "single", "tight"],
         help="parts of --scale to run (default: quality cells timing; single: each airfield's "
-        "UAV alone against its own rule-aware bound)",
+        "UAV alone against its own rule-aware bound; tight: the same against the "
+        "tour-charged bound too)",
     )
     p.add_argument(
         "--scale-out",

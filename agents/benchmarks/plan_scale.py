@@ -144,6 +144,64 @@ def single(maps, episodes: int, seed0: int) -> dict[str, float]:
     return out
 
 
+def tight(maps, episodes: int, seed0: int) -> dict[str, float]:
+    """How loose the rule-aware bound is for one flight: the cases of :func:`single` (each
+    airfield's first UAV alone), its planned POS over its rule-aware bound and over the
+    tour-charged bound (:func:`poc_env.theory.tour_bound.tour_bound`, the travel between the
+    searched blocks charged); and, in the planners' own coverage model (W x length per cell,
+    no spill), the plan's POS over the same two bounds with ``rho = 0``."""
+    import dataclasses
+
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.agents.planning.flight_rules import path_coverage
+    from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import Grid
+    from poc_env.theory.search_theory import pod_from_coverage
+    from poc_env.theory.tour_bound import tour_bound
+
+    out: dict[str, float] = {}
+    for name in maps:
+        sc = load_scenario(name)
+        grid = Grid.from_config(sc.map)
+        rows: dict[str, list[float]] = {"rule": [], "tour": [], "rule0": [], "tour0": []}
+        for g in sc.fleet:
+            one = dataclasses.replace(sc, fleet=(dataclasses.replace(g, count=1),))
+            for seed in range(seed0, seed0 + episodes):
+                prior = episode_prior(sc, seed)
+                plan = make_allocation_plan(one, prior=prior)
+                u = plan["uavs"][0]
+                path = [one.takeoff_m[0], *u["waypoints_m"], one.landing_m[0]]
+                cov = path_coverage(path, grid, one.sensor.sweep_width_m)
+                model = float(np.sum(prior * pod_from_coverage(cov, one.sensor.law)))
+                env_b = tour_bound(one, prior)
+                plan_b = tour_bound(one, prior, spill_m=0.0)
+                rows["rule"].append(plan["posc"] / env_b.rule)
+                rows["tour"].append(plan["posc"] / env_b.upper)
+                rows["rule0"].append(model / plan_b.rule)
+                rows["tour0"].append(model / plan_b.upper)
+                print(
+                    f"  {name} field {g.takeoff} seed {seed}: planned {plan['posc']:.4f}, "
+                    f"rule {env_b.rule:.4f}, tour {env_b.upper:.4f}; model {model:.4f}, "
+                    f"rule(rho 0) {plan_b.rule:.4f}, tour(rho 0) {plan_b.upper:.4f}",
+                    flush=True,
+                )
+        notes = {
+            "rule": "planned / rule-aware bound",
+            "tour": "planned / tour-charged bound",
+            "rule0": "model POS / rule-aware bound, rho 0",
+            "tour0": "model POS / tour-charged bound, rho 0",
+        }
+        for key, x in rows.items():
+            out[f"{name}_alone_{key}"] = float(np.mean(x))
+            _line(
+                f"{name} alone {key}",
+                out[f"{name}_alone_{key}"],
+                f"{notes[key]}, mean of {len(x)} (min {min(x):.3f}, max {max(x):.3f})",
+            )
+    return out
+
+
 def cells(name: str = "paper_6_2") -> dict[str, float]:
     """Planned and flown POS of the allocation plan at each cell size of :data:`CELLS_KM`."""
     from poc_env.config import load_scenario
@@ -203,6 +261,8 @@ def main(
         out.update(quality(maps, episodes, seed0, records))
     if "single" in parts:
         out.update(single(maps, episodes, seed0))
+    if "tight" in parts:
+        out.update(tight(maps, episodes, seed0))
     if "cells" in parts:
         out.update(cells())
     if "timing" in parts:

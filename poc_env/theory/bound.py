@@ -491,7 +491,7 @@ def reach_optimum(
     return ReachBound(pos, upper, cov.reshape(m.shape), float(x.sum()), entry.name)
 
 
-def rule_bound(scenario: Scenario, prior) -> ReachBound:
+def rule_bound(scenario: Scenario, prior, spill_m: float | None = None) -> ReachBound:
     """The rule-aware bound of ``scenario`` on ``prior``: the reach-aware bound for a flight
     that keeps the plan rules -- out and searching at ``v_max``, back on the ground within the
     usable endurance 0.85 T (eq. 18), the way home flown at the cruise speed ``v_c`` (eq. 18's
@@ -508,12 +508,19 @@ def rule_bound(scenario: Scenario, prior) -> ReachBound:
     keep the rules (the allocation planner's, the greedy rectangles') stay below it; the
     environment itself lets a UAV sense until T, so :func:`reach_bound` stays the bound of any
     policy.
+
+    ``spill_m`` replaces ``rho`` (None: the environment's). ``spill_m=0`` bounds the *planned*
+    POS of the planners' coverage model (:func:`poc_env.agents.planning.flight_rules.
+    path_coverage`: effort only in the cells the track crosses), not the flown one.
     """
     lim = env_limits(scenario)
     grid = Grid.from_config(scenario.map)
+    rho = lim.spill_m if spill_m is None else float(spill_m)
+    if not (rho >= 0 and np.isfinite(rho)):
+        raise ConfigError("spill_m", spill_m, "a distance >= 0 m, or None for the environment's")
     v_home = min(float(scenario.uav.cruise_speed_mps), lim.speed_mps)
-    out = np.maximum(cell_distances(grid, lim.takeoff_m) - lim.spill_m, 0.0) / lim.speed_mps
-    home = np.maximum(cell_distances(grid, lim.landing_m) - lim.spill_m, 0.0) / v_home
+    out = np.maximum(cell_distances(grid, lim.takeoff_m) - rho, 0.0) / lim.speed_mps
+    home = np.maximum(cell_distances(grid, lim.landing_m) - rho, 0.0) / v_home
     n = len(lim.takeoff_m)
     budget = scenario.uav.usable_endurance_s
     return reach_optimum(

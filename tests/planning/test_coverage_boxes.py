@@ -230,3 +230,28 @@ def test_shared_gain_tables_give_the_per_lawnmower_routes(monkeypatch):
     monkeypatch.setattr(coverage_boxes, "_SHARE_TABLES", False)
     for c, got in zip(cases, shared, strict=True):
         assert _routes(*c, rounds=1) == got
+
+
+def test_a_compact_blob_gets_lines_closer_than_a_sweep_width():
+    """Spacings below one sweep width (:data:`coverage_boxes.DENSE_SPACINGS`, 0.75 W: coverage
+    4/3): a lone UAV with time to spare over a compact blob lays its lines 0.75 W apart, and
+    finds more than with the spacings of W and wider only (the environment's detection
+    model)."""
+    sc, grid, _, to, la = _inputs(**{"fleet": [{"takeoff": "A", "count": 1}]})
+    ys, xs = np.mgrid[0 : grid.ny, 0 : grid.nx]
+    prior = np.exp(-((xs * 5.0 + 2.5 - 40.0) ** 2 + (ys * 5.0 + 2.5 - 30.0) ** 2) / (2 * 8.0**2))
+    prior = prior / prior.sum()
+    assert min(coverage_boxes.DENSE_SPACINGS) < 1.0
+    wide = coverage_boxes.SPACINGS
+    found = {}
+    for name, sp in (("default", None), ("wide", wide)):
+        r = _routes(sc, grid, prior, to, la, spacings=sp, chain=())
+        found[name] = sampled_sweep(sc, grid, prior, [[to[0], *r[0], la[0]]])[0][0]
+        wps = np.asarray(r[0]).reshape(-1, 2)
+        n2 = len(wps) // 2 * 2
+        mid = 0.5 * (wps[0:n2:2] + wps[1:n2:2])  # the lines' midpoints: one spacing apart
+        gaps = np.abs(np.diff(mid, axis=0)).max(axis=1)
+        found[name + "_gap"] = float(np.median(gaps))
+    assert abs(found["default_gap"] - 0.75 * sc.sensor.sweep_width_m) < 1.0
+    assert found["wide_gap"] >= sc.sensor.sweep_width_m - 1.0
+    assert found["default"] > found["wide"] + 0.005
