@@ -31,13 +31,23 @@ def _run_order(folder: Path) -> tuple[int, str]:
     return (int(k) if k.isdigit() else -1, folder.name)
 
 
-def _read(log: Path) -> dict[str, np.ndarray]:
+def _read(log: Path) -> tuple[float, dict[str, np.ndarray]]:
+    """When the log's writer started (its first event's wall time) and its curves.
+
+    Not the file name's order: the name holds the start time in whole seconds, then the host,
+    the process id and a per-process writer count, so a resumed attempt started within the same
+    second as the killed one sorted by process id and by the count as text (``.10`` before
+    ``.9``), and the killed attempt's points replaced the resumed ones (a flaky CI test)."""
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
     acc = EventAccumulator(str(log), size_guidance={"scalars": 0})
     acc.Reload()
     have = acc.Tags()["scalars"]
-    return {
+    try:
+        started = float(acc.FirstEventTimestamp())
+    except ValueError:  # an empty file: no event at all
+        started = float("inf")
+    return started, {
         tag: np.array([[e.step, e.value] for e in acc.Scalars(tag)], dtype=float).reshape(-1, 2)
         for tag in TAGS
         if tag in have
@@ -52,8 +62,9 @@ def training_curve(run_dir: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         raise ConfigError("run_dir", str(run_dir), "a run folder with TensorBoard logs (tb/)")
     for folder in sorted(folders, key=_run_order, reverse=True):  # the newest run first
         out: dict[str, np.ndarray] = {}
-        for log in sorted(folder.glob("events.out.tfevents.*")):  # named by their start time
-            for tag, data in _read(log).items():
+        logs = [(*_read(log), log.name) for log in folder.glob("events.out.tfevents.*")]
+        for _, read, _ in sorted(logs, key=lambda r: (r[0], r[2])):  # as the attempts started
+            for tag, data in read.items():
                 if tag in out and len(data):
                     out[tag] = np.concatenate([out[tag][out[tag][:, 0] < data[0, 0]], data])
                 elif len(data):

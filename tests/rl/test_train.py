@@ -543,6 +543,34 @@ def test_curve_takes_the_newest_run_folder(tmp_path):
     np.testing.assert_array_equal(training_curve(tmp_path)["rollout/posc_mean"], [[96, 0.5]])
 
 
+def test_curve_joins_attempts_in_the_order_they_started(tmp_path):
+    """A resumed attempt's event file can sort before the killed one's by name (the name's
+    time is in whole seconds, then the process id and a writer count compared as text: ``.10``
+    before ``.9``); the killed attempt's points then replaced the resumed ones, which made
+    test_resume_continues_bit_identically flaky under xdist. The files are joined by their first
+    event's wall time."""
+    from torch.utils.tensorboard import SummaryWriter
+
+    from poc_env.agents.rl.curve import training_curve
+
+    folder = tmp_path / "tb" / "ppo_1"
+    for name, points in (
+        ("killed", [(96, 0.125), (192, 0.25)]),
+        ("resumed", [(192, 0.375), (288, 0.5)]),
+    ):
+        with SummaryWriter(str(tmp_path / name)) as w:
+            for step, value in points:
+                w.add_scalar("rollout/posc_mean", value, step)
+        (log,) = (tmp_path / name).glob("events.out.tfevents.*")
+        folder.mkdir(parents=True, exist_ok=True)
+        # names in the wrong order: the resumed attempt's sorts first as text
+        count = 9 if name == "killed" else 10
+        log.rename(folder / f"events.out.tfevents.1700000000.host.7.{count}")
+    np.testing.assert_array_equal(
+        training_curve(tmp_path)["rollout/posc_mean"], [[96, 0.125], [192, 0.375], [288, 0.5]]
+    )
+
+
 @pytest.mark.parametrize(
     ("kw", "field", "said"),
     [
