@@ -284,9 +284,14 @@ def main(
     episode's figures (map, seed, policy, POSC, rule-aware bound, planned POS_C, the start the
     allocation plan kept, planning time, load average), written atomically at the end."""
     parts = ("quality", "cells", "timing") if parts is None else tuple(parts)  # "single": asked
+    what = (
+        f"{episodes} random priors per map (seeds {seed0}..), allocation_plan and "
+        "greedy_rectangles interleaved per seed; "
+        if {"quality", "single"} & set(parts)
+        else ""
+    )
     print(
-        f"# issue 24 scale figures: {episodes} random priors per map (seeds {seed0}..), one "
-        f"core; allocation_plan and greedy_rectangles interleaved per seed; load average "
+        f"# issue 24 scale figures ({' '.join(parts)}): {what}one core; load average "
         f"{os.getloadavg()[0]:.1f} at the start",
         flush=True,
     )
