@@ -38,7 +38,9 @@ behind the ``tuned`` preset (docs/PLANNER.md section 4).
 ``--scale`` runs issue 24's figures instead (:mod:`poc_env.agents.benchmarks.plan_scale`):
 flown ``allocation_plan`` against ``greedy_rectangles`` as shares of the rule-aware bound on
 ``--episodes`` random priors of ``paper_6_2`` and ``large_400``, planned against flown POS at
-2.5, 5 and 10 km cells, and planning time for 24 UAVs on 160 x 160 cells.
+2.5, 5 and 10 km cells, and planning time for 24 UAVs on 160 x 160 cells;
+``--scale-parts zones --zones N`` times the same two plans with and without ``N`` random no-fly
+zones.
 
 ``main(argv)`` returns ``{figure: value, ...}``.
 """
@@ -115,10 +117,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--scale-parts",
         nargs="+",
         default=None,
-        choices=["quality", "cells", "timing", "single", "tight"],
+        choices=["quality", "cells", "timing", "single", "tight", "zones"],
         help="parts of --scale to run (default: quality cells timing; single: each airfield's "
         "UAV alone against its own rule-aware bound; tight: the same against the "
-        "tour-charged bound too)",
+        "tour-charged bound too; zones: planning time with and without --zones random no-fly "
+        "zones)",
+    )
+    p.add_argument(
+        "--zones",
+        type=int,
+        default=4,
+        help="random no-fly zones of --scale-parts zones (inside the search area)",
     )
     p.add_argument(
         "--scale-out",
@@ -199,7 +208,13 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
         maps = args.scale_maps or plan_scale.MAPS
         return plan_scale.main(
-            maps, args.episodes, args.seed0, args.runs, args.scale_parts, args.scale_out
+            maps,
+            args.episodes,
+            args.seed0,
+            args.runs,
+            args.scale_parts,
+            args.scale_out,
+            zones=args.zones,
         )
     sc = load_scenario(args.scenario)
     obj = PlanObjective(sc, uavs=args.uavs)

@@ -13,6 +13,10 @@
 * **Planning time**: :func:`poc_env.agents.planning.allocation.make_allocation_plan`, median
   of ``--runs`` after a warm-up, on ``paper_6_2`` (target <= 2 s) and on ``large_400`` with
   2.5 km cells (160 x 160) and 24 UAVs (target <= 10 s), one core.
+* **Planning time with no-fly zones** (``--scale-parts zones``, ``--zones N``): the same two
+  cases planned with and without ``N`` random zones inside the search area
+  (:func:`random_zones`), the two interleaved per run; medians, their ratio, and the planned
+  POS_C of both. Not part of the default parts.
 
 Figures are quoted in docs/PLANNER.md with the command; the machine's load changes the times.
 """
@@ -242,16 +246,110 @@ def timing(runs: int) -> dict[str, float]:
     return out
 
 
+#: the shapes of :func:`random_zones` (those of the mission property test, tests/mission).
+ZONE_SHAPES = ("rect", "tri", "L", "U")
+
+
+def random_zones(
+    w_km: float, h_km: float, n: int, rng: np.random.Generator, size: tuple = (0.06, 0.15)
+) -> list[list[list[float]]]:
+    """``n`` no-fly zones (km) inside the ``w_km x h_km`` search area: rectangles, triangles,
+    L and U shapes (concave, as the mission property test draws them), each side a share
+    ``size`` of the area's shorter side, anywhere inside the area; drawn from ``rng``."""
+    side = min(w_km, h_km)
+    zones = []
+    for _ in range(n):
+        kind = ZONE_SHAPES[int(rng.integers(len(ZONE_SHAPES)))]
+        a, b = rng.uniform(size[0] * side, size[1] * side, 2)
+        x, y = rng.uniform(0, w_km - a), rng.uniform(0, h_km - b)
+        t = min(a, b) * rng.uniform(0.2, 0.33)  # the arms' thickness (L, U)
+        if kind == "rect":
+            z = [[x, y], [x + a, y], [x + a, y + b], [x, y + b]]
+        elif kind == "tri":
+            z = [[x, y], [x + a, y], [x + rng.uniform(0, a), y + b]]
+        elif kind == "L":
+            z = [[x, y], [x + a, y], [x + a, y + t], [x + t, y + t], [x + t, y + b], [x, y + b]]
+        else:
+            z = [[x, y], [x + a, y], [x + a, y + b], [x + a - t, y + b], [x + a - t, y + t],
+                 [x + t, y + t], [x + t, y + b], [x, y + b]]  # fmt: skip
+        zones.append([[float(px), float(py)] for px, py in z])
+    return zones
+
+
+#: the cases of :func:`timing_zones`: label -> (scenario, overrides, UAVs or None), those of
+#: :func:`timing`.
+ZONE_CASES: dict[str, tuple[str, dict, int | None]] = {
+    "paper_6_2": ("paper_6_2", {}, None),
+    "large_400_160x160_24uav": ("large_400", {"map.cell_km": 2.5}, 24),
+}
+
+
+def timing_zones(
+    runs: int, n_zones: int, seed: int = 0, cases: dict | None = None
+) -> dict[str, float]:
+    """Allocation planning time of ``cases`` (default :data:`ZONE_CASES`) with and without
+    ``n_zones`` random zones (:func:`random_zones`, ``default_rng(seed)``), interleaved per
+    run: medians, the ratio with / without, and the planned POS_C of both (the zones' router
+    builds a visibility graph, reroutes every leg and discounts the zones' interior mass)."""
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.config import load_scenario
+
+    rng = np.random.default_rng(seed)
+    cases = ZONE_CASES if cases is None else cases
+    out: dict[str, float] = {}
+    for label, (name, over, uavs) in cases.items():
+        plain = load_scenario(name, over)
+        m = plain.map
+        ox, oy = (v / 1000 for v in m.origin_m)
+        drawn = random_zones(m.width_m / 1000, m.height_m / 1000, n_zones, rng)
+        zones = [[[x + ox, y + oy] for x, y in z] for z in drawn]
+        names = [f"Z-{i + 1}" for i in range(n_zones)]
+        zoned = load_scenario(name, {**over, "map.no_fly_zones_km": zones,
+                                     "map.no_fly_names": names})  # fmt: skip
+        times: dict[str, list[float]] = {"plain": [], "zones": []}
+        posc: dict[str, float] = {}
+        for sc in (plain, zoned):
+            make_allocation_plan(sc, uavs=uavs, refine=0)  # warm-up (JIT, caches)
+        for _ in range(runs):
+            for tag, sc in (("plain", plain), ("zones", zoned)):
+                t0 = time.perf_counter()
+                plan = make_allocation_plan(sc, uavs=uavs)
+                times[tag].append(time.perf_counter() - t0)
+                posc[tag] = float(plan["posc"])
+        for tag in times:
+            out[f"{label}_{tag}_plan_s"] = statistics.median(times[tag])
+            out[f"{label}_{tag}_posc"] = posc[tag]
+        ratio = out[f"{label}_zones_plan_s"] / out[f"{label}_plain_plan_s"]
+        out[f"{label}_zones_ratio"] = ratio
+        _line(f"{label} plan_s", out[f"{label}_plain_plan_s"],
+              f"no zones, median of {runs}; planned POS_C {posc['plain']:.4f}")  # fmt: skip
+        _line(f"{label} plan_s +{n_zones} zones", out[f"{label}_zones_plan_s"],
+              f"median of {runs}, interleaved; planned POS_C {posc['zones']:.4f}")  # fmt: skip
+        _line(f"{label} zones / none", ratio, "planning time ratio")
+    return out
+
+
 def main(
-    maps, episodes: int, seed0: int, runs: int, parts=None, out_path: str | None = None
+    maps,
+    episodes: int,
+    seed0: int,
+    runs: int,
+    parts=None,
+    out_path: str | None = None,
+    zones: int = 4,
 ) -> dict[str, Any]:
     """The ``parts`` (default: quality, cells, timing); ``out_path``: a JSON file of every
     episode's figures (map, seed, policy, POSC, rule-aware bound, planned POS_C, the start the
     allocation plan kept, planning time, load average), written atomically at the end."""
     parts = ("quality", "cells", "timing") if parts is None else tuple(parts)  # "single": asked
+    what = (
+        f"{episodes} random priors per map (seeds {seed0}..), allocation_plan and "
+        "greedy_rectangles interleaved per seed; "
+        if {"quality", "single"} & set(parts)
+        else ""
+    )
     print(
-        f"# issue 24 scale figures: {episodes} random priors per map (seeds {seed0}..), one "
-        f"core; allocation_plan and greedy_rectangles interleaved per seed; load average "
+        f"# issue 24 scale figures ({' '.join(parts)}): {what}one core; load average "
         f"{os.getloadavg()[0]:.1f} at the start",
         flush=True,
     )
@@ -267,6 +365,8 @@ def main(
         out.update(cells())
     if "timing" in parts:
         out.update(timing(runs))
+    if "zones" in parts:
+        out.update(timing_zones(runs, zones))
     _line("load average", os.getloadavg()[0], "at the end (1 min)")
     if out_path is not None:
         from poc_env.io import write_text_atomic

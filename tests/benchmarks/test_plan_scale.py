@@ -42,3 +42,32 @@ def test_scale_tight_puts_lone_uavs_against_both_bounds(capsys):
     printed = capsys.readouterr().out
     assert "small field A seed 1: planned" in printed
     assert "quality" not in printed and "greedy_rectangles:" not in printed
+
+
+def test_random_zones_lie_inside_the_area_and_follow_the_seed():
+    import numpy as np
+    import shapely
+
+    from poc_env.agents.benchmarks.plan_scale import random_zones
+
+    zones = random_zones(200.0, 150.0, 12, np.random.default_rng(3))
+    assert len(zones) == 12
+    assert zones == random_zones(200.0, 150.0, 12, np.random.default_rng(3))
+    area = shapely.box(0, 0, 200, 150)
+    for z in zones:
+        poly = shapely.Polygon(z)
+        assert poly.is_valid and area.contains(poly)
+        assert 0.06 * 150 <= max(np.ptp(np.array(z), axis=0)) <= 0.15 * 150
+    assert {len(z) for z in zones} >= {3, 4, 6, 8}  # triangles, rectangles, Ls and Us
+
+
+def test_zones_part_plans_with_and_without_the_zones(capsys):
+    from poc_env.agents.benchmarks import plan_scale
+
+    out = plan_scale.timing_zones(1, 2, seed=5, cases={"small": ("small", {}, None)})
+    assert out["small_zones_ratio"] == pytest.approx(
+        out["small_zones_plan_s"] / out["small_plain_plan_s"]
+    )
+    # the zones reach the planner: the planned POS changes (zone-interior mass discounted)
+    assert out["small_zones_posc"] != out["small_plain_posc"]
+    assert "small plan_s +2 zones" in capsys.readouterr().out
