@@ -53,6 +53,19 @@ def _check_int(field: str, value: int | None, lo: int, hi: int | None = None) ->
         as_int(field, value, lo, hi)
 
 
+def _check_baselines(baselines: list[str], policies: list[str], where: str) -> None:
+    """ConfigError naming ``baseline`` unless each baseline is one of ``policies`` and there is
+    another policy to pair with it (a lone baseline left the paired table empty, and writing it
+    failed after every episode had flown)."""
+    for b in baselines:
+        if b not in policies:
+            raise ConfigError("baseline", b, f"one or more of {where}: " + ", ".join(policies))
+        if len(policies) < 2:
+            raise ConfigError(
+                "baseline", b, f"a policy of {where} with at least one other policy to pair with"
+            )
+
+
 def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
     """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
 
@@ -412,9 +425,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         raise ConfigError("policies", args.policies, allowed)
     _check_out("out", args.out, "folder")
     baselines = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
-    for b in baselines:
-        if b not in names:
-            raise ConfigError("baseline", b, "one or more of --policies: " + ", ".join(names))
+    _check_baselines(baselines, names, "--policies")
     args.baselines = baselines
     with _ray(args):
         if not args.out:
@@ -539,10 +550,7 @@ def cmd_summarise(args: argparse.Namespace) -> int:
     ev = read_episodes(folder / "episodes.csv", ttd)
     given = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
     baselines = given or [b for b in paired_baselines if b in ev.policies]
-    for b in baselines:
-        if b not in ev.policies:
-            raise ConfigError("baseline", b, "one or more of the folder's policies: "
-                              + ", ".join(ev.policies))  # fmt: skip
+    _check_baselines(baselines, list(ev.policies), "the folder's policies")
     if ev.time_to_detection_min is not None:  # an episodes.csv of an older evaluate
         source = "the folder's evaluate.csv" if old else "unknown (no evaluate.csv)"
         print(f"note: episodes.csv has no time_to_detection_s column: t_det is {source}")

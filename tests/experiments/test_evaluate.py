@@ -142,6 +142,23 @@ def test_paired_differences_against_a_baseline(tmp_path, capsys):
     assert not (tmp_path / "none").exists()
 
 
+def test_a_lone_baseline_is_refused_before_anything_flies(tmp_path, capsys):
+    """``--baseline X`` with X the only policy flew every episode and then failed writing an
+    empty paired table (IndexError, nothing written); it is refused up front, by evaluate and by
+    summarise on a folder of one policy."""
+    out = tmp_path / "ev"
+    lone = ["evaluate", "--scenario", "small", "--policies", "lawnmower", "--episodes", "1",
+            "--quiet", "--out", str(out)]  # fmt: skip
+    assert main([*lone, "--baseline", "lawnmower"]) == 2
+    assert "baseline: got 'lawnmower'" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(lone) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert main(["summarise", str(out), "--baseline", "lawnmower"]) == 2
+    assert "at least one other policy" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
 @pytest.mark.parametrize("priors", [[], ["--random-priors"]])
 def test_summarise_rewrites_the_summary_evaluate_wrote_from_episodes_csv(tmp_path, capsys, priors):
     """``poc-env summarise`` (issue 27): the summary files from episodes.csv alone equal the
