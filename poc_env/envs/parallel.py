@@ -436,6 +436,10 @@ class UAVSearchParallelEnv(ParallelEnv):
             terminations = {a: terminal[i] for a, i in zip(live, idx)}
             truncations = {a: truncated[i] for a, i in zip(live, idx)}
         observations = self._agent_obs(last.obs, live)  # agents finishing now get a last obs
+        return self._end_step(live, observations, rewards, terminations, truncations, infos)
+
+    def _end_step(self, live, observations, rewards, terminations, truncations, infos):
+        """The end of both step paths: the agents still flying, the renderer, the return."""
         self.agents = [a for a in live if not (terminations[a] or truncations[a])]
         if self._renderer is not None:
             self._renderer.record(self.sim_state)
@@ -478,12 +482,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             truncations[a] = truncated[i]
         infos = self._agent_infos(engine_mod.info_parts(*self._step_of), live)
         observations = self._agent_obs(tr.obs, live)  # agents finishing now get a last obs
-        self.agents = [a for a in live if not (terminations[a] or truncations[a])]
-        if self._renderer is not None:
-            self._renderer.record(self.sim_state)
-        if self.render_mode == "human":
-            self.render()
-        return observations, rewards, terminations, truncations, infos
+        return self._end_step(live, observations, rewards, terminations, truncations, infos)
 
     def _agent_infos(
         self, parts: dict[str, np.ndarray], agents: list[str]

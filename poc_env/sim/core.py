@@ -285,6 +285,43 @@ class Events:
         """(E, N) bool: any safety or communication constraint violated this step."""
         return self.out_of_bounds | self.no_fly | self.collision | self.threat | ~self.comms_ok
 
+    @classmethod
+    def from_parts(cls, parts: tuple[np.ndarray, ...]) -> Events:
+        """The events of a step's ``parts`` ``(found, team, time_term, flags, no_fly, threat,
+        shielded, detected_now, connected)``, ``flags`` the swarm kernel's ``(6, E, N)`` rows
+        (:data:`poc_env._kernels.swarm.OVERTIME` ...); :meth:`as_parts` is the inverse."""
+        found, team, time_term, flags, nofly, threat, shielded, detected_now, connected = parts
+        return cls(
+            pos_agent=found,
+            pos_team=team,
+            time_term=time_term,
+            overtime=flags[_swarm.OVERTIME],
+            out_of_bounds=flags[_swarm.OOB],
+            no_fly=nofly,
+            collision=flags[_swarm.COLLISION],
+            threat=threat,
+            comms_ok=flags[_swarm.COMMS_OK],
+            shielded=shielded,
+            landed_now=flags[_swarm.LANDED],
+            crashed_now=flags[_swarm.CRASHED],
+            detected_now=detected_now,
+            connected=connected,
+        )
+
+    def as_parts(self) -> tuple[np.ndarray, ...]:
+        """The ``parts`` of :meth:`from_parts`."""
+        flags = np.empty((_swarm.N_FLAGS, *self.pos_agent.shape), dtype=bool)
+        flags[_swarm.OVERTIME] = self.overtime
+        flags[_swarm.OOB] = self.out_of_bounds
+        flags[_swarm.COLLISION] = self.collision
+        flags[_swarm.COMMS_OK] = self.comms_ok
+        flags[_swarm.LANDED] = self.landed_now
+        flags[_swarm.CRASHED] = self.crashed_now
+        return (
+            self.pos_agent, self.pos_team, self.time_term, flags, self.no_fly, self.threat,
+            self.shielded, self.detected_now, np.asarray(self.connected, dtype=bool),
+        )  # fmt: skip
+
 
 def target_cdf(prior_fine: np.ndarray) -> np.ndarray | None:
     """The cumulative distribution over the sub-cells of the fine prior that
@@ -695,21 +732,8 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
     connected = np.asarray(_update_topology(params, state, rngs, dist).connected)
     if state.known is not None:
         share_beliefs(params, state, a2, b2)
-    return Events(
-        pos_agent=found,
-        pos_team=team,
-        time_term=time_term,
-        overtime=flags[_swarm.OVERTIME],
-        out_of_bounds=flags[_swarm.OOB],
-        no_fly=nofly,
-        collision=flags[_swarm.COLLISION],
-        threat=threat,
-        comms_ok=flags[_swarm.COMMS_OK],
-        shielded=shielded,
-        landed_now=flags[_swarm.LANDED],
-        crashed_now=flags[_swarm.CRASHED],
-        detected_now=detected_now,
-        connected=connected,
+    return Events.from_parts(
+        (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
     )
 
 

@@ -51,41 +51,13 @@ TERMS = ("pos", "time", "violation", "overtime", "crash")
 
 
 def events_of(parts: tuple[np.ndarray, ...]) -> sim.Events:
-    """The :class:`~poc_env.sim.core.Events` of a step's ``parts`` ``(found, team, time_term,
-    flags, no_fly, threat, shielded, detected_now, connected)``, ``flags`` the core step's
-    ``(6, E, N)`` rows (:data:`poc_env._kernels.swarm.OVERTIME` ...)."""
-    found, team, time_term, flags, nofly, threat, shielded, detected_now, connected = parts
-    return sim.Events(
-        pos_agent=found,
-        pos_team=team,
-        time_term=time_term,
-        overtime=flags[_swarm.OVERTIME],
-        out_of_bounds=flags[_swarm.OOB],
-        no_fly=nofly,
-        collision=flags[_swarm.COLLISION],
-        threat=threat,
-        comms_ok=flags[_swarm.COMMS_OK],
-        shielded=shielded,
-        landed_now=flags[_swarm.LANDED],
-        crashed_now=flags[_swarm.CRASHED],
-        detected_now=detected_now,
-        connected=connected,
-    )
+    """The :class:`~poc_env.sim.core.Events` of a step's ``parts`` (``Events.from_parts``)."""
+    return sim.Events.from_parts(parts)
 
 
 def parts_of(ev: sim.Events) -> tuple[np.ndarray, ...]:
-    """The inverse of :func:`events_of`."""
-    flags = np.empty((_swarm.N_FLAGS, *ev.pos_agent.shape), dtype=bool)
-    flags[_swarm.OVERTIME] = ev.overtime
-    flags[_swarm.OOB] = ev.out_of_bounds
-    flags[_swarm.COLLISION] = ev.collision
-    flags[_swarm.COMMS_OK] = ev.comms_ok
-    flags[_swarm.LANDED] = ev.landed_now
-    flags[_swarm.CRASHED] = ev.crashed_now
-    return (
-        ev.pos_agent, ev.pos_team, ev.time_term, flags, ev.no_fly, ev.threat, ev.shielded,
-        ev.detected_now, np.asarray(ev.connected, dtype=bool),
-    )  # fmt: skip
+    """The inverse of :func:`events_of` (``Events.as_parts``)."""
+    return ev.as_parts()
 
 
 @dataclass
