@@ -114,7 +114,9 @@ def _timer(fn: Callable, label: str, totals: dict[str, float]) -> Callable:
     return wrapped
 
 
-def _make_vec(scenario: str, envs: int, steps: int, seed: int) -> Callable[[], int]:
+def warm_vec_env(scenario: str, envs: int, steps: int, seed: int):
+    """``make_vec`` of ``scenario``'s Heading task, reset with ``seed`` and stepped 20 times
+    (compilation, caches), and ``steps`` seeded random actions for it to time."""
     import gymnasium
 
     import poc_env  # noqa: F401  (registers the tasks)
@@ -127,9 +129,14 @@ def _make_vec(scenario: str, envs: int, steps: int, seed: int) -> Callable[[], i
     acts = np.random.default_rng(seed).uniform(-1, 1, shape).astype(np.float32)
     for a in acts[:20]:  # warm-up: compilation, caches
         env.step(a)
+    return env, acts[20:]
+
+
+def _make_vec(scenario: str, envs: int, steps: int, seed: int) -> Callable[[], int]:
+    env, acts = warm_vec_env(scenario, envs, steps, seed)
 
     def run() -> int:
-        for a in acts[20:]:
+        for a in acts:
             env.step(a)
         return steps
 

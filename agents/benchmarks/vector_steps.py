@@ -23,26 +23,13 @@ import statistics
 import time
 import tracemalloc
 
-import numpy as np
-
 KINDS = ("autoreset", "every agent live", "some finished")
 
 
 def _env_and_actions(scenario: str, envs: int, steps: int, seed: int):
-    import gymnasium
+    from poc_env.agents.benchmarks.breakdown import warm_vec_env
 
-    import poc_env  # noqa: F401  (registers the tasks)
-    from poc_env.agents.benchmarks.breakdown import heading_task
-
-    env = gymnasium.make_vec(
-        heading_task(scenario), num_envs=envs, vectorization_mode="vector_entry_point"
-    )
-    env.reset(seed=seed)
-    shape = (steps + 20, *(env.action_space.shape or ()))
-    acts = np.random.default_rng(seed).uniform(-1, 1, shape).astype(np.float32)
-    for a in acts[:20]:  # warm-up: compilation, caches
-        env.step(a)
-    return env, acts[20:]
+    return warm_vec_env(scenario, envs, steps, seed)
 
 
 def _kind(env) -> str:

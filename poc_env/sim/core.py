@@ -323,6 +323,25 @@ class Events:
         )  # fmt: skip
 
 
+def airspace_violations(params, moving, a2, b2, new) -> tuple[np.ndarray, np.ndarray]:
+    """``(no_fly, threat)`` ``(E, N)`` of a step: the moving UAVs whose leg ``a2 -> b2``
+    crosses a no-fly zone (eq. 20) and whose new position ``new`` is over a threat peak's
+    threshold (eq. 23); numpy, and only when the map has zones or threats."""
+    e, n = moving.shape
+    if len(params.zones):
+        nofly = moving & params.zones.segment_crosses(a2, b2)
+    else:
+        nofly = np.zeros((e, n), dtype=bool)
+    if len(params.threat_lambdas):
+        threat = moving & cons.threat_violation(
+            new[..., :2], params.threat_centers, params.threat_lambdas,
+            params.scenario.map.threat_threshold,
+        )  # fmt: skip
+    else:
+        threat = np.zeros((e, n), dtype=bool)
+    return nofly, threat
+
+
 def target_cdf(prior_fine: np.ndarray) -> np.ndarray | None:
     """The cumulative distribution over the sub-cells of the fine prior that
     ``Generator.choice(size, p=flat / flat.sum())`` builds (``p.cumsum()``, then divided by its
@@ -696,17 +715,7 @@ def step(params: Params, state: State, actions: np.ndarray, rngs) -> Events:
         with np.errstate(divide="ignore"):
             state.target_exponent += -np.log1p(-p_t).sum(axis=1)
 
-    # no-fly zones and threat peaks (eq. 20, 23): numpy, only when the map has them
-    if len(params.zones):
-        nofly = moving & params.zones.segment_crosses(a2, b2)
-    else:
-        nofly = np.zeros((e, n), dtype=bool)
-    if len(params.threat_lambdas):
-        threat = moving & cons.threat_violation(
-            new[..., :2], params.threat_centers, params.threat_lambdas, sc.map.threat_threshold
-        )
-    else:
-        threat = np.zeros((e, n), dtype=bool)
+    nofly, threat = airspace_violations(params, moving, a2, b2, new)
 
     # POS bookkeeping (eq. 12-13), detection, time model (eq. 17-18), constraints (eq. 20-24),
     # landing, the step counter: one compiled pass

@@ -33,7 +33,6 @@ import poc_env._kernels.rewards as _rewards
 import poc_env._kernels.sensing as _sensing
 import poc_env._kernels.swarm as _swarm
 from poc_env.sim import comms as comms_mod
-from poc_env.sim import constraints as cons
 from poc_env.sim import core as sim
 from poc_env.sim import observations as obs_mod
 from poc_env.sim import rewards as rewards_mod
@@ -116,8 +115,6 @@ class _Constants:
         self.auto = cc.link_failure_prob <= 0 and p.switcher is None
         self.range_m = float(cc.range_m)
         self.k_nearest = comms_mod.nearest_count(cc.min_neighbours, p.n_agents)
-        self.zones = len(p.zones) > 0
-        self.threat = len(p.threat_lambdas) > 0
         x0, y0, x1, y1 = g.bounds
         self.own_sum = g.nx > 1 and p.s < 8  # as observations.rasters
         self.raster = (float(x0), float(y0), float(x1), float(y1), float(g.cell_m))
@@ -258,17 +255,7 @@ class SingleStep:
             else:
                 with np.errstate(divide="ignore"):
                     st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
-        if k.zones:
-            nofly = moving & p.zones.segment_crosses(a2, b2)
-        else:
-            nofly = np.zeros((e, n), dtype=bool)
-        if k.threat:
-            sc = p.scenario
-            threat = moving & cons.threat_violation(
-                new[..., :2], p.threat_centers, p.threat_lambdas, sc.map.threat_threshold
-            )
-        else:
-            threat = np.zeros((e, n), dtype=bool)
+        nofly, threat = sim.airspace_violations(p, moving, a2, b2, new)
         team = np.empty(e)
         flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
         time_term = np.empty((e, n))
