@@ -310,6 +310,21 @@ def step(state, sensed, events, landing, constants):
                 flying[e, i] = False
 
 
+@_jit
+def step_auto(state, sensed, events, landing, constants, range_m, k_nearest, links, connected):
+    """:func:`step`, then the auto topology of its new distances among the UAVs still flying
+    (:func:`auto_links`) into ``links (E, N, N)`` and whether each env's graph is one
+    component into ``connected (E,)``: the single environment's bookkeeping in one call
+    (:class:`poc_env.sim.single.SingleStep`, when the topology is the common ``auto`` one)."""
+    step(state, sensed, events, landing, constants)
+    dist = events[4]
+    flying = state[13]
+    n_comp = np.empty(connected.shape[0], dtype=np.int64)
+    auto_links(dist, range_m, flying, k_nearest, links, n_comp)
+    for e in range(connected.shape[0]):
+        connected[e] = n_comp[e] <= 1
+
+
 # ------------------------------------------------------------------------ eq. 19 kinematics
 
 #: The scalar constants of :func:`kinematics`, in the order of its ``constants`` array
@@ -403,3 +418,13 @@ def kinematics(actions, turn, moving, pos, heading, pitch, speed, constants, out
                 speed_out[e, i] = _clip(speed[e, i] + dv, v_min, v_max)
             else:
                 speed_out[e, i] = speed[e, i]
+
+
+@_jit
+def all_finite(a):
+    """Whether every entry of the float array ``a`` (any shape, C order) is finite: the
+    PettingZoo env's check of its actions (``np.isfinite(a).all()`` in one pass)."""
+    for v in a.flat:  # noqa: SIM110 (a loop numba compiles, stopping at the first)
+        if not math.isfinite(v):
+            return False
+    return True

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from pettingzoo import ParallelEnv
 
+import poc_env._kernels.swarm as _swarm
 from poc_env import spec
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError, PocEnvError
@@ -270,7 +271,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         ``info`` that step's info arrays. AttributeError before the first step."""
         tr = self._transition
         if tr is None and self._last is not None:  # the fast step's, made when asked for
-            last = self._last
+            last = self._last.copy()  # its arrays are the fast step's scratch: kept
             tr = engine_mod.Transition(
                 last.obs, last.reward, last.terms_dict(), last.events, last.terminated,
                 last.truncated, last.over, {},
@@ -360,7 +361,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         return {a: obs[0, index[a]] for a in agents}
 
     def _actions_array(self, actions: Mapping[str, Any]) -> np.ndarray:
-        if not isinstance(actions, Mapping):
+        if type(actions) is not dict and not isinstance(actions, Mapping):
             raise ConfigError(
                 "actions", actions, f"a dict {{agent: action}} of the live agents {self.agents}"
             )
@@ -374,10 +375,10 @@ class UAVSearchParallelEnv(ParallelEnv):
                 arr is not None
                 and arr.dtype.kind in _NUMERIC_KINDS
                 and arr.shape == (len(agents), self._dim)
-                and np.logical_and.reduce(np.isfinite(arr), axis=None)
+                and _swarm.all_finite(arr := arr.astype(float, copy=False))
             ):
-                if len(agents) == self.params.n_agents:
-                    return arr.astype(float, copy=False)[None]
+                if len(agents) == len(self.possible_agents):
+                    return arr[None]
                 out = np.zeros((1, self.params.n_agents, self._dim))
                 out[0, [self._index[a] for a in agents]] = arr
                 return out

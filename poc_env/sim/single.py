@@ -65,7 +65,8 @@ class Step:
     fields (``terms`` as a ``(5, E, N)`` array in :data:`TERMS` order, the events as their
     ``parts``: :func:`events_of`) and the info values grouped by type: ``finfo (E, N,
     len(FLOAT_INFOS))``, ``binfo``, ``iinfo`` (the keys of :data:`FLOAT_INFOS`,
-    :data:`BOOL_INFOS`, :data:`INT_INFOS`; scratch arrays, valid until the next step)."""
+    :data:`BOOL_INFOS`, :data:`INT_INFOS`). Every array but the observations is scratch of
+    :class:`SingleStep`, valid until its next step: :meth:`copy` keeps them."""
 
     obs: Any
     reward: np.ndarray
@@ -87,6 +88,40 @@ class Step:
         """The reward terms as :func:`~poc_env.sim.rewards.reward_terms` returns them."""
         return {t: self.terms[k] for k, t in enumerate(TERMS)}
 
+    def copy(self) -> Step:
+        """This step with copies of its scratch arrays (the observations are its own)."""
+        return Step(
+            self.obs, self.reward.copy(), self.terms.copy(), tuple(a.copy() for a in self.parts),
+            self.terminated.copy(), self.truncated.copy(), self.over.copy(), self.finfo.copy(),
+            self.binfo.copy(), self.iinfo.copy(),
+        )  # fmt: skip
+
+
+class _Scratch:
+    """The arrays of :class:`SingleStep` for ``E`` envs of ``N`` UAVs that each step
+    overwrites: the kernels' outputs that never leave a step (what a :class:`Step` holds
+    but its observations; :meth:`Step.copy` keeps them) and their temporaries."""
+
+    def __init__(self, e: int, n: int) -> None:
+        self.shape = (e, n)
+        self.finfo = np.empty((e, n, len(_rewards.FLOAT_INFOS)))
+        self.binfo = np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool)
+        self.iinfo = np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64)
+        self.dist = np.empty((e, n, n))
+        self.p_t = np.empty((e, n))
+        self.moving = np.empty((e, n), dtype=bool)
+        self.found = np.empty((e, n))
+        self.team = np.empty(e)
+        self.time_term = np.empty((e, n))
+        self.flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
+        self.detected_now = np.empty(e, dtype=bool)
+        self.connected = np.empty(e, dtype=bool)
+        #: no-fly, threat and shielded flags of a map without zones or threats: always False
+        self.no_airspace = np.zeros((3, e, n), dtype=bool)
+        self.values = np.empty((6, e, n))  # the reward terms, then the reward
+        self.ends = np.empty((2, e, n), dtype=bool)  # terminated, truncated
+        self.over = np.empty(e, dtype=bool)
+
 
 class _Constants:
     """What the kernels of one :class:`~poc_env.sim.core.Params` take besides the state: the
@@ -99,18 +134,16 @@ class _Constants:
         sensor, cc, u = sc.sensor, sc.comms, sc.uav
         g = p.grid
         self.params = p
-        self.origin = np.asarray(g.origin_m, dtype=np.float64)
         law = detection_law(sensor.law)
-        self.sweep = (
-            law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
-            float(_reach(g, sensor.law, sensor.sweep_width_m, p.cutoff_m)), float(g.cell_m),
-            0.0, 0.0, g.cell_m / p.s,
-        )  # fmt: skip
         ox, oy = g.origin_m
-        self.target = (
+        #: :func:`poc_env._kernels.sensing.sense_step`'s constants: the origin, then sweep's
+        self.sense = (
             float(ox), float(oy), law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
-            float(g.cell_m),
+            float(_reach(g, sensor.law, sensor.sweep_width_m, p.cutoff_m)), float(g.cell_m),
+            g.cell_m / p.s,
         )  # fmt: skip
+        #: no-fly zones or threats (:func:`~poc_env.sim.core.airspace_violations`)
+        self.airspace = bool(len(p.zones) or len(p.threat_lambdas))
         #: the common topology: in-range graph and the auto rule, one kernel
         self.auto = cc.link_failure_prob <= 0 and p.switcher is None
         self.range_m = float(cc.range_m)
@@ -147,7 +180,7 @@ class SingleStep:
         self._ends = bool(sc.episode.detection_ends_episode)
         self._coef: np.ndarray | None = None
         self._k: _Constants | None = None
-        self._scratch: tuple[np.ndarray, ...] | None = None
+        self._scratch: _Scratch | None = None
         self._pass_through = engine.control == "increments" and not engine.return_increments
         self._shield = sc.constraints.violation == "shield"
         self._hazard = comms_mod._shaped(engine.hazard, engine.params.grid.shape, np.float32)
@@ -187,30 +220,22 @@ class SingleStep:
         k = self._constants(p)
         e, n = st.flying.shape
         if self._pass_through:  # swarm_increments' increments level: the actions as floats
-            inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
+            inc = actions
+            if type(inc) is not np.ndarray or inc.dtype != np.float64 or inc.shape != (e, n, 3):
+                inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
         else:
             inc = swarm_increments(
                 p, eng.control, st, actions, eng.auto_return, eng.return_increments
-            )
-        scratch = self._scratch
-        if scratch is None or scratch[0].shape[:2] != (e, n):
-            scratch = self._scratch = (
-                np.empty((e, n, len(_rewards.FLOAT_INFOS))),
-                np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool),
-                np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64),
-                np.empty((e, n, n)),
-                np.empty((e, n)),
-            )
-        finfo, binfo, iinfo, dist, p_t = scratch
+            ).astype(float, copy=False)
+        s = self.scratch(e, n)
         if self._shield:
             parts = parts_of(sim.step(p, st, inc, eng.rngs))
         else:
-            parts = self._core_step(p, k, st, inc.astype(float, copy=False), dist, p_t)
-        values = np.empty((6, e, n))  # fresh each step: the transition's arrays are views
+            parts = self._core_step(p, k, st, inc, s)
+        values, ends, over = s.values, s.ends, s.over
         terms, reward = values[:5], values[5]
-        ends = np.empty((2, e, n), dtype=bool)
         terminated, truncated = ends[0], ends[1]
-        over = np.empty(e, dtype=bool)
+        finfo, binfo, iinfo = s.finfo, s.binfo, s.iinfo
         _rewards.end_step(
             parts,
             (st.posc, st.elapsed, st.detected, st.detect_step, st.topology, st.violations,
@@ -221,33 +246,42 @@ class SingleStep:
         obs = self._observe(p, k, st)
         return Step(obs, reward, terms, parts, terminated, truncated, over, finfo, binfo, iinfo)
 
+    def scratch(self, e: int, n: int) -> _Scratch:
+        """The step's scratch arrays for ``E`` envs of ``N`` UAVs (made at the first step)."""
+        s = self._scratch
+        if s is None or s.shape != (e, n):
+            s = self._scratch = _Scratch(e, n)
+        return s
+
     def _core_step(
-        self, p: sim.Params, k: _Constants, st: sim.State, actions, dist, p_t
+        self, p: sim.Params, k: _Constants, st: sim.State, actions: np.ndarray, s: _Scratch
     ) -> tuple[np.ndarray, ...]:
         """:func:`poc_env.sim.core.step` without the shield (which keeps that function), its
-        kernels called with the arguments of :class:`_Constants`, in the same order; returns
-        the events' parts (:func:`events_of`). ``dist (E, N, N)``, ``p_t (E, N)``: scratch."""
-        moving = st.flying.copy()
+        kernels called with the arguments of :class:`_Constants`, in the same order, on the
+        float64 increments ``actions (E, N, 3)``; returns the events' parts
+        (:func:`events_of`), arrays of the scratch ``s`` (:meth:`scratch`) but the no-fly and
+        threat flags of a map with zones or threats."""
+        moving = s.moving
+        np.copyto(moving, st.flying)
         e, n = moving.shape
+        dist, p_t = s.dist, s.p_t
         if p.motion is not None:  # the filter's predict step; static targets skip it
             sim.predict(p, st)
-        a2 = st.pos[..., :2].copy()
-        new = np.empty_like(st.pos)
+        old = st.pos  # kinematics writes the new positions into a new array: old stays
+        new = np.empty_like(old)
         alpha = np.empty((e, n))
         beta = np.empty((e, n))
         speed = np.empty((e, n))
         _swarm.kinematics(
-            actions, None, moving, st.pos, st.heading, st.pitch, st.speed, p.motion_constants,
+            actions, None, moving, old, st.heading, st.pitch, st.speed, p.motion_constants,
             (new, alpha, beta, speed),
         )  # fmt: skip
         st.heading = alpha
         st.pitch = beta
         st.speed = speed
-        b2 = new[..., :2]
-        found = np.empty((e, n))
-        _sensing.sweep(st.belief, a2 - k.origin, b2 - k.origin, *k.sweep, found)
-        st.pos = new
-        if _sensing.target_pod(st.target, a2, b2, moving, *k.target, p_t):
+        found = s.found
+        # the sweep on the grid-relative legs and the hidden target's POD: one call
+        if _sensing.sense_step(st.belief, old, new, moving, st.target, *k.sense, found, p_t):
             if st.target_out is not None:  # a target that left the map is beyond the search
                 p_t[st.target_out] = 0.0
             if np.maximum.reduce(p_t, axis=None) < 1.0:  # no log1p(-1): no warning to silence
@@ -255,34 +289,34 @@ class SingleStep:
             else:
                 with np.errstate(divide="ignore"):
                     st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
-        nofly, threat = sim.airspace_violations(p, moving, a2, b2, new)
-        team = np.empty(e)
-        flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
-        time_term = np.empty((e, n))
-        detected_now = np.empty(e, dtype=bool)
+        st.pos = new
+        if k.airspace:
+            nofly, threat = sim.airspace_violations(p, moving, old[..., :2], new[..., :2], new)
+            shielded = np.zeros((e, n), dtype=bool)
+        else:  # no zones, no threats: the three flags false (never written)
+            nofly, threat, shielded = s.no_airspace
+        team, flags, time_term, detected_now = s.team, s.flags, s.time_term, s.detected_now
         detect_step = st.detect_step.copy()
-        _swarm.step(
-            (
-                st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
-                st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
-                st.crashed, st.flying, st.violations,
-            ),
-            (found, moving, nofly, threat),
-            (team, detected_now, time_term, flags, dist),
-            p.landing,
-            p.step_constants,
+        state = (
+            st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
+            st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
+            st.crashed, st.flying, st.violations,
         )  # fmt: skip
-        st.detect_step = detect_step
-        if k.auto:
-            links = np.empty((e, n, n), dtype=bool)
-            n_comp = np.empty(e, dtype=np.int64)
-            _swarm.auto_links(dist, k.range_m, st.flying, k.k_nearest, links, n_comp)
+        events = (team, detected_now, time_term, flags, dist)
+        if k.auto:  # the bookkeeping and the common topology: one call
+            links = np.empty((e, n, n), dtype=bool)  # the state's: a new array
+            connected = s.connected
+            _swarm.step_auto(
+                state, (found, moving, nofly, threat), events, p.landing, p.step_constants,
+                k.range_m, k.k_nearest, links, connected,
+            )  # fmt: skip
+            st.detect_step = detect_step
             st.links = links
-            connected = n_comp <= 1
         else:
+            _swarm.step(state, (found, moving, nofly, threat), events, p.landing, p.step_constants)
+            st.detect_step = detect_step
             topo = sim._update_topology(p, st, self.engine.rngs, dist)
             connected = np.asarray(topo.connected, dtype=bool)
-        shielded = np.zeros((e, n), dtype=bool)
         return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
 
     def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:

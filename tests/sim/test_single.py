@@ -285,7 +285,7 @@ def test_core_step_equals_sim_step_on_crafted_states(overrides):
         k = fast_step._constants(eng.params)
         e, n = st.flying.shape
         parts = fast_step._core_step(
-            eng.params, k, got_state, acts.astype(float), np.empty((e, n, n)), np.empty((e, n))
+            eng.params, k, got_state, acts.astype(float), fast_step.scratch(e, n)
         )
         _same(single.events_of(parts), want, "events")
         _same(got_state, want_state, "state")
