@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 
 import poc_env._kernels.observations as _obs_kernels
-import poc_env._kernels.rewards as _rewards
 import poc_env._kernels.sensing as _sensing
 import poc_env._kernels.swarm as _swarm
 from poc_env.sim import comms as comms_mod
@@ -41,9 +40,9 @@ from poc_env.theory.detection import detection_law
 from poc_env.theory.search_theory import _reach
 
 #: The per-agent info keys of :attr:`Step.finfo`, :attr:`Step.binfo` and :attr:`Step.iinfo`.
-FLOAT_INFOS = _rewards.FLOAT_INFOS
-BOOL_INFOS = _rewards.BOOL_INFOS
-INT_INFOS = _rewards.INT_INFOS
+FLOAT_INFOS = _swarm.FLOAT_INFOS
+BOOL_INFOS = _swarm.BOOL_INFOS
+INT_INFOS = _swarm.INT_INFOS
 #: The reward terms in the order of ``end_step``'s ``terms`` rows (:data:`poc_env.spec.
 #: REWARD_TERMS`; the engine's test pins them).
 TERMS = ("pos", "time", "violation", "overtime", "crash")
@@ -104,9 +103,9 @@ class _Scratch:
 
     def __init__(self, e: int, n: int) -> None:
         self.shape = (e, n)
-        self.finfo = np.empty((e, n, len(_rewards.FLOAT_INFOS)))
-        self.binfo = np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool)
-        self.iinfo = np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64)
+        self.finfo = np.empty((e, n, len(_swarm.FLOAT_INFOS)))
+        self.binfo = np.empty((e, n, len(_swarm.BOOL_INFOS)), dtype=bool)
+        self.iinfo = np.empty((e, n, len(_swarm.INT_INFOS)), dtype=np.int64)
         self.dist = np.empty((e, n, n))
         self.p_t = np.empty((e, n))
         self.moving = np.empty((e, n), dtype=bool)
@@ -194,7 +193,7 @@ class SingleStep:
 
     def _coefficients(self, dt: float) -> np.ndarray:
         if self._coef is None or self._coef_dt != dt:
-            c = np.empty(len(_rewards.COEFFICIENTS))
+            c = np.empty(len(_swarm.COEFFICIENTS))
             for k, v in enumerate((*self._coef_of, self._crash)):
                 # reward_terms multiplies an array by this Python number: the same float64
                 c[k] = np.float64(v)
@@ -230,21 +229,27 @@ class SingleStep:
         s = self.scratch(e, n)
         if self._shield:
             parts = parts_of(sim.step(p, st, inc, eng.rngs))
+            self._end_step(p, st, parts, s)
         else:
             parts = self._core_step(p, k, st, inc, s)
-        values, ends, over = s.values, s.ends, s.over
-        terms, reward = values[:5], values[5]
-        terminated, truncated = ends[0], ends[1]
-        finfo, binfo, iinfo = s.finfo, s.binfo, s.iinfo
-        _rewards.end_step(
+        values, ends = s.values, s.ends
+        obs = self._observe(p, k, st)
+        return Step(
+            obs, values[5], values[:5], parts, ends[0], ends[1], s.over, s.finfo, s.binfo, s.iinfo
+        )
+
+    def _end_step(self, p: sim.Params, st: sim.State, parts: tuple, s: _Scratch) -> None:
+        """The reward terms and total, the episode end and the info values of the step whose
+        events are ``parts`` (after its topology) into the scratch ``s``: :func:`poc_env.
+        _kernels.swarm.end_step`."""
+        values, ends = s.values, s.ends
+        _swarm.end_step(
             parts,
             (st.posc, st.elapsed, st.detected, st.detect_step, st.topology, st.violations,
              st.landed, st.crashed, st.step),
             self._coefficients(p.dt), p.horizon, self._ends, self._team,
-            (terms, reward, terminated, truncated, over, finfo, binfo, iinfo),
+            (values[:5], values[5], ends[0], ends[1], s.over, s.finfo, s.binfo, s.iinfo),
         )  # fmt: skip
-        obs = self._observe(p, k, st)
-        return Step(obs, reward, terms, parts, terminated, truncated, over, finfo, binfo, iinfo)
 
     def scratch(self, e: int, n: int) -> _Scratch:
         """The step's scratch arrays for ``E`` envs of ``N`` UAVs (made at the first step)."""
@@ -258,9 +263,10 @@ class SingleStep:
     ) -> tuple[np.ndarray, ...]:
         """:func:`poc_env.sim.core.step` without the shield (which keeps that function), its
         kernels called with the arguments of :class:`_Constants`, in the same order, on the
-        float64 increments ``actions (E, N, 3)``; returns the events' parts
-        (:func:`events_of`), arrays of the scratch ``s`` (:meth:`scratch`) but the no-fly and
-        threat flags of a map with zones or threats."""
+        float64 increments ``actions (E, N, 3)``, then the end of the step (:meth:`_end_step`:
+        with the bookkeeping and the auto topology in one call, ``swarm.step_end``); returns
+        the events' parts (:func:`events_of`), arrays of the scratch ``s`` (:meth:`scratch`) but
+        the no-fly and threat flags of a map with zones or threats."""
         moving = s.moving
         np.copyto(moving, st.flying)
         e, n = moving.shape
@@ -297,27 +303,40 @@ class SingleStep:
             nofly, threat, shielded = s.no_airspace
         team, flags, time_term, detected_now = s.team, s.flags, s.time_term, s.detected_now
         detect_step = st.detect_step.copy()
-        state = (
-            st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
-            st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
-            st.crashed, st.flying, st.violations,
-        )  # fmt: skip
-        events = (team, detected_now, time_term, flags, dist)
-        if k.auto:  # the bookkeeping and the common topology: one call
+        if k.auto:  # the bookkeeping, the common topology and the end of step: one call
             links = np.empty((e, n, n), dtype=bool)  # the state's: a new array
             connected = s.connected
-            _swarm.step_auto(
-                state, (found, moving, nofly, threat), events, p.landing, p.step_constants,
-                k.range_m, k.k_nearest, links, connected,
+            values, ends = s.values, s.ends
+            _swarm.step_end(
+                st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
+                st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
+                st.crashed, st.flying, st.violations, st.topology,
+                found, moving, nofly, threat, shielded,
+                team, detected_now, time_term, flags, dist, links, connected,
+                p.landing, p.step_constants, k.range_m, k.k_nearest,
+                self._coefficients(p.dt), p.horizon, self._ends, self._team,
+                values, ends, s.over, s.finfo, s.binfo, s.iinfo,
             )  # fmt: skip
             st.detect_step = detect_step
             st.links = links
-        else:
-            _swarm.step(state, (found, moving, nofly, threat), events, p.landing, p.step_constants)
-            st.detect_step = detect_step
-            topo = sim._update_topology(p, st, self.engine.rngs, dist)
-            connected = np.asarray(topo.connected, dtype=bool)
-        return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
+            return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
+        _swarm.step(
+            (
+                st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
+                st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
+                st.crashed, st.flying, st.violations,
+            ),
+            (found, moving, nofly, threat),
+            (team, detected_now, time_term, flags, dist),
+            p.landing,
+            p.step_constants,
+        )  # fmt: skip
+        st.detect_step = detect_step
+        topo = sim._update_topology(p, st, self.engine.rngs, dist)
+        connected = np.asarray(topo.connected, dtype=bool)
+        parts = (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
+        self._end_step(p, st, parts, s)
+        return parts
 
     def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
         """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and

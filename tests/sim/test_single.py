@@ -1,4 +1,4 @@
-"""The single environment's fast step (poc_env.sim.single, poc_env._kernels.rewards) against the
+"""The single environment's fast step (poc_env.sim.single, poc_env._kernels.swarm) against the
 engine's numpy step, bit for bit.
 
 The PettingZoo env steps through :class:`~poc_env.sim.single.SingleStep` (the engine's step with
@@ -19,7 +19,7 @@ import pytest
 
 import poc_env
 from poc_env import spec
-from poc_env._kernels import rewards as kernel
+from poc_env._kernels import swarm as kernel
 from poc_env.config import load_scenario
 from poc_env.sim import core as sim
 from poc_env.sim import engine as engine_mod
@@ -139,16 +139,8 @@ def test_fast_step_covers_terminations_truncations_and_violations():
     assert all(seen.values()) and len(seen) == 5, seen
 
 
-def test_flag_rows_are_the_swarm_kernels():
-    from poc_env._kernels import swarm
-
-    names = ("OVERTIME", "OOB", "COLLISION", "COMMS_OK", "LANDED", "CRASHED")
-    assert [getattr(kernel, k) for k in names] == [getattr(swarm, k) for k in names]
-    assert len(names) == swarm.N_FLAGS
-
-
 def test_numpy_sum_is_numpys_pairwise_sum():
-    """:func:`~poc_env._kernels.rewards.numpy_sum` gives ``ndarray.sum``'s bits at every size
+    """:func:`~poc_env._kernels.swarm.numpy_sum` gives ``ndarray.sum``'s bits at every size
     (the plain, eight-accumulator and halving branches), values of mixed magnitudes, -0.0."""
     rng = np.random.default_rng(0)
     for n in [*range(0, 40), 127, 128, 129, 255, 256, 300, 1000]:
