@@ -220,6 +220,6 @@ def test_single_breakdown_times_the_single_step_and_its_kernels():
     step = by["single step (sim.single.SingleStep.step)"]
     assert 0 < step <= whole
     assert 0 < by["- core step and its end (SingleStep._core_step)"] <= step
-    assert by["  - sensing, hidden target kernel (eq. 12-14)"] > 0
+    assert by["  - sensing and hidden target kernel (eq. 12-14)"] > 0
     assert by["  - bookkeeping, topology, rewards, episode end, infos kernel"] > 0
     assert (sensing.sense_step, swarm.step_end) == before
