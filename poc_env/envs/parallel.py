@@ -53,18 +53,19 @@ __all__ = [
 def _row_builder(keys: tuple[str, ...]) -> Any:
     """A function ``row(f, b, i, links) -> dict`` making one agent's info dict with ``keys``
     in order from its :class:`~poc_env.sim.single.Step` values: ``f``, ``b``, ``i`` its rows
-    of the float, bool and int groups (lists), ``links`` its adjacency row. Written as one
-    dict display (as :mod:`dataclasses` writes its methods): about half the time of
-    ``dict(zip(keys, values))`` for the two dozen keys of a step."""
+    of the float, bool and int groups (lists), ``links`` its adjacency row. Written as a copy
+    of a dict of the keys in order, then one store per key (as :mod:`dataclasses` writes its
+    methods): about 0.4 the time of ``dict(zip(keys, values))`` for the two dozen keys of a
+    step, 0.8 that of one dict display."""
     groups = {
         **{k: f"f[{j}]" for j, k in enumerate(single_mod.FLOAT_INFOS)},
         **{k: f"b[{j}]" for j, k in enumerate(single_mod.BOOL_INFOS)},
         **{k: f"i[{j}]" for j, k in enumerate(single_mod.INT_INFOS)},
         "links": "links",
     }
-    body = ", ".join(f"{k!r}: {groups[k]}" for k in keys)
-    scope: dict[str, Any] = {}
-    exec(f"def row(f, b, i, links):\n    return {{{body}}}\n", scope)
+    body = "".join(f"    d[{k!r}] = {groups[k]}\n" for k in keys)
+    scope: dict[str, Any] = {"_keys": dict.fromkeys(keys)}
+    exec(f"def row(f, b, i, links):\n    d = _keys.copy()\n{body}    return d\n", scope)
     return scope["row"]
 
 

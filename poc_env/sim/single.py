@@ -153,13 +153,15 @@ class _Constants:
         bx0, by0, bx1, by1 = p.bounds
         w, h = bx1 - bx0, by1 - by0
         n = p.n_agents
-        self.vector = (
+        #: ``vectors_of``'s scalars (one float64 array), then the clip bounds
+        scalars = (
             float(bx0), float(by0), float(w), float(h), obs_mod._diagonal(w, h),
             float(u.max_altitude_m), float(u.min_speed_mps),
             float(u.max_speed_mps - u.min_speed_mps), float(u.max_pitch_rad),
             float(u.endurance_s), float(u.usable_endurance_s), float(p.horizon),
-            float(cc.range_m), float(max(n - 1, 1)), obs_mod._LOW, obs_mod._HIGH,
+            float(cc.range_m), float(max(n - 1, 1)),
         )  # fmt: skip
+        self.vector = (np.array(scalars, dtype=np.float64), obs_mod._LOW, obs_mod._HIGH)
 
 
 class SingleStep:
@@ -360,7 +362,7 @@ class SingleStep:
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
             *k.raster, raster,
         )  # fmt: skip
-        _obs_kernels.vectors(
+        _obs_kernels.vectors_of(
             st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
             st.flying, st.step, p.landing, *k.vector, vector,
         )  # fmt: skip
