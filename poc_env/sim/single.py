@@ -1,24 +1,30 @@
 """The single environment's step: :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with
-its glue formed once and its end in one compiled call.
+its glue formed once, in four compiled calls.
 
 The PettingZoo env steps one env of a few UAVs, where a dozen numpy calls on ``(1, N)`` arrays
-cost more than the arithmetic they do. :class:`SingleStep` runs the engine's step in the same
-order: the autopilot (:func:`~poc_env.sim.control.swarm_increments`), the core step
-(:func:`poc_env.sim.core.step`'s kernels called with the arguments :class:`_Constants` forms
-once per scenario; the shield keeps that function) and the ``dict`` and ``flat`` observations
-(the kernels of :func:`poc_env.sim.observations.observe`); then, in place of the reward terms
-and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
+cost more than the arithmetic they do, and numba's dispatch of a kernel (a fraction of a
+microsecond per array argument, more inside tuples) more than some kernels' work.
+:class:`SingleStep` runs the engine's step in the same order: the autopilot
+(:func:`~poc_env.sim.control.swarm_increments`), the core step (:func:`poc_env.sim.core.step`'s
+kernels called with the arguments :class:`_Constants` forms once per scenario: the eq. 19
+kinematics, then the sweep and the hidden target's POD in one call,
+:func:`poc_env._kernels.sensing.sense_step`; the shield keeps that function), then the
+bookkeeping, the auto topology and, in place of the reward terms and total
+(:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
 :func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and the info values
-(:func:`~poc_env.sim.engine.info_parts`), one call of the kernel
-:func:`poc_env._kernels.rewards.end_step`, which also groups the per-agent info values by
-Python type so that the adapter builds its per-agent info dicts from three ``tolist()`` calls.
-The step's :class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
+(:func:`~poc_env.sim.engine.info_parts`), one call of :func:`poc_env._kernels.swarm.step_end`
+(:func:`~poc_env._kernels.swarm.end_step` alone after another topology), which also groups the
+per-agent info values by Python type so that the adapter builds its per-agent info dicts from
+three ``tolist()`` calls; then the ``dict`` and ``flat`` observations (the kernels of
+:func:`poc_env.sim.observations.observe`). The step's arrays that stay inside it are scratch
+(:class:`_Scratch`, reused at the next step; :meth:`Step.copy` keeps them); its
+:class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
 
 Every value is the engine's, bit for bit: ``tests/sim/test_single.py`` runs both on random
-actions over several tasks and options (and the core step on crafted states) and compares
-every array and info. (One compiled call for the whole step would also save the kernels'
-dispatch, but the cache rule of :mod:`poc_env._kernels` keeps each group's kernels in its
-own module.)
+actions over several tasks and options (and the core step on crafted states, the fused calls
+against the kernels they join) and compares every array and info. (The cache rule of
+:mod:`poc_env._kernels` keeps sensing, the swarm's arithmetic and the observations in
+separate modules, so in separate calls.)
 """
 
 from __future__ import annotations
