@@ -257,6 +257,9 @@ class UAVSearchParallelEnv(ParallelEnv):
         #: Whether :func:`_row_builder` makes the infos of a :class:`~poc_env.sim.single.Step`
         #: (set at reset): not when the keys differ (moving targets' ``mass_out``).
         self._grouped_infos = False
+        #: The info row function of ``_info_keys`` (:func:`_row_builder`; made by exec, so not
+        #: pickled: ``__getstate__`` drops it, :meth:`_fast_infos` makes it again).
+        self._row: Any = None
 
     @property
     def info_arrays(self) -> dict[str, np.ndarray]:
@@ -335,6 +338,7 @@ class UAVSearchParallelEnv(ParallelEnv):
             for k in keys
         )
         self._grouped_infos = sorted(keys) == sorted(_GROUPED_KEYS)
+        self._row = None
         if self.random_airfields and self._renderer is not None:
             # its background shows the airfields: draw afresh
             self._renderer.close()
@@ -458,7 +462,9 @@ class UAVSearchParallelEnv(ParallelEnv):
             return self._agent_infos(engine_mod.info_parts(*self._step_of), live)
         fl, bl, il = last.finfo[0].tolist(), last.binfo[0].tolist(), last.iinfo[0].tolist()
         links = list(self.engine.current.links[0].copy())  # each agent's row, its own
-        row = _row_builder(self._info_keys)  # (a function made by exec: not kept, not pickled)
+        row = self._row
+        if row is None:
+            row = self._row = _row_builder(self._info_keys)
         if len(live) == len(fl):  # every agent: in index order
             return dict(zip(live, map(row, fl, bl, il, links)))
         idx = map(self._index.__getitem__, live)
@@ -549,9 +555,11 @@ class UAVSearchParallelEnv(ParallelEnv):
         return frame if self.render_mode == "rgb_array" else None
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle without the renderer (a matplotlib figure); a copy draws afresh."""
+        """Pickle without the renderer (a matplotlib figure; a copy draws afresh) and the info
+        row function (made by exec; a copy makes it again)."""
         state = self.__dict__.copy()
         state["_renderer"] = None
+        state["_row"] = None
         return state
 
     def close(self) -> None:
