@@ -50,23 +50,33 @@ __all__ = [
 
 
 @functools.lru_cache(maxsize=16)
-def _row_builder(keys: tuple[str, ...]) -> Any:
-    """A function ``row(f, b, i, links) -> dict`` making one agent's info dict with ``keys``
-    in order from its :class:`~poc_env.sim.single.Step` values: ``f``, ``b``, ``i`` its rows
-    of the float, bool and int groups (lists), ``links`` its adjacency row. Written as a copy
-    of a dict of the keys in order, then one store per key (as :mod:`dataclasses` writes its
-    methods): about 0.4 the time of ``dict(zip(keys, values))`` for the two dozen keys of a
-    step, 0.8 that of one dict display."""
+def _row_builder(keys: tuple[str, ...]) -> tuple[Any, Any]:
+    """Functions ``(env_row, row)`` making the per-agent info dicts with ``keys`` in order from
+    the :class:`~poc_env.sim.single.Step` values of one env: ``env_row(f, b, i)`` a dict of
+    every key whose value is the env's (:data:`poc_env.sim.engine.PER_ENV_INFOS`, from any
+    agent's rows: the same for all), the others None; ``row(d, f, b, i, links)`` a copy of
+    that dict with one agent's values stored (``f``, ``b``, ``i`` its rows of the float, bool
+    and int groups, lists; ``links`` its adjacency row). Written as code (as
+    :mod:`dataclasses` writes its methods): a dict copy and a store per agent key is about
+    0.4 the time of ``dict(zip(keys, values))`` for the two dozen keys of a step, 0.7 that of
+    one dict display."""
     groups = {
         **{k: f"f[{j}]" for j, k in enumerate(single_mod.FLOAT_INFOS)},
         **{k: f"b[{j}]" for j, k in enumerate(single_mod.BOOL_INFOS)},
         **{k: f"i[{j}]" for j, k in enumerate(single_mod.INT_INFOS)},
         "links": "links",
     }
-    body = "".join(f"    d[{k!r}] = {groups[k]}\n" for k in keys)
+    shared = [k for k in keys if k in engine_mod.PER_ENV_INFOS]
+    own = [k for k in keys if k not in engine_mod.PER_ENV_INFOS]
+    env_body = "".join(f"    d[{k!r}] = {groups[k]}\n" for k in shared)
+    body = "".join(f"    d[{k!r}] = {groups[k]}\n" for k in own)
     scope: dict[str, Any] = {"_keys": dict.fromkeys(keys)}
-    exec(f"def row(f, b, i, links):\n    d = _keys.copy()\n{body}    return d\n", scope)
-    return scope["row"]
+    exec(
+        f"def env_row(f, b, i):\n    d = _keys.copy()\n{env_body}    return d\n"
+        f"def row(d, f, b, i, links):\n    d = d.copy()\n{body}    return d\n",
+        scope,
+    )
+    return scope["env_row"], scope["row"]
 
 
 class EpisodeOverError(PocEnvError, RuntimeError):
@@ -257,8 +267,8 @@ class UAVSearchParallelEnv(ParallelEnv):
         #: Whether :func:`_row_builder` makes the infos of a :class:`~poc_env.sim.single.Step`
         #: (set at reset): not when the keys differ (moving targets' ``mass_out``).
         self._grouped_infos = False
-        #: The info row function of ``_info_keys`` (:func:`_row_builder`; made by exec, so not
-        #: pickled: ``__getstate__`` drops it, :meth:`_fast_infos` makes it again).
+        #: The info row functions of ``_info_keys`` (:func:`_row_builder`; made by exec, so not
+        #: pickled: ``__getstate__`` drops them, :meth:`_fast_infos` makes them again).
         self._row: Any = None
 
     @property
@@ -462,13 +472,15 @@ class UAVSearchParallelEnv(ParallelEnv):
             return self._agent_infos(engine_mod.info_parts(*self._step_of), live)
         fl, bl, il = last.finfo[0].tolist(), last.binfo[0].tolist(), last.iinfo[0].tolist()
         links = list(self.engine.current.links[0].copy())  # each agent's row, its own
-        row = self._row
-        if row is None:
-            row = self._row = _row_builder(self._info_keys)
+        rows = self._row
+        if rows is None:
+            rows = self._row = _row_builder(self._info_keys)
+        env_row, row = rows
+        d = env_row(fl[0], bl[0], il[0])
         if len(live) == len(fl):  # every agent: in index order
-            return dict(zip(live, map(row, fl, bl, il, links)))
+            return dict(zip(live, map(row, repeat(d), fl, bl, il, links)))
         idx = map(self._index.__getitem__, live)
-        return {a: row(fl[i], bl[i], il[i], links[i]) for a, i in zip(live, idx)}
+        return {a: row(d, fl[i], bl[i], il[i], links[i]) for a, i in zip(live, idx)}
 
     def _step_engine(self, arr: np.ndarray):
         """:meth:`step` through the engine's step (per-UAV beliefs)."""
