@@ -438,9 +438,9 @@ class UAVSearchParallelEnv(ParallelEnv):
         self._transition = None
         self._info = None
         live = self.agents
-        reward = last.reward[0].tolist()
-        terminal = last.terminated[0].tolist()
-        truncated = last.truncated[0].tolist()
+        reward = last.reward.tolist()[0]  # (the env's row of the lists: no array view)
+        terminal = last.terminated.tolist()[0]
+        truncated = last.truncated.tolist()[0]
         infos = self._fast_infos(last, live)
         if len(live) == len(reward):  # every agent: in index order
             rewards = dict(zip(live, reward))
@@ -470,7 +470,7 @@ class UAVSearchParallelEnv(ParallelEnv):
         if not self._grouped_infos:  # keys beyond the grouped ones: the engine's info values
             self.transition  # noqa: B018 (sets _step_of)
             return self._agent_infos(engine_mod.info_parts(*self._step_of), live)
-        fl, bl, il = last.finfo[0].tolist(), last.binfo[0].tolist(), last.iinfo[0].tolist()
+        fl, bl, il = last.finfo.tolist()[0], last.binfo.tolist()[0], last.iinfo.tolist()[0]
         links = list(self.engine.current.links[0].copy())  # each agent's row, its own
         rows = self._row
         if rows is None:

@@ -121,10 +121,18 @@ class _Scratch:
         self.detected_now = np.empty(e, dtype=bool)
         self.connected = np.empty(e, dtype=bool)
         #: no-fly, threat and shielded flags of a map without zones or threats: always False
-        self.no_airspace = np.zeros((3, e, n), dtype=bool)
+        self.no_airspace = tuple(np.zeros((3, e, n), dtype=bool))
         self.values = np.empty((6, e, n))  # the reward terms, then the reward
         self.ends = np.empty((2, e, n), dtype=bool)  # terminated, truncated
         self.over = np.empty(e, dtype=bool)
+        # their views, formed once
+        self.terms, self.reward = self.values[:5], self.values[5]
+        self.terminated, self.truncated = self.ends[0], self.ends[1]
+
+    def __reduce__(self) -> tuple[type, tuple[int, int]]:
+        """Pickled as its shape, made afresh: copies of the views above would no longer see
+        the arrays the kernels write (a pickled :class:`Step` keeps its own copies)."""
+        return (_Scratch, self.shape)
 
 
 class _Constants:
@@ -239,23 +247,22 @@ class SingleStep:
             self._end_step(p, st, parts, s)
         else:
             parts = self._core_step(p, k, st, inc, s)
-        values, ends = s.values, s.ends
         obs = self._observe(p, k, st)
         return Step(
-            obs, values[5], values[:5], parts, ends[0], ends[1], s.over, s.finfo, s.binfo, s.iinfo
-        )
+            obs, s.reward, s.terms, parts, s.terminated, s.truncated, s.over, s.finfo, s.binfo,
+            s.iinfo,
+        )  # fmt: skip
 
     def _end_step(self, p: sim.Params, st: sim.State, parts: tuple, s: _Scratch) -> None:
         """The reward terms and total, the episode end and the info values of the step whose
         events are ``parts`` (after its topology) into the scratch ``s``: :func:`poc_env.
         _kernels.swarm.end_step`."""
-        values, ends = s.values, s.ends
         _swarm.end_step(
             parts,
             (st.posc, st.elapsed, st.detected, st.detect_step, st.topology, st.violations,
              st.landed, st.crashed, st.step),
             self._coefficients(p.dt), p.horizon, self._ends, self._team,
-            (values[:5], values[5], ends[0], ends[1], s.over, s.finfo, s.binfo, s.iinfo),
+            (s.terms, s.reward, s.terminated, s.truncated, s.over, s.finfo, s.binfo, s.iinfo),
         )  # fmt: skip
 
     def scratch(self, e: int, n: int) -> _Scratch:
