@@ -62,7 +62,7 @@ PARTS: dict[str, list[tuple[str, str, str]]] = {
         ),
         ("poc_env.sim.single", "SingleStep._observe", "- observations (SingleStep._observe)"),
         ("poc_env._kernels.observations", "rasters", "  - rasters kernel"),
-        ("poc_env._kernels.observations", "vectors", "  - vectors kernel"),
+        ("poc_env._kernels.observations", "vectors_of", "  - vectors kernel"),
         ("poc_env.sim.single", "swarm_increments", "- autopilot (control.swarm_increments)"),
         ("poc_env.envs.parallel", "UAVSearchParallelEnv._actions_array", "action dict to array"),
         ("poc_env.envs.parallel", "UAVSearchParallelEnv._fast_infos", "per-agent info dicts"),
