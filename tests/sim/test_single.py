@@ -53,6 +53,8 @@ CASES = [
     # a current that carries the hidden target out of the map within the episode
     ("small", {"target__model": "drift", "target__random_current_kmh": 100}),
     ("small", {"overrides": {"fleet": [{"takeoff": "A", "count": 9}], "reward.beta": 1}}),
+    # the shield: the engine's core step, then the end-of-step kernel alone
+    ("small", {"overrides": {**NOFLY, "constraints.violation": "shield"}, "max_cycles": 40}),
     # a map whose origin is not 0: the sweep's grid-relative legs
     ("small", {"overrides": {"map.origin_km": [0.437, -0.291]}, "obs_type": "flat"}),
 ]
