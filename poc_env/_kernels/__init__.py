@@ -5,7 +5,8 @@ module              kernels (the public functions that call them)
 ==================  ==========================================================================
 ``sensing``         the detection laws' compiled branches (``LAW_CODES``), their array forms
                     and the fused sensing sweep of eq. 12-14 (:mod:`poc_env.theory.search_theory`),
-                    the hidden target's POD (:mod:`poc_env.sim.core`)
+                    the hidden target's POD (:mod:`poc_env.sim.core`), both in one call
+                    (:mod:`poc_env.sim.single`)
 ``swarm``           pairwise distances, the eq. 20-21 checks (:mod:`poc_env.sim.constraints`),
                     the eq. 24 graphs and the auto topology (:mod:`poc_env.sim.comms`), the
                     eq. 19 kinematics and the simulator step's bookkeeping that applies them
