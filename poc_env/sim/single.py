@@ -52,6 +52,7 @@ INT_INFOS = _swarm.INT_INFOS
 #: The reward terms in the order of ``end_step``'s ``terms`` rows (:data:`poc_env.spec.
 #: REWARD_TERMS`; the engine's test pins them).
 TERMS = ("pos", "time", "violation", "overtime", "crash")
+_F8 = np.dtype(np.float64)  # (float64 arrays' own descriptor: an identity check)
 
 
 def events_of(parts: tuple[np.ndarray, ...]) -> sim.Events:
@@ -146,6 +147,8 @@ class _Constants:
         sensor, cc, u = sc.sensor, sc.comms, sc.uav
         g = p.grid
         self.params = p
+        #: the end-of-step kernel's coefficients (:meth:`SingleStep._coefficients`; set there)
+        self.coef = np.empty(0)
         law = detection_law(sensor.law)
         ox, oy = g.origin_m
         #: :func:`poc_env._kernels.sensing.sense_step`'s constants: the origin, then sweep's
@@ -220,6 +223,7 @@ class SingleStep:
         k = self._k
         if k is None or k.params is not p:  # random_airfields: new Params at each reset
             k = self._k = _Constants(p)
+            k.coef = self._coefficients(p.dt)
         return k
 
     def step(self, actions: np.ndarray) -> Step:
@@ -235,7 +239,7 @@ class SingleStep:
         e, n = st.flying.shape
         if self._pass_through:  # swarm_increments' increments level: the actions as floats
             inc = actions
-            if type(inc) is not np.ndarray or inc.dtype != np.float64 or inc.shape != (e, n, 3):
+            if type(inc) is not np.ndarray or inc.dtype is not _F8 or inc.shape != (e, n, 3):
                 inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
         else:
             inc = swarm_increments(
@@ -327,7 +331,7 @@ class SingleStep:
                 found, moving, nofly, threat, shielded,
                 team, detected_now, time_term, flags, dist, links, connected,
                 p.landing, p.step_constants, k.range_m, k.k_nearest,
-                self._coefficients(p.dt), p.horizon, self._ends, self._team,
+                k.coef, p.horizon, self._ends, self._team,
                 values, ends, s.over, s.finfo, s.binfo, s.iinfo,
             )  # fmt: skip
             st.detect_step = detect_step
