@@ -5,16 +5,17 @@ module              kernels (the public functions that call them)
 ==================  ==========================================================================
 ``sensing``         the detection laws' compiled branches (``LAW_CODES``), their array forms
                     and the fused sensing sweep of eq. 12-14 (:mod:`poc_env.theory.search_theory`),
-                    the hidden target's POD (:mod:`poc_env.sim.core`)
+                    the hidden target's POD (:mod:`poc_env.sim.core`), both in one call
+                    (:mod:`poc_env.sim.single`)
 ``swarm``           pairwise distances, the eq. 20-21 checks (:mod:`poc_env.sim.constraints`),
                     the eq. 24 graphs and the auto topology (:mod:`poc_env.sim.comms`), the
                     eq. 19 kinematics and the simulator step's bookkeeping that applies them
-                    (:mod:`poc_env.sim.core`)
+                    (:mod:`poc_env.sim.core`); the single env's end of step: reward terms and
+                    total, episode end, info values, sums in numpy's pairwise order, and the
+                    bookkeeping, topology and end of step in one call (:mod:`poc_env.sim.single`)
 ``autopilot``       the heading and waypoint levels' autopilot and eq. 18 return rule
                     (:func:`poc_env.sim.control.swarm_increments`)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
-``rewards``         the single env's end of step: reward terms and total, episode end, info
-                    values (:mod:`poc_env.sim.single`), sums in numpy's pairwise order
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells
                     (:mod:`poc_env.theory.regions`, the planner's objective)
 ==================  ==========================================================================

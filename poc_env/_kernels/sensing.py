@@ -459,3 +459,26 @@ def target_pod(target, a, b, moving, ox, oy, law, w, cutoff, cell, out):
             out[e, i] = p
             hit = hit or p != 0.0
     return hit
+
+
+@_jit
+def sense_step(
+    belief, old, new, moving, target, ox, oy, law, w, cutoff, reach, cell, h, found, p_t
+):
+    """The sensing of one simulator step in one call: :func:`sweep` of every UAV's step
+    ``old[e, i, :2] -> new[e, i, :2]`` (positions ``(E, N, >= 2)``) on ``belief`` in the grid's
+    frame (each coordinate minus the origin ``(ox, oy)``, as numpy subtracts it), into
+    ``found``; then :func:`target_pod` of the same steps into ``p_t``, returned: whether any is
+    not 0. The single environment's step (:class:`poc_env.sim.single.SingleStep`) calls this
+    rather than the two kernels and the numpy subtractions between them."""
+    n_env, n = found.shape
+    a = np.empty((n_env, n, 2))
+    b = np.empty((n_env, n, 2))
+    for e in range(n_env):
+        for i in range(n):
+            a[e, i, 0] = old[e, i, 0] - ox
+            a[e, i, 1] = old[e, i, 1] - oy
+            b[e, i, 0] = new[e, i, 0] - ox
+            b[e, i, 1] = new[e, i, 1] - oy
+    sweep(belief, a, b, law, w, cutoff, reach, cell, 0.0, 0.0, h, found)
+    return target_pod(target, old, new, moving, ox, oy, law, w, cutoff, cell, p_t)

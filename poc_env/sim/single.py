@@ -1,24 +1,30 @@
 """The single environment's step: :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with
-its glue formed once and its end in one compiled call.
+its glue formed once, in four compiled calls.
 
 The PettingZoo env steps one env of a few UAVs, where a dozen numpy calls on ``(1, N)`` arrays
-cost more than the arithmetic they do. :class:`SingleStep` runs the engine's step in the same
-order: the autopilot (:func:`~poc_env.sim.control.swarm_increments`), the core step
-(:func:`poc_env.sim.core.step`'s kernels called with the arguments :class:`_Constants` forms
-once per scenario; the shield keeps that function) and the ``dict`` and ``flat`` observations
-(the kernels of :func:`poc_env.sim.observations.observe`); then, in place of the reward terms
-and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
+cost more than the arithmetic they do, and numba's dispatch of a kernel (a fraction of a
+microsecond per array argument, more inside tuples) more than some kernels' work.
+:class:`SingleStep` runs the engine's step in the same order: the autopilot
+(:func:`~poc_env.sim.control.swarm_increments`), the core step (:func:`poc_env.sim.core.step`'s
+kernels called with the arguments :class:`_Constants` forms once per scenario: the eq. 19
+kinematics, then the sweep and the hidden target's POD in one call,
+:func:`poc_env._kernels.sensing.sense_step`; the shield keeps that function), then the
+bookkeeping, the auto topology and, in place of the reward terms and total
+(:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
 :func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and the info values
-(:func:`~poc_env.sim.engine.info_parts`), one call of the kernel
-:func:`poc_env._kernels.rewards.end_step`, which also groups the per-agent info values by
-Python type so that the adapter builds its per-agent info dicts from three ``tolist()`` calls.
-The step's :class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
+(:func:`~poc_env.sim.engine.info_parts`), one call of :func:`poc_env._kernels.swarm.step_end`
+(:func:`~poc_env._kernels.swarm.end_step` alone after another topology), which also groups the
+per-agent info values by Python type so that the adapter builds its per-agent info dicts from
+three ``tolist()`` calls; then the ``dict`` and ``flat`` observations (the kernels of
+:func:`poc_env.sim.observations.observe`). The step's arrays that stay inside it are scratch
+(:class:`_Scratch`, reused at the next step; :meth:`Step.copy` keeps them); its
+:class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
 
 Every value is the engine's, bit for bit: ``tests/sim/test_single.py`` runs both on random
-actions over several tasks and options (and the core step on crafted states) and compares
-every array and info. (One compiled call for the whole step would also save the kernels'
-dispatch, but the cache rule of :mod:`poc_env._kernels` keeps each group's kernels in its
-own module.)
+actions over several tasks and options (and the core step on crafted states, the fused calls
+against the kernels they join) and compares every array and info. (The cache rule of
+:mod:`poc_env._kernels` keeps sensing, the swarm's arithmetic and the observations in
+separate modules, so in separate calls.)
 """
 
 from __future__ import annotations
@@ -29,7 +35,6 @@ from typing import Any
 import numpy as np
 
 import poc_env._kernels.observations as _obs_kernels
-import poc_env._kernels.rewards as _rewards
 import poc_env._kernels.sensing as _sensing
 import poc_env._kernels.swarm as _swarm
 from poc_env.sim import comms as comms_mod
@@ -41,12 +46,13 @@ from poc_env.theory.detection import detection_law
 from poc_env.theory.search_theory import _reach
 
 #: The per-agent info keys of :attr:`Step.finfo`, :attr:`Step.binfo` and :attr:`Step.iinfo`.
-FLOAT_INFOS = _rewards.FLOAT_INFOS
-BOOL_INFOS = _rewards.BOOL_INFOS
-INT_INFOS = _rewards.INT_INFOS
+FLOAT_INFOS = _swarm.FLOAT_INFOS
+BOOL_INFOS = _swarm.BOOL_INFOS
+INT_INFOS = _swarm.INT_INFOS
 #: The reward terms in the order of ``end_step``'s ``terms`` rows (:data:`poc_env.spec.
 #: REWARD_TERMS`; the engine's test pins them).
 TERMS = ("pos", "time", "violation", "overtime", "crash")
+_F8 = np.dtype(np.float64)  # (float64 arrays' own descriptor: an identity check)
 
 
 def events_of(parts: tuple[np.ndarray, ...]) -> sim.Events:
@@ -59,13 +65,14 @@ def parts_of(ev: sim.Events) -> tuple[np.ndarray, ...]:
     return ev.as_parts()
 
 
-@dataclass
+@dataclass(slots=True)
 class Step:
     """One step of :class:`SingleStep`: the engine's :class:`~poc_env.sim.engine.Transition`
     fields (``terms`` as a ``(5, E, N)`` array in :data:`TERMS` order, the events as their
     ``parts``: :func:`events_of`) and the info values grouped by type: ``finfo (E, N,
     len(FLOAT_INFOS))``, ``binfo``, ``iinfo`` (the keys of :data:`FLOAT_INFOS`,
-    :data:`BOOL_INFOS`, :data:`INT_INFOS`; scratch arrays, valid until the next step)."""
+    :data:`BOOL_INFOS`, :data:`INT_INFOS`). Every array but the observations is scratch of
+    :class:`SingleStep`, valid until its next step: :meth:`copy` keeps them."""
 
     obs: Any
     reward: np.ndarray
@@ -87,6 +94,47 @@ class Step:
         """The reward terms as :func:`~poc_env.sim.rewards.reward_terms` returns them."""
         return {t: self.terms[k] for k, t in enumerate(TERMS)}
 
+    def copy(self) -> Step:
+        """This step with copies of its scratch arrays (the observations are its own)."""
+        return Step(
+            self.obs, self.reward.copy(), self.terms.copy(), tuple(a.copy() for a in self.parts),
+            self.terminated.copy(), self.truncated.copy(), self.over.copy(), self.finfo.copy(),
+            self.binfo.copy(), self.iinfo.copy(),
+        )  # fmt: skip
+
+
+class _Scratch:
+    """The arrays of :class:`SingleStep` for ``E`` envs of ``N`` UAVs that each step
+    overwrites: the kernels' outputs that never leave a step (what a :class:`Step` holds
+    but its observations; :meth:`Step.copy` keeps them) and their temporaries."""
+
+    def __init__(self, e: int, n: int) -> None:
+        self.shape = (e, n)
+        self.finfo = np.empty((e, n, len(_swarm.FLOAT_INFOS)))
+        self.binfo = np.empty((e, n, len(_swarm.BOOL_INFOS)), dtype=bool)
+        self.iinfo = np.empty((e, n, len(_swarm.INT_INFOS)), dtype=np.int64)
+        self.dist = np.empty((e, n, n))
+        self.p_t = np.empty((e, n))
+        self.found = np.empty((e, n))
+        self.team = np.empty(e)
+        self.time_term = np.empty((e, n))
+        self.flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
+        self.detected_now = np.empty(e, dtype=bool)
+        self.connected = np.empty(e, dtype=bool)
+        #: no-fly, threat and shielded flags of a map without zones or threats: always False
+        self.no_airspace = tuple(np.zeros((3, e, n), dtype=bool))
+        self.values = np.empty((6, e, n))  # the reward terms, then the reward
+        self.ends = np.empty((2, e, n), dtype=bool)  # terminated, truncated
+        self.over = np.empty(e, dtype=bool)
+        # their views, formed once
+        self.terms, self.reward = self.values[:5], self.values[5]
+        self.terminated, self.truncated = self.ends[0], self.ends[1]
+
+    def __reduce__(self) -> tuple[type, tuple[int, int]]:
+        """Pickled as its shape, made afresh: copies of the views above would no longer see
+        the arrays the kernels write (a pickled :class:`Step` keeps its own copies)."""
+        return (_Scratch, self.shape)
+
 
 class _Constants:
     """What the kernels of one :class:`~poc_env.sim.core.Params` take besides the state: the
@@ -99,18 +147,18 @@ class _Constants:
         sensor, cc, u = sc.sensor, sc.comms, sc.uav
         g = p.grid
         self.params = p
-        self.origin = np.asarray(g.origin_m, dtype=np.float64)
+        #: the end-of-step kernel's coefficients (:meth:`SingleStep._coefficients`; set there)
+        self.coef = np.empty(0)
         law = detection_law(sensor.law)
-        self.sweep = (
-            law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
-            float(_reach(g, sensor.law, sensor.sweep_width_m, p.cutoff_m)), float(g.cell_m),
-            0.0, 0.0, g.cell_m / p.s,
-        )  # fmt: skip
         ox, oy = g.origin_m
-        self.target = (
+        #: :func:`poc_env._kernels.sensing.sense_step`'s constants: the origin, then sweep's
+        self.sense = (
             float(ox), float(oy), law.code, float(sensor.sweep_width_m), float(p.cutoff_m),
-            float(g.cell_m),
+            float(_reach(g, sensor.law, sensor.sweep_width_m, p.cutoff_m)), float(g.cell_m),
+            g.cell_m / p.s,
         )  # fmt: skip
+        #: no-fly zones or threats (:func:`~poc_env.sim.core.airspace_violations`)
+        self.airspace = bool(len(p.zones) or len(p.threat_lambdas))
         #: the common topology: in-range graph and the auto rule, one kernel
         self.auto = cc.link_failure_prob <= 0 and p.switcher is None
         self.range_m = float(cc.range_m)
@@ -121,13 +169,15 @@ class _Constants:
         bx0, by0, bx1, by1 = p.bounds
         w, h = bx1 - bx0, by1 - by0
         n = p.n_agents
-        self.vector = (
+        #: ``vectors_of``'s scalars (one float64 array), then the clip bounds
+        scalars = (
             float(bx0), float(by0), float(w), float(h), obs_mod._diagonal(w, h),
             float(u.max_altitude_m), float(u.min_speed_mps),
             float(u.max_speed_mps - u.min_speed_mps), float(u.max_pitch_rad),
             float(u.endurance_s), float(u.usable_endurance_s), float(p.horizon),
-            float(cc.range_m), float(max(n - 1, 1)), obs_mod._LOW, obs_mod._HIGH,
+            float(cc.range_m), float(max(n - 1, 1)),
         )  # fmt: skip
+        self.vector = (np.array(scalars, dtype=np.float64), obs_mod._LOW, obs_mod._HIGH)
 
 
 class SingleStep:
@@ -147,7 +197,7 @@ class SingleStep:
         self._ends = bool(sc.episode.detection_ends_episode)
         self._coef: np.ndarray | None = None
         self._k: _Constants | None = None
-        self._scratch: tuple[np.ndarray, ...] | None = None
+        self._scratch: _Scratch | None = None
         self._pass_through = engine.control == "increments" and not engine.return_increments
         self._shield = sc.constraints.violation == "shield"
         self._hazard = comms_mod._shaped(engine.hazard, engine.params.grid.shape, np.float32)
@@ -161,7 +211,7 @@ class SingleStep:
 
     def _coefficients(self, dt: float) -> np.ndarray:
         if self._coef is None or self._coef_dt != dt:
-            c = np.empty(len(_rewards.COEFFICIENTS))
+            c = np.empty(len(_swarm.COEFFICIENTS))
             for k, v in enumerate((*self._coef_of, self._crash)):
                 # reward_terms multiplies an array by this Python number: the same float64
                 c[k] = np.float64(v)
@@ -173,6 +223,7 @@ class SingleStep:
         k = self._k
         if k is None or k.params is not p:  # random_airfields: new Params at each reset
             k = self._k = _Constants(p)
+            k.coef = self._coefficients(p.dt)
         return k
 
     def step(self, actions: np.ndarray) -> Step:
@@ -187,67 +238,73 @@ class SingleStep:
         k = self._constants(p)
         e, n = st.flying.shape
         if self._pass_through:  # swarm_increments' increments level: the actions as floats
-            inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
+            inc = actions
+            if type(inc) is not np.ndarray or inc.dtype is not _F8 or inc.shape != (e, n, 3):
+                inc = np.asarray(actions, dtype=float).reshape(e, n, 3)
         else:
             inc = swarm_increments(
                 p, eng.control, st, actions, eng.auto_return, eng.return_increments
-            )
-        scratch = self._scratch
-        if scratch is None or scratch[0].shape[:2] != (e, n):
-            scratch = self._scratch = (
-                np.empty((e, n, len(_rewards.FLOAT_INFOS))),
-                np.empty((e, n, len(_rewards.BOOL_INFOS)), dtype=bool),
-                np.empty((e, n, len(_rewards.INT_INFOS)), dtype=np.int64),
-                np.empty((e, n, n)),
-                np.empty((e, n)),
-            )
-        finfo, binfo, iinfo, dist, p_t = scratch
+            ).astype(float, copy=False)
+        s = self.scratch(e, n)
         if self._shield:
             parts = parts_of(sim.step(p, st, inc, eng.rngs))
+            self._end_step(p, st, parts, s)
         else:
-            parts = self._core_step(p, k, st, inc.astype(float, copy=False), dist, p_t)
-        values = np.empty((6, e, n))  # fresh each step: the transition's arrays are views
-        terms, reward = values[:5], values[5]
-        ends = np.empty((2, e, n), dtype=bool)
-        terminated, truncated = ends[0], ends[1]
-        over = np.empty(e, dtype=bool)
-        _rewards.end_step(
+            parts = self._core_step(p, k, st, inc, s)
+        obs = self._observe(p, k, st)
+        return Step(
+            obs, s.reward, s.terms, parts, s.terminated, s.truncated, s.over, s.finfo, s.binfo,
+            s.iinfo,
+        )  # fmt: skip
+
+    def _end_step(self, p: sim.Params, st: sim.State, parts: tuple, s: _Scratch) -> None:
+        """The reward terms and total, the episode end and the info values of the step whose
+        events are ``parts`` (after its topology) into the scratch ``s``: :func:`poc_env.
+        _kernels.swarm.end_step`."""
+        _swarm.end_step(
             parts,
             (st.posc, st.elapsed, st.detected, st.detect_step, st.topology, st.violations,
              st.landed, st.crashed, st.step),
             self._coefficients(p.dt), p.horizon, self._ends, self._team,
-            (terms, reward, terminated, truncated, over, finfo, binfo, iinfo),
+            (s.terms, s.reward, s.terminated, s.truncated, s.over, s.finfo, s.binfo, s.iinfo),
         )  # fmt: skip
-        obs = self._observe(p, k, st)
-        return Step(obs, reward, terms, parts, terminated, truncated, over, finfo, binfo, iinfo)
+
+    def scratch(self, e: int, n: int) -> _Scratch:
+        """The step's scratch arrays for ``E`` envs of ``N`` UAVs (made at the first step)."""
+        s = self._scratch
+        if s is None or s.shape != (e, n):
+            s = self._scratch = _Scratch(e, n)
+        return s
 
     def _core_step(
-        self, p: sim.Params, k: _Constants, st: sim.State, actions, dist, p_t
+        self, p: sim.Params, k: _Constants, st: sim.State, actions: np.ndarray, s: _Scratch
     ) -> tuple[np.ndarray, ...]:
         """:func:`poc_env.sim.core.step` without the shield (which keeps that function), its
-        kernels called with the arguments of :class:`_Constants`, in the same order; returns
-        the events' parts (:func:`events_of`). ``dist (E, N, N)``, ``p_t (E, N)``: scratch."""
-        moving = st.flying.copy()
+        kernels called with the arguments of :class:`_Constants`, in the same order, on the
+        float64 increments ``actions (E, N, 3)``, then the end of the step (:meth:`_end_step`:
+        with the bookkeeping and the auto topology in one call, ``swarm.step_end``); returns
+        the events' parts (:func:`events_of`), arrays of the scratch ``s`` (:meth:`scratch`) but
+        the no-fly and threat flags of a map with zones or threats."""
+        moving = st.flying.copy()  # (a copy: half the time of np.copyto into scratch)
         e, n = moving.shape
+        dist, p_t = s.dist, s.p_t
         if p.motion is not None:  # the filter's predict step; static targets skip it
             sim.predict(p, st)
-        a2 = st.pos[..., :2].copy()
-        new = np.empty_like(st.pos)
+        old = st.pos  # kinematics writes the new positions into a new array: old stays
+        new = np.empty_like(old)
         alpha = np.empty((e, n))
         beta = np.empty((e, n))
         speed = np.empty((e, n))
         _swarm.kinematics(
-            actions, None, moving, st.pos, st.heading, st.pitch, st.speed, p.motion_constants,
+            actions, None, moving, old, st.heading, st.pitch, st.speed, p.motion_constants,
             (new, alpha, beta, speed),
         )  # fmt: skip
         st.heading = alpha
         st.pitch = beta
         st.speed = speed
-        b2 = new[..., :2]
-        found = np.empty((e, n))
-        _sensing.sweep(st.belief, a2 - k.origin, b2 - k.origin, *k.sweep, found)
-        st.pos = new
-        if _sensing.target_pod(st.target, a2, b2, moving, *k.target, p_t):
+        found = s.found
+        # the sweep on the grid-relative legs and the hidden target's POD: one call
+        if _sensing.sense_step(st.belief, old, new, moving, st.target, *k.sense, found, p_t):
             if st.target_out is not None:  # a target that left the map is beyond the search
                 p_t[st.target_out] = 0.0
             if np.maximum.reduce(p_t, axis=None) < 1.0:  # no log1p(-1): no warning to silence
@@ -255,12 +312,31 @@ class SingleStep:
             else:
                 with np.errstate(divide="ignore"):
                     st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
-        nofly, threat = sim.airspace_violations(p, moving, a2, b2, new)
-        team = np.empty(e)
-        flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
-        time_term = np.empty((e, n))
-        detected_now = np.empty(e, dtype=bool)
+        st.pos = new
+        if k.airspace:
+            nofly, threat = sim.airspace_violations(p, moving, old[..., :2], new[..., :2], new)
+            shielded = np.zeros((e, n), dtype=bool)
+        else:  # no zones, no threats: the three flags false (never written)
+            nofly, threat, shielded = s.no_airspace
+        team, flags, time_term, detected_now = s.team, s.flags, s.time_term, s.detected_now
         detect_step = st.detect_step.copy()
+        if k.auto:  # the bookkeeping, the common topology and the end of step: one call
+            links = np.empty((e, n, n), dtype=bool)  # the state's: a new array
+            connected = s.connected
+            values, ends = s.values, s.ends
+            _swarm.step_end(
+                st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
+                st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
+                st.crashed, st.flying, st.violations, st.topology,
+                found, moving, nofly, threat, shielded,
+                team, detected_now, time_term, flags, dist, links, connected,
+                p.landing, p.step_constants, k.range_m, k.k_nearest,
+                k.coef, p.horizon, self._ends, self._team,
+                values, ends, s.over, s.finfo, s.binfo, s.iinfo,
+            )  # fmt: skip
+            st.detect_step = detect_step
+            st.links = links
+            return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
         _swarm.step(
             (
                 st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
@@ -273,17 +349,11 @@ class SingleStep:
             p.step_constants,
         )  # fmt: skip
         st.detect_step = detect_step
-        if k.auto:
-            links = np.empty((e, n, n), dtype=bool)
-            n_comp = np.empty(e, dtype=np.int64)
-            _swarm.auto_links(dist, k.range_m, st.flying, k.k_nearest, links, n_comp)
-            st.links = links
-            connected = n_comp <= 1
-        else:
-            topo = sim._update_topology(p, st, self.engine.rngs, dist)
-            connected = np.asarray(topo.connected, dtype=bool)
-        shielded = np.zeros((e, n), dtype=bool)
-        return (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
+        topo = sim._update_topology(p, st, self.engine.rngs, dist)
+        connected = np.asarray(topo.connected, dtype=bool)
+        parts = (found, team, time_term, flags, nofly, threat, shielded, detected_now, connected)
+        self._end_step(p, st, parts, s)
+        return parts
 
     def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
         """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and
@@ -307,7 +377,7 @@ class SingleStep:
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
             *k.raster, raster,
         )  # fmt: skip
-        _obs_kernels.vectors(
+        _obs_kernels.vectors_of(
             st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
             st.flying, st.step, p.landing, *k.vector, vector,
         )  # fmt: skip

@@ -209,18 +209,17 @@ def test_single_breakdown_times_the_single_step_and_its_kernels():
     """``--breakdown single`` wraps the single env's step (:mod:`poc_env.sim.single`) and the
     kernels it calls: each part resolves, the step and its core and kernels are timed, and the
     kernels are the original dispatchers afterwards."""
-    from poc_env._kernels import rewards as rewards_kernel
-    from poc_env._kernels import sensing
+    from poc_env._kernels import sensing, swarm
     from poc_env.agents.benchmarks import breakdown
 
-    before = (sensing.sweep, rewards_kernel.end_step)
+    before = (sensing.sense_step, swarm.step_end)
     rows = breakdown.breakdown("single", steps=5)
     by = {r["part"]: r["ms_per_step"] for r in rows}
     assert [r["part"] for r in rows] == [p[2] for p in breakdown.PARTS["single"]]
     whole = rows[0]["ms_per_step"]
     step = by["single step (sim.single.SingleStep.step)"]
     assert 0 < step <= whole
-    assert 0 < by["- core step (SingleStep._core_step)"] <= step
-    assert by["  - sensing kernel (eq. 12-14)"] > 0
-    assert by["- rewards, episode end, infos kernel"] > 0
-    assert (sensing.sweep, rewards_kernel.end_step) == before
+    assert 0 < by["- core step and its end (SingleStep._core_step)"] <= step
+    assert by["  - sensing and hidden target kernel (eq. 12-14)"] > 0
+    assert by["  - bookkeeping, topology, rewards, episode end, infos kernel"] > 0
+    assert (sensing.sense_step, swarm.step_end) == before

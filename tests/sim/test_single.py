@@ -1,4 +1,4 @@
-"""The single environment's fast step (poc_env.sim.single, poc_env._kernels.rewards) against the
+"""The single environment's fast step (poc_env.sim.single, poc_env._kernels.swarm) against the
 engine's numpy step, bit for bit.
 
 The PettingZoo env steps through :class:`~poc_env.sim.single.SingleStep` (the engine's step with
@@ -19,7 +19,7 @@ import pytest
 
 import poc_env
 from poc_env import spec
-from poc_env._kernels import rewards as kernel
+from poc_env._kernels import swarm as kernel
 from poc_env.config import load_scenario
 from poc_env.sim import core as sim
 from poc_env.sim import engine as engine_mod
@@ -53,6 +53,10 @@ CASES = [
     # a current that carries the hidden target out of the map within the episode
     ("small", {"target__model": "drift", "target__random_current_kmh": 100}),
     ("small", {"overrides": {"fleet": [{"takeoff": "A", "count": 9}], "reward.beta": 1}}),
+    # the shield: the engine's core step, then the end-of-step kernel alone
+    ("small", {"overrides": {**NOFLY, "constraints.violation": "shield"}, "max_cycles": 40}),
+    # a map whose origin is not 0: the sweep's grid-relative legs
+    ("small", {"overrides": {"map.origin_km": [0.437, -0.291]}, "obs_type": "flat"}),
 ]
 
 
@@ -139,16 +143,8 @@ def test_fast_step_covers_terminations_truncations_and_violations():
     assert all(seen.values()) and len(seen) == 5, seen
 
 
-def test_flag_rows_are_the_swarm_kernels():
-    from poc_env._kernels import swarm
-
-    names = ("OVERTIME", "OOB", "COLLISION", "COMMS_OK", "LANDED", "CRASHED")
-    assert [getattr(kernel, k) for k in names] == [getattr(swarm, k) for k in names]
-    assert len(names) == swarm.N_FLAGS
-
-
 def test_numpy_sum_is_numpys_pairwise_sum():
-    """:func:`~poc_env._kernels.rewards.numpy_sum` gives ``ndarray.sum``'s bits at every size
+    """:func:`~poc_env._kernels.swarm.numpy_sum` gives ``ndarray.sum``'s bits at every size
     (the plain, eight-accumulator and halving branches), values of mixed magnitudes, -0.0."""
     rng = np.random.default_rng(0)
     for n in [*range(0, 40), 127, 128, 129, 255, 256, 300, 1000]:
@@ -285,7 +281,7 @@ def test_core_step_equals_sim_step_on_crafted_states(overrides):
         k = fast_step._constants(eng.params)
         e, n = st.flying.shape
         parts = fast_step._core_step(
-            eng.params, k, got_state, acts.astype(float), np.empty((e, n, n)), np.empty((e, n))
+            eng.params, k, got_state, acts.astype(float), fast_step.scratch(e, n)
         )
         _same(single.events_of(parts), want, "events")
         _same(got_state, want_state, "state")
@@ -310,3 +306,128 @@ def test_returned_values_are_not_changed_by_later_steps():
     assert len(kept) == 8
     for got, want in kept:
         _same(got, want, "kept")
+
+
+@pytest.mark.parametrize("law", ["inverse_cube", "exponential", "definite_range"])
+def test_fused_kernels_equal_the_kernels_they_join(law):
+    """The single step's fused calls against what they replace, on random states of many
+    sizes: ``sensing.sense_step`` against :func:`core.sense` (numpy's origin shifts, the sweep)
+    and the hidden target kernel as :func:`core.step` calls it; ``swarm.step_end`` against the
+    bookkeeping kernel, the auto topology and the end-of-step kernel called one by one;
+    ``observations.vectors_of`` against ``vectors``; ``swarm.all_finite`` against numpy."""
+    import copy
+
+    from poc_env._kernels import observations as obs_kernels
+    from poc_env._kernels import sensing
+    from poc_env.sim import observations as obs_mod
+
+    rng = np.random.default_rng(11)
+    for k in range(8):
+        e, n = int(rng.integers(1, 4)), int(rng.integers(1, 13))
+        sc = load_scenario(
+            "small",
+            {
+                "sensor.law": law,
+                "fleet": [{"takeoff": "A", "count": n}],
+                "comms.range_km": float(rng.uniform(5, 40)),
+                "reward.credit": ["team", "individual"][k % 2],
+                "episode.detection_ends_episode": bool(k % 3 == 0),
+                "map.origin_km": [0.0, 0.0] if k == 0 else rng.uniform(-0.9, 0.9, 2).tolist(),
+            },
+        )
+        p = sim.make_params(sc)
+        st = sim.initial(p, [np.random.default_rng(k + i) for i in range(e)])
+        x0, y0, x1, y1 = p.grid.bounds
+        old = st.pos.copy()
+        old[..., 0] = rng.uniform(x0 - 2e3, x1 + 2e3, (e, n))
+        old[..., 1] = rng.uniform(y0 - 2e3, y1 + 2e3, (e, n))
+        new = old.copy()
+        new[..., :2] += rng.normal(0.0, 3e3, (e, n, 2))
+        new[:, 0, :2] = old[:, 0, :2]  # a zero-length step
+        st.target[:, :2] = new[:, -1, :2]  # a UAV right over its env's target
+        moving = rng.random((e, n)) < 0.8
+        steps = single.SingleStep(engine_mod.Engine(sc, e))
+        kc = single._Constants(p)
+
+        # sensing: the fused call against core.sense and the target kernel as core.step calls it
+        got_st, want_st = copy.deepcopy(st), copy.deepcopy(st)
+        found, p_t = np.empty((e, n)), np.empty((e, n))
+        hit = sensing.sense_step(got_st.belief, old, new, moving, st.target, *kc.sense, found, p_t)
+        want_found = sim.sense(p, want_st, old[..., :2].copy(), new[..., :2])
+        want_p = np.empty((e, n))
+        ox, oy = p.grid.origin_m
+        want_hit = sensing.target_pod(
+            st.target, old[..., :2].copy(), new[..., :2], moving, float(ox), float(oy),
+            sensing.LAW_CODES[law], float(sc.sensor.sweep_width_m), float(p.cutoff_m),
+            float(p.grid.cell_m), want_p,
+        )  # fmt: skip
+        _same(found, want_found, "found")
+        _same(got_st.belief, want_st.belief, "belief")
+        _same(p_t, want_p, "p_t")
+        assert hit == want_hit and (hit or not want_p.any())
+
+        # the bookkeeping, topology and end of step: one call against three
+        st.step[:] = rng.integers(p.horizon - 2, p.horizon + 1, e)
+        st.elapsed[:] = rng.random((e, n)) * sc.uav.endurance_s
+        st.target_exponent[:] = rng.random(e) * 3
+        nofly, threat, shielded = rng.random((3, e, n)) < 0.2
+        coef = steps._coefficients(p.dt)
+        ends_on, team = bool(sc.episode.detection_ends_episode), sc.reward.credit == "team"
+        runs = []
+        for fused in (True, False):
+            s = copy.deepcopy(st)
+            s.pos = new.copy()
+            out = single._Scratch(e, n)
+            for arr in vars(out).values():  # what neither writes compares equal
+                if isinstance(arr, np.ndarray):
+                    arr[...] = 0
+            links = np.empty((e, n, n), dtype=bool)
+            state = (
+                s.agent_pos, s.posc, s.pos, s.speed, s.target_exponent, s.target_threshold,
+                s.step, s.detected, s.detect_step, s.elapsed, s.left_home, s.landed,
+                s.crashed, s.flying, s.violations,
+            )  # fmt: skip
+            events = (out.team, out.detected_now, out.time_term, out.flags, out.dist)
+            parts = (
+                found, out.team, out.time_term, out.flags, nofly, threat, shielded,
+                out.detected_now, out.connected,
+            )  # fmt: skip
+            if fused:
+                kernel.step_end(
+                    *state, s.topology, found, moving, nofly, threat, shielded, *events, links,
+                    out.connected, p.landing, p.step_constants, kc.range_m, kc.k_nearest, coef,
+                    p.horizon, ends_on, team, out.values, out.ends, out.over, out.finfo,
+                    out.binfo, out.iinfo,
+                )  # fmt: skip
+            else:
+                kernel.step(state, (found, moving, nofly, threat), events, p.landing,
+                            p.step_constants)  # fmt: skip
+                n_comp = np.empty(e, dtype=np.int64)
+                kernel.auto_links(out.dist, kc.range_m, s.flying, kc.k_nearest, links, n_comp)
+                out.connected[:] = n_comp <= 1
+                kernel.end_step(
+                    parts,
+                    (s.posc, s.elapsed, s.detected, s.detect_step, s.topology, s.violations,
+                     s.landed, s.crashed, s.step),
+                    coef, p.horizon, ends_on, team,
+                    (out.values[:5], out.values[5], out.ends[0], out.ends[1], out.over,
+                     out.finfo, out.binfo, out.iinfo),
+                )  # fmt: skip
+            runs.append((s, links, parts, vars(out)))
+        _same(runs[0], runs[1], "step_end")
+
+        # the vector observation with its scalars in one array
+        vec = np.empty((2, e, n, obs_mod.VECTOR_SIZE), dtype=np.float32)
+        args = (st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
+                st.flying, st.step, p.landing)  # fmt: skip
+        c, low, high = kc.vector
+        obs_kernels.vectors_of(*args, c, low, high, vec[0])
+        obs_kernels.vectors(*args, *c.tolist(), low, high, vec[1])
+        _same(vec[0], vec[1], "vectors")
+
+    a = rng.uniform(-1, 1, (6, 3))
+    assert kernel.all_finite(a)
+    for bad in (np.nan, np.inf, -np.inf):
+        b = a.copy()
+        b[5, 2] = bad
+        assert not kernel.all_finite(b) and not np.isfinite(b).all()
