@@ -18,7 +18,10 @@ follower's transit legs (:mod:`poc_env.sim.autopilot`).
   (:meth:`ZoneRouter.crosses`) therefore keeps ``c`` from every zone (issue 24: with the
   obstacle at ``0.9 c`` and two segments per quarter circle, routes passed 0.90-0.92 c from
   zones). Vertices outside the operating area (eq. 20's box, convex) are dropped, so paths stay
-  inside it.
+  inside it. An end already inside the ``c`` ring (an airfield near a zone) joins vertices
+  whose segments come no closer to the zones than that end itself (else, if there is no such
+  path, any that misses the zones): a route from a field at ``d < c`` keeps ``d`` (issue 24:
+  take-off and landing legs of fields at 0.92-0.96 c cut the ring down to 0.012 c).
 - **Clipping** (:meth:`ZoneRouter.reroute`): every leg of a polyline is cut to its parts
   outside the keep-out area and consecutive parts are joined by shortest paths, so search legs
   fly only searchable airspace and transit goes around.
@@ -61,6 +64,9 @@ QUAD_SEGS = 4
 #: came 0.2 % short of its distance where two zones' keep-out areas meet), so the obstacle
 #: (the zones grown by ``c``, finely rounded) lies strictly inside them.
 _GROW = 1.01 / float(np.cos(np.pi / (4 * QUAD_SEGS)))
+#: a segment with an end inside the c ring may come closer to the zones than that end by this
+#: share of c (rounding; :meth:`ZoneRouter._visible`).
+KEEP_TOL = 1e-6
 #: answers a router remembers per kind (paths, pieces, visible vertices) before it forgets them
 #: all (a follower's router lives as long as its episode).
 CACHE_SIZE = 100_000
@@ -177,7 +183,8 @@ class ZoneRouter:
         )
         self.obstacle = raw.buffer(self.clearance, quad_segs=16)
         self.raw = raw.buffer(1.0)
-        for g in (self.keep_out, self.obstacle, self.raw):
+        self._zones_union = raw
+        for g in (self.keep_out, self.obstacle, self.raw, raw):
             shapely.prepare(g)
         self._edges_of = {id(g): _Edges(g) for g in (self.keep_out, self.obstacle, self.raw)}
         polys = list(getattr(self.keep_out, "geoms", [self.keep_out]))
@@ -227,27 +234,39 @@ class ZoneRouter:
             cache.clear()
         cache[key] = value
 
-    def _visible(self, p: np.ndarray, targets: np.ndarray, nodes: bool = False) -> np.ndarray:
+    def _visible(
+        self, p: np.ndarray, targets: np.ndarray, nodes: bool = False, keep: bool = True
+    ) -> np.ndarray:
         """Bool (T,): the straight segments p -> targets miss the obstacle (the zones grown by
-        c; from a point already inside that ring, the zones themselves). ``nodes``: the
-        targets are the graph's vertices (the answer is remembered per ``p``)."""
+        c). A segment with an end already inside that ring (a field near a zone, a UAV cutting
+        a corner) misses the zones themselves and, with ``keep``, comes no closer to them than
+        that end is (:data:`KEEP_TOL`): a route from a field at ``d < c`` from a zone keeps
+        ``d``, the least any route from there can keep. ``nodes``: the targets are the graph's
+        vertices (the answer is remembered per ``p`` and ``keep``)."""
         if not len(targets):
             return np.zeros(0, dtype=bool)
-        key = _key(p)
+        key = _key(p) + bytes([keep])
         if nodes and key in self._seen:
             return self._seen[key]
         starts = np.broadcast_to(p, targets.shape)
         hit = self._hits(self.obstacle, starts, targets)
-        # an end already inside the c ring (a field near a zone, a UAV cutting a corner):
-        # only the zones themselves count for that segment
         if nodes and not self.reference:
             near = self._nodes_near.copy()
         else:
             near = shapely.contains_xy(self.obstacle, targets[:, 0], targets[:, 1])
-        if self.obstacle.contains(Point(p)):
+        p_near = bool(self.obstacle.contains(Point(p)))
+        if p_near:
             near[:] = True
         if near.any():
             hit[near] = self._hits(self.raw, starts[near], targets[near])
+            if keep:  # no closer to the zones than the end inside the ring
+                ends = targets[near]
+                d_end = shapely.distance(self._zones_union, shapely.points(ends))
+                if p_near:
+                    d_end = np.minimum(d_end, shapely.distance(self._zones_union, Point(p)))
+                lines = shapely.linestrings(np.stack([starts[near], ends], axis=1))
+                gap = shapely.distance(self._zones_union, lines)
+                hit[near] |= gap < d_end - KEEP_TOL * self.clearance
         vis = ~hit
         if nodes:
             self._remember(self._seen, key, vis)
@@ -268,12 +287,19 @@ class ZoneRouter:
         return res
 
     def _path(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
-        if self._visible(a, b[None])[0]:
+        # an end inside the c ring: a path that keeps its distance if there is one, else one
+        # that only misses the zones
+        res = self._shortest(a, b, True)
+        return self._shortest(a, b, False) if res is None else res
+
+    def _shortest(self, a: np.ndarray, b: np.ndarray, keep: bool) -> np.ndarray | None:
+        if self._visible(a, b[None], keep=keep)[0]:
             return np.stack([a, b])
         n = len(self.nodes)
         if not n:
             return None
-        va, vb = self._visible(a, self.nodes, True), self._visible(b, self.nodes, True)
+        va = self._visible(a, self.nodes, True, keep)
+        vb = self._visible(b, self.nodes, True, keep)
         da = np.where(va, np.hypot(*(self.nodes - a).T), np.inf)
         db = np.where(vb, np.hypot(*(self.nodes - b).T), np.inf)
         tot = da[:, None] + self.dist + db[None, :]

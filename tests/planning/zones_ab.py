@@ -12,7 +12,9 @@ not a test.
     Allocation planning time with 4 zones of each case (default ``paper_6_2`` and
     ``large_400_160x160_24uav``, :data:`poc_env.agents.benchmarks.plan_scale.ZONE_CASES`), the
     two trees alternated ``N`` times, one subprocess per tree and round (one thread, two plans
-    each after a warm-up plan, the faster kept); medians and pair ratios B / A, with the load.
+    each after a warm-up plan, the faster kept); medians and pair ratios B / A of the wall
+    time and of the process's CPU time (``time.process_time``: on a shared, loaded machine
+    the steadier of the two), with the load.
 
 Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
 /work/main . 3``.
@@ -94,12 +96,14 @@ def one(case: str) -> None:
     name, over, uavs = ZONE_CASES[case]
     sc = zoned(name, over, 4, 0)
     make_allocation_plan(sc, uavs=uavs)
-    ts = []
+    ts, cpu = [], []
     for _ in range(2):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         plan = make_allocation_plan(sc, uavs=uavs)
         ts.append(time.perf_counter() - t0)
-    print(json.dumps({"s": min(ts), "posc": float(plan["posc"]), "digest": _digest(plan)}))
+        cpu.append(time.process_time() - c0)
+    print(json.dumps({"s": min(ts), "cpu": min(cpu), "posc": float(plan["posc"]),
+                      "digest": _digest(plan)}))  # fmt: skip
 
 
 def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
@@ -107,6 +111,7 @@ def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
     print("load at start", os.getloadavg(), flush=True)
     for case in cases:
         ts: dict[str, list[float]] = {tree_a: [], tree_b: []}
+        cpu: dict[str, list[float]] = {tree_a: [], tree_b: []}
         for r in range(n):
             for tree in (tree_a, tree_b):
                 res = subprocess.run(
@@ -118,11 +123,15 @@ def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
                 )
                 rec = json.loads(res.stdout.strip().splitlines()[-1])
                 ts[tree].append(rec["s"])
-                print(case, r, tree, round(rec["s"], 3), round(rec["posc"], 4), rec["digest"],
+                cpu[tree].append(rec["cpu"])
+                print(case, r, tree, "wall", round(rec["s"], 3), "cpu", round(rec["cpu"], 3),
+                      round(rec["posc"], 4), rec["digest"],
                       "load", round(os.getloadavg()[0], 2), flush=True)  # fmt: skip
-        ratios = [round(b / a, 3) for a, b in zip(ts[tree_a], ts[tree_b])]
-        print(case, {t: round(statistics.median(x), 3) for t, x in ts.items()},
-              "pair ratios B/A", ratios, flush=True)  # fmt: skip
+        for what, d in (("wall", ts), ("cpu", cpu)):
+            ratios = [round(b / a, 3) for a, b in zip(d[tree_a], d[tree_b])]
+            print(case, what, {t: round(statistics.median(x), 3) for t, x in d.items()},
+                  "pair ratios B/A", ratios, "median", statistics.median(ratios),
+                  flush=True)  # fmt: skip
     print("load at end", os.getloadavg(), flush=True)
 
 
