@@ -10,7 +10,8 @@ not a test.
     for bit (digests are machine-bound: another CPU may round differently).
 ``timing TREE_A TREE_B N [CASE ...]``
     Allocation planning time with 4 zones of each case (default ``paper_6_2`` and
-    ``large_400_160x160_24uav``, :data:`poc_env.agents.benchmarks.plan_scale.ZONE_CASES`), the
+    ``large_400_160x160_24uav``, :data:`poc_env.agents.benchmarks.plan_scale.ZONE_CASES`; the
+    zones of ``poc-env bench plan --scale --scale-parts zones --zones 4``), the
     two trees alternated ``N`` times, one subprocess per tree and round (one thread, two plans
     each after a warm-up plan, the faster kept); medians and pair ratios B / A of the wall
     time and of the process's CPU time (``time.process_time``: on a shared, loaded machine
@@ -46,8 +47,9 @@ CASES: dict[str, tuple[str, dict, int | None, int, int]] = {
 }
 
 
-def zoned(name: str, over: dict, n_zones: int, seed: int):
-    """``name`` with ``n_zones`` random zones drawn from ``default_rng(seed)``."""
+def zoned(name: str, over: dict, n_zones: int, seed: int | np.random.Generator):
+    """``name`` with ``n_zones`` random zones drawn from ``default_rng(seed)`` (or ``seed``
+    itself, a generator)."""
     from poc_env.agents.benchmarks.plan_scale import random_zones
     from poc_env.config import load_scenario
 
@@ -93,8 +95,12 @@ def one(case: str) -> None:
     from poc_env.agents.benchmarks.plan_scale import ZONE_CASES
     from poc_env.agents.planning.allocation import make_allocation_plan
 
-    name, over, uavs = ZONE_CASES[case]
-    sc = zoned(name, over, 4, 0)
+    rng = np.random.default_rng(0)  # the bench's zones: drawn case after case from one rng
+    for label, (name, over, _) in ZONE_CASES.items():
+        sc = zoned(name, over, 4, rng)
+        if label == case:
+            break
+    uavs = ZONE_CASES[case][2]
     make_allocation_plan(sc, uavs=uavs)
     ts, cpu = [], []
     for _ in range(2):
