@@ -17,6 +17,11 @@ not a test.
     time and of the process's CPU time (``time.process_time``: on a shared, loaded machine
     the steadier of the two), with the load.
 
+``profile [CASE]``
+    cProfile of one allocation plan of ``CASE`` (default ``paper_6_2``) with the bench's 4
+    zones, after a warm-up plan: the 25 costliest functions by cumulative time, then the
+    router's share (:meth:`~poc_env.sim.routing.ZoneRouter.reroute` over the whole plan).
+
 Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
 /work/main . 3``.
 """
@@ -92,15 +97,9 @@ def digest(out: str) -> None:
 
 def one(case: str) -> None:
     """Child: warm-up plan, then two timed plans of ``case`` with 4 zones; prints JSON."""
-    from poc_env.agents.benchmarks.plan_scale import ZONE_CASES
     from poc_env.agents.planning.allocation import make_allocation_plan
 
-    rng = np.random.default_rng(0)  # the bench's zones: drawn case after case from one rng
-    for label, (name, over, _) in ZONE_CASES.items():
-        sc = zoned(name, over, 4, rng)
-        if label == case:
-            break
-    uavs = ZONE_CASES[case][2]
+    sc, uavs = _bench_case(case)
     make_allocation_plan(sc, uavs=uavs)
     ts, cpu = [], []
     for _ in range(2):
@@ -110,6 +109,38 @@ def one(case: str) -> None:
         cpu.append(time.process_time() - c0)
     print(json.dumps({"s": min(ts), "cpu": min(cpu), "posc": float(plan["posc"]),
                       "digest": _digest(plan)}))  # fmt: skip
+
+
+def _bench_case(case: str):
+    """``case``'s scenario with the bench's 4 zones (drawn case after case from one rng)."""
+    from poc_env.agents.benchmarks.plan_scale import ZONE_CASES
+
+    rng = np.random.default_rng(0)
+    for label, (name, over, _) in ZONE_CASES.items():
+        sc = zoned(name, over, 4, rng)
+        if label == case:
+            return sc, ZONE_CASES[case][2]
+    raise KeyError(case)
+
+
+def profile(case: str) -> None:
+    import cProfile
+    import pstats
+
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc, uavs = _bench_case(case)
+    make_allocation_plan(sc, uavs=uavs)
+    prof = cProfile.Profile()
+    prof.enable()
+    make_allocation_plan(sc, uavs=uavs)
+    prof.disable()
+    st = pstats.Stats(prof)
+    st.sort_stats("cumulative").print_stats(25)
+    total = max(v[3] for v in st.stats.values())  # type: ignore[attr-defined]
+    router = sum(v[3] for k, v in st.stats.items()  # type: ignore[attr-defined]
+                 if k[0].endswith("routing.py") and k[2] == "reroute")  # fmt: skip
+    print(f"router (reroute) {router:.3f} s of {total:.3f} s: {router / total:.1%}", flush=True)
 
 
 def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
@@ -146,6 +177,8 @@ if __name__ == "__main__":
         digest(sys.argv[2])
     elif sys.argv[1] == "one":
         one(sys.argv[2])
+    elif sys.argv[1] == "profile":
+        profile(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2")
     else:
         timing(sys.argv[2], sys.argv[3], int(sys.argv[4]),
                sys.argv[5:] or ["paper_6_2", "large_400_160x160_24uav"])  # fmt: skip
