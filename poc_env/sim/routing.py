@@ -69,7 +69,7 @@ _GROW = 1.01 / float(np.cos(np.pi / (4 * QUAD_SEGS)))
 KEEP_TOL = 1e-6
 #: answers a router remembers per kind (paths, pieces, visible vertices) before it forgets them
 #: all (a follower's router lives as long as its episode).
-CACHE_SIZE = 100_000
+CACHE_SIZE = 20_000
 
 
 class _Edges:
