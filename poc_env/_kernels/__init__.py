@@ -18,6 +18,8 @@ module              kernels (the public functions that call them)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells
                     (:mod:`poc_env.theory.regions`, the planner's objective)
+``segments``        segments against polygon edges with certified orientation signs (the
+                    zone router's visibility and clipping tests, :mod:`poc_env.sim.routing`)
 ==================  ==========================================================================
 
 The planner's own kernels (its rectangle pass, route timing) are

@@ -18,13 +18,27 @@ follower's transit legs (:mod:`poc_env.sim.autopilot`).
   (:meth:`ZoneRouter.crosses`) therefore keeps ``c`` from every zone (issue 24: with the
   obstacle at ``0.9 c`` and two segments per quarter circle, routes passed 0.90-0.92 c from
   zones). Vertices outside the operating area (eq. 20's box, convex) are dropped, so paths stay
-  inside it.
+  inside it. An end already inside the ``c`` ring (an airfield near a zone) joins vertices
+  whose segments come no closer to the zones than that end itself (else, if there is no such
+  path, any that misses the zones): a route from a field at ``d < c`` keeps ``d`` (issue 24:
+  take-off and landing legs of fields at 0.92-0.96 c cut the ring down to 0.012 c).
 - **Clipping** (:meth:`ZoneRouter.reroute`): every leg of a polyline is cut to its parts
   outside the keep-out area and consecutive parts are joined by shortest paths, so search legs
   fly only searchable airspace and transit goes around.
 - **Reach** (:meth:`ZoneRouter.reach_share`): the share of each cell's area within ``W/2`` of
   flyable airspace, i.e. the part of a zone's interior a sensor of sweep width ``W`` reaches from
   outside; planners multiply the prior by it (the zone-interior mass discount).
+
+**Speed** (issue 24: planning with zones within 2 s on ``paper_6_2``). A segment's test
+against the obstacle, the keep-out area or the zones (shapely's ``intersects``) first goes
+through a compiled test of its edges (:func:`poc_env._kernels.segments.edge_contacts`): a
+certified proper crossing is a hit, a certified absence of contact is decided by one end's
+side (``contains_xy``), and only the uncertain rest (touches, collinear runs, near-zero
+orientations) goes to shapely. Each answer is shapely's exactly; the router also remembers its
+answers (a point's visible vertices, the paths and clipped pieces between repeated ends: a
+plan reroutes the same legs many times). ``reference=True`` (or the class attribute
+:attr:`ZoneRouter.reference`) answers with shapely alone and remembers nothing: the definition
+the tests hold the fast path to, plan for plan.
 """
 
 from __future__ import annotations
@@ -38,6 +52,7 @@ import shapely
 from scipy.sparse.csgraph import shortest_path
 from shapely.geometry import LineString, Point
 
+from poc_env._kernels.segments import edge_contacts
 from poc_env.geometry import as_polygon
 from poc_env.sim.constraints import NoFlyZones
 
@@ -49,6 +64,67 @@ QUAD_SEGS = 4
 #: came 0.2 % short of its distance where two zones' keep-out areas meet), so the obstacle
 #: (the zones grown by ``c``, finely rounded) lies strictly inside them.
 _GROW = 1.01 / float(np.cos(np.pi / (4 * QUAD_SEGS)))
+#: a segment with an end inside the c ring may come closer to the zones than that end by this
+#: share of c (rounding; :meth:`ZoneRouter._visible`).
+KEEP_TOL = 1e-6
+#: answers a router remembers per kind (paths, pieces, visible vertices) before it forgets them
+#: all (a follower's router lives as long as its episode).
+CACHE_SIZE = 20_000
+
+
+class _Edges:
+    """A polygonal geometry's boundary edges, grouped by ring, for exact segment tests."""
+
+    def __init__(self, geom: Any) -> None:
+        self.geom = geom
+        rings = [r for p in getattr(geom, "geoms", [geom]) for r in (p.exterior, *p.interiors)]
+        starts, ends, first, boxes = [], [], [0], []
+        for ring in rings:
+            pts = np.asarray(ring.coords, dtype=float)[:, :2]
+            starts.append(pts[:-1])
+            ends.append(pts[1:])
+            first.append(first[-1] + len(pts) - 1)
+            boxes.append([*pts.min(axis=0), *pts.max(axis=0)])
+        a = np.concatenate(starts) if starts else np.zeros((0, 2))
+        b = np.concatenate(ends) if ends else np.zeros((0, 2))
+        self._e = (
+            np.ascontiguousarray(a[:, 0]),
+            np.ascontiguousarray(a[:, 1]),
+            np.ascontiguousarray(b[:, 0]),
+            np.ascontiguousarray(b[:, 1]),
+        )
+        self._rings = np.asarray(first, dtype=np.int64)
+        self._boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
+
+    def hits(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Bool (L,): ``shapely.intersects(LineString(a[i], b[i]), geom)``, exactly (the
+        module doc's compiled test first, shapely for what it leaves uncertain)."""
+        a = np.ascontiguousarray(a, dtype=float).reshape(-1, 2)
+        b = np.ascontiguousarray(b, dtype=float).reshape(-1, 2)
+        state = np.empty(len(a), dtype=np.int8)
+        edge_contacts(
+            np.ascontiguousarray(a[:, 0]),
+            np.ascontiguousarray(a[:, 1]),
+            np.ascontiguousarray(b[:, 0]),
+            np.ascontiguousarray(b[:, 1]),
+            *self._e,
+            self._rings,
+            self._boxes,
+            state,
+        )
+        hit = state == 1
+        clear = state == 0  # no contact with the boundary: wholly inside or wholly outside
+        if clear.any():
+            hit[clear] = shapely.contains_xy(self.geom, a[clear, 0], a[clear, 1])
+        unsure = state == 2
+        if unsure.any():
+            lines = shapely.linestrings(np.stack([a[unsure], b[unsure]], axis=1))
+            hit[unsure] = shapely.intersects(lines, self.geom)
+        return hit
+
+
+def _key(*points: np.ndarray) -> bytes:
+    return b"".join(np.asarray(p, dtype=float).tobytes() for p in points)
 
 
 def reach_and_turn_m(scenario: Any, speed: Any) -> Any:
@@ -75,18 +151,30 @@ class ZoneRouter:
         ``(x0, y0, x1, y1)``: eq. 20's operating area, or None (the plane).
     clearance:
         ``c`` in metres (:func:`clearance_m`).
+    reference:
+        Shapely's predicates alone, nothing remembered (the module doc's "Speed"); None: the
+        class attribute :attr:`reference`.
     """
+
+    #: the default of ``reference`` (tests set it to plan with the reference router).
+    reference: bool = False
 
     def __init__(
         self,
         zones: Sequence[Any],
         area: Sequence[float] | None,
         clearance: float,
+        reference: bool | None = None,
     ) -> None:
         self.zones = tuple(as_polygon(z, f"no_fly_zones[{i}]") for i, z in enumerate(zones))
         self.clearance = float(clearance)
         self.area = None if area is None else tuple(float(v) for v in area)
         self.active = bool(self.zones)
+        if reference is not None:
+            self.reference = bool(reference)
+        self._paths: dict[bytes, np.ndarray | None] = {}
+        self._pieces: dict[bytes, list[tuple[np.ndarray, np.ndarray]]] = {}
+        self._seen: dict[bytes, np.ndarray] = {}
         if not self.active:
             return
         raw = shapely.union_all(self.zones)
@@ -95,8 +183,10 @@ class ZoneRouter:
         )
         self.obstacle = raw.buffer(self.clearance, quad_segs=16)
         self.raw = raw.buffer(1.0)
-        for g in (self.keep_out, self.obstacle, self.raw):
+        self._zones_union = raw
+        for g in (self.keep_out, self.obstacle, self.raw, raw):
             shapely.prepare(g)
+        self._edges_of = {id(g): _Edges(g) for g in (self.keep_out, self.obstacle, self.raw)}
         polys = list(getattr(self.keep_out, "geoms", [self.keep_out]))
         nodes = [np.asarray(r.coords)[:-1, :2] for p in polys for r in (p.exterior, *p.interiors)]
         pts = np.concatenate(nodes) if nodes else np.zeros((0, 2))
@@ -109,9 +199,7 @@ class ZoneRouter:
         w = np.full((n, n), np.inf)
         if n > 1:
             i, j = np.triu_indices(n, 1)
-            vis = ~shapely.intersects(
-                shapely.linestrings(np.stack([pts[i], pts[j]], axis=1)), self.obstacle
-            )
+            vis = ~self._hits(self.obstacle, pts[i], pts[j])
             d = np.hypot(*(pts[i] - pts[j]).T)
             w[i[vis], j[vis]] = d[vis]
             w[j[vis], i[vis]] = d[vis]
@@ -119,6 +207,8 @@ class ZoneRouter:
             np.where(np.isfinite(w), w, 0.0), method="D", directed=False, return_predecessors=True
         )
         self._edges = NoFlyZones([p for p in getattr(self.obstacle, "geoms", [self.obstacle])])
+        # the vertices inside the obstacle (a segment from them is tested against the zones)
+        self._nodes_near = shapely.contains_xy(self.obstacle, pts[:, 0], pts[:, 1])
 
     @classmethod
     def for_scenario(cls, scenario: Any, area: Sequence[float] | None = None) -> ZoneRouter:
@@ -130,32 +220,86 @@ class ZoneRouter:
         return cls(scenario.map.no_fly_zones_m, area, clearance_m(scenario))
 
     # -- queries -----------------------------------------------------------------------------
-    def _visible(self, p: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    def _hits(self, geom: Any, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Bool (L,): the segments ``a[i] -> b[i]`` intersect ``geom`` (one of the router's
+        three geometries; shapely's answer, computed as the module doc's "Speed" says)."""
+        if self.reference:
+            return shapely.intersects(shapely.linestrings(np.stack([a, b], axis=1)), geom)
+        return self._edges_of[id(geom)].hits(a, b)
+
+    def _remember(self, cache: dict, key: bytes, value: Any) -> None:
+        if self.reference:
+            return
+        if len(cache) >= CACHE_SIZE:
+            cache.clear()
+        cache[key] = value
+
+    def _visible(
+        self, p: np.ndarray, targets: np.ndarray, nodes: bool = False, keep: bool = True
+    ) -> np.ndarray:
         """Bool (T,): the straight segments p -> targets miss the obstacle (the zones grown by
-        c; from a point already inside that ring, the zones themselves)."""
+        c). A segment with an end already inside that ring (a field near a zone, a UAV cutting
+        a corner) misses the zones themselves and, with ``keep``, comes no closer to them than
+        that end is (:data:`KEEP_TOL`): a route from a field at ``d < c`` from a zone keeps
+        ``d``, the least any route from there can keep. ``nodes``: the targets are the graph's
+        vertices (the answer is remembered per ``p`` and ``keep``)."""
         if not len(targets):
             return np.zeros(0, dtype=bool)
-        lines = shapely.linestrings(np.stack([np.broadcast_to(p, targets.shape), targets], axis=1))
-        hit = shapely.intersects(lines, self.obstacle)
-        # an end already inside the c ring (a field near a zone, a UAV cutting a corner):
-        # only the zones themselves count for that segment
-        near = shapely.contains_xy(self.obstacle, targets[:, 0], targets[:, 1])
-        if self.obstacle.contains(Point(p)):
+        key = _key(p) + bytes([keep])
+        if nodes and key in self._seen:
+            return self._seen[key]
+        starts = np.broadcast_to(p, targets.shape)
+        hit = self._hits(self.obstacle, starts, targets)
+        if nodes and not self.reference:
+            near = self._nodes_near.copy()
+        else:
+            near = shapely.contains_xy(self.obstacle, targets[:, 0], targets[:, 1])
+        p_near = bool(self.obstacle.contains(Point(p)))
+        if p_near:
             near[:] = True
         if near.any():
-            hit[near] = shapely.intersects(lines[near], self.raw)
-        return ~hit
+            hit[near] = self._hits(self.raw, starts[near], targets[near])
+            if keep:  # no closer to the zones than the end inside the ring
+                ends = targets[near]
+                d_end = shapely.distance(self._zones_union, shapely.points(ends))
+                if p_near:
+                    d_end = np.minimum(d_end, shapely.distance(self._zones_union, Point(p)))
+                lines = shapely.linestrings(np.stack([starts[near], ends], axis=1))
+                gap = shapely.distance(self._zones_union, lines)
+                hit[near] |= gap < d_end - KEEP_TOL * self.clearance
+        vis = ~hit
+        if nodes:
+            self._remember(self._seen, key, vis)
+        return vis
 
     def path(self, a, b) -> np.ndarray | None:
         """The shortest flyable polyline ``a -> b`` ((k, 2), ends included), or None."""
         a = np.asarray(a, dtype=float)
         b = np.asarray(b, dtype=float)
-        if not self.active or self._visible(a, b[None])[0]:
+        if not self.active:
+            return np.stack([a, b])
+        key = _key(a, b)
+        if key in self._paths:
+            got = self._paths[key]
+            return None if got is None else got.copy()
+        res = self._path(a, b)
+        self._remember(self._paths, key, None if res is None else res.copy())
+        return res
+
+    def _path(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        # an end inside the c ring: a path that keeps its distance if there is one, else one
+        # that only misses the zones
+        res = self._shortest(a, b, True)
+        return self._shortest(a, b, False) if res is None else res
+
+    def _shortest(self, a: np.ndarray, b: np.ndarray, keep: bool) -> np.ndarray | None:
+        if self._visible(a, b[None], keep=keep)[0]:
             return np.stack([a, b])
         n = len(self.nodes)
         if not n:
             return None
-        va, vb = self._visible(a, self.nodes), self._visible(b, self.nodes)
+        va = self._visible(a, self.nodes, True, keep)
+        vb = self._visible(b, self.nodes, True, keep)
         da = np.where(va, np.hypot(*(self.nodes - a).T), np.inf)
         db = np.where(vb, np.hypot(*(self.nodes - b).T), np.inf)
         tot = da[:, None] + self.dist + db[None, :]
@@ -186,10 +330,18 @@ class ZoneRouter:
         b = np.asarray(b, dtype=float)
         if not self.active:
             return [(a, b)]
+        key = _key(a, b)
+        if key in self._pieces:
+            return list(self._pieces[key])
+        res = self._clip(a, b)
+        self._remember(self._pieces, key, res)
+        return list(res)
+
+    def _clip(self, a: np.ndarray, b: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         seg = LineString([a, b]) if np.any(a != b) else None
         if seg is None:
             return [] if self.keep_out.contains(Point(a)) else [(a, b)]
-        if not seg.intersects(self.keep_out):
+        if not self._hits(self.keep_out, a[None], b[None])[0]:
             return [(a, b)]
         rest = seg.difference(self.keep_out)
         out = []
@@ -226,8 +378,10 @@ class ZoneRouter:
             cur = out[-1]
             return True
 
-        for p, q in itertools.pairwise(pts):
-            for s, e in self.pieces(p, q):
+        # legs clear of the keep-out area are their own piece (one batched test)
+        clear = ~self._hits(self.keep_out, pts[:-1], pts[1:])
+        for leg, (p, q) in enumerate(itertools.pairwise(pts)):
+            for s, e in [(p, q)] if clear[leg] else self.pieces(p, q):
                 if go(s):
                     out.append(e)
                     cur = e

@@ -1,0 +1,184 @@
+"""Issue 24's router figures (docs/PLANNER.md "Planning time with no-fly zones"): a script,
+not a test.
+
+``digest OUT.json``
+    Plans :data:`CASES` (random no-fly zones of ``poc-env bench plan --scale --scale-parts
+    zones``, :func:`~poc_env.agents.benchmarks.plan_scale.random_zones`) with the allocation
+    planner, the greedy rectangles and the DE planner, and writes a SHA-256 of every plan's
+    waypoints (bytes of the float64 arrays) and its planned POS. Run it with two trees'
+    ``PYTHONPATH`` on the same machine and compare the files: equal digests are plans equal bit
+    for bit (digests are machine-bound: another CPU may round differently).
+``timing TREE_A TREE_B N [CASE ...]``
+    Allocation planning time with 4 zones of each case (default ``paper_6_2`` and
+    ``large_400_160x160_24uav``, :data:`poc_env.agents.benchmarks.plan_scale.ZONE_CASES`; the
+    zones of ``poc-env bench plan --scale --scale-parts zones --zones 4``), the
+    two trees alternated ``N`` times, one subprocess per tree and round (one thread, two plans
+    each after a warm-up plan, the faster kept); medians and pair ratios B / A of the wall
+    time and of the process's CPU time (``time.process_time``: on a shared, loaded machine
+    the steadier of the two), with the load.
+
+``profile [CASE]``
+    cProfile of one allocation plan of ``CASE`` (default ``paper_6_2``) with the bench's 4
+    zones, after a warm-up plan: the 25 costliest functions by cumulative time, then the
+    router's share (:meth:`~poc_env.sim.routing.ZoneRouter.reroute` over the whole plan).
+
+Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
+/work/main . 3``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+#: label -> (scenario, overrides, UAVs or None, zones, zone seed)
+CASES: dict[str, tuple[str, dict, int | None, int, int]] = {
+    "paper_6_2_z4_s0": ("paper_6_2", {}, None, 4, 0),
+    "paper_6_2_z2_s1": ("paper_6_2", {}, None, 2, 1),
+    "paper_6_2_z3_s2": ("paper_6_2", {}, None, 3, 2),
+    "paper_6_2_z6_s3": ("paper_6_2", {}, None, 6, 3),
+    "paper_6_2_z8_s4": ("paper_6_2", {}, None, 8, 4),
+    "paper_6_2_z4_s5_3uav": ("paper_6_2", {}, 3, 4, 5),
+    "large_400_z4_s0": ("large_400", {}, None, 4, 0),
+    "large_400_z6_s6": ("large_400", {}, None, 6, 6),
+}
+
+
+def zoned(name: str, over: dict, n_zones: int, seed: int | np.random.Generator):
+    """``name`` with ``n_zones`` random zones drawn from ``default_rng(seed)`` (or ``seed``
+    itself, a generator)."""
+    from poc_env.agents.benchmarks.plan_scale import random_zones
+    from poc_env.config import load_scenario
+
+    m = load_scenario(name, over).map
+    ox, oy = (v / 1000 for v in m.origin_m)
+    drawn = random_zones(m.width_m / 1000, m.height_m / 1000, n_zones, np.random.default_rng(seed))
+    zones = [[[x + ox, y + oy] for x, y in z] for z in drawn]
+    names = [f"Z-{i + 1}" for i in range(n_zones)]
+    return load_scenario(name, {**over, "map.no_fly_zones_km": zones, "map.no_fly_names": names})
+
+
+def _digest(plan: dict[str, Any]) -> str:
+    h = hashlib.sha256()
+    for u in plan["uavs"]:
+        h.update(np.asarray(u["waypoints_m"], dtype=float).tobytes())
+        h.update(b"|")
+    return h.hexdigest()[:16]
+
+
+def digest(out: str) -> None:
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
+    from poc_env.agents.planning.planner import make_plan
+
+    recs = {}
+    for label, (name, over, uavs, nz, seed) in CASES.items():
+        sc = zoned(name, over, nz, seed)
+        t0 = time.perf_counter()
+        plan = make_allocation_plan(sc, uavs=uavs)
+        recs[f"{label} allocation"] = [_digest(plan), float(plan["posc"])]
+        plan = make_greedy_rectangles_plan(sc, uavs=uavs)
+        recs[f"{label} greedy"] = [_digest(plan), float(plan["posc"])]
+        if name == "paper_6_2":
+            plan = make_plan(sc, planner="de", uavs=uavs, seed=seed, maxiter=5, popsize=8)
+            recs[f"{label} de"] = [_digest(plan), float(plan["posc"])]
+        print(label, recs[f"{label} allocation"], round(time.perf_counter() - t0, 2), flush=True)
+    with open(out, "w") as f:
+        json.dump(recs, f, indent=1)
+
+
+def one(case: str) -> None:
+    """Child: warm-up plan, then two timed plans of ``case`` with 4 zones; prints JSON."""
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc, uavs = _bench_case(case)
+    make_allocation_plan(sc, uavs=uavs)
+    ts, cpu = [], []
+    for _ in range(2):
+        t0, c0 = time.perf_counter(), time.process_time()
+        plan = make_allocation_plan(sc, uavs=uavs)
+        ts.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    print(json.dumps({"s": min(ts), "cpu": min(cpu), "posc": float(plan["posc"]),
+                      "digest": _digest(plan)}))  # fmt: skip
+
+
+def _bench_case(case: str):
+    """``case``'s scenario with the bench's 4 zones (drawn case after case from one rng)."""
+    from poc_env.agents.benchmarks.plan_scale import ZONE_CASES
+
+    rng = np.random.default_rng(0)
+    for label, (name, over, _) in ZONE_CASES.items():
+        sc = zoned(name, over, 4, rng)
+        if label == case:
+            return sc, ZONE_CASES[case][2]
+    raise KeyError(case)
+
+
+def profile(case: str) -> None:
+    import cProfile
+    import pstats
+
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc, uavs = _bench_case(case)
+    make_allocation_plan(sc, uavs=uavs)
+    prof = cProfile.Profile()
+    prof.enable()
+    make_allocation_plan(sc, uavs=uavs)
+    prof.disable()
+    st = pstats.Stats(prof)
+    st.sort_stats("cumulative").print_stats(25)
+    total = max(v[3] for v in st.stats.values())  # type: ignore[attr-defined]
+    router = sum(v[3] for k, v in st.stats.items()  # type: ignore[attr-defined]
+                 if k[0].endswith("routing.py") and k[2] == "reroute")  # fmt: skip
+    print(f"router (reroute) {router:.3f} s of {total:.3f} s: {router / total:.1%}", flush=True)
+
+
+def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    print("load at start", os.getloadavg(), flush=True)
+    for case in cases:
+        ts: dict[str, list[float]] = {tree_a: [], tree_b: []}
+        cpu: dict[str, list[float]] = {tree_a: [], tree_b: []}
+        for r in range(n):
+            for tree in (tree_a, tree_b):
+                res = subprocess.run(
+                    [sys.executable, __file__, "one", case],
+                    env={**env, "PYTHONPATH": os.path.abspath(tree)},
+                    capture_output=True,
+                    text=True,
+                    check=True,
+                )
+                rec = json.loads(res.stdout.strip().splitlines()[-1])
+                ts[tree].append(rec["s"])
+                cpu[tree].append(rec["cpu"])
+                print(case, r, tree, "wall", round(rec["s"], 3), "cpu", round(rec["cpu"], 3),
+                      round(rec["posc"], 4), rec["digest"],
+                      "load", round(os.getloadavg()[0], 2), flush=True)  # fmt: skip
+        for what, d in (("wall", ts), ("cpu", cpu)):
+            ratios = [round(b / a, 3) for a, b in zip(d[tree_a], d[tree_b])]
+            print(case, what, {t: round(statistics.median(x), 3) for t, x in d.items()},
+                  "pair ratios B/A", ratios, "median", statistics.median(ratios),
+                  flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "digest":
+        digest(sys.argv[2])
+    elif sys.argv[1] == "one":
+        one(sys.argv[2])
+    elif sys.argv[1] == "profile":
+        profile(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2")
+    else:
+        timing(sys.argv[2], sys.argv[3], int(sys.argv[4]),
+               sys.argv[5:] or ["paper_6_2", "large_400_160x160_24uav"])  # fmt: skip
