@@ -91,6 +91,7 @@ from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError
 from poc_env.errors import ConfigError, MissingExtraError
 from poc_env.sim import core as sim
 from poc_env.sim import engine as engine_mod
+from poc_env.sim import single as single_mod
 from poc_env.theory.probability_map import validate_map
 
 try:
@@ -196,6 +197,10 @@ class SwarmVecEnv(VecEnv):
         self.return_autopilot = return_autopilot
         self._t_start = time.time()
         self._closed = False
+        #: The engine's step with its glue formed once (:class:`poc_env.sim.single.SingleStep`,
+        #: the PettingZoo env's; every env is stepped at once here too), or None (per-UAV
+        #: beliefs: :meth:`Engine.step <poc_env.sim.engine.Engine.step>`).
+        self._fast = single_mod.SingleStep(eng) if single_mod.SingleStep.supports(eng) else None
 
     @property
     def params(self) -> sim.Params:
@@ -310,7 +315,7 @@ class SwarmVecEnv(VecEnv):
             raise EpisodeOverError("call reset() before step()")
         p, n = self.params, self.n_agents
         active = self._active
-        tr = self.engine.step(self._actions, with_info=False)  # the few infos: from the state
+        tr = self._engine_step()  # the few infos: from the state
         st = self.engine.current
         reward = np.where(active, self._reward(tr, st), 0.0)
         self._returns += reward
@@ -359,6 +364,20 @@ class SwarmVecEnv(VecEnv):
             slots = (ended[:, None] * n + np.arange(n)).ravel()
             self._write(obs, slots, first)
         return obs, reward.ravel().astype(np.float32), done, infos
+
+    def _engine_step(self) -> engine_mod.Transition:
+        """The engine's step of every env under the last actions, without infos:
+        :meth:`Engine.step <poc_env.sim.engine.Engine.step>`'s transition (``with_info=False``),
+        through :class:`~poc_env.sim.single.SingleStep` when it runs the engine (the same
+        arrays bit for bit, ``tests/sim/test_single.py``; ``tests/rl/test_vector.py`` runs both
+        here)."""
+        fast = self._fast
+        if fast is None:
+            return self.engine.step(self._actions, with_info=False)
+        s = fast.step(self._actions)
+        return engine_mod.Transition(
+            s.obs, s.reward, s.terms_dict(), s.events, s.terminated, s.truncated, s.over, {}
+        )
 
     def _zero_obs(self):
         space = self.observation_space
