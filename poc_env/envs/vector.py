@@ -187,6 +187,7 @@ class SwarmVecEnv(VecEnv):
         self.possible_agents = [f"uav_{i}" for i in range(self.n_agents)]
         self.render_mode = None
         super().__init__(self.n_envs * self.n_agents, eng.observation_space, eng.action_space)
+        self._width = int(np.prod(self.action_space.shape or (1,)))
         e, n = self.n_envs, self.n_agents
         self._root_seed = seed
         self._active = np.zeros((e, n), dtype=bool)
@@ -244,7 +245,7 @@ class SwarmVecEnv(VecEnv):
             p = self._options[k * self.n_agents].get("prior")
             field = f"options[{k * self.n_agents}]['prior']"
             given.append(None if p is None else validate_map(p, grid, field))
-        obs, _ = self.engine.reset(envs, given)
+        obs, _ = self.engine.reset(envs, given, with_info=False)
         self._active[envs] = True
         self._returns[envs] = 0.0
         self._lengths[envs] = 0
@@ -287,11 +288,11 @@ class SwarmVecEnv(VecEnv):
     # -- stepping --------------------------------------------------------------------------------
     def step_async(self, actions: np.ndarray) -> None:
         a = np.asarray(actions, dtype=float)
-        width = int(np.prod(self.action_space.shape or (1,)))
+        width = self._width
         if a.size != self.num_envs * width:
             raise ConfigError("actions", a.shape, f"shape ({self.num_envs}, {width})")
         a = a.reshape(self.n_envs, self.n_agents, width)
-        if not np.isfinite(a).all():
+        if not np.logical_and.reduce(np.isfinite(a), axis=None):
             raise ConfigError("actions", "non-finite values", "finite numbers in [-1, 1]")
         self._actions = self._sim_actions(a)
 
@@ -329,40 +330,45 @@ class SwarmVecEnv(VecEnv):
 
         obs = self._slots(tr.obs)
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-        for k in np.flatnonzero(~was_active):
-            infos[k]["inactive"] = True
-        for k in np.flatnonzero(done):
-            info = infos[k]
-            info["terminal_observation"] = (
-                self._slot_obs(obs, k) if was_active[k] else self._zero_obs()
-            )
-            info["TimeLimit.truncated"] = bool(truncated[k])
-        self._write(obs, ~still.ravel(), 0.0)  # finished agents show the placeholder
+        # (each loop and write below runs only when some slot needs it: usually none does)
+        if not was_active.all():
+            for k in np.flatnonzero(~was_active).tolist():
+                infos[k]["inactive"] = True
+        if done.any():
+            for k in np.flatnonzero(done).tolist():
+                info = infos[k]
+                info["terminal_observation"] = (
+                    self._slot_obs(obs, k) if was_active[k] else self._zero_obs()
+                )
+                info["TimeLimit.truncated"] = bool(truncated[k])
+        if not still.all():
+            self._write(obs, ~still.ravel(), 0.0)  # finished agents show the placeholder
         self._active = still
 
+        if not env_end.any():
+            return obs, reward.ravel().astype(np.float32), done, infos
         ended = np.flatnonzero(env_end)
-        if len(ended):
-            elapsed = round(time.time() - self._t_start, 6)
-            posc_all = st.posc.tolist()
-            landed, crashed = st.landed.tolist(), st.crashed.tolist()
-            violations = st.violations.tolist()
-            for k in ended.tolist():
-                posc = posc_all[k]
-                for i in range(n):
-                    info = infos[k * n + i]
-                    info["episode"] = {
-                        "r": float(self._returns[k, i]),  # unrounded, unlike Monitor's
-                        "l": int(self._lengths[k, i]),
-                        "t": elapsed,
-                        "posc": posc,
-                    }
-                    info["posc"] = posc
-                    info["landed"] = landed[k][i]
-                    info["crashed"] = crashed[k][i]
-                    info["violations"] = violations[k][i]
-            first = self._new_episodes(ended)
-            slots = (ended[:, None] * n + np.arange(n)).ravel()
-            self._write(obs, slots, first)
+        elapsed = round(time.time() - self._t_start, 6)
+        posc_all = st.posc.tolist()
+        landed, crashed = st.landed.tolist(), st.crashed.tolist()
+        violations = st.violations.tolist()
+        for k in ended.tolist():
+            posc = posc_all[k]
+            for i in range(n):
+                info = infos[k * n + i]
+                info["episode"] = {
+                    "r": float(self._returns[k, i]),  # unrounded, unlike Monitor's
+                    "l": int(self._lengths[k, i]),
+                    "t": elapsed,
+                    "posc": posc,
+                }
+                info["posc"] = posc
+                info["landed"] = landed[k][i]
+                info["crashed"] = crashed[k][i]
+                info["violations"] = violations[k][i]
+        first = self._new_episodes(ended)
+        slots = (ended[:, None] * n + np.arange(n)).ravel()
+        self._write(obs, slots, first)
         return obs, reward.ravel().astype(np.float32), done, infos
 
     def _engine_step(self) -> engine_mod.Transition:
