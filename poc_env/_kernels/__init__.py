@@ -15,6 +15,8 @@ module              kernels (the public functions that call them)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
 ``rewards``         the single env's end of step: reward terms and total, episode end, info
                     values (:mod:`poc_env.sim.single`), sums in numpy's pairwise order
+``priors``          a Gaussian-mixture prior's exponent and sub-cell sums
+                    (:func:`poc_env.theory.probability_map.gaussian_mixture`)
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells
                     (:mod:`poc_env.theory.regions`, the planner's objective)
 ==================  ==========================================================================

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import box
 
+import poc_env._kernels.priors as _priors
 from poc_env.config import GaussianComponent, MapConfig, PriorConfig
 from poc_env.errors import MapFileError
 
@@ -135,21 +136,19 @@ def _sample_axes(grid: Grid, s: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _coarsen_in_order(grid: Grid, fine: np.ndarray, s: int) -> np.ndarray:
-    """:meth:`Grid.coarsen` of a C-contiguous float64 ``(ny s, nx s)`` array, bit for bit,
-    in a few strided adds: numpy's two-axis sum adds each cell's sub-rows in order to 0, each
-    sub-row summed from its first value in order (its pairwise sum below 8 values), which
-    this spells out for ``1 < s < 8`` and ``nx > 1`` (else numpy's own sum: a single column
-    or longer sub-rows sum otherwise). ``tests/theory/test_probability_map.py`` pins it."""
+    """:meth:`Grid.coarsen` of a C-contiguous float64 ``(ny s, nx s)`` array, bit for bit, in
+    one compiled pass (:func:`poc_env._kernels.priors.coarsen`): numpy's two-axis sum adds each
+    cell's sub-rows in order to 0, each sub-row summed from its first value in order (its
+    pairwise sum below 8 values), which the kernel spells out for ``1 < s < 8`` and ``nx > 1``
+    (else numpy's own sum: a single column or longer sub-rows sum otherwise).
+    ``tests/theory/test_probability_map.py`` pins it."""
     f = np.asarray(fine)
     if not (1 < s < 8 and grid.nx > 1 and f.dtype == np.float64 and f.flags.c_contiguous):
         return grid.coarsen(f, s)
-    rows = f[:, 0::s] + f[:, 1::s]  # (ny s, nx): each sub-row's sum, in order
-    for b in range(2, s):
-        rows += f[:, b::s]
-    rows3 = rows.reshape(grid.ny, s, grid.nx)
-    out = np.zeros(grid.shape)
-    for a in range(s):  # 0 + the cell's sub-rows, in order
-        out += rows3[:, a]
+    if f.shape != (grid.ny * s, grid.nx * s):
+        raise ValueError(f"fine array of shape {f.shape} for {grid.ny} x {grid.nx} cells of {s}")
+    out = np.empty(grid.shape)
+    _priors.coarsen(f, s, out)
     return out
 
 
@@ -170,10 +169,10 @@ def gaussian_mixture(
     Per component, on the sub-cell centres ``(x, y)`` (:meth:`Grid.sample_points`) with
     ``(dx, dy)`` their offsets from the mean: ``u = (c dx + s dy) / sigma_x``,
     ``v = (-s dx + c dy) / sigma_y`` (``c, s``: cosine and sine of the rotation), density
-    ``exp(-0.5 (u^2 + v^2))``, summed per cell (:meth:`Grid.coarsen`). The offsets are formed
-    once per axis and the terms broadcast into two scratch rasters (the same floating-point
-    operations on every sub-cell as on the stacked points: a reset draws a random prior in
-    about a third of the time).
+    ``exp(-0.5 (u^2 + v^2))``, summed per cell (:meth:`Grid.coarsen`). The exponent and the
+    sums are compiled passes over the sub-cell axes (:mod:`poc_env._kernels.priors`: the same
+    floating-point operations, in the same order, as numpy on the stacked points; numpy's
+    ``exp`` between them), so a reset draws a random prior in a fraction of the time.
     """
     xs, ys = _sample_axes(grid, oversample)
     mass = np.zeros(grid.shape)
@@ -182,20 +181,11 @@ def gaussian_mixture(
         weights = weights / weights.max()  # first: a sum of weights near 1e308 overflows
         weights = weights / weights.sum()
     q = np.empty((len(ys), len(xs)))
-    t = np.empty_like(q)
     for w, comp in zip(weights, components):
-        mx, my = np.asarray(comp.mean_m, dtype=float)
-        dx = xs - mx
-        dy = ys - my
+        mx, my = (float(m) for m in comp.mean_m)
         c, s = np.cos(comp.rotation_rad), np.sin(comp.rotation_rad)
-        np.add((c * dx)[None, :], (s * dy)[:, None], out=q)
-        q /= comp.sigma_m[0]  # u
-        q *= q
-        np.add((-s * dx)[None, :], (c * dy)[:, None], out=t)
-        t /= comp.sigma_m[1]  # v
-        t *= t
-        q += t
-        q *= -0.5
+        sx, sy = (float(sd) for sd in comp.sigma_m)
+        _priors.mixture_exponent(xs, ys, mx, my, float(c), float(s), sx, sy, q)
         np.exp(q, out=q)
         part = _coarsen_in_order(grid, q, oversample)
         if part.sum() > 0:  # a component wholly off the grid contributes nothing
