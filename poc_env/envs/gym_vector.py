@@ -285,7 +285,7 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         assert self._fast is not None
         s = self._fast.step(a)
         st = self.engine.current
-        groups = {}
+        groups: dict[str, np.ndarray] = {}
         for names, values in (
             (single_mod.FLOAT_INFOS, s.finfo),
             (single_mod.BOOL_INFOS, s.binfo),

@@ -79,6 +79,7 @@ replays env ``e``'s first episode (with the scenario's prior) transition for tra
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -187,7 +188,6 @@ class SwarmVecEnv(VecEnv):
         self.possible_agents = [f"uav_{i}" for i in range(self.n_agents)]
         self.render_mode = None
         super().__init__(self.n_envs * self.n_agents, eng.observation_space, eng.action_space)
-        self._width = int(np.prod(self.action_space.shape or (1,)))
         e, n = self.n_envs, self.n_agents
         self._root_seed = seed
         self._active = np.zeros((e, n), dtype=bool)
@@ -288,7 +288,7 @@ class SwarmVecEnv(VecEnv):
     # -- stepping --------------------------------------------------------------------------------
     def step_async(self, actions: np.ndarray) -> None:
         a = np.asarray(actions, dtype=float)
-        width = self._width
+        width = math.prod(self.action_space.shape or (1,))  # a subclass may set its own
         if a.size != self.num_envs * width:
             raise ConfigError("actions", a.shape, f"shape ({self.num_envs}, {width})")
         a = a.reshape(self.n_envs, self.n_agents, width)

@@ -149,39 +149,42 @@ def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.n
         state.flying,
         state.step,
         params.landing,
-        *_vector_constants(params),
-        float(max(n - 1, 1)),
-        _LOW,
-        _HIGH,
+        *_vector_constants(params, n),
         out,
     )
     return out
 
 
+#: The vectors kernel's arguments from ``bx0`` to ``high``: 14 floats and two bound arrays.
+_VectorConstants = tuple[
+    float, float, float, float, float, float, float, float, float, float, float, float, float,
+    float, np.ndarray, np.ndarray,
+]  # fmt: skip
 #: :func:`_vector_constants` of the Params seen last, by id (each entry keeps its Params).
-_VECTOR_CONSTANTS: dict[int, tuple[Params, tuple[float, ...]]] = {}
+_VECTOR_CONSTANTS: dict[tuple[int, int], tuple[Params, _VectorConstants]] = {}
 
 
-def _vector_constants(params: Params) -> tuple[float, ...]:
-    """The scalar arguments of the vectors kernel that ``params`` fixes, in its order (from
-    ``bx0`` to ``range_m``), formed once per Params (a step computes the vectors twice: for
-    the autopilot and the observation)."""
-    hit = _VECTOR_CONSTANTS.get(id(params))
+def _vector_constants(params: Params, n: int) -> _VectorConstants:
+    """The vectors kernel's arguments after the state's and the landing fields (from ``bx0``
+    to ``high``) for ``params`` and ``n`` UAVs per env, formed once per Params (a step
+    computes the vectors twice: for the autopilot and the observation)."""
+    key = (id(params), n)
+    hit = _VECTOR_CONSTANTS.get(key)
     if hit is not None and hit[0] is params:
         return hit[1]
     sc = params.scenario
     u = sc.uav
     bx0, by0, bx1, by1 = params.bounds
     w, h = bx1 - bx0, by1 - by0
-    k = (
+    k: _VectorConstants = (
         float(bx0), float(by0), float(w), float(h), _diagonal(w, h), float(u.max_altitude_m),
         float(u.min_speed_mps), float(u.max_speed_mps - u.min_speed_mps),
         float(u.max_pitch_rad), float(u.endurance_s), float(u.usable_endurance_s),
-        float(params.horizon), float(sc.comms.range_m),
+        float(params.horizon), float(sc.comms.range_m), float(max(n - 1, 1)), _LOW, _HIGH,
     )  # fmt: skip
     if len(_VECTOR_CONSTANTS) >= 64:  # many scenarios in one process: start over
         _VECTOR_CONSTANTS.clear()
-    _VECTOR_CONSTANTS[id(params)] = (params, k)
+    _VECTOR_CONSTANTS[key] = (params, k)
     return k
 
 

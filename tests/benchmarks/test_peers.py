@@ -182,24 +182,29 @@ def test_declared_agents_are_the_scenarios():
 
 def test_breakdown_times_the_parts_and_restores_them(tmp_path):
     """``--breakdown``: a row per part of the contender's step, the whole first at 100 %, the
-    engine's parts inside it (nested parts never exceed what contains them), written as a
-    table set; the timed functions are the original ones afterwards. A bad key names it."""
+    whole-batch step's parts inside it (nested parts never exceed what contains them), written
+    as a table set; the timed functions are the original ones afterwards. A bad key names it."""
+    from poc_env._kernels import observations as obs_kernels
     from poc_env.agents.benchmarks import breakdown
     from poc_env.envs.gym_vector import SwarmGymVectorEnv
-    from poc_env.sim import core, engine
+    from poc_env.sim import engine, single
 
-    before = (SwarmGymVectorEnv.step, engine.Engine.step, core.step, engine.swarm_increments)
+    before = (SwarmGymVectorEnv.step, engine.Engine.step, single.SingleStep.step,
+              single.swarm_increments, obs_kernels.compass)  # fmt: skip
     out = tmp_path / "bd"
     rows = peers.main(["--breakdown", "make_vec_small", "--smoke", "--out", str(out)])
     by = {r["part"]: r for r in rows}
     assert [r["part"] for r in rows] == [p[2] for p in breakdown.PARTS["make_vec_small"]]
-    whole, eng = rows[0], by["engine step (Engine.step)"]
+    whole, batch = rows[0], by["whole-batch step"]
+    fast = by["- single step (sim.single.SingleStep.step)"]
     assert whole["share"] == 100.0 and whole["ms_per_step"] > 0
-    assert 0 < eng["ms_per_step"] <= whole["ms_per_step"]
-    assert 0 < by["- core step (sim.core.step)"]["ms_per_step"] <= eng["ms_per_step"]
-    assert by["- observations (observations.observe)"]["ms_per_step"] > 0
+    assert 0 < batch["ms_per_step"] <= whole["ms_per_step"]
+    assert 0 < fast["ms_per_step"] <= batch["ms_per_step"]
+    assert 0 < by["  - core step (SingleStep._core_step)"]["ms_per_step"] <= fast["ms_per_step"]
+    assert 0 < by["    - compass kernel"]["ms_per_step"] <= fast["ms_per_step"]
     assert (out / "breakdown_make_vec_small.csv").exists()
-    after = (SwarmGymVectorEnv.step, engine.Engine.step, core.step, engine.swarm_increments)
+    after = (SwarmGymVectorEnv.step, engine.Engine.step, single.SingleStep.step,
+             single.swarm_increments, obs_kernels.compass)  # fmt: skip
     assert after == before
     with pytest.raises(ConfigError, match="breakdown"):
         breakdown.breakdown("vmas")
