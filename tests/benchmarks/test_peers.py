@@ -126,6 +126,39 @@ def test_bad_input_names_the_field_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
+def test_sb3_cpu_time_option_reaches_the_pair_and_picks_the_cpu_clock(tmp_path, monkeypatch):
+    """``--sb3-cpu-time`` times the SB3 pair by the process's CPU time: the flag reaches
+    ``_sb3_rate`` of the task side (not set: wall time), and ``_sb3_rate`` reads the clock it
+    names (a fake model whose learning takes 2 s of CPU and 10 s of wall time)."""
+    import types
+
+    seen: list[bool] = []
+    monkeypatch.setattr(peers, "_sb3_rate", lambda a, e, s, i, cpu=False: seen.append(cpu) or 1.0)
+    for flag in ([], ["--sb3-cpu-time"]):
+        out = tmp_path / f"cpu{len(flag)}"
+        peers.main(["--smoke", "--rounds", "1", "--only", "sb3_task", *flag, "--out", str(out)])
+    assert seen == [False, True]
+    monkeypatch.undo()
+
+    clocks = {"process_time": 0.0, "perf_counter": 0.0}
+
+    class Model:
+        def learn(self, steps, reset_num_timesteps=True):
+            clocks["process_time"] += 2.0
+            clocks["perf_counter"] += 10.0
+
+    import poc_env.agents.rl.train as train
+
+    monkeypatch.setattr(train, "make_model", lambda args, env, log: Model())
+    monkeypatch.setattr(train, "seed_everything", lambda seed: None)
+    fake_time = types.SimpleNamespace(**{k: (lambda k=k: clocks[k]) for k in clocks})
+    monkeypatch.setattr(peers, "time", fake_time)
+    env = types.SimpleNamespace(num_envs=3, close=lambda: None)
+    args = types.SimpleNamespace(n_steps=4)
+    assert peers._sb3_rate(args, env, 0, 2, cpu_time=True) == 2 * 12 / 2.0
+    assert peers._sb3_rate(args, env, 0, 2, cpu_time=False) == 2 * 12 / 10.0
+
+
 def test_sb3_pair_smoke_run(tmp_path):
     """The SB3 PPO pair (``--sb3``): PPO through ``train --task`` against PPO with the same
     settings on MPE2; each side runs where its packages import (SB3, and MPE2 with SuperSuit,
