@@ -23,20 +23,23 @@ import numpy as np
 from poc_env.errors import ConfigError
 
 #: ``(module, attribute path, label)`` of the timed parts of each contender, the whole first.
-_ENGINE = [
-    ("poc_env.sim.engine", "Engine.step", "engine step (Engine.step)"),
-    ("poc_env.sim.core", "step", "- core step (sim.core.step)"),
-    ("poc_env.sim.core", "sense", "  - sensing (sim.core.sense)"),
-    ("poc_env.sim.observations", "observe", "- observations (observations.observe)"),
-    ("poc_env.sim.engine", "swarm_increments", "- autopilot (control.swarm_increments)"),
-    ("poc_env.sim.engine", "reward_terms", "- reward terms (rewards.reward_terms)"),
-    ("poc_env.sim.engine", "infos", "- infos (engine.infos)"),
-    ("poc_env.sim.engine", "Engine.reset", "resets (Engine.reset)"),
+#: The batched adapters' step of every env at once: the single env's step (sim.single), nested.
+_FAST = [
+    ("poc_env.sim.single", "SingleStep.step", "- single step (sim.single.SingleStep.step)"),
+    ("poc_env.sim.single", "SingleStep._core_step", "  - core step (SingleStep._core_step)"),
+    ("poc_env.sim.single", "SingleStep._observe", "  - observations (SingleStep._observe)"),
+    ("poc_env._kernels.observations", "compass", "    - compass kernel"),
+    ("poc_env._kernels.observations", "coarse_poc", "    - coarse POC kernel"),
+    ("poc_env.sim.single", "swarm_increments", "  - autopilot (control.swarm_increments)"),
+    ("poc_env._kernels.observations", "vectors", "  - vectors kernel (observation, autopilot)"),
 ]
 PARTS: dict[str, list[tuple[str, str, str]]] = {
     "make_vec_small": [
         ("poc_env.envs.gym_vector", "SwarmGymVectorEnv.step", "make_vec step (whole)"),
-        *_ENGINE,
+        ("poc_env.envs.gym_vector", "SwarmGymVectorEnv._whole_step", "whole-batch step"),
+        *_FAST,
+        ("poc_env.sim.engine", "Engine.step", "steps of some envs (Engine.step)"),
+        ("poc_env.sim.engine", "Engine.reset", "resets (Engine.reset)"),
         ("poc_env.envs.gym_vector", "keep_rows", "finished agents' rows (keep_rows)"),
         ("poc_env.envs.gym_vector", "SwarmGymVectorEnv._infos", "info masks (_infos)"),
         ("poc_env.sim.engine", "mean_over", "reward mean (engine.mean_over)"),
@@ -71,8 +74,10 @@ PARTS: dict[str, list[tuple[str, str, str]]] = {
     "sb3_task": [
         ("", "", "SB3 PPO learn (whole)"),
         ("poc_env.envs.vector", "SwarmVecEnv.step_wait", "env step_wait"),
+        ("poc_env.envs.vector", "SwarmVecEnv._engine_step", "- engine step (_engine_step)"),
+        *_FAST,
+        ("poc_env.sim.engine", "Engine.reset", "- resets (Engine.reset)"),
         ("poc_env.envs.vector", "SwarmVecEnv.step_async", "env step_async"),
-        *_ENGINE,
     ],
 }
 PARTS["make_vec_paper62"] = PARTS["make_vec_small"]

@@ -2,6 +2,7 @@
 
     poc-env bench peers [--rounds 5] [--out results/peers] [--only KEY ...] [--sb3]
                         [--heading-envs 64] [--small-envs 256] [--vmas-envs 256] [--smoke]
+                        [--sb3-cpu-time]
 
 Every contender of :data:`CONTENDERS` is timed once per round, the rounds interleaved (the
 order rotates by one each round), on one thread (``OMP_NUM_THREADS=1`` and friends set before
@@ -23,7 +24,8 @@ rounds, a ratio is the ratio of two medians (with the range of the per-round rat
 - with ``--sb3`` (slow: PPO runs): SB3 PPO agent transitions/s through ``poc-env train --task``
   on :data:`SB3_TASK` against SB3 PPO with the same settings (``TrainArgs``: hyper-parameters,
   MLP, ``n_envs`` swarms) on MPE2 ``simple_spread_v3`` N=6 through SuperSuit (one warm-up
-  iteration, then ``sb3_iterations`` timed ones, one torch thread).
+  iteration, then ``sb3_iterations`` timed ones, one torch thread; ``--sb3-cpu-time``: timed
+  by the process's CPU time, steadier than wall time on a loaded machine).
 
 A peer whose package is not importable is reported as ``not installed`` (its row and every
 ratio that needs it), never a traceback. :data:`TARGETS` are the ratios issue 26 asks for;
@@ -75,6 +77,7 @@ class Settings:
     sb3_n_steps: int | None = None  # PPO n_steps / batch_size (None: TrainArgs' defaults)
     sb3_batch_size: int | None = None
     sb3_n_envs: int | None = None  # swarms (MPE2 worlds) side by side (None: TrainArgs')
+    sb3_cpu_time: bool = False  # time the SB3 pair by the process's CPU time, not wall time
 
 
 @dataclass(frozen=True)
@@ -213,11 +216,12 @@ def _sb3_args(s: Settings, seed: int):
     )
 
 
-def _sb3_rate(args, env, seed: int, iterations: int) -> float:
+def _sb3_rate(args, env, seed: int, iterations: int, cpu_time: bool = False) -> float:
     """Agent transitions/s of SB3 PPO (:func:`poc_env.agents.rl.train.make_model`: the policy,
     network and hyper-parameters of ``args``) on the VecEnv ``env``, one torch thread: one
     warm-up iteration, then ``iterations`` timed ones (rollouts and updates). SB3 counts a
-    transition per slot; a slot is one agent in both contenders."""
+    transition per slot; a slot is one agent in both contenders. ``cpu_time``: timed by the
+    process's CPU time (``time.process_time``) instead of wall time."""
     import torch as th
 
     from poc_env.agents.rl.train import make_model, seed_everything
@@ -227,9 +231,10 @@ def _sb3_rate(args, env, seed: int, iterations: int) -> float:
     model = make_model(args, env, None)
     rollout = args.n_steps * env.num_envs
     model.learn(rollout)
-    t0 = time.perf_counter()
+    clock = time.process_time if cpu_time else time.perf_counter
+    t0 = clock()
     model.learn(iterations * rollout, reset_num_timesteps=False)
-    rate = iterations * rollout / (time.perf_counter() - t0)
+    rate = iterations * rollout / (clock() - t0)
     env.close()
     return rate
 
@@ -242,7 +247,7 @@ def _sb3_task(s: Settings, seed: int) -> float:
 
     args = _sb3_args(s, seed)
     env = make_env(args, get_task(SB3_TASK).load_scenario())
-    return _sb3_rate(args, env, seed, s.sb3_iterations)
+    return _sb3_rate(args, env, seed, s.sb3_iterations, s.sb3_cpu_time)
 
 
 def _sb3_mpe(s: Settings, seed: int) -> float:
@@ -270,7 +275,7 @@ def _sb3_mpe(s: Settings, seed: int) -> float:
         return [seed] * env.num_envs
 
     env.seed = seed_all  # type: ignore[method-assign]
-    return _sb3_rate(args, env, seed, s.sb3_iterations)
+    return _sb3_rate(args, env, seed, s.sb3_iterations, s.sb3_cpu_time)
 
 
 #: Contenders timed only with ``--sb3`` (or named in ``--only``): a PPO run each, slow.
@@ -546,6 +551,12 @@ def build_parser() -> argparse.ArgumentParser:
         + ", ".join(SB3_KEYS)
         + ")",
     )
+    p.add_argument(
+        "--sb3-cpu-time",
+        action="store_true",
+        help="time the SB3 pair by the process's CPU time (time.process_time) instead of wall "
+        "time: steadier on a loaded machine (one thread each); the others keep wall time",
+    )
     p.add_argument("--smoke", action="store_true", help="tiny sizes (the test suite's run)")
     p.add_argument(
         "--breakdown",
@@ -590,6 +601,10 @@ def main(argv: list[str] | None = None) -> list[dict]:
             sb3_batch_size=16,
             sb3_n_envs=1,
         )
+    if args.sb3_cpu_time:
+        import dataclasses
+
+        s = dataclasses.replace(s, sb3_cpu_time=True)
     load0 = os.getloadavg()[0]
     rates = measure(keys, s, args.rounds)
     load1 = os.getloadavg()[0]

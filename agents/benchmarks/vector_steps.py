@@ -1,7 +1,7 @@
 """CPU time and peak allocation of ``gymnasium.make_vec`` steps, by kind of step.
 
     python agents/benchmarks/vector_steps.py [--scenario Small] [--envs 256] [--steps 800]
-                                             [--memory] [--seed 0]
+                                             [--memory] [--seed 0] [--sb3]
 
 Runs the newest ``UAVSearch-<scenario>-Heading`` task's batched vector env from a seeded reset
 under seeded random actions (20 warm-up steps first) and times each step with the process's
@@ -11,6 +11,11 @@ where some agents have finished. Prints the count, the median CPU time and, for 
 steps, how many envs reset on average; with ``--memory`` a second pass of the same steps under
 :mod:`tracemalloc` prints the largest peak allocation per env of each kind (numpy's arrays;
 numba's scratch inside kernels is not seen).
+
+``--sb3`` times the SB3 ``VecEnv`` of ``poc-env train --task`` on ``bench peers``' SB3 task
+instead (:data:`~poc_env.agents.benchmarks.breakdown.SB3_TASK`, ``TrainArgs``' swarms; a
+``step`` is ``step_async`` + ``step_wait`` of every slot, autoresets included): the mean and
+median CPU time of a step, the env's share of ``bench peers``' SB3 pair.
 
 It imports ``poc_env`` from ``PYTHONPATH``, so one copy of this file times any tree: run it
 alternately over two trees on a loaded machine and compare the medians of the pairs.
@@ -77,6 +82,33 @@ def peak_per_env(scenario: str, envs: int, steps: int, seed: int = 0) -> dict[st
     return {k: max(v) / envs / 1024 for k, v in peaks.items() if v}
 
 
+def time_sb3_steps(steps: int, seed: int = 0) -> dict[str, float]:
+    """``count``, ``mean_ms`` and ``median_ms`` (CPU) of the SB3 task VecEnv's steps under
+    seeded random actions, after 50 warm-up steps (``--sb3``)."""
+    import numpy as np
+
+    from poc_env.agents.benchmarks.breakdown import SB3_TASK
+    from poc_env.agents.rl.args import TrainArgs
+    from poc_env.agents.rl.train import make_env
+    from poc_env.tasks import get_task
+
+    args = TrainArgs(task=SB3_TASK, seed=seed, progress=False)
+    env = make_env(args, get_task(SB3_TASK).load_scenario())
+    env.seed(seed)
+    env.reset()
+    shape = (steps + 50, env.num_envs, *(env.action_space.shape or ()))
+    acts = np.random.default_rng(seed).uniform(-1, 1, shape).astype(np.float32)
+    for a in acts[:50]:
+        env.step(a)
+    times = []
+    for a in acts[50:]:
+        t = time.process_time()
+        env.step(a)
+        times.append((time.process_time() - t) * 1e3)
+    mean, median = statistics.mean(times), statistics.median(times)
+    return {"count": steps, "mean_ms": mean, "median_ms": median}
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenario", default="Small", help="task scenario part (default: Small)")
@@ -84,7 +116,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--steps", type=int, default=800)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--memory", action="store_true", help="also the peak allocation per env")
+    ap.add_argument("--sb3", action="store_true", help="the SB3 task VecEnv's steps instead")
     args = ap.parse_args(argv)
+    if args.sb3:
+        r = time_sb3_steps(args.steps, args.seed)
+        print(f"SB3 VecEnv step {r['count']:4d} steps, mean {r['mean_ms']:.4f} ms CPU, "
+              f"median {r['median_ms']:.4f} ms CPU")  # fmt: skip
+        return
     rows = time_steps(args.scenario, args.envs, args.steps, args.seed)
     for k in KINDS:
         r = rows[k]

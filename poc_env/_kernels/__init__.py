@@ -16,6 +16,8 @@ module              kernels (the public functions that call them)
 ``autopilot``       the heading and waypoint levels' autopilot and eq. 18 return rule
                     (:func:`poc_env.sim.control.swarm_increments`)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
+``priors``          a Gaussian-mixture prior's exponent and sub-cell sums
+                    (:func:`poc_env.theory.probability_map.gaussian_mixture`)
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells
                     (:mod:`poc_env.theory.regions`, the planner's objective)
 ``segments``        segments against polygon edges with certified orientation signs (the

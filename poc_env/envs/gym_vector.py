@@ -38,6 +38,7 @@ from poc_env.envs.parallel import OBS_TYPES, check_seed
 from poc_env.errors import ConfigError
 from poc_env.sim import core as sim
 from poc_env.sim import engine as engine_mod
+from poc_env.sim import single as single_mod
 from poc_env.theory.probability_map import validate_map
 
 try:  # gymnasium >= 1.1 names the autoreset modes
@@ -94,6 +95,12 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         self._autoreset = np.zeros(e, dtype=bool)
         self._mask_keys: list[str] = []
         self._all = np.arange(e)
+        #: The whole batch's step with its glue formed once (:class:`poc_env.sim.single.
+        #: SingleStep`, the PettingZoo env's: the engine's transition bit for bit), or None
+        #: (per-UAV beliefs). Steps of some envs (an autoreset that resets first) keep
+        #: :meth:`Engine.step <poc_env.sim.engine.Engine.step>`.
+        self._fast = single_mod.SingleStep(eng) if single_mod.SingleStep.supports(eng) else None
+        self._info_keys: tuple[str, ...] = ()
 
     @property
     def params(self) -> sim.Params:
@@ -146,6 +153,7 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             priors = [validate_map(prior, self.params.grid, "options['prior']")] * self.num_envs
         self._last, info = self.engine.reset(priors=priors)
         self._last_info = view_info(info)
+        self._info_keys = tuple(info)  # the engine's keys, in its order (the same at a step)
         self._live[:] = True
         self._autoreset[:] = False
         return self._joint(), self._infos()
@@ -236,7 +244,8 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         terminated, truncated), each ``(len(going),)``, as arrays over those envs."""
         whole = going is None
         live = self._live.copy() if whole else self._live[going]
-        tr = self.engine.step(a, going)  # finished agents' actions: ignored
+        # finished agents' actions: ignored
+        tr = self._whole_step(a) if whole and self._fast is not None else self.engine.step(a, going)
         reward = engine_mod.mean_over(tr.reward, live)
         done = tr.over
         truncated = done & tr.truncated.any(axis=1)
@@ -267,3 +276,33 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         self._last = keep_rows(self._last, tr.obs, envs, live)
         self._last_info = keep_rows(self._last_info, tr.info, envs, live)
         return reward, terminated, truncated
+
+    def _whole_step(self, a: np.ndarray) -> engine_mod.Transition:
+        """:meth:`Engine.step <poc_env.sim.engine.Engine.step>` of every env under ``a``
+        through :class:`~poc_env.sim.single.SingleStep`: the same transition bit for bit, its
+        infos (:func:`~poc_env.sim.engine.infos`) taken from the step's per-agent values grouped
+        by type (one copy per group, each key a contiguous row of it) and the state's."""
+        assert self._fast is not None
+        s = self._fast.step(a)
+        st = self.engine.current
+        groups: dict[str, np.ndarray] = {}
+        for names, values in (
+            (single_mod.FLOAT_INFOS, s.finfo),
+            (single_mod.BOOL_INFOS, s.binfo),
+            (single_mod.INT_INFOS, s.iinfo),
+        ):
+            rows = np.moveaxis(values, -1, 0).copy()  # (keys, E, N): the step's own arrays
+            groups.update(zip(names, rows))
+        info: dict[str, np.ndarray] = {}
+        for key in self._info_keys:
+            if key == "posc":  # per env, as the engine's
+                info[key] = st.posc.astype(float)
+            elif key == "links":
+                info[key] = st.links.copy()
+            elif key in groups:
+                info[key] = groups[key]
+            else:  # a key the kernel does not group (moving targets' mass_out): the engine's
+                info[key] = engine_mod.infos(self.params, st, s.events, s.terms_dict())[key]
+        return engine_mod.Transition(
+            s.obs, s.reward, s.terms_dict(), s.events, s.terminated, s.truncated, s.over, info
+        )

@@ -79,6 +79,7 @@ replays env ``e``'s first episode (with the scenario's prior) transition for tra
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -91,6 +92,7 @@ from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError
 from poc_env.errors import ConfigError, MissingExtraError
 from poc_env.sim import core as sim
 from poc_env.sim import engine as engine_mod
+from poc_env.sim import single as single_mod
 from poc_env.theory.probability_map import validate_map
 
 try:
@@ -196,6 +198,10 @@ class SwarmVecEnv(VecEnv):
         self.return_autopilot = return_autopilot
         self._t_start = time.time()
         self._closed = False
+        #: The engine's step with its glue formed once (:class:`poc_env.sim.single.SingleStep`,
+        #: the PettingZoo env's; every env is stepped at once here too), or None (per-UAV
+        #: beliefs: :meth:`Engine.step <poc_env.sim.engine.Engine.step>`).
+        self._fast = single_mod.SingleStep(eng) if single_mod.SingleStep.supports(eng) else None
 
     @property
     def params(self) -> sim.Params:
@@ -239,7 +245,7 @@ class SwarmVecEnv(VecEnv):
             p = self._options[k * self.n_agents].get("prior")
             field = f"options[{k * self.n_agents}]['prior']"
             given.append(None if p is None else validate_map(p, grid, field))
-        obs, _ = self.engine.reset(envs, given)
+        obs, _ = self.engine.reset(envs, given, with_info=False)
         self._active[envs] = True
         self._returns[envs] = 0.0
         self._lengths[envs] = 0
@@ -282,11 +288,11 @@ class SwarmVecEnv(VecEnv):
     # -- stepping --------------------------------------------------------------------------------
     def step_async(self, actions: np.ndarray) -> None:
         a = np.asarray(actions, dtype=float)
-        width = int(np.prod(self.action_space.shape or (1,)))
+        width = math.prod(self.action_space.shape or (1,))  # a subclass may set its own
         if a.size != self.num_envs * width:
             raise ConfigError("actions", a.shape, f"shape ({self.num_envs}, {width})")
         a = a.reshape(self.n_envs, self.n_agents, width)
-        if not np.isfinite(a).all():
+        if not np.logical_and.reduce(np.isfinite(a), axis=None):
             raise ConfigError("actions", "non-finite values", "finite numbers in [-1, 1]")
         self._actions = self._sim_actions(a)
 
@@ -310,7 +316,7 @@ class SwarmVecEnv(VecEnv):
             raise EpisodeOverError("call reset() before step()")
         p, n = self.params, self.n_agents
         active = self._active
-        tr = self.engine.step(self._actions, with_info=False)  # the few infos: from the state
+        tr = self._engine_step()  # the few infos: from the state
         st = self.engine.current
         reward = np.where(active, self._reward(tr, st), 0.0)
         self._returns += reward
@@ -324,41 +330,60 @@ class SwarmVecEnv(VecEnv):
 
         obs = self._slots(tr.obs)
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-        for k in np.flatnonzero(~was_active):
-            infos[k]["inactive"] = True
-        for k in np.flatnonzero(done):
-            info = infos[k]
-            info["terminal_observation"] = (
-                self._slot_obs(obs, k) if was_active[k] else self._zero_obs()
-            )
-            info["TimeLimit.truncated"] = bool(truncated[k])
-        self._write(obs, ~still.ravel(), 0.0)  # finished agents show the placeholder
+        # (each loop and write below runs only when some slot needs it: usually none does)
+        if not was_active.all():
+            for k in np.flatnonzero(~was_active).tolist():
+                infos[k]["inactive"] = True
+        if done.any():
+            for k in np.flatnonzero(done).tolist():
+                info = infos[k]
+                info["terminal_observation"] = (
+                    self._slot_obs(obs, k) if was_active[k] else self._zero_obs()
+                )
+                info["TimeLimit.truncated"] = bool(truncated[k])
+        if not still.all():
+            self._write(obs, ~still.ravel(), 0.0)  # finished agents show the placeholder
         self._active = still
 
+        if not env_end.any():
+            return obs, reward.ravel().astype(np.float32), done, infos
         ended = np.flatnonzero(env_end)
-        if len(ended):
-            elapsed = round(time.time() - self._t_start, 6)
-            posc_all = st.posc.tolist()
-            landed, crashed = st.landed.tolist(), st.crashed.tolist()
-            violations = st.violations.tolist()
-            for k in ended.tolist():
-                posc = posc_all[k]
-                for i in range(n):
-                    info = infos[k * n + i]
-                    info["episode"] = {
-                        "r": float(self._returns[k, i]),  # unrounded, unlike Monitor's
-                        "l": int(self._lengths[k, i]),
-                        "t": elapsed,
-                        "posc": posc,
-                    }
-                    info["posc"] = posc
-                    info["landed"] = landed[k][i]
-                    info["crashed"] = crashed[k][i]
-                    info["violations"] = violations[k][i]
-            first = self._new_episodes(ended)
-            slots = (ended[:, None] * n + np.arange(n)).ravel()
-            self._write(obs, slots, first)
+        elapsed = round(time.time() - self._t_start, 6)
+        posc_all = st.posc.tolist()
+        landed, crashed = st.landed.tolist(), st.crashed.tolist()
+        violations = st.violations.tolist()
+        for k in ended.tolist():
+            posc = posc_all[k]
+            for i in range(n):
+                info = infos[k * n + i]
+                info["episode"] = {
+                    "r": float(self._returns[k, i]),  # unrounded, unlike Monitor's
+                    "l": int(self._lengths[k, i]),
+                    "t": elapsed,
+                    "posc": posc,
+                }
+                info["posc"] = posc
+                info["landed"] = landed[k][i]
+                info["crashed"] = crashed[k][i]
+                info["violations"] = violations[k][i]
+        first = self._new_episodes(ended)
+        slots = (ended[:, None] * n + np.arange(n)).ravel()
+        self._write(obs, slots, first)
         return obs, reward.ravel().astype(np.float32), done, infos
+
+    def _engine_step(self) -> engine_mod.Transition:
+        """The engine's step of every env under the last actions, without infos:
+        :meth:`Engine.step <poc_env.sim.engine.Engine.step>`'s transition (``with_info=False``),
+        through :class:`~poc_env.sim.single.SingleStep` when it runs the engine (the same
+        arrays bit for bit, ``tests/sim/test_single.py``; ``tests/rl/test_vector.py`` runs both
+        here)."""
+        fast = self._fast
+        if fast is None:
+            return self.engine.step(self._actions, with_info=False)
+        s = fast.step(self._actions)
+        return engine_mod.Transition(
+            s.obs, s.reward, s.terms_dict(), s.events, s.terminated, s.truncated, s.over, {}
+        )
 
     def _zero_obs(self):
         space = self.observation_space

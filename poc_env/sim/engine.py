@@ -468,9 +468,11 @@ class Engine:
         self,
         envs: Sequence[int] | np.ndarray | None = None,
         priors: Sequence[np.ndarray | None] | None = None,
+        with_info: bool = True,
     ) -> Any:
         """Start new episodes in ``envs`` (default all); return their first observations and
-        infos (:func:`infos` at a reset: step quantities 0/False), batched over ``envs``.
+        infos (:func:`infos` at a reset: step quantities 0/False), batched over ``envs``
+        (``with_info=False``: an empty dict, for an adapter that reads no reset infos).
 
         ``priors``: one per env of ``envs``, a ``(ny, nx)`` map or None (then the
         :class:`PriorSource` draws it from the env's generator); maps are taken as given
@@ -504,7 +506,7 @@ class Engine:
             self.state = fresh
         else:
             sim.scatter_envs(self.state, fresh, idx)
-        return self.observe_state(fresh, idx), infos(p, fresh)
+        return self.observe_state(fresh, idx), (infos(p, fresh) if with_info else {})
 
     # -- observations ------------------------------------------------------------------------------
     def observe_state(self, state: sim.State, envs: Sequence[int] | np.ndarray | None = None):

@@ -136,10 +136,6 @@ _NO_COARSE = np.zeros((1, 1, 1))
 def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.ndarray:
     """(E, N, VECTOR_SIZE) float32 state vectors of every agent, written into ``out`` when
     given (a view of the flat observation)."""
-    sc = params.scenario
-    u = sc.uav
-    bx0, by0, bx1, by1 = params.bounds
-    w, h = bx1 - bx0, by1 - by0
     n = state.flying.shape[1]
     if out is None:
         out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
@@ -153,25 +149,43 @@ def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.n
         state.flying,
         state.step,
         params.landing,
-        float(bx0),
-        float(by0),
-        float(w),
-        float(h),
-        _diagonal(w, h),
-        float(u.max_altitude_m),
-        float(u.min_speed_mps),
-        float(u.max_speed_mps - u.min_speed_mps),
-        float(u.max_pitch_rad),
-        float(u.endurance_s),
-        float(u.usable_endurance_s),
-        float(params.horizon),
-        float(sc.comms.range_m),
-        float(max(n - 1, 1)),
-        _LOW,
-        _HIGH,
+        *_vector_constants(params, n),
         out,
     )
     return out
+
+
+#: The vectors kernel's arguments from ``bx0`` to ``high``: 14 floats and two bound arrays.
+_VectorConstants = tuple[
+    float, float, float, float, float, float, float, float, float, float, float, float, float,
+    float, np.ndarray, np.ndarray,
+]  # fmt: skip
+#: :func:`_vector_constants` of the Params seen last, by id (each entry keeps its Params).
+_VECTOR_CONSTANTS: dict[tuple[int, int], tuple[Params, _VectorConstants]] = {}
+
+
+def _vector_constants(params: Params, n: int) -> _VectorConstants:
+    """The vectors kernel's arguments after the state's and the landing fields (from ``bx0``
+    to ``high``) for ``params`` and ``n`` UAVs per env, formed once per Params (a step
+    computes the vectors twice: for the autopilot and the observation)."""
+    key = (id(params), n)
+    hit = _VECTOR_CONSTANTS.get(key)
+    if hit is not None and hit[0] is params:
+        return hit[1]
+    sc = params.scenario
+    u = sc.uav
+    bx0, by0, bx1, by1 = params.bounds
+    w, h = bx1 - bx0, by1 - by0
+    k: _VectorConstants = (
+        float(bx0), float(by0), float(w), float(h), _diagonal(w, h), float(u.max_altitude_m),
+        float(u.min_speed_mps), float(u.max_speed_mps - u.min_speed_mps),
+        float(u.max_pitch_rad), float(u.endurance_s), float(u.usable_endurance_s),
+        float(params.horizon), float(sc.comms.range_m), float(max(n - 1, 1)), _LOW, _HIGH,
+    )  # fmt: skip
+    if len(_VECTOR_CONSTANTS) >= 64:  # many scenarios in one process: start over
+        _VECTOR_CONSTANTS.clear()
+    _VECTOR_CONSTANTS[key] = (params, k)
+    return k
 
 
 @functools.lru_cache(maxsize=64)
@@ -244,6 +258,14 @@ class CompassFeatures:
             b["vector"].start, b["compass"].start, b["others"].start, b["mean_poc"].start,
             b["index"].start, N_IDS, N_SECTORS, self.agent_index,
         )  # fmt: skip
+        g = params.grid
+        bx0, by0, bx1, by1 = params.bounds
+        x0, y0, x1, y1 = g.bounds
+        self._grid_box = (float(x0), float(y0), float(x1), float(y1), float(g.cell_m))
+        self._area = (
+            float(bx0), float(by0), float(bx1 - bx0), float(by1 - by0), float(OTHERS_RADIUS_M),
+            float(self.others),
+        )  # fmt: skip
 
     def __call__(self, raster: np.ndarray, vector: np.ndarray, k) -> np.ndarray:
         """``raster (B, C, ny, nx)``, ``vector (B, VECTOR_SIZE)`` of UAVs ``k (B,)`` ->
@@ -280,22 +302,18 @@ class CompassFeatures:
         ``out (E, N, F >= FEATURES)``: written in place (zeroed, then the compass blocks at
         their offsets; the set observation's blocks follow them)."""
         params = self.params
-        g = params.grid
         vec = vectors(params, state)
         poc = coarse_poc(params, state, poc_scale)
         e, n = state.flying.shape
         if out is None:
             out = np.empty((e, n, FEATURES), dtype=np.float32)
-        bx0, by0, bx1, by1 = params.bounds
-        x0, y0, x1, y1 = g.bounds
         _kernels.compass(
             poc,
             vec,
             state.pos,
             state.flying,
-            (float(x0), float(y0), float(x1), float(y1), float(g.cell_m)),
-            (float(bx0), float(by0), float(bx1 - bx0), float(by1 - by0),
-             float(OTHERS_RADIUS_M), float(self.others)),
+            self._grid_box,
+            self._area,
             self._xs,
             self._ys,
             self._edges,

@@ -13,6 +13,7 @@ user's map is read by :func:`load_map` from ``.npy`` or ``.csv``.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import warnings
 from dataclasses import dataclass
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import box
 
+import poc_env._kernels.priors as _priors
 from poc_env.config import GaussianComponent, MapConfig, PriorConfig
 from poc_env.errors import MapFileError
 
@@ -120,6 +122,36 @@ class Grid:
 # --------------------------------------------------------------------------- priors
 
 
+@functools.lru_cache(maxsize=64)
+def _sample_axes(grid: Grid, s: int) -> tuple[np.ndarray, np.ndarray]:
+    """The x (``nx * s``) and y (``ny * s``) coordinates of :meth:`Grid.sample_points`' grid
+    (``sample_points(s)[j, i] == (xs[i], ys[j])``), read-only, once per grid."""
+    x0, y0 = grid.origin_m
+    h = grid.cell_m / s
+    xs = x0 + (np.arange(grid.nx * s) + 0.5) * h
+    ys = y0 + (np.arange(grid.ny * s) + 0.5) * h
+    xs.flags.writeable = False
+    ys.flags.writeable = False
+    return xs, ys
+
+
+def _coarsen_in_order(grid: Grid, fine: np.ndarray, s: int) -> np.ndarray:
+    """:meth:`Grid.coarsen` of a C-contiguous float64 ``(ny s, nx s)`` array, bit for bit, in
+    one compiled pass (:func:`poc_env._kernels.priors.coarsen`): numpy's two-axis sum adds each
+    cell's sub-rows in order to 0, each sub-row summed from its first value in order (its
+    pairwise sum below 8 values), which the kernel spells out for ``1 < s < 8`` and ``nx > 1``
+    (else numpy's own sum: a single column or longer sub-rows sum otherwise).
+    ``tests/theory/test_probability_map.py`` pins it."""
+    f = np.asarray(fine)
+    if not (1 < s < 8 and grid.nx > 1 and f.dtype == np.float64 and f.flags.c_contiguous):
+        return grid.coarsen(f, s)
+    if f.shape != (grid.ny * s, grid.nx * s):
+        raise ValueError(f"fine array of shape {f.shape} for {grid.ny} x {grid.nx} cells of {s}")
+    out = np.empty(grid.shape)
+    _priors.coarsen(f, s, out)
+    return out
+
+
 def gaussian_mixture(
     grid: Grid,
     components: tuple[GaussianComponent, ...] | list[GaussianComponent],
@@ -133,19 +165,29 @@ def gaussian_mixture(
     density over the cell, not its value at the centre) and normalised on the grid, so a
     component's ``weight`` (relative to the others) is exactly its share of the mass on the map.
     ``background`` is the share of mass spread uniformly.
+
+    Per component, on the sub-cell centres ``(x, y)`` (:meth:`Grid.sample_points`) with
+    ``(dx, dy)`` their offsets from the mean: ``u = (c dx + s dy) / sigma_x``,
+    ``v = (-s dx + c dy) / sigma_y`` (``c, s``: cosine and sine of the rotation), density
+    ``exp(-0.5 (u^2 + v^2))``, summed per cell (:meth:`Grid.coarsen`). The exponent and the
+    sums are compiled passes over the sub-cell axes (:mod:`poc_env._kernels.priors`: the same
+    floating-point operations, in the same order, as numpy on the stacked points; numpy's
+    ``exp`` between them), so a reset draws a random prior in a fraction of the time.
     """
-    pts = grid.sample_points(oversample)
+    xs, ys = _sample_axes(grid, oversample)
     mass = np.zeros(grid.shape)
     weights = np.array([c.weight for c in components], dtype=float)
     if len(components):
         weights = weights / weights.max()  # first: a sum of weights near 1e308 overflows
         weights = weights / weights.sum()
+    q = np.empty((len(ys), len(xs)))
     for w, comp in zip(weights, components):
-        d = pts - np.asarray(comp.mean_m)
+        mx, my = (float(m) for m in comp.mean_m)
         c, s = np.cos(comp.rotation_rad), np.sin(comp.rotation_rad)
-        u = (c * d[..., 0] + s * d[..., 1]) / comp.sigma_m[0]
-        v = (-s * d[..., 0] + c * d[..., 1]) / comp.sigma_m[1]
-        part = grid.coarsen(np.exp(-0.5 * (u * u + v * v)), oversample)
+        sx, sy = (float(sd) for sd in comp.sigma_m)
+        _priors.mixture_exponent(xs, ys, mx, my, float(c), float(s), sx, sy, q)
+        np.exp(q, out=q)
+        part = _coarsen_in_order(grid, q, oversample)
         if part.sum() > 0:  # a component wholly off the grid contributes nothing
             mass += w * part / part.sum()
     total = mass.sum()

@@ -126,6 +126,39 @@ def test_bad_input_names_the_field_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
+def test_sb3_cpu_time_option_reaches_the_pair_and_picks_the_cpu_clock(tmp_path, monkeypatch):
+    """``--sb3-cpu-time`` times the SB3 pair by the process's CPU time: the flag reaches
+    ``_sb3_rate`` of the task side (not set: wall time), and ``_sb3_rate`` reads the clock it
+    names (a fake model whose learning takes 2 s of CPU and 10 s of wall time)."""
+    import types
+
+    seen: list[bool] = []
+    monkeypatch.setattr(peers, "_sb3_rate", lambda a, e, s, i, cpu=False: seen.append(cpu) or 1.0)
+    for flag in ([], ["--sb3-cpu-time"]):
+        out = tmp_path / f"cpu{len(flag)}"
+        peers.main(["--smoke", "--rounds", "1", "--only", "sb3_task", *flag, "--out", str(out)])
+    assert seen == [False, True]
+    monkeypatch.undo()
+
+    clocks = {"process_time": 0.0, "perf_counter": 0.0}
+
+    class Model:
+        def learn(self, steps, reset_num_timesteps=True):
+            clocks["process_time"] += 2.0
+            clocks["perf_counter"] += 10.0
+
+    import poc_env.agents.rl.train as train
+
+    monkeypatch.setattr(train, "make_model", lambda args, env, log: Model())
+    monkeypatch.setattr(train, "seed_everything", lambda seed: None)
+    fake_time = types.SimpleNamespace(**{k: (lambda k=k: clocks[k]) for k in clocks})
+    monkeypatch.setattr(peers, "time", fake_time)
+    env = types.SimpleNamespace(num_envs=3, close=lambda: None)
+    args = types.SimpleNamespace(n_steps=4)
+    assert peers._sb3_rate(args, env, 0, 2, cpu_time=True) == 2 * 12 / 2.0
+    assert peers._sb3_rate(args, env, 0, 2, cpu_time=False) == 2 * 12 / 10.0
+
+
 def test_sb3_pair_smoke_run(tmp_path):
     """The SB3 PPO pair (``--sb3``): PPO through ``train --task`` against PPO with the same
     settings on MPE2; each side runs where its packages import (SB3, and MPE2 with SuperSuit,
@@ -182,24 +215,29 @@ def test_declared_agents_are_the_scenarios():
 
 def test_breakdown_times_the_parts_and_restores_them(tmp_path):
     """``--breakdown``: a row per part of the contender's step, the whole first at 100 %, the
-    engine's parts inside it (nested parts never exceed what contains them), written as a
-    table set; the timed functions are the original ones afterwards. A bad key names it."""
+    whole-batch step's parts inside it (nested parts never exceed what contains them), written
+    as a table set; the timed functions are the original ones afterwards. A bad key names it."""
+    from poc_env._kernels import observations as obs_kernels
     from poc_env.agents.benchmarks import breakdown
     from poc_env.envs.gym_vector import SwarmGymVectorEnv
-    from poc_env.sim import core, engine
+    from poc_env.sim import engine, single
 
-    before = (SwarmGymVectorEnv.step, engine.Engine.step, core.step, engine.swarm_increments)
+    before = (SwarmGymVectorEnv.step, engine.Engine.step, single.SingleStep.step,
+              single.swarm_increments, obs_kernels.compass)  # fmt: skip
     out = tmp_path / "bd"
     rows = peers.main(["--breakdown", "make_vec_small", "--smoke", "--out", str(out)])
     by = {r["part"]: r for r in rows}
     assert [r["part"] for r in rows] == [p[2] for p in breakdown.PARTS["make_vec_small"]]
-    whole, eng = rows[0], by["engine step (Engine.step)"]
+    whole, batch = rows[0], by["whole-batch step"]
+    fast = by["- single step (sim.single.SingleStep.step)"]
     assert whole["share"] == 100.0 and whole["ms_per_step"] > 0
-    assert 0 < eng["ms_per_step"] <= whole["ms_per_step"]
-    assert 0 < by["- core step (sim.core.step)"]["ms_per_step"] <= eng["ms_per_step"]
-    assert by["- observations (observations.observe)"]["ms_per_step"] > 0
+    assert 0 < batch["ms_per_step"] <= whole["ms_per_step"]
+    assert 0 < fast["ms_per_step"] <= batch["ms_per_step"]
+    assert 0 < by["  - core step (SingleStep._core_step)"]["ms_per_step"] <= fast["ms_per_step"]
+    assert 0 < by["    - compass kernel"]["ms_per_step"] <= fast["ms_per_step"]
     assert (out / "breakdown_make_vec_small.csv").exists()
-    after = (SwarmGymVectorEnv.step, engine.Engine.step, core.step, engine.swarm_increments)
+    after = (SwarmGymVectorEnv.step, engine.Engine.step, single.SingleStep.step,
+             single.swarm_increments, obs_kernels.compass)  # fmt: skip
     assert after == before
     with pytest.raises(ConfigError, match="breakdown"):
         breakdown.breakdown("vmas")

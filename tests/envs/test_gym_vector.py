@@ -11,6 +11,7 @@ import pytest
 
 import poc_env  # (also registers the tasks)
 from poc_env.sim import core as sim
+from poc_env.sim import single
 
 TID = "poc_env/UAVSearch-Small-Heading-v1"
 
@@ -70,12 +71,18 @@ def test_the_autoreset_step_steps_every_env_when_the_step_is_per_env(monkeypatch
     fastest current) the ended envs are reset without being stepped."""
     calls: list = []
     step = sim.step
+    fast_step = single.SingleStep.step
 
     def counted(params, state, actions, rngs):
         calls.append(state.flying.shape[0])
         return step(params, state, actions, rngs)
 
+    def counted_fast(self, actions):  # the whole batch's step (make_vec's fast path)
+        calls.append(self.engine.current.flying.shape[0])
+        return fast_step(self, actions)
+
     monkeypatch.setattr(sim, "step", counted)
+    monkeypatch.setattr(single.SingleStep, "step", counted_fast)
     v = gymnasium.make_vec(task, num_envs=4, vectorization_mode="vector_entry_point", max_cycles=3)
     assert sim.step_is_per_env(v.unwrapped.params) == ("Drift" not in task)
     v.reset(seed=1)
@@ -83,3 +90,50 @@ def test_the_autoreset_step_steps_every_env_when_the_step_is_per_env(monkeypatch
     for _ in range(4):  # the fourth step autoresets every env
         v.step(a)
     assert calls == steps
+
+
+@pytest.mark.parametrize(
+    ("task", "kwargs"),
+    [
+        (
+            "poc_env/UAVSearch-Small-Heading-v1",
+            {"overrides": {"comms.link_failure_prob": 0.3}, "max_cycles": 10},
+        ),
+        ("poc_env/UAVSearch-Small-Drift-Heading-v1", {"max_cycles": 9}),
+        ("poc_env/UAVSearch-Paper62-Random-Heading-v1", {"obs_type": "dict", "max_cycles": 12}),
+        (
+            "poc_env/UAVSearch-Small-Heading-v1",
+            {"overrides": {"constraints.violation": "shield", "episode.horizon_steps": 10}},
+        ),
+    ],
+    ids=["failures", "drift", "paper62-random-dict", "shield"],
+)
+def test_fast_whole_batch_step_equals_the_engines_step(task, kwargs):
+    """The whole batch's step through :class:`~poc_env.sim.single.SingleStep` (``_fast``)
+    returns what :meth:`Engine.step` returns (``_fast = None``): observations, rewards, ends
+    and every info (keys in order, dtypes, values), over autoresets."""
+    kw = {"num_envs": 3, "vectorization_mode": "vector_entry_point", **kwargs}
+    fast, ref = gymnasium.make_vec(task, **kw), gymnasium.make_vec(task, **kw)
+    assert fast.unwrapped._fast is not None, "the fast step is not used"
+    ref.unwrapped._fast = None
+    got, want = fast.reset(seed=2), ref.reset(seed=2)
+    rng = np.random.default_rng(2)
+    resets = 0
+    for t in range(30):
+        a = rng.uniform(-1.2, 1.2, fast.action_space.shape).astype(np.float32)
+        resets += int(fast.unwrapped._autoreset.any())
+        got, want = fast.step(a), ref.step(a)
+        if isinstance(got[0], dict):
+            for key in want[0]:
+                np.testing.assert_array_equal(got[0][key], want[0][key], err_msg=key)
+        else:
+            np.testing.assert_array_equal(got[0], want[0])
+        for j in range(1, 4):
+            assert got[j].dtype == want[j].dtype
+            np.testing.assert_array_equal(got[j], want[j], err_msg=f"step {t} item {j}")
+        assert list(got[4]) == list(want[4])
+        for key, w in want[4].items():
+            g = got[4][key]
+            assert g.dtype == w.dtype and g.shape == w.shape, key
+            np.testing.assert_array_equal(g, w, err_msg=f"step {t} {key}")
+    assert resets >= 1

@@ -359,3 +359,50 @@ def test_return_autopilot_at_the_increments_level():
     assert outcome[False] and not any(landed for landed, _ in outcome[False])
     with pytest.raises(ConfigError, match="return_autopilot"):
         SwarmVecEnv("small", control="increments", return_autopilot=1)
+
+
+def _same_infos(a: list[dict], b: list[dict]) -> None:
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        assert list(x) == list(y)
+        for key in x:
+            if key == "episode":  # its "t" is wall time
+                assert {k: v for k, v in x[key].items() if k != "t"} == {
+                    k: v for k, v in y[key].items() if k != "t"
+                }
+            elif key == "terminal_observation":
+                _assert_obs_equal(x[key], y[key])
+            else:
+                assert type(x[key]) is type(y[key]) and x[key] == y[key], key
+
+
+@pytest.mark.parametrize(
+    ("scenario", "kwargs"),
+    [
+        ("paper_6_2", {"obs_type": "compass", "control": "heading_clip", "random_priors": True}),
+        ("small", {"obs_type": "dict", "overrides": {"comms.link_failure_prob": 0.3}}),
+        ("small", {"obs_type": "flat", "control": "waypoint", "return_autopilot": False}),
+    ],
+    ids=["paper62-compass-random", "small-dict-failures", "small-flat-waypoint"],
+)
+def test_fast_step_equals_the_engines_step(scenario, kwargs):
+    """The adapter's step through :class:`~poc_env.sim.single.SingleStep` (``_fast``) gives
+    what it gives through :meth:`Engine.step` (``_fast = None``), bit for bit: observations,
+    rewards, dones and infos over episodes with finished agents and autoresets."""
+    overrides = {"episode.horizon_steps": 25, **kwargs.pop("overrides", {})}
+    fast = SwarmVecEnv(scenario, n_envs=3, seed=4, overrides=overrides, **kwargs)
+    ref = SwarmVecEnv(scenario, n_envs=3, seed=4, overrides=overrides, **kwargs)
+    assert fast._fast is not None, "the fast step is not used"
+    ref._fast = None
+    _assert_obs_equal(fast.reset(), ref.reset())
+    rng = np.random.default_rng(5)
+    ends = 0
+    for _ in range(60):
+        acts = rng.uniform(-1.2, 1.2, (fast.num_envs, *fast.action_space.shape))
+        got, want = fast.step(acts), ref.step(acts)
+        _assert_obs_equal(got[0], want[0])
+        for x, y in zip(got[1:3], want[1:3], strict=True):
+            assert x.dtype == y.dtype and np.array_equal(x, y)
+        _same_infos(got[3], want[3])
+        ends += sum("episode" in info for info in got[3])
+    assert ends >= 2 * fast.n_agents  # autoresets were compared
