@@ -329,7 +329,7 @@ class SwarmVecEnv(VecEnv):
         was_active = active.ravel()
 
         obs = self._slots(tr.obs)
-        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        infos = [{} for _ in range(self.num_envs)]  # list[dict[str, Any]]
         # (each loop and write below runs only when some slot needs it: usually none does)
         if not was_active.all():
             for k in np.flatnonzero(~was_active).tolist():

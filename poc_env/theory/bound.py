@@ -387,7 +387,7 @@ def _merge_groups(tau, rate, budget):
     groups are merged into the second with the smaller transit of the two (a relaxation: a cell
     set's capacity can only grow, the total effort stays the same; the bound stays valid,
     looser); on grids of more than ``sqrt(_MAX_PAIRS)`` cells, two rows are merged into one."""
-    groups: dict[bytes, list] = {}
+    groups = {}  # dict[bytes, list]: transit row -> its groups
     for g in range(tau.shape[0]):
         key = tau[g].tobytes()
         if key in groups:
