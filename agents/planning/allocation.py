@@ -646,9 +646,8 @@ def make_allocation_plan(
                     RANGE_MARGIN * sc.comms.range_m,
                     sc.comms.min_neighbours,
                 ),
-                router=router,
             )
-            if router.active:  # moves and the route keep c from the zones (issue 24)
+            if router.active:  # the refined routes made flyable: they keep c (issue 24)
                 r_routes = [_around(k, r_routes[k]) if r_routes[k] else [] for k in range(n)]
             # the refinement scores W x length per cell; kept only if the environment's model
             # agrees (on cells wider than W it can lose: large_400 at 10 km, 0.463 -> 0.416)

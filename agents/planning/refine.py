@@ -317,7 +317,6 @@ def refine_routes(
     sweeps: int = 4,
     headings=None,
     airspace: Airspace | None = None,
-    router: ZoneRouter | None = None,
 ) -> tuple[list[list[list[float]]], float]:
     """Refined waypoints per UAV and their planned POS (module docstring). ``routes[k]`` are
     UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; a route that does not
@@ -325,9 +324,9 @@ def refine_routes(
     does, and every kept move keeps it fitting. ``headings`` (n,): the UAVs' headings at
     take-off (rad), or None. With ``airspace``, a move is kept only if it adds no
     :func:`swarm_violations` at the planned positions (the best-scoring candidates are tried in
-    turn, at most :data:`TRIES`). With ``router``, a move whose new legs enter a no-fly zone
-    grown by the clearance c (:meth:`poc_env.sim.routing.ZoneRouter.crosses`) is not tried, so
-    routes made flyable stay flyable (eq. 20) and keep c."""
+    turn, at most :data:`TRIES`). The moves do not see no-fly zones: on a map with zones the
+    caller makes the refined routes flyable afterwards (:func:`fly_around`, eq. 20, keeping the
+    clearance c)."""
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     n = len(takeoff)
