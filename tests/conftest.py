@@ -34,26 +34,10 @@ def usual_lawnmower():
     return _usual_lawnmower
 
 
-def _fly(sc, policy, seed=0):
-    """(no-fly steps, out-of-bounds steps, UAVs landed) of one episode of ``policy`` on the
-    scenario ``sc``: the environment's eq. 20 infos ``violation_no_fly`` and
-    ``violation_out_of_bounds``, summed over the UAVs and steps."""
-    import poc_env
-
-    env = poc_env.parallel_env(sc)
-    obs, _ = env.reset(seed=seed)
-    policy.reset(env, seed)
-    nofly = oob = 0
-    while env.agents:
-        obs, _, _, _, info = env.step(policy.predict(obs)[0])
-        nofly += sum(int(i["violation_no_fly"]) for i in info.values())
-        oob += sum(int(i["violation_out_of_bounds"]) for i in info.values())
-    landed = int(env.sim_state.landed[0].sum())
-    env.close()
-    return nofly, oob, landed
-
-
 @pytest.fixture
 def fly():
-    """Fly a policy's episode and count its eq. 20 steps (:func:`_fly`)."""
-    return _fly
+    """Fly a policy's episode and count its eq. 20 steps
+    (:func:`poc_env.agents.testing.flights.fly`)."""
+    from poc_env.agents.testing.flights import fly
+
+    return fly

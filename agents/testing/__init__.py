@@ -3,4 +3,6 @@ line included).
 
 ``campaign``  the hostile-input campaign (``poc-env bench campaign``; ``tests/test_campaign.py``
               runs every target in the default suite)
+``flights``   one policy's episode with its eq. 20 (no-fly, out-of-bounds) steps counted, as
+              the airspace tests and scripts need it
 """

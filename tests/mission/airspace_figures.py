@@ -23,6 +23,7 @@ from poc_env.agents.planning.allocation import make_allocation_plan  # noqa: E40
 from poc_env.agents.planning.planner import make_plan  # noqa: E402
 from poc_env.agents.policies.allocation import AllocationPlanPolicy  # noqa: E402
 from poc_env.agents.policies.de_plan import DEPlanPolicy  # noqa: E402
+from poc_env.agents.testing.flights import fly as fly_episode  # noqa: E402
 from poc_env.config import load_scenario  # noqa: E402
 
 #: the zones of tests/planning/test_airspace.py (km): across ``small``'s search area, and a
@@ -36,20 +37,9 @@ CASES = {
 
 def fly(sc: Any, policy: Any, seed: int = 0) -> dict[str, Any]:
     """One episode of ``policy`` on ``sc``: eq. 20 steps, flown and planned POS."""
-    import poc_env
-
-    env = poc_env.parallel_env(sc)
-    obs, _ = env.reset(seed=seed)
-    policy.reset(env, seed)
-    nofly = oob = 0
-    while env.agents:
-        obs, _, _, _, info = env.step(policy.predict(obs)[0])
-        nofly += sum(int(i["violation_no_fly"]) for i in info.values())
-        oob += sum(int(i["violation_out_of_bounds"]) for i in info.values())
-    rec = {"nofly_steps": nofly, "oob_steps": oob, "flown_pos": float(env.sim_state.posc[0]),
-           "planned_pos": float(policy.plan["posc"])}  # fmt: skip
-    env.close()
-    return rec
+    f = fly_episode(sc, policy, seed)
+    return {"nofly_steps": f.nofly_steps, "oob_steps": f.oob_steps, "flown_pos": f.posc,
+            "planned_pos": float(policy.plan["posc"])}  # fmt: skip
 
 
 def main() -> None:

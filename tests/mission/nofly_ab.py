@@ -39,9 +39,9 @@ HERE = Path(__file__).resolve().parent
 sys.path[:0] = [str(HERE), str(HERE.parent)]
 
 import test_mission_property as T  # noqa: E402
-from conftest import _fly  # noqa: E402
 
 from poc_env.agents.policies.base import PlanPolicy  # noqa: E402
+from poc_env.agents.testing.flights import fly as fly_episode  # noqa: E402
 from poc_env.sim.routing import clearance_m  # noqa: E402
 
 
@@ -67,8 +67,8 @@ def cases(out: Path, first: int, last: int, exports: bool) -> None:
     extra: dict[str, list] = {}
 
     def fly(sc, policy, seed):
-        new = _fly(sc, policy, seed)
-        old = _fly(sc, _Given(policy.given, False), seed)
+        new = fly_episode(sc, policy, seed)
+        old = fly_episode(sc, _Given(policy.given, False), seed)
         zones = shapely.union_all([shapely.Polygon(z) for z in sc.map.no_fly_zones_m])
         dmin, enters = np.inf, 0
         for k, u in enumerate(policy.given["uavs"]):
@@ -76,7 +76,7 @@ def cases(out: Path, first: int, last: int, exports: bool) -> None:
                 line = shapely.LineString([sc.takeoff_m[k], *u["waypoints_m"], sc.landing_m[k]])
                 dmin = min(dmin, line.distance(zones))
                 enters += int(line.intersects(zones))
-        extra.setdefault("old_nofly", []).append(old[0])
+        extra.setdefault("old_nofly", []).append(old.nofly_steps)
         extra.setdefault("route_min_over_c", []).append(dmin / clearance_m(sc))
         extra.setdefault("routes_entering", []).append(enters)
         return new
@@ -109,14 +109,8 @@ def flown(name: str, n: int, out: Path) -> None:
     sc = load_scenario(name)
 
     def run(pol, seed, prior) -> tuple[float, int]:
-        env = UAVSearchParallelEnv(scenario=sc)
-        obs, _ = env.reset(seed=seed, options={"prior": prior})
-        pol.reset(env, seed)
-        nofly = 0
-        while env.agents:
-            obs, _, _, _, info = env.step(pol.predict(obs)[0])
-            nofly += sum(int(i["violation_no_fly"]) for i in info.values())
-        return float(env.sim_state.posc[0]), nofly
+        f = fly_episode(sc, pol, seed, prior)
+        return f.posc, f.nofly_steps
 
     for seed in range(n):
         prior = episode_prior(sc, seed)

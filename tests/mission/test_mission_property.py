@@ -319,7 +319,8 @@ def check_case(fly, seed: int, folder: Path, planners: tuple[str, ...] = PLANNER
                     for f in sorted((out / fmt).glob("*.plan")):
                         least, _ = qgc_clearance(json.loads(f.read_text()), dem)
                         c["qgc_low"] += least < t.min_clearance_m - 1e-6
-        nofly, oob, _ = fly(sc, _Fly(plan), seed)
+        flight = fly(sc, _Fly(plan), seed)
+        nofly, oob = flight.nofly_steps, flight.oob_steps
         c["flown"] += 1
         c["nofly_steps"] += nofly
         c["oob_steps"] += oob

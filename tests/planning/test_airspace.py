@@ -73,9 +73,9 @@ def test_planners_route_around_a_zone_across_the_search_area():
 def test_flown_plans_have_no_no_fly_steps(policy, fly):
     sc = load_scenario("small", ACROSS)
     pol = AllocationPlanPolicy() if policy == "allocation" else DEPlanPolicy(16, 15)
-    nofly, oob, landed = fly(sc, pol)
-    assert (nofly, oob) == (0, 0)
-    assert landed == sc.n_uavs
+    f = fly(sc, pol)
+    assert (f.nofly_steps, f.oob_steps) == (0, 0)
+    assert f.landed == sc.n_uavs
 
 
 def test_zone_over_an_airfield_or_the_whole_area_is_named():
