@@ -1,0 +1,135 @@
+"""Issue 24, session i24-quality4 (docs/PLANNER.md, "Excursions and what else was tried"): a
+script, not a test.
+
+``plan MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
+    Planned ``allocation_plan`` POS_C over the rule-aware bound on ``MAP``'s random priors
+    (the priors of ``poc-env bench plan --scale``, seeds ``SEED0..SEED1-1``; the validation
+    priors are 5000-5011 on ``paper_6_2`` and 5000-5002 on ``large_400``), every variant of
+    :data:`VARIANTS` planned per seed in turn (interleaved); the records are rewritten after
+    every seed and a paired summary against ``main`` is printed.
+``fly MAP SEED0 SEED1 VARIANT OUT.json``
+    The same flown in the environment (``main`` and ``VARIANT`` per seed).
+
+Run from the repository root, one thread: ``OMP_NUM_THREADS=1 python
+tests/planning/quality4_ab.py plan large_400 5000 5003 main,excursions out.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import sys
+import time
+from contextlib import contextmanager
+
+import numpy as np
+
+from poc_env.agents.experiments.evaluate import episode_prior
+from poc_env.agents.planning import coverage_boxes, excursions
+from poc_env.config import load_scenario
+from poc_env.theory.bound import rule_bound
+
+#: variants: module attributes set while planning (``main`` sets nothing).
+VARIANTS: dict[str, list[tuple[object, str, object]]] = {
+    "main": [],
+    "excursions": [(coverage_boxes, "EXCURSIONS", True)],
+    "angles45": [(coverage_boxes, "ANGLES", (45.0, 135.0))],
+    "angles30": [(coverage_boxes, "ANGLES", (30.0, 60.0, 120.0, 150.0))],
+    "angles45_excursions": [
+        (coverage_boxes, "ANGLES", (45.0, 135.0)),
+        (coverage_boxes, "EXCURSIONS", True),
+    ],
+    "excursions_top24": [
+        (coverage_boxes, "EXCURSIONS", True),
+        (excursions, "TOP", 24),
+        (excursions, "EXACT", 12),
+    ],
+}
+
+
+@contextmanager
+def variant(name: str):
+    saved = [(mod, attr, getattr(mod, attr)) for mod, attr, _ in VARIANTS[name]]
+    try:
+        for mod, attr, val in VARIANTS[name]:
+            setattr(mod, attr, val)
+        yield
+    finally:
+        for mod, attr, val in saved:
+            setattr(mod, attr, val)
+
+
+def summary(recs: list[dict], key: str) -> None:
+    from poc_env.stats import ci95
+
+    names = sorted({r["variant"] for r in recs} - {"main"})
+    base = {r["seed"]: r[key] / r["rule_bound"] for r in recs if r["variant"] == "main"}
+    for v in names:
+        d = np.array(
+            [r[key] / r["rule_bound"] - base[r["seed"]] for r in recs
+             if r["variant"] == v and r["seed"] in base]
+        )  # fmt: skip
+        if not len(d):
+            continue
+        half = ci95(d) if len(d) > 1 else float("nan")
+        wtl = f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}"
+        mean0 = statistics.mean(base.values())
+        print(f"{v} - main ({key}/rule): {d.mean():+.4f} +- {half:.4f} {wtl} (n {len(d)}); "
+              f"main mean {mean0:.4f}", flush=True)  # fmt: skip
+
+
+def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc = load_scenario(name)
+    recs = []
+    for seed in range(seed0, seed1):
+        prior = episode_prior(sc, seed)
+        bound = rule_bound(sc, prior).upper
+        for v in names:
+            with variant(v):
+                t0 = time.perf_counter()
+                p = make_allocation_plan(sc, prior=prior)
+                dt = time.perf_counter() - t0
+            recs.append(
+                {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
+                 "rule_bound": bound, "start": p["start"], "refined": p["refined"],
+                 "plan_s": dt, "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            print(name, seed, v, round(p["posc"] / bound, 4), p["start"], p["refined"],
+                  round(dt, 1), flush=True)  # fmt: skip
+        with open(out, "w") as f:
+            json.dump(recs, f, indent=1)
+    summary(recs, "planned_posc")
+
+
+def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
+    from poc_env.agents.benchmarks.plan_scale import _flown
+
+    sc = load_scenario(name)
+    recs = []
+    for seed in range(seed0, seed1):
+        prior = episode_prior(sc, seed)
+        bound = rule_bound(sc, prior).upper
+        for var in ("main", v):
+            with variant(var):
+                posc, p = _flown(sc, "allocation_plan", seed, prior)
+            recs.append(
+                {"map": name, "seed": seed, "variant": var, "posc": posc,
+                 "planned_posc": float(p["posc"]), "rule_bound": bound, "start": p.get("start"),
+                 "plan_s": float(p.get("runtime_s", float("nan"))), "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            print(name, seed, var, round(posc / bound, 4), flush=True)
+        with open(out, "w") as f:
+            json.dump(recs, f, indent=1)
+    summary(recs, "posc")
+    summary(recs, "planned_posc")
+
+
+if __name__ == "__main__":
+    cmd, name, s0, s1, vs, out = sys.argv[1:7]
+    if cmd == "plan":
+        plan(name, int(s0), int(s1), vs.split(","), out)
+    else:
+        fly(name, int(s0), int(s1), vs, out)
