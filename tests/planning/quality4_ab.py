@@ -9,6 +9,10 @@ script, not a test.
     every seed and a paired summary against ``main`` is printed.
 ``fly MAP SEED0 SEED1 VARIANT OUT.json``
     The same flown in the environment (``main`` and ``VARIANT`` per seed).
+``bound OUT.json RECORDS.json [RECORDS.json ...]``
+    The flown POSC of stored ``poc-env bench plan --scale`` records (results/plan_scale/*.json)
+    over the rule-aware bound and over :func:`poc_env.theory.split_bound.split_rule_bound` (the
+    same bound without merged airfields), recomputed per seed from the seed's prior.
 
 Run from the repository root, one thread: ``OMP_NUM_THREADS=1 python
 tests/planning/quality4_ab.py plan large_400 5000 5003 main,excursions out.json``.
@@ -127,7 +131,39 @@ def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
     summary(recs, "planned_posc")
 
 
+def bound(out: str, paths: list[str]) -> None:
+    from poc_env.stats import ci95
+    from poc_env.theory.split_bound import split_rule_bound
+
+    eps = []
+    for p in paths:
+        with open(p) as f:
+            eps += json.load(f)["episodes"]
+    recs = []
+    for name in sorted({e["map"] for e in eps}):
+        sc = load_scenario(name)
+        for seed in sorted({e["seed"] for e in eps if e["map"] == name}):
+            sb = split_rule_bound(sc, episode_prior(sc, seed))
+            for e in eps:
+                if e["map"] == name and e["seed"] == seed:
+                    assert abs(e["rule_bound"] - sb.rule) < 1e-9 * max(1.0, sb.rule), e
+                    recs.append({**e, "split_bound": sb.upper, "split_how": sb.how})
+            print(name, seed, round(sb.rule, 4), round(sb.upper, 4), sb.how, flush=True)
+            with open(out, "w") as f:
+                json.dump(recs, f, indent=1)
+        for pol in sorted({e["policy"] for e in recs if e["map"] == name}):
+            rs = [e for e in recs if e["map"] == name and e["policy"] == pol]
+            a = np.array([e["posc"] / e["rule_bound"] for e in rs])
+            b = np.array([e["posc"] / e["split_bound"] for e in rs])
+            print(f"{name} {pol} (n {len(rs)}): flown/rule {a.mean():.4f} +- {ci95(a):.4f}, "
+                  f"flown/split {b.mean():.4f} +- {ci95(b):.4f}, priors >= 0.90: "
+                  f"{(a >= 0.9).sum()} / {(b >= 0.9).sum()}", flush=True)  # fmt: skip
+
+
 if __name__ == "__main__":
+    if sys.argv[1] == "bound":
+        bound(sys.argv[2], sys.argv[3:])
+        sys.exit()
     cmd, name, s0, s1, vs, out = sys.argv[1:7]
     if cmd == "plan":
         plan(name, int(s0), int(s1), vs.split(","), out)
