@@ -9,6 +9,10 @@ script, not a test.
     every seed and a paired summary against ``main`` is printed.
 ``fly MAP SEED0 SEED1 VARIANT OUT.json``
     The same flown in the environment (``main`` and ``VARIANT`` per seed).
+``fields MAP SEED0 SEED1``
+    Each fleet group alone (its UAVs only, the rest of the fleet removed): planned POS_C of
+    ``allocation_plan``, its rule-aware bound with the sensor's spill (the environment's) and
+    without it (``spill_m=0``), and the fleet's rule-aware and split bounds.
 ``bound OUT.json RECORDS.json [RECORDS.json ...]``
     The flown POSC of stored ``poc-env bench plan --scale`` records (results/plan_scale/*.json)
     over the rule-aware bound and over :func:`poc_env.theory.split_bound.split_rule_bound` (the
@@ -131,6 +135,26 @@ def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
     summary(recs, "planned_posc")
 
 
+def fields(name: str, seed0: int, seed1: int) -> None:
+    import dataclasses
+
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.theory.split_bound import split_rule_bound
+
+    sc = load_scenario(name)
+    for seed in range(seed0, seed1):
+        prior = episode_prior(sc, seed)
+        sb = split_rule_bound(sc, prior)
+        print(f"{name} {seed} fleet: rule {sb.rule:.4f} split {sb.upper:.4f} ({sb.how})")
+        for i, g in enumerate(sc.fleet):
+            one = dataclasses.replace(sc, fleet=(g,))
+            p = make_allocation_plan(one, prior=prior)
+            b, b0 = rule_bound(one, prior).upper, rule_bound(one, prior, spill_m=0.0).upper
+            print(f"{name} {seed} group {i} ({g.takeoff}, {g.count} UAVs): planned "
+                  f"{p['posc']:.4f}, rule {b:.4f} ({p['posc'] / b:.3f}), rule without spill "
+                  f"{b0:.4f} ({p['posc'] / b0:.3f})", flush=True)  # fmt: skip
+
+
 def bound(out: str, paths: list[str]) -> None:
     from poc_env.stats import ci95
     from poc_env.theory.split_bound import split_rule_bound
@@ -163,6 +187,9 @@ def bound(out: str, paths: list[str]) -> None:
 if __name__ == "__main__":
     if sys.argv[1] == "bound":
         bound(sys.argv[2], sys.argv[3:])
+        sys.exit()
+    if sys.argv[1] == "fields":
+        fields(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]))
         sys.exit()
     cmd, name, s0, s1, vs, out = sys.argv[1:7]
     if cmd == "plan":
