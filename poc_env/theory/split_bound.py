@@ -11,14 +11,17 @@ field's reach (docs/PLANNER.md, "The rule-aware bound with three airfields").
 POS of any fleet keeping the plan rules, the environment's detection model):
 
 * ``rule_bound`` with each field first in the fleet's order (the merge differs);
-* for each partition of the fields into blocks of at most two, the sum over the blocks of
-  ``rule_bound`` of the block's UAVs alone (each exact).
+* for each partition of the fields into blocks of at most two, and for the partition into
+  single fields, the sum over the blocks of ``rule_bound`` of the block's UAVs alone (exact
+  where ``rule_bound`` is: on grids of more than ``sqrt(bound._MAX_PAIRS)`` cells it merges
+  two fields into one too, and then the single fields' sum is the tighter).
 
 *Why the sum is an upper bound.* Any fleet's efforts split by field as ``x = sum_b x_b``,
 ``x_b`` in block ``b``'s feasible set (``rule_bound``'s polymatroid for its UAVs). The objective
 ``phi(x) = sum_j m_j POD(x_j / a_j)`` is separable and concave in each ``x_j >= 0`` with
 ``phi(0) = 0``, so it is subadditive: ``phi(x) <= sum_b phi(x_b) <= sum_b max phi over b's set``.
-With at most two fields, :func:`split_rule_bound` is ``rule_bound`` itself.
+With at most two fields on a grid where ``rule_bound`` is exact, :func:`split_rule_bound` is
+``rule_bound`` itself.
 """
 
 from __future__ import annotations
@@ -29,7 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from poc_env.config import Scenario
+from poc_env.theory import bound as _bound
 from poc_env.theory.bound import rule_bound
+from poc_env.theory.probability_map import Grid
 
 #: most partitions of the fields into blocks of at most two that are tried.
 MAX_PARTITIONS = 32
@@ -80,7 +85,9 @@ def split_rule_bound(scenario: Scenario, prior) -> SplitBound:
         field_of.append(keys.index(key))
         k += g.count
     n = len(keys)
-    if n <= 2:
+    cells = Grid.from_config(scenario.map).nx * Grid.from_config(scenario.map).ny
+    exact_pairs = cells**2 <= _bound._MAX_PAIRS
+    if n == 1 or (n == 2 and exact_pairs):
         return SplitBound(full, full, "rule")
 
     def sub(fields: tuple[int, ...]) -> Scenario:
@@ -94,7 +101,8 @@ def split_rule_bound(scenario: Scenario, prior) -> SplitBound:
         if val < best:
             best, how = val, f"first={f}"
     cache: dict[tuple[int, ...], float] = {}
-    for part in _pairings(list(range(n)))[:MAX_PARTITIONS]:
+    parts = [*_pairings(list(range(n)))[:MAX_PARTITIONS], [(f,) for f in range(n)]]
+    for part in parts:
         total = 0.0
         for block in part:
             if block not in cache:

@@ -34,7 +34,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from poc_env.agents.experiments.evaluate import episode_prior
-from poc_env.agents.planning import coverage_boxes, excursions
+from poc_env.agents.planning import allocation, coverage_boxes, excursions
 from poc_env.config import load_scenario
 from poc_env.theory.bound import rule_bound
 
@@ -48,6 +48,10 @@ VARIANTS: dict[str, list[tuple[object, str, object]]] = {
         (coverage_boxes, "ANGLES", (45.0, 135.0)),
         (coverage_boxes, "EXCURSIONS", True),
     ],
+    # knobs of the existing planner (kwargs of make_allocation_plan under "kwargs")
+    "refine8": [("kwargs", "refine", 8)],
+    "refine_all_starts": [("kwargs", "refine_starts", 3), (allocation, "REFINE_WITHIN", 0.0)],
+    "rounds4": [(coverage_boxes, "ROUNDS", 4), (coverage_boxes, "CHAIN_ROUNDS", 4)],
     "excursions_top24": [
         (coverage_boxes, "EXCURSIONS", True),
         (excursions, "TOP", 24),
@@ -58,11 +62,13 @@ VARIANTS: dict[str, list[tuple[object, str, object]]] = {
 
 @contextmanager
 def variant(name: str):
-    saved = [(mod, attr, getattr(mod, attr)) for mod, attr, _ in VARIANTS[name]]
+    """Set ``name``'s module attributes; yields its keyword arguments for the planner."""
+    mods = [t for t in VARIANTS[name] if t[0] != "kwargs"]
+    saved = [(mod, attr, getattr(mod, attr)) for mod, attr, _ in mods]
     try:
-        for mod, attr, val in VARIANTS[name]:
+        for mod, attr, val in mods:
             setattr(mod, attr, val)
-        yield
+        yield {str(k): v for m, k, v in VARIANTS[name] if m == "kwargs"}
     finally:
         for mod, attr, val in saved:
             setattr(mod, attr, val)
@@ -96,9 +102,9 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
         prior = episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
         for v in names:
-            with variant(v):
+            with variant(v) as kw:
                 t0 = time.perf_counter()
-                p = make_allocation_plan(sc, prior=prior)
+                p = make_allocation_plan(sc, prior=prior, **kw)
                 dt = time.perf_counter() - t0
             recs.append(
                 {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
@@ -121,7 +127,9 @@ def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
         prior = episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
         for var in ("main", v):
-            with variant(var):
+            with variant(var) as kw:
+                if kw:
+                    raise SystemExit(f"{var}: planner arguments cannot be flown by the policy")
                 posc, p = _flown(sc, "allocation_plan", seed, prior)
             recs.append(
                 {"map": name, "seed": seed, "variant": var, "posc": posc,

@@ -53,3 +53,21 @@ def test_three_airfields_tighter_and_still_above_a_plan():
     plan = make_allocation_plan(sc, prior=three, refine=0)
     assert 0.0 < plan["posc"] <= sb3.upper <= sb3.rule
     assert plan["posc"] > 0.5 * sb3.upper, (plan["posc"], sb3)
+
+
+def test_large_grids_split_into_single_fields():
+    """On grids where ``rule_bound`` merges even two fields into one (more than
+    sqrt(bound._MAX_PAIRS) cells: large_400 at 4 km cells, 100 x 100) the single fields' sum is
+    tried too. Two fields, south-west and north, a blob near the north one: the merged bound
+    credits the south-western UAVs the north field's reach, the split bound is at least 10 %
+    lower and still above the north field's own bound."""
+    import dataclasses
+
+    sc = load_scenario("large_400", {"map.cell_km": 4})
+    sc = dataclasses.replace(sc, fleet=(sc.fleet[0], sc.fleet[2]))
+    grid = Grid.from_config(sc.map)
+    assert (grid.nx * grid.ny) ** 2 > 50_000_000
+    prior = _blobs(grid, [(200, 350)], 30.0)
+    sb = split_rule_bound(sc, prior)
+    alone = rule_bound(dataclasses.replace(sc, fleet=sc.fleet[1:]), prior).upper
+    assert alone < sb.upper < 0.9 * sb.rule, (alone, sb)
