@@ -101,7 +101,8 @@ def split_rule_bound(scenario: Scenario, prior) -> SplitBound:
         if val < best:
             best, how = val, f"first={f}"
     cache: dict[tuple[int, ...], float] = {}
-    parts = [*_pairings(list(range(n)))[:MAX_PARTITIONS], [(f,) for f in range(n)]]
+    singles: list[tuple[int, ...]] = [(f,) for f in range(n)]
+    parts = [*_pairings(list(range(n)))[:MAX_PARTITIONS], singles]
     for part in parts:
         total = 0.0
         for block in part:
