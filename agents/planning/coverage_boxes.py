@@ -90,6 +90,12 @@ EXCURSIONS = False
 #: an angle is searched on the gain table resampled onto a turned raster (:func:`turned_raster`)
 #: and its lines clipped to the map; () only axis-aligned boxes (main's plans).
 ANGLES: tuple[float, ...] = ()
+#: also try, per UAV candidate, boxes turned to the principal axis of the gain around its best
+#: axis-aligned route (rounded to :data:`AXIS_STEP` degrees), searched in a window around that
+#: route grown by :data:`AXIS_GROW` of its size on each side (False: main's plans).
+AXIS = False
+AXIS_STEP = 15.0
+AXIS_GROW = 0.5
 #: a route that does not fit flies its first dropped line in part (True) or drops it whole.
 PART = True
 #: halvings of the bisection for the part of a line that fits.
@@ -227,14 +233,18 @@ def box_routes(
     half_turn = math.pi / turn_rate  # a half-turn at a line end (the box search's estimate)
 
     angles = (0.0, *(float(a) for a in ANGLES))
-    turned = {a: turned_raster(grid, f, a) for a in angles[1:]}
-    sides = {
-        a: (
-            _side_lengths(t[1].shape[1]).astype(np.int64),
-            _side_lengths(t[1].shape[0]).astype(np.int64),
-        )
-        for a, t in turned.items()
-    }
+    turned: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+    side_cache: dict[int, np.ndarray] = {}
+
+    def turned_of(a: float) -> tuple[np.ndarray, np.ndarray]:
+        if a not in turned:
+            turned[a] = turned_raster(grid, f, a)
+        return turned[a]
+
+    def sides_of(m: int) -> np.ndarray:
+        if m not in side_cache:
+            side_cache[m] = _side_lengths(m).astype(np.int64)
+        return side_cache[m]
 
     def gain_table(cov: np.ndarray, base: np.ndarray, s: float, angle: float = 0.0) -> np.ndarray:
         """Step 1: the summed-area table (on ``f x f`` blocks; turned by ``angle``,
@@ -242,7 +252,7 @@ def box_routes(
         coverage ``cov`` (``base`` its POD)."""
         cell_gain = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
         if angle:
-            idx = turned[angle][1]
+            idx = turned_of(angle)[1]
             gain = np.where(idx >= 0, cell_gain.ravel()[np.maximum(idx, 0)], 0.0).sum(axis=-1)
         else:
             block[: grid.ny, : grid.nx] = cell_gain
@@ -275,16 +285,25 @@ def box_routes(
         lead: np.ndarray,
         left: float,
         angle: float = 0.0,
+        window: tuple[int, int, int, int] | None = None,
     ) -> np.ndarray:
         """UAV ``k``'s lawnmower of lines ``s`` sweep widths apart of most gain in the gain
         tables ``tab`` (:func:`tables`), flown from ``frm`` after the waypoints ``lead`` with
         ``left`` seconds of the budget left there; its last lines dropped until the whole
-        route keeps eq. 18."""
+        route keeps eq. 18; ``window`` (rows r0:r1, columns c0:c1 of the turned raster) limits
+        the search of a turned box."""
         table = tab(s, angle)
         frm = np.asarray(frm, dtype=float)
         if angle:  # the box searched in the turned frame, its lines turned back and clipped
             back = rotation(-angle)
-            o, wd, ht, fr, la = turned[angle][0], *sides[angle], back @ frm, back @ landing[k]
+            o = turned_of(angle)[0]
+            if window is not None:  # the summed-area table of the window alone
+                r0, r1, c0, c1 = window
+                t = table[r0 : r1 + 1, c0 : c1 + 1]
+                table = t - t[:1, :] - t[:, :1] + t[0, 0]
+                o = o + np.array([c0, r0]) * f * grid.cell_m
+            wd, ht = sides_of(table.shape[1] - 1), sides_of(table.shape[0] - 1)
+            fr, la = back @ frm, back @ landing[k]
         else:
             o, wd, ht, fr, la = orig, widths, heights, frm, landing[k]
         sp = speed_arr if not len(lead) else np.array([speeds.line, speeds.line, speeds.home])
@@ -322,6 +341,48 @@ def box_routes(
                 break
         return wps
 
+    ctr = np.stack(
+        np.meshgrid(
+            orig[0] + grid.cell_m * (np.arange(grid.nx) + 0.5),
+            orig[1] + grid.cell_m * (np.arange(grid.ny) + 0.5),
+        ),
+        axis=-1,
+    )  # cell centres (ny, nx, 2)
+
+    def axis_box(
+        cov: np.ndarray, base: np.ndarray, wps: np.ndarray
+    ) -> tuple[float, tuple[int, int, int, int]] | None:
+        """The principal axis (degrees modulo 90, rounded to :data:`AXIS_STEP`; None when it
+        is one of the map's axes) of the gain of lines one sweep width apart in the route ``wps``'s
+        bounding box grown by :data:`AXIS_GROW` a side, and that grown box's window on the
+        turned raster."""
+        lo, hi = wps.min(axis=0), wps.max(axis=0)
+        grow = AXIS_GROW * (hi - lo) + 2 * grid.cell_m
+        lo, hi = lo - grow, hi + grow
+        inside = np.all((ctr >= lo) & (ctr <= hi), axis=-1)
+        g = np.where(inside, prior * (pod_from_coverage(cov + 1.0, law) - base), 0.0)
+        tot = float(g.sum())
+        if not tot > 0.0:
+            return None
+        mean = np.tensordot(g, ctr, axes=([0, 1], [0, 1])) / tot
+        d = ctr - mean
+        dx, dy = d[..., 0], d[..., 1]
+        cxx, cyy, cxy = (float(np.sum(g * a * b)) / tot for a, b in ((dx, dx), (dy, dy), (dx, dy)))
+        # a frame turned by deg and one turned by deg + 90 hold the same boxes: modulo 90
+        deg = math.degrees(0.5 * math.atan2(2.0 * cxy, cxx - cyy)) % 90.0
+        deg = (round(deg / AXIS_STEP) * AXIS_STEP) % 90.0
+        if deg == 0.0:
+            return None
+        o, idx = turned_of(deg)
+        corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [lo[0], hi[1]], [hi[0], hi[1]]])
+        q = (corners @ rotation(-deg).T - o) / (f * grid.cell_m)
+        c0, r0 = (max(0, math.floor(float(v))) for v in q.min(axis=0))
+        c1 = min(idx.shape[1], math.ceil(float(q[:, 0].max())))
+        r1 = min(idx.shape[0], math.ceil(float(q[:, 1].max())))
+        if c1 <= c0 or r1 <= r0:
+            return None
+        return deg, (r0, r1, c0, c1)
+
     def candidate(
         k: int, cov: np.ndarray, shares: tuple[float, ...] = ()
     ) -> tuple[float, np.ndarray, np.ndarray]:
@@ -335,11 +396,16 @@ def box_routes(
             c = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
             return float(np.sum(prior * (pod_from_coverage(cov + c, law) - base))), c
 
-        firsts = [(s, budget, a) for a in angles for s in spacings]
-        firsts += [(s, x * budget, a) for x in shares for a in angles for s in spacings]
+        firsts: list[tuple[float, float, float, tuple[int, int, int, int] | None]]
+        firsts = [(s, budget, a, None) for a in angles for s in spacings]
+        firsts += [(s, x * budget, a, None) for x in shares for a in angles for s in spacings]
         tab = tables(cov, base)
-        for s, share, a in firsts:
-            wps = lawn(k, s, tab, takeoff[k], none, share, a)
+        n_axis = len(firsts)
+        i_first = 0
+        while i_first < len(firsts):
+            s, share, a, win = firsts[i_first]
+            i_first += 1
+            wps = lawn(k, s, tab, takeoff[k], none, share, a, win)
             if not len(wps):
                 continue
             if share < budget:  # a second lawnmower after this one, with the time left
@@ -362,6 +428,11 @@ def box_routes(
                 val, c = score(wps)
             if val > best[0]:
                 best = (val, wps, c)
+            if AXIS and i_first == n_axis and len(best[1]):  # then the principal axis's boxes
+                turn = axis_box(cov, base, best[1])
+                if turn is not None:
+                    firsts += [(s, budget, turn[0], turn[1]) for s in spacings]
+                    firsts += [(s, x * budget, turn[0], turn[1]) for x in shares for s in spacings]
         if EXCURSIONS:
             ex = excursion(
                 prior, cov, grid, w, law, speeds, takeoff[k], landing[k], budget, turn_rate,

@@ -48,6 +48,8 @@ VARIANTS: dict[str, list[tuple[object, str, object]]] = {
         (coverage_boxes, "ANGLES", (45.0, 135.0)),
         (coverage_boxes, "EXCURSIONS", True),
     ],
+    "axis": [(coverage_boxes, "AXIS", True)],
+    "axis_grow2": [(coverage_boxes, "AXIS", True), (coverage_boxes, "AXIS_GROW", 2.0)],
     # knobs of the existing planner (kwargs of make_allocation_plan under "kwargs")
     "refine8": [("kwargs", "refine", 8)],
     "refine_all_starts": [("kwargs", "refine_starts", 3), (allocation, "REFINE_WITHIN", 0.0)],

@@ -280,7 +280,8 @@ def test_turned_raster_carries_the_map_cells():
 
 def test_turned_boxes_follow_a_diagonal_ridge(monkeypatch):
     """A lone UAV over a thin ridge at 45 degrees: with boxes turned by 45 and 135 degrees
-    (:data:`coverage_boxes.ANGLES`) its lines run along the ridge and it finds more (the
+    (:data:`coverage_boxes.ANGLES`), or to the gain's principal axis (:data:`coverage_boxes.
+    AXIS`), its lines run along the ridge and it finds more (the
     environment's detection model) than with axis-aligned boxes only; the lines lie in the map
     and the route keeps eq. 18."""
     sc, grid, _, to, la = _inputs(**{"fleet": [{"takeoff": "A", "count": 1}]})
@@ -290,8 +291,10 @@ def test_turned_boxes_follow_a_diagonal_ridge(monkeypatch):
     prior = np.exp(-(along**2) / (2 * 35.0**2) - across**2 / (2 * 4.0**2))
     prior = prior / prior.sum()
     found, dirs = {}, {}
-    for name, angles in (("axes", ()), ("turned", (45.0, 135.0))):
+    for name, angles, axis in (("axes", (), False), ("turned", (45.0, 135.0), False),
+                               ("axis", (), True)):  # fmt: skip
         monkeypatch.setattr(coverage_boxes, "ANGLES", angles)
+        monkeypatch.setattr(coverage_boxes, "AXIS", axis)
         r = _routes(sc, grid, prior, to, la, chain=())
         found[name] = sampled_sweep(sc, grid, prior, [[to[0], *r[0], la[0]]])[0][0]
         wps = np.asarray(r[0]).reshape(-1, 2)
@@ -310,6 +313,10 @@ def test_turned_boxes_follow_a_diagonal_ridge(monkeypatch):
         )
     assert np.allclose(dirs["turned"], 45.0, atol=1.0), dirs["turned"]
     assert found["turned"] > found["axes"] + 0.02, found
+    # the principal axis of the gain around the axis-aligned box (coverage_boxes.AXIS): the
+    # same direction, found without trying every angle
+    assert np.allclose(dirs["axis"], 45.0, atol=1.0), dirs["axis"]
+    assert found["axis"] > found["axes"] + 0.02, found
 
 
 def test_excursions_fan_out_far_uavs(monkeypatch):
