@@ -42,6 +42,13 @@ assigns each UAV its own region of the map and its own coverage there, as the al
 
 Deterministic: no clock, no random draw. No-fly zones: the start is flown around them by the
 allocation planner like its other starts.
+
+Options tried for issue 24 and left off (docs/PLANNER.md, "Excursions, turned boxes, and the
+bound with three airfields": none gained +0.02 of the rule-aware bound on both maps'
+validation priors): :data:`ANGLES` (boxes turned by given angles, searched on the gain table
+resampled onto a turned raster), :data:`AXIS` (one turned box per candidate, along the gain's
+principal axis around its axis-aligned box) and :data:`EXCURSIONS` (routes out to a point,
+across and home, :mod:`poc_env.agents.planning.excursions`). Off, the routes are as before.
 """
 
 from __future__ import annotations

@@ -48,6 +48,10 @@ VARIANTS: dict[str, list[tuple[object, str, object]]] = {
         (coverage_boxes, "ANGLES", (45.0, 135.0)),
         (coverage_boxes, "EXCURSIONS", True),
     ],
+    "angles3_excursions": [
+        (coverage_boxes, "ANGLES", (22.5, 45.0, 67.5)),
+        (coverage_boxes, "EXCURSIONS", True),
+    ],
     "axis": [(coverage_boxes, "AXIS", True)],
     "axis_grow2": [(coverage_boxes, "AXIS", True), (coverage_boxes, "AXIS_GROW", 2.0)],
     # knobs of the existing planner (kwargs of make_allocation_plan under "kwargs")
