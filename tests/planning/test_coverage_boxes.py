@@ -255,3 +255,96 @@ def test_a_compact_blob_gets_lines_closer_than_a_sweep_width():
     assert abs(found["default_gap"] - 0.75 * sc.sensor.sweep_width_m) < 1.0
     assert found["wide_gap"] >= sc.sensor.sweep_width_m - 1.0
     assert found["default"] > found["wide"] + 0.005
+
+
+def test_clip_lines_keeps_the_parts_inside_the_map():
+    """Lines clipped to a rectangle: a crossing line is cut at both edges, a line inside is
+    kept, one outside (or left shorter than 1 m) is dropped, the order is kept."""
+    wps = np.array([[-10.0, 5.0], [30.0, 5.0], [2.0, 2.0], [8.0, 8.0], [50.0, 50.0], [60.0, 60.0]])
+    got = coverage_boxes.clip_lines(wps, (0.0, 0.0, 20.0, 10.0))
+    assert np.allclose(got, [[0.0, 5.0], [20.0, 5.0], [2.0, 2.0], [8.0, 8.0]])
+    assert len(coverage_boxes.clip_lines(wps[4:], (0.0, 0.0, 20.0, 10.0))) == 0
+
+
+def test_turned_raster_carries_the_map_cells():
+    """The turned raster's sub-cells sample each map cell about once (a turn keeps areas): the
+    gains summed over the raster are the map's to a few cells' worth, at 0, 30 and 45 degrees,
+    with blocks of one cell and of two."""
+    _, grid, prior, _, _ = _inputs()
+    for f in (1, 2):
+        for deg in (0.0, 30.0, 45.0):
+            _, idx = coverage_boxes.turned_raster(grid, f, deg)
+            got = np.where(idx >= 0, prior.ravel()[np.maximum(idx, 0)], 0.0).sum()
+            assert abs(got - 1.0) < 0.03, (f, deg, got)
+
+
+def test_turned_boxes_follow_a_diagonal_ridge(monkeypatch):
+    """A lone UAV over a thin ridge at 45 degrees: with boxes turned by 45 and 135 degrees
+    (:data:`coverage_boxes.ANGLES`), or to the gain's principal axis (:data:`coverage_boxes.
+    AXIS`), its lines run along the ridge and it finds more (the
+    environment's detection model) than with axis-aligned boxes only; the lines lie in the map
+    and the route keeps eq. 18."""
+    sc, grid, _, to, la = _inputs(**{"fleet": [{"takeoff": "A", "count": 1}]})
+    ys, xs = np.mgrid[0 : grid.ny, 0 : grid.nx]
+    x, y = xs * 5.0 + 2.5 - 60.0, ys * 5.0 + 2.5 - 60.0  # km from the ridge's centre
+    along, across = (x + y) / np.sqrt(2), (y - x) / np.sqrt(2)
+    prior = np.exp(-(along**2) / (2 * 35.0**2) - across**2 / (2 * 4.0**2))
+    prior = prior / prior.sum()
+    found, dirs = {}, {}
+    for name, angles, axis in (("axes", (), False), ("turned", (45.0, 135.0), False),
+                               ("axis", (), True)):  # fmt: skip
+        monkeypatch.setattr(coverage_boxes, "ANGLES", angles)
+        monkeypatch.setattr(coverage_boxes, "AXIS", axis)
+        r = _routes(sc, grid, prior, to, la, chain=())
+        found[name] = sampled_sweep(sc, grid, prior, [[to[0], *r[0], la[0]]])[0][0]
+        wps = np.asarray(r[0]).reshape(-1, 2)
+        n2 = len(wps) // 2 * 2
+        d = wps[1:n2:2] - wps[0:n2:2]  # the lines
+        dirs[name] = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 180.0
+        x0, y0, x1, y1 = grid.bounds
+        assert np.all((wps >= [x0 - 1e-6, y0 - 1e-6]) & (wps <= [x1 + 1e-6, y1 + 1e-6]))
+        assert route_fits(
+            np.vstack([to[0], wps, la[0]]),
+            plan_speeds(sc),
+            sc.uav.max_turn_rate_rad_s,
+            sc.uav.usable_endurance_s,
+            reserve_s(sc),
+            takeoff_heading(grid.bounds, to)[0],
+        )
+    assert np.allclose(dirs["turned"], 45.0, atol=1.0), dirs["turned"]
+    assert found["turned"] > found["axes"] + 0.02, found
+    # the principal axis of the gain around the axis-aligned box (coverage_boxes.AXIS): the
+    # same direction, found without trying every angle
+    assert np.allclose(dirs["axis"], 45.0, atol=1.0), dirs["axis"]
+    assert found["axis"] > found["axes"] + 0.02, found
+
+
+def test_excursions_fan_out_far_uavs(monkeypatch):
+    """Excursions (:mod:`poc_env.agents.planning.excursions`, :data:`coverage_boxes.EXCURSIONS`):
+    two UAVs whose field is just within reach of a blob's rim find more with excursions among
+    their candidates than with boxes only (W x length per cell, the candidates' score), and
+    their routes keep eq. 18."""
+    sc, grid, _, to, la = _inputs("large_400", None, **{"map.cell_km": 10})
+    keep = [0, 1]
+    to, la = to[keep], la[keep]
+    ys, xs = np.mgrid[0 : grid.ny, 0 : grid.nx]
+    cx, cy = 210.0, 290.0  # km: the rim ~ 250 km from the field at (80, -30)
+    prior = np.exp(-((xs * 10.0 + 5 - cx) ** 2 + (ys * 10.0 + 5 - cy) ** 2) / (2 * 30.0**2))
+    prior = prior / prior.sum()
+    w, law = sc.sensor.sweep_width_m, sc.sensor.law
+    found = {}
+    for name, on in (("boxes", False), ("excursions", True)):
+        monkeypatch.setattr(coverage_boxes, "EXCURSIONS", on)
+        r = _routes(sc, grid, prior, to, la)
+        cov = sum(path_coverage([to[k], *r[k], la[k]], grid, w) for k in range(2))
+        found[name] = float(np.sum(prior * pod_from_coverage(cov, law)))
+        for k in range(2):
+            assert route_fits(
+                np.vstack([to[k], np.asarray(r[k]).reshape(-1, 2), la[k]]),
+                plan_speeds(sc),
+                sc.uav.max_turn_rate_rad_s,
+                sc.uav.usable_endurance_s,
+                reserve_s(sc),
+                takeoff_heading(grid.bounds, to)[k],
+            )
+    assert found["excursions"] > found["boxes"] * 1.05, found
