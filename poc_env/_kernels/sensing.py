@@ -462,15 +462,27 @@ def target_pod(target, a, b, moving, ox, oy, law, w, cutoff, cell, out):
 
 
 @_jit
+def _hit_code(p_t):
+    """What :func:`sense_step` returns for the hidden target's PODs ``p_t``: 0 if every one
+    is 0, 2 if one is 1 or NaN (``log1p(-p)`` then warns: the caller silences it), else 1."""
+    code = 0
+    for v in p_t.flat:
+        if v != 0.0:
+            code = max(code, 1 if v < 1.0 else 2)
+    return code
+
+
+@_jit
 def sense_step(
     belief, old, new, moving, target, ox, oy, law, w, cutoff, reach, cell, h, found, p_t
 ):
     """The sensing of one simulator step in one call: :func:`sweep` of every UAV's step
     ``old[e, i, :2] -> new[e, i, :2]`` (positions ``(E, N, >= 2)``) on ``belief`` in the grid's
     frame (each coordinate minus the origin ``(ox, oy)``, as numpy subtracts it), into
-    ``found``; then :func:`target_pod` of the same steps into ``p_t``, returned: whether any is
-    not 0. The single environment's step (:class:`poc_env.sim.single.SingleStep`) calls this
-    rather than the two kernels and the numpy subtractions between them."""
+    ``found``; then :func:`target_pod` of the same steps into ``p_t``; returns 0 if every POD
+    is 0 (nothing to add to the target's exponent), else 1, or 2 if one is 1 or NaN
+    (:func:`_hit_code`). The single environment's step (:class:`poc_env.sim.single.SingleStep`)
+    calls this rather than the two kernels and the numpy subtractions between them."""
     n_env, n = found.shape
     a = np.empty((n_env, n, 2))
     b = np.empty((n_env, n, 2))
@@ -481,4 +493,6 @@ def sense_step(
             b[e, i, 0] = new[e, i, 0] - ox
             b[e, i, 1] = new[e, i, 1] - oy
     sweep(belief, a, b, law, w, cutoff, reach, cell, 0.0, 0.0, h, found)
-    return target_pod(target, old, new, moving, ox, oy, law, w, cutoff, cell, p_t)
+    if target_pod(target, old, new, moving, ox, oy, law, w, cutoff, cell, p_t):
+        return _hit_code(p_t)
+    return 0

@@ -614,12 +614,16 @@ def end_step(events, state, coef, horizon, detection_ends, team_credit, out):
 def step_end(
     agent_pos, posc, pos, speed, exponent, threshold, step_count, detected, detect_step,
     elapsed, left_home, landed, crashed, flying, violations, topology,
-    found, moving, nofly, threat, shielded,
+    found, moving, nofly, threat, shielded, log_miss, hit,
     team, detected_now, time_term, flags, dist, links, connected,
     landing, constants, range_m, k_nearest, coef, horizon, detection_ends, team_credit,
     values, ends, over, finfo, binfo, iinfo,
 ):  # fmt: skip
-    """The single environment's step after sensing, in one call: :func:`step` (its ``state``,
+    """The single environment's step after sensing, in one call: if ``hit``, the hidden
+    target's exponent grown by the step's ``log_miss = log1p(-p_t)`` (numpy's, computed by the
+    caller: numba's ``log1p`` may differ from numpy's in the last bit), ``exponent[e] +=
+    -log_miss[e].sum()`` with numpy's summation (:func:`numpy_sum`) as :func:`poc_env.sim.core.
+    step` adds it; then :func:`step` (its ``state``,
     ``sensed`` and ``events`` the arrays of the same names, ``topology`` the state's), the auto
     topology of the new distances among the UAVs still flying (:func:`auto_links`) into
     ``links (E, N, N)`` and ``connected (E,)`` (one component), then :func:`end_step` with
@@ -627,6 +631,9 @@ def step_end(
     truncated). One dispatch with every array an argument of its own: numba types a tuple of
     arrays more slowly than as many arrays (:class:`poc_env.sim.single.SingleStep`, when the
     topology is the common ``auto`` one)."""
+    if hit:
+        for e in range(exponent.shape[0]):
+            exponent[e] += -numpy_sum(log_miss[e])
     step(
         (
             agent_pos, posc, pos, speed, exponent, threshold, step_count, detected, detect_step,

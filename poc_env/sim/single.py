@@ -115,6 +115,8 @@ class _Scratch:
         self.iinfo = np.empty((e, n, len(_swarm.INT_INFOS)), dtype=np.int64)
         self.dist = np.empty((e, n, n))
         self.p_t = np.empty((e, n))
+        self.neg_p_t = np.empty((e, n))
+        self.log_miss = np.empty((e, n))  # log1p(-p_t): the hidden target's miss
         self.found = np.empty((e, n))
         self.team = np.empty(e)
         self.time_term = np.empty((e, n))
@@ -304,14 +306,19 @@ class SingleStep:
         st.speed = speed
         found = s.found
         # the sweep on the grid-relative legs and the hidden target's POD: one call
-        if _sensing.sense_step(st.belief, old, new, moving, st.target, *k.sense, found, p_t):
+        hit = _sensing.sense_step(st.belief, old, new, moving, st.target, *k.sense, found, p_t)
+        log_miss = s.log_miss
+        if hit:  # numpy's log1p(-p_t) (core.step's; numba's log1p may differ in the last bit)
             if st.target_out is not None:  # a target that left the map is beyond the search
                 p_t[st.target_out] = 0.0
-            if np.maximum.reduce(p_t, axis=None) < 1.0:  # no log1p(-1): no warning to silence
-                st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+            np.negative(p_t, out=s.neg_p_t)
+            if hit == 1:  # no POD of 1: no log1p(-1) warning to silence
+                np.log1p(s.neg_p_t, out=log_miss)
             else:
                 with np.errstate(divide="ignore"):
-                    st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+                    np.log1p(s.neg_p_t, out=log_miss)
+            if not k.auto:  # (step_end adds it, in numpy's order)
+                st.target_exponent += -np.add.reduce(log_miss, axis=1)
         st.pos = new
         if k.airspace:
             nofly, threat = sim.airspace_violations(p, moving, old[..., :2], new[..., :2], new)
@@ -328,7 +335,7 @@ class SingleStep:
                 st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
                 st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
                 st.crashed, st.flying, st.violations, st.topology,
-                found, moving, nofly, threat, shielded,
+                found, moving, nofly, threat, shielded, log_miss, hit,
                 team, detected_now, time_term, flags, dist, links, connected,
                 p.landing, p.step_constants, k.range_m, k.k_nearest,
                 k.coef, p.horizon, self._ends, self._team,
@@ -373,13 +380,10 @@ class SingleStep:
             raster = flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx)
             vector = flat[:, :, size:]
         coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
-        _obs_kernels.rasters(
+        _obs_kernels.rasters_vectors(
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
-            *k.raster, raster,
-        )  # fmt: skip
-        _obs_kernels.vectors_of(
-            st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
-            st.flying, st.step, p.landing, *k.vector, vector,
+            *k.raster, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
+            st.step, p.landing, *k.vector, raster, vector,
         )  # fmt: skip
         if kind == "dict":
             return {"raster": raster, "vector": vector}
