@@ -406,6 +406,13 @@ def kinematics(actions, turn, moving, pos, heading, pitch, speed, constants, out
 
 
 @_jit
+def kinematics_into(actions, moving, pos, heading, pitch, speed, constants, new, alpha, beta, v):
+    """:func:`kinematics` without a ``turn``, its outputs ``new, alpha, beta, v`` arguments of
+    their own (the single environment's call: numba types a tuple of arrays slowly)."""
+    kinematics(actions, None, moving, pos, heading, pitch, speed, constants, (new, alpha, beta, v))
+
+
+@_jit
 def all_finite(a):
     """Whether every entry of the float array ``a`` (any shape, C order) is finite: the
     PettingZoo env's check of its actions (``np.isfinite(a).all()`` in one pass)."""
@@ -610,27 +617,45 @@ def end_step(events, state, coef, horizon, detection_ends, team_credit, out):
         over[e] = at_horizon or all_done
 
 
+#: Rows of :func:`step_end`'s float64 ``(ROWS_F, E, N)`` array: what each UAV found, the time
+#: term, the hidden target's ``log1p(-p_t)``, then the five reward terms and the reward.
+FOUND, TIME_TERM, LOG_MISS, VALUES = 0, 1, 2, 3
+ROWS_F = 9
+#: Rows of its bool ``(ROWS_B, E, N)`` array: the :data:`N_FLAGS` flags, terminated and
+#: truncated, the no-fly, threat and shielded flags.
+FLAGS, ENDS, NOFLY, THREAT, SHIELDED = 0, 6, 8, 9, 10
+ROWS_B = 11
+#: Rows of its bool ``(ROWS_E, E)`` array: detected now, connected, episode over.
+DETECTED_NOW, CONNECTED, OVER = 0, 1, 2
+ROWS_E = 3
+
+
 @_jit
 def step_end(
     agent_pos, posc, pos, speed, exponent, threshold, step_count, detected, detect_step,
     elapsed, left_home, landed, crashed, flying, violations, topology,
-    found, moving, nofly, threat, shielded, log_miss, hit,
-    team, detected_now, time_term, flags, dist, links, connected,
+    moving, hit, team, dist, links, rows_f, rows_b, rows_e,
     landing, constants, range_m, k_nearest, coef, horizon, detection_ends, team_credit,
-    values, ends, over, finfo, binfo, iinfo,
+    finfo, binfo, iinfo,
 ):  # fmt: skip
     """The single environment's step after sensing, in one call: if ``hit``, the hidden
-    target's exponent grown by the step's ``log_miss = log1p(-p_t)`` (numpy's, computed by the
-    caller: numba's ``log1p`` may differ from numpy's in the last bit), ``exponent[e] +=
-    -log_miss[e].sum()`` with numpy's summation (:func:`numpy_sum`) as :func:`poc_env.sim.core.
-    step` adds it; then :func:`step` (its ``state``,
-    ``sensed`` and ``events`` the arrays of the same names, ``topology`` the state's), the auto
-    topology of the new distances among the UAVs still flying (:func:`auto_links`) into
-    ``links (E, N, N)`` and ``connected (E,)`` (one component), then :func:`end_step` with
-    ``values (6, E, N)`` (the terms, then the reward) and ``ends (2, E, N)`` (terminated,
-    truncated). One dispatch with every array an argument of its own: numba types a tuple of
-    arrays more slowly than as many arrays (:class:`poc_env.sim.single.SingleStep`, when the
-    topology is the common ``auto`` one)."""
+    target's exponent grown by the step's ``log1p(-p_t)`` (row :data:`LOG_MISS`: numpy's,
+    computed by the caller, since numba's ``log1p`` may differ from numpy's in the last bit),
+    ``exponent[e] += -log_miss[e].sum()`` with numpy's summation (:func:`numpy_sum`) as
+    :func:`poc_env.sim.core.step` adds it; then :func:`step` (its ``state``, ``sensed`` and
+    ``events`` the arrays of the same names, ``topology`` the state's), the auto topology of
+    the new distances among the UAVs still flying (:func:`auto_links`) into ``links (E, N,
+    N)`` and ``connected`` (one component), then :func:`end_step` with ``values`` (the terms,
+    then the reward) and ``ends`` (terminated, truncated). The arrays of one shape and dtype
+    come as the rows of one array each (``rows_f``: :data:`FOUND` ...; ``rows_b``:
+    :data:`FLAGS` ...; ``rows_e``: :data:`DETECTED_NOW` ...): numba's dispatch costs about
+    60 ns per array argument, and types a tuple of arrays more slowly still
+    (:class:`poc_env.sim.single.SingleStep`, when the topology is the common ``auto`` one)."""
+    found, time_term, log_miss = rows_f[FOUND], rows_f[TIME_TERM], rows_f[LOG_MISS]
+    values = rows_f[VALUES:ROWS_F]
+    flags, ends = rows_b[FLAGS:ENDS], rows_b[ENDS:NOFLY]
+    nofly, threat, shielded = rows_b[NOFLY], rows_b[THREAT], rows_b[SHIELDED]
+    detected_now, connected, over = rows_e[DETECTED_NOW], rows_e[CONNECTED], rows_e[OVER]
     if hit:
         for e in range(exponent.shape[0]):
             exponent[e] += -numpy_sum(log_miss[e])

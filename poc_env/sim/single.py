@@ -110,25 +110,36 @@ class _Scratch:
 
     def __init__(self, e: int, n: int) -> None:
         self.shape = (e, n)
-        self.finfo = np.empty((e, n, len(_swarm.FLOAT_INFOS)))
-        self.binfo = np.empty((e, n, len(_swarm.BOOL_INFOS)), dtype=bool)
-        self.iinfo = np.empty((e, n, len(_swarm.INT_INFOS)), dtype=np.int64)
+        sw = _swarm
+        self.finfo = np.empty((e, n, len(sw.FLOAT_INFOS)))
+        self.binfo = np.empty((e, n, len(sw.BOOL_INFOS)), dtype=bool)
+        self.iinfo = np.empty((e, n, len(sw.INT_INFOS)), dtype=np.int64)
         self.dist = np.empty((e, n, n))
         self.p_t = np.empty((e, n))
         self.neg_p_t = np.empty((e, n))
-        self.log_miss = np.empty((e, n))  # log1p(-p_t): the hidden target's miss
-        self.found = np.empty((e, n))
+        self.sin_h, self.cos_h = np.empty((e, n)), np.empty((e, n))  # the vectors' headings
         self.team = np.empty(e)
-        self.time_term = np.empty((e, n))
-        self.flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
-        self.detected_now = np.empty(e, dtype=bool)
-        self.connected = np.empty(e, dtype=bool)
-        #: no-fly, threat and shielded flags of a map without zones or threats: always False
-        self.no_airspace = tuple(np.zeros((3, e, n), dtype=bool))
-        self.values = np.empty((6, e, n))  # the reward terms, then the reward
-        self.ends = np.empty((2, e, n), dtype=bool)  # terminated, truncated
-        self.over = np.empty(e, dtype=bool)
+        # step_end's arrays of one shape and dtype, as the rows of one array each
+        self.rows_f = np.empty((sw.ROWS_F, e, n))
+        #: (the no-fly, threat and shielded rows of a map without zones or threats: always
+        #: False, never written)
+        self.rows_b = np.zeros((sw.ROWS_B, e, n), dtype=bool)
+        self.rows_e = np.empty((sw.ROWS_E, e), dtype=bool)
         # their views, formed once
+        f, b, v = self.rows_f, self.rows_b, self.rows_e
+        self.found, self.time_term = f[sw.FOUND], f[sw.TIME_TERM]
+        self.log_miss = f[sw.LOG_MISS]  # log1p(-p_t): the hidden target's miss
+        self.values = f[sw.VALUES :]  # the reward terms, then the reward
+        self.flags, self.ends = (
+            b[sw.FLAGS : sw.ENDS],
+            b[sw.ENDS : sw.NOFLY],
+        )  # terminated, truncated
+        self.airspace = (b[sw.NOFLY], b[sw.THREAT], b[sw.SHIELDED])  # no-fly, threat, shielded
+        self.detected_now, self.connected, self.over = (
+            v[sw.DETECTED_NOW],
+            v[sw.CONNECTED],
+            v[sw.OVER],
+        )
         self.terms, self.reward = self.values[:5], self.values[5]
         self.terminated, self.truncated = self.ends[0], self.ends[1]
 
@@ -253,7 +264,7 @@ class SingleStep:
             self._end_step(p, st, parts, s)
         else:
             parts = self._core_step(p, k, st, inc, s)
-        obs = self._observe(p, k, st)
+        obs = self._observe(p, k, st, s)
         return Step(
             obs, s.reward, s.terms, parts, s.terminated, s.truncated, s.over, s.finfo, s.binfo,
             s.iinfo,
@@ -297,9 +308,9 @@ class SingleStep:
         alpha = np.empty((e, n))
         beta = np.empty((e, n))
         speed = np.empty((e, n))
-        _swarm.kinematics(
-            actions, None, moving, old, st.heading, st.pitch, st.speed, p.motion_constants,
-            (new, alpha, beta, speed),
+        _swarm.kinematics_into(
+            actions, moving, old, st.heading, st.pitch, st.speed, p.motion_constants, new, alpha,
+            beta, speed,
         )  # fmt: skip
         st.heading = alpha
         st.pitch = beta
@@ -320,26 +331,23 @@ class SingleStep:
             if not k.auto:  # (step_end adds it, in numpy's order)
                 st.target_exponent += -np.add.reduce(log_miss, axis=1)
         st.pos = new
-        if k.airspace:
-            nofly, threat = sim.airspace_violations(p, moving, old[..., :2], new[..., :2], new)
-            shielded = np.zeros((e, n), dtype=bool)
-        else:  # no zones, no threats: the three flags false (never written)
-            nofly, threat, shielded = s.no_airspace
+        nofly, threat, shielded = s.airspace  # no zones, no threats: all False (never written)
+        if k.airspace:  # (the scenario's zones and threats: every step of this scratch has them)
+            nofly[...], threat[...] = sim.airspace_violations(
+                p, moving, old[..., :2], new[..., :2], new
+            )
         team, flags, time_term, detected_now = s.team, s.flags, s.time_term, s.detected_now
         detect_step = st.detect_step.copy()
         if k.auto:  # the bookkeeping, the common topology and the end of step: one call
             links = np.empty((e, n, n), dtype=bool)  # the state's: a new array
             connected = s.connected
-            values, ends = s.values, s.ends
             _swarm.step_end(
                 st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
                 st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
                 st.crashed, st.flying, st.violations, st.topology,
-                found, moving, nofly, threat, shielded, log_miss, hit,
-                team, detected_now, time_term, flags, dist, links, connected,
+                moving, hit, team, dist, links, s.rows_f, s.rows_b, s.rows_e,
                 p.landing, p.step_constants, k.range_m, k.k_nearest,
-                k.coef, p.horizon, self._ends, self._team,
-                values, ends, s.over, s.finfo, s.binfo, s.iinfo,
+                k.coef, p.horizon, self._ends, self._team, s.finfo, s.binfo, s.iinfo,
             )  # fmt: skip
             st.detect_step = detect_step
             st.links = links
@@ -362,7 +370,7 @@ class SingleStep:
         self._end_step(p, st, parts, s)
         return parts
 
-    def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
+    def _observe(self, p: sim.Params, k: _Constants, st: sim.State, s: _Scratch) -> Any:
         """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and
         ``flat`` through their kernels with the arguments of :class:`_Constants`."""
         eng = self.engine
@@ -382,8 +390,8 @@ class SingleStep:
         coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
         _obs_kernels.rasters_vectors(
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
-            *k.raster, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
-            st.step, p.landing, *k.vector, raster, vector,
+            *k.raster, st.speed, np.sin(st.heading, out=s.sin_h), np.cos(st.heading, out=s.cos_h),
+            st.pitch, st.elapsed, st.step, p.landing, *k.vector, raster, vector,
         )  # fmt: skip
         if kind == "dict":
             return {"raster": raster, "vector": vector}

@@ -390,6 +390,10 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
                 if isinstance(arr, np.ndarray):
                     arr[...] = 0
             links = np.empty((e, n, n), dtype=bool)
+            # the sensed arrays as the fused call takes them: rows of the scratch
+            out.found[...], out.log_miss[...] = found, log_miss
+            for row, flag in zip(out.airspace, (nofly, threat, shielded), strict=True):
+                row[...] = flag
             state = (
                 s.agent_pos, s.posc, s.pos, s.speed, s.target_exponent, s.target_threshold,
                 s.step, s.detected, s.detect_step, s.elapsed, s.left_home, s.landed,
@@ -397,21 +401,20 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
             )  # fmt: skip
             events = (out.team, out.detected_now, out.time_term, out.flags, out.dist)
             parts = (
-                found, out.team, out.time_term, out.flags, nofly, threat, shielded,
-                out.detected_now, out.connected,
+                out.found, out.team, out.time_term, out.flags, *out.airspace, out.detected_now,
+                out.connected,
             )  # fmt: skip
             if fused:
                 kernel.step_end(
-                    *state, s.topology, found, moving, nofly, threat, shielded, log_miss,
-                    hit_code, *events, links,
-                    out.connected, p.landing, p.step_constants, kc.range_m, kc.k_nearest, coef,
-                    p.horizon, ends_on, team, out.values, out.ends, out.over, out.finfo,
-                    out.binfo, out.iinfo,
+                    *state, s.topology, moving, hit_code, out.team, out.dist, links, out.rows_f,
+                    out.rows_b, out.rows_e, p.landing, p.step_constants, kc.range_m,
+                    kc.k_nearest, coef, p.horizon, ends_on, team, out.finfo, out.binfo,
+                    out.iinfo,
                 )  # fmt: skip
             else:
                 if hit_code:  # as core.step adds it
                     s.target_exponent += -np.log1p(-p_miss).sum(axis=1)
-                kernel.step(state, (found, moving, nofly, threat), events, p.landing,
+                kernel.step(state, (out.found, moving, *out.airspace[:2]), events, p.landing,
                             p.step_constants)  # fmt: skip
                 n_comp = np.empty(e, dtype=np.int64)
                 kernel.auto_links(out.dist, kc.range_m, s.flying, kc.k_nearest, links, n_comp)
