@@ -406,13 +406,6 @@ def kinematics(actions, turn, moving, pos, heading, pitch, speed, constants, out
 
 
 @_jit
-def kinematics_into(actions, moving, pos, heading, pitch, speed, constants, new, alpha, beta, v):
-    """:func:`kinematics` without a ``turn``, its outputs ``new, alpha, beta, v`` arguments of
-    their own (the single environment's call: numba types a tuple of arrays slowly)."""
-    kinematics(actions, None, moving, pos, heading, pitch, speed, constants, (new, alpha, beta, v))
-
-
-@_jit
 def all_finite(a):
     """Whether every entry of the float array ``a`` (any shape, C order) is finite: the
     PettingZoo env's check of its actions (``np.isfinite(a).all()`` in one pass)."""

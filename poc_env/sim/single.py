@@ -308,9 +308,9 @@ class SingleStep:
         alpha = np.empty((e, n))
         beta = np.empty((e, n))
         speed = np.empty((e, n))
-        _swarm.kinematics_into(
-            actions, moving, old, st.heading, st.pitch, st.speed, p.motion_constants, new, alpha,
-            beta, speed,
+        _swarm.kinematics(
+            actions, None, moving, old, st.heading, st.pitch, st.speed, p.motion_constants,
+            (new, alpha, beta, speed),
         )  # fmt: skip
         st.heading = alpha
         st.pitch = beta
