@@ -117,7 +117,7 @@ class _Scratch:
         self.dist = np.empty((e, n, n))
         self.p_t = np.empty((e, n))
         self.neg_p_t = np.empty((e, n))
-        self.sin_h, self.cos_h = np.empty((e, n)), np.empty((e, n))  # the vectors' headings
+        self.sin_cos = np.empty((2, e, n))  # the headings' sines and cosines (vectors)
         self.team = np.empty(e)
         # step_end's arrays of one shape and dtype, as the rows of one array each
         self.rows_f = np.empty((sw.ROWS_F, e, n))
@@ -191,6 +191,8 @@ class _Constants:
             float(cc.range_m), float(max(n - 1, 1)),
         )  # fmt: skip
         self.vector = (np.array(scalars, dtype=np.float64), obs_mod._LOW, obs_mod._HIGH)
+        #: the same as the rows of one array (``rasters_vectors``' ``c_low_high``)
+        self.vector_rows = np.stack(self.vector)
 
 
 class SingleStep:
@@ -388,10 +390,12 @@ class SingleStep:
             raster = flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx)
             vector = flat[:, :, size:]
         coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
+        np.sin(st.heading, out=s.sin_cos[0])
+        np.cos(st.heading, out=s.sin_cos[1])
         _obs_kernels.rasters_vectors(
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
-            *k.raster, st.speed, np.sin(st.heading, out=s.sin_h), np.cos(st.heading, out=s.cos_h),
-            st.pitch, st.elapsed, st.step, p.landing, *k.vector, raster, vector,
+            *k.raster, st.speed, s.sin_cos, st.pitch, st.elapsed, st.step, p.landing,
+            k.vector_rows, raster, vector,
         )  # fmt: skip
         if kind == "dict":
             return {"raster": raster, "vector": vector}
