@@ -52,11 +52,10 @@ PARTS: dict[str, list[tuple[str, str, str]]] = {
             "SingleStep._core_step",
             "- core step and its end (SingleStep._core_step)",
         ),
-        ("poc_env._kernels.swarm", "kinematics", "  - eq. 19 kinematics kernel"),
         (
             "poc_env._kernels.sensing",
-            "sense_step",
-            "  - sensing and hidden target kernel (eq. 12-14)",
+            "fly_sense",
+            "  - kinematics, sensing and hidden target kernel (eq. 19, 12-14)",
         ),
         (
             "poc_env._kernels.swarm",

@@ -1,29 +1,31 @@
 """The single environment's step: :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with
-its glue formed once, in four compiled calls.
+its glue formed once, in three compiled calls.
 
 The PettingZoo env steps one env of a few UAVs, where a dozen numpy calls on ``(1, N)`` arrays
-cost more than the arithmetic they do, and numba's dispatch of a kernel (a fraction of a
-microsecond per array argument, more inside tuples) more than some kernels' work.
-:class:`SingleStep` runs the engine's step in the same order: the autopilot
-(:func:`~poc_env.sim.control.swarm_increments`), the core step (:func:`poc_env.sim.core.step`'s
-kernels called with the arguments :class:`_Constants` forms once per scenario: the eq. 19
-kinematics, then the sweep and the hidden target's POD in one call,
-:func:`poc_env._kernels.sensing.sense_step`; the shield keeps that function), then the
-bookkeeping, the auto topology and, in place of the reward terms and total
-(:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
+cost more than the arithmetic they do, and numba's dispatch of a kernel (about 60 ns per array
+argument, more inside tuples) more than some kernels' work. :class:`SingleStep` runs the
+engine's step in the same order: the autopilot (:func:`~poc_env.sim.control.swarm_increments`),
+the core step (:func:`poc_env.sim.core.step`'s kernels called with the arguments
+:class:`_Constants` forms once per scenario: the eq. 19 kinematics, the sweep and the hidden
+target's POD in one call, :func:`poc_env._kernels.sensing.fly_sense`; the shield keeps
+that function), the hidden target's ``log1p(-p)`` in numpy when a UAV may detect it (numba's
+``log1p`` may differ from numpy's in the last bit: numpy's uses SVML on AVX-512 CPUs), then
+the target's exponent, the bookkeeping, the auto topology and, in place of the reward terms
+and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
 :func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and the info values
 (:func:`~poc_env.sim.engine.info_parts`), one call of :func:`poc_env._kernels.swarm.step_end`
 (:func:`~poc_env._kernels.swarm.end_step` alone after another topology), which also groups the
 per-agent info values by Python type so that the adapter builds its per-agent info dicts from
-three ``tolist()`` calls; then the ``dict`` and ``flat`` observations (the kernels of
+three ``tolist()`` calls; then the ``dict`` and ``flat`` observations in one call
+(:func:`poc_env._kernels.observations.rasters_vectors`, the kernels of
 :func:`poc_env.sim.observations.observe`). The step's arrays that stay inside it are scratch
 (:class:`_Scratch`, reused at the next step; :meth:`Step.copy` keeps them); its
 :class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
 
 Every value is the engine's, bit for bit: ``tests/sim/test_single.py`` runs both on random
 actions over several tasks and options (and the core step on crafted states, the fused calls
-against the kernels they join) and compares every array and info. (The cache rule of
-:mod:`poc_env._kernels` keeps sensing, the swarm's arithmetic and the observations in
+against the kernels they join) and compares every array, info and the state. (The cache rule
+of :mod:`poc_env._kernels` keeps sensing, the swarm's arithmetic and the observations in
 separate modules, so in separate calls.)
 """
 
@@ -310,16 +312,15 @@ class SingleStep:
         alpha = np.empty((e, n))
         beta = np.empty((e, n))
         speed = np.empty((e, n))
-        _swarm.kinematics(
-            actions, None, moving, old, st.heading, st.pitch, st.speed, p.motion_constants,
-            (new, alpha, beta, speed),
+        found = s.found
+        # the kinematics, the sweep on the grid-relative legs and the hidden target's POD
+        hit = _sensing.fly_sense(
+            actions, moving, old, st.heading, st.pitch, st.speed, p.motion_constants, new, alpha,
+            beta, speed, st.belief, st.target, *k.sense, found, p_t,
         )  # fmt: skip
         st.heading = alpha
         st.pitch = beta
         st.speed = speed
-        found = s.found
-        # the sweep on the grid-relative legs and the hidden target's POD: one call
-        hit = _sensing.sense_step(st.belief, old, new, moving, st.target, *k.sense, found, p_t)
         log_miss = s.log_miss
         if hit:  # numpy's log1p(-p_t) (core.step's; numba's log1p may differ in the last bit)
             if st.target_out is not None:  # a target that left the map is beyond the search

@@ -314,7 +314,8 @@ def test_returned_values_are_not_changed_by_later_steps():
 def test_fused_kernels_equal_the_kernels_they_join(law):
     """The single step's fused calls against what they replace, on random states of many
     sizes: ``sensing.sense_step`` against :func:`core.sense` (numpy's origin shifts, the sweep)
-    and the hidden target kernel as :func:`core.step` calls it; ``swarm.step_end`` against the
+    and the hidden target kernel as :func:`core.step` calls it; ``sensing.fly_sense`` against
+    :func:`core.kinematics`, then ``sense_step``; ``swarm.step_end`` against the
     bookkeeping kernel, the auto topology and the end-of-step kernel called one by one;
     ``observations.vectors_of`` against ``vectors``; ``swarm.all_finite`` against numpy."""
     import copy
@@ -368,6 +369,24 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
         _same(p_t, want_p, "p_t")
         code = 0 if not want_p.any() else 2 if (want_p >= 1).any() | np.isnan(want_p).any() else 1
         assert hit == code and bool(hit) == want_hit
+
+        # the kinematics and the sensing in one call against sim.kinematics, then sense_step
+        acts = rng.uniform(-1.2, 1.2, (e, n, 3))
+        fly_st, ref_st = copy.deepcopy(st), copy.deepcopy(st)
+        ref_new = sim.kinematics(p, ref_st, acts, moving)
+        ref_found, ref_p = np.empty((e, n)), np.empty((e, n))
+        ref_hit = sensing.sense_step(
+            ref_st.belief, st.pos, ref_new, moving, st.target, *kc.sense, ref_found, ref_p
+        )
+        fly = [np.empty_like(st.pos), *np.empty((3, e, n))]
+        fly_found, fly_p = np.empty((e, n)), np.empty((e, n))
+        fly_hit = sensing.fly_sense(
+            acts, moving, st.pos, st.heading, st.pitch, st.speed, p.motion_constants, *fly,
+            fly_st.belief, st.target, *kc.sense, fly_found, fly_p,
+        )  # fmt: skip
+        _same(fly, [ref_new, ref_st.heading, ref_st.pitch, ref_st.speed], "kinematics")
+        _same((fly_found, fly_p, fly_st.belief), (ref_found, ref_p, ref_st.belief), "fly_sense")
+        assert fly_hit == ref_hit
 
         # the bookkeeping, topology and end of step: one call against three
         st.step[:] = rng.integers(p.horizon - 2, p.horizon + 1, e)
