@@ -120,6 +120,7 @@ class _Scratch:
         self.p_t = np.empty((e, n))
         self.neg_p_t = np.empty((e, n))
         self.sin_cos = np.empty((2, e, n))  # the headings' sines and cosines (vectors)
+        self.sin_h, self.cos_h = self.sin_cos
         self.team = np.empty(e)
         # step_end's arrays of one shape and dtype, as the rows of one array each
         self.rows_f = np.empty((sw.ROWS_F, e, n))
@@ -391,8 +392,8 @@ class SingleStep:
             raster = flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx)
             vector = flat[:, :, size:]
         coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
-        np.sin(st.heading, out=s.sin_cos[0])
-        np.cos(st.heading, out=s.sin_cos[1])
+        np.sin(st.heading, out=s.sin_h)
+        np.cos(st.heading, out=s.cos_h)
         _obs_kernels.rasters_vectors(
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
             *k.raster, st.speed, s.sin_cos, st.pitch, st.elapsed, st.step, p.landing,
