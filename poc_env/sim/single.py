@@ -133,16 +133,12 @@ class _Scratch:
         self.found, self.time_term = f[sw.FOUND], f[sw.TIME_TERM]
         self.log_miss = f[sw.LOG_MISS]  # log1p(-p_t): the hidden target's miss
         self.values = f[sw.VALUES :]  # the reward terms, then the reward
-        self.flags, self.ends = (
-            b[sw.FLAGS : sw.ENDS],
-            b[sw.ENDS : sw.NOFLY],
-        )  # terminated, truncated
+        self.flags = b[sw.FLAGS : sw.ENDS]
+        self.ends = b[sw.ENDS : sw.NOFLY]  # terminated, truncated
         self.airspace = (b[sw.NOFLY], b[sw.THREAT], b[sw.SHIELDED])  # no-fly, threat, shielded
-        self.detected_now, self.connected, self.over = (
-            v[sw.DETECTED_NOW],
-            v[sw.CONNECTED],
-            v[sw.OVER],
-        )
+        self.detected_now = v[sw.DETECTED_NOW]
+        self.connected = v[sw.CONNECTED]
+        self.over = v[sw.OVER]
         self.terms, self.reward = self.values[:5], self.values[5]
         self.terminated, self.truncated = self.ends[0], self.ends[1]
 
