@@ -52,11 +52,10 @@ PARTS: dict[str, list[tuple[str, str, str]]] = {
             "SingleStep._core_step",
             "- core step and its end (SingleStep._core_step)",
         ),
-        ("poc_env._kernels.swarm", "kinematics", "  - eq. 19 kinematics kernel"),
         (
             "poc_env._kernels.sensing",
-            "sense_step",
-            "  - sensing and hidden target kernel (eq. 12-14)",
+            "fly_sense",
+            "  - kinematics, sensing and hidden target kernel (eq. 19, 12-14)",
         ),
         (
             "poc_env._kernels.swarm",
@@ -64,8 +63,7 @@ PARTS: dict[str, list[tuple[str, str, str]]] = {
             "  - bookkeeping, topology, rewards, episode end, infos kernel",
         ),
         ("poc_env.sim.single", "SingleStep._observe", "- observations (SingleStep._observe)"),
-        ("poc_env._kernels.observations", "rasters", "  - rasters kernel"),
-        ("poc_env._kernels.observations", "vectors_of", "  - vectors kernel"),
+        ("poc_env._kernels.observations", "rasters_vectors", "  - rasters and vectors kernel"),
         ("poc_env.sim.single", "swarm_increments", "- autopilot (control.swarm_increments)"),
         ("poc_env.envs.parallel", "UAVSearchParallelEnv._actions_array", "action dict to array"),
         ("poc_env.envs.parallel", "UAVSearchParallelEnv._fast_infos", "per-agent info dicts"),

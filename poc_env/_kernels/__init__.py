@@ -5,11 +5,11 @@ module              kernels (the public functions that call them)
 ==================  ==========================================================================
 ``sensing``         the detection laws' compiled branches (``LAW_CODES``), their array forms
                     and the fused sensing sweep of eq. 12-14 (:mod:`poc_env.theory.search_theory`),
-                    the hidden target's POD (:mod:`poc_env.sim.core`), both in one call
-                    (:mod:`poc_env.sim.single`)
+                    the hidden target's POD and the eq. 19 kinematics (:mod:`poc_env.sim.core`),
+                    the three in one call (:mod:`poc_env.sim.single`)
 ``swarm``           pairwise distances, the eq. 20-21 checks (:mod:`poc_env.sim.constraints`),
                     the eq. 24 graphs and the auto topology (:mod:`poc_env.sim.comms`), the
-                    eq. 19 kinematics and the simulator step's bookkeeping that applies them
+                    simulator step's bookkeeping that applies them
                     (:mod:`poc_env.sim.core`); the single env's end of step: reward terms and
                     total, episode end, info values, sums in numpy's pairwise order, and the
                     bookkeeping, topology and end of step in one call (:mod:`poc_env.sim.single`)
@@ -32,14 +32,15 @@ The planner's own kernels (its rectangle pass, route timing) are
 that calls a compiled function of another file, or reads a constant of another file (numba
 freezes globals into the machine code), would keep running a stale copy of it after that file
 is edited; so would one whose decorator options came from another file. A kernel module
-therefore imports only the standard library, numpy, numba and llvmlite: every function a
-kernel calls, every constant it reads and the options it is compiled with are in its own file,
-and an edit of that file invalidates exactly the kernels that could see it. A group that needs
-another group's arithmetic owns it (the step owns the distances and eq. 20-24 checks that
-``constraints`` and ``comms`` also call; the vector observation counts its neighbours with
-its own loop, pinned to ``comms.in_range`` by the tests; the hidden target's POD sits with the
-laws), or the Python caller composes kernels of two modules (the planner's rectangle pass,
-then :func:`~poc_env._kernels.rectangles.rectangle_masses`).
+therefore imports only the standard library, numpy, numba and llvmlite: every function a kernel
+calls, every constant it reads and the options it is compiled with are in its own file, and an
+edit of that file invalidates exactly the kernels that could see it. A group that needs another
+group's arithmetic owns it (the step owns the distances and eq. 20-24 checks that
+``constraints`` and ``comms`` also call; the vector observation counts its neighbours with its
+own loop, pinned to ``comms.in_range`` by the tests; the hidden target's POD sits with the
+laws, and so do the kinematics, which the single env's step flies and senses in one call), or
+the Python caller composes kernels of two modules (the planner's rectangle pass, then
+:func:`~poc_env._kernels.rectangles.rectangle_masses`).
 
 ``tests/sim/test_kernels.py`` enforces the rule:
 ``test_kernel_modules_import_nothing_of_the_project`` reads each kernel module's imports,

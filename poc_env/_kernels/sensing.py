@@ -5,7 +5,9 @@ probability of a point for one straight step (:func:`_point_pod`), mapped over a
 ufuncs for :mod:`poc_env.theory.search_theory` (``segment_exponent``, ``segment_pod``,
 ``clip_length``, ``distance_to_segment``, ``window_start``), the sweep of every UAV's step over
 the fine belief (:func:`sweep`), and the hidden target's POD for the simulator step
-(:func:`target_pod`). Tested against plain-numpy references in ``tests/sim``.
+(:func:`target_pod`). Also the eq. 19 kinematics (:func:`kinematics`, moved here from the
+swarm kernels so that the single environment's step flies and senses in one call,
+:func:`fly_sense`). Tested against plain-numpy references in ``tests/sim``.
 
 A kernel module: imports nothing of the project (the cache rule, :mod:`poc_env._kernels`).
 Imports numpy, numba, and llvmlite (numba's code generator, for two intrinsics).
@@ -434,6 +436,101 @@ def sweep(belief, a, b, law, w, cutoff, reach, cell, x0, y0, h, found):
             found[e, i] = total
 
 
+# ------------------------------------------------------------------------ eq. 19 kinematics
+
+#: The scalar constants of :func:`kinematics`, in the order of its ``constants`` array
+#: (:func:`motion_constants` builds it once per scenario).
+MOTION_CONSTANTS = (
+    "dt_s",
+    "max_accel_mps2",
+    "max_turn_rate_rad_s",
+    "max_pitch_rate_rad_s",
+    "max_pitch_rad",
+    "min_speed_mps",
+    "max_speed_mps",
+    "max_altitude_m",
+)
+
+
+def motion_constants(**values: float) -> np.ndarray:
+    """The float64 array of :func:`kinematics`' constants from their names
+    (:data:`MOTION_CONSTANTS`, every one and no other)."""
+    if set(values) != set(MOTION_CONSTANTS):
+        raise TypeError(f"motion_constants needs exactly {MOTION_CONSTANTS}, got {sorted(values)}")
+    out = np.array([float(values[name]) for name in MOTION_CONSTANTS], dtype=np.float64)
+    out.flags.writeable = False
+    return out
+
+
+@_jit
+def _clip(q, lo, hi):
+    """``q`` clipped to [lo, hi] (NaN stays NaN, as ``np.clip``)."""
+    if q < lo:
+        return lo
+    if q > hi:
+        return hi
+    return q
+
+
+@_jit
+def _increment(a, limit, dt):
+    """One normalised action ``a`` (clipped to [-1, 1]) as its eq. 19 increment: ``a *
+    limit * dt`` (``limit`` the per-second bound)."""
+    return _clip(a, -1.0, 1.0) * limit * dt
+
+
+@_jit
+def scale_actions(actions, constants, out):
+    """Normalised actions ``(E, N, 3)`` -> the increments ``out (3, E, N)`` (dv, d alpha,
+    d beta) within their eq. 19 per-step limits."""
+    dt = constants[0]
+    n_env, n = actions.shape[0], actions.shape[1]
+    for e in range(n_env):
+        for i in range(n):
+            out[0, e, i] = _increment(actions[e, i, 0], constants[1], dt)
+            out[1, e, i] = _increment(actions[e, i, 1], constants[2], dt)
+            out[2, e, i] = _increment(actions[e, i, 2], constants[3], dt)
+
+
+@_jit
+def kinematics(actions, turn, moving, pos, heading, pitch, speed, constants, out):
+    """Eq. 19 for the ``moving`` UAVs from normalised ``actions (E, N, 3)``: the new position
+    into ``out[0] (E, N, 3)`` and heading, pitch and speed into ``out[1:4]``'s first channel
+    (``out = (pos, heading, pitch, speed)`` arrays, the inputs untouched). ``turn (E, N)``
+    (or None) replaces the heading increment of the actions (the shield's). Headings are wrapped
+    to [-pi, pi) and pitches of UAVs that do not move are 0, as before."""
+    new, alpha_out, beta_out, speed_out = out
+    dt = constants[0]
+    max_pitch = constants[4]
+    v_min, v_max, z_max = constants[5], constants[6], constants[7]
+    two_pi = 2.0 * np.pi
+    n_env, n = moving.shape
+    for e in range(n_env):
+        for i in range(n):
+            mv = moving[e, i]
+            if turn is None:  # noqa: SIM108 (numba drops the dead branch of an if statement)
+                dalpha = _increment(actions[e, i, 1], constants[2], dt)
+            else:
+                dalpha = turn[e, i]
+            alpha = heading[e, i] + dalpha if mv else heading[e, i]
+            alpha = (alpha + np.pi) % two_pi - np.pi
+            dbeta = _increment(actions[e, i, 2], constants[3], dt)
+            beta = _clip(pitch[e, i] + dbeta, -max_pitch, max_pitch) if mv else 0.0
+            step = speed[e, i] * dt if mv else 0.0
+            cb = math.cos(beta)
+            new[e, i, 0] = pos[e, i, 0] + step * math.cos(alpha) * cb
+            new[e, i, 1] = pos[e, i, 1] + step * math.sin(alpha) * cb
+            z = pos[e, i, 2] + step * math.sin(beta)
+            new[e, i, 2] = z_max if z > z_max else z  # np.minimum: NaN stays NaN
+            alpha_out[e, i] = alpha
+            beta_out[e, i] = beta
+            if mv:
+                dv = _increment(actions[e, i, 0], constants[1], dt)
+                speed_out[e, i] = _clip(speed[e, i] + dv, v_min, v_max)
+            else:
+                speed_out[e, i] = speed[e, i]
+
+
 # ------------------------------------------------------------------------------ the hidden target
 
 
@@ -462,15 +559,27 @@ def target_pod(target, a, b, moving, ox, oy, law, w, cutoff, cell, out):
 
 
 @_jit
+def _hit_code(p_t):
+    """What :func:`sense_step` returns for the hidden target's PODs ``p_t``: 0 if every one
+    is 0, 2 if one is 1 or NaN (``log1p(-p)`` then warns: the caller silences it), else 1."""
+    code = 0
+    for v in p_t.flat:
+        if v != 0.0:
+            code = max(code, 1 if v < 1.0 else 2)
+    return code
+
+
+@_jit
 def sense_step(
     belief, old, new, moving, target, ox, oy, law, w, cutoff, reach, cell, h, found, p_t
 ):
     """The sensing of one simulator step in one call: :func:`sweep` of every UAV's step
     ``old[e, i, :2] -> new[e, i, :2]`` (positions ``(E, N, >= 2)``) on ``belief`` in the grid's
     frame (each coordinate minus the origin ``(ox, oy)``, as numpy subtracts it), into
-    ``found``; then :func:`target_pod` of the same steps into ``p_t``, returned: whether any is
-    not 0. The single environment's step (:class:`poc_env.sim.single.SingleStep`) calls this
-    rather than the two kernels and the numpy subtractions between them."""
+    ``found``; then :func:`target_pod` of the same steps into ``p_t``; returns 0 if every POD
+    is 0 (nothing to add to the target's exponent), else 1, or 2 if one is 1 or NaN
+    (:func:`_hit_code`). The single environment's step (:class:`poc_env.sim.single.SingleStep`)
+    calls this rather than the two kernels and the numpy subtractions between them."""
     n_env, n = found.shape
     a = np.empty((n_env, n, 2))
     b = np.empty((n_env, n, 2))
@@ -481,4 +590,23 @@ def sense_step(
             b[e, i, 0] = new[e, i, 0] - ox
             b[e, i, 1] = new[e, i, 1] - oy
     sweep(belief, a, b, law, w, cutoff, reach, cell, 0.0, 0.0, h, found)
-    return target_pod(target, old, new, moving, ox, oy, law, w, cutoff, cell, p_t)
+    if target_pod(target, old, new, moving, ox, oy, law, w, cutoff, cell, p_t):
+        return _hit_code(p_t)
+    return 0
+
+
+@_jit
+def fly_sense(
+    actions, moving, old, heading, pitch, speed, motion, new, alpha, beta, new_speed,
+    belief, target, ox, oy, law, w, cutoff, reach, cell, h, found, p_t,
+):  # fmt: skip
+    """The single environment's kinematics and sensing in one call: :func:`kinematics` of the
+    increments ``actions`` (no ``turn``; ``motion`` its constants) from ``old`` into ``new,
+    alpha, beta, new_speed``, then :func:`sense_step` of the steps ``old -> new``, whose code
+    it returns (:class:`poc_env.sim.single.SingleStep`: one dispatch, not two)."""
+    kinematics(
+        actions, None, moving, old, heading, pitch, speed, motion, (new, alpha, beta, new_speed)
+    )
+    return sense_step(
+        belief, old, new, moving, target, ox, oy, law, w, cutoff, reach, cell, h, found, p_t
+    )

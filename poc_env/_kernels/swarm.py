@@ -310,101 +310,6 @@ def step(state, sensed, events, landing, constants):
                 flying[e, i] = False
 
 
-# ------------------------------------------------------------------------ eq. 19 kinematics
-
-#: The scalar constants of :func:`kinematics`, in the order of its ``constants`` array
-#: (:func:`motion_constants` builds it once per scenario).
-MOTION_CONSTANTS = (
-    "dt_s",
-    "max_accel_mps2",
-    "max_turn_rate_rad_s",
-    "max_pitch_rate_rad_s",
-    "max_pitch_rad",
-    "min_speed_mps",
-    "max_speed_mps",
-    "max_altitude_m",
-)
-
-
-def motion_constants(**values: float) -> np.ndarray:
-    """The float64 array of :func:`kinematics`' constants from their names
-    (:data:`MOTION_CONSTANTS`, every one and no other)."""
-    if set(values) != set(MOTION_CONSTANTS):
-        raise TypeError(f"motion_constants needs exactly {MOTION_CONSTANTS}, got {sorted(values)}")
-    out = np.array([float(values[name]) for name in MOTION_CONSTANTS], dtype=np.float64)
-    out.flags.writeable = False
-    return out
-
-
-@_jit
-def _clip(q, lo, hi):
-    """``q`` clipped to [lo, hi] (NaN stays NaN, as ``np.clip``)."""
-    if q < lo:
-        return lo
-    if q > hi:
-        return hi
-    return q
-
-
-@_jit
-def _increment(a, limit, dt):
-    """One normalised action ``a`` (clipped to [-1, 1]) as its eq. 19 increment: ``a *
-    limit * dt`` (``limit`` the per-second bound)."""
-    return _clip(a, -1.0, 1.0) * limit * dt
-
-
-@_jit
-def scale_actions(actions, constants, out):
-    """Normalised actions ``(E, N, 3)`` -> the increments ``out (3, E, N)`` (dv, d alpha,
-    d beta) within their eq. 19 per-step limits."""
-    dt = constants[0]
-    n_env, n = actions.shape[0], actions.shape[1]
-    for e in range(n_env):
-        for i in range(n):
-            out[0, e, i] = _increment(actions[e, i, 0], constants[1], dt)
-            out[1, e, i] = _increment(actions[e, i, 1], constants[2], dt)
-            out[2, e, i] = _increment(actions[e, i, 2], constants[3], dt)
-
-
-@_jit
-def kinematics(actions, turn, moving, pos, heading, pitch, speed, constants, out):
-    """Eq. 19 for the ``moving`` UAVs from normalised ``actions (E, N, 3)``: the new position
-    into ``out[0] (E, N, 3)`` and heading, pitch and speed into ``out[1:4]``'s first channel
-    (``out = (pos, heading, pitch, speed)`` arrays, the inputs untouched). ``turn (E, N)``
-    (or None) replaces the heading increment of the actions (the shield's). Headings are wrapped
-    to [-pi, pi) and pitches of UAVs that do not move are 0, as before."""
-    new, alpha_out, beta_out, speed_out = out
-    dt = constants[0]
-    max_pitch = constants[4]
-    v_min, v_max, z_max = constants[5], constants[6], constants[7]
-    two_pi = 2.0 * np.pi
-    n_env, n = moving.shape
-    for e in range(n_env):
-        for i in range(n):
-            mv = moving[e, i]
-            if turn is None:  # noqa: SIM108 (numba drops the dead branch of an if statement)
-                dalpha = _increment(actions[e, i, 1], constants[2], dt)
-            else:
-                dalpha = turn[e, i]
-            alpha = heading[e, i] + dalpha if mv else heading[e, i]
-            alpha = (alpha + np.pi) % two_pi - np.pi
-            dbeta = _increment(actions[e, i, 2], constants[3], dt)
-            beta = _clip(pitch[e, i] + dbeta, -max_pitch, max_pitch) if mv else 0.0
-            step = speed[e, i] * dt if mv else 0.0
-            cb = math.cos(beta)
-            new[e, i, 0] = pos[e, i, 0] + step * math.cos(alpha) * cb
-            new[e, i, 1] = pos[e, i, 1] + step * math.sin(alpha) * cb
-            z = pos[e, i, 2] + step * math.sin(beta)
-            new[e, i, 2] = z_max if z > z_max else z  # np.minimum: NaN stays NaN
-            alpha_out[e, i] = alpha
-            beta_out[e, i] = beta
-            if mv:
-                dv = _increment(actions[e, i, 0], constants[1], dt)
-                speed_out[e, i] = _clip(speed[e, i] + dv, v_min, v_max)
-            else:
-                speed_out[e, i] = speed[e, i]
-
-
 @_jit
 def all_finite(a):
     """Whether every entry of the float array ``a`` (any shape, C order) is finite: the
@@ -610,23 +515,48 @@ def end_step(events, state, coef, horizon, detection_ends, team_credit, out):
         over[e] = at_horizon or all_done
 
 
+#: Rows of :func:`step_end`'s float64 ``(ROWS_F, E, N)`` array: what each UAV found, the time
+#: term, the hidden target's ``log1p(-p_t)``, then the five reward terms and the reward.
+FOUND, TIME_TERM, LOG_MISS, VALUES = 0, 1, 2, 3
+ROWS_F = 9
+#: Rows of its bool ``(ROWS_B, E, N)`` array: the :data:`N_FLAGS` flags, terminated and
+#: truncated, the no-fly, threat and shielded flags.
+FLAGS, ENDS, NOFLY, THREAT, SHIELDED = 0, 6, 8, 9, 10
+ROWS_B = 11
+#: Rows of its bool ``(ROWS_E, E)`` array: detected now, connected, episode over.
+DETECTED_NOW, CONNECTED, OVER = 0, 1, 2
+ROWS_E = 3
+
+
 @_jit
 def step_end(
     agent_pos, posc, pos, speed, exponent, threshold, step_count, detected, detect_step,
     elapsed, left_home, landed, crashed, flying, violations, topology,
-    found, moving, nofly, threat, shielded,
-    team, detected_now, time_term, flags, dist, links, connected,
+    moving, hit, team, dist, links, rows_f, rows_b, rows_e,
     landing, constants, range_m, k_nearest, coef, horizon, detection_ends, team_credit,
-    values, ends, over, finfo, binfo, iinfo,
+    finfo, binfo, iinfo,
 ):  # fmt: skip
-    """The single environment's step after sensing, in one call: :func:`step` (its ``state``,
-    ``sensed`` and ``events`` the arrays of the same names, ``topology`` the state's), the auto
-    topology of the new distances among the UAVs still flying (:func:`auto_links`) into
-    ``links (E, N, N)`` and ``connected (E,)`` (one component), then :func:`end_step` with
-    ``values (6, E, N)`` (the terms, then the reward) and ``ends (2, E, N)`` (terminated,
-    truncated). One dispatch with every array an argument of its own: numba types a tuple of
-    arrays more slowly than as many arrays (:class:`poc_env.sim.single.SingleStep`, when the
-    topology is the common ``auto`` one)."""
+    """The single environment's step after sensing, in one call: if ``hit``, the hidden
+    target's exponent grown by the step's ``log1p(-p_t)`` (row :data:`LOG_MISS`: numpy's,
+    computed by the caller, since numba's ``log1p`` may differ from numpy's in the last bit),
+    ``exponent[e] += -log_miss[e].sum()`` with numpy's summation (:func:`numpy_sum`) as
+    :func:`poc_env.sim.core.step` adds it; then :func:`step` (its ``state``, ``sensed`` and
+    ``events`` the arrays of the same names, ``topology`` the state's), the auto topology of
+    the new distances among the UAVs still flying (:func:`auto_links`) into ``links (E, N,
+    N)`` and ``connected`` (one component), then :func:`end_step` with ``values`` (the terms,
+    then the reward) and ``ends`` (terminated, truncated). The arrays of one shape and dtype
+    come as the rows of one array each (``rows_f``: :data:`FOUND` ...; ``rows_b``:
+    :data:`FLAGS` ...; ``rows_e``: :data:`DETECTED_NOW` ...): numba's dispatch costs about
+    60 ns per array argument, and types a tuple of arrays more slowly still
+    (:class:`poc_env.sim.single.SingleStep`, when the topology is the common ``auto`` one)."""
+    found, time_term, log_miss = rows_f[FOUND], rows_f[TIME_TERM], rows_f[LOG_MISS]
+    values = rows_f[VALUES:ROWS_F]
+    flags, ends = rows_b[FLAGS:ENDS], rows_b[ENDS:NOFLY]
+    nofly, threat, shielded = rows_b[NOFLY], rows_b[THREAT], rows_b[SHIELDED]
+    detected_now, connected, over = rows_e[DETECTED_NOW], rows_e[CONNECTED], rows_e[OVER]
+    if hit:
+        for e in range(exponent.shape[0]):
+            exponent[e] += -numpy_sum(log_miss[e])
     step(
         (
             agent_pos, posc, pos, speed, exponent, threshold, step_count, detected, detect_step,

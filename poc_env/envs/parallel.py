@@ -452,11 +452,16 @@ class UAVSearchParallelEnv(ParallelEnv):
             terminations = {a: terminal[i] for a, i in zip(live, idx)}
             truncations = {a: truncated[i] for a, i in zip(live, idx)}
         observations = self._agent_obs(last.obs, live)  # agents finishing now get a last obs
-        return self._end_step(live, observations, rewards, terminations, truncations, infos)
+        done = True in terminal or True in truncated  # (the lists of every agent's flag)
+        return self._end_step(live, observations, rewards, terminations, truncations, infos, done)
 
-    def _end_step(self, live, observations, rewards, terminations, truncations, infos):
-        """The end of both step paths: the agents still flying, the renderer, the return."""
-        self.agents = [a for a in live if not (terminations[a] or truncations[a])]
+    def _end_step(self, live, observations, rewards, terminations, truncations, infos, done=True):
+        """The end of both step paths: the agents still flying (``live``, a new list, when
+        ``done`` is False: none finished), the renderer, the return."""
+        if done:
+            self.agents = [a for a in live if not (terminations[a] or truncations[a])]
+        else:
+            self.agents = live.copy()
         if self._renderer is not None:
             self._renderer.record(self.sim_state)
         if self.render_mode == "human":

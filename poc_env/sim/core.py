@@ -85,10 +85,10 @@ class Params:
 
     @functools.cached_property
     def motion_constants(self) -> np.ndarray:
-        """The UAV limits of the compiled eq. 19 kinematics (:data:`poc_env._kernels.swarm.
+        """The UAV limits of the compiled eq. 19 kinematics (:data:`poc_env._kernels.sensing.
         MOTION_CONSTANTS`), packed once per Params."""
         u = self.scenario.uav
-        return _swarm.motion_constants(
+        return _sensing.motion_constants(
             dt_s=self.dt,
             max_accel_mps2=u.max_accel_mps2,
             max_turn_rate_rad_s=u.max_turn_rate_rad_s,
@@ -616,7 +616,7 @@ def scale_actions(params: Params, actions: np.ndarray):
     """Normalised actions (E, N, 3) in [-1, 1] -> increments (dv, d alpha, d beta)."""
     a = np.asarray(actions, dtype=float)
     out = np.empty((3, *a.shape[:-1]))
-    _swarm.scale_actions(a, params.motion_constants, out)
+    _sensing.scale_actions(a, params.motion_constants, out)
     return out[0], out[1], out[2]
 
 
@@ -624,12 +624,12 @@ def kinematics(params: Params, state: State, actions, moving, turn=None):
     """Eq. 19 for the ``moving`` UAVs under normalised ``actions (E, N, 3)`` (``turn (E, N)``:
     heading increments replacing the actions', the shield's); updates heading, pitch and
     speed and returns the new position array (E, N, 3). One compiled pass
-    (:func:`poc_env._kernels.swarm.kinematics`)."""
+    (:func:`poc_env._kernels.sensing.kinematics`)."""
     new = np.empty_like(state.pos)
     alpha = np.empty_like(state.heading)
     beta = np.empty_like(state.pitch)
     speed = np.empty_like(state.speed)
-    _swarm.kinematics(
+    _sensing.kinematics(
         actions, turn, moving, state.pos, state.heading, state.pitch, state.speed,
         params.motion_constants, (new, alpha, beta, speed),
     )  # fmt: skip

@@ -1,29 +1,31 @@
 """The single environment's step: :meth:`Engine.step <poc_env.sim.engine.Engine.step>` with
-its glue formed once, in four compiled calls.
+its glue formed once, in three compiled calls.
 
 The PettingZoo env steps one env of a few UAVs, where a dozen numpy calls on ``(1, N)`` arrays
-cost more than the arithmetic they do, and numba's dispatch of a kernel (a fraction of a
-microsecond per array argument, more inside tuples) more than some kernels' work.
-:class:`SingleStep` runs the engine's step in the same order: the autopilot
-(:func:`~poc_env.sim.control.swarm_increments`), the core step (:func:`poc_env.sim.core.step`'s
-kernels called with the arguments :class:`_Constants` forms once per scenario: the eq. 19
-kinematics, then the sweep and the hidden target's POD in one call,
-:func:`poc_env._kernels.sensing.sense_step`; the shield keeps that function), then the
-bookkeeping, the auto topology and, in place of the reward terms and total
-(:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
+cost more than the arithmetic they do, and numba's dispatch of a kernel (about 60 ns per array
+argument, more inside tuples) more than some kernels' work. :class:`SingleStep` runs the
+engine's step in the same order: the autopilot (:func:`~poc_env.sim.control.swarm_increments`),
+the core step (:func:`poc_env.sim.core.step`'s kernels called with the arguments
+:class:`_Constants` forms once per scenario: the eq. 19 kinematics, the sweep and the hidden
+target's POD in one call, :func:`poc_env._kernels.sensing.fly_sense`; the shield keeps
+that function), the hidden target's ``log1p(-p)`` in numpy when a UAV may detect it (numba's
+``log1p`` may differ from numpy's in the last bit: numpy's uses SVML on AVX-512 CPUs), then
+the target's exponent, the bookkeeping, the auto topology and, in place of the reward terms
+and total (:mod:`poc_env.sim.rewards`), the episode end (:func:`~poc_env.sim.core.terminal`,
 :func:`~poc_env.sim.core.truncated`, :func:`~poc_env.sim.core.episode_over`) and the info values
 (:func:`~poc_env.sim.engine.info_parts`), one call of :func:`poc_env._kernels.swarm.step_end`
 (:func:`~poc_env._kernels.swarm.end_step` alone after another topology), which also groups the
 per-agent info values by Python type so that the adapter builds its per-agent info dicts from
-three ``tolist()`` calls; then the ``dict`` and ``flat`` observations (the kernels of
+three ``tolist()`` calls; then the ``dict`` and ``flat`` observations in one call
+(:func:`poc_env._kernels.observations.rasters_vectors`, the kernels of
 :func:`poc_env.sim.observations.observe`). The step's arrays that stay inside it are scratch
 (:class:`_Scratch`, reused at the next step; :meth:`Step.copy` keeps them); its
 :class:`~poc_env.sim.core.Events` are made only when asked for (:attr:`Step.events`).
 
 Every value is the engine's, bit for bit: ``tests/sim/test_single.py`` runs both on random
 actions over several tasks and options (and the core step on crafted states, the fused calls
-against the kernels they join) and compares every array and info. (The cache rule of
-:mod:`poc_env._kernels` keeps sensing, the swarm's arithmetic and the observations in
+against the kernels they join) and compares every array, info and the state. (The cache rule
+of :mod:`poc_env._kernels` keeps sensing, the swarm's arithmetic and the observations in
 separate modules, so in separate calls.)
 """
 
@@ -110,23 +112,33 @@ class _Scratch:
 
     def __init__(self, e: int, n: int) -> None:
         self.shape = (e, n)
-        self.finfo = np.empty((e, n, len(_swarm.FLOAT_INFOS)))
-        self.binfo = np.empty((e, n, len(_swarm.BOOL_INFOS)), dtype=bool)
-        self.iinfo = np.empty((e, n, len(_swarm.INT_INFOS)), dtype=np.int64)
+        sw = _swarm
+        self.finfo = np.empty((e, n, len(sw.FLOAT_INFOS)))
+        self.binfo = np.empty((e, n, len(sw.BOOL_INFOS)), dtype=bool)
+        self.iinfo = np.empty((e, n, len(sw.INT_INFOS)), dtype=np.int64)
         self.dist = np.empty((e, n, n))
         self.p_t = np.empty((e, n))
-        self.found = np.empty((e, n))
+        self.neg_p_t = np.empty((e, n))
+        self.sin_cos = np.empty((2, e, n))  # the headings' sines and cosines (vectors)
+        self.sin_h, self.cos_h = self.sin_cos
         self.team = np.empty(e)
-        self.time_term = np.empty((e, n))
-        self.flags = np.empty((_swarm.N_FLAGS, e, n), dtype=bool)
-        self.detected_now = np.empty(e, dtype=bool)
-        self.connected = np.empty(e, dtype=bool)
-        #: no-fly, threat and shielded flags of a map without zones or threats: always False
-        self.no_airspace = tuple(np.zeros((3, e, n), dtype=bool))
-        self.values = np.empty((6, e, n))  # the reward terms, then the reward
-        self.ends = np.empty((2, e, n), dtype=bool)  # terminated, truncated
-        self.over = np.empty(e, dtype=bool)
+        # step_end's arrays of one shape and dtype, as the rows of one array each
+        self.rows_f = np.empty((sw.ROWS_F, e, n))
+        #: (the no-fly, threat and shielded rows of a map without zones or threats: always
+        #: False, never written)
+        self.rows_b = np.zeros((sw.ROWS_B, e, n), dtype=bool)
+        self.rows_e = np.empty((sw.ROWS_E, e), dtype=bool)
         # their views, formed once
+        f, b, v = self.rows_f, self.rows_b, self.rows_e
+        self.found, self.time_term = f[sw.FOUND], f[sw.TIME_TERM]
+        self.log_miss = f[sw.LOG_MISS]  # log1p(-p_t): the hidden target's miss
+        self.values = f[sw.VALUES :]  # the reward terms, then the reward
+        self.flags = b[sw.FLAGS : sw.ENDS]
+        self.ends = b[sw.ENDS : sw.NOFLY]  # terminated, truncated
+        self.airspace = (b[sw.NOFLY], b[sw.THREAT], b[sw.SHIELDED])  # no-fly, threat, shielded
+        self.detected_now = v[sw.DETECTED_NOW]
+        self.connected = v[sw.CONNECTED]
+        self.over = v[sw.OVER]
         self.terms, self.reward = self.values[:5], self.values[5]
         self.terminated, self.truncated = self.ends[0], self.ends[1]
 
@@ -178,6 +190,8 @@ class _Constants:
             float(cc.range_m), float(max(n - 1, 1)),
         )  # fmt: skip
         self.vector = (np.array(scalars, dtype=np.float64), obs_mod._LOW, obs_mod._HIGH)
+        #: the same as the rows of one array (``rasters_vectors``' ``c_low_high``)
+        self.vector_rows = np.stack(self.vector)
 
 
 class SingleStep:
@@ -251,7 +265,7 @@ class SingleStep:
             self._end_step(p, st, parts, s)
         else:
             parts = self._core_step(p, k, st, inc, s)
-        obs = self._observe(p, k, st)
+        obs = self._observe(p, k, st, s)
         return Step(
             obs, s.reward, s.terms, parts, s.terminated, s.truncated, s.over, s.finfo, s.binfo,
             s.iinfo,
@@ -295,44 +309,45 @@ class SingleStep:
         alpha = np.empty((e, n))
         beta = np.empty((e, n))
         speed = np.empty((e, n))
-        _swarm.kinematics(
-            actions, None, moving, old, st.heading, st.pitch, st.speed, p.motion_constants,
-            (new, alpha, beta, speed),
+        found = s.found
+        # the kinematics, the sweep on the grid-relative legs and the hidden target's POD
+        hit = _sensing.fly_sense(
+            actions, moving, old, st.heading, st.pitch, st.speed, p.motion_constants, new, alpha,
+            beta, speed, st.belief, st.target, *k.sense, found, p_t,
         )  # fmt: skip
         st.heading = alpha
         st.pitch = beta
         st.speed = speed
-        found = s.found
-        # the sweep on the grid-relative legs and the hidden target's POD: one call
-        if _sensing.sense_step(st.belief, old, new, moving, st.target, *k.sense, found, p_t):
+        log_miss = s.log_miss
+        if hit:  # numpy's log1p(-p_t) (core.step's; numba's log1p may differ in the last bit)
             if st.target_out is not None:  # a target that left the map is beyond the search
                 p_t[st.target_out] = 0.0
-            if np.maximum.reduce(p_t, axis=None) < 1.0:  # no log1p(-1): no warning to silence
-                st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+            np.negative(p_t, out=s.neg_p_t)
+            if hit == 1:  # no POD of 1: no log1p(-1) warning to silence
+                np.log1p(s.neg_p_t, out=log_miss)
             else:
                 with np.errstate(divide="ignore"):
-                    st.target_exponent += -np.add.reduce(np.log1p(-p_t), axis=1)
+                    np.log1p(s.neg_p_t, out=log_miss)
+            if not k.auto:  # (step_end adds it, in numpy's order)
+                st.target_exponent += -np.add.reduce(log_miss, axis=1)
         st.pos = new
-        if k.airspace:
-            nofly, threat = sim.airspace_violations(p, moving, old[..., :2], new[..., :2], new)
-            shielded = np.zeros((e, n), dtype=bool)
-        else:  # no zones, no threats: the three flags false (never written)
-            nofly, threat, shielded = s.no_airspace
+        nofly, threat, shielded = s.airspace  # no zones, no threats: all False (never written)
+        if k.airspace:  # (the scenario's zones and threats: every step of this scratch has them)
+            nofly[...], threat[...] = sim.airspace_violations(
+                p, moving, old[..., :2], new[..., :2], new
+            )
         team, flags, time_term, detected_now = s.team, s.flags, s.time_term, s.detected_now
         detect_step = st.detect_step.copy()
         if k.auto:  # the bookkeeping, the common topology and the end of step: one call
             links = np.empty((e, n, n), dtype=bool)  # the state's: a new array
             connected = s.connected
-            values, ends = s.values, s.ends
             _swarm.step_end(
                 st.agent_pos, st.posc, new, st.speed, st.target_exponent, st.target_threshold,
                 st.step, st.detected, detect_step, st.elapsed, st.left_home, st.landed,
                 st.crashed, st.flying, st.violations, st.topology,
-                found, moving, nofly, threat, shielded,
-                team, detected_now, time_term, flags, dist, links, connected,
+                moving, hit, team, dist, links, s.rows_f, s.rows_b, s.rows_e,
                 p.landing, p.step_constants, k.range_m, k.k_nearest,
-                k.coef, p.horizon, self._ends, self._team,
-                values, ends, s.over, s.finfo, s.binfo, s.iinfo,
+                k.coef, p.horizon, self._ends, self._team, s.finfo, s.binfo, s.iinfo,
             )  # fmt: skip
             st.detect_step = detect_step
             st.links = links
@@ -355,7 +370,7 @@ class SingleStep:
         self._end_step(p, st, parts, s)
         return parts
 
-    def _observe(self, p: sim.Params, k: _Constants, st: sim.State) -> Any:
+    def _observe(self, p: sim.Params, k: _Constants, st: sim.State, s: _Scratch) -> Any:
         """The engine's observations (:func:`poc_env.sim.observations.observe`); ``dict`` and
         ``flat`` through their kernels with the arguments of :class:`_Constants`."""
         eng = self.engine
@@ -373,13 +388,12 @@ class SingleStep:
             raster = flat[:, :, :size].reshape(e, n, -1, g.ny, g.nx)
             vector = flat[:, :, size:]
         coarse = obs_mod._NO_COARSE if k.own_sum else g.coarsen(st.belief, p.s)
-        _obs_kernels.rasters(
+        np.sin(st.heading, out=s.sin_h)
+        np.cos(st.heading, out=s.cos_h)
+        _obs_kernels.rasters_vectors(
             st.belief, p.s, coarse, k.own_sum, eng.poc_scale, self._hazard, st.pos, st.flying,
-            *k.raster, raster,
-        )  # fmt: skip
-        _obs_kernels.vectors_of(
-            st.pos, st.speed, np.sin(st.heading), np.cos(st.heading), st.pitch, st.elapsed,
-            st.flying, st.step, p.landing, *k.vector, vector,
+            *k.raster, st.speed, s.sin_cos, st.pitch, st.elapsed, st.step, p.landing,
+            k.vector_rows, raster, vector,
         )  # fmt: skip
         if kind == "dict":
             return {"raster": raster, "vector": vector}

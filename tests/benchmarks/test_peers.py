@@ -250,7 +250,7 @@ def test_single_breakdown_times_the_single_step_and_its_kernels():
     from poc_env._kernels import sensing, swarm
     from poc_env.agents.benchmarks import breakdown
 
-    before = (sensing.sense_step, swarm.step_end)
+    before = (sensing.fly_sense, swarm.step_end)
     rows = breakdown.breakdown("single", steps=5)
     by = {r["part"]: r["ms_per_step"] for r in rows}
     assert [r["part"] for r in rows] == [p[2] for p in breakdown.PARTS["single"]]
@@ -258,6 +258,6 @@ def test_single_breakdown_times_the_single_step_and_its_kernels():
     step = by["single step (sim.single.SingleStep.step)"]
     assert 0 < step <= whole
     assert 0 < by["- core step and its end (SingleStep._core_step)"] <= step
-    assert by["  - sensing and hidden target kernel (eq. 12-14)"] > 0
+    assert by["  - kinematics, sensing and hidden target kernel (eq. 19, 12-14)"] > 0
     assert by["  - bookkeeping, topology, rewards, episode end, infos kernel"] > 0
-    assert (sensing.sense_step, swarm.step_end) == before
+    assert (sensing.fly_sense, swarm.step_end) == before

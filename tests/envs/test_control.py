@@ -8,7 +8,7 @@ from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test
 
 import poc_env
-import poc_env._kernels.swarm as _swarm
+import poc_env._kernels.sensing as _sensing
 from poc_env.envs.gymnasium_env import UAVSearchGym
 from poc_env.errors import ConfigError
 from poc_env.sim import control as ctl
@@ -18,23 +18,27 @@ from poc_env.sim.observations import CompassFeatures
 def _fly(env, seed, policy):
     """Fly one episode with ``policy(rng, agents)``; record the increments the core received."""
     seen = []
-    real_kinematics = _swarm.kinematics  # what every step (the engine's, the single env's) flies
+    # what every step flies: the engine's kinematics, the single env's kinematics and sensing
+    real = (_sensing.kinematics, _sensing.fly_sense)
 
-    def spy(actions, *args):
-        seen.append(np.asarray(actions).copy())
-        return real_kinematics(actions, *args)
+    def spy(fn):
+        def call(actions, *args):
+            seen.append(np.asarray(actions).copy())
+            return fn(actions, *args)
+
+        return call
 
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
     infos: dict = {}
     posc = 0.0
-    _swarm.kinematics = spy
+    _sensing.kinematics, _sensing.fly_sense = map(spy, real)
     try:
         while env.agents:
             _, _, _, _, infos = env.step(policy(rng, env.agents))
             posc = max([posc, *(i["posc"] for i in infos.values())])
     finally:
-        _swarm.kinematics = real_kinematics
+        _sensing.kinematics, _sensing.fly_sense = real
     return np.concatenate(seen), env.sim_state, posc
 
 

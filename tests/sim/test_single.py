@@ -112,6 +112,8 @@ def test_fast_step_equals_the_engines_step(name, kwargs):
             acts = {a: rng.uniform(-1.2, 1.2, dim) for a in fast.agents}
             got, want = fast.step(acts), ref.step(acts)
             _same(got, want, f"step {steps}")
+            # the state too: the hidden target's exponent shows in no output until detection
+            _same(fast.sim_state, ref.sim_state, f"state at step {steps}")
             assert fast.agents == ref.agents
             if steps % 7 == 0:  # the arrays behind the dicts, made when asked for
                 tf, tr = fast.transition, ref.transition
@@ -312,7 +314,8 @@ def test_returned_values_are_not_changed_by_later_steps():
 def test_fused_kernels_equal_the_kernels_they_join(law):
     """The single step's fused calls against what they replace, on random states of many
     sizes: ``sensing.sense_step`` against :func:`core.sense` (numpy's origin shifts, the sweep)
-    and the hidden target kernel as :func:`core.step` calls it; ``swarm.step_end`` against the
+    and the hidden target kernel as :func:`core.step` calls it; ``sensing.fly_sense`` against
+    :func:`core.kinematics`, then ``sense_step``; ``swarm.step_end`` against the
     bookkeeping kernel, the auto topology and the end-of-step kernel called one by one;
     ``observations.vectors_of`` against ``vectors``; ``swarm.all_finite`` against numpy."""
     import copy
@@ -364,7 +367,26 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
         _same(found, want_found, "found")
         _same(got_st.belief, want_st.belief, "belief")
         _same(p_t, want_p, "p_t")
-        assert hit == want_hit and (hit or not want_p.any())
+        code = 0 if not want_p.any() else 2 if (want_p >= 1).any() | np.isnan(want_p).any() else 1
+        assert hit == code and bool(hit) == want_hit
+
+        # the kinematics and the sensing in one call against sim.kinematics, then sense_step
+        acts = rng.uniform(-1.2, 1.2, (e, n, 3))
+        fly_st, ref_st = copy.deepcopy(st), copy.deepcopy(st)
+        ref_new = sim.kinematics(p, ref_st, acts, moving)
+        ref_found, ref_p = np.empty((e, n)), np.empty((e, n))
+        ref_hit = sensing.sense_step(
+            ref_st.belief, st.pos, ref_new, moving, st.target, *kc.sense, ref_found, ref_p
+        )
+        fly = [np.empty_like(st.pos), *np.empty((3, e, n))]
+        fly_found, fly_p = np.empty((e, n)), np.empty((e, n))
+        fly_hit = sensing.fly_sense(
+            acts, moving, st.pos, st.heading, st.pitch, st.speed, p.motion_constants, *fly,
+            fly_st.belief, st.target, *kc.sense, fly_found, fly_p,
+        )  # fmt: skip
+        _same(fly, [ref_new, ref_st.heading, ref_st.pitch, ref_st.speed], "kinematics")
+        _same((fly_found, fly_p, fly_st.belief), (ref_found, ref_p, ref_st.belief), "fly_sense")
+        assert fly_hit == ref_hit
 
         # the bookkeeping, topology and end of step: one call against three
         st.step[:] = rng.integers(p.horizon - 2, p.horizon + 1, e)
@@ -373,6 +395,11 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
         nofly, threat, shielded = rng.random((3, e, n)) < 0.2
         coef = steps._coefficients(p.dt)
         ends_on, team = bool(sc.episode.detection_ends_episode), sc.reward.credit == "team"
+        # the hidden target's miss, some PODs 0 (and, with k odd, every one: no hit)
+        p_miss = np.where(rng.random((e, n)) < 0.5, 0.0, rng.random((e, n)) ** 4)
+        with np.errstate(divide="ignore"):
+            log_miss = np.log1p(-p_miss)
+        hit_code = k % 2
         runs = []
         for fused in (True, False):
             s = copy.deepcopy(st)
@@ -382,6 +409,10 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
                 if isinstance(arr, np.ndarray):
                     arr[...] = 0
             links = np.empty((e, n, n), dtype=bool)
+            # the sensed arrays as the fused call takes them: rows of the scratch
+            out.found[...], out.log_miss[...] = found, log_miss
+            for row, flag in zip(out.airspace, (nofly, threat, shielded), strict=True):
+                row[...] = flag
             state = (
                 s.agent_pos, s.posc, s.pos, s.speed, s.target_exponent, s.target_threshold,
                 s.step, s.detected, s.detect_step, s.elapsed, s.left_home, s.landed,
@@ -389,18 +420,20 @@ def test_fused_kernels_equal_the_kernels_they_join(law):
             )  # fmt: skip
             events = (out.team, out.detected_now, out.time_term, out.flags, out.dist)
             parts = (
-                found, out.team, out.time_term, out.flags, nofly, threat, shielded,
-                out.detected_now, out.connected,
+                out.found, out.team, out.time_term, out.flags, *out.airspace, out.detected_now,
+                out.connected,
             )  # fmt: skip
             if fused:
                 kernel.step_end(
-                    *state, s.topology, found, moving, nofly, threat, shielded, *events, links,
-                    out.connected, p.landing, p.step_constants, kc.range_m, kc.k_nearest, coef,
-                    p.horizon, ends_on, team, out.values, out.ends, out.over, out.finfo,
-                    out.binfo, out.iinfo,
+                    *state, s.topology, moving, hit_code, out.team, out.dist, links, out.rows_f,
+                    out.rows_b, out.rows_e, p.landing, p.step_constants, kc.range_m,
+                    kc.k_nearest, coef, p.horizon, ends_on, team, out.finfo, out.binfo,
+                    out.iinfo,
                 )  # fmt: skip
             else:
-                kernel.step(state, (found, moving, nofly, threat), events, p.landing,
+                if hit_code:  # as core.step adds it
+                    s.target_exponent += -np.log1p(-p_miss).sum(axis=1)
+                kernel.step(state, (out.found, moving, *out.airspace[:2]), events, p.landing,
                             p.step_constants)  # fmt: skip
                 n_comp = np.empty(e, dtype=np.int64)
                 kernel.auto_links(out.dist, kc.range_m, s.flying, kc.k_nearest, links, n_comp)
