@@ -291,7 +291,7 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             (single_mod.BOOL_INFOS, s.binfo),
             (single_mod.INT_INFOS, s.iinfo),
         ):
-            rows = np.moveaxis(values, -1, 0).copy()  # (keys, E, N): the step's own arrays
+            rows = values.transpose(2, 0, 1).copy()  # (keys, E, N): the step's own arrays
             groups.update(zip(names, rows))
         info: dict[str, np.ndarray] = {}
         for key in self._info_keys:

@@ -314,7 +314,7 @@ class SwarmVecEnv(VecEnv):
     def step_wait(self):
         if self.state is None:
             raise EpisodeOverError("call reset() before step()")
-        p, n = self.params, self.n_agents
+        n = self.n_agents
         active = self._active
         tr = self._engine_step()  # the few infos: from the state
         st = self.engine.current
@@ -323,7 +323,10 @@ class SwarmVecEnv(VecEnv):
         self._lengths += active
         finished = active & (tr.terminated | self._rl_done(st))
         still = active & ~finished
-        env_end = sim.episode_over(p, st, ~still)
+        # sim.episode_over(p, st, ~still): the horizon or no slot still going. The engine's
+        # ``over`` is the horizon or every agent terminal, and a terminal agent is not still
+        # going, so or-ing the rows where none is gives the same, without the state's arrays
+        env_end = tr.over | ~np.logical_or.reduce(still, axis=1)
         done = (finished | env_end[:, None]).ravel()
         truncated = (still & tr.truncated).ravel()
         was_active = active.ravel()
