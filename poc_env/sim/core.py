@@ -423,8 +423,8 @@ def initial(
     )
     priors_given = priors
     if priors is None:  # every env's the scenario's: one fine prior, copied
-        fine = np.repeat(np.repeat(np.asarray(params.prior, dtype=float), s, 0), s, 1) / (s * s)
-        belief = np.broadcast_to(fine, (e, *fine.shape)).copy()
+        one = np.repeat(np.repeat(np.asarray(params.prior, dtype=float), s, 0), s, 1) / (s * s)
+        belief = np.broadcast_to(one, (e, *one.shape)).copy()
     else:
         belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, 1), s, 2) / (s * s)
     pos = np.zeros((e, n, 3))
