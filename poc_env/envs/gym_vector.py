@@ -26,7 +26,7 @@ actions (a test checks it transition for transition, episode ends included), onl
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -47,6 +47,18 @@ try:  # gymnasium >= 1.1 names the autoreset modes
     _NEXT_STEP: Any = AutoresetMode.NEXT_STEP
 except ImportError:  # pragma: no cover - gymnasium 1.0: next-step autoreset is the only mode
     _NEXT_STEP = "NextStep"
+
+
+class _Outcome(NamedTuple):
+    """What :meth:`SwarmGymVectorEnv._advance` reads of a step: the fields of the engine's
+    :class:`~poc_env.sim.engine.Transition` but its reward terms and events."""
+
+    obs: Any
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    over: np.ndarray
+    info: dict[str, np.ndarray]
 
 
 class SwarmGymVectorEnv(gym.vector.VectorEnv):
@@ -245,7 +257,11 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         whole = going is None
         live = self._live.copy() if whole else self._live[going]
         # finished agents' actions: ignored
-        tr = self._whole_step(a) if whole and self._fast is not None else self.engine.step(a, going)
+        if whole and self._fast is not None:
+            tr = self._whole_step(a)
+        else:
+            t = self.engine.step(a, going)
+            tr = _Outcome(t.obs, t.reward, t.terminated, t.truncated, t.over, t.info)
         reward = engine_mod.mean_over(tr.reward, live)
         done = tr.over
         truncated = done & tr.truncated.any(axis=1)
@@ -277,11 +293,12 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         self._last_info = keep_rows(self._last_info, tr.info, envs, live)
         return reward, terminated, truncated
 
-    def _whole_step(self, a: np.ndarray) -> engine_mod.Transition:
+    def _whole_step(self, a: np.ndarray) -> _Outcome:
         """:meth:`Engine.step <poc_env.sim.engine.Engine.step>` of every env under ``a``
-        through :class:`~poc_env.sim.single.SingleStep`: the same transition bit for bit, its
-        infos (:func:`~poc_env.sim.engine.infos`) taken from the step's per-agent values grouped
-        by type (one copy per group, each key a contiguous row of it) and the state's."""
+        through :class:`~poc_env.sim.single.SingleStep`: the same transition bit for bit (but
+        the reward terms and events, which the adapter does not read), its infos
+        (:func:`~poc_env.sim.engine.infos`) taken from the step's per-agent values grouped by
+        type (one copy per group, each key a contiguous row of it) and the state's."""
         assert self._fast is not None
         s = self._fast.step(a)
         st = self.engine.current
@@ -303,6 +320,4 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
                 info[key] = groups[key]
             else:  # a key the kernel does not group (moving targets' mass_out): the engine's
                 info[key] = engine_mod.infos(self.params, st, s.events, s.terms_dict())[key]
-        return engine_mod.Transition(
-            s.obs, s.reward, s.terms_dict(), s.events, s.terminated, s.truncated, s.over, info
-        )
+        return _Outcome(s.obs, s.reward, s.terminated, s.truncated, s.over, info)

@@ -1,0 +1,73 @@
+"""The SB3 adapter's slot bookkeeping of a step, in one pass.
+
+The kernel behind :meth:`poc_env.envs.vector.SwarmVecEnv.step_wait`: from the engine's step
+(each agent's reward, whether it finished, whether the horizon cut it off, whether its env's
+episode is over) and which slots were active, the slots' rewards (0 for placeholders), dones
+and truncations, which agents still fly on, which envs end, and each agent's running return
+and length, as the numpy formulation of ``step_wait`` writes them (``np.where(active, reward,
+0.0)``, then ``returns += reward``, ``lengths += active``, ``reward.astype(np.float32)``: the
+same additions and roundings, element by element). A dozen numpy calls on ``(E, N)`` arrays
+cost more than the arithmetic at SB3's sizes; ``tests/envs/test_vector.py`` pins the kernel to
+that formulation.
+
+A kernel module: imports nothing of the project (the cache rule, :mod:`poc_env._kernels`).
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+_jit = njit(cache=True, error_model="numpy")
+
+#: Bits of :func:`slot_step`'s result.
+SOME_INACTIVE, SOME_DONE, SOME_STOPPED, SOME_ENV_ENDS = 1, 2, 4, 8
+
+
+@_jit
+def slot_step(
+    active, reward, finished, truncated, over, returns, lengths,
+    slot_reward, slot_done, slot_truncated, still, env_end,
+):  # fmt: skip
+    """One step's slot bookkeeping for ``E`` envs of ``N`` agents.
+
+    Inputs: ``active (E, N)`` the slots with a live agent before the step, ``reward (E, N)``
+    its reward, ``finished (E, N)`` whether its RL episode ended at the step (terminal, or
+    the adapter's own reason), ``truncated (E, N)`` the horizon's cut, ``over (E,)`` the
+    engine's episode end. Updated in place: ``returns (E, N)`` (+= the slot's reward) and
+    ``lengths (E, N)`` (+= 1 for active slots). Written: ``slot_reward (E * N,)`` float32 (the
+    reward of active slots, else 0), ``slot_done (E * N,)`` (the agent finished, or its env
+    ended), ``slot_truncated (E * N,)`` (still flying and cut off), ``still (E, N)`` (active
+    and not finished), ``env_end (E,)`` (the engine's end, or no agent still flying). Returns
+    the or of :data:`SOME_INACTIVE` (some slot was not active), :data:`SOME_DONE`,
+    :data:`SOME_STOPPED` (some agent does not fly on) and :data:`SOME_ENV_ENDS`."""
+    n_env, n = active.shape
+    flags = 0
+    for e in range(n_env):
+        going = False
+        for i in range(n):
+            k = e * n + i
+            a = active[e, i]
+            r = reward[e, i] if a else 0.0
+            returns[e, i] += r
+            if a:
+                lengths[e, i] += 1
+            else:
+                flags |= SOME_INACTIVE
+            slot_reward[k] = r
+            s = a and not finished[e, i]
+            still[e, i] = s
+            going = going or s
+            slot_truncated[k] = s and truncated[e, i]
+        end = over[e] or not going
+        env_end[e] = end
+        if end:
+            flags |= SOME_ENV_ENDS
+        for i in range(n):
+            k = e * n + i
+            d = end or (active[e, i] and finished[e, i])
+            slot_done[k] = d
+            if d:
+                flags |= SOME_DONE
+            if not still[e, i]:
+                flags |= SOME_STOPPED
+    return flags
