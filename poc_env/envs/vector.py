@@ -87,7 +87,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from gymnasium import spaces
 
-import poc_env._kernels.slots as _slots
+import poc_env._kernels.adapters as _adapters
 from poc_env.config import Scenario
 from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError
 from poc_env.errors import ConfigError, MissingExtraError
@@ -333,7 +333,7 @@ class SwarmVecEnv(VecEnv):
         st = self.engine.current
         rl_done = self._rl_done(st)
         finished = tr.terminated if rl_done is False else tr.terminated | rl_done
-        # the slots' bookkeeping in one compiled pass (_kernels.slots): as numpy would,
+        # the slots' bookkeeping in one compiled pass (_kernels.adapters): as numpy would,
         #   reward = np.where(active, reward, 0.0); returns += reward; lengths += active
         #   finished = active & finished; still = active & ~finished
         #   env_end = over | all(~still, axis=1)   (sim.episode_over(p, st, ~still): the
@@ -346,7 +346,7 @@ class SwarmVecEnv(VecEnv):
         truncated = np.empty(e * n, dtype=bool)
         still = np.empty((e, n), dtype=bool)
         env_end = np.empty(e, dtype=bool)
-        flags = _slots.slot_step(
+        flags = _adapters.slot_step(
             active, self._reward(tr.reward, st), finished, tr.truncated, tr.over,
             self._returns, self._lengths, reward, done, truncated, still, env_end,
         )  # fmt: skip
@@ -355,21 +355,21 @@ class SwarmVecEnv(VecEnv):
         obs = self._slots(tr.obs)
         infos = [{} for _ in range(self.num_envs)]  # list[dict[str, Any]]
         # (each loop and write below runs only when some slot needs it: usually none does)
-        if flags & _slots.SOME_INACTIVE:
+        if flags & _adapters.SOME_INACTIVE:
             for k in np.flatnonzero(~was_active).tolist():
                 infos[k]["inactive"] = True
-        if flags & _slots.SOME_DONE:
+        if flags & _adapters.SOME_DONE:
             for k in np.flatnonzero(done).tolist():
                 info = infos[k]
                 info["terminal_observation"] = (
                     self._slot_obs(obs, k) if was_active[k] else self._zero_obs()
                 )
                 info["TimeLimit.truncated"] = bool(truncated[k])
-        if flags & _slots.SOME_STOPPED:
+        if flags & _adapters.SOME_STOPPED:
             self._write(obs, ~still.ravel(), 0.0)  # finished agents show the placeholder
         self._active = still
 
-        if not flags & _slots.SOME_ENV_ENDS:
+        if not flags & _adapters.SOME_ENV_ENDS:
             return obs, reward, done, infos
         ended = np.flatnonzero(env_end)
         elapsed = round(time.time() - self._t_start, 6)

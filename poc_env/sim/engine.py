@@ -41,6 +41,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+import poc_env._kernels.adapters as _adapters
 import poc_env.limits as limits
 import poc_env.spec as spec
 from poc_env.config import Scenario, load_scenario
@@ -259,29 +260,16 @@ def mean_over(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
     (0 for a row without any): the centralised view's reward, the mean of the live agents'.
 
     Each mean is numpy's mean of exactly the row's live values (the same floating-point sums).
-    Rows of fewer than 8 entries, which numpy sums one after the other, are summed column by
-    column with 0.0 in place of the masked values (adding 0.0 changes no sum, and numpy's sum
-    of the live values starts from 0.0 too); longer rows, which numpy sums pairwise, are grouped
-    by how many entries they average."""
+    Rows of fewer than 8 entries, which numpy sums one after the other, are summed in one
+    compiled pass (:func:`poc_env._kernels.adapters.live_mean`); longer rows, which numpy sums
+    pairwise, are grouped by how many entries they average."""
     values = np.asarray(values, dtype=float)
     mask = np.asarray(mask, dtype=bool)
-    every = bool(np.logical_and.reduce(mask, axis=None))
-    n = values.shape[1] if values.ndim == 2 else 0
-    if 0 < n < 8:  # (numpy's pairwise sum adds fewer than 8 values in order)
-        w = values if every else np.where(mask, values, 0.0)
-        total = w[:, 0] + 0.0  # numpy's sum starts from 0.0: -0.0 + 0.0 is 0.0
-        for k in range(1, n):
-            total += w[:, k]
-        if every:
-            return total / n
-        count = mask[:, 0].astype(np.int64)
-        for k in range(1, n):
-            count += mask[:, k]
-        with np.errstate(invalid="ignore"):  # 0 / 0 in rows without a live entry: 0 below
-            total /= count
-        total[count == 0] = 0.0
-        return total
-    if every:  # every agent live: the same rows, the same sums
+    if values.ndim == 2 and 0 < values.shape[1] < 8 and mask.shape == values.shape:
+        out = np.empty(values.shape[0])
+        _adapters.live_mean(values, mask, out)
+        return out
+    if mask.all():  # every agent live: the same rows, the same sums
         return values.mean(axis=1)
     count = mask.sum(axis=1)
     c0 = int(count[0])

@@ -409,7 +409,7 @@ def test_fast_step_equals_the_engines_step(scenario, kwargs):
 
 
 def _numpy_slot_step(active, reward, finished, truncated, over, returns, lengths):
-    """``step_wait``'s bookkeeping in numpy (the formulation ``_kernels.slots`` compiles)."""
+    """``step_wait``'s bookkeeping in numpy (what ``_kernels.adapters.slot_step`` compiles)."""
     r = np.where(active, reward, 0.0)
     returns += r
     lengths += active
@@ -421,10 +421,10 @@ def _numpy_slot_step(active, reward, finished, truncated, over, returns, lengths
 
 
 def test_slot_bookkeeping_kernel_is_the_numpy_formulation():
-    """``_kernels.slots.slot_step`` (SwarmVecEnv.step_wait's bookkeeping) writes what the
+    """``_kernels.adapters.slot_step`` (SwarmVecEnv.step_wait's bookkeeping) writes what the
     numpy formulation gives, bit for bit, and its flags say what the arrays hold: random
     placeholders, finished agents, cuts and ends; rewards with -0.0, NaN and float32 rounding."""
-    from poc_env._kernels import slots
+    from poc_env._kernels import adapters as slots
 
     rng = np.random.default_rng(3)
     specials = np.array([0.0, -0.0, np.nan, 1e-320, 0.1, -3.7, 1 / 3, 1e30])

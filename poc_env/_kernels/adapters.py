@@ -1,14 +1,17 @@
-"""The SB3 adapter's slot bookkeeping of a step, in one pass.
+"""The batched adapters' bookkeeping of a step, each in one pass.
 
-The kernel behind :meth:`poc_env.envs.vector.SwarmVecEnv.step_wait`: from the engine's step
-(each agent's reward, whether it finished, whether the horizon cut it off, whether its env's
-episode is over) and which slots were active, the slots' rewards (0 for placeholders), dones
-and truncations, which agents still fly on, which envs end, and each agent's running return
-and length, as the numpy formulation of ``step_wait`` writes them (``np.where(active, reward,
-0.0)``, then ``returns += reward``, ``lengths += active``, ``reward.astype(np.float32)``: the
-same additions and roundings, element by element). A dozen numpy calls on ``(E, N)`` arrays
-cost more than the arithmetic at SB3's sizes; ``tests/envs/test_vector.py`` pins the kernel to
-that formulation.
+:func:`slot_step` is the SB3 adapter's (:meth:`poc_env.envs.vector.SwarmVecEnv.step_wait`):
+from the engine's step (each agent's reward, whether it finished, whether the horizon cut it
+off, whether its env's episode is over) and which slots were active, the slots' rewards (0 for
+placeholders), dones and truncations, which agents still fly on, which envs end, and each
+agent's running return and length, as the numpy formulation of ``step_wait`` writes them
+(``np.where(active, reward, 0.0)``, then ``returns += reward``, ``lengths += active``,
+``reward.astype(np.float32)``: the same additions and roundings, element by element).
+:func:`live_mean` is the centralised view's reward (:func:`poc_env.sim.engine.mean_over`,
+``gymnasium.make_vec``'s): each row's mean over its live agents, summed in numpy's order for
+rows of fewer than 8. A dozen numpy calls on ``(E, N)`` arrays cost more than the arithmetic
+at these sizes; ``tests/envs/test_vector.py`` and ``tests/envs/test_engine.py`` pin the two to
+numpy.
 
 A kernel module: imports nothing of the project (the cache rule, :mod:`poc_env._kernels`).
 """
@@ -71,3 +74,19 @@ def slot_step(
             if not still[e, i]:
                 flags |= SOME_STOPPED
     return flags
+
+
+@_jit
+def live_mean(values, mask, out):
+    """``out (E,)``: each row's mean of ``values (E, N)`` over its True ``mask`` entries, 0
+    for a row without any, for ``N < 8``: numpy's mean of those values to the bit (numpy adds
+    fewer than 8 values one after the other, from 0.0), then divides by their count."""
+    n_env, n = values.shape
+    for e in range(n_env):
+        total = 0.0
+        count = 0
+        for i in range(n):
+            if mask[e, i]:
+                total = total + values[e, i]
+                count += 1
+        out[e] = total / count if count else 0.0
