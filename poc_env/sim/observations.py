@@ -139,11 +139,12 @@ def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.n
     n = state.flying.shape[1]
     if out is None:
         out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
+    sin_h, cos_h = _sin_cos(state.heading)
     _kernels.vectors_of(
         state.pos,
         state.speed,
-        np.sin(state.heading),
-        np.cos(state.heading),
+        sin_h,
+        cos_h,
         state.pitch,
         state.elapsed,
         state.flying,
@@ -153,6 +154,33 @@ def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.n
         out,
     )
     return out
+
+
+#: The headings of the last large :func:`_sin_cos` call (a copy), their sines and cosines.
+_TRIG: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+#: Below this many UAVs numpy's sine and cosine cost less than comparing the headings.
+_TRIG_MIN = 256
+
+
+def _sin_cos(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.sin(heading)`` and ``np.cos(heading)``; those of the last call again when its
+    headings were these, bit for bit (each step computes the vectors twice: the autopilot's
+    at its start, of the headings the last observation saw unless something wrote them since,
+    which the comparison sees). The arrays returned are only read."""
+    global _TRIG
+    h = heading
+    if h.size < _TRIG_MIN or h.dtype != np.float64 or not h.flags.c_contiguous:
+        return np.sin(h), np.cos(h)
+    last = _TRIG  # (one read: another thread may replace it, never change it)
+    if (
+        last is not None
+        and last[0].shape == h.shape
+        and np.array_equal(last[0].view(np.int64), h.view(np.int64))
+    ):
+        return last[1], last[2]
+    sin_h, cos_h = np.sin(h), np.cos(h)
+    _TRIG = (h.copy(), sin_h, cos_h)
+    return sin_h, cos_h
 
 
 #: The vectors kernel's arguments after the state's and the landing fields: its 14 scalars
