@@ -298,7 +298,7 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         through :class:`~poc_env.sim.single.SingleStep`: the same transition bit for bit (but
         the reward terms and events, which the adapter does not read), its infos
         (:func:`~poc_env.sim.engine.infos`) taken from the step's per-agent values grouped by
-        type (one copy per group, each key a contiguous row of it) and the state's."""
+        type (one copy per group, each key a column of it) and the state's."""
         assert self._fast is not None
         s = self._fast.step(a)
         st = self.engine.current
@@ -308,8 +308,8 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             (single_mod.BOOL_INFOS, s.binfo),
             (single_mod.INT_INFOS, s.iinfo),
         ):
-            rows = values.transpose(2, 0, 1).copy()  # (keys, E, N): the step's own arrays
-            groups.update(zip(names, rows))
+            own = values.copy()  # the step's own values; each key a column (E, N) of them
+            groups.update((name, own[..., j]) for j, name in enumerate(names))
         info: dict[str, np.ndarray] = {}
         for key in self._info_keys:
             if key == "posc":  # per env, as the engine's
