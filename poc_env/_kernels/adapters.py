@@ -77,16 +77,45 @@ def slot_step(
 
 
 @_jit
+def _row_mean(values, mask, e):
+    """Row ``e``'s mean of ``values`` over its True ``mask`` entries (0 without any), for rows
+    of fewer than 8: numpy's mean of those values to the bit (numpy adds fewer than 8 values one
+    after the other, from 0.0), then divided by their count."""
+    total = 0.0
+    count = 0
+    for i in range(values.shape[1]):
+        if mask[e, i]:
+            total = total + values[e, i]
+            count += 1
+    return total / count if count else 0.0
+
+
+@_jit
 def live_mean(values, mask, out):
     """``out (E,)``: each row's mean of ``values (E, N)`` over its True ``mask`` entries, 0
-    for a row without any, for ``N < 8``: numpy's mean of those values to the bit (numpy adds
-    fewer than 8 values one after the other, from 0.0), then divides by their count."""
-    n_env, n = values.shape
-    for e in range(n_env):
-        total = 0.0
-        count = 0
-        for i in range(n):
-            if mask[e, i]:
-                total = total + values[e, i]
-                count += 1
-        out[e] = total / count if count else 0.0
+    for a row without any, for ``N < 8`` (:func:`_row_mean`)."""
+    for e in range(values.shape[0]):
+        out[e] = _row_mean(values, mask, e)
+
+
+@_jit
+def live_step(live, reward, terminated, truncated, over, mean, env_term, env_trunc, new_live):
+    """``gymnasium.make_vec``'s bookkeeping of a whole batch's step for ``N < 8`` agents, as
+    :meth:`poc_env.envs.gym_vector.SwarmGymVectorEnv._advance` writes it in numpy: ``mean
+    (E,)`` each env's reward, the mean over the agents ``live (E, N)`` before the step
+    (:func:`_row_mean`); ``env_trunc (E,)`` the episode is ``over`` and the horizon cut some
+    agent off (``truncated (E, N)``), ``env_term`` over otherwise; ``new_live (E, N)`` live and
+    neither ``terminated`` nor truncated (it may be ``live`` itself: each entry is read before
+    it is written). Returns whether every agent was live."""
+    every = True
+    for e in range(live.shape[0]):
+        mean[e] = _row_mean(reward, live, e)
+        cut = False
+        for i in range(live.shape[1]):
+            alive = live[e, i]
+            every = every and alive
+            cut = cut or truncated[e, i]
+            new_live[e, i] = alive and not (terminated[e, i] or truncated[e, i])
+        env_trunc[e] = over[e] and cut
+        env_term[e] = over[e] and not cut
+    return every

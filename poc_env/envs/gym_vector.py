@@ -33,6 +33,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
+import poc_env._kernels.adapters as _adapters
 from poc_env.envs.gymnasium_env import keep_rows, view_info
 from poc_env.envs.parallel import OBS_TYPES, check_seed
 from poc_env.errors import ConfigError
@@ -262,15 +263,27 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         else:
             t = self.engine.step(a, going)
             tr = _Outcome(t.obs, t.reward, t.terminated, t.truncated, t.over, t.info)
-        reward = engine_mod.mean_over(tr.reward, live)
         done = tr.over
-        truncated = done & tr.truncated.any(axis=1)
-        terminated = done & ~truncated
-        finished = live & (tr.terminated | tr.truncated)
+        if whole and self._fast is not None and live.shape[1] < 8:  # one compiled pass:
+            e = len(live)  # mean_over's reward, the ends, the live agents as below
+            reward = np.empty(e)
+            terminated = np.empty(e, dtype=bool)
+            truncated = np.empty(e, dtype=bool)
+            every = _adapters.live_step(
+                live, tr.reward, tr.terminated, tr.truncated, done, reward, terminated,
+                truncated, self._live,
+            )  # fmt: skip
+        else:
+            reward = engine_mod.mean_over(tr.reward, live)
+            truncated = done & tr.truncated.any(axis=1)
+            terminated = done & ~truncated
+            finished = live & (tr.terminated | tr.truncated)
+            every = bool(live.all())
+            if whole:
+                self._live[:] = live & ~finished
         if whole:
-            self._live[:] = live & ~finished
             self._autoreset[:] = done
-            if live.all():  # every row is new (keep_rows would return the new arrays)
+            if every:  # every row is new (keep_rows would return the new arrays)
                 self._last, self._last_info = tr.obs, tr.info
                 return reward, terminated, truncated
             # the engine's observations are fresh arrays of this step, not handed out yet: the
@@ -283,7 +296,16 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             else:
                 obs[dead] = self._last[dead]
             self._last = obs
-            self._last_info = keep_rows(self._last_info, tr.info, self._all, live)
+            if self._fast is None:
+                self._last_info = keep_rows(self._last_info, tr.info, self._all, live)
+                return reward, terminated, truncated
+            # so are the infos of the whole batch's step (_whole_step): keep_rows' values too
+            # (a per-env entry, posc, is never frozen; links (E, N, N) by the agent's row)
+            for key, v in tr.info.items():
+                if v.ndim > 1:
+                    where = dead.reshape(dead.shape + (1,) * (v.ndim - 2))
+                    np.copyto(v, self._last_info[key], where=where)
+            self._last_info = tr.info
             return reward, terminated, truncated
         envs = self.engine.envs(going)
         if not whole:
@@ -318,6 +340,9 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
                 info[key] = st.links.copy()
             elif key in groups:
                 info[key] = groups[key]
-            else:  # a key the kernel does not group (moving targets' mass_out): the engine's
-                info[key] = engine_mod.infos(self.params, st, s.events, s.terms_dict())[key]
+            else:  # a key the kernel does not group (moving targets' mass_out): the engine's,
+                # copied (this step's own array, as the others: _advance writes rows into them)
+                info[key] = np.array(
+                    engine_mod.infos(self.params, st, s.events, s.terms_dict())[key]
+                )
         return _Outcome(s.obs, s.reward, s.terminated, s.truncated, s.over, info)
