@@ -31,7 +31,7 @@ _FAST = [
     ("poc_env._kernels.observations", "compass", "    - compass kernel"),
     ("poc_env._kernels.observations", "coarse_poc", "    - coarse POC kernel"),
     ("poc_env.sim.single", "swarm_increments", "  - autopilot (control.swarm_increments)"),
-    ("poc_env._kernels.observations", "vectors", "  - vectors kernel (observation, autopilot)"),
+    ("poc_env._kernels.observations", "vectors_of", "  - vectors kernel (observation, autopilot)"),
 ]
 PARTS: dict[str, list[tuple[str, str, str]]] = {
     "make_vec_small": [

@@ -54,7 +54,6 @@ from poc_env.sim import observations as obs_mod
 from poc_env.sim.autopilot import returning
 from poc_env.sim.control import heading_increments
 from poc_env.sim.core import Params
-from poc_env.sim.engine import Transition
 from poc_env.sim.observations import (
     FEATURE_HIGH,
     FEATURE_LOW,
@@ -118,8 +117,8 @@ class PilotVecEnv(SwarmVecEnv):
         self._phi = self._potential(self.state)
         return super()._sim_actions(a)
 
-    def _reward(self, tr: Transition, state: sim.State) -> np.ndarray:
-        r = super()._reward(tr, state)
+    def _reward(self, reward: np.ndarray, state: sim.State) -> np.ndarray:
+        r = super()._reward(reward, state)
         if self.approach_shaping:
             phi = np.where(state.flying, self._potential(state), 0.0)
             r = r + self.approach_shaping * (self.gamma * phi - self._phi)

@@ -16,6 +16,9 @@ module              kernels (the public functions that call them)
 ``autopilot``       the heading and waypoint levels' autopilot and eq. 18 return rule
                     (:func:`poc_env.sim.control.swarm_increments`)
 ``observations``    rasters, vectors and compass sums (:mod:`poc_env.sim.observations`)
+``adapters``        the batched adapters' bookkeeping of a step: the SB3 slots' rewards, dones
+                    and returns (:class:`poc_env.envs.vector.SwarmVecEnv`), the mean over live
+                    agents (:func:`poc_env.sim.engine.mean_over`)
 ``priors``          a Gaussian-mixture prior's exponent and sub-cell sums
                     (:func:`poc_env.theory.probability_map.gaussian_mixture`)
 ``rectangles``      area fractions and weighted masses of rotated rectangles over grid cells

@@ -23,6 +23,8 @@ from numba import njit
 
 _jit = njit(cache=True, error_model="numpy")
 
+_TWO_PI = 2 * np.pi
+
 #: Control levels the kernel flies, by code.
 HEADING, HEADING_CLIP, WAYPOINT = 0, 1, 2
 
@@ -72,7 +74,10 @@ def _steer(c, x, y, heading, speed, pitch, z, gx, gy, target_speed, out):
     """:func:`poc_env.sim.autopilot.steer` of one UAV into ``out (3,)`` (float32)."""
     dt = c[0]
     want = math.atan2(gy - y, gx - x)
-    turn = (want - heading + np.pi) % (2 * np.pi) - np.pi
+    m = want - heading + np.pi
+    if not (m > 0.0 and m < _TWO_PI):  # inside (0, 2 pi) the remainder is m itself, exactly
+        m = m % _TWO_PI
+    turn = m - np.pi  # (want - heading + pi) % (2 pi) - pi
     a_turn = _clip(turn / (c[13] * dt), -1.0, 1.0)
     a_speed = _clip((target_speed - speed) / (c[14] * dt), -1.0, 1.0)
     dz = c[16] - z

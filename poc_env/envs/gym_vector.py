@@ -26,13 +26,14 @@ actions (a test checks it transition for transition, episode ends included), onl
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
+import poc_env._kernels.adapters as _adapters
 from poc_env.envs.gymnasium_env import keep_rows, view_info
 from poc_env.envs.parallel import OBS_TYPES, check_seed
 from poc_env.errors import ConfigError
@@ -47,6 +48,18 @@ try:  # gymnasium >= 1.1 names the autoreset modes
     _NEXT_STEP: Any = AutoresetMode.NEXT_STEP
 except ImportError:  # pragma: no cover - gymnasium 1.0: next-step autoreset is the only mode
     _NEXT_STEP = "NextStep"
+
+
+class _Outcome(NamedTuple):
+    """What :meth:`SwarmGymVectorEnv._advance` reads of a step: the fields of the engine's
+    :class:`~poc_env.sim.engine.Transition` but its reward terms and events."""
+
+    obs: Any
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    over: np.ndarray
+    info: dict[str, np.ndarray]
 
 
 class SwarmGymVectorEnv(gym.vector.VectorEnv):
@@ -245,16 +258,32 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         whole = going is None
         live = self._live.copy() if whole else self._live[going]
         # finished agents' actions: ignored
-        tr = self._whole_step(a) if whole and self._fast is not None else self.engine.step(a, going)
-        reward = engine_mod.mean_over(tr.reward, live)
+        if whole and self._fast is not None:
+            tr = self._whole_step(a)
+        else:
+            t = self.engine.step(a, going)
+            tr = _Outcome(t.obs, t.reward, t.terminated, t.truncated, t.over, t.info)
         done = tr.over
-        truncated = done & tr.truncated.any(axis=1)
-        terminated = done & ~truncated
-        finished = live & (tr.terminated | tr.truncated)
+        if whole and self._fast is not None and live.shape[1] < 8:  # one compiled pass:
+            e = len(live)  # mean_over's reward, the ends, the live agents as below
+            reward = np.empty(e)
+            terminated = np.empty(e, dtype=bool)
+            truncated = np.empty(e, dtype=bool)
+            every = _adapters.live_step(
+                live, tr.reward, tr.terminated, tr.truncated, done, reward, terminated,
+                truncated, self._live,
+            )  # fmt: skip
+        else:
+            reward = engine_mod.mean_over(tr.reward, live)
+            truncated = done & tr.truncated.any(axis=1)
+            terminated = done & ~truncated
+            finished = live & (tr.terminated | tr.truncated)
+            every = bool(live.all())
+            if whole:
+                self._live[:] = live & ~finished
         if whole:
-            self._live[:] = live & ~finished
             self._autoreset[:] = done
-            if live.all():  # every row is new (keep_rows would return the new arrays)
+            if every:  # every row is new (keep_rows would return the new arrays)
                 self._last, self._last_info = tr.obs, tr.info
                 return reward, terminated, truncated
             # the engine's observations are fresh arrays of this step, not handed out yet: the
@@ -267,7 +296,16 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             else:
                 obs[dead] = self._last[dead]
             self._last = obs
-            self._last_info = keep_rows(self._last_info, tr.info, self._all, live)
+            if self._fast is None:
+                self._last_info = keep_rows(self._last_info, tr.info, self._all, live)
+                return reward, terminated, truncated
+            # so are the infos of the whole batch's step (_whole_step): keep_rows' values too
+            # (a per-env entry, posc, is never frozen; links (E, N, N) by the agent's row)
+            for key, v in tr.info.items():
+                if v.ndim > 1:
+                    where = dead.reshape(dead.shape + (1,) * (v.ndim - 2))
+                    np.copyto(v, self._last_info[key], where=where)
+            self._last_info = tr.info
             return reward, terminated, truncated
         envs = self.engine.envs(going)
         if not whole:
@@ -277,11 +315,12 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
         self._last_info = keep_rows(self._last_info, tr.info, envs, live)
         return reward, terminated, truncated
 
-    def _whole_step(self, a: np.ndarray) -> engine_mod.Transition:
+    def _whole_step(self, a: np.ndarray) -> _Outcome:
         """:meth:`Engine.step <poc_env.sim.engine.Engine.step>` of every env under ``a``
-        through :class:`~poc_env.sim.single.SingleStep`: the same transition bit for bit, its
-        infos (:func:`~poc_env.sim.engine.infos`) taken from the step's per-agent values grouped
-        by type (one copy per group, each key a contiguous row of it) and the state's."""
+        through :class:`~poc_env.sim.single.SingleStep`: the same transition bit for bit (but
+        the reward terms and events, which the adapter does not read), its infos
+        (:func:`~poc_env.sim.engine.infos`) taken from the step's per-agent values grouped by
+        type (one copy per group, each key a column of it) and the state's."""
         assert self._fast is not None
         s = self._fast.step(a)
         st = self.engine.current
@@ -291,8 +330,8 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
             (single_mod.BOOL_INFOS, s.binfo),
             (single_mod.INT_INFOS, s.iinfo),
         ):
-            rows = np.moveaxis(values, -1, 0).copy()  # (keys, E, N): the step's own arrays
-            groups.update(zip(names, rows))
+            own = values.copy()  # the step's own values; each key a column (E, N) of them
+            groups.update((name, own[..., j]) for j, name in enumerate(names))
         info: dict[str, np.ndarray] = {}
         for key in self._info_keys:
             if key == "posc":  # per env, as the engine's
@@ -301,8 +340,9 @@ class SwarmGymVectorEnv(gym.vector.VectorEnv):
                 info[key] = st.links.copy()
             elif key in groups:
                 info[key] = groups[key]
-            else:  # a key the kernel does not group (moving targets' mass_out): the engine's
-                info[key] = engine_mod.infos(self.params, st, s.events, s.terms_dict())[key]
-        return engine_mod.Transition(
-            s.obs, s.reward, s.terms_dict(), s.events, s.terminated, s.truncated, s.over, info
-        )
+            else:  # a key the kernel does not group (moving targets' mass_out): the engine's,
+                # copied (this step's own array, as the others: _advance writes rows into them)
+                info[key] = np.array(
+                    engine_mod.infos(self.params, st, s.events, s.terms_dict())[key]
+                )
+        return _Outcome(s.obs, s.reward, s.terminated, s.truncated, s.over, info)

@@ -82,11 +82,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from gymnasium import spaces
 
+import poc_env._kernels.adapters as _adapters
 from poc_env.config import Scenario
 from poc_env.envs.parallel import OBS_TYPES, EpisodeOverError
 from poc_env.errors import ConfigError, MissingExtraError
@@ -107,6 +108,17 @@ except ModuleNotFoundError as exc:  # the environment alone does not need the 'r
 def env_seed_sequences(seed: int | None, n_envs: int) -> list[np.random.SeedSequence]:
     """The seed sequences of the envs of a :class:`SwarmVecEnv` built with ``seed``."""
     return np.random.SeedSequence(seed).spawn(n_envs)
+
+
+class _Outcome(NamedTuple):
+    """What :meth:`SwarmVecEnv.step_wait` reads of the engine's step: the fields of its
+    :class:`~poc_env.sim.engine.Transition` but the reward terms, events and infos."""
+
+    obs: Any
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    over: np.ndarray
 
 
 class SwarmVecEnv(VecEnv):
@@ -303,9 +315,10 @@ class SwarmVecEnv(VecEnv):
         them, home-bound UAVs whatever their slot commands; finished agents' are ignored."""
         return a
 
-    def _reward(self, tr: engine_mod.Transition, state: sim.State) -> np.ndarray:
-        """Reward (E, N) of the step ``tr`` that produced ``state``."""
-        return tr.reward
+    def _reward(self, reward: np.ndarray, state: sim.State) -> np.ndarray:
+        """Reward (E, N) of the step whose engine reward was ``reward`` and that produced
+        ``state``."""
+        return reward
 
     def _rl_done(self, state: sim.State) -> np.ndarray | bool:
         """Agents whose RL episode ends although they still fly (E, N), or False."""
@@ -314,39 +327,50 @@ class SwarmVecEnv(VecEnv):
     def step_wait(self):
         if self.state is None:
             raise EpisodeOverError("call reset() before step()")
-        p, n = self.params, self.n_agents
+        n = self.n_agents
         active = self._active
         tr = self._engine_step()  # the few infos: from the state
         st = self.engine.current
-        reward = np.where(active, self._reward(tr, st), 0.0)
-        self._returns += reward
-        self._lengths += active
-        finished = active & (tr.terminated | self._rl_done(st))
-        still = active & ~finished
-        env_end = sim.episode_over(p, st, ~still)
-        done = (finished | env_end[:, None]).ravel()
-        truncated = (still & tr.truncated).ravel()
+        rl_done = self._rl_done(st)
+        finished = tr.terminated if rl_done is False else tr.terminated | rl_done
+        # the slots' bookkeeping in one compiled pass (_kernels.adapters): as numpy would,
+        #   reward = np.where(active, reward, 0.0); returns += reward; lengths += active
+        #   finished = active & finished; still = active & ~finished
+        #   env_end = over | all(~still, axis=1)   (sim.episode_over(p, st, ~still): the
+        #       engine's over is the horizon or every agent terminal, and a terminal agent
+        #       is not still going, so or-ing in the rows where none is gives the same)
+        #   done = finished | env_end[:, None]; truncated = still & truncated
+        e = self.n_envs
+        reward = np.empty(e * n, dtype=np.float32)  # new arrays: SB3 keeps and writes them
+        done = np.empty(e * n, dtype=bool)
+        truncated = np.empty(e * n, dtype=bool)
+        still = np.empty((e, n), dtype=bool)
+        env_end = np.empty(e, dtype=bool)
+        flags = _adapters.slot_step(
+            active, self._reward(tr.reward, st), finished, tr.truncated, tr.over,
+            self._returns, self._lengths, reward, done, truncated, still, env_end,
+        )  # fmt: skip
         was_active = active.ravel()
 
         obs = self._slots(tr.obs)
         infos = [{} for _ in range(self.num_envs)]  # list[dict[str, Any]]
         # (each loop and write below runs only when some slot needs it: usually none does)
-        if not was_active.all():
+        if flags & _adapters.SOME_INACTIVE:
             for k in np.flatnonzero(~was_active).tolist():
                 infos[k]["inactive"] = True
-        if done.any():
+        if flags & _adapters.SOME_DONE:
             for k in np.flatnonzero(done).tolist():
                 info = infos[k]
                 info["terminal_observation"] = (
                     self._slot_obs(obs, k) if was_active[k] else self._zero_obs()
                 )
                 info["TimeLimit.truncated"] = bool(truncated[k])
-        if not still.all():
+        if flags & _adapters.SOME_STOPPED:
             self._write(obs, ~still.ravel(), 0.0)  # finished agents show the placeholder
         self._active = still
 
-        if not env_end.any():
-            return obs, reward.ravel().astype(np.float32), done, infos
+        if not flags & _adapters.SOME_ENV_ENDS:
+            return obs, reward, done, infos
         ended = np.flatnonzero(env_end)
         elapsed = round(time.time() - self._t_start, 6)
         posc_all = st.posc.tolist()
@@ -369,21 +393,20 @@ class SwarmVecEnv(VecEnv):
         first = self._new_episodes(ended)
         slots = (ended[:, None] * n + np.arange(n)).ravel()
         self._write(obs, slots, first)
-        return obs, reward.ravel().astype(np.float32), done, infos
+        return obs, reward, done, infos
 
-    def _engine_step(self) -> engine_mod.Transition:
+    def _engine_step(self) -> _Outcome:
         """The engine's step of every env under the last actions, without infos:
-        :meth:`Engine.step <poc_env.sim.engine.Engine.step>`'s transition (``with_info=False``),
-        through :class:`~poc_env.sim.single.SingleStep` when it runs the engine (the same
-        arrays bit for bit, ``tests/sim/test_single.py``; ``tests/rl/test_vector.py`` runs both
-        here)."""
+        :meth:`Engine.step <poc_env.sim.engine.Engine.step>`'s transition (``with_info=False``)
+        but its reward terms and events, through :class:`~poc_env.sim.single.SingleStep` when
+        it runs the engine (the same arrays bit for bit, ``tests/sim/test_single.py``;
+        ``tests/rl/test_vector.py`` runs both here)."""
         fast = self._fast
         if fast is None:
-            return self.engine.step(self._actions, with_info=False)
+            t = self.engine.step(self._actions, with_info=False)
+            return _Outcome(t.obs, t.reward, t.terminated, t.truncated, t.over)
         s = fast.step(self._actions)
-        return engine_mod.Transition(
-            s.obs, s.reward, s.terms_dict(), s.events, s.terminated, s.truncated, s.over, {}
-        )
+        return _Outcome(s.obs, s.reward, s.terminated, s.truncated, s.over)
 
     def _zero_obs(self):
         space = self.observation_space

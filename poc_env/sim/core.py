@@ -374,6 +374,25 @@ def _draw_target(
     return (origin[0] + (i + du) * h, origin[1] + (j + dv) * h)
 
 
+def _draw_targets(
+    cdfs: list, nx: int, h: float, origin, rngs: list, target: np.ndarray, threshold: np.ndarray
+) -> None:
+    """:func:`_draw_target` then the detection threshold ``-log1p(-u)`` of every env into
+    ``target (E, 2)`` and ``threshold (E,)``, the four uniforms of each env drawn at once
+    (``rng.random(4)``: the stream's next four, as ``random()``, ``random(2)``, ``random()``
+    draw them) and the rest as arrays (the same operations on each element). ``cdfs``: each
+    env's :func:`target_cdf`, all the same object when the envs share the prior."""
+    u = np.stack([rng.random(4) for rng in rngs])
+    if all(c is cdfs[0] for c in cdfs):
+        k = cdfs[0].searchsorted(u[:, 0], side="right")
+    else:
+        k = np.array([c.searchsorted(v, side="right") for c, v in zip(cdfs, u[:, 0].tolist())])
+    j, i = np.divmod(k, nx)
+    target[:, 0] = origin[0] + (i + u[:, 1]) * h
+    target[:, 1] = origin[1] + (j + u[:, 2]) * h
+    threshold[:] = -np.log1p(-u[:, 3])
+
+
 def takeoff_heading(bounds, takeoff) -> np.ndarray:
     """Every UAV's heading at take-off (rad): towards the centre of the map ``bounds``
     ``(x0, y0, x1, y1)`` from its take-off point (``takeoff`` (n, 2))."""
@@ -403,9 +422,11 @@ def initial(
         "n_envs", e, limits.env_bytes(cells, s, n, e, comms), f"{e} envs x {cells} cells"
     )
     priors_given = priors
-    if priors is None:
-        priors = np.broadcast_to(params.prior, (e, *params.prior.shape))
-    belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, axis=1), s, axis=2) / (s * s)
+    if priors is None:  # every env's the scenario's: one fine prior, copied
+        one = np.repeat(np.repeat(np.asarray(params.prior, dtype=float), s, 0), s, 1) / (s * s)
+        belief = np.broadcast_to(one, (e, *one.shape)).copy()
+    else:
+        belief = np.repeat(np.repeat(np.asarray(priors, dtype=float), s, 1), s, 2) / (s * s)
     pos = np.zeros((e, n, 3))
     pos[:, :, :2] = params.takeoff[None]
     pos[:, :, 2] = u.cruise_altitude_m
@@ -414,10 +435,13 @@ def initial(
     target = np.zeros((e, 2))
     threshold = np.zeros(e)
     shared = target_cdf(belief[0]) if priors_given is None and e else None
-    for k, rng in enumerate(rngs):
-        cdf = shared if priors_given is None else target_cdf(belief[k])
-        target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng, cdf)
-        threshold[k] = -np.log1p(-rng.random())
+    cdfs = [shared] * e if priors_given is None else [target_cdf(b) for b in belief]
+    if e and all(c is not None for c in cdfs):  # each env's four uniforms at once
+        _draw_targets(cdfs, belief.shape[2], h, params.grid.origin_m, rngs, target, threshold)
+    else:  # a prior choice refuses: its error (or an env's draw through choice)
+        for k, rng in enumerate(rngs):
+            target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng, cdfs[k])
+            threshold[k] = -np.log1p(-rng.random())
     links = np.zeros((e, n, n), dtype=bool)
     topology = np.full(e, -1, dtype=int)
     state = State(

@@ -41,6 +41,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+import poc_env._kernels.adapters as _adapters
 import poc_env.limits as limits
 import poc_env.spec as spec
 from poc_env.config import Scenario, load_scenario
@@ -258,10 +259,16 @@ def mean_over(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(E,) the mean of ``values (E, N)`` over the True entries of ``mask (E, N)`` in each row
     (0 for a row without any): the centralised view's reward, the mean of the live agents'.
 
-    Rows are grouped by how many entries they average, so each mean is numpy's mean of exactly
-    those values (the same floating-point sums as a mean of the row's live values alone)."""
+    Each mean is numpy's mean of exactly the row's live values (the same floating-point sums).
+    Rows of fewer than 8 entries, which numpy sums one after the other, are summed in one
+    compiled pass (:func:`poc_env._kernels.adapters.live_mean`); longer rows, which numpy sums
+    pairwise, are grouped by how many entries they average."""
     values = np.asarray(values, dtype=float)
     mask = np.asarray(mask, dtype=bool)
+    if values.ndim == 2 and 0 < values.shape[1] < 8 and mask.shape == values.shape:
+        out = np.empty(values.shape[0])
+        _adapters.live_mean(values, mask, out)
+        return out
     if mask.all():  # every agent live: the same rows, the same sums
         return values.mean(axis=1)
     count = mask.sum(axis=1)

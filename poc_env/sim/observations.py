@@ -139,11 +139,12 @@ def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.n
     n = state.flying.shape[1]
     if out is None:
         out = np.empty((*state.flying.shape, VECTOR_SIZE), dtype=np.float32)
-    _kernels.vectors(
+    sin_h, cos_h = _sin_cos(state.heading)
+    _kernels.vectors_of(
         state.pos,
         state.speed,
-        np.sin(state.heading),
-        np.cos(state.heading),
+        sin_h,
+        cos_h,
         state.pitch,
         state.elapsed,
         state.flying,
@@ -155,19 +156,45 @@ def vectors(params: Params, state: State, out: np.ndarray | None = None) -> np.n
     return out
 
 
-#: The vectors kernel's arguments from ``bx0`` to ``high``: 14 floats and two bound arrays.
-_VectorConstants = tuple[
-    float, float, float, float, float, float, float, float, float, float, float, float, float,
-    float, np.ndarray, np.ndarray,
-]  # fmt: skip
+#: The headings of the last large :func:`_sin_cos` call (a copy), their sines and cosines.
+_TRIG: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+#: Below this many UAVs numpy's sine and cosine cost less than comparing the headings.
+_TRIG_MIN = 256
+
+
+def _sin_cos(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.sin(heading)`` and ``np.cos(heading)``; those of the last call again when its
+    headings were these, bit for bit (each step computes the vectors twice: the autopilot's
+    at its start, of the headings the last observation saw unless something wrote them since,
+    which the comparison sees). The arrays returned are only read."""
+    global _TRIG
+    h = heading
+    if h.size < _TRIG_MIN or h.dtype != np.float64 or not h.flags.c_contiguous:
+        return np.sin(h), np.cos(h)
+    last = _TRIG  # (one read: another thread may replace it, never change it)
+    if (
+        last is not None
+        and last[0].shape == h.shape
+        and np.array_equal(last[0].view(np.int64), h.view(np.int64))
+    ):
+        return last[1], last[2]
+    sin_h, cos_h = np.sin(h), np.cos(h)
+    _TRIG = (h.copy(), sin_h, cos_h)
+    return sin_h, cos_h
+
+
+#: The vectors kernel's arguments after the state's and the landing fields: its 14 scalars
+#: (``bx0`` to ``others``) in one float64 array (``vectors_of``: numba unboxes one array
+#: faster than 14 floats), then the two bound arrays.
+_VectorConstants = tuple[np.ndarray, np.ndarray, np.ndarray]
 #: :func:`_vector_constants` of the Params seen last, by id (each entry keeps its Params).
 _VECTOR_CONSTANTS: dict[tuple[int, int], tuple[Params, _VectorConstants]] = {}
 
 
 def _vector_constants(params: Params, n: int) -> _VectorConstants:
-    """The vectors kernel's arguments after the state's and the landing fields (from ``bx0``
-    to ``high``) for ``params`` and ``n`` UAVs per env, formed once per Params (a step
-    computes the vectors twice: for the autopilot and the observation)."""
+    """The vectors kernel's arguments after the state's and the landing fields for ``params``
+    and ``n`` UAVs per env, formed once per Params (a step computes the vectors twice: for the
+    autopilot and the observation)."""
     key = (id(params), n)
     hit = _VECTOR_CONSTANTS.get(key)
     if hit is not None and hit[0] is params:
@@ -176,12 +203,16 @@ def _vector_constants(params: Params, n: int) -> _VectorConstants:
     u = sc.uav
     bx0, by0, bx1, by1 = params.bounds
     w, h = bx1 - bx0, by1 - by0
-    k: _VectorConstants = (
-        float(bx0), float(by0), float(w), float(h), _diagonal(w, h), float(u.max_altitude_m),
-        float(u.min_speed_mps), float(u.max_speed_mps - u.min_speed_mps),
-        float(u.max_pitch_rad), float(u.endurance_s), float(u.usable_endurance_s),
-        float(params.horizon), float(sc.comms.range_m), float(max(n - 1, 1)), _LOW, _HIGH,
+    scalars = np.array(
+        (
+            float(bx0), float(by0), float(w), float(h), _diagonal(w, h), float(u.max_altitude_m),
+            float(u.min_speed_mps), float(u.max_speed_mps - u.min_speed_mps),
+            float(u.max_pitch_rad), float(u.endurance_s), float(u.usable_endurance_s),
+            float(params.horizon), float(sc.comms.range_m), float(max(n - 1, 1)),
+        ),
+        dtype=np.float64,
     )  # fmt: skip
+    k: _VectorConstants = (scalars, _LOW, _HIGH)
     if len(_VECTOR_CONSTANTS) >= 64:  # many scenarios in one process: start over
         _VECTOR_CONSTANTS.clear()
     _VECTOR_CONSTANTS[key] = (params, k)

@@ -71,6 +71,29 @@ def test_mean_over_is_numpys_mean_of_the_live_values():
             assert got.tolist() == want
 
 
+def test_mean_over_short_rows_bit_for_bit():
+    """Rows of fewer than 8 agents (summed column by column, the masked values as 0.0): every
+    mean is numpy's mean of the row's live values to the bit, the sign of a zero included
+    (NaN's sign aside): special values, rows without a live agent, every agent live."""
+    rng = np.random.default_rng(1)
+    specials = np.array([0.0, -0.0, 1e300, -1e300, 5e-324, np.inf, -np.inf, 0.1, -1.0, 1 / 3])
+    for trial in range(3000):
+        n, e = int(rng.integers(1, 8)), int(rng.integers(1, 30))
+        if trial % 2:
+            values = rng.choice(specials, (e, n))
+        else:
+            values = rng.normal(size=(e, n)) * 10.0 ** rng.integers(-6, 6, (e, n))
+        mask = rng.random((e, n)) < (1.0 if trial % 5 == 0 else rng.random())
+        got = engine_mod.mean_over(values, mask)
+        for k in range(e):
+            with np.errstate(invalid="ignore"):
+                want = np.mean(values[k][mask[k]]) if mask[k].any() else 0.0
+            if np.isnan(want):
+                assert np.isnan(got[k])
+            else:
+                assert got[k] == want and np.signbit(got[k]) == np.signbit(want), (k, trial)
+
+
 def test_engine_seeds_give_the_parallel_envs_episodes():
     eng = make_engine(2, scenario="small", random_prior=True, seeds=[4, 9])
     obs, info = eng.reset()

@@ -137,3 +137,38 @@ def test_fast_whole_batch_step_equals_the_engines_step(task, kwargs):
             assert g.dtype == w.dtype and g.shape == w.shape, key
             np.testing.assert_array_equal(g, w, err_msg=f"step {t} {key}")
     assert resets >= 1
+
+
+def test_live_step_kernel_is_the_numpy_bookkeeping():
+    """``_kernels.adapters.live_step`` (``_advance``'s bookkeeping of a whole batch's step,
+    fewer than 8 agents) gives what the numpy formulation gives, to the bit: the reward mean
+    over the agents live before the step (``engine.mean_over``), the ends, the live agents
+    after it (written over ``live`` itself, as ``_advance`` lets it), and whether all were
+    live; -0.0 and infinite rewards, envs without a live agent."""
+    from poc_env._kernels import adapters
+
+    rng = np.random.default_rng(8)
+    specials = np.array([0.0, -0.0, np.inf, -np.inf, 1e-310, 0.1, -2.5, 1 / 3])
+    for trial in range(400):
+        e, n = int(rng.integers(1, 9)), int(rng.integers(1, 8))
+        live = rng.random((e, n)) < (1.0 if trial % 4 == 0 else rng.random())
+        reward = rng.normal(size=(e, n)) * 10.0 ** rng.integers(-6, 6, (e, n))
+        if trial % 3 == 0:
+            reward = rng.choice(specials, (e, n))
+        term = rng.random((e, n)) < 0.3
+        trunc = rng.random((e, n)) < 0.2
+        over = rng.random(e) < 0.4
+        want_mean = np.array(
+            [np.mean(reward[k][live[k]]) if live[k].any() else 0.0 for k in range(e)]
+        )
+        want_trunc = over & trunc.any(axis=1)
+        want_term = over & ~want_trunc
+        want_live = live & ~(live & (term | trunc))
+        got = np.empty(e), np.empty(e, bool), np.empty(e, bool)
+        new_live = live.copy()
+        every = adapters.live_step(new_live, reward, term, trunc, over, *got, new_live)
+        np.testing.assert_array_equal(got[0].view(np.int64), want_mean.view(np.int64))
+        np.testing.assert_array_equal(got[1], want_term)
+        np.testing.assert_array_equal(got[2], want_trunc)
+        np.testing.assert_array_equal(new_live, want_live)
+        assert every == bool(live.all())

@@ -406,3 +406,53 @@ def test_fast_step_equals_the_engines_step(scenario, kwargs):
         _same_infos(got[3], want[3])
         ends += sum("episode" in info for info in got[3])
     assert ends >= 2 * fast.n_agents  # autoresets were compared
+
+
+def _numpy_slot_step(active, reward, finished, truncated, over, returns, lengths):
+    """``step_wait``'s bookkeeping in numpy (what ``_kernels.adapters.slot_step`` compiles)."""
+    r = np.where(active, reward, 0.0)
+    returns += r
+    lengths += active
+    fin = active & finished
+    still = active & ~fin
+    env_end = over | np.all(~still, axis=1)
+    done = (fin | env_end[:, None]).ravel()
+    return r.ravel().astype(np.float32), done, (still & truncated).ravel(), still, env_end
+
+
+def test_slot_bookkeeping_kernel_is_the_numpy_formulation():
+    """``_kernels.adapters.slot_step`` (SwarmVecEnv.step_wait's bookkeeping) writes what the
+    numpy formulation gives, bit for bit, and its flags say what the arrays hold: random
+    placeholders, finished agents, cuts and ends; rewards with -0.0, NaN and float32 rounding."""
+    from poc_env._kernels import adapters as slots
+
+    rng = np.random.default_rng(3)
+    specials = np.array([0.0, -0.0, np.nan, 1e-320, 0.1, -3.7, 1 / 3, 1e30])
+    for trial in range(300):
+        e, n = int(rng.integers(1, 6)), int(rng.integers(1, 7))
+        active = rng.random((e, n)) < rng.random()
+        finished = rng.random((e, n)) < rng.random()
+        truncated = rng.random((e, n)) < 0.3
+        over = rng.random(e) < 0.3
+        reward = rng.normal(size=(e, n)) * 10.0 ** rng.integers(-8, 8, (e, n))
+        if trial % 3 == 0:
+            reward = rng.choice(specials, (e, n))
+        returns = rng.normal(size=(e, n))
+        lengths = rng.integers(0, 100, (e, n))
+        want_ret, want_len = returns.copy(), lengths.copy()
+        want = _numpy_slot_step(active, reward, finished, truncated, over, want_ret, want_len)
+        got = (
+            np.empty(e * n, np.float32), np.empty(e * n, bool), np.empty(e * n, bool),
+            np.empty((e, n), bool), np.empty(e, bool),
+        )  # fmt: skip
+        flags = slots.slot_step(active, reward, finished, truncated, over, returns, lengths, *got)
+        for g, w in zip(got, want, strict=True):
+            assert g.dtype == w.dtype and g.shape == w.shape
+            np.testing.assert_array_equal(g.view(np.uint8), w.view(np.uint8))
+        np.testing.assert_array_equal(returns.view(np.int64), want_ret.view(np.int64))
+        np.testing.assert_array_equal(lengths, want_len)
+        _, done, _, still, env_end = want
+        assert bool(flags & slots.SOME_INACTIVE) == (not active.all())
+        assert bool(flags & slots.SOME_DONE) == done.any()
+        assert bool(flags & slots.SOME_STOPPED) == (not still.all())
+        assert bool(flags & slots.SOME_ENV_ENDS) == env_end.any()

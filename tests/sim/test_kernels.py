@@ -1260,3 +1260,44 @@ def test_np_sum_is_numpys_sum_bit_for_bit():
             assert obs_kernels.np_sum(a) == a.sum(), n
             assert np.signbit(obs_kernels.np_sum(a)) == np.signbit(a.sum())
     assert np.signbit(obs_kernels.np_sum(np.array([-0.0])))  # numpy: -0.0 + -0.0
+
+
+def test_vectors_reuse_sines_only_of_the_same_headings():
+    """``observations.vectors`` reuses the last large call's sines and cosines only when the
+    headings are the same bits: headings written in place since (one UAV turned, a zero's
+    sign flipped, a NaN), a new array of other values and a batch of another shape each give
+    the vectors of their own headings (numpy's ``sin``/``cos`` of them)."""
+    params = sim.make_params(load_scenario("small"))
+    rng = np.random.default_rng(6)
+    st = sim.initial(params, [np.random.default_rng(k) for k in range(120)])  # 360 UAVs
+    st.heading = rng.uniform(-np.pi, np.pi, st.heading.shape)
+
+    def expected(state):
+        n = state.flying.shape[1]
+        out = np.empty((*state.flying.shape, obs.VECTOR_SIZE), np.float32)
+        h = state.heading
+        obs_kernels.vectors_of(
+            state.pos, state.speed, np.sin(h), np.cos(h), state.pitch, state.elapsed,
+            state.flying, state.step, params.landing, *obs._vector_constants(params, n), out,
+        )  # fmt: skip
+        return out
+
+    def check(state):
+        got = obs.vectors(params, state)
+        np.testing.assert_array_equal(got.view(np.int32), expected(state).view(np.int32))
+
+    check(st)
+    check(st)  # the same headings: reused
+    st.heading[3, 1] += 1e-12  # written in place
+    check(st)
+    st.heading[7, 0] = 0.0
+    check(st)
+    st.heading[7, 0] = -0.0  # equal as numbers, not as bits: sin(-0.0) is -0.0
+    check(st)
+    st.heading[9, 2] = np.nan
+    check(st)
+    st.heading = rng.uniform(-np.pi, np.pi, st.heading.shape)  # a new array
+    check(st)
+    small = sim.initial(params, [np.random.default_rng(k) for k in range(100)])  # 300 UAVs
+    check(small)
+    check(st)
