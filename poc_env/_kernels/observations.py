@@ -264,51 +264,76 @@ def _classify(dx, dy, edges, radius, n_sectors):
     return sector, ring, inside
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _clear_bin(dx, dy, lo0, lo1, lo2, hi0, hi1, hi2):
+    """The bin ``sector * 4 + ring`` of an offset clearly inside an octant and a ring (8 sectors,
+    3 ring edges: squared edges times ``1 -+ 1e-9`` in ``lo*``, ``hi*``), else -1: the octant
+    from the signs of the offset and ``|dy| < |dx|``, the ring from how many squared edges the
+    squared distance reaches, where :func:`_classify`'s fast branch decides the same (a squared
+    distance within 1e-9 of a squared edge, where the squares and ``hypot`` might disagree, or
+    an offset within 1e-9 of a sector boundary gives -1). No branches, so that a loop over cells
+    calling it vectorises."""
+    tol = 1e-9
+    ax = abs(dx)
+    ay = abs(dy)
+    tb = tol * max(ax, ay)
+    d2 = dx * dx + dy * dy
+    ring = np.intp(d2 >= lo0) + np.intp(d2 >= lo1) + np.intp(d2 >= lo2)
+    ring_hi = np.intp(d2 > hi0) + np.intp(d2 > hi1) + np.intp(d2 > hi2)
+    clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb) & (ring == ring_hi)
+    # octants 0-7 counter-clockwise from east: quadrant 0 (+, +), 1 (-, +), 2 (-, -), 3 (+, -),
+    # its lower octant where |dy| < |dx| in quadrants 0 and 2, else the upper one
+    sx = np.intp(dx > 0)
+    sy = np.intp(dy > 0)
+    quad = sy * (1 - sx) + (1 - sy) * (2 + sx)
+    upper = np.intp(ay < ax) ^ np.intp(sx == sy)
+    return (2 * quad + upper) * 4 + ring if clear else -1
+
+
 @_jit
-def _cell_bins(cx, cy, px, py, edges, radius, n_sectors, bins):
-    """Each cell's (sector, ring) bin of :func:`_bins` (``sector * n_rings + ring``) into
-    ``bins (cells,)``, in one pass over the cells without branches (so that it vectorises): a
-    cell clearly inside an octant (:func:`_classify`'s fast branch) takes its octant from the
-    signs of its offset and ``|dy| < |dx|``, and its ring from how many squared edges its
-    squared distance reaches, unless that squared distance lies within 1e-9 of a squared edge
-    (there the squares and ``hypot`` might disagree); any other cell (next to a sector or ring
-    boundary; all of them for sectors other than octants or other than three ring edges) is
-    decided by :func:`_classify`. The "others" radius decides no bin."""
+def _cell_bins(cx, cy, pxs, pys, g, cnt, edges, radius, n_sectors, bins):
+    """Each cell's (sector, ring) bin of :func:`_bins` (``sector * n_rings + ring``) for the
+    ``cnt`` (1 to 3) UAVs ``g, g + 1 ...`` at ``(pxs, pys)`` into ``bins[u] (cells,)``: one pass
+    over the cells for the three (a shorter group repeats its last UAV), each cell's bin by
+    :func:`_clear_bin`; then the cells it leaves (next to a sector or ring boundary; all of
+    them for sectors other than octants or other than three ring edges) decided by
+    :func:`_classify`. The "others" radius decides no bin."""
     n_cells = cx.shape[0]
     n_rings = edges.shape[0] + 1
     tol = 1e-9
-    unclear = True
-    if n_sectors == 8 and n_rings == 4:
+    every = n_sectors != 8 or n_rings != 4  # no fast bins: every cell by _classify
+    worst = -1
+    if not every:
         lo0 = edges[0] * edges[0] * (1.0 - tol)
         lo1 = edges[1] * edges[1] * (1.0 - tol)
         lo2 = edges[2] * edges[2] * (1.0 - tol)
         hi0 = edges[0] * edges[0] * (1.0 + tol)
         hi1 = edges[1] * edges[1] * (1.0 + tol)
         hi2 = edges[2] * edges[2] * (1.0 + tol)
-        unclear = False
+        k1 = g + min(1, cnt - 1)
+        k2 = g + min(2, cnt - 1)
+        px0, py0, px1, py1, px2, py2 = pxs[g], pys[g], pxs[k1], pys[k1], pxs[k2], pys[k2]
+        b0 = bins[0]
+        b1 = bins[1]
+        b2 = bins[2]
+        worst = 0
         for j in range(n_cells):
-            dx = cx[j] - px
-            dy = cy[j] - py
-            ax = abs(dx)
-            ay = abs(dy)
-            tb = tol * max(ax, ay)
-            d2 = dx * dx + dy * dy
-            ring = np.intp(d2 >= lo0) + np.intp(d2 >= lo1) + np.intp(d2 >= lo2)
-            ring_hi = np.intp(d2 > hi0) + np.intp(d2 > hi1) + np.intp(d2 > hi2)
-            clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb) & (ring == ring_hi)
-            # octants 0-7 counter-clockwise from east: quadrant 0 (+, +), 1 (-, +), 2 (-, -),
-            # 3 (+, -), its lower octant where |dy| < |dx| in quadrants 0 and 2, else the upper
-            sx = np.intp(dx > 0)
-            sy = np.intp(dy > 0)
-            quad = sy * (1 - sx) + (1 - sy) * (2 + sx)
-            upper = np.intp(ay < ax) ^ np.intp(sx == sy)
-            bins[j] = (2 * quad + upper) * 4 + ring if clear else -1
-            unclear |= not clear
-    if unclear:
-        for j in range(n_cells):
-            if bins[j] < 0 or n_sectors != 8 or n_rings != 4:
-                sector, ring, _inside = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
-                bins[j] = sector * n_rings + ring
+            x = cx[j]
+            y = cy[j]
+            v0 = _clear_bin(x - px0, y - py0, lo0, lo1, lo2, hi0, hi1, hi2)
+            v1 = _clear_bin(x - px1, y - py1, lo0, lo1, lo2, hi0, hi1, hi2)
+            v2 = _clear_bin(x - px2, y - py2, lo0, lo1, lo2, hi0, hi1, hi2)
+            b0[j] = v0
+            b1[j] = v1
+            b2[j] = v2
+            worst = min(worst, min(v0, min(v1, v2)))
+    if worst < 0:
+        for u in range(cnt):
+            px, py = pxs[g + u], pys[g + u]
+            for j in range(n_cells):
+                if every or bins[u, j] < 0:
+                    sector, ring, _in = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
+                    bins[u, j] = sector * n_rings + ring
 
 
 @_jit
@@ -462,9 +487,7 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
             pys[k] = by0 + np.float64(vector[e, k, 1]) * bh
         step = 3 if n_shared == 1 else 1  # UAVs summed together: those sharing a row
         for g in range(0, n, step):  # a group short of three is padded by the spare (row n)
-            for u in range(step):
-                if g + u < n:
-                    _cell_bins(cx, cy, pxs[g + u], pys[g + u], edges, radius, n_sectors, bins[u])
+            _cell_bins(cx, cy, pxs, pys, g, min(step, n - g), edges, radius, n_sectors, bins)
             k1 = g + 1 if step == 3 and g + 1 < n else n
             k2 = g + 2 if step == 3 and g + 2 < n else n
             _bin_sums(

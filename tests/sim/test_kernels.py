@@ -1062,7 +1062,6 @@ def test_compass_cell_bins_and_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_
     radius = float(OTHERS_RADIUS_M)
     n_bins = n_sectors * (len(edges) + 1)
     spare_bins = np.zeros(n_cells, dtype=np.intp)
-    bins = np.empty((3, n_cells), dtype=np.intp)
     for group in (1, 2, 3):
         for start in range(0, len(px) - group + 1, group):
             k = np.arange(start, start + group)
@@ -1072,8 +1071,8 @@ def test_compass_cell_bins_and_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_
                 np.zeros((group, n_cells)), edges, radius, n_sectors,
             )  # fmt: skip
             mass = np.zeros((4, n_bins + 1))  # row 3, column n_bins: the spares
-            for u, ku in enumerate(k):
-                obs_kernels._cell_bins(cx, cy, px[ku], py[ku], edges, radius, n_sectors, bins[u])
+            bins = np.full((3, n_cells), -7, dtype=np.intp)
+            obs_kernels._cell_bins(cx, cy, px, py, start, group, edges, radius, n_sectors, bins)
             b = [bins[u] if u < group else spare_bins for u in range(3)]
             m = [mass[u] if u < group else mass[3] for u in range(3)]
             obs_kernels._bin_sums(row, *b, *m, n_bins)
