@@ -38,7 +38,22 @@ def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
     cells summed as ``Grid.coarsen`` does with numpy (``own_sum``), or taken from ``coarse``;
     ``poc_sum (ny, nx)`` is scratch."""
     ny, nx = poc.shape
-    if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
+    if own_sum and s == 4:  # the branch below cell by cell (scalar, 1.5 times its vector code)
+        for j in range(ny):
+            r0 = belief[e, 4 * j]
+            r1 = belief[e, 4 * j + 1]
+            r2 = belief[e, 4 * j + 2]
+            r3 = belief[e, 4 * j + 3]
+            acc = poc_sum[j]
+            for i in range(nx):
+                k = 4 * i  # -0.0 + x is x: each sub-row's sum starts at its first value
+                c = 0.0
+                c += ((r0[k] + r0[k + 1]) + r0[k + 2]) + r0[k + 3]
+                c += ((r1[k] + r1[k + 1]) + r1[k + 2]) + r1[k + 3]
+                c += ((r2[k] + r2[k + 1]) + r2[k + 2]) + r2[k + 3]
+                c += ((r3[k] + r3[k + 1]) + r3[k + 2]) + r3[k + 3]
+                acc[i] = c
+    elif own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
         for j in range(ny):
             acc = poc_sum[j]
             acc[:] = 0.0
@@ -47,10 +62,6 @@ def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
                 if s == 2:
                     for i in range(nx):
                         acc[i] += row[2 * i] + row[2 * i + 1]
-                elif s == 4:  # the loop below with its sub-cells unrolled (it vectorises)
-                    for i in range(nx):
-                        k = 4 * i
-                        acc[i] += (((-0.0 + row[k]) + row[k + 1]) + row[k + 2]) + row[k + 3]
                 else:
                     for i in range(nx):
                         r = -0.0
