@@ -38,7 +38,7 @@ def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
     cells summed as ``Grid.coarsen`` does with numpy (``own_sum``), or taken from ``coarse``;
     ``poc_sum (ny, nx)`` is scratch."""
     ny, nx = poc.shape
-    if own_sum and s == 4:  # the branch below cell by cell (scalar, 1.5 times its vector code)
+    if own_sum and s == 4:  # the last branch cell by cell (scalar: 1.5 times its vector code)
         for j in range(ny):
             r0 = belief[e, 4 * j]
             r1 = belief[e, 4 * j + 1]
@@ -53,21 +53,28 @@ def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
                 c += ((r2[k] + r2[k + 1]) + r2[k + 2]) + r2[k + 3]
                 c += ((r3[k] + r3[k + 1]) + r3[k + 2]) + r3[k + 3]
                 acc[i] = c
+    elif own_sum and s == 2:  # the same for two sub-rows (Paper62)
+        for j in range(ny):
+            r0 = belief[e, 2 * j]
+            r1 = belief[e, 2 * j + 1]
+            acc = poc_sum[j]
+            for i in range(nx):
+                k = 2 * i
+                c = 0.0
+                c += r0[k] + r0[k + 1]
+                c += r1[k] + r1[k + 1]
+                acc[i] = c
     elif own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
         for j in range(ny):
             acc = poc_sum[j]
             acc[:] = 0.0
             for a in range(s):
                 row = belief[e, j * s + a]
-                if s == 2:
-                    for i in range(nx):
-                        acc[i] += row[2 * i] + row[2 * i + 1]
-                else:
-                    for i in range(nx):
-                        r = -0.0
-                        for b in range(s):
-                            r += row[i * s + b]
-                        acc[i] += r
+                for i in range(nx):
+                    r = -0.0
+                    for b in range(s):
+                        r += row[i * s + b]
+                    acc[i] += r
     else:
         poc_sum[:] = coarse[e]
     for j in range(ny):

@@ -1234,7 +1234,7 @@ def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, s
 
 @pytest.mark.parametrize("s", [1, 2, 3, 4, 5, 7])
 def test_coarse_poc_is_numpys_coarsening_bit_for_bit(s):
-    """Raster channel 0 from the kernel's own sub-cell sums (s < 8; unrolled for s = 2 and 4)
+    """Raster channel 0 from the kernel's own sub-cell sums (s < 8; cell by cell for s = 2 and 4)
     is the float32 of ``Grid.coarsen`` / scale clipped to [0, 1], bit for bit (what the
     recorded episodes saw), on a belief with partly searched, zero and tiny cells."""
     params = sim.make_params(
