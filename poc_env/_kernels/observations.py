@@ -446,7 +446,7 @@ def np_sum(a):
 
 
 @_jit
-def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
+def compass(poc, vector, pos, flying, grid_box, area, cx, cy, edges, layout, out):
     """The compass observation of every UAV of every env into ``out (E, N, F)`` float32 (the
     blocks of :class:`poc_env.sim.observations.CompassFeatures`), computed straight from each
     env's raster channel 0 ``poc (E, P, ny, nx)`` (P = 1: shared by its UAVs; P = N: each UAV's
@@ -459,9 +459,9 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
     A UAV's own position is decoded from its float32 vector as ``decode_vector`` does, ``area =
     (bx0, by0, w, h)``. ``layout = (v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index)``: the
     block offsets, the index block's size, the sectors, whether to set the index; ``area``'s
-    tail holds the others radius and the count normaliser. The cell centres are the grid
-    ``(xs[i], ys[j])``: each UAV's cells are put in their bins (:func:`_cell_bins`) and the
-    sums made three UAVs at a time (:func:`_bin_sums`); ``edges``: the ring edges."""
+    tail holds the others radius and the count normaliser. Cell ``j * nx + i`` has its centre
+    at ``(cx, cy)[j * nx + i]``: each UAV's cells are put in their bins (:func:`_cell_bins`) and
+    the sums made three UAVs at a time (:func:`_bin_sums`); ``edges``: the ring edges."""
     v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index = layout
     x0, y0, x1, y1, cell = grid_box
     bx0, by0, bw, bh, radius, others = area
@@ -474,14 +474,8 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
     mass = np.empty((n + 1, n_bins + 1))  # row n, column n_bins: spares for _bin_sums
     count = np.empty(n_sectors)
     others_cells = np.zeros(ny * nx)  # the "others" channel of one UAV, cleared after use
-    cx = np.empty(ny * nx)
-    cy = np.empty(ny * nx)
     bins = np.empty((4, ny * nx), dtype=np.intp)  # a group's three UAVs, then the spare's
     bins[3] = 0
-    for j in range(ny):
-        for i in range(nx):
-            cx[j * nx + i] = xs[i]
-            cy[j * nx + i] = ys[j]
     rows = np.empty(n, dtype=np.intp)
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
@@ -525,9 +519,8 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
                 c = rows[m] * nx + cols[m]
                 if m != k and present[m] and others_cells[c] == 0.0:
                     others_cells[c] = 1.0
-                    sector, _ring, inside = _classify(
-                        xs[cols[m]] - px, ys[rows[m]] - py, edges, radius, n_sectors
-                    )
+                    dx, dy = cx[c] - px, cy[c] - py
+                    sector, _ring, inside = _classify(dx, dy, edges, radius, n_sectors)
                     if inside:
                         count[sector] += 1.0
             for m in range(n):
