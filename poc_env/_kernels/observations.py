@@ -358,11 +358,12 @@ def _cell_bins(cx, cy, pxs, pys, g, cnt, edges, radius, n_sectors, bins):
 def _bin_sums(q, b0, b1, b2, m0, m1, m2, spare):
     """Three UAVs' sums of one shared POC row per bin, each bin summed in cell order (what
     :func:`_bins` adds): UAV ``u`` adds ``q[j]`` (float32) into ``m_u[b_u[j]]`` for ``j`` in
-    order; the three
-    chains of additions interleaved so that they overlap. Branch-free: while a UAV's cells stay
-    in one bin its running sum stays in a register (the bin's slot is still written each time),
-    and its load reads the never-written slot ``m_u[spare]`` instead of the slot just stored,
-    so no addition waits on a store; a new bin's sum is read back from its slot."""
+    order, the three chains of additions interleaved so that they overlap. Branch-free: while a
+    UAV's cells stay in one bin its running sum stays in a register (the bin's slot is still
+    written each time) and its load reads the never-written slot ``m_u[spare]`` instead of the
+    slot just stored, so no addition waits on a store; a new bin's sum is read from its slot.
+    A group of fewer than three UAVs passes a spare row for the others (bins all 0, a mass row
+    nobody reads)."""
     d = np.uint64(spare)
     p0 = d
     p1 = d
