@@ -38,25 +38,43 @@ def _coarse_poc(belief, e, s, coarse, own_sum, scale, poc_sum, poc):
     cells summed as ``Grid.coarsen`` does with numpy (``own_sum``), or taken from ``coarse``;
     ``poc_sum (ny, nx)`` is scratch."""
     ny, nx = poc.shape
-    if own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
+    if own_sum and s == 4:  # the last branch cell by cell (scalar: 1.5 times its vector code)
+        for j in range(ny):
+            r0 = belief[e, 4 * j]
+            r1 = belief[e, 4 * j + 1]
+            r2 = belief[e, 4 * j + 2]
+            r3 = belief[e, 4 * j + 3]
+            acc = poc_sum[j]
+            for i in range(nx):
+                k = 4 * i  # -0.0 + x is x: each sub-row's sum starts at its first value
+                c = 0.0
+                c += ((r0[k] + r0[k + 1]) + r0[k + 2]) + r0[k + 3]
+                c += ((r1[k] + r1[k + 1]) + r1[k + 2]) + r1[k + 3]
+                c += ((r2[k] + r2[k + 1]) + r2[k + 2]) + r2[k + 3]
+                c += ((r3[k] + r3[k + 1]) + r3[k + 2]) + r3[k + 3]
+                acc[i] = c
+    elif own_sum and s == 2:  # the same for two sub-rows (Paper62)
+        for j in range(ny):
+            r0 = belief[e, 2 * j]
+            r1 = belief[e, 2 * j + 1]
+            acc = poc_sum[j]
+            for i in range(nx):
+                k = 2 * i
+                c = 0.0
+                c += r0[k] + r0[k + 1]
+                c += r1[k] + r1[k + 1]
+                acc[i] = c
+    elif own_sum:  # numpy's multi-axis sum: 0 + each sub-row's sum (started from -0.0)
         for j in range(ny):
             acc = poc_sum[j]
             acc[:] = 0.0
             for a in range(s):
                 row = belief[e, j * s + a]
-                if s == 2:
-                    for i in range(nx):
-                        acc[i] += row[2 * i] + row[2 * i + 1]
-                elif s == 4:  # the loop below with its sub-cells unrolled (it vectorises)
-                    for i in range(nx):
-                        k = 4 * i
-                        acc[i] += (((-0.0 + row[k]) + row[k + 1]) + row[k + 2]) + row[k + 3]
-                else:
-                    for i in range(nx):
-                        r = -0.0
-                        for b in range(s):
-                            r += row[i * s + b]
-                        acc[i] += r
+                for i in range(nx):
+                    r = -0.0
+                    for b in range(s):
+                        r += row[i * s + b]
+                    acc[i] += r
     else:
         poc_sum[:] = coarse[e]
     for j in range(ny):
@@ -227,54 +245,15 @@ def rasters_vectors(
 def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
     """One UAV's row of :func:`compass_bins`: add ``poc[j]`` into ``mass`` per (sector, ring)
     and ``others[j]`` into ``count`` per sector over the cells within ``radius``, the cells
-    visited in index order (those where both are zero add nothing and are skipped)."""
-    n_cells = cx.shape[0]
+    visited in index order (those where both are zero add nothing and are skipped), each
+    decided by :func:`_classify`."""
     n_rings = edges.shape[0] + 1
-    two_pi = 2.0 * np.pi
-    half = n_sectors // 2
-    radius2 = radius * radius
-    octants = n_sectors == 8
-    tol = 1e-9  # relative margin around a boundary inside which the exact formula decides
-    for j in range(n_cells):
+    for j in range(cx.shape[0]):
         q = poc[j]
         w = others[j]
         if q == 0.0 and w == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
             continue
-        dx = cx[j] - px
-        dy = cy[j] - py
-        ax = abs(dx)
-        ay = abs(dy)
-        big = max(ax, ay)
-        if octants and ay > tol * big and ax > tol * big and abs(ax - ay) > tol * big:
-            # clearly inside an octant: signs and |dy| vs |dx| name it, no arctan2 needed
-            if dy > 0 and dx > 0:
-                sector = 0 if ay < ax else 1
-            elif dy > 0:
-                sector = 2 if ay > ax else 3
-            elif dx < 0:
-                sector = 4 if ay < ax else 5
-            else:
-                sector = 6 if ay > ax else 7
-        else:  # on or next to a sector boundary: the defining formula, bit for bit
-            ang = np.arctan2(dy, dx)
-            sector = int(np.floor((ang + np.pi) / two_pi * n_sectors)) % n_sectors
-            sector = (sector + half) % n_sectors  # arctan2 + pi starts at west
-        d2 = dx * dx + dy * dy
-        ring = 0
-        exact = False
-        for r in range(n_rings - 1):  # squared distances decide unless next to an edge
-            if abs(d2 - (edges[r] * edges[r])) <= tol * (edges[r] * edges[r]):
-                exact = True
-        near_radius = abs(d2 - radius2) <= tol * radius2
-        if exact or near_radius:
-            dist = np.hypot(dx, dy)
-            while ring < n_rings - 1 and edges[ring] <= dist:
-                ring += 1
-            inside = dist <= radius
-        else:
-            while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
-                ring += 1
-            inside = d2 <= radius2
+        sector, ring, inside = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
         mass[sector * n_rings + ring] += q
         if inside:
             count[sector] += w
@@ -282,10 +261,11 @@ def _bins(cx, cy, px, py, poc, others, edges, radius, n_sectors, mass, count):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _classify(dx, dy, edges, radius, n_sectors):
-    """Sector, ring and within-``radius`` flag of one offset: the decisions of :func:`_bins`'
-    loop body, spelled out once more for :func:`_grid_bins`, which calls it once per run of
-    cells and next to a boundary (a call per cell would cost more than the decision, hence the
-    copy)."""
+    """Sector, ring and within-``radius`` flag of one offset (a cell centre minus a UAV's
+    position; sector 0 starting due east, counter-clockwise; the ring: how many ``edges`` are
+    <= the distance): the defining formulas (``arctan2``, ``hypot``) next to a boundary, and
+    away from every boundary (a relative margin of 1e-9) the octant from the signs and
+    ``|dy|`` vs ``|dx|`` and the ring from squared distances, which agree with them there."""
     n_rings = edges.shape[0] + 1
     tol = 1e-9
     ax = abs(dx)
@@ -324,173 +304,115 @@ def _classify(dx, dy, edges, radius, n_sectors):
     return sector, ring, inside
 
 
-#: Octant of an offset clearly inside one (the branches of :func:`_classify`), indexed by
-#: ``4 * (dy > 0) + 2 * (dx > 0) + (|dy| < |dx|)``.
-_OCTANT = np.array([5, 4, 6, 7, 2, 3, 1, 0], dtype=np.intp)
+@njit(cache=True, error_model="numpy", inline="always")
+def _clear_bin(dx, dy, lo0, lo1, lo2, hi0, hi1, hi2):
+    """The bin ``sector * 4 + ring`` of an offset clearly inside an octant and a ring (8 sectors,
+    3 ring edges: squared edges times ``1 -+ 1e-9`` in ``lo*``, ``hi*``), else -1: the octant
+    from the signs of the offset and ``|dy| < |dx|``, the ring from how many squared edges the
+    squared distance reaches, where :func:`_classify`'s fast branch decides the same (a squared
+    distance within 1e-9 of a squared edge, where the squares and ``hypot`` might disagree, or
+    an offset within 1e-9 of a sector boundary gives -1). No branches, so that a loop over cells
+    calling it vectorises."""
+    tol = 1e-9
+    ax = abs(dx)
+    ay = abs(dy)
+    tb = tol * max(ax, ay)
+    d2 = dx * dx + dy * dy
+    ring = np.intp(d2 >= lo0) + np.intp(d2 >= lo1) + np.intp(d2 >= lo2)
+    ring_hi = np.intp(d2 > hi0) + np.intp(d2 > hi1) + np.intp(d2 > hi2)
+    clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb) & (ring == ring_hi)
+    # octants 0-7 counter-clockwise from east: quadrant 0 (+, +), 1 (-, +), 2 (-, -), 3 (+, -),
+    # its lower octant where |dy| < |dx| in quadrants 0 and 2, else the upper one
+    sx = np.intp(dx > 0)
+    sy = np.intp(dy > 0)
+    quad = sy * (1 - sx) + (1 - sy) * (2 + sx)
+    upper = np.intp(ay < ax) ^ np.intp(sx == sy)
+    return (2 * quad + upper) * 4 + ring if clear else -1
 
 
 @_jit
-def _cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
-    """The POC sums of :func:`_bins` (``mass``; each bin summed in cell order) without its
-    "others" counts, for short rows, in passes over the cells without branches (so that they
-    vectorise). First each cell's bin: a cell clearly inside an octant and away from every
-    ring edge and from ``radius`` (:func:`_classify`'s fast branch) takes its octant from
-    :data:`_OCTANT` and its ring from how many squared edges (``edges`` ascending) its squared
-    distance reaches; any other cell gets -1. Then the sums in cell order, the -1 cells decided
-    by :func:`_classify`. Adding a zero to a sum started at +0.0 changes nothing, so zero cells
-    are not skipped (but a zero cell is never classified). ``bins``, ``d2s (cells,)``:
-    scratch."""
-    n_rings = edges.shape[0] + 1
-    _cell_bin_ids(cx, cy, px, py, edges, radius, n_sectors, bins, d2s)
-    for j in range(cx.shape[0]):
-        q = poc[j]
-        b = bins[j]
-        if b >= 0:
-            mass[b] += q
-        elif q != 0.0:
-            sector, ring, _inside = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
-            mass[sector * n_rings + ring] += q
-
-
-@_jit
-def _cell_bin_ids(cx, cy, px, py, edges, radius, n_sectors, bins, d2s):
-    """The first pass of :func:`_cell_bins`: each cell's bin (``sector * n_rings + ring``) into
-    ``bins``, or a negative number for a cell :func:`_classify` must decide."""
+def _cell_bins(cx, cy, pxs, pys, g, cnt, edges, radius, n_sectors, bins):
+    """Each cell's (sector, ring) bin of :func:`_bins` (``sector * n_rings + ring``) for the
+    ``cnt`` (1 to 3) UAVs ``g, g + 1 ...`` at ``(pxs, pys)`` into ``bins[u] (cells,)``: one pass
+    over the cells for the three (a shorter group repeats its last UAV), each cell's bin by
+    :func:`_clear_bin`; then the cells it leaves (next to a sector or ring boundary; all of
+    them for sectors other than octants or other than three ring edges) decided by
+    :func:`_classify`. The "others" radius decides no bin."""
     n_cells = cx.shape[0]
     n_rings = edges.shape[0] + 1
     tol = 1e-9
-    radius2 = radius * radius
-    if n_sectors != 8:  # no octants: every cell by the defining formula
-        bins[:n_cells] = -1
-        return
-    for j in range(n_cells):
-        dx = cx[j] - px
-        dy = cy[j] - py
-        ax = abs(dx)
-        ay = abs(dy)
-        tb = tol * max(ax, ay)
-        d2 = dx * dx + dy * dy
-        d2s[j] = d2
-        clear = (ay > tb) & (ax > tb) & (abs(ax - ay) > tb)
-        clear &= abs(d2 - radius2) > tol * radius2
-        k = 4 * np.intp(dy > 0) + 2 * np.intp(dx > 0) + np.intp(ay < ax)
-        bins[j] = _OCTANT[k] * n_rings if clear else -n_cells * n_rings
-    for r in range(n_rings - 1):
-        e2 = edges[r] * edges[r]
-        band = tol * e2
-        for j in range(n_cells):  # a cell next to an edge is pushed below zero for good
-            d2 = d2s[j]
-            bins[j] += np.intp(d2 >= e2) - np.intp(abs(d2 - e2) <= band) * n_cells * n_rings
+    every = n_sectors != 8 or n_rings != 4  # no fast bins: every cell by _classify
+    worst = -1
+    if not every:
+        lo0 = edges[0] * edges[0] * (1.0 - tol)
+        lo1 = edges[1] * edges[1] * (1.0 - tol)
+        lo2 = edges[2] * edges[2] * (1.0 - tol)
+        hi0 = edges[0] * edges[0] * (1.0 + tol)
+        hi1 = edges[1] * edges[1] * (1.0 + tol)
+        hi2 = edges[2] * edges[2] * (1.0 + tol)
+        k1 = g + min(1, cnt - 1)
+        k2 = g + min(2, cnt - 1)
+        px0, py0, px1, py1, px2, py2 = pxs[g], pys[g], pxs[k1], pys[k1], pxs[k2], pys[k2]
+        b0 = bins[0]
+        b1 = bins[1]
+        b2 = bins[2]
+        worst = 0
+        for j in range(n_cells):
+            x = cx[j]
+            y = cy[j]
+            v0 = _clear_bin(x - px0, y - py0, lo0, lo1, lo2, hi0, hi1, hi2)
+            v1 = _clear_bin(x - px1, y - py1, lo0, lo1, lo2, hi0, hi1, hi2)
+            v2 = _clear_bin(x - px2, y - py2, lo0, lo1, lo2, hi0, hi1, hi2)
+            b0[j] = v0
+            b1[j] = v1
+            b2[j] = v2
+            worst = min(worst, min(v0, min(v1, v2)))
+    if worst < 0:
+        for u in range(cnt):
+            px, py = pxs[g + u], pys[g + u]
+            for j in range(n_cells):
+                if every or bins[u, j] < 0:
+                    sector, ring, _in = _classify(cx[j] - px, cy[j] - py, edges, radius, n_sectors)
+                    bins[u, j] = sector * n_rings + ring
 
 
 @_jit
-def _shared_cell_bins(cx, cy, px, py, poc, edges, radius, n_sectors, mass, bins, d2s):
-    """:func:`_cell_bins` of several UAVs over one shared row ``poc``: ``px``, ``py (B,)``,
-    ``mass (B, bins)``, ``bins (B, cells)``. The same sums in the same order per UAV (each
-    UAV's bins summed in cell order), the UAVs' additions interleaved cell by cell so that
-    their chains of additions overlap."""
-    b_n = px.shape[0]
-    n_rings = edges.shape[0] + 1
-    for k in range(b_n):
-        _cell_bin_ids(cx, cy, px[k], py[k], edges, radius, n_sectors, bins[k], d2s)
-    for j in range(cx.shape[0]):
-        q = poc[j]
-        for k in range(b_n):
-            b = bins[k, j]
-            if b >= 0:
-                mass[k, b] += q
-            elif q != 0.0:
-                sector, ring, _inside = _classify(
-                    cx[j] - px[k], cy[j] - py[k], edges, radius, n_sectors
-                )
-                mass[k, sector * n_rings + ring] += q
-
-
-@_jit
-def _grid_bins(xs, ys, px, py, poc, edges, radius, n_sectors, mass, bps, pos):
-    """The POC sums of :func:`_bins` (``mass``; each bin summed in cell order) over a grid of
-    cell centres ``(xs[i], ys[j])`` (``xs`` increasing, cell ``j * nx + i``), row by row: a
-    row's boundaries (``dx`` = 0 or +-dy, a ring edge's circle) cut it into runs of cells that
-    share a sector and ring; the first cell of a run is decided by :func:`_classify`, the
-    others take its bin and are added in order, and every cell within a margin of a boundary
-    is decided on its own. The margin, 2e-4 of the row's largest offsets, is far wider than the
-    exact formulas' 1e-9 bands (at most ~3e-5 of a ring's radius wide in ``dx``, on a row
-    nearly tangent to it), whatever the cell size. Rows too
-    close to the UAV's own (``dy`` ~ 0) are decided cell by cell. ``bps``, ``pos``: scratch."""
-    nx = xs.shape[0]
-    ny = ys.shape[0]
-    n_rings = edges.shape[0] + 1
-    span = abs(xs[0] - px) + abs(xs[nx - 1] - px)
-    for j in range(ny):
-        dy = ys[j] - py
-        base = j * nx
-        if not (n_sectors == 8 and abs(dy) > 1e-6 * (span + 1.0)):
-            for i in range(nx):
-                q = poc[base + i]
-                if q == 0.0:  # adding +-0.0 to sums started at +0.0 changes nothing
-                    continue
-                sector, ring, _inside = _classify(xs[i] - px, dy, edges, radius, n_sectors)
-                mass[sector * n_rings + ring] += q
-            continue
-        # the row's boundaries, sorted: -P reversed, 0, P, where P is |dy| merged into the
-        # chords of the ring edges the row reaches (ascending with the edges; the radius
-        # decides no POC sum)
-        ady = abs(dy)
-        npos = 0
-        placed = False
-        for r in range(n_rings - 1):
-            h = edges[r] * edges[r] - dy * dy
-            if h >= 0.0:
-                chord = math.sqrt(h)
-                if not placed and ady <= chord:
-                    pos[npos] = ady
-                    npos += 1
-                    placed = True
-                pos[npos] = chord
-                npos += 1
-        if not placed:
-            pos[npos] = ady
-            npos += 1
-        bps[npos] = 0.0
-        for a in range(npos):
-            bps[npos - 1 - a] = -pos[a]
-            bps[npos + 1 + a] = pos[a]
-        nb = 2 * npos + 1
-        m = 2e-4 * (span + ady + radius + edges[n_rings - 2])
-        ptr = 0
-        i = 0
-        while i < nx:
-            dx = xs[i] - px
-            while ptr < nb and bps[ptr] < dx - m:
-                ptr += 1
-            if ptr < nb and bps[ptr] <= dx + m:  # next to a boundary: this cell alone
-                sector, ring, _inside = _classify(dx, dy, edges, radius, n_sectors)
-                mass[sector * n_rings + ring] += poc[base + i]
-                i += 1
-                continue
-            # a run, farther than the margin from every boundary: there :func:`_classify`
-            # takes its octant branch and squared distances (dx and |dx| - |dy| are far from
-            # 0, no ring edge is near; near the radius alone hypot and the squares agree)
-            ax = abs(dx)
-            if dy > 0 and dx > 0:
-                sector = 0 if ady < ax else 1
-            elif dy > 0:
-                sector = 2 if ady > ax else 3
-            elif dx < 0:
-                sector = 4 if ady < ax else 5
-            else:
-                sector = 6 if ady > ax else 7
-            d2 = dx * dx + dy * dy
-            ring = 0
-            while ring < n_rings - 1 and edges[ring] * edges[ring] <= d2:
-                ring += 1
-            bin_ = sector * n_rings + ring
-            limit = bps[ptr] - m if ptr < nb else np.inf
-            acc = mass[bin_]  # up to the next boundary's margin: one bin, in order
-            while i < nx and xs[i] - px < limit:
-                acc += poc[base + i]
-                i += 1
-            mass[bin_] = acc
+def _bin_sums(q, b0, b1, b2, m0, m1, m2, spare):
+    """Three UAVs' sums of one shared POC row per bin, each bin summed in cell order (what
+    :func:`_bins` adds): UAV ``u`` adds ``q[j]`` (float32) into ``m_u[b_u[j]]`` for ``j`` in
+    order, the three chains of additions interleaved so that they overlap. Branch-free: while a
+    UAV's cells stay in one bin its running sum stays in a register (the bin's slot is still
+    written each time) and its load reads the never-written slot ``m_u[spare]`` instead of the
+    slot just stored, so no addition waits on a store; a new bin's sum is read from its slot.
+    A group of fewer than three UAVs passes a spare row for the others (bins all 0, a mass row
+    nobody reads)."""
+    d = np.uint64(spare)
+    p0 = d
+    p1 = d
+    p2 = d
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    for j in range(b0.shape[0]):
+        qj = np.float64(q[j])
+        b = np.uint64(b0[j])
+        same = b == p0
+        v = m0[d if same else b]
+        a0 = (a0 if same else v) + qj
+        m0[b] = a0
+        p0 = b
+        b = np.uint64(b1[j])
+        same = b == p1
+        v = m1[d if same else b]
+        a1 = (a1 if same else v) + qj
+        m1[b] = a1
+        p1 = b
+        b = np.uint64(b2[j])
+        same = b == p2
+        v = m2[d if same else b]
+        a2 = (a2 if same else v) + qj
+        m2[b] = a2
+        p2 = b
 
 
 @_jit
@@ -547,7 +469,7 @@ def np_sum(a):
 
 
 @_jit
-def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out):
+def compass(poc, vector, pos, flying, grid_box, area, cx, cy, edges, layout, out):
     """The compass observation of every UAV of every env into ``out (E, N, F)`` float32 (the
     blocks of :class:`poc_env.sim.observations.CompassFeatures`), computed straight from each
     env's raster channel 0 ``poc (E, P, ny, nx)`` (P = 1: shared by its UAVs; P = N: each UAV's
@@ -560,35 +482,26 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
     A UAV's own position is decoded from its float32 vector as ``decode_vector`` does, ``area =
     (bx0, by0, w, h)``. ``layout = (v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index)``: the
     block offsets, the index block's size, the sectors, whether to set the index; ``area``'s
-    tail holds the others radius and the count normaliser. The cell centres are the grid
-    ``(xs[i], ys[j])``, walked row by row (:func:`_grid_bins`); ``edges``: the ring edges."""
+    tail holds the others radius and the count normaliser. Cell ``j * nx + i`` has its centre
+    at ``(cx, cy)[j * nx + i]``: each UAV's cells are put in their bins (:func:`_cell_bins`) and
+    the sums made three UAVs at a time (:func:`_bin_sums`); ``edges``: the ring edges."""
     v0, c0, o0, m0, i0, n_ids, n_sectors, agent_index = layout
     x0, y0, x1, y1, cell = grid_box
     bx0, by0, bw, bh, radius, others = area
     n_env, n = flying.shape
     n_shared, ny, nx = poc.shape[1], poc.shape[2], poc.shape[3]
+    n_cells = ny * nx
     n_rings = edges.shape[0] + 1
+    n_bins = n_sectors * n_rings
     n_vec = vector.shape[2]
-    mass = np.empty(n_sectors * n_rings)
+    mass = np.empty((n + 1, n_bins + 1))  # row n, column n_bins: spares for _bin_sums
     count = np.empty(n_sectors)
     others_cells = np.zeros(ny * nx)  # the "others" channel of one UAV, cleared after use
-    bps = np.empty(2 * n_rings + 3)
-    chords = np.empty(n_rings)
-    short = nx < 16  # short rows: a row's boundaries would cost more than its cells' decisions
-    cx = np.empty(ny * nx)
-    cy = np.empty(ny * nx)
-    cell_bin = np.empty(ny * nx if short else 0, dtype=np.intp)
-    cell_d2 = np.empty(ny * nx if short else 0)
-    for j in range(ny):
-        for i in range(nx):
-            cx[j * nx + i] = xs[i]
-            cy[j * nx + i] = ys[j]
+    bins = np.empty((4, ny * nx), dtype=np.intp)  # a group's three UAVs, then the spare's
+    bins[3] = 0
     rows = np.empty(n, dtype=np.intp)
     cols = np.empty(n, dtype=np.intp)
     present = np.empty(n, dtype=np.bool_)
-    together = short and n_shared == 1  # the UAVs' sums over their env's row, interleaved
-    all_mass = np.empty((n if together else 0, n_sectors * n_rings))
-    all_bins = np.empty((n if together else 0, ny * nx), dtype=np.intp)
     pxs = np.empty(n)
     pys = np.empty(n)
     wide = np.empty(ny * nx)  # a channel 0 in float64, for numpy's sums
@@ -602,15 +515,20 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
                 wide[c] = flat[c]
             totals[p] = np_sum(wide)
             means[p] = totals[p] / (ny * nx)
+        mass[:] = 0.0
+        rows_e = poc[e].reshape(n_shared, n_cells)
         for k in range(n):
             pxs[k] = bx0 + np.float64(vector[e, k, 0]) * bw
             pys[k] = by0 + np.float64(vector[e, k, 1]) * bh
-        if together:
-            all_mass[:] = 0.0
-            row = poc[e, 0].reshape(ny * nx)
-            _shared_cell_bins(
-                cx, cy, pxs, pys, row, edges, radius, n_sectors, all_mass, all_bins, cell_d2
-            )
+        step = 3 if n_shared == 1 else 1  # UAVs summed together: those sharing a row
+        for g in range(0, n, step):  # a group short of three is padded by the spare (row n)
+            _cell_bins(cx, cy, pxs, pys, g, min(step, n - g), edges, radius, n_sectors, bins)
+            k1 = g + 1 if step == 3 and g + 1 < n else n
+            k2 = g + 2 if step == 3 and g + 2 < n else n
+            _bin_sums(
+                rows_e[g if n_shared > 1 else 0], bins[0], bins[1 if k1 < n else 3],
+                bins[2 if k2 < n else 3], mass[g], mass[k1], mass[k2], n_bins,
+            )  # fmt: skip
         for k in range(n):
             p = k if n_shared > 1 else 0
             o = out[e, k]
@@ -620,32 +538,21 @@ def compass(poc, vector, pos, flying, grid_box, area, xs, ys, edges, layout, out
             px = pxs[k]
             py = pys[k]
             count[:] = 0.0
-            if together:
-                mass[:] = all_mass[k]
-            else:
-                mass[:] = 0.0
-                row = poc[e, p].reshape(ny * nx)
-                if short:
-                    _cell_bins(
-                        cx, cy, px, py, row, edges, radius, n_sectors, mass, cell_bin, cell_d2
-                    )
-                else:
-                    _grid_bins(xs, ys, px, py, row, edges, radius, n_sectors, mass, bps, chords)
             for m in range(n):  # each cell holding another UAV counts once (a 1.0)
                 c = rows[m] * nx + cols[m]
                 if m != k and present[m] and others_cells[c] == 0.0:
                     others_cells[c] = 1.0
-                    sector, _ring, inside = _classify(
-                        xs[cols[m]] - px, ys[rows[m]] - py, edges, radius, n_sectors
-                    )
+                    dx, dy = cx[c] - px, cy[c] - py
+                    sector, _ring, inside = _classify(dx, dy, edges, radius, n_sectors)
                     if inside:
                         count[sector] += 1.0
             for m in range(n):
                 if present[m]:
                     others_cells[rows[m] * nx + cols[m]] = 0.0
             tot = totals[p]
-            for b in range(mass.size):
-                o[c0 + b] = mass[b] / tot if tot > 0 else 0.0
+            if tot > 0:  # else the zeros written above
+                for b in range(n_bins):
+                    o[c0 + b] = mass[k, b] / tot
             for b in range(n_sectors):
                 o[o0 + b] = min(count[b] / others, 1.0)
             o[m0] = means[p]

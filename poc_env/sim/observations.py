@@ -277,11 +277,6 @@ class CompassFeatures:
         self.centers = params.grid.centers.reshape(-1, 2).astype(float)
         self._cx = np.ascontiguousarray(self.centers[:, 0])
         self._cy = np.ascontiguousarray(self.centers[:, 1])
-        grid = params.grid.centers
-        self._xs = np.ascontiguousarray(grid[0, :, 0], dtype=float)  # the kernel walks rows
-        self._ys = np.ascontiguousarray(grid[:, 0, 1], dtype=float)
-        assert (grid[..., 0] == self._xs).all() and (grid[..., 1] == self._ys[:, None]).all()
-        assert (np.diff(self._xs) > 0).all()
         self._edges = np.asarray(RING_EDGES_M, dtype=float)
         self.others = max(params.n_agents - 1, 1)
         b = _BLOCK
@@ -345,8 +340,8 @@ class CompassFeatures:
             state.flying,
             self._grid_box,
             self._area,
-            self._xs,
-            self._ys,
+            self._cx,
+            self._cy,
             self._edges,
             self._layout,
             out,

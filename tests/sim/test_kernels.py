@@ -1014,58 +1014,71 @@ def test_compass_bins_on_boundaries_equal_the_defining_formula():
         np.testing.assert_array_equal(count[i], want_c)
 
 
-@pytest.mark.parametrize("n_sectors", [8, 6])
-def test_short_row_compass_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_sectors):
-    """The short-row compass sums (``_cell_bins``: branch-free bins, then the sums) equal the
-    cell-by-cell kernel (``compass_bins``) bit for bit on an 8 x 8 grid: UAVs at random, on
-    cell centres, on the grid's diagonals and axes through cell centres, at ring edges and at
-    the others radius from a cell centre (and 1e-12 off them), POC with zeros, ties and -0.0;
-    and with sectors other than octants (every cell by the defining formula)."""
+def _compass_positions(rng, cx, cy, n_random):
+    """UAV positions for the compass kernel's pins: at random over and around the grid, and
+    on cell centres, on the axes and diagonals through them, at the ring edges and the others
+    radius from a cell centre along the axes, the diagonals and Pythagorean directions (where
+    ``dx^2 + dy^2`` rounds but ``hypot`` is exact), each also 1e-12 off."""
     from poc_env.sim.observations import OTHERS_RADIUS_M, RING_EDGES_M
 
-    xs = np.arange(8) * 5000.0 + 2500.0
-    cx, cy = np.tile(xs, 8), np.repeat(xs, 8)
-    rng = np.random.default_rng(5)
-    px = list(rng.uniform(-40e3, 80e3, 300))
-    py = list(rng.uniform(-40e3, 80e3, 300))
+    lo, hi = min(cx.min(), cy.min()) - 40e3, max(cx.max(), cy.max()) + 40e3
+    px, py = list(rng.uniform(lo, hi, n_random)), list(rng.uniform(lo, hi, n_random))
+    dirs = ((1, 0), (0, 1), (1, 1), (-1, 1), (0.6, 0.8), (-0.8, 0.6), (5 / 13, -12 / 13),
+            (-8 / 17, -15 / 17))  # fmt: skip
     for d in (*RING_EDGES_M, OTHERS_RADIUS_M, 5000.0, 0.0):
         for eps in (0.0, 1e-12, -1e-12):
-            for ux, uy in ((1, 0), (0, 1), (1, 1), (-1, 1), (0.6, 0.8)):
-                j = rng.integers(0, 64)
+            for ux, uy in dirs:
+                j = rng.integers(0, len(cx))
                 px.append(cx[j] + ux * d * (1 + eps))
                 py.append(cy[j] + uy * d * (1 + eps))
-    px, py = np.array(px), np.array(py)
-    poc = rng.random((len(px), 64))
+    return np.array(px), np.array(py)
+
+
+@pytest.mark.parametrize("n_sectors", [8, 6])
+@pytest.mark.parametrize(("nx", "ny"), [(8, 8), (40, 30)])
+def test_compass_cell_bins_and_sums_equal_the_cell_by_cell_kernel_bit_for_bit(n_sectors, nx, ny):
+    """The compass kernel's sums (``_cell_bins``: each cell's bin in a branch-free pass, the
+    cells next to a boundary decided by ``_classify``; then ``_bin_sums``: three UAVs' sums of
+    a shared row interleaved, each bin summed in cell order) equal the cell-by-cell kernel
+    (``compass_bins``) bit for bit, on Small's 8 x 8 grid and Paper62's 40 x 30: UAVs at random
+    and on the boundary positions of :func:`_compass_positions`, float32 POC over 13 orders of
+    magnitude (a sum in another order rounds differently) with zeros, ties and -0.0, groups of
+    one, two and three UAVs (padded by a spare), and sectors other than octants (every cell by
+    the defining formula)."""
+    from poc_env.sim.observations import OTHERS_RADIUS_M, RING_EDGES_M
+
+    xs = np.arange(nx) * 5000.0 + 2500.0
+    ys = np.arange(ny) * 5000.0 + 2500.0
+    cx, cy = np.tile(xs, ny), np.repeat(ys, nx)
+    n_cells = nx * ny
+    rng = np.random.default_rng(5 + nx)
+    px, py = _compass_positions(rng, cx, cy, 120 if nx < 16 else 30)
+    poc = rng.random((len(px), n_cells)) * 10.0 ** rng.integers(-12, 1, (len(px), n_cells))
     poc[rng.random(poc.shape) < 0.3] = 0.0
     poc[:, 5] = -0.0
-    poc[::7, :] = 0.25  # equal values: any change of summation order would show
+    poc[::7, :] = 0.25  # equal values
+    poc = poc.astype(np.float32)  # what the kernel sums: raster channel 0
     edges = np.asarray(RING_EDGES_M, dtype=float)
     radius = float(OTHERS_RADIUS_M)
-    want, _count = obs_kernels.compass_bins(
-        cx, cy, px, py, poc, np.zeros_like(poc), edges, radius, n_sectors
-    )
-    bins, d2s = np.empty(64, dtype=np.intp), np.empty(64)
-    for i in range(len(px)):
-        mass = np.zeros(n_sectors * (len(edges) + 1))
-        obs_kernels._cell_bins(
-            cx, cy, px[i], py[i], poc[i], edges, radius, n_sectors, mass, bins, d2s
-        )
-        np.testing.assert_array_equal(mass, want[i], err_msg=f"UAV {i} at {px[i]}, {py[i]}")
-    # several UAVs over one shared row (an env's), their additions interleaved: the same sums
-    for group in (1, 3, 6):
+    n_bins = n_sectors * (len(edges) + 1)
+    spare_bins = np.zeros(n_cells, dtype=np.intp)
+    for group in (1, 2, 3):
         for start in range(0, len(px) - group + 1, group):
             k = np.arange(start, start + group)
             row = poc[start]
-            shared_want, _c = obs_kernels.compass_bins(
-                cx, cy, px[k], py[k], np.tile(row, (group, 1)), np.zeros((group, 64)), edges,
-                radius, n_sectors,
+            want, _c = obs_kernels.compass_bins(
+                cx, cy, px[k], py[k], np.tile(row.astype(float), (group, 1)),
+                np.zeros((group, n_cells)), edges, radius, n_sectors,
             )  # fmt: skip
-            mass = np.zeros((group, n_sectors * (len(edges) + 1)))
-            obs_kernels._shared_cell_bins(
-                cx, cy, px[k], py[k], row, edges, radius, n_sectors, mass,
-                np.empty((group, 64), dtype=np.intp), d2s,
-            )  # fmt: skip
-            np.testing.assert_array_equal(mass, shared_want, err_msg=f"UAVs {k}")
+            mass = np.zeros((4, n_bins + 1))  # row 3, column n_bins: the spares
+            bins = np.full((3, n_cells), -7, dtype=np.intp)
+            obs_kernels._cell_bins(cx, cy, px, py, start, group, edges, radius, n_sectors, bins)
+            b = [bins[u] if u < group else spare_bins for u in range(3)]
+            m = [mass[u] if u < group else mass[3] for u in range(3)]
+            obs_kernels._bin_sums(row, *b, *m, n_bins)
+            np.testing.assert_array_equal(
+                mass[:group, :n_bins], want, err_msg=f"UAVs {k} at {px[k]}, {py[k]}"
+            )
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -1221,7 +1234,7 @@ def test_compass_of_state_equals_the_features_of_the_rasters_bit_for_bit(name, s
 
 @pytest.mark.parametrize("s", [1, 2, 3, 4, 5, 7])
 def test_coarse_poc_is_numpys_coarsening_bit_for_bit(s):
-    """Raster channel 0 from the kernel's own sub-cell sums (s < 8; unrolled for s = 2 and 4)
+    """Raster channel 0 from the kernel's own sub-cell sums (s < 8; cell by cell for s = 2 and 4)
     is the float32 of ``Grid.coarsen`` / scale clipped to [0, 1], bit for bit (what the
     recorded episodes saw), on a belief with partly searched, zero and tiny cells."""
     params = sim.make_params(
