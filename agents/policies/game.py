@@ -25,7 +25,7 @@ import numpy as np
 
 from poc_env.agents.policies.base import BeliefPolicy, Reading
 from poc_env.agents.policies.greedy import best_cell
-from poc_env.sim.autopilot import steer
+from poc_env.sim.autopilot import steer_to
 from poc_env.theory.search_theory import segment_pod
 
 
@@ -94,28 +94,12 @@ class PotentialGamePolicy(BeliefPolicy):
             q = qs[k]
             if not np.any(poc * pods[k][self.choice[k]] > 0):  # nothing in sight: go find it
                 goal = centers[best_cell(p, poc, q, k)]  # type: ignore[arg-type]
-                actions[self.agents[k]] = steer(
-                    p,
-                    q["xy"],
-                    q["heading"],
-                    q["speed"],
-                    q["pitch"],
-                    q["z"],
-                    goal,
-                    u.cruise_speed_mps,
-                ).astype(np.float32)
+                actions[self.agents[k]] = steer_to(p, q, goal, u.cruise_speed_mps).astype(
+                    np.float32
+                )
                 continue
             # speed and altitude as the follower holds them; the heading change is the choice
-            a = steer(
-                p,
-                q["xy"],
-                q["heading"],
-                q["speed"],
-                q["pitch"],
-                q["z"],
-                q["xy"],
-                u.search_speed_mps,
-            )
+            a = steer_to(p, q, q["xy"], u.search_speed_mps)
             a[1] = self.turns[self.choice[k]]
             actions[self.agents[k]] = a.astype(np.float32)
         return actions

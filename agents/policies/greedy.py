@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.policies.base import BeliefPolicy, Reading
-from poc_env.sim.autopilot import steer
+from poc_env.sim.autopilot import steer_to
 
 
 def best_cell(params, poc: np.ndarray, q: dict, k: int, taken=()) -> int:
@@ -51,14 +51,7 @@ class GreedyBayesPolicy(BeliefPolicy):
             q = r.q
             best = best_cell(p, r.poc, q, r.k, taken)
             taken.add(best)
-            actions[r.agent] = steer(
-                p,
-                q["xy"],
-                q["heading"],
-                q["speed"],
-                q["pitch"],
-                q["z"],
-                self.centers[best],
-                u.search_speed_mps,
-            ).astype(np.float32)
+            actions[r.agent] = steer_to(p, q, self.centers[best], u.search_speed_mps).astype(
+                np.float32
+            )
         return actions

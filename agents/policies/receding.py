@@ -24,7 +24,7 @@ import numpy as np
 from poc_env.agents.planning.optimizers import adaptive_de
 from poc_env.agents.policies.base import BeliefPolicy, Reading
 from poc_env.agents.policies.greedy import best_cell
-from poc_env.sim.autopilot import steer
+from poc_env.sim.autopilot import steer_to
 from poc_env.theory.search_theory import segment_pod
 
 
@@ -106,28 +106,10 @@ class DERecedingPolicy(BeliefPolicy):
             res = adaptive_de(f, bounds, popsize=self.popsize, maxiter=self.maxiter, rng=seed)
             for j, k in enumerate(searching_k):
                 q = qs[k]
-                a = steer(
-                    p,
-                    q["xy"],
-                    q["heading"],
-                    q["speed"],
-                    q["pitch"],
-                    q["z"],
-                    q["xy"],
-                    u.search_speed_mps,
-                )
+                a = steer_to(p, q, q["xy"], u.search_speed_mps)
                 a[1] = res.x[j]
                 if not p.grid.contains(q["xy"]):  # transit from the airfield to the area
                     goal = p.grid.centers.reshape(-1, 2)[best_cell(p, poc, q, k)]  # type: ignore[arg-type]
-                    a = steer(
-                        p,
-                        q["xy"],
-                        q["heading"],
-                        q["speed"],
-                        q["pitch"],
-                        q["z"],
-                        goal,
-                        u.cruise_speed_mps,
-                    )
+                    a = steer_to(p, q, goal, u.cruise_speed_mps)
                 actions[self.agents[k]] = a.astype(np.float32)
         return actions

@@ -50,6 +50,12 @@ def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> n
     return np.stack([a_speed, a_turn, a_pitch], axis=-1)
 
 
+def steer_to(params: Params, q: dict, goal, target_speed) -> np.ndarray:
+    """:func:`steer` of the UAV (or UAVs) whose state vector entries are ``q`` (``xy``,
+    ``heading``, ``speed``, ``pitch``, ``z``), towards ``goal`` at ``target_speed``."""
+    return steer(params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, target_speed)
+
+
 def returning(params: Params, xy, usable, k) -> np.ndarray:
     """Vectorised :func:`must_return`: ``xy (..., 2)`` positions, ``usable (...)`` remaining
     usable-endurance shares (observation entry ``usable``), ``k (...)`` UAV indices."""
@@ -66,9 +72,7 @@ def homing(params: Params, q: dict, k) -> np.ndarray:
     d = goal - np.asarray(q["xy"], dtype=float)
     home = np.hypot(d[..., 0], d[..., 1])
     v = np.where(home < 2 * u.cruise_speed_mps * params.dt, u.min_speed_mps, u.cruise_speed_mps)
-    return steer(params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v).astype(
-        np.float32
-    )
+    return steer_to(params, q, goal, v).astype(np.float32)
 
 
 def must_return(params: Params, q: dict, k: int) -> bool:
@@ -270,8 +274,6 @@ class WaypointFollower:
                 actions[agent] = self._guarded(q, act)
                 continue
             v = self.pattern_speed if on_pattern else self.transit_speed
-            act = steer(
-                self.params, q["xy"], q["heading"], q["speed"], q["pitch"], q["z"], goal, v
-            ).astype(np.float32)
+            act = steer_to(self.params, q, goal, v).astype(np.float32)
             actions[agent] = self._guarded(q, act)
         return actions, state
