@@ -11,6 +11,10 @@ was obtained, and the summary's ratios recomputed as ``poc_env.agents.benchmarks
 quality`` computes them (``*_rule_merged``: the old ones). Files already rewritten are checked
 against the recomputed bound instead.
 
+``timing [N]``: the relaxation alone (one solve) against ``rule_bound`` on ``large_400``,
+``wide_400`` and ``paper_6_2``'s random priors 0..N-1 (default 3), interleaved per prior;
+medians and the median ratio (run with ``OMP_NUM_THREADS=1``).
+
     PYTHONPATH=. OMP_NUM_THREADS=1 python results/plan_scale/rebound.py \
         results/plan_scale/large_400.json results/plan_scale/large_400_b.json
 """
@@ -73,6 +77,34 @@ def rebound(path: str) -> None:
     print(json.dumps(data["summary"], indent=1))
 
 
+def timing(n: int) -> None:
+    import os
+    import time
+
+    from poc_env.theory.bound import _rule_relaxation, env_limits
+
+    print(f"load average {os.getloadavg()[0]:.1f}")
+    for name in ("large_400", "wide_400", "paper_6_2"):
+        sc = load_scenario(name)
+        rho = env_limits(sc).spill_m
+        one, full = [], []
+        for seed in range(n):
+            prior = episode_prior(sc, seed)
+            t = time.perf_counter()
+            _rule_relaxation(sc, prior, rho)
+            one.append(time.perf_counter() - t)
+            t = time.perf_counter()
+            rule_bound(sc, prior)
+            full.append(time.perf_counter() - t)
+        ratio = np.median(np.array(full) / np.array(one))
+        print(f"{name}: relaxation {np.median(one):.3f} s, rule_bound {np.median(full):.3f} s, "
+              f"ratio {ratio:.2f} (median of {n})")  # fmt: skip
+    print(f"load average {os.getloadavg()[0]:.1f}")
+
+
 if __name__ == "__main__":
+    if sys.argv[1] == "timing":
+        timing(int(sys.argv[2]) if len(sys.argv) > 2 else 3)
+        sys.exit()
     for p in sys.argv[1:]:
         rebound(p)
