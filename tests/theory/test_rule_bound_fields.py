@@ -103,3 +103,21 @@ def test_large_grids_split_into_single_fields():
     rb0 = rule_bound(sc, prior, spill_m=0.0)
     alone0 = rule_bound(dataclasses.replace(sc, fleet=sc.fleet[1:]), prior, spill_m=0.0).upper
     assert alone0 < rb0.upper < rb.upper
+
+
+def test_flown_allocation_plans_stay_below_the_bound_with_three_airfields():
+    """large_400 on 20 km cells, random priors whose bound is a block sum (seed 12, 0.80 of the
+    merged relaxation) and a reordered merge (seed 13): the allocation plan flown in the
+    environment (the sensor's spill included) stays below the bound."""
+    from poc_env.agents.benchmarks.plan_scale import _flown
+    from poc_env.agents.experiments.evaluate import episode_prior
+
+    sc = load_scenario("large_400", {"map.cell_km": 20})
+    hows = []
+    for seed in (12, 13):
+        prior = episode_prior(sc, seed)
+        rb = rule_bound(sc, prior)
+        posc, _ = _flown(sc, "allocation_plan", seed, prior)
+        assert 0.0 < posc <= rb.upper < 0.95 * rb.merged, (seed, posc, rb)
+        hows.append(rb.how.split("=")[0])
+    assert hows == ["blocks", "first"]
