@@ -84,13 +84,15 @@ The solver (:func:`reach_optimum`) is exact: the feasible efforts form a polymat
 concave objectives over a polymatroid reduces it to water-fillings (:func:`physical_optimum`)
 and a search for the most violated cell set, which for one or two distinct take-off points is a
 scan over thresholds (more are merged into two, and on grids above ~7000 cells two into one:
-valid relaxations). A Lagrangian dual value at
+valid relaxations, which :func:`rule_bound` tightens by sums over blocks of at most two fields).
+A Lagrangian dual value at
 the allocation's marginal returns certifies it (``ReachBound.upper``, gap below 1e-9 on the
 shipped scenarios). 0.1 s on ``paper_6_2`` (40 x 30 cells, 6 UAVs).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -491,7 +493,41 @@ def reach_optimum(
     return ReachBound(pos, upper, cov.reshape(m.shape), float(x.sum()), entry.name)
 
 
-def rule_bound(scenario: Scenario, prior, spill_m: float | None = None) -> ReachBound:
+#: most partitions of the fields into blocks of at most two that :func:`rule_bound` tries.
+MAX_PARTITIONS = 32
+
+
+@dataclass(frozen=True)
+class RuleBound(ReachBound):
+    """Result of :func:`rule_bound`: a :class:`ReachBound` (report ``upper``) that says how it
+    was obtained. ``how``: ``"exact"`` (one relaxation, exact: at most two airfields),
+    ``"merged"`` (the fleet's relaxation with merged airfields was the least), ``"first=F"``
+    (the relaxation with field ``F`` first) or ``"blocks=(F, F)+(F,)"`` (the sum over blocks of
+    fields; ``pos``, ``coverage`` and ``effort_m2`` are then the blocks' sums, and ``pos`` is
+    not the POS of that ``coverage``); fields ``F`` numbered in order of first appearance in
+    the fleet. ``merged``: the fleet's relaxation alone (``upper`` of the merged airfields)."""
+
+    how: str
+    merged: float
+
+
+def _pairings(items: list[int]) -> list[list[tuple[int, ...]]]:
+    """Partitions of ``items`` into pairs (and one single when odd), in a fixed order."""
+    if len(items) <= 1:
+        return [[tuple(items)]] if items else [[]]
+    first, rest = items[0], items[1:]
+    out: list[list[tuple[int, ...]]] = []
+    if len(items) % 2:  # first may be the single
+        out += [[(first,), *p] for p in _pairings(rest)]
+    for i, other in enumerate(rest):
+        left = rest[:i] + rest[i + 1 :]
+        if len(left) % 2 and len(items) % 2 == 0:
+            continue
+        out += [[(first, other), *p] for p in _pairings(left)]
+    return [p for p in out if sum(len(b) == 1 for b in p) <= len(items) % 2]
+
+
+def rule_bound(scenario: Scenario, prior, spill_m: float | None = None) -> RuleBound:
     """The rule-aware bound of ``scenario`` on ``prior``: the reach-aware bound for a flight
     that keeps the plan rules -- out and searching at ``v_max``, back on the ground within the
     usable endurance 0.85 T (eq. 18), the way home flown at the cruise speed ``v_c`` (eq. 18's
@@ -512,12 +548,85 @@ def rule_bound(scenario: Scenario, prior, spill_m: float | None = None) -> Reach
     ``spill_m`` replaces ``rho`` (None: the environment's). ``spill_m=0`` bounds the *planned*
     POS of the planners' coverage model (:func:`poc_env.agents.planning.flight_rules.
     path_coverage`: effort only in the cells the track crosses), not the flown one.
+
+    *More than two airfields.* :func:`reach_optimum` is exact for at most two distinct transit
+    rows (airfields); beyond two it merges the later fields into the second with the smaller
+    transit of the two (valid, loose: a UAV is credited the nearer field's reach), and on grids
+    of more than ``sqrt(_MAX_PAIRS)`` cells it merges two into one. There the result is the
+    least of these valid bounds of the same quantity (:attr:`RuleBound.how` says which):
+
+    * the relaxation with each field first in the fleet's order (the merge differs);
+    * for each partition of the fields into blocks of at most two (at most
+      :data:`MAX_PARTITIONS`), and for the partition into single fields, the sum over the
+      blocks of the relaxation of the block's UAVs alone.
+
+    *Why the sum is an upper bound.* Any fleet's efforts split by field as ``x = sum_b x_b``,
+    ``x_b`` in block ``b``'s feasible set (the polymatroid above for its UAVs). The objective
+    ``phi(x) = sum_j m_j POD(x_j / a_j)`` is separable, concave in each ``x_j >= 0`` and
+    ``phi(0) = 0``, so it is subadditive: ``phi(x) <= sum_b phi(x_b) <= sum_b max_b phi``.
+    With one field, or two on a grid where the relaxation is exact, the result is the
+    relaxation itself (bit for bit). On ``large_400`` (three fields) this takes ~10 solves
+    instead of one.
     """
     lim = env_limits(scenario)
-    grid = Grid.from_config(scenario.map)
     rho = lim.spill_m if spill_m is None else float(spill_m)
     if not (rho >= 0 and np.isfinite(rho)):
         raise ConfigError("spill_m", spill_m, "a distance >= 0 m, or None for the environment's")
+    full = _rule_relaxation(scenario, prior, rho)
+    groups = list(scenario.fleet)
+    # the field (take-off, landing) of each fleet group, in order of first appearance
+    keys: list[tuple] = []
+    field_of: list[int] = []
+    k = 0
+    for g in groups:
+        key = (tuple(np.round(lim.takeoff_m[k], 3)), tuple(np.round(lim.landing_m[k], 3)))
+        if key not in keys:
+            keys.append(key)
+        field_of.append(keys.index(key))
+        k += g.count
+    n = len(keys)
+    grid = Grid.from_config(scenario.map)
+    exact = (grid.nx * grid.ny) ** 2 <= _MAX_PAIRS
+    if n == 1 or (n == 2 and exact):
+        return RuleBound(full.pos, full.upper, full.coverage, full.effort_m2, full.law, "exact",
+                         full.upper)  # fmt: skip
+
+    def sub(fields: tuple[int, ...]) -> Scenario:
+        fleet = tuple(g for f in fields for g, fo in zip(groups, field_of, strict=True) if fo == f)
+        return dataclasses.replace(scenario, fleet=fleet)
+
+    best, how = full, "merged"
+    for f in range(n):
+        order = (f, *(x for x in range(n) if x != f))
+        one = sub(order)
+        if one.fleet == scenario.fleet:
+            continue  # the relaxation above
+        val = _rule_relaxation(one, prior, rho)
+        if val.upper < best.upper:
+            best, how = val, f"first={f}"
+    cache: dict[tuple[int, ...], ReachBound] = {}
+    singles: list[tuple[int, ...]] = [(f,) for f in range(n)]
+    for part in [*_pairings(list(range(n)))[:MAX_PARTITIONS], singles]:
+        for block in part:
+            if block not in cache:
+                cache[block] = _rule_relaxation(sub(block), prior, rho)
+        total = sum(cache[b].upper for b in part)
+        if total < best.upper:
+            how = "blocks=" + "+".join(str(b) for b in part)
+            best = ReachBound(
+                float(sum(cache[b].pos for b in part)), float(total),
+                sum((cache[b].coverage for b in part), np.zeros_like(full.coverage)),
+                float(sum(cache[b].effort_m2 for b in part)), full.law,
+            )  # fmt: skip
+    return RuleBound(best.pos, best.upper, best.coverage, best.effort_m2, best.law, how,
+                     full.upper)  # fmt: skip
+
+
+def _rule_relaxation(scenario: Scenario, prior, rho: float) -> ReachBound:
+    """:func:`rule_bound`'s relaxation for ``scenario``'s whole fleet: one :func:`reach_optimum`
+    (exact for at most two airfields, merged beyond, see :func:`_merge_groups`)."""
+    lim = env_limits(scenario)
+    grid = Grid.from_config(scenario.map)
     v_home = min(float(scenario.uav.cruise_speed_mps), lim.speed_mps)
     out = np.maximum(cell_distances(grid, lim.takeoff_m) - rho, 0.0) / lim.speed_mps
     home = np.maximum(cell_distances(grid, lim.landing_m) - rho, 0.0) / v_home
