@@ -356,6 +356,14 @@ def target_cdf(prior_fine: np.ndarray) -> np.ndarray | None:
     return cdf
 
 
+def detection_threshold(u):
+    """The hidden target's detection threshold ``-ln(1 - u)`` of a uniform ``u`` in [0, 1):
+    the target is found at the first step its cumulative exponent (eq. 14's ``-sum log(1 -
+    p)``) reaches it, i.e. with probability ``1 - exp(-exponent)``. ``log1p`` keeps the
+    small-``u`` end exact."""
+    return -np.log1p(-u)
+
+
 def _draw_target(
     prior_fine: np.ndarray, h: float, origin, rng: np.random.Generator, cdf: np.ndarray | None
 ):
@@ -377,7 +385,7 @@ def _draw_target(
 def _draw_targets(
     cdfs: list, nx: int, h: float, origin, rngs: list, target: np.ndarray, threshold: np.ndarray
 ) -> None:
-    """:func:`_draw_target` then the detection threshold ``-log1p(-u)`` of every env into
+    """:func:`_draw_target` then the :func:`detection_threshold` of every env into
     ``target (E, 2)`` and ``threshold (E,)``, the four uniforms of each env drawn at once
     (``rng.random(4)``: the stream's next four, as ``random()``, ``random(2)``, ``random()``
     draw them) and the rest as arrays (the same operations on each element). ``cdfs``: each
@@ -390,7 +398,7 @@ def _draw_targets(
     j, i = np.divmod(k, nx)
     target[:, 0] = origin[0] + (i + u[:, 1]) * h
     target[:, 1] = origin[1] + (j + u[:, 2]) * h
-    threshold[:] = -np.log1p(-u[:, 3])
+    threshold[:] = detection_threshold(u[:, 3])
 
 
 def takeoff_heading(bounds, takeoff) -> np.ndarray:
@@ -441,7 +449,7 @@ def initial(
     else:  # a prior choice refuses: its error (or an env's draw through choice)
         for k, rng in enumerate(rngs):
             target[k] = _draw_target(belief[k], h, params.grid.origin_m, rng, cdfs[k])
-            threshold[k] = -np.log1p(-rng.random())
+            threshold[k] = detection_threshold(rng.random())
     links = np.zeros((e, n, n), dtype=bool)
     topology = np.full(e, -1, dtype=int)
     state = State(
