@@ -23,14 +23,6 @@ HEAD = "UAVSearch-Small-Random-Heading-v0"
 ROLLOUT = 768
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    threads = th.get_num_threads()
-    th.set_num_threads(1)
-    yield
-    th.set_num_threads(threads)
-
-
 def _args(run_dir: Path, **kw) -> TrainArgs:
     base = dict(
         task=INC,
@@ -49,14 +41,6 @@ def _args(run_dir: Path, **kw) -> TrainArgs:
     )
     base.update(kw)
     return TrainArgs(**base)
-
-
-def _params(path: Path) -> list[np.ndarray]:
-    return [p.detach().numpy().copy() for p in load_policy(path).policy.parameters()]
-
-
-def _same(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
-    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
 
 
 @pytest.fixture(scope="module")
@@ -174,17 +158,19 @@ def test_a_bc_run_writes_bc_json_and_counts_ppo_steps_only(bc_run):
     assert list((bc_run / "tb" / "bc").glob("events.out.tfevents.*"))
 
 
-def test_bc_runs_are_reproducible(bc_run, tmp_path):
+def test_bc_runs_are_reproducible(bc_run, tmp_path, same_weights):
     again = train(_args(tmp_path / "again"))
     other = train(_args(tmp_path / "other", seed=1))
-    ref = _params(bc_run / "model.zip")
-    assert _same(_params(again / "model.zip"), ref)
-    assert not _same(_params(other / "model.zip"), ref)
+    ref = bc_run / "model.zip"
+    assert same_weights(again / "model.zip", ref)
+    assert not same_weights(other / "model.zip", ref)
     a, b = (json.loads((r / "bc.json").read_text()) for r in (bc_run, again))
     assert a["after"] == b["after"] and a["seeds"] == b["seeds"]
 
 
-def test_a_resumed_bc_run_continues_bit_identically_without_bc_again(bc_run, tmp_path, monkeypatch):
+def test_a_resumed_bc_run_continues_bit_identically_without_bc_again(
+    bc_run, tmp_path, monkeypatch, same_weights
+):
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Interrupt(Exception):
@@ -208,7 +194,7 @@ def test_a_resumed_bc_run_continues_bit_identically_without_bc_again(bc_run, tmp
     monkeypatch.setattr("poc_env.agents.rl.bc.warm_start", no_bc)
     train(TrainArgs(resume=str(run), progress=False))
     assert load_policy(run / "model.zip").num_timesteps == 3 * ROLLOUT
-    assert _same(_params(run / "model.zip"), _params(bc_run / "model.zip"))
+    assert same_weights(run / "model.zip", bc_run / "model.zip")
     assert (run / "bc.json").read_bytes() == bc_before
 
 
@@ -316,7 +302,7 @@ def test_set_task_demos_see_the_set_observation_and_clone_with_the_set_network()
     assert cloned * 3 < fresh
 
 
-def test_a_set_bc_run_is_reproducible(tmp_path):
+def test_a_set_bc_run_is_reproducible(tmp_path, same_weights):
     """``--bc-teacher`` with a -Set task and ``--net set`` through train(): bc.json, and the
     same weights from the same seed."""
     kw = dict(task=SET, net="set", bc_teacher="lawnmower", total_timesteps=0)
@@ -324,4 +310,4 @@ def test_a_set_bc_run_is_reproducible(tmp_path):
     b = train(_args(tmp_path / "b", **kw))
     bc = json.loads((a / "bc.json").read_text())
     assert bc["samples"] > 0 and bc["after"]["actor_mse"] < bc["before"]["actor_mse"]
-    assert _same(_params(a / "model.zip"), _params(b / "model.zip"))
+    assert same_weights(a / "model.zip", b / "model.zip")

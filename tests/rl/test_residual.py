@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch as th
 
 from poc_env.agents.rl.args import TrainArgs
 from poc_env.agents.rl.checkpoint import load_policy
@@ -17,14 +16,6 @@ from poc_env.agents.rl.train import train
 from poc_env.errors import ConfigError
 
 SET = "UAVSearch-Small-Random-Set-Heading-v1"
-
-
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    threads = th.get_num_threads()
-    th.set_num_threads(1)
-    yield
-    th.set_num_threads(threads)
 
 
 def _args(run_dir: Path, **kw) -> TrainArgs:

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch as th
 
 from poc_env.agents.rl.args import TrainArgs, parse_train_args
 from poc_env.agents.rl.checkpoint import checkpoint_steps, latest_checkpoint, load_policy
@@ -43,15 +42,6 @@ def _args(recipe: str, run_dir: Path, **kw) -> TrainArgs:
     return TrainArgs(**base)
 
 
-def _params(path: Path) -> list[np.ndarray]:
-    model = load_policy(path)
-    return [p.detach().numpy().copy() for p in model.policy.parameters()]
-
-
-def _same(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
-    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
-
-
 class Interrupt(Exception):
     """Stands in for a kill in the middle of a rollout."""
 
@@ -68,14 +58,6 @@ def _killer(at: int):
     return Kill()
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    threads = th.get_num_threads()
-    th.set_num_threads(1)
-    yield
-    th.set_num_threads(threads)
-
-
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory) -> dict[str, Path]:
     """One complete tiny run per recipe."""
@@ -85,7 +67,7 @@ def runs(tmp_path_factory) -> dict[str, Path]:
 
 # -- run folder -------------------------------------------------------------------------------
 @pytest.mark.parametrize("recipe", ["shared", "central", "pilot"])
-def test_train_writes_the_run_folder(runs, recipe):
+def test_train_writes_the_run_folder(runs, recipe, same_weights):
     run = runs[recipe]
     total = 3 * ROLLOUT[recipe]
     cfg = json.loads((run / "config.json").read_text())
@@ -106,7 +88,7 @@ def test_train_writes_the_run_folder(runs, recipe):
     assert not [p for p in run.rglob(".*") if "tb" not in p.relative_to(run).parts]
     model = load_policy(run / "model.zip")
     assert model.num_timesteps == total
-    assert _same(_params(run / "model.zip"), _params(model_zip))
+    assert same_weights(run / "model.zip", model_zip)
 
 
 def test_every_run_file_is_published_by_rename(tmp_path, monkeypatch):
@@ -157,17 +139,17 @@ def test_save_load_gives_identical_deterministic_actions(tmp_path, recipe):
     assert np.unique(a.round(6), axis=0).shape[0] > 1  # not a degenerate constant policy
 
 
-def test_same_seed_same_parameters_other_seed_others(runs, tmp_path):
+def test_same_seed_same_parameters_other_seed_others(runs, tmp_path, same_weights):
     again = train(_args("shared", tmp_path / "again"))
     other = train(_args("shared", tmp_path / "other", seed=1))
-    ref = _params(runs["shared"] / "model.zip")
-    assert _same(_params(again / "model.zip"), ref)
-    assert not _same(_params(other / "model.zip"), ref)
+    ref = runs["shared"] / "model.zip"
+    assert same_weights(again / "model.zip", ref)
+    assert not same_weights(other / "model.zip", ref)
 
 
 # -- resume -----------------------------------------------------------------------------------
 @pytest.mark.parametrize("recipe", ["shared", "pilot"])
-def test_resume_continues_bit_identically(runs, tmp_path, recipe):
+def test_resume_continues_bit_identically(runs, tmp_path, recipe, same_weights):
     run = tmp_path / "killed"
     with pytest.raises(Interrupt):  # killed in the middle of the second rollout
         train(_args(recipe, run), callback=_killer(ROLLOUT[recipe] + 54))
@@ -186,11 +168,11 @@ def test_resume_continues_bit_identically(runs, tmp_path, recipe):
     steps = training_curve(run)["rollout/posc_mean"][:, 0]
     np.testing.assert_array_equal(steps, [ROLLOUT[recipe] * k for k in (1, 2, 3)])
     # model, optimiser, env state and generators restored: the uninterrupted run's parameters
-    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
+    assert same_weights(run / "model.zip", runs[recipe] / "model.zip")
     # resuming a finished run changes nothing
     before = (run / "model.zip").read_bytes()
     train(TrainArgs(resume=str(run), progress=False))
-    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
+    assert same_weights(run / "model.zip", runs[recipe] / "model.zip")
     assert len(before) > 0
 
 
@@ -260,7 +242,9 @@ def test_checkpoint_for_another_number_of_uavs_or_grid(runs, tmp_path):
     assert err.value.field == "checkpoint"
 
 
-def test_a_shared_checkpoint_from_before_the_layout_by_role_loads(tmp_path, monkeypatch):
+def test_a_shared_checkpoint_from_before_the_layout_by_role_loads(
+    tmp_path, monkeypatch, same_weights
+):
     """Shared-recipe files pickle the extractor's class by module path; those written before
     the layout by role name ``agents.networks`` (now ``poc_env.agents.rl.networks``)."""
     import sys
@@ -284,10 +268,7 @@ def test_a_shared_checkpoint_from_before_the_layout_by_role_loads(tmp_path, monk
         PPO.load(tmp_path / "old.zip", device="cpu")  # the file names the old module
     loaded = load_policy(tmp_path / "old.zip", env)
     assert loaded.policy_kwargs["features_extractor_class"] is SwarmExtractor
-    assert _same(
-        [p.detach().numpy() for p in loaded.policy.parameters()],
-        [p.detach().numpy() for p in model.policy.parameters()],
-    )
+    assert same_weights(loaded, model)
 
 
 # -- evaluation through ppo:PATH --------------------------------------------------------------
@@ -441,7 +422,9 @@ def test_cli_options_come_from_trainargs(tmp_path, capsys, monkeypatch):
     assert seen == [seen[0]]  # nothing else was trained
 
 
-def test_resume_skips_a_checkpoint_killed_between_model_and_state(runs, tmp_path, monkeypatch):
+def test_resume_skips_a_checkpoint_killed_between_model_and_state(
+    runs, tmp_path, monkeypatch, same_weights
+):
     """A kill after step_192.zip but before its state file: resume takes the last complete
     checkpoint (step_96, with its generators) and ends bit-identical to the uninterrupted run,
     instead of restoring the weights without the generators."""
@@ -467,7 +450,7 @@ def test_resume_skips_a_checkpoint_killed_between_model_and_state(runs, tmp_path
     assert ck is not None and ck.step == ROLLOUT[recipe]
     with pytest.warns(UserWarning, match="incomplete"):
         train(TrainArgs(resume=str(run), progress=False))
-    assert _same(_params(run / "model.zip"), _params(runs[recipe] / "model.zip"))
+    assert same_weights(run / "model.zip", runs[recipe] / "model.zip")
 
 
 def test_latest_json_cannot_point_outside_the_run(runs, tmp_path):
@@ -482,7 +465,7 @@ def test_latest_json_cannot_point_outside_the_run(runs, tmp_path):
         latest_checkpoint(run)
 
 
-def test_a_run_killed_before_its_first_checkpoint_can_be_resumed(runs, tmp_path):
+def test_a_run_killed_before_its_first_checkpoint_can_be_resumed(runs, tmp_path, same_weights):
     """--resume on a run with config but no checkpoint trains it again from step 0 and ends
     where the uninterrupted run ends (it used to refuse, pointing at --run-dir, which refused)."""
     run = tmp_path / "early"
@@ -491,10 +474,10 @@ def test_a_run_killed_before_its_first_checkpoint_can_be_resumed(runs, tmp_path)
     assert checkpoint_steps(run) == [] and (run / "config.json").is_file()
     with pytest.warns(UserWarning, match="no complete checkpoint"):
         train(TrainArgs(resume=str(run), progress=False))
-    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+    assert same_weights(run / "model.zip", runs["shared"] / "model.zip")
 
 
-def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path):
+def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path, same_weights):
     """Issue 27: a kill between config.json and scenario.yaml left a folder that --resume
     refused (no scenario.yaml) and --run-dir refused (it holds a run: use --resume). Now
     --resume rebuilds scenario.yaml from config.json and trains in the folder from step 0,
@@ -509,10 +492,12 @@ def test_a_run_killed_before_its_scenario_file_can_be_resumed(runs, tmp_path):
     with pytest.warns(UserWarning, match="no complete checkpoint"):
         train(TrainArgs(resume=str(run), progress=False))
     assert (run / "scenario.yaml").is_file()
-    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+    assert same_weights(run / "model.zip", runs["shared"] / "model.zip")
 
 
-def test_rerunning_the_command_of_a_run_killed_before_its_first_checkpoint(runs, tmp_path):
+def test_rerunning_the_command_of_a_run_killed_before_its_first_checkpoint(
+    runs, tmp_path, same_weights
+):
     """Issue 27, the documented way: the same command (options and --run-dir) after a kill
     before the first checkpoint trains the run again in its folder from step 0, ending where
     the uninterrupted run ends; other options, or a folder holding a finished run, are refused
@@ -525,7 +510,7 @@ def test_rerunning_the_command_of_a_run_killed_before_its_first_checkpoint(runs,
     assert err.value.field == "run_dir"
     with pytest.warns(UserWarning, match="no complete checkpoint"):
         assert train(_args("shared", run)) == run
-    assert _same(_params(run / "model.zip"), _params(runs["shared"] / "model.zip"))
+    assert same_weights(run / "model.zip", runs["shared"] / "model.zip")
     assert sorted(p.name for p in (run / "tb").iterdir()) == ["ppo_1", "ppo_2"]
     with pytest.raises(ConfigError, match=r"finished run.*evaluate --policies ppo:'"):
         train(_args("shared", run))
