@@ -105,7 +105,9 @@ def ideal_tracks(coverage, grid: Grid, w: float, phase: float = 0.5) -> tuple[np
     ``c n / ceil(n)`` long and centred; so W x the track in each cell is ``C_j a_j`` exactly."""
     cov = np.asarray(coverage, dtype=float)
     if cov.shape != grid.shape or not np.all(np.isfinite(cov)) or np.any(cov < 0):
-        raise ConfigError("coverage", "array", f"finite coverages >= 0 of the grid's shape {grid.shape}")
+        raise ConfigError(
+            "coverage", "array", f"finite coverages >= 0 of the grid's shape {grid.shape}"
+        )
     if not 0.0 <= phase < 1.0:
         raise ConfigError("phase", phase, "a share of the line spacing in [0, 1)")
     c = grid.cell_m
@@ -236,12 +238,14 @@ def footprint_optimum(prior, cell_area_m2: float, coverages, law: str = "inverse
         return 0.0, 0
     total = np.sum(cov, axis=0)
     value = float(np.sum(m * entry.pod(total)))
-    if entry.optimal_coverage is None:
+    opt = entry.optimal_coverage
+    if opt is None:
         raise ConfigError("law", law, "a law with an optimal coverage (inverse_cube, exponential)")
     dens = m / float(cell_area_m2)
     feet = [c > 0 for c in cov]  # fixed: a footprint cell may be given no effort
     passes = 0
-    for passes in range(1, PASSES + 1):
+    while passes < PASSES:
+        passes += 1
         for k, ck in enumerate(cov):
             foot = feet[k]
             z = float(ck.sum())
@@ -253,7 +257,7 @@ def footprint_optimum(prior, cell_area_m2: float, coverages, law: str = "inverse
             def target(mu: float, base=base, d=d) -> np.ndarray:
                 with np.errstate(divide="ignore"):
                     gg = np.log(np.where(d > 0, d, 1e-300)) - mu
-                return np.maximum(entry.optimal_coverage(np.maximum(gg, 0.0)) - base, 0.0)
+                return np.maximum(opt(np.maximum(gg, 0.0)) - base, 0.0)
 
             def excess(mu: float, z=z, target=target) -> float:
                 return float(target(mu).sum()) - z
@@ -379,9 +383,7 @@ def loss_chain(
     crossed = np.sum([c > 0 for c in per_uav], axis=0) if per_uav else np.zeros(grid.shape)
     overlap = float(cov[crossed >= 2].sum() / cov.sum()) if cov.sum() > 0 else 0.0
     graded = rule_bound(sc, prior * foot, spill_m=0.0) if foot.any() else None
-    pattern_full = (
-        float(np.sum(prior * pod_from_coverage(cov / share, law))) if share > 0 else 0.0
-    )
+    pattern_full = float(np.sum(prior * pod_from_coverage(cov / share, law))) if share > 0 else 0.0
     tb = time_budget(sc, plan)
     levels = {}
     for k in QUANTISED:
@@ -430,4 +432,4 @@ def fly_allocation(sc: Scenario, prior, seed: int) -> tuple[float, dict[str, Any
         obs, *_ = env.step(actions)
     posc = float(env.sim_state.posc[0])
     env.close()
-    return posc, pol.plan
+    return posc, getattr(pol, "plan", {})

@@ -4,9 +4,11 @@
 Run from the repository root, one thread:
 
     OMP_NUM_THREADS=1 PYTHONPATH=. python results/plan_scale/losschain/losschain.py run \
-        paper_6_2 --seeds 5000-5011 --own --out results/plan_scale/losschain/paper_6_2_validation.json
+        paper_6_2 --seeds 5000-5011 --own \
+        --out results/plan_scale/losschain/paper_6_2_validation.json
     OMP_NUM_THREADS=1 PYTHONPATH=. python results/plan_scale/losschain/losschain.py run \
-        large_400 --seeds 5000-5002 --groups --out results/plan_scale/losschain/large_400_validation.json
+        large_400 --seeds 5000-5002 --groups \
+        --out results/plan_scale/losschain/large_400_validation.json
     PYTHONPATH=. python results/plan_scale/losschain/losschain.py table \
         results/plan_scale/losschain/paper_6_2_validation.json ...
 
@@ -94,7 +96,9 @@ def table(paths: list[str]) -> None:
 
     cols = []
     for m, who in keys:
-        rs = [r for r in recs if r["map"] == m and (r["who"] == who or r["who"].startswith(who + " "))]
+        rs = [
+            r for r in recs if r["map"] == m and (r["who"] == who or r["who"].startswith(who + " "))
+        ]
         cols.append((f"`{m}` {who} ({len(rs)})", rs))
     print("| share of the rule-aware bound | " + " | ".join(c for c, _ in cols) + " |")
     print("| --- |" + " --- |" * len(cols))
@@ -114,21 +118,24 @@ def table(paths: list[str]) -> None:
             print(f"| ({k}) | " + " | ".join(
                 share(rs, lambda r, k=k: r["side"][k]) for _, rs in cols) + " |")  # fmt: skip
     for k in ("effort_share", "overlap_share", "coincident_share", "bound_sweep_share"):
-        print(f"| ({k}) | " + " | ".join(
-            f"{statistics.mean(r['side'][k] for r in rs):.3f}" for _, rs in cols) + " |")  # fmt: skip
+        row = [statistics.mean(r["side"][k] for r in rs) for _, rs in cols]
+        print(f"| ({k}) | " + " | ".join(f"{x:.3f}" for x in row) + " |")
     for k in ("in_map", "outside", "turns", "unused"):
-        print(f"| (time: {k}) | " + " | ".join(
-            f"{statistics.mean(r['side']['time_s'][k] / r['side']['time_s']['total'] for r in rs):.3f}"
-            for _, rs in cols) + " |")  # fmt: skip
+        row = [statistics.mean(r["side"]["time_s"][k] / r["side"]["time_s"]["total"] for r in rs)
+               for _, rs in cols]  # fmt: skip
+        print(f"| (time: {k}) | " + " | ".join(f"{x:.3f}" for x in row) + " |")
     for _, rs in cols:
         a = [r["values"]["flown"] / r["values"]["bound"] for r in rs]
-        print(f"{rs[0]['map']} {rs[0]['who']}: flown/bound {statistics.mean(a):.4f} "
-              f"(min {min(a):.3f}, max {max(a):.3f}, >= 0.90: {sum(x >= 0.9 for x in a)}/{len(a)}); "
-              f"load {min(r['load'] for r in rs):.1f}-{max(r['load'] for r in rs):.1f}")  # fmt: skip
+        load = [r["load"] for r in rs]
+        print(f"{rs[0]['map']} {rs[0]['who']}: flown/bound {statistics.mean(a):.4f} (min "
+              f"{min(a):.3f}, max {max(a):.3f}, >= 0.90: {sum(x >= 0.9 for x in a)}/{len(a)}); "
+              f"load {min(load):.1f}-{max(load):.1f}")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run", help="fly allocation_plan per prior and write the chains")
     r.add_argument("map", help="scenario name, e.g. paper_6_2 or large_400")
