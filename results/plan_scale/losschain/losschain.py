@@ -17,8 +17,9 @@ Run from the repository root, one thread:
 environment on it (the whole fleet; with ``--groups`` also each fleet group alone, the rest of
 the fleet removed, as tests/planning/quality4_ab.py ``fields`` does) and the chain of the plan
 it flew. ``--own`` adds the scenario's own prior (episode seed 0). The records are rewritten
-after every case. ``table``: the mean of every value and link over the bound, per map and
-fleet/group, as a markdown table.
+after every case. ``refine``: the planned chain (no flight) of the allocation plan with and
+without its refinement, per seed. ``table``: the mean of every value and link over the bound,
+per map and fleet/group, as a markdown table.
 """
 
 from __future__ import annotations
@@ -82,6 +83,31 @@ def run(name: str, seeds: list[int], own: bool, groups: bool, out: str) -> None:
             write_text_atomic(out, json.dumps(recs, indent=1))
 
 
+def refine(name: str, seeds: list[int], out: str) -> None:
+    """The planned chain (no flight) of the allocation plan with its default refinement and
+    with ``refine=0``, per seed: what the refinement (scored by W x length per cell) gains in
+    the planners' model and in the sensor model."""
+    from poc_env.agents.planning.allocation import REFINE, make_allocation_plan
+
+    sc = load_scenario(name)
+    recs: list[dict] = []
+    for seed in seeds:
+        prior = episode_prior(sc, seed)
+        for passes in (REFINE, 0):
+            plan = make_allocation_plan(sc, prior=prior, refine=passes)
+            ch = loss_chain(sc, prior, plan)
+            v, b = ch["values"], ch["values"]["bound"]
+            recs.append(
+                {"map": name, "prior": str(seed), "seed": seed, "who": f"refine {passes}", **ch,
+                 "start": plan["start"], "refined": plan["refined"], "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            print(f"{name} {seed} refine={passes} ({plan['start']}, kept refined: "
+                  f"{plan['refined']}): cell model {v['cell_model'] / b:.3f}, planned "
+                  f"{v['planned'] / b:.3f}, line geometry "
+                  f"{ch['links']['line geometry'] / b:+.3f}", flush=True)  # fmt: skip
+            write_text_atomic(out, json.dumps(recs, indent=1))
+
+
 def table(paths: list[str]) -> None:
     recs: list[dict] = []
     for p in paths:
@@ -90,9 +116,11 @@ def table(paths: list[str]) -> None:
     keys = sorted({(r["map"], r["who"].split(" (")[0] if r["who"] != "fleet" else "fleet")
                    for r in recs})  # fmt: skip
 
+    from poc_env.stats import ci95
+
     def share(rs, get) -> str:
         x = [get(r) / r["values"]["bound"] for r in rs]
-        return f"{statistics.mean(x):.3f}"
+        return f"{statistics.mean(x):.3f} ± {ci95(x):.3f}" if len(x) > 1 else f"{x[0]:.3f}"
 
     cols = []
     for m, who in keys:
@@ -143,11 +171,17 @@ def main(argv: list[str] | None = None) -> None:
     r.add_argument("--own", action="store_true", help="also the scenario's own prior")
     r.add_argument("--groups", action="store_true", help="also each fleet group alone")
     r.add_argument("--out", required=True, help="records (JSON), rewritten after every case")
+    f = sub.add_parser("refine", help="planned chains with and without the refinement")
+    f.add_argument("map")
+    f.add_argument("--seeds", default="5000-5011", help="A-B (inclusive) or A,B,C")
+    f.add_argument("--out", required=True)
     t = sub.add_parser("table", help="mean shares of the bound per map and fleet/group")
     t.add_argument("records", nargs="+")
     a = ap.parse_args(argv)
     if a.cmd == "run":
         run(a.map, seeds_of(a.seeds), a.own, a.groups, a.out)
+    elif a.cmd == "refine":
+        refine(a.map, seeds_of(a.seeds), a.out)
     else:
         table(a.records)
 
