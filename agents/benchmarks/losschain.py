@@ -145,12 +145,18 @@ def segments_pos(sc: Scenario, grid: Grid, prior, a, b) -> tuple[float, np.ndarr
     return float(found.sum()), grid.coarsen(before - belief[0], s)
 
 
-def ideal_pos(sc: Scenario, grid: Grid, prior, coverage, phases=PHASES) -> float:
+def ideal_found(sc: Scenario, grid: Grid, prior, coverage, phases=PHASES):
     """What ``coverage`` is worth laid as ideal parallel tracks (:func:`ideal_tracks`) and swept
-    by the environment's sensor model (:func:`segments_pos`), averaged over line ``phases``."""
+    by the environment's sensor model (:func:`segments_pos`), averaged over line ``phases``: the
+    POS and the mass found per cell."""
     w = sc.sensor.sweep_width_m
-    vals = [segments_pos(sc, grid, prior, *ideal_tracks(coverage, grid, w, ph))[0] for ph in phases]
-    return float(np.mean(vals))
+    runs = [segments_pos(sc, grid, prior, *ideal_tracks(coverage, grid, w, ph)) for ph in phases]
+    return float(np.mean([r[0] for r in runs])), np.mean([r[1] for r in runs], axis=0)
+
+
+def ideal_pos(sc: Scenario, grid: Grid, prior, coverage, phases=PHASES) -> float:
+    """The POS of :func:`ideal_found`."""
+    return ideal_found(sc, grid, prior, coverage, phases)[0]
 
 
 def _paths(plan: dict[str, Any]) -> list[np.ndarray]:
@@ -365,7 +371,7 @@ def loss_chain(
     found = np.sum(found_k, axis=0) if found_k else np.zeros(grid.shape)
     planned = float(sum(pos_k))
     inside = float(found[foot].sum())
-    ideal = ideal_pos(sc, grid, prior, cov)
+    ideal, ideal_cells = ideal_found(sc, grid, prior, cov)
     values = {
         "bound": float(b.upper),
         "bound_nospill": float(b0.upper),
@@ -382,6 +388,13 @@ def loss_chain(
     # beside the chain
     crossed = np.sum([c > 0 for c in per_uav], axis=0) if per_uav else np.zeros(grid.shape)
     overlap = float(cov[crossed >= 2].sum() / cov.sum()) if cov.sum() > 0 else 0.0
+    # the two sensor-model links split per cell (exactly additive): cells two or more UAVs'
+    # tracks cross, cells one crosses, cells none crosses
+    cell_pod = prior * pod_from_coverage(cov, law)
+    split = {}
+    for part, mask in (("shared", crossed >= 2), ("single", crossed == 1), ("none", crossed == 0)):
+        split[f"sensor_law_{part}"] = float(cell_pod[mask].sum() - ideal_cells[mask].sum())
+        split[f"line_geometry_{part}"] = float(ideal_cells[mask].sum() - found[mask].sum())
     graded = rule_bound(sc, prior * foot, spill_m=0.0) if foot.any() else None
     pattern_full = float(np.sum(prior * pod_from_coverage(cov / share, law))) if share > 0 else 0.0
     tb = time_budget(sc, plan)
@@ -403,6 +416,7 @@ def loss_chain(
         "ceiling_graded_footprint": float(graded.upper) if graded is not None else 0.0,
         "planned_inside_footprint": inside,
         "coincident_share": coincident_share(paths, grid),
+        **split,
         "ideal_plan_full_effort": ideal_pos(sc, grid, prior, cov / share) if share > 0 else 0.0,
         "ideal_graded_footprint": (
             ideal_pos(sc, grid, prior, graded.coverage) if graded is not None else 0.0

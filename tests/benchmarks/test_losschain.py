@@ -152,6 +152,9 @@ def test_the_chain_adds_up_to_the_bound_minus_the_flown_pos():
     assert ch["side"]["effort_share"] == pytest.approx(
         float(cov.sum()) * grid.cell_area_m2 / ch["side"]["bound_effort_m2"]
     )
+    for link in ("sensor_law", "line_geometry"):  # split per cell, exactly
+        parts = [ch["side"][f"{link}_{p}"] for p in ("shared", "single", "none")]
+        assert sum(parts) == pytest.approx(links[link.replace("_", " ")], abs=1e-12)
     tb = time_budget(sc, plan)
     parts = [tb[k] for k in ("in_map", "outside", "turns", "unused")]
     assert min(parts) >= -1e-9 and sum(parts) == pytest.approx(tb["total"])

@@ -18,8 +18,9 @@ environment on it (the whole fleet; with ``--groups`` also each fleet group alon
 the fleet removed, as tests/planning/quality4_ab.py ``fields`` does) and the chain of the plan
 it flew. ``--own`` adds the scenario's own prior (episode seed 0). The records are rewritten
 after every case. ``refine``: the planned chain (no flight) of the allocation plan with and
-without its refinement, per seed. ``table``: the mean of every value and link over the bound,
-per map and fleet/group, as a markdown table.
+without its refinement, per seed. ``shift``: the plan's planned POS translated by parts of a
+cell (the sample lattice's share of the line-geometry link). ``table``: the mean of every
+value and link over the bound, per map and fleet/group, as a markdown table.
 """
 
 from __future__ import annotations
@@ -108,6 +109,39 @@ def refine(name: str, seeds: list[int], out: str) -> None:
             write_text_atomic(out, json.dumps(recs, indent=1))
 
 
+def shift(name: str, seeds: list[int], out: str) -> None:
+    """The planned POS (sensor model) of the allocation plan translated as a whole by ``(d, d)``,
+    ``d`` from 0 to 7/16 of a cell in sixteenths (across lines along x or y alike): how much the
+    sample points' lattice alone moves the score (aliasing)."""
+    from poc_env.agents.planning.allocation import make_allocation_plan, sampled_sweep
+    from poc_env.theory.bound import rule_bound
+    from poc_env.theory.probability_map import Grid
+
+    sc = load_scenario(name)
+    grid = Grid.from_config(sc.map)
+    recs: list[dict] = []
+    for seed in seeds:
+        prior = episode_prior(sc, seed)
+        bound = rule_bound(sc, prior).upper
+        plan = make_allocation_plan(sc, prior=prior)
+        paths = [
+            np.vstack([u["takeoff_m"], np.reshape(u["waypoints_m"], (-1, 2)), u["landing_m"]])
+            if u["waypoints_m"] else [] for u in plan["uavs"]
+        ]  # fmt: skip
+        dys = [grid.cell_m / 16 * i for i in range(8)]
+        vals = [
+            float(sum(sampled_sweep(sc, grid, prior, [p + np.array([dy, dy]) if len(p) else []
+                                                      for p in paths])[0])) / bound
+            for dy in dys
+        ]  # fmt: skip
+        recs.append({"map": name, "seed": seed, "shift_m": dys, "planned_over_bound": vals,
+                     "load": os.getloadavg()[0]})  # fmt: skip
+        print(f"{name} {seed}: " + " ".join(f"{v:.3f}" for v in vals)
+              + f"; range {max(vals) - min(vals):.3f}, mean - unshifted "
+              f"{statistics.mean(vals) - vals[0]:+.3f}", flush=True)  # fmt: skip
+        write_text_atomic(out, json.dumps(recs, indent=1))
+
+
 def table(paths: list[str]) -> None:
     recs: list[dict] = []
     for p in paths:
@@ -145,6 +179,13 @@ def table(paths: list[str]) -> None:
         if all(k in r["side"] for r in recs):
             print(f"| ({k}) | " + " | ".join(
                 share(rs, lambda r, k=k: r["side"][k]) for _, rs in cols) + " |")  # fmt: skip
+    split = [
+        f"{a}_{b}" for a in ("sensor_law", "line_geometry") for b in ("shared", "single", "none")
+    ]
+    for k in split:
+        if all(k in r["side"] for r in recs):
+            print(f"| ({k}) | " + " | ".join(
+                share(rs, lambda r, k=k: r["side"][k]) for _, rs in cols) + " |")  # fmt: skip
     for k in ("effort_share", "overlap_share", "coincident_share", "bound_sweep_share"):
         row = [statistics.mean(r["side"][k] for r in rs) for _, rs in cols]
         print(f"| ({k}) | " + " | ".join(f"{x:.3f}" for x in row) + " |")
@@ -175,6 +216,10 @@ def main(argv: list[str] | None = None) -> None:
     f.add_argument("map")
     f.add_argument("--seeds", default="5000-5011", help="A-B (inclusive) or A,B,C")
     f.add_argument("--out", required=True)
+    h = sub.add_parser("shift", help="planned POS of the plan translated by parts of a cell")
+    h.add_argument("map")
+    h.add_argument("--seeds", default="5000-5011", help="A-B (inclusive) or A,B,C")
+    h.add_argument("--out", required=True)
     t = sub.add_parser("table", help="mean shares of the bound per map and fleet/group")
     t.add_argument("records", nargs="+")
     a = ap.parse_args(argv)
@@ -182,6 +227,8 @@ def main(argv: list[str] | None = None) -> None:
         run(a.map, seeds_of(a.seeds), a.own, a.groups, a.out)
     elif a.cmd == "refine":
         refine(a.map, seeds_of(a.seeds), a.out)
+    elif a.cmd == "shift":
+        shift(a.map, seeds_of(a.seeds), a.out)
     else:
         table(a.records)
 
