@@ -140,6 +140,10 @@ def shift(name: str, seeds: list[int], out: str) -> None:
               + f"; range {max(vals) - min(vals):.3f}, mean - unshifted "
               f"{statistics.mean(vals) - vals[0]:+.3f}", flush=True)  # fmt: skip
         write_text_atomic(out, json.dumps(recs, indent=1))
+    gaps = [statistics.mean(r["planned_over_bound"]) - r["planned_over_bound"][0] for r in recs]
+    ranges = [max(r["planned_over_bound"]) - min(r["planned_over_bound"]) for r in recs]
+    print(f"{name}, {len(recs)} priors: range {min(ranges):.3f}-{max(ranges):.3f}, mean of the "
+          f"shifts - unshifted {statistics.mean(gaps):+.4f}", flush=True)  # fmt: skip
 
 
 def table(paths: list[str]) -> None:
