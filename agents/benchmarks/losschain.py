@@ -39,18 +39,21 @@ The chain (:data:`VALUES`, in order):
 ``planned``
     the plan's planned POS (``posc``: the sensor model over the plan's own whole paths,
     :func:`poc_env.agents.planning.allocation.sampled_sweep`). Link **line geometry**: the
-    plan's lines where they are instead of evenly spread in each cell -- lines of two UAVs on
-    top of each other (boxes that overlap on the same lattice), uneven gaps, lines along cell
-    edges.
+    plan's lines where they are instead of evenly spread in each cell (lines of UAVs sharing
+    cells laid without regard to each other, lines whose lateral sweep falls on thinner
+    cells than the ones W x length per cell credits, the sample points' lattice).
 ``flown``
     the POSC of the ``allocation_plan`` policy flown in the environment. Link **flying**.
 
 Beside the chain (:func:`loss_chain`'s ``side``): the relaxation's own allocation laid as ideal
 parallel tracks and scored by the sensor model (:func:`ideal_pos`: the modelling gap between the
 bound's erf(C) per cell and the environment's law with its cut-off), the fleet's time budget
-(:func:`time_budget`), the share of the plan's effort in cells two UAVs cross, and two ceilings
-of the plan's structure (its coverage pattern with the lost effort returned; the best graded
-coverage on its footprint at full effort).
+(:func:`time_budget`), the share of the plan's effort in cells two UAVs cross and of its track
+on top of another UAV's (:func:`coincident_share`), the relaxation's coverage with 1-3 line
+spacings (:func:`quantised`), ceilings of the plan's structure (its coverage pattern with the
+lost effort returned; the best graded coverage on its footprint at full effort), and the two
+sensor-model links split per cell into the cells two or more UAVs cross, one crosses and none
+crosses (exactly additive).
 """
 
 from __future__ import annotations
