@@ -8,7 +8,8 @@ checkpoint; the evaluation stream only scores it.
         --out results/anysize/heldout
 
 Appends to ``OUT/curve.csv`` (a (run, step, task, seed) already there is not flown again), so
-it can run while training goes on and pick up new checkpoints.
+it can run while training goes on and pick up new checkpoints. Without run folders it only
+re-plots ``OUT/curve.csv`` (several runs: each a thin line, their mean a thick one).
 """
 
 from __future__ import annotations
@@ -45,7 +46,9 @@ def checkpoints(run: Path) -> list[tuple[int, Path]]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("runs", nargs="+", type=Path)
+    ap.add_argument(
+        "runs", nargs="*", type=Path, help="run folders (none: only re-plot OUT/curve.csv)"
+    )
     ap.add_argument("--tasks", default=",".join(TASKS), help="keys of " + ", ".join(TASKS))
     ap.add_argument("--every", type=int, default=1, help="every k-th checkpoint (and the last)")
     ap.add_argument("--seed", type=int, default=5000)
@@ -82,20 +85,32 @@ def main() -> None:
 
 
 def plot(rows: list[dict[str, str]], out: Path) -> None:
+    """One colour per task: each run a thin line, the mean over runs a thick one (at the
+    checkpoints every run has)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    keys = sorted({(r["run"], r["task"]) for r in rows})
-    for run, task in keys:
-        steps = sorted({int(r["step"]) for r in rows if (r["run"], r["task"]) == (run, task)})
-        pts = {s: [float(r["posc"]) for r in rows
-                   if (r["run"], r["task"], r["step"]) == (run, task, str(s))]
-               for s in steps}  # fmt: skip
-        means = [np.mean(pts[s]) for s in steps]
-        ax.plot(np.array(steps) / 1e6, means, marker="o", label=f"{run}: {task}")
+    runs = sorted({r["run"] for r in rows})
+    for k, task in enumerate(sorted({r["task"] for r in rows})):
+        colour = f"C{k}"
+        curves = {}
+        for run in runs:
+            steps = sorted({int(r["step"]) for r in rows if (r["run"], r["task"]) == (run, task)})
+            here = [r for r in rows if (r["run"], r["task"]) == (run, task)]
+            curves[run] = {
+                s: float(np.mean([float(r["posc"]) for r in here if r["step"] == str(s)]))
+                for s in steps
+            }
+            if len(runs) > 1:
+                ax.plot(np.array(steps) / 1e6, [curves[run][s] for s in steps], color=colour,
+                        lw=0.8, alpha=0.35)  # fmt: skip
+        common = sorted(set.intersection(*(set(c) for c in curves.values() if c)))
+        mean = [np.mean([curves[run][s] for run in runs if curves[run]]) for s in common]
+        label = f"{task} (mean of {len(runs)} runs)" if len(runs) > 1 else f"{runs[0]}: {task}"
+        ax.plot(np.array(common) / 1e6, mean, color=colour, lw=2, marker="o", label=label)
     ax.set_xlabel("PPO agent transitions (M)")
     ax.set_ylabel("mean POSC, validation priors")
     ax.legend(fontsize=7)
