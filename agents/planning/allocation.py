@@ -420,9 +420,9 @@ def violation_penalty(
     """The environment's violation penalty of ``routes`` (waypoints per UAV between its
     take-off and landing) at their planned positions, in POS: ``reward.violation_penalty`` per
     UAV-step in violation of eq. 21 / 24 (:func:`~poc_env.agents.planning.refine.
-    swarm_violations`, every ``dt``, with the refinement's margins
-    ``options.separation_margin``, ``options.range_margin`` when ``options.penalty_margins``:
-    the follower flies the route, not its timing, to the second) over ``alpha`` x UAVs (team
+    swarm_violations`, every ``dt``, with margins ``options.penalty_separation`` on d_s and
+    ``options.penalty_range`` on the range, by default the refinement's: the follower flies the
+    route, not its timing, to the second) over ``alpha`` x UAVs (team
     credit: every UAV is credited the swarm's POS, so this is the reward's own exchange rate),
     times ``options.penalty_weight``."""
     u = sc.uav
@@ -435,8 +435,8 @@ def violation_penalty(
     heading0 = takeoff_heading(grid.bounds, takeoff)
     air = Airspace(
         sc.episode.dt_s,
-        (opt.separation_margin if opt.penalty_margins else 1.0) * sc.constraints.safety_distance_m,
-        (opt.range_margin if opt.penalty_margins else 1.0) * sc.comms.range_m,
+        opt.penalty_separation * sc.constraints.safety_distance_m,
+        opt.penalty_range * sc.comms.range_m,
         sc.comms.min_neighbours,
     )
     times = np.arange(int(np.ceil(u.usable_endurance_s / air.dt_s)) + 1) * air.dt_s

@@ -91,9 +91,10 @@ class PlanOptions:
     #: violation_penalty`) where the boxes are graded and sampled (i24-quality3); False: by
     #: POS alone.
     airspace_penalty: bool = False
-    #: the penalty counts violations with the refinement's margins (True) or at d_s and the
-    #: communication range themselves (False).
-    penalty_margins: bool = True
+    #: the penalty counts violations within ``penalty_separation`` x d_s (eq. 21) and with fewer
+    #: neighbours than needed within ``penalty_range`` x the communication range (eq. 24).
+    penalty_separation: float = 2.0
+    penalty_range: float = 0.9
     #: the penalty's weight on the reward's rate (1: the reward's own exchange rate).
     penalty_weight: float = 1.0
     #: also start from the greedy rectangle plan, and from the coverage boxes.
@@ -181,8 +182,10 @@ class PlanOptions:
         _number("graded_step", self.graded_step, 0.0, 1.0, closed_low=False)
         _number("sampled_top", self.sampled_top, 1, 100, integer=True)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
+        _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
+        _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "penalty_margins", "chain_early", "part", "share_tables", "axis", "excursions",
+                 "chain_early", "part", "share_tables", "axis", "excursions",
                  "sampled")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
@@ -222,4 +225,6 @@ THOROUGH: dict[str, Any] = {
     "sampled": True,
     "refine_sampled": True,
     "airspace_penalty": True,
+    "angles": (45.0,),
+    "excursions": True,
 }

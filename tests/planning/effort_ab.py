@@ -11,9 +11,15 @@
     on ``large_400``), every variant of :data:`VARIANTS` per seed in turn (interleaved, so the
     time ratios are paired); records rewritten after every seed; paired summary against
     ``default``.
-``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json``
-    Registered policies flown in the environment on the same random priors, interleaved per
-    seed, records rewritten after every seed (a partial run gives paired figures).
+``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json CHECK RECORDS.json...``
+    Registered policies flown in the environment on the same random priors, records rewritten
+    after every flight (a partial run gives paired figures; a rerun resumes): the first policy
+    on every seed, the others on the first ``CHECK`` seeds only, to check they equal the stored
+    ``poc-env bench plan --scale`` records (results/plan_scale/*.json), which then stand in for
+    them; the rule-aware bound is the stored one (recomputed and checked on those seeds).
+``paired OUT.json RECORDS.json...``
+    The paired summary of a ``fly`` run against the stored ``allocation_plan`` and
+    ``greedy_rectangles`` flights.
 
 Run from the repository root, one thread: ``OMP_NUM_THREADS=1 python
 tests/planning/effort_ab.py plan paper_6_2 5000 5012 default,thorough out.json``.
@@ -145,10 +151,25 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
     summary(recs, "planned_posc", names[0])
 
 
-def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str) -> None:
+def stored(paths: list[str]) -> dict[tuple[int, str], dict]:
+    """The episodes of ``poc-env bench plan --scale`` records (results/plan_scale/*.json) by
+    (seed, policy)."""
+    out = {}
+    for p in paths:
+        with open(p) as f:
+            for e in json.load(f)["episodes"]:
+                out[e["seed"], e["policy"]] = e
+    return out
+
+
+def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check: int,
+        records: list[str]) -> None:  # fmt: skip
+    """``policies[0]`` flown on every seed, the others on the first ``check`` seeds only (to
+    check they equal the stored ``records``, which then stand in for them)."""
     from poc_env.agents.benchmarks.plan_scale import _flown
 
     sc = load_scenario(name)
+    old = stored(records)
     recs: list[dict] = []
     if os.path.exists(out):  # resume: seeds already flown are kept
         with open(out) as f:
@@ -157,11 +178,14 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str) -> Non
     for seed in range(seed0, seed1):
         prior = episode_prior(sc, seed)
         bound = None
-        for pol in policies:
+        for pol in policies if seed - seed0 < check else policies[:1]:
             if (seed, pol) in done:
                 continue
             if bound is None:
-                bound = rule_bound(sc, prior).upper
+                known = old.get((seed, "allocation_plan"))
+                bound = known["rule_bound"] if known else rule_bound(sc, prior).upper
+                if seed - seed0 < check and known:  # the stored bound is this prior's
+                    assert abs(rule_bound(sc, prior).upper - bound) <= 1e-9 * bound, seed
             t0 = time.perf_counter()
             posc, p = _flown(sc, pol, seed, prior)
             recs.append(
@@ -170,20 +194,62 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str) -> Non
                  "start": p.get("start"), "plan_s": float(p.get("runtime_s", float("nan"))),
                  "episode_s": time.perf_counter() - t0, "load": os.getloadavg()[0]}
             )  # fmt: skip
+            ref = old.get((seed, pol))
+            same = "" if ref is None else f" stored {ref['posc'] / bound:.4f}"
             print(name, seed, pol, round(posc / bound, 4), round(recs[-1]["plan_s"], 1),
-                  round(os.getloadavg()[0], 1), flush=True)  # fmt: skip
+                  round(os.getloadavg()[0], 1), same, flush=True)  # fmt: skip
             with open(out + ".tmp", "w") as f:
                 json.dump(recs, f, indent=1)
             os.replace(out + ".tmp", out)
-    summary(recs, "posc", policies[0])
+    paired(out, records)
+
+
+def paired(out: str, records: list[str]) -> None:
+    """Flown ``fly`` records paired per seed with the stored ``allocation_plan`` and
+    ``greedy_rectangles`` episodes (checked equal where the default was flown here too)."""
+    from poc_env.stats import ci95
+
+    with open(out) as f:
+        recs = json.load(f)
+    old = stored(records)
+    for r in recs:  # the default flown here equals the stored flight, seed for seed
+        ref = old.get((r["seed"], r["variant"]))
+        if ref is not None:
+            same = abs(ref["posc"] - r["posc"]) <= 1e-12
+            print(f"check seed {r['seed']} {r['variant']}: flown {r['posc']:.6f} stored "
+                  f"{ref['posc']:.6f} {'equal' if same else 'DIFFERENT'}")  # fmt: skip
+    mine = [r for r in recs if r["variant"] not in old_policies(old)]
+    for pol in sorted({r["variant"] for r in mine}):
+        rs = sorted((r for r in mine if r["variant"] == pol), key=lambda r: r["seed"])
+        a = np.array([r["posc"] / r["rule_bound"] for r in rs])
+        for base in ("allocation_plan", "greedy_rectangles"):
+            b = np.array([old[r["seed"], base]["posc"] / r["rule_bound"] for r in rs])
+            d = a - b
+            half = ci95(d) if len(d) > 1 else float("nan")
+            print(f"{pol} - {base} (flown/rule, n {len(d)}): {d.mean():+.4f} +- {half:.4f} "
+                  f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}; min "
+                  f"{d.min():+.4f}; {pol} {a.mean():.4f} +- {ci95(a) if len(a) > 1 else 0:.4f}, "
+                  f"{base} {b.mean():.4f}; priors >= 0.90: {(a >= 0.9).sum()} vs "
+                  f"{(b >= 0.9).sum()}")  # fmt: skip
+        t = [r["plan_s"] for r in rs]
+        lo, hi = min(r["load"] for r in rs), max(r["load"] for r in rs)
+        print(f"{pol} planning time median {statistics.median(t):.1f} s (max {max(t):.1f}); "
+              f"load {lo:.1f}-{hi:.1f}")  # fmt: skip
+
+
+def old_policies(old: dict) -> set[str]:
+    return {k[1] for k in old}
 
 
 if __name__ == "__main__":
     if sys.argv[1] == "digest":
         digest(sys.argv[2])
         sys.exit()
+    if sys.argv[1] == "paired":
+        paired(sys.argv[2], sys.argv[3:])
+        sys.exit()
     cmd, name, s0, s1, vs, out = sys.argv[1:7]
     if cmd == "plan":
         plan(name, int(s0), int(s1), vs.split(","), out)
-    else:
-        fly(name, int(s0), int(s1), vs.split(","), out)
+    else:  # fly ... CHECK RECORDS.json...
+        fly(name, int(s0), int(s1), vs.split(","), out, int(sys.argv[7]), sys.argv[8:])
