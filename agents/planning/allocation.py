@@ -451,6 +451,38 @@ def violation_penalty(
     return rate * air.violations(pos, act)
 
 
+def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, t0: float):
+    """``opt.also_default``: the plan with ``opt`` and the default plan (``PlanOptions()`` with
+    ``opt``'s keyword-level fields: levels, margin, refine, starts), the one of more planned
+    POS less the violation penalty kept (the penalty where ``opt`` prices it,
+    :func:`violation_penalty`; ties: ``opt``'s). The effort levels' guarantee: a thorough plan
+    never scores less than the default one."""
+    kw = {"prior": prior, "map_source": map_source, "seed": seed, "speed": speed, "crs": crs}
+    mine = make_allocation_plan(sc, options=dataclasses.replace(opt, also_default=False), **kw)
+    base_opt = PlanOptions(
+        levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
+        refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
+    )  # fmt: skip
+    base = make_allocation_plan(sc, options=base_opt, **kw)
+    grid = Grid.from_config(sc.map)
+    v = plan_speeds(sc, speed)
+
+    def score(p) -> float:
+        pen = 0.0
+        if opt.airspace_penalty and sampled_boxes(grid, opt):
+            pen = violation_penalty(sc, [u["waypoints_m"] for u in p["uavs"]], v, opt)
+        return float(p["posc"]) - pen
+
+    kept = mine if score(mine) >= score(base) else base
+    settings = {**kept["optimizer"]["settings"], "options": opt.changed()}
+    settings["kept"] = "default" if kept is base else "options"
+    return {
+        **kept,
+        "optimizer": {**kept["optimizer"], "settings": settings},
+        "runtime_s": time.perf_counter() - t0,
+    }
+
+
 def make_allocation_plan(
     scenario: Scenario | str = "paper_6_2",
     *,
@@ -508,6 +540,8 @@ def make_allocation_plan(
         opt = dataclasses.replace(opt, greedy_start=bool(greedy_start))
     if box_start is not None:
         opt = dataclasses.replace(opt, box_start=bool(box_start))
+    if opt.also_default:
+        return _best_of_default(sc, prior, map_source, seed, speed, crs, opt, t0)
     ks = list(opt.levels)
     refine = opt.refine
     margin = opt.margin

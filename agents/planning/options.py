@@ -151,6 +151,11 @@ class PlanOptions:
     sampled: bool = False
     #: second chained lawnmowers rescored by the sampled model: the best few by the cell model.
     sampled_top: int = 2
+    #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
+    #: and starts) and keep it if it scores more (planned POS less the violation penalty where
+    #: ``airspace_penalty`` prices it): a plan of these options then never scores less than the
+    #: default's, at the default's planning time more.
+    also_default: bool = False
 
     def __post_init__(self) -> None:
         _positive_tuple("levels", self.levels, integer=True, high=64)
@@ -185,7 +190,7 @@ class PlanOptions:
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "chain_early", "part", "share_tables", "axis", "excursions",
+                 "chain_early", "also_default", "part", "share_tables", "axis", "excursions",
                  "sampled")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
@@ -227,4 +232,5 @@ THOROUGH: dict[str, Any] = {
     "airspace_penalty": True,
     "angles": (45.0,),
     "excursions": True,
+    "also_default": True,
 }

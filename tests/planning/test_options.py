@@ -126,7 +126,7 @@ def test_cli_plan_effort(tmp_path, capsys):
     out = tmp_path / "plan.json"
     assert main([*args, "--effort", "thorough", "--out", str(out)]) == 0
     plan = json.loads(out.read_text())
-    assert plan["optimizer"]["settings"]["options"] == THOROUGH
+    assert plan["optimizer"]["settings"]["options"] == json.loads(json.dumps(THOROUGH))
     capsys.readouterr()
     bad = tmp_path / "bad.json"
     assert main([*args, "--effort", "max", "--out", str(bad)]) == 2
