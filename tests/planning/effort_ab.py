@@ -17,6 +17,9 @@
     on every seed, the others on the first ``CHECK`` seeds only, to check they equal the stored
     ``poc-env bench plan --scale`` records (results/plan_scale/*.json), which then stand in for
     them; the rule-aware bound is the stored one (recomputed and checked on those seeds).
+``violations MAP SEED[,SEED...] VARIANT [VARIANT...]``
+    Flown violation steps and POSC per variant (``de``: ``de_plan``); on ``small`` as
+    tests/policies/test_allocation.py flies it (``small 1 default q3 q3np de``).
 ``paired OUT.json RECORDS.json...``
     The paired summary of a ``fly`` run against the stored ``allocation_plan`` and
     ``greedy_rectangles`` flights.
@@ -151,6 +154,34 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
     summary(recs, "planned_posc", names[0])
 
 
+def violations(name: str, seeds: list[int], names: list[str]) -> None:
+    """Flown separation-violation steps (eq. 21 / 24, the environment's count) and POSC of the
+    allocation policy with each variant's options (``de`` for ``de_plan`` at the test's budget,
+    popsize 16, 20 generations): on ``small`` the episode's own prior, as
+    tests/policies/test_allocation.py flies it; elsewhere the random prior of the seed."""
+    from poc_env.agents.policies.allocation import AllocationPlanPolicy
+    from poc_env.agents.policies.de_plan import DEPlanPolicy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    sc = load_scenario(name)
+    for seed in seeds:
+        opts = None if name == "small" else {"prior": episode_prior(sc, seed)}
+        for v in names:
+            env = UAVSearchParallelEnv(scenario=sc)
+            if v == "de":
+                pol: object = DEPlanPolicy(popsize=16, maxiter=20)
+            else:
+                pol = AllocationPlanPolicy()
+                pol.options = _options(v)  # type: ignore[attr-defined]
+            obs, _ = env.reset(seed=seed, options=opts)
+            pol.reset(env, seed)  # type: ignore[attr-defined]
+            while env.agents:
+                obs, *_ = env.step(pol.predict(obs)[0])  # type: ignore[attr-defined]
+            st = env.sim_state
+            print(name, seed, v, "violation steps", int(st.violations[0].sum()), "posc",
+                  round(float(st.posc[0]), 4), flush=True)  # fmt: skip
+
+
 def stored(paths: list[str]) -> dict[tuple[int, str], dict]:
     """The episodes of ``poc-env bench plan --scale`` records (results/plan_scale/*.json) by
     (seed, policy)."""
@@ -244,6 +275,9 @@ def old_policies(old: dict) -> set[str]:
 if __name__ == "__main__":
     if sys.argv[1] == "digest":
         digest(sys.argv[2])
+        sys.exit()
+    if sys.argv[1] == "violations":
+        violations(sys.argv[2], [int(x) for x in sys.argv[3].split(",")], sys.argv[4:])
         sys.exit()
     if sys.argv[1] == "paired":
         paired(sys.argv[2], sys.argv[3:])
