@@ -35,6 +35,7 @@ def _routes(plan):
         ({"max_cells": 4}, "options.max_cells"),
         ({"chain": (0.35, 1.2)}, "options.chain"),
         ({"angles": (0.0,)}, "options.angles"),
+        ({"angles": (45.0, 180.0)}, "options.angles"),
         ({"angles": (45.0, float("nan"))}, "options.angles"),
         ({"graded": "yes"}, "options.graded"),
         ({"sampled": 1}, "options.sampled"),
@@ -148,3 +149,20 @@ def test_thorough_policy_is_registered():
     assert pol.options == PlanOptions.preset("thorough")
     assert pol.name == "allocation_plan_thorough"
     assert make_policy("allocation_plan").options == PlanOptions()
+
+
+def test_also_default_keeps_the_default_plan_when_it_scores_more():
+    """Options that plan worse (the boxes' lines four sweep widths apart only, on a random
+    prior of ``paper_6_2`` where the boxes win) with ``also_default``: the default plan is kept
+    (its routes, its POS, and ``kept`` says so); without it the worse plan is returned."""
+    sc = load_scenario("paper_6_2")
+    prior = episode_prior(sc, 4)
+    worse = PlanOptions(spacings=(4.0,), dense_spacings=(), refine=1)
+    default = make_allocation_plan(sc, prior=prior, refine=1)
+    alone = make_allocation_plan(sc, prior=prior, options=worse)
+    assert alone["posc"] < default["posc"]
+    both = make_allocation_plan(
+        sc, prior=prior, options=dataclasses.replace(worse, also_default=True)
+    )
+    assert both["optimizer"]["settings"]["kept"] == "default"
+    assert both["posc"] == default["posc"] and _routes(both) == _routes(default)
