@@ -454,9 +454,10 @@ def violation_penalty(
 def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, t0: float):
     """``opt.also_default``: the plan with ``opt`` and the default plan (``PlanOptions()`` with
     ``opt``'s keyword-level fields: levels, margin, refine, starts), the one of more planned
-    POS less the violation penalty kept (the penalty where ``opt`` prices it,
-    :func:`violation_penalty`; ties: ``opt``'s). The effort levels' guarantee: a thorough plan
-    never scores less than the default one."""
+    POS kept (ties: ``opt``'s). The effort levels' guarantee: a thorough plan never plans less
+    POS than the default one. (By POS alone: the default plan is the shipped planner's, its
+    violations accepted as they are; ``opt``'s own pick among its starts is the one that
+    prices violations, ``airspace_penalty``.)"""
     kw = {"prior": prior, "map_source": map_source, "seed": seed, "speed": speed, "crs": crs}
     mine = make_allocation_plan(sc, options=dataclasses.replace(opt, also_default=False), **kw)
     base_opt = PlanOptions(
@@ -464,16 +465,7 @@ def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, 
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
-    grid = Grid.from_config(sc.map)
-    v = plan_speeds(sc, speed)
-
-    def score(p) -> float:
-        pen = 0.0
-        if opt.airspace_penalty and sampled_boxes(grid, opt):
-            pen = violation_penalty(sc, [u["waypoints_m"] for u in p["uavs"]], v, opt)
-        return float(p["posc"]) - pen
-
-    kept = mine if score(mine) >= score(base) else base
+    kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
     settings = {**kept["optimizer"]["settings"], "options": opt.changed()}
     settings["kept"] = "default" if kept is base else "options"
     return {

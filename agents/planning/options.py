@@ -152,9 +152,8 @@ class PlanOptions:
     #: second chained lawnmowers rescored by the sampled model: the best few by the cell model.
     sampled_top: int = 2
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
-    #: and starts) and keep it if it scores more (planned POS less the violation penalty where
-    #: ``airspace_penalty`` prices it): a plan of these options then never scores less than the
-    #: default's, at the default's planning time more.
+    #: and starts) and keep it if it plans more POS: a plan of these options then never plans
+    #: less POS than the default's, at the default's planning time more.
     also_default: bool = False
 
     def __post_init__(self) -> None:
