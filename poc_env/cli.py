@@ -680,6 +680,7 @@ def _plan(
         planner=planner,
         speed=getattr(args, "speed", None),
         refine=getattr(args, "refine", None),
+        effort=getattr(args, "effort", None),
     )
     print(plan_table(plan))
     if plot is not None:
@@ -1063,6 +1064,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="allocation planner: passes of the waypoint refinement (default 4; 0: the straight "
         "search lines only)",
+    )
+    p.add_argument(
+        "--effort",
+        default=None,
+        help="allocation planner: default (seconds) or thorough (a minute or two on one core, "
+        "more POS: docs/PLANNER.md, effort levels)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

@@ -30,7 +30,7 @@
    pieces put UAVs on different lines of the route at different times (deconfliction by
    construction; flown separation is measured, see docs/PLANNER.md).
 5. **Effort scale.** Turns, connections and the cut into pieces cost time the allocation does
-   not see, so steps 1-4 run for each ``eta`` of :data:`ETAS` and each ``K`` and the plan keeps
+   not see, so steps 1-4 run for each ``eta`` of ``options.etas`` and each ``K`` and the plan keeps
    the one of highest planned POS (lines no UAV can fit are left unflown).
 6. **Second start.** On large maps, one route chained over the whole map and cut into pieces
    spends much of each UAV's time in transit; the greedy rectangle plan
@@ -38,10 +38,11 @@
    can search) is planned too, and so are the coverage boxes
    (:mod:`poc_env.agents.planning.coverage_boxes`: each UAV its own box and line spacing by
    the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out). The starts
-   within :data:`REFINE_WITHIN` of the best one's planned POS (at most ``refine_starts``) are
+   within ``options.refine_within`` of the best one's planned POS (at most ``refine_starts``) are
    refined and the plan keeps the best of them, refined or not, by the environment's model
-   (:func:`sampled_sweep`); ``start`` records which start and ``refined`` whether the
-   refined routes were kept.
+   (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
+   (``options.airspace_penalty``, off by default); ``start`` records which start and
+   ``refined`` whether the refined routes were kept.
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -64,6 +65,7 @@ the sampled model, the refined plan flew worse on ``small`` (0.627 against 0.646
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
@@ -71,17 +73,19 @@ import numpy as np
 from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
-from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines
+from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sampled_boxes
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
     refine_routes,
     route_fits,
     route_time,
+    track,
 )
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
@@ -91,29 +95,18 @@ from poc_env.theory.bound import cell_distances, reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
-#: the numbers of coverage layers (K) tried and the share of 0.85 T a route may fill.
-LEVELS = (3, 4, 6)
-MARGIN = 1.0
+#: the planner's defaults (:class:`~poc_env.agents.planning.options.PlanOptions`; its fields
+#: hold every choice of this planner and its starts, passed down as ``options``): the numbers
+#: of coverage layers (K) tried, the share of 0.85 T a route may fill, the refinement's passes
+#: and the starts refined. Kept as names for the callers that read them.
+LEVELS = PlanOptions.levels
+MARGIN = PlanOptions.margin
+REFINE = PlanOptions.refine
+REFINE_STARTS = PlanOptions.refine_starts
 #: coverage laid at most (eq. 10: POD erf(sqrt(pi)/2 x 3) > 0.9999; more only adds lines).
 COVER_CAP = 3.0
 #: least bearing difference between field-mates flying out (degrees, :func:`_fan_out`).
 FAN_DEG = 20.0
-#: the effort scales ``eta`` tried (the plan keeps the one of highest planned POS).
-ETAS = (0.3, 0.4, 0.5, 0.65)
-#: margins on d_s (eq. 21) and the communication range (eq. 24) for the refinement's airspace
-#: check: the follower flies the planned route, not the planned timing, to the second.
-SEPARATION_MARGIN = 2.0
-RANGE_MARGIN = 0.9
-#: passes of :func:`poc_env.agents.planning.refine.refine_routes` over the chosen routes (0: none).
-REFINE = 4
-#: the starts refined (best first by W x length per cell); the plan keeps the best of them,
-#: refined or not, by the environment's model (:func:`sampled_sweep`).
-REFINE_STARTS = 2
-#: a start is refined too only if its W x length per cell score is within this share of the
-#: best start's (on paper_6_2's own prior the allocation start, 0.935 of the boxes' unrefined,
-#: refines to 0.5853 against the boxes' 0.5748; on random priors the boxes lead by 4-20 %
-#: and win refined).
-REFINE_WITHIN = 0.9
 
 
 def _lines_of(routes) -> list[list[int]]:
@@ -421,6 +414,67 @@ def sampled_sweep(
     return pos, found
 
 
+def violation_penalty(
+    sc: Scenario, routes, v: Speeds | None = None, options: PlanOptions | None = None
+) -> float:
+    """The environment's violation penalty of ``routes`` (waypoints per UAV between its
+    take-off and landing) at their planned positions, in POS: ``reward.violation_penalty`` per
+    UAV-step in violation of eq. 21 / 24 (:func:`~poc_env.agents.planning.refine.
+    swarm_violations`, every ``dt``, with margins ``options.penalty_separation`` on d_s and
+    ``options.penalty_range`` on the range, by default the refinement's: the follower flies the
+    route, not its timing, to the second) over ``alpha`` x UAVs (team
+    credit: every UAV is credited the swarm's POS, so this is the reward's own exchange rate),
+    times ``options.penalty_weight``."""
+    u = sc.uav
+    opt = PlanOptions() if options is None else options
+    v = plan_speeds(sc, SPEED) if v is None else v
+    grid = Grid.from_config(sc.map)
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    n = len(takeoff)
+    heading0 = takeoff_heading(grid.bounds, takeoff)
+    air = Airspace(
+        sc.episode.dt_s,
+        opt.penalty_separation * sc.constraints.safety_distance_m,
+        opt.penalty_range * sc.comms.range_m,
+        sc.comms.min_neighbours,
+    )
+    times = np.arange(int(np.ceil(u.usable_endurance_s / air.dt_s)) + 1) * air.dt_s
+    pos = np.zeros((len(times), n, 2))
+    act = np.zeros((len(times), n), dtype=bool)
+    for k in range(n):
+        if len(routes[k]):
+            path = np.vstack([takeoff[k], np.asarray(routes[k], dtype=float), landing[k]])
+            pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
+    rw = sc.reward
+    rate = opt.penalty_weight * rw.violation_penalty / (max(rw.alpha, 1e-12) * n)
+    return rate * air.violations(pos, act)
+
+
+def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, t0: float):
+    """``opt.also_default``: the plan with ``opt`` and the default plan (``PlanOptions()`` with
+    ``opt``'s keyword-level fields: levels, margin, refine, starts), the one of more planned
+    POS kept (ties: ``opt``'s). The effort levels' guarantee: a thorough plan never plans less
+    POS than the default one. (By POS alone: the default plan is the shipped planner's, its
+    violations accepted as they are; ``opt``'s own pick among its starts is the one that
+    prices violations, ``airspace_penalty``.)"""
+    kw = {"prior": prior, "map_source": map_source, "seed": seed, "speed": speed, "crs": crs}
+    mine = make_allocation_plan(sc, options=dataclasses.replace(opt, also_default=False), **kw)
+    base_opt = PlanOptions(
+        levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
+        refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
+    )  # fmt: skip
+    base = make_allocation_plan(sc, options=base_opt, **kw)
+    kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
+    settings = {**kept["optimizer"]["settings"], "options": opt.changed()}
+    settings["kept"] = "default" if kept is base else "options"
+    return {
+        **kept,
+        "optimizer": {**kept["optimizer"], "settings": settings},
+        "runtime_s": time.perf_counter() - t0,
+    }
+
+
 def make_allocation_plan(
     scenario: Scenario | str = "paper_6_2",
     *,
@@ -428,14 +482,15 @@ def make_allocation_plan(
     map_source: str = "builtin",
     uavs: int | None = None,
     seed: int = 0,
-    levels: int | tuple[int, ...] = LEVELS,
-    margin: float = MARGIN,
+    levels: int | tuple[int, ...] | None = None,
+    margin: float | None = None,
     speed: str = SPEED,
-    refine: int = REFINE,
+    refine: int | None = None,
     crs: dict[str, Any] | None = None,
-    greedy_start: bool = True,
-    box_start: bool = True,
-    refine_starts: int = REFINE_STARTS,
+    greedy_start: bool | None = None,
+    box_start: bool | None = None,
+    refine_starts: int | None = None,
+    options: PlanOptions | None = None,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
@@ -445,7 +500,11 @@ def make_allocation_plan(
     ``box_start``: also from the coverage boxes
     (:func:`poc_env.agents.planning.coverage_boxes.box_routes`); ``refine_starts``: how many of
     the best starts may be refined (module docstring, step 6; ``start`` in the plan says which
-    was kept).
+    was kept). ``options``: every other choice of the planner
+    (:class:`~poc_env.agents.planning.options.PlanOptions`; default ``PlanOptions()``, the
+    ``"default"`` effort level; ``PlanOptions.preset("thorough")`` for the slower, better one);
+    ``levels``, ``margin``, ``refine``, ``greedy_start``, ``box_start`` and ``refine_starts``
+    given here override its fields of the same names.
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -455,10 +514,30 @@ def make_allocation_plan(
     sc = load_scenario(scenario)
     if uavs is not None:
         sc = sc.with_uavs(as_int("uavs", uavs, 1, 64))
-    ks = [as_int("levels", k, 1, 64) for k in np.atleast_1d(levels).tolist()]
-    refine = as_int("refine", refine, 0, 100)
-    if not (0.1 <= float(margin) <= 1.0):
-        raise ConfigError("margin", margin, "a share of 0.85 T in [0.1, 1]")
+    opt = PlanOptions() if options is None else options
+    if not isinstance(opt, PlanOptions):
+        raise ConfigError("options", opt, "a PlanOptions (poc_env.agents.planning.options)")
+    if levels is not None:
+        ks = [as_int("levels", k, 1, 64) for k in np.atleast_1d(levels).tolist()]
+        opt = dataclasses.replace(opt, levels=tuple(ks))
+    if refine is not None:
+        opt = dataclasses.replace(opt, refine=as_int("refine", refine, 0, 100))
+    if margin is not None:
+        if not (0.1 <= float(margin) <= 1.0):
+            raise ConfigError("margin", margin, "a share of 0.85 T in [0.1, 1]")
+        opt = dataclasses.replace(opt, margin=float(margin))
+    if refine_starts is not None:
+        opt = dataclasses.replace(opt, refine_starts=as_int("refine_starts", refine_starts, 1, 3))
+    if greedy_start is not None:
+        opt = dataclasses.replace(opt, greedy_start=bool(greedy_start))
+    if box_start is not None:
+        opt = dataclasses.replace(opt, box_start=bool(box_start))
+    if opt.also_default:
+        return _best_of_default(sc, prior, map_source, seed, speed, crs, opt, t0)
+    ks = list(opt.levels)
+    refine = opt.refine
+    margin = opt.margin
+    greedy_start, box_start, refine_starts = opt.greedy_start, opt.box_start, opt.refine_starts
     grid = Grid.from_config(sc.map)
     prior = build_prior(sc.map) if prior is None else np.asarray(prior, dtype=float)
     reason = _check(sc, prior, grid)
@@ -530,7 +609,7 @@ def make_allocation_plan(
     best_val = -1.0
     fleet = None
     if reason is None:
-        for cand, k in [(e, k) for e in ETAS for k in ks]:
+        for cand, k in [(e, k) for e in opt.etas for k in ks]:
             if k == ks[0]:
                 alloc = reach_optimum(
                     prior,
@@ -550,6 +629,11 @@ def make_allocation_plan(
         if best is None or not any(best[2]):
             reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
             best = None
+
+    def _penalty(rs) -> float:  # where the boxes are graded and sampled (as they are picked)
+        if opt.airspace_penalty and sampled_boxes(grid, opt):
+            return violation_penalty(sc, rs, v, opt)
+        return 0.0
 
     def _sampled_total(rs) -> float:
         paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
@@ -588,6 +672,12 @@ def make_allocation_plan(
             u.max_turn_rate_rad_s,
             _reserve(sc),
             heading0,
+            sampled=(
+                grid.refine(prior, sc.sensor.samples_per_cell),
+                sc.sensor.samples_per_cell,
+                sc.sensor.cutoff_sweep_widths * w,
+            ),
+            options=opt,
         )
         # field-mates fanned out as the allocation's routes are (eq. 21 on the way out), the
         # last lines dropped until each route keeps eq. 18 again
@@ -607,7 +697,7 @@ def make_allocation_plan(
                 )
 
             if len(arr) and not fits(arr[lead:]):  # the last line cut short, or dropped
-                arr = np.vstack([arr[:lead], cut_lines(arr[lead:], fits, w)[0]])
+                arr = np.vstack([arr[:lead], cut_lines(arr[lead:], fits, w, opt)[0]])
             b_routes[k] = [] if len(arr) - lead < 2 else arr.tolist()
         if router.active:
             b_routes = [_around(k, b_routes[k]) if b_routes[k] else [] for k in range(n)]
@@ -624,7 +714,16 @@ def make_allocation_plan(
             spacing = w
     if starts and refine:
         best_sampled = -1.0
-        tried = [t for t in starts[: max(1, refine_starts)] if t[0] >= REFINE_WITHIN * starts[0][0]]
+        sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
+        top = starts[: max(1, refine_starts)]
+        top_s = max(sampled_of[t[1]] for t in top)
+        by_model = opt.refine_sampled and box_start and sampled_boxes(grid, opt)
+        tried = [
+            t
+            for i, t in enumerate(top)
+            if t[0] >= opt.refine_within * starts[0][0]
+            and (i == 0 or not by_model or sampled_of[t[1]] >= opt.refine_within * top_s)
+        ]
         for _, name, s_routes, s_pieces in tried:
             r_routes, _ = refine_routes(
                 s_routes,
@@ -642,8 +741,8 @@ def make_allocation_plan(
                 headings=takeoff_heading(grid.bounds, takeoff),
                 airspace=Airspace(
                     sc.episode.dt_s,
-                    SEPARATION_MARGIN * sc.constraints.safety_distance_m,
-                    RANGE_MARGIN * sc.comms.range_m,
+                    opt.separation_margin * sc.constraints.safety_distance_m,
+                    opt.range_margin * sc.comms.range_m,
                     sc.comms.min_neighbours,
                 ),
             )
@@ -653,7 +752,8 @@ def make_allocation_plan(
             # agrees (on cells wider than W it can lose: large_400 at 10 km, 0.463 -> 0.416)
             for was_refined in (True, False):
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
-                score = _sampled_total(trial)
+                score = _sampled_total(trial) if was_refined else sampled_of[name]
+                score -= _penalty(trial)
                 if score > best_sampled:
                     best_sampled = score
                     routes = trial
@@ -665,7 +765,7 @@ def make_allocation_plan(
         for _, name, s_routes, s_pieces in starts:
             if any(name == t[1] for t in tried):
                 continue
-            score = _sampled_total(s_routes)
+            score = sampled_of[name] - _penalty(s_routes)
             if score > best_sampled:
                 best_sampled, routes, pieces = score, s_routes, s_pieces
                 start, refined = name, False
@@ -745,6 +845,7 @@ def make_allocation_plan(
                 "margin": margin,
                 "speed": speed,
                 "refine": refine,
+                **({"options": opt.changed()} if opt.changed() else {}),
             },
         },
         "runtime_s": runtime,

@@ -1,7 +1,7 @@
 """Excursions: routes ``take-off -> P -> Q -> landing`` whose transit legs are the search.
 
 A candidate route for the coverage boxes (:mod:`poc_env.agents.planning.coverage_boxes`,
-:data:`~poc_env.agents.planning.coverage_boxes.EXCURSIONS`) for UAVs that can just reach the
+``PlanOptions.excursions``) for UAVs that can just reach the
 mass (issue 24, docs/PLANNER.md, "Excursions"): on ``large_400`` the fields far from a blob
 have a few tens of km of slack past its rim, the box search scores only the lines inside a box
 (not the legs out and home), and their boxes are degenerate. An excursion flies out to a point
@@ -12,8 +12,9 @@ Search: with the swarm's coverage ``C`` so far, a line through cell ``j`` gains 
 ``g_j = p_j (POD(C_j + W / c) - POD(C_j)) / c`` per metre (eq. 10 per cell, ``c`` the cell
 side); a leg's gain is ``g`` summed along it (:func:`leg_gains`, half-cell samples). Every cell
 centre the UAV can reach and come home from within 0.85 T is a ``P`` (the legs' times at the
-plan's speeds), the :data:`TOP` best ``P`` (out and home gain) are paired with every ``Q``
-that keeps the time, and the :data:`EXACT` best pairs by the summed leg gains (overlaps not
+plan's speeds), the ``top`` best ``P`` (out and home gain) are paired with every ``Q``
+that keeps the time, and the ``exact`` best pairs (``PlanOptions.excursion_top``,
+``excursion_exact``) by the summed leg gains (overlaps not
 charged) are scored by the route's coverage (:func:`~poc_env.agents.planning.flight_rules.
 path_coverage`) and cut to eq. 18 (:func:`~poc_env.agents.planning.coverage_boxes.cut_lines`:
 ``Q`` drawn back towards ``P`` until the route fits). Deterministic.
@@ -26,13 +27,9 @@ import math
 import numpy as np
 
 from poc_env.agents.planning.flight_rules import Speeds
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage
-
-#: the best first points ``P`` paired with every second point ``Q``.
-TOP = 12
-#: the best pairs scored by the route's coverage.
-EXACT = 6
 
 
 def leg_gains(a: np.ndarray, b: np.ndarray, rate: np.ndarray, grid: Grid) -> np.ndarray:
@@ -71,6 +68,8 @@ def excursion(
     fits,
     score,
     cut,
+    top: int = PlanOptions.excursion_top,
+    exact: int = PlanOptions.excursion_exact,
 ) -> tuple[float, np.ndarray, np.ndarray]:
     """The best excursion (module docstring) of one UAV against the coverage ``cov``:
     (gain, waypoints [P, Q] or fewer, its coverage) by ``score(wps) -> (gain, coverage)``;
@@ -94,7 +93,7 @@ def excursion(
     cand = pts[ok]
     g_out = leg_gains(takeoff[None, :], cand, rate, grid)
     g_home = leg_gains(cand, landing[None, :], rate, grid)
-    order = np.argsort(-(g_out + g_home), kind="stable")[:TOP]
+    order = np.argsort(-(g_out + g_home), kind="stable")[:top]
     pairs: list[tuple[float, int, int]] = []
     for i in order:
         p = cand[i]
@@ -104,11 +103,11 @@ def excursion(
         if not len(good):
             continue
         val = g_out[i] + leg_gains(p[None, :], cand[good], rate, grid) + g_home[good]
-        for j in np.argsort(-val, kind="stable")[:EXACT]:
+        for j in np.argsort(-val, kind="stable")[:exact]:
             pairs.append((float(val[j]), int(i), int(good[j])))
     pairs.sort(key=lambda t: -t[0])
     best = none
-    for _, i, j in pairs[:EXACT]:
+    for _, i, j in pairs[:exact]:
         wps = np.vstack([cand[i], cand[j]])
         if not fits(wps):
             wps = cut(wps, fits)

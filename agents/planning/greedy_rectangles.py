@@ -60,16 +60,19 @@ def _side_lengths(n: int) -> np.ndarray:
     return np.array(sorted(sides))
 
 
-def _lines(lo, hi, w: float, start) -> np.ndarray:
+def _lines(lo, hi, w: float, start, offsets=None) -> np.ndarray:
     """Boustrophedon waypoints over the box ``lo``-``hi`` (x, y): lines ``w`` apart along its
-    longer side, centred across it, from the corner nearest ``start``."""
+    longer side, centred across it, from the corner nearest ``start``; or, given ``offsets``
+    (increasing positions across the box, m), lines at those positions."""
     lo = np.asarray(lo, dtype=float)
     hi = np.asarray(hi, dtype=float)
     size = hi - lo
     along = 0 if size[0] >= size[1] else 1
     across = 1 - along
-    n = max(1, math.ceil(size[across] / w - 1e-9))
-    offsets = lo[across] + (np.arange(n) + 0.5) * size[across] / n
+    if offsets is None:
+        n = max(1, math.ceil(size[across] / w - 1e-9))
+        offsets = lo[across] + (np.arange(n) + 0.5) * size[across] / n
+    offsets = np.asarray(offsets, dtype=float)
     if abs(start[across] - hi[across]) < abs(start[across] - lo[across]):
         offsets = offsets[::-1]
     ends = [lo[along], hi[along]]

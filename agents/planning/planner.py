@@ -65,6 +65,7 @@ def make_plan(
     planner: str = "de",
     speed: str | None = None,
     refine: int | None = None,
+    effort: str | None = None,
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-2 dict (see the module docstring).
 
@@ -72,7 +73,9 @@ def make_plan(
     (:func:`poc_env.agents.planning.allocation.make_allocation_plan`, routes from the reach-aware
     optimal allocation; the optimiser arguments do not apply to it). ``speed`` (``max`` or
     ``paper``) and ``refine`` (passes of the waypoint refinement, 0 for straight lines only) are
-    the allocation planner's (None: its defaults); the DE plan refuses them.
+    the allocation planner's (None: its defaults), and so is ``effort`` (``default`` or
+    ``thorough``, :meth:`poc_env.agents.planning.options.PlanOptions.preset`); the DE plan
+    refuses them.
 
     ``preset`` (:func:`poc_env.agents.planning.optimizers.preset_settings`): ``paper`` runs the
     scenario's ``planner`` settings (the paper's), ``tuned`` the same budget with the measured
@@ -92,6 +95,7 @@ def make_plan(
     crs = scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
     if planner == "allocation":
         from poc_env.agents.planning.allocation import REFINE, SPEED, make_allocation_plan
+        from poc_env.agents.planning.options import PlanOptions
 
         return check_terrain(
             make_allocation_plan(
@@ -103,9 +107,10 @@ def make_plan(
                 crs=crs,
                 speed=SPEED if speed is None else speed,
                 refine=REFINE if refine is None else refine,
+                options=PlanOptions.preset("default" if effort is None else effort),
             )
         )
-    for name, value in (("speed", speed), ("refine", refine)):
+    for name, value in (("speed", speed), ("refine", refine), ("effort", effort)):
         if value is not None:
             raise ConfigError(name, value, "only with planner allocation (leave it out for de)")
     sc = load_scenario(scenario)

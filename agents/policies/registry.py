@@ -221,6 +221,13 @@ register(
     summary="routes from the reach-aware optimal allocation, refined, then flown (best planner)",
 )
 register(
+    "allocation_plan_thorough",
+    "poc_env.agents.policies.allocation:AllocationPlanPolicy",
+    kwargs={"effort": "thorough"},
+    summary="allocation_plan at the thorough effort level: a slower plan of more POS "
+    "(docs/PLANNER.md, effort levels)",
+)
+register(
     "greedy_rectangles",
     "poc_env.agents.policies.greedy_rectangles:GreedyRectanglesPolicy",
     summary="each UAV the best remaining axis-aligned rectangle it can search, flown as lines",

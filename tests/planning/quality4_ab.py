@@ -25,60 +25,41 @@ tests/planning/quality4_ab.py plan large_400 5000 5003 main,excursions out.json`
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import statistics
 import sys
 import time
-from contextlib import contextmanager
 
 import numpy as np
 
 from poc_env.agents.experiments.evaluate import episode_prior
-from poc_env.agents.planning import allocation, coverage_boxes, excursions
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.config import load_scenario
 from poc_env.theory.bound import rule_bound
 
-#: variants: module attributes set while planning (``main`` sets nothing).
-VARIANTS: dict[str, list[tuple[object, str, object]]] = {
-    "main": [],
-    "excursions": [(coverage_boxes, "EXCURSIONS", True)],
-    "angles45": [(coverage_boxes, "ANGLES", (45.0, 135.0))],
-    "angles30": [(coverage_boxes, "ANGLES", (30.0, 60.0, 120.0, 150.0))],
-    "angles45_excursions": [
-        (coverage_boxes, "ANGLES", (45.0, 135.0)),
-        (coverage_boxes, "EXCURSIONS", True),
-    ],
-    "angles3_excursions": [
-        (coverage_boxes, "ANGLES", (22.5, 45.0, 67.5)),
-        (coverage_boxes, "EXCURSIONS", True),
-    ],
-    "axis": [(coverage_boxes, "AXIS", True)],
-    "axis_grow2": [(coverage_boxes, "AXIS", True), (coverage_boxes, "AXIS_GROW", 2.0)],
-    # knobs of the existing planner (kwargs of make_allocation_plan under "kwargs")
-    "refine8": [("kwargs", "refine", 8)],
-    "refine_all_starts": [("kwargs", "refine_starts", 3), (allocation, "REFINE_WITHIN", 0.0)],
-    "rounds4": [(coverage_boxes, "ROUNDS", 4), (coverage_boxes, "CHAIN_ROUNDS", 4)],
-    "excursions_top24": [
-        (coverage_boxes, "EXCURSIONS", True),
-        (excursions, "TOP", 24),
-        (excursions, "EXACT", 12),
-    ],
+#: variants: the plan options' fields changed (``dataclasses.replace``; ``main`` changes none).
+VARIANTS: dict[str, dict[str, object]] = {
+    "main": {},
+    "excursions": {"excursions": True},
+    "angles45": {"angles": (45.0, 135.0)},
+    "angles30": {"angles": (30.0, 60.0, 120.0, 150.0)},
+    "angles45_excursions": {"angles": (45.0, 135.0), "excursions": True},
+    "angles3_excursions": {"angles": (22.5, 45.0, 67.5), "excursions": True},
+    "axis": {"axis": True},
+    "axis_grow2": {"axis": True, "axis_grow": 2.0},
+    # knobs of the existing planner
+    "refine8": {"refine": 8},
+    "refine_all_starts": {"refine_starts": 3, "refine_within": 0.0},
+    "rounds4": {"rounds": 4, "chain_rounds": 4},
+    "excursions_top24": {"excursions": True, "excursion_top": 24, "excursion_exact": 12},
 }
 
 
-@contextmanager
-def variant(name: str):
-    """Set ``name``'s module attributes; yields its keyword arguments for the planner."""
-    mods = [t for t in VARIANTS[name] if t[0] != "kwargs"]
-    saved = [(mod, attr, getattr(mod, attr)) for mod, attr, _ in mods]
-    try:
-        for mod, attr, val in mods:
-            setattr(mod, attr, val)
-        yield {str(k): v for m, k, v in VARIANTS[name] if m == "kwargs"}
-    finally:
-        for mod, attr, val in saved:
-            setattr(mod, attr, val)
+def variant(name: str) -> PlanOptions:
+    """The plan options of variant ``name``: the defaults with its fields changed."""
+    return dataclasses.replace(PlanOptions(), **VARIANTS[name])  # type: ignore[arg-type]
 
 
 def summary(recs: list[dict], key: str) -> None:
@@ -109,10 +90,9 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
         prior = episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
         for v in names:
-            with variant(v) as kw:
-                t0 = time.perf_counter()
-                p = make_allocation_plan(sc, prior=prior, **kw)
-                dt = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            p = make_allocation_plan(sc, prior=prior, options=variant(v))
+            dt = time.perf_counter() - t0
             recs.append(
                 {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
                  "rule_bound": bound, "start": p["start"], "refined": p["refined"],
@@ -126,7 +106,18 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
 
 
 def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
-    from poc_env.agents.benchmarks.plan_scale import _flown
+    from poc_env.agents.policies.allocation import AllocationPlanPolicy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    def _flown(sc, seed, prior, options):  # plan_scale._flown with the policy's options
+        env = UAVSearchParallelEnv(scenario=sc)
+        pol = AllocationPlanPolicy()
+        pol.options = options
+        obs, _ = env.reset(seed=seed, options={"prior": prior})
+        pol.reset(env, seed)
+        while env.agents:
+            obs, *_ = env.step(pol.predict(obs)[0])
+        return float(env.sim_state.posc[0]), pol.plan
 
     sc = load_scenario(name)
     recs = []
@@ -134,10 +125,7 @@ def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
         prior = episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
         for var in ("main", v):
-            with variant(var) as kw:
-                if kw:
-                    raise SystemExit(f"{var}: planner arguments cannot be flown by the policy")
-                posc, p = _flown(sc, "allocation_plan", seed, prior)
+            posc, p = _flown(sc, seed, prior, variant(var))
             recs.append(
                 {"map": name, "seed": seed, "variant": var, "posc": posc,
                  "planned_posc": float(p["posc"]), "rule_bound": bound, "start": p.get("start"),

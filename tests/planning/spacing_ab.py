@@ -5,7 +5,7 @@ script, not a test.
     Flown ``allocation_plan`` over the rule-aware bound on ``MAP``'s random priors (episode
     seeds ``SEED0..SEED1-1``, the priors of ``poc-env bench plan --scale``), planned with and
     without the coverage boxes' spacings below one sweep width
-    (:data:`poc_env.agents.planning.coverage_boxes.DENSE_SPACINGS`; without them the planner
+    (``PlanOptions.dense_spacings``; without them the planner
     is main's), interleaved per seed; the records are rewritten after every seed.
 ``timing N``
     Planning time on ``paper_6_2``'s own prior (the 2 s target's case) with and without them,
@@ -22,24 +22,37 @@ import os
 import sys
 import time
 
-from poc_env.agents.benchmarks.plan_scale import _flown
 from poc_env.agents.experiments.evaluate import episode_prior
-from poc_env.agents.planning import coverage_boxes
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.config import load_scenario
 from poc_env.theory.bound import rule_bound
 
 
+def _flown(sc, seed, prior, options):
+    """The allocation policy with ``options`` flown on ``sc`` with ``prior``: POSC, plan."""
+    from poc_env.agents.policies.allocation import AllocationPlanPolicy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    env = UAVSearchParallelEnv(scenario=sc)
+    pol = AllocationPlanPolicy()
+    pol.options = options
+    obs, _ = env.reset(seed=seed, options={"prior": prior})
+    pol.reset(env, seed)
+    while env.agents:
+        obs, *_ = env.step(pol.predict(obs)[0])
+    return float(env.sim_state.posc[0]), pol.plan
+
+
 def main(name: str, seed0: int, seed1: int, out: str) -> None:
-    dense = tuple(coverage_boxes.DENSE_SPACINGS)
+    dense = PlanOptions().dense_spacings
     sc = load_scenario(name)
     recs = []
     for seed in range(seed0, seed1):
         prior = episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
         for variant, sp in (("main", ()), ("dense", dense)):
-            coverage_boxes.DENSE_SPACINGS = sp
             t0 = time.perf_counter()
-            posc, plan = _flown(sc, "allocation_plan", seed, prior)
+            posc, plan = _flown(sc, seed, prior, PlanOptions(dense_spacings=sp))
             recs.append(
                 {"map": name, "seed": seed, "variant": variant, "posc": posc,
                  "rule_bound": bound, "planned_posc": float(plan["posc"]),
@@ -57,16 +70,15 @@ def timing(n: int) -> None:
 
     from poc_env.agents.planning.allocation import make_allocation_plan
 
-    dense = tuple(coverage_boxes.DENSE_SPACINGS)
+    dense = PlanOptions().dense_spacings
     sc = load_scenario("paper_6_2")
     make_allocation_plan(sc, refine=0)
     make_allocation_plan(sc)
     ts: dict[str, list[float]] = {"main": [], "dense": []}
     for r in range(n):
         for variant, sp in (("main", ()), ("dense", dense)):
-            coverage_boxes.DENSE_SPACINGS = sp
             t0 = time.perf_counter()
-            plan = make_allocation_plan(sc)
+            plan = make_allocation_plan(sc, options=PlanOptions(dense_spacings=sp))
             ts[variant].append(time.perf_counter() - t0)
             print(r, variant, round(ts[variant][-1], 3), round(plan["posc"], 4), "load",
                   round(os.getloadavg()[0], 2), flush=True)  # fmt: skip

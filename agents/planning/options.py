@@ -1,0 +1,235 @@
+"""The allocation planner's tuning knobs as one value, and its effort levels (issue 24).
+
+:class:`PlanOptions` holds every choice of :func:`poc_env.agents.planning.allocation.
+make_allocation_plan` and of the starts it builds (:mod:`~poc_env.agents.planning.coverage_boxes`,
+:mod:`~poc_env.agents.planning.excursions`) that used to be a module global. It is passed down
+explicitly (``make_allocation_plan(..., options=...)``, ``box_routes(..., options=...)``); its
+defaults are the planner's as it was, so ``PlanOptions()`` plans what the module globals
+planned, bit for bit. Change a copy with :func:`dataclasses.replace`; fields are checked on
+construction (:class:`~poc_env.errors.ConfigError` naming the field, the value and what is
+allowed).
+
+**Effort levels** (:meth:`PlanOptions.preset`): a planning officer plans a sortie once and can
+wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and ``poc-env plan``
+(within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
+``"thorough"`` is the combination that gained most on the validation priors within about a
+minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
+(i24-effort, 2026-11-28)"): ``poc-env plan --effort thorough``, policy
+``allocation_plan_thorough``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from poc_env.errors import ConfigError
+
+#: the effort levels of :meth:`PlanOptions.preset`.
+EFFORTS = ("default", "thorough")
+
+
+def _positive_tuple(name: str, value: Any, *, integer: bool = False, low: float = 0.0,
+                    high: float = math.inf, empty: bool = False) -> None:  # fmt: skip
+    kind = "integers" if integer else "numbers"
+    allowed = f"a tuple of {kind} in ({low:g}, {high:g}]" + ("" if empty else ", not empty")
+    if not isinstance(value, tuple) or (not value and not empty):
+        raise ConfigError(f"options.{name}", value, allowed)
+    for v in value:
+        bad = isinstance(v, bool) or not isinstance(v, int | float)
+        if integer and not isinstance(v, int):
+            bad = True
+        if bad or not math.isfinite(float(v)) or not (low < float(v) <= high):
+            raise ConfigError(f"options.{name}", value, allowed)
+
+
+def _number(name: str, value: Any, low: float, high: float, *, integer: bool = False,
+            closed_low: bool = True) -> None:  # fmt: skip
+    lo = "[" if closed_low else "("
+    allowed = f"{'an integer' if integer else 'a number'} in {lo}{low:g}, {high:g}]"
+    bad = isinstance(value, bool) or not isinstance(value, int | float)
+    if integer and not isinstance(value, int):
+        bad = True
+    if bad or not math.isfinite(float(value)):
+        raise ConfigError(f"options.{name}", value, allowed)
+    v = float(value)
+    if v > high or v < low or (v == low and not closed_low):
+        raise ConfigError(f"options.{name}", value, allowed)
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """The allocation planner's choices (module docstring). Defaults: the planner of
+    ``allocation_plan``, unchanged."""
+
+    # --- make_allocation_plan (agents/planning/allocation.py) ---
+    #: numbers of coverage layers ``K`` tried (step 2 of the allocation planner).
+    levels: tuple[int, ...] = (3, 4, 6)
+    #: effort scales ``eta`` tried (step 5; the plan keeps the one of highest planned POS).
+    etas: tuple[float, ...] = (0.3, 0.4, 0.5, 0.65)
+    #: the share of 0.85 T a route of the allocation start may fill.
+    margin: float = 1.0
+    #: passes of :func:`~poc_env.agents.planning.refine.refine_routes` (0: none).
+    refine: int = 4
+    #: the starts refined (best first by W x length per cell).
+    refine_starts: int = 2
+    #: a start is refined too only if its W x length per cell score is within this share of
+    #: the best start's.
+    refine_within: float = 0.9
+    #: ... and (True) within that share of the best of the starts to refine by the
+    #: environment's model too, where the boxes are graded and sampled
+    #: (:meth:`sampled_here`); i24-quality3.
+    refine_sampled: bool = False
+    #: margins on d_s (eq. 21) and the communication range (eq. 24) of the refinement's
+    #: airspace check.
+    separation_margin: float = 2.0
+    range_margin: float = 0.9
+    #: the plan is picked among the starts by sampled POS less the environment's violation
+    #: penalty at the planned positions (:func:`~poc_env.agents.planning.allocation.
+    #: violation_penalty`) where the boxes are graded and sampled (i24-quality3); False: by
+    #: POS alone.
+    airspace_penalty: bool = False
+    #: the penalty counts violations within ``penalty_separation`` x d_s (eq. 21) and with fewer
+    #: neighbours than needed within ``penalty_range`` x the communication range (eq. 24).
+    penalty_separation: float = 2.0
+    penalty_range: float = 0.9
+    #: the penalty's weight on the reward's rate (1: the reward's own exchange rate).
+    penalty_weight: float = 1.0
+    #: also start from the greedy rectangle plan, and from the coverage boxes.
+    greedy_start: bool = True
+    box_start: bool = True
+
+    # --- coverage boxes (agents/planning/coverage_boxes.py) ---
+    #: line spacings tried, in sweep widths.
+    spacings: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0, 4.0)
+    #: spacings below one sweep width, tried too where boxes are searched cell by cell.
+    dense_spacings: tuple[float, ...] = (0.75,)
+    #: boxes are searched on blocks of cells so that a side has at most this many blocks.
+    max_cells: int = 80
+    #: recompute candidates lazily (same routes; False recomputes every field's each round).
+    lazy: bool = True
+    #: passes of the single-box exchange.
+    rounds: int = 2
+    #: shares of the budget the first of two chained lawnmowers is searched with (): one.
+    chain: tuple[float, ...] = (0.35, 0.55)
+    #: chains tried in the greedy and exchange steps too (True) or only in final passes.
+    chain_early: bool = False
+    #: final exchange passes with chains.
+    chain_rounds: int = 2
+    #: spacings tried for the second chained lawnmower; (): all of the spacings.
+    chain_spacings: tuple[float, ...] = ()
+    #: a route that does not fit flies its first dropped line in part (True) or drops it.
+    part: bool = True
+    #: halvings of the bisection for the part of a line that fits.
+    part_steps: int = 12
+    #: share one coverage's gain tables among the lawnmowers searched against it (same
+    #: routes; False recomputes them per lawnmower, slower; for the tests).
+    share_tables: bool = True
+    #: box orientations tried besides the map's axes (degrees; i24-quality4).
+    angles: tuple[float, ...] = ()
+    #: also try, per candidate, boxes turned to the gain's principal axis (i24-quality4),
+    #: rounded to ``axis_step`` degrees, in a window grown by ``axis_grow`` of the box a side.
+    axis: bool = False
+    axis_step: float = 15.0
+    axis_grow: float = 0.5
+    #: excursions (take-off -> P -> Q -> landing) as candidates too (i24-quality4); the best
+    #: ``excursion_top`` first points paired, the ``excursion_exact`` best pairs scored.
+    excursions: bool = False
+    excursion_top: int = 12
+    excursion_exact: int = 6
+    #: lines at graded spacing across each box (:func:`~poc_env.agents.planning.
+    #: coverage_boxes.graded_offsets`; i24-quality3) where boxes are searched cell by cell:
+    #: False evenly (as before), True graded, "both" each candidate both ways.
+    graded: bool | str = False
+    #: the least spacing of graded lines (sweep widths) and the water-filling's step (lines).
+    graded_min: float = 0.5
+    graded_step: float = 0.25
+    #: candidates scored by the environment's detection model (i24-quality3) where boxes are
+    #: searched cell by cell; False: W x length per cell.
+    sampled: bool = False
+    #: second chained lawnmowers rescored by the sampled model: the best few by the cell model.
+    sampled_top: int = 2
+    #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
+    #: and starts) and keep it if it plans more POS: a plan of these options then never plans
+    #: less POS than the default's, at the default's planning time more.
+    also_default: bool = False
+
+    def __post_init__(self) -> None:
+        _positive_tuple("levels", self.levels, integer=True, high=64)
+        _positive_tuple("etas", self.etas, high=1.0)
+        _number("margin", self.margin, 0.1, 1.0)
+        _number("refine", self.refine, 0, 100, integer=True)
+        _number("refine_starts", self.refine_starts, 1, 3, integer=True)
+        _number("refine_within", self.refine_within, 0.0, 1.0)
+        _number("separation_margin", self.separation_margin, 1.0, 10.0)
+        _number("range_margin", self.range_margin, 0.1, 1.0)
+        _positive_tuple("spacings", self.spacings, high=20.0)
+        _positive_tuple("dense_spacings", self.dense_spacings, high=20.0, empty=True)
+        _number("max_cells", self.max_cells, 8, 400, integer=True)
+        _number("rounds", self.rounds, 0, 20, integer=True)
+        _positive_tuple("chain", self.chain, high=0.95, empty=True)
+        _number("chain_rounds", self.chain_rounds, 0, 20, integer=True)
+        _positive_tuple("chain_spacings", self.chain_spacings, high=20.0, empty=True)
+        _number("part_steps", self.part_steps, 1, 40, integer=True)
+        _positive_tuple("angles", self.angles, high=180.0, empty=True)
+        if any(float(a) % 180.0 == 0.0 for a in self.angles):
+            raise ConfigError("options.angles", self.angles, "angles in (0, 180) degrees")
+        _number("axis_step", self.axis_step, 0.0, 45.0, closed_low=False)
+        _number("axis_grow", self.axis_grow, 0.0, 10.0)
+        _number("excursion_top", self.excursion_top, 1, 1000, integer=True)
+        _number("excursion_exact", self.excursion_exact, 1, 1000, integer=True)
+        if not (self.graded is True or self.graded is False or self.graded == "both"):
+            raise ConfigError("options.graded", self.graded, 'False, True or "both"')
+        _number("graded_min", self.graded_min, 0.0, 4.0, closed_low=False)
+        _number("graded_step", self.graded_step, 0.0, 1.0, closed_low=False)
+        _number("sampled_top", self.sampled_top, 1, 100, integer=True)
+        _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
+        _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
+        _number("penalty_range", self.penalty_range, 0.1, 1.0)
+        flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
+                 "chain_early", "also_default", "part", "share_tables", "axis", "excursions",
+                 "sampled")  # fmt: skip
+        for name in flags:
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(f"options.{name}", getattr(self, name), "true or false")
+
+    def sampled_here(self, nx: int, ny: int) -> bool:
+        """Whether graded lines and sampled scores apply on a map of ``nx x ny`` cells: where
+        boxes are searched cell by cell (at most :attr:`max_cells` a side; on 24 UAVs over
+        160 x 160 cells the sampled scores took 3.5 times the planning time, i24-quality3)."""
+        return max(nx, ny) <= self.max_cells
+
+    @classmethod
+    def preset(cls, effort: str = "default") -> PlanOptions:
+        """The options of an effort level (:data:`EFFORTS`): ``"default"`` the planner of
+        ``allocation_plan``; ``"thorough"`` the combination chosen on the validation priors
+        (module docstring)."""
+        if effort == "default":
+            return cls()
+        if effort == "thorough":
+            return cls(**THOROUGH)
+        raise ConfigError("effort", effort, f"one of {', '.join(EFFORTS)}")
+
+    def changed(self) -> dict[str, Any]:
+        """The fields that differ from the defaults (for plan.json)."""
+        base = PlanOptions()
+        return {
+            f.name: getattr(self, f.name)
+            for f in dataclasses.fields(self)
+            if getattr(self, f.name) != getattr(base, f.name)
+        }
+
+
+#: the ``thorough`` effort level's changes to the defaults (chosen on validation priors:
+#: docs/PLANNER.md, "Effort levels (i24-effort, 2026-11-28)").
+THOROUGH: dict[str, Any] = {
+    "graded": True,
+    "sampled": True,
+    "refine_sampled": True,
+    "airspace_penalty": True,
+    "angles": (45.0,),
+    "excursions": True,
+    "also_default": True,
+}

@@ -1,0 +1,289 @@
+"""Issue 24, session i24-effort (docs/PLANNER.md, "Effort levels"): a script, not a test.
+
+``digest OUT.json``
+    A digest (sha256 of every UAV's waypoints and the planned POS, ``repr`` of the floats) of
+    the default allocation plan on ``paper_6_2``'s own prior, two of its random priors
+    (episode seeds 0, 1), ``small`` and ``large_400``'s own prior: run before and after a
+    change that must not alter the default plans, and compare the two files.
+``plan MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
+    Planned POS_C over the rule-aware bound on ``MAP``'s random priors (the priors of
+    ``poc-env bench plan --scale``; validation priors: 5000-5011 on ``paper_6_2``, 5000-5002
+    on ``large_400``), every variant of :data:`VARIANTS` per seed in turn (interleaved, so the
+    time ratios are paired); records rewritten after every seed; paired summary against
+    ``default``.
+``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json CHECK RECORDS.json...``
+    Registered policies flown in the environment on the same random priors, records rewritten
+    after every flight (a partial run gives paired figures; a rerun resumes): the first policy
+    on every seed, the others on the first ``CHECK`` seeds only, to check they equal the stored
+    ``poc-env bench plan --scale`` records (results/plan_scale/*.json), which then stand in for
+    them; the rule-aware bound is the stored one (recomputed and checked on those seeds).
+``violations MAP SEED[,SEED...] VARIANT [VARIANT...]``
+    Flown violation steps and POSC per variant (``de``: ``de_plan``); on ``small`` as
+    tests/policies/test_allocation.py flies it (``small 1 default q3 q3np de``).
+``paired OUT.json RECORDS.json...``
+    The paired summary of a ``fly`` run against the stored ``allocation_plan`` and
+    ``greedy_rectangles`` flights.
+
+Run from the repository root, one thread: ``OMP_NUM_THREADS=1 python
+tests/planning/effort_ab.py plan paper_6_2 5000 5012 default,thorough out.json``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+from poc_env.agents.experiments.evaluate import episode_prior
+from poc_env.config import load_scenario
+from poc_env.theory.bound import rule_bound
+
+#: named variants (a preset and ``+field=value`` changes; tuples ``:``-separated).
+NAMED = {
+    "q3": "default+graded=1+sampled=1+refine_sampled=1+airspace_penalty=1",
+    "q3np": "default+graded=1+sampled=1+refine_sampled=1",
+}
+
+
+def _options(name: str):
+    """The plan options of variant ``name``: a preset or a :data:`NAMED` variant, with
+    ``+field=value`` changes (``thorough+angles=45``, ``q3+angles=22.5:45:67.5``)."""
+    from poc_env.agents.planning.options import PlanOptions
+
+    head, *rest = name.split("+")
+    if head in NAMED:
+        head, *more = NAMED[head].split("+")
+        rest = more + rest
+    base, changes = head, rest
+    opt = PlanOptions.preset(base)
+    for ch in changes:
+        key, val = ch.split("=", 1)
+        cur = getattr(opt, key)
+        if isinstance(cur, bool):
+            new: object = val.lower() in ("1", "true", "yes", "on")
+        elif isinstance(cur, tuple):
+            new = tuple(float(x) for x in val.split(":") if x)
+        elif isinstance(cur, int):
+            new = int(val)
+        elif isinstance(cur, float):
+            new = float(val)
+        else:
+            new = val
+        opt = dataclasses.replace(opt, **{key: new})
+    return opt
+
+
+def _digest(plan: dict) -> str:
+    h = hashlib.sha256()
+    for u in plan["uavs"]:
+        h.update(repr([[float(a), float(b)] for a, b in u["waypoints_m"]]).encode())
+    h.update(repr(float(plan["posc"])).encode())
+    return h.hexdigest()
+
+
+def digest(out: str) -> None:
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    cases = [("paper_6_2", None), ("paper_6_2", 0), ("paper_6_2", 1), ("small", None),
+             ("large_400", None)]  # fmt: skip
+    recs = {}
+    for name, seed in cases:
+        sc = load_scenario(name)
+        prior = None if seed is None else episode_prior(sc, seed)
+        t0 = time.perf_counter()
+        p = make_allocation_plan(sc, prior=prior)
+        key = f"{name}:{'scenario' if seed is None else seed}"
+        recs[key] = {"digest": _digest(p), "posc": float(p["posc"]), "start": p["start"],
+                     "plan_s": time.perf_counter() - t0}  # fmt: skip
+        print(key, recs[key], flush=True)
+    with open(out, "w") as f:
+        json.dump(recs, f, indent=1)
+
+
+def summary(recs: list[dict], key: str, base_name: str) -> None:
+    from poc_env.stats import ci95
+
+    names = sorted({r["variant"] for r in recs} - {base_name})
+    base = {r["seed"]: r for r in recs if r["variant"] == base_name}
+    for v in names:
+        rs = [r for r in recs if r["variant"] == v and r["seed"] in base]
+        d = np.array([r[key] / r["rule_bound"] - base[r["seed"]][key] / r["rule_bound"]
+                      for r in rs])  # fmt: skip
+        if not len(d):
+            continue
+        half = ci95(d) if len(d) > 1 else float("nan")
+        wtl = f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}"
+        ratio = [r["plan_s"] / base[r["seed"]]["plan_s"] for r in rs if "plan_s" in r]
+        mean0 = statistics.mean(b[key] / b["rule_bound"] for b in base.values())
+        mean1 = statistics.mean(r[key] / r["rule_bound"] for r in rs)
+        med = statistics.median(r["plan_s"] for r in rs if "plan_s" in r) if ratio else float("nan")
+        print(f"{v} - {base_name} ({key}/rule): {d.mean():+.4f} +- {half:.4f} {wtl} (n {len(d)}); "
+              f"{base_name} {mean0:.4f}, {v} {mean1:.4f}; time ratio median "
+              f"{statistics.median(ratio) if ratio else float('nan'):.2f}, {v} median {med:.1f} s",
+              flush=True)  # fmt: skip
+
+
+def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc = load_scenario(name)
+    recs = []
+    for seed in range(seed0, seed1):
+        prior = episode_prior(sc, seed)
+        bound = rule_bound(sc, prior).upper
+        for v in names:
+            opt = _options(v)
+            t0 = time.perf_counter()
+            p = make_allocation_plan(sc, prior=prior, options=opt)
+            dt = time.perf_counter() - t0
+            recs.append(
+                {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
+                 "rule_bound": bound, "start": p["start"], "refined": p["refined"],
+                 "plan_s": dt, "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            print(name, seed, v, round(p["posc"] / bound, 4), p["start"], p["refined"],
+                  round(dt, 1), round(os.getloadavg()[0], 1), flush=True)  # fmt: skip
+        with open(out, "w") as f:
+            json.dump(recs, f, indent=1)
+    summary(recs, "planned_posc", names[0])
+
+
+def violations(name: str, seeds: list[int], names: list[str]) -> None:
+    """Flown separation-violation steps (eq. 21 / 24, the environment's count) and POSC of the
+    allocation policy with each variant's options (``de`` for ``de_plan`` at the test's budget,
+    popsize 16, 20 generations): on ``small`` the episode's own prior, as
+    tests/policies/test_allocation.py flies it; elsewhere the random prior of the seed."""
+    from poc_env.agents.policies.allocation import AllocationPlanPolicy
+    from poc_env.agents.policies.de_plan import DEPlanPolicy
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    sc = load_scenario(name)
+    for seed in seeds:
+        opts = None if name == "small" else {"prior": episode_prior(sc, seed)}
+        for v in names:
+            env = UAVSearchParallelEnv(scenario=sc)
+            if v == "de":
+                pol: object = DEPlanPolicy(popsize=16, maxiter=20)
+            else:
+                pol = AllocationPlanPolicy()
+                pol.options = _options(v)  # type: ignore[attr-defined]
+            obs, _ = env.reset(seed=seed, options=opts)
+            pol.reset(env, seed)  # type: ignore[attr-defined]
+            while env.agents:
+                obs, *_ = env.step(pol.predict(obs)[0])  # type: ignore[attr-defined]
+            st = env.sim_state
+            print(name, seed, v, "violation steps", int(st.violations[0].sum()), "posc",
+                  round(float(st.posc[0]), 4), flush=True)  # fmt: skip
+
+
+def stored(paths: list[str]) -> dict[tuple[int, str], dict]:
+    """The episodes of ``poc-env bench plan --scale`` records (results/plan_scale/*.json) by
+    (seed, policy)."""
+    out = {}
+    for p in paths:
+        with open(p) as f:
+            for e in json.load(f)["episodes"]:
+                out[e["seed"], e["policy"]] = e
+    return out
+
+
+def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check: int,
+        records: list[str]) -> None:  # fmt: skip
+    """``policies[0]`` flown on every seed, the others on the first ``check`` seeds only (to
+    check they equal the stored ``records``, which then stand in for them)."""
+    from poc_env.agents.benchmarks.plan_scale import _flown
+
+    sc = load_scenario(name)
+    old = stored(records)
+    recs: list[dict] = []
+    if os.path.exists(out):  # resume: seeds already flown are kept
+        with open(out) as f:
+            recs = json.load(f)
+    done = {(r["seed"], r["variant"]) for r in recs}
+    for seed in range(seed0, seed1):
+        prior = episode_prior(sc, seed)
+        bound = None
+        for pol in policies if seed - seed0 < check else policies[:1]:
+            if (seed, pol) in done:
+                continue
+            if bound is None:
+                known = old.get((seed, "allocation_plan"))
+                bound = known["rule_bound"] if known else rule_bound(sc, prior).upper
+                if seed - seed0 < check and known:  # the stored bound is this prior's
+                    assert abs(rule_bound(sc, prior).upper - bound) <= 1e-9 * bound, seed
+            t0 = time.perf_counter()
+            posc, p = _flown(sc, pol, seed, prior)
+            recs.append(
+                {"map": name, "seed": seed, "variant": pol, "posc": float(posc),
+                 "planned_posc": float(p.get("posc", float("nan"))), "rule_bound": bound,
+                 "start": p.get("start"), "plan_s": float(p.get("runtime_s", float("nan"))),
+                 "episode_s": time.perf_counter() - t0, "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            ref = old.get((seed, pol))
+            same = "" if ref is None else f" stored {ref['posc'] / bound:.4f}"
+            print(name, seed, pol, round(posc / bound, 4), round(recs[-1]["plan_s"], 1),
+                  round(os.getloadavg()[0], 1), same, flush=True)  # fmt: skip
+            with open(out + ".tmp", "w") as f:
+                json.dump(recs, f, indent=1)
+            os.replace(out + ".tmp", out)
+    paired(out, records)
+
+
+def paired(out: str, records: list[str]) -> None:
+    """Flown ``fly`` records paired per seed with the stored ``allocation_plan`` and
+    ``greedy_rectangles`` episodes (checked equal where the default was flown here too)."""
+    from poc_env.stats import ci95
+
+    with open(out) as f:
+        recs = json.load(f)
+    old = stored(records)
+    for r in recs:  # the default flown here equals the stored flight, seed for seed
+        ref = old.get((r["seed"], r["variant"]))
+        if ref is not None:
+            same = abs(ref["posc"] - r["posc"]) <= 1e-12
+            print(f"check seed {r['seed']} {r['variant']}: flown {r['posc']:.6f} stored "
+                  f"{ref['posc']:.6f} {'equal' if same else 'DIFFERENT'}")  # fmt: skip
+    mine = [r for r in recs if r["variant"] not in old_policies(old)]
+    for pol in sorted({r["variant"] for r in mine}):
+        rs = sorted((r for r in mine if r["variant"] == pol), key=lambda r: r["seed"])
+        a = np.array([r["posc"] / r["rule_bound"] for r in rs])
+        for base in ("allocation_plan", "greedy_rectangles"):
+            b = np.array([old[r["seed"], base]["posc"] / r["rule_bound"] for r in rs])
+            d = a - b
+            half = ci95(d) if len(d) > 1 else float("nan")
+            print(f"{pol} - {base} (flown/rule, n {len(d)}): {d.mean():+.4f} +- {half:.4f} "
+                  f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}; min "
+                  f"{d.min():+.4f}; {pol} {a.mean():.4f} +- {ci95(a) if len(a) > 1 else 0:.4f}, "
+                  f"{base} {b.mean():.4f}; priors >= 0.90: {(a >= 0.9).sum()} vs "
+                  f"{(b >= 0.9).sum()}")  # fmt: skip
+        t = [r["plan_s"] for r in rs]
+        lo, hi = min(r["load"] for r in rs), max(r["load"] for r in rs)
+        print(f"{pol} planning time median {statistics.median(t):.1f} s (max {max(t):.1f}); "
+              f"load {lo:.1f}-{hi:.1f}")  # fmt: skip
+
+
+def old_policies(old: dict) -> set[str]:
+    return {k[1] for k in old}
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "digest":
+        digest(sys.argv[2])
+        sys.exit()
+    if sys.argv[1] == "violations":
+        violations(sys.argv[2], [int(x) for x in sys.argv[3].split(",")], sys.argv[4:])
+        sys.exit()
+    if sys.argv[1] == "paired":
+        paired(sys.argv[2], sys.argv[3:])
+        sys.exit()
+    cmd, name, s0, s1, vs, out = sys.argv[1:7]
+    if cmd == "plan":
+        plan(name, int(s0), int(s1), vs.split(","), out)
+    else:  # fly ... CHECK RECORDS.json...
+        fly(name, int(s0), int(s1), vs.split(","), out, int(sys.argv[7]), sys.argv[8:])
