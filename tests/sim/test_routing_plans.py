@@ -67,3 +67,26 @@ def test_plan_with_zones_is_the_reference_routers(label, monkeypatch):
         field = np.asarray(sc.airfields[0].position_m)
         d = shapely.Point(field).distance(shapely.union_all(ref.zones))
         assert 0 < d < clearance_m(sc)
+
+
+def test_remembered_routes_are_the_references():
+    """Routes that share their first points or their ends (the eq. 18 bisection's cuts of a
+    route, each cut with another landing), asked twice: the fast router's remembered answers
+    are the reference's."""
+    sc, _ = _scenario("paper_6_2", (4, 0), None)
+    fast = ZoneRouter.for_scenario(sc)
+    ref = ZoneRouter.for_scenario(sc)
+    ref.reference = True
+    x0, y0, x1, y1 = fast.area
+    rng = np.random.default_rng(7)
+    routes = [rng.uniform([x0, y0], [x1, y1], (8, 2)) for _ in range(6)]
+    others = rng.uniform([x0, y0], [x1, y1], (6, 2))
+    cuts = [
+        np.vstack([route[: m + 1], end])
+        for route, other in zip(routes, others, strict=True)
+        for m in range(len(route) - 1)
+        for end in (route[-1], other)
+    ]
+    for _ in range(2):  # the second time from memory
+        for cut in cuts:
+            np.testing.assert_array_equal(fast.reroute(cut), ref.reroute(cut))
