@@ -22,6 +22,14 @@ not a test.
     zones, after a warm-up plan: the 25 costliest functions by cumulative time, then the
     router's share (:meth:`~poc_env.sim.routing.ZoneRouter.reroute` over the whole plan).
 
+``breakdown [CASE] [N]``
+    Where the zones' extra planning time goes: ``N`` (default 3) allocation plans of ``CASE``
+    (default ``paper_6_2``) with the bench's 4 zones and without zones, alternated after a
+    warm-up plan of each, in one process: the process's CPU time of the plan, of the
+    refinement runs (:func:`~poc_env.agents.planning.refine.refine_routes`, how many) and of
+    the router (every :class:`~poc_env.sim.routing.ZoneRouter` call from outside the router:
+    its construction, ``reach_share``, ``reroute``); medians.
+
 Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
 /work/main . 3``.
 """
@@ -143,6 +151,60 @@ def profile(case: str) -> None:
     print(f"router (reroute) {router:.3f} s of {total:.3f} s: {router / total:.1%}", flush=True)
 
 
+def breakdown(case: str, n: int) -> None:
+    import functools
+
+    import poc_env.agents.planning.allocation as alloc
+    import poc_env.sim.routing as routing
+    from poc_env.agents.benchmarks.plan_scale import ZONE_CASES
+    from poc_env.config import load_scenario
+
+    spent = {"refine": 0.0, "router": 0.0, "runs": 0}
+    depth = [0]
+
+    def timed(f, what):
+        @functools.wraps(f)
+        def g(*a, **k):
+            if depth[0]:
+                return f(*a, **k)
+            depth[0] += 1
+            c0 = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                spent[what] += time.process_time() - c0
+                spent["runs"] += what == "refine"
+                depth[0] -= 1
+
+        return g
+
+    for name in ("__init__", "reach_share", "reroute", "path", "pieces", "crosses", "flyable"):
+        setattr(routing.ZoneRouter, name, timed(getattr(routing.ZoneRouter, name), "router"))
+    alloc.refine_routes = timed(alloc.refine_routes, "refine")  # type: ignore[assignment]
+    sc, uavs = _bench_case(case)
+    cases = {"4 zones": sc, "no zones": load_scenario(*ZONE_CASES[case][:2])}
+    for s in cases.values():
+        alloc.make_allocation_plan(s, uavs=uavs)
+    rows: dict[str, list[tuple[float, float, float, int]]] = {k: [] for k in cases}
+    print("load at start", os.getloadavg(), flush=True)
+    for _ in range(n):
+        for label, s in cases.items():
+            spent.update(refine=0.0, router=0.0, runs=0)
+            c0 = time.process_time()
+            plan = alloc.make_allocation_plan(s, uavs=uavs)
+            total = time.process_time() - c0
+            rows[label].append((total, spent["refine"], spent["router"], int(spent["runs"])))
+            print(case, label, "plan CPU", round(total, 3), "refine", round(spent["refine"], 3),
+                  f"({spent['runs']} runs)", "router", round(spent["router"], 3),
+                  "posc", round(float(plan["posc"]), 4), flush=True)  # fmt: skip
+    for label, r in rows.items():
+        med = [statistics.median(x) for x in zip(*r)]
+        print(f"{case} {label}: medians of {n}: plan {med[0]:.3f} s CPU, refinement "
+              f"{med[1]:.3f} s ({med[3]:.0f} runs), router {med[2]:.3f} s, rest "
+              f"{med[0] - med[1] - med[2]:.3f} s", flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
 def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     print("load at start", os.getloadavg(), flush=True)
@@ -177,6 +239,9 @@ if __name__ == "__main__":
         digest(sys.argv[2])
     elif sys.argv[1] == "one":
         one(sys.argv[2])
+    elif sys.argv[1] == "breakdown":
+        breakdown(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2",
+                  int(sys.argv[3]) if len(sys.argv) > 3 else 3)  # fmt: skip
     elif sys.argv[1] == "profile":
         profile(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2")
     else:
