@@ -117,7 +117,10 @@ class _Edges:
         hit = state == 1
         clear = state == 0  # no contact with the boundary: wholly inside or wholly outside
         if clear.any():
-            hit[clear] = shapely.contains_xy(self.geom, a[clear, 0], a[clear, 1])
+            if len(a) > 1 and a.strides[0] == 0:  # one start (broadcast): one test
+                hit[clear] = shapely.contains_xy(self.geom, a[0, 0], a[0, 1])
+            else:
+                hit[clear] = shapely.contains_xy(self.geom, a[clear, 0], a[clear, 1])
         unsure = state == 2
         if unsure.any():
             lines = shapely.linestrings(np.stack([a[unsure], b[unsure]], axis=1))
@@ -248,7 +251,7 @@ class ZoneRouter:
         vertices (the answer is remembered per ``p`` and ``keep``)."""
         if not len(targets):
             return np.zeros(0, dtype=bool)
-        key = _key(p) + bytes([keep])
+        key = _key(p) + bytes([keep]) if nodes else b""
         if nodes and key in self._seen:
             return self._seen[key]
         starts = np.broadcast_to(p, targets.shape)

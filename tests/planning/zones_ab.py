@@ -30,6 +30,13 @@ not a test.
     the router (every :class:`~poc_env.sim.routing.ZoneRouter` call from outside the router:
     its construction, ``reach_share``, ``reroute``); medians.
 
+``router TREE_A [CASE] [N]``
+    The router alone, ``TREE_A``'s ``poc_env/sim/routing.py`` against this one's in one
+    process: every ``reroute`` call of one allocation plan of ``CASE`` (default
+    ``paper_6_2``) with the bench's 4 zones is recorded, then replayed ``N`` times (default
+    9) through fresh routers of each (as a plan builds them), alternated; CPU time medians
+    and pair ratios, and a check that both answer every call as the plan did.
+
 Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
 /work/main . 3``.
 """
@@ -205,6 +212,52 @@ def breakdown(case: str, n: int) -> None:
     print("load at end", os.getloadavg(), flush=True)
 
 
+def router(tree_a: str, case: str, n: int) -> None:
+    import importlib.util
+
+    import poc_env.sim.routing as this
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.sim.core import operating_area
+
+    spec = importlib.util.spec_from_file_location(
+        "routing_a", os.path.join(tree_a, "poc_env", "sim", "routing.py")
+    )
+    assert spec is not None and spec.loader is not None
+    other = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(other)
+    sc, uavs = _bench_case(case)
+    calls: list[tuple[int, np.ndarray, np.ndarray]] = []
+    real = this.ZoneRouter.reroute
+    routers: list[int] = []
+
+    def recorded(self, points):
+        got = real(self, points)
+        if id(self) not in routers:
+            routers.append(id(self))
+        calls.append((routers.index(id(self)), np.array(points, dtype=float), got))
+        return got
+
+    this.ZoneRouter.reroute = recorded  # type: ignore[method-assign]
+    make_allocation_plan(sc, uavs=uavs)
+    this.ZoneRouter.reroute = real  # type: ignore[method-assign]
+    args = (sc.map.no_fly_zones_m, operating_area(sc), this.clearance_m(sc))
+    cpu: dict[str, list[float]] = {tree_a: [], ".": []}
+    print("load at start", os.getloadavg(), len(calls), "reroute calls", flush=True)
+    for r in range(n):
+        order = [(tree_a, other), (".", this)]
+        for label, mod in order if r % 2 == 0 else order[::-1]:
+            c0 = time.process_time()
+            rs = [mod.ZoneRouter(*args) for _ in routers]
+            got = [rs[i].reroute(p) for i, p, _ in calls]
+            cpu[label].append(time.process_time() - c0)
+            assert all(np.array_equal(g, w) for g, (_, _, w) in zip(got, calls)), label
+    pairs = [round(b / a, 3) for a, b in zip(cpu[tree_a], cpu["."])]
+    med = {k: round(statistics.median(v), 4) for k, v in cpu.items()}
+    print(case, "router CPU s medians", med, "pair ratios this / A", pairs, "median",
+          statistics.median(pairs), flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
 def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     print("load at start", os.getloadavg(), flush=True)
@@ -242,6 +295,9 @@ if __name__ == "__main__":
     elif sys.argv[1] == "breakdown":
         breakdown(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2",
                   int(sys.argv[3]) if len(sys.argv) > 3 else 3)  # fmt: skip
+    elif sys.argv[1] == "router":
+        router(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "paper_6_2",
+               int(sys.argv[4]) if len(sys.argv) > 4 else 9)  # fmt: skip
     elif sys.argv[1] == "profile":
         profile(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2")
     else:
