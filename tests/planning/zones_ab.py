@@ -37,6 +37,13 @@ not a test.
     9) through fresh routers of each (as a plan builds them), alternated; CPU time medians
     and pair ratios, and a check that both answer every call as the plan did.
 
+``plan-router TREE_A [CASE] [N]``
+    Whole allocation plans of ``CASE`` (default ``paper_6_2``) with the bench's 4 zones, in
+    one process, with ``TREE_A``'s ``ZoneRouter`` and with this one's patched into the
+    planners (the allocation planner and the greedy rectangles), alternated ``N`` times
+    (default 8) after a plan of each: both plans' waypoint digests, CPU time medians and pair
+    ratios (the plan's time change that the router alone makes).
+
 Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
 /work/main . 3``.
 """
@@ -258,6 +265,43 @@ def router(tree_a: str, case: str, n: int) -> None:
     print("load at end", os.getloadavg(), flush=True)
 
 
+def plan_router(tree_a: str, case: str, n: int) -> None:
+    import importlib.util
+
+    import poc_env.agents.planning.allocation as alloc
+    import poc_env.agents.planning.greedy_rectangles as greedy
+    import poc_env.sim.routing as this
+
+    spec = importlib.util.spec_from_file_location(
+        "routing_a", os.path.join(tree_a, "poc_env", "sim", "routing.py")
+    )
+    assert spec is not None and spec.loader is not None
+    other = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(other)
+    sc, uavs = _bench_case(case)
+    ways = {tree_a: other.ZoneRouter, ".": this.ZoneRouter}
+
+    def plan(label: str) -> dict[str, Any]:
+        alloc.ZoneRouter = greedy.ZoneRouter = ways[label]  # type: ignore[misc]
+        return alloc.make_allocation_plan(sc, uavs=uavs)
+
+    print("load at start", os.getloadavg(), flush=True)
+    for label in ways:
+        got = plan(label)
+        print(label, "digest", _digest(got), "posc", got["posc"], flush=True)
+    cpu: dict[str, list[float]] = {k: [] for k in ways}
+    for r in range(n):
+        for label in list(ways) if r % 2 == 0 else list(ways)[::-1]:
+            c0 = time.process_time()
+            plan(label)
+            cpu[label].append(time.process_time() - c0)
+    pairs = [round(b / a, 3) for a, b in zip(cpu[tree_a], cpu["."])]
+    med = {k: round(statistics.median(v), 3) for k, v in cpu.items()}
+    print(case, "plan CPU s medians", med, "pair ratios this / A", pairs, "median",
+          statistics.median(pairs), flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
 def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     print("load at start", os.getloadavg(), flush=True)
@@ -298,6 +342,9 @@ if __name__ == "__main__":
     elif sys.argv[1] == "router":
         router(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "paper_6_2",
                int(sys.argv[4]) if len(sys.argv) > 4 else 9)  # fmt: skip
+    elif sys.argv[1] == "plan-router":
+        plan_router(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "paper_6_2",
+                    int(sys.argv[4]) if len(sys.argv) > 4 else 8)  # fmt: skip
     elif sys.argv[1] == "profile":
         profile(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2")
     else:
