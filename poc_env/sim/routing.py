@@ -99,14 +99,16 @@ class _Edges:
     def hits(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Bool (L,): ``shapely.intersects(LineString(a[i], b[i]), geom)``, exactly (the
         module doc's compiled test first, shapely for what it leaves uncertain)."""
-        a = np.ascontiguousarray(a, dtype=float).reshape(-1, 2)
-        b = np.ascontiguousarray(b, dtype=float).reshape(-1, 2)
+        a = np.asarray(a, dtype=float).reshape(-1, 2)
+        b = np.asarray(b, dtype=float).reshape(-1, 2)
         state = np.empty(len(a), dtype=np.int8)
+        ax, ay = np.ascontiguousarray(a.T)
+        bx, by = np.ascontiguousarray(b.T)
         edge_contacts(
-            np.ascontiguousarray(a[:, 0]),
-            np.ascontiguousarray(a[:, 1]),
-            np.ascontiguousarray(b[:, 0]),
-            np.ascontiguousarray(b[:, 1]),
+            ax,
+            ay,
+            bx,
+            by,
             *self._e,
             self._rings,
             self._boxes,
@@ -115,7 +117,10 @@ class _Edges:
         hit = state == 1
         clear = state == 0  # no contact with the boundary: wholly inside or wholly outside
         if clear.any():
-            hit[clear] = shapely.contains_xy(self.geom, a[clear, 0], a[clear, 1])
+            if len(a) > 1 and a.strides[0] == 0:  # one start (broadcast): one test
+                hit[clear] = shapely.contains_xy(self.geom, a[0, 0], a[0, 1])
+            else:
+                hit[clear] = shapely.contains_xy(self.geom, a[clear, 0], a[clear, 1])
         unsure = state == 2
         if unsure.any():
             lines = shapely.linestrings(np.stack([a[unsure], b[unsure]], axis=1))
@@ -175,6 +180,7 @@ class ZoneRouter:
         self._paths: dict[bytes, np.ndarray | None] = {}
         self._pieces: dict[bytes, list[tuple[np.ndarray, np.ndarray]]] = {}
         self._seen: dict[bytes, np.ndarray] = {}
+        self._routes: dict[bytes, np.ndarray] = {}
         if not self.active:
             return
         raw = shapely.union_all(self.zones)
@@ -245,7 +251,7 @@ class ZoneRouter:
         vertices (the answer is remembered per ``p`` and ``keep``)."""
         if not len(targets):
             return np.zeros(0, dtype=bool)
-        key = _key(p) + bytes([keep])
+        key = _key(p) + bytes([keep]) if nodes else b""
         if nodes and key in self._seen:
             return self._seen[key]
         starts = np.broadcast_to(p, targets.shape)
@@ -254,7 +260,10 @@ class ZoneRouter:
             near = self._nodes_near.copy()
         else:
             near = shapely.contains_xy(self.obstacle, targets[:, 0], targets[:, 1])
-        p_near = bool(self.obstacle.contains(Point(p)))
+        if self.reference:
+            p_near = bool(self.obstacle.contains(Point(p)))
+        else:  # the same predicate on the prepared geometry, without a Point
+            p_near = bool(shapely.contains_xy(self.obstacle, p[0], p[1]))
         if p_near:
             near[:] = True
         if near.any():
@@ -343,7 +352,12 @@ class ZoneRouter:
             return [] if self.keep_out.contains(Point(a)) else [(a, b)]
         if not self._hits(self.keep_out, a[None], b[None])[0]:
             return [(a, b)]
-        rest = seg.difference(self.keep_out)
+        return self._parts(a, b, seg.difference(self.keep_out))
+
+    @staticmethod
+    def _parts(a: np.ndarray, b: np.ndarray, rest: Any) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The pieces of the leg ``a -> b`` left in ``rest`` (its difference with the keep-out
+        area), in flight order."""
         out = []
         d = b - a
         for g in getattr(rest, "geoms", [rest]):
@@ -356,6 +370,20 @@ class ZoneRouter:
         out.sort(key=lambda r: r[2])
         return [(s, e) for s, e, _ in out]
 
+    def _clip_legs(self, a: np.ndarray, b: np.ndarray) -> None:
+        """Remember :meth:`pieces` of the legs ``a[i] -> b[i]`` ((L, 2) each, every one known
+        to meet the keep-out area) not remembered yet: :meth:`_clip`'s answers, the differences
+        taken in one shapely call."""
+        keys = [_key(p, q) for p, q in zip(a, b)]
+        todo = [i for i, k in enumerate(keys) if k not in self._pieces and np.any(a[i] != b[i])]
+        if len(todo) < 2:
+            return
+        rest = shapely.difference(
+            shapely.linestrings(np.stack([a[todo], b[todo]], axis=1)), self.keep_out
+        )
+        for i, r in zip(todo, rest):
+            self._remember(self._pieces, keys[i], self._parts(a[i].copy(), b[i].copy(), r))
+
     def reroute(self, points) -> np.ndarray:
         """``points`` (take-off, waypoints, landing) made flyable: each leg cut to its parts
         outside the keep-out area, consecutive parts joined by :meth:`path` (a part that cannot
@@ -363,6 +391,17 @@ class ZoneRouter:
         pts = np.asarray(points, dtype=float).reshape(-1, 2)
         if not self.active or len(pts) < 2:
             return pts
+        if self.reference:
+            return self._reroute(pts)
+        key = pts.tobytes()
+        got = self._routes.get(key)
+        if got is None:
+            got = self._reroute(pts)
+            self._remember(self._routes, key, got)
+        return got.copy()
+
+    def _reroute(self, pts: np.ndarray) -> np.ndarray:
+        """:meth:`reroute` of ``pts`` ((n, 2), n >= 2)."""
         cur = pts[0]
         out = [cur]
         eps = 1e-6
@@ -378,13 +417,26 @@ class ZoneRouter:
             cur = out[-1]
             return True
 
-        # legs clear of the keep-out area are their own piece (one batched test)
+        # legs clear of the keep-out area are their own piece (one batched test); the fast
+        # router clips the others in one call and goes straight on along a run of clear legs
+        # (the route is then at the leg's start itself: going there adds nothing)
         clear = ~self._hits(self.keep_out, pts[:-1], pts[1:])
+        fast = not self.reference
+        if fast:
+            cut = np.flatnonzero(~clear)
+            self._clip_legs(pts[cut], pts[cut + 1])
+        at = False  # the route is at the leg's start itself (a clear leg's end)
         for leg, (p, q) in enumerate(itertools.pairwise(pts)):
+            if at and clear[leg]:
+                out.append(q)
+                cur = q
+                continue
+            at = False
             for s, e in [(p, q)] if clear[leg] else self.pieces(p, q):
                 if go(s):
                     out.append(e)
                     cur = e
+                    at = fast and bool(clear[leg])
         if not go(pts[-1]):
             out.append(pts[-1])  # no flyable way: the straight leg (the caller checks)
         res = np.asarray(out)

@@ -22,6 +22,28 @@ not a test.
     zones, after a warm-up plan: the 25 costliest functions by cumulative time, then the
     router's share (:meth:`~poc_env.sim.routing.ZoneRouter.reroute` over the whole plan).
 
+``breakdown [CASE] [N]``
+    Where the zones' extra planning time goes: ``N`` (default 3) allocation plans of ``CASE``
+    (default ``paper_6_2``) with the bench's 4 zones and without zones, alternated after a
+    warm-up plan of each, in one process: the process's CPU time of the plan, of the
+    refinement runs (:func:`~poc_env.agents.planning.refine.refine_routes`, how many) and of
+    the router (every :class:`~poc_env.sim.routing.ZoneRouter` call from outside the router:
+    its construction, ``reach_share``, ``reroute``); medians.
+
+``router TREE_A [CASE] [N]``
+    The router alone, ``TREE_A``'s ``poc_env/sim/routing.py`` against this one's in one
+    process: every ``reroute`` call of one allocation plan of ``CASE`` (default
+    ``paper_6_2``) with the bench's 4 zones is recorded, then replayed ``N`` times (default
+    9) through fresh routers of each (as a plan builds them), alternated; CPU time medians
+    and pair ratios, and a check that both answer every call as the plan did.
+
+``plan-router TREE_A [CASE] [N]``
+    Whole allocation plans of ``CASE`` (default ``paper_6_2``) with the bench's 4 zones, in
+    one process, with ``TREE_A``'s ``ZoneRouter`` and with this one's patched into the
+    planners (the allocation planner and the greedy rectangles), alternated ``N`` times
+    (default 8) after a plan of each: both plans' waypoint digests, CPU time medians and pair
+    ratios (the plan's time change that the router alone makes).
+
 Run from the repository root: ``OMP_NUM_THREADS=1 python tests/planning/zones_ab.py timing
 /work/main . 3``.
 """
@@ -143,6 +165,143 @@ def profile(case: str) -> None:
     print(f"router (reroute) {router:.3f} s of {total:.3f} s: {router / total:.1%}", flush=True)
 
 
+def breakdown(case: str, n: int) -> None:
+    import functools
+
+    import poc_env.agents.planning.allocation as alloc
+    import poc_env.sim.routing as routing
+    from poc_env.agents.benchmarks.plan_scale import ZONE_CASES
+    from poc_env.config import load_scenario
+
+    spent = {"refine": 0.0, "router": 0.0, "runs": 0}
+    depth = [0]
+
+    def timed(f, what):
+        @functools.wraps(f)
+        def g(*a, **k):
+            if depth[0]:
+                return f(*a, **k)
+            depth[0] += 1
+            c0 = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                spent[what] += time.process_time() - c0
+                spent["runs"] += what == "refine"
+                depth[0] -= 1
+
+        return g
+
+    for name in ("__init__", "reach_share", "reroute", "path", "pieces", "crosses", "flyable"):
+        setattr(routing.ZoneRouter, name, timed(getattr(routing.ZoneRouter, name), "router"))
+    alloc.refine_routes = timed(alloc.refine_routes, "refine")  # type: ignore[assignment]
+    sc, uavs = _bench_case(case)
+    cases = {"4 zones": sc, "no zones": load_scenario(*ZONE_CASES[case][:2])}
+    for s in cases.values():
+        alloc.make_allocation_plan(s, uavs=uavs)
+    rows: dict[str, list[tuple[float, float, float, int]]] = {k: [] for k in cases}
+    print("load at start", os.getloadavg(), flush=True)
+    for _ in range(n):
+        for label, s in cases.items():
+            spent.update(refine=0.0, router=0.0, runs=0)
+            c0 = time.process_time()
+            plan = alloc.make_allocation_plan(s, uavs=uavs)
+            total = time.process_time() - c0
+            rows[label].append((total, spent["refine"], spent["router"], int(spent["runs"])))
+            print(case, label, "plan CPU", round(total, 3), "refine", round(spent["refine"], 3),
+                  f"({spent['runs']} runs)", "router", round(spent["router"], 3),
+                  "posc", round(float(plan["posc"]), 4), flush=True)  # fmt: skip
+    for label, r in rows.items():
+        med = [statistics.median(x) for x in zip(*r)]
+        print(f"{case} {label}: medians of {n}: plan {med[0]:.3f} s CPU, refinement "
+              f"{med[1]:.3f} s ({med[3]:.0f} runs), router {med[2]:.3f} s, rest "
+              f"{med[0] - med[1] - med[2]:.3f} s", flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
+def router(tree_a: str, case: str, n: int) -> None:
+    import importlib.util
+
+    import poc_env.sim.routing as this
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.sim.core import operating_area
+
+    spec = importlib.util.spec_from_file_location(
+        "routing_a", os.path.join(tree_a, "poc_env", "sim", "routing.py")
+    )
+    assert spec is not None and spec.loader is not None
+    other = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(other)
+    sc, uavs = _bench_case(case)
+    calls: list[tuple[int, np.ndarray, np.ndarray]] = []
+    real = this.ZoneRouter.reroute
+    routers: list[int] = []
+
+    def recorded(self, points):
+        got = real(self, points)
+        if id(self) not in routers:
+            routers.append(id(self))
+        calls.append((routers.index(id(self)), np.array(points, dtype=float), got))
+        return got
+
+    this.ZoneRouter.reroute = recorded  # type: ignore[method-assign]
+    make_allocation_plan(sc, uavs=uavs)
+    this.ZoneRouter.reroute = real  # type: ignore[method-assign]
+    args = (sc.map.no_fly_zones_m, operating_area(sc), this.clearance_m(sc))
+    cpu: dict[str, list[float]] = {tree_a: [], ".": []}
+    print("load at start", os.getloadavg(), len(calls), "reroute calls", flush=True)
+    for r in range(n):
+        order = [(tree_a, other), (".", this)]
+        for label, mod in order if r % 2 == 0 else order[::-1]:
+            c0 = time.process_time()
+            rs = [mod.ZoneRouter(*args) for _ in routers]
+            got = [rs[i].reroute(p) for i, p, _ in calls]
+            cpu[label].append(time.process_time() - c0)
+            assert all(np.array_equal(g, w) for g, (_, _, w) in zip(got, calls)), label
+    pairs = [round(b / a, 3) for a, b in zip(cpu[tree_a], cpu["."])]
+    med = {k: round(statistics.median(v), 4) for k, v in cpu.items()}
+    print(case, "router CPU s medians", med, "pair ratios this / A", pairs, "median",
+          statistics.median(pairs), flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
+def plan_router(tree_a: str, case: str, n: int) -> None:
+    import importlib.util
+
+    import poc_env.agents.planning.allocation as alloc
+    import poc_env.agents.planning.greedy_rectangles as greedy
+    import poc_env.sim.routing as this
+
+    spec = importlib.util.spec_from_file_location(
+        "routing_a", os.path.join(tree_a, "poc_env", "sim", "routing.py")
+    )
+    assert spec is not None and spec.loader is not None
+    other = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(other)
+    sc, uavs = _bench_case(case)
+    ways = {tree_a: other.ZoneRouter, ".": this.ZoneRouter}
+
+    def plan(label: str) -> dict[str, Any]:
+        alloc.ZoneRouter = greedy.ZoneRouter = ways[label]  # type: ignore[misc]
+        return alloc.make_allocation_plan(sc, uavs=uavs)
+
+    print("load at start", os.getloadavg(), flush=True)
+    for label in ways:
+        got = plan(label)
+        print(label, "digest", _digest(got), "posc", got["posc"], flush=True)
+    cpu: dict[str, list[float]] = {k: [] for k in ways}
+    for r in range(n):
+        for label in list(ways) if r % 2 == 0 else list(ways)[::-1]:
+            c0 = time.process_time()
+            plan(label)
+            cpu[label].append(time.process_time() - c0)
+    pairs = [round(b / a, 3) for a, b in zip(cpu[tree_a], cpu["."])]
+    med = {k: round(statistics.median(v), 3) for k, v in cpu.items()}
+    print(case, "plan CPU s medians", med, "pair ratios this / A", pairs, "median",
+          statistics.median(pairs), flush=True)  # fmt: skip
+    print("load at end", os.getloadavg(), flush=True)
+
+
 def timing(tree_a: str, tree_b: str, n: int, cases: list[str]) -> None:
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     print("load at start", os.getloadavg(), flush=True)
@@ -177,6 +336,15 @@ if __name__ == "__main__":
         digest(sys.argv[2])
     elif sys.argv[1] == "one":
         one(sys.argv[2])
+    elif sys.argv[1] == "breakdown":
+        breakdown(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2",
+                  int(sys.argv[3]) if len(sys.argv) > 3 else 3)  # fmt: skip
+    elif sys.argv[1] == "router":
+        router(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "paper_6_2",
+               int(sys.argv[4]) if len(sys.argv) > 4 else 9)  # fmt: skip
+    elif sys.argv[1] == "plan-router":
+        plan_router(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "paper_6_2",
+                    int(sys.argv[4]) if len(sys.argv) > 4 else 8)  # fmt: skip
     elif sys.argv[1] == "profile":
         profile(sys.argv[2] if len(sys.argv) > 2 else "paper_6_2")
     else:
