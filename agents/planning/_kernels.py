@@ -4,7 +4,8 @@
 :mod:`poc_env.agents.planning.objective` for a population in one pass (the prior masses then
 come from :func:`poc_env._kernels.rectangles.rectangle_masses`, called by the objective);
 :func:`route_timeline` and :func:`route_sample` time and sample a flight along a path and
-:func:`fits_batch` times a waypoint's candidate edits (:mod:`poc_env.agents.planning.refine`);
+:func:`fits_batch` times a waypoint's candidate edits and :func:`leg_samples` samples legs onto
+the grid (:mod:`poc_env.agents.planning.refine`);
 :func:`best_box` is the greedy rectangle planner's box search
 (:mod:`poc_env.agents.planning.greedy_rectangles`) and the coverage boxes'
 (:mod:`poc_env.agents.planning.coverage_boxes`).
@@ -180,6 +181,39 @@ def fits_batch(p, i, qs, ops, v_out, v_line, v_home, turn_cost, budget, reserve,
         ok[c] = route_timeline(
             buf[:k], v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out[:k], dep[:k]
         )
+
+
+@_jit
+def leg_samples(sx, sy, dx, dy, length, ox, oy, c, nx, ny, w, area):
+    """The coverage samples of legs from ``(sx, sy)`` by ``(dx, dy)`` of ``length`` (numpy's
+    ``hypot``, computed by the caller: transcendentals stay in numpy), ``m = max(1, ceil(4 L /
+    c))`` points a leg at ``t = (j + 1/2) / m``: per point inside the ``nx x ny`` grid of cell
+    ``c`` from ``(ox, oy)``, its leg, flat cell and coverage ``w L / m / area`` (eq. 10 per
+    cell). The operations and their order are ``refine``'s numpy formulation's, so the samples
+    are the same bit for bit (``tests/planning/test_refine.py``)."""
+    n_legs = len(sx)
+    m = np.empty(n_legs, np.int64)
+    total = 0
+    for i in range(n_legs):
+        k = np.ceil(4.0 * length[i] / c)
+        m[i] = np.int64(k) if k > 1.0 else 1
+        total += m[i]
+    leg = np.empty(total, np.int64)
+    cell = np.empty(total, np.int64)
+    weight = np.empty(total)
+    n = 0
+    for i in range(n_legs):
+        wi = w * length[i] / m[i] / area
+        for j in range(m[i]):
+            t = (j + 0.5) / m[i]
+            col = np.int64(np.floor((sx[i] + t * dx[i] - ox) / c))
+            row = np.int64(np.floor((sy[i] + t * dy[i] - oy) / c))
+            if 0 <= col < nx and 0 <= row < ny:
+                leg[n] = i
+                cell[n] = row * nx + col
+                weight[n] = wi
+                n += 1
+    return leg[:n], cell[:n], weight[:n]
 
 
 @_jit

@@ -61,25 +61,28 @@ _DIRS = np.array(
 def leg_samples(starts, ends, grid: Grid, w: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The coverage samples of :func:`leg_coverage`: per sample inside the map, the leg it lies
     on (index into ``starts``), its flat cell index and its coverage (eq. 10 per cell), in the
-    order :func:`leg_coverage` sums them (a leg's samples from its start)."""
+    order :func:`leg_coverage` sums them (a leg's samples from its start). One compiled pass
+    (:func:`poc_env.agents.planning._kernels.leg_samples`; the legs' lengths by numpy)."""
     starts = np.asarray(starts, dtype=float).reshape(-1, 2)
     ends = np.asarray(ends, dtype=float).reshape(-1, 2)
     if not len(starts):
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
-    c = grid.cell_m
     d = ends - starts
-    length = np.hypot(d[:, 0], d[:, 1])
-    m = np.maximum(1, np.ceil(4.0 * length / c)).astype(np.int64)
-    leg = np.repeat(np.arange(len(starts)), m)
-    first = np.cumsum(m) - m
-    t = (np.arange(int(m.sum())) - first[leg] + 0.5) / m[leg]
-    xy = starts[leg] + t[:, None] * d[leg]
     ox, oy = grid.origin_m
-    col = np.floor((xy[:, 0] - ox) / c).astype(np.int64)
-    row = np.floor((xy[:, 1] - oy) / c).astype(np.int64)
-    ok = (col >= 0) & (col < grid.nx) & (row >= 0) & (row < grid.ny)
-    weight = w * length[leg] / m[leg] / grid.cell_area_m2
-    return leg[ok], (row * grid.nx + col)[ok], weight[ok]
+    return _kernels.leg_samples(
+        np.ascontiguousarray(starts[:, 0]),
+        np.ascontiguousarray(starts[:, 1]),
+        np.ascontiguousarray(d[:, 0]),
+        np.ascontiguousarray(d[:, 1]),
+        np.hypot(d[:, 0], d[:, 1]),
+        float(ox),
+        float(oy),
+        float(grid.cell_m),
+        grid.nx,
+        grid.ny,
+        float(w),
+        float(grid.cell_area_m2),
+    )
 
 
 def leg_coverage(starts, ends, grid: Grid, w: float, rows: np.ndarray | None = None) -> np.ndarray:
