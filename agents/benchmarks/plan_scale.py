@@ -43,13 +43,14 @@ def _line(name: str, value: float, note: str = "") -> None:
     print(f"{name:34s} {value:12.4g}  {note}".rstrip(), flush=True)
 
 
-def _flown(sc, policy: str, seed: int, prior: np.ndarray | None) -> tuple[float, dict]:
-    """POSC of ``policy`` flown on ``sc`` with ``prior`` (None: the scenario's), and its plan."""
+def _flown(sc, policy, seed: int, prior: np.ndarray | None) -> tuple[float, dict]:
+    """POSC of ``policy`` (a registered name, or a policy object with ``reset`` and
+    ``predict``) flown on ``sc`` with ``prior`` (None: the scenario's), and its plan."""
     from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=sc)
-    pol = make_policy(policy)
+    pol = make_policy(policy) if isinstance(policy, str) else policy
     obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
     pol.reset(env, seed)
     while env.agents:

@@ -106,18 +106,13 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
 
 
 def fly(name: str, seed0: int, seed1: int, v: str, out: str) -> None:
+    from poc_env.agents.benchmarks.plan_scale import _flown as flown
     from poc_env.agents.policies.allocation import AllocationPlanPolicy
-    from poc_env.envs.parallel import UAVSearchParallelEnv
 
     def _flown(sc, seed, prior, options):  # plan_scale._flown with the policy's options
-        env = UAVSearchParallelEnv(scenario=sc)
         pol = AllocationPlanPolicy()
         pol.options = options
-        obs, _ = env.reset(seed=seed, options={"prior": prior})
-        pol.reset(env, seed)
-        while env.agents:
-            obs, *_ = env.step(pol.predict(obs)[0])
-        return float(env.sim_state.posc[0]), pol.plan
+        return flown(sc, pol, seed, prior)
 
     sc = load_scenario(name)
     recs = []

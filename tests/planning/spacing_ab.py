@@ -30,17 +30,12 @@ from poc_env.theory.bound import rule_bound
 
 def _flown(sc, seed, prior, options):
     """The allocation policy with ``options`` flown on ``sc`` with ``prior``: POSC, plan."""
+    from poc_env.agents.benchmarks.plan_scale import _flown as flown
     from poc_env.agents.policies.allocation import AllocationPlanPolicy
-    from poc_env.envs.parallel import UAVSearchParallelEnv
 
-    env = UAVSearchParallelEnv(scenario=sc)
     pol = AllocationPlanPolicy()
     pol.options = options
-    obs, _ = env.reset(seed=seed, options={"prior": prior})
-    pol.reset(env, seed)
-    while env.agents:
-        obs, *_ = env.step(pol.predict(obs)[0])
-    return float(env.sim_state.posc[0]), pol.plan
+    return flown(sc, pol, seed, prior)
 
 
 def main(name: str, seed0: int, seed1: int, out: str) -> None:
