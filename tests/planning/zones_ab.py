@@ -219,19 +219,25 @@ def breakdown(case: str, n: int) -> None:
     print("load at end", os.getloadavg(), flush=True)
 
 
-def router(tree_a: str, case: str, n: int) -> None:
+def _routing_of(tree: str):
+    """``poc_env/sim/routing.py`` of another source tree, loaded as its own module."""
     import importlib.util
 
-    import poc_env.sim.routing as this
-    from poc_env.agents.planning.allocation import make_allocation_plan
-    from poc_env.sim.core import operating_area
-
     spec = importlib.util.spec_from_file_location(
-        "routing_a", os.path.join(tree_a, "poc_env", "sim", "routing.py")
+        "routing_a", os.path.join(tree, "poc_env", "sim", "routing.py")
     )
     assert spec is not None and spec.loader is not None
     other = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(other)
+    return other
+
+
+def router(tree_a: str, case: str, n: int) -> None:
+    import poc_env.sim.routing as this
+    from poc_env.agents.planning.allocation import make_allocation_plan
+    from poc_env.sim.core import operating_area
+
+    other = _routing_of(tree_a)
     sc, uavs = _bench_case(case)
     calls: list[tuple[int, np.ndarray, np.ndarray]] = []
     real = this.ZoneRouter.reroute
@@ -266,18 +272,11 @@ def router(tree_a: str, case: str, n: int) -> None:
 
 
 def plan_router(tree_a: str, case: str, n: int) -> None:
-    import importlib.util
-
     import poc_env.agents.planning.allocation as alloc
     import poc_env.agents.planning.greedy_rectangles as greedy
     import poc_env.sim.routing as this
 
-    spec = importlib.util.spec_from_file_location(
-        "routing_a", os.path.join(tree_a, "poc_env", "sim", "routing.py")
-    )
-    assert spec is not None and spec.loader is not None
-    other = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(other)
+    other = _routing_of(tree_a)
     sc, uavs = _bench_case(case)
     ways = {tree_a: other.ZoneRouter, ".": this.ZoneRouter}
 
