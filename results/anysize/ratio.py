@@ -18,13 +18,13 @@ import numpy as np
 from poc_env.stats import ci95
 
 
-def ratio(path: Path, generalist: str, specialist: str, resamples: int = 10_000) -> dict:
-    rows = list(csv.DictReader(path.open(newline="")))
+def ratio(paths: list[Path], generalist: str, specialist: str, resamples: int = 10_000) -> dict:
+    rows = [r for path in paths for r in csv.DictReader(path.open(newline=""))]
     g = {int(r["seed"]): float(r["posc"]) for r in rows if r["policy"] == generalist}
     s = {int(r["seed"]): float(r["posc"]) for r in rows if r["policy"] == specialist}
     seeds = sorted(set(g) & set(s))
     if not seeds or len(seeds) != len(g) or len(seeds) != len(s):
-        raise SystemExit(f"{path}: {generalist} and {specialist} must fly the same seeds")
+        raise SystemExit(f"{paths}: {generalist} and {specialist} must fly the same seeds")
     a = np.array([g[k] for k in seeds])
     b = np.array([s[k] for k in seeds])
     rng = np.random.default_rng(28)  # the bootstrap's own stream
@@ -47,13 +47,14 @@ def ratio(path: Path, generalist: str, specialist: str, resamples: int = 10_000)
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("episodes", type=Path)
+    ap.add_argument("episodes", type=Path, nargs="+", help="episodes.csv files (rows joined)")
     ap.add_argument("--generalist", required=True)
     ap.add_argument("--specialist", required=True)
     a = ap.parse_args()
     r = ratio(a.episodes, a.generalist, a.specialist)
     print(
-        f"{a.episodes}: generalist {r['generalist']:.4f}, specialist {r['specialist']:.4f}, "
+        f"{' '.join(map(str, a.episodes))}: generalist {r['generalist']:.4f}, "
+        f"specialist {r['specialist']:.4f}, "
         f"ratio {r['ratio']:.3f} [{r['ratio_lo']:.3f}, {r['ratio_hi']:.3f}], "
         f"paired {r['diff']:+.4f} ± {r['diff_ci95']:.4f}, wins {r['wins']} losses {r['losses']}"
         f" of {r['episodes']}"
