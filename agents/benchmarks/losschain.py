@@ -71,7 +71,7 @@ from poc_env.errors import ConfigError
 from poc_env.sim.core import takeoff_heading
 from poc_env.theory.bound import rule_bound
 from poc_env.theory.probability_map import Grid
-from poc_env.theory.search_theory import pod_from_coverage, sweep_segments
+from poc_env.theory.search_theory import clip_length, pod_from_coverage, sweep_segments
 
 #: the chain's values, from the bound down to the flown POS.
 VALUES = (
@@ -174,24 +174,6 @@ def _paths(plan: dict[str, Any]) -> list[np.ndarray]:
     return out
 
 
-def _inside_length(p: np.ndarray, q: np.ndarray, bounds) -> np.ndarray:
-    """Length of each segment ``p[i] -> q[i]`` inside the rectangle ``bounds`` (Liang-Barsky)."""
-    x0, y0, x1, y1 = bounds
-    d = q - p
-    t0 = np.zeros(len(p))
-    t1 = np.ones(len(p))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for k, lo, hi in ((0, x0, x1), (1, y0, y1)):
-            for num, den in ((p[:, k] - lo, -d[:, k]), (hi - p[:, k], d[:, k])):
-                r = num / den
-                par = den == 0
-                bad = par & (num < 0)
-                t0 = np.where(~par & (den < 0), np.maximum(t0, r), t0)
-                t1 = np.where(~par & (den > 0), np.minimum(t1, r), t1)
-                t1 = np.where(bad, -1.0, t1)
-    return np.maximum(t1 - t0, 0.0) * np.hypot(d[:, 0], d[:, 1])
-
-
 def time_budget(sc: Scenario, plan: dict[str, Any]) -> dict[str, float]:
     """The fleet's usable time (n x 0.85 T, s) as the plan spends it: ``in_map`` (flying over
     the map, where every leg sweeps), ``outside`` (transit outside it), ``turns`` (eq. 17's
@@ -212,7 +194,7 @@ def time_budget(sc: Scenario, plan: dict[str, Any]) -> dict[str, float]:
         speed = np.full(len(p), v.line)
         speed[0], speed[-1] = v.out, v.home
         length = np.hypot(*(q - p).T)
-        inside = _inside_length(p, q, grid.bounds)
+        inside = clip_length(p, q, np.array(grid.bounds[:2]), np.array(grid.bounds[2:]))
         t_in = float(np.sum(inside / speed))
         t_out = float(np.sum((length - inside) / speed))
         total = route_time(path, v, sc.uav.max_turn_rate_rad_s, float(heads[k]))
@@ -439,16 +421,6 @@ def loss_chain(
 def fly_allocation(sc: Scenario, prior, seed: int) -> tuple[float, dict[str, Any]]:
     """``allocation_plan`` flown in the environment on ``prior`` (episode ``seed``): its POSC
     and the plan it flew."""
-    from poc_env.agents.policies.registry import make_policy
-    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.agents.benchmarks.plan_scale import _flown
 
-    env = UAVSearchParallelEnv(scenario=sc)
-    pol = make_policy("allocation_plan")
-    obs, _ = env.reset(seed=seed, options={"prior": np.asarray(prior, dtype=float)})
-    pol.reset(env, seed)
-    while env.agents:
-        actions, _ = pol.predict(obs)
-        obs, *_ = env.step(actions)
-    posc = float(env.sim_state.posc[0])
-    env.close()
-    return posc, getattr(pol, "plan", {})
+    return _flown(sc, "allocation_plan", seed, np.asarray(prior, dtype=float))
