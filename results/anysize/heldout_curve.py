@@ -31,6 +31,7 @@ TASKS = {
     "wide_n6": "UAVSearch-Wide-N6-Random-Set-Heading-v1",
     "wide_n12": "UAVSearch-Wide-N12-Random-Set-Heading-v1",
     "wide_n24": "UAVSearch-Wide-N24-Random-Set-Heading-v1",
+    "paper62_inc": "UAVSearch-Paper62-Random-Increments-v0",  # results/bc_increments
 }
 FIELDS = ["run", "step", "task", "seed", "posc"]
 
@@ -54,7 +55,12 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=5000)
     ap.add_argument("--episodes", type=int, default=20)
     ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument(
+        "--reference", action="append", default=[], metavar="NAME=POSC",
+        help="a dashed line at a planner's mean POSC on the same priors (repeatable)",
+    )  # fmt: skip
     a = ap.parse_args()
+    refs = [(r.split("=", 1)[0], float(r.split("=", 1)[1])) for r in a.reference]
     a.out.mkdir(parents=True, exist_ok=True)
     path = a.out / "curve.csv"
     rows: list[dict[str, str]] = []
@@ -81,21 +87,29 @@ def main() -> None:
                 here = (run.name, str(step), key)
                 got = [float(r["posc"]) for r in rows if (r["run"], r["step"], r["task"]) == here]
                 print(f"{run.name} {step:>9} {key:<9} {np.mean(got):.4f} ({len(got)} priors)")
-    plot(rows, a.out / "curve.png")
+    plot(rows, a.out / "curve.png", refs)
 
 
-def plot(rows: list[dict[str, str]], out: Path) -> None:
-    """One colour per task: each run a thin line, the mean over runs a thick one (at the
-    checkpoints every run has)."""
+def method(run: str) -> str:
+    """The recipe a run folder belongs to: its name less a trailing ``_s<seed>``."""
+    return re.sub(r"_s\d+$", "", run)
+
+
+def plot(
+    rows: list[dict[str, str]], out: Path, refs: list[tuple[str, float]] | None = None
+) -> None:
+    """One colour per task and recipe (:func:`method`): each run a thin line, the mean over the
+    recipe's runs a thick one (at the checkpoints every run has)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    runs = sorted({r["run"] for r in rows})
-    for k, task in enumerate(sorted({r["task"] for r in rows})):
+    groups = sorted({(r["task"], method(r["run"])) for r in rows})
+    for k, (task, recipe) in enumerate(groups):
         colour = f"C{k}"
+        runs = sorted({r["run"] for r in rows if (r["task"], method(r["run"])) == (task, recipe)})
         curves = {}
         for run in runs:
             steps = sorted({int(r["step"]) for r in rows if (r["run"], r["task"]) == (run, task)})
@@ -109,8 +123,12 @@ def plot(rows: list[dict[str, str]], out: Path) -> None:
                         lw=0.8, alpha=0.35)  # fmt: skip
         common = sorted(set.intersection(*(set(c) for c in curves.values() if c)))
         mean = [np.mean([curves[run][s] for run in runs if curves[run]]) for s in common]
-        label = f"{task} (mean of {len(runs)} runs)" if len(runs) > 1 else f"{runs[0]}: {task}"
+        label = f"{runs[0]}: {task}"
+        if len(runs) > 1:
+            label = f"{recipe}: {task} (mean of {len(runs)} runs)"
         ax.plot(np.array(common) / 1e6, mean, color=colour, lw=2, marker="o", label=label)
+    for name, value in refs or []:
+        ax.axhline(value, color="k", ls="--", lw=1, label=f"{name} (same priors)")
     ax.set_xlabel("PPO agent transitions (M)")
     ax.set_ylabel("mean POSC, validation priors")
     ax.legend(fontsize=7)

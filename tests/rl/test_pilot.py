@@ -177,6 +177,7 @@ SHIPPED = [
     "ppo_heading_paper_6_2",
     "ppo_heading_individual_paper_6_2",
     "ppo_increments_paper_6_2",
+    "ppo_increments_individual_paper_6_2",  # BC at the increments level, then PPO (docs/rl.md)
     "rllib_heading_paper_6_2",
     "ppo_set_anysize",  # the set observation, one policy for 3 to 24 UAVs (docs/rl.md)
     "ppo_drift_small",
@@ -228,6 +229,7 @@ def test_shipped_checkpoint_replays_its_card_and_flies_an_unseen_episode(name):
         ("ppo_heading_paper_6_2", "heading"),
         ("ppo_heading_individual_paper_6_2", "heading"),
         ("ppo_increments_paper_6_2", "increments"),
+        ("ppo_increments_individual_paper_6_2", "increments"),
     ],
 )
 def test_shipped_checkpoint_flies_at_its_level_within_limits(name, control):
