@@ -43,6 +43,11 @@
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
    (``options.airspace_penalty``, off by default); ``start`` records which start and
    ``refined`` whether the refined routes were kept.
+7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
+   climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
+   polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
+   17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
+   no-fly zones. The plan's optimizer settings record its passes and kept moves (``polish``).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -79,6 +84,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
+from poc_env.agents.planning.polish import polish_routes
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -769,6 +775,29 @@ def make_allocation_plan(
             if score > best_sampled:
                 best_sampled, routes, pieces = score, s_routes, s_pieces
                 start, refined = name, False
+    polished = None
+    if opt.polish and any(routes) and not router.active:  # eq. 20: the polish sees no zones
+        routes, _, polished = polish_routes(
+            routes,
+            takeoff,
+            landing,
+            full_prior,
+            grid,
+            sc.sensor,
+            v,
+            u.usable_endurance_s,
+            u.max_turn_rate_rad_s,
+            _reserve(sc),
+            passes=opt.polish,
+            radii=opt.polish_radii,
+            headings=heading0,
+            airspace=Airspace(
+                sc.episode.dt_s,
+                opt.separation_margin * sc.constraints.safety_distance_m,
+                opt.range_margin * sc.comms.range_m,
+                sc.comms.min_neighbours,
+            ),
+        )
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)
@@ -786,14 +815,14 @@ def make_allocation_plan(
         wps = routes[k]
         arr = np.asarray(wps, dtype=float).reshape(-1, 2)
         inside = (arr[:, 0] >= x0) & (arr[:, 0] <= x1) & (arr[:, 1] >= y0) & (arr[:, 1] <= y1)
-        if refine:  # transit: the waypoints before the route first enters the map
+        if refine or polished:  # transit: the waypoints before the route first enters the map
             lead = int(np.argmax(inside)) if inside.any() else len(arr)
         else:  # the dog-leg before the lines
             lead = len(arr) - 2 * len(pieces[k])
         legs: np.ndarray = np.zeros((0, 2, 2))
-        if refine and len(arr) > lead + 1:  # every leg of the route is flown as search
+        if (refine or polished) and len(arr) > lead + 1:  # every leg is flown as search
             legs = np.stack([arr[lead:-1], arr[lead + 1 :]], axis=1)
-        elif not refine:  # the lines
+        elif not (refine or polished):  # the lines
             legs = arr[lead:].reshape(-1, 2, 2)
         path = np.vstack([takeoff[k], arr, landing[k]])
         t_k = _flight_time(wps, takeoff[k], landing[k], sc, v, heading_k[k])
@@ -846,6 +875,7 @@ def make_allocation_plan(
                 "speed": speed,
                 "refine": refine,
                 **({"options": opt.changed()} if opt.changed() else {}),
+                **({"polish": polished} if polished is not None else {}),
             },
         },
         "runtime_s": runtime,

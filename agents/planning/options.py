@@ -151,6 +151,13 @@ class PlanOptions:
     sampled: bool = False
     #: second chained lawnmowers rescored by the sampled model: the best few by the cell model.
     sampled_top: int = 2
+    #: passes of :func:`~poc_env.agents.planning.polish.polish_routes` on the chosen routes
+    #: (0: none): a local search on the waypoints scored by the environment's own sensor
+    #: model (the plan's ``posc``), after the start is picked (i24-polish); not on maps with
+    #: no-fly zones.
+    polish: int = 0
+    #: the polish's move radii, in sweep widths.
+    polish_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -185,6 +192,8 @@ class PlanOptions:
         _number("graded_min", self.graded_min, 0.0, 4.0, closed_low=False)
         _number("graded_step", self.graded_step, 0.0, 1.0, closed_low=False)
         _number("sampled_top", self.sampled_top, 1, 100, integer=True)
+        _number("polish", self.polish, 0, 100, integer=True)
+        _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)

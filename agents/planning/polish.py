@@ -69,6 +69,8 @@ from poc_env.theory.search_theory import _reach
 TOL = 1e-7
 #: default move radii, in sweep widths.
 RADII = (0.25, 0.5, 1.0, 2.0)
+#: the kinds of move (module docstring).
+MOVES = ("move", "slide", "shift", "insert", "delete")
 _DIRS = np.array(
     [[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4], dtype=float
 )  # unit steps of the move
@@ -169,12 +171,14 @@ def polish_routes(
     radii: Sequence[float] = RADII,
     headings=None,
     airspace: Airspace | None = None,
+    moves: Sequence[str] = MOVES,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
     the cell masses (the grid's shape); ``sensor`` the scenario's
     (:class:`poc_env.config.SensorConfig`: sweep width, law, samples per cell, cut-off);
-    ``radii`` in sweep widths; ``headings`` (n,) the UAVs' headings at take-off (rad) or None.
+    ``radii`` in sweep widths; ``headings`` (n,) the UAVs' headings at take-off (rad) or None;
+    ``moves`` the kinds of move tried (:data:`MOVES`).
     A route that does not fit ``budget`` to begin with is only changed by moves after which
     it does. Returns ``(routes, pos, {"passes", "moves"})``."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
@@ -182,6 +186,9 @@ def polish_routes(
     rad = tuple(radii)
     if not rad or any(not np.isfinite(r) or r <= 0 for r in rad):
         raise ConfigError("radii", radii, "positive numbers (sweep widths), not empty")
+    kinds = set(moves)
+    if not kinds or not kinds <= set(MOVES):
+        raise ConfigError("moves", moves, f"some of {', '.join(MOVES)}")
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     n = len(takeoff)
@@ -224,7 +231,7 @@ def polish_routes(
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
-    moves = 0
+    n_moves = 0
     done = 0
     for _ in range(max(0, int(passes))):
         kept = 0
@@ -243,16 +250,16 @@ def polish_routes(
                 a, b = path[i - 1], path[i]
                 if i < m - 1:  # an inner waypoint: move, slide, shift, delete
                     nxt = path[i + 1]
-                    qs = [b + offsets]
-                    for u in (b - a, nxt - b):
+                    qs = [b + offsets] if "move" in kinds else []
+                    for u in (b - a, nxt - b) if "slide" in kinds else ():
                         ln = float(np.hypot(*u))
                         if ln > 1e-3:
                             qs.append(b + signed[:, None] * (u / ln)[None])
-                    for q in np.clip(np.vstack(qs), lo, hi):
+                    for q in np.clip(np.vstack(qs), lo, hi) if qs else ():
                         seqs.append(np.vstack([a, q, tail]))
-                    if m > 3:  # delete (a route keeps a waypoint: sampled_sweep skips empty ones)
+                    if m > 3 and "delete" in kinds:  # a route keeps a waypoint (sampled_sweep)
                         seqs.append(np.vstack([a, tail]))
-                    if i + 1 < m - 1:  # the leg i -> i+1 between two inner waypoints
+                    if i + 1 < m - 1 and "shift" in kinds:  # leg i -> i+1, two inner waypoints
                         d = nxt - b
                         ln = float(np.hypot(*d))
                         if ln > 1e-3:
@@ -263,11 +270,14 @@ def polish_routes(
                                 seqs.append(np.vstack([a, q1, q2, path[i + 2 : j_end + 1]]))
                 d = b - a  # insert before i
                 ln = float(np.hypot(*d))
-                if ln > 1e-3:
+                if ln > 1e-3 and "insert" in kinds:
                     nrm = np.array([-d[1], d[0]]) / ln
                     for o in signed:
                         q = np.clip(0.5 * (a + b) + o * nrm, lo, hi)
                         seqs.append(np.vstack([a, q, b, tail]))
+                if not seqs:
+                    i += 1
+                    continue
                 first = np.zeros(len(seqs) + 1, dtype=np.int64)
                 first[1:] = np.cumsum([len(q) - 1 for q in seqs])
                 starts = np.vstack([q[:-1] for q in seqs])
@@ -301,11 +311,11 @@ def polish_routes(
                     if len(new_path) < m:
                         continue  # deleted: the next waypoint is now at i
                 i += 1
-        moves += kept
+        n_moves += kept
         if not kept:
             break
     out = [
         [[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] if flying[k] else []
         for k, p in enumerate(paths)
     ]
-    return out, ex.pos(), {"passes": done, "moves": moves}
+    return out, ex.pos(), {"passes": done, "moves": n_moves}

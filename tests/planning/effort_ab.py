@@ -11,6 +11,13 @@
     on ``large_400``), every variant of :data:`VARIANTS` per seed in turn (interleaved, so the
     time ratios are paired); records rewritten after every seed; paired summary against
     ``default``.
+``polish MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
+    As ``plan`` (seed -1: the map's own prior; i24-polish, docs/PLANNER.md "Polish by the
+    environment's model"), records kept and resumed as ``fly``'s, and each
+    plan's routes also scored on a finer sample lattice (``sensor.samples_per_cell = 8``, the
+    same routes, ``sampled_sweep``): a polish that only learned to put lines on the 2 x 2
+    sample rows would gain on the first and not on the second. Paired summaries of both
+    against the first variant.
 ``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json CHECK RECORDS.json...``
     Registered policies flown in the environment on the same random priors, records rewritten
     after every flight (a partial run gives paired figures; a rerun resumes): the first policy
@@ -43,6 +50,7 @@ import numpy as np
 from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.config import load_scenario
 from poc_env.theory.bound import rule_bound
+from poc_env.theory.probability_map import build_prior
 
 #: named variants (a preset and ``+field=value`` changes; tuples ``:``-separated).
 NAMED = {
@@ -152,6 +160,58 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
         with open(out, "w") as f:
             json.dump(recs, f, indent=1)
     summary(recs, "planned_posc", names[0])
+
+
+def fine_posc(sc, prior, plan: dict, samples: int = 8) -> float:
+    """``plan``'s routes scored by ``sampled_sweep`` on ``samples x samples`` points a cell."""
+    from poc_env.agents.planning.allocation import sampled_sweep
+    from poc_env.theory.probability_map import Grid
+
+    fine = load_scenario(sc, overrides={"sensor.samples_per_cell": samples})
+    paths = [[u["takeoff_m"], *u["waypoints_m"], u["landing_m"]] if u["waypoints_m"] else []
+             for u in plan["uavs"]]  # fmt: skip
+    return float(sum(sampled_sweep(fine, Grid.from_config(fine.map), prior, paths)[0]))
+
+
+def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc = load_scenario(name)
+    recs: list[dict] = []
+    if os.path.exists(out):  # resume: seeds already planned are kept
+        with open(out) as f:
+            recs = json.load(f)
+    done = {(r["seed"], r["variant"]) for r in recs}
+    for seed in range(seed0, seed1):  # seed -1: the scenario's own prior
+        prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
+        bound = rule_bound(sc, prior).upper
+        for v in names:
+            if (seed, v) in done:
+                continue
+            opt = _options(v)
+            t0 = time.perf_counter()
+            p = make_allocation_plan(sc, prior=prior, options=opt)
+            dt = time.perf_counter() - t0
+            moves = p["optimizer"]["settings"].get("polish", {}).get("moves", 0)
+            recs.append(
+                {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
+                 "fine_posc": fine_posc(sc, prior, p), "rule_bound": bound,
+                 "start": p["start"], "moves": moves, "plan_s": dt,
+                 "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            r = recs[-1]
+            print(name, seed, v, round(r["planned_posc"] / bound, 4),
+                  round(r["fine_posc"] / bound, 4), moves, round(dt, 1),
+                  round(os.getloadavg()[0], 1), flush=True)  # fmt: skip
+            with open(out + ".tmp", "w") as f:
+                json.dump(recs, f, indent=1)
+            os.replace(out + ".tmp", out)
+    for base in names:
+        if "polish" not in base:
+            fam = [base] + [v for v in names if v.startswith(base + "+polish")]
+            sub = [r for r in recs if r["variant"] in fam]
+            summary(sub, "planned_posc", base)
+            summary(sub, "fine_posc", base)
 
 
 def violations(name: str, seeds: list[int], names: list[str]) -> None:
@@ -285,5 +345,7 @@ if __name__ == "__main__":
     cmd, name, s0, s1, vs, out = sys.argv[1:7]
     if cmd == "plan":
         plan(name, int(s0), int(s1), vs.split(","), out)
+    elif cmd == "polish":
+        polish(name, int(s0), int(s1), vs.split(","), out)
     else:  # fly ... CHECK RECORDS.json...
         fly(name, int(s0), int(s1), vs.split(","), out, int(sys.argv[7]), sys.argv[8:])
