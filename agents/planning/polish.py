@@ -228,6 +228,37 @@ def polish_routes(
                 pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
         count = AirspaceCount(airspace, pos, act)
 
+    def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray]) -> bool:
+        """Keep the best of the candidates ``seqs`` for ``paths[k][i0 : i1 + 1]`` (same first
+        and last points) that gains more than :data:`TOL` and keeps the route flyable."""
+        nonlocal value
+        path = paths[k]
+        old = path[i0 : i1 + 1]
+        first = np.zeros(len(seqs) + 1, dtype=np.int64)
+        first[1:] = np.cumsum([len(q) - 1 for q in seqs])
+        starts = np.vstack([q[:-1] for q in seqs])
+        ends = np.vstack([q[1:] for q in seqs])
+        gain = ex.gains(old[:-1], old[1:], starts, ends, first)
+        tried = 0
+        for cj in np.argsort(-gain, kind="stable"):
+            if not gain[cj] > TOL or tried >= TRIES:
+                break
+            cand = np.vstack([path[:i0], seqs[cj], path[i1 + 1 :]])
+            if not route_fits(cand, speeds, turn_rate, budget, reserve, h0[k]):
+                continue
+            if airspace is not None:
+                tried += 1
+                v_new, state = count.move(k, *track(cand, speeds, turn_rate, times, h0[k]))
+                if v_new > count.value:
+                    continue
+                count.keep(state)
+            ex.add(old[:-1], old[1:], -1.0)
+            ex.add(seqs[cj][:-1], seqs[cj][1:], 1.0)
+            value += float(gain[cj])
+            paths[k] = cand
+            return True
+        return False
+
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
@@ -244,7 +275,6 @@ def polish_routes(
                 path = paths[k]
                 m = len(path)
                 j_end = min(i + 2, m - 1)  # the legs path[i-1] .. path[j_end] may change
-                old = path[i - 1 : j_end + 1]
                 tail = path[i + 1 : j_end + 1]  # after waypoint i, in the window
                 seqs: list[np.ndarray] = []  # each candidate's points from path[i-1] to path[j_end]
                 a, b = path[i - 1], path[i]
@@ -278,37 +308,9 @@ def polish_routes(
                 if not seqs:
                     i += 1
                     continue
-                first = np.zeros(len(seqs) + 1, dtype=np.int64)
-                first[1:] = np.cumsum([len(q) - 1 for q in seqs])
-                starts = np.vstack([q[:-1] for q in seqs])
-                ends = np.vstack([q[1:] for q in seqs])
-                gain = ex.gains(old[:-1], old[1:], starts, ends, first)
-                order = np.argsort(-gain, kind="stable")
-                chosen = -1
-                new_path = path
-                tried = 0
-                for cj in order:
-                    if not gain[cj] > TOL or tried >= TRIES:
-                        break
-                    cand = np.vstack([path[: i - 1], seqs[cj], path[j_end + 1 :]])
-                    if not route_fits(cand, speeds, turn_rate, budget, reserve, h0[k]):
-                        continue
-                    if airspace is not None:
-                        tried += 1
-                        v_new, state = count.move(k, *track(cand, speeds, turn_rate, times, h0[k]))
-                        if v_new > count.value:
-                            continue
-                        count.keep(state)
-                    chosen, new_path = int(cj), cand
-                    break
-                if chosen >= 0:
-                    ex.add(old[:-1], old[1:], -1.0)
-                    q = seqs[chosen]
-                    ex.add(q[:-1], q[1:], 1.0)
-                    value += float(gain[chosen])
-                    paths[k] = new_path
+                if choose(k, i - 1, j_end, seqs):
                     kept += 1
-                    if len(new_path) < m:
+                    if len(paths[k]) < m:
                         continue  # deleted: the next waypoint is now at i
                 i += 1
         n_moves += kept

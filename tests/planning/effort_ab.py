@@ -19,7 +19,8 @@
     sample rows would gain on the first and not on the second. Paired summaries of both
     against the first variant.
 ``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json CHECK RECORDS.json...``
-    Registered policies flown in the environment on the same random priors, records rewritten
+    Registered policies (or ``allocation_plan@VARIANT``: the allocation policy with a
+    variant's options) flown in the environment on the same random priors, records rewritten
     after every flight (a partial run gives paired figures; a rerun resumes): the first policy
     on every seed, the others on the first ``CHECK`` seeds only, to check they equal the stored
     ``poc-env bench plan --scale`` records (results/plan_scale/*.json), which then stand in for
@@ -242,14 +243,32 @@ def violations(name: str, seeds: list[int], names: list[str]) -> None:
                   round(float(st.posc[0]), 4), flush=True)  # fmt: skip
 
 
+def _policy(spec: str):
+    """A registered policy's name, or ``allocation_plan@VARIANT``: the allocation policy with
+    :func:`_options` of ``VARIANT`` (``allocation_plan@default+polish=2``)."""
+    if "@" not in spec:
+        return spec
+    from poc_env.agents.policies.allocation import AllocationPlanPolicy
+
+    head, variant = spec.split("@", 1)
+    if head != "allocation_plan":
+        raise SystemExit(f"{spec}: only allocation_plan@VARIANT is known")
+    pol = AllocationPlanPolicy()
+    pol.options = _options(variant)
+    return pol
+
+
 def stored(paths: list[str]) -> dict[tuple[int, str], dict]:
     """The episodes of ``poc-env bench plan --scale`` records (results/plan_scale/*.json) by
     (seed, policy)."""
     out = {}
     for p in paths:
         with open(p) as f:
-            for e in json.load(f)["episodes"]:
-                out[e["seed"], e["policy"]] = e
+            data = json.load(f)
+        if isinstance(data, list):  # a ``fly`` run's records (results/plan_scale/effort)
+            data = {"episodes": [{**r, "policy": r["variant"]} for r in data]}
+        for e in data["episodes"]:
+            out[e["seed"], e["policy"]] = e
     return out
 
 
@@ -278,7 +297,7 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
                 if seed - seed0 < check and known:  # the stored bound is this prior's
                     assert abs(rule_bound(sc, prior).upper - bound) <= 1e-9 * bound, seed
             t0 = time.perf_counter()
-            posc, p = _flown(sc, pol, seed, prior)
+            posc, p = _flown(sc, _policy(pol), seed, prior)
             recs.append(
                 {"map": name, "seed": seed, "variant": pol, "posc": float(posc),
                  "planned_posc": float(p.get("posc", float("nan"))), "rule_bound": bound,
@@ -296,8 +315,9 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
 
 
 def paired(out: str, records: list[str]) -> None:
-    """Flown ``fly`` records paired per seed with the stored ``allocation_plan`` and
-    ``greedy_rectangles`` episodes (checked equal where the default was flown here too)."""
+    """Flown ``fly`` records paired per seed with every stored policy flown on all of their
+    seeds (``allocation_plan``, ``greedy_rectangles``; ``allocation_plan_thorough`` from
+    results/plan_scale/effort's records), checked equal where flown here too."""
     from poc_env.stats import ci95
 
     with open(out) as f:
@@ -313,7 +333,9 @@ def paired(out: str, records: list[str]) -> None:
     for pol in sorted({r["variant"] for r in mine}):
         rs = sorted((r for r in mine if r["variant"] == pol), key=lambda r: r["seed"])
         a = np.array([r["posc"] / r["rule_bound"] for r in rs])
-        for base in ("allocation_plan", "greedy_rectangles"):
+        for base in sorted(old_policies(old)):
+            if any((r["seed"], base) not in old for r in rs):
+                continue
             b = np.array([old[r["seed"], base]["posc"] / r["rule_bound"] for r in rs])
             d = a - b
             half = ci95(d) if len(d) > 1 else float("nan")
