@@ -459,16 +459,17 @@ def violation_penalty(
 
 def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, t0: float):
     """``opt.also_default``: the plan with ``opt`` and the default plan (``PlanOptions()`` with
-    ``opt``'s keyword-level fields: levels, margin, refine, starts), the one of more planned
-    POS kept (ties: ``opt``'s). The effort levels' guarantee: a thorough plan never plans less
-    POS than the default one. (By POS alone: the default plan is the shipped planner's, its
-    violations accepted as they are; ``opt``'s own pick among its starts is the one that
-    prices violations, ``airspace_penalty``.)"""
+    ``opt``'s keyword-level fields: levels, margin, refine, starts; and its polish), the one
+    of more planned POS kept (ties: ``opt``'s). The effort levels' guarantee: a thorough plan
+    never plans less POS than the default one (polished alike). (By POS alone: the default
+    plan is the shipped planner's, its violations accepted as they are; ``opt``'s own pick
+    among its starts is the one that prices violations, ``airspace_penalty``.)"""
     kw = {"prior": prior, "map_source": map_source, "seed": seed, "speed": speed, "crs": crs}
     mine = make_allocation_plan(sc, options=dataclasses.replace(opt, also_default=False), **kw)
     base_opt = PlanOptions(
         levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
+        polish=opt.polish, polish_radii=opt.polish_radii,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base

@@ -241,4 +241,5 @@ THOROUGH: dict[str, Any] = {
     "angles": (45.0,),
     "excursions": True,
     "also_default": True,
+    "polish": 6,  # i24-polish: docs/PLANNER.md, "Polish by the environment's model"
 }
