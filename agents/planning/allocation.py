@@ -776,8 +776,10 @@ def make_allocation_plan(
             if score > best_sampled:
                 best_sampled, routes, pieces = score, s_routes, s_pieces
                 start, refined = name, False
-    polished = None
-    if opt.polish and any(routes) and not router.active:  # eq. 20: the polish sees no zones
+    polished: dict[str, Any] | None = None
+    if opt.polish and router.active:  # eq. 20: the polish does not see the zones
+        polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
+    elif opt.polish and any(routes):
         routes, _, polished = polish_routes(
             routes,
             takeoff,
@@ -799,6 +801,7 @@ def make_allocation_plan(
                 sc.comms.min_neighbours,
             ),
         )
+    moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)
@@ -816,14 +819,14 @@ def make_allocation_plan(
         wps = routes[k]
         arr = np.asarray(wps, dtype=float).reshape(-1, 2)
         inside = (arr[:, 0] >= x0) & (arr[:, 0] <= x1) & (arr[:, 1] >= y0) & (arr[:, 1] <= y1)
-        if refine or polished:  # transit: the waypoints before the route first enters the map
+        if refine or moved:  # transit: the waypoints before the route first enters the map
             lead = int(np.argmax(inside)) if inside.any() else len(arr)
         else:  # the dog-leg before the lines
             lead = len(arr) - 2 * len(pieces[k])
         legs: np.ndarray = np.zeros((0, 2, 2))
-        if (refine or polished) and len(arr) > lead + 1:  # every leg is flown as search
+        if (refine or moved) and len(arr) > lead + 1:  # every leg is flown as search
             legs = np.stack([arr[lead:-1], arr[lead + 1 :]], axis=1)
-        elif not (refine or polished):  # the lines
+        elif not (refine or moved):  # the lines
             legs = arr[lead:].reshape(-1, 2, 2)
         path = np.vstack([takeoff[k], arr, landing[k]])
         t_k = _flight_time(wps, takeoff[k], landing[k], sc, v, heading_k[k])

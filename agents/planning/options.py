@@ -14,8 +14,9 @@ wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and `
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
 ``"thorough"`` is the combination that gained most on the validation priors within about a
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
-(i24-effort, 2026-11-28)"): ``poc-env plan --effort thorough``, policy
-``allocation_plan_thorough``.
+(i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
+(:mod:`~poc_env.agents.planning.polish`; "Polish by the environment's model (i24-polish,
+2026-11-28)"): ``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``.
 """
 
 from __future__ import annotations
