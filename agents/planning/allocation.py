@@ -719,6 +719,7 @@ def make_allocation_plan(
         routes, pieces = starts[0][2], starts[0][3]
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
+    ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
         best_sampled = -1.0
         sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
@@ -761,6 +762,7 @@ def make_allocation_plan(
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
                 score = _sampled_total(trial) if was_refined else sampled_of[name]
                 score -= _penalty(trial)
+                ranked.append((score, trial, s_pieces, name, was_refined))
                 if score > best_sampled:
                     best_sampled = score
                     routes = trial
@@ -773,15 +775,14 @@ def make_allocation_plan(
             if any(name == t[1] for t in tried):
                 continue
             score = sampled_of[name] - _penalty(s_routes)
+            ranked.append((score, s_routes, s_pieces, name, False))
             if score > best_sampled:
                 best_sampled, routes, pieces = score, s_routes, s_pieces
                 start, refined = name, False
-    polished: dict[str, Any] | None = None
-    if opt.polish and router.active:  # eq. 20: the polish does not see the zones
-        polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
-    elif opt.polish and any(routes):
-        routes, _, polished = polish_routes(
-            routes,
+
+    def _polish(rs):
+        return polish_routes(
+            rs,
             takeoff,
             landing,
             full_prior,
@@ -801,6 +802,30 @@ def make_allocation_plan(
                 sc.comms.min_neighbours,
             ),
         )
+
+    polished: dict[str, Any] | None = None
+    if opt.polish and router.active:  # eq. 20: the polish does not see the zones
+        polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
+    elif opt.polish and any(routes):
+        # the chosen plan polished, and with ``polish_starts`` the next best of the starts
+        # (refined or not) too: the best polished one kept (by POS less the penalty)
+        pool = [(routes, pieces, start, refined)]
+        for _, r_, p_, name, was_refined in sorted(ranked, key=lambda t: -t[0]):
+            if len(pool) >= opt.polish_starts:
+                break
+            if any(r_ is q[0] for q in pool) or not any(r_):
+                continue
+            pool.append((r_, p_, name, was_refined))
+        best_polished: tuple | None = None
+        for r_, p_, name, was_refined in pool:
+            pr, val, stats = _polish(r_)
+            score = val - (_penalty(pr) if len(pool) > 1 else 0.0)
+            if best_polished is None or score > best_polished[0]:
+                best_polished = (score, pr, p_, name, was_refined, stats)
+        assert best_polished is not None
+        _, routes, pieces, start, refined, polished = best_polished
+        if len(pool) > 1:
+            polished = {**polished, "plans": len(pool)}
     moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too

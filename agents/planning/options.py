@@ -159,6 +159,9 @@ class PlanOptions:
     polish: int = 0
     #: the polish's move radii, in sweep widths.
     polish_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
+    #: plans polished: the chosen one and the next best of the starts (refined or not); the
+    #: best polished one is kept.
+    polish_starts: int = 1
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -194,6 +197,7 @@ class PlanOptions:
         _number("graded_step", self.graded_step, 0.0, 1.0, closed_low=False)
         _number("sampled_top", self.sampled_top, 1, 100, integer=True)
         _number("polish", self.polish, 0, 100, integer=True)
+        _number("polish_starts", self.polish_starts, 1, 6, integer=True)
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)

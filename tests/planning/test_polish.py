@@ -146,7 +146,8 @@ def test_default_options_leave_plans_unchanged_and_polish_is_recorded():
     ("change", "field"),
     [({"polish": -1}, "options.polish"), ({"polish": 1.5}, "options.polish"),
      ({"polish_radii": ()}, "options.polish_radii"),
-     ({"polish_radii": (0.5, -1.0)}, "options.polish_radii")],
+     ({"polish_radii": (0.5, -1.0)}, "options.polish_radii"),
+     ({"polish_starts": 0}, "options.polish_starts")],
 )  # fmt: skip
 def test_polish_options_are_checked(change, field):
     with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
@@ -173,3 +174,17 @@ def test_no_polish_on_maps_with_no_fly_zones():
     pol = make_allocation_plan(sc, options=PlanOptions(polish=2))
     assert [u["waypoints_m"] for u in pol["uavs"]] == [u["waypoints_m"] for u in base["uavs"]]
     assert pol["optimizer"]["settings"]["polish"]["skipped"] == "no-fly zones"
+
+
+def test_polishing_more_starts_never_plans_less():
+    """``polish_starts`` polishes the next best start too and keeps the best polished plan:
+    never less planned POS than polishing the chosen plan alone; the settings say how many
+    plans were polished."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+
+    sc = load_scenario("small")
+    prior = episode_prior(sc, 3)
+    one = make_allocation_plan(sc, prior=prior, options=PlanOptions(polish=1))
+    two = make_allocation_plan(sc, prior=prior, options=PlanOptions(polish=1, polish_starts=2))
+    assert two["posc"] >= one["posc"] - 1e-12
+    assert two["optimizer"]["settings"]["polish"]["plans"] == 2
