@@ -18,6 +18,10 @@
     same routes, ``sampled_sweep``): a polish that only learned to put lines on the 2 x 2
     sample rows would gain on the first and not on the second. Paired summaries of both
     against the first variant.
+``chain MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
+    The planned loss chain (:func:`poc_env.agents.benchmarks.losschain.loss_chain`, no flight:
+    the planned POS stands in for the flown) of each variant's plan per seed (-1: the map's own
+    prior), and the mean of every link over the rule-aware bound per variant.
 ``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json CHECK RECORDS.json...``
     Registered policies (or ``allocation_plan@VARIANT``: the allocation policy with a
     variant's options) flown in the environment on the same random priors, records rewritten
@@ -215,6 +219,34 @@ def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> Non
             summary(sub, "fine_posc", base)
 
 
+def chain(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
+    from poc_env.agents.benchmarks.losschain import loss_chain
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc = load_scenario(name)
+    recs = []
+    for seed in range(seed0, seed1):
+        prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
+        for v in names:
+            p = make_allocation_plan(sc, prior=prior, options=_options(v))
+            c = loss_chain(sc, prior, p)
+            b = c["values"]["bound"]
+            recs.append({"map": name, "seed": seed, "variant": v, "bound": b,
+                         "links": {k: x / b for k, x in c["links"].items()},
+                         "values": {k: x / b for k, x in c["values"].items()}})  # fmt: skip
+            print(name, seed, v, {k: round(x, 4) for k, x in recs[-1]["links"].items()},
+                  flush=True)  # fmt: skip
+        with open(out + ".tmp", "w") as f:
+            json.dump(recs, f, indent=1)
+        os.replace(out + ".tmp", out)
+    for v in names:
+        rs = [r for r in recs if r["variant"] == v]
+        mean = {k: statistics.mean(r["links"][k] for r in rs) for k in rs[0]["links"]}
+        planned = statistics.mean(r["values"]["planned"] for r in rs)
+        print(f"{v} (n {len(rs)}): planned {planned:.4f};",
+              "; ".join(f"{k} {x:.4f}" for k, x in mean.items()), flush=True)  # fmt: skip
+
+
 def violations(name: str, seeds: list[int], names: list[str]) -> None:
     """Flown separation-violation steps (eq. 21 / 24, the environment's count) and POSC of the
     allocation policy with each variant's options (``de`` for ``de_plan`` at the test's budget,
@@ -367,6 +399,8 @@ if __name__ == "__main__":
     cmd, name, s0, s1, vs, out = sys.argv[1:7]
     if cmd == "plan":
         plan(name, int(s0), int(s1), vs.split(","), out)
+    elif cmd == "chain":
+        chain(name, int(s0), int(s1), vs.split(","), out)
     elif cmd == "polish":
         polish(name, int(s0), int(s1), vs.split(","), out)
     else:  # fly ... CHECK RECORDS.json...
