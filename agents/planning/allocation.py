@@ -43,6 +43,11 @@
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
    (``options.airspace_penalty``, off by default); ``start`` records which start and
    ``refined`` whether the refined routes were kept.
+7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
+   climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
+   polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
+   17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
+   no-fly zones. The plan's optimizer settings record its passes and kept moves (``polish``).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -79,6 +84,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
+from poc_env.agents.planning.polish import polish_routes
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -453,16 +459,17 @@ def violation_penalty(
 
 def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, t0: float):
     """``opt.also_default``: the plan with ``opt`` and the default plan (``PlanOptions()`` with
-    ``opt``'s keyword-level fields: levels, margin, refine, starts), the one of more planned
-    POS kept (ties: ``opt``'s). The effort levels' guarantee: a thorough plan never plans less
-    POS than the default one. (By POS alone: the default plan is the shipped planner's, its
-    violations accepted as they are; ``opt``'s own pick among its starts is the one that
-    prices violations, ``airspace_penalty``.)"""
+    ``opt``'s keyword-level fields: levels, margin, refine, starts; and its polish), the one
+    of more planned POS kept (ties: ``opt``'s). The effort levels' guarantee: a thorough plan
+    never plans less POS than the default one (polished alike). (By POS alone: the default
+    plan is the shipped planner's, its violations accepted as they are; ``opt``'s own pick
+    among its starts is the one that prices violations, ``airspace_penalty``.)"""
     kw = {"prior": prior, "map_source": map_source, "seed": seed, "speed": speed, "crs": crs}
     mine = make_allocation_plan(sc, options=dataclasses.replace(opt, also_default=False), **kw)
     base_opt = PlanOptions(
         levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
+        polish=opt.polish, polish_radii=opt.polish_radii,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
@@ -712,6 +719,7 @@ def make_allocation_plan(
         routes, pieces = starts[0][2], starts[0][3]
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
+    ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
         best_sampled = -1.0
         sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
@@ -754,6 +762,7 @@ def make_allocation_plan(
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
                 score = _sampled_total(trial) if was_refined else sampled_of[name]
                 score -= _penalty(trial)
+                ranked.append((score, trial, s_pieces, name, was_refined))
                 if score > best_sampled:
                     best_sampled = score
                     routes = trial
@@ -766,9 +775,58 @@ def make_allocation_plan(
             if any(name == t[1] for t in tried):
                 continue
             score = sampled_of[name] - _penalty(s_routes)
+            ranked.append((score, s_routes, s_pieces, name, False))
             if score > best_sampled:
                 best_sampled, routes, pieces = score, s_routes, s_pieces
                 start, refined = name, False
+
+    def _polish(rs):
+        return polish_routes(
+            rs,
+            takeoff,
+            landing,
+            full_prior,
+            grid,
+            sc.sensor,
+            v,
+            u.usable_endurance_s,
+            u.max_turn_rate_rad_s,
+            _reserve(sc),
+            passes=opt.polish,
+            radii=opt.polish_radii,
+            headings=heading0,
+            airspace=Airspace(
+                sc.episode.dt_s,
+                opt.separation_margin * sc.constraints.safety_distance_m,
+                opt.range_margin * sc.comms.range_m,
+                sc.comms.min_neighbours,
+            ),
+        )
+
+    polished: dict[str, Any] | None = None
+    if opt.polish and router.active:  # eq. 20: the polish does not see the zones
+        polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
+    elif opt.polish and any(routes):
+        # the chosen plan polished, and with ``polish_starts`` the next best of the starts
+        # (refined or not) too: the best polished one kept (by POS less the penalty)
+        pool = [(routes, pieces, start, refined)]
+        for _, r_, p_, name, was_refined in sorted(ranked, key=lambda t: -t[0]):
+            if len(pool) >= opt.polish_starts:
+                break
+            if any(r_ is q[0] for q in pool) or not any(r_):
+                continue
+            pool.append((r_, p_, name, was_refined))
+        best_polished: tuple | None = None
+        for r_, p_, name, was_refined in pool:
+            pr, val, stats = _polish(r_)
+            score = val - (_penalty(pr) if len(pool) > 1 else 0.0)
+            if best_polished is None or score > best_polished[0]:
+                best_polished = (score, pr, p_, name, was_refined, stats)
+        assert best_polished is not None
+        _, routes, pieces, start, refined, polished = best_polished
+        if len(pool) > 1:
+            polished = {**polished, "plans": len(pool)}
+    moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
     # little where cells are narrower than W, too much where they are wider)
@@ -786,14 +844,14 @@ def make_allocation_plan(
         wps = routes[k]
         arr = np.asarray(wps, dtype=float).reshape(-1, 2)
         inside = (arr[:, 0] >= x0) & (arr[:, 0] <= x1) & (arr[:, 1] >= y0) & (arr[:, 1] <= y1)
-        if refine:  # transit: the waypoints before the route first enters the map
+        if refine or moved:  # transit: the waypoints before the route first enters the map
             lead = int(np.argmax(inside)) if inside.any() else len(arr)
         else:  # the dog-leg before the lines
             lead = len(arr) - 2 * len(pieces[k])
         legs: np.ndarray = np.zeros((0, 2, 2))
-        if refine and len(arr) > lead + 1:  # every leg of the route is flown as search
+        if (refine or moved) and len(arr) > lead + 1:  # every leg is flown as search
             legs = np.stack([arr[lead:-1], arr[lead + 1 :]], axis=1)
-        elif not refine:  # the lines
+        elif not (refine or moved):  # the lines
             legs = arr[lead:].reshape(-1, 2, 2)
         path = np.vstack([takeoff[k], arr, landing[k]])
         t_k = _flight_time(wps, takeoff[k], landing[k], sc, v, heading_k[k])
@@ -846,6 +904,7 @@ def make_allocation_plan(
                 "speed": speed,
                 "refine": refine,
                 **({"options": opt.changed()} if opt.changed() else {}),
+                **({"polish": polished} if polished is not None else {}),
             },
         },
         "runtime_s": runtime,

@@ -14,8 +14,9 @@ wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and `
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
 ``"thorough"`` is the combination that gained most on the validation priors within about a
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
-(i24-effort, 2026-11-28)"): ``poc-env plan --effort thorough``, policy
-``allocation_plan_thorough``.
+(i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
+(:mod:`~poc_env.agents.planning.polish`; "Polish by the environment's model (i24-polish,
+2026-11-28)"): ``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``.
 """
 
 from __future__ import annotations
@@ -151,6 +152,16 @@ class PlanOptions:
     sampled: bool = False
     #: second chained lawnmowers rescored by the sampled model: the best few by the cell model.
     sampled_top: int = 2
+    #: passes of :func:`~poc_env.agents.planning.polish.polish_routes` on the chosen routes
+    #: (0: none): a local search on the waypoints scored by the environment's own sensor
+    #: model (the plan's ``posc``), after the start is picked (i24-polish); not on maps with
+    #: no-fly zones.
+    polish: int = 0
+    #: the polish's move radii, in sweep widths.
+    polish_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
+    #: plans polished: the chosen one and the next best of the starts (refined or not); the
+    #: best polished one is kept.
+    polish_starts: int = 1
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -185,6 +196,9 @@ class PlanOptions:
         _number("graded_min", self.graded_min, 0.0, 4.0, closed_low=False)
         _number("graded_step", self.graded_step, 0.0, 1.0, closed_low=False)
         _number("sampled_top", self.sampled_top, 1, 100, integer=True)
+        _number("polish", self.polish, 0, 100, integer=True)
+        _number("polish_starts", self.polish_starts, 1, 6, integer=True)
+        _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
@@ -232,4 +246,5 @@ THOROUGH: dict[str, Any] = {
     "angles": (45.0,),
     "excursions": True,
     "also_default": True,
+    "polish": 6,  # i24-polish: docs/PLANNER.md, "Polish by the environment's model"
 }

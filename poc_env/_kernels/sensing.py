@@ -610,3 +610,112 @@ def fly_sense(
     return sense_step(
         belief, old, new, moving, target, ox, oy, law, w, cutoff, reach, cell, h, found, p_t
     )
+
+
+# ------------------------------------------------------------------ exposure (the planner's polish)
+
+#: the exposure ``-log(1 - p)`` a step gives a point at most: ``one_minus_exp_neg`` returns 1
+#: exactly from 50 on, so a point with ``p = 1`` gets this (``1 - exp(-50)`` rounds to 1 too).
+EXPOSURE_CAP = 50.0
+
+
+@_jit
+def leg_exposure(law, ax, ay, bx, by, w, cutoff, reach, cell, h, sign, expo, box):
+    """Add ``sign x -log(1 - p)`` (at most :data:`EXPOSURE_CAP`) of the step a -> b to every
+    point of the fine grid ``expo (ny, nx)`` it can detect, ``p`` the law's POD
+    (:func:`_point_pod`'s branches, the same scalars :func:`sweep` applies, and for the
+    inverse-cube law its exponent F itself, cut off as :func:`_ic_pod` does; grid-relative
+    coordinates, samples at ``(k + 1/2) h``). The points visited are :func:`sweep`'s (the
+    capsule of the reach for the inverse-cube law, the reach's box otherwise); ``box (4,)``
+    (first row, end row, first column, end column) grows to hold them. Exposures of steps add:
+    a point's ``1 - exp(-sum)`` is :func:`sweep`'s ``1 - prod(1 - p)`` to rounding."""
+    ny, nx = expo.shape
+    if ax == bx and ay == by:  # a zero-length step detects nothing, under every law
+        return
+    ux, uy, length = _seg_axis(ax, ay, bx, by)
+    c0, c1 = _index_range(min(ax, bx) - reach, max(ax, bx) + reach, 0.0, h, nx)
+    r0, r1 = _index_range(min(ay, by) - reach, max(ay, by) + reach, 0.0, h, ny)
+    capsule = law == INVERSE_CUBE and reach < math.inf
+    iux = 1.0 / ux if ux != 0.0 else 0.0
+    iuy = 1.0 / uy if uy != 0.0 else 0.0
+    w2 = w * w
+    for j in range(r0, r1):
+        py = 0.0 + (j + 0.5) * h
+        k0, k1 = c0, c1
+        if capsule:
+            lo, hi = _capsule_row(py, ax, ay, bx, by, ux, uy, length, reach, iux, iuy)
+            k0, k1 = _index_range(lo, hi, 0.0, h, nx)
+        if k1 <= k0:
+            continue
+        box[0] = min(box[0], j)
+        box[1] = max(box[1], j + 1)
+        box[2] = min(box[2], k0)
+        box[3] = max(box[3], k1)
+        for k in range(k0, k1):
+            px = 0.0 + (k + 0.5) * h
+            if law == INVERSE_CUBE:  # the exponent F itself (_ic_pod's p = 1 - exp(-F))
+                lateral, along, beyond = _frame(px, py, ax, ay, ux, uy, length)
+                if lateral * lateral + beyond * beyond <= cutoff * cutoff:
+                    f = _ic_exponent(lateral, -along, length - along, w2)
+                    expo[j, k] += sign * min(f, EXPOSURE_CAP)
+                continue
+            if law == DEFINITE_RANGE:
+                p = _dr_pod(px, py, ax, ay, ux, uy, length, w)
+            else:
+                p = _exp_pod(px, py, ax, ay, bx, by, w, cell)
+            if p > 0.0:
+                f = -math.log1p(-p) if p < 1.0 else EXPOSURE_CAP
+                expo[j, k] += sign * min(f, EXPOSURE_CAP)
+
+
+@_jit
+def legs_exposure(law, a, b, w, cutoff, reach, cell, h, sign, expo):
+    """:func:`leg_exposure` of the steps ``a[l] -> b[l]`` (L, 2) in turn, each ``sign``."""
+    box = np.array([expo.shape[0], 0, expo.shape[1], 0])
+    for i in range(a.shape[0]):
+        leg_exposure(
+            law, a[i, 0], a[i, 1], b[i, 0], b[i, 1], w, cutoff, reach, cell, h, sign, expo, box
+        )
+
+
+@_jit
+def exposure_gains(
+    live, old_a, old_b, new_a, new_b, first, law, w, cutoff, reach, cell, h, base, work,
+    out,
+):  # fmt: skip
+    """The change of ``sum mass (1 - exp(-E))`` (``E`` the points' exposure, ``live = mass
+    exp(-E)`` the mass not yet found) when the steps ``old_a -> old_b`` are replaced by
+    candidate ``c``'s steps ``new_a[l] -> new_b[l]``, ``first[c] <= l < first[c + 1]``, into
+    ``out[c]`` (the points the steps reach only: every other point keeps its exposure).
+    ``base`` and ``work`` (the fine grid's shape) are zero scratch arrays, zero again on
+    return. Per point ``live (1 - exp(-d))``, ``d`` the change of its exposure (``expm1``: no
+    cancellation)."""
+    ny, nx = live.shape
+    box_o = np.array([ny, 0, nx, 0])
+    for o in range(old_a.shape[0]):
+        leg_exposure(
+            law, old_a[o, 0], old_a[o, 1], old_b[o, 0], old_b[o, 1], w, cutoff, reach, cell,
+            h, -1.0, base, box_o,
+        )  # fmt: skip
+    box = np.empty(4, np.int64)
+    for c in range(first.shape[0] - 1):
+        box[:] = box_o
+        for j in range(box_o[0], box_o[1]):
+            for k in range(box_o[2], box_o[3]):
+                work[j, k] = base[j, k]
+        for i in range(first[c], first[c + 1]):
+            leg_exposure(
+                law, new_a[i, 0], new_a[i, 1], new_b[i, 0], new_b[i, 1], w, cutoff, reach,
+                cell, h, 1.0, work, box,
+            )  # fmt: skip
+        g = 0.0
+        for j in range(box[0], box[1]):
+            for k in range(box[2], box[3]):
+                d = work[j, k]
+                if d != 0.0:
+                    g += live[j, k] * -math.expm1(-d)
+                    work[j, k] = 0.0
+        out[c] = g
+    for j in range(box_o[0], box_o[1]):
+        for k in range(box_o[2], box_o[3]):
+            base[j, k] = 0.0

@@ -11,8 +11,20 @@
     on ``large_400``), every variant of :data:`VARIANTS` per seed in turn (interleaved, so the
     time ratios are paired); records rewritten after every seed; paired summary against
     ``default``.
+``polish MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
+    As ``plan`` (seed -1: the map's own prior; i24-polish, docs/PLANNER.md "Polish by the
+    environment's model"), records kept and resumed as ``fly``'s, and each
+    plan's routes also scored on a finer sample lattice (``sensor.samples_per_cell = 8``, the
+    same routes, ``sampled_sweep``): a polish that only learned to put lines on the 2 x 2
+    sample rows would gain on the first and not on the second. Paired summaries of both
+    against the first variant.
+``chain MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
+    The planned loss chain (:func:`poc_env.agents.benchmarks.losschain.loss_chain`, no flight:
+    the planned POS stands in for the flown) of each variant's plan per seed (-1: the map's own
+    prior), and the mean of every link over the rule-aware bound per variant.
 ``fly MAP SEED0 SEED1 POLICY[,POLICY...] OUT.json CHECK RECORDS.json...``
-    Registered policies flown in the environment on the same random priors, records rewritten
+    Registered policies (or ``allocation_plan@VARIANT``: the allocation policy with a
+    variant's options) flown in the environment on the same random priors, records rewritten
     after every flight (a partial run gives paired figures; a rerun resumes): the first policy
     on every seed, the others on the first ``CHECK`` seeds only, to check they equal the stored
     ``poc-env bench plan --scale`` records (results/plan_scale/*.json), which then stand in for
@@ -43,6 +55,7 @@ import numpy as np
 from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.config import load_scenario
 from poc_env.theory.bound import rule_bound
+from poc_env.theory.probability_map import build_prior
 
 #: named variants (a preset and ``+field=value`` changes; tuples ``:``-separated).
 NAMED = {
@@ -154,6 +167,86 @@ def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
     summary(recs, "planned_posc", names[0])
 
 
+def fine_posc(sc, prior, plan: dict, samples: int = 8) -> float:
+    """``plan``'s routes scored by ``sampled_sweep`` on ``samples x samples`` points a cell."""
+    from poc_env.agents.planning.allocation import sampled_sweep
+    from poc_env.theory.probability_map import Grid
+
+    fine = load_scenario(sc, overrides={"sensor.samples_per_cell": samples})
+    paths = [[u["takeoff_m"], *u["waypoints_m"], u["landing_m"]] if u["waypoints_m"] else []
+             for u in plan["uavs"]]  # fmt: skip
+    return float(sum(sampled_sweep(fine, Grid.from_config(fine.map), prior, paths)[0]))
+
+
+def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc = load_scenario(name)
+    recs: list[dict] = []
+    if os.path.exists(out):  # resume: seeds already planned are kept
+        with open(out) as f:
+            recs = json.load(f)
+    done = {(r["seed"], r["variant"]) for r in recs}
+    for seed in range(seed0, seed1):  # seed -1: the scenario's own prior
+        prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
+        bound = rule_bound(sc, prior).upper
+        for v in names:
+            if (seed, v) in done:
+                continue
+            opt = _options(v)
+            t0 = time.perf_counter()
+            p = make_allocation_plan(sc, prior=prior, options=opt)
+            dt = time.perf_counter() - t0
+            moves = p["optimizer"]["settings"].get("polish", {}).get("moves", 0)
+            recs.append(
+                {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
+                 "fine_posc": fine_posc(sc, prior, p), "rule_bound": bound,
+                 "start": p["start"], "moves": moves, "plan_s": dt,
+                 "load": os.getloadavg()[0]}
+            )  # fmt: skip
+            r = recs[-1]
+            print(name, seed, v, round(r["planned_posc"] / bound, 4),
+                  round(r["fine_posc"] / bound, 4), moves, round(dt, 1),
+                  round(os.getloadavg()[0], 1), flush=True)  # fmt: skip
+            with open(out + ".tmp", "w") as f:
+                json.dump(recs, f, indent=1)
+            os.replace(out + ".tmp", out)
+    for base in names:
+        if "polish" not in base:
+            fam = [base] + [v for v in names if v.startswith(base + "+polish")]
+            sub = [r for r in recs if r["variant"] in fam]
+            summary(sub, "planned_posc", base)
+            summary(sub, "fine_posc", base)
+
+
+def chain(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
+    from poc_env.agents.benchmarks.losschain import loss_chain
+    from poc_env.agents.planning.allocation import make_allocation_plan
+
+    sc = load_scenario(name)
+    recs = []
+    for seed in range(seed0, seed1):
+        prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
+        for v in names:
+            p = make_allocation_plan(sc, prior=prior, options=_options(v))
+            c = loss_chain(sc, prior, p)
+            b = c["values"]["bound"]
+            recs.append({"map": name, "seed": seed, "variant": v, "bound": b,
+                         "links": {k: x / b for k, x in c["links"].items()},
+                         "values": {k: x / b for k, x in c["values"].items()}})  # fmt: skip
+            print(name, seed, v, {k: round(x, 4) for k, x in recs[-1]["links"].items()},
+                  flush=True)  # fmt: skip
+        with open(out + ".tmp", "w") as f:
+            json.dump(recs, f, indent=1)
+        os.replace(out + ".tmp", out)
+    for v in names:
+        rs = [r for r in recs if r["variant"] == v]
+        mean = {k: statistics.mean(r["links"][k] for r in rs) for k in rs[0]["links"]}
+        planned = statistics.mean(r["values"]["planned"] for r in rs)
+        print(f"{v} (n {len(rs)}): planned {planned:.4f};",
+              "; ".join(f"{k} {x:.4f}" for k, x in mean.items()), flush=True)  # fmt: skip
+
+
 def violations(name: str, seeds: list[int], names: list[str]) -> None:
     """Flown separation-violation steps (eq. 21 / 24, the environment's count) and POSC of the
     allocation policy with each variant's options (``de`` for ``de_plan`` at the test's budget,
@@ -182,14 +275,32 @@ def violations(name: str, seeds: list[int], names: list[str]) -> None:
                   round(float(st.posc[0]), 4), flush=True)  # fmt: skip
 
 
+def _policy(spec: str):
+    """A registered policy's name, or ``allocation_plan@VARIANT``: the allocation policy with
+    :func:`_options` of ``VARIANT`` (``allocation_plan@default+polish=2``)."""
+    if "@" not in spec:
+        return spec
+    from poc_env.agents.policies.allocation import AllocationPlanPolicy
+
+    head, variant = spec.split("@", 1)
+    if head != "allocation_plan":
+        raise SystemExit(f"{spec}: only allocation_plan@VARIANT is known")
+    pol = AllocationPlanPolicy()
+    pol.options = _options(variant)
+    return pol
+
+
 def stored(paths: list[str]) -> dict[tuple[int, str], dict]:
     """The episodes of ``poc-env bench plan --scale`` records (results/plan_scale/*.json) by
     (seed, policy)."""
     out = {}
     for p in paths:
         with open(p) as f:
-            for e in json.load(f)["episodes"]:
-                out[e["seed"], e["policy"]] = e
+            data = json.load(f)
+        if isinstance(data, list):  # a ``fly`` run's records (results/plan_scale/effort)
+            data = {"episodes": [{**r, "policy": r["variant"]} for r in data]}
+        for e in data["episodes"]:
+            out[e["seed"], e["policy"]] = e
     return out
 
 
@@ -218,7 +329,7 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
                 if seed - seed0 < check and known:  # the stored bound is this prior's
                     assert abs(rule_bound(sc, prior).upper - bound) <= 1e-9 * bound, seed
             t0 = time.perf_counter()
-            posc, p = _flown(sc, pol, seed, prior)
+            posc, p = _flown(sc, _policy(pol), seed, prior)
             recs.append(
                 {"map": name, "seed": seed, "variant": pol, "posc": float(posc),
                  "planned_posc": float(p.get("posc", float("nan"))), "rule_bound": bound,
@@ -236,8 +347,9 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
 
 
 def paired(out: str, records: list[str]) -> None:
-    """Flown ``fly`` records paired per seed with the stored ``allocation_plan`` and
-    ``greedy_rectangles`` episodes (checked equal where the default was flown here too)."""
+    """Flown ``fly`` records paired per seed with every stored policy flown on all of their
+    seeds (``allocation_plan``, ``greedy_rectangles``; ``allocation_plan_thorough`` from
+    results/plan_scale/effort's records), checked equal where flown here too."""
     from poc_env.stats import ci95
 
     with open(out) as f:
@@ -253,7 +365,9 @@ def paired(out: str, records: list[str]) -> None:
     for pol in sorted({r["variant"] for r in mine}):
         rs = sorted((r for r in mine if r["variant"] == pol), key=lambda r: r["seed"])
         a = np.array([r["posc"] / r["rule_bound"] for r in rs])
-        for base in ("allocation_plan", "greedy_rectangles"):
+        for base in sorted(old_policies(old)):
+            if any((r["seed"], base) not in old for r in rs):
+                continue
             b = np.array([old[r["seed"], base]["posc"] / r["rule_bound"] for r in rs])
             d = a - b
             half = ci95(d) if len(d) > 1 else float("nan")
@@ -285,5 +399,9 @@ if __name__ == "__main__":
     cmd, name, s0, s1, vs, out = sys.argv[1:7]
     if cmd == "plan":
         plan(name, int(s0), int(s1), vs.split(","), out)
+    elif cmd == "chain":
+        chain(name, int(s0), int(s1), vs.split(","), out)
+    elif cmd == "polish":
+        polish(name, int(s0), int(s1), vs.split(","), out)
     else:  # fly ... CHECK RECORDS.json...
         fly(name, int(s0), int(s1), vs.split(","), out, int(sys.argv[7]), sys.argv[8:])

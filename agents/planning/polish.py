@@ -1,0 +1,323 @@
+"""Polish: a local search on a route plan's waypoints scored by the environment's own sensor.
+
+:func:`poc_env.agents.planning.refine.refine_routes` climbs W x length per cell (eq. 10 per
+cell), which the environment does not honour: its sensor spreads a line's effort laterally
+(the inverse-cube law's lateral range, cut off at ``cutoff_sweep_widths x W``) over the prior's
+sample points, so where two lines lie within a sweep width of each other, or a line runs along
+the edge of the mass, the cell score and the environment disagree (docs/PLANNER.md, "Where the
+loss goes, link by link": the line-geometry link). :func:`polish_routes` climbs the planned POS
+itself, the quantity the plan reports (``allocation.sampled_sweep``).
+
+**The score.** Per sample point ``x`` of the prior's fine lattice (``grid.refine(prior, s)``,
+``s = sensor.samples_per_cell``, mass ``p(x)``) the swarm's exposure ``E(x) = sum over every
+leg of every UAV of -log(1 - p_leg(x))``, ``p_leg`` the law's POD of the leg for the point
+(:func:`poc_env._kernels.sensing.leg_exposure`: the compiled scalars the environment's sweep
+applies, with its cut-off; for the inverse-cube law ``-log(1 - p)`` is the segment's exponent
+F, and exponents of segments add). The swarm's POS is ``sum p(x) (1 - exp(-E(x)))`` (eq. 14
+applied leg by leg: ``1 - prod(1 - p)``), which is ``sampled_sweep``'s total of the same paths
+to rounding (``tests/planning/test_polish.py``: rel. 1e-9). A move changes a few legs, so its
+gain is computed over the points those legs reach only (old legs' exposures out, new legs' in:
+:func:`poc_env._kernels.sensing.exposure_gains`), and ``E`` is updated in place when a move is
+kept.
+
+**The moves**, per UAV ``k`` and waypoint ``i`` in turn (take-off and landing fields fixed;
+``r`` in ``radii`` sweep widths):
+
+* **move** the waypoint by ``r`` in one of 8 directions;
+* **slide** it by ``+-r`` along its incoming or outgoing leg (a leg lengthened or shortened:
+  the time a shorter connection frees goes to a longer line);
+* **shift** the leg from it to the next waypoint sideways: both ends moved by ``+-r``
+  perpendicular to the leg (a lawnmower line moved: two UAVs' lines over a shared patch
+  interleave, a UAV's own lines space as the sensor wants);
+* **insert** a waypoint at the midpoint of the leg into it moved ``+-r`` across the leg (before
+  the landing field too: a route extended when time is left);
+* **delete** it.
+
+The move of highest gain is tried first; it is kept if it gains more than :data:`TOL` and the
+route stays as :func:`~poc_env.agents.planning.refine.refine_routes` keeps it: eq. 17-18 time
+with turns within the budget and reserve (:func:`~poc_env.agents.planning.refine.route_fits`),
+moved and inserted waypoints inside the map, and, with ``airspace``, no more eq. 21 / 24
+violations at the planned positions (:class:`~poc_env.agents.planning.refine.AirspaceCount`,
+the best :data:`~poc_env.agents.planning.refine.TRIES` fitting candidates tried in turn). The
+search stops after ``passes`` passes over all waypoints or a pass without a kept move:
+deterministic (no clock, no random draw). No-fly zones are not seen: the allocation planner
+polishes only on maps without zones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from poc_env._kernels import sensing as _sensing
+from poc_env.agents.planning.refine import (
+    TRIES,
+    Airspace,
+    AirspaceCount,
+    _dedupe,
+    route_fits,
+    track,
+)
+from poc_env.errors import ConfigError
+from poc_env.theory.detection import detection_law
+from poc_env.theory.probability_map import Grid
+from poc_env.theory.search_theory import _reach
+
+#: least gain in planned POS for a move to be kept.
+TOL = 1e-7
+#: default move radii, in sweep widths.
+RADII = (0.25, 0.5, 1.0, 2.0)
+#: the kinds of move (module docstring).
+MOVES = ("move", "slide", "shift", "insert", "delete")
+_DIRS = np.array(
+    [[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4], dtype=float
+)  # unit steps of the move
+
+
+@dataclass
+class Exposure:
+    """The swarm's exposure ``E`` on the fine lattice of ``grid`` (module docstring) and the
+    sensor it is computed with; coordinates relative to the grid's origin inside."""
+
+    grid: Grid
+    samples: int
+    sweep_width_m: float
+    law: str
+    cutoff_m: float
+    mass: np.ndarray  # (ny s, nx s): the prior spread on the sample points
+    expo: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.code = int(detection_law(self.law).code)
+        self.reach = float(_reach(self.grid, self.law, self.sweep_width_m, self.cutoff_m))
+        self.h = self.grid.cell_m / self.samples
+        self.origin = np.asarray(self.grid.origin_m, dtype=float)
+        self.mass = np.ascontiguousarray(self.mass, dtype=float)
+        self.expo = np.zeros_like(self.mass)
+        self.live = self.mass.copy()  # mass exp(-E): not yet found
+        self._base = np.zeros_like(self.mass)
+        self._work = np.zeros_like(self.mass)
+
+    def _rel(self, pts) -> np.ndarray:
+        return np.ascontiguousarray(np.asarray(pts, dtype=float).reshape(-1, 2) - self.origin)
+
+    def steps(self, a, b) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The legs ``a -> b`` (L, 2) cut into steps no longer than a cell, as
+        ``sampled_sweep`` flies them (:func:`~poc_env.theory.search_theory.sweep_track` with
+        ``step_m`` the cell: the cut-off applies per step), relative to the grid's origin:
+        (starts, ends, steps per leg)."""
+        a = self._rel(a)
+        b = self._rel(b)
+        d = b - a
+        n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / self.grid.cell_m)).astype(np.int64)
+        leg = np.repeat(np.arange(len(a)), n)
+        j = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+        nl = n[leg].astype(float)
+        t0 = (j / nl)[:, None]
+        t1 = ((j + 1) / nl)[:, None]
+        return (
+            np.ascontiguousarray(a[leg] + t0 * d[leg]),
+            np.ascontiguousarray(a[leg] + t1 * d[leg]),
+            n,
+        )
+
+    def add(self, a, b, sign: float = 1.0) -> None:
+        """Add (``sign`` 1) or take out (-1) the exposure of the legs ``a -> b`` (L, 2)."""
+        sa, sb, _ = self.steps(a, b)
+        _sensing.legs_exposure(
+            self.code, sa, sb, self.sweep_width_m, self.cutoff_m,
+            self.reach, self.grid.cell_m, self.h, float(sign), self.expo,
+        )  # fmt: skip
+        self.live = self.mass * np.exp(-self.expo)
+
+    def pos(self) -> float:
+        """The swarm's POS ``sum p (1 - exp(-E))``."""
+        return float(np.sum(self.mass * -np.expm1(-self.expo)))
+
+    def gains(self, old_a, old_b, new_a, new_b, first) -> np.ndarray:
+        """Gain in POS of each candidate (its legs ``new_a[l] -> new_b[l]``, ``first[c] <= l <
+        first[c + 1]``) replacing the legs ``old_a -> old_b``."""
+        out = np.empty(len(first) - 1)
+        oa, ob, _ = self.steps(old_a, old_b)
+        na, nb, per_leg = self.steps(new_a, new_b)
+        cum = np.concatenate([[0], np.cumsum(per_leg)])
+        _sensing.exposure_gains(
+            self.live, oa, ob, na, nb, cum[np.asarray(first, dtype=np.int64)],
+            self.code,
+            self.sweep_width_m, self.cutoff_m, self.reach, self.grid.cell_m, self.h,
+            self._base, self._work, out,
+        )  # fmt: skip
+        return out
+
+
+def _legs(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return points[:-1], points[1:]
+
+
+def polish_routes(
+    routes: Sequence[Sequence[Sequence[float]]],
+    takeoff,
+    landing,
+    prior: np.ndarray,
+    grid: Grid,
+    sensor,
+    speeds,
+    budget: float,
+    turn_rate: float,
+    reserve: float,
+    passes: int = 1,
+    radii: Sequence[float] = RADII,
+    headings=None,
+    airspace: Airspace | None = None,
+    moves: Sequence[str] = MOVES,
+) -> tuple[list[list[list[float]]], float, dict]:
+    """Polished waypoints per UAV, their planned POS and counts (module docstring).
+    ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
+    the cell masses (the grid's shape); ``sensor`` the scenario's
+    (:class:`poc_env.config.SensorConfig`: sweep width, law, samples per cell, cut-off);
+    ``radii`` in sweep widths; ``headings`` (n,) the UAVs' headings at take-off (rad) or None;
+    ``moves`` the kinds of move tried (:data:`MOVES`).
+    A route that does not fit ``budget`` to begin with is only changed by moves after which
+    it does. Returns ``(routes, pos, {"passes", "moves"})``."""
+    if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
+        raise ConfigError("passes", passes, "an integer >= 0")
+    rad = tuple(radii)
+    if not rad or any(not np.isfinite(r) or r <= 0 for r in rad):
+        raise ConfigError("radii", radii, "positive numbers (sweep widths), not empty")
+    kinds = set(moves)
+    if not kinds or not kinds <= set(MOVES):
+        raise ConfigError("moves", moves, f"some of {', '.join(MOVES)}")
+    takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
+    landing = np.asarray(landing, dtype=float).reshape(-1, 2)
+    n = len(takeoff)
+    w = float(sensor.sweep_width_m)
+    s = int(sensor.samples_per_cell)
+    ex = Exposure(
+        grid,
+        s,
+        w,
+        sensor.law,
+        float(sensor.cutoff_sweep_widths) * w,
+        grid.refine(np.asarray(prior, dtype=float), s),
+    )
+    x0, y0, x1, y1 = grid.bounds
+    c = grid.cell_m
+    lo = np.array([x0 + 1e-6 * c, y0 + 1e-6 * c])
+    hi = np.array([x1 - 1e-6 * c, y1 - 1e-6 * c])
+    flying = [len(r) > 0 for r in routes]
+    paths = [
+        np.vstack([takeoff[k], np.asarray(routes[k], dtype=float).reshape(-1, 2), landing[k]])
+        if flying[k]
+        else np.zeros((0, 2))
+        for k in range(n)
+    ]
+    h0 = [None] * n if headings is None else [float(h) for h in headings]
+    for k in range(n):
+        if flying[k]:
+            ex.add(*_legs(paths[k]))
+    value = ex.pos()
+
+    if airspace is not None:
+        times = np.arange(int(np.ceil(budget / airspace.dt_s)) + 1) * airspace.dt_s
+        pos = np.zeros((len(times), n, 2))
+        act = np.zeros((len(times), n), dtype=bool)
+        for k in range(n):
+            if flying[k]:
+                pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
+        count = AirspaceCount(airspace, pos, act)
+
+    def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray]) -> bool:
+        """Keep the best of the candidates ``seqs`` for ``paths[k][i0 : i1 + 1]`` (same first
+        and last points) that gains more than :data:`TOL` and keeps the route flyable."""
+        nonlocal value
+        path = paths[k]
+        old = path[i0 : i1 + 1]
+        first = np.zeros(len(seqs) + 1, dtype=np.int64)
+        first[1:] = np.cumsum([len(q) - 1 for q in seqs])
+        starts = np.vstack([q[:-1] for q in seqs])
+        ends = np.vstack([q[1:] for q in seqs])
+        gain = ex.gains(old[:-1], old[1:], starts, ends, first)
+        tried = 0
+        for cj in np.argsort(-gain, kind="stable"):
+            if not gain[cj] > TOL or tried >= TRIES:
+                break
+            cand = np.vstack([path[:i0], seqs[cj], path[i1 + 1 :]])
+            if not route_fits(cand, speeds, turn_rate, budget, reserve, h0[k]):
+                continue
+            if airspace is not None:
+                tried += 1
+                v_new, state = count.move(k, *track(cand, speeds, turn_rate, times, h0[k]))
+                if v_new > count.value:
+                    continue
+                count.keep(state)
+            ex.add(old[:-1], old[1:], -1.0)
+            ex.add(seqs[cj][:-1], seqs[cj][1:], 1.0)
+            value += float(gain[cj])
+            paths[k] = cand
+            return True
+        return False
+
+    steps = np.asarray(rad, dtype=float) * w
+    offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
+    signed = np.concatenate([steps, -steps])
+    n_moves = 0
+    done = 0
+    for _ in range(max(0, int(passes))):
+        kept = 0
+        done += 1
+        for k in range(n):
+            if not flying[k]:
+                continue
+            i = 1
+            while i < len(paths[k]):  # i: the waypoint changed (inserts go before it)
+                path = paths[k]
+                m = len(path)
+                j_end = min(i + 2, m - 1)  # the legs path[i-1] .. path[j_end] may change
+                tail = path[i + 1 : j_end + 1]  # after waypoint i, in the window
+                seqs: list[np.ndarray] = []  # each candidate's points from path[i-1] to path[j_end]
+                a, b = path[i - 1], path[i]
+                if i < m - 1:  # an inner waypoint: move, slide, shift, delete
+                    nxt = path[i + 1]
+                    qs = [b + offsets] if "move" in kinds else []
+                    for u in (b - a, nxt - b) if "slide" in kinds else ():
+                        ln = float(np.hypot(*u))
+                        if ln > 1e-3:
+                            qs.append(b + signed[:, None] * (u / ln)[None])
+                    for q in np.clip(np.vstack(qs), lo, hi) if qs else ():
+                        seqs.append(np.vstack([a, q, tail]))
+                    if m > 3 and "delete" in kinds:  # a route keeps a waypoint (sampled_sweep)
+                        seqs.append(np.vstack([a, tail]))
+                    if i + 1 < m - 1 and "shift" in kinds:  # leg i -> i+1, two inner waypoints
+                        d = nxt - b
+                        ln = float(np.hypot(*d))
+                        if ln > 1e-3:
+                            nrm = np.array([-d[1], d[0]]) / ln
+                            for o in signed:
+                                q1 = np.clip(b + o * nrm, lo, hi)
+                                q2 = np.clip(nxt + o * nrm, lo, hi)
+                                seqs.append(np.vstack([a, q1, q2, path[i + 2 : j_end + 1]]))
+                d = b - a  # insert before i
+                ln = float(np.hypot(*d))
+                if ln > 1e-3 and "insert" in kinds:
+                    nrm = np.array([-d[1], d[0]]) / ln
+                    for o in signed:
+                        q = np.clip(0.5 * (a + b) + o * nrm, lo, hi)
+                        seqs.append(np.vstack([a, q, b, tail]))
+                if not seqs:
+                    i += 1
+                    continue
+                if choose(k, i - 1, j_end, seqs):
+                    kept += 1
+                    if len(paths[k]) < m:
+                        continue  # deleted: the next waypoint is now at i
+                i += 1
+        n_moves += kept
+        if not kept:
+            break
+    out = [
+        [[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] if flying[k] else []
+        for k, p in enumerate(paths)
+    ]
+    return out, ex.pos(), {"passes": done, "moves": n_moves}

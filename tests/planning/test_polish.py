@@ -1,0 +1,190 @@
+"""The polish: a local search on a plan's waypoints scored by the environment's sensor model."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from poc_env.agents.planning.allocation import make_allocation_plan, sampled_sweep
+from poc_env.agents.planning.flight_rules import plan_speeds, reserve_s
+from poc_env.agents.planning.options import PlanOptions
+from poc_env.agents.planning.polish import Exposure, polish_routes
+from poc_env.agents.planning.refine import Airspace, route_fits
+from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
+from poc_env.sim.core import takeoff_heading
+from poc_env.theory.probability_map import Grid, build_prior
+
+
+def _setup(sc):
+    grid = Grid.from_config(sc.map)
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    return grid, takeoff, landing
+
+
+def _polish(sc, routes, prior, passes=2, airspace=True, **kw):
+    grid, takeoff, landing = _setup(sc)
+    u = sc.uav
+    air = Airspace(
+        sc.episode.dt_s, 2.0 * sc.constraints.safety_distance_m, 0.9 * sc.comms.range_m,
+        sc.comms.min_neighbours,
+    )  # fmt: skip
+    return polish_routes(
+        routes, takeoff, landing, prior, grid, sc.sensor, plan_speeds(sc),
+        u.usable_endurance_s, u.max_turn_rate_rad_s, reserve_s(sc), passes=passes,
+        headings=takeoff_heading(grid.bounds, takeoff), airspace=air if airspace else None,
+        **kw,
+    )  # fmt: skip
+
+
+def _sampled(sc, routes, prior) -> float:
+    grid, takeoff, landing = _setup(sc)
+    paths = [[takeoff[k], *r, landing[k]] if r else [] for k, r in enumerate(routes)]
+    return float(sum(sampled_sweep(sc, grid, prior, paths)[0]))
+
+
+@pytest.mark.parametrize("law", ["inverse_cube", "exponential", "definite_range"])
+def test_incremental_score_equals_sampled_sweep_after_a_polish(law):
+    """The exposure kept move by move gives the environment's own sweep of the polished
+    routes (rel. 1e-9), under each detection law, before and after moves are kept."""
+    sc = load_scenario("small", overrides={"sensor.law": law})
+    prior = build_prior(sc.map)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    _, before, _ = _polish(sc, routes, prior, passes=0)
+    assert before == pytest.approx(_sampled(sc, routes, prior), rel=1e-9)
+    out, value, stats = _polish(sc, routes, prior, passes=2)
+    assert stats["moves"] > 0 and out != routes
+    assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
+
+
+def test_polish_never_lowers_planned_pos_and_keeps_routes_flyable():
+    """On a random prior of paper_6_2's: the planned POS does not drop, every route fits
+    eq. 17-18 (route_fits) and every waypoint lies inside the map."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+
+    sc = load_scenario("paper_6_2")
+    prior = episode_prior(sc, 7)
+    grid, takeoff, landing = _setup(sc)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc, prior=prior)["uavs"]]
+    out, value, stats = _polish(sc, routes, prior, passes=1)
+    assert stats["moves"] > 0
+    assert value > _sampled(sc, routes, prior) + 1e-4
+    v = plan_speeds(sc)
+    heading = takeoff_heading(grid.bounds, takeoff)
+    x0, y0, x1, y1 = grid.bounds
+    for k, r in enumerate(out):
+        old = np.asarray(routes[k])
+        new = np.asarray(r)
+        path = np.vstack([takeoff[k], new, landing[k]])
+        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
+                          reserve_s(sc), heading[k])  # fmt: skip
+        moved = ~np.isin(new, old).all(axis=1)  # waypoints the polish placed
+        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+
+
+def test_a_leg_shift_moves_coincident_lines_apart():
+    """Two UAVs fly the same line over a uniform patch: shifting one line sideways (both its
+    ends by the same offset) is the move that pays, and the polish finds it with only shifts
+    allowed; the lines end up parallel and at least a sweep width apart."""
+    sc = load_scenario("small")
+    sc = sc.with_uavs(2)
+    grid = _setup(sc)[0]
+    prior = np.ones(grid.shape) / grid.shape[0] / grid.shape[1]
+    line = [[5000.0, 20000.0], [35000.0, 20000.0]]
+    routes = [list(map(list, line)), list(map(list, line))]
+    out, value, stats = _polish(sc, routes, prior, passes=2, airspace=False, moves=("shift",))
+    assert stats["moves"] > 0 and value > _sampled(sc, routes, prior)
+    a, b = np.asarray(out[0]), np.asarray(out[1])
+    assert a.shape == b.shape == (2, 2)
+    for r in (a, b):  # still lines along x: both ends moved alike
+        assert r[0, 1] == pytest.approx(r[1, 1])
+    assert abs(a[0, 1] - b[0, 1]) >= sc.sensor.sweep_width_m - 1e-6
+
+
+def test_exposure_gain_equals_the_score_difference():
+    """One candidate's gain (exposure_gains) equals the change of the full score when the
+    legs are swapped in place."""
+    sc = load_scenario("small")
+    grid, *_ = _setup(sc)
+    rng = np.random.default_rng(3)
+    prior = rng.random(grid.shape)
+    s = sc.sensor.samples_per_cell
+    w = sc.sensor.sweep_width_m
+    ex = Exposure(grid, s, w, sc.sensor.law, sc.sensor.cutoff_sweep_widths * w,
+                  grid.refine(prior, s))  # fmt: skip
+    pts = rng.uniform(0, 40000, size=(6, 2))
+    ex.add(pts[:-1], pts[1:])
+    v0 = ex.pos()
+    old = pts[1:4]
+    new = np.array([pts[1], [20000.0, 21000.0], [9000.0, 30000.0], pts[3]])
+    gain = ex.gains(old[:-1], old[1:], new[:-1], new[1:], [0, 3])[0]
+    ex.add(old[:-1], old[1:], -1.0)
+    ex.add(new[:-1], new[1:], 1.0)
+    assert gain != 0.0
+    assert gain == pytest.approx(ex.pos() - v0, rel=1e-9, abs=1e-13)
+
+
+def test_default_options_leave_plans_unchanged_and_polish_is_recorded():
+    """polish = 0 (the default) plans what the planner planned before (no polish call at all:
+    the option's two code paths give the same routes); polish > 0 never plans less POS and
+    records its passes and moves."""
+    sc = load_scenario("small")
+    base = make_allocation_plan(sc)
+    same = make_allocation_plan(sc, options=PlanOptions(polish=0))
+    assert [u["waypoints_m"] for u in same["uavs"]] == [u["waypoints_m"] for u in base["uavs"]]
+    assert same["posc"] == base["posc"] and "polish" not in base["optimizer"]["settings"]
+    pol = make_allocation_plan(sc, options=PlanOptions(polish=2))
+    assert pol["posc"] > base["posc"]
+    rec = pol["optimizer"]["settings"]
+    assert rec["polish"]["moves"] > 0 and rec["options"] == {"polish": 2}
+    assert pol["posc"] == pytest.approx(_sampled(sc, [u["waypoints_m"] for u in pol["uavs"]],
+                                                 build_prior(sc.map)), rel=1e-12)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [({"polish": -1}, "options.polish"), ({"polish": 1.5}, "options.polish"),
+     ({"polish_radii": ()}, "options.polish_radii"),
+     ({"polish_radii": (0.5, -1.0)}, "options.polish_radii"),
+     ({"polish_starts": 0}, "options.polish_starts")],
+)  # fmt: skip
+def test_polish_options_are_checked(change, field):
+    with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
+        dataclasses.replace(PlanOptions(), **change)
+
+
+def test_polish_arguments_are_checked():
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    with pytest.raises(ConfigError, match="moves"):
+        _polish(sc, [[], [], []], prior, moves=("jump",))
+    with pytest.raises(ConfigError, match="passes"):
+        _polish(sc, [[], [], []], prior, passes=-1)
+    with pytest.raises(ConfigError, match="radii"):
+        _polish(sc, [[], [], []], prior, radii=())
+
+
+def test_no_polish_on_maps_with_no_fly_zones():
+    """The moves do not see the zones (eq. 20): on a map with one the plan is the unpolished
+    one and the settings say the polish was skipped."""
+    zone = {"map.no_fly_zones_km": [[[15, 10], [25, 10], [25, 30], [15, 30]]]}
+    sc = load_scenario("small", zone)
+    base = make_allocation_plan(sc)
+    pol = make_allocation_plan(sc, options=PlanOptions(polish=2))
+    assert [u["waypoints_m"] for u in pol["uavs"]] == [u["waypoints_m"] for u in base["uavs"]]
+    assert pol["optimizer"]["settings"]["polish"]["skipped"] == "no-fly zones"
+
+
+def test_polishing_more_starts_never_plans_less():
+    """``polish_starts`` polishes the next best start too and keeps the best polished plan:
+    never less planned POS than polishing the chosen plan alone; the settings say how many
+    plans were polished."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+
+    sc = load_scenario("small")
+    prior = episode_prior(sc, 3)
+    one = make_allocation_plan(sc, prior=prior, options=PlanOptions(polish=1))
+    two = make_allocation_plan(sc, prior=prior, options=PlanOptions(polish=1, polish_starts=2))
+    assert two["posc"] >= one["posc"] - 1e-12
+    assert two["optimizer"]["settings"]["polish"]["plans"] == 2
