@@ -178,15 +178,21 @@ def fine_posc(sc, prior, plan: dict, samples: int = 8) -> float:
     return float(sum(sampled_sweep(fine, Grid.from_config(fine.map), prior, paths)[0]))
 
 
+def resumed(out: str) -> tuple[list[dict], set[tuple[int, str]]]:
+    """The records already in ``out`` (a run goes on where it stopped) and their (seed,
+    variant) pairs."""
+    recs: list[dict] = []
+    if os.path.exists(out):
+        with open(out) as f:
+            recs = json.load(f)
+    return recs, {(r["seed"], r["variant"]) for r in recs}
+
+
 def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
     from poc_env.agents.planning.allocation import make_allocation_plan
 
     sc = load_scenario(name)
-    recs: list[dict] = []
-    if os.path.exists(out):  # resume: seeds already planned are kept
-        with open(out) as f:
-            recs = json.load(f)
-    done = {(r["seed"], r["variant"]) for r in recs}
+    recs, done = resumed(out)
     for seed in range(seed0, seed1):  # seed -1: the scenario's own prior
         prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
@@ -312,11 +318,7 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
 
     sc = load_scenario(name)
     old = stored(records)
-    recs: list[dict] = []
-    if os.path.exists(out):  # resume: seeds already flown are kept
-        with open(out) as f:
-            recs = json.load(f)
-    done = {(r["seed"], r["variant"]) for r in recs}
+    recs, done = resumed(out)
     for seed in range(seed0, seed1):
         prior = episode_prior(sc, seed)
         bound = None
