@@ -45,6 +45,19 @@ def checkpoints(run: Path) -> list[tuple[int, Path]]:
     return sorted(out)
 
 
+def reference(text: str) -> tuple[str, float]:
+    """``NAME=POSC`` of ``--reference``: a name and a POSC in [0, 1] (else argparse's error,
+    naming the option and the value)."""
+    name, _, value = text.partition("=")
+    try:
+        posc = float(value)
+    except ValueError:
+        posc = float("nan")
+    if not name or not (0.0 <= posc <= 1.0):
+        raise argparse.ArgumentTypeError(f"got {text!r}; allowed: NAME=POSC, POSC in [0, 1]")
+    return name, posc
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument(
@@ -56,11 +69,11 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=20)
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument(
-        "--reference", action="append", default=[], metavar="NAME=POSC",
+        "--reference", action="append", default=[], metavar="NAME=POSC", type=reference,
         help="a dashed line at a planner's mean POSC on the same priors (repeatable)",
     )  # fmt: skip
     a = ap.parse_args()
-    refs = [(r.split("=", 1)[0], float(r.split("=", 1)[1])) for r in a.reference]
+    refs = a.reference
     a.out.mkdir(parents=True, exist_ok=True)
     path = a.out / "curve.csv"
     rows: list[dict[str, str]] = []
