@@ -164,6 +164,9 @@ class PlanOptions:
     #: plans polished: the chosen one and the next best of the starts (refined or not); the
     #: best polished one is kept.
     polish_starts: int = 1
+    #: the polish also tries its ``grade`` moves (a run of consecutive lawnmower lines
+    #: squeezed or spread together: :data:`~poc_env.agents.planning.polish.KINDS`; i24-grade).
+    polish_grade: bool = False
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -206,7 +209,7 @@ class PlanOptions:
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
                  "chain_early", "also_default", "part", "share_tables", "axis", "excursions",
-                 "sampled")  # fmt: skip
+                 "sampled", "polish_grade")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")
