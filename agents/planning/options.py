@@ -16,9 +16,14 @@ wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and `
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
 (i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
 (:mod:`~poc_env.agents.planning.polish`; "Polish by the environment's model (i24-polish,
-2026-11-28)"): ``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``. With
-the polish it took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s)
-on ``large_400``, one thread at load 1-6, over the 50 reported priors each.
+2026-11-28)") and its grade moves ("Grading and the last 0.007 (i24-grade, 2026-11-28)"):
+``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``. With the polish it
+took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s) on
+``large_400``, one thread at load 1-6, over the 50 reported priors each; with the grade moves
+88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3 times the time without them,
+interleaved in one process at that load) and
+248 s (at most 287 s) on ``large_400`` at load
+5.6-8.5 (10 priors).
 """
 
 from __future__ import annotations
@@ -252,4 +257,5 @@ THOROUGH: dict[str, Any] = {
     "excursions": True,
     "also_default": True,
     "polish": 6,  # i24-polish: docs/PLANNER.md, "Polish by the environment's model"
+    "polish_grade": True,  # i24-grade: docs/PLANNER.md, "Grading and the last 0.007"
 }
