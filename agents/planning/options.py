@@ -20,7 +20,7 @@ minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "
 ``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``. With the polish it
 took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s) on
 ``large_400``, one thread at load 1-6, over the 50 reported priors each; with the grade moves
-88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3 times the time without them,
+88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3-1.4 times the time without them,
 interleaved in one process at that load) and
 248 s (at most 287 s) on ``large_400`` at load
 5.6-8.5 (10 priors).
