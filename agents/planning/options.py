@@ -22,8 +22,8 @@ took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s
 ``large_400``, one thread at load 1-6, over the 50 reported priors each; with the grade moves
 88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3-1.4 times the time without them,
 interleaved in one process at that load) and
-248 s (at most 287 s) on ``large_400`` at load
-5.6-8.5 (10 priors).
+210 s (at most 287 s) on ``large_400`` at load
+4.2-8.5 (20 priors).
 """
 
 from __future__ import annotations
