@@ -84,7 +84,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.polish import polish_routes
+from poc_env.agents.planning.polish import KINDS, MOVES, polish_routes
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -469,7 +469,7 @@ def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, 
     base_opt = PlanOptions(
         levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
-        polish=opt.polish, polish_radii=opt.polish_radii,
+        polish=opt.polish, polish_radii=opt.polish_radii, polish_grade=opt.polish_grade,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
@@ -794,6 +794,7 @@ def make_allocation_plan(
             _reserve(sc),
             passes=opt.polish,
             radii=opt.polish_radii,
+            moves=KINDS if opt.polish_grade else MOVES,
             headings=heading0,
             airspace=Airspace(
                 sc.episode.dt_s,

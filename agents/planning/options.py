@@ -16,9 +16,14 @@ wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and `
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
 (i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
 (:mod:`~poc_env.agents.planning.polish`; "Polish by the environment's model (i24-polish,
-2026-11-28)"): ``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``. With
-the polish it took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s)
-on ``large_400``, one thread at load 1-6, over the 50 reported priors each.
+2026-11-28)") and its grade moves ("Grading and the last 0.007 (i24-grade, 2026-11-28)"):
+``poc-env plan --effort thorough``, policy ``allocation_plan_thorough``. With the polish it
+took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s) on
+``large_400``, one thread at load 1-6, over the 50 reported priors each; with the grade moves
+88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3-1.4 times the time without them,
+interleaved in one process at that load) and
+210 s (at most 287 s) on ``large_400`` at load
+4.2-8.5 (20 priors; 1.13 times the time without them, interleaved at load 3.2-3.4).
 """
 
 from __future__ import annotations
@@ -164,6 +169,9 @@ class PlanOptions:
     #: plans polished: the chosen one and the next best of the starts (refined or not); the
     #: best polished one is kept.
     polish_starts: int = 1
+    #: the polish also tries its ``grade`` moves (a run of consecutive lawnmower lines
+    #: squeezed or spread together: :data:`~poc_env.agents.planning.polish.KINDS`; i24-grade).
+    polish_grade: bool = False
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -206,7 +214,7 @@ class PlanOptions:
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
                  "chain_early", "also_default", "part", "share_tables", "axis", "excursions",
-                 "sampled")  # fmt: skip
+                 "sampled", "polish_grade")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")
@@ -249,4 +257,5 @@ THOROUGH: dict[str, Any] = {
     "excursions": True,
     "also_default": True,
     "polish": 6,  # i24-polish: docs/PLANNER.md, "Polish by the environment's model"
+    "polish_grade": True,  # i24-grade: docs/PLANNER.md, "Grading and the last 0.007"
 }

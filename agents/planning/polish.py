@@ -31,7 +31,13 @@ kept.
   interleave, a UAV's own lines space as the sensor wants);
 * **insert** a waypoint at the midpoint of the leg into it moved ``+-r`` across the leg (before
   the landing field too: a route extended when time is left);
-* **delete** it.
+* **delete** it;
+* **grade** (not in :data:`MOVES`; ``moves`` must name it, i24-grade): the ``m`` waypoints
+  from it on (``m`` in :data:`GRADE_WINDOWS`) squeezed or spread across the leg from it to the
+  next waypoint -- every point's offset across that leg, measured from the first or from the
+  last of them, scaled by a factor of :data:`GRADE_SCALES` -- so the spacing of a run of
+  consecutive parallel lawnmower lines changes together: a graded lawnmower, denser where the
+  mass is, built from the one spacing a box was laid at.
 
 The move of highest gain is tried first; it is kept if it gains more than :data:`TOL` and the
 route stays as :func:`~poc_env.agents.planning.refine.refine_routes` keeps it: eq. 17-18 time
@@ -71,6 +77,11 @@ TOL = 1e-7
 RADII = (0.25, 0.5, 1.0, 2.0)
 #: the kinds of move (module docstring).
 MOVES = ("move", "slide", "shift", "insert", "delete")
+#: every kind of move (``grade`` too: tried only if ``moves`` names it).
+KINDS = (*MOVES, "grade")
+#: waypoints a grade move scales together (2, 3 and 4 lawnmower lines), and its factors.
+GRADE_WINDOWS = (4, 6, 8)
+GRADE_SCALES = (0.8, 0.9, 1.1, 1.25)
 _DIRS = np.array(
     [[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4], dtype=float
 )  # unit steps of the move
@@ -178,7 +189,7 @@ def polish_routes(
     the cell masses (the grid's shape); ``sensor`` the scenario's
     (:class:`poc_env.config.SensorConfig`: sweep width, law, samples per cell, cut-off);
     ``radii`` in sweep widths; ``headings`` (n,) the UAVs' headings at take-off (rad) or None;
-    ``moves`` the kinds of move tried (:data:`MOVES`).
+    ``moves`` the kinds of move tried (:data:`KINDS`; default :data:`MOVES`).
     A route that does not fit ``budget`` to begin with is only changed by moves after which
     it does. Returns ``(routes, pos, {"passes", "moves"})``."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
@@ -187,8 +198,8 @@ def polish_routes(
     if not rad or any(not np.isfinite(r) or r <= 0 for r in rad):
         raise ConfigError("radii", radii, "positive numbers (sweep widths), not empty")
     kinds = set(moves)
-    if not kinds or not kinds <= set(MOVES):
-        raise ConfigError("moves", moves, f"some of {', '.join(MOVES)}")
+    if not kinds or not kinds <= set(KINDS):
+        raise ConfigError("moves", moves, f"some of {', '.join(KINDS)}")
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     n = len(takeoff)
@@ -259,6 +270,29 @@ def polish_routes(
             return True
         return False
 
+    def grade(k: int, i: int) -> int:
+        """The grade moves at waypoint ``i`` of UAV ``k`` (module docstring): per window, the
+        best fitting candidate kept if it gains; the number kept."""
+        got = 0
+        for m_ in GRADE_WINDOWS:
+            path = paths[k]
+            if i + m_ > len(path) - 1:  # the window's points are inner waypoints
+                break
+            d = path[i + 1] - path[i]
+            ln = float(np.hypot(*d))
+            if ln <= 1e-3:
+                break
+            nrm = np.array([-d[1], d[0]]) / ln
+            pts = path[i : i + m_]
+            off = (pts - pts[0]) @ nrm  # offsets across the first leg
+            seqs = []
+            for pivot in (0.0, float(off[-1])):
+                for f in GRADE_SCALES:
+                    q = np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
+                    seqs.append(np.vstack([path[i - 1], q, path[i + m_]]))
+            got += int(choose(k, i - 1, i + m_, seqs))
+        return got
+
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
@@ -305,13 +339,12 @@ def polish_routes(
                     for o in signed:
                         q = np.clip(0.5 * (a + b) + o * nrm, lo, hi)
                         seqs.append(np.vstack([a, q, b, tail]))
-                if not seqs:
-                    i += 1
-                    continue
-                if choose(k, i - 1, j_end, seqs):
+                if seqs and choose(k, i - 1, j_end, seqs):
                     kept += 1
                     if len(paths[k]) < m:
                         continue  # deleted: the next waypoint is now at i
+                if "grade" in kinds:
+                    kept += grade(k, i)
                 i += 1
         n_moves += kept
         if not kept:

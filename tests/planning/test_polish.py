@@ -188,3 +188,88 @@ def test_polishing_more_starts_never_plans_less():
     two = make_allocation_plan(sc, prior=prior, options=PlanOptions(polish=1, polish_starts=2))
     assert two["posc"] >= one["posc"] - 1e-12
     assert two["optimizer"]["settings"]["polish"]["plans"] == 2
+
+
+def _lawnmower(ys, x0=15000.0, x1=25000.0):
+    """A lawnmower's waypoints: lines along x at the heights ``ys``, turning at alternate
+    ends."""
+    pts = []
+    for j, y in enumerate(ys):
+        a, b = (x0, x1) if j % 2 == 0 else (x1, x0)
+        pts += [[a, float(y)], [b, float(y)]]
+    return pts
+
+
+def test_a_grade_move_squeezes_a_lawnmower_onto_a_narrow_band():
+    """One UAV sweeps four lines 3 km apart (1.2 W) over mass in one row of cells (y 10-15 km)
+    at the first two lines:
+    with only grade moves allowed (i24-grade) the polish squeezes the run of lines towards the
+    band (every line still along x, the spacing smaller), gains planned POS and keeps the
+    route flyable; no other kind of move could keep the lines straight and parallel."""
+    from poc_env.agents.planning.polish import KINDS, MOVES
+
+    assert "grade" in KINDS and "grade" not in MOVES  # the default moves are unchanged
+    sc = load_scenario("small").with_uavs(1)
+    grid, takeoff, landing = _setup(sc)
+    prior = np.zeros(grid.shape)
+    prior[2, 3:5] = 0.5  # small: 8 x 8 cells of 5 km; row 2 is y 10-15 km
+    routes = [_lawnmower([12000.0, 15000.0, 18000.0, 21000.0])]
+    path = np.vstack([takeoff[0], routes[0], landing[0]])
+    heading = takeoff_heading(grid.bounds, takeoff)
+    v = plan_speeds(sc)
+    fits = (v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s, reserve_s(sc))
+    assert route_fits(path, *fits, heading[0])
+    out, value, stats = _polish(sc, routes, prior, passes=3, airspace=False, moves=("grade",))
+    assert stats["moves"] > 0 and value > _sampled(sc, routes, prior) + 1e-3
+    assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
+    r = np.asarray(out[0])
+    assert r.shape == (8, 2)
+    assert np.allclose(r[0::2, 1], r[1::2, 1])  # lines along x still
+    assert np.ptp(r[:, 1]) < 9000.0 - 1e-6  # squeezed: the run spans less than 3 x 3 km
+    assert route_fits(np.vstack([takeoff[0], r, landing[0]]), *fits, heading[0])
+    x0, y0, x1, y1 = grid.bounds
+    assert np.all((r >= [x0, y0]) & (r <= [x1, y1]))
+
+
+def test_grade_moves_never_lower_planned_pos_and_keep_routes_flyable():
+    """Grade moves alone, then all kinds with grade, on a random prior of small's (the
+    airspace check on): the planned POS rises, the score is the environment's sweep of the
+    routes, every route fits eq. 17-18 and every waypoint the polish placed lies inside the
+    map."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.planning.polish import KINDS
+
+    sc = load_scenario("small")
+    prior = episode_prior(sc, 7)
+    grid, takeoff, landing = _setup(sc)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc, prior=prior)["uavs"]]
+    before = _sampled(sc, routes, prior)
+    only, v_only, s_only = _polish(sc, routes, prior, passes=2, moves=("grade",))
+    assert s_only["moves"] > 0 and v_only > before + 1e-4  # grade moves alone pay
+    out, value, _ = _polish(sc, routes, prior, passes=2, moves=KINDS)
+    assert value > before and value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
+    assert v_only == pytest.approx(_sampled(sc, only, prior), rel=1e-9)
+    v = plan_speeds(sc)
+    heading = takeoff_heading(grid.bounds, takeoff)
+    x0, y0, x1, y1 = grid.bounds
+    n = len(takeoff)
+    for j, r in enumerate((*only, *out)):
+        k = j % n
+        new = np.asarray(r).reshape(-1, 2)
+        path = np.vstack([takeoff[k], new, landing[k]])
+        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
+                          reserve_s(sc), heading[k])  # fmt: skip
+        moved = ~np.isin(new, np.asarray(routes[k]).reshape(-1, 2)).all(axis=1)
+        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+
+
+def test_polish_grade_option_is_checked_and_reaches_the_polish():
+    """``polish_grade`` is a flag (ConfigError naming it otherwise); set, the plan's polish
+    tries the grade moves (a different plan from the one without them on small)."""
+    with pytest.raises(ConfigError, match=r"options\.polish_grade"):
+        PlanOptions(polish_grade=1)  # type: ignore[arg-type]
+    sc = load_scenario("small")
+    a = make_allocation_plan(sc, options=PlanOptions(polish=2))
+    b = make_allocation_plan(sc, options=PlanOptions(polish=2, polish_grade=True))
+    assert b["optimizer"]["settings"]["options"]["polish_grade"] is True
+    assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
