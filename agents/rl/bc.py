@@ -27,6 +27,15 @@ SB3 ``MlpPolicy`` to what it did, and hands the fitted policy to ordinary PPO fi
    starts again from step 0, BC included, with the same result) and writes ``bc.json`` and
    TensorBoard scalars (``tb/bc``). ``--total-timesteps`` counts PPO transitions only (0:
    the BC policy alone is saved).
+4. With ``--bc-dagger N`` (:func:`_dagger`), N DAgger iterations follow the first fit: the
+   policy flies (:func:`dagger_rollouts`: its mean, through the path of ``ppo:`` checkpoints,
+   :func:`poc_env.agents.rl.policy.compass_actions`, with the run's return autopilot), the
+   teacher, planned on the same prior, labels every state it flies into, the rows join all the
+   data so far (:func:`join_demos`) and :func:`pretrain` refits from the current weights. A
+   plan-then-fly teacher's label off its route is its follower's way back to the route
+   (results/dagger/README.md): with ``--bc-dagger-beta`` the teacher's action flies part of
+   the steps, which keeps the states near its routes. ``--bc-dagger 0`` is the warm start as
+   before, bit for bit.
 
 Labels (one per UAV and step, ``Box(-1, 1)`` of the control level,
 :mod:`poc_env.sim.control`):
@@ -51,9 +60,11 @@ Seeding: every episode seed and random prior comes from one generator of the cal
 that neither the training envs (``SeedSequence(seed).spawn(n_envs)``: one-word spawn keys)
 nor the evaluation priors (``default_rng([seed, EVAL_PRIOR_STREAM])``: no spawn key) can
 produce, so demonstrations never replay a training or held-out episode. Minibatches are
-shuffled by a generator of ``SeedSequence(seed, spawn_key=FIT_KEY)``; BC draws nothing from
-the global torch, numpy or python generators, so a run with BC is as reproducible as one
-without.
+shuffled by a generator of ``SeedSequence(seed, spawn_key=FIT_KEY)`` (DAgger's refits continue
+it); DAgger iteration ``i`` draws its episodes and mixture coins from
+``SeedSequence(seed, spawn_key=DAGGER_KEY + (i,))``, three-word keys no other stream uses.
+BC draws nothing from the global torch, numpy or python generators, so a run with BC is as
+reproducible as one without.
 """
 
 from __future__ import annotations
