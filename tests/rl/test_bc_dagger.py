@@ -210,3 +210,28 @@ def test_dagger_options_on_the_command_line():
     with pytest.raises(ConfigError) as err:
         parse_train_args(["--task", INC, "--total-timesteps", "10", "--bc-dagger", "2"])
     assert err.value.field == "bc_dagger"
+
+
+def test_beta_one_flies_the_teacher():
+    """With the mixture at 1 every UAV flies the teacher's action: the labelled states are the
+    teacher's own demonstration of the same episode (less the rows the autopilot flies home);
+    at 0 they are not."""
+    sc = load_scenario("small")
+    seed_everything(0)
+    args = _args(Path("unused"))
+    model = make_model(args, make_env(args, sc), None)
+    ss = np.random.SeedSequence(9, spawn_key=(*DAGGER_KEY, 1))
+    mixed, counts = dagger_rollouts(
+        sc, INC, "lawnmower", model, 1, ss, return_autopilot=True, beta=1.0
+    )
+    assert counts["teacher_flown"] == counts["labelled"] > 0
+    own = collect_demos(
+        sc, INC, "lawnmower", 1, np.random.SeedSequence(9, spawn_key=(*DAGGER_KEY, 1))
+    )
+    assert mixed.posc == pytest.approx(own.posc)
+    rows = {(int(u), tuple(o)) for u, o in zip(own.uav, own.obs.round(5), strict=True)}
+    assert all(
+        (int(u), tuple(o)) in rows for u, o in zip(mixed.uav, mixed.obs.round(5), strict=True)
+    )
+    pure, _ = dagger_rollouts(sc, INC, "lawnmower", model, 1, ss, return_autopilot=True, beta=0.0)
+    assert pure.posc != pytest.approx(own.posc)
