@@ -154,7 +154,8 @@ class TrainArgs:
     weights)."""
     bc_dagger_beta: float = 0.0
     """BC: DAgger's mixture: in iteration i each UAV flies the teacher's action instead of the
-    policy's with probability beta**i at every step (0: the policy alone)."""
+    policy's with probability beta**i at every step (0: the policy alone; on paper_6_2 0.5
+    lifted allocation_plan's clone and 0 sank it: docs/rl.md, DAgger warm start)."""
     # -- residual: a residual policy on a planner (sb3 with --task) ----------------------------
     residual_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
