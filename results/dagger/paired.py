@@ -32,9 +32,27 @@ def rows(spec: str) -> dict[int, float]:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--ref", required=True)
-    ap.add_argument("--other", required=True, nargs="+")
+    ap.add_argument("--ref")
+    ap.add_argument("--other", nargs="+", default=[])
+    ap.add_argument(
+        "--pool", nargs="+", default=[], metavar="REF=OTHER",
+        help="pairs pooled into one difference (e.g. one per training seed)",
+    )  # fmt: skip
     a = ap.parse_args(argv)
+    if a.pool:
+        d, x_all, r_all = [], [], []
+        for pair in a.pool:
+            r_spec, o_spec = pair.split("=", 1)
+            r, x = rows(r_spec), rows(o_spec)
+            for s in sorted(set(r) & set(x)):
+                d.append(x[s] - r[s])
+                x_all.append(x[s])
+                r_all.append(r[s])
+        dd = np.array(d)
+        half = stats.t.ppf(0.975, len(dd) - 1) * dd.std(ddof=1) / np.sqrt(len(dd))
+        print(f"pooled {len(dd)} pairs: {np.mean(r_all):.4f} -> {np.mean(x_all):.4f}, "
+              f"{dd.mean():+.4f} ± {half:.4f} ({int((dd > 0).sum())} wins)")  # fmt: skip
+        return
     ref = rows(a.ref)
     print(f"reference {a.ref}: {np.mean(list(ref.values())):.4f} over {len(ref)} seeds")
     for o in a.other:
