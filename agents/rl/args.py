@@ -141,6 +141,21 @@ class TrainArgs:
     bc_log_std: float = -1.0
     """BC: the policy's log standard deviation after the fit (PPO explores around the teacher;
     -1.0: std 0.37)."""
+    bc_dagger: int = 0
+    """BC: DAgger iterations after the fit (0: none). Each flies the current policy (its mean,
+    with the run's --return-autopilot) for --bc-dagger-episodes episodes, labels every state of
+    a UAV the autopilot does not own with the teacher's action there (the teacher plans on the
+    same prior and is asked at the learner's states), adds the rows to the data and refits;
+    increments tasks with the compass observation. bc.json records each iteration."""
+    bc_dagger_episodes: int = 16
+    """BC: learner episodes per DAgger iteration (seeds and priors from their own stream)."""
+    bc_dagger_epochs: int = 10
+    """BC: passes over all the data so far after each DAgger iteration (from the current
+    weights)."""
+    bc_dagger_beta: float = 0.0
+    """BC: DAgger's mixture: in iteration i each UAV flies the teacher's action instead of the
+    policy's with probability beta**i at every step (0: the policy alone; on paper_6_2 0.5
+    lifted allocation_plan's clone and 0 sank it: docs/rl.md, DAgger warm start)."""
     # -- residual: a residual policy on a planner (sb3 with --task) ----------------------------
     residual_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
@@ -261,6 +276,10 @@ class TrainArgs:
         as_int("bc_epochs", self.bc_epochs, 1, 10_000)
         as_int("bc_batch_size", self.bc_batch_size, 1, 10**7)
         as_number("bc_log_std", self.bc_log_std, -20.0, 2.0)
+        as_int("bc_dagger", self.bc_dagger, 0, 1000)
+        as_int("bc_dagger_episodes", self.bc_dagger_episodes, 1, limits.MAX_EPISODES)
+        as_int("bc_dagger_epochs", self.bc_dagger_epochs, 1, 10_000)
+        as_number("bc_dagger_beta", self.bc_dagger_beta, 0.0, 1.0)
         if self.bc_teacher is None:
             return
         check_teacher(self.bc_teacher)
@@ -272,6 +291,16 @@ class TrainArgs:
             raise ConfigError(
                 "bc_teacher", self.bc_teacher, "None with --engine rllib (BC is for sb3 runs)"
             )
+        if self.bc_dagger > 0:
+            from poc_env.tasks import get_task
+
+            task = get_task(str(self.task))
+            if (task.control, task.obs) != ("increments", "compass"):
+                raise ConfigError(
+                    "bc_dagger", self.bc_dagger, f"0 with {self.task} (DAgger relabels at the "
+                    f"increments level with the compass observation, not {task.control} with "
+                    f"{task.obs})",
+                )  # fmt: skip
 
     def _check_residual(self) -> None:
         """The residual fields (poc_env.agents.rl.residual)."""
@@ -403,7 +432,17 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
     ),
     "bc": (
         "Behaviour-cloning warm start before PPO (sb3 with --task; poc_env.agents.rl.bc).",
-        ("bc_teacher", "bc_episodes", "bc_epochs", "bc_batch_size", "bc_log_std"),
+        (
+            "bc_teacher",
+            "bc_episodes",
+            "bc_epochs",
+            "bc_batch_size",
+            "bc_log_std",
+            "bc_dagger",
+            "bc_dagger_episodes",
+            "bc_dagger_epochs",
+            "bc_dagger_beta",
+        ),
     ),
     "residual": (
         "A residual policy on a planner (sb3 with --task; poc_env.agents.rl.residual).",
@@ -531,7 +570,14 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
     "num_env_runners": (lambda a: a.engine == "rllib", "with --engine rllib"),
     **{
         f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
-        for k in ("episodes", "epochs", "batch_size", "log_std")
+        for k in ("episodes", "epochs", "batch_size", "log_std", "dagger")
+    },
+    **{
+        f"bc_dagger_{k}": (
+            lambda a: a.bc_teacher is not None and a.bc_dagger > 0,
+            "with --bc-teacher and --bc-dagger N > 0",
+        )
+        for k in ("episodes", "epochs", "beta")
     },
     **{
         f"residual_{k}": (lambda a: a.residual_teacher is not None, "with --residual-teacher")

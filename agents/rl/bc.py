@@ -27,6 +27,15 @@ SB3 ``MlpPolicy`` to what it did, and hands the fitted policy to ordinary PPO fi
    starts again from step 0, BC included, with the same result) and writes ``bc.json`` and
    TensorBoard scalars (``tb/bc``). ``--total-timesteps`` counts PPO transitions only (0:
    the BC policy alone is saved).
+4. With ``--bc-dagger N`` (:func:`_dagger`), N DAgger iterations follow the first fit: the
+   policy flies (:func:`dagger_rollouts`: its mean, through the path of ``ppo:`` checkpoints,
+   :func:`poc_env.agents.rl.policy.compass_actions`, with the run's return autopilot), the
+   teacher, planned on the same prior, labels every state it flies into, the rows join all the
+   data so far (:func:`join_demos`) and :func:`pretrain` refits from the current weights. A
+   plan-then-fly teacher's label off its route is its follower's way back to the route
+   (results/dagger/README.md): with ``--bc-dagger-beta`` the teacher's action flies part of
+   the steps, which keeps the states near its routes. ``--bc-dagger 0`` is the warm start as
+   before, bit for bit.
 
 Labels (one per UAV and step, ``Box(-1, 1)`` of the control level,
 :mod:`poc_env.sim.control`):
@@ -51,9 +60,11 @@ Seeding: every episode seed and random prior comes from one generator of the cal
 that neither the training envs (``SeedSequence(seed).spawn(n_envs)``: one-word spawn keys)
 nor the evaluation priors (``default_rng([seed, EVAL_PRIOR_STREAM])``: no spawn key) can
 produce, so demonstrations never replay a training or held-out episode. Minibatches are
-shuffled by a generator of ``SeedSequence(seed, spawn_key=FIT_KEY)``; BC draws nothing from
-the global torch, numpy or python generators, so a run with BC is as reproducible as one
-without.
+shuffled by a generator of ``SeedSequence(seed, spawn_key=FIT_KEY)`` (DAgger's refits continue
+it); DAgger iteration ``i`` draws its episodes and mixture coins from
+``SeedSequence(seed, spawn_key=DAGGER_KEY + (i,))``, three-word keys no other stream uses.
+BC draws nothing from the global torch, numpy or python generators, so a run with BC is as
+reproducible as one without.
 """
 
 from __future__ import annotations
@@ -79,6 +90,9 @@ if TYPE_CHECKING:
 DEMO_KEY = (0xBC, 0)
 #: Spawn key of the SeedSequence that shuffles BC minibatches.
 FIT_KEY = (0xBC, 1)
+#: Spawn key prefix of the DAgger rollouts: iteration ``i`` (1, 2, ...) draws its seeds, priors
+#: and mixture coins from ``SeedSequence(seed, spawn_key=(*DAGGER_KEY, i))``.
+DAGGER_KEY = (0xBC, 2)
 
 
 @dataclass(frozen=True)
@@ -240,6 +254,154 @@ def collect_demos(
     )
 
 
+def join_demos(a: Demos, b: Demos) -> Demos:
+    """The rows of ``a`` then ``b`` (DAgger's aggregation; ``b``'s episode numbers follow
+    ``a``'s)."""
+    off = len(a.posc)
+    return Demos(
+        teacher=a.teacher,
+        control=a.control,
+        gamma=a.gamma,
+        obs=np.concatenate([a.obs, b.obs]),
+        labels=np.concatenate([a.labels, b.labels]),
+        rewards=np.concatenate([a.rewards, b.rewards]),
+        returns=np.concatenate([a.returns, b.returns]),
+        episode=np.concatenate([a.episode, b.episode + off]),
+        uav=np.concatenate([a.uav, b.uav]),
+        posc=a.posc + b.posc,
+        seeds=a.seeds + b.seeds,
+    )
+
+
+def dagger_rollouts(
+    scenario: str | Scenario,
+    task: str | Task,
+    teacher: str,
+    model: PPO,
+    episodes: int,
+    seed_seq: np.random.SeedSequence,
+    gamma: float = 0.99,
+    agent_index: bool = True,
+    return_autopilot: bool = False,
+    beta: float = 0.0,
+) -> tuple[Demos, dict[str, Any]]:
+    """One DAgger iteration's data: fly ``model`` (its deterministic mean, as
+    :class:`~poc_env.agents.rl.policy.PPOPolicy` flies a compass checkpoint, through
+    :func:`~poc_env.agents.rl.policy.compass_actions`, with the run's ``return_autopilot``) for
+    ``episodes`` episodes of ``scenario`` and label each state with ``teacher``'s action there.
+
+    The teacher is made and reset on the same env and seed as each episode starts (so a
+    planner plans on the episode's prior) and is asked every step, on the observations the
+    learner's flight produced, for its eq. 19 action: a plan-then-fly teacher's waypoint
+    follower steers back to its route from wherever the UAV is and advances its waypoints only
+    when the UAV reaches or passes them (:class:`~poc_env.sim.autopilot.WaypointFollower`).
+    The label of the row is that action clipped to [-1, 1]; rows of UAVs the return autopilot
+    has taken home are left out (the autopilot, not the policy, flies them). With ``beta`` > 0
+    each UAV flies the teacher's action instead of the policy's with probability ``beta`` at
+    every step (coins from the ``seed_seq`` generator); the labels are the teacher's either way.
+    Value targets: the discounted returns of the trajectories as flown (:func:`collect_demos`).
+    Seeds and priors are drawn as in :func:`collect_demos` from a generator of ``seed_seq``.
+
+    Returns the labelled rows (``posc``: the episodes' POSC as flown, i.e. DAgger's own
+    on-policy score when ``beta`` is 0) and counts: ``rows`` (UAV-steps flown), ``labelled``,
+    ``autopilot`` (rows the autopilot owned), ``teacher_flown`` (rows flown by the teacher's
+    action), ``teacher_homing`` (labelled rows where the teacher's follower had finished its
+    route and was taking the UAV home)."""
+    from poc_env.agents.policies.registry import make_policy
+    from poc_env.agents.rl.policy import compass_actions
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+    from poc_env.sim.control import ACTION_DIMS
+    from poc_env.sim.engine import RandomPrior
+    from poc_env.sim.observations import FEATURES, CompassFeatures
+    from poc_env.tasks import get_task
+
+    check_teacher(teacher, "teacher")
+    episodes = as_int("bc_dagger_episodes", episodes, 1, None)
+    beta = as_number("bc_dagger_beta", beta, 0.0, 1.0)
+    t = get_task(task) if isinstance(task, str) else task
+    if (t.control, t.obs) != ("increments", "compass"):
+        raise ConfigError(
+            "task", t.id, "an increments task with the compass observation (DAgger's labels)"
+        )
+    env = UAVSearchParallelEnv(scenario=scenario)
+    params = env.params
+    features = CompassFeatures(params, agent_index)
+    index = {a: i for i, a in enumerate(env.possible_agents)}
+    rng = np.random.default_rng(seed_seq)
+    obs_rows: list[np.ndarray] = []
+    lab_rows: list[np.ndarray] = []
+    rew_rows: list[float] = []
+    ret_rows: list[float] = []
+    who: list[tuple[int, int]] = []
+    poscs: list[float] = []
+    seeds: list[int] = []
+    counts = dict.fromkeys(("rows", "labelled", "autopilot", "teacher_flown", "teacher_homing"), 0)
+    for ep in range(episodes):
+        seed = int(rng.integers(0, 2**31))
+        prior = RandomPrior().draw(params.grid, rng) if t.random_prior else None
+        obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
+        expert = make_policy(teacher)
+        expert.reset(env, seed)
+        follower = getattr(expert, "follower", None)
+        traj: dict[int, list[tuple[np.ndarray, np.ndarray | None, float]]] = {
+            i: [] for i in index.values()
+        }
+        while env.agents:
+            live = list(env.agents)
+            k = np.array([index[a] for a in live])
+            labels, _ = expert.predict(obs)  # the teacher at the learner's states
+            feats, inc, home = compass_actions(
+                params, features, model, "increments", return_autopilot,
+                [obs[a] for a in live], k, True,
+            )  # fmt: skip
+            lab = np.clip(np.stack([np.asarray(labels[a], dtype=float) for a in live]), -1, 1)
+            if beta > 0.0:
+                coin = rng.random(len(live)) < beta
+                fly = coin & ~home
+                inc = np.where(fly[:, None], lab, inc)
+                counts["teacher_flown"] += int(fly.sum())
+            actions = {a: np.asarray(inc[j], dtype=np.float32) for j, a in enumerate(live)}
+            obs, rewards, *_ = env.step(actions)
+            for j, a in enumerate(live):
+                i = int(k[j])
+                keep = not bool(home[j])
+                if keep and follower is not None:
+                    counts["teacher_homing"] += int(follower.index[i] >= len(follower.waypoints[i]))
+                traj[i].append((feats[j], lab[j] if keep else None, float(rewards[a])))
+            counts["rows"] += len(live)
+            counts["autopilot"] += int(home.sum())
+        for i, rows in traj.items():
+            if not rows:
+                continue
+            g = discounted_returns(np.array([r for *_, r in rows]), gamma)
+            for (f, lab_i, r), gt in zip(rows, g, strict=True):
+                if lab_i is not None:
+                    obs_rows.append(f)
+                    lab_rows.append(lab_i)
+                    rew_rows.append(r)
+                    ret_rows.append(float(gt))
+                    who.append((ep, i))
+        poscs.append(float(env.sim_state.posc[0]))
+        seeds.append(seed)
+    env.close()
+    counts["labelled"] = len(obs_rows)
+    dim = ACTION_DIMS["increments"]
+    demos = Demos(
+        teacher=teacher,
+        control="increments",
+        gamma=float(gamma),
+        obs=np.array(obs_rows, dtype=np.float32).reshape(-1, FEATURES),
+        labels=np.array(lab_rows, dtype=np.float32).reshape(-1, dim),
+        rewards=np.array(rew_rows, dtype=np.float32),
+        returns=np.array(ret_rows, dtype=np.float32),
+        episode=np.array([e for e, _ in who], dtype=np.int64),
+        uav=np.array([i for _, i in who], dtype=np.int64),
+        posc=tuple(poscs),
+        seeds=tuple(seeds),
+    )
+    return demos, counts
+
+
 def bc_losses(model: PPO, demos: Demos) -> dict[str, float]:
     """Mean squared errors of ``model``'s policy on ``demos``: ``actor_mse`` (Gaussian mean
     vs labels), ``action_mse`` (deterministic actions, i.e. the mean clipped to the action
@@ -358,6 +520,7 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
         agent_index=args.agent_index,
     )
     t1 = time.perf_counter()
+    fit_rng = np.random.default_rng(np.random.SeedSequence(args.seed, spawn_key=FIT_KEY))
     writer = _tb_writer(run_dir / "tb" / "bc")
     try:
         fit = pretrain(
@@ -365,7 +528,7 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
             demos,
             epochs=args.bc_epochs,
             batch_size=args.bc_batch_size,
-            seed=np.random.default_rng(np.random.SeedSequence(args.seed, spawn_key=FIT_KEY)),
+            seed=fit_rng,
             log_std=args.bc_log_std,
             writer=writer,
         )
@@ -374,6 +537,7 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
             writer.close()
     t2 = time.perf_counter()
     posc = np.array(demos.posc)
+    dagger = _dagger(args, scenario, model, run_dir, demos, fit_rng) if args.bc_dagger else None
     out: dict[str, Any] = {
         "teacher": demos.teacher,
         "control": demos.control,
@@ -387,8 +551,101 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
         "collect_seconds": round(t1 - t0, 3),
         "fit_seconds": round(t2 - t1, 3),
     }
+    if dagger is not None:
+        out["dagger"] = dagger
     write_json(run_dir / "bc.json", out)
     return out
+
+
+def _dagger(
+    args: TrainArgs,
+    scenario: Scenario,
+    model: PPO,
+    run_dir: Path,
+    demos: Demos,
+    fit_rng: np.random.Generator,
+) -> list[dict[str, Any]]:
+    """``args.bc_dagger`` DAgger iterations after the initial fit (:func:`warm_start`): each
+    flies the current policy (:func:`dagger_rollouts`, ``args.bc_dagger_episodes`` episodes,
+    stream ``DAGGER_KEY + (i,)`` of ``args.seed``, mixture ``args.bc_dagger_beta ** i``), adds
+    its labelled rows to all the data so far and refits from the current weights
+    (:func:`pretrain`, ``args.bc_dagger_epochs``; the minibatch generator continues the first
+    fit's). The policy after iteration ``i`` is saved as ``bc_dagger/iter_<i>.zip``
+    (``iter_0``: the first fit's; flown with ``ppo:RUN/bc_dagger/iter_<i>.zip``). Returns one
+    record per iteration for ``bc.json``."""
+    assert args.task is not None and args.bc_teacher is not None
+    data = demos
+    records: list[dict[str, Any]] = []
+    _save(model, run_dir / "bc_dagger" / "iter_0.zip")  # the first fit's policy
+    for i in range(1, args.bc_dagger + 1):
+        t0 = time.perf_counter()
+        beta = float(args.bc_dagger_beta) ** i
+        new, counts = dagger_rollouts(
+            scenario,
+            args.task,
+            args.bc_teacher,
+            model,
+            args.bc_dagger_episodes,
+            np.random.SeedSequence(args.seed, spawn_key=(*DAGGER_KEY, i)),
+            gamma=args.gamma,
+            agent_index=args.agent_index,
+            return_autopilot=args.return_autopilot,
+            beta=beta,
+        )
+        t1 = time.perf_counter()
+        on_new = bc_losses(model, new) if new.samples else None
+        data = join_demos(data, new)
+        fit = pretrain(
+            model,
+            data,
+            epochs=args.bc_dagger_epochs,
+            batch_size=args.bc_batch_size,
+            seed=fit_rng,
+            log_std=args.bc_log_std,
+        )
+        t2 = time.perf_counter()
+        path = _save(model, run_dir / "bc_dagger" / f"iter_{i}.zip")
+        posc = np.array(new.posc)
+        records.append(
+            {
+                "iteration": i,
+                "beta": beta,
+                "episodes": len(new.posc),
+                "rollout_posc_mean": float(posc.mean()),
+                "rollout_posc": [float(p) for p in posc],
+                "seeds": list(new.seeds),
+                **counts,
+                "samples_new": new.samples,
+                "samples_total": data.samples,
+                "new_before_fit": on_new,
+                "before": fit["before"],
+                "after": fit["after"],
+                "epochs": fit["epochs"],
+                "epochs_actor_mse": fit["epochs_actor_mse"],
+                "epochs_value_mse": fit["epochs_value_mse"],
+                "model": path.relative_to(run_dir).as_posix(),
+                "rollout_seconds": round(t1 - t0, 3),
+                "fit_seconds": round(t2 - t1, 3),
+            }
+        )
+        print(
+            f"DAgger {i}/{args.bc_dagger}: rollout POSC {posc.mean():.4f} ({len(posc)} episodes),"
+            f" +{new.samples} rows -> {data.samples}; action MSE on the new rows "
+            f"{(on_new or {}).get('action_mse', float('nan')):.4f} -> "
+            f"{bc_losses(model, new)['action_mse'] if new.samples else float('nan'):.4f}",
+            flush=True,
+        )
+    return records
+
+
+def _save(model: PPO, path: Path) -> Path:
+    """``model`` saved atomically as ``path`` (its folder made)."""
+    from poc_env.io import atomic_path
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path, suffix=".zip") as tmp:
+        model.save(tmp)
+    return path
 
 
 def _tb_writer(folder: Path) -> Any:

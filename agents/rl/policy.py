@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -114,6 +115,43 @@ def checkpoint_origin(spelling: str) -> tuple[str | None, str | None]:
     task = cfg.get("task")
     recipe = cfg.get("recipe")
     return (str(task) if task else None), (str(recipe) if recipe else None)
+
+
+def compass_actions(
+    params: Any,
+    features: Any,
+    model: Any,
+    control: str,
+    return_autopilot: bool,
+    observations: Sequence[Any],
+    k: np.ndarray,
+    deterministic: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How a compass-observation checkpoint flies (:class:`PPOPolicy`'s ``compass`` mode): the
+    UAVs ``k (B,)`` with env ``observations`` (B of them) read the compass ``features``
+    (:class:`~poc_env.sim.observations.CompassFeatures`), ``model`` acts at ``control``, its
+    actions become eq. 19 increments (:func:`poc_env.sim.control.to_increments`) and, with
+    ``return_autopilot`` (an increments run trained with ``--return-autopilot``), the UAVs that
+    must head home fly the autopilot's homing increments
+    (:func:`poc_env.sim.control.return_home`). Returns the features ``(B, FEATURES)``, the
+    increments ``(B, 3)`` and which UAVs the autopilot took home ``(B,)`` (all False without
+    it). The one path of :class:`PPOPolicy` and of the DAgger rollouts
+    (:func:`poc_env.agents.rl.bc.dagger_rollouts`)."""
+    from poc_env.sim.autopilot import returning
+    from poc_env.sim.control import return_home, to_increments
+    from poc_env.sim.observations import decode_vector
+
+    shape = params.grid.shape
+    ras, vec = zip(*(split_observation(o, shape) for o in observations), strict=True)
+    feats = features(np.stack(ras), np.stack(vec), k)
+    act, _ = model.predict(feats, deterministic=deterministic)
+    q = decode_vector(params, np.stack(vec))
+    inc = to_increments(params, control, q, np.asarray(act), k)
+    home = np.zeros(len(k), dtype=bool)
+    if return_autopilot:  # trained with the return autopilot
+        home = np.asarray(returning(params, np.asarray(q["xy"], dtype=float), q["usable"], k))
+        inc = return_home(params, q, inc, k).astype(np.float32)
+    return feats, inc, home
 
 
 class PPOPolicy(Policy):
@@ -224,20 +262,11 @@ class PPOPolicy(Policy):
             return {a: act[self._agents.index(a)] for a in live}, state
         batch: Any
         if self.mode == "compass":
-            from poc_env.sim.control import to_increments
-            from poc_env.sim.observations import decode_vector
-
-            shape = self.env.params.grid.shape
-            ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
             k = np.array([self._agents.index(a) for a in live])
-            feats = self._features(np.stack(ras), np.stack(vec), k)
-            act, _ = self.model.predict(feats, deterministic=deterministic)
-            q = decode_vector(self.env.params, np.stack(vec))
-            inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
-            if self._return:  # trained with the return autopilot
-                from poc_env.sim.control import return_home
-
-                inc = return_home(self.env.params, q, inc, k).astype(np.float32)
+            _, inc, _ = compass_actions(
+                self.env.params, self._features, self.model, self.control, self._return,
+                [observations[a] for a in live], k, deterministic,
+            )  # fmt: skip
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "set":  # computed from the swarm's state as the -Set tasks observe it
             from poc_env.sim.control import to_increments

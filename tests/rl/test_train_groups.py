@@ -25,6 +25,7 @@ FLAGS = {
     "--scenario", "--seed", "--task", "--torch-threads", "--total-timesteps",
     "--net", "--also-task",  # issue 28: the set network and fleet sizes trained together
     "--residual-teacher", "--residual-pool", "--residual-log-std",  # issue 28: residual policy
+    "--bc-dagger", "--bc-dagger-episodes", "--bc-dagger-epochs", "--bc-dagger-beta",  # DAgger
 }  # fmt: skip
 
 
