@@ -191,6 +191,7 @@ class PPOPolicy(Policy):
             # a -Set task's policy: the set observation of this env's swarm, any fleet size
             self.mode, self.control = "set", task.control
             self._set = SetFeatures(env.params)
+            self._return = self.control == "increments" and cfg.get("return_autopilot") is True
         elif m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
             self.mode, self.control = "compass", "heading"  # the pilot recipe
             self._features = pilot.PilotFeatures(env.params)
@@ -212,6 +213,18 @@ class PPOPolicy(Policy):
         self._agents = agents
         self._last = {}
 
+    def _increments(self, q: np.ndarray, act: Any, k: np.ndarray) -> np.ndarray:
+        """The eq. 19 increments of the model's actions ``act`` at the run's control level for
+        the UAVs ``k`` in states ``q``; with ``--return-autopilot`` runs (increments), the
+        autopilot's :func:`~poc_env.sim.control.return_home` takes over once eq. 18 says so,
+        as in training (:class:`~poc_env.envs.vector.SwarmVecEnv`)."""
+        from poc_env.sim.control import return_home, to_increments
+
+        inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
+        if self._return:
+            inc = return_home(self.env.params, q, inc, k).astype(np.float32)
+        return inc
+
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         if not observations:
             return {}, state
@@ -224,7 +237,6 @@ class PPOPolicy(Policy):
             return {a: act[self._agents.index(a)] for a in live}, state
         batch: Any
         if self.mode == "compass":
-            from poc_env.sim.control import to_increments
             from poc_env.sim.observations import decode_vector
 
             shape = self.env.params.grid.shape
@@ -233,14 +245,9 @@ class PPOPolicy(Policy):
             feats = self._features(np.stack(ras), np.stack(vec), k)
             act, _ = self.model.predict(feats, deterministic=deterministic)
             q = decode_vector(self.env.params, np.stack(vec))
-            inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
-            if self._return:  # trained with the return autopilot
-                from poc_env.sim.control import return_home
-
-                inc = return_home(self.env.params, q, inc, k).astype(np.float32)
+            inc = self._increments(q, act, k)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "set":  # computed from the swarm's state as the -Set tasks observe it
-            from poc_env.sim.control import to_increments
             from poc_env.sim.observations import VECTOR_SIZE, decode_vector
 
             eng = self.env.engine
@@ -248,7 +255,7 @@ class PPOPolicy(Policy):
             feats = self._set.of_state(eng.current, eng.poc_scale)[0, k]
             act, _ = self.model.predict(feats, deterministic=deterministic)
             q = decode_vector(self.env.params, feats[:, :VECTOR_SIZE])
-            inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
+            inc = self._increments(q, act, k)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "residual":
             from poc_env.agents.rl.residual import augment, combine, teacher_actions
