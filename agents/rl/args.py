@@ -141,6 +141,9 @@ class TrainArgs:
     bc_log_std: float = -1.0
     """BC: the policy's log standard deviation after the fit (PPO explores around the teacher;
     -1.0: std 0.37)."""
+    bc_all_tasks: bool = False
+    """BC with --also-task: record --bc-episodes episodes of every task of the run (each from its
+    own stream), not only of --task's, so the clone has seen every map and fleet size."""
     # -- residual: a residual policy on a planner (sb3 with --task) ----------------------------
     residual_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
@@ -272,6 +275,8 @@ class TrainArgs:
             raise ConfigError(
                 "bc_teacher", self.bc_teacher, "None with --engine rllib (BC is for sb3 runs)"
             )
+        if self.bc_all_tasks and not self.also_task:
+            raise ConfigError("bc_all_tasks", self.bc_all_tasks, "False without --also-task")
 
     def _check_residual(self) -> None:
         """The residual fields (poc_env.agents.rl.residual)."""
@@ -403,7 +408,7 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
     ),
     "bc": (
         "Behaviour-cloning warm start before PPO (sb3 with --task; poc_env.agents.rl.bc).",
-        ("bc_teacher", "bc_episodes", "bc_epochs", "bc_batch_size", "bc_log_std"),
+        ("bc_teacher", "bc_episodes", "bc_epochs", "bc_batch_size", "bc_log_std", "bc_all_tasks"),
     ),
     "residual": (
         "A residual policy on a planner (sb3 with --task; poc_env.agents.rl.residual).",
@@ -531,7 +536,7 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
     "num_env_runners": (lambda a: a.engine == "rllib", "with --engine rllib"),
     **{
         f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
-        for k in ("episodes", "epochs", "batch_size", "log_std")
+        for k in ("episodes", "epochs", "batch_size", "log_std", "all_tasks")
     },
     **{
         f"residual_{k}": (lambda a: a.residual_teacher is not None, "with --residual-teacher")
