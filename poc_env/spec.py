@@ -433,7 +433,7 @@ OBS_PARTS = (
 )
 #: The control parts each observation part other than the compass is registered with, and the
 #: first version of each (it is registered at that version and every later one).
-OBS_CONTROLS = {"set": {"Heading": 1}}
+OBS_CONTROLS = {"set": {"Heading": 1, "Increments": 0}}
 #: The fleet-size tasks: one scenario flown by several fleet sizes (set observation, random
 #: prior, :data:`OBS_CONTROLS`' control parts): ``UAVSearch-Wide-N12-Random-Set-Heading-v1``.
 SIZE_SCENARIO = Part("Wide", "wide_400", "a large area with 3 airfields for the fleet sizes")

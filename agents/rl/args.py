@@ -156,6 +156,9 @@ class TrainArgs:
     """BC: DAgger's mixture: in iteration i each UAV flies the teacher's action instead of the
     policy's with probability beta**i at every step (0: the policy alone; on paper_6_2 0.5
     lifted allocation_plan's clone and 0 sank it: docs/rl.md, DAgger warm start)."""
+    bc_all_tasks: bool = False
+    """BC with --also-task: record --bc-episodes episodes of every task of the run (each from its
+    own stream), not only of --task's, so the clone has seen every map and fleet size."""
     # -- residual: a residual policy on a planner (sb3 with --task) ----------------------------
     residual_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
@@ -301,6 +304,8 @@ class TrainArgs:
                     f"increments level with the compass observation, not {task.control} with "
                     f"{task.obs})",
                 )  # fmt: skip
+        if self.bc_all_tasks and not self.also_task:
+            raise ConfigError("bc_all_tasks", self.bc_all_tasks, "False without --also-task")
 
     def _check_residual(self) -> None:
         """The residual fields (poc_env.agents.rl.residual)."""
@@ -442,6 +447,7 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
             "bc_dagger_episodes",
             "bc_dagger_epochs",
             "bc_dagger_beta",
+            "bc_all_tasks",
         ),
     ),
     "residual": (
@@ -570,7 +576,7 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
     "num_env_runners": (lambda a: a.engine == "rllib", "with --engine rllib"),
     **{
         f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
-        for k in ("episodes", "epochs", "batch_size", "log_std", "dagger")
+        for k in ("episodes", "epochs", "batch_size", "log_std", "dagger", "all_tasks")
     },
     **{
         f"bc_dagger_{k}": (

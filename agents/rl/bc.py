@@ -31,7 +31,7 @@ SB3 ``MlpPolicy`` to what it did, and hands the fitted policy to ordinary PPO fi
    policy flies (:func:`dagger_rollouts`: its mean, through the path of ``ppo:`` checkpoints,
    :func:`poc_env.agents.rl.policy.compass_actions`, with the run's return autopilot), the
    teacher, planned on the same prior, labels every state it flies into, the rows join all the
-   data so far (:func:`join_demos`) and :func:`pretrain` refits from the current weights. A
+   data so far (:func:`concat_demos`) and :func:`pretrain` refits from the current weights. A
    plan-then-fly teacher's label off its route is its follower's way back to the route
    (results/dagger/README.md): with ``--bc-dagger-beta`` the teacher's action flies part of
    the steps, which keeps the states near its routes. ``--bc-dagger 0`` is the warm start as
@@ -133,6 +133,32 @@ def _label(control: str, params: Any, action: np.ndarray, xy0: np.ndarray, xy1: 
     from poc_env.sim.control import waypoint_action
 
     return waypoint_action(params, xy1)[0]
+
+
+def concat_demos(parts: list[Demos]) -> Demos:
+    """One :class:`Demos` of several (same teacher, control level and discount; e.g. one per
+    task of a run): rows in order, episode numbers renumbered to follow on."""
+    if len(parts) == 1:
+        return parts[0]
+    first = parts[0]
+    want = (first.teacher, first.control, first.gamma)
+    for d in parts[1:]:
+        if (d.teacher, d.control, d.gamma) != want:
+            raise ConfigError("demos", (d.teacher, d.control, d.gamma), f"{want}, as the first")
+    offsets = np.cumsum([0, *(len(d.posc) for d in parts[:-1])])
+    return Demos(
+        teacher=first.teacher,
+        control=first.control,
+        gamma=first.gamma,
+        obs=np.concatenate([d.obs for d in parts]),
+        labels=np.concatenate([d.labels for d in parts]),
+        rewards=np.concatenate([d.rewards for d in parts]),
+        returns=np.concatenate([d.returns for d in parts]),
+        episode=np.concatenate([d.episode + o for d, o in zip(parts, offsets, strict=True)]),
+        uav=np.concatenate([d.uav for d in parts]),
+        posc=tuple(p for d in parts for p in d.posc),
+        seeds=tuple(x for d in parts for x in d.seeds),
+    )
 
 
 def discounted_returns(rewards: np.ndarray, gamma: float) -> np.ndarray:
@@ -251,25 +277,6 @@ def collect_demos(
         uav=np.array([i for _, i in who], dtype=np.int64),
         posc=tuple(poscs),
         seeds=tuple(seeds),
-    )
-
-
-def join_demos(a: Demos, b: Demos) -> Demos:
-    """The rows of ``a`` then ``b`` (DAgger's aggregation; ``b``'s episode numbers follow
-    ``a``'s)."""
-    off = len(a.posc)
-    return Demos(
-        teacher=a.teacher,
-        control=a.control,
-        gamma=a.gamma,
-        obs=np.concatenate([a.obs, b.obs]),
-        labels=np.concatenate([a.labels, b.labels]),
-        rewards=np.concatenate([a.rewards, b.rewards]),
-        returns=np.concatenate([a.returns, b.returns]),
-        episode=np.concatenate([a.episode, b.episode + off]),
-        uav=np.concatenate([a.uav, b.uav]),
-        posc=a.posc + b.posc,
-        seeds=a.seeds + b.seeds,
     )
 
 
@@ -510,15 +517,22 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
 
     assert args.task is not None and args.bc_teacher is not None
     t0 = time.perf_counter()
-    demos = collect_demos(
-        scenario,
-        args.task,
-        args.bc_teacher,
-        args.bc_episodes,
-        np.random.SeedSequence(args.seed, spawn_key=DEMO_KEY),
-        gamma=args.gamma,
-        agent_index=args.agent_index,
-    )
+    tasks = [args.task, *(args.also_task if args.bc_all_tasks else [])]
+    parts = []
+    for k, tid in enumerate(tasks):  # the k-th task's stream: DEMO_KEY, then (*DEMO_KEY, k)
+        key: tuple[int, ...] = DEMO_KEY
+        if k == 0:
+            sc = scenario
+        else:
+            from poc_env.agents.rl.args import parse_overrides
+            from poc_env.tasks import get_task
+
+            sc = get_task(tid).load_scenario(parse_overrides(args.overrides))
+            key = (*DEMO_KEY, k)
+        seq = np.random.SeedSequence(args.seed, spawn_key=key)
+        parts.append(collect_demos(sc, tid, args.bc_teacher, args.bc_episodes, seq,
+                                   gamma=args.gamma, agent_index=args.agent_index))  # fmt: skip
+    demos = concat_demos(parts)
     t1 = time.perf_counter()
     fit_rng = np.random.default_rng(np.random.SeedSequence(args.seed, spawn_key=FIT_KEY))
     writer = _tb_writer(run_dir / "tb" / "bc")
@@ -547,6 +561,21 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
         "seeds": list(demos.seeds),
         "samples": demos.samples,
         "gamma": demos.gamma,
+        **(
+            {
+                "tasks": [
+                    {
+                        "task": t,
+                        "episodes": len(d.posc),
+                        "samples": d.samples,
+                        "teacher_posc_mean": float(np.mean(d.posc)),
+                    }
+                    for t, d in zip(tasks, parts, strict=True)
+                ]
+            }
+            if len(tasks) > 1
+            else {}
+        ),
         **fit,
         "collect_seconds": round(t1 - t0, 3),
         "fit_seconds": round(t2 - t1, 3),
@@ -594,7 +623,7 @@ def _dagger(
         )
         t1 = time.perf_counter()
         on_new = bc_losses(model, new) if new.samples else None
-        data = join_demos(data, new)
+        data = concat_demos([data, new])
         fit = pretrain(
             model,
             data,

@@ -137,8 +137,6 @@ def compass_actions(
     increments ``(B, 3)`` and which UAVs the autopilot took home ``(B,)`` (all False without
     it). The one path of :class:`PPOPolicy` and of the DAgger rollouts
     (:func:`poc_env.agents.rl.bc.dagger_rollouts`)."""
-    from poc_env.sim.autopilot import returning
-    from poc_env.sim.control import return_home, to_increments
     from poc_env.sim.observations import decode_vector
 
     shape = params.grid.shape
@@ -146,12 +144,29 @@ def compass_actions(
     feats = features(np.stack(ras), np.stack(vec), k)
     act, _ = model.predict(feats, deterministic=deterministic)
     q = decode_vector(params, np.stack(vec))
+    inc, home = model_increments(params, control, return_autopilot, q, act, k)
+    return feats, inc, home
+
+
+def model_increments(
+    params: Any, control: str, return_autopilot: bool, q: Any, act: Any, k: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A task checkpoint's actions ``act`` at ``control`` for the UAVs ``k`` in states ``q``
+    as eq. 19 increments (:func:`poc_env.sim.control.to_increments`); with
+    ``return_autopilot`` (an increments run trained with ``--return-autopilot``) the UAVs that
+    must head home (eq. 18, :func:`poc_env.sim.autopilot.returning`) fly the autopilot's homing
+    increments (:func:`poc_env.sim.control.return_home`), as in training. Returns the
+    increments ``(B, 3)`` and which UAVs the autopilot took home ``(B,)``. The one rule of the
+    compass and the set observation."""
+    from poc_env.sim.autopilot import returning
+    from poc_env.sim.control import return_home, to_increments
+
     inc = to_increments(params, control, q, np.asarray(act), k)
     home = np.zeros(len(k), dtype=bool)
     if return_autopilot:  # trained with the return autopilot
         home = np.asarray(returning(params, np.asarray(q["xy"], dtype=float), q["usable"], k))
         inc = return_home(params, q, inc, k).astype(np.float32)
-    return feats, inc, home
+    return inc, home
 
 
 class PPOPolicy(Policy):
@@ -229,6 +244,7 @@ class PPOPolicy(Policy):
             # a -Set task's policy: the set observation of this env's swarm, any fleet size
             self.mode, self.control = "set", task.control
             self._set = SetFeatures(env.params)
+            self._return = self.control == "increments" and cfg.get("return_autopilot") is True
         elif m_obs == pilot.OBSERVATION_SPACE and m_act == pilot.ACTION_SPACE:
             self.mode, self.control = "compass", "heading"  # the pilot recipe
             self._features = pilot.PilotFeatures(env.params)
@@ -269,7 +285,6 @@ class PPOPolicy(Policy):
             )  # fmt: skip
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "set":  # computed from the swarm's state as the -Set tasks observe it
-            from poc_env.sim.control import to_increments
             from poc_env.sim.observations import VECTOR_SIZE, decode_vector
 
             eng = self.env.engine
@@ -277,7 +292,7 @@ class PPOPolicy(Policy):
             feats = self._set.of_state(eng.current, eng.poc_scale)[0, k]
             act, _ = self.model.predict(feats, deterministic=deterministic)
             q = decode_vector(self.env.params, feats[:, :VECTOR_SIZE])
-            inc = to_increments(self.env.params, self.control, q, np.asarray(act), k)
+            inc, _ = model_increments(self.env.params, self.control, self._return, q, act, k)
             return {a: inc[j] for j, a in enumerate(live)}, state
         if self.mode == "residual":
             from poc_env.agents.rl.residual import augment, combine, teacher_actions

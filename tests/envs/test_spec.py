@@ -165,7 +165,8 @@ def test_the_task_table_is_the_spec():
                 )
                 want[tid] = (spec.SIZE_SCENARIO.value, ctl, True, v.version, v.env_control)
                 assert tasks.TASKS[tid].n_uavs == int(n.value)
-    assert spec.obs_versions("set") == (spec.TASK_VERSIONS[2],)  # Heading v1
+    # Increments v0 (issue 28: BC at the teacher's level for any fleet size), Heading v1
+    assert spec.obs_versions("set") == (spec.TASK_VERSIONS[0], spec.TASK_VERSIONS[2])
     assert {t.motion for t in tasks.TASKS.values()} == {str(m.value) for m in spec.MOTION_PARTS}
     assert {t.obs for t in tasks.TASKS.values()} == {str(o.value) for o in spec.OBS_PARTS}
     assert got == want

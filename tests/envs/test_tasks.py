@@ -25,8 +25,10 @@ ALL = list(tasks.TASKS)
 
 def test_the_table_of_tasks():
     # Increments v0, Heading v0 and v1, Waypoint v0; plus Drift-Heading v0 and v1; plus
-    # Set-Heading v1 on every scenario and prior and on Wide at 4 fleet sizes
-    assert len(ALL) == 3 * 2 * 4 + 3 * 2 + 3 * 2 + 4
+    # Set-Heading v1 and Set-Increments v0 on every scenario and prior and on Wide at 4 fleet
+    # sizes
+    assert len(ALL) == 3 * 2 * 4 + 3 * 2 + 2 * (3 * 2 + 4)
+    assert "poc_env/UAVSearch-Wide-N12-Random-Set-Increments-v0" in ALL
     assert f"poc_env/UAVSearch-Paper62-Drift-Heading-v{tasks.VERSION}" in ALL
     assert "poc_env/UAVSearch-Paper62-Drift-Heading-v1" in ALL
     assert f"poc_env/UAVSearch-Paper62-Random-Heading-v{tasks.VERSION}" in ALL

@@ -311,3 +311,44 @@ def test_a_set_bc_run_is_reproducible(tmp_path, same_weights):
     bc = json.loads((a / "bc.json").read_text())
     assert bc["samples"] > 0 and bc["after"]["actor_mse"] < bc["before"]["actor_mse"]
     assert same_weights(a / "model.zip", b / "model.zip")
+
+
+# -- every task of a mixed run (--bc-all-tasks) --------------------------------------------------
+def test_bc_all_tasks_records_every_task_and_keeps_the_first_tasks_stream(tmp_path):
+    """``--bc-all-tasks``: ``--bc-episodes`` teacher episodes of each task of the run, the
+    first task's from the stream it had without the flag (so its rows are the same)."""
+    kw = dict(task="UAVSearch-Small-Random-Set-Increments-v0", net="set", bc_teacher="lawnmower",
+              bc_episodes=1, total_timesteps=0,
+              also_task=["UAVSearch-Wide-N3-Random-Set-Increments-v0"])  # fmt: skip
+    both = json.loads(
+        (train(_args(tmp_path / "all", bc_all_tasks=True, **kw)) / "bc.json").read_text()
+    )
+    first = json.loads((train(_args(tmp_path / "first", **kw)) / "bc.json").read_text())
+    assert [t["task"] for t in both["tasks"]] == [kw["task"], *kw["also_task"]]
+    assert "tasks" not in first and both["episodes"] == 2 and first["episodes"] == 1
+    assert both["samples"] == sum(t["samples"] for t in both["tasks"]) > first["samples"]
+    assert both["tasks"][0]["samples"] == first["samples"]
+    assert both["teacher_posc"][0] == first["teacher_posc"][0]
+    assert both["tasks"][1]["samples"] > 0  # the wide_400 episode's rows are in the fit
+
+
+def test_concat_demos_renumbers_episodes_and_refuses_mixed_teachers():
+    from poc_env.agents.rl.bc import concat_demos
+
+    sc = load_scenario("small")
+    a = collect_demos(sc, INC, "lawnmower", 2, np.random.SeedSequence(1, spawn_key=DEMO_KEY))
+    b = collect_demos(sc, INC, "lawnmower", 1, np.random.SeedSequence(2, spawn_key=DEMO_KEY))
+    c = concat_demos([a, b])
+    assert c.samples == a.samples + b.samples and c.posc == a.posc + b.posc
+    np.testing.assert_array_equal(c.episode, np.concatenate([a.episode, b.episode + 2]))
+    np.testing.assert_array_equal(c.obs[a.samples :], b.obs)
+    g = collect_demos(sc, INC, "greedy_bayes", 1, np.random.SeedSequence(2, spawn_key=DEMO_KEY))
+    with pytest.raises(ConfigError) as err:
+        concat_demos([a, g])
+    assert err.value.field == "demos"
+
+
+def test_bc_all_tasks_needs_also_task():
+    with pytest.raises(ConfigError) as err:
+        TrainArgs(task=INC, bc_teacher="lawnmower", bc_all_tasks=True)
+    assert err.value.field == "bc_all_tasks"

@@ -93,13 +93,21 @@ def test_no_agent_index_trains_and_flies_without_it(tmp_path):
         TrainArgs(task="UAVSearch-Small-Heading-v0", agent_index="no")
 
 
-def test_return_autopilot_trains_and_flies_the_same_way(tmp_path):
+@pytest.mark.parametrize(
+    ("task", "net", "mode"),
+    [
+        ("UAVSearch-Small-Random-Increments-v0", "mlp", "compass"),
+        ("UAVSearch-Small-Random-Set-Increments-v0", "set", "set"),  # any fleet size
+    ],
+)
+def test_return_autopilot_trains_and_flies_the_same_way(tmp_path, task, net, mode):
     """--return-autopilot at the increments level: recorded in config.json, and PPOPolicy
-    replaces the increments of home-bound UAVs by the autopilot's, as the training env did."""
+    replaces the increments of home-bound UAVs by the autopilot's, as the training env did
+    (the compass and the set observation alike)."""
     from poc_env.sim.control import return_home
     from poc_env.sim.observations import decode_vector, split_observation
 
-    run = train(_tiny(tmp_path, task="UAVSearch-Small-Random-Increments-v0", return_autopilot=True))
+    run = train(_tiny(tmp_path, task=task, net=net, return_autopilot=True))
     assert json.loads((run / "config.json").read_text())["return_autopilot"] is True
     pol = PPOPolicy(run)
     net = pol.model.policy.action_net  # level flight (zero increments) until the way home
@@ -108,7 +116,7 @@ def test_return_autopilot_trains_and_flies_the_same_way(tmp_path):
     env = poc_env.parallel_env("small")
     obs, _ = env.reset(seed=0)
     pol.reset(env, seed=0)
-    assert pol._return and pol.control == "increments"
+    assert pol._return and (pol.mode, pol.control) == (mode, "increments")
     plain = PPOPolicy(run)
     plain.reset(env, seed=0)
     plain._return = False
