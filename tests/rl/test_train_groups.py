@@ -26,6 +26,7 @@ FLAGS = {
     "--net", "--also-task",  # issue 28: the set network and fleet sizes trained together
     "--residual-teacher", "--residual-pool", "--residual-log-std",  # issue 28: residual policy
     "--bc-dagger", "--bc-dagger-episodes", "--bc-dagger-epochs", "--bc-dagger-beta",  # DAgger
+    "--bc-all-tasks", "--no-bc-all-tasks",  # issue 28: BC on every task of a mixed run
 }  # fmt: skip
 
 
