@@ -180,6 +180,7 @@ SHIPPED = [
     "ppo_increments_individual_paper_6_2",  # BC at the increments level, then PPO (docs/rl.md)
     "rllib_heading_paper_6_2",
     "ppo_set_anysize",  # the set observation, one policy for 3 to 24 UAVs (docs/rl.md)
+    "ppo_set_increments_anysize",  # the same at the eq. 19 level, BC on every task (docs/rl.md)
     "ppo_drift_small",
 ]
 
