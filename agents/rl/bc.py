@@ -171,6 +171,52 @@ def discounted_returns(rewards: np.ndarray, gamma: float) -> np.ndarray:
     return out
 
 
+class _Rows:
+    """The labelled rows of demonstration episodes, gathered per UAV trajectory: each step's
+    ``(features, label or None, reward)``; a step's value target is the discounted return of
+    the UAV's trajectory from it (:func:`discounted_returns`), and steps without a label are
+    left out. The one assembly of :func:`collect_demos` and :func:`dagger_rollouts`."""
+
+    def __init__(self) -> None:
+        self.obs: list[np.ndarray] = []
+        self.lab: list[np.ndarray] = []
+        self.rew: list[float] = []
+        self.ret: list[float] = []
+        self.who: list[tuple[int, int]] = []
+
+    def add(self, ep: int, traj: dict[int, list[Any]], gamma: float) -> None:
+        """Episode ``ep``'s trajectories, UAV index -> its steps in order."""
+        for i, steps in traj.items():
+            if not steps:
+                continue
+            g = discounted_returns(np.array([r for *_, r in steps]), gamma)
+            for (f, lab, r), gt in zip(steps, g, strict=True):
+                if lab is not None:
+                    self.obs.append(f)
+                    self.lab.append(lab)
+                    self.rew.append(r)
+                    self.ret.append(float(gt))
+                    self.who.append((ep, i))
+
+    def demos(self, teacher: str, control: str, gamma: float, width: int,
+              posc: list[float], seeds: list[int]) -> Demos:  # fmt: skip
+        from poc_env.sim.control import ACTION_DIMS
+
+        return Demos(
+            teacher=teacher,
+            control=control,
+            gamma=float(gamma),
+            obs=np.array(self.obs, dtype=np.float32).reshape(-1, width),
+            labels=np.array(self.lab, dtype=np.float32).reshape(-1, ACTION_DIMS[control]),
+            rewards=np.array(self.rew, dtype=np.float32),
+            returns=np.array(self.ret, dtype=np.float32),
+            episode=np.array([e for e, _ in self.who], dtype=np.int64),
+            uav=np.array([i for _, i in self.who], dtype=np.int64),
+            posc=tuple(posc),
+            seeds=tuple(seeds),
+        )
+
+
 def collect_demos(
     scenario: str | Scenario,
     task: str | Task,
@@ -191,7 +237,6 @@ def collect_demos(
     """
     from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
-    from poc_env.sim.control import ACTION_DIMS
     from poc_env.sim.engine import RandomPrior
     from poc_env.sim.observations import (
         FEATURES,
@@ -215,11 +260,7 @@ def collect_demos(
     width = SET_SIZE if t.obs == "set" else FEATURES
     index = {a: i for i, a in enumerate(env.possible_agents)}
     rng = np.random.default_rng(seed_seq)
-    obs_rows: list[np.ndarray] = []
-    lab_rows: list[np.ndarray] = []
-    rew_rows: list[float] = []
-    ret_rows: list[float] = []
-    who: list[tuple[int, int]] = []
+    rows = _Rows()
     poscs: list[float] = []
     seeds: list[int] = []
     for ep in range(episodes):
@@ -250,34 +291,11 @@ def collect_demos(
                 i = int(k[j])
                 lab = _label(control, params, actions[a], xy0[i], xy1[i])
                 traj[i].append((feats[j], lab, float(rewards[a])))
-        for i, rows in traj.items():
-            if not rows:
-                continue
-            g = discounted_returns(np.array([r for *_, r in rows]), gamma)
-            for (f, lab, r), gt in zip(rows, g, strict=True):
-                if lab is not None:
-                    obs_rows.append(f)
-                    lab_rows.append(lab)
-                    rew_rows.append(r)
-                    ret_rows.append(float(gt))
-                    who.append((ep, i))
+        rows.add(ep, traj, gamma)
         poscs.append(float(env.sim_state.posc[0]))
         seeds.append(seed)
     env.close()
-    dim = ACTION_DIMS[control]
-    return Demos(
-        teacher=teacher,
-        control=control,
-        gamma=float(gamma),
-        obs=np.array(obs_rows, dtype=np.float32).reshape(-1, width),
-        labels=np.array(lab_rows, dtype=np.float32).reshape(-1, dim),
-        rewards=np.array(rew_rows, dtype=np.float32),
-        returns=np.array(ret_rows, dtype=np.float32),
-        episode=np.array([e for e, _ in who], dtype=np.int64),
-        uav=np.array([i for _, i in who], dtype=np.int64),
-        posc=tuple(poscs),
-        seeds=tuple(seeds),
-    )
+    return rows.demos(teacher, control, gamma, width, poscs, seeds)
 
 
 def dagger_rollouts(
@@ -317,7 +335,6 @@ def dagger_rollouts(
     from poc_env.agents.policies.registry import make_policy
     from poc_env.agents.rl.policy import compass_actions
     from poc_env.envs.parallel import UAVSearchParallelEnv
-    from poc_env.sim.control import ACTION_DIMS
     from poc_env.sim.engine import RandomPrior
     from poc_env.sim.observations import FEATURES, CompassFeatures
     from poc_env.tasks import get_task
@@ -335,11 +352,7 @@ def dagger_rollouts(
     features = CompassFeatures(params, agent_index)
     index = {a: i for i, a in enumerate(env.possible_agents)}
     rng = np.random.default_rng(seed_seq)
-    obs_rows: list[np.ndarray] = []
-    lab_rows: list[np.ndarray] = []
-    rew_rows: list[float] = []
-    ret_rows: list[float] = []
-    who: list[tuple[int, int]] = []
+    rows = _Rows()
     poscs: list[float] = []
     seeds: list[int] = []
     counts = dict.fromkeys(("rows", "labelled", "autopilot", "teacher_flown", "teacher_homing"), 0)
@@ -377,36 +390,12 @@ def dagger_rollouts(
                 traj[i].append((feats[j], lab[j] if keep else None, float(rewards[a])))
             counts["rows"] += len(live)
             counts["autopilot"] += int(home.sum())
-        for i, rows in traj.items():
-            if not rows:
-                continue
-            g = discounted_returns(np.array([r for *_, r in rows]), gamma)
-            for (f, lab_i, r), gt in zip(rows, g, strict=True):
-                if lab_i is not None:
-                    obs_rows.append(f)
-                    lab_rows.append(lab_i)
-                    rew_rows.append(r)
-                    ret_rows.append(float(gt))
-                    who.append((ep, i))
+        rows.add(ep, traj, gamma)
         poscs.append(float(env.sim_state.posc[0]))
         seeds.append(seed)
     env.close()
-    counts["labelled"] = len(obs_rows)
-    dim = ACTION_DIMS["increments"]
-    demos = Demos(
-        teacher=teacher,
-        control="increments",
-        gamma=float(gamma),
-        obs=np.array(obs_rows, dtype=np.float32).reshape(-1, FEATURES),
-        labels=np.array(lab_rows, dtype=np.float32).reshape(-1, dim),
-        rewards=np.array(rew_rows, dtype=np.float32),
-        returns=np.array(ret_rows, dtype=np.float32),
-        episode=np.array([e for e, _ in who], dtype=np.int64),
-        uav=np.array([i for _, i in who], dtype=np.int64),
-        posc=tuple(poscs),
-        seeds=tuple(seeds),
-    )
-    return demos, counts
+    counts["labelled"] = len(rows.obs)
+    return rows.demos(teacher, "increments", gamma, FEATURES, poscs, seeds), counts
 
 
 def bc_losses(model: PPO, demos: Demos) -> dict[str, float]:
