@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import json
-import sys
 from pathlib import Path
 
 from poc_env.agents.rl.card import make_card
@@ -123,4 +122,8 @@ def main(name: str = "ppo_set_anysize") -> Path:
 
 
 if __name__ == "__main__":
-    print(f"wrote {main(*sys.argv[1:2])}")
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("name", nargs="?", default="ppo_set_anysize", choices=sorted(CARDS))
+    print(f"wrote {main(ap.parse_args().name)}")
