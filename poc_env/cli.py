@@ -587,6 +587,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     from poc_env.agents.rl.train import train
 
     targs = parse_train_args(args.train_options)
+    if targs.from_card is not None:
+        from poc_env.agents.rl.args import load_card
+
+        step = load_card(targs.from_card).get("model_step")
+        shipped = "" if step is None else f"; the shipped model is its run's step {step:,}"
+        print(f"recipe of {targs.from_card}'s card (options given here replace it{shipped})")
     _check_int("n_envs", targs.n_envs, 1, limits.N_ENVS_MAX)
     _check_out("run_dir", targs.run_dir, "folder")
     try:

@@ -72,6 +72,11 @@ class TrainArgs:
     """Run folder; default runs/<scenario>-<algo>-s<seed>-<timestamp>."""
     resume: Annotated[str | None, _arg(metavar="RUN_DIR")] = None
     """Continue this run folder from its latest checkpoint and config (no other options)."""
+    from_card: Annotated[str | None, _arg(metavar="NAME")] = None
+    """Train with a shipped checkpoint's recipe, one command: the training options of its card
+    (agents/checkpoints/NAME.json, e.g. ppo_set_increments_anysize) are this run's defaults,
+    and every option given here replaces the card's value (a list too), e.g. --seed 2 --run-dir
+    DIR. The card's model_step is the checkpoint that was shipped."""
     checkpoint_every: int = 50_000
     """Timesteps between checkpoints (taken at the next rollout boundary)."""
     torch_threads: int = 1
@@ -231,6 +236,8 @@ class TrainArgs:
             raise ConfigError("net_arch", self.net_arch, "a list of layer widths (integers >= 1)")
         if not isinstance(self.scenario, str):
             raise ConfigError("scenario", self.scenario, "a string")
+        if self.from_card is not None and self.from_card not in card_names():
+            raise ConfigError("from_card", self.from_card, _CARDS_ALLOWED + ", ".join(card_names()))
         for name in ("run_dir", "resume"):
             v = getattr(self, name)
             if v is not None and not isinstance(v, str | os.PathLike):
@@ -306,6 +313,11 @@ class TrainArgs:
                 )  # fmt: skip
         if self.bc_all_tasks and not self.also_task:
             raise ConfigError("bc_all_tasks", self.bc_all_tasks, "False without --also-task")
+        if self.bc_all_tasks and self.bc_dagger > 0:
+            raise ConfigError(
+                "bc_dagger", self.bc_dagger, "0 with --bc-all-tasks (DAgger relabels the "
+                "episodes of --task only)",
+            )  # fmt: skip
 
     def _check_residual(self) -> None:
         """The residual fields (poc_env.agents.rl.residual)."""
@@ -342,6 +354,38 @@ class TrainArgs:
         if unknown:
             raise ConfigError(f"{where}.{unknown[0]}", data[unknown[0]], "a TrainArgs field")
         return cls(**data)
+
+
+_CARDS_ALLOWED = "the name of a shipped checkpoint with a card: "
+
+
+def card_names() -> list[str]:
+    """The shipped checkpoints that have a card (``agents/checkpoints/<name>.json``)."""
+    import importlib.resources
+
+    folder = importlib.resources.files("poc_env.agents").joinpath("checkpoints")
+    return sorted(f.name[:-5] for f in folder.iterdir() if f.name.endswith(".json"))
+
+
+def load_card(name: str) -> dict[str, Any]:
+    """The card of the shipped checkpoint ``name`` (``agents/checkpoints/<name>.json``: its
+    run's training options, ``model_step``, its evaluation)."""
+    import importlib.resources
+    import json
+
+    if name not in card_names():
+        raise ConfigError("from_card", name, _CARDS_ALLOWED + ", ".join(card_names()))
+    ref = importlib.resources.files("poc_env.agents").joinpath("checkpoints", f"{name}.json")
+    card: dict[str, Any] = json.loads(ref.read_text(encoding="utf-8"))
+    return card
+
+
+def card_options(name: str) -> dict[str, Any]:
+    """The training options recorded in the card of the shipped checkpoint ``name``: its
+    TrainArgs fields (a field the card predates takes its default, as on ``--resume``), without
+    the run folder's own (``run_dir``, ``resume``, ``progress``); ``--from-card``'s defaults."""
+    names = {f.name for f in dataclasses.fields(TrainArgs)} - {"run_dir", "resume", "progress"}
+    return {k: v for k, v in load_card(name).items() if k in names}
 
 
 def teachers() -> tuple[str, ...]:
@@ -391,6 +435,7 @@ DESCRIPTION = (
         "poc-env train --task poc_env/UAVSearch-Small-Heading-v1 --total-timesteps 20000 "
         "--run-dir runs/small",
         "poc-env train --resume runs/small",
+        "poc-env train --from-card ppo_set_increments_anysize --seed 2 --run-dir runs/s2",
         "poc-env train --scenario small --overrides episode.horizon_steps=40 --recipe pilot "
         "--total-timesteps 4096 --n-envs 2",
         "poc-env train --engine rllib --task poc_env/UAVSearch-Small-Heading-v1 "
@@ -627,6 +672,9 @@ def parse_train_args(argv: Sequence[str] | None = None) -> TrainArgs:
                 values["resume"],
                 f"no other training options (a resumed run keeps its config.json); got {flags}",
             )
+    given = given_options(argv)
+    if values["from_card"] is not None:
+        values = card_options(values["from_card"]) | {k: values[k] for k in given}
     args = TrainArgs(**values)
-    check_used(args, given_options(argv))
+    check_used(args, given)
     return args
