@@ -35,3 +35,14 @@ def test_readme_links_and_figures_exist():
 def test_readme_stays_a_front_door():
     """The README is the front door (about 15 KB at most); the manual is the docs site."""
     assert README.stat().st_size <= 15_500
+
+
+def test_counts_of_tasks_match_the_registry():
+    """The README and docs/environment.md say how many tasks are registered; the number follows
+    the registry (it said 18 for three sessions after the registry had grown to 50)."""
+    from poc_env.tasks import TASKS
+
+    readme = " ".join(README.read_text(encoding="utf-8").split())
+    env_doc = (ROOT / "docs" / "environment.md").read_text(encoding="utf-8")
+    assert re.findall(r"\((\d+) registered tasks", readme) == [str(len(TASKS))]
+    assert re.findall(r"\((\d+) tasks: every scenario", env_doc) == [str(len(TASKS))]
