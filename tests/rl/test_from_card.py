@@ -61,3 +61,15 @@ def test_dagger_with_every_task_is_refused() -> None:
     assert parse_train_args([*argv, "--bc-all-tasks"]).bc_all_tasks
     with pytest.raises(ConfigError, match=r"bc_dagger: got 2.*--bc-all-tasks"):
         parse_train_args([*argv, "--bc-all-tasks", "--bc-dagger", "2"])
+
+
+def test_docs_table_lists_every_card() -> None:
+    # docs/rl.md opens with the table of shipped policies: one row and the count per card
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "rl.md").read_text(encoding="utf-8")
+    table = text.split("\n\n| name |", 1)[1].split("\n\n", 1)[0]
+    rows = [line.split("`")[1] for line in table.splitlines()[2:]]
+    assert sorted(rows) == card_names()
+    words = ["One", "Two", "Three", "Four", "Five", "Six", "Seven", "Eight", "Nine", "Ten"]
+    assert f"{words[len(rows) - 1]} policies are shipped" in text
