@@ -470,6 +470,7 @@ def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, 
         levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
         polish=opt.polish, polish_radii=opt.polish_radii, polish_grade=opt.polish_grade,
+        polish_lines=opt.polish_lines,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
@@ -781,6 +782,25 @@ def make_allocation_plan(
                 start, refined = name, False
 
     def _polish(rs):
+        moves = KINDS if opt.polish_grade else MOVES
+        out = _polish_stage(rs, opt.polish, moves) if opt.polish else (rs, 0.0, {})
+        if not opt.polish_lines:
+            return out
+        # i24-lines: a second polish with the block moves too (the lines of a run moved as one)
+        pr, val, stats = _polish_stage(out[0], opt.polish_lines, (*moves, "block"))
+        st0 = out[2]
+        return (
+            pr,
+            val,
+            {
+                "passes": st0.get("passes", 0) + stats["passes"],
+                "moves": st0.get("moves", 0) + stats["moves"],
+                "lines_moves": stats["moves"],
+                "block_moves": stats["block_moves"],
+            },
+        )
+
+    def _polish_stage(rs, passes, moves):
         return polish_routes(
             rs,
             takeoff,
@@ -792,9 +812,9 @@ def make_allocation_plan(
             u.usable_endurance_s,
             u.max_turn_rate_rad_s,
             _reserve(sc),
-            passes=opt.polish,
+            passes=passes,
             radii=opt.polish_radii,
-            moves=KINDS if opt.polish_grade else MOVES,
+            moves=moves,
             headings=heading0,
             airspace=Airspace(
                 sc.episode.dt_s,
@@ -805,9 +825,10 @@ def make_allocation_plan(
         )
 
     polished: dict[str, Any] | None = None
-    if opt.polish and router.active:  # eq. 20: the polish does not see the zones
+    polishing = bool(opt.polish or opt.polish_lines)
+    if polishing and router.active:  # eq. 20: the polish does not see the zones
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
-    elif opt.polish and any(routes):
+    elif polishing and any(routes):
         # the chosen plan polished, and with ``polish_starts`` the next best of the starts
         # (refined or not) too: the best polished one kept (by POS less the penalty)
         pool = [(routes, pieces, start, refined)]

@@ -172,6 +172,10 @@ class PlanOptions:
     #: the polish also tries its ``grade`` moves (a run of consecutive lawnmower lines
     #: squeezed or spread together: :data:`~poc_env.agents.planning.polish.KINDS`; i24-grade).
     polish_grade: bool = False
+    #: passes of a second polish after it (0: none), its moves those of the polish and the
+    #: ``block`` moves (a run of lawnmower lines translated as one across or along the lines:
+    #: :data:`~poc_env.agents.planning.polish.ALL_KINDS`; i24-lines).
+    polish_lines: int = 0
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -208,6 +212,7 @@ class PlanOptions:
         _number("sampled_top", self.sampled_top, 1, 100, integer=True)
         _number("polish", self.polish, 0, 100, integer=True)
         _number("polish_starts", self.polish_starts, 1, 6, integer=True)
+        _number("polish_lines", self.polish_lines, 0, 100, integer=True)
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
