@@ -470,7 +470,7 @@ def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, 
         levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
         polish=opt.polish, polish_radii=opt.polish_radii, polish_grade=opt.polish_grade,
-        polish_lines=opt.polish_lines,
+        polish_lines=opt.polish_lines, polish_lines_radii=opt.polish_lines_radii,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
@@ -783,11 +783,15 @@ def make_allocation_plan(
 
     def _polish(rs):
         moves = KINDS if opt.polish_grade else MOVES
-        out = _polish_stage(rs, opt.polish, moves) if opt.polish else (rs, 0.0, {})
+        out = (
+            _polish_stage(rs, opt.polish, moves, opt.polish_radii) if opt.polish else (rs, 0.0, {})
+        )
         if not opt.polish_lines:
             return out
         # i24-lines: a second polish with the block moves too (the lines of a run moved as one)
-        pr, val, stats = _polish_stage(out[0], opt.polish_lines, (*moves, "block"))
+        pr, val, stats = _polish_stage(
+            out[0], opt.polish_lines, (*moves, "block"), opt.polish_lines_radii
+        )
         st0 = out[2]
         return (
             pr,
@@ -800,7 +804,7 @@ def make_allocation_plan(
             },
         )
 
-    def _polish_stage(rs, passes, moves):
+    def _polish_stage(rs, passes, moves, radii):
         return polish_routes(
             rs,
             takeoff,
@@ -813,7 +817,7 @@ def make_allocation_plan(
             u.max_turn_rate_rad_s,
             _reserve(sc),
             passes=passes,
-            radii=opt.polish_radii,
+            radii=radii,
             moves=moves,
             headings=heading0,
             airspace=Airspace(

@@ -176,6 +176,8 @@ class PlanOptions:
     #: ``block`` moves (a run of lawnmower lines translated as one across or along the lines:
     #: :data:`~poc_env.agents.planning.polish.ALL_KINDS`; i24-lines).
     polish_lines: int = 0
+    #: the second polish's move radii, in sweep widths.
+    polish_lines_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -214,6 +216,7 @@ class PlanOptions:
         _number("polish_starts", self.polish_starts, 1, 6, integer=True)
         _number("polish_lines", self.polish_lines, 0, 100, integer=True)
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
+        _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)

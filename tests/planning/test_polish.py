@@ -338,6 +338,12 @@ def test_polish_lines_option_is_checked(bad):
         PlanOptions(polish_lines=bad)
 
 
+@pytest.mark.parametrize("bad", [(), (0.5, -1.0), (0.5, 9.0), (float("nan"),)])
+def test_polish_lines_radii_option_is_checked(bad):
+    with pytest.raises(ConfigError, match=r"options\.polish_lines_radii"):
+        PlanOptions(polish_lines_radii=bad)
+
+
 def test_polish_lines_option_reaches_the_plan_and_never_plans_less():
     """``polish_lines`` runs a second polish with the block moves after the polish: on small
     it keeps block moves (recorded in the settings), and the plan never plans less POS than
@@ -349,3 +355,17 @@ def test_polish_lines_option_reaches_the_plan_and_never_plans_less():
     assert st["options"]["polish_lines"] == 2 and st["polish"]["block_moves"] > 0
     assert b["posc"] >= a["posc"] - 1e-12
     assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
+
+
+def test_polish_lines_radii_reach_the_second_polish():
+    """``polish_lines_radii`` are the second polish's radii (not the first's): on small, with
+    W/8 added, the second polish keeps other moves than with the default radii, and the first
+    polish is the same (so the plan differs only through the second)."""
+    sc = load_scenario("small")
+    opt = PlanOptions(polish=2, polish_grade=True, polish_lines=1)
+    a = make_allocation_plan(sc, options=opt)
+    fine = dataclasses.replace(opt, polish_lines_radii=(0.125, 0.25, 0.5, 1.0, 2.0))
+    b = make_allocation_plan(sc, options=fine)
+    assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
+    sa, sb = a["optimizer"]["settings"]["polish"], b["optimizer"]["settings"]["polish"]
+    assert sa["moves"] - sa["lines_moves"] == sb["moves"] - sb["lines_moves"]
