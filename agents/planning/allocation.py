@@ -48,6 +48,10 @@
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
    17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
    no-fly zones. The plan's optimizer settings record its passes and kept moves (``polish``).
+   With ``options.polish_lines`` passes (off by default; i24-lines) a second polish follows,
+   with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as
+   one) at radii ``options.polish_lines_radii``; the settings then also record its kept moves
+   (``lines_moves``) and how many were block moves (``block_moves``).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
