@@ -266,4 +266,7 @@ THOROUGH: dict[str, Any] = {
     "also_default": True,
     "polish": 6,  # i24-polish: docs/PLANNER.md, "Polish by the environment's model"
     "polish_grade": True,  # i24-grade: docs/PLANNER.md, "Grading and the last 0.007"
+    # i24-lines: docs/PLANNER.md, "Block moves and a second polish"
+    "polish_lines": 6,
+    "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
 }
