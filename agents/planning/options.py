@@ -23,7 +23,11 @@ took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s
 88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3-1.4 times the time without them,
 interleaved in one process at that load) and
 210 s (at most 287 s) on ``large_400`` at load
-4.2-8.5 (20 priors; 1.13 times the time without them, interleaved at load 3.2-3.4).
+4.2-8.5 (20 priors; 1.13 times the time without them, interleaved at load 3.2-3.4). With the
+second polish and its block moves (``polish_lines``; "Block moves and a second polish
+(i24-lines, 2026-11-28)") 71 s (at most 113 s) on ``paper_6_2`` at load 4.4-7.5 over the 50
+reported priors: 2.2-2.5 times the CPU time without it (interleaved, validation priors 5002
+and 5003: 16.4 -> 36.4 s, 14.1 -> 34.8 s).
 """
 
 from __future__ import annotations
