@@ -8,7 +8,8 @@ widths (empty: the default radii), ``passes`` an integer; e.g. ``all+block//4``.
 plan's routes are polished again exactly as the allocation planner's polish does it (same
 speeds, budget, reserve, headings, airspace margins of ``thorough``), then scored on the 2 x 2
 lattice (the planned POS) and on 8 x 8 points a cell (``effort_ab.fine_posc``); the gains over
-the stored plan, paired per seed (Student's t 95 %), are printed and stored with the time.
+the stored plan, paired per seed (Student's t 95 %), are printed and stored with the time
+(and, with ``STAGE2_ROUTES=1`` in the environment, the polished routes, for chain_cached.py).
 """
 
 from __future__ import annotations
@@ -102,6 +103,8 @@ def main(plans: list[str], variants: list[str], out: str) -> None:
                    "base_fine": r["fine_posc"], "moves": stats["moves"],
                    "passes": stats["passes"], "stage_s": dt, "base_plan_s": r["plan_s"],
                    "load": os.getloadavg()[0]}  # fmt: skip
+            if os.environ.get("STAGE2_ROUTES"):  # the routes too (for chain_cached.py)
+                rec["uavs"] = new["uavs"]
             recs.append(rec)
             print(r["map"], r["seed"], v, f"{(planned - r['planned_posc']) / b:+.4f}",
                   f"{(fine - r['fine_posc']) / b:+.4f}", stats, round(dt, 1),
