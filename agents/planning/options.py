@@ -23,7 +23,11 @@ took 32 s (median; at most 58 s) a plan on ``paper_6_2`` and 38 s (at most 165 s
 88 s (at most 124 s) on ``paper_6_2`` at load 6.4-8.5 (1.3-1.4 times the time without them,
 interleaved in one process at that load) and
 210 s (at most 287 s) on ``large_400`` at load
-4.2-8.5 (20 priors; 1.13 times the time without them, interleaved at load 3.2-3.4).
+4.2-8.5 (20 priors; 1.13 times the time without them, interleaved at load 3.2-3.4). With the
+second polish and its block moves (``polish_lines``; "Block moves and a second polish
+(i24-lines, 2026-11-28)") 71 s (at most 113 s) on ``paper_6_2`` at load 4.4-7.5 over the 50
+reported priors: 2.2-2.5 times the CPU time without it (interleaved, validation priors 5002
+and 5003: 16.4 -> 36.4 s, 14.1 -> 34.8 s).
 """
 
 from __future__ import annotations
@@ -172,6 +176,12 @@ class PlanOptions:
     #: the polish also tries its ``grade`` moves (a run of consecutive lawnmower lines
     #: squeezed or spread together: :data:`~poc_env.agents.planning.polish.KINDS`; i24-grade).
     polish_grade: bool = False
+    #: passes of a second polish after it (0: none), its moves those of the polish and the
+    #: ``block`` moves (a run of lawnmower lines translated as one across or along the lines:
+    #: :data:`~poc_env.agents.planning.polish.ALL_KINDS`; i24-lines).
+    polish_lines: int = 0
+    #: the second polish's move radii, in sweep widths.
+    polish_lines_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -208,7 +218,9 @@ class PlanOptions:
         _number("sampled_top", self.sampled_top, 1, 100, integer=True)
         _number("polish", self.polish, 0, 100, integer=True)
         _number("polish_starts", self.polish_starts, 1, 6, integer=True)
+        _number("polish_lines", self.polish_lines, 0, 100, integer=True)
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
+        _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
@@ -258,4 +270,7 @@ THOROUGH: dict[str, Any] = {
     "also_default": True,
     "polish": 6,  # i24-polish: docs/PLANNER.md, "Polish by the environment's model"
     "polish_grade": True,  # i24-grade: docs/PLANNER.md, "Grading and the last 0.007"
+    # i24-lines: docs/PLANNER.md, "Block moves and a second polish"
+    "polish_lines": 6,
+    "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
 }

@@ -37,7 +37,13 @@ kept.
   next waypoint -- every point's offset across that leg, measured from the first or from the
   last of them, scaled by a factor of :data:`GRADE_SCALES` -- so the spacing of a run of
   consecutive parallel lawnmower lines changes together: a graded lawnmower, denser where the
-  mass is, built from the one spacing a box was laid at.
+  mass is, built from the one spacing a box was laid at;
+* **block** (not in :data:`MOVES`; ``moves`` must name it, i24-lines): the ``m`` waypoints
+  from it on (``m`` in :data:`BLOCK_WINDOWS`) translated together by ``+-r`` across the leg
+  from it to the next waypoint or along it -- a run of lawnmower lines moved as one (their
+  offsets re-solved jointly where a single line's shift, against its neighbours' fixed
+  offsets, does not gain) or slid along the lines (the part of the box they cover moved
+  along the line direction, the connectors into and out of the run changed).
 
 The move of highest gain is tried first; it is kept if it gains more than :data:`TOL` and the
 route stays as :func:`~poc_env.agents.planning.refine.refine_routes` keeps it: eq. 17-18 time
@@ -79,6 +85,10 @@ RADII = (0.25, 0.5, 1.0, 2.0)
 MOVES = ("move", "slide", "shift", "insert", "delete")
 #: every kind of move (``grade`` too: tried only if ``moves`` names it).
 KINDS = (*MOVES, "grade")
+#: the kinds a ``moves`` argument may name (``block`` too, i24-lines).
+ALL_KINDS = (*KINDS, "block")
+#: waypoints a block move translates together (1 to 4 lawnmower lines).
+BLOCK_WINDOWS = (2, 4, 6, 8)
 #: waypoints a grade move scales together (2, 3 and 4 lawnmower lines), and its factors.
 GRADE_WINDOWS = (4, 6, 8)
 GRADE_SCALES = (0.8, 0.9, 1.1, 1.25)
@@ -189,17 +199,18 @@ def polish_routes(
     the cell masses (the grid's shape); ``sensor`` the scenario's
     (:class:`poc_env.config.SensorConfig`: sweep width, law, samples per cell, cut-off);
     ``radii`` in sweep widths; ``headings`` (n,) the UAVs' headings at take-off (rad) or None;
-    ``moves`` the kinds of move tried (:data:`KINDS`; default :data:`MOVES`).
+    ``moves`` the kinds of move tried (:data:`ALL_KINDS`; default :data:`MOVES`).
     A route that does not fit ``budget`` to begin with is only changed by moves after which
-    it does. Returns ``(routes, pos, {"passes", "moves"})``."""
+    it does. Returns ``(routes, pos, {"passes", "moves"})`` (and ``"block_moves"``, the kept
+    moves that were block moves, where ``moves`` names them)."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
     if not rad or any(not np.isfinite(r) or r <= 0 for r in rad):
         raise ConfigError("radii", radii, "positive numbers (sweep widths), not empty")
     kinds = set(moves)
-    if not kinds or not kinds <= set(KINDS):
-        raise ConfigError("moves", moves, f"some of {', '.join(KINDS)}")
+    if not kinds or not kinds <= set(ALL_KINDS):
+        raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
     takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
     landing = np.asarray(landing, dtype=float).reshape(-1, 2)
     n = len(takeoff)
@@ -293,10 +304,33 @@ def polish_routes(
             got += int(choose(k, i - 1, i + m_, seqs))
         return got
 
+    def block(k: int, i: int) -> int:
+        """The block moves at waypoint ``i`` of UAV ``k`` (module docstring): per window, the
+        best fitting translation kept if it gains; the number kept."""
+        got = 0
+        for m_ in BLOCK_WINDOWS:
+            path = paths[k]
+            if i + m_ > len(path) - 1:  # the window's points are inner waypoints
+                break
+            d = path[i + 1] - path[i]
+            ln = float(np.hypot(*d))
+            if ln <= 1e-3:
+                break
+            tan = d / ln
+            pts = path[i : i + m_]
+            seqs = []
+            for u in (np.array([-tan[1], tan[0]]), tan):
+                for o in signed:
+                    q = np.clip(pts + o * u[None], lo, hi)
+                    seqs.append(np.vstack([path[i - 1], q, path[i + m_]]))
+            got += int(choose(k, i - 1, i + m_, seqs))
+        return got
+
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
     n_moves = 0
+    n_block = 0  # of them block moves
     done = 0
     for _ in range(max(0, int(passes))):
         kept = 0
@@ -345,6 +379,10 @@ def polish_routes(
                         continue  # deleted: the next waypoint is now at i
                 if "grade" in kinds:
                     kept += grade(k, i)
+                if "block" in kinds:
+                    got = block(k, i)
+                    kept += got
+                    n_block += got
                 i += 1
         n_moves += kept
         if not kept:
@@ -353,4 +391,7 @@ def polish_routes(
         [[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] if flying[k] else []
         for k, p in enumerate(paths)
     ]
-    return out, ex.pos(), {"passes": done, "moves": n_moves}
+    stats = {"passes": done, "moves": n_moves}
+    if "block" in kinds:
+        stats["block_moves"] = n_block
+    return out, ex.pos(), stats

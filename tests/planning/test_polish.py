@@ -273,3 +273,99 @@ def test_polish_grade_option_is_checked_and_reaches_the_polish():
     b = make_allocation_plan(sc, options=PlanOptions(polish=2, polish_grade=True))
     assert b["optimizer"]["settings"]["options"]["polish_grade"] is True
     assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
+
+
+def test_a_block_move_carries_a_run_of_lines_onto_the_mass():
+    """One UAV sweeps three lines 5 km apart (W) along x at x 10-20 km, y 10-20 km; the mass
+    lies in the cells at x 20-35 km, y 15-30 km (up and to the right of the run): with only
+    block moves allowed (i24-lines) the polish carries the run towards the mass (across the
+    lines and along them), gains planned POS (the score the environment's sweep), and keeps
+    the route flyable and inside the map."""
+    from poc_env.agents.planning.polish import ALL_KINDS, KINDS
+
+    assert "block" in ALL_KINDS and "block" not in KINDS  # grade's kinds (thorough) unchanged
+    sc = load_scenario("small").with_uavs(1)
+    grid, takeoff, landing = _setup(sc)
+    prior = np.zeros(grid.shape)
+    prior[3:6, 4:7] = 1.0 / 9.0  # small: 8 x 8 cells of 5 km; rows y 15-30, columns x 20-35
+    routes = [_lawnmower([10000.0, 15000.0, 20000.0], x0=10000.0, x1=20000.0)]
+    before = _sampled(sc, routes, prior)
+    out, value, stats = _polish(sc, routes, prior, passes=3, airspace=False, moves=("block",))
+    assert stats["moves"] > 0 and value > before + 1e-3
+    assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
+    r, r0 = np.asarray(out[0]), np.asarray(routes[0])
+    assert r.shape == r0.shape  # no waypoint added or taken away: the run translated
+    assert r[:, 0].mean() > r0[:, 0].mean() + 1000.0 and r[:, 1].mean() > r0[:, 1].mean() + 1000.0
+    v = plan_speeds(sc)
+    heading = takeoff_heading(grid.bounds, takeoff)
+    fits = (v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s, reserve_s(sc))
+    assert route_fits(np.vstack([takeoff[0], r, landing[0]]), *fits, heading[0])
+    x0, y0, x1, y1 = grid.bounds
+    assert np.all((r >= [x0, y0]) & (r <= [x1, y1]))
+
+
+def test_block_moves_never_lower_planned_pos_and_keep_routes_flyable():
+    """Every kind of move with the block moves, after a polish without them, on a random prior
+    of small's (the airspace check on): the planned POS does not fall (and rises here), the
+    score is the environment's sweep of the routes, every route fits eq. 17-18 and every
+    waypoint the polish placed lies inside the map."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.planning.polish import KINDS
+
+    sc = load_scenario("small")
+    prior = episode_prior(sc, 7)
+    grid, takeoff, landing = _setup(sc)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc, prior=prior)["uavs"]]
+    first, v_first, _ = _polish(sc, routes, prior, passes=2, moves=KINDS)
+    out, value, stats = _polish(sc, first, prior, passes=2, moves=(*KINDS, "block"))
+    assert stats["block_moves"] > 0 and value > v_first + 1e-5
+    assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
+    v = plan_speeds(sc)
+    heading = takeoff_heading(grid.bounds, takeoff)
+    x0, y0, x1, y1 = grid.bounds
+    for k, r in enumerate(out):
+        new = np.asarray(r).reshape(-1, 2)
+        path = np.vstack([takeoff[k], new, landing[k]])
+        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
+                          reserve_s(sc), heading[k])  # fmt: skip
+        moved = ~np.isin(new, np.asarray(first[k]).reshape(-1, 2)).all(axis=1)
+        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, 101])
+def test_polish_lines_option_is_checked(bad):
+    with pytest.raises(ConfigError, match=r"options\.polish_lines"):
+        PlanOptions(polish_lines=bad)
+
+
+@pytest.mark.parametrize("bad", [(), (0.5, -1.0), (0.5, 9.0), (float("nan"),)])
+def test_polish_lines_radii_option_is_checked(bad):
+    with pytest.raises(ConfigError, match=r"options\.polish_lines_radii"):
+        PlanOptions(polish_lines_radii=bad)
+
+
+def test_polish_lines_option_reaches_the_plan_and_never_plans_less():
+    """``polish_lines`` runs a second polish with the block moves after the polish: on small
+    it keeps block moves (recorded in the settings), and the plan never plans less POS than
+    the polish alone (the second stage starts from its routes and keeps only gains)."""
+    sc = load_scenario("small")
+    a = make_allocation_plan(sc, options=PlanOptions(polish=2, polish_grade=True))
+    b = make_allocation_plan(sc, options=PlanOptions(polish=2, polish_grade=True, polish_lines=2))
+    st = b["optimizer"]["settings"]
+    assert st["options"]["polish_lines"] == 2 and st["polish"]["block_moves"] > 0
+    assert b["posc"] >= a["posc"] - 1e-12
+    assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
+
+
+def test_polish_lines_radii_reach_the_second_polish():
+    """``polish_lines_radii`` are the second polish's radii (not the first's): on small, with
+    W/8 added, the second polish keeps other moves than with the default radii, and the first
+    polish is the same (so the plan differs only through the second)."""
+    sc = load_scenario("small")
+    opt = PlanOptions(polish=2, polish_grade=True, polish_lines=1)
+    a = make_allocation_plan(sc, options=opt)
+    fine = dataclasses.replace(opt, polish_lines_radii=(0.125, 0.25, 0.5, 1.0, 2.0))
+    b = make_allocation_plan(sc, options=fine)
+    assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
+    sa, sb = a["optimizer"]["settings"]["polish"], b["optimizer"]["settings"]["polish"]
+    assert sa["moves"] - sa["lines_moves"] == sb["moves"] - sb["lines_moves"]
