@@ -27,6 +27,7 @@ FLAGS = {
     "--residual-teacher", "--residual-pool", "--residual-log-std",  # issue 28: residual policy
     "--bc-dagger", "--bc-dagger-episodes", "--bc-dagger-epochs", "--bc-dagger-beta",  # DAgger
     "--bc-all-tasks", "--no-bc-all-tasks",  # issue 28: BC on every task of a mixed run
+    "--bc-coef", "--bc-coef-half-life",  # issue 28: the BC term during PPO
 }  # fmt: skip
 
 
