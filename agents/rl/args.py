@@ -165,6 +165,11 @@ class TrainArgs:
     mean to the teacher's labels, as the warm start fits it) on a minibatch of the warm
     start's own demonstrations (the teacher's states, not DAgger's); 0: plain PPO, as
     before. The demonstrations are kept in the run folder (bc_demos.npz) for --resume."""
+    bc_coef_filter: bool = False
+    """BC: the filtered term (self-imitation, Oh et al. 2018): imitate only the demonstration
+    rows whose discounted return (the teacher's, from that state) exceeds the critic's value of
+    the state, i.e. where the teacher did better than the policy expects to; elsewhere the
+    policy is free."""
     bc_coef_half_life: int = 0
     """BC: the half-life of --bc-coef in PPO transitions: bc_coef_t = bc_coef x
     0.5 ** (t / half-life), t the run's transitions so far (0: constant). Independent of
@@ -467,6 +472,7 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
             "bc_all_tasks",
             "bc_coef",
             "bc_coef_half_life",
+            "bc_coef_filter",
         ),
     ),
     "residual": (
@@ -597,10 +603,13 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
         f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
         for k in ("episodes", "epochs", "batch_size", "log_std", "dagger", "all_tasks", "coef")
     },
-    "bc_coef_half_life": (
-        lambda a: a.bc_teacher is not None and a.bc_coef > 0,
-        "with --bc-teacher and --bc-coef C > 0",
-    ),
+    **{
+        f"bc_coef_{k}": (
+            lambda a: a.bc_teacher is not None and a.bc_coef > 0,
+            "with --bc-teacher and --bc-coef C > 0",
+        )
+        for k in ("half_life", "filter")
+    },
     **{
         f"bc_dagger_{k}": (
             lambda a: a.bc_teacher is not None and a.bc_dagger > 0,

@@ -420,12 +420,16 @@ def bc_losses(model: PPO, demos: Demos) -> dict[str, float]:
     }
 
 
-def actor_loss(policy: Any, obs: Any, labels: Any) -> Any:
+def actor_loss(policy: Any, obs: Any, labels: Any, weights: Any = None) -> Any:
     """The BC actor loss: the mean squared error of ``policy``'s Gaussian mean at ``obs`` to
     the teacher's ``labels`` (torch tensors; differentiable). The one implementation of the
     warm start's fit (:func:`pretrain`) and of the BC term during PPO
-    (:mod:`poc_env.agents.rl.bcppo`)."""
-    return ((policy.get_distribution(obs).mode() - labels) ** 2).mean()
+    (:mod:`poc_env.agents.rl.bcppo`). With ``weights`` (one per row, >= 0): the weighted
+    mean over the rows (0 when every weight is 0), e.g. the filtered BC term's 0/1 mask."""
+    sq = (policy.get_distribution(obs).mode() - labels) ** 2
+    if weights is None:
+        return sq.mean()
+    return (weights * sq.mean(dim=-1)).sum() / weights.sum().clamp(min=1e-12)
 
 
 #: Arrays of a :class:`Demos` kept in ``bc_demos.npz`` (:func:`save_demos`).

@@ -30,6 +30,14 @@ uninterrupted run would have; nothing is drawn from the global generators. Tenso
 progress: ``train/bc_loss`` (the mean BC actor loss of the update's minibatches, before each
 step) and ``train/bc_coef`` (``C_t``).
 
+``--bc-coef-filter`` (filtered BC, the self-imitation criterion of Oh et al. 2018, "Self-
+Imitation Learning"): only the minibatch rows whose discounted return in the demonstrations
+(the teacher's return from that state, :class:`~poc_env.agents.rl.bc.Demos` ``returns``)
+exceeds the critic's current value of the state count, a weighted mean
+(:func:`~poc_env.agents.rl.bc.actor_loss` with a 0/1 weight): where the policy already
+expects to do better than the teacher did, the term leaves it free. ``train/bc_filter_kept``
+logs the share of rows kept.
+
 The demonstrations are written to the run folder by the warm start (``bc_demos.npz``,
 :func:`poc_env.agents.rl.bc.save_demos`) and read back from it both by the fresh run and by
 ``--resume`` (:func:`attach`), so a resumed run continues with the same buffer. A run with
@@ -68,11 +76,13 @@ class BCPPO(PPO):
     bc_coef: float
     bc_half_life: int
     bc_seed: int
+    bc_filter: bool
     bc_obs: Any
     bc_labels: Any
+    bc_returns: Any
 
     def _excluded_save_params(self) -> list[str]:
-        return [*super()._excluded_save_params(), "bc_obs", "bc_labels"]
+        return [*super()._excluded_save_params(), "bc_obs", "bc_labels", "bc_returns"]
 
     def train(self) -> None:
         import torch as th
@@ -84,16 +94,23 @@ class BCPPO(PPO):
         opt = self.policy.optimizer
         zero_grad = opt.zero_grad
         losses: list[float] = []
+        kept: list[float] = []
 
         def zero_grad_then_bc(*a: Any, **kw: Any) -> None:
             zero_grad(*a, **kw)
             idx = th.as_tensor(rng.integers(0, m, size=self.batch_size))
+            w = None
+            if self.bc_filter:  # the teacher's return from the state beats the critic's value
+                with th.no_grad():
+                    v = self.policy.predict_values(self.bc_obs[idx]).squeeze(-1)
+                w = (self.bc_returns[idx] > v).to(v.dtype)
+                kept.append(float(w.mean()))
             if c > 0.0:
-                loss = actor_loss(self.policy, self.bc_obs[idx], self.bc_labels[idx])
+                loss = actor_loss(self.policy, self.bc_obs[idx], self.bc_labels[idx], w)
                 (c * loss).backward()
             else:  # C_t = 0: logged only, the gradient is PPO's alone
                 with th.no_grad():
-                    loss = actor_loss(self.policy, self.bc_obs[idx], self.bc_labels[idx])
+                    loss = actor_loss(self.policy, self.bc_obs[idx], self.bc_labels[idx], w)
             losses.append(float(loss.detach()))
 
         opt.zero_grad = zero_grad_then_bc  # type: ignore[method-assign]
@@ -104,12 +121,17 @@ class BCPPO(PPO):
         self.logger.record("train/bc_coef", c)
         if losses:
             self.logger.record("train/bc_loss", float(np.mean(losses)))
+        if kept:
+            self.logger.record("train/bc_filter_kept", float(np.mean(kept)))
 
 
-def attach(model: PPO, demos: Demos, coef: float, half_life: int, seed: int) -> BCPPO:
+def attach(
+    model: PPO, demos: Demos, coef: float, half_life: int, seed: int, filtered: bool = False
+) -> BCPPO:
     """``model`` (a PPO, fresh or restored from a checkpoint) turned into a :class:`BCPPO`
     that imitates ``demos`` with ``coef`` and ``half_life`` (module docstring), its minibatch
-    draws from ``seed``'s stream. Returns the same object."""
+    draws from ``seed``'s stream; ``filtered``: only the rows whose return beats the critic's
+    value (``--bc-coef-filter``). Returns the same object."""
     import torch as th
 
     model.__class__ = BCPPO  # adds behaviour only; every PPO attribute stays as it is
@@ -119,4 +141,6 @@ def attach(model: PPO, demos: Demos, coef: float, half_life: int, seed: int) -> 
     bc.bc_seed = int(seed)
     bc.bc_obs = th.as_tensor(demos.obs)
     bc.bc_labels = th.as_tensor(demos.labels)
+    bc.bc_returns = th.as_tensor(demos.returns)
+    bc.bc_filter = bool(filtered)
     return bc

@@ -598,7 +598,9 @@ def _run(
             from poc_env.agents.rl.bcppo import attach
 
             demos = load_demos(run_dir / DEMOS_FILE)
-            model = attach(model, demos, args.bc_coef, args.bc_coef_half_life, args.seed)
+            model = attach(
+                model, demos, args.bc_coef, args.bc_coef_half_life, args.seed, args.bc_coef_filter
+            )
         start = int(model.num_timesteps)
         remaining = args.total_timesteps - start
         if remaining > 0:

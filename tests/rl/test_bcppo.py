@@ -116,6 +116,39 @@ def test_the_demos_file_holds_the_warm_starts_demonstrations(bc_run, tmp_path):
     assert (again.posc, again.seeds, again.gamma) == (demos.posc, demos.seeds, demos.gamma)
 
 
+def test_actor_loss_weights_select_rows():
+    import torch as th
+
+    from poc_env.agents.rl.bc import actor_loss
+
+    class Mean:  # a policy whose Gaussian mean is its observation
+        def get_distribution(self, obs):
+            class D:
+                def mode(self):
+                    return obs
+
+            return D()
+
+    obs = th.tensor([[0.0, 0.0], [1.0, 1.0], [0.0, 2.0]], requires_grad=True)
+    lab = th.zeros(3, 2)
+    assert float(actor_loss(Mean(), obs, lab)) == pytest.approx((0 + 2 + 4) / 6)
+    assert float(actor_loss(Mean(), obs, lab, th.ones(3))) == pytest.approx((0 + 2 + 4) / 6)
+    assert float(actor_loss(Mean(), obs, lab, th.tensor([0.0, 1.0, 0.0]))) == pytest.approx(1.0)
+    none = actor_loss(Mean(), obs, lab, th.zeros(3))
+    none.backward()
+    assert float(none) == 0.0 and float(obs.grad.abs().sum()) == 0.0
+
+
+def test_a_filtered_run_imitates_only_the_rows_where_the_teacher_did_better(tmp_path):
+    """--bc-coef-filter: the kept share (rows whose demo return beats the critic) is logged,
+    strictly between none and all after the warm start's value fit."""
+    run = train(_args(tmp_path / "filtered", bc_coef=BC_COEF, bc_coef_filter=True))
+    kept = [v for _, v in _scalars(run, "train/bc_filter_kept")]
+    print("kept", kept)
+    assert len(kept) == 2 and all(0.0 < k < 1.0 for k in kept)
+    assert len(_scalars(run, "train/bc_loss")) == 2
+
+
 # -- the schedule ------------------------------------------------------------------------------
 def test_the_half_life_schedule():
     assert bcppo.bc_coef_at(2.0, 0, 10**9) == 2.0  # constant
@@ -156,6 +189,10 @@ def test_bc_coef_options_on_the_command_line():
     with pytest.raises(ConfigError) as err:  # a half-life without the term does nothing
         parse_train_args([*argv, "--bc-coef-half-life", "1000"])
     assert err.value.field == "bc_coef_half_life"
+    with pytest.raises(ConfigError) as err:
+        parse_train_args([*argv, "--bc-coef-filter"])
+    assert err.value.field == "bc_coef_filter"
+    assert parse_train_args([*argv, "--bc-coef", "1", "--bc-coef-filter"]).bc_coef_filter
     with pytest.raises(ConfigError) as err:
         parse_train_args(["--task", INC, "--bc-coef", "1"])
     assert err.value.field == "bc_coef"
