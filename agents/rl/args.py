@@ -164,6 +164,21 @@ class TrainArgs:
     bc_all_tasks: bool = False
     """BC with --also-task: record --bc-episodes episodes of every task of the run (each from its
     own stream), not only of --task's, so the clone has seen every map and fleet size."""
+    bc_coef: float = 0.0
+    """BC: keep the teacher in the loss during PPO (poc_env.agents.rl.bcppo): every PPO
+    minibatch update adds bc_coef_t x the BC actor loss (the mean squared error of the policy
+    mean to the teacher's labels, as the warm start fits it) on a minibatch of the warm
+    start's own demonstrations (the teacher's states, not DAgger's); 0: plain PPO, as
+    before. The demonstrations are kept in the run folder (bc_demos.npz) for --resume."""
+    bc_coef_filter: bool = False
+    """BC: the filtered term (self-imitation, Oh et al. 2018): imitate only the demonstration
+    rows whose discounted return (the teacher's, from that state) exceeds the critic's value of
+    the state, i.e. where the teacher did better than the policy expects to; elsewhere the
+    policy is free."""
+    bc_coef_half_life: int = 0
+    """BC: the half-life of --bc-coef in PPO transitions: bc_coef_t = bc_coef x
+    0.5 ** (t / half-life), t the run's transitions so far (0: constant). Independent of
+    --total-timesteps, so a run's checkpoint at t is the same whatever its budget."""
     # -- residual: a residual policy on a planner (sb3 with --task) ----------------------------
     residual_teacher: Annotated[str | None, _arg(metavar="POLICY")] = None
     """--task, sb3: learn a residual on this plan-then-fly policy (allocation_plan, de_plan,
@@ -290,7 +305,14 @@ class TrainArgs:
         as_int("bc_dagger_episodes", self.bc_dagger_episodes, 1, limits.MAX_EPISODES)
         as_int("bc_dagger_epochs", self.bc_dagger_epochs, 1, 10_000)
         as_number("bc_dagger_beta", self.bc_dagger_beta, 0.0, 1.0)
+        as_number("bc_coef", self.bc_coef, 0.0, 1e6)
+        as_int("bc_coef_half_life", self.bc_coef_half_life, 0, 10**12)
         if self.bc_teacher is None:
+            if self.bc_coef > 0:
+                raise ConfigError(
+                    "bc_coef", self.bc_coef, "0 without --bc-teacher (the BC term imitates the "
+                    "warm start's demonstrations)",
+                )  # fmt: skip
             return
         check_teacher(self.bc_teacher)
         if self.task is None:
@@ -493,6 +515,9 @@ GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
             "bc_dagger_epochs",
             "bc_dagger_beta",
             "bc_all_tasks",
+            "bc_coef",
+            "bc_coef_half_life",
+            "bc_coef_filter",
         ),
     ),
     "residual": (
@@ -621,7 +646,14 @@ USED_WHEN: dict[str, tuple[Any, str]] = {
     "num_env_runners": (lambda a: a.engine == "rllib", "with --engine rllib"),
     **{
         f"bc_{k}": (lambda a: a.bc_teacher is not None, "with --bc-teacher")
-        for k in ("episodes", "epochs", "batch_size", "log_std", "dagger", "all_tasks")
+        for k in ("episodes", "epochs", "batch_size", "log_std", "dagger", "all_tasks", "coef")
+    },
+    **{
+        f"bc_coef_{k}": (
+            lambda a: a.bc_teacher is not None and a.bc_coef > 0,
+            "with --bc-teacher and --bc-coef C > 0",
+        )
+        for k in ("half_life", "filter")
     },
     **{
         f"bc_dagger_{k}": (

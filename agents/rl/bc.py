@@ -93,6 +93,8 @@ FIT_KEY = (0xBC, 1)
 #: Spawn key prefix of the DAgger rollouts: iteration ``i`` (1, 2, ...) draws its seeds, priors
 #: and mixture coins from ``SeedSequence(seed, spawn_key=(*DAGGER_KEY, i))``.
 DAGGER_KEY = (0xBC, 2)
+#: The warm start's demonstrations in the run folder, kept when ``--bc-coef`` > 0.
+DEMOS_FILE = "bc_demos.npz"
 
 
 @dataclass(frozen=True)
@@ -418,6 +420,61 @@ def bc_losses(model: PPO, demos: Demos) -> dict[str, float]:
     }
 
 
+def actor_loss(policy: Any, obs: Any, labels: Any, weights: Any = None) -> Any:
+    """The BC actor loss: the mean squared error of ``policy``'s Gaussian mean at ``obs`` to
+    the teacher's ``labels`` (torch tensors; differentiable). The one implementation of the
+    warm start's fit (:func:`pretrain`) and of the BC term during PPO
+    (:mod:`poc_env.agents.rl.bcppo`). With ``weights`` (one per row, >= 0): the weighted
+    mean over the rows (0 when every weight is 0), e.g. the filtered BC term's 0/1 mask."""
+    sq = (policy.get_distribution(obs).mode() - labels) ** 2
+    if weights is None:
+        return sq.mean()
+    return (weights * sq.mean(dim=-1)).sum() / weights.sum().clamp(min=1e-12)
+
+
+#: Arrays of a :class:`Demos` kept in ``bc_demos.npz`` (:func:`save_demos`).
+_DEMO_ARRAYS = ("obs", "labels", "rewards", "returns", "episode", "uav")
+
+
+def save_demos(demos: Demos, path: Path) -> Path:
+    """``demos`` written atomically to ``path`` (``.npz``, no pickles; :func:`load_demos`)."""
+    from poc_env.io import atomic_path
+
+    with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:
+        np.savez(
+            fh,
+            allow_pickle=False,
+            **{k: getattr(demos, k) for k in _DEMO_ARRAYS},
+            teacher=np.array(demos.teacher),
+            control=np.array(demos.control),
+            gamma=np.array(demos.gamma),
+            posc=np.array(demos.posc, dtype=float),
+            seeds=np.array(demos.seeds, dtype=np.int64),
+        )
+    return path
+
+
+def load_demos(path: Path) -> Demos:
+    """The :class:`Demos` :func:`save_demos` wrote to ``path`` (ConfigError if it is missing
+    or unreadable)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: np.array(z[k]) for k in _DEMO_ARRAYS}
+            return Demos(
+                teacher=str(z["teacher"]),
+                control=str(z["control"]),
+                gamma=float(z["gamma"]),
+                posc=tuple(float(p) for p in z["posc"]),
+                seeds=tuple(int(x) for x in z["seeds"]),
+                **arrays,
+            )
+    except (OSError, KeyError, ValueError) as err:
+        raise ConfigError(
+            "bc_coef", str(path), f"the run's demonstrations saved by its warm start, readable "
+            f"({type(err).__name__}: {err})",
+        ) from None  # fmt: skip
+
+
 def pretrain(
     model: PPO,
     demos: Demos,
@@ -466,9 +523,8 @@ def pretrain(
         sum_a = sum_v = 0.0
         for lo in range(0, m, batch_size):
             b = perm[lo : lo + batch_size]
-            mean = policy.get_distribution(obs[b]).mode()
+            la = actor_loss(policy, obs[b], lab[b])
             value = policy.predict_values(obs[b]).squeeze(-1)
-            la = ((mean - lab[b]) ** 2).mean()
             lv = ((value - ret[b]) ** 2).mean()
             opt.zero_grad()
             (la + lv).backward()
@@ -522,6 +578,8 @@ def warm_start(args: TrainArgs, scenario: Scenario, model: PPO, run_dir: Path) -
         parts.append(collect_demos(sc, tid, args.bc_teacher, args.bc_episodes, seq,
                                    gamma=args.gamma, agent_index=args.agent_index))  # fmt: skip
     demos = concat_demos(parts)
+    if args.bc_coef > 0:  # the BC term during PPO imitates these (poc_env.agents.rl.bcppo)
+        save_demos(demos, run_dir / DEMOS_FILE)
     t1 = time.perf_counter()
     fit_rng = np.random.default_rng(np.random.SeedSequence(args.seed, spawn_key=FIT_KEY))
     writer = _tb_writer(run_dir / "tb" / "bc")

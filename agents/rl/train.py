@@ -32,6 +32,8 @@ Every run writes to its own folder (default ``runs/<scenario>-<algo>-s<seed>-<ti
     model.zip        the final model
     bc.json          with ``--bc-teacher``: the behaviour-cloning warm start (teacher POSC,
                      samples, losses; :mod:`poc_env.agents.rl.bc`); TensorBoard scalars in tb/bc/
+    bc_demos.npz     with ``--bc-coef`` > 0: the warm start's demonstrations, which the BC term
+                     imitates during PPO (:mod:`poc_env.agents.rl.bcppo`; read again on resume)
 
 Checkpoints are taken at rollout boundaries once every ``checkpoint_every`` timesteps and at
 the end; the newest ``keep_checkpoints`` are kept.
@@ -591,6 +593,14 @@ def _run(
                 init_policy(model, args.residual_log_std)
         else:
             model = restore_checkpoint(checkpoint, env, run_dir)
+        if args.bc_coef > 0:  # the teacher kept in the loss: the warm start's saved demos
+            from poc_env.agents.rl.bc import DEMOS_FILE, load_demos
+            from poc_env.agents.rl.bcppo import attach
+
+            demos = load_demos(run_dir / DEMOS_FILE)
+            model = attach(
+                model, demos, args.bc_coef, args.bc_coef_half_life, args.seed, args.bc_coef_filter
+            )
         start = int(model.num_timesteps)
         remaining = args.total_timesteps - start
         if remaining > 0:

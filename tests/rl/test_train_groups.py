@@ -28,6 +28,8 @@ FLAGS = {
     "--bc-dagger", "--bc-dagger-episodes", "--bc-dagger-epochs", "--bc-dagger-beta",  # DAgger
     "--bc-all-tasks", "--no-bc-all-tasks",  # issue 28: BC on every task of a mixed run
     "--from-card",  # issue 28: a shipped checkpoint's recipe, one command
+    "--bc-coef", "--bc-coef-half-life",  # issue 28: the BC term during PPO
+    "--bc-coef-filter", "--no-bc-coef-filter",
 }  # fmt: skip
 
 
