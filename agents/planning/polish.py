@@ -281,11 +281,13 @@ def polish_routes(
             return True
         return False
 
-    def grade(k: int, i: int) -> int:
-        """The grade moves at waypoint ``i`` of UAV ``k`` (module docstring): per window, the
-        best fitting candidate kept if it gains; the number kept."""
+    def windows(k: int, i: int, sizes, moved) -> int:
+        """The window moves at waypoint ``i`` of UAV ``k``: for each window of ``sizes``
+        consecutive inner waypoints, ``moved(pts, tan)`` gives its candidate positions (``tan``
+        the unit direction of the window's first leg) and the best fitting one is kept if it
+        gains; the number kept."""
         got = 0
-        for m_ in GRADE_WINDOWS:
+        for m_ in sizes:
             path = paths[k]
             if i + m_ > len(path) - 1:  # the window's points are inner waypoints
                 break
@@ -293,38 +295,30 @@ def polish_routes(
             ln = float(np.hypot(*d))
             if ln <= 1e-3:
                 break
-            nrm = np.array([-d[1], d[0]]) / ln
-            pts = path[i : i + m_]
-            off = (pts - pts[0]) @ nrm  # offsets across the first leg
-            seqs = []
-            for pivot in (0.0, float(off[-1])):
-                for f in GRADE_SCALES:
-                    q = np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
-                    seqs.append(np.vstack([path[i - 1], q, path[i + m_]]))
+            ends = path[i - 1], path[i + m_]
+            seqs = [np.vstack([ends[0], q, ends[1]]) for q in moved(path[i : i + m_], d / ln)]
             got += int(choose(k, i - 1, i + m_, seqs))
         return got
 
-    def block(k: int, i: int) -> int:
-        """The block moves at waypoint ``i`` of UAV ``k`` (module docstring): per window, the
-        best fitting translation kept if it gains; the number kept."""
-        got = 0
-        for m_ in BLOCK_WINDOWS:
-            path = paths[k]
-            if i + m_ > len(path) - 1:  # the window's points are inner waypoints
-                break
-            d = path[i + 1] - path[i]
-            ln = float(np.hypot(*d))
-            if ln <= 1e-3:
-                break
-            tan = d / ln
-            pts = path[i : i + m_]
-            seqs = []
-            for u in (np.array([-tan[1], tan[0]]), tan):
-                for o in signed:
-                    q = np.clip(pts + o * u[None], lo, hi)
-                    seqs.append(np.vstack([path[i - 1], q, path[i + m_]]))
-            got += int(choose(k, i - 1, i + m_, seqs))
-        return got
+    def graded(pts: np.ndarray, tan: np.ndarray) -> list[np.ndarray]:
+        """Grade moves (module docstring): the window squeezed or spread across its first
+        leg about its first or its last point."""
+        nrm = np.array([-tan[1], tan[0]])
+        off = (pts - pts[0]) @ nrm  # offsets across the first leg
+        return [
+            np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
+            for pivot in (0.0, float(off[-1]))
+            for f in GRADE_SCALES
+        ]
+
+    def blocked(pts: np.ndarray, tan: np.ndarray) -> list[np.ndarray]:
+        """Block moves (module docstring): the window translated across or along its first
+        leg by each signed radius."""
+        return [
+            np.clip(pts + o * u[None], lo, hi)
+            for u in (np.array([-tan[1], tan[0]]), tan)
+            for o in signed
+        ]
 
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
@@ -378,9 +372,9 @@ def polish_routes(
                     if len(paths[k]) < m:
                         continue  # deleted: the next waypoint is now at i
                 if "grade" in kinds:
-                    kept += grade(k, i)
+                    kept += windows(k, i, GRADE_WINDOWS, graded)
                 if "block" in kinds:
-                    got = block(k, i)
+                    got = windows(k, i, BLOCK_WINDOWS, blocked)
                     kept += got
                     n_block += got
                 i += 1
