@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
@@ -38,8 +39,10 @@ def test_card_options_are_the_defaults_and_given_options_replace_them() -> None:
 
 
 def test_config_json_records_the_card(tmp_path) -> None:
+    # config.json is dataclasses.asdict(args) (agents/rl/train.py), read back by --resume
     args = parse_train_args(["--from-card", CARD, "--run-dir", str(tmp_path)])
-    again = TrainArgs.from_dict(json.loads(json.dumps(args.__dict__)))
+    assert json.loads(json.dumps(dataclasses.asdict(args)))["from_card"] == CARD
+    again = TrainArgs.from_dict(json.loads(json.dumps(dataclasses.asdict(args))))
     assert again == args and again.from_card == CARD
 
 
