@@ -461,6 +461,23 @@ def violation_penalty(
     return rate * air.violations(pos, act)
 
 
+#: the fields of ``opt`` its default plan keeps (:func:`_best_of_default`): the keyword-level
+#: ones and every ``polish*`` field, so a polish option added later is kept without a change
+#: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
+#: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did).
+_DEFAULT_KEPT = (
+    "levels", "etas", "margin", "refine", "refine_starts", "greedy_start", "box_start",
+    *(f.name for f in dataclasses.fields(PlanOptions)
+      if f.name.startswith("polish") and f.name != "polish_starts"),
+)  # fmt: skip
+
+
+def default_options(opt: PlanOptions) -> PlanOptions:
+    """The options of ``opt``'s default plan under ``also_default``: ``PlanOptions()`` with
+    ``opt``'s :data:`_DEFAULT_KEPT` fields."""
+    return PlanOptions(**{k: getattr(opt, k) for k in _DEFAULT_KEPT})
+
+
 def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, t0: float):
     """``opt.also_default``: the plan with ``opt`` and the default plan (``PlanOptions()`` with
     ``opt``'s keyword-level fields: levels, margin, refine, starts; and its polish), the one
@@ -470,13 +487,7 @@ def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, 
     among its starts is the one that prices violations, ``airspace_penalty``.)"""
     kw = {"prior": prior, "map_source": map_source, "seed": seed, "speed": speed, "crs": crs}
     mine = make_allocation_plan(sc, options=dataclasses.replace(opt, also_default=False), **kw)
-    base_opt = PlanOptions(
-        levels=opt.levels, etas=opt.etas, margin=opt.margin, refine=opt.refine,
-        refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
-        polish=opt.polish, polish_radii=opt.polish_radii, polish_grade=opt.polish_grade,
-        polish_lines=opt.polish_lines, polish_lines_radii=opt.polish_lines_radii,
-    )  # fmt: skip
-    base = make_allocation_plan(sc, options=base_opt, **kw)
+    base = make_allocation_plan(sc, options=default_options(opt), **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
     settings = {**kept["optimizer"]["settings"], "options": opt.changed()}
     settings["kept"] = "default" if kept is base else "options"

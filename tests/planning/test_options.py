@@ -166,3 +166,22 @@ def test_also_default_keeps_the_default_plan_when_it_scores_more():
     )
     assert both["optimizer"]["settings"]["kept"] == "default"
     assert both["posc"] == default["posc"] and _routes(both) == _routes(default)
+
+
+def test_the_default_plan_keeps_every_polish_option_but_its_starts():
+    """``also_default``'s default plan is polished as ``opt``'s is: every ``polish*`` field of
+    ``opt`` (a field added later included) and the keyword-level ones carry over, everything
+    else is the default's; ``polish_starts`` stays 1 (the recorded runs polished the default
+    plan's own start only)."""
+    from poc_env.agents.planning.allocation import default_options
+
+    opt = PlanOptions.preset("thorough")
+    opt = dataclasses.replace(
+        opt, polish_starts=2, polish_radii=(0.5,), refine=3, spacings=(4.0,), levels=(2,)
+    )
+    base = default_options(opt)
+    for f in dataclasses.fields(PlanOptions):
+        if f.name.startswith("polish") and f.name != "polish_starts":
+            assert getattr(base, f.name) == getattr(opt, f.name), f.name
+    assert base.polish_starts == 1 and base.refine == 3 and base.levels == (2,)
+    assert base.spacings == PlanOptions().spacings and base.also_default is False
