@@ -88,7 +88,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.polish import KINDS, MOVES, polish_routes
+from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_routes
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -475,6 +475,7 @@ def _best_of_default(sc, prior, map_source, seed, speed, crs, opt: PlanOptions, 
         refine_starts=opt.refine_starts, greedy_start=opt.greedy_start, box_start=opt.box_start,
         polish=opt.polish, polish_radii=opt.polish_radii, polish_grade=opt.polish_grade,
         polish_lines=opt.polish_lines, polish_lines_radii=opt.polish_lines_radii,
+        polish_boxes=opt.polish_boxes, polish_boxes_radii=opt.polish_boxes_radii,
     )  # fmt: skip
     base = make_allocation_plan(sc, options=base_opt, **kw)
     kept = mine if float(mine["posc"]) >= float(base["posc"]) else base
@@ -786,6 +787,26 @@ def make_allocation_plan(
                 start, refined = name, False
 
     def _polish(rs):
+        out = _polish12(rs)
+        if not opt.polish_boxes:
+            return out
+        # i24-boxes: a third polish with the box moves only (boxes and groups moved as one)
+        pr, val, stats = _polish_stage(
+            out[0], opt.polish_boxes, BOX_KINDS, opt.polish_lines_radii, opt.polish_boxes_radii
+        )
+        st0 = out[2]
+        return (
+            pr,
+            val,
+            {
+                **st0,
+                "passes": st0.get("passes", 0) + stats["passes"],
+                "moves": st0.get("moves", 0) + stats["moves"],
+                "box_moves": stats["box_moves"],
+            },
+        )
+
+    def _polish12(rs):
         moves = KINDS if opt.polish_grade else MOVES
         out = (
             _polish_stage(rs, opt.polish, moves, opt.polish_radii) if opt.polish else (rs, 0.0, {})
@@ -808,7 +829,7 @@ def make_allocation_plan(
             },
         )
 
-    def _polish_stage(rs, passes, moves, radii):
+    def _polish_stage(rs, passes, moves, radii, box_radii=None):
         return polish_routes(
             rs,
             takeoff,
@@ -823,6 +844,7 @@ def make_allocation_plan(
             passes=passes,
             radii=radii,
             moves=moves,
+            **({} if box_radii is None else {"box_radii": box_radii}),
             headings=heading0,
             airspace=Airspace(
                 sc.episode.dt_s,
@@ -833,7 +855,7 @@ def make_allocation_plan(
         )
 
     polished: dict[str, Any] | None = None
-    polishing = bool(opt.polish or opt.polish_lines)
+    polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes)
     if polishing and router.active:  # eq. 20: the polish does not see the zones
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
     elif polishing and any(routes):
