@@ -52,6 +52,10 @@
    with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as
    one) at radii ``options.polish_lines_radii``; the settings then also record its kept moves
    (``lines_moves``) and how many were block moves (``block_moves``).
+   With ``options.polish_boxes`` passes (off by default; i24-boxes) a third polish follows
+   with the box moves only (a route's box translated by ``options.polish_boxes_radii``,
+   stretched or turned as one, an airfield's group of search parts translated or turned
+   together); the settings then record how many it kept (``box_moves``).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
