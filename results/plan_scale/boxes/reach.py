@@ -47,15 +47,25 @@ def main(plans: list[str], out: str) -> None:
             grid = Grid.from_config(sc.map)
             v = plan_speeds(sc, SPEED)
             s, w = sc.sensor.samples_per_cell, sc.sensor.sweep_width_m
-            ex = Exposure(grid, s, w, sc.sensor.law, sc.sensor.cutoff_sweep_widths * w,
-                          grid.refine(np.asarray(prior, dtype=float), s))  # fmt: skip
+            ex = Exposure(
+                grid,
+                s,
+                w,
+                sc.sensor.law,
+                sc.sensor.cutoff_sweep_widths * w,
+                grid.refine(np.asarray(prior, dtype=float), s),
+            )
             uavs = r["uavs"]
             paths = [np.array([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]]) for u in uavs]
             for pth in paths:
                 ex.add(pth[:-1], pth[1:])
             take = np.array([u["takeoff_m"] for u in uavs])
             h0 = takeoff_heading(grid.bounds, take)
-            budget, reserve, turn = sc.uav.usable_endurance_s, reserve_s(sc), sc.uav.max_turn_rate_rad_s
+            budget, reserve, turn = (
+                sc.uav.usable_endurance_s,
+                reserve_s(sc),
+                sc.uav.max_turn_rate_rad_s,
+            )
             groups: dict[tuple, list[int]] = {}
             for k, u in enumerate(uavs):
                 groups.setdefault(tuple(u["takeoff_m"]), []).append(k)
@@ -64,28 +74,55 @@ def main(plans: list[str], out: str) -> None:
                 cands = []
                 for rad, d in offs:
                     o = rad * w * _DIRS[d]
-                    cands.append([np.vstack([paths[k][0], paths[k][1:-1] + o, paths[k][-1]]) for k in ks])
+                    cands.append(
+                        [np.vstack([paths[k][0], paths[k][1:-1] + o, paths[k][-1]]) for k in ks]
+                    )
                 first = np.zeros(len(cands) + 1, dtype=np.int64)
                 first[1:] = np.cumsum([sum(len(q) - 1 for q in c) for c in cands])
-                gain = ex.gains(
-                    np.vstack([paths[k][:-1] for k in ks]), np.vstack([paths[k][1:] for k in ks]),
-                    np.vstack([q[:-1] for c in cands for q in c]),
-                    np.vstack([q[1:] for c in cands for q in c]), first,
-                ) / r["rule_bound"]  # fmt: skip
-                over = np.array([max(overrun(q, v, turn, budget, reserve, h0[k]) for k, q in zip(ks, c))
-                                 for c in cands])  # fmt: skip
+                gain = (
+                    ex.gains(
+                        np.vstack([paths[k][:-1] for k in ks]),
+                        np.vstack([paths[k][1:] for k in ks]),
+                        np.vstack([q[:-1] for c in cands for q in c]),
+                        np.vstack([q[1:] for c in cands for q in c]),
+                        first,
+                    )
+                    / r["rule_bound"]
+                )
+                over = np.array(
+                    [
+                        max(overrun(q, v, turn, budget, reserve, h0[k]) for k, q in zip(ks, c))
+                        for c in cands
+                    ]
+                )
                 best = int(np.argmax(gain))
                 fit = over <= 0
-                rec = {"map": r["map"], "seed": r["seed"], "airfield_m": list(paths[ks[0]][0]),
-                       "uavs": ks, "best_gain": float(gain[best]),
-                       "best_offset_km": [float(x) for x in offs[best][0] * w * _DIRS[offs[best][1]] / 1e3],
-                       "best_overrun_s": float(over[best]),
-                       "best_fitting_gain": float(gain[fit].max()) if fit.any() else None,
-                       "base_overrun_s": max(overrun(paths[k], v, turn, budget, reserve, h0[k]) for k in ks)}  # fmt: skip
+                rec = {
+                    "map": r["map"],
+                    "seed": r["seed"],
+                    "airfield_m": list(paths[ks[0]][0]),
+                    "uavs": ks,
+                    "best_gain": float(gain[best]),
+                    "best_offset_km": [
+                        float(x) for x in offs[best][0] * w * _DIRS[offs[best][1]] / 1e3
+                    ],
+                    "best_overrun_s": float(over[best]),
+                    "best_fitting_gain": float(gain[fit].max()) if fit.any() else None,
+                    "base_overrun_s": max(
+                        overrun(paths[k], v, turn, budget, reserve, h0[k]) for k in ks
+                    ),
+                }
                 recs.append(rec)
-                print(r["map"], r["seed"], ks, f"best {rec['best_gain']:+.4f}",
-                      rec["best_offset_km"], f"lacks {rec['best_overrun_s'] / 60:.1f} min",
-                      f"fitting {rec['best_fitting_gain']}", flush=True)  # fmt: skip
+                print(
+                    r["map"],
+                    r["seed"],
+                    ks,
+                    f"best {rec['best_gain']:+.4f}",
+                    rec["best_offset_km"],
+                    f"lacks {rec['best_overrun_s'] / 60:.1f} min",
+                    f"fitting {rec['best_fitting_gain']}",
+                    flush=True,
+                )
     with open(out + ".tmp", "w") as f:
         json.dump(recs, f, indent=1)
     os.replace(out + ".tmp", out)
