@@ -60,6 +60,9 @@ kept.
   its length, so a box -- a route's whole search part, turned about its airfield -- is aimed
   at the mass at almost the same time (the one other connecting leg changes), where a
   translation towards a far mass would not fit the time;
+* **trim** (likewise, i24-boxes; not in :data:`BOX_KINDS`): a box translated as the box
+  move translates it (no squeeze) with its first or last one or two waypoints dropped -- the
+  time the translation costs paid by the box's end lines;
 * **group** (likewise, i24-boxes): the search parts (every inner waypoint) of all the UAVs
   that share a take-off and a landing field translated together, as the box move translates
   one box (the same offsets and squeeze factors, about the group's centre): a group's
@@ -109,7 +112,7 @@ MOVES = ("move", "slide", "shift", "insert", "delete")
 KINDS = (*MOVES, "grade")
 #: the kinds a ``moves`` argument may name (``block`` too, i24-lines; ``box`` and
 #: ``stretch`` too, i24-boxes).
-ALL_KINDS = (*KINDS, "block", "box", "stretch", "rotate", "group")
+ALL_KINDS = (*KINDS, "block", "box", "stretch", "rotate", "group", "trim")
 #: the box moves (i24-boxes): what ``PlanOptions.polish_boxes``'s third polish tries.
 BOX_KINDS = ("box", "stretch", "rotate", "group")
 #: a rotate move's angles, in degrees (i24-boxes).
@@ -383,6 +386,11 @@ def polish_routes(
         rel = pts - c
         return [np.clip(c + f * rel + o[None], lo, hi) for o in box_offsets for f in BOX_FITS]
 
+    def trimmed(pts: np.ndarray) -> list[np.ndarray]:
+        """Trim moves (module docstring): the box translated with an end cut off."""
+        cuts = [sl for j in (1, 2) if len(pts) > j for sl in (slice(j, None), slice(None, -j))]
+        return [np.clip(pts[sl] + o[None], lo, hi) for o in box_offsets for sl in cuts]
+
     def stretched(pts: np.ndarray) -> list[np.ndarray]:
         """Stretch moves (module docstring): the box scaled along or across its lines about
         its centre or either edge."""
@@ -419,6 +427,8 @@ def polish_routes(
             seqs: list[np.ndarray] = []
             if "box" in kinds:
                 seqs += boxed(pts)
+            if "trim" in kinds:
+                seqs += trimmed(pts)
             if "stretch" in kinds and i1 > i0:
                 seqs += stretched(pts)
             if "rotate" in kinds:
@@ -426,6 +436,8 @@ def polish_routes(
             seqs = [np.vstack([path[i0 - 1], q, path[i1 + 1]]) for q in seqs]
             if seqs:
                 got += int(choose(k, i0 - 1, i1 + 1, seqs))
+            if len(paths[k]) != len(path):  # trimmed: the windows are the next pass's
+                break
         return got
 
     def group_move(ks: list[int]) -> bool:
@@ -508,7 +520,7 @@ def polish_routes(
         for k in range(n):
             if not flying[k]:
                 continue
-            if kinds & {"box", "stretch", "rotate"}:  # i24-boxes: whole boxes first
+            if kinds & {"box", "stretch", "rotate", "trim"}:  # i24-boxes: whole boxes first
                 got = boxes(k)
                 kept += got
                 n_box += got
@@ -568,6 +580,6 @@ def polish_routes(
     stats = {"passes": done, "moves": n_moves}
     if "block" in kinds:
         stats["block_moves"] = n_block
-    if kinds & {"box", "stretch", "rotate", "group"}:
+    if kinds & {"box", "stretch", "rotate", "group", "trim"}:
         stats["box_moves"] = n_box
     return out, ex.pos(), stats
