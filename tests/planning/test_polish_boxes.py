@@ -110,6 +110,25 @@ def test_a_box_move_carries_a_box_far_onto_the_mass():
     _flyable_inside(sc, out)
 
 
+def test_a_trim_move_translates_a_box_and_drops_an_end():
+    """The box of the box test with only trim moves (a box translated with one or two end
+    waypoints dropped): the polish carries what is left of it towards the mass, gains, and
+    the route is shorter by the dropped waypoints, flyable and inside the map."""
+    sc = load_scenario("small").with_uavs(1)
+    grid, _, _ = _setup(sc)
+    prior = np.zeros(grid.shape)
+    prior[5:7, 5:7] = 0.25
+    routes = [_lawnmower([5000.0, 7500.0, 10000.0], x0=5000.0, x1=12500.0)]
+    before = _sampled(sc, routes, prior)
+    out, value, stats = _polish(sc, routes, prior, passes=2, airspace=False, moves=("trim",))
+    assert stats["box_moves"] > 0 and value > before + 1e-2
+    assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
+    r, r0 = np.asarray(out[0]), np.asarray(routes[0])
+    assert len(r) < len(r0)
+    assert r[:, 0].mean() > r0[:, 0].mean() + 5000.0 and r[:, 1].mean() > r0[:, 1].mean() + 5000.0
+    _flyable_inside(sc, out)
+
+
 def test_a_stretch_move_squeezes_a_wide_box_onto_rich_mass():
     """One UAV sweeps three lines 7.5 km apart (3 W) over y 5-20 km; the mass lies in one row
     of cells (y 10-15 km) about the middle line: with only stretch moves the box is squeezed

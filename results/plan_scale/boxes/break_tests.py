@@ -30,6 +30,12 @@ CASES = [
         "rot = [(1.0, 0.0)]",
         "test_a_rotate_move",
     ),
+    (
+        POLISH,
+        "cuts = [sl for j in (1, 2) if len(pts) > j for sl in (slice(j, None), slice(None, -j))]",
+        "cuts = []",
+        "test_a_trim_move",
+    ),
     (POLISH, "got = int(group_move(g))", "got = 0", "test_a_group_move_carries"),
     (
         POLISH,
