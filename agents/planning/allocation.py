@@ -52,6 +52,10 @@
    with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as
    one) at radii ``options.polish_lines_radii``; the settings then also record its kept moves
    (``lines_moves``) and how many were block moves (``block_moves``).
+   With ``options.polish_boxes`` passes (off by default; i24-boxes) a third polish follows
+   with the box moves only (a route's box translated by ``options.polish_boxes_radii``,
+   stretched or turned as one, an airfield's group of search parts translated or turned
+   together); the settings then record how many it kept (``box_moves``).
 
 The plan is the same schema-2 dict as :func:`poc_env.agents.planning.planner.make_plan` (see
 :mod:`poc_env.agents.mission.plan`): per UAV the ``rectangle`` is ``null`` (a route plan has no
@@ -88,7 +92,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.polish import KINDS, MOVES, polish_routes
+from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_routes
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -797,6 +801,26 @@ def make_allocation_plan(
                 start, refined = name, False
 
     def _polish(rs):
+        out = _polish12(rs)
+        if not opt.polish_boxes:
+            return out
+        # i24-boxes: a third polish with the box moves only (boxes and groups moved as one)
+        pr, val, stats = _polish_stage(
+            out[0], opt.polish_boxes, BOX_KINDS, opt.polish_lines_radii, opt.polish_boxes_radii
+        )
+        st0 = out[2]
+        return (
+            pr,
+            val,
+            {
+                **st0,
+                "passes": st0.get("passes", 0) + stats["passes"],
+                "moves": st0.get("moves", 0) + stats["moves"],
+                "box_moves": stats["box_moves"],
+            },
+        )
+
+    def _polish12(rs):
         moves = KINDS if opt.polish_grade else MOVES
         out = (
             _polish_stage(rs, opt.polish, moves, opt.polish_radii) if opt.polish else (rs, 0.0, {})
@@ -819,7 +843,7 @@ def make_allocation_plan(
             },
         )
 
-    def _polish_stage(rs, passes, moves, radii):
+    def _polish_stage(rs, passes, moves, radii, box_radii=None):
         return polish_routes(
             rs,
             takeoff,
@@ -834,6 +858,7 @@ def make_allocation_plan(
             passes=passes,
             radii=radii,
             moves=moves,
+            **({} if box_radii is None else {"box_radii": box_radii}),
             headings=heading0,
             airspace=Airspace(
                 sc.episode.dt_s,
@@ -844,7 +869,7 @@ def make_allocation_plan(
         )
 
     polished: dict[str, Any] | None = None
-    polishing = bool(opt.polish or opt.polish_lines)
+    polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes)
     if polishing and router.active:  # eq. 20: the polish does not see the zones
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
     elif polishing and any(routes):

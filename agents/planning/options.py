@@ -182,6 +182,12 @@ class PlanOptions:
     polish_lines: int = 0
     #: the second polish's move radii, in sweep widths.
     polish_lines_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
+    #: passes of a third polish after the polishes (0: none), with the box moves only (a
+    #: route's box translated, stretched or turned as one, an airfield's group translated or
+    #: turned together: :data:`~poc_env.agents.planning.polish.BOX_KINDS`; i24-boxes).
+    polish_boxes: int = 0
+    #: the box moves' translations, in sweep widths.
+    polish_boxes_radii: tuple[float, ...] = (2.0, 4.0, 8.0, 16.0)
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -221,6 +227,8 @@ class PlanOptions:
         _number("polish_lines", self.polish_lines, 0, 100, integer=True)
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
+        _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
+        _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)

@@ -44,6 +44,31 @@ kept.
   offsets re-solved jointly where a single line's shift, against its neighbours' fixed
   offsets, does not gain) or slid along the lines (the part of the box they cover moved
   along the line direction, the connectors into and out of the run changed).
+* **box** (not in :data:`MOVES`; ``moves`` must name it, i24-boxes): a whole box of a
+  route -- its inner waypoints split at its :data:`BOX_SPLITS` longest inner legs (the transit
+  between its boxes), every run of consecutive pieces -- translated as one by ``r`` in
+  ``box_radii`` sweep widths in one of 8 directions, squeezed about its centre by each
+  factor of :data:`BOX_FITS` (1: none) so that a box carried further from its airfield can
+  still fit the time: the footprint moved towards the mass at km scale, which the waypoint
+  moves (radii of a few sweep widths) cannot do;
+* **stretch** (likewise, i24-boxes): such a box scaled by a factor of
+  :data:`STRETCH_SCALES` along or across its lines (its legs' length-weighted principal
+  direction) about its centre or either edge: wider spacing over a larger area where the
+  mass is thin, denser where it is rich, the time kept by ``route_fits``.
+* **rotate** (likewise, i24-boxes): such a box turned by an angle of :data:`ROTATIONS`
+  about the waypoint before it or the one after it: the leg into (or out of) the box keeps
+  its length, so a box -- a route's whole search part, turned about its airfield -- is aimed
+  at the mass at almost the same time (the one other connecting leg changes), where a
+  translation towards a far mass would not fit the time;
+* **trim** (likewise, i24-boxes; not in :data:`BOX_KINDS`): a box translated as the box
+  move translates it (no squeeze) with its first or last one or two waypoints dropped -- the
+  time the translation costs paid by the box's end lines;
+* **group** (likewise, i24-boxes): the search parts (every inner waypoint) of all the UAVs
+  that share a take-off and a landing field translated together, as the box move translates
+  one box (the same offsets and squeeze factors, about the group's centre): a group's
+  interleaved lines carried towards the mass as one, which no move of one UAV's box makes
+  without breaking the interleave; kept if the group's gain exceeds :data:`TOL`, every
+  member's route fits and, with ``airspace``, the swarm's violations do not rise.
 
 The move of highest gain is tried first; it is kept if it gains more than :data:`TOL` and the
 route stays as :func:`~poc_env.agents.planning.refine.refine_routes` keeps it: eq. 17-18 time
@@ -85,8 +110,21 @@ RADII = (0.25, 0.5, 1.0, 2.0)
 MOVES = ("move", "slide", "shift", "insert", "delete")
 #: every kind of move (``grade`` too: tried only if ``moves`` names it).
 KINDS = (*MOVES, "grade")
-#: the kinds a ``moves`` argument may name (``block`` too, i24-lines).
-ALL_KINDS = (*KINDS, "block")
+#: the kinds a ``moves`` argument may name (``block`` too, i24-lines; ``box`` and
+#: ``stretch`` too, i24-boxes).
+ALL_KINDS = (*KINDS, "block", "box", "stretch", "rotate", "group", "trim")
+#: the box moves (i24-boxes): what ``PlanOptions.polish_boxes``'s third polish tries.
+BOX_KINDS = ("box", "stretch", "rotate", "group")
+#: a rotate move's angles, in degrees (i24-boxes).
+ROTATIONS = (-20.0, -10.0, -5.0, -2.5, 2.5, 5.0, 10.0, 20.0)
+#: default box translation radii, in sweep widths (i24-boxes).
+BOX_RADII = (2.0, 4.0, 8.0, 16.0)
+#: the factors a translated box is squeezed by about its centre (so a box carried further from
+#: its airfield can still fit the time), and a stretch move's factors.
+BOX_FITS = (1.0, 0.9, 0.8, 0.7)
+STRETCH_SCALES = (0.7, 0.85, 1.15, 1.3)
+#: inner legs a route's box windows are split at (the longest ones: transit between boxes).
+BOX_SPLITS = 2
 #: waypoints a block move translates together (1 to 4 lawnmower lines).
 BLOCK_WINDOWS = (2, 4, 6, 8)
 #: waypoints a grade move scales together (2, 3 and 4 lawnmower lines), and its factors.
@@ -193,6 +231,7 @@ def polish_routes(
     headings=None,
     airspace: Airspace | None = None,
     moves: Sequence[str] = MOVES,
+    box_radii: Sequence[float] = BOX_RADII,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
@@ -201,13 +240,17 @@ def polish_routes(
     ``radii`` in sweep widths; ``headings`` (n,) the UAVs' headings at take-off (rad) or None;
     ``moves`` the kinds of move tried (:data:`ALL_KINDS`; default :data:`MOVES`).
     A route that does not fit ``budget`` to begin with is only changed by moves after which
-    it does. Returns ``(routes, pos, {"passes", "moves"})`` (and ``"block_moves"``, the kept
-    moves that were block moves, where ``moves`` names them)."""
+    it does. ``box_radii``: the box moves' translations, in sweep widths. Returns ``(routes,
+    pos, {"passes", "moves"})`` (and ``"block_moves"``, ``"box_moves"``, the kept moves that
+    were block moves, box or stretch moves, where ``moves`` names them)."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
     if not rad or any(not np.isfinite(r) or r <= 0 for r in rad):
         raise ConfigError("radii", radii, "positive numbers (sweep widths), not empty")
+    brad = tuple(box_radii)
+    if not brad or any(not np.isfinite(r) or r <= 0 for r in brad):
+        raise ConfigError("box_radii", box_radii, "positive numbers (sweep widths), not empty")
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):
         raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
@@ -320,18 +363,167 @@ def polish_routes(
             for o in signed
         ]
 
+    def box_windows(k: int) -> list[tuple[int, int]]:
+        """The boxes of UAV ``k``'s route: first and last inner waypoint of every run of
+        consecutive pieces of its inner waypoints split at its :data:`BOX_SPLITS` longest
+        inner legs (module docstring)."""
+        m = len(paths[k])
+        if m < 3:
+            return []
+        inner = np.hypot(*np.diff(paths[k][1 : m - 1], axis=0).T) if m > 3 else np.zeros(0)
+        cut = sorted(int(j) for j in np.argsort(-inner, kind="stable")[:BOX_SPLITS])
+        edges = [1, *(j + 2 for j in cut), m - 1]  # piece p: edges[p] .. edges[p + 1] - 1
+        return [
+            (edges[a], edges[b] - 1)
+            for a in range(len(edges) - 1)
+            for b in range(a + 1, len(edges))
+        ]
+
+    def boxed(pts: np.ndarray) -> list[np.ndarray]:
+        """Box moves (module docstring): the box translated in 8 directions by each box
+        radius, squeezed about its centre by each factor of :data:`BOX_FITS`."""
+        c = pts.mean(axis=0)
+        rel = pts - c
+        return [np.clip(c + f * rel + o[None], lo, hi) for o in box_offsets for f in BOX_FITS]
+
+    def trimmed(pts: np.ndarray) -> list[np.ndarray]:
+        """Trim moves (module docstring): the box translated with an end cut off."""
+        cuts = [sl for j in (1, 2) if len(pts) > j for sl in (slice(j, None), slice(None, -j))]
+        return [np.clip(pts[sl] + o[None], lo, hi) for o in box_offsets for sl in cuts]
+
+    def stretched(pts: np.ndarray) -> list[np.ndarray]:
+        """Stretch moves (module docstring): the box scaled along or across its lines about
+        its centre or either edge."""
+        d = np.diff(pts, axis=0)
+        ln = np.hypot(d[:, 0], d[:, 1])
+        if len(pts) < 2 or float(ln.sum()) <= 1e-3:
+            return []
+        ang = 0.5 * np.arctan2(np.sum(ln * np.sin(2 * np.arctan2(d[:, 1], d[:, 0]))),
+                               np.sum(ln * np.cos(2 * np.arctan2(d[:, 1], d[:, 0]))))  # fmt: skip
+        main = np.array([np.cos(ang), np.sin(ang)])
+        out = []
+        for u in (main, np.array([-main[1], main[0]])):
+            t = pts @ u
+            for pivot in (0.5 * (t.min() + t.max()), t.min(), t.max()):
+                for f in STRETCH_SCALES:
+                    out.append(np.clip(pts + ((f - 1.0) * (t - pivot))[:, None] * u[None], lo, hi))
+        return out
+
+    def rotated(pts: np.ndarray, pivots) -> list[np.ndarray]:
+        """Rotate moves (module docstring): the box turned about each pivot."""
+        out = []
+        for pv in pivots:
+            rel = pts - pv
+            for cs, sn in rot:
+                out.append(np.clip(pv + rel @ np.array([[cs, sn], [-sn, cs]]), lo, hi))
+        return out
+
+    def boxes(k: int) -> int:
+        """The box and stretch moves of UAV ``k``'s boxes: the number kept."""
+        got = 0
+        for i0, i1 in box_windows(k):
+            path = paths[k]
+            pts = path[i0 : i1 + 1]
+            seqs: list[np.ndarray] = []
+            if "box" in kinds:
+                seqs += boxed(pts)
+            if "trim" in kinds:
+                seqs += trimmed(pts)
+            if "stretch" in kinds and i1 > i0:
+                seqs += stretched(pts)
+            if "rotate" in kinds:
+                seqs += rotated(pts, (path[i0 - 1], path[i1 + 1]))
+            seqs = [np.vstack([path[i0 - 1], q, path[i1 + 1]]) for q in seqs]
+            if seqs:
+                got += int(choose(k, i0 - 1, i1 + 1, seqs))
+            if len(paths[k]) != len(path):  # trimmed: the windows are the next pass's
+                break
+        return got
+
+    def group_move(ks: list[int]) -> bool:
+        """The group move (module docstring) of the UAVs ``ks``: the best fitting candidate
+        kept if it gains."""
+        nonlocal value
+        inner = [paths[k][1:-1] for k in ks]
+        c = np.vstack(inner).mean(axis=0)
+        cands = [
+            [np.clip(c + f * (q - c) + o[None], lo, hi) for q in inner]
+            for o in box_offsets
+            for f in BOX_FITS
+        ]
+        for pv in dict.fromkeys(map(tuple, (paths[ks[0]][0], paths[ks[0]][-1]))):
+            cands += [list(z) for z in zip(*(rotated(q, (np.asarray(pv),)) for q in inner))]
+        full = [[np.vstack([paths[k][0], q, paths[k][-1]]) for k, q in zip(ks, cd)] for cd in cands]
+        old_a = np.vstack([paths[k][:-1] for k in ks])
+        old_b = np.vstack([paths[k][1:] for k in ks])
+        first = np.zeros(len(full) + 1, dtype=np.int64)
+        first[1:] = np.cumsum([sum(len(p) - 1 for p in fp) for fp in full])
+        starts = np.vstack([p[:-1] for fp in full for p in fp])
+        ends = np.vstack([p[1:] for fp in full for p in fp])
+        gain = ex.gains(old_a, old_b, starts, ends, first)
+        tried = 0
+        for cj in np.argsort(-gain, kind="stable"):
+            if not gain[cj] > TOL or tried >= TRIES:
+                break
+            fp = full[cj]
+            if not all(
+                route_fits(p, speeds, turn_rate, budget, reserve, h0[k]) for k, p in zip(ks, fp)
+            ):
+                continue
+            if airspace is not None:
+                tried += 1
+                before = count.value
+                undo = [(k, count.pos[:, k].copy(), count.act[:, k].copy()) for k in ks]
+                for k, p in zip(ks, fp):
+                    count.keep(count.move(k, *track(p, speeds, turn_rate, times, h0[k]))[1])
+                if count.value > before:
+                    for k, pk, ak in undo:
+                        count.keep(count.move(k, pk, ak)[1])
+                    continue
+            for k, p in zip(ks, fp):
+                ex.add(paths[k][:-1], paths[k][1:], -1.0)
+                ex.add(p[:-1], p[1:], 1.0)
+                paths[k] = p
+            value += float(gain[cj])
+            return True
+        return False
+
+    groups: list[list[int]] = []
+    for k in range(n):
+        if flying[k] and len(paths[k]) > 2:
+            for g in groups:
+                if np.array_equal(takeoff[g[0]], takeoff[k]) and np.array_equal(
+                    landing[g[0]], landing[k]
+                ):
+                    g.append(k)
+                    break
+            else:
+                groups.append([k])
+    rot = [(np.cos(a), np.sin(a)) for a in np.radians(ROTATIONS)]
+    box_offsets = (np.asarray(brad, dtype=float)[:, None, None] * w * _DIRS[None]).reshape(-1, 2)
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
     n_moves = 0
     n_block = 0  # of them block moves
+    n_box = 0  # of them box or stretch moves
     done = 0
     for _ in range(max(0, int(passes))):
         kept = 0
         done += 1
+        if "group" in kinds:  # i24-boxes: the groups' search parts first
+            for g in groups:
+                if len(g) > 1:
+                    got = int(group_move(g))
+                    kept += got
+                    n_box += got
         for k in range(n):
             if not flying[k]:
                 continue
+            if kinds & {"box", "stretch", "rotate", "trim"}:  # i24-boxes: whole boxes first
+                got = boxes(k)
+                kept += got
+                n_box += got
             i = 1
             while i < len(paths[k]):  # i: the waypoint changed (inserts go before it)
                 path = paths[k]
@@ -388,4 +580,6 @@ def polish_routes(
     stats = {"passes": done, "moves": n_moves}
     if "block" in kinds:
         stats["block_moves"] = n_block
+    if kinds & {"box", "stretch", "rotate", "group", "trim"}:
+        stats["box_moves"] = n_box
     return out, ex.pos(), stats
