@@ -80,6 +80,9 @@ FEATURES = (
     "switched",  # share of those UAVs the candidate gives a new route
     "gain_x_time",
     "gain_x_drift",
+    "turn",  # mean turn to the first waypoint (/ pi), the candidate's minus keep's
+    "lead",  # mean distance to the first waypoint / map diagonal, minus keep's
+    "length",  # mean route length / (line speed x usable time left), minus keep's
     *(f"kind_{k}" for k in KINDS),
 )
 
@@ -129,17 +132,40 @@ def _plan_routes(plan: dict, n: int, follower: Any) -> tuple[list, list, dict]:
     return new, new_v, v
 
 
+def geometry(
+    cand: Candidate, xy: np.ndarray, heading: np.ndarray, diag_m: float, reach_m: float
+) -> np.ndarray:
+    """``(turn, lead, length)`` of a candidate's routes, means over its UAVs: the heading
+    change to the first waypoint (/ pi), the distance to it (/ ``diag_m``) and the route's
+    length from the UAV (/ ``reach_m``, the distance the endurance left flies)."""
+    out = np.zeros(3)
+    n = len(cand.routes)
+    for j, r in enumerate(cand.routes):
+        r = np.asarray(r, dtype=float).reshape(-1, 2)
+        if not len(r):
+            continue
+        d = r[0] - xy[j]
+        turn = np.angle(np.exp(1j * (math.atan2(d[1], d[0]) - float(heading[j]))))
+        path = np.vstack([xy[j], r])
+        length = float(np.hypot(*np.diff(path, axis=0).T).sum())
+        out += (abs(turn) / math.pi, float(np.hypot(*d)) / diag_m, length / max(reach_m, 1.0))
+    return out / max(n, 1)
+
+
 def features(
     scores: list[float],
     cands: list[Candidate],
     ctx: dict[str, float],
+    geo: list[np.ndarray] | None = None,
 ) -> np.ndarray:
     """``(len(cands) - 1, len(FEATURES))``: the features of every candidate but ``keep``
-    (candidate 0), from the planner-model ``scores`` and the decision's context ``ctx``
-    (:meth:`ReplanChoicePolicy.context`)."""
+    (candidate 0), from the planner-model ``scores``, the decision's context ``ctx``
+    (:meth:`ReplanChoicePolicy.context`) and each candidate's :func:`geometry` (``geo``,
+    zeros if None)."""
     keep = float(scores[0])
+    geo = [np.zeros(3)] * len(cands) if geo is None else geo
     rows = []
-    for c, s in zip(cands[1:], scores[1:], strict=True):
+    for c, s, gm in zip(cands[1:], scores[1:], geo[1:], strict=True):
         g = float(s) - keep
         kind = [1.0 if c.kind == k else 0.0 for k in KINDS]
         rows.append(
@@ -156,17 +182,57 @@ def features(
                 float(np.mean(c.new)),
                 g * ctx["time"],
                 g * ctx["drift"],
+                *(np.asarray(gm) - np.asarray(geo[0])),
                 *kind,
             ]
         )
     return np.asarray(rows, dtype=float).reshape(-1, len(FEATURES))
 
 
+#: the continuous features :func:`expand` multiplies pairwise (``"quadratic"``).
+CONTINUOUS = (
+    "gain_model",
+    "keep_model",
+    "time",
+    "drift",
+    "drift_along",
+    "spread",
+    "mass",
+    "searching",
+    "switched",
+    "turn",
+    "lead",
+    "length",
+)
+
+#: the feature expansions a :class:`ChooserModel` may use (:func:`expand`).
+EXPANSIONS = ("linear", "kinds", "quadratic")
+
+
+def expand(x: np.ndarray, how: str) -> np.ndarray:
+    """The model's inputs from :func:`features`' rows: ``"linear"`` as they are; ``"kinds"``
+    adds the planner-model gain times each candidate kind (a slope per kind);
+    ``"quadratic"`` adds those and every product of two :data:`CONTINUOUS` features."""
+    if how not in EXPANSIONS:
+        raise ConfigError("expand", how, f"one of {', '.join(EXPANSIONS)}")
+    x = np.asarray(x, dtype=float).reshape(-1, len(FEATURES))
+    cols = [x]
+    if how in ("kinds", "quadratic"):
+        g = x[:, FEATURES.index("gain_model")]
+        kinds = x[:, [FEATURES.index(f"kind_{k}") for k in KINDS]]
+        cols.append(g[:, None] * kinds)
+    if how == "quadratic":
+        c = x[:, [FEATURES.index(f) for f in CONTINUOUS]]
+        i, j = np.triu_indices(c.shape[1])
+        cols.append(c[:, i] * c[:, j])
+    return np.hstack(cols)
+
+
 @dataclass
 class ChooserModel:
-    """Ridge regression of a candidate's flown gain over ``keep`` on its standardised
-    :func:`features`: ``gain = (x - mean) / scale @ weights + bias``. Saved as JSON (no
-    pickle): :meth:`save`, :meth:`load`."""
+    """Ridge regression of a candidate's flown gain over ``keep`` on its standardised,
+    expanded :func:`features` (``meta["expand"]``, :func:`expand`): ``gain = (z - mean) /
+    scale @ weights + bias``. Saved as JSON (no pickle): :meth:`save`, :meth:`load`."""
 
     mean: np.ndarray
     scale: np.ndarray
@@ -175,20 +241,29 @@ class ChooserModel:
     meta: dict
 
     def predict(self, x: np.ndarray) -> np.ndarray:
-        return ((np.asarray(x, dtype=float) - self.mean) / self.scale) @ self.weights + self.bias
+        z = expand(x, self.meta.get("expand", "linear"))
+        return ((z - self.mean) / self.scale) @ self.weights + self.bias
 
     @classmethod
-    def fit(cls, x: np.ndarray, y: np.ndarray, ridge: float, meta: dict | None = None):
-        x = np.asarray(x, dtype=float)
+    def fit(
+        cls,
+        x: np.ndarray,
+        y: np.ndarray,
+        ridge: float,
+        how: str = "linear",
+        meta: dict | None = None,
+    ) -> ChooserModel:
+        """Fit on :func:`features`' rows ``x`` and the flown gains ``y``."""
+        z = expand(x, how)
         y = np.asarray(y, dtype=float)
-        mean = x.mean(axis=0)
-        scale = x.std(axis=0)
+        mean = z.mean(axis=0)
+        scale = z.std(axis=0)
         scale[scale < 1e-12] = 1.0
-        z = (x - mean) / scale
+        zs = (z - mean) / scale
         bias = float(y.mean())
-        a = z.T @ z + ridge * len(z) * np.eye(z.shape[1])
-        w = np.linalg.solve(a, z.T @ (y - bias))
-        return cls(mean, scale, w, bias, dict(meta or {}, ridge=ridge))
+        a = zs.T @ zs + ridge * len(zs) * np.eye(zs.shape[1])
+        w = np.linalg.solve(a, zs.T @ (y - bias))
+        return cls(mean, scale, w, bias, dict(meta or {}, ridge=ridge, expand=how))
 
     def to_dict(self) -> dict:
         return {
@@ -274,7 +349,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         """The UAVs a re-plan may route (live, not heading home, route not finished) and
         their positions (metres)."""
         p = self.params
-        ks, pos = [], []
+        ks, pos, head = [], [], []
         for k, agent in enumerate(self.agents):
             if agent not in observations:
                 continue
@@ -283,6 +358,8 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
                 continue
             ks.append(k)
             pos.append(np.asarray(q["xy"], dtype=float))
+            head.append(float(q["heading"]))
+        self.headings = np.array(head)
         return ks, np.array(pos).reshape(-1, 2)
 
     def context(self, belief: np.ndarray, xy: np.ndarray, now: float, n_ks: int) -> dict:
@@ -400,7 +477,12 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         )
         self.scores.append(scores)
         ctx = self.context(belief, xy, now, len(ks))
-        x = features(scores, cands, ctx)
+        grid = p.grid
+        diag = math.hypot(grid.shape[1] * grid.cell_m, grid.shape[0] * grid.cell_m)
+        left = sc.uav.usable_fraction * sc.uav.endurance_s - now
+        reach = sc.uav.search_speed_mps * max(left, 0.0)
+        geo = [geometry(c, xy, self.headings, diag, reach) for c in cands]
+        x = features(scores, cands, ctx, geo)
         flown = None
         if self.chooser == "rule":
             i = 1 if scores[1] > scores[0] + self.margin else 0

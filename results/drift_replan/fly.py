@@ -55,13 +55,14 @@ def main() -> None:
         for d in pol.decisions:
             lines.append(json.dumps({"seed": seed, **d}))
         print(seed, f"{posc:.4f}", f"{secs:.2f}s", picks, flush=True)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-    w.writeheader()
-    w.writerows(rows)
-    write_text_atomic(args.out, buf.getvalue())
-    if args.decisions is not None:
-        write_text_atomic(args.decisions, "\n".join(lines) + "\n")
+        # the episodes so far, rewritten whole after each (a stopped run keeps them)
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+        write_text_atomic(args.out, buf.getvalue())
+        if args.decisions is not None:
+            write_text_atomic(args.decisions, "\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

@@ -110,7 +110,7 @@ def _toy_model(tmp_path):
     rng = np.random.default_rng(0)
     x = rng.normal(size=(200, len(FEATURES)))
     y = 0.5 * x[:, 0] + 0.1 * x[:, FEATURES.index("gain_x_time")]
-    model = ChooserModel.fit(x, y, ridge=1e-3, meta={"decide_min": [10.0, 20.0]})
+    model = ChooserModel.fit(x, y, 1e-3, "kinds", meta={"decide_min": [10.0, 20.0]})
     return model, model.save(tmp_path / "toy.json")
 
 
