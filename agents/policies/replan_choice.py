@@ -316,6 +316,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         model_path: str | None = None,
         decide_min: tuple[float, ...] = (20.0,),
         rule_min: tuple[float, ...] = (20.0,),
+        model_min: tuple[float, ...] | None = None,
         variants: bool = True,
         switch_margin: float = SWITCH_MARGIN,
         **kwargs: Any,
@@ -336,6 +337,10 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
                 raise ConfigError(field, times, "decision times in minutes, in (0, 1e4]")
         self.decide_s = tuple(sorted(float(t) * 60.0 for t in decide_min))
         self.rule_s = tuple(sorted(float(t) * 60.0 for t in rule_min))
+        if model_min is None and self.model is not None:
+            model_min = tuple(self.model.meta.get("model_min", decide_min))
+        #: the decision times (s) at which the model chooses; ``rule`` decides at the others
+        self.model_s = tuple(float(t) * 60.0 for t in (model_min or decide_min))
         self.variants = bool(variants)
         self.record = True
 
@@ -400,7 +405,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         plan = replan(sc, belief, drift, p.s, xy, now, ks, seed=seed, poc=poc, **self.alloc)
         new, new_v, v = _plan_routes(plan, n, old)
         out.append(Candidate("replan", "replan", new, new_v, [True] * n, v))
-        if not self.variants or self.chooser == "rule":
+        if not self.variants or self._chooser(now) == "rule":
             return out
         for name, opts in VARIANTS.items():
             alloc = {**self.alloc, **opts}
@@ -484,15 +489,16 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         geo = [geometry(c, xy, self.headings, diag, reach) for c in cands]
         x = features(scores, cands, ctx, geo)
         flown = None
-        if self.chooser == "rule":
+        chooser = self._chooser(now)
+        if chooser == "rule":
             i = 1 if scores[1] > scores[0] + self.margin else 0
-        elif self.chooser == "best":
+        elif chooser == "best":
             i = pick
-        elif self.chooser == "keep":
+        elif chooser == "keep":
             i = 0
-        elif self.chooser == "switch":
+        elif chooser == "switch":
             i = 1
-        elif self.chooser == "oracle":
+        elif chooser == "oracle":
             flown, seen = [], {}
             for c in cands:  # candidates with the same routes fly the same (one rollout)
                 key = _route_key(c)
@@ -518,6 +524,12 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
                 }
             )
         self.apply(cands[i], ks)
+
+    def _chooser(self, now: float) -> str:
+        """The chooser of the decision at ``now``: a model chooses at its own times only."""
+        if self.chooser == "model" and not any(abs(now - t) < 1e-6 for t in self.model_s):
+            return "rule"
+        return self.chooser
 
     def predict(self, observations: dict, state=None, episode_start=None, deterministic=True):
         now = float(self.env.sim_state.step[0]) * self.params.dt
