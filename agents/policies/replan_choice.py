@@ -317,6 +317,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         decide_min: tuple[float, ...] = (20.0,),
         rule_min: tuple[float, ...] = (20.0,),
         model_min: tuple[float, ...] | None = None,
+        lookahead: int = 0,
         variants: bool = True,
         switch_margin: float = SWITCH_MARGIN,
         **kwargs: Any,
@@ -342,6 +343,14 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         #: the decision times (s) at which the model chooses; ``rule`` decides at the others
         self.model_s = tuple(float(t) * 60.0 for t in (model_min or decide_min))
         self.variants = bool(variants)
+        if not (isinstance(lookahead, int) and 0 <= lookahead <= 64):
+            raise ConfigError("lookahead", lookahead, "a number of candidates in [0, 64]")
+        if lookahead and chooser not in ("best", "model"):
+            raise ConfigError("lookahead", lookahead, "0 unless the chooser is best or a model")
+        #: > 0: roll out keep and the chooser's ``lookahead`` best-ranked candidates (by the
+        #: planner's model for ``best``, by the model's prediction for a model) and fly the one
+        #: of highest flown POSC, as the oracle does over every candidate
+        self.lookahead = lookahead
         self.record = True
 
     def reset(self, env: Any, seed: int) -> None:
@@ -490,7 +499,28 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         x = features(scores, cands, ctx, geo)
         flown = None
         chooser = self._chooser(now)
-        if chooser == "rule":
+        if chooser in ("best", "model") and self.lookahead and len(cands) > 1:
+            if chooser == "best":
+                rank = np.asarray(scores[1:], dtype=float)
+            else:
+                assert self.model is not None
+                rank = self.model.predict(x)
+            flown = [None] * len(cands)
+            seen: dict[bytes, float] = {_route_key(cands[0]): 0.0}
+            flown[0] = self.rollout(observations, cands[0], ks, now)
+            seen[_route_key(cands[0])] = flown[0]
+            for j in np.argsort(-rank, kind="stable"):  # best-ranked first, distinct routes
+                key = _route_key(cands[j + 1])
+                if key in seen:
+                    continue
+                if len(seen) > self.lookahead:
+                    break
+                seen[key] = flown[j + 1] = self.rollout(observations, cands[j + 1], ks, now)
+            i = max(
+                (k for k in range(len(cands)) if flown[k] is not None),
+                key=lambda k: (flown[k], -k),
+            )
+        elif chooser == "rule":
             i = 1 if scores[1] > scores[0] + self.margin else 0
         elif chooser == "best":
             i = pick
@@ -565,10 +595,16 @@ def from_spec(spec: str, **kwargs: Any) -> ReplanChoicePolicy:
     """The policy of ``receding_choice:SPEC``: ``SPEC`` is a chooser of :data:`CHOOSERS` other
     than ``model``, optionally with its decision times (``oracle@10-20-30``), or a chooser
     model: a ``.json`` path or the name of a shipped one (:func:`shipped_choosers`), flown at
-    the decision times recorded in it."""
+    the decision times recorded in it. ``*K`` after ``best`` or a model rolls out ``keep`` and
+    its ``K`` best-ranked candidates and flies the best of them (``best*2@10-20``)."""
     if not isinstance(spec, str) or not spec:
         raise ConfigError("spec", spec, "a chooser or a chooser model")
     head, _, times = spec.partition("@")
+    head, star, k = head.partition("*")
+    if star:
+        if not k.isdigit():
+            raise ConfigError("spec", spec, "NAME*K with K the candidates rolled out (best*2)")
+        kwargs = {**kwargs, "lookahead": int(k)}
     if head in CHOOSERS and head != "model":
         decide = _minutes("spec", times) if times else (20.0,)
         return ReplanChoicePolicy(head, decide_min=decide, **kwargs)

@@ -14,7 +14,7 @@ import json
 import time
 from pathlib import Path
 
-from poc_env.agents.policies.replan_choice import ReplanChoicePolicy
+from poc_env.agents.policies.replan_choice import ReplanChoicePolicy, from_spec
 from poc_env.envs.parallel import UAVSearchParallelEnv
 from poc_env.io import write_text_atomic
 from poc_env.tasks import get_task
@@ -37,6 +37,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, nargs=2, required=True, help="first and last seed")
     ap.add_argument("--chooser", default="oracle")
+    ap.add_argument("--spec", default=None, help="a receding_choice SPEC instead of --chooser")
     ap.add_argument("--model", default=None)
     ap.add_argument("--decide", type=float, nargs="+", default=[20.0])
     ap.add_argument("--no-variants", action="store_true")
@@ -46,9 +47,12 @@ def main() -> None:
     sc = get_task(TASK).load_scenario({})
     rows, lines = [], []
     for seed in range(args.seeds[0], args.seeds[1] + 1):
-        pol = ReplanChoicePolicy(
-            args.chooser, args.model, tuple(args.decide), variants=not args.no_variants
-        )
+        if args.spec is not None:
+            pol = from_spec(args.spec)
+        else:
+            pol = ReplanChoicePolicy(
+                args.chooser, args.model, tuple(args.decide), variants=not args.no_variants
+            )
         posc, secs = fly(pol, sc, seed)
         picks = ";".join(d["names"][d["pick"]] for d in pol.decisions)
         rows.append({"seed": seed, "posc": posc, "seconds": round(secs, 3), "picks": picks})

@@ -105,6 +105,18 @@ def test_oracle_rollout_predicts_the_flown_episode_exactly():
     assert float(env.sim_state.posc[0]) == pytest.approx(d["flown"][d["pick"]], abs=1e-12)
 
 
+def test_lookahead_rolls_out_keep_and_the_k_best_ranked():
+    pol = from_spec("best*2@10")
+    _fly(pol, 8)
+    (d,) = pol.decisions
+    rolled = [k for k, f in enumerate(d["flown"]) if f is not None]
+    assert rolled[0] == 0 and 2 <= len(rolled) <= 3  # keep and at most 2 distinct others
+    # the others are the best-ranked by the planner's model (ties in routes skipped)
+    top = int(np.argmax(d["scores"][1:])) + 1
+    assert top in rolled or (d["flown"][top] is None and len(rolled) == 3)
+    assert d["pick"] == max(rolled, key=lambda k: (d["flown"][k], -k))
+
+
 def _toy_model(tmp_path):
     # prefers candidates the planner's model scores above keep, the more so later
     rng = np.random.default_rng(0)
@@ -137,6 +149,10 @@ def test_bad_specs_name_the_field(tmp_path):
         from_spec("oracle@ten")
     with pytest.raises(ConfigError, match="chooser"):
         ReplanChoicePolicy("sometimes")
+    with pytest.raises(ConfigError, match="lookahead"):
+        ReplanChoicePolicy("rule", lookahead=2)
+    with pytest.raises(ConfigError, match="spec: got 'best\\*x'"):
+        from_spec("best*x")
     with pytest.raises(ConfigError, match="decide_min"):
         ReplanChoicePolicy("rule", decide_min=())
     with pytest.raises(ConfigError, match="path"):
