@@ -17,6 +17,7 @@ at 20 min it was ahead of every fitted model in cross-validation, results/drift_
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 from pathlib import Path
 
@@ -31,7 +32,8 @@ FOLDS = 5
 def load(paths: list[Path]) -> list[dict]:
     out = []
     for p in paths:
-        for line in p.read_text().splitlines():
+        text = gzip.decompress(p.read_bytes()).decode() if p.suffix == ".gz" else p.read_text()
+        for line in text.splitlines():
             if line.strip():
                 d = json.loads(line)
                 if d.get("flown") and len(d["names"]) > 1:

@@ -176,6 +176,12 @@ def test_shipped_chooser_replays_its_card_and_flies_an_unseen_episode(name):
     # recorded on another machine: numpy/scipy sums may round their last bits by CPU
     # (docs/CONTRIBUTING.md, "Numbers recorded elsewhere")
     assert first.posc == pytest.approx(ev["posc"][0], rel=1e-3)
+    # an episode in which the model's own decision is not keep: the replay checks the model
+    rep = meta["replay"]
+    pol = from_spec(name)
+    env, _ = _fly(pol, rep["seed"])
+    assert [d["names"][d["pick"]] for d in pol.decisions] == rep["picks"]
+    assert float(env.sim_state.posc[0]) == pytest.approx(rep["posc"], rel=1e-3)
     unseen = run_episode(_scenario(), spec, 987_654)
     assert unseen.landed == _scenario().n_uavs and unseen.crashed == 0
     assert unseen.posc >= ev["floor"] > 0.0
