@@ -497,7 +497,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         reach = sc.uav.search_speed_mps * max(left, 0.0)
         geo = [geometry(c, xy, self.headings, diag, reach) for c in cands]
         x = features(scores, cands, ctx, geo)
-        flown = None
+        flown: list[float | None] | None = None
         chooser = self._chooser(now)
         if chooser in ("best", "model") and self.lookahead and len(cands) > 1:
             if chooser == "best":
@@ -505,21 +505,18 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
             else:
                 assert self.model is not None
                 rank = self.model.predict(x)
-            flown = [None] * len(cands)
-            seen: dict[bytes, float] = {_route_key(cands[0]): 0.0}
-            flown[0] = self.rollout(observations, cands[0], ks, now)
-            seen[_route_key(cands[0])] = flown[0]
+            got = {0: self.rollout(observations, cands[0], ks, now)}
+            keys = {_route_key(cands[0])}
             for j in np.argsort(-rank, kind="stable"):  # best-ranked first, distinct routes
-                key = _route_key(cands[j + 1])
-                if key in seen:
+                key = _route_key(cands[int(j) + 1])
+                if key in keys:
                     continue
-                if len(seen) > self.lookahead:
+                if len(keys) > self.lookahead:
                     break
-                seen[key] = flown[j + 1] = self.rollout(observations, cands[j + 1], ks, now)
-            i = max(
-                (k for k in range(len(cands)) if flown[k] is not None),
-                key=lambda k: (flown[k], -k),
-            )
+                keys.add(key)
+                got[int(j) + 1] = self.rollout(observations, cands[int(j) + 1], ks, now)
+            flown = [got.get(k) for k in range(len(cands))]
+            i = max(got, key=lambda k: (got[k], -k))
         elif chooser == "rule":
             i = 1 if scores[1] > scores[0] + self.margin else 0
         elif chooser == "best":
@@ -529,13 +526,14 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         elif chooser == "switch":
             i = 1
         elif chooser == "oracle":
-            flown, seen = [], {}
+            seen: dict[bytes, float] = {}
             for c in cands:  # candidates with the same routes fly the same (one rollout)
                 key = _route_key(c)
                 if key not in seen:
                     seen[key] = self.rollout(observations, c, ks, now)
-                flown.append(seen[key])
-            i = int(np.argmax(flown))  # ties: the first (keep before any switch)
+            values = [seen[_route_key(c)] for c in cands]
+            flown = list(values)
+            i = int(np.argmax(values))  # ties: the first (keep before any switch)
         else:
             assert self.model is not None
             pred = self.model.predict(x) if len(x) else np.zeros(0)
