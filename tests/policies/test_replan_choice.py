@@ -38,10 +38,11 @@ def _fly(pol, seed, stop_at=None):
     return env, obs
 
 
-def test_rule_at_20_min_flies_what_spacetime_receding_flies():
-    a, _ = _fly(make_policy("spacetime_receding"), 3)
+@pytest.mark.parametrize("seed", [1, 8])  # re-plans 0.0135 above keep; 0.0032 (kept)
+def test_rule_at_20_min_flies_what_spacetime_receding_flies(seed):
+    a, _ = _fly(make_policy("spacetime_receding"), seed)
     pol = make_policy("receding_choice:rule")
-    b, _ = _fly(pol, 3)
+    b, _ = _fly(pol, seed)
     assert float(b.sim_state.posc[0]) == float(a.sim_state.posc[0])
     assert np.array_equal(a.sim_state.agent_pos, b.sim_state.agent_pos)
     assert [d["time_s"] for d in pol.decisions] == [1200.0]
@@ -101,6 +102,7 @@ def test_oracle_rollout_predicts_the_flown_episode_exactly():
     pol = ReplanChoicePolicy("oracle", decide_min=(20.0,))
     env, _ = _fly(pol, 6)
     (d,) = pol.decisions
+    assert len(set(d["flown"])) > 2  # the candidates fly differently (each rollout its own)
     assert d["pick"] == int(np.argmax(d["flown"]))
     assert float(env.sim_state.posc[0]) == pytest.approx(d["flown"][d["pick"]], abs=1e-12)
 
