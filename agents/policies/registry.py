@@ -266,3 +266,12 @@ register(
     summary="spacetime_plan re-planned every 20 min from the current belief, from where the "
     "UAVs are; a re-plan is flown only if it scores more than the routes being flown",
 )
+register(
+    "receding_choice",
+    "poc_env.agents.policies.replan_choice:from_spec",
+    argument="spec",
+    argument_help="a chooser (rule, best, keep, switch, oracle; @T-T-... for decision times in "
+    "minutes) or a chooser model (a .json path or a shipped name)",
+    summary="spacetime_receding's re-planning decisions over wider candidates, made by a rule, "
+    "a lookahead oracle or a learned chooser",
+)
