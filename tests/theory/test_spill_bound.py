@@ -271,3 +271,21 @@ def test_spill_bound_checks_its_input():
         spill_bound(sc, prior, configs=((0.0, 1.0, True),))
     with pytest.raises(ConfigError, match="configs"):
         spill_bound(sc, prior, configs=((1.0, 1.5, True),))
+
+
+def test_plan_prints_and_writes_the_spill_charged_bound(tmp_path, capsys):
+    """``poc-env plan --spill-bound``: plan.json holds ``bound_spill`` (at most the rule-aware
+    bound, the least of the two) and the table prints it; without the flag neither."""
+    import json
+
+    from poc_env.cli import main
+
+    out = tmp_path / "plan.json"
+    args = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet", "--out"]
+    assert main([*args, str(out), "--spill-bound"]) == 0
+    plan = json.loads(out.read_text())
+    assert 0 < plan["bound_spill"] <= plan["bound_rule"]
+    assert "spill-charged bound" in capsys.readouterr().out
+    assert main([*args, str(out)]) == 0
+    assert "bound_spill" not in json.loads(out.read_text())
+    assert "spill-charged bound" not in capsys.readouterr().out
