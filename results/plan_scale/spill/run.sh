@@ -10,3 +10,6 @@ python $S/spill.py bounds large_400 0 1 $S/large_400_0.json > $S/large_400_0.log
 python $S/spill.py bounds large_400 1 13 $S/large_400_a.json > $S/large_400_a.log &
 python $S/spill.py bounds large_400 13 25 $S/large_400_b.json > $S/large_400_b.log
 wait
+python $S/spill.py variants large_400 5000 5001 $S/variants_large_400.json > $S/variants_large_400.log
+python $S/spill.py table $S/paper_6_2.json $S/large_400_0.json $S/large_400_a.json \
+  $S/large_400_b.json $S/groups_large_400.json $S/variants_large_400.json > $S/table.md

@@ -6,7 +6,11 @@ rule-aware bound on the stored flights' priors; a script, not a test.
     (``rule_bound(...).upper``), the spill-charged bound and the program's value per
     configuration, seconds and the load; the records are rewritten after every seed.
 ``groups MAP SEED0 SEED1 OUT.json``
-    The same for each fleet group alone (its UAVs only).
+    The same for each fleet group alone (its UAVs only), also with the wider charge of
+    :data:`GROUP_CONFIGS`.
+``variants MAP SEED0 SEED1 OUT.json``
+    The fleet's program under each configuration of :data:`VARIANTS` (which cells are charged:
+    with and without ``alone``, ``theta`` 1 and 0.75).
 ``table BOUNDS.json [BOUNDS.json ...]``
     The stored flights (results/plan_scale/lines/flown_{large_400,paper_6_2}.json and
     results/plan_scale/{large_400,paper_6_2}.json) over both bounds: mean +- Student's t 95 %,
@@ -30,7 +34,7 @@ from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.config import load_scenario
 from poc_env.io import write_text_atomic
 from poc_env.stats import ci95
-from poc_env.theory.spill_bound import spill_bound
+from poc_env.theory.spill_bound import CONFIGS, spill_bound
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
@@ -46,9 +50,17 @@ FLIGHTS = {
 }
 
 
-def _record(sc, prior, **extra) -> dict:
+#: each group alone is also bounded with a wider charge (cells from 0.75 T_u of near transit).
+GROUP_CONFIGS = (*CONFIGS, (1.0, 0.75, True))
+
+
+#: the fleet's charge variants of ``variants``.
+VARIANTS = ((1.0, 1.0, True), (1.0, 1.0, False), (1.0, 0.75, True))
+
+
+def _record(sc, prior, configs=CONFIGS, **extra) -> dict:
     t0 = time.perf_counter()
-    b = spill_bound(sc, prior)
+    b = spill_bound(sc, prior, configs=configs)
     return {
         **extra,
         "rule_bound": b.rule,
@@ -60,7 +72,7 @@ def _record(sc, prior, **extra) -> dict:
     }
 
 
-def bounds(name: str, s0: int, s1: int, out: str, groups: bool = False) -> None:
+def bounds(name: str, s0: int, s1: int, out: str, groups: bool = False, cfg=None) -> None:
     sc = load_scenario(name)
     recs: list[dict] = []
     for seed in range(s0, s1):
@@ -69,7 +81,8 @@ def bounds(name: str, s0: int, s1: int, out: str, groups: bool = False) -> None:
         if groups:
             fleets = [(f"{g.takeoff}", dataclasses.replace(sc, fleet=(g,))) for g in sc.fleet]
         for label, one in fleets:
-            r = _record(one, prior, map=name, seed=seed, group=label)
+            r = _record(one, prior, cfg or (GROUP_CONFIGS if groups else CONFIGS), map=name,
+                        seed=seed, group=label)  # fmt: skip
             recs.append(r)
             print(name, seed, label, round(r["rule_bound"], 5), round(r["spill_bound"], 5),
                   f"{1 - r['spill_bound'] / r['rule_bound']:.4f}", r["how"],
@@ -92,7 +105,8 @@ def table(paths: list[str]) -> None:
     for p in paths:
         with open(p) as f:
             recs += json.load(f)
-    fleet = {(r["map"], r["seed"]): r for r in recs if r.get("group") is None}
+    fleet = {(r["map"], r["seed"]): r for r in recs if r.get("group") is None and
+             len(r["program"]) == len(CONFIGS)}  # fmt: skip
     print("| map | flights | n | over rule-aware | >= 0.90 | over spill-charged | >= 0.90 |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for name in sorted({m for m, _ in fleet}):
@@ -114,10 +128,17 @@ def table(paths: list[str]) -> None:
               f"{np.median([r['seconds'] for r in fr]):.1f}, load "
               f"{min(r['load'] for r in fr):.1f}-{max(r['load'] for r in fr):.1f}")  # fmt: skip
     for r in recs:
+        if r.get("group") is None and len(r["program"]) == len(VARIANTS):
+            print(f"{r['map']} {r['seed']} fleet variants: rule {r['rule_bound']:.5f}, " +
+                  ", ".join(f"{k}: {v:.5f}" for k, v in r["program"].items()))  # fmt: skip
         if r.get("group") is not None:
+            prog = ", ".join(
+                f"{k}: {1 - min(v, r['rule_bound']) / r['rule_bound']:.3f}"
+                for k, v in r["program"].items()
+            )
             print(f"{r['map']} {r['seed']} group {r['group']}: rule {r['rule_bound']:.4f}, "
                   f"spill-charged {r['spill_bound']:.4f}, removed "
-                  f"{1 - r['spill_bound'] / r['rule_bound']:.3f}")  # fmt: skip
+                  f"{1 - r['spill_bound'] / r['rule_bound']:.3f} ({prog})")  # fmt: skip
 
 
 if __name__ == "__main__":
@@ -125,4 +146,5 @@ if __name__ == "__main__":
     if cmd == "table":
         table(sys.argv[2:])
     else:
-        bounds(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5], cmd == "groups")
+        cfg = VARIANTS if cmd == "variants" else None
+        bounds(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5], cmd == "groups", cfg)
