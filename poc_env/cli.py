@@ -688,6 +688,12 @@ def _plan(
         refine=getattr(args, "refine", None),
         effort=getattr(args, "effort", None),
     )
+    if getattr(args, "spill_bound", False) and plan.get("bound_rule"):
+        # the spill-charged bound (docs/PLANNER.md, i24-spill): asked for, a linear program
+        from poc_env.agents.planning.geography import probability
+        from poc_env.theory.spill_bound import spill_bound
+
+        plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
     print(plan_table(plan))
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
@@ -1057,6 +1063,12 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["de", "allocation"],
         help="de: the paper's optimiser plan; allocation: routes from the reach-aware "
         "optimal allocation (docs/PLANNER.md)",
+    )
+    p.add_argument(
+        "--spill-bound",
+        action="store_true",
+        help="also the spill-charged rule-aware bound (bound_spill: the sensor's spill charged "
+        "by its lateral law, docs/PLANNER.md; a linear program, seconds to minutes)",
     )
     p.add_argument(
         "--speed",

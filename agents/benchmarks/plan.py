@@ -117,11 +117,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--scale-parts",
         nargs="+",
         default=None,
-        choices=["quality", "cells", "timing", "single", "tight", "zones"],
+        choices=["quality", "cells", "timing", "single", "tight", "zones", "spill"],
         help="parts of --scale to run (default: quality cells timing; single: each airfield's "
         "UAV alone against its own rule-aware bound; tight: the same against the "
         "tour-charged bound too; zones: planning time with and without --zones random no-fly "
-        "zones)",
+        "zones; spill: the spill-charged bound beside the rule-aware one, with quality the "
+        "flown POSC over it too)",
     )
     p.add_argument(
         "--zones",

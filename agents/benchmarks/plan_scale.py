@@ -17,6 +17,9 @@
   cases planned with and without ``N`` random zones inside the search area
   (:func:`random_zones`), the two interleaved per run; medians, their ratio, and the planned
   POS_C of both. Not part of the default parts.
+* **Spill charge** (``--scale-parts spill``, with ``quality`` for the flown ratios): the
+  spill-charged bound beside the rule-aware one on the same priors (i24-spill). Not part of
+  the default parts.
 
 Figures are quoted in docs/PLANNER.md with the command; the machine's load changes the times.
 """
@@ -146,6 +149,37 @@ def single(maps, episodes: int, seed0: int) -> dict[str, float]:
             f"planned / its rule bound, mean of {len(shares)} (min {min(shares):.3f}, "
             f"max {max(shares):.3f})",
         )
+    return out
+
+
+def spill(maps, episodes: int, seed0: int, records: list | None = None) -> dict[str, float]:
+    """The spill-charged bound (:func:`poc_env.theory.spill_bound.spill_bound`) beside the
+    rule-aware bound on the same random priors: the mean share of the rule-aware bound the
+    charge removes, and, for the episodes of ``quality`` in ``records`` (same invocation), each
+    policy's flown POSC over the spill-charged bound (``spill_bound`` added to the records)."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.config import load_scenario
+    from poc_env.theory.spill_bound import spill_bound
+
+    out: dict[str, float] = {}
+    for name in maps:
+        sc = load_scenario(name)
+        cut = []
+        share: dict[str, list[float]] = {}
+        for seed in range(seed0, seed0 + episodes):
+            b = spill_bound(sc, episode_prior(sc, seed))
+            cut.append(1.0 - b.upper / b.rule)
+            for r in records or []:
+                if r["map"] == name and r["seed"] == seed:
+                    r["spill_bound"] = b.upper
+                    share.setdefault(r["policy"], []).append(r["posc"] / b.upper)
+        out[f"{name}_spill_removed"] = float(np.mean(cut))
+        note = f"share of the rule bound removed, {len(cut)} priors (max {max(cut):.4f})"
+        _line(f"{name} spill charge", float(np.mean(cut)), note)
+        for pol, x in share.items():
+            out[f"{name}_{pol}_spill"] = float(np.mean(x))
+            note = f"flown POSC / spill-charged bound, +- {ci95(np.array(x)):.4f} (95 %)"
+            _line(f"{name} {pol}", float(np.mean(x)), note)
     return out
 
 
@@ -362,6 +396,8 @@ def main(
         out.update(single(maps, episodes, seed0))
     if "tight" in parts:
         out.update(tight(maps, episodes, seed0))
+    if "spill" in parts:
+        out.update(spill(maps, episodes, seed0, records))
     if "cells" in parts:
         out.update(cells())
     if "timing" in parts:

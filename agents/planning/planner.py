@@ -258,6 +258,12 @@ def plan_table(plan: dict[str, Any]) -> str:
             f"rule-aware bound (back by 0.85 T, home at v_c): {rule:.4f} "
             f"(POS_C / rule {plan['posc'] / rule:.3f})"
         )
+    spill = plan.get("bound_spill")
+    if spill:
+        lines.append(
+            f"spill-charged bound (the rule-aware one, the sensor's spill charged by its "
+            f"lateral law): {spill:.4f} (POS_C / spill {plan['posc'] / spill:.3f})"
+        )
     return "\n".join(lines)
 
 
