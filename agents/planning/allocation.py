@@ -801,47 +801,35 @@ def make_allocation_plan(
                 start, refined = name, False
 
     def _polish(rs):
-        out = _polish12(rs)
-        if not opt.polish_boxes:
-            return out
-        # i24-boxes: a third polish with the box moves only (boxes and groups moved as one)
-        pr, val, stats = _polish_stage(
-            out[0], opt.polish_boxes, BOX_KINDS, opt.polish_lines_radii, opt.polish_boxes_radii
-        )
-        st0 = out[2]
-        return (
-            pr,
-            val,
-            {
-                **st0,
-                "passes": st0.get("passes", 0) + stats["passes"],
-                "moves": st0.get("moves", 0) + stats["moves"],
-                "box_moves": stats["box_moves"],
-            },
-        )
-
-    def _polish12(rs):
+        """The polish stages in turn -- the polish, the second polish with the block moves too
+        (i24-lines), the third with the box moves only (i24-boxes; boxes and groups moved as
+        one) -- each from the routes the one before left; passes and moves summed, each later
+        stage's own kept moves as ``lines_moves`` and ``box_moves``."""
         moves = KINDS if opt.polish_grade else MOVES
         out = (
             _polish_stage(rs, opt.polish, moves, opt.polish_radii) if opt.polish else (rs, 0.0, {})
         )
-        if not opt.polish_lines:
-            return out
-        # i24-lines: a second polish with the block moves too (the lines of a run moved as one)
-        pr, val, stats = _polish_stage(
-            out[0], opt.polish_lines, (*moves, "block"), opt.polish_lines_radii
+        later = (
+            ("lines", opt.polish_lines, (*moves, "block"), opt.polish_lines_radii, None),
+            ("box", opt.polish_boxes, BOX_KINDS, opt.polish_lines_radii, opt.polish_boxes_radii),
         )
-        st0 = out[2]
-        return (
-            pr,
-            val,
-            {
-                "passes": st0.get("passes", 0) + stats["passes"],
-                "moves": st0.get("moves", 0) + stats["moves"],
-                "lines_moves": stats["moves"],
-                "block_moves": stats["block_moves"],
-            },
-        )
+        for stage, passes, kinds, radii, box_radii in later:
+            if not passes:
+                continue
+            pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii)
+            st0 = out[2]
+            out = (
+                pr,
+                val,
+                {
+                    **st0,
+                    **stats,
+                    "passes": st0.get("passes", 0) + stats["passes"],
+                    "moves": st0.get("moves", 0) + stats["moves"],
+                    f"{stage}_moves": stats["moves"],
+                },
+            )
+        return out
 
     def _polish_stage(rs, passes, moves, radii, box_radii=None):
         return polish_routes(
