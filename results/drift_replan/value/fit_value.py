@@ -81,13 +81,14 @@ def centred(v: np.ndarray, group: np.ndarray) -> np.ndarray:
     return v - (sums / np.maximum(counts, 1))[group]
 
 
-def oof(x, y, seed, ridge, how, folds=5):
+def oof(x, y, seed, ridge, how, groups=None, folds=5):
     seeds = np.unique(seed)
     fold = {s: i % folds for i, s in enumerate(seeds)}
     f = np.array([fold[s] for s in seed])
     pred = np.zeros_like(y)
     for k in range(folds):
-        m = ValueModel.fit(x[f != k], y[f != k], ridge, how)
+        g = None if groups is None else groups[f != k]
+        m = ValueModel.fit(x[f != k], y[f != k], ridge, how, groups=g)
         pred[f == k] = m.predict(x[f == k])
     return pred
 
@@ -138,15 +139,20 @@ def main() -> None:
     x, y, seed, group, cand, snap, dec = rows(decisions)
     print(f"{len(set(seed))} episodes, {len(decisions)} decisions, {len(y)} states")
     best = None
-    for how in EXPANSIONS:
-        for ridge in RIDGES:
-            p = oof(x, y, seed, ridge, how)
-            r_all, r_diff = r2(y, p), r2(centred(y, group), centred(p, group))
-            print(f"{how:9s} ridge {ridge:g}: R2 to come {r_all:.3f}, R2 differences {r_diff:.3f}")
-            if best is None or r_diff > best[0]:
-                best = (r_diff, how, ridge, p)
-    _, how, ridge, p = best
-    print(f"chosen (best R2 of differences): {how}, ridge {ridge:g}")
+    for within in (False, True):
+        for how in EXPANSIONS:
+            for ridge in RIDGES:
+                p = oof(x, y, seed, ridge, how, group if within else None)
+                r_all, r_diff = r2(y, p), r2(centred(y, group), centred(p, group))
+                fit = "within" if within else "pooled"
+                print(
+                    f"{fit} {how:9s} ridge {ridge:g}: R2 to come {r_all:.3f}, "
+                    f"R2 differences {r_diff:.3f}"
+                )
+                if best is None or r_diff > best[0]:
+                    best = (r_diff, how, ridge, within, p)
+    _, how, ridge, within, p = best
+    print(f"chosen (best R2 of differences): {'within' if within else 'pooled'} {how}, {ridge:g}")
     for t in sorted(set(snap)):
         s = snap == t
         print(
