@@ -29,6 +29,10 @@ and picks one with a *chooser*:
     hidden target only decides ``detected``), so the rollout reads nothing the planner could
     not compute; it is the upper bound a chooser of these candidates can reach with ``rule``
     after it.
+    With ``horizon_min`` (``oracle~H``) the rollouts stop ``H`` minutes after the decision
+    and score the POSC then, plus, with ``value_path`` (``oracle~H+VALUE.json``), a
+    :class:`ValueModel`'s estimate of the POSC still to come from the state reached (its
+    :data:`STATE_FEATURES`): a shorter lookahead ended by a learned value.
 ``model``
     a fitted :class:`ChooserModel` (a JSON checkpoint): predicts each candidate's flown gain
     over ``keep`` from its :func:`features` and flies the highest prediction if above 0.
@@ -45,7 +49,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -240,8 +244,15 @@ class ChooserModel:
     bias: float
     meta: dict
 
+    #: the names of the input columns (checked on :meth:`load`)
+    COLUMNS: ClassVar[tuple[str, ...]] = FEATURES
+
+    @staticmethod
+    def expand(x: np.ndarray, how: str) -> np.ndarray:
+        return expand(x, how)
+
     def predict(self, x: np.ndarray) -> np.ndarray:
-        z = expand(x, self.meta.get("expand", "linear"))
+        z = self.expand(x, self.meta.get("expand", "linear"))
         return ((z - self.mean) / self.scale) @ self.weights + self.bias
 
     @classmethod
@@ -252,22 +263,34 @@ class ChooserModel:
         ridge: float,
         how: str = "linear",
         meta: dict | None = None,
-    ) -> ChooserModel:
-        """Fit on :func:`features`' rows ``x`` and the flown gains ``y``."""
-        z = expand(x, how)
+        groups: np.ndarray | None = None,
+    ) -> Any:
+        """Fit on :func:`features`' rows ``x`` and the flown gains ``y``. ``groups`` (one
+        label per row): fit the slopes on the deviations from each group's mean only (what
+        ranks the rows of one group), the bias then on the level."""
+        z = cls.expand(x, how)
         y = np.asarray(y, dtype=float)
         mean = z.mean(axis=0)
         scale = z.std(axis=0)
         scale[scale < 1e-12] = 1.0
         zs = (z - mean) / scale
         bias = float(y.mean())
+        yc = y - bias
+        if groups is not None:  # within-group deviations only (fixed effects): the slopes
+            g = np.unique(np.asarray(groups), return_inverse=True)[1]  # that rank a group
+            counts = np.bincount(g)[:, None]
+            zs = zs - (np.stack([np.bincount(g, weights=c) for c in zs.T], 1) / counts)[g]
+            yc = yc - (np.bincount(g, weights=yc) / counts[:, 0])[g]
         a = zs.T @ zs + ridge * len(zs) * np.eye(zs.shape[1])
-        w = np.linalg.solve(a, zs.T @ (y - bias))
-        return cls(mean, scale, w, bias, dict(meta or {}, ridge=ridge, expand=how))
+        w = np.linalg.solve(a, zs.T @ yc)
+        if groups is not None:  # the level: the mean residual
+            bias = float(y.mean() - (((z - mean) / scale) @ w).mean())
+        meta = dict(meta or {}, ridge=ridge, expand=how, within=groups is not None)
+        return cls(mean, scale, w, bias, meta)
 
     def to_dict(self) -> dict:
         return {
-            "features": list(FEATURES),
+            "features": list(self.COLUMNS),
             "mean": self.mean.tolist(),
             "scale": self.scale.tolist(),
             "weights": self.weights.tolist(),
@@ -281,14 +304,15 @@ class ChooserModel:
         return write_text_atomic(Path(path), json.dumps(self.to_dict(), indent=1) + "\n")
 
     @classmethod
-    def load(cls, path: str | Path) -> ChooserModel:
+    def load(cls, path: str | Path) -> Any:
         p = Path(path)
+        what = "a value model" if cls.COLUMNS is STATE_FEATURES else "a chooser model"
         if not p.is_file():
-            raise ConfigError("path", str(path), "a chooser model file (.json)")
+            raise ConfigError("path", str(path), f"{what} file (.json)")
         d = json.loads(p.read_text())
-        if list(d.get("features", [])) != list(FEATURES):
+        if list(d.get("features", [])) != list(cls.COLUMNS):
             raise ConfigError(
-                "path", str(path), f"a chooser model over the features {', '.join(FEATURES)}"
+                "path", str(path), f"{what} over the features {', '.join(cls.COLUMNS)}"
             )
         return cls(
             np.asarray(d["mean"], dtype=float),
@@ -297,6 +321,49 @@ class ChooserModel:
             float(d["bias"]),
             dict(d.get("meta", {})),
         )
+
+
+#: names of :meth:`ReplanChoicePolicy.state_features`' columns: the inputs of a
+#: :class:`ValueModel` (the POSC still to come from a state, the rule re-planning after).
+STATE_FEATURES = (
+    "time_left",  # (usable endurance - now) / endurance
+    "posc",  # POSC so far (eq. 13)
+    "mass",  # mass left in the map (the coarse belief's sum)
+    "spread",  # belief's standard distance / map diagonal
+    "dist",  # mean distance of the searching UAVs to the belief's centre / map diagonal
+    "drift",  # drift speed / search speed
+    "drift_along",  # cosine between the drift and the way from the fleet to the mass
+    "searching",  # UAVs still searching / fleet size
+    "length",  # mean route length left / (search speed x usable time left)
+    "keep_model",  # planner-model POS of the routes being flown (choose_routes' score)
+)
+
+#: the expansions a :class:`ValueModel` may use: as they are, or with every pairwise product.
+VALUE_EXPANSIONS = ("linear", "quadratic")
+
+
+def expand_state(x: np.ndarray, how: str) -> np.ndarray:
+    """A :class:`ValueModel`'s inputs from :data:`STATE_FEATURES` rows
+    (:data:`VALUE_EXPANSIONS`)."""
+    if how not in VALUE_EXPANSIONS:
+        raise ConfigError("expand", how, f"one of {', '.join(VALUE_EXPANSIONS)}")
+    x = np.asarray(x, dtype=float).reshape(-1, len(STATE_FEATURES))
+    if how == "linear":
+        return x
+    i, j = np.triu_indices(x.shape[1])
+    return np.hstack([x, x[:, i] * x[:, j]])
+
+
+class ValueModel(ChooserModel):
+    """Ridge regression of the POSC still to come (to the episode's end, ``rule`` deciding at
+    its times) from a state's :data:`STATE_FEATURES`: the learned value that ends a truncated
+    rollout (``receding_choice:oracle~H+VALUE.json``). Same JSON layout as :class:`ChooserModel`."""
+
+    COLUMNS = STATE_FEATURES
+
+    @staticmethod
+    def expand(x: np.ndarray, how: str) -> np.ndarray:
+        return expand_state(x, how)
 
 
 CHOOSERS = ("rule", "best", "oracle", "keep", "switch", "model")
@@ -320,6 +387,9 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         lookahead: int = 0,
         variants: bool = True,
         switch_margin: float = SWITCH_MARGIN,
+        horizon_min: float | None = None,
+        value_path: str | None = None,
+        snap_min: tuple[float, ...] = (),
         **kwargs: Any,
     ) -> None:
         super().__init__(switch_margin=switch_margin, **kwargs)
@@ -351,6 +421,21 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         #: planner's model for ``best``, by the model's prediction for a model) and fly the one
         #: of highest flown POSC, as the oracle does over every candidate
         self.lookahead = lookahead
+        if horizon_min is not None:
+            if not (isinstance(horizon_min, int | float) and 0.0 < float(horizon_min) <= 1e4):
+                raise ConfigError("horizon_min", horizon_min, "a rollout length in (0, 1e4] min")
+            if chooser != "oracle" and not lookahead:
+                raise ConfigError(
+                    "horizon_min", horizon_min, "None unless the chooser rolls out (oracle, *K)"
+                )
+        if value_path is not None and horizon_min is None:
+            raise ConfigError("value_path", value_path, "None unless the rollouts are truncated")
+        #: rollouts stop ``horizon_s`` after the decision (None: at the episode's end) and
+        #: score the POSC then, plus the value model's POSC to come if there is one
+        self.horizon_s = None if horizon_min is None else float(horizon_min) * 60.0
+        self.value = None if value_path is None else ValueModel.load(value_path)
+        #: times (s) at which a rollout records its state's features and POSC (training data)
+        self.snap_s = tuple(sorted(float(t) * 60.0 for t in snap_min))
         self.record = True
 
     def reset(self, env: Any, seed: int) -> None:
@@ -401,6 +486,50 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
             "mass": mass,
             "searching": n_ks / len(self.agents),
         }
+
+    def state_features(self, observations: dict, now: float) -> np.ndarray:
+        """The state's :data:`STATE_FEATURES` (a :class:`ValueModel`'s inputs)."""
+        sc, p = self.env.scenario, self.params
+        ks, xy = self.searching(observations)
+        belief = np.array(self.env.sim_state.belief[0], dtype=float)
+        grid = p.grid
+        diag = math.hypot(grid.shape[1] * grid.cell_m, grid.shape[0] * grid.cell_m)
+        left = max(sc.uav.usable_fraction * sc.uav.endurance_s - now, 0.0)
+        dist = length = keep = 0.0
+        if ks:
+            ctx = self.context(belief, xy, now, len(ks))
+            coarse = grid.coarsen(belief, p.s)
+            mass = float(coarse.sum())
+            ys, xs = np.indices(coarse.shape)
+            w = coarse / mass if mass > 0 else np.full(coarse.shape, 1.0 / coarse.size)
+            centre = (
+                np.array([float((w * (xs + 0.5)).sum()), float((w * (ys + 0.5)).sum())])
+                * grid.cell_m
+            )  # the frame of context()
+            dist = float(np.hypot(*(xy - centre).T).mean()) / diag
+            kept, kept_v = _kept(self.follower, ks)
+            reach = sc.uav.search_speed_mps * max(left, 1.0)
+            cand = Candidate("keep", "keep", kept, kept_v, [False] * len(ks), {})
+            length = float(geometry(cand, xy, self.headings, diag, reach)[2])
+            _, (keep,) = choose_routes(
+                sc, belief, drift_of(self.env), p.s, xy, now, ks, [(kept, kept_v)], self.margin
+            )
+        else:
+            ctx = self.context(belief, np.zeros((1, 2)), now, 0)
+        return np.array(
+            [
+                left / sc.uav.endurance_s,
+                float(self.env.sim_state.posc[0]),
+                ctx["mass"],
+                ctx["spread"],
+                dist,
+                ctx["drift"],
+                ctx["drift_along"] if ks else 0.0,
+                ctx["searching"],
+                length,
+                float(keep),
+            ]
+        )
 
     def candidates(self, ks: list[int], xy: np.ndarray, now: float, belief, poc) -> list:
         """keep, the default re-plan, and (if ``variants``) the other re-plans and mixes."""
@@ -453,18 +582,36 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
 
     def rollout(self, observations: dict, cand: Candidate, ks: list[int], now: float) -> float:
         """The POSC at the episode's end if ``cand`` is flown now and ``rule`` decides after,
-        flown on a deep copy of the environment and this policy (the live ones are untouched)."""
+        flown on a deep copy of the environment and this policy (the live ones are untouched).
+        With ``horizon_s`` the rollout stops that long after ``now`` (before the policy acts at
+        that step): the POSC then, plus the :class:`ValueModel`'s POSC to come if there is one.
+        With ``snap_s`` it records ``(time, state features, POSC)`` at those times in
+        ``self.snaps`` (the value's training data)."""
         env, pol = copy.deepcopy((self.env, self))
         pol.record = False
         pol.chooser = "rule"
+        pol.lookahead = 0
         pol.todo = [t for t in self.rule_s if t > now + 1e-9]
         pol.apply(cand, ks)
         obs = copy.deepcopy(observations)
+        stop = math.inf if self.horizon_s is None else now + self.horizon_s
+        snaps = [t for t in self.snap_s if t > now + 1e-9]
+        self.snaps: list[tuple[float, list[float], float]] = []
         actions, _ = pol.follower.predict(obs)
         while env.agents:
             obs, *_ = env.step(actions)
             if not env.agents:
                 break
+            t = float(env.sim_state.step[0]) * self.params.dt
+            while snaps and t >= snaps[0] - 1e-9:
+                snaps.pop(0)
+                x = pol.state_features(obs, t)
+                self.snaps.append((t, x.tolist(), float(env.sim_state.posc[0])))
+            if t >= stop - 1e-9:
+                posc = float(env.sim_state.posc[0])
+                if self.value is None:
+                    return posc
+                return posc + float(self.value.predict(pol.state_features(obs, t))[0])
             actions, _ = pol.predict(obs)
         return float(env.sim_state.posc[0])
 
@@ -498,6 +645,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
         geo = [geometry(c, xy, self.headings, diag, reach) for c in cands]
         x = features(scores, cands, ctx, geo)
         flown: list[float | None] | None = None
+        snaps: list | None = None
         chooser = self._chooser(now)
         if chooser in ("best", "model") and self.lookahead and len(cands) > 1:
             if chooser == "best":
@@ -527,12 +675,15 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
             i = 1
         elif chooser == "oracle":
             seen: dict[bytes, float] = {}
+            snapped: dict[bytes, list] = {}
             for c in cands:  # candidates with the same routes fly the same (one rollout)
                 key = _route_key(c)
                 if key not in seen:
                     seen[key] = self.rollout(observations, c, ks, now)
+                    snapped[key] = self.snaps
             values = [seen[_route_key(c)] for c in cands]
             flown = list(values)
+            snaps = [snapped[_route_key(c)] for c in cands] if self.snap_s else None
             i = int(np.argmax(values))  # ties: the first (keep before any switch)
         else:
             assert self.model is not None
@@ -549,6 +700,7 @@ class ReplanChoicePolicy(SpacetimeRecedingPolicy):
                     "features": x.tolist(),
                     "flown": flown,
                     "pick": i,
+                    **({"snaps": snaps} if snaps is not None else {}),
                 }
             )
         self.apply(cands[i], ks)
@@ -594,15 +746,29 @@ def from_spec(spec: str, **kwargs: Any) -> ReplanChoicePolicy:
     than ``model``, optionally with its decision times (``oracle@10-20-30``), or a chooser
     model: a ``.json`` path or the name of a shipped one (:func:`shipped_choosers`), flown at
     the decision times recorded in it. ``*K`` after ``best`` or a model rolls out ``keep`` and
-    its ``K`` best-ranked candidates and flies the best of them (``best*2@10-20``)."""
+    its ``K`` best-ranked candidates and flies the best of them (``best*2@10-20``). ``~H`` after
+    the oracle or ``*K`` stops the rollouts ``H`` minutes after the decision and scores the POSC
+    then (``oracle~5@10-20``); ``+VALUE.json`` after it adds a :class:`ValueModel`'s POSC to
+    come (``oracle~5+value.json@10-20``)."""
     if not isinstance(spec, str) or not spec:
         raise ConfigError("spec", spec, "a chooser or a chooser model")
     head, _, times = spec.partition("@")
+    head, plus, value = head.partition("+")
+    head, tilde, h = head.partition("~")
     head, star, k = head.partition("*")
     if star:
         if not k.isdigit():
             raise ConfigError("spec", spec, "NAME*K with K the candidates rolled out (best*2)")
         kwargs = {**kwargs, "lookahead": int(k)}
+    if tilde:
+        try:
+            kwargs = {**kwargs, "horizon_min": float(h)}
+        except ValueError:
+            raise ConfigError("spec", spec, "NAME~H with H the rollout length in minutes") from None
+    if plus:
+        if not tilde:
+            raise ConfigError("spec", spec, "NAME~H+VALUE.json: a value ends truncated rollouts")
+        kwargs = {**kwargs, "value_path": value}
     if head in CHOOSERS and head != "model":
         decide = _minutes("spec", times) if times else (20.0,)
         return ReplanChoicePolicy(head, decide_min=decide, **kwargs)
