@@ -92,7 +92,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_routes
+from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_for
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -832,28 +832,17 @@ def make_allocation_plan(
         return out
 
     def _polish_stage(rs, passes, moves, radii, box_radii=None):
-        return polish_routes(
+        return polish_for(
+            sc,
             rs,
-            takeoff,
-            landing,
             full_prior,
-            grid,
-            sc.sensor,
-            v,
-            u.usable_endurance_s,
-            u.max_turn_rate_rad_s,
-            _reserve(sc),
-            passes=passes,
+            passes,
+            speeds=v,
+            separation_margin=opt.separation_margin,
+            range_margin=opt.range_margin,
             radii=radii,
             moves=moves,
             **({} if box_radii is None else {"box_radii": box_radii}),
-            headings=heading0,
-            airspace=Airspace(
-                sc.episode.dt_s,
-                opt.separation_margin * sc.constraints.safety_distance_m,
-                opt.range_margin * sc.comms.range_m,
-                sc.comms.min_neighbours,
-            ),
         )
 
     polished: dict[str, Any] | None = None

@@ -583,3 +583,52 @@ def polish_routes(
     if kinds & {"box", "stretch", "rotate", "group", "trim"}:
         stats["box_moves"] = n_box
     return out, ex.pos(), stats
+
+
+def polish_for(
+    sc,
+    routes: Sequence[Sequence[Sequence[float]]],
+    prior: np.ndarray,
+    passes: int = 1,
+    *,
+    speeds=None,
+    separation_margin: float = 2.0,
+    range_margin: float = 0.9,
+    airspace: bool = True,
+    **kw,
+) -> tuple[list[list[list[float]]], float, dict]:
+    """:func:`polish_routes` of scenario ``sc``'s routes as the allocation planner calls it:
+    its map, fields, sensor, usable endurance, turn rate and reserve, the headings at take-off,
+    ``speeds`` (default :func:`~poc_env.agents.planning.flight_rules.plan_speeds`) and, with
+    ``airspace``, eq. 21 / 24 counted with ``separation_margin`` on d_s and ``range_margin`` on
+    the range (:class:`~poc_env.agents.planning.options.PlanOptions`' defaults); ``kw``:
+    ``radii``, ``moves``, ``box_radii``."""
+    from poc_env.agents.planning.flight_rules import plan_speeds, reserve_s
+    from poc_env.sim.core import takeoff_heading
+
+    grid = Grid.from_config(sc.map)
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    air = Airspace(
+        sc.episode.dt_s,
+        separation_margin * sc.constraints.safety_distance_m,
+        range_margin * sc.comms.range_m,
+        sc.comms.min_neighbours,
+    )
+    u = sc.uav
+    return polish_routes(
+        routes,
+        takeoff,
+        landing,
+        prior,
+        grid,
+        sc.sensor,
+        plan_speeds(sc) if speeds is None else speeds,
+        u.usable_endurance_s,
+        u.max_turn_rate_rad_s,
+        reserve_s(sc),
+        passes=passes,
+        headings=takeoff_heading(grid.bounds, takeoff),
+        airspace=air if airspace else None,
+        **kw,
+    )

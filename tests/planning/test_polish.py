@@ -8,8 +8,8 @@ import pytest
 from poc_env.agents.planning.allocation import make_allocation_plan, sampled_sweep
 from poc_env.agents.planning.flight_rules import plan_speeds, reserve_s
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.polish import Exposure, polish_routes
-from poc_env.agents.planning.refine import Airspace, route_fits
+from poc_env.agents.planning.polish import Exposure, polish_for
+from poc_env.agents.planning.refine import route_fits
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim.core import takeoff_heading
@@ -24,18 +24,8 @@ def _setup(sc):
 
 
 def _polish(sc, routes, prior, passes=2, airspace=True, **kw):
-    grid, takeoff, landing = _setup(sc)
-    u = sc.uav
-    air = Airspace(
-        sc.episode.dt_s, 2.0 * sc.constraints.safety_distance_m, 0.9 * sc.comms.range_m,
-        sc.comms.min_neighbours,
-    )  # fmt: skip
-    return polish_routes(
-        routes, takeoff, landing, prior, grid, sc.sensor, plan_speeds(sc),
-        u.usable_endurance_s, u.max_turn_rate_rad_s, reserve_s(sc), passes=passes,
-        headings=takeoff_heading(grid.bounds, takeoff), airspace=air if airspace else None,
-        **kw,
-    )  # fmt: skip
+    """polish_routes as the planner calls it (:func:`polish_for`), 2 passes."""
+    return polish_for(sc, routes, prior, passes, airspace=airspace, **kw)
 
 
 def _sampled(sc, routes, prior) -> float:
