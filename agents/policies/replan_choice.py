@@ -309,18 +309,34 @@ class ChooserModel:
         what = "a value model" if cls.COLUMNS is STATE_FEATURES else "a chooser model"
         if not p.is_file():
             raise ConfigError("path", str(path), f"{what} file (.json)")
-        d = json.loads(p.read_text())
-        if list(d.get("features", [])) != list(cls.COLUMNS):
+        try:
+            d = json.loads(p.read_text())
+        except (UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ConfigError("path", str(path), f"{what} file: JSON ({e})") from None
+        if not isinstance(d, dict) or list(d.get("features", [])) != list(cls.COLUMNS):
             raise ConfigError(
                 "path", str(path), f"{what} over the features {', '.join(cls.COLUMNS)}"
             )
-        return cls(
-            np.asarray(d["mean"], dtype=float),
-            np.asarray(d["scale"], dtype=float),
-            np.asarray(d["weights"], dtype=float),
-            float(d["bias"]),
-            dict(d.get("meta", {})),
-        )
+        meta = d.get("meta", {})
+        if not isinstance(meta, dict):
+            raise ConfigError(f"{path}: meta", meta, "an object")
+        # the width the model's expansion gives (an unknown expansion is refused by it)
+        width = cls.expand(np.zeros((1, len(cls.COLUMNS))), meta.get("expand", "linear")).shape[1]
+        arrays = []
+        for key in ("mean", "scale", "weights"):
+            try:
+                a = np.asarray(d.get(key), dtype=float)
+            except (TypeError, ValueError):
+                a = np.empty(0)
+            if a.shape != (width,) or not np.all(np.isfinite(a)):
+                raise ConfigError(f"{path}: {key}", d.get(key), f"{width} finite numbers")
+            arrays.append(a)
+        if np.any(arrays[1] <= 0):
+            raise ConfigError(f"{path}: scale", d["scale"], "numbers > 0")
+        bias = d.get("bias")
+        if isinstance(bias, bool) or not isinstance(bias, int | float) or not np.isfinite(bias):
+            raise ConfigError(f"{path}: bias", bias, "a finite number")
+        return cls(arrays[0], arrays[1], arrays[2], float(bias), dict(meta))
 
 
 #: names of :meth:`ReplanChoicePolicy.state_features`' columns: the inputs of a

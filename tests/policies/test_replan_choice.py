@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -163,6 +165,33 @@ def test_bad_specs_name_the_field(tmp_path):
     bad.write_text('{"features": ["x"], "mean": [], "scale": [], "weights": [], "bias": 0}')
     with pytest.raises(ConfigError, match="features"):
         from_spec(str(bad))
+
+
+def test_malformed_model_files_are_refused_with_the_field(tmp_path):
+    """A chooser file that is not JSON, or whose arrays have the wrong width, hold NaN, or a
+    zero scale, or whose bias is not a number: a ConfigError naming the file's field, not a
+    traceback or a NaN flowing into the decisions."""
+    good = ChooserModel.fit(np.eye(len(FEATURES))[:4] + 0.1, np.arange(4.0), 0.1).to_dict()
+    n = len(good["weights"])
+    path = tmp_path / "m.json"
+    path.write_text("{not json")
+    with pytest.raises(ConfigError, match="JSON"):
+        ChooserModel.load(path)
+    cases = {
+        "weights": ([1.0] * (n - 1), "weights"),
+        "mean": ([float("nan")] * n, "mean"),
+        "scale": ([0.0] * n, "scale"),
+        "bias": ("high", "bias"),
+    }
+    for key, (value, field) in cases.items():
+        path.write_text(json.dumps({**good, key: value}))
+        with pytest.raises(ConfigError, match=f"m.json: {field}"):
+            ChooserModel.load(path)
+    path.write_text(json.dumps({**good, "meta": {"expand": "cubic"}}))
+    with pytest.raises(ConfigError, match="expand"):
+        ChooserModel.load(path)
+    path.write_text(json.dumps(good))
+    assert ChooserModel.load(path).weights.shape == (n,)
 
 
 @pytest.mark.parametrize("name", shipped_choosers())
