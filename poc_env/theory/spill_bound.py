@@ -389,7 +389,7 @@ def spill_bound(
     if prior.shape != grid.shape:
         raise ConfigError("prior", prior.shape, f"an array of the grid's shape {grid.shape}")
     rule = float(rule_bound(scenario, prior).upper)
-    if lim.law != "inverse_cube":
+    if lim.law != "inverse_cube" or rule <= 0.0:  # nothing to charge: no spill, or no mass
         return SpillBound(rule, rule, {}, 0.0)
     for cfg in configs:
         if not (len(cfg) == 3 and cfg[0] > 0 and np.isfinite(cfg[0]) and 0 < cfg[1] <= 1):

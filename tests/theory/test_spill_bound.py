@@ -273,6 +273,13 @@ def test_spill_bound_checks_its_input():
         spill_bound(sc, prior, configs=((1.0, 1.5, True),))
 
 
+def test_a_prior_without_mass_has_a_zero_bound():
+    """No mass: the bound is 0 (the rule-aware one), not a solver error on an empty program."""
+    sc, _, prior = _far_case()
+    b = spill_bound(sc, np.zeros_like(prior))
+    assert b.upper == 0.0 and b.rule == 0.0
+
+
 def test_plan_prints_and_writes_the_spill_charged_bound(tmp_path, capsys):
     """``poc-env plan --spill-bound``: plan.json holds ``bound_spill`` (at most the rule-aware
     bound, the least of the two) and the table prints it; without the flag neither."""
