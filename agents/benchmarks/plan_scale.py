@@ -49,16 +49,13 @@ def _line(name: str, value: float, note: str = "") -> None:
 def _flown(sc, policy, seed: int, prior: np.ndarray | None) -> tuple[float, dict]:
     """POSC of ``policy`` (a registered name, or a policy object with ``reset`` and
     ``predict``) flown on ``sc`` with ``prior`` (None: the scenario's), and its plan."""
+    from poc_env.agents.experiments.evaluate import play
     from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=sc)
     pol = make_policy(policy) if isinstance(policy, str) else policy
-    obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
-    pol.reset(env, seed)
-    while env.agents:
-        actions, _ = pol.predict(obs)
-        obs, *_ = env.step(actions)
+    play(env, pol, seed, prior)
     return float(env.sim_state.posc[0]), getattr(pol, "plan", {})
 
 

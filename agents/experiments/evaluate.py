@@ -97,6 +97,21 @@ def episode_prior(scenario: Any, seed: int) -> np.ndarray:
     return random_gaussian_mixture(grid, np.random.default_rng([seed, EVAL_PRIOR_STREAM]))
 
 
+def play(env, policy, seed: int, prior: np.ndarray | None = None, each=None) -> None:
+    """Fly ``policy`` (an object with ``reset(env, seed)`` and ``predict(obs)``) for one episode
+    of ``env`` reset with ``seed`` (and ``prior``, if given, as the reset's ``options["prior"]``),
+    calling ``each(infos)`` after every step: the one episode loop of the evaluation harness,
+    the airspace checks (:func:`poc_env.agents.testing.flights.fly`) and the planner's
+    benchmarks. The episode's end state is ``env.sim_state``."""
+    obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
+    policy.reset(env, seed)
+    while env.agents:
+        actions, _ = policy.predict(obs)
+        obs, _, _, _, infos = env.step(actions)
+        if each is not None:
+            each(infos)
+
+
 def run_episode(
     scenario: Any,
     policy: str,
@@ -110,16 +125,11 @@ def run_episode(
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=scenario, map_file=map_file)
-    pol = make_policy(policy)
     prior = episode_prior(env.scenario, seed) if random_priors else None
-    options = None if prior is None else {"prior": prior}
-    obs, _ = env.reset(seed=seed, options=options)
-    pol.reset(env, seed)
-    curve = []
-    while env.agents:
-        actions, _ = pol.predict(obs)
-        obs, *_ = env.step(actions)
-        curve.append(float(env.sim_state.posc[0]))
+    curve: list[float] = []
+    play(
+        env, make_policy(policy), seed, prior, lambda _: curve.append(float(env.sim_state.posc[0]))
+    )
     st = env.sim_state
     return Episode(
         policy=policy,

@@ -31,16 +31,18 @@ def fly(scenario: Any, policy: Any, seed: int = 0, prior: Any = None) -> Flight:
     """Fly ``policy`` (``reset(env, seed)`` / ``predict(obs)``) for one episode of a fresh
     ``parallel_env(scenario)`` reset with ``seed`` (and ``prior``, if given, as the reset's
     ``options["prior"]``) and count its eq. 20 steps."""
+    from poc_env.agents.experiments.evaluate import play
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=scenario)
-    obs, _ = env.reset(seed=seed, options=None if prior is None else {"prior": prior})
-    policy.reset(env, seed)
-    nofly = oob = 0
-    while env.agents:
-        obs, _, _, _, info = env.step(policy.predict(obs)[0])
-        nofly += sum(int(i["violation_no_fly"]) for i in info.values())
-        oob += sum(int(i["violation_out_of_bounds"]) for i in info.values())
+    counts = [0, 0]
+
+    def count(info) -> None:
+        counts[0] += sum(int(i["violation_no_fly"]) for i in info.values())
+        counts[1] += sum(int(i["violation_out_of_bounds"]) for i in info.values())
+
+    play(env, policy, seed, prior, count)
+    nofly, oob = counts
     st = env.sim_state
     flight = Flight(nofly, oob, int(st.landed[0].sum()), float(st.posc[0]))
     env.close()
