@@ -491,8 +491,13 @@ def _evaluate(
                     "observation (raster and vector)",
                 )  # fmt: skip
             if origin is not None and _task_of(origin).id != task.id:
+                seen = _task_of(origin).obs  # the policy computes its own observation
+                how = "same control level and observation" if seen == task.obs else (
+                    f"same control level; the policy reads its own '{seen}' observation, "
+                    f"not the task's '{task.obs}'"
+                )  # fmt: skip
                 print(f"note: {name} was trained on {_task_of(origin).id}; flown here on "
-                      f"{task.id} (a transfer: same control level and observation)")  # fmt: skip
+                      f"{task.id} (a transfer: {how})")  # fmt: skip
     if args.task is not None:  # with a fleet-size task's fleet
         sc = task.load_scenario(parse_overrides(args.overrides or []))
     else:
