@@ -316,14 +316,18 @@ def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
 
 def run_control(path: str | os.PathLike[str]) -> str:
     """The control level an RLlib run (its folder or ``checkpoint/``) was trained at, from its
-    ``config.json`` through :func:`env_kwargs` (the rule the run itself used)."""
+    ``config.json`` through :func:`env_kwargs` (the rule the run itself used): the level, not
+    a task version's variant of it (``heading`` for ``...-Heading-v1``'s ``heading_clip``,
+    :data:`poc_env.sim.control.VARIANTS`), as ``evaluate --task`` compares it with a task's."""
     from poc_env.agents.rl.args import TrainArgs
+    from poc_env.sim.control import VARIANTS
 
     cfg = _checkpoint_dir(path).parent / "config.json"
     if not cfg.is_file():
         raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
     args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
-    return str(env_kwargs(args).get("control", "increments"))
+    control = str(env_kwargs(args).get("control", "increments"))
+    return VARIANTS.get(control, control)
 
 
 class RLlibPolicy(Policy):

@@ -266,3 +266,24 @@ def test_a_damaged_checkpoint_is_a_clear_error(tmp_path, damage):
     with pytest.raises(ConfigError) as err:
         RLlibPolicy(run)
     assert err.value.field in ("checkpoint", "config.json")
+
+
+def test_an_rllib_run_of_a_heading_v1_task_flies_that_task(tmp_path, capsys):
+    """Audit (i28-audit): ``train --engine rllib --task ...-Heading-v1`` (the help's own
+    example) wrote a run that ``evaluate --task`` of the same id refused ("trained at
+    'heading_clip'", the v1 variant, not the level). The run's level is ``heading``; a run
+    folder without modules then fails on its checkpoint, not on its control level."""
+    import json
+
+    from poc_env.agents.rl.policy import checkpoint_control
+    from poc_env.cli import main
+
+    run = tmp_path / "run"
+    (run / "checkpoint" / "learner_group").mkdir(parents=True)
+    args = TrainArgs(engine="rllib", task="UAVSearch-Small-Heading-v1", progress=False)
+    (run / "config.json").write_text(json.dumps(dataclasses.asdict(args)))
+    assert checkpoint_control(f"rllib:{run}") == "heading"
+    argv = ["evaluate", "--policies", f"rllib:{run}", "--episodes", "1", "--quiet"]
+    assert main([*argv, "--task", "UAVSearch-Small-Heading-v1"]) != 0
+    err = capsys.readouterr().err
+    assert "trained at" not in err and "has no RLModule folder" in err
