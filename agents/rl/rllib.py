@@ -369,10 +369,12 @@ class RLlibPolicy(Policy):
                     "checkpoint", str(path), f"{allowed}; {d.name} cannot be read ({shown})"
                 ) from None
         self._n = None
+        self._set: Any = None  # SetFeatures of a -Set task's run (set at reset)
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
-        from poc_env.sim.observations import CompassFeatures
+        from poc_env.sim.observations import CompassFeatures, SetFeatures
+        from poc_env.tasks import get_task
 
         n = env.params.n_agents
         if self.args.rllib_policies == "per_uav" and len(self.modules) != n:
@@ -381,6 +383,10 @@ class RLlibPolicy(Policy):
                 f"(this run has {len(self.modules)})",
             )  # fmt: skip
         self._n = n
+        # the observation the run trained on: its task's (a -Set task's set observation,
+        # computed from the swarm's state as PPOPolicy's set mode does), else the compass
+        obs = get_task(self.args.task).obs if self.args.task is not None else "compass"
+        self._set = SetFeatures(env.params) if obs == "set" else None
         self._features = CompassFeatures(env.params)
         self._agents = list(env.possible_agents)
 
@@ -388,15 +394,22 @@ class RLlibPolicy(Policy):
         import torch as th
 
         from poc_env.sim.control import ACTION_DIMS, to_increments
-        from poc_env.sim.observations import decode_vector, split_observation
+        from poc_env.sim.observations import VECTOR_SIZE, decode_vector, split_observation
 
         if not observations:
             return {}, state
         live = [a for a in self._agents if a in observations]
-        shape = self.env.params.grid.shape
-        ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
         k = np.array([self._agents.index(a) for a in live])
-        feats = self._features(np.stack(ras), np.stack(vec), k)
+        if self._set is not None:  # a -Set task's run: the set observation of the swarm
+            eng = self.env.engine
+            feats = self._set.of_state(eng.current, eng.poc_scale)[0, k]
+            vectors = feats[:, :VECTOR_SIZE]
+        else:
+            shape = self.env.params.grid.shape
+            pairs = (split_observation(observations[a], shape) for a in live)
+            ras, vec = zip(*pairs, strict=True)
+            feats = self._features(np.stack(ras), np.stack(vec), k)
+            vectors = np.stack(vec)
         acts = np.zeros((len(live), ACTION_DIMS[self.control]))
         groups = (
             {"shared": list(range(len(live)))}
@@ -408,6 +421,6 @@ class RLlibPolicy(Policy):
                 out = self.modules[name].forward_inference({"obs": th.as_tensor(feats[rows])})
             dist = out["action_dist_inputs"].numpy()
             acts[rows] = np.clip(dist[:, : acts.shape[1]], -1.0, 1.0)  # the Gaussian's mean
-        q = decode_vector(self.env.params, np.stack(vec))
+        q = decode_vector(self.env.params, vectors)
         inc = to_increments(self.env.params, self.control, q, acts, k)
         return {a: inc[j] for j, a in enumerate(live)}, state
