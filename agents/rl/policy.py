@@ -103,17 +103,23 @@ def checkpoint_control(spelling: str) -> str | None:
 
 
 def checkpoint_origin(spelling: str) -> tuple[str | None, str | None]:
-    """``(task id, recipe)`` a ``ppo:PATH`` policy was trained with (from its run's config or
-    card), ``(None, None)`` for other policies and models without a config."""
+    """``(task id, recipe)`` a ``ppo:PATH`` or ``rllib:PATH`` policy was trained with (from
+    its run's config or card), ``(None, None)`` for other policies and models without a
+    config."""
     kind, sep, path = spelling.partition(":")
-    if not sep or kind != "ppo":
+    if not sep or kind not in ("ppo", "rllib"):
         return None, None
     try:
-        cfg = _run_config(model_path(path))
+        if kind == "rllib":
+            from poc_env.agents.rl.rllib import run_config
+
+            cfg = run_config(path)
+        else:
+            cfg = _run_config(model_path(path))
     except ConfigError:
         return None, None
     task = cfg.get("task")
-    recipe = cfg.get("recipe")
+    recipe = cfg.get("recipe") if kind == "ppo" else None  # RLlib runs observe the compass
     return (str(task) if task else None), (str(recipe) if recipe else None)
 
 

@@ -314,6 +314,17 @@ def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
     return p
 
 
+def run_config(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``config.json`` of an RLlib run (its folder or ``checkpoint/``), as a dict."""
+    cfg = _checkpoint_dir(path).parent / "config.json"
+    if not cfg.is_file():
+        raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
+    data = read_json(cfg, "config.json")
+    if not isinstance(data, dict):
+        raise ConfigError("config.json", data, "a JSON object of TrainArgs fields")
+    return data
+
+
 def run_control(path: str | os.PathLike[str]) -> str:
     """The control level an RLlib run (its folder or ``checkpoint/``) was trained at, from its
     ``config.json`` through :func:`env_kwargs` (the rule the run itself used): the level, not
@@ -322,10 +333,7 @@ def run_control(path: str | os.PathLike[str]) -> str:
     from poc_env.agents.rl.args import TrainArgs
     from poc_env.sim.control import VARIANTS
 
-    cfg = _checkpoint_dir(path).parent / "config.json"
-    if not cfg.is_file():
-        raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
-    args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
+    args = TrainArgs.from_dict(run_config(path), "config.json")
     control = str(env_kwargs(args).get("control", "increments"))
     return VARIANTS.get(control, control)
 
@@ -345,10 +353,7 @@ class RLlibPolicy(Policy):
 
         self.dir = _checkpoint_dir(path).resolve()  # RLlib reads URIs: absolute paths only
         self.name = name or f"rllib:{path}"
-        cfg = self.dir.parent / "config.json"
-        if not cfg.is_file():
-            raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
-        self.args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
+        self.args = TrainArgs.from_dict(run_config(path), "config.json")
         kw = env_kwargs(self.args)
         self.control = kw.get("control", "increments")
         modules = self.dir / "learner_group" / "learner" / "rl_module"

@@ -316,3 +316,27 @@ def test_an_rllib_run_of_a_heading_v1_task_flies_that_task(tmp_path, capsys):
     assert main([*argv, "--task", "UAVSearch-Small-Heading-v1"]) != 0
     err = capsys.readouterr().err
     assert "trained at" not in err and "has no RLModule folder" in err
+
+
+def test_an_rllib_transfer_is_noted_as_a_ppo_one(tmp_path, capsys):
+    """Audit (i28-audit): ``evaluate --task`` said nothing when an RLlib run flew a task other
+    than its own (a ``ppo:`` run gets a note naming both tasks and the observation read)."""
+    import json
+
+    from poc_env.cli import main
+
+    run = tmp_path / "run"
+    (run / "checkpoint" / "learner_group").mkdir(parents=True)
+    own = "poc_env/UAVSearch-Small-Random-Set-Heading-v1"
+    args = TrainArgs(engine="rllib", task=own, progress=False)
+    (run / "config.json").write_text(json.dumps(dataclasses.asdict(args)))
+    argv = ["evaluate", "--policies", f"rllib:{run}", "--episodes", "1", "--quiet", "--task"]
+    main([*argv, "UAVSearch-Small-Random-Heading-v1"])
+    out = capsys.readouterr().out
+    assert f"was trained on {own}; flown here on poc_env/UAVSearch-Small-Random-Heading-v1" in out
+    assert "its own 'set' observation, not the task's 'compass'" in out
+    # a run without a task (the scenario at the heading level, the compass) is not a recipe's
+    args = TrainArgs(engine="rllib", scenario="small", progress=False)
+    (run / "config.json").write_text(json.dumps(dataclasses.asdict(args)))
+    main([*argv, "UAVSearch-Small-Random-Heading-v1"])
+    assert "recipe's observation" not in capsys.readouterr().err
