@@ -423,6 +423,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:  # flown twice, one row each; a baseline's paired table then failed
+        raise ConfigError(
+            "policies", args.policies, f"each policy once (repeated: {', '.join(repeated)})"
+        )
     _check_out("out", args.out, "folder")
     baselines = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
     _check_baselines(baselines, names, "--policies")
