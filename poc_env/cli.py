@@ -477,7 +477,17 @@ def _evaluate(
         task = get_task(args.task)
         if scenario is not None:
             raise ConfigError("task", args.task, "either --task or --scenario, not both")
-        scenario, random_priors, label = task.scenario, random_priors or task.random_prior, task.id
+        if random_priors and not task.random_prior:  # would print random priors' scores
+            from poc_env.tasks import TASKS  # under a fixed-prior task's id
+
+            sibling = [t for t in TASKS.values() if t.random_prior and t.kwargs == {
+                **task.kwargs, "random_prior": True}]  # fmt: skip
+            raise ConfigError(
+                "random_priors", True, "not with --task: the id says whether its priors are "
+                "random, and " + (f"{sibling[0].id} flies random ones" if sibling else
+                f"{task.id} has no -Random- version"),
+            )  # fmt: skip
+        scenario, random_priors, label = task.scenario, task.random_prior, task.id
         from poc_env.agents.rl.policy import checkpoint_control, checkpoint_origin
         from poc_env.tasks import get_task as _task_of
 
@@ -986,7 +996,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="every seed flies a fresh random Gaussian-mixture prior "
         "(poc_env.agents.experiments.evaluate.episode_prior; a generator stream training "
-        "never draws from)",
+        "never draws from); with --task, a -Random- task's own (a fixed-prior task refuses it)",
     )
     p.add_argument(
         "--baseline",
