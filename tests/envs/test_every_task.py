@@ -148,3 +148,20 @@ def test_two_seeds_give_two_episodes_where_the_task_is_random(tid):
     a, b = episode(21), episode(22)
     assert a.shape != b.shape or not np.array_equal(a, b)
     np.testing.assert_array_equal(a, episode(21))
+
+
+@pytest.mark.parametrize("tid", ALL)
+def test_an_action_outside_the_box_flies_as_its_clip(tid):
+    """The documented rule (docs/environment.md, Action): each component outside [-1, 1] is
+    clipped to it, at every level but ``...-Heading-v0``'s (which normalises the direction as
+    given: an old id keeps its behaviour)."""
+    if tasks.TASKS[tid].kwargs["control"] == "heading":
+        pytest.skip("Heading-v0 normalises the direction as given (its version history)")
+    env = gymnasium.make(tid, overrides=SHORT, disable_env_checker=True)
+    wild = np.random.default_rng(4).uniform(-6, 6, env.action_space.shape)
+    runs = []
+    for action in (wild, np.clip(wild, -1, 1)):
+        env.reset(seed=4)
+        runs.append(env.step(action))
+    np.testing.assert_array_equal(runs[0][0], runs[1][0])
+    assert runs[0][1] == runs[1][1]
