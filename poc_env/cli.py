@@ -498,14 +498,17 @@ def _evaluate(
                     "policies", name, f"a checkpoint trained at the task's control level "
                     f"({task.control}); this one was trained at '{trained}'",
                 )  # fmt: skip
-            origin, recipe = checkpoint_origin(name)
+            origin, recipe, also = checkpoint_origin(name)
             if origin is None and recipe in ("shared", "central"):
                 raise ConfigError(
                     "policies", name, f"a checkpoint trained on the task's compass observation "
                     f"({task.id}); this one was trained with the '{recipe}' recipe's "
                     "observation (raster and vector)",
                 )  # fmt: skip
-            if origin is not None and _task_of(origin).id != task.id:
+            if task.id in {_task_of(t).id for t in also}:  # trained side by side with it
+                print(f"note: {name} was trained on {_task_of(origin or also[0]).id}; "
+                      f"{task.id} is one of its --also-task tasks")  # fmt: skip
+            elif origin is not None and _task_of(origin).id != task.id:
                 seen = _task_of(origin).obs  # the policy computes its own observation
                 how = "same control level and observation" if seen == task.obs else (
                     f"same control level; the policy reads its own '{seen}' observation, "
