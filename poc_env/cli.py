@@ -220,12 +220,15 @@ def cmd_tasks(args: argparse.Namespace) -> int:
 
     rows = task_table()
     width = max(len(r["id"]) for r in rows)
-    print(f"{'task':<{width}}  {'scenario':<10} {'control':<10} prior   UAVs  horizon")
+    print(
+        f"{'task':<{width}}  {'scenario':<10} {'control':<10} prior   UAVs  horizon  "
+        f"{'obs':<8} target"
+    )
     for r in rows:
         prior = "random" if r["random_prior"] else "fixed "
         print(
             f"{r['id']:<{width}}  {r['scenario']:<10} {r['control']:<10} {prior}  "
-            f"{r['n_uavs']:>4}  {r['horizon_steps']:>7}"
+            f"{r['n_uavs']:>4}  {r['horizon_steps']:>7}  {r['obs']:<8} {r['motion']}"
         )
     return 0
 

@@ -248,8 +248,8 @@ def register_tasks() -> None:
 
 
 def task_table() -> list[dict[str, Any]]:
-    """One row per task (id, scenario, control, random prior, agents, horizon): the rows of
-    ``poc-env tasks``."""
+    """One row per task (id, scenario, control, random prior, agents, horizon, observation,
+    target motion): the rows of ``poc-env tasks``."""
     rows = []
     for tid, task in TASKS.items():
         sc = task.load_scenario()
@@ -261,6 +261,8 @@ def task_table() -> list[dict[str, Any]]:
                 "random_prior": task.random_prior,
                 "n_uavs": sc.n_uavs,
                 "horizon_steps": sc.horizon_steps,
+                "obs": task.obs,
+                "motion": task.motion,
             }
         )
     return rows

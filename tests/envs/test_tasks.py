@@ -108,6 +108,22 @@ def test_unknown_task(bad):
         tasks.make_parallel(bad)
 
 
+def test_poc_env_tasks_shows_the_observation_and_the_target(capsys):
+    """Audit (i28-audit): ``poc-env tasks`` showed scenario, control, prior, UAVs and horizon,
+    so a -Set task (another observation) and a -Drift task (a moving target) read as their
+    plain siblings but for the id."""
+    from poc_env.cli import main
+
+    assert main(["tasks"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[-2:] == ["obs", "target"]
+    row = {ln.split()[0]: ln.split()[-2:] for ln in lines[1:]}
+    assert row["poc_env/UAVSearch-Small-Heading-v1"] == ["compass", "static"]
+    assert row["poc_env/UAVSearch-Small-Random-Set-Heading-v1"] == ["set", "static"]
+    assert row["poc_env/UAVSearch-Small-Drift-Heading-v1"] == ["compass", "drift"]
+    assert len(row) == len(ALL)
+
+
 @pytest.mark.parametrize(
     ("bad", "closest"),
     [
