@@ -297,6 +297,27 @@ def check_vec(tid):
     return problems
 
 
+def _edge_cases(view, step, bad, ok):
+    """``step`` of each ``bad`` action must raise ConfigError, of each ``ok`` one succeed."""
+    from poc_env.errors import ConfigError
+
+    problems = []
+    for name, action in bad.items():
+        try:
+            step(action)
+            problems.append(f"{view} {name}: accepted")
+        except ConfigError:
+            pass
+        except Exception as e:
+            problems.append(f"{view} {name}: {type(e).__name__}: {e}"[:150])
+    for name, action in ok.items():
+        try:
+            step(action)
+        except Exception as e:
+            problems.append(f"{view} {name}: {type(e).__name__}: {e}"[:150])
+    return problems
+
+
 def check_actions(tid):
     """Edge-case actions on the four views: NaN/inf, wrong shape -> ConfigError; out of bounds
     -> documented clipping (accepted, finite obs); dtypes float16/float64/int accepted."""
@@ -342,55 +363,19 @@ def check_actions(tid):
     g = gymnasium.make(tid, overrides=SHORT, disable_env_checker=True)
     g.reset(seed=0)
     n = g.action_space.shape[0]
-    for name, bad in (
-        ("nan", np.full(n, np.nan)),
-        ("inf", np.full(n, -np.inf)),
-        ("shape", np.zeros(n + 1)),
-        ("obj", np.array([None] * n)),
-    ):
-        try:
-            g.step(bad)
-            problems.append(f"gym {name}: accepted")
-        except ConfigError:
-            pass
-        except Exception as e:
-            problems.append(f"gym {name}: {type(e).__name__}: {e}"[:150])
-    for name, ok in (
-        ("big", np.full(n, 9.0)),
-        ("f16", np.zeros(n, np.float16)),
-        ("int", np.ones(n, int)),
-        ("2d", np.zeros((n // d, d))),
-    ):
-        try:
-            g.step(ok)
-        except Exception as e:
-            problems.append(f"gym {name}: {type(e).__name__}: {e}"[:150])
+    bad = {"nan": np.full(n, np.nan), "inf": np.full(n, -np.inf), "shape": np.zeros(n + 1)}
+    bad["obj"] = np.array([None] * n)
+    ok = {"big": np.full(n, 9.0), "f16": np.zeros(n, np.float16), "int": np.ones(n, int)}
+    ok["2d"] = np.zeros((n // d, d))
+    problems += _edge_cases("gym", g.step, bad, ok)
     v = gymnasium.make_vec(tid, num_envs=2, overrides=SHORT)
     v.reset(seed=0)
     shp = v.action_space.shape
-    for name, bad in (
-        ("nan", np.full(shp, np.nan)),
-        ("inf", np.full(shp, np.inf)),
-        ("shape", np.zeros((2, shp[1] + 1))),
-        ("flat", np.zeros(shp[1])),
-        ("str", np.full(shp, "a")),
-    ):
-        try:
-            v.step(bad)
-            problems.append(f"vec {name}: accepted")
-        except ConfigError:
-            pass
-        except Exception as e:
-            problems.append(f"vec {name}: {type(e).__name__}: {e}"[:150])
-    for name, ok in (
-        ("big", np.full(shp, 9.0)),
-        ("f16", np.zeros(shp, np.float16)),
-        ("int", np.ones(shp, int)),
-    ):
-        try:
-            v.step(ok)
-        except Exception as e:
-            problems.append(f"vec {name}: {type(e).__name__}: {e}"[:150])
+    bad = {"nan": np.full(shp, np.nan), "inf": np.full(shp, np.inf)}
+    bad |= {"shape": np.zeros((2, shp[1] + 1)), "flat": np.zeros(shp[1])}
+    bad["str"] = np.full(shp, "a")
+    ok = {"big": np.full(shp, 9.0), "f16": np.zeros(shp, np.float16), "int": np.ones(shp, int)}
+    problems += _edge_cases("vec", v.step, bad, ok)
     aec = tasks.make_aec(tid, overrides=SHORT)
     aec.reset(seed=0)
     for name, bad in (("nan", np.full(d, np.nan)), ("shape", np.zeros(d + 2))):
