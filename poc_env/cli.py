@@ -491,6 +491,8 @@ def _evaluate(
                 f"{task.id} has no -Random- version"),
             )  # fmt: skip
         scenario, random_priors, label = task.scenario, task.random_prior, task.id
+        if args.overrides:  # another MDP than the id's: said where the scores are printed
+            label += f" with --overrides {' '.join(args.overrides)} (not the registered task)"
         from poc_env.agents.rl.policy import checkpoint_control, checkpoint_origin
         from poc_env.tasks import get_task as _task_of
 
