@@ -426,11 +426,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
-    repeated = sorted({n for n in names if names.count(n) > 1})
-    if repeated:  # flown twice, one row each; a baseline's paired table then failed
-        raise ConfigError(
-            "policies", args.policies, f"each policy once (repeated: {', '.join(repeated)})"
-        )
+    from poc_env.agents.experiments.evaluate import check_once
+
+    check_once(names)  # before the output folder (a baseline's paired table failed on a repeat)
     _check_out("out", args.out, "folder")
     baselines = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
     _check_baselines(baselines, names, "--policies")

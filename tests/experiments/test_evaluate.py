@@ -220,3 +220,11 @@ def test_a_task_flown_with_overrides_is_not_printed_as_the_task(capsys):
         .out.splitlines()[0]
         .startswith("poc_env/UAVSearch-Small-Heading-v1: 1 episodes")
     )
+
+
+def test_a_repeated_policy_is_refused_before_any_episode():
+    """Audit (i28-audit): a policy named twice flew twice and its two runs were pooled into
+    one row over twice the episodes (``bench baselines --episodes 1 --policies a,a`` printed
+    "over 2 seeds" and an interval over copies)."""
+    with pytest.raises(ConfigError, match=r"^policies: .*each policy once \(repeated: random\)"):
+        evaluate("small", ["random", "lawnmower", "random"], episodes=1)
