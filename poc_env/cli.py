@@ -220,12 +220,15 @@ def cmd_tasks(args: argparse.Namespace) -> int:
 
     rows = task_table()
     width = max(len(r["id"]) for r in rows)
-    print(f"{'task':<{width}}  {'scenario':<10} {'control':<10} prior   UAVs  horizon")
+    print(
+        f"{'task':<{width}}  {'scenario':<10} {'control':<10} prior   UAVs  horizon  "
+        f"{'obs':<8} target"
+    )
     for r in rows:
         prior = "random" if r["random_prior"] else "fixed "
         print(
             f"{r['id']:<{width}}  {r['scenario']:<10} {r['control']:<10} {prior}  "
-            f"{r['n_uavs']:>4}  {r['horizon_steps']:>7}"
+            f"{r['n_uavs']:>4}  {r['horizon_steps']:>7}  {r['obs']:<8} {r['motion']}"
         )
     return 0
 
@@ -423,6 +426,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
         allowed = "a comma-separated list of registered policies: " + ", ".join(registered())
         raise ConfigError("policies", args.policies, allowed)
+    from poc_env.agents.experiments.evaluate import check_once
+
+    check_once(names)  # before the output folder (a baseline's paired table failed on a repeat)
     _check_out("out", args.out, "folder")
     baselines = [b.strip() for b in (args.baseline or "").split(",") if b.strip()]
     _check_baselines(baselines, names, "--policies")
@@ -472,7 +478,19 @@ def _evaluate(
         task = get_task(args.task)
         if scenario is not None:
             raise ConfigError("task", args.task, "either --task or --scenario, not both")
-        scenario, random_priors, label = task.scenario, random_priors or task.random_prior, task.id
+        if random_priors and not task.random_prior:  # would print random priors' scores
+            from poc_env.tasks import TASKS  # under a fixed-prior task's id
+
+            sibling = [t for t in TASKS.values() if t.random_prior and t.kwargs == {
+                **task.kwargs, "random_prior": True}]  # fmt: skip
+            raise ConfigError(
+                "random_priors", True, "not with --task: the id says whether its priors are "
+                "random, and " + (f"{sibling[0].id} flies random ones" if sibling else
+                f"{task.id} has no -Random- version"),
+            )  # fmt: skip
+        scenario, random_priors, label = task.scenario, task.random_prior, task.id
+        if args.overrides:  # another MDP than the id's: said where the scores are printed
+            label += f" with --overrides {' '.join(args.overrides)} (not the registered task)"
         from poc_env.agents.rl.policy import checkpoint_control, checkpoint_origin
         from poc_env.tasks import get_task as _task_of
 
@@ -483,16 +501,24 @@ def _evaluate(
                     "policies", name, f"a checkpoint trained at the task's control level "
                     f"({task.control}); this one was trained at '{trained}'",
                 )  # fmt: skip
-            origin, recipe = checkpoint_origin(name)
+            origin, recipe, also = checkpoint_origin(name)
             if origin is None and recipe in ("shared", "central"):
                 raise ConfigError(
                     "policies", name, f"a checkpoint trained on the task's compass observation "
                     f"({task.id}); this one was trained with the '{recipe}' recipe's "
                     "observation (raster and vector)",
                 )  # fmt: skip
-            if origin is not None and _task_of(origin).id != task.id:
+            if task.id in {_task_of(t).id for t in also}:  # trained side by side with it
+                print(f"note: {name} was trained on {_task_of(origin or also[0]).id}; "
+                      f"{task.id} is one of its --also-task tasks")  # fmt: skip
+            elif origin is not None and _task_of(origin).id != task.id:
+                seen = _task_of(origin).obs  # the policy computes its own observation
+                how = "same control level and observation" if seen == task.obs else (
+                    f"same control level; the policy reads its own '{seen}' observation, "
+                    f"not the task's '{task.obs}'"
+                )  # fmt: skip
                 print(f"note: {name} was trained on {_task_of(origin).id}; flown here on "
-                      f"{task.id} (a transfer: same control level and observation)")  # fmt: skip
+                      f"{task.id} (a transfer: {how})")  # fmt: skip
     if args.task is not None:  # with a fleet-size task's fleet
         sc = task.load_scenario(parse_overrides(args.overrides or []))
     else:
@@ -976,7 +1002,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="every seed flies a fresh random Gaussian-mixture prior "
         "(poc_env.agents.experiments.evaluate.episode_prior; a generator stream training "
-        "never draws from)",
+        "never draws from); with --task, a -Random- task's own (a fixed-prior task refuses it)",
     )
     p.add_argument(
         "--baseline",

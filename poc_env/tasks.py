@@ -187,8 +187,19 @@ def get_task(task: str) -> Task:
         key = task if "/" in task else f"{NAMESPACE}/{task}"
         if key in TASKS:
             return TASKS[key]
-    names = ", ".join(t.split("/", 1)[1] for t in TASKS)
-    raise ConfigError("task", task, f"a registered task id: {names} (poc-env tasks)")
+    ids = [t.split("/", 1)[1] for t in TASKS]
+    closest = ""
+    if isinstance(task, str):  # a typo, a missing UAVSearch- or a version: the nearest ids first
+        import difflib
+
+        asked = task.split("/", 1)[-1]
+        asked = asked if asked.startswith("UAVSearch-") else f"UAVSearch-{asked}"
+        near = difflib.get_close_matches(asked, ids, n=3, cutoff=0.6)
+        closest = f", the closest {', '.join(near)}" if near else ""
+    names = ", ".join(ids)
+    raise ConfigError(
+        "task", task, f"a registered task id{closest}; all {len(ids)}: {names} (poc-env tasks)"
+    )
 
 
 def task_kwargs(task: str, **overrides: Any) -> dict[str, Any]:
@@ -237,8 +248,8 @@ def register_tasks() -> None:
 
 
 def task_table() -> list[dict[str, Any]]:
-    """One row per task (id, scenario, control, random prior, agents, horizon): the rows of
-    ``poc-env tasks``."""
+    """One row per task (id, scenario, control, random prior, agents, horizon, observation,
+    target motion): the rows of ``poc-env tasks``."""
     rows = []
     for tid, task in TASKS.items():
         sc = task.load_scenario()
@@ -250,6 +261,8 @@ def task_table() -> list[dict[str, Any]]:
                 "random_prior": task.random_prior,
                 "n_uavs": sc.n_uavs,
                 "horizon_steps": sc.horizon_steps,
+                "obs": task.obs,
+                "motion": task.motion,
             }
         )
     return rows

@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
                 + ", ".join(tasks.CONTROL_NAMES) + "), e.g. PPO-RLlib=rllib:runs/r_{Control}",
             )  # fmt: skip
         learned.append((label, only or None, pol))
-    fixed = args.policies.split(",") if args.policies else None
+    fixed = [p.strip() for p in (args.policies or "").split(",") if p.strip()] or None
     cache: dict[tuple[str, int | None, bool, str, str], dict[str, Any]] = {}
     rows = []
     for task in chosen:

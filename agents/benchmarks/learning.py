@@ -123,7 +123,8 @@ def run(args: argparse.Namespace) -> tuple[list[dict[str, Any]], list[dict[str, 
         "workers": args.workers,
         "random_priors": task.random_prior,
     }
-    ref = evaluate(task.scenario, [args.reference], **kw).rows()[0]["posc_mean"]
+    sc = task.load_scenario()  # the task itself: a size task's fleet, a Drift task's target
+    ref = evaluate(sc, [args.reference], **kw).rows()[0]["posc_mean"]
     rows: list[dict[str, Any]] = []
     summary: list[dict[str, Any]] = []
     for label, runs in recipes.items():
@@ -133,7 +134,7 @@ def run(args: argparse.Namespace) -> tuple[list[dict[str, Any]], list[dict[str, 
             cks = checkpoints(r)
             cks = [c for k, c in enumerate(cks) if k % args.every == 0 or k == len(cks) - 1]
             for step, path in cks:
-                ev = evaluate(task.scenario, [f"ppo:{path}"], **kw).rows()[0]
+                ev = evaluate(sc, [f"ppo:{path}"], **kw).rows()[0]
                 rows.append(
                     {
                         "recipe": label,

@@ -31,14 +31,25 @@ from poc_env.io import csv_text
 from poc_env.stats import ci95
 
 
+def check_once(policies: Sequence[str]) -> None:
+    """ConfigError naming ``policies`` when a name is given twice (it would fly twice, and its
+    runs would be pooled into one row over twice the episodes)."""
+    names = list(policies)
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise ConfigError("policies", names, f"each policy once (repeated: {', '.join(repeated)})")
+
+
 def check_policies(policies: Sequence[str]) -> None:
     """Make every policy once, so that a bad name fails before any episode runs.
 
     Raises
     ------
     ConfigError
-        Field ``policies`` for a name the registry does not know (listing the registered ones).
+        Field ``policies`` for a name given twice (:func:`check_once`), or for a name the
+        registry does not know (listing the registered ones).
     """
+    check_once(policies)
     for p in policies:
         try:
             make_policy(p)

@@ -102,19 +102,26 @@ def checkpoint_control(spelling: str) -> str | None:
     return None if task is None else task.control
 
 
-def checkpoint_origin(spelling: str) -> tuple[str | None, str | None]:
-    """``(task id, recipe)`` a ``ppo:PATH`` policy was trained with (from its run's config or
-    card), ``(None, None)`` for other policies and models without a config."""
+def checkpoint_origin(spelling: str) -> tuple[str | None, str | None, tuple[str, ...]]:
+    """``(task id, recipe, also-task ids)`` a ``ppo:PATH`` or ``rllib:PATH`` policy was
+    trained with (from its run's config or card), ``(None, None, ())`` for other policies and
+    models without a config."""
     kind, sep, path = spelling.partition(":")
-    if not sep or kind != "ppo":
-        return None, None
+    if not sep or kind not in ("ppo", "rllib"):
+        return None, None, ()
     try:
-        cfg = _run_config(model_path(path))
+        if kind == "rllib":
+            from poc_env.agents.rl.rllib import run_config
+
+            cfg = run_config(path)
+        else:
+            cfg = _run_config(model_path(path))
     except ConfigError:
-        return None, None
+        return None, None, ()
     task = cfg.get("task")
-    recipe = cfg.get("recipe")
-    return (str(task) if task else None), (str(recipe) if recipe else None)
+    recipe = cfg.get("recipe") if kind == "ppo" else None  # RLlib runs observe the compass
+    also = tuple(str(t) for t in cfg.get("also_task") or ())
+    return (str(task) if task else None), (str(recipe) if recipe else None), also
 
 
 def compass_actions(

@@ -314,16 +314,28 @@ def _checkpoint_dir(path: str | os.PathLike[str]) -> Path:
     return p
 
 
-def run_control(path: str | os.PathLike[str]) -> str:
-    """The control level an RLlib run (its folder or ``checkpoint/``) was trained at, from its
-    ``config.json`` through :func:`env_kwargs` (the rule the run itself used)."""
-    from poc_env.agents.rl.args import TrainArgs
-
+def run_config(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``config.json`` of an RLlib run (its folder or ``checkpoint/``), as a dict."""
     cfg = _checkpoint_dir(path).parent / "config.json"
     if not cfg.is_file():
         raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
-    args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
-    return str(env_kwargs(args).get("control", "increments"))
+    data = read_json(cfg, "config.json")
+    if not isinstance(data, dict):
+        raise ConfigError("config.json", data, "a JSON object of TrainArgs fields")
+    return data
+
+
+def run_control(path: str | os.PathLike[str]) -> str:
+    """The control level an RLlib run (its folder or ``checkpoint/``) was trained at, from its
+    ``config.json`` through :func:`env_kwargs` (the rule the run itself used): the level, not
+    a task version's variant of it (``heading`` for ``...-Heading-v1``'s ``heading_clip``,
+    :data:`poc_env.sim.control.VARIANTS`), as ``evaluate --task`` compares it with a task's."""
+    from poc_env.agents.rl.args import TrainArgs
+    from poc_env.sim.control import VARIANTS
+
+    args = TrainArgs.from_dict(run_config(path), "config.json")
+    control = str(env_kwargs(args).get("control", "increments"))
+    return VARIANTS.get(control, control)
 
 
 class RLlibPolicy(Policy):
@@ -341,10 +353,7 @@ class RLlibPolicy(Policy):
 
         self.dir = _checkpoint_dir(path).resolve()  # RLlib reads URIs: absolute paths only
         self.name = name or f"rllib:{path}"
-        cfg = self.dir.parent / "config.json"
-        if not cfg.is_file():
-            raise ConfigError("checkpoint", str(path), "a checkpoint beside its config.json")
-        self.args = TrainArgs.from_dict(read_json(cfg, "config.json"), "config.json")
+        self.args = TrainArgs.from_dict(run_config(path), "config.json")
         kw = env_kwargs(self.args)
         self.control = kw.get("control", "increments")
         modules = self.dir / "learner_group" / "learner" / "rl_module"
@@ -365,10 +374,12 @@ class RLlibPolicy(Policy):
                     "checkpoint", str(path), f"{allowed}; {d.name} cannot be read ({shown})"
                 ) from None
         self._n = None
+        self._set: Any = None  # SetFeatures of a -Set task's run (set at reset)
 
     def reset(self, env: Any, seed: int) -> None:
         super().reset(env, seed)
-        from poc_env.sim.observations import CompassFeatures
+        from poc_env.sim.observations import CompassFeatures, SetFeatures
+        from poc_env.tasks import get_task
 
         n = env.params.n_agents
         if self.args.rllib_policies == "per_uav" and len(self.modules) != n:
@@ -377,6 +388,10 @@ class RLlibPolicy(Policy):
                 f"(this run has {len(self.modules)})",
             )  # fmt: skip
         self._n = n
+        # the observation the run trained on: its task's (a -Set task's set observation,
+        # computed from the swarm's state as PPOPolicy's set mode does), else the compass
+        obs = get_task(self.args.task).obs if self.args.task is not None else "compass"
+        self._set = SetFeatures(env.params) if obs == "set" else None
         self._features = CompassFeatures(env.params)
         self._agents = list(env.possible_agents)
 
@@ -384,15 +399,22 @@ class RLlibPolicy(Policy):
         import torch as th
 
         from poc_env.sim.control import ACTION_DIMS, to_increments
-        from poc_env.sim.observations import decode_vector, split_observation
+        from poc_env.sim.observations import VECTOR_SIZE, decode_vector, split_observation
 
         if not observations:
             return {}, state
         live = [a for a in self._agents if a in observations]
-        shape = self.env.params.grid.shape
-        ras, vec = zip(*(split_observation(observations[a], shape) for a in live), strict=True)
         k = np.array([self._agents.index(a) for a in live])
-        feats = self._features(np.stack(ras), np.stack(vec), k)
+        if self._set is not None:  # a -Set task's run: the set observation of the swarm
+            eng = self.env.engine
+            feats = self._set.of_state(eng.current, eng.poc_scale)[0, k]
+            vectors = feats[:, :VECTOR_SIZE]
+        else:
+            shape = self.env.params.grid.shape
+            pairs = (split_observation(observations[a], shape) for a in live)
+            ras, vec = zip(*pairs, strict=True)
+            feats = self._features(np.stack(ras), np.stack(vec), k)
+            vectors = np.stack(vec)
         acts = np.zeros((len(live), ACTION_DIMS[self.control]))
         groups = (
             {"shared": list(range(len(live)))}
@@ -404,6 +426,6 @@ class RLlibPolicy(Policy):
                 out = self.modules[name].forward_inference({"obs": th.as_tensor(feats[rows])})
             dist = out["action_dist_inputs"].numpy()
             acts[rows] = np.clip(dist[:, : acts.shape[1]], -1.0, 1.0)  # the Gaussian's mean
-        q = decode_vector(self.env.params, np.stack(vec))
+        q = decode_vector(self.env.params, vectors)
         inc = to_increments(self.env.params, self.control, q, acts, k)
         return {a: inc[j] for j, a in enumerate(live)}, state

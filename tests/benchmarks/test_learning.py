@@ -81,3 +81,34 @@ def test_bad_input_writes_nothing(runs, tmp_path):
     with pytest.raises(ConfigError, match="polic"):
         learning.main(["--recipe", f"h={runs[0]}", "--reference", "nope", "--out", str(out)])
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "task", ["UAVSearch-Wide-N3-Random-Set-Heading-v1", "UAVSearch-Small-Drift-Heading-v1"]
+)
+def test_the_curve_flies_the_runs_task(tmp_path, monkeypatch, task):
+    """Audit (i28-audit): the checkpoints and the reference were flown on the task's scenario
+    by name, so a ``Wide-N3`` run was scored with the scenario's 12 UAVs and a ``Drift`` run
+    on a standing target. They fly ``Task.load_scenario()``, the task itself."""
+    import json
+    import types
+
+    from poc_env import tasks
+    from poc_env.agents.experiments import evaluate as evaluate_mod
+
+    run = tmp_path / "run"
+    (run / "checkpoints").mkdir(parents=True)
+    (run / "checkpoints" / "step_64.zip").write_bytes(b"")
+    (run / "config.json").write_text(json.dumps({"task": task}))
+    flown = []
+
+    def fake(scenario, policies, **kw):  # what the curve is made of: one row per policy
+        flown.append(scenario)
+        row = {"posc_mean": 0.5, "posc_ci95": 0.0, "normalised": 0.5, "rule_normalised": 0.5}
+        return types.SimpleNamespace(rows=lambda: [dict(row, policy=p) for p in policies])
+
+    monkeypatch.setattr(evaluate_mod, "evaluate", fake)
+    argv = ["--recipe", f"r={run}", "--reference", "random", "--episodes", "1", "--quiet"]
+    learning.main([*argv, "--out", str(tmp_path / "out")])
+    want = tasks.get_task(task).load_scenario()
+    assert flown and all(sc == want for sc in flown)

@@ -67,6 +67,14 @@ def test_baselines_learned_columns_follow_the_control_level():
     assert "| task | lawnmower | floor | only |" in md
 
 
+def test_baselines_policies_are_a_comma_list_as_evaluate_reads_it():
+    """Audit (i28-audit): ``--policies "random_waypoint, lawnmower"`` was refused (``got '
+    lawnmower'``) where ``evaluate --policies`` strips each name."""
+    argv = ["--tasks", "UAVSearch-Small-Waypoint-v0", "--episodes", "1"]
+    rows = baselines.run(baselines._parse([*argv, "--policies", "random_waypoint, lawnmower,"]))
+    assert [r["policy"] for r in rows] == ["random_waypoint", "lawnmower"]
+
+
 def test_suite_env_figures_are_positive():
     tid = tasks.task_id("Small", "Heading", False)
     assert suite.bench_vector(tid, 4, runs=1) > 0

@@ -41,6 +41,16 @@ CASES = [
     (["plan", "--scenario", "small", "--seed", "-1", "--out", "{d}/plan.json"], "seed"),
     (["evaluate", "--policies", "", "--episodes", "1"], "policies"),
     (["evaluate", "--policies", " , ", "--episodes", "1"], "policies"),
+    # audit (i28-audit): a repeated policy flew twice, and with --baseline the paired table
+    # crashed (IndexError) after every episode had flown
+    (["evaluate", "--policies", "random,random", "--episodes", "1"], "policies"),
+    (["evaluate", "--policies", "random, lawnmower,random", "--baseline", "random"], "policies"),
+    # audit (i28-audit): random priors flown and printed under a fixed-prior task's id
+    (["evaluate", "--task", "UAVSearch-Small-Heading-v1", "--random-priors"], "random_priors"),
+    (
+        ["evaluate", "--task", "UAVSearch-Small-Drift-Heading-v1", "--random-priors"],
+        "random_priors",
+    ),
     (["plan", "--scenario", "small", "--popsize", "0", "--out", "{d}/plan.json"], "popsize"),
     (["plan", "--popsize", str(10**12), "--out", "{d}/plan.json"], "popsize"),
     (["plan", "--scenario", "small", "--maxiter", "0", "--out", "{d}/plan.json"], "maxiter"),

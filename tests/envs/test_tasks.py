@@ -108,6 +108,40 @@ def test_unknown_task(bad):
         tasks.make_parallel(bad)
 
 
+def test_poc_env_tasks_shows_the_observation_and_the_target(capsys):
+    """Audit (i28-audit): ``poc-env tasks`` showed scenario, control, prior, UAVs and horizon,
+    so a -Set task (another observation) and a -Drift task (a moving target) read as their
+    plain siblings but for the id."""
+    from poc_env.cli import main
+
+    assert main(["tasks"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[-2:] == ["obs", "target"]
+    row = {ln.split()[0]: ln.split()[-2:] for ln in lines[1:]}
+    assert row["poc_env/UAVSearch-Small-Heading-v1"] == ["compass", "static"]
+    assert row["poc_env/UAVSearch-Small-Random-Set-Heading-v1"] == ["set", "static"]
+    assert row["poc_env/UAVSearch-Small-Drift-Heading-v1"] == ["compass", "drift"]
+    assert len(row) == len(ALL)
+
+
+@pytest.mark.parametrize(
+    ("bad", "closest"),
+    [
+        ("UAVSearch-Smal-Heading-v1", "UAVSearch-Small-Heading-v1"),  # a typo
+        ("Small-Random-Heading-v1", "UAVSearch-Small-Random-Heading-v1"),  # no UAVSearch-
+        ("poc_env/UAVSearch-Small-Increments-v1", "UAVSearch-Small-Increments-v0"),  # a version
+    ],
+)
+def test_a_wrong_task_id_names_the_closest_ids_first(bad, closest):
+    """Audit (i28-audit): the error listed all 50 ids and no near match; the closest come
+    first, then the whole list."""
+    with pytest.raises(ConfigError) as err:
+        tasks.get_task(bad)
+    text = str(err.value)
+    assert f"allowed: a registered task id, the closest {closest}" in text
+    assert text.index(closest) < text.index("UAVSearch-Paper61-Increments-v0")
+
+
 # -- gymnasium.make_vec: the batched core equals the sync vector env ---------------------------
 def _run_both(tid, num_envs, steps, seed, **kw):
     v = gymnasium.make_vec(tid, num_envs=num_envs, vectorization_mode="vector_entry_point", **kw)

@@ -203,3 +203,28 @@ def test_summarise_refuses_a_bad_episodes_csv_and_writes_nothing(tmp_path, capsy
         assert "error: " in err and "allowed: " in err, (name, err)
         assert sorted(p.name for p in folder.iterdir()) == ([] if text is None else
                                                             ["episodes.csv"]), name  # fmt: skip
+
+
+def test_a_task_flown_with_overrides_is_not_printed_as_the_task(capsys):
+    """Audit (i28-audit): ``evaluate --task ID --overrides ...`` printed its scores under the
+    bare id, though the overrides make another MDP (scores compare only between equal ids)."""
+    argv = ["evaluate", "--task", "UAVSearch-Small-Heading-v1", "--policies", "random"]
+    argv += ["--episodes", "1", "--quiet"]
+    assert main([*argv, "--overrides", "episode.horizon_steps=3"]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    assert head.startswith("poc_env/UAVSearch-Small-Heading-v1 with --overrides ")
+    assert "episode.horizon_steps=3 (not the registered task)" in head
+    assert main(argv) == 0
+    assert (
+        capsys.readouterr()
+        .out.splitlines()[0]
+        .startswith("poc_env/UAVSearch-Small-Heading-v1: 1 episodes")
+    )
+
+
+def test_a_repeated_policy_is_refused_before_any_episode():
+    """Audit (i28-audit): a policy named twice flew twice and its two runs were pooled into
+    one row over twice the episodes (``bench baselines --episodes 1 --policies a,a`` printed
+    "over 2 seeds" and an interval over copies)."""
+    with pytest.raises(ConfigError, match=r"^policies: .*each policy once \(repeated: random\)"):
+        evaluate("small", ["random", "lawnmower", "random"], episodes=1)

@@ -81,6 +81,35 @@ def test_shared_policy_trains_saves_and_flies(ray_local, tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_an_rllib_run_of_a_set_task_flies_on_its_observation(ray_local, tmp_path):
+    """Audit (i28-audit): RLlib trains on a ``-Set`` task (the 116-value set observation), but
+    its policy read the 63-value compass, so ``evaluate`` crashed in torch (``mat1 and mat2
+    shapes cannot be multiplied (3x63 and 116x128)``). It reads the set observation of the
+    env's swarm, which is the task's own observation of the same state."""
+    import poc_env
+    from poc_env.tasks import make_parallel
+
+    set_task = "poc_env/UAVSearch-Small-Random-Set-Heading-v1"
+    run = train(_args(tmp_path, "set", task=set_task))
+    policy = make_policy(f"rllib:{run}")
+    env = make_parallel(set_task, overrides={"episode.horizon_steps": 5})
+    obs, _ = env.reset(seed=3)
+    policy.reset(env, seed=3)
+    acts, _ = policy.predict(obs)
+    assert set(acts) == set(env.agents) and all(np.isfinite(a).all() for a in acts.values())
+    np.testing.assert_array_equal(  # the policy's features are the env's observation
+        policy._set.of_state(env.engine.current, env.engine.poc_scale)[0],
+        np.stack([obs[a] for a in env.agents]),
+    )
+    ev = evaluate(
+        poc_env.tasks.get_task(set_task).load_scenario({"episode.horizon_steps": 20}),
+        [f"rllib:{run}"],
+        episodes=1,
+        seed0=0,
+    )
+    assert 0.0 <= ev.rows()[0]["posc_mean"] <= 1.0
+
+
 def test_one_policy_per_uav(ray_local, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # relative run folders (RLlib itself needs absolute URIs)
     train(dataclasses.replace(_args(tmp_path, "x", rllib_policies="per_uav"), run_dir="per_uav"))
@@ -266,3 +295,48 @@ def test_a_damaged_checkpoint_is_a_clear_error(tmp_path, damage):
     with pytest.raises(ConfigError) as err:
         RLlibPolicy(run)
     assert err.value.field in ("checkpoint", "config.json")
+
+
+def test_an_rllib_run_of_a_heading_v1_task_flies_that_task(tmp_path, capsys):
+    """Audit (i28-audit): ``train --engine rllib --task ...-Heading-v1`` (the help's own
+    example) wrote a run that ``evaluate --task`` of the same id refused ("trained at
+    'heading_clip'", the v1 variant, not the level). The run's level is ``heading``; a run
+    folder without modules then fails on its checkpoint, not on its control level."""
+    import json
+
+    from poc_env.agents.rl.policy import checkpoint_control
+    from poc_env.cli import main
+
+    run = tmp_path / "run"
+    (run / "checkpoint" / "learner_group").mkdir(parents=True)
+    args = TrainArgs(engine="rllib", task="UAVSearch-Small-Heading-v1", progress=False)
+    (run / "config.json").write_text(json.dumps(dataclasses.asdict(args)))
+    assert checkpoint_control(f"rllib:{run}") == "heading"
+    argv = ["evaluate", "--policies", f"rllib:{run}", "--episodes", "1", "--quiet"]
+    assert main([*argv, "--task", "UAVSearch-Small-Heading-v1"]) != 0
+    err = capsys.readouterr().err
+    assert "trained at" not in err and "has no RLModule folder" in err
+
+
+def test_an_rllib_transfer_is_noted_as_a_ppo_one(tmp_path, capsys):
+    """Audit (i28-audit): ``evaluate --task`` said nothing when an RLlib run flew a task other
+    than its own (a ``ppo:`` run gets a note naming both tasks and the observation read)."""
+    import json
+
+    from poc_env.cli import main
+
+    run = tmp_path / "run"
+    (run / "checkpoint" / "learner_group").mkdir(parents=True)
+    own = "poc_env/UAVSearch-Small-Random-Set-Heading-v1"
+    args = TrainArgs(engine="rllib", task=own, progress=False)
+    (run / "config.json").write_text(json.dumps(dataclasses.asdict(args)))
+    argv = ["evaluate", "--policies", f"rllib:{run}", "--episodes", "1", "--quiet", "--task"]
+    main([*argv, "UAVSearch-Small-Random-Heading-v1"])
+    out = capsys.readouterr().out
+    assert f"was trained on {own}; flown here on poc_env/UAVSearch-Small-Random-Heading-v1" in out
+    assert "its own 'set' observation, not the task's 'compass'" in out
+    # a run without a task (the scenario at the heading level, the compass) is not a recipe's
+    args = TrainArgs(engine="rllib", scenario="small", progress=False)
+    (run / "config.json").write_text(json.dumps(dataclasses.asdict(args)))
+    main([*argv, "UAVSearch-Small-Random-Heading-v1"])
+    assert "recipe's observation" not in capsys.readouterr().err

@@ -132,3 +132,23 @@ def test_docs_example_builds_swarm_vec_env():
         ref.num_envs, ref.action_space, ref.control,
     )  # fmt: skip
     np.testing.assert_array_equal(venv.reset(), ref.reset())
+    # audit (i28-audit): the example, for any id, builds that task's MDP (it passed
+    # control=t.control, the level, and obs_type="compass": a Heading-v1 id flew v0's rule
+    # and a -Set id the compass)
+    from poc_env.sim.observations import FEATURES, SET_SIZE
+
+    # and the scenario's name alone: a Wide-N3 task flew 12 UAVs, a Drift task a static target
+    for tid in (
+        "UAVSearch-Small-Random-Set-Heading-v1",
+        "UAVSearch-Small-Heading-v1",
+        "UAVSearch-Wide-N3-Random-Set-Heading-v1",
+        "UAVSearch-Small-Drift-Heading-v1",
+    ):
+        ns = {}
+        exec(compile(blocks[0].replace(TASK, tid), "docs/FRAMEWORKS.md", "exec"), ns)
+        task = tasks.get_task(tid)
+        venv = ns["venv"]
+        assert venv.control == task.kwargs["control"]
+        assert venv.observation_space.shape == (SET_SIZE if task.obs == "set" else FEATURES,)
+        assert venv.scenario == task.load_scenario()
+        assert venv.num_envs == 2 * task.load_scenario().n_uavs

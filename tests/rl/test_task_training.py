@@ -76,6 +76,35 @@ def test_a_checkpoint_of_another_control_level_is_refused(tmp_path, capsys):
     assert "a transfer" not in capsys.readouterr().out
 
 
+def test_a_transfer_note_names_the_observation_the_policy_reads(capsys):
+    """Audit (i28-audit): ``ppo:ppo_set_anysize`` (trained on a ``-Set`` task) flown by
+    ``evaluate --task`` on a compass task reads its own set observation; the note said
+    "same control level and observation"."""
+    from poc_env.cli import main
+
+    argv = ["evaluate", "--policies", "ppo:ppo_set_anysize", "--episodes", "1", "--quiet"]
+    argv += ["--overrides", "episode.horizon_steps=3"]
+    assert main([*argv, "--task", "UAVSearch-Small-Random-Heading-v1"]) == 0
+    out = capsys.readouterr().out
+    assert "same control level and observation" not in out
+    assert "its own 'set' observation" in out and "the task's 'compass'" in out
+    assert main([*argv, "--task", "UAVSearch-Small-Random-Set-Heading-v1"]) == 0
+    assert "(a transfer: same control level and observation)" in capsys.readouterr().out
+
+
+def test_a_task_trained_with_also_task_is_not_called_a_transfer(capsys):
+    """Audit (i28-audit): ``ppo_set_anysize`` trained on Paper62 with the four ``Wide`` sizes
+    as ``--also-task``; ``evaluate --task`` of one of them called it a transfer."""
+    from poc_env.cli import main
+
+    argv = ["evaluate", "--policies", "ppo:ppo_set_anysize", "--episodes", "1", "--quiet"]
+    argv += ["--overrides", "episode.horizon_steps=2"]
+    assert main([*argv, "--task", "UAVSearch-Wide-N3-Random-Set-Heading-v1"]) == 0
+    out = capsys.readouterr().out
+    assert "a transfer" not in out
+    assert "UAVSearch-Wide-N3-Random-Set-Heading-v1 is one of its --also-task tasks" in out
+
+
 def test_no_agent_index_trains_and_flies_without_it(tmp_path):
     """--no-agent-index: the training env's features and the checkpoint's, flown by
     PPOPolicy, both have the index block at zero."""
