@@ -540,7 +540,10 @@ def rule_bound(scenario: Scenario, prior, spill_m: float | None = None) -> RuleB
     ``v_max`` per second. So the transit to cell j is ``tau_j = (d_o - rho)^+ / v_max +
     (d_l - rho)^+ / v_c`` (``rho`` the detection spill, as in :func:`reach_bound`) with budget
     ``T_u`` and rate ``W v_max``, solved by :func:`reach_optimum`. With ``v_c = v_max`` it is
-    :func:`reach_bound` with ``round_trip=True``; a slower way home only lowers it. Plans that
+    :func:`reach_bound` with ``round_trip=True``; a slower way home only lowers it. Where the
+    episode ends first (its sensing time, :func:`env_limits`, below ``T_u``: a short
+    ``episode.horizon_steps``), the track sensed by then is also at most ``v_max (t_sense -
+    d_o / v_max)^+`` and the relaxation is the least of the two. Plans that
     keep the rules (the allocation planner's, the greedy rectangles') stay below it; the
     environment itself lets a UAV sense until T, so :func:`reach_bound` stays the bound of any
     policy.
@@ -632,10 +635,15 @@ def _rule_relaxation(scenario: Scenario, prior, rho: float) -> ReachBound:
     home = np.maximum(cell_distances(grid, lim.landing_m) - rho, 0.0) / v_home
     n = len(lim.takeoff_m)
     budget = scenario.uav.usable_endurance_s
-    return reach_optimum(
-        prior, grid.cell_area_m2, out + home, np.full(n, lim.rate_m2_s), np.full(n, budget),
-        lim.law,
-    )  # fmt: skip
+    rate = np.full(n, lim.rate_m2_s)
+    rule = reach_optimum(prior, grid.cell_area_m2, out + home, rate, np.full(n, budget), lim.law)
+    if lim.time_s >= budget:
+        return rule
+    # an episode that ends before 0.85 T (a short horizon): what a flight senses by then at
+    # points d_o from its take-off field is at most v_max (t_sense - (d_o - rho)^+ / v_max)^+,
+    # whatever its way home; the least of the two relaxations bounds it
+    cut = reach_optimum(prior, grid.cell_area_m2, out, rate, np.full(n, lim.time_s), lim.law)
+    return cut if cut.upper < rule.upper else rule
 
 
 def reach_bound(scenario: Scenario, prior, round_trip: bool = False) -> ReachBound:

@@ -213,3 +213,28 @@ def test_two_row_search_by_blocks_and_the_large_grid_relaxation(monkeypatch):
     relaxed = reach_bound(sc, prior)
     assert exact.upper - 1e-12 <= relaxed.upper <= honest_optimum(sc, prior).pos + 1e-9
     assert relaxed.upper > exact.upper + 1e-4  # the merge does loosen it here
+
+
+def test_rule_bound_of_an_episode_cut_before_the_usable_endurance_is_no_looser_than_reach():
+    """An episode whose horizon ends before 0.85 T (``episode.horizon_steps`` = 10 on small:
+    300 s of sensing) cannot sense more than the reach-aware bound allows; the rule-aware bound
+    ignored the horizon (0.845 against reach 0.236). It is now the least of its relaxation and
+    the horizon's, and it stays above a rule-keeping plan flown in that episode."""
+    import poc_env
+    from poc_env.agents.experiments.evaluate import play
+    from poc_env.agents.policies.registry import make_policy
+
+    sc = load_scenario("small", {"episode.horizon_steps": 10})
+    prior = build_prior(sc.map)
+    rule, reach = rule_bound(sc, prior), reach_bound(sc, prior)
+    assert rule.upper <= reach.upper + 1e-9
+    assert rule_bound(sc, prior, spill_m=0.0).upper <= rule.upper + 1e-9
+    env = poc_env.parallel_env(sc)
+    play(env, make_policy("greedy_bayes"), 0)
+    assert 0.0 < float(env.sim_state.posc[0]) <= rule.upper
+    # a horizon past 0.85 T leaves the rule-aware bound as it was
+    full = load_scenario("small")
+    assert (
+        rule_bound(full, prior).upper
+        == rule_bound(load_scenario("small", {"episode.horizon_steps": 200}), prior).upper
+    )
