@@ -99,6 +99,12 @@ class Episode:
 EVAL_PRIOR_STREAM = 0x5EA7C4
 
 
+def _half(row: dict[str, Any], key: str = "posc_ci95") -> str:
+    """A table's interval column: ``-`` for one episode (no spread to estimate; the records
+    keep :func:`poc_env.stats.ci95`'s 0)."""
+    return "-" if row["episodes"] < 2 else f"{row[key]:.4f}"
+
+
 def episode_prior(scenario: Any, seed: int) -> np.ndarray:
     """The random Gaussian-mixture prior of evaluation episode ``seed`` (``--random-priors``)."""
     from poc_env.config import load_scenario
@@ -235,7 +241,7 @@ class Evaluation:
             nrm = "-" if r["normalised"] is None else f"{r['normalised']:.4f}"
             nrl = "-" if r["normalised_rule"] is None else f"{r['normalised_rule']:.4f}"
             lines.append(
-                f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {r['posc_ci95']:>7.4f} "
+                f"{r['policy']:<{width}} {r['posc_mean']:>8.4f} {_half(r):>7} "
                 f"{r['detection_rate']:>9.2f} {t:>10} {r['violation_steps']:>10.1f} "
                 f"{r['crashed']:>8.2f} {r['landed']:>7.2f} {nrm:>10} {nrl:>9}"
                 + (f" {r['normalised_moving']:>11.4f}" if moving else "")
@@ -316,7 +322,7 @@ class Evaluation:
         for r in rows:
             lines.append(
                 f"{r['policy']:<{width}} {r['diff_mean']:>+{max(16, len(baseline) + 2)}.4f} "
-                f"{r['diff_ci95']:>7.4f} {r['wins']:>5} {r['ties']:>5} {r['losses']:>6}"
+                f"{_half(r, 'diff_ci95'):>7} {r['wins']:>5} {r['ties']:>5} {r['losses']:>6}"
             )
         return "\n".join(lines)
 

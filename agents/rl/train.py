@@ -526,6 +526,13 @@ def _resume(run_dir: Path, progress: bool, callback: BaseCallback | None) -> Pat
         sc = _scenario_of(args)
         save_scenario(sc, run_dir / "scenario.yaml")
     ck = latest_checkpoint(run_dir)
+    if ck is not None and ck.step >= args.total_timesteps and (run_dir / "model.zip").is_file():
+        print(
+            f"{run_dir}: finished (step {ck.step} of {args.total_timesteps}); nothing to train. "
+            "Train longer with a new run: poc-env train --run-dir NEW ...",
+            file=sys.stderr,
+        )
+        return run_dir
     if ck is None:  # killed before its first checkpoint: the same run again, from step 0
         warnings.warn(
             f"{run_dir}: no complete checkpoint; training again from step 0 with its config",

@@ -228,3 +228,14 @@ def test_a_repeated_policy_is_refused_before_any_episode():
     "over 2 seeds" and an interval over copies)."""
     with pytest.raises(ConfigError, match=r"^policies: .*each policy once \(repeated: random\)"):
         evaluate("small", ["random", "lawnmower", "random"], episodes=1)
+
+
+def test_one_episode_prints_no_interval():
+    """With one episode there is no spread to estimate: the tables print ``-`` in the ±95 %
+    column (they printed 0.0000, which reads as certainty); two episodes print the number."""
+    one = evaluate("small", ["lawnmower", "random"], episodes=1)
+    row = one.table().splitlines()[2].split()
+    assert row[0] == "lawnmower" and row[2] == "-"
+    assert one.paired_table("random").splitlines()[3].split()[2] == "-"
+    two = evaluate("small", ["lawnmower", "random"], episodes=2)
+    assert two.table().splitlines()[2].split()[2] == f"{two.rows()[0]['posc_ci95']:.4f}"

@@ -149,7 +149,7 @@ def test_same_seed_same_parameters_other_seed_others(runs, tmp_path, same_weight
 
 # -- resume -----------------------------------------------------------------------------------
 @pytest.mark.parametrize("recipe", ["shared", "pilot"])
-def test_resume_continues_bit_identically(runs, tmp_path, recipe, same_weights):
+def test_resume_continues_bit_identically(runs, tmp_path, recipe, same_weights, capsys):
     run = tmp_path / "killed"
     with pytest.raises(Interrupt):  # killed in the middle of the second rollout
         train(_args(recipe, run), callback=_killer(ROLLOUT[recipe] + 54))
@@ -169,11 +169,12 @@ def test_resume_continues_bit_identically(runs, tmp_path, recipe, same_weights):
     np.testing.assert_array_equal(steps, [ROLLOUT[recipe] * k for k in (1, 2, 3)])
     # model, optimiser, env state and generators restored: the uninterrupted run's parameters
     assert same_weights(run / "model.zip", runs[recipe] / "model.zip")
-    # resuming a finished run changes nothing
-    before = (run / "model.zip").read_bytes()
+    # resuming a finished run changes nothing, and says so
+    before = (run / "model.zip").stat().st_mtime_ns, (run / "model.zip").read_bytes()
     train(TrainArgs(resume=str(run), progress=False))
     assert same_weights(run / "model.zip", runs[recipe] / "model.zip")
-    assert len(before) > 0
+    assert ((run / "model.zip").stat().st_mtime_ns, (run / "model.zip").read_bytes()) == before
+    assert "nothing to train" in capsys.readouterr().err
 
 
 def test_resume_continues_the_step_count_central(tmp_path):
