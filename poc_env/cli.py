@@ -725,7 +725,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     dest = Path(args.out) if args.out else Path(args.plan).parent
     _check_out("out", dest, "folder")
     with _output_folder("out", dest) as stage:
-        _wrote(export(args.plan, args.format, args.origin, stage), stage, dest)
+        written = export(args.plan, args.format, args.origin, stage)
+    _wrote(written, stage, dest)  # once in place: a refused merge writes (and says) nothing
     return 0
 
 

@@ -194,3 +194,23 @@ def test_atomic_dir_never_replaces_a_folder_by_a_file(tmp_path):
         (stage / "sub").mkdir()
         (stage / "sub" / "a.txt").write_text("x")
     assert (tmp_path / "p" / "sub").read_text() == "a file"
+
+
+def test_export_over_a_folder_in_the_way_says_nothing_written(tmp_path, capsys):
+    """``poc-env export`` whose output name is taken by a folder: a clear error, the folder and
+    its contents kept, and no ``wrote`` line for a file that was not written."""
+    plan = tmp_path / "plan.json"
+    argv = ["plan", "--scenario", "small", "--popsize", "8", "--maxiter", "1", "--quiet"]
+    assert main([*argv, "--origin", "45.75,126.65", "--out", str(plan)]) == 0
+    (tmp_path / "o" / "plan.geojson").mkdir(parents=True)
+    (tmp_path / "o" / "plan.geojson" / "keep.txt").write_text("the user's")
+    capsys.readouterr()
+    assert main(["export", str(plan), "--format", "geojson", "--out", str(tmp_path / "o")]) == 2
+    printed = capsys.readouterr()
+    assert "plan.geojson'; allowed: a new path or a regular file to replace; it is a folder" in (
+        printed.err
+    )
+    assert "wrote" not in printed.out
+    assert (tmp_path / "o" / "plan.geojson" / "keep.txt").read_text() == "the user's"
+    assert main(["export", str(plan), "--format", "geojson", "--out", str(tmp_path / "p")]) == 0
+    assert f"wrote {tmp_path / 'p' / 'plan.geojson'}" in capsys.readouterr().out
