@@ -335,7 +335,7 @@ def _read_csv_rows(
     file: Path, crs: dict, allowed: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_read_csv` on a file that decodes (decoding and CSV errors raised as they come)."""
-    with open(file, newline="", encoding="utf-8") as fh:
+    with open(file, newline="", encoding="utf-8-sig") as fh:  # a spreadsheet's BOM dropped
         reader = csv.reader(fh)
         try:
             header = [h.strip().lower() for h in next(reader)]

@@ -494,3 +494,18 @@ def test_area_file_name_in_the_yaml_header_adds_no_keys(tmp_path, layers, stem):
     head = [ln for ln in text.splitlines() if not ln.startswith("#")]
     assert yaml.safe_load("\n".join(head)) == doc  # the header is comments only
     assert load_scenario(str(out)).name == "imported"
+
+
+# --------------------------------------------------------------------------- audit i24
+
+
+def test_csv_prior_with_a_byte_order_mark(tmp_path, layers):
+    """Audit i24: a CSV saved by a spreadsheet as 'CSV UTF-8' starts with a byte-order mark;
+    its header read as ``['\\ufefflat', ...]`` and the import said the lat column was missing."""
+    text = "lat,lon,probability\n45.75,126.7,0.6\n45.8,126.8,0.4\n"
+    plain, bom = tmp_path / "plain.csv", tmp_path / "bom.csv"
+    plain.write_text(text, encoding="utf-8")
+    bom.write_text(text, encoding="utf-8-sig")
+    a = import_scenario(layers["area"], prior=plain, airfields=layers["fields"])["prior"]
+    b = import_scenario(layers["area"], prior=bom, airfields=layers["fields"])["prior"]
+    np.testing.assert_array_equal(a, b)
