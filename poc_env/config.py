@@ -32,7 +32,7 @@ import yaml
 
 import poc_env.limits as limits
 from poc_env._kernels.sensing import LAW_CODES
-from poc_env.errors import ConfigError, as_bool, as_int, as_number, describe_range
+from poc_env.errors import ConfigError, as_bool, as_int, as_number, check_name, describe_range
 from poc_env.io import write_text_atomic
 
 KM = 1000.0
@@ -280,6 +280,8 @@ class MapConfig:
             raise ConfigError(
                 "no_fly_names", list(names), f"one name per no-fly zone ({len(zones)})"
             )
+        for i, name in enumerate(names):
+            check_name(f"no_fly_names[{i}]", name, limits.MAX_ZONE_NAME, empty=True)
         object.__setattr__(self, "no_fly_names", tuple(names))
         if zones:
             from shapely.geometry import Polygon, box
@@ -500,8 +502,7 @@ class Airfield:
     position_m: tuple[float, float] = _f("position_km", KM)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise ConfigError("name", self.name, "a non-empty string")
+        check_name("name", self.name, limits.MAX_AIRFIELD_NAME)  # what every export carries
         object.__setattr__(self, "position_m", _vec2("position_km", self.position_m))
 
 

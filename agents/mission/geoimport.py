@@ -43,7 +43,7 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
-from poc_env.errors import ConfigError, GeometryError, as_number, require_extra
+from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import validate_polygon
 from poc_env.io import atomic_path
 
@@ -273,6 +273,7 @@ def _points(file: Path, feats: list) -> list[tuple[int, str, np.ndarray]]:
         name = props.get("name")
         if not isinstance(name, str) or not name.strip():
             raise ConfigError(f"{_feature(file, i)} name", name, "a non-empty name property")
+        check_name(f"{_feature(file, i)} name", name.strip(), limits.MAX_AIRFIELD_NAME)
         out.append((i, name.strip(), _lonlat(file, i, [coords])[0]))
     return out
 
@@ -672,7 +673,10 @@ def import_scenario(
                     _near(zfile, i, v, np.array(to_geographic_one(v, crs)), poly, crs)
             ring = np.asarray(z.exterior.coords)[:-1]
             zones.append([[_km(x), _km(y)] for x, y in ring])
-            zone_names.append(str((zfeats[i][2] or {}).get("name") or ""))
+            zname = str((zfeats[i][2] or {}).get("name") or "")
+            zone_names.append(
+                check_name(f"{_feature(zfile, i)} name", zname, limits.MAX_ZONE_NAME, empty=True)
+            )
 
     grid_prior, prior_report = _prior(prior, crs, grid, poly, particles, particles_time)
 

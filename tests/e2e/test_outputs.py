@@ -181,7 +181,10 @@ def test_atomic_dir_never_replaces_a_folder_by_a_file(tmp_path):
     (dest / "plan.geojson").mkdir(parents=True)
     (dest / "plan.geojson" / "keep.txt").write_text("the user's")
     (dest / "plan.kml").write_text("old")
-    with pytest.raises(ConfigError, match="plan.geojson.*it is a folder"), atomic_dir(dest) as stage:
+    with (
+        pytest.raises(ConfigError, match="plan.geojson.*it is a folder"),
+        atomic_dir(dest) as stage,
+    ):
         (stage / "plan.kml").write_text("new")
         (stage / "plan.geojson").write_text("{}")
     assert (dest / "plan.geojson" / "keep.txt").read_text() == "the user's"

@@ -509,3 +509,22 @@ def test_csv_prior_with_a_byte_order_mark(tmp_path, layers):
     a = import_scenario(layers["area"], prior=plain, airfields=layers["fields"])["prior"]
     b = import_scenario(layers["area"], prior=bom, airfields=layers["fields"])["prior"]
     np.testing.assert_array_equal(a, b)
+
+
+def test_names_no_export_can_carry_are_refused_at_import(tmp_path, layers):
+    """Audit i24: an airfield name over 64 characters, a zone name over 200, or a name with a
+    control character was imported and planned, and then every export refused the plan.json
+    (``plan.airfields[0].name: ... allowed: 1-64 characters``). The import now refuses it,
+    naming the file and feature, with the plan schema's own rule; the scenario loader too."""
+    long_field = _write(tmp_path / "lf.geojson", _fc([_pt(126.25, 45.62, name="H" * 65)]))
+    _bad(tmp_path, layers, r"lf\.geojson feature 0 name.*1-64 characters", airfields=long_field)
+    bell = _write(tmp_path / "bf.geojson", _fc([_pt(126.25, 45.62, name="Har\x07bin")]))
+    _bad(tmp_path, layers, r"bf\.geojson feature 0 name.*control character U\+0007", airfields=bell)
+    long_zone = _write(tmp_path / "lz.geojson", _fc([_poly([ZONE], name="R" * 201)]))
+    _bad(tmp_path, layers, r"lz\.geojson feature 0 name.*at most 200 characters", no_fly=long_zone)
+    ok = _write(tmp_path / "ok.geojson", _fc([_poly([ZONE], name="R" * 200)]))
+    import_scenario(layers["area"], airfields=layers["fields"], no_fly=ok)  # the limit itself
+    data = import_scenario(layers["area"], airfields=layers["fields"])["scenario"]
+    data["airfields"][0]["name"] = "H" * 65
+    with pytest.raises(ConfigError, match=r"name.*1-64 characters"):
+        load_scenario(data)
