@@ -284,18 +284,13 @@ class MapConfig:
             check_name(f"no_fly_names[{i}]", name, limits.MAX_ZONE_NAME, empty=True)
         object.__setattr__(self, "no_fly_names", tuple(names))
         if zones:
-            from shapely.geometry import Polygon, box
+            from shapely.geometry import box
+
+            from poc_env.geometry import check_zones_leave_room
 
             area = box(self.origin_m[0], self.origin_m[1], self.origin_m[0] + self.width_m,
                        self.origin_m[1] + self.height_m)  # fmt: skip
-            for i, z in enumerate(zones):
-                poly = Polygon(z)
-                if poly.is_valid and poly.covers(area):
-                    raise ConfigError(
-                        f"no_fly_zones_km[{i}]",
-                        self.zone_label(i),
-                        "a zone that leaves part of the search area flyable (it covers all of it)",
-                    )
+            check_zones_leave_room(zones, self.no_fly_names, area, "the search area")
 
     def zone_label(self, i: int) -> str:
         """How messages name no-fly zone ``i`` (:func:`poc_env.geometry.zone_label`)."""

@@ -44,7 +44,7 @@ from shapely.geometry.polygon import orient
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
-from poc_env.geometry import validate_polygon
+from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
 
 KM = 1000.0
@@ -678,6 +678,11 @@ def import_scenario(
                 check_name(f"{_feature(zfile, i)} name", zname, limits.MAX_ZONE_NAME, empty=True)
             )
 
+    if zones:  # the map's rectangle is checked by the loader; the area drawn is checked here
+        check_zones_leave_room(
+            [[(x * KM, y * KM) for x, y in z] for z in zones], zone_names, poly,
+            f"the search area ({file.name} feature {i_area})",
+        )  # fmt: skip
     grid_prior, prior_report = _prior(prior, crs, grid, poly, particles, particles_time)
 
     data = _base_mapping(base)

@@ -528,3 +528,33 @@ def test_names_no_export_can_carry_are_refused_at_import(tmp_path, layers):
     data["airfields"][0]["name"] = "H" * 65
     with pytest.raises(ConfigError, match=r"name.*1-64 characters"):
         load_scenario(data)
+
+
+def test_zones_covering_the_whole_search_area_are_refused(tmp_path, layers):
+    """Audit i24 (issue 24, Bad input: zones covering the whole area): a zone drawn over the
+    whole search polygon, but not over the grid's extra cells beyond it, and two zones that
+    cover the area only together, were imported; the plan then had nothing to search (DE: POS
+    0 after 33 s). Both are refused, naming the zones, and nothing is returned."""
+    lon0, lat0, lon1, lat1 = 125.99, 45.29, 127.21, 46.11  # just around AREA
+    whole = [[lon0, lat0], [lon1, lat0], [lon1, lat1], [lon0, lat1], [lon0, lat0]]
+    f = _write(tmp_path / "whole.geojson", _fc([_poly([whole], name="all of it")]))
+    _bad(tmp_path, layers, r"no_fly_zones_km\[0\].*'all of it'.*leaves part of the search area",
+         no_fly=f)  # fmt: skip
+    mid = 126.6
+    west = [[lon0, lat0], [mid, lat0], [mid, lat1], [lon0, lat1], [lon0, lat0]]
+    east = [[mid, lat0], [lon1, lat0], [lon1, lat1], [mid, lat1], [mid, lat0]]
+    f = _write(tmp_path / "halves.geojson", _fc([_poly([west], name="W"), _poly([east], name="E")]))
+    _bad(tmp_path, layers, r"no_fly_zones_km\[0, 1\].*'W'.*'E'.*leave part", no_fly=f)
+    # a zone over part of the area is fine
+    import_scenario(layers["area"], airfields=layers["fields"], no_fly=layers["zones"])
+
+
+def test_zones_covering_the_whole_map_together_are_refused_by_the_loader():
+    """The scenario loader's rule is the union of the zones, not each zone alone."""
+    base = {"name": "z", "map": {"width_km": 40, "height_km": 40, "cell_km": 5},
+            "airfields": [{"name": "A", "position_km": [-10, 20]}],
+            "fleet": [{"takeoff": "A", "count": 1}]}  # fmt: skip
+    halves = [[[-1, -1], [21, -1], [21, 41], [-1, 41]], [[20, -1], [41, -1], [41, 41], [20, 41]]]
+    with pytest.raises(ConfigError, match=r"no_fly_zones_km\[0, 1\].*leave part"):
+        load_scenario({**base, "map": {**base["map"], "no_fly_zones_km": halves}})
+    load_scenario({**base, "map": {**base["map"], "no_fly_zones_km": halves[:1]}})
