@@ -266,19 +266,24 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
 def _gpx_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     """Every track segment (``trk/trkseg/trkpt`` with ``lat`` and ``lon`` attributes) of a GPX
     1.1 (or 1.0) file; GPX is WGS 84 by definition. Routes (``rte``) and waypoints are not
-    flown tracks and are ignored."""
+    flown tracks and are ignored, and so are segments of fewer than two points (they sweep no
+    line)."""
     root = _xml_root(raw, path, "GPX", GPX_NAMESPACES)
     ns = root.nsmap.get(None) or GPX_NAMESPACES[0]
     out = []
+    segments = 0
     for i, trk in enumerate(root.findall(f"{{{ns}}}trk")):
         for k, seg in enumerate(trk.findall(f"{{{ns}}}trkseg")):
+            segments += 1
             field = f"tracks.trk[{i}].trkseg[{k}]"
             pts = seg.findall(f"{{{ns}}}trkpt")
+            if len(pts) < 2:  # an empty or one-fix segment (valid GPX: a logger's pause) sweeps
+                continue  # no line; a file of nothing else is refused by read_tracks
             rows = [[_number(p.get("lon"), f"{field}.trkpt[{j}].lon"),
                      _number(p.get("lat"), f"{field}.trkpt[{j}].lat")]
                     for j, p in enumerate(pts)]  # fmt: skip
             out.append((f"{field}.trkpt", np.array(rows, dtype=float).reshape(-1, 2)))
-    if not out:
+    if not segments:
         raise ConfigError("tracks", os.fspath(path), "a GPX file with trk/trkseg/trkpt tracks")
     return out
 

@@ -278,3 +278,27 @@ def test_replan_of_a_yaml_scenario_finds_it_by_the_plan(tmp_path, monkeypatch, c
     assert load_plan(p2)["scenario_file"] == str(yml.resolve())
     assert main(["export", str(p2), "--format", "kml"]) == 0
     assert (tmp_path / "s2" / "p2_prior.png").is_file()  # the prior placed on the map
+
+
+def test_gpx_segments_without_a_line_are_skipped(first, tmp_path):
+    """Audit i24: a logger's GPX holds empty ``<trkseg/>`` (logging paused) and one-point
+    segments (a fix between dropouts); both are valid GPX 1.1 and sweep no line. The whole file
+    was refused (``trkseg[1].trkpt: got []; allowed: 2 or more [lon, lat]``); they are skipped
+    and the other segments sweep what they swept alone. A file with no segment of two points
+    is still refused."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = _lonlat_lines(plan)
+    plain, gappy = tmp_path / "plain.gpx", tmp_path / "gappy.gpx"
+    _gpx(plain, lines)
+    _gpx(gappy, [lines[0], [], lines[0][2:3], *lines[1:]])
+    want = read_tracks(plain, plan["crs"])
+    got = read_tracks(gappy, plan["crs"])
+    assert len(got) == len(want)
+    for (_, a), (_, b) in zip(got, want):
+        np.testing.assert_array_equal(a, b)
+    _gpx(tmp_path / "none.gpx", [[], lines[0][:1]])
+    with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
+        read_tracks(tmp_path / "none.gpx", plan["crs"])
