@@ -558,3 +558,31 @@ def test_zones_covering_the_whole_map_together_are_refused_by_the_loader():
     with pytest.raises(ConfigError, match=r"no_fly_zones_km\[0, 1\].*leave part"):
         load_scenario({**base, "map": {**base["map"], "no_fly_zones_km": halves}})
     load_scenario({**base, "map": {**base["map"], "no_fly_zones_km": halves[:1]}})
+
+
+def test_geojson_edges_are_straight_in_longitude_latitude(tmp_path):
+    """Audit i24: a GeoJSON edge is a straight line in longitude/latitude (RFC 7946, 3.1.1),
+    so a rectangle drawn along parallels keeps its parallels. The import joined the projected
+    vertices with straight lines in the map's metres: on a 500 x 500 km area near 45 N the
+    southern edge ran up to 4.6 km north of latitude 43, and sightings 2.2 km inside it were
+    dropped as outside the area (11.5 % of that prior's mass). Points 2.2 km inside an edge
+    are kept, points 2.2 km outside are still dropped, and short edges are left as they are."""
+    area = [[5.0, 43.0], [11.14, 43.0], [11.14, 47.5], [5.0, 47.5], [5.0, 43.0]]
+    area_f = _write(tmp_path / "big.geojson", _fc([_poly([area])]))
+    fields = _write(tmp_path / "f.geojson", _fc([_pt(4.8, 45.0, name="W")]))
+    lons = np.linspace(7.0, 9.0, 9)
+    rows = ["lat,lon,probability", "45.0,8.0,1"]
+    rows += [f"43.02,{lon},1" for lon in lons] + [f"47.48,{lon},1" for lon in lons]
+    rows += [f"42.98,{lon},1" for lon in lons]  # just outside the southern edge
+    csv_path = tmp_path / "p.csv"
+    csv_path.write_text("\n".join(rows) + "\n")
+    with pytest.warns(UserWarning, match="outside the search area"):
+        res = import_scenario(area_f, prior=csv_path, airfields=fields, cell_km=10)
+    rep = res["report"]["prior"]
+    assert rep["outside"] == pytest.approx(len(lons), abs=1e-9)  # only the points outside
+    # a small zone's edges (a few km) are not densified: the ring keeps its 4 vertices
+    zones = _write(tmp_path / "z.geojson", _fc([_poly([ZONE])]))
+    res = import_scenario(_write(tmp_path / "a.geojson", _fc([_poly([AREA])])),
+                          airfields=_write(tmp_path / "g.geojson", _fc([_pt(126.25, 45.62, name="H")])),
+                          no_fly=zones)  # fmt: skip
+    assert len(res["scenario"]["map"]["no_fly_zones_km"][0]) == 4
