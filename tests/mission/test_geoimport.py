@@ -582,7 +582,7 @@ def test_geojson_edges_are_straight_in_longitude_latitude(tmp_path):
     assert rep["outside"] == pytest.approx(len(lons), abs=1e-9)  # only the points outside
     # a small zone's edges (a few km) are not densified: the ring keeps its 4 vertices
     zones = _write(tmp_path / "z.geojson", _fc([_poly([ZONE])]))
-    res = import_scenario(_write(tmp_path / "a.geojson", _fc([_poly([AREA])])),
-                          airfields=_write(tmp_path / "g.geojson", _fc([_pt(126.25, 45.62, name="H")])),
-                          no_fly=zones)  # fmt: skip
+    field = _write(tmp_path / "g.geojson", _fc([_pt(126.25, 45.62, name="H")]))
+    area_f = _write(tmp_path / "a.geojson", _fc([_poly([AREA])]))
+    res = import_scenario(area_f, airfields=field, no_fly=zones)
     assert len(res["scenario"]["map"]["no_fly_zones_km"][0]) == 4
