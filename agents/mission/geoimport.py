@@ -206,9 +206,15 @@ def _kml_features(file: Path) -> list[tuple[str, Any, dict]]:
             out.append(("Polygon" if len(polys) == 1 else "MultiPolygon", _one(polys), props))
         elif points:
             out.append(("Point", points[0], props))
-        else:
-            out.append(("(none)", None, props))
+        else:  # named by its geometry (a LineString, a gx:Track, ...), else "(none)"
+            kinds = (_strip(e.tag) for e in pm.iter() if isinstance(e.tag, str))
+            other = next((k for k in kinds if k in KML_OTHER_GEOMETRIES), "(none)")
+            out.append((other, None, props))
     return out
+
+
+#: KML geometries that are not a Point or Polygon, named in errors when a Placemark has one.
+KML_OTHER_GEOMETRIES = ("LineString", "LinearRing", "Track", "MultiTrack", "Model")
 
 
 def _one(polys: list) -> Any:

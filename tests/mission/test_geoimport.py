@@ -586,3 +586,17 @@ def test_geojson_edges_are_straight_in_longitude_latitude(tmp_path):
     area_f = _write(tmp_path / "a.geojson", _fc([_poly([AREA])]))
     res = import_scenario(area_f, airfields=field, no_fly=zones)
     assert len(res["scenario"]["map"]["no_fly_zones_km"][0]) == 4
+
+
+def test_kml_placemark_of_another_geometry_is_named(tmp_path, layers):
+    """Audit i24: a KML airfield file with a LineString placemark (a drawn runway, a track)
+    was refused as ``got '(none)'``; the error now names the geometry found."""
+    kml = (
+        '<?xml version="1.0"?><kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
+        "<Placemark><name>Harbin</name><Point><coordinates>126.25,45.62</coordinates></Point>"
+        "</Placemark><Placemark><name>runway</name><LineString><coordinates>126.25,45.62 "
+        "126.26,45.63</coordinates></LineString></Placemark></Document></kml>"
+    )
+    f = tmp_path / "fields.kml"
+    f.write_text(kml)
+    _bad(tmp_path, layers, r"fields\.kml feature 1: got 'LineString'; allowed: a Point", airfields=f)
