@@ -599,4 +599,5 @@ def test_kml_placemark_of_another_geometry_is_named(tmp_path, layers):
     )
     f = tmp_path / "fields.kml"
     f.write_text(kml)
-    _bad(tmp_path, layers, r"fields\.kml feature 1: got 'LineString'; allowed: a Point", airfields=f)
+    want = r"fields\.kml feature 1: got 'LineString'; allowed: a Point"
+    _bad(tmp_path, layers, want, airfields=f)
