@@ -347,6 +347,19 @@ def next_sortie(
     return nxt
 
 
+def swept_text(plans: list[str], files: list[str] | None, tracks: list | None) -> str:
+    """What ``replan`` swept, in one line: the routes of the ``plans``, or the ``tracks`` read
+    from ``files``, which stand for the flights of every plan (:func:`next_sortie`)."""
+    routes = ", ".join(str(p) for p in plans)
+    if not files or tracks is None:
+        return f"swept: the routes of {routes}"
+    n = len(tracks)
+    return (
+        f"swept: {n} track{'s' if n != 1 else ''} from {', '.join(str(f) for f in files)}, "
+        f"in place of the routes of {routes}"
+    )
+
+
 def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
     from poc_env.agents.mission.plan import (
@@ -381,6 +394,7 @@ def cli_main(args: Any) -> int:
         for t in args.tracks:
             tracks += read_tracks(t, crs)
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
+    print(swept_text(args.plan, args.tracks, tracks))
     print(plan_table(nxt))
     print(
         f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "

@@ -302,3 +302,20 @@ def test_gpx_segments_without_a_line_are_skipped(first, tmp_path):
     _gpx(tmp_path / "none.gpx", [[], lines[0][:1]])
     with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
         read_tracks(tmp_path / "none.gpx", plan["crs"])
+
+
+def test_replan_says_which_flights_it_swept(first, tmp_path, capsys):
+    """Audit i24: with ``--tracks`` the tracks stand for the flights of every ``--plan`` given
+    (sortie 1's routes are not swept when only sortie 2's log is given). The command now says
+    which flights it swept, so an officer replanning sortie 3 from sortie 2's log sees that
+    sortie 1 is not in it."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    p2 = tmp_path / "p2.json"
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0
+    assert f"swept: the routes of {p1}" in capsys.readouterr().out
+    _gpx(tmp_path / "s2.gpx", _lonlat_lines(plan)[:1])
+    argv = ["replan", "--plan", str(p1), "--plan", str(p2), "--tracks", str(tmp_path / "s2.gpx")]
+    assert main([*argv, "--out", str(tmp_path / "p3.json")]) == 0
+    out = capsys.readouterr().out
+    assert f"swept: 1 track from {tmp_path / 's2.gpx'}, in place of the routes of {p1}, {p2}" in out
