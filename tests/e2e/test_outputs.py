@@ -182,7 +182,7 @@ def test_atomic_dir_never_replaces_a_folder_by_a_file(tmp_path):
     (dest / "plan.geojson" / "keep.txt").write_text("the user's")
     (dest / "plan.kml").write_text("old")
     with (
-        pytest.raises(ConfigError, match="plan.geojson.*it is a folder"),
+        pytest.raises(ConfigError, match=r"plan\.geojson.*it is a folder"),
         atomic_dir(dest) as stage,
     ):
         (stage / "plan.kml").write_text("new")
