@@ -319,3 +319,24 @@ def plan_crs(
     if origin is None:
         raise ConfigError("origin", None, "LAT,LON of the map's (0, 0): the plan records no crs")
     return make_crs(projection, origin, zone=zone)
+
+
+#: GeoJSON ``crs`` member names (2008 GeoJSON spec) that mean WGS 84 longitude/latitude, the
+#: RFC 7946 default, compared lower-case by :func:`is_wgs84_name`. One list for every GeoJSON
+#: reader (``scenario import`` layers, ``replan --tracks``).
+WGS84_NAMES = (
+    "urn:ogc:def:crs:ogc:1.3:crs84",
+    "urn:ogc:def:crs:ogc::crs84",
+    "crs84",
+    "epsg:4326",
+    "urn:ogc:def:crs:epsg::4326",
+    "urn:ogc:def:crs:epsg:6.6:4326",
+    "http://www.opengis.net/def/crs/ogc/1.3/crs84",
+    "http://www.opengis.net/def/crs/epsg/0/4326",
+)
+
+
+def is_wgs84_name(name: Any) -> bool:
+    """Whether a GeoJSON ``crs`` member's name means WGS 84 longitude/latitude
+    (:data:`WGS84_NAMES`, case and surrounding spaces ignored)."""
+    return isinstance(name, str) and name.strip().lower() in WGS84_NAMES

@@ -43,6 +43,7 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
+from poc_env.crs import is_wgs84_name
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
@@ -50,17 +51,6 @@ from poc_env.io import atomic_path
 KM = 1000.0
 VECTOR_SUFFIXES = (".geojson", ".json", ".kml")
 PRIOR_SUFFIXES = (".tif", ".tiff", ".csv")
-#: ``crs`` members of a GeoJSON file that mean longitude/latitude on WGS84.
-WGS84_NAMES = (
-    "urn:ogc:def:crs:ogc:1.3:crs84",
-    "urn:ogc:def:crs:ogc::crs84",
-    "crs84",
-    "epsg:4326",
-    "urn:ogc:def:crs:epsg::4326",
-    "urn:ogc:def:crs:epsg:6.6:4326",
-    "http://www.opengis.net/def/crs/ogc/1.3/crs84",
-    "http://www.opengis.net/def/crs/epsg/0/4326",
-)
 #: Points (airfields, no-fly vertices, CSV rows) farther than this from the area are refused.
 MAX_DISTANCE_KM = 1000.0
 #: Mass outside the area above this share of the prior's total gives a warning.
@@ -113,7 +103,7 @@ def _geojson_crs(file: Path, doc: Any) -> None:
     if crs is None:
         return
     name = crs.get("properties", {}).get("name") if isinstance(crs, dict) else None
-    if not isinstance(name, str) or name.strip().lower() not in WGS84_NAMES:
+    if not is_wgs84_name(name):
         raise ConfigError(
             f"{file} crs",
             name if name is not None else crs,

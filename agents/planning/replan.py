@@ -32,18 +32,10 @@ from typing import Any
 import numpy as np
 
 from poc_env.config import Scenario
+from poc_env.crs import is_wgs84_name
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
-
-#: GeoJSON ``crs`` names accepted (WGS 84 longitude/latitude, the RFC 7946 default).
-WGS84_NAMES = (
-    "urn:ogc:def:crs:OGC:1.3:CRS84",
-    "urn:ogc:def:crs:OGC::CRS84",
-    "urn:ogc:def:crs:EPSG::4326",
-    "EPSG:4326",
-    "CRS84",
-)
 
 
 def operating_area(sc: Scenario, prior: np.ndarray) -> tuple[float, float, float, float]:
@@ -158,12 +150,12 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     crs_member = data.get("crs")
     props = crs_member.get("properties") if isinstance(crs_member, dict) else None
     name = props.get("name") if isinstance(props, dict) else None
-    if "crs" in data and (not isinstance(name, str) or name not in WGS84_NAMES):
+    if "crs" in data and not is_wgs84_name(name):
         raise ConfigError(
             f"{where}.crs",
             name if name is not None else data.get("crs"),
             "WGS 84 longitude/latitude (RFC 7946: leave crs out, or "
-            + ", ".join(WGS84_NAMES[:3]) + ")",
+            "urn:ogc:def:crs:OGC:1.3:CRS84, urn:ogc:def:crs:EPSG::4326, EPSG:4326)",
         )  # fmt: skip
     if data.get("type") == "FeatureCollection":
         feats = data.get("features")

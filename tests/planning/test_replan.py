@@ -319,3 +319,20 @@ def test_replan_says_which_flights_it_swept(first, tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path / "p3.json")]) == 0
     out = capsys.readouterr().out
     assert f"swept: 1 track from {tmp_path / 's2.gpx'}, in place of the routes of {p1}, {p2}" in out
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["http://www.opengis.net/def/crs/OGC/1.3/CRS84", "epsg:4326", "urn:ogc:def:crs:EPSG:6.6:4326"],
+)
+def test_track_crs_names_are_the_import_s(first, tmp_path, name):
+    """Audit i24: ``scenario import`` and ``replan --tracks`` each kept a list of the GeoJSON
+    ``crs`` names meaning WGS 84; a layer declaring one of these was imported but its tracks
+    were refused. One list now (:func:`poc_env.crs.is_wgs84_name`)."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    crs = {"type": "name", "properties": {"name": name}}
+    _tracks(tmp_path / "t.geojson", plan, crs=crs)
+    assert len(read_tracks(tmp_path / "t.geojson", plan["crs"])) == len(plan["uavs"])
