@@ -366,3 +366,30 @@ def test_html_page_escapes_every_plan_string(tmp_path):
     p.feed(page)
     assert "x-evil" not in p.tags and p.tags.count("script") == 3
     assert "&lt;x-evil&gt;&amp;" in page and "\\u003cx-evil>" in page
+
+
+def test_a_route_through_a_zone_is_flagged_by_every_viewing_format(small_plan, tmp_path, capsys):
+    """Audit i24 (issue 24: "KML, GeoJSON and HTML export the crossing routes without a
+    word"): a plan.json edited by hand so that a route crosses a no-fly zone. The QGC export
+    refuses it (the exclusion geofence); GeoJSON, KML and the HTML report are still written,
+    to show the officer the route, but each says so on the console, and the report's page
+    says so too, with the same words as the QGC refusal."""
+    plan = json.loads(small_plan.read_text())
+    x, y = plan["uavs"][0]["waypoints_m"][1]
+    plan["no_fly_zones_m"] = [[[x - 500, y - 500], [x + 500, y - 500], [x + 500, y + 500],
+                               [x - 500, y + 500]]]  # fmt: skip
+    plan["no_fly_zone_names"] = ["R-9"]
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(plan))
+    with pytest.raises(ConfigError, match=r"outside no-fly zone 0 \('R-9'\)"):
+        export_plan(path, "qgc", out_dir=tmp_path / "q")
+    for fmt in ("geojson", "kml", "html"):
+        files = export_plan(path, fmt, out_dir=tmp_path / fmt)
+        out = capsys.readouterr().out
+        assert "warning: plan.uavs[0]: got 1; allowed: a mission outside no-fly zone 0 ('R-9')" in (
+            out
+        ), fmt
+        if fmt == "html":
+            assert "a mission outside no-fly zone 0 (&#39;R-9&#39;)" in files[0].read_text()
+    export_plan(small_plan, "html", out_dir=tmp_path / "clean")
+    assert "warning" not in capsys.readouterr().out

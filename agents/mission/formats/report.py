@@ -452,6 +452,8 @@ def write(job: ExportJob) -> list[Path]:
     overlay, note = plan_prior(job.plan, job.plan_path, job.prior)
     if overlay is None:  # said on the command line too, not only inside the file
         print(f"note: {note}")
+    if job.warning is not None:  # on the page too: a route QGC would not fly
+        note = f"Warning: {job.warning}. {note}"
     page = html_report(
         job.plan, job.crs, overlay, note, job.altitude_m, job.altitude_ref, job.ground_m
     )
