@@ -393,3 +393,34 @@ def test_a_route_through_a_zone_is_flagged_by_every_viewing_format(small_plan, t
             assert "a mission outside no-fly zone 0 (&#39;R-9&#39;)" in files[0].read_text()
     export_plan(small_plan, "html", out_dir=tmp_path / "clean")
     assert "warning" not in capsys.readouterr().out
+
+
+def test_headless_browser_draws_routes_above_zones_and_areas(small_plan, tmp_path):
+    """Audit i24: the page drew the search areas, airfields, no-fly zones and the operating area
+    after (above) the routes, so a zone's red fill tinted the route under it (and the areas
+    took the mouse over their routes). Drawn now as a map is read: the ground (terrain,
+    prior), the areas (operating area, zones, search areas), the routes, the airfields on
+    top. Checked on screen: UAV 1's route shows its own colour as much under a zone laid
+    over its whole search pattern as beside a small zone in a corner."""
+    exe = _chromium()
+    plan = json.loads(small_plan.read_text())
+    wps = np.array(plan["uavs"][0]["waypoints_m"])
+    (x0, y0), (x1, y1) = wps.min(axis=0) - 1000, wps.max(axis=0) + 1000
+    ox0, oy0 = np.array(plan["operating_area_m"]).min(axis=0) + 1000
+    zones = {
+        "over": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
+        "corner": [[ox0, oy0], [ox0 + 2000, oy0], [ox0 + 2000, oy0 + 2000], [ox0, oy0 + 2000]],
+    }
+    seen = {}
+    for name, zone in zones.items():
+        plan["no_fly_zones_m"] = [[[float(a), float(b)] for a, b in zone]]
+        path = tmp_path / name / "p.json"
+        path.parent.mkdir()
+        path.write_text(json.dumps(plan))
+        (page,) = export_plan(path, "html", out_dir=path.parent)
+        drawn, mapped, console = _browse(exe, page)
+        assert console == [], console
+        assert drawn == expected_layers(load_plan(path), overlay=False)  # no prior: edited
+        seen[name] = _near(mapped, ROUTE_COLOURS[0], 6)
+    assert seen["corner"] > 30
+    assert seen["over"] >= 0.9 * seen["corner"], seen

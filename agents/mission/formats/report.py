@@ -346,6 +346,33 @@ _SCRIPT = r"""
     image = L.imageOverlay(data.overlay.url, data.overlay.bounds, {opacity: 1.0});
     add("Prior probability of containment", image);
   }
+  // drawn as a map is read: the ground (above), the areas, the routes, the airfields on top
+  if (data.operating_area.length) {
+    var area = L.featureGroup();
+    data.operating_area.forEach(function (z) {
+      L.polygon(z.latlon, {color: "#555", weight: 1.5, dashArray: "4 4", fill: false})
+        .bindTooltip(label(z.name)).addTo(area);
+    });
+    add("Operating area", area);
+  }
+  if (data.no_fly_zones.length) {
+    var nfz = L.featureGroup();
+    data.no_fly_zones.forEach(function (z) {
+      L.polygon(z.latlon, {color: "#d00000", weight: 2, fillColor: "#ff0000", fillOpacity: 0.35})
+        .bindTooltip(label(z.name)).addTo(nfz);
+    });
+    add("No-fly zones", nfz);
+  }
+  var areas = L.featureGroup();
+  var nAreas = 0;
+  data.uavs.forEach(function (u) {
+    u.rings.forEach(function (r) {
+      L.polygon(r.latlon, {color: u.colour, weight: 1.5, opacity: 0.6, fillOpacity: 0.06})
+        .bindTooltip(label("UAV " + u.id + " " + r.kind.replace("_", " "))).addTo(areas);
+      nAreas += 1;
+    });
+  });
+  if (nAreas) { add("Search areas", areas); }
   data.uavs.forEach(function (u) {
     var g = L.featureGroup();
     u.transit.forEach(function (leg) {
@@ -360,16 +387,6 @@ _SCRIPT = r"""
     g.bindTooltip(label("UAV " + u.id));
     add("UAV " + u.id + " route", g);
   });
-  var areas = L.featureGroup();
-  var nAreas = 0;
-  data.uavs.forEach(function (u) {
-    u.rings.forEach(function (r) {
-      L.polygon(r.latlon, {color: u.colour, weight: 1.5, opacity: 0.6, fillOpacity: 0.06})
-        .bindTooltip(label("UAV " + u.id + " " + r.kind.replace("_", " "))).addTo(areas);
-      nAreas += 1;
-    });
-  });
-  if (nAreas) { add("Search areas", areas); }
   var fields = L.featureGroup();
   data.airfields.forEach(function (a) {
     L.circleMarker(a.latlon, {radius: 6, color: "#000", weight: 2, fillColor: "#fff",
@@ -377,22 +394,6 @@ _SCRIPT = r"""
                               direction: "right"}).addTo(fields);
   });
   add("Airfields", fields);
-  if (data.no_fly_zones.length) {
-    var nfz = L.featureGroup();
-    data.no_fly_zones.forEach(function (z) {
-      L.polygon(z.latlon, {color: "#d00000", weight: 2, fillColor: "#ff0000", fillOpacity: 0.35})
-        .bindTooltip(label(z.name)).addTo(nfz);
-    });
-    add("No-fly zones", nfz);
-  }
-  if (data.operating_area.length) {
-    var area = L.featureGroup();
-    data.operating_area.forEach(function (z) {
-      L.polygon(z.latlon, {color: "#555", weight: 1.5, dashArray: "4 4", fill: false})
-        .bindTooltip(label(z.name)).addTo(area);
-    });
-    add("Operating area", area);
-  }
   var view = extent.isValid() ? extent : L.latLngBounds([[-1, -1], [1, 1]]);
   map.fitBounds(view, {padding: [10, 10]});
   L.control.layers({"OpenStreetMap": base}, overlays, {collapsed: false}).addTo(map);
