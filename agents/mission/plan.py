@@ -590,6 +590,16 @@ def scenario_source(
     return next((str(c) for c in cands if c.is_file()), None)
 
 
+def scenario_not_found(name: str, plan_path: str | os.PathLike[str], plan: Any) -> str:
+    """Why a plan's scenario ``name`` was not found, with every file tried (for messages:
+    export's prior note, ``replan``'s error)."""
+    looked = ", ".join(str(c) for c in _scenario_candidates(name, plan_path, plan))
+    return (
+        f"scenario {name!r} is not built in and no YAML file of it was found (looked for "
+        f"{looked}): copy the scenario's YAML file beside the plan as {name}.yaml"
+    )
+
+
 def _scenario_candidates(name: str, plan_path: str | os.PathLike[str], plan: Any) -> list[Path]:
     """The YAML files :func:`scenario_source` tries, in order."""
     recorded = plan.get("scenario_file") if isinstance(plan, dict) else None

@@ -356,6 +356,7 @@ def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
     from poc_env.agents.mission.plan import (
         load_plan,
+        scenario_not_found,
         scenario_source,
         with_scenario_file,
         write_plan,
@@ -367,11 +368,13 @@ def cli_main(args: Any) -> int:
     plans = [dict(load_plan(p)) for p in args.plan]
     # the scenario the first plan was made on: by name, or its recorded YAML file (plan
     # --scenario FILE.yaml records scenario_file; issue 24: replan looked for the name only)
-    name = (
-        args.scenario
-        or scenario_source(str(plans[0]["scenario"]), args.plan[0], plans[0].get("scenario_file"))
-        or str(plans[0]["scenario"])
+    name = args.scenario or scenario_source(
+        str(plans[0]["scenario"]), args.plan[0], plans[0].get("scenario_file")
     )
+    if name is None:  # say where it looked, as export's prior note does
+        why = scenario_not_found(str(plans[0]["scenario"]), args.plan[0], plans[0])
+        raise ConfigError("scenario", plans[0]["scenario"], f"the plan's scenario ({why}), or "
+                          "--scenario FILE.yaml")  # fmt: skip
     sc = load_scenario(name, parse_overrides(args.overrides or []))
     prior = build_prior(sc.map, args.map_file)
     tracks = None

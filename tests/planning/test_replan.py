@@ -336,3 +336,30 @@ def test_track_crs_names_are_the_import_s(first, tmp_path, name):
     crs = {"type": "name", "properties": {"name": name}}
     _tracks(tmp_path / "t.geojson", plan, crs=crs)
     assert len(read_tracks(tmp_path / "t.geojson", plan["crs"])) == len(plan["uavs"])
+
+
+def test_replan_of_a_plan_whose_scenario_file_is_gone_says_where_it_looked(
+    tmp_path, monkeypatch, capsys
+):
+    """Audit i24: a plan made on a YAML scenario, replanned after the YAML was moved, said only
+    ``scenario: got 'mine'; allowed: a built-in name (...) or a path to a YAML file``; export
+    of the same plan lists the files it looked for. ``replan`` now says the same (one text,
+    :func:`poc_env.agents.mission.plan.scenario_not_found`) and names ``--scenario``."""
+    import yaml
+
+    data = load_scenario("small").to_dict()
+    data["name"] = "mine"
+    data["map"]["origin_deg"] = [46.5, 7.9]
+    yml = tmp_path / "scen" / "mine.yaml"
+    yml.parent.mkdir()
+    yml.write_text(yaml.safe_dump(data))
+    monkeypatch.chdir(tmp_path)
+    p1 = tmp_path / "s1" / "p1.json"
+    argv = ["plan", "--scenario", str(yml), "--planner", "allocation", "--refine", "0"]
+    assert main([*argv, "--quiet", "--out", str(p1)]) == 0
+    yml.rename(tmp_path / "scen" / "elsewhere.yaml")
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p1), "--out", str(tmp_path / "p2.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"looked for {yml}" in err and "--scenario" in err, err
+    assert not (tmp_path / "p2.json").exists()
