@@ -43,7 +43,7 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
-from poc_env.crs import is_wgs84_name
+from poc_env.crs import densify_ring, is_wgs84_name
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
@@ -257,38 +257,10 @@ def _local_polygon(file: Path, i: int, rings: Any, crs: dict) -> Polygon:
         raise GeometryError(f"{where}: spans more than 180 deg of longitude; allowed: an area "
                             "that does not cross the antimeridian")  # fmt: skip
     if file.suffix.lower() != ".kml":  # GeoJSON: edges straight in lon/lat (RFC 7946 3.1.1)
-        ll = _densify_lonlat(ll, crs)
+        ll = densify_ring(ll, crs, straight_in="lonlat")
     xy = np.array(to_local(ll[:, ::-1], crs))
     poly = validate_polygon(xy, where)
     return orient(poly, 1.0)
-
-
-#: Largest distance (m) between a GeoJSON edge, straight in longitude/latitude, and the
-#: straight lines in the map's metres that stand for it after the import.
-EDGE_TOLERANCE_M = 10.0
-
-
-def _densify_lonlat(ll: np.ndarray, crs: dict) -> np.ndarray:
-    """The ring ``ll`` ((n, 2) lon/lat, not closed) with points added along each edge, evenly
-    in longitude/latitude, so that the projected ring stays within :data:`EDGE_TOLERANCE_M` of
-    the edges as drawn (straight in lon/lat, RFC 7946 3.1.1; a parallel is a curve in the
-    map's metres). An edge's departure from its chord grows as its length squared, so an edge
-    departing ``d`` is cut into ``ceil(sqrt(d / tolerance))`` pieces (a few km long edges: none;
-    a 500 km edge along a parallel near 45 N: about 22)."""
-    nxt = np.roll(ll, -1, axis=0)
-    t = np.linspace(0.0, 1.0, 9)[1:-1]
-    inner = ll[:, None, :] + t[None, :, None] * (nxt - ll)[:, None, :]  # (n, 7, 2)
-    ends = np.array(to_local(np.vstack([ll, nxt])[:, ::-1], crs)).reshape(2, -1, 2)
-    mid = np.array(to_local(inner.reshape(-1, 2)[:, ::-1], crs)).reshape(len(ll), len(t), 2)
-    chord = ends[0][:, None, :] + t[None, :, None] * (ends[1] - ends[0])[:, None, :]
-    dev = np.max(np.hypot(*(mid - chord).transpose(2, 0, 1)), axis=1)
-    pieces = np.ceil(np.sqrt(np.maximum(dev, 0.0) / EDGE_TOLERANCE_M)).astype(int)
-    pieces = np.clip(pieces, 1, 1000)
-    out = []
-    for a, b, m in zip(ll, nxt, pieces):
-        f = np.arange(m)[:, None] / m
-        out.append(a + f * (b - a))
-    return np.vstack(out)
 
 
 def _points(file: Path, feats: list) -> list[tuple[int, str, np.ndarray]]:
