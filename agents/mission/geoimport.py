@@ -648,6 +648,14 @@ def import_scenario(
         origin = parse_origin(origin)
     crs = make_crs(projection, origin)
     poly = _local_polygon(file, i_area, rings, crs)
+    far = poly.distance(Point(0.0, 0.0))  # the origin is local (0, 0) in every projection
+    if far > MAX_DISTANCE_KM * KM:  # the projection's scale error grows with the distance
+        raise ConfigError(
+            "origin", [float(v) for v in crs["origin_deg"]],
+            f"a point within {MAX_DISTANCE_KM:g} km of the search area (it is {far / KM:.0f} km "
+            "away; the map's scale error grows as (distance / R)^2 / 6: leave --origin out for "
+            "the area's south-west corner)",
+        )  # fmt: skip
     grid = _Grid(poly, cell_km * KM)
 
     ffile, ffeats = read_features(airfields, "airfields: named Points")

@@ -601,3 +601,17 @@ def test_kml_placemark_of_another_geometry_is_named(tmp_path, layers):
     f.write_text(kml)
     want = r"fields\.kml feature 1: got 'LineString'; allowed: a Point"
     _bad(tmp_path, layers, want, airfields=f)
+
+
+def test_an_origin_far_from_the_area_is_refused(tmp_path, layers):
+    """Audit i24: ``--origin`` is the centre of the map's projection; the import took any. An
+    origin at a headquarters 4,300 km away made the 8,310 km^2 area 8,987 km^2 on the map (+8
+    %; aeqd's scale error grows as (distance / R)^2 / 6), silently. An origin more than 1,000
+    km from the area (the airfields' limit; 0.4 % of scale error at most) is refused, naming
+    it; one 145 km away is fine."""
+    kw = {"airfields": layers["fields"]}
+    with pytest.raises(ConfigError, match=r"^origin: got \[45\.0, 70\.0\]; allowed: a point "
+                       r"within 1000 km of the search area \(it is \d+ km away"):  # fmt: skip
+        import_scenario(layers["area"], origin="45.0,70.0", **kw)
+    res = import_scenario(layers["area"], origin="44.0,126.6", **kw)  # ~150 km south
+    assert res["crs"]["origin_deg"] == [44.0, 126.6]
