@@ -43,7 +43,7 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
-from poc_env.crs import densify_ring, is_wgs84_name
+from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, is_wgs84_name
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
@@ -518,7 +518,8 @@ def _prior(
         raise ConfigError(str(file), "zero total probability", "positive probability mass")
     w = w / peak
     total = float(w.sum())
-    inside = contains_xy(area, x, y)
+    # on the edge as drawn counts as inside: within the edges' tolerance (densify_ring), either side
+    inside = contains_xy(area.buffer(EDGE_TOLERANCE_M), x, y)
     if file.suffix.lower() == ".csv" and inside.mean() < 0.5:
         swapped = np.array(to_local(np.column_stack(_swap_back(x, y, crs)), crs))
         if contains_xy(area, swapped[:, 0], swapped[:, 1]).mean() > inside.mean():

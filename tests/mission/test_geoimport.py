@@ -615,3 +615,17 @@ def test_an_origin_far_from_the_area_is_refused(tmp_path, layers):
         import_scenario(layers["area"], origin="45.0,70.0", **kw)
     res = import_scenario(layers["area"], origin="44.0,126.6", **kw)  # ~150 km south
     assert res["crs"]["origin_deg"] == [44.0, 126.6]
+
+
+def test_sightings_on_the_area_s_edge_are_kept(tmp_path, layers):
+    """Audit i24: a sighting exactly on the area's edge as drawn (a road the officer drew the
+    area along) was dropped as outside it (``contains`` excludes the boundary, and a parallel
+    lies within the 10 m edge tolerance on either side of the projected edge). Points within
+    that tolerance of the area are inside; 100 m out they are still dropped."""
+    rows = ["lat,lon,probability", "45.75,126.7,1", "45.7,126.0,1", "45.3,126.6,1"]
+    rows += ["45.299,126.6,1"]  # ~110 m south of the southern edge
+    csv_path = tmp_path / "edge.csv"
+    csv_path.write_text("\n".join(rows) + "\n")
+    with pytest.warns(UserWarning, match="outside the search area"):
+        res = import_scenario(layers["area"], prior=csv_path, airfields=layers["fields"])
+    assert res["report"]["prior"]["outside"] == pytest.approx(1.0, abs=1e-9)
