@@ -424,3 +424,20 @@ def test_headless_browser_draws_routes_above_zones_and_areas(small_plan, tmp_pat
         seen[name] = _near(mapped, ROUTE_COLOURS[0], 6)
     assert seen["corner"] > 30
     assert seen["over"] >= 0.9 * seen["corner"], seen
+
+
+def test_every_route_is_labelled_on_the_map(small_plan, tmp_path):
+    """Audit i24: the page has 8 route colours for up to 64 UAVs (a 24-UAV fleet: three
+    routes a colour), and a route was named only by a tooltip on hover, so a printed or
+    screenshot briefing could not tell UAV 1's route from UAV 9's. Each route now carries a
+    permanent label ``UAV <id>`` where its search pattern starts (in its own layer: hidden
+    with the route)."""
+    exe = _chromium()
+    (page,) = export_plan(small_plan, "html", out_dir=tmp_path)
+    dom = _run_chromium(exe, page, "--dump-dom")
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    labels = re.findall(r'class="leaflet-tooltip[^"]*uav-label[^"]*"[^>]*><span>([^<]*)</span>',
+                        dom.stdout)  # fmt: skip
+    plan = load_plan(small_plan)
+    want = sorted(f"UAV {u['id']}" for u in plan["uavs"] if len(u["waypoints_m"]) > 1)
+    assert sorted(labels) == want and want

@@ -8,7 +8,8 @@ BSD-2-Clause, inlined with its CSS and images) draws
   else is drawn),
 - the plan's prior probability of containment as a coloured image overlay
   (:func:`poc_env.agents.mission.overlay.warp_prior`),
-- per UAV its route in one colour (transit legs dashed, the search pattern solid, the landing
+- per UAV its route in one colour, labelled ``UAV <id>`` where its search starts (transit legs
+  dashed, the search pattern solid, the landing
   approach dotted), its search strips, rectangles or areas
   (:func:`~poc_env.agents.mission.plan.search_rings`),
 - the airfields (named markers), the no-fly zones (red polygons) and the operating area,
@@ -380,6 +381,10 @@ _SCRIPT = r"""
     });
     if (u.search.length > 1) {
       L.polyline(u.search, {color: u.colour, weight: 3}).addTo(g);
+      // named on the map where its search starts: colours repeat beyond 8 UAVs
+      L.circleMarker(u.search[0], {radius: 3, color: u.colour, weight: 2, fillOpacity: 1})
+        .bindTooltip(label("UAV " + u.id), {permanent: true, direction: "top",
+                                            className: "uav-label"}).addTo(g);
     }
     u.approach.forEach(function (leg) {
       L.polyline(leg, {color: u.colour, weight: 2, opacity: 0.7, dashArray: "2 4"}).addTo(g);
