@@ -815,3 +815,24 @@ def test_large_polygons_are_drawn_where_the_planner_has_them(tmp_path):
         assert worst < 10.5, (kind, worst)
         if kind == "no_fly_zone":
             assert len(lonlat) == 5  # 10 km edges: left as they are
+
+
+def test_kml_overlay_href_survives_any_plan_file_name(tmp_path):
+    """Audit i24: the KML's GroundOverlay ``href`` is a URI reference, written as the PNG's
+    bare file name: a plan named ``sortie #2 (100%).json`` gave ``sortie #2 (100%)_prior.png``,
+    which a KML reader takes as the file ``sortie `` with a fragment (``#``) and a bad escape
+    (``%)``). The href is now percent-encoded and resolves to the PNG written beside it."""
+    from urllib.parse import urljoin, urlparse
+    from urllib.request import url2pathname
+
+    path, _ = _plan(tmp_path)
+    odd = tmp_path / "sortie #2 (100%) ü.json"
+    path.rename(odd)
+    out = tmp_path / "out"
+    kml, png = export_plan(odd, "kml", "45.75,126.65", out)
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    href = ET.parse(kml).getroot().find(".//k:GroundOverlay/k:Icon/k:href", ns).text
+    assert "#" not in href and " " not in href
+    url = urljoin(kml.resolve().as_uri(), href)  # as a reader resolves it against the KML
+    assert url2pathname(urlparse(url).path) == str(png.resolve())
+    assert png.is_file()
