@@ -226,6 +226,7 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     root = _xml_root(raw, path, "KML", KML_NAMESPACES)
     out = []
     placemarks = [e for e in root.iter() if isinstance(e.tag, str) and e.tag.endswith("}Placemark")]
+    seen = 0  # LineStrings and gx:Tracks read, kept or not
     for i, pm in enumerate(placemarks):
         n = 0
         for e in pm.iter():
@@ -246,11 +247,14 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
             else:
                 continue
             n += 1
+            seen += 1
             if any(len(r) != 2 for r in rows):
                 j = next(k for k, r in enumerate(rows) if len(r) != 2)
                 raise ConfigError(f"{field}[{j}]", rows[j], "lon,lat[,alt]")
+            if name == "Track" and len(rows) < 2:  # one fix sweeps no line (as a GPX segment)
+                continue
             out.append((field, np.array(rows, dtype=float).reshape(-1, 2)))
-    if not out:
+    if not seen:
         raise ConfigError("tracks", os.fspath(path), "a KML file with LineString placemarks")
     return out
 

@@ -363,3 +363,30 @@ def test_replan_of_a_plan_whose_scenario_file_is_gone_says_where_it_looked(
     err = capsys.readouterr().err
     assert f"looked for {yml}" in err and "--scenario" in err, err
     assert not (tmp_path / "p2.json").exists()
+
+
+def test_kml_gx_tracks_of_one_fix_are_skipped_like_gpx_segments(first, tmp_path):
+    """Audit i24: a ``gx:Track`` (a logger's KML) may hold a single ``gx:coord``; like a GPX
+    segment of one point it sweeps no line and is skipped, not a reason to refuse the file.
+    A ``LineString`` needs two positions by the KML schema and is still checked."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = _lonlat_lines(plan)
+
+    def track(pts):
+        coords = "".join(f"<gx:coord>{lon!r} {lat!r} 1500</gx:coord>" for lon, lat in pts)
+        return f"<Placemark><gx:Track>{coords}</gx:Track></Placemark>"
+
+    kml = (
+        '<?xml version="1.0"?><kml xmlns="http://www.opengis.net/kml/2.2" '
+        'xmlns:gx="http://www.google.com/kml/ext/2.2"><Document>{}</Document></kml>'
+    )
+    f = tmp_path / "t.kml"
+    f.write_text(kml.format(track(lines[0]) + track(lines[0][:1])))
+    got = read_tracks(f, plan["crs"])
+    assert len(got) == 1 and len(got[0][1]) == len(lines[0])
+    f.write_text(kml.format(track(lines[0][:1])))
+    with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
+        read_tracks(f, plan["crs"])
