@@ -1121,7 +1121,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--tracks",
         action="append",
         default=None,
-        help="flown tracks (WGS 84): GeoJSON or KML LineStrings, GPX tracks; repeatable",
+        help="flown tracks (WGS 84): GeoJSON or KML LineStrings, GPX tracks; repeatable; they "
+        "stand for the flights of every --plan given (give every sortie's logs)",
     )
     p.add_argument("--origin", default=None, help="LAT,LON of (0, 0) if the plan has no crs")
     p.add_argument(
