@@ -98,6 +98,13 @@ def main(out: Path) -> None:
         fc([feat(same, 'Zone <b>"R&D"</b> </script><script>alert(1)</script> ü 🚁 \' end')]),
     )
     w("f_uni.geojson", fc([feat(point(169.9, -43.8), 'W<i>an</i>&aka "x" 🛩')]))
+    # a circular zone digitised with 64, 360 and 2,000 vertices
+    for n in (64, 360, 2000):
+        t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        lon = 170.3 + 0.08 * np.cos(t) / np.cos(np.radians(43.8))
+        lat = -43.8 + 0.08 * np.sin(t)
+        ring = [[float(a), float(b)] for a, b in zip(lon, lat)]
+        w(f"circle{n}.geojson", fc([feat(poly([*ring, ring[0]]), f"CTR {n}")]))
     # tiny, thin, far
     w("tiny_area.geojson", fc([feat(poly(box(170.0, -44.0, 170.02, -43.99)), "tiny")]))
     w("tiny_field.geojson", fc([feat(point(169.99, -43.995), "near")]))

@@ -36,6 +36,10 @@ for z in touch overlap between many field whole hole bowtie empty emptyfc nullge
     imp "z_$z" nz_area.geojson --airfields nz_field.geojson --no-fly "z_$z.geojson" --base small
     fly "z_$z" allocation
 done
+for n in 64 360 2000; do
+    imp "c$n" nz_area.geojson --airfields nz_field.geojson --no-fly "circle$n.geojson" --base small
+    fly "c$n" allocation
+done
 imp f_long nz_area.geojson --airfields f_long.geojson --base small; fly f_long allocation --refine 0
 imp f_ctl nz_area.geojson --airfields f_ctl.geojson --base small
 imp uni nz_area.geojson --airfields f_uni.geojson --no-fly z_uni.geojson --base small
