@@ -751,7 +751,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     dest = Path(args.out) if args.out else Path(args.plan).parent
     _check_out("out", dest, "folder")
     with _output_folder("out", dest) as stage:
-        _wrote(export(args.plan, args.format, args.origin, stage), stage, dest)
+        written = export(args.plan, args.format, args.origin, stage)
+    _wrote(written, stage, dest)  # once in place: a refused merge writes (and says) nothing
     return 0
 
 
@@ -1146,7 +1147,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--tracks",
         action="append",
         default=None,
-        help="flown tracks (WGS 84): GeoJSON or KML LineStrings, GPX tracks; repeatable",
+        help="flown tracks (WGS 84): GeoJSON or KML LineStrings, GPX tracks; repeatable; they "
+        "stand for the flights of every --plan given (give every sortie's logs)",
     )
     p.add_argument("--origin", default=None, help="LAT,LON of (0, 0) if the plan has no crs")
     p.add_argument(

@@ -32,7 +32,7 @@ import yaml
 
 import poc_env.limits as limits
 from poc_env._kernels.sensing import LAW_CODES
-from poc_env.errors import ConfigError, as_bool, as_int, as_number, describe_range
+from poc_env.errors import ConfigError, as_bool, as_int, as_number, check_name, describe_range
 from poc_env.io import write_text_atomic
 
 KM = 1000.0
@@ -280,20 +280,17 @@ class MapConfig:
             raise ConfigError(
                 "no_fly_names", list(names), f"one name per no-fly zone ({len(zones)})"
             )
+        for i, name in enumerate(names):
+            check_name(f"no_fly_names[{i}]", name, limits.MAX_ZONE_NAME, empty=True)
         object.__setattr__(self, "no_fly_names", tuple(names))
         if zones:
-            from shapely.geometry import Polygon, box
+            from shapely.geometry import box
+
+            from poc_env.geometry import check_zones_leave_room
 
             area = box(self.origin_m[0], self.origin_m[1], self.origin_m[0] + self.width_m,
                        self.origin_m[1] + self.height_m)  # fmt: skip
-            for i, z in enumerate(zones):
-                poly = Polygon(z)
-                if poly.is_valid and poly.covers(area):
-                    raise ConfigError(
-                        f"no_fly_zones_km[{i}]",
-                        self.zone_label(i),
-                        "a zone that leaves part of the search area flyable (it covers all of it)",
-                    )
+            check_zones_leave_room(zones, self.no_fly_names, area, "the search area")
 
     def zone_label(self, i: int) -> str:
         """How messages name no-fly zone ``i`` (:func:`poc_env.geometry.zone_label`)."""
@@ -500,8 +497,7 @@ class Airfield:
     position_m: tuple[float, float] = _f("position_km", KM)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise ConfigError("name", self.name, "a non-empty string")
+        check_name("name", self.name, limits.MAX_AIRFIELD_NAME)  # what every export carries
         object.__setattr__(self, "position_m", _vec2("position_km", self.position_m))
 
 

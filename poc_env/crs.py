@@ -319,3 +319,67 @@ def plan_crs(
     if origin is None:
         raise ConfigError("origin", None, "LAT,LON of the map's (0, 0): the plan records no crs")
     return make_crs(projection, origin, zone=zone)
+
+
+#: GeoJSON ``crs`` member names (2008 GeoJSON spec) that mean WGS 84 longitude/latitude, the
+#: RFC 7946 default, compared lower-case by :func:`is_wgs84_name`. One list for every GeoJSON
+#: reader (``scenario import`` layers, ``replan --tracks``).
+WGS84_NAMES = (
+    "urn:ogc:def:crs:ogc:1.3:crs84",
+    "urn:ogc:def:crs:ogc::crs84",
+    "crs84",
+    "epsg:4326",
+    "urn:ogc:def:crs:epsg::4326",
+    "urn:ogc:def:crs:epsg:6.6:4326",
+    "http://www.opengis.net/def/crs/ogc/1.3/crs84",
+    "http://www.opengis.net/def/crs/epsg/0/4326",
+)
+
+
+def is_wgs84_name(name: Any) -> bool:
+    """Whether a GeoJSON ``crs`` member's name means WGS 84 longitude/latitude
+    (:data:`WGS84_NAMES`, case and surrounding spaces ignored)."""
+    return isinstance(name, str) and name.strip().lower() in WGS84_NAMES
+
+
+#: Largest distance (m) allowed between a polygon edge, straight where it was drawn (in
+#: longitude/latitude for a GeoJSON layer, in the map's metres for the planner's areas), and
+#: the straight lines that stand for it once it is drawn in the other space
+#: (:func:`densify_ring`).
+EDGE_TOLERANCE_M = 10.0
+
+
+def densify_ring(
+    ring: Any, crs: Any, *, straight_in: str, tol_m: float = EDGE_TOLERANCE_M
+) -> np.ndarray:
+    """``ring`` ((n, 2), not closed) with points added along its long edges, so that joining
+    its points with lines straight in the *other* space stays within ``tol_m`` metres of its
+    edges as drawn.
+
+    ``straight_in="lonlat"``: ``ring`` is (lon, lat), its edges straight in longitude/latitude
+    (GeoJSON, RFC 7946 3.1.1), to be projected and joined straight in the map's metres (the
+    import). ``straight_in="local"``: ``ring`` is in the map's metres, its edges straight there
+    (the planner's operating area and zones), to be drawn by a GIS straight in lon/lat (the
+    exports). An edge departs from its counterpart by about its length squared, so an edge
+    departing ``d`` is cut evenly into ``ceil(sqrt(d / tol_m))`` pieces (at most 1,000): an edge
+    under about 20 km at mid-latitudes keeps its two ends; a 500 km edge gets about 22 pieces.
+    """
+    a = np.asarray(ring, dtype=float).reshape(-1, 2)
+    b = np.roll(a, -1, axis=0)
+    t = np.linspace(0.0, 1.0, 9)[1:-1]
+    mid = a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]  # evenly along, in ring space
+    if straight_in == "lonlat":
+        drawn = np.array(to_local(mid.reshape(-1, 2)[:, ::-1], crs)).reshape(mid.shape)
+        ends = np.array(to_local(np.vstack([a, b])[:, ::-1], crs)).reshape(2, -1, 2)
+        other = ends[0][:, None, :] + t[None, :, None] * (ends[1] - ends[0])[:, None, :]
+    elif straight_in == "local":
+        drawn = mid
+        ll = np.array(to_geographic(np.vstack([a, b]), crs)).reshape(2, -1, 2)
+        chord = ll[0][:, None, :] + t[None, :, None] * (ll[1] - ll[0])[:, None, :]
+        other = np.array(to_local(chord.reshape(-1, 2), crs)).reshape(mid.shape)
+    else:
+        raise ValueError(f"straight_in: {straight_in!r}; allowed: lonlat or local")
+    dev = np.max(np.hypot(*(drawn - other).transpose(2, 0, 1)), axis=1)
+    pieces = np.clip(np.ceil(np.sqrt(np.maximum(dev, 0.0) / tol_m)).astype(int), 1, 1000)
+    out = [p + (np.arange(m)[:, None] / m) * (q - p) for p, q, m in zip(a, b, pieces)]
+    return np.vstack(out)

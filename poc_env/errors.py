@@ -7,6 +7,7 @@ user can fix a YAML file or a call without reading a traceback from deep inside 
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 
@@ -202,3 +203,62 @@ def check_positive(field: str, value: Any, *, allow_zero: bool = False) -> float
 def check_range(field: str, value: Any, lo: float, hi: float) -> float:
     """Return ``value`` as a float if it is a finite number in ``[lo, hi]``."""
     return as_number(field, value, lo, hi)
+
+
+#: Characters no text that reaches an export may hold: the C0 controls XML 1.0 forbids (all
+#: below U+0020 but tab, line feed and carriage return), U+FFFE, U+FFFF and lone UTF-16
+#: surrogates (no UTF-8 encoding exists for them). Every export format writes plan text into
+#: XML, HTML, JSON or file names.
+BAD_TEXT = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def check_text(field: str, value: Any) -> None:
+    """Refuse text that no export format can carry, anywhere in ``value`` (keys included).
+
+    Walks mappings and lists; every string (and mapping key) must be free of :data:`BAD_TEXT`.
+
+    Raises
+    ------
+    ConfigError
+        Naming the field (``plan.uavs[0].flown_rectangle.rule``), the character's code point
+        and what is allowed.
+    """
+    if isinstance(value, str):
+        bad = BAD_TEXT.search(value)
+        if bad is not None:
+            kind = "a lone surrogate" if "\ud800" <= bad.group() <= "\udfff" else "a control"
+            raise ConfigError(
+                field,
+                f"text with {kind} character U+{ord(bad.group()):04X} at {bad.start()}",
+                "text without C0 control characters (tab, line feed and carriage return are "
+                "allowed), U+FFFE, U+FFFF or lone surrogates",
+            )
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            if isinstance(k, str):
+                check_text(f"{field} key", k)
+            check_text(f"{field}.{k}", v)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            check_text(f"{field}[{i}]", v)
+
+
+def check_name(field: str, value: Any, most: int, *, empty: bool = False) -> str:
+    """A name that every export can carry (an airfield's, a no-fly zone's): a string of at most
+    ``most`` characters (at least one unless ``empty``) passing :func:`check_text`. The one
+    rule for the scenario loader, ``scenario import`` and plan.json, so that a name accepted
+    on the way in is never refused by an export.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``field``, the value (shortened) and what is allowed.
+    """
+    lo = 0 if empty else 1
+    if not isinstance(value, str) or not lo <= len(value) <= most:
+        shown = value if not isinstance(value, str) or len(value) <= 80 else value[:77] + "..."
+        got = shown if not isinstance(value, str) else f"{shown!r} ({len(value)} characters)"
+        size = f"at most {most}" if empty else f"{lo}-{most}"
+        raise ConfigError(field, got, f"a name of {size} characters")
+    check_text(field, value)
+    return value

@@ -139,3 +139,35 @@ def zone_label(i: int, names: Sequence[str] = ()) -> str:
     and import errors count), with its name when it has one: ``no-fly zone 0 ('range R-12')``."""
     name = names[i] if 0 <= i < len(names) and names[i] else ""
     return f"no-fly zone {i}" + (f" ({name!r})" if name else "")
+
+
+def check_zones_leave_room(
+    zones: Sequence[Sequence[Sequence[float]]], names: Sequence[str], region: Polygon, what: str
+) -> None:
+    """Refuse no-fly ``zones`` (point lists, the map's metres) that together cover ``region``
+    (the search area: the map's rectangle, or an imported area polygon): nothing would be
+    left to fly over it. One zone or several side by side alike.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``no_fly_zones_km[i, j, ...]`` (the zones that meet ``region``), their labels
+        (:func:`zone_label`) and ``what`` the region is.
+    """
+    from poc_env.errors import ConfigError
+
+    polys = [Polygon(z) for z in zones]
+    valid = [p for p in polys if p.is_valid]
+    if not valid or not shapely.union_all(valid).covers(region):
+        return
+    one = [i for i, p in enumerate(polys) if p.is_valid and p.covers(region)]
+    if one:  # a zone alone: named alone
+        idx, allowed = one[:1], f"a zone that leaves part of {what} flyable (it covers all of it)"
+    else:
+        idx = [i for i, p in enumerate(polys) if p.is_valid and p.intersection(region).area > 0]
+        allowed = f"zones that leave part of {what} flyable (together they cover all of it)"
+    raise ConfigError(
+        f"no_fly_zones_km[{', '.join(str(i) for i in idx)}]",
+        ", ".join(zone_label(i, names) for i in idx),
+        allowed,
+    )

@@ -168,26 +168,33 @@ def _clean_stale_staging(dest: Path) -> None:
 
 def _check_merge(src: Path, dest: Path) -> None:
     """Before :func:`_merge_into` moves anything: every file it would replace is a regular
-    file (:func:`check_replaceable`), so a merge is whole or not started."""
+    file (:func:`check_replaceable`: a folder of the user's in the way is refused, never
+    deleted), and a folder it writes goes into a folder or a new path, so a merge is whole or
+    not started."""
+    from poc_env.errors import ConfigError
+
     for entry in src.iterdir():
         target = dest / entry.name
-        if entry.is_dir() and not entry.is_symlink() and target.is_dir():
-            _check_merge(entry, target)
-        elif not (target.is_dir() and not target.is_symlink()):
+        if entry.is_dir() and not entry.is_symlink():
+            if target.is_dir():
+                _check_merge(entry, target)
+            elif os.path.lexists(target):
+                raise ConfigError(
+                    "output", os.fspath(target), "a new path or a folder to write a folder into; "
+                    "it is a file",
+                )  # fmt: skip
+        else:
             check_replaceable(target)
 
 
 def _merge_into(src: Path, dest: Path) -> None:
-    """Move every file of ``src`` into ``dest`` (same file system), replacing same-named files."""
+    """Move every file of ``src`` into ``dest`` (same file system), replacing same-named files
+    (checked first by :func:`_check_merge`: only regular files are replaced)."""
     for entry in sorted(src.iterdir()):
         target = dest / entry.name
         if entry.is_dir() and not entry.is_symlink() and target.is_dir():
             _merge_into(entry, target)
         else:
-            if target.is_dir() and not target.is_symlink():
-                import shutil
-
-                shutil.rmtree(target)
             os.replace(entry, target)
 
 

@@ -28,6 +28,10 @@ MAX_EXTENT_KM = 2000.0
 #: Largest distance of any configured point (origin, airfields, zones, peaks) from the map
 #: origin, km.
 MAX_COORD_KM = 10_000.0
+#: Longest airfield name and no-fly zone name (characters): what plan.json and every export
+#: carry (an airfield name becomes part of labels and rally-point names).
+MAX_AIRFIELD_NAME = 64
+MAX_ZONE_NAME = 200
 #: Smallest cell side: 10 m (a search cell narrower than any sensor footprint is meaningless).
 MIN_CELL_KM = 0.01
 #: Fastest UAV: 1,500 km/h (beyond any search aircraft; the paper's fly 100-240 km/h).

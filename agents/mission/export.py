@@ -94,6 +94,9 @@ def export_plan(
     field_elevation_m = 0.0 if field_elevation_m is None else field_elevation_m
     alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
     elevation = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
+    warning = None if fmt == "qgc" else airspace_warning(plan)
+    if warning is not None:  # QGC refuses such a plan; the other formats show it, and say so
+        print(f"warning: {warning}")
     job = ExportJob(
         plan=plan,
         plan_path=Path(plan_path),
@@ -105,8 +108,23 @@ def export_plan(
         geofence=geofence,
         prior=prior,
         out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
+        warning=warning,
     )
     return FORMATS[fmt].write(job)
+
+
+def airspace_warning(plan: Any) -> str | None:
+    """The QGC export's airspace refusal (:func:`~poc_env.agents.mission.formats.qgc.check_fences`:
+    a mission point outside the operating area, a leg through a no-fly zone) as text, or None:
+    what the viewing formats (GeoJSON, KML, the HTML report) say about a plan, edited by hand,
+    that QGC would not fly."""
+    from poc_env.agents.mission.formats.qgc import check_fences
+
+    try:
+        check_fences(plan, plan.get("operating_area_m"))
+    except ConfigError as err:
+        return str(err)
+    return None
 
 
 def _terrain_altitudes(

@@ -22,6 +22,7 @@ from poc_env.agents.mission.plan import (
     route,
 )
 from poc_env.agents.mission.terrain import from_record, plan_profiles
+from poc_env.crs import densify_ring
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
 
@@ -166,7 +167,8 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
     for i, z in enumerate(plan.get("no_fly_zones_m") or []):
         polys.append(("no_fly_zone", zone_label(i, znames), z))
     for kind, name, ring in polys:
-        ccw = clockwise(ring)[::-1]
+        # long edges straight in metres, as the planner has them, where a GIS draws lon/lat
+        ccw = densify_ring(clockwise(ring)[::-1], crs, straight_in="local").tolist()
         out.append(
             {
                 "geometry": "Polygon",

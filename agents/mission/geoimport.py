@@ -43,24 +43,14 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
-from poc_env.errors import ConfigError, GeometryError, as_number, require_extra
-from poc_env.geometry import validate_polygon
+from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, is_wgs84_name
+from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
+from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
 
 KM = 1000.0
 VECTOR_SUFFIXES = (".geojson", ".json", ".kml")
 PRIOR_SUFFIXES = (".tif", ".tiff", ".csv")
-#: ``crs`` members of a GeoJSON file that mean longitude/latitude on WGS84.
-WGS84_NAMES = (
-    "urn:ogc:def:crs:ogc:1.3:crs84",
-    "urn:ogc:def:crs:ogc::crs84",
-    "crs84",
-    "epsg:4326",
-    "urn:ogc:def:crs:epsg::4326",
-    "urn:ogc:def:crs:epsg:6.6:4326",
-    "http://www.opengis.net/def/crs/ogc/1.3/crs84",
-    "http://www.opengis.net/def/crs/epsg/0/4326",
-)
 #: Points (airfields, no-fly vertices, CSV rows) farther than this from the area are refused.
 MAX_DISTANCE_KM = 1000.0
 #: Mass outside the area above this share of the prior's total gives a warning.
@@ -113,7 +103,7 @@ def _geojson_crs(file: Path, doc: Any) -> None:
     if crs is None:
         return
     name = crs.get("properties", {}).get("name") if isinstance(crs, dict) else None
-    if not isinstance(name, str) or name.strip().lower() not in WGS84_NAMES:
+    if not is_wgs84_name(name):
         raise ConfigError(
             f"{file} crs",
             name if name is not None else crs,
@@ -206,9 +196,15 @@ def _kml_features(file: Path) -> list[tuple[str, Any, dict]]:
             out.append(("Polygon" if len(polys) == 1 else "MultiPolygon", _one(polys), props))
         elif points:
             out.append(("Point", points[0], props))
-        else:
-            out.append(("(none)", None, props))
+        else:  # named by its geometry (a LineString, a gx:Track, ...), else "(none)"
+            kinds = (_strip(e.tag) for e in pm.iter() if isinstance(e.tag, str))
+            other = next((k for k in kinds if k in KML_OTHER_GEOMETRIES), "(none)")
+            out.append((other, None, props))
     return out
+
+
+#: KML geometries that are not a Point or Polygon, named in errors when a Placemark has one.
+KML_OTHER_GEOMETRIES = ("LineString", "LinearRing", "Track", "MultiTrack", "Model")
 
 
 def _one(polys: list) -> Any:
@@ -260,6 +256,8 @@ def _local_polygon(file: Path, i: int, rings: Any, crs: dict) -> Polygon:
     if np.ptp(ll[:, 0]) > 180:
         raise GeometryError(f"{where}: spans more than 180 deg of longitude; allowed: an area "
                             "that does not cross the antimeridian")  # fmt: skip
+    if file.suffix.lower() != ".kml":  # GeoJSON: edges straight in lon/lat (RFC 7946 3.1.1)
+        ll = densify_ring(ll, crs, straight_in="lonlat")
     xy = np.array(to_local(ll[:, ::-1], crs))
     poly = validate_polygon(xy, where)
     return orient(poly, 1.0)
@@ -273,6 +271,7 @@ def _points(file: Path, feats: list) -> list[tuple[int, str, np.ndarray]]:
         name = props.get("name")
         if not isinstance(name, str) or not name.strip():
             raise ConfigError(f"{_feature(file, i)} name", name, "a non-empty name property")
+        check_name(f"{_feature(file, i)} name", name.strip(), limits.MAX_AIRFIELD_NAME)
         out.append((i, name.strip(), _lonlat(file, i, [coords])[0]))
     return out
 
@@ -335,7 +334,7 @@ def _read_csv_rows(
     file: Path, crs: dict, allowed: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_read_csv` on a file that decodes (decoding and CSV errors raised as they come)."""
-    with open(file, newline="", encoding="utf-8") as fh:
+    with open(file, newline="", encoding="utf-8-sig") as fh:  # a spreadsheet's BOM dropped
         reader = csv.reader(fh)
         try:
             header = [h.strip().lower() for h in next(reader)]
@@ -519,7 +518,8 @@ def _prior(
         raise ConfigError(str(file), "zero total probability", "positive probability mass")
     w = w / peak
     total = float(w.sum())
-    inside = contains_xy(area, x, y)
+    # on the edge as drawn counts as inside: within the edges' tolerance (densify_ring), either side
+    inside = contains_xy(area.buffer(EDGE_TOLERANCE_M), x, y)
     if file.suffix.lower() == ".csv" and inside.mean() < 0.5:
         swapped = np.array(to_local(np.column_stack(_swap_back(x, y, crs)), crs))
         if contains_xy(area, swapped[:, 0], swapped[:, 1]).mean() > inside.mean():
@@ -531,7 +531,7 @@ def _prior(
     kept = float(m.sum())
     if kept <= 0:
         raise ConfigError(str(file), "no probability mass inside the area", "a prior over it")
-    outside = total - kept
+    outside = max(total - kept, 0.0)  # (rounding printed "-0.000%")
     report = {  # in the file's units (may overflow to inf; the share does not)
         "source": str(file),
         "total": total * peak,
@@ -649,6 +649,14 @@ def import_scenario(
         origin = parse_origin(origin)
     crs = make_crs(projection, origin)
     poly = _local_polygon(file, i_area, rings, crs)
+    far = poly.distance(Point(0.0, 0.0))  # the origin is local (0, 0) in every projection
+    if far > MAX_DISTANCE_KM * KM:  # the projection's scale error grows with the distance
+        raise ConfigError(
+            "origin", [float(v) for v in crs["origin_deg"]],
+            f"a point within {MAX_DISTANCE_KM:g} km of the search area (it is {far / KM:.0f} km "
+            "away; the map's scale error grows as (distance / R)^2 / 6: leave --origin out for "
+            "the area's south-west corner)",
+        )  # fmt: skip
     grid = _Grid(poly, cell_km * KM)
 
     ffile, ffeats = read_features(airfields, "airfields: named Points")
@@ -672,8 +680,16 @@ def import_scenario(
                     _near(zfile, i, v, np.array(to_geographic_one(v, crs)), poly, crs)
             ring = np.asarray(z.exterior.coords)[:-1]
             zones.append([[_km(x), _km(y)] for x, y in ring])
-            zone_names.append(str((zfeats[i][2] or {}).get("name") or ""))
+            zname = str((zfeats[i][2] or {}).get("name") or "")
+            zone_names.append(
+                check_name(f"{_feature(zfile, i)} name", zname, limits.MAX_ZONE_NAME, empty=True)
+            )
 
+    if zones:  # the map's rectangle is checked by the loader; the area drawn is checked here
+        check_zones_leave_room(
+            [[(x * KM, y * KM) for x, y in z] for z in zones], zone_names, poly,
+            f"the search area ({file.name} feature {i_area})",
+        )  # fmt: skip
     grid_prior, prior_report = _prior(prior, crs, grid, poly, particles, particles_time)
 
     data = _base_mapping(base)

@@ -33,6 +33,9 @@ class ExportJob:
         The prior overlay's source (None: rebuilt from the plan's scenario).
     out_dir : Path
         The folder written into.
+    warning : str or None
+        What the plan breaks that the QGC export refuses (a leg through a no-fly zone, a point
+        outside the operating area), shown by the viewing formats (the HTML report's note).
     """
 
     plan: Plan
@@ -45,6 +48,7 @@ class ExportJob:
     geofence: bool
     prior: Any
     out_dir: Path
+    warning: str | None = None
 
     def path(self, suffix: str) -> Path:
         """``out_dir / (plan stem + suffix)``: every file an export writes is named so."""

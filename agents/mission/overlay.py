@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.mission.crs import to_geographic, to_local
-from poc_env.agents.mission.plan import Plan, _scenario_candidates, scenario_source
+from poc_env.agents.mission.plan import Plan, scenario_not_found, scenario_source
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 
@@ -233,11 +233,7 @@ def plan_prior(
     name = str(plan.get("scenario"))
     where = scenario_source(name, plan_path, plan.get("scenario_file"))
     if where is None:
-        looked = ", ".join(str(c) for c in _scenario_candidates(name, plan_path, plan))
-        why = (
-            f"scenario {name!r} is not built in and no YAML file of it was found (looked for "
-            f"{looked}): copy the scenario's YAML file beside the plan as {name}.yaml"
-        )
+        why = scenario_not_found(name, plan_path, plan)
         if prior is None:
             return None, f"no prior overlay: {why}"
         raise ConfigError("scenario", name, f"a scenario to place the prior on ({why})")

@@ -77,8 +77,9 @@ from pathlib import Path
 from typing import Any, NoReturn, TypedDict
 
 from poc_env.agents.mission.crs import check_crs
-from poc_env.errors import ConfigError, as_number
+from poc_env.errors import ConfigError, as_number, check_name, check_text
 from poc_env.io import read_json, write_text_atomic
+from poc_env.limits import MAX_AIRFIELD_NAME, MAX_ZONE_NAME
 
 SCHEMA = 2
 #: The schemas :func:`load_plan` reads.
@@ -387,14 +388,12 @@ def _check_optional(plan: dict[str, Any]) -> None:
     znames = plan.get("no_fly_zone_names")
     if znames is not None:
         n_z = len(zones or [])
-        if (
-            not isinstance(znames, list)
-            or len(znames) != n_z
-            or not all(isinstance(z, str) and len(z) <= 200 for z in znames)
-        ):
+        if not isinstance(znames, list) or len(znames) != n_z:
             raise ConfigError(
                 "plan.no_fly_zone_names", znames, f"one name per no-fly zone ({n_z}), strings"
             )
+        for i, zname in enumerate(znames):
+            check_name(f"plan.no_fly_zone_names[{i}]", zname, MAX_ZONE_NAME, empty=True)
     if plan.get("terrain") is not None:
         _check_terrain("plan.terrain", plan["terrain"])
     fields = plan.get("airfields")
@@ -404,46 +403,8 @@ def _check_optional(plan: dict[str, Any]) -> None:
         for i, a in enumerate(fields):
             if not isinstance(a, dict) or sorted(a) != ["name", "position_m"]:
                 raise ConfigError(f"plan.airfields[{i}]", a, "a mapping of name, position_m")
-            if not isinstance(a["name"], str) or not 1 <= len(a["name"]) <= 64:
-                raise ConfigError(f"plan.airfields[{i}].name", a["name"], "1-64 characters")
+            check_name(f"plan.airfields[{i}].name", a["name"], MAX_AIRFIELD_NAME)
             _point(f"plan.airfields[{i}].position_m", a["position_m"])
-
-
-#: Characters no plan text may hold: the C0 controls XML 1.0 forbids (all below U+0020 but
-#: tab, line feed and carriage return), U+FFFE, U+FFFF and lone UTF-16 surrogates (no UTF-8
-#: encoding exists for them). Every format writes plan text into XML, HTML, JSON or file names.
-_BAD_TEXT = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
-
-
-def check_text(field: str, value: Any) -> None:
-    """Refuse text that no export format can carry, anywhere in ``value`` (keys included).
-
-    Walks mappings and lists; every string (and mapping key) must be free of :data:`_BAD_TEXT`.
-
-    Raises
-    ------
-    ConfigError
-        Naming the field (``plan.uavs[0].flown_rectangle.rule``), the character's code point
-        and what is allowed.
-    """
-    if isinstance(value, str):
-        bad = _BAD_TEXT.search(value)
-        if bad is not None:
-            kind = "a lone surrogate" if "\ud800" <= bad.group() <= "\udfff" else "a control"
-            raise ConfigError(
-                field,
-                f"text with {kind} character U+{ord(bad.group()):04X} at {bad.start()}",
-                "text without C0 control characters (tab, line feed and carriage return are "
-                "allowed), U+FFFE, U+FFFF or lone surrogates",
-            )
-    elif isinstance(value, dict):
-        for k, v in value.items():
-            if isinstance(k, str):
-                check_text(f"{field} key", k)
-            check_text(f"{field}.{k}", v)
-    elif isinstance(value, list):
-        for i, v in enumerate(value):
-            check_text(f"{field}[{i}]", v)
 
 
 def _point(field: str, value: Any) -> None:
@@ -627,6 +588,16 @@ def scenario_source(
         return name
     cands = _scenario_candidates(name, plan_path, {"scenario_file": scenario_file})
     return next((str(c) for c in cands if c.is_file()), None)
+
+
+def scenario_not_found(name: str, plan_path: str | os.PathLike[str], plan: Any) -> str:
+    """Why a plan's scenario ``name`` was not found, with every file tried (for messages:
+    export's prior note, ``replan``'s error)."""
+    looked = ", ".join(str(c) for c in _scenario_candidates(name, plan_path, plan))
+    return (
+        f"scenario {name!r} is not built in and no YAML file of it was found (looked for "
+        f"{looked}): copy the scenario's YAML file beside the plan as {name}.yaml"
+    )
 
 
 def _scenario_candidates(name: str, plan_path: str | os.PathLike[str], plan: Any) -> list[Path]:

@@ -245,6 +245,8 @@ def plan_table(plan: dict[str, Any]) -> str:
         f"{plan['upper_bound']:.4f}   ({plan['optimizer']['name']}, seed {plan['seed']}, "
         f"{plan['runtime_s']:.2f} s)"
     )
+    if plan.get("reason"):  # an allocation plan that reaches nothing says why (not just 0s)
+        lines.append(f"no search planned: {plan['reason']}")
     b = plan.get("bounds")
     if b:
         ratio = f" (POS_C / reach {plan['posc'] / b['reach']:.3f})" if b["reach"] > 0 else ""

@@ -32,18 +32,10 @@ from typing import Any
 import numpy as np
 
 from poc_env.config import Scenario
+from poc_env.crs import is_wgs84_name
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
-
-#: GeoJSON ``crs`` names accepted (WGS 84 longitude/latitude, the RFC 7946 default).
-WGS84_NAMES = (
-    "urn:ogc:def:crs:OGC:1.3:CRS84",
-    "urn:ogc:def:crs:OGC::CRS84",
-    "urn:ogc:def:crs:EPSG::4326",
-    "EPSG:4326",
-    "CRS84",
-)
 
 
 def operating_area(sc: Scenario, prior: np.ndarray) -> tuple[float, float, float, float]:
@@ -158,12 +150,12 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     crs_member = data.get("crs")
     props = crs_member.get("properties") if isinstance(crs_member, dict) else None
     name = props.get("name") if isinstance(props, dict) else None
-    if "crs" in data and (not isinstance(name, str) or name not in WGS84_NAMES):
+    if "crs" in data and not is_wgs84_name(name):
         raise ConfigError(
             f"{where}.crs",
             name if name is not None else data.get("crs"),
             "WGS 84 longitude/latitude (RFC 7946: leave crs out, or "
-            + ", ".join(WGS84_NAMES[:3]) + ")",
+            "urn:ogc:def:crs:OGC:1.3:CRS84, urn:ogc:def:crs:EPSG::4326, EPSG:4326)",
         )  # fmt: skip
     if data.get("type") == "FeatureCollection":
         feats = data.get("features")
@@ -234,6 +226,7 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     root = _xml_root(raw, path, "KML", KML_NAMESPACES)
     out = []
     placemarks = [e for e in root.iter() if isinstance(e.tag, str) and e.tag.endswith("}Placemark")]
+    seen = 0  # LineStrings and gx:Tracks read, kept or not
     for i, pm in enumerate(placemarks):
         n = 0
         for e in pm.iter():
@@ -254,11 +247,14 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
             else:
                 continue
             n += 1
+            seen += 1
             if any(len(r) != 2 for r in rows):
                 j = next(k for k, r in enumerate(rows) if len(r) != 2)
                 raise ConfigError(f"{field}[{j}]", rows[j], "lon,lat[,alt]")
+            if name == "Track" and len(rows) < 2:  # one fix sweeps no line (as a GPX segment)
+                continue
             out.append((field, np.array(rows, dtype=float).reshape(-1, 2)))
-    if not out:
+    if not seen:
         raise ConfigError("tracks", os.fspath(path), "a KML file with LineString placemarks")
     return out
 
@@ -266,19 +262,24 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
 def _gpx_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     """Every track segment (``trk/trkseg/trkpt`` with ``lat`` and ``lon`` attributes) of a GPX
     1.1 (or 1.0) file; GPX is WGS 84 by definition. Routes (``rte``) and waypoints are not
-    flown tracks and are ignored."""
+    flown tracks and are ignored, and so are segments of fewer than two points (they sweep no
+    line)."""
     root = _xml_root(raw, path, "GPX", GPX_NAMESPACES)
     ns = root.nsmap.get(None) or GPX_NAMESPACES[0]
     out = []
+    segments = 0
     for i, trk in enumerate(root.findall(f"{{{ns}}}trk")):
         for k, seg in enumerate(trk.findall(f"{{{ns}}}trkseg")):
+            segments += 1
             field = f"tracks.trk[{i}].trkseg[{k}]"
             pts = seg.findall(f"{{{ns}}}trkpt")
+            if len(pts) < 2:  # an empty or one-fix segment (valid GPX: a logger's pause) sweeps
+                continue  # no line; a file of nothing else is refused by read_tracks
             rows = [[_number(p.get("lon"), f"{field}.trkpt[{j}].lon"),
                      _number(p.get("lat"), f"{field}.trkpt[{j}].lat")]
                     for j, p in enumerate(pts)]  # fmt: skip
             out.append((f"{field}.trkpt", np.array(rows, dtype=float).reshape(-1, 2)))
-    if not out:
+    if not segments:
         raise ConfigError("tracks", os.fspath(path), "a GPX file with trk/trkseg/trkpt tracks")
     return out
 
@@ -342,10 +343,24 @@ def next_sortie(
     return nxt
 
 
+def swept_text(plans: list[str], files: list[str] | None, tracks: list | None) -> str:
+    """What ``replan`` swept, in one line: the routes of the ``plans``, or the ``tracks`` read
+    from ``files``, which stand for the flights of every plan (:func:`next_sortie`)."""
+    routes = ", ".join(str(p) for p in plans)
+    if not files or tracks is None:
+        return f"swept: the routes of {routes}"
+    n = len(tracks)
+    return (
+        f"swept: {n} track{'s' if n != 1 else ''} from {', '.join(str(f) for f in files)}, "
+        f"in place of the routes of {routes}"
+    )
+
+
 def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
     from poc_env.agents.mission.plan import (
         load_plan,
+        scenario_not_found,
         scenario_source,
         with_scenario_file,
         write_plan,
@@ -357,11 +372,13 @@ def cli_main(args: Any) -> int:
     plans = [dict(load_plan(p)) for p in args.plan]
     # the scenario the first plan was made on: by name, or its recorded YAML file (plan
     # --scenario FILE.yaml records scenario_file; issue 24: replan looked for the name only)
-    name = (
-        args.scenario
-        or scenario_source(str(plans[0]["scenario"]), args.plan[0], plans[0].get("scenario_file"))
-        or str(plans[0]["scenario"])
+    name = args.scenario or scenario_source(
+        str(plans[0]["scenario"]), args.plan[0], plans[0].get("scenario_file")
     )
+    if name is None:  # say where it looked, as export's prior note does
+        why = scenario_not_found(str(plans[0]["scenario"]), args.plan[0], plans[0])
+        raise ConfigError("scenario", plans[0]["scenario"], f"the plan's scenario ({why}), or "
+                          "--scenario FILE.yaml")  # fmt: skip
     sc = load_scenario(name, parse_overrides(args.overrides or []))
     prior = build_prior(sc.map, args.map_file)
     tracks = None
@@ -376,6 +393,7 @@ def cli_main(args: Any) -> int:
         for t in args.tracks:
             tracks += read_tracks(t, crs)
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
+    print(swept_text(args.plan, args.tracks, tracks))
     print(plan_table(nxt))
     print(
         f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "

@@ -64,12 +64,40 @@ QUAD_SEGS = 4
 #: came 0.2 % short of its distance where two zones' keep-out areas meet), so the obstacle
 #: (the zones grown by ``c``, finely rounded) lies strictly inside them.
 _GROW = 1.01 / float(np.cos(np.pi / (4 * QUAD_SEGS)))
+#: a zone's keep-out polygon with more vertices than this (a circle digitised with thousands)
+#: is simplified outwards (:func:`_keep_out`): the graph has a node per vertex and its cost
+#: grows as their square (a 2,000-vertex circle: 263 s and 1.25 GB for one allocation plan).
+MAX_KEEP_OUT_VERTICES = 256
+#: the simplification's tolerance, a share of ``c`` (doubled until the polygon is small enough)
+SIMPLIFY_SHARE = 0.01
 #: a segment with an end inside the c ring may come closer to the zones than that end by this
 #: share of c (rounding; :meth:`ZoneRouter._visible`).
 KEEP_TOL = 1e-6
 #: answers a router remembers per kind (paths, pieces, visible vertices) before it forgets them
 #: all (a follower's router lives as long as its episode).
 CACHE_SIZE = 20_000
+
+
+def _vertices(poly: Any) -> int:
+    return sum(len(r.coords) - 1 for r in (poly.exterior, *poly.interiors))
+
+
+def _keep_out(zone: Any, clearance: float) -> Any:
+    """``zone`` grown by ``_GROW * clearance`` (its keep-out polygon); one of more than
+    :data:`MAX_KEEP_OUT_VERTICES` vertices simplified by a tolerance ``t`` (from
+    :data:`SIMPLIFY_SHARE` of ``c``, doubled up to 8 % of it until it is small enough), then
+    grown by ``t`` with mitred joins, so that it still holds the plain keep-out polygon (paths
+    keep ``c``) and departs from it by at most ``2 t``. Zones of few vertices: the plain
+    polygon, unchanged."""
+    grown = zone.buffer(_GROW * clearance, quad_segs=QUAD_SEGS)
+    if _vertices(grown) <= MAX_KEEP_OUT_VERTICES:
+        return grown
+    tol = SIMPLIFY_SHARE * clearance
+    while True:
+        out = grown.simplify(tol).buffer(tol, join_style="mitre")
+        if _vertices(out) <= MAX_KEEP_OUT_VERTICES or tol >= 0.08 * clearance:
+            return out
+        tol *= 2
 
 
 class _Edges:
@@ -184,9 +212,7 @@ class ZoneRouter:
         if not self.active:
             return
         raw = shapely.union_all(self.zones)
-        self.keep_out = shapely.union_all(
-            [z.buffer(_GROW * self.clearance, quad_segs=QUAD_SEGS) for z in self.zones]
-        )
+        self.keep_out = shapely.union_all([_keep_out(z, self.clearance) for z in self.zones])
         self.obstacle = raw.buffer(self.clearance, quad_segs=16)
         self.raw = raw.buffer(1.0)
         self._zones_union = raw

@@ -169,3 +169,51 @@ def test_temp_files_of_killed_writers_are_cleaned(tmp_path):
     assert not stale.exists()  # its writer is gone
     assert live.exists()  # its writer (this process) is alive: never touched
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "latest.json"])
+
+
+def test_atomic_dir_never_replaces_a_folder_by_a_file(tmp_path):
+    """A folder of the user's where the command writes a file of the same name is refused with
+    a clear error naming it, and kept with its contents (audit i24: ``export --out o`` with a
+    folder ``o/plan.geojson`` deleted that folder and everything in it)."""
+    from poc_env.errors import ConfigError
+
+    dest = tmp_path / "o"
+    (dest / "plan.geojson").mkdir(parents=True)
+    (dest / "plan.geojson" / "keep.txt").write_text("the user's")
+    (dest / "plan.kml").write_text("old")
+    with (
+        pytest.raises(ConfigError, match=r"plan\.geojson.*it is a folder"),
+        atomic_dir(dest) as stage,
+    ):
+        (stage / "plan.kml").write_text("new")
+        (stage / "plan.geojson").write_text("{}")
+    assert (dest / "plan.geojson" / "keep.txt").read_text() == "the user's"
+    assert (dest / "plan.kml").read_text() == "old"  # nothing moved: the merge is whole or none
+    assert not _leftovers(tmp_path)
+    # and a folder the command writes where the user has a file: refused the same way
+    (tmp_path / "p").mkdir()
+    (tmp_path / "p" / "sub").write_text("a file")
+    with pytest.raises(ConfigError, match="sub"), atomic_dir(tmp_path / "p") as stage:
+        (stage / "sub").mkdir()
+        (stage / "sub" / "a.txt").write_text("x")
+    assert (tmp_path / "p" / "sub").read_text() == "a file"
+
+
+def test_export_over_a_folder_in_the_way_says_nothing_written(tmp_path, capsys):
+    """``poc-env export`` whose output name is taken by a folder: a clear error, the folder and
+    its contents kept, and no ``wrote`` line for a file that was not written."""
+    plan = tmp_path / "plan.json"
+    argv = ["plan", "--scenario", "small", "--popsize", "8", "--maxiter", "1", "--quiet"]
+    assert main([*argv, "--origin", "45.75,126.65", "--out", str(plan)]) == 0
+    (tmp_path / "o" / "plan.geojson").mkdir(parents=True)
+    (tmp_path / "o" / "plan.geojson" / "keep.txt").write_text("the user's")
+    capsys.readouterr()
+    assert main(["export", str(plan), "--format", "geojson", "--out", str(tmp_path / "o")]) == 2
+    printed = capsys.readouterr()
+    assert "plan.geojson'; allowed: a new path or a regular file to replace; it is a folder" in (
+        printed.err
+    )
+    assert "wrote" not in printed.out
+    assert (tmp_path / "o" / "plan.geojson" / "keep.txt").read_text() == "the user's"
+    assert main(["export", str(plan), "--format", "geojson", "--out", str(tmp_path / "p")]) == 0
+    assert f"wrote {tmp_path / 'p' / 'plan.geojson'}" in capsys.readouterr().out

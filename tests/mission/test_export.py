@@ -1,5 +1,6 @@
 """Mission export: GeoJSON, KML and QGroundControl files parse back to the same waypoints."""
 
+import itertools
 import json
 import math
 import re
@@ -8,6 +9,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 from pyproj import Geod, Transformer
+from shapely.geometry import Point
 
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_geographic, to_local
 from poc_env.agents.mission.export import export_plan
@@ -783,3 +785,54 @@ def test_cli_plan_refuses_a_utm_zone_across_the_globe(tmp_path, capsys):
                  "--out", str(tmp_path / "p.json")])  # fmt: skip
     assert code != 0 and not (tmp_path / "p.json").exists()
     assert "crs.zone" in capsys.readouterr().err
+
+
+def test_large_polygons_are_drawn_where_the_planner_has_them(tmp_path):
+    """Audit i24: GeoJSON, KML and the map report join a polygon's vertices with lines straight
+    in longitude/latitude; the planner's operating area and zones are straight in the map's
+    metres. On a 600 km operating area near 46 N the exported edges ran up to kilometres off
+    the planner's (6.4 km on the audit's 500 km scenario). Long edges now get points along
+    them (:func:`poc_env.crs.densify_ring`) so that every lon/lat-straight piece stays within
+    10 m (plus the 1e-6 degree rounding) of the planner's edge; short edges keep their
+    vertices."""
+    from shapely.geometry import Polygon
+
+    big = [[-300e3, -300e3], [300e3, -300e3], [300e3, 300e3], [-300e3, 300e3]]
+    zone = [[10e3, 10e3], [20e3, 10e3], [20e3, 20e3], [10e3, 20e3]]
+    path, _ = _plan(tmp_path, operating_area_m=big, no_fly_zones_m=[zone])
+    (out,) = export_plan(path, "geojson", "45.75,126.65", geofence=False)
+    feats = json.loads(out.read_text())["features"]
+    for kind, ring_m in (("operating_area", big), ("no_fly_zone", zone)):
+        (f,) = [f for f in feats if f["properties"]["kind"] == kind]
+        lonlat = np.array(f["geometry"]["coordinates"][0])
+        edge = Polygon(ring_m).exterior
+        t = np.linspace(0, 1, 21)[:, None]
+        worst = 0.0
+        for a, b in itertools.pairwise(lonlat):  # each piece as a GIS draws it
+            pts = a + t * (b - a)
+            xy = to_local([(lat, lon) for lon, lat in pts], ORIGIN)
+            worst = max(worst, max(edge.distance(Point(p)) for p in xy))
+        assert worst < 10.5, (kind, worst)
+        if kind == "no_fly_zone":
+            assert len(lonlat) == 5  # 10 km edges: left as they are
+
+
+def test_kml_overlay_href_survives_any_plan_file_name(tmp_path):
+    """Audit i24: the KML's GroundOverlay ``href`` is a URI reference, written as the PNG's
+    bare file name: a plan named ``sortie #2 (100%).json`` gave ``sortie #2 (100%)_prior.png``,
+    which a KML reader takes as the file ``sortie `` with a fragment (``#``) and a bad escape
+    (``%)``). The href is now percent-encoded and resolves to the PNG written beside it."""
+    from urllib.parse import urljoin, urlparse
+    from urllib.request import url2pathname
+
+    path, _ = _plan(tmp_path)
+    odd = tmp_path / "sortie #2 (100%) ü.json"
+    path.rename(odd)
+    out = tmp_path / "out"
+    kml, png = export_plan(odd, "kml", "45.75,126.65", out)
+    ns = {"k": "http://www.opengis.net/kml/2.2"}
+    href = ET.parse(kml).getroot().find(".//k:GroundOverlay/k:Icon/k:href", ns).text
+    assert "#" not in href and " " not in href
+    url = urljoin(kml.resolve().as_uri(), href)  # as a reader resolves it against the KML
+    assert url2pathname(urlparse(url).path) == str(png.resolve())
+    assert png.is_file()

@@ -494,3 +494,138 @@ def test_area_file_name_in_the_yaml_header_adds_no_keys(tmp_path, layers, stem):
     head = [ln for ln in text.splitlines() if not ln.startswith("#")]
     assert yaml.safe_load("\n".join(head)) == doc  # the header is comments only
     assert load_scenario(str(out)).name == "imported"
+
+
+# --------------------------------------------------------------------------- audit i24
+
+
+def test_csv_prior_with_a_byte_order_mark(tmp_path, layers):
+    """Audit i24: a CSV saved by a spreadsheet as 'CSV UTF-8' starts with a byte-order mark;
+    its header read as ``['\\ufefflat', ...]`` and the import said the lat column was missing."""
+    text = "lat,lon,probability\n45.75,126.7,0.6\n45.8,126.8,0.4\n"
+    plain, bom = tmp_path / "plain.csv", tmp_path / "bom.csv"
+    plain.write_text(text, encoding="utf-8")
+    bom.write_text(text, encoding="utf-8-sig")
+    a = import_scenario(layers["area"], prior=plain, airfields=layers["fields"])["prior"]
+    b = import_scenario(layers["area"], prior=bom, airfields=layers["fields"])["prior"]
+    np.testing.assert_array_equal(a, b)
+
+
+def test_names_no_export_can_carry_are_refused_at_import(tmp_path, layers):
+    """Audit i24: an airfield name over 64 characters, a zone name over 200, or a name with a
+    control character was imported and planned, and then every export refused the plan.json
+    (``plan.airfields[0].name: ... allowed: 1-64 characters``). The import now refuses it,
+    naming the file and feature, with the plan schema's own rule; the scenario loader too."""
+    long_field = _write(tmp_path / "lf.geojson", _fc([_pt(126.25, 45.62, name="H" * 65)]))
+    _bad(tmp_path, layers, r"lf\.geojson feature 0 name.*1-64 characters", airfields=long_field)
+    bell = _write(tmp_path / "bf.geojson", _fc([_pt(126.25, 45.62, name="Har\x07bin")]))
+    _bad(tmp_path, layers, r"bf\.geojson feature 0 name.*control character U\+0007", airfields=bell)
+    long_zone = _write(tmp_path / "lz.geojson", _fc([_poly([ZONE], name="R" * 201)]))
+    _bad(tmp_path, layers, r"lz\.geojson feature 0 name.*at most 200 characters", no_fly=long_zone)
+    ok = _write(tmp_path / "ok.geojson", _fc([_poly([ZONE], name="R" * 200)]))
+    import_scenario(layers["area"], airfields=layers["fields"], no_fly=ok)  # the limit itself
+    data = import_scenario(layers["area"], airfields=layers["fields"])["scenario"]
+    data["airfields"][0]["name"] = "H" * 65
+    with pytest.raises(ConfigError, match=r"name.*1-64 characters"):
+        load_scenario(data)
+
+
+def test_zones_covering_the_whole_search_area_are_refused(tmp_path, layers):
+    """Audit i24 (issue 24, Bad input: zones covering the whole area): a zone drawn over the
+    whole search polygon, but not over the grid's extra cells beyond it, and two zones that
+    cover the area only together, were imported; the plan then had nothing to search (DE: POS
+    0 after 33 s). Both are refused, naming the zones, and nothing is returned."""
+    lon0, lat0, lon1, lat1 = 125.99, 45.29, 127.21, 46.11  # just around AREA
+    whole = [[lon0, lat0], [lon1, lat0], [lon1, lat1], [lon0, lat1], [lon0, lat0]]
+    f = _write(tmp_path / "whole.geojson", _fc([_poly([whole], name="all of it")]))
+    _bad(tmp_path, layers, r"no_fly_zones_km\[0\].*'all of it'.*leaves part of the search area",
+         no_fly=f)  # fmt: skip
+    mid = 126.6
+    west = [[lon0, lat0], [mid, lat0], [mid, lat1], [lon0, lat1], [lon0, lat0]]
+    east = [[mid, lat0], [lon1, lat0], [lon1, lat1], [mid, lat1], [mid, lat0]]
+    f = _write(tmp_path / "halves.geojson", _fc([_poly([west], name="W"), _poly([east], name="E")]))
+    _bad(tmp_path, layers, r"no_fly_zones_km\[0, 1\].*'W'.*'E'.*leave part", no_fly=f)
+    # a zone over part of the area is fine
+    import_scenario(layers["area"], airfields=layers["fields"], no_fly=layers["zones"])
+
+
+def test_zones_covering_the_whole_map_together_are_refused_by_the_loader():
+    """The scenario loader's rule is the union of the zones, not each zone alone."""
+    base = {"name": "z", "map": {"width_km": 40, "height_km": 40, "cell_km": 5},
+            "airfields": [{"name": "A", "position_km": [-10, 20]}],
+            "fleet": [{"takeoff": "A", "count": 1}]}  # fmt: skip
+    halves = [[[-1, -1], [21, -1], [21, 41], [-1, 41]], [[20, -1], [41, -1], [41, 41], [20, 41]]]
+    with pytest.raises(ConfigError, match=r"no_fly_zones_km\[0, 1\].*leave part"):
+        load_scenario({**base, "map": {**base["map"], "no_fly_zones_km": halves}})
+    load_scenario({**base, "map": {**base["map"], "no_fly_zones_km": halves[:1]}})
+
+
+def test_geojson_edges_are_straight_in_longitude_latitude(tmp_path):
+    """Audit i24: a GeoJSON edge is a straight line in longitude/latitude (RFC 7946, 3.1.1),
+    so a rectangle drawn along parallels keeps its parallels. The import joined the projected
+    vertices with straight lines in the map's metres: on a 500 x 500 km area near 45 N the
+    southern edge ran up to 4.6 km north of latitude 43, and sightings 2.2 km inside it were
+    dropped as outside the area (11.5 % of that prior's mass). Points 2.2 km inside an edge
+    are kept, points 2.2 km outside are still dropped, and short edges are left as they are."""
+    area = [[5.0, 43.0], [11.14, 43.0], [11.14, 47.5], [5.0, 47.5], [5.0, 43.0]]
+    area_f = _write(tmp_path / "big.geojson", _fc([_poly([area])]))
+    fields = _write(tmp_path / "f.geojson", _fc([_pt(4.8, 45.0, name="W")]))
+    lons = np.linspace(7.0, 9.0, 9)
+    rows = ["lat,lon,probability", "45.0,8.0,1"]
+    rows += [f"43.02,{lon},1" for lon in lons] + [f"47.48,{lon},1" for lon in lons]
+    rows += [f"42.98,{lon},1" for lon in lons]  # just outside the southern edge
+    csv_path = tmp_path / "p.csv"
+    csv_path.write_text("\n".join(rows) + "\n")
+    with pytest.warns(UserWarning, match="outside the search area"):
+        res = import_scenario(area_f, prior=csv_path, airfields=fields, cell_km=10)
+    rep = res["report"]["prior"]
+    assert rep["outside"] == pytest.approx(len(lons), abs=1e-9)  # only the points outside
+    # a small zone's edges (a few km) are not densified: the ring keeps its 4 vertices
+    zones = _write(tmp_path / "z.geojson", _fc([_poly([ZONE])]))
+    field = _write(tmp_path / "g.geojson", _fc([_pt(126.25, 45.62, name="H")]))
+    area_f = _write(tmp_path / "a.geojson", _fc([_poly([AREA])]))
+    res = import_scenario(area_f, airfields=field, no_fly=zones)
+    assert len(res["scenario"]["map"]["no_fly_zones_km"][0]) == 4
+
+
+def test_kml_placemark_of_another_geometry_is_named(tmp_path, layers):
+    """Audit i24: a KML airfield file with a LineString placemark (a drawn runway, a track)
+    was refused as ``got '(none)'``; the error now names the geometry found."""
+    kml = (
+        '<?xml version="1.0"?><kml xmlns="http://www.opengis.net/kml/2.2"><Document>'
+        "<Placemark><name>Harbin</name><Point><coordinates>126.25,45.62</coordinates></Point>"
+        "</Placemark><Placemark><name>runway</name><LineString><coordinates>126.25,45.62 "
+        "126.26,45.63</coordinates></LineString></Placemark></Document></kml>"
+    )
+    f = tmp_path / "fields.kml"
+    f.write_text(kml)
+    want = r"fields\.kml feature 1: got 'LineString'; allowed: a Point"
+    _bad(tmp_path, layers, want, airfields=f)
+
+
+def test_an_origin_far_from_the_area_is_refused(tmp_path, layers):
+    """Audit i24: ``--origin`` is the centre of the map's projection; the import took any. An
+    origin at a headquarters 4,300 km away made the 8,310 km^2 area 8,987 km^2 on the map (+8
+    %; aeqd's scale error grows as (distance / R)^2 / 6), silently. An origin more than 1,000
+    km from the area (the airfields' limit; 0.4 % of scale error at most) is refused, naming
+    it; one 145 km away is fine."""
+    kw = {"airfields": layers["fields"]}
+    with pytest.raises(ConfigError, match=r"^origin: got \[45\.0, 70\.0\]; allowed: a point "
+                       r"within 1000 km of the search area \(it is \d+ km away"):  # fmt: skip
+        import_scenario(layers["area"], origin="45.0,70.0", **kw)
+    res = import_scenario(layers["area"], origin="44.0,126.6", **kw)  # ~150 km south
+    assert res["crs"]["origin_deg"] == [44.0, 126.6]
+
+
+def test_sightings_on_the_area_s_edge_are_kept(tmp_path, layers):
+    """Audit i24: a sighting exactly on the area's edge as drawn (a road the officer drew the
+    area along) was dropped as outside it (``contains`` excludes the boundary, and a parallel
+    lies within the 10 m edge tolerance on either side of the projected edge). Points within
+    that tolerance of the area are inside; 100 m out they are still dropped."""
+    rows = ["lat,lon,probability", "45.75,126.7,1", "45.7,126.0,1", "45.3,126.6,1"]
+    rows += ["45.299,126.6,1"]  # ~110 m south of the southern edge
+    csv_path = tmp_path / "edge.csv"
+    csv_path.write_text("\n".join(rows) + "\n")
+    with pytest.warns(UserWarning, match="outside the search area"):
+        res = import_scenario(layers["area"], prior=csv_path, airfields=layers["fields"])
+    assert res["report"]["prior"]["outside"] == pytest.approx(1.0, abs=1e-9)

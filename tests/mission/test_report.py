@@ -366,3 +366,78 @@ def test_html_page_escapes_every_plan_string(tmp_path):
     p.feed(page)
     assert "x-evil" not in p.tags and p.tags.count("script") == 3
     assert "&lt;x-evil&gt;&amp;" in page and "\\u003cx-evil>" in page
+
+
+def test_a_route_through_a_zone_is_flagged_by_every_viewing_format(small_plan, tmp_path, capsys):
+    """Audit i24 (issue 24: "KML, GeoJSON and HTML export the crossing routes without a
+    word"): a plan.json edited by hand so that a route crosses a no-fly zone. The QGC export
+    refuses it (the exclusion geofence); GeoJSON, KML and the HTML report are still written,
+    to show the officer the route, but each says so on the console, and the report's page
+    says so too, with the same words as the QGC refusal."""
+    plan = json.loads(small_plan.read_text())
+    x, y = plan["uavs"][0]["waypoints_m"][1]
+    plan["no_fly_zones_m"] = [[[x - 500, y - 500], [x + 500, y - 500], [x + 500, y + 500],
+                               [x - 500, y + 500]]]  # fmt: skip
+    plan["no_fly_zone_names"] = ["R-9"]
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(plan))
+    with pytest.raises(ConfigError, match=r"outside no-fly zone 0 \('R-9'\)"):
+        export_plan(path, "qgc", out_dir=tmp_path / "q")
+    for fmt in ("geojson", "kml", "html"):
+        files = export_plan(path, fmt, out_dir=tmp_path / fmt)
+        out = capsys.readouterr().out
+        assert "warning: plan.uavs[0]: got 1; allowed: a mission outside no-fly zone 0 ('R-9')" in (
+            out
+        ), fmt
+        if fmt == "html":
+            assert "a mission outside no-fly zone 0 (&#39;R-9&#39;)" in files[0].read_text()
+    export_plan(small_plan, "html", out_dir=tmp_path / "clean")
+    assert "warning" not in capsys.readouterr().out
+
+
+def test_headless_browser_draws_routes_above_zones_and_areas(small_plan, tmp_path):
+    """Audit i24: the page drew the search areas, airfields, no-fly zones and the operating area
+    after (above) the routes, so a zone's red fill tinted the route under it (and the areas
+    took the mouse over their routes). Drawn now as a map is read: the ground (terrain,
+    prior), the areas (operating area, zones, search areas), the routes, the airfields on
+    top. Checked on screen: UAV 1's route shows its own colour as much under a zone laid
+    over its whole search pattern as beside a small zone in a corner."""
+    exe = _chromium()
+    plan = json.loads(small_plan.read_text())
+    wps = np.array(plan["uavs"][0]["waypoints_m"])
+    (x0, y0), (x1, y1) = wps.min(axis=0) - 1000, wps.max(axis=0) + 1000
+    ox0, oy0 = np.array(plan["operating_area_m"]).min(axis=0) + 1000
+    zones = {
+        "over": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
+        "corner": [[ox0, oy0], [ox0 + 2000, oy0], [ox0 + 2000, oy0 + 2000], [ox0, oy0 + 2000]],
+    }
+    seen = {}
+    for name, zone in zones.items():
+        plan["no_fly_zones_m"] = [[[float(a), float(b)] for a, b in zone]]
+        path = tmp_path / name / "p.json"
+        path.parent.mkdir()
+        path.write_text(json.dumps(plan))
+        (page,) = export_plan(path, "html", out_dir=path.parent)
+        drawn, mapped, console = _browse(exe, page)
+        assert console == [], console
+        assert drawn == expected_layers(load_plan(path), overlay=False)  # no prior: edited
+        seen[name] = _near(mapped, ROUTE_COLOURS[0], 6)
+    assert seen["corner"] > 30
+    assert seen["over"] >= 0.9 * seen["corner"], seen
+
+
+def test_every_route_is_labelled_on_the_map(small_plan, tmp_path):
+    """Audit i24: the page has 8 route colours for up to 64 UAVs (a 24-UAV fleet: three
+    routes a colour), and a route was named only by a tooltip on hover, so a printed or
+    screenshot briefing could not tell UAV 1's route from UAV 9's. Each route now carries a
+    permanent label ``UAV <id>`` where its search pattern starts (in its own layer: hidden
+    with the route)."""
+    exe = _chromium()
+    (page,) = export_plan(small_plan, "html", out_dir=tmp_path)
+    dom = _run_chromium(exe, page, "--dump-dom")
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    labels = re.findall(r'class="leaflet-tooltip[^"]*uav-label[^"]*"[^>]*><span>([^<]*)</span>',
+                        dom.stdout)  # fmt: skip
+    plan = load_plan(small_plan)
+    want = sorted(f"UAV {u['id']}" for u in plan["uavs"] if len(u["waypoints_m"]) > 1)
+    assert sorted(labels) == want and want

@@ -75,3 +75,23 @@ def test_cli_plan_writes_a_plan_that_exports(tmp_path, capsys):
         main(["plan", "--scenario", "small", "--optimizer", "magic", "--quiet", "--out", str(out)])
         == 2
     )
+
+
+def test_an_allocation_plan_that_reaches_nothing_says_why(tmp_path, capsys):
+    """Audit i24: an airfield 300 km from the area with 40-minute UAVs. ``plan --planner de``
+    refuses (``uav.endurance_h: ... at least 2.57 h``); the allocation planner writes its
+    documented empty plan with a ``reason``, but the command printed only zeros
+    (``POS_C = 0.0000``). The reason is printed with the plan's table."""
+    import yaml
+
+    sc = {"name": "far", "map": {"width_km": 40, "height_km": 40, "cell_km": 5},
+          "airfields": [{"name": "A", "position_km": [-300, 20]}],
+          "fleet": [{"takeoff": "A", "count": 2}], "uav": {"endurance_h": 0.6667}}  # fmt: skip
+    path = tmp_path / "far.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    out = tmp_path / "p.json"
+    argv = ["plan", "--scenario", str(path), "--planner", "allocation", "--quiet"]
+    assert main([*argv, "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    assert plan["posc"] == 0 and plan["reason"]
+    assert f"no search planned: {plan['reason']}" in capsys.readouterr().out

@@ -278,3 +278,115 @@ def test_replan_of_a_yaml_scenario_finds_it_by_the_plan(tmp_path, monkeypatch, c
     assert load_plan(p2)["scenario_file"] == str(yml.resolve())
     assert main(["export", str(p2), "--format", "kml"]) == 0
     assert (tmp_path / "s2" / "p2_prior.png").is_file()  # the prior placed on the map
+
+
+def test_gpx_segments_without_a_line_are_skipped(first, tmp_path):
+    """Audit i24: a logger's GPX holds empty ``<trkseg/>`` (logging paused) and one-point
+    segments (a fix between dropouts); both are valid GPX 1.1 and sweep no line. The whole file
+    was refused (``trkseg[1].trkpt: got []; allowed: 2 or more [lon, lat]``); they are skipped
+    and the other segments sweep what they swept alone. A file with no segment of two points
+    is still refused."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = _lonlat_lines(plan)
+    plain, gappy = tmp_path / "plain.gpx", tmp_path / "gappy.gpx"
+    _gpx(plain, lines)
+    _gpx(gappy, [lines[0], [], lines[0][2:3], *lines[1:]])
+    want = read_tracks(plain, plan["crs"])
+    got = read_tracks(gappy, plan["crs"])
+    assert len(got) == len(want)
+    for (_, a), (_, b) in zip(got, want):
+        np.testing.assert_array_equal(a, b)
+    _gpx(tmp_path / "none.gpx", [[], lines[0][:1]])
+    with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
+        read_tracks(tmp_path / "none.gpx", plan["crs"])
+
+
+def test_replan_says_which_flights_it_swept(first, tmp_path, capsys):
+    """Audit i24: with ``--tracks`` the tracks stand for the flights of every ``--plan`` given
+    (sortie 1's routes are not swept when only sortie 2's log is given). The command now says
+    which flights it swept, so an officer replanning sortie 3 from sortie 2's log sees that
+    sortie 1 is not in it."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    p2 = tmp_path / "p2.json"
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0
+    assert f"swept: the routes of {p1}" in capsys.readouterr().out
+    _gpx(tmp_path / "s2.gpx", _lonlat_lines(plan)[:1])
+    argv = ["replan", "--plan", str(p1), "--plan", str(p2), "--tracks", str(tmp_path / "s2.gpx")]
+    assert main([*argv, "--out", str(tmp_path / "p3.json")]) == 0
+    out = capsys.readouterr().out
+    assert f"swept: 1 track from {tmp_path / 's2.gpx'}, in place of the routes of {p1}, {p2}" in out
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["http://www.opengis.net/def/crs/OGC/1.3/CRS84", "epsg:4326", "urn:ogc:def:crs:EPSG:6.6:4326"],
+)
+def test_track_crs_names_are_the_import_s(first, tmp_path, name):
+    """Audit i24: ``scenario import`` and ``replan --tracks`` each kept a list of the GeoJSON
+    ``crs`` names meaning WGS 84; a layer declaring one of these was imported but its tracks
+    were refused. One list now (:func:`poc_env.crs.is_wgs84_name`)."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    crs = {"type": "name", "properties": {"name": name}}
+    _tracks(tmp_path / "t.geojson", plan, crs=crs)
+    assert len(read_tracks(tmp_path / "t.geojson", plan["crs"])) == len(plan["uavs"])
+
+
+def test_replan_of_a_plan_whose_scenario_file_is_gone_says_where_it_looked(
+    tmp_path, monkeypatch, capsys
+):
+    """Audit i24: a plan made on a YAML scenario, replanned after the YAML was moved, said only
+    ``scenario: got 'mine'; allowed: a built-in name (...) or a path to a YAML file``; export
+    of the same plan lists the files it looked for. ``replan`` now says the same (one text,
+    :func:`poc_env.agents.mission.plan.scenario_not_found`) and names ``--scenario``."""
+    import yaml
+
+    data = load_scenario("small").to_dict()
+    data["name"] = "mine"
+    data["map"]["origin_deg"] = [46.5, 7.9]
+    yml = tmp_path / "scen" / "mine.yaml"
+    yml.parent.mkdir()
+    yml.write_text(yaml.safe_dump(data))
+    monkeypatch.chdir(tmp_path)
+    p1 = tmp_path / "s1" / "p1.json"
+    argv = ["plan", "--scenario", str(yml), "--planner", "allocation", "--refine", "0"]
+    assert main([*argv, "--quiet", "--out", str(p1)]) == 0
+    yml.rename(tmp_path / "scen" / "elsewhere.yaml")
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p1), "--out", str(tmp_path / "p2.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"looked for {yml}" in err and "--scenario" in err, err
+    assert not (tmp_path / "p2.json").exists()
+
+
+def test_kml_gx_tracks_of_one_fix_are_skipped_like_gpx_segments(first, tmp_path):
+    """Audit i24: a ``gx:Track`` (a logger's KML) may hold a single ``gx:coord``; like a GPX
+    segment of one point it sweeps no line and is skipped, not a reason to refuse the file.
+    A ``LineString`` needs two positions by the KML schema and is still checked."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = _lonlat_lines(plan)
+
+    def track(pts):
+        coords = "".join(f"<gx:coord>{lon!r} {lat!r} 1500</gx:coord>" for lon, lat in pts)
+        return f"<Placemark><gx:Track>{coords}</gx:Track></Placemark>"
+
+    kml = (
+        '<?xml version="1.0"?><kml xmlns="http://www.opengis.net/kml/2.2" '
+        'xmlns:gx="http://www.google.com/kml/ext/2.2"><Document>{}</Document></kml>'
+    )
+    f = tmp_path / "t.kml"
+    f.write_text(kml.format(track(lines[0]) + track(lines[0][:1])))
+    got = read_tracks(f, plan["crs"])
+    assert len(got) == 1 and len(got[0][1]) == len(lines[0])
+    f.write_text(kml.format(track(lines[0][:1])))
+    with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
+        read_tracks(f, plan["crs"])

@@ -116,3 +116,25 @@ def test_route_from_a_field_inside_the_ring_keeps_the_fields_distance(reference)
             assert shapely.LineString(path).length <= 1.05 * shapely.LineString(loose).length
         line = r.reroute([field, goal, field])
         assert shapely.LineString(line).distance(poly) >= d_field * (1 - 1e-6)
+
+
+def test_a_densely_drawn_zone_keeps_a_small_graph():
+    """Audit i24: a circular restricted area digitised with 2,000 vertices (as an AIP circle
+    often is) gave the visibility graph one node per vertex of its keep-out polygon: the
+    allocation plan took 263 s and 1.25 GB instead of 1.8 s (64 vertices), the same POS. A
+    keep-out polygon of more than ``MAX_KEEP_OUT_VERTICES`` vertices is simplified outwards
+    (it still holds the plain keep-out: every path keeps ``c``); a zone of few vertices keeps
+    its keep-out polygon exactly (plans unchanged)."""
+    from poc_env.sim.routing import _GROW, MAX_KEEP_OUT_VERTICES, QUAD_SEGS
+
+    c = 3300.0
+    t = np.linspace(0, 2 * np.pi, 2000, endpoint=False)
+    circle = np.column_stack([20e3 + 8e3 * np.cos(t), 20e3 + 8e3 * np.sin(t)])
+    r = ZoneRouter([circle], None, c)
+    plain = shapely.Polygon(circle).buffer(_GROW * c, quad_segs=QUAD_SEGS)
+    assert len(r.nodes) <= MAX_KEEP_OUT_VERTICES < len(plain.exterior.coords) - 1
+    assert r.keep_out.buffer(1e-6).covers(plain)  # outwards only
+    assert r.keep_out.hausdorff_distance(plain) < 0.05 * c  # and not much more
+    rect = [[0, 0], [10e3, 0], [10e3, 5e3], [0, 5e3]]
+    r = ZoneRouter([rect], None, c)
+    assert r.keep_out.equals_exact(shapely.Polygon(rect).buffer(_GROW * c, quad_segs=QUAD_SEGS), 0)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 from lxml import etree
 
@@ -234,7 +235,7 @@ def write(job: ExportJob) -> list[Path]:
     if overlay is not None:
         rgba, box = warp_prior(overlay, job.crs, "latitude")
         png = write_bytes_atomic(job.path("_prior.png"), png_bytes(rgba))
-        g.update(href=png.name, box=box)
+        g.update(href=quote(png.name), box=box)  # a URI reference: '#', '%', ' ' escaped
         written.append(png)
     text = kml(job.plan, job.crs, job.altitude_m, job.altitude_ref, job.ground_m, ground_overlay=g)
     return [write_text_atomic(job.path(".kml"), text), *written]

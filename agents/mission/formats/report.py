@@ -8,7 +8,8 @@ BSD-2-Clause, inlined with its CSS and images) draws
   else is drawn),
 - the plan's prior probability of containment as a coloured image overlay
   (:func:`poc_env.agents.mission.overlay.warp_prior`),
-- per UAV its route in one colour (transit legs dashed, the search pattern solid, the landing
+- per UAV its route in one colour, labelled ``UAV <id>`` where its search starts (transit legs
+  dashed, the search pattern solid, the landing
   approach dotted), its search strips, rectangles or areas
   (:func:`~poc_env.agents.mission.plan.search_rings`),
 - the airfields (named markers), the no-fly zones (red polygons) and the operating area,
@@ -346,20 +347,23 @@ _SCRIPT = r"""
     image = L.imageOverlay(data.overlay.url, data.overlay.bounds, {opacity: 1.0});
     add("Prior probability of containment", image);
   }
-  data.uavs.forEach(function (u) {
-    var g = L.featureGroup();
-    u.transit.forEach(function (leg) {
-      L.polyline(leg, {color: u.colour, weight: 3, dashArray: "8 6"}).addTo(g);
+  // drawn as a map is read: the ground (above), the areas, the routes, the airfields on top
+  if (data.operating_area.length) {
+    var area = L.featureGroup();
+    data.operating_area.forEach(function (z) {
+      L.polygon(z.latlon, {color: "#555", weight: 1.5, dashArray: "4 4", fill: false})
+        .bindTooltip(label(z.name)).addTo(area);
     });
-    if (u.search.length > 1) {
-      L.polyline(u.search, {color: u.colour, weight: 3}).addTo(g);
-    }
-    u.approach.forEach(function (leg) {
-      L.polyline(leg, {color: u.colour, weight: 2, opacity: 0.7, dashArray: "2 4"}).addTo(g);
+    add("Operating area", area);
+  }
+  if (data.no_fly_zones.length) {
+    var nfz = L.featureGroup();
+    data.no_fly_zones.forEach(function (z) {
+      L.polygon(z.latlon, {color: "#d00000", weight: 2, fillColor: "#ff0000", fillOpacity: 0.35})
+        .bindTooltip(label(z.name)).addTo(nfz);
     });
-    g.bindTooltip(label("UAV " + u.id));
-    add("UAV " + u.id + " route", g);
-  });
+    add("No-fly zones", nfz);
+  }
   var areas = L.featureGroup();
   var nAreas = 0;
   data.uavs.forEach(function (u) {
@@ -370,6 +374,24 @@ _SCRIPT = r"""
     });
   });
   if (nAreas) { add("Search areas", areas); }
+  data.uavs.forEach(function (u) {
+    var g = L.featureGroup();
+    u.transit.forEach(function (leg) {
+      L.polyline(leg, {color: u.colour, weight: 3, dashArray: "8 6"}).addTo(g);
+    });
+    if (u.search.length > 1) {
+      L.polyline(u.search, {color: u.colour, weight: 3}).addTo(g);
+      // named on the map where its search starts: colours repeat beyond 8 UAVs
+      L.circleMarker(u.search[0], {radius: 3, color: u.colour, weight: 2, fillOpacity: 1})
+        .bindTooltip(label("UAV " + u.id), {permanent: true, direction: "top",
+                                            className: "uav-label"}).addTo(g);
+    }
+    u.approach.forEach(function (leg) {
+      L.polyline(leg, {color: u.colour, weight: 2, opacity: 0.7, dashArray: "2 4"}).addTo(g);
+    });
+    g.bindTooltip(label("UAV " + u.id));
+    add("UAV " + u.id + " route", g);
+  });
   var fields = L.featureGroup();
   data.airfields.forEach(function (a) {
     L.circleMarker(a.latlon, {radius: 6, color: "#000", weight: 2, fillColor: "#fff",
@@ -377,22 +399,6 @@ _SCRIPT = r"""
                               direction: "right"}).addTo(fields);
   });
   add("Airfields", fields);
-  if (data.no_fly_zones.length) {
-    var nfz = L.featureGroup();
-    data.no_fly_zones.forEach(function (z) {
-      L.polygon(z.latlon, {color: "#d00000", weight: 2, fillColor: "#ff0000", fillOpacity: 0.35})
-        .bindTooltip(label(z.name)).addTo(nfz);
-    });
-    add("No-fly zones", nfz);
-  }
-  if (data.operating_area.length) {
-    var area = L.featureGroup();
-    data.operating_area.forEach(function (z) {
-      L.polygon(z.latlon, {color: "#555", weight: 1.5, dashArray: "4 4", fill: false})
-        .bindTooltip(label(z.name)).addTo(area);
-    });
-    add("Operating area", area);
-  }
   var view = extent.isValid() ? extent : L.latLngBounds([[-1, -1], [1, 1]]);
   map.fitBounds(view, {padding: [10, 10]});
   L.control.layers({"OpenStreetMap": base}, overlays, {collapsed: false}).addTo(map);
@@ -452,6 +458,8 @@ def write(job: ExportJob) -> list[Path]:
     overlay, note = plan_prior(job.plan, job.plan_path, job.prior)
     if overlay is None:  # said on the command line too, not only inside the file
         print(f"note: {note}")
+    if job.warning is not None:  # on the page too: a route QGC would not fly
+        note = f"Warning: {job.warning}. {note}"
     page = html_report(
         job.plan, job.crs, overlay, note, job.altitude_m, job.altitude_ref, job.ground_m
     )
