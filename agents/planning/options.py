@@ -112,6 +112,12 @@ class PlanOptions:
     #: also start from the greedy rectangle plan, and from the coverage boxes.
     greedy_start: bool = True
     box_start: bool = True
+    #: also start from the relaxation patches (:mod:`~poc_env.agents.planning.relax_patches`:
+    #: each UAV its own patch of the relaxation's coverage, laid graded; i24-relax).
+    relax_start: bool = False
+    #: the relaxation patches' coverage is laid at each of these shares of the relaxation's
+    #: (each UAV keeps the one of most POS on its patch; less coverage, shorter routes).
+    relax_scales: tuple[float, ...] = (1.0, 0.8, 0.65)
 
     # --- coverage boxes (agents/planning/coverage_boxes.py) ---
     #: line spacings tried, in sweep widths.
@@ -229,12 +235,13 @@ class PlanOptions:
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
+        _positive_tuple("relax_scales", self.relax_scales, high=1.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "chain_early", "also_default", "part", "share_tables", "axis", "excursions",
-                 "sampled", "polish_grade")  # fmt: skip
+                 "relax_start", "chain_early", "also_default", "part", "share_tables", "axis",
+                 "excursions", "sampled", "polish_grade")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")

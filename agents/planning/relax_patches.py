@@ -1,0 +1,272 @@
+"""Relaxation patches: each UAV its own compact patch of the relaxation's coverage (i24-relax).
+
+A start of the allocation planner (:func:`poc_env.agents.planning.allocation.
+make_allocation_plan`, ``PlanOptions.relax_start``). The allocation start lays the
+relaxation's coverage ``C_j`` (:func:`poc_env.theory.bound.reach_optimum`, step 1 of the
+planner) as one route chained over the whole map and cut into pieces per UAV; the boxes start
+(:mod:`~poc_env.agents.planning.coverage_boxes`) gives each UAV its own box and one spacing.
+Here each UAV gets its own patch of the relaxation's cells, and its coverage there is laid
+graded as the allocation start lays it (``_tracks``: nested layers of lines, eq. 10
+``C = W / d``), so both the footprint and the grading come from the relaxation:
+
+1. **Fields.** Each cell of positive coverage goes to the airfield (take-off, landing) of
+   least out-and-back time plus that field's price ``lambda_f``; a field whose cells need more
+   time than its UAVs have (pattern time ``a_j C_j / (eta W v_s)`` summed over the cells at
+   transit ``>= t``, against ``n_f (B - t)`` for every ``t``: the relaxation's own polymatroid
+   constraint per field) is priced up until none is, or :data:`PRICE_ROUNDS` rounds.
+2. **Patches.** A field's cells are sorted by bearing from the field (about the bearing of
+   their effort-weighted centre) and cut into one sector per UAV of equal pattern time, so
+   field-mates fly side by side at about the same distance.
+3. **Lines.** In each patch the coverage, scaled by each of ``scales``, is laid with
+   ``_tracks`` (each of the ``levels`` and both line directions), chained nearest first from
+   the take-off (``_order``) and cut at its far end until eq. 17-18 hold
+   (:func:`~poc_env.agents.planning.coverage_boxes.cut_lines`, :func:`~poc_env.agents.planning.
+   refine.route_fits`); the UAV keeps the variant of most POS on its own patch by W x length
+   per cell (eq. 10 per cell, the score the planner ranks starts by).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from poc_env.agents.planning.coverage_boxes import cut_lines
+from poc_env.agents.planning.flight_rules import Speeds
+from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
+from poc_env.agents.planning.options import PlanOptions
+from poc_env.agents.planning.refine import route_fits
+from poc_env.theory.probability_map import Grid
+from poc_env.theory.search_theory import pod_from_coverage
+
+#: rounds of the fields' dual (:func:`dedicated_allocation`).
+DUAL_ROUNDS = 8
+
+
+def field_groups(takeoff: np.ndarray, landing: np.ndarray) -> list[list[int]]:
+    """The UAVs of each airfield (same take-off and landing to the millimetre), fields in
+    order of their coordinates."""
+    n = len(takeoff)
+    keys = [tuple(np.round(np.concatenate([takeoff[k], landing[k]]), 3)) for k in range(n)]
+    fields = sorted(set(keys))
+    return [[k for k in range(n) if keys[k] == f] for f in fields]
+
+
+def dedicated_allocation(
+    prior: np.ndarray,
+    cell_area_m2: float,
+    t_f: np.ndarray,
+    sizes,
+    rate: float,
+    budget: float,
+    law: str,
+) -> np.ndarray:
+    """Each field's coverage (``(F, *prior.shape)``), step 1 of the module docstring: most
+    ``sum_j m_j POD(C_j)`` (eq. 10) when a UAV of field f searching at out-and-back time
+    ``t_fj`` has ``budget - t_fj`` for its pattern at ``rate`` m^2/s, so a second of pattern
+    there takes ``1 / (budget - t_fj)`` of a UAV, and field f has ``sizes[f]`` UAVs:
+    ``sum_j a_j C_fj / (rate (budget - t_fj)) <= n_f``. (The relaxation's polymatroid,
+    :func:`poc_env.theory.bound.reach_optimum`, charges a set of cells only its nearest cell's
+    transit, which a UAV's patch reaching farther cannot keep.) Separable and concave with one
+    constraint per field: its dual is minimised field by field (bisection on each field's
+    multiplier ``mu_f``, :data:`DUAL_ROUNDS` rounds); at the multipliers each cell is searched
+    by its field of least price ``mu_f / (rate (budget - t_fj))`` per m^2 of effort, at the
+    KKT coverage of that price. Laws without a KKT coverage (linear POD) get none."""
+    from poc_env.agents.planning.allocation import COVER_CAP
+    from poc_env.theory.bound import _coverage_at
+    from poc_env.theory.detection import detection_law
+
+    entry = detection_law(law)
+    nf = t_f.shape[0]
+    out = np.zeros((nf, *prior.shape))
+    m = prior.ravel()
+    cells = np.flatnonzero(m > 0)
+    if entry.optimal_coverage is None or not cells.size:
+        return out
+    dens = m[cells] / cell_area_m2
+    slack = budget - t_f.reshape(nf, -1)[:, cells]  # (F, J)
+    reach = slack > 0
+    per = np.where(reach, 1.0 / (rate * np.where(reach, slack, 1.0)), np.inf)  # UAVs per m^2
+    sizes = np.asarray(sizes, dtype=float)
+    log_mu = np.full(nf, np.log(dens.max()) + 1.0)  # every field priced out
+
+    def state(lm: np.ndarray):
+        price = np.exp(lm)[:, None] * per
+        best = np.argmin(price, axis=0)
+        p = price[best, np.arange(cells.size)]
+        cov = np.where(
+            np.isfinite(p), _coverage_at(np.where(np.isfinite(p), p, 1.0), dens, entry), 0
+        )
+        return best, np.minimum(cov, COVER_CAP)
+
+    for _ in range(DUAL_ROUNDS):
+        for f in range(nf):
+            if not reach[f].any():
+                continue
+
+            def used(x: float, f=f) -> float:
+                lm = log_mu.copy()
+                lm[f] = x
+                best, cov = state(lm)
+                sel = best == f
+                return float(np.sum(cell_area_m2 * cov[sel] * per[f, sel]))
+
+            lo = float(np.log(dens.min() / per[f][reach[f]].max())) - 30.0
+            hi = float(np.log(dens.max() / per[f][reach[f]].min())) + 1.0
+            if used(lo) <= sizes[f]:
+                log_mu[f] = lo
+                continue
+            for _ in range(50):
+                mid = 0.5 * (lo + hi)
+                if used(mid) > sizes[f]:
+                    lo = mid
+                else:
+                    hi = mid
+            log_mu[f] = hi
+    best, cov = state(log_mu)
+    for f in range(nf):
+        out[f].ravel()[cells[best == f]] = cov[best == f]
+    return out
+
+
+def sectors(tau: np.ndarray, load: np.ndarray, bearing: np.ndarray, n: int) -> np.ndarray:
+    """Each cell's sector (0..n-1): cells in order of ``bearing`` cut into ``n`` runs of about
+    equal time, a run's time its load-weighted mean transit plus its load (step 2)."""
+    order = np.argsort(bearing, kind="stable")
+    part = np.zeros(len(load), dtype=int)
+    if n <= 1 or not len(load):
+        return part
+    t, ld = tau[order], load[order]
+
+    def cut(target: float) -> np.ndarray:
+        lab = np.zeros(len(ld), dtype=int)
+        k, acc, acc_t = 0, 0.0, 0.0
+        for i in range(len(ld)):
+            if (
+                acc > 0
+                and k < n - 1
+                and (acc_t + t[i] * ld[i]) / (acc + ld[i]) + acc + ld[i] > target
+            ):
+                k, acc, acc_t = k + 1, 0.0, 0.0
+            lab[i] = k
+            acc += ld[i]
+            acc_t += t[i] * ld[i]
+        return lab
+
+    lo, hi = 0.0, float(t.max() + ld.sum())
+    for _ in range(30):  # the least target that needs at most n runs
+        mid = 0.5 * (lo + hi)
+        lab = cut(mid)
+        last = lab == lab.max()
+        span = (
+            float(np.average(t[last], weights=ld[last]) + ld[last].sum())
+            if ld[last].sum() > 0
+            else 0.0
+        )
+        if span > mid:
+            lo = mid
+        else:
+            hi = mid
+    part[order] = cut(hi)
+    return part
+
+
+def patches(
+    field_cov: np.ndarray, grid: Grid, tau: np.ndarray, groups: list[list[int]],
+    takeoff: np.ndarray, rate: float,
+) -> np.ndarray:  # fmt: skip
+    """Each UAV's coverage (``(n, ny, nx)``), step 2 of the module docstring: each field's
+    coverage ``field_cov[f]`` cut into one sector per UAV (:func:`sectors`). ``tau``: each
+    UAV's out-and-back time per cell, ``rate`` the pattern's sweep rate (m^2/s)."""
+    n = len(takeoff)
+    out = np.zeros((n, *grid.shape))
+    for f, g in enumerate(groups):
+        cells = np.flatnonzero(field_cov[f].ravel() > 0)
+        if not cells.size:
+            continue
+        cov = field_cov[f].ravel()[cells]
+        load = cov * grid.cell_area_m2 / rate
+        ys, xs = np.divmod(cells, grid.nx)
+        a = takeoff[g[0]]
+        dx = grid.origin_m[0] + (xs + 0.5) * grid.cell_m - a[0]
+        dy = grid.origin_m[1] + (ys + 0.5) * grid.cell_m - a[1]
+        centre = np.arctan2(np.sum(load * dy), np.sum(load * dx))
+        bearing = np.angle(np.exp(1j * (np.arctan2(dy, dx) - centre)))
+        part = sectors(tau[g[0]].ravel()[cells], load, bearing, len(g))
+        for i, k in enumerate(g):
+            out[k].ravel()[cells[part == i]] = cov[part == i]
+    return out
+
+
+def relax_routes(
+    prior: np.ndarray,
+    grid: Grid,
+    w: float,
+    law: str,
+    v: Speeds,
+    takeoff: np.ndarray,
+    landing: np.ndarray,
+    tau: np.ndarray,
+    eta: float,
+    budget: float,
+    turn_rate: float,
+    reserve: float,
+    headings,
+    levels: tuple[int, ...],
+    scales: tuple[float, ...],
+    options: PlanOptions | None = None,
+) -> list[list[list[float]]]:
+    """Waypoints per UAV of the relaxation patches (module docstring) of ``coverage`` (the
+    relaxation's ``C_j`` at effort scale ``eta``): lawnmower lines, two waypoints a line, each
+    route within the map and flown whole under eq. 17-18 (``budget`` the usable endurance,
+    ``reserve`` eq. 18's reserve, ``headings`` the take-off headings)."""
+    from poc_env.agents.planning.allocation import COVER_CAP, _order, _tracks
+
+    n = len(takeoff)
+    groups = field_groups(takeoff, landing)
+    rate = eta * w * v.line
+    t_f = np.stack([tau[g[0]] for g in groups])
+    field_cov = dedicated_allocation(
+        prior, grid.cell_area_m2, t_f, [len(g) for g in groups], rate, budget, law
+    )
+    own_cov = patches(field_cov, grid, tau, groups, takeoff, rate)
+    mirrored = Grid(grid.ny, grid.nx, grid.cell_m, (grid.origin_m[1], grid.origin_m[0]))
+    routes: list[list[list[float]]] = [[] for _ in range(n)]
+    for k in range(n):
+        mask = own_cov[k] > 0
+        if not mask.any():
+            continue
+        own = prior * mask
+        best: tuple[float, np.ndarray] | None = None
+        for scale in scales:
+            cov = np.minimum(own_cov[k] * scale, COVER_CAP)
+            for swap in (False, True):
+                g_f = mirrored if swap else grid
+                start = takeoff[k][::-1] if swap else takeoff[k]
+                for lv in levels:
+                    regions = _tracks(cov.T if swap else cov, g_f, w, lv)
+                    if not regions:
+                        continue
+                    lines = _order(regions, start)
+                    wps = np.array([[x, y] for (y, a, b, _) in lines for x in (a, b)], dtype=float)
+                    if swap:
+                        wps = wps[:, ::-1]
+
+                    def fits(q, k=k) -> bool:
+                        return route_fits(
+                            np.vstack([takeoff[k], q, landing[k]]),
+                            v,
+                            turn_rate,
+                            budget,
+                            reserve,
+                            headings[k],
+                        )
+
+                    wps = cut_lines(wps, fits, w, options)[0]
+                    if len(wps) < 2:
+                        continue
+                    path = np.vstack([takeoff[k], wps, landing[k]])
+                    val = float(np.sum(own * pod_from_coverage(_path_coverage(path, grid, w), law)))
+                    if best is None or val > best[0]:
+                        best = (val, wps)
+        if best is not None:
+            routes[k] = best[1].tolist()
+    return routes
