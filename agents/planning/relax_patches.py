@@ -37,8 +37,13 @@ from poc_env.agents.planning.refine import route_fits
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage
 
-#: rounds of the fields' dual (:func:`dedicated_allocation`).
-DUAL_ROUNDS = 8
+#: coverages between which :func:`dedicated_allocation` takes eq. 10's POD as linear (up to
+#: the allocation start's ``COVER_CAP``).
+BREAKS = (0.0, 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 1.15, 1.45, 1.8, 2.3)
+#: (sub-)cells of coverage per UAV the patches are cut from, at least (:func:`subcells`) ...
+CELLS_PER_UAV = 6
+#: ... with cells split into at most this many sub-cells a side.
+MAX_SUB = 4
 
 
 def field_groups(takeoff: np.ndarray, landing: np.ndarray) -> list[list[int]]:
@@ -60,70 +65,58 @@ def dedicated_allocation(
     law: str,
 ) -> np.ndarray:
     """Each field's coverage (``(F, *prior.shape)``), step 1 of the module docstring: most
-    ``sum_j m_j POD(C_j)`` (eq. 10) when a UAV of field f searching at out-and-back time
-    ``t_fj`` has ``budget - t_fj`` for its pattern at ``rate`` m^2/s, so a second of pattern
-    there takes ``1 / (budget - t_fj)`` of a UAV, and field f has ``sizes[f]`` UAVs:
-    ``sum_j a_j C_fj / (rate (budget - t_fj)) <= n_f``. (The relaxation's polymatroid,
-    :func:`poc_env.theory.bound.reach_optimum`, charges a set of cells only its nearest cell's
-    transit, which a UAV's patch reaching farther cannot keep.) Separable and concave with one
-    constraint per field: its dual is minimised field by field (bisection on each field's
-    multiplier ``mu_f``, :data:`DUAL_ROUNDS` rounds); at the multipliers each cell is searched
-    by its field of least price ``mu_f / (rate (budget - t_fj))`` per m^2 of effort, at the
-    KKT coverage of that price. Laws without a KKT coverage (linear POD) get none."""
-    from poc_env.agents.planning.allocation import COVER_CAP
-    from poc_env.theory.bound import _coverage_at
-    from poc_env.theory.detection import detection_law
+    ``sum_j m_j POD(C_j)`` (eq. 10), ``C_j = sum_f C_fj``, when a UAV of field f searching at
+    out-and-back time ``t_fj`` has ``budget - t_fj`` for its pattern at ``rate`` m^2/s, so a
+    second of pattern there takes ``1 / (budget - t_fj)`` of a UAV, and field f has
+    ``sizes[f]`` UAVs: ``sum_j a_j C_fj / (rate (budget - t_fj)) <= n_f``. (The relaxation's
+    polymatroid, :func:`poc_env.theory.bound.reach_optimum`, charges a set of cells only its
+    nearest cell's transit, which a UAV's patch reaching farther cannot keep.) Solved as one
+    linear program (HiGHS) with POD piecewise linear between :data:`BREAKS` (concave, so the
+    segments fill in order); a cell may be shared by fields. Coverage at most ``COVER_CAP``."""
+    from scipy.optimize import linprog
+    from scipy.sparse import coo_matrix
 
-    entry = detection_law(law)
+    from poc_env.agents.planning.allocation import COVER_CAP
+
     nf = t_f.shape[0]
     out = np.zeros((nf, *prior.shape))
     m = prior.ravel()
-    cells = np.flatnonzero(m > 0)
-    if entry.optimal_coverage is None or not cells.size:
+    tf = t_f.reshape(nf, -1)
+    cells = np.flatnonzero((m > 0) & (tf < budget).any(axis=0))
+    nj = cells.size
+    if not nj:
         return out
-    dens = m[cells] / cell_area_m2
-    slack = budget - t_f.reshape(nf, -1)[:, cells]  # (F, J)
-    reach = slack > 0
-    per = np.where(reach, 1.0 / (rate * np.where(reach, slack, 1.0)), np.inf)  # UAVs per m^2
-    sizes = np.asarray(sizes, dtype=float)
-    log_mu = np.full(nf, np.log(dens.max()) + 1.0)  # every field priced out
-
-    def state(lm: np.ndarray):
-        price = np.exp(lm)[:, None] * per
-        best = np.argmin(price, axis=0)
-        p = price[best, np.arange(cells.size)]
-        cov = np.where(
-            np.isfinite(p), _coverage_at(np.where(np.isfinite(p), p, 1.0), dens, entry), 0
-        )
-        return best, np.minimum(cov, COVER_CAP)
-
-    for _ in range(DUAL_ROUNDS):
-        for f in range(nf):
-            if not reach[f].any():
-                continue
-
-            def used(x: float, f=f) -> float:
-                lm = log_mu.copy()
-                lm[f] = x
-                best, cov = state(lm)
-                sel = best == f
-                return float(np.sum(cell_area_m2 * cov[sel] * per[f, sel]))
-
-            lo = float(np.log(dens.min() / per[f][reach[f]].max())) - 30.0
-            hi = float(np.log(dens.max() / per[f][reach[f]].min())) + 1.0
-            if used(lo) <= sizes[f]:
-                log_mu[f] = lo
-                continue
-            for _ in range(50):
-                mid = 0.5 * (lo + hi)
-                if used(mid) > sizes[f]:
-                    lo = mid
-                else:
-                    hi = mid
-            log_mu[f] = hi
-    best, cov = state(log_mu)
-    for f in range(nf):
-        out[f].ravel()[cells[best == f]] = cov[best == f]
+    brk = np.asarray([b for b in BREAKS if b < COVER_CAP] + [COVER_CAP])
+    width = np.diff(brk)
+    slope = np.diff(pod_from_coverage(brk, law)) / width  # (L,)
+    nl = width.size
+    fi, ji = np.nonzero(tf[:, cells] < budget)  # the fields reaching each cell
+    ny_ = nj * nl
+    nz = fi.size
+    # rows 0..nj-1: sum_l y_jl - sum_f z_fj = 0; rows nj..nj+nf-1: each field's UAVs
+    y_rows = np.repeat(np.arange(nj), nl)
+    z_use = cell_area_m2 / (rate * (budget - tf[fi, cells[ji]]))
+    a = coo_matrix(
+        (
+            np.concatenate([np.ones(ny_), -np.ones(nz), z_use]),
+            (
+                np.concatenate([y_rows, ji, nj + fi]),
+                np.concatenate([np.arange(ny_), ny_ + np.arange(nz), ny_ + np.arange(nz)]),
+            ),
+        ),
+        shape=(nj + nf, ny_ + nz),
+    ).tocsr()
+    cost = np.concatenate([-(m[cells][:, None] * slope[None, :]).ravel(), np.zeros(nz)])
+    upper = np.concatenate([np.tile(width, nj), np.full(nz, COVER_CAP)])
+    res = linprog(
+        cost, A_ub=a[nj:], b_ub=np.asarray(sizes, dtype=float), A_eq=a[:nj], b_eq=np.zeros(nj),
+        bounds=np.stack([np.zeros(ny_ + nz), upper], axis=1), method="highs",
+    )  # fmt: skip
+    if res.status != 0:
+        return out
+    z = np.maximum(res.x[ny_:], 0.0)
+    flat = out.reshape(nf, -1)
+    flat[fi, cells[ji]] = z
     return out
 
 
@@ -169,6 +162,20 @@ def sectors(tau: np.ndarray, load: np.ndarray, bearing: np.ndarray, n: int) -> n
     return part
 
 
+def subcells(field_cov: np.ndarray, groups: list[list[int]]) -> int:
+    """Sub-cells a side (1-:data:`MAX_SUB`) for the patches: the least ``s`` giving every field
+    at least :data:`CELLS_PER_UAV` (sub-)cells of coverage per UAV (on coarse cells a field's
+    few cells could not be cut into one sector per UAV)."""
+    for s in range(1, MAX_SUB + 1):
+        if all(
+            np.count_nonzero(field_cov[f]) * s * s >= CELLS_PER_UAV * len(g)
+            or not field_cov[f].any()
+            for f, g in enumerate(groups)
+        ):
+            return s
+    return MAX_SUB
+
+
 def patches(
     field_cov: np.ndarray, grid: Grid, tau: np.ndarray, groups: list[list[int]],
     takeoff: np.ndarray, rate: float,
@@ -193,6 +200,30 @@ def patches(
         part = sectors(tau[g[0]].ravel()[cells], load, bearing, len(g))
         for i, k in enumerate(g):
             out[k].ravel()[cells[part == i]] = cov[part == i]
+    return out
+
+
+def by_layer(regions: list[list[tuple]], h: float, levels: int) -> list[list[tuple]]:
+    """The lines of ``_tracks`` regions (``(y, x_start, x_end, row)``, lattice spacing ``h``
+    from the frame's origin... as ``_tracks`` lays them) regrouped by layer: each layer's lines
+    (every ``levels``-th lattice line, spacing ``levels h``) flown boustrophedon on their own,
+    so consecutive lines differ by one layer spacing instead of by the layers' extents."""
+    lines = [ln for reg in regions for ln in reg]
+    if not lines:
+        return []
+    y0 = min(ln[0] for ln in lines)
+    layers: dict[int, list[tuple]] = {}
+    for ln in lines:
+        i = round((ln[0] - y0) / h)
+        layers.setdefault(i % levels, []).append(ln)
+    out = []
+    for key in sorted(layers):
+        seq, flip = [], False
+        for y in sorted({ln[0] for ln in layers[key]}):
+            row = sorted((ln for ln in layers[key] if ln[0] == y), key=lambda t: t[1], reverse=flip)
+            seq += [(y, b, a, r) if flip else (y, a, b, r) for (_, a, b, r) in row]
+            flip = not flip
+        out.append(seq)
     return out
 
 
@@ -227,6 +258,12 @@ def relax_routes(
     field_cov = dedicated_allocation(
         prior, grid.cell_area_m2, t_f, [len(g) for g in groups], rate, budget, law
     )
+    sub = subcells(field_cov, groups)
+    if sub > 1:  # coarse cells: patches cut on sub-cells (coverage and transit repeated)
+        field_cov = np.repeat(np.repeat(field_cov, sub, axis=1), sub, axis=2)
+        tau = np.repeat(np.repeat(tau, sub, axis=1), sub, axis=2)
+        prior = grid.refine(prior, sub)
+        grid = Grid(grid.nx * sub, grid.ny * sub, grid.cell_m / sub, grid.origin_m)
     own_cov = patches(field_cov, grid, tau, groups, takeoff, rate)
     mirrored = Grid(grid.ny, grid.nx, grid.cell_m, (grid.origin_m[1], grid.origin_m[0]))
     routes: list[list[list[float]]] = [[] for _ in range(n)]
@@ -245,28 +282,30 @@ def relax_routes(
                     regions = _tracks(cov.T if swap else cov, g_f, w, lv)
                     if not regions:
                         continue
-                    lines = _order(regions, start)
-                    wps = np.array([[x, y] for (y, a, b, _) in lines for x in (a, b)], dtype=float)
-                    if swap:
-                        wps = wps[:, ::-1]
+                    h = w / float(cov.max())  # the lattice of _tracks
+                    for order in (_order(regions, start), _order(by_layer(regions, h, lv), start)):
+                        wps = np.array([[x, y] for (y, a, b, _) in order for x in (a, b)])
+                        if swap:
+                            wps = wps[:, ::-1]
 
-                    def fits(q, k=k) -> bool:
-                        return route_fits(
-                            np.vstack([takeoff[k], q, landing[k]]),
-                            v,
-                            turn_rate,
-                            budget,
-                            reserve,
-                            headings[k],
-                        )
+                        def fits(q, k=k) -> bool:
+                            return route_fits(
+                                np.vstack([takeoff[k], q, landing[k]]),
+                                v,
+                                turn_rate,
+                                budget,
+                                reserve,
+                                headings[k],
+                            )
 
-                    wps = cut_lines(wps, fits, w, options)[0]
-                    if len(wps) < 2:
-                        continue
-                    path = np.vstack([takeoff[k], wps, landing[k]])
-                    val = float(np.sum(own * pod_from_coverage(_path_coverage(path, grid, w), law)))
-                    if best is None or val > best[0]:
-                        best = (val, wps)
+                        wps = cut_lines(wps, fits, w, options)[0]
+                        if len(wps) < 2:
+                            continue
+                        path = np.vstack([takeoff[k], wps, landing[k]])
+                        cover = _path_coverage(path, grid, w)
+                        val = float(np.sum(own * pod_from_coverage(cover, law)))
+                        if best is None or val > best[0]:
+                            best = (val, wps)
         if best is not None:
             routes[k] = best[1].tolist()
     return routes
