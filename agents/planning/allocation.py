@@ -749,7 +749,7 @@ def make_allocation_plan(
         starts.append((b_val, "boxes", b_routes, _lines_of(b_routes)))
     if best is not None and opt.relax_start:  # i24-relax: each UAV a patch of the relaxation
         r_best: tuple[float, list] | None = None
-        for cand in opt.etas:
+        for cand in opt.relax_etas:
             r_routes = relax_routes(
                 prior,
                 grid,

@@ -115,9 +115,12 @@ class PlanOptions:
     #: also start from the relaxation patches (:mod:`~poc_env.agents.planning.relax_patches`:
     #: each UAV its own patch of the relaxation's coverage, laid graded; i24-relax).
     relax_start: bool = False
-    #: the relaxation patches' coverage is laid at each of these shares of the relaxation's
-    #: (each UAV keeps the one of most POS on its patch; less coverage, shorter routes).
-    relax_scales: tuple[float, ...] = (1.0, 0.8, 0.65)
+    #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
+    #: their allocation assumes; the start keeps the one of most W x length per cell) ...
+    relax_etas: tuple[float, ...] = (0.65, 0.75, 0.85, 0.95, 1.0)
+    #: ... and the shares of its coverage each UAV's patch is laid at (each UAV keeps the one
+    #: of most POS on its patch; less coverage, shorter routes).
+    relax_scales: tuple[float, ...] = (1.0, 0.9, 0.8, 0.7, 0.6, 0.5)
 
     # --- coverage boxes (agents/planning/coverage_boxes.py) ---
     #: line spacings tried, in sweep widths.
@@ -235,6 +238,7 @@ class PlanOptions:
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
+        _positive_tuple("relax_etas", self.relax_etas, high=1.0)
         _positive_tuple("relax_scales", self.relax_scales, high=1.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)

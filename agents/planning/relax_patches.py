@@ -1,28 +1,39 @@
-"""Relaxation patches: each UAV its own compact patch of the relaxation's coverage (i24-relax).
+"""Relaxation patches: each UAV its own patch of an allocation's graded coverage (i24-relax).
 
 A start of the allocation planner (:func:`poc_env.agents.planning.allocation.
-make_allocation_plan`, ``PlanOptions.relax_start``). The allocation start lays the
-relaxation's coverage ``C_j`` (:func:`poc_env.theory.bound.reach_optimum`, step 1 of the
-planner) as one route chained over the whole map and cut into pieces per UAV; the boxes start
+make_allocation_plan`, ``PlanOptions.relax_start``, off by default). The allocation start lays
+the relaxation's coverage (:func:`poc_env.theory.bound.reach_optimum`) as one route chained over
+the whole map and cut into pieces per UAV; the boxes start
 (:mod:`~poc_env.agents.planning.coverage_boxes`) gives each UAV its own box and one spacing.
-Here each UAV gets its own patch of the relaxation's cells, and its coverage there is laid
-graded as the allocation start lays it (``_tracks``: nested layers of lines, eq. 10
-``C = W / d``), so both the footprint and the grading come from the relaxation:
+Here each UAV gets its own patch of an allocation's cells, and its coverage there is laid
+graded as the allocation start lays it, so the footprint and the grading both come from the
+allocation; for each effort scale ``eta`` of ``PlanOptions.etas`` (the pattern sweeps
+``eta W v_s`` m^2/s):
 
-1. **Fields.** Each cell of positive coverage goes to the airfield (take-off, landing) of
-   least out-and-back time plus that field's price ``lambda_f``; a field whose cells need more
-   time than its UAVs have (pattern time ``a_j C_j / (eta W v_s)`` summed over the cells at
-   transit ``>= t``, against ``n_f (B - t)`` for every ``t``: the relaxation's own polymatroid
-   constraint per field) is priced up until none is, or :data:`PRICE_ROUNDS` rounds.
-2. **Patches.** A field's cells are sorted by bearing from the field (about the bearing of
-   their effort-weighted centre) and cut into one sector per UAV of equal pattern time, so
-   field-mates fly side by side at about the same distance.
-3. **Lines.** In each patch the coverage, scaled by each of ``scales``, is laid with
-   ``_tracks`` (each of the ``levels`` and both line directions), chained nearest first from
-   the take-off (``_order``) and cut at its far end until eq. 17-18 hold
-   (:func:`~poc_env.agents.planning.coverage_boxes.cut_lines`, :func:`~poc_env.agents.planning.
-   refine.route_fits`); the UAV keeps the variant of most POS on its own patch by W x length
-   per cell (eq. 10 per cell, the score the planner ranks starts by).
+1. **Fields** (:func:`dedicated_allocation`). The relaxation's polymatroid charges a set of
+   cells only its nearest cell's transit, which one UAV's patch reaching farther cannot keep
+   (laid in patches, the relaxation's own coverage overran the near field's time by a third on
+   ``large_400``). So the coverage is allocated again with a UAV *dedicated* to a distance:
+   searching at out-and-back time ``t`` it has ``B - t`` for its pattern, and field f's
+   coverage needs ``sum_j a_j C_fj / (eta W v_s (B - t_fj)) <= n_f`` UAVs; most
+   ``sum_j m_j POD(sum_f C_fj)`` (eq. 10), one linear program (POD piecewise linear).
+2. **Patches** (:func:`patches`). A field's coverage is cut by bearing from the field into one
+   sector per UAV of equal time (pattern time plus its mean transit, :func:`sectors`), so
+   field-mates fly side by side; on coarse cells on sub-cells (:func:`subcells`). (Compact
+   blocks by recursive bisection were tried too and scored less on every field of four
+   validation priors; not kept.)
+3. **Lines** (:func:`relax_routes`). In each patch the coverage, scaled by each of
+   ``PlanOptions.relax_scales``, is laid with the allocation start's ``_tracks`` (each of the
+   ``levels`` and both line directions; lines flown row by row or layer by layer,
+   :func:`by_layer`), chained nearest first from the take-off and cut at its far end until eq.
+   17-18 hold (:func:`~poc_env.agents.planning.coverage_boxes.cut_lines`,
+   :func:`~poc_env.agents.planning.refine.route_fits`); each UAV keeps the variant of most POS
+   on its own patch by W x length per cell (eq. 10 per cell, the score that ranks starts).
+
+**Measured** (docs/PLANNER.md, "Relaxation patches (i24-relax, 2026-11-28)"): on ``large_400``'s
+validation priors the start is never kept by the default effort (plans unchanged), and in the
+boxes' place (the same refinement) it plans 0.045 of the rule-aware bound less: graded nested
+layers cost connections (about 40 % of a near UAV's pattern) that one-spacing boxes do not.
 """
 
 from __future__ import annotations

@@ -126,7 +126,8 @@ def test_option_puts_the_start_in_the_plan():
     ("change", "field"),
     [({"relax_start": 1}, "options.relax_start"),
      ({"relax_scales": (1.0, 1.5)}, "options.relax_scales"),
-     ({"relax_scales": ()}, "options.relax_scales")],
+     ({"relax_scales": ()}, "options.relax_scales"),
+     ({"relax_etas": (0.5, 1.2)}, "options.relax_etas")],
 )  # fmt: skip
 def test_bad_relax_options_name_the_field(change, field):
     with pytest.raises(ConfigError) as err:

@@ -4,8 +4,9 @@
 (an explicit list of seeds, so no range reaches the reported priors by mistake; seed -1: the
 map's own prior; records resumed; rewritten atomically after every plan).
 
-VARIANT ``start`` is the relaxation-patch start alone, unrefined (built as
-``make_allocation_plan`` builds it: the allocation at each of the default ``etas``, the patches,
+VARIANT ``start`` (or ``start+FIELD=VALUE...``, options changed as effort_ab's variants) is the
+relaxation-patch start alone, unrefined (built as
+``make_allocation_plan`` builds it: the allocation at each of ``relax_etas``, the patches,
 field-mates fanned out, eq. 18 cuts; the best eta by W x length per cell), scored by
 ``sampled_sweep``; any other VARIANT is planned by ``make_allocation_plan`` with
 ``effort_ab._options(VARIANT)`` (e.g. ``default``, ``default+relax_start=1``,
@@ -30,7 +31,7 @@ from poc_env.theory.bound import rule_bound
 from poc_env.theory.probability_map import build_prior
 
 
-def start_alone(sc, prior) -> dict:
+def start_alone(sc, prior, opt=None) -> dict:
     """The relaxation-patch start alone, as the planner builds it (no refine, no polish)."""
     from poc_env.agents.planning import allocation as al
     from poc_env.agents.planning.flight_rules import SPEED, plan_speeds, reserve_s
@@ -40,7 +41,7 @@ def start_alone(sc, prior) -> dict:
     from poc_env.theory.bound import cell_distances
     from poc_env.theory.probability_map import Grid
 
-    opt = PlanOptions(relax_start=True)
+    opt = PlanOptions(relax_start=True) if opt is None else opt
     grid = Grid.from_config(sc.map)
     u = sc.uav
     w = sc.sensor.sweep_width_m
@@ -52,7 +53,7 @@ def start_alone(sc, prior) -> dict:
     tau = cell_distances(grid, takeoff) / v.out + cell_distances(grid, landing) / v.home
     heading0 = takeoff_heading(grid.bounds, takeoff)
     best = None
-    for eta in opt.etas:
+    for eta in opt.relax_etas:
         rs = relax_routes(prior, grid, w, law, v, takeoff, landing, tau, eta,
                           u.usable_endurance_s, u.max_turn_rate_rad_s, reserve_s(sc), heading0,
                           opt.levels, opt.relax_scales, opt)  # fmt: skip
@@ -85,8 +86,8 @@ def main(name: str, seeds: list[int], variants: list[str], out: str) -> None:
                 continue
             bound = rule_bound(sc, prior).upper if bound is None else bound
             t0 = time.perf_counter()
-            if variant == "start":
-                p = start_alone(sc, prior)
+            if variant.split("+")[0] == "start":  # start[+field=value...]
+                p = start_alone(sc, prior, _options(variant.replace("start", "default", 1)))
             else:
                 p = make_allocation_plan(sc, prior=prior, options=_options(variant))
             dt = time.perf_counter() - t0
