@@ -4,7 +4,8 @@
 VARIANT_B``: A - B per seed (2 x 2 sample points a cell, the environment's; and 8 x 8) and
 the mean ± Student's t 95 % (wins / ties / losses), over the seeds both hold; also each
 variant's mean share of the bound. Files are comma-separated lists (records of measure.py or
-of results/plan_scale/lines/cache_plans.py / stage2.py).
+of results/plan_scale/lines/cache_plans.py / stage2.py); a VARIANT may list several names
+separated by ``|`` (any of them).
 """
 
 import json
@@ -21,7 +22,7 @@ def _load(paths: str, variant: str) -> dict:
     out = {}
     for p in paths.split(","):
         with open(p) as f:
-            out.update({r["seed"]: r for r in json.load(f) if r["variant"] == variant})
+            out.update({r["seed"]: r for r in json.load(f) if r["variant"] in variant.split("|")})
     return out
 
 
