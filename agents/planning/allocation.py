@@ -101,12 +101,12 @@ from poc_env.agents.planning.refine import (
     route_time,
     track,
 )
-from poc_env.agents.planning.relax_patches import field_groups, relax_routes
+from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import takeoff_heading
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.bound import cell_distances, reach_optimum
+from poc_env.theory.bound import reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
@@ -611,7 +611,7 @@ def make_allocation_plan(
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
     n = len(takeoff)
     v = plan_speeds(sc, speed)
-    tau = cell_distances(grid, takeoff) / v.out + cell_distances(grid, landing) / v.home
+    tau = out_and_back(grid, takeoff, landing, v)
     budget = np.full(n, u.usable_endurance_s)
     if reason is None and not np.any((tau < budget[:, None, None]) & (prior > 0)[None]):
         reason = "no UAV can reach any mass and come back within 0.85 T (eq. 18)"

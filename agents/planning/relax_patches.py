@@ -57,6 +57,14 @@ CELLS_PER_UAV = 6
 MAX_SUB = 4
 
 
+def out_and_back(grid: Grid, takeoff: np.ndarray, landing: np.ndarray, v: Speeds) -> np.ndarray:
+    """Each UAV's out-and-back time to each cell (``(n, ny, nx)`` s): out at ``v.out``, home
+    at ``v.home`` (the allocation planner's transit, step 1 of its module docstring)."""
+    from poc_env.theory.bound import cell_distances
+
+    return cell_distances(grid, takeoff) / v.out + cell_distances(grid, landing) / v.home
+
+
 def field_groups(takeoff: np.ndarray, landing: np.ndarray) -> list[list[int]]:
     """The UAVs of each airfield (same take-off and landing to the millimetre), fields in
     order of their coordinates."""

@@ -36,22 +36,17 @@ def start_alone(sc, prior, opt=None) -> dict:
     from poc_env.agents.planning import allocation as al
     from poc_env.agents.planning.flight_rules import SPEED, plan_speeds, reserve_s
     from poc_env.agents.planning.options import PlanOptions
-    from poc_env.agents.planning.relax_patches import relax_routes
+    from poc_env.agents.planning.relax_patches import out_and_back, relax_routes
     from poc_env.sim.core import takeoff_heading
-    from poc_env.theory.bound import cell_distances
     from poc_env.theory.probability_map import Grid
 
     opt = PlanOptions(relax_start=True) if opt is None else opt
-    grid = Grid.from_config(sc.map)
-    u = sc.uav
-    w = sc.sensor.sweep_width_m
-    law = sc.sensor.law
-    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
-    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
-    n = len(takeoff)
-    v = plan_speeds(sc, SPEED)
-    tau = cell_distances(grid, takeoff) / v.out + cell_distances(grid, landing) / v.home
+    grid, u, v = Grid.from_config(sc.map), sc.uav, plan_speeds(sc, SPEED)
+    takeoff, landing = (np.asarray(p, dtype=float).reshape(-1, 2) for p in (sc.takeoff_m,
+                                                                            sc.landing_m))  # fmt: skip
+    tau = out_and_back(grid, takeoff, landing, v)
     heading0 = takeoff_heading(grid.bounds, takeoff)
+    w, law, n = sc.sensor.sweep_width_m, sc.sensor.law, len(takeoff)
     best = None
     for eta in opt.relax_etas:
         rs = relax_routes(prior, grid, w, law, v, takeoff, landing, tau, eta,
