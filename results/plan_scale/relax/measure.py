@@ -42,8 +42,8 @@ def start_alone(sc, prior, opt=None) -> dict:
 
     opt = PlanOptions(relax_start=True) if opt is None else opt
     grid, u, v = Grid.from_config(sc.map), sc.uav, plan_speeds(sc, SPEED)
-    takeoff, landing = (np.asarray(p, dtype=float).reshape(-1, 2) for p in (sc.takeoff_m,
-                                                                            sc.landing_m))  # fmt: skip
+    ends = (sc.takeoff_m, sc.landing_m)
+    takeoff, landing = (np.asarray(p, dtype=float).reshape(-1, 2) for p in ends)
     tau = out_and_back(grid, takeoff, landing, v)
     heading0 = takeoff_heading(grid.bounds, takeoff)
     w, law, n = sc.sensor.sweep_width_m, sc.sensor.law, len(takeoff)
