@@ -37,7 +37,10 @@
    (:mod:`poc_env.agents.planning.greedy_rectangles`: each UAV the best remaining rectangle it
    can search) is planned too, and so are the coverage boxes
    (:mod:`poc_env.agents.planning.coverage_boxes`: each UAV its own box and line spacing by
-   the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out). The starts
+   the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out); with
+   ``options.relax_start`` (off by default; i24-relax) the relaxation patches too
+   (:mod:`poc_env.agents.planning.relax_patches`: each UAV its own sector of an allocation,
+   laid graded; ``start`` ``"relax"``). The starts
    within ``options.refine_within`` of the best one's planned POS (at most ``refine_starts``) are
    refined and the plan keeps the best of them, refined or not, by the environment's model
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
