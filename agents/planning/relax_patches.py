@@ -31,9 +31,11 @@ allocation; for each effort scale ``eta`` of ``PlanOptions.etas`` (the pattern s
    on its own patch by W x length per cell (eq. 10 per cell, the score that ranks starts).
 
 **Measured** (docs/PLANNER.md, "Relaxation patches (i24-relax, 2026-11-28)"): on ``large_400``'s
-validation priors the start is never kept by the default effort (plans unchanged), and in the
-boxes' place (the same refinement) it plans 0.045 of the rule-aware bound less: graded nested
-layers cost connections (about 40 % of a near UAV's pattern) that one-spacing boxes do not.
+validation priors the default effort keeps the start on 1 of 8 (+0.0018 of the rule-aware
+bound on the mean), and in the boxes' place (the same refinement) it plans 0.021 less: its
+loss is footprint and effort (a dedicated UAV gets a small sector at the rim of its reach;
+graded nested layers cost connections), not grading. On ``paper_6_2`` the default effort keeps
+it on 8 of 13 (+0.0045) at 2.1-2.6 times the CPU time; so it stays off by default.
 """
 
 from __future__ import annotations
