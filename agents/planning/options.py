@@ -113,7 +113,8 @@ class PlanOptions:
     greedy_start: bool = True
     box_start: bool = True
     #: also start from the relaxation patches (:mod:`~poc_env.agents.planning.relax_patches`:
-    #: each UAV its own patch of the relaxation's coverage, laid graded; i24-relax).
+    #: each UAV its own sector of an allocation with UAVs dedicated to a distance, laid
+    #: graded; i24-relax; off: measured below the boxes on ``large_400``).
     relax_start: bool = False
     #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
     #: their allocation assumes; the start keeps the one of most W x length per cell) ...
