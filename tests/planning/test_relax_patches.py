@@ -133,3 +133,20 @@ def test_bad_relax_options_name_the_field(change, field):
     with pytest.raises(ConfigError) as err:
         PlanOptions(**change)
     assert err.value.field == field
+
+
+def test_the_start_goes_around_no_fly_zones():
+    """A zone along ``paper_6_2``'s southern edge, in the way out of both airfields: the
+    relaxation patches, kept as the start, cross it nowhere (eq. 20: routed around as the
+    boxes are)."""
+    import shapely
+
+    band = [[[10, 5], [130, 5], [130, 15], [10, 15]]]  # between both airfields and the mass
+    sc = load_scenario("paper_6_2", {"map.no_fly_zones_km": band})
+    opt = PlanOptions(relax_start=True, box_start=False, greedy_start=False, refine=0)
+    plan = make_allocation_plan(sc, options=opt)
+    assert plan["start"] == "relax"
+    zone = shapely.Polygon(sc.map.no_fly_zones_m[0])
+    for u in plan["uavs"]:
+        path = shapely.LineString([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]])
+        assert not path.intersects(zone)
