@@ -37,7 +37,10 @@
    (:mod:`poc_env.agents.planning.greedy_rectangles`: each UAV the best remaining rectangle it
    can search) is planned too, and so are the coverage boxes
    (:mod:`poc_env.agents.planning.coverage_boxes`: each UAV its own box and line spacing by
-   the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out). The starts
+   the marginal gain of eq. 10 per cell; ``box_start=False`` leaves them out); with
+   ``options.relax_start`` (off by default; i24-relax) the relaxation patches too
+   (:mod:`poc_env.agents.planning.relax_patches`: each UAV its own sector of an allocation,
+   laid graded; ``start`` ``"relax"``). The starts
    within ``options.refine_within`` of the best one's planned POS (at most ``refine_starts``) are
    refined and the plan keeps the best of them, refined or not, by the environment's model
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
@@ -101,11 +104,12 @@ from poc_env.agents.planning.refine import (
     route_time,
     track,
 )
+from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import takeoff_heading
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.bound import cell_distances, reach_optimum
+from poc_env.theory.bound import reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
@@ -260,9 +264,7 @@ def _assign(regions, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     field's lines are chained from it and cut among its UAVs (:func:`_split`); lines left over
     go to the UAVs left without a piece. Returns (route, pieces, times, lines unflown)."""
     n = len(takeoff)
-    keys = [tuple(np.round(np.concatenate([takeoff[k], landing[k]]), 3)) for k in range(n)]
-    fields = sorted(set(keys))
-    groups = [[k for k in range(n) if keys[k] == f] for f in fields]
+    groups = field_groups(takeoff, landing)
     heads = np.array([[takeoff[g[0]], landing[g[0]]] for g in groups])  # (F, 2, 2)
 
     def field_of(line) -> int:
@@ -343,6 +345,37 @@ def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
                 k
             ]
     return wps
+
+
+def fit_lawnmowers(
+    routes, takeoff, landing, sc: Scenario, v: Speeds, headings, options: PlanOptions
+) -> list[list[list[float]]]:
+    """A start's lawnmower routes (a line = two waypoints) with field-mates fanned out as the
+    allocation's routes are (:func:`_spread`: eq. 21 on the way out), and each route's last
+    lines dropped, the first dropped one flown in part (:func:`~poc_env.agents.planning.
+    coverage_boxes.cut_lines`), until it keeps eq. 18 again (:func:`~poc_env.agents.planning.
+    refine.route_fits`)."""
+    u = sc.uav
+    w = sc.sensor.sweep_width_m
+    rs = _spread(routes, takeoff, sc)
+    for k in range(len(takeoff)):
+        arr = np.asarray(rs[k], dtype=float).reshape(-1, 2)
+        lead = len(arr) % 2  # the dog-leg's waypoint before the lines
+
+        def fits(q, k=k, arr=arr, lead=lead) -> bool:
+            return route_fits(
+                np.vstack([takeoff[k], arr[:lead], q, landing[k]]),
+                v,
+                u.max_turn_rate_rad_s,
+                u.usable_endurance_s,
+                _reserve(sc),
+                headings[k],
+            )
+
+        if len(arr) and not fits(arr[lead:]):  # the last line cut short, or dropped
+            arr = np.vstack([arr[:lead], cut_lines(arr[lead:], fits, w, options)[0]])
+        rs[k] = [] if len(arr) - lead < 2 else arr.tolist()
+    return rs
 
 
 def _swept_areas(lines: np.ndarray, spacing: float) -> list[list[list[float]]]:
@@ -581,7 +614,7 @@ def make_allocation_plan(
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
     n = len(takeoff)
     v = plan_speeds(sc, speed)
-    tau = cell_distances(grid, takeoff) / v.out + cell_distances(grid, landing) / v.home
+    tau = out_and_back(grid, takeoff, landing, v)
     budget = np.full(n, u.usable_endurance_s)
     if reason is None and not np.any((tau < budget[:, None, None]) & (prior > 0)[None]):
         reason = "no UAV can reach any mass and come back within 0.85 T (eq. 18)"
@@ -629,6 +662,14 @@ def make_allocation_plan(
             ),
         )
         return [[float(a), float(b)] for a, b in path[1:-1]]
+
+    def _lawnmower_start(rs) -> list[list[list[float]]]:
+        """A start's lawnmower routes fitted (:func:`fit_lawnmowers`) and routed around the
+        zones."""
+        rs = fit_lawnmowers(rs, takeoff, landing, sc, v, heading0, opt)
+        if router.active:
+            rs = [_around(k, rs[k]) if rs[k] else [] for k in range(n)]
+        return rs
 
     eta = 0.0
     chosen = 0
@@ -706,30 +747,36 @@ def make_allocation_plan(
             ),
             options=opt,
         )
-        # field-mates fanned out as the allocation's routes are (eq. 21 on the way out), the
-        # last lines dropped until each route keeps eq. 18 again
-        b_routes = _spread(b_routes, takeoff, sc)
-        for k in range(n):
-            arr = np.asarray(b_routes[k], dtype=float).reshape(-1, 2)
-            lead = len(arr) % 2  # the dog-leg's waypoint before the lines
-
-            def fits(q, k=k, arr=arr, lead=lead) -> bool:
-                return route_fits(
-                    np.vstack([takeoff[k], arr[:lead], q, landing[k]]),
-                    v,
-                    u.max_turn_rate_rad_s,
-                    u.usable_endurance_s,
-                    _reserve(sc),
-                    heading0[k],
-                )
-
-            if len(arr) and not fits(arr[lead:]):  # the last line cut short, or dropped
-                arr = np.vstack([arr[:lead], cut_lines(arr[lead:], fits, w, opt)[0]])
-            b_routes[k] = [] if len(arr) - lead < 2 else arr.tolist()
-        if router.active:
-            b_routes = [_around(k, b_routes[k]) if b_routes[k] else [] for k in range(n)]
+        b_routes = _lawnmower_start(b_routes)
         b_val = _cell_pos(b_routes, takeoff, landing, prior, grid, w, law)
         starts.append((b_val, "boxes", b_routes, _lines_of(b_routes)))
+    if best is not None and opt.relax_start:  # i24-relax: each UAV a patch of the relaxation
+        r_best: tuple[float, list] | None = None
+        for cand in opt.relax_etas:
+            r_routes = relax_routes(
+                prior,
+                grid,
+                w,
+                law,
+                v,
+                takeoff,
+                landing,
+                tau,
+                cand,
+                u.usable_endurance_s,
+                u.max_turn_rate_rad_s,
+                _reserve(sc),
+                heading0,
+                tuple(ks),
+                opt.relax_scales,
+                opt,
+            )
+            r_routes = _lawnmower_start(r_routes)
+            r_val = _cell_pos(r_routes, takeoff, landing, prior, grid, w, law)
+            if r_best is None or r_val > r_best[0]:
+                r_best = (r_val, r_routes)
+        if r_best is not None:
+            starts.append((r_best[0], "relax", r_best[1], _lines_of(r_best[1])))
     # the best starts by W x length per cell (stable: allocation, greedy, boxes on ties)
     starts.sort(key=lambda t: -t[0])
     start = starts[0][1] if starts else "allocation"

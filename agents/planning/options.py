@@ -112,6 +112,16 @@ class PlanOptions:
     #: also start from the greedy rectangle plan, and from the coverage boxes.
     greedy_start: bool = True
     box_start: bool = True
+    #: also start from the relaxation patches (:mod:`~poc_env.agents.planning.relax_patches`:
+    #: each UAV its own sector of an allocation with UAVs dedicated to a distance, laid
+    #: graded; i24-relax; off: measured below the boxes on ``large_400``).
+    relax_start: bool = False
+    #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
+    #: their allocation assumes; the start keeps the one of most W x length per cell) ...
+    relax_etas: tuple[float, ...] = (0.65, 0.75, 0.85, 0.95, 1.0)
+    #: ... and the shares of its coverage each UAV's patch is laid at (each UAV keeps the one
+    #: of most POS on its patch; less coverage, shorter routes).
+    relax_scales: tuple[float, ...] = (1.0, 0.9, 0.8, 0.7, 0.6, 0.5)
 
     # --- coverage boxes (agents/planning/coverage_boxes.py) ---
     #: line spacings tried, in sweep widths.
@@ -229,12 +239,14 @@ class PlanOptions:
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
+        _positive_tuple("relax_etas", self.relax_etas, high=1.0)
+        _positive_tuple("relax_scales", self.relax_scales, high=1.0)
         _number("penalty_weight", self.penalty_weight, 0.0, 100.0)
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "chain_early", "also_default", "part", "share_tables", "axis", "excursions",
-                 "sampled", "polish_grade")  # fmt: skip
+                 "relax_start", "chain_early", "also_default", "part", "share_tables", "axis",
+                 "excursions", "sampled", "polish_grade")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")
