@@ -257,21 +257,29 @@ def cells(name: str = "paper_6_2") -> dict[str, float]:
 
 
 def timing(runs: int) -> dict[str, float]:
-    """Allocation planning time on ``paper_6_2`` and on 160 x 160 cells with 24 UAVs."""
+    """Allocation planning time on ``paper_6_2`` and on 160 x 160 cells with 24 UAVs, with the
+    scenario's prior and with one of 300 small blobs (many separate regions of coverage: the
+    allocation start's lines per region took 30 of 48 s on such a prior before 2026-11-28)."""
     from poc_env.agents.planning.allocation import make_allocation_plan
     from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import Grid, random_gaussian_mixture
 
+    big = load_scenario("large_400", {"map.cell_km": 2.5})
+    blobs = random_gaussian_mixture(
+        Grid.from_config(big.map), np.random.default_rng(0), (300, 300), (0.003, 0.008), (0, 0)
+    )
     cases = {
-        "paper_6_2": (load_scenario("paper_6_2"), None, 2.0),
-        "large_400_160x160_24uav": (load_scenario("large_400", {"map.cell_km": 2.5}), 24, 10.0),
+        "paper_6_2": (load_scenario("paper_6_2"), None, 2.0, None),
+        "large_400_160x160_24uav": (big, 24, 10.0, None),
+        "large_400_160x160_24uav_300blobs": (big, 24, 10.0, blobs),
     }
     out: dict[str, float] = {}
-    for label, (sc, uavs, target) in cases.items():
-        make_allocation_plan(sc, uavs=uavs, refine=0)  # warm-up (JIT)
+    for label, (sc, uavs, target, prior) in cases.items():
+        make_allocation_plan(sc, prior=prior, uavs=uavs, refine=0)  # warm-up (JIT)
         times = []
         for _ in range(runs):
             t0 = time.perf_counter()
-            make_allocation_plan(sc, uavs=uavs)
+            make_allocation_plan(sc, prior=prior, uavs=uavs)
             times.append(time.perf_counter() - t0)
         out[f"{label}_plan_s"] = statistics.median(times)
         _line(f"{label} plan_s", out[f"{label}_plan_s"], f"median of {runs} (target <= {target} s)")
