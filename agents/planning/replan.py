@@ -140,6 +140,10 @@ def _to_map(field: str, arr: np.ndarray, crs: Any) -> np.ndarray:
     return np.array(to_local(np.stack([lat, lon], axis=1), crs))
 
 
+#: GeoJSON geometries a collection of tracks may hold beside its lines (skipped).
+GEOJSON_OTHER = ("Point", "MultiPoint", "Polygon", "MultiPolygon")
+
+
 def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     from poc_env.io import loads_json
 
@@ -170,8 +174,15 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     else:
         geoms = [(where, data)]
     out = []
+    lines = ("LineString", "MultiLineString")
+    # a collection's points and areas (a logger's waypoints, the search area drawn beside the
+    # tracks) sweep no line: skipped, as KML's other placemarks and GPX's waypoints are; a
+    # collection without a line is refused, as a lone geometry of another type is
+    skip = len(geoms) > 1 and any(isinstance(g, dict) and g.get("type") in lines for _, g in geoms)
     for field, g in geoms:
-        if not isinstance(g, dict) or g.get("type") not in ("LineString", "MultiLineString"):
+        if skip and isinstance(g, dict) and g.get("type") in GEOJSON_OTHER:
+            continue
+        if not isinstance(g, dict) or g.get("type") not in lines:
             kind = g.get("type") if isinstance(g, dict) else g
             raise ConfigError(f"{field}.type", kind, "LineString or MultiLineString")
         parts = [g.get("coordinates")] if g["type"] == "LineString" else g.get("coordinates")

@@ -390,3 +390,42 @@ def test_kml_gx_tracks_of_one_fix_are_skipped_like_gpx_segments(first, tmp_path)
     f.write_text(kml.format(track(lines[0][:1])))
     with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
         read_tracks(f, plan["crs"])
+
+
+def test_geojson_points_and_areas_beside_the_tracks_are_skipped(first, tmp_path):
+    """Audit i24 (noticed): a GeoJSON collection of a logger's tracks with its waypoints or the
+    search area beside them was refused whole (``features[0].geometry.type: got 'Point'``), where
+    KML's other placemarks and GPX's waypoints are skipped. Now skipped in a collection holding a
+    line; a collection of points alone is still refused, naming the first."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = tmp_path / "lines.geojson"
+    feats = _tracks(lines, plan)
+    lon, lat = feats[0]["geometry"]["coordinates"][0]
+    point = {
+        "type": "Feature",
+        "properties": {},
+        "geometry": {"type": "Point", "coordinates": [lon, lat]},
+    }
+    ring = [[lon, lat], [lon + 0.1, lat], [lon + 0.1, lat + 0.1], [lon, lat]]
+    area = {
+        "type": "Feature",
+        "properties": {},
+        "geometry": {"type": "Polygon", "coordinates": [ring]},
+    }
+    mixed = tmp_path / "mixed.geojson"
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": [point, *feats, area]}))
+    want = read_tracks(lines, plan["crs"])
+    got = read_tracks(mixed, plan["crs"])
+    assert [f for f, _ in got] == [
+        f"tracks.features[{i + 1}].geometry.coordinates" for i in range(len(want))
+    ]
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    only = tmp_path / "points.geojson"
+    only.write_text(json.dumps({"type": "FeatureCollection", "features": [point, point]}))
+    with pytest.raises(ConfigError) as err:
+        read_tracks(only, plan["crs"])
+    assert err.value.field == "tracks.features[0].geometry.type" and err.value.value == "Point"
