@@ -102,9 +102,18 @@ def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> N
         raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
 
 
+_STAGED: list[tuple[Path, list[str]]] = []
+"""The staging folders of the open :func:`_output_folder` blocks (innermost last), each with
+the ``wrote PATH`` lines :func:`_wrote` holds back until its files are in place."""
+
+
 @contextlib.contextmanager
 def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
-    """:func:`poc_env.io.atomic_dir` with file-system errors reported as ``field`` errors."""
+    """:func:`poc_env.io.atomic_dir` with file-system errors reported as ``field`` errors.
+
+    The ``wrote PATH`` lines of the files staged in the block are printed once they are in
+    place: a run refused at the end (or interrupted) says nothing was written.
+    """
     from poc_env.io import atomic_dir
 
     try:
@@ -114,26 +123,50 @@ def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
         raise ConfigError(
             field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
         ) from None
+    entry: tuple[Path, list[str]] = (stage, [])
+    _STAGED.append(entry)
     try:
-        yield stage
-    except BaseException:
-        if not stage_cm.__exit__(*sys.exc_info()):
-            raise
-    else:
         try:
-            stage_cm.__exit__(None, None, None)
-        except OSError as err:
-            raise ConfigError(
-                field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
-            ) from None
+            yield stage
+        except BaseException:
+            if not stage_cm.__exit__(*sys.exc_info()):
+                raise
+        else:
+            try:
+                stage_cm.__exit__(None, None, None)
+            except OSError as err:
+                raise ConfigError(
+                    field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
+                ) from None
+            for line in entry[1]:
+                print(line)
+    finally:
+        _STAGED.remove(entry)
 
 
 def _wrote(paths, stage: Path | None = None, dest: Path | None = None) -> None:
-    """Print ``wrote PATH`` for each path, as it will be named once ``stage`` is ``dest``."""
+    """Print ``wrote PATH`` for each path, as it will be named once ``stage`` is ``dest``.
+
+    A ``stage`` inside an open :func:`_output_folder` block: the lines wait for its end.
+    """
+    lines = []
     for p in paths:
         if stage is not None and dest is not None:
             p = dest / Path(p).relative_to(stage)
-        print(f"wrote {p}")
+        lines.append(f"wrote {p}")
+    _say(lines, stage)
+
+
+def _say(lines: list[str], where: Path | None) -> None:
+    """Print ``lines`` about files written at ``where``: now, or (``where`` inside an open
+    :func:`_output_folder` block) once that block's files are in place."""
+    inside = Path(where) if where is not None else None
+    for root, pending in reversed(_STAGED):
+        if inside is not None and (inside == root or root in inside.parents):
+            pending.extend(lines)
+            return
+    for line in lines:
+        print(line)
 
 
 def _add_projection(p: argparse.ArgumentParser) -> None:
@@ -725,9 +758,8 @@ def _plan(
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
-    print(f"wrote {shown_out}")
-    if plot is not None:
-        print(f"wrote {shown_plot}")
+    lines = [f"wrote {shown_out}"] + ([f"wrote {shown_plot}"] if plot is not None else [])
+    _say(lines, out.parent)  # staged by demo: said once in place
     return 0
 
 
