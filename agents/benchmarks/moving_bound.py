@@ -189,4 +189,6 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    main()
+    from poc_env.agents.benchmarks import run_main
+
+    run_main(main)

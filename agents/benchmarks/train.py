@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import sys
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -123,5 +122,6 @@ def main(argv: Sequence[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    main()
-    sys.exit(0)
+    from poc_env.agents.benchmarks import run_main
+
+    run_main(main)
