@@ -320,8 +320,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
     """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
-    args = build_parser().parse_args(argv)
+    from poc_env.agents.benchmarks import check_counts
 
+    args = build_parser().parse_args(argv)
+    check_counts(args, envs=1, runs=1)
     overrides = {}
     for item in args.set:
         key, _, value = item.partition("=")

@@ -147,7 +147,10 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
+    from poc_env.agents.benchmarks import check_counts
+
     args = build_parser().parse_args(argv)
+    check_counts(args, runs=1, steps=1, seed=0)
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     out: dict[str, float] = {}

@@ -202,7 +202,10 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
+    from poc_env.agents.benchmarks import check_counts
+
     args = build_parser().parse_args(argv)
+    check_counts(args, uavs=1, runs=1, seeds=1, episodes=1)
     if args.scale:
         from poc_env.agents.benchmarks import plan_scale
 

@@ -104,7 +104,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     """``poc-env bench train``: print the figures of :func:`bench_train`."""
+    from poc_env.agents.benchmarks import check_counts
+
     ns = build_parser().parse_args(argv)
+    check_counts(ns, n_envs=1, iterations=1)
     r = bench_train(ns.scenario, ns.recipe, ns.n_envs, ns.iterations)
     d = TrainArgs()
     print(

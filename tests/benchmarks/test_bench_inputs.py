@@ -1,12 +1,35 @@
 """``poc-env bench NAME`` with bad values: a clear ``error: FIELD: ...`` (exit status 2), never
 a traceback nor a table of ``nan`` / ``0 in 0.0 s`` from a count below one."""
 
+import importlib
 import subprocess
 import sys
 
 import pytest
 
 from poc_env.cli import BENCHMARKS
+from poc_env.errors import ConfigError
+
+
+@pytest.mark.parametrize(
+    "module, argv, field",
+    [
+        ("env", ["--envs", "1", "--runs", "0", "--no-mpe", "--no-memory"], "runs"),
+        ("env", ["--envs", "0", "--runs", "1", "--no-mpe", "--no-memory"], "envs"),
+        ("plan", ["--runs", "0"], "runs"),
+        ("plan", ["--quality", "--seeds", "0"], "seeds"),
+        ("moving_bound", ["--scenario", "small", "--runs", "0", "--steps", "5"], "runs"),
+        ("moving_bound", ["--scenario", "small", "--runs", "1", "--steps", "0"], "steps"),
+        ("suite", ["--runs", "0", "--skip-sb3", "--skip-rllib"], "runs"),
+        ("train", ["--iterations", "0"], "iterations"),
+    ],
+)
+def test_a_count_below_one_is_refused_naming_it(module, argv, field):
+    """A count of runs, seeds, envs, steps or iterations below one: refused before any work
+    (it ended in ``no median for empty data``, a ``KeyError``, or a table of ``nan``)."""
+    main = importlib.import_module(f"poc_env.agents.benchmarks.{module}").main
+    with pytest.raises(ConfigError, match=rf"^{field}: got [-0-9]+; allowed: an integer >= 1"):
+        main(argv)
 
 
 @pytest.mark.parametrize("what", ["env", "plan", "train", "moving-bound"])
