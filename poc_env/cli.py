@@ -14,7 +14,7 @@ import contextlib
 import os
 import sys
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -102,17 +102,19 @@ def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> N
         raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
 
 
-_STAGED: list[tuple[Path, list[str]]] = []
+_STAGED: list[tuple[Path, list[Callable[[], object]]]] = []
 """The staging folders of the open :func:`_output_folder` blocks (innermost last), each with
-the ``wrote PATH`` lines :func:`_wrote` holds back until its files are in place."""
+what :func:`_once_in_place` holds back until its files are in place (``wrote PATH`` lines, a
+file written beside the folder)."""
 
 
 @contextlib.contextmanager
 def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
     """:func:`poc_env.io.atomic_dir` with file-system errors reported as ``field`` errors.
 
-    The ``wrote PATH`` lines of the files staged in the block are printed once they are in
-    place: a run refused at the end (or interrupted) says nothing was written.
+    The ``wrote PATH`` lines of the files staged in the block are printed (and the outputs
+    written beside the folder, such as ``survey --plan-out``, are written) once they are in
+    place: a run refused at the end (or interrupted) writes and says nothing.
     """
     from poc_env.io import atomic_dir
 
@@ -123,7 +125,7 @@ def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
         raise ConfigError(
             field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
         ) from None
-    entry: tuple[Path, list[str]] = (stage, [])
+    entry: tuple[Path, list[Callable[[], object]]] = (stage, [])
     _STAGED.append(entry)
     try:
         try:
@@ -138,8 +140,8 @@ def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
                 raise ConfigError(
                     field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
                 ) from None
-            for line in entry[1]:
-                print(line)
+            for then in entry[1]:
+                then()
     finally:
         _STAGED.remove(entry)
 
@@ -158,15 +160,19 @@ def _wrote(paths, stage: Path | None = None, dest: Path | None = None) -> None:
 
 
 def _say(lines: list[str], where: Path | None) -> None:
-    """Print ``lines`` about files written at ``where``: now, or (``where`` inside an open
-    :func:`_output_folder` block) once that block's files are in place."""
+    """Print ``lines`` about files written at ``where``, once they are in place."""
+    _once_in_place(where, lambda: print(*lines, sep="\n") if lines else None)
+
+
+def _once_in_place(where: Path | None, then: Callable[[], object]) -> None:
+    """Call ``then`` now or, ``where`` inside an open :func:`_output_folder` block, once that
+    block's files are in place (never, if they are not)."""
     inside = Path(where) if where is not None else None
     for root, pending in reversed(_STAGED):
         if inside is not None and (inside == root or root in inside.parents):
-            pending.extend(lines)
+            pending.append(then)
             return
-    for line in lines:
-        print(line)
+    then()
 
 
 def _add_projection(p: argparse.ArgumentParser) -> None:
@@ -337,7 +343,8 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
             projection=args.projection,
             zone=args.utm_zone,
         )
-        print(f"wrote {write_plan(with_scenario_file(doc, args.scenario), args.plan_out)}")
+        doc = with_scenario_file(doc, args.scenario)
+        _once_in_place(stage, lambda: print(f"wrote {write_plan(doc, args.plan_out)}"))
     return 0
 
 

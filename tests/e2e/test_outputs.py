@@ -243,3 +243,15 @@ def test_a_refused_output_folder_prints_no_wrote_line(tmp_path, capsys, argv, ta
     assert (out / taken / "keep.txt").read_text() == "the user's"
     assert main([*argv, "--out", str(tmp_path / "p")]) == 0
     assert f"wrote {tmp_path / 'p' / taken}" in capsys.readouterr().out
+
+
+def test_survey_plan_out_absent_when_its_out_folder_is_refused(tmp_path, capsys):
+    """``survey --out DIR --plan-out FILE`` is one set of outputs: a refused ``DIR`` leaves no
+    ``FILE`` either (it was written before the folder's merge was refused)."""
+    out, plan = tmp_path / "o", tmp_path / "survey_plan.json"
+    (out / "survey.csv").mkdir(parents=True)
+    argv = ["survey", "--scenario", "paper_6_1", "--plan-out", str(plan)]
+    assert main([*argv, "--out", str(out)]) == 2
+    assert not plan.exists() and "wrote" not in capsys.readouterr().out
+    assert main([*argv, "--out", str(tmp_path / "p")]) == 0
+    assert plan.is_file() and f"wrote {plan}" in capsys.readouterr().out
