@@ -13,7 +13,6 @@ import argparse
 import contextlib
 import os
 import sys
-import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
@@ -31,7 +30,7 @@ from poc_env.errors import (
     skipped_for_extra,
 )
 from poc_env.helptext import examples, use_everywhere, walk
-from poc_env.io import check_replaceable
+from poc_env.io import check_out as _check_out
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
 _EXTRA_OF = {
@@ -64,42 +63,6 @@ def _check_baselines(baselines: list[str], policies: list[str], where: str) -> N
             raise ConfigError(
                 "baseline", b, f"a policy of {where} with at least one other policy to pair with"
             )
-
-
-def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
-    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
-
-    Refused: an empty path, a file where a folder is expected (or the reverse), a path under a
-    file, and a path whose nearest existing folder poc-env cannot write into (tried by
-    creating and removing a temporary folder there).
-    """
-    if value is None:
-        return
-    text = os.fspath(value)
-    what = "a file path (not a folder)" if kind == "file" else "a folder path (not a file)"
-    allowed = f"{what} that poc-env can create or write"
-    if not text or "\0" in text:
-        raise ConfigError(field, text, allowed)
-    path = Path(text)
-    try:
-        if kind == "file":
-            if path.is_dir() or text.endswith(("/", os.sep)):
-                raise ConfigError(field, text, f"{what}; it is a folder")
-            check_replaceable(path, field)  # /dev/null, a FIFO: never swapped for a file
-            start = path.parent
-        else:
-            if path.exists() and not path.is_dir():
-                raise ConfigError(field, text, f"{what}; it is an existing file")
-            start = path
-        nearest = start
-        while not nearest.exists() and nearest != nearest.parent:
-            nearest = nearest.parent
-        if not nearest.is_dir():
-            raise ConfigError(field, text, f"{what}; {nearest} is a file, not a folder")
-        probe = tempfile.mkdtemp(prefix=".poc-env-probe-", dir=nearest)
-        os.rmdir(probe)
-    except OSError as err:
-        raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
 
 
 _STAGED: list[tuple[Path, list[Callable[[], object]]]] = []

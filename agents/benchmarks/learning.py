@@ -257,8 +257,10 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
     from poc_env.agents.benchmarks import check_counts, write_table_set
+    from poc_env.io import check_out
 
     args = _parse(argv)
+    check_out("out", args.out, "folder")  # before the run, not after it
     check_counts(args, episodes=1, seed=0, workers=1, every=1)
     given = sys.argv[1:] if argv is None else argv
     command = "poc-env bench learning " + shlex.join(given)

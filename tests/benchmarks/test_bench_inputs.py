@@ -45,3 +45,23 @@ def test_bench_bad_input_ends_as_an_error_line_not_a_traceback(what):
     assert r.returncode == 2, r.stderr
     assert r.stderr.startswith("error: scenario: got 'nosuch'")
     assert "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("module", ["baselines", "generalise", "learning", "peers"])
+def test_an_unwritable_out_is_refused_before_any_work(tmp_path, monkeypatch, module):
+    """``--out`` that is a file: ``out: ...`` before the benchmark runs (it was found after the
+    whole run, minutes at full budget, as ``output: got 'FILE/NAME.csv'``)."""
+    mod = importlib.import_module(f"poc_env.agents.benchmarks.{module}")
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the benchmark ran before its --out was checked")
+
+    for name in ("run", "measure"):
+        if hasattr(mod, name):
+            monkeypatch.setattr(mod, name, no_work)
+    (tmp_path / "a_file").write_text("x")
+    argv = ["--out", str(tmp_path / "a_file")]
+    if module == "learning":
+        argv += ["--recipe", f"r={tmp_path}"]
+    with pytest.raises(ConfigError, match=r"^out: got '.*a_file'; allowed: a folder path"):
+        mod.main(argv)
