@@ -203,9 +203,11 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
     from poc_env.agents.benchmarks import check_counts
+    from poc_env.io import check_out
 
     args = build_parser().parse_args(argv)
-    check_counts(args, uavs=1, runs=1, seeds=1, episodes=1)
+    check_counts(args, uavs=1, runs=1, seeds=1, episodes=1, seed0=0, zones=0)
+    check_out("scale_out", args.scale_out, "file")  # before the run, not after it
     if args.scale:
         from poc_env.agents.benchmarks import plan_scale
 

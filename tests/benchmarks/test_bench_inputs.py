@@ -65,3 +65,20 @@ def test_an_unwritable_out_is_refused_before_any_work(tmp_path, monkeypatch, mod
         argv += ["--recipe", f"r={tmp_path}"]
     with pytest.raises(ConfigError, match=r"^out: got '.*a_file'; allowed: a folder path"):
         mod.main(argv)
+
+
+def test_bench_plan_scale_out_and_seeds_checked_before_the_run(tmp_path, monkeypatch):
+    """``bench plan --scale --scale-out FOLDER`` (or a negative ``--seed0``, ``--zones``): refused
+    naming the option before the scale run, not found after it."""
+    from poc_env.agents.benchmarks import plan, plan_scale
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the scale run started before its options were checked")
+
+    monkeypatch.setattr(plan_scale, "main", no_work)
+    with pytest.raises(ConfigError, match=r"^scale_out: got .*; allowed: a file path"):
+        plan.main(["--scale", "--scale-out", str(tmp_path)])
+    with pytest.raises(ConfigError, match=r"^seed0: got -1; allowed: an integer >= 0"):
+        plan.main(["--sweep", "100,300,0.2,0.1", "--seed0", "-1"])
+    with pytest.raises(ConfigError, match=r"^zones: got -1; allowed: an integer >= 0"):
+        plan.main(["--scale", "--zones", "-1"])
