@@ -82,3 +82,13 @@ def test_bench_plan_scale_out_and_seeds_checked_before_the_run(tmp_path, monkeyp
         plan.main(["--sweep", "100,300,0.2,0.1", "--seed0", "-1"])
     with pytest.raises(ConfigError, match=r"^zones: got -1; allowed: an integer >= 0"):
         plan.main(["--scale", "--zones", "-1"])
+
+
+@pytest.mark.parametrize("option, value", [("--frame-min", "0"), ("--swirl", "nan")])
+def test_bench_moving_bound_bad_frame_interval_or_swirl_refused(option, value):
+    """``--frame-min 0`` ended in ``ZeroDivisionError``; a NaN swirl drifted the belief by NaN."""
+    from poc_env.agents.benchmarks import moving_bound
+
+    field = option[2:].replace("-", "_")
+    with pytest.raises(ConfigError, match=rf"^{field}: got {value}"):
+        moving_bound.main(["--scenario", "small", "--runs", "1", "--steps", "3", option, value])
