@@ -138,10 +138,17 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
 
 
 def _column(row: dict[str, Any]) -> str:
-    """A row's column: its label; the unlabelled floors of every control level share one."""
-    if row["label"] == row["policy"] and row["policy"] in FLOOR.values():
+    """A row's column: its label; the unlabelled floor of each task's control level shares
+    ``random``, and another level's floor flown on it (``--policies``) is named with its level,
+    ``random_heading (heading)``."""
+    from poc_env import tasks
+
+    if row["label"] != row["policy"] or row["policy"] not in FLOOR.values():
+        return row["label"]
+    if FLOOR[tasks.get_task(row["task"]).control] == row["policy"]:
         return "random"
-    return row["label"]
+    level = next(c for c, floor in FLOOR.items() if floor == row["policy"])
+    return f"{row['policy']} ({level})"
 
 
 def to_markdown(rows: list[dict[str, Any]], command: str) -> str:

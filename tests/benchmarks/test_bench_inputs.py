@@ -92,3 +92,27 @@ def test_bench_moving_bound_bad_frame_interval_or_swirl_refused(option, value):
     field = option[2:].replace("-", "_")
     with pytest.raises(ConfigError, match=rf"^{field}: got {value}"):
         moving_bound.main(["--scenario", "small", "--runs", "1", "--steps", "3", option, value])
+
+
+def test_bench_baselines_random_column_is_each_tasks_own_floor():
+    """``bench baselines --policies random,random_heading,...``: the ``random`` column is the
+    floor of each task's control level (it showed whichever floor came last: Increments'
+    ``random`` cell held ``random_heading``'s 0.036 where its own was 0.085)."""
+    from poc_env.agents.benchmarks.baselines import to_markdown
+
+    def row(task, policy, posc):
+        return {"task": f"poc_env/UAVSearch-Small-{task}-v0", "policy": policy, "label": policy,
+                "episodes": 20, "posc_mean": posc, "posc_ci95": 0.01, "normalised": posc,
+                "violation_steps": 1.0}  # fmt: skip
+
+    md = to_markdown(
+        [row("Increments", "random", 0.085), row("Increments", "random_heading", 0.036),
+         row("Heading", "random", 0.085), row("Heading", "random_heading", 0.036)],
+        "cmd",
+    )  # fmt: skip
+    lines = md.splitlines()
+    assert lines[0] == "| task | random | random_heading (heading) | random (increments) |"
+    cell = "{:.3f} ± 0.010 ({:.3f}; 1)".format
+    inc, head = cell(0.085, 0.085), cell(0.036, 0.036)
+    assert lines[2] == f"| UAVSearch-Small-Increments-v0 | {inc} | {head} | - |"
+    assert lines[3] == f"| UAVSearch-Small-Heading-v0 | {head} | - | {inc} |"
