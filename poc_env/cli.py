@@ -13,8 +13,7 @@ import argparse
 import contextlib
 import os
 import sys
-import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +30,7 @@ from poc_env.errors import (
     skipped_for_extra,
 )
 from poc_env.helptext import examples, use_everywhere, walk
-from poc_env.io import check_replaceable
+from poc_env.io import check_out as _check_out
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
 _EXTRA_OF = {
@@ -66,45 +65,20 @@ def _check_baselines(baselines: list[str], policies: list[str], where: str) -> N
             )
 
 
-def _check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
-    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
-
-    Refused: an empty path, a file where a folder is expected (or the reverse), a path under a
-    file, and a path whose nearest existing folder poc-env cannot write into (tried by
-    creating and removing a temporary folder there).
-    """
-    if value is None:
-        return
-    text = os.fspath(value)
-    what = "a file path (not a folder)" if kind == "file" else "a folder path (not a file)"
-    allowed = f"{what} that poc-env can create or write"
-    if not text or "\0" in text:
-        raise ConfigError(field, text, allowed)
-    path = Path(text)
-    try:
-        if kind == "file":
-            if path.is_dir() or text.endswith(("/", os.sep)):
-                raise ConfigError(field, text, f"{what}; it is a folder")
-            check_replaceable(path, field)  # /dev/null, a FIFO: never swapped for a file
-            start = path.parent
-        else:
-            if path.exists() and not path.is_dir():
-                raise ConfigError(field, text, f"{what}; it is an existing file")
-            start = path
-        nearest = start
-        while not nearest.exists() and nearest != nearest.parent:
-            nearest = nearest.parent
-        if not nearest.is_dir():
-            raise ConfigError(field, text, f"{what}; {nearest} is a file, not a folder")
-        probe = tempfile.mkdtemp(prefix=".poc-env-probe-", dir=nearest)
-        os.rmdir(probe)
-    except OSError as err:
-        raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
+_STAGED: list[tuple[Path, list[Callable[[], object]]]] = []
+"""The staging folders of the open :func:`_output_folder` blocks (innermost last), each with
+what :func:`_once_in_place` holds back until its files are in place (``wrote PATH`` lines, a
+file written beside the folder)."""
 
 
 @contextlib.contextmanager
 def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
-    """:func:`poc_env.io.atomic_dir` with file-system errors reported as ``field`` errors."""
+    """:func:`poc_env.io.atomic_dir` with file-system errors reported as ``field`` errors.
+
+    The ``wrote PATH`` lines of the files staged in the block are printed (and the outputs
+    written beside the folder, such as ``survey --plan-out``, are written) once they are in
+    place: a run refused at the end (or interrupted) writes and says nothing.
+    """
     from poc_env.io import atomic_dir
 
     try:
@@ -114,26 +88,54 @@ def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
         raise ConfigError(
             field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
         ) from None
+    entry: tuple[Path, list[Callable[[], object]]] = (stage, [])
+    _STAGED.append(entry)
     try:
-        yield stage
-    except BaseException:
-        if not stage_cm.__exit__(*sys.exc_info()):
-            raise
-    else:
         try:
-            stage_cm.__exit__(None, None, None)
-        except OSError as err:
-            raise ConfigError(
-                field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
-            ) from None
+            yield stage
+        except BaseException:
+            if not stage_cm.__exit__(*sys.exc_info()):
+                raise
+        else:
+            try:
+                stage_cm.__exit__(None, None, None)
+            except OSError as err:
+                raise ConfigError(
+                    field, os.fspath(path), f"a folder poc-env can write ({err.strerror})"
+                ) from None
+            for then in entry[1]:
+                then()
+    finally:
+        _STAGED.remove(entry)
 
 
 def _wrote(paths, stage: Path | None = None, dest: Path | None = None) -> None:
-    """Print ``wrote PATH`` for each path, as it will be named once ``stage`` is ``dest``."""
+    """Print ``wrote PATH`` for each path, as it will be named once ``stage`` is ``dest``.
+
+    A ``stage`` inside an open :func:`_output_folder` block: the lines wait for its end.
+    """
+    lines = []
     for p in paths:
         if stage is not None and dest is not None:
             p = dest / Path(p).relative_to(stage)
-        print(f"wrote {p}")
+        lines.append(f"wrote {p}")
+    _say(lines, stage)
+
+
+def _say(lines: list[str], where: Path | None) -> None:
+    """Print ``lines`` about files written at ``where``, once they are in place."""
+    _once_in_place(where, lambda: print(*lines, sep="\n") if lines else None)
+
+
+def _once_in_place(where: Path | None, then: Callable[[], object]) -> None:
+    """Call ``then`` now or, ``where`` inside an open :func:`_output_folder` block, once that
+    block's files are in place (never, if they are not)."""
+    inside = Path(where) if where is not None else None
+    for root, pending in reversed(_STAGED):
+        if inside is not None and (inside == root or root in inside.parents):
+            pending.append(then)
+            return
+    then()
 
 
 def _add_projection(p: argparse.ArgumentParser) -> None:
@@ -304,7 +306,8 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
             projection=args.projection,
             zone=args.utm_zone,
         )
-        print(f"wrote {write_plan(with_scenario_file(doc, args.scenario), args.plan_out)}")
+        doc = with_scenario_file(doc, args.scenario)
+        _once_in_place(stage, lambda: print(f"wrote {write_plan(doc, args.plan_out)}"))
     return 0
 
 
@@ -725,9 +728,8 @@ def _plan(
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
-    print(f"wrote {shown_out}")
-    if plot is not None:
-        print(f"wrote {shown_plot}")
+    lines = [f"wrote {shown_out}"] + ([f"wrote {shown_plot}"] if plot is not None else [])
+    _say(lines, out.parent)  # staged by demo: said once in place
     return 0
 
 

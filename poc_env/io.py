@@ -198,6 +198,44 @@ def _merge_into(src: Path, dest: Path) -> None:
             os.replace(entry, target)
 
 
+def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
+    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
+
+    Refused: an empty path, a file where a folder is expected (or the reverse), a path under a
+    file, and a path whose nearest existing folder poc-env cannot write into (tried by
+    creating and removing a temporary folder there).
+    """
+    from poc_env.errors import ConfigError
+
+    if value is None:
+        return
+    text = os.fspath(value)
+    what = "a file path (not a folder)" if kind == "file" else "a folder path (not a file)"
+    allowed = f"{what} that poc-env can create or write"
+    if not text or "\0" in text:
+        raise ConfigError(field, text, allowed)
+    path = Path(text)
+    try:
+        if kind == "file":
+            if path.is_dir() or text.endswith(("/", os.sep)):
+                raise ConfigError(field, text, f"{what}; it is a folder")
+            check_replaceable(path, field)  # /dev/null, a FIFO: never swapped for a file
+            start = path.parent
+        else:
+            if path.exists() and not path.is_dir():
+                raise ConfigError(field, text, f"{what}; it is an existing file")
+            start = path
+        nearest = start
+        while not nearest.exists() and nearest != nearest.parent:
+            nearest = nearest.parent
+        if not nearest.is_dir():
+            raise ConfigError(field, text, f"{what}; {nearest} is a file, not a folder")
+        probe = tempfile.mkdtemp(prefix=".poc-env-probe-", dir=nearest)
+        os.rmdir(probe)
+    except OSError as err:
+        raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
+
+
 @contextlib.contextmanager
 def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a staging folder beside ``path``; put its files in place if the block succeeds.

@@ -27,6 +27,23 @@ def write_table_set(
             figure(stage / f"{stem}.png")
 
 
+def check_counts(args: Any, **least: int) -> None:
+    """Raise :class:`~poc_env.errors.ConfigError` naming the first option of ``least``
+    (attribute name = its least value) whose value, or one of whose values (a list option), is
+    not an integer that large; an option left at ``None`` (its default) is not checked.
+
+    Called on a benchmark's parsed arguments before any work: a count of runs, seeds or envs
+    below one ended in a traceback (``no median for empty data``) or a table of ``nan``.
+    """
+    from poc_env.errors import as_int
+
+    for name, lo in least.items():
+        value = getattr(args, name)
+        for v in value if isinstance(value, list) else [value]:
+            if v is not None:
+                as_int(name, v, lo)
+
+
 def run_main(main: Callable[[], Any]) -> None:
     """A benchmark module's ``__main__``: bad input ends as ``error: FIELD: ...`` on stderr
     with exit status 2, never a traceback."""

@@ -138,10 +138,17 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
 
 
 def _column(row: dict[str, Any]) -> str:
-    """A row's column: its label; the unlabelled floors of every control level share one."""
-    if row["label"] == row["policy"] and row["policy"] in FLOOR.values():
+    """A row's column: its label; the unlabelled floor of each task's control level shares
+    ``random``, and another level's floor flown on it (``--policies``) is named with its level,
+    ``random_heading (heading)``."""
+    from poc_env import tasks
+
+    if row["label"] != row["policy"] or row["policy"] not in FLOOR.values():
+        return row["label"]
+    if FLOOR[tasks.get_task(row["task"]).control] == row["policy"]:
         return "random"
-    return row["label"]
+    level = next(c for c, floor in FLOOR.items() if floor == row["policy"])
+    return f"{row['policy']} ({level})"
 
 
 def to_markdown(rows: list[dict[str, Any]], command: str) -> str:
@@ -177,8 +184,10 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
 
     from poc_env.agents.benchmarks import write_table_set
     from poc_env.agents.experiments.pool import ray_jobs
+    from poc_env.io import check_out
 
     args = _parse(argv)
+    check_out("out", args.out, "folder")  # before the run, not after it
     given = sys.argv[1:] if argv is None else argv
     command = "poc-env bench baselines " + shlex.join(given)
     ctx = ray_jobs(args.ray) if args.ray is not None else contextlib.nullcontext()

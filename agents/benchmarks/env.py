@@ -41,7 +41,6 @@ for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLA
 import argparse  # noqa: E402
 import copy  # noqa: E402
 import statistics  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -321,8 +320,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
     """Run the benchmark; print one line per figure; return ``{name: agent-steps/s, ...}``."""
-    args = build_parser().parse_args(argv)
+    from poc_env.agents.benchmarks import check_counts
 
+    args = build_parser().parse_args(argv)
+    check_counts(args, envs=1, runs=1)
     overrides = {}
     for item in args.set:
         key, _, value = item.partition("=")
@@ -370,4 +371,6 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    from poc_env.agents.benchmarks import run_main
+
+    run_main(main)

@@ -246,8 +246,10 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
     from poc_env.agents.benchmarks import write_table_set
+    from poc_env.io import check_out
 
     args = _parse(argv)
+    check_out("out", args.out, "folder")  # before the run, not after it
     given = sys.argv[1:] if argv is None else argv
     command = "poc-env bench generalise " + shlex.join(given)
     rows = run(args)

@@ -256,13 +256,12 @@ def plot(rows: list[dict[str, Any]], reference: str, ref: float, path: Path) -> 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     import shlex
 
-    from poc_env.agents.benchmarks import write_table_set
+    from poc_env.agents.benchmarks import check_counts, write_table_set
+    from poc_env.io import check_out
 
     args = _parse(argv)
-    for name, lo in (("episodes", 1), ("seed", 0), ("workers", 1), ("every", 1)):
-        v = getattr(args, name)
-        if v < lo:
-            raise ConfigError(name, v, f"an integer >= {lo}")
+    check_out("out", args.out, "folder")  # before the run, not after it
+    check_counts(args, episodes=1, seed=0, workers=1, every=1)
     given = sys.argv[1:] if argv is None else argv
     command = "poc-env bench learning " + shlex.join(given)
     rows, summary, ref = run(args)

@@ -147,7 +147,13 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
+    from poc_env.agents.benchmarks import check_counts
+    from poc_env.errors import as_number, check_positive
+
     args = build_parser().parse_args(argv)
+    check_counts(args, runs=1, steps=1, seed=0)
+    check_positive("frame_min", args.frame_min)  # the frames' interval divides
+    as_number("swirl", args.swirl)  # finite (a NaN was found in a temporary file's velocities)
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     out: dict[str, float] = {}
@@ -189,4 +195,6 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    main()
+    from poc_env.agents.benchmarks import run_main
+
+    run_main(main)

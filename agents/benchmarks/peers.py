@@ -570,8 +570,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> list[dict]:
+    from poc_env.io import check_out
+
     p = build_parser()
     args = p.parse_args(argv)
+    check_out("out", args.out, "folder")  # before the run, not after it
     if args.rounds < 1 or args.rounds > 1000:
         raise ConfigError("rounds", args.rounds, "an integer from 1 to 1000")
     for field in ("heading_envs", "small_envs", "vmas_envs"):

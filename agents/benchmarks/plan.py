@@ -54,7 +54,6 @@ for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLA
 
 import argparse  # noqa: E402
 import statistics  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -203,7 +202,12 @@ def _line(name: str, value: float, note: str = "") -> None:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
+    from poc_env.agents.benchmarks import check_counts
+    from poc_env.io import check_out
+
     args = build_parser().parse_args(argv)
+    check_counts(args, uavs=1, runs=1, seeds=1, episodes=1, seed0=0, zones=0)
+    check_out("scale_out", args.scale_out, "file")  # before the run, not after it
     if args.scale:
         from poc_env.agents.benchmarks import plan_scale
 
@@ -307,4 +311,6 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    from poc_env.agents.benchmarks import run_main
+
+    run_main(main)

@@ -146,7 +146,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
+    from poc_env.agents.benchmarks import check_counts
+
     args = build_parser().parse_args(argv)
+    check_counts(args, envs=1, runs=1, iterations=1)
     from poc_env import tasks
 
     out: dict[str, float] = {}

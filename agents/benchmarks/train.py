@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import sys
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -105,7 +104,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> dict[str, float]:
     """``poc-env bench train``: print the figures of :func:`bench_train`."""
+    from poc_env.agents.benchmarks import check_counts
+
     ns = build_parser().parse_args(argv)
+    check_counts(ns, n_envs=1, iterations=1)
     r = bench_train(ns.scenario, ns.recipe, ns.n_envs, ns.iterations)
     d = TrainArgs()
     print(
@@ -123,5 +125,6 @@ def main(argv: Sequence[str] | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    main()
-    sys.exit(0)
+    from poc_env.agents.benchmarks import run_main
+
+    run_main(main)

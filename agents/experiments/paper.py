@@ -892,6 +892,7 @@ def run_experiment(
     # ``all`` stages the whole of ``out``, so a kill part-way leaves the previous run's results
     # as they were, never mixed with some of the new run's.
     whole = atomic_dir(out) if name == "all" else contextlib.nullcontext(None)
+    held: list[str] = []  # ``all``: the ``wrote`` lines, said once ``out`` is in place
     try:
         with whole as stage:
             for k, n in enumerate(names):
@@ -916,9 +917,16 @@ def run_experiment(
                     budget_name = "quick" if quick else "paper budget"
                     echo(f"\n== {n} ({budget_name}, {wall:.1f} s) ==")
                     echo(res.table)
-                    echo("wrote " + ", ".join(str(p) for p in res.files))
+                    said = "wrote " + ", ".join(str(p) for p in res.files)
+                    if stage is None:
+                        echo(said)
+                    else:
+                        held.append(said)
     finally:
         runner.close()
+    if echo is not None:
+        for said in held:
+            echo(said)
     return results
 
 

@@ -217,3 +217,41 @@ def test_export_over_a_folder_in_the_way_says_nothing_written(tmp_path, capsys):
     assert (tmp_path / "o" / "plan.geojson" / "keep.txt").read_text() == "the user's"
     assert main(["export", str(plan), "--format", "geojson", "--out", str(tmp_path / "p")]) == 0
     assert f"wrote {tmp_path / 'p' / 'plan.geojson'}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "argv, taken",
+    [
+        (["survey", "--scenario", "paper_6_1"], "survey.csv"),
+        (["evaluate", "--policies", "random", "--episodes", "1", "--quiet"], "episodes.csv"),
+        (["figures"], "survey_paper_6_1/survey.csv"),
+    ],
+    ids=["survey", "evaluate", "figures"],
+)
+def test_a_refused_output_folder_prints_no_wrote_line(tmp_path, capsys, argv, taken):
+    """``survey``, ``evaluate`` and ``figures`` whose output name is taken by a folder: the
+    merge is refused at the end, nothing is written, and no ``wrote`` line claims otherwise
+    (they printed ``wrote PATH`` while still staging); into a fresh folder they say it."""
+    out = tmp_path / "o"
+    (out / taken).mkdir(parents=True)
+    (out / taken / "keep.txt").write_text("the user's")
+    capsys.readouterr()
+    assert main([*argv, "--out", str(out)]) == 2
+    printed = capsys.readouterr()
+    assert "it is a folder" in printed.err
+    assert "wrote" not in printed.out
+    assert (out / taken / "keep.txt").read_text() == "the user's"
+    assert main([*argv, "--out", str(tmp_path / "p")]) == 0
+    assert f"wrote {tmp_path / 'p' / taken}" in capsys.readouterr().out
+
+
+def test_survey_plan_out_absent_when_its_out_folder_is_refused(tmp_path, capsys):
+    """``survey --out DIR --plan-out FILE`` is one set of outputs: a refused ``DIR`` leaves no
+    ``FILE`` either (it was written before the folder's merge was refused)."""
+    out, plan = tmp_path / "o", tmp_path / "survey_plan.json"
+    (out / "survey.csv").mkdir(parents=True)
+    argv = ["survey", "--scenario", "paper_6_1", "--plan-out", str(plan)]
+    assert main([*argv, "--out", str(out)]) == 2
+    assert not plan.exists() and "wrote" not in capsys.readouterr().out
+    assert main([*argv, "--out", str(tmp_path / "p")]) == 0
+    assert plan.is_file() and f"wrote {plan}" in capsys.readouterr().out

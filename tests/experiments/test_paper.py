@@ -203,3 +203,27 @@ def test_all_killed_part_way_leaves_the_previous_run_untouched(tmp_path, monkeyp
     run_experiment("all", quick=True, out=out, echo=None)
     assert (out / "first" / "first.csv").read_text() == "x\n1\n"
     assert (out / "mine.txt").read_text() == "the user's own file\n"
+
+
+def test_experiment_all_says_wrote_only_once_its_files_are_in_place(tmp_path, monkeypatch):
+    """``experiment all`` stages the whole of ``out``: its ``wrote`` lines wait for the end (they
+    were printed after each experiment, so an interrupted run listed files it never wrote)."""
+    import poc_env.agents.experiments.paper as paper
+
+    def first(budget, runner, folder, seed):
+        return paper.Result("first", [{"x": 1}], "new table")
+
+    def second(budget, runner, folder, seed):
+        raise KeyboardInterrupt  # a Ctrl-C part-way through the second experiment
+
+    out, said = tmp_path / "D", []
+    monkeypatch.setattr(paper, "EXPERIMENTS", {"first": first, "second": second})
+    with pytest.raises(KeyboardInterrupt):
+        run_experiment("all", quick=True, out=out, echo=said.append)
+    assert "new table" in said and not [s for s in said if "wrote" in s]
+    assert not out.exists()
+    monkeypatch.setattr(paper, "EXPERIMENTS", {"first": first})
+    said.clear()
+    run_experiment("all", quick=True, out=out, echo=said.append)
+    assert said[-1] == f"wrote {out / 'first' / 'first.csv'}, {out / 'first' / 'first.txt'}"
+    assert (out / "first" / "first.csv").is_file()
