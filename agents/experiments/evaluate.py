@@ -364,18 +364,32 @@ class Evaluation:
 
     def summary_files(self, baselines: Sequence[str] = ()) -> dict[str, str]:
         """The summary files of an evaluation folder, name -> text: ``evaluate.csv``,
-        ``evaluate.txt`` (the table, then each baseline's paired table) and, with
-        ``baselines``, ``paired.csv``. ``poc-env evaluate --out`` writes them beside
-        ``episodes.csv``; ``poc-env summarise`` writes them again from ``episodes.csv`` alone
-        (:func:`read_episodes`)."""
+        ``evaluate.txt`` (the table, then each baseline's paired table) and ``paired.csv``
+        (each baseline's pairings; its header alone without ``baselines``). ``poc-env evaluate
+        --out`` writes them beside ``episodes.csv``; ``poc-env summarise`` writes them again
+        from ``episodes.csv`` alone (:func:`read_episodes`)."""
         text = self.table()
         for b in baselines:
             text += "\n\n" + self.paired_table(b)
         files = {"evaluate.csv": self.to_csv(), "evaluate.txt": text + "\n"}
-        if baselines:
-            files["paired.csv"] = csv_text([row for b in baselines for row in self.paired(b)])
+        # always written (its header alone without baselines): a folder evaluated again
+        # without --baseline keeps no earlier run's pairings for summarise to read back
+        rows = [row for b in baselines for row in self.paired(b)]
+        files["paired.csv"] = csv_text(rows) if rows else ",".join(PAIRED_COLUMNS) + "\r\n"
         return files
 
+
+#: The columns of paired.csv (:meth:`Evaluation.paired`).
+PAIRED_COLUMNS = (
+    "policy",
+    "baseline",
+    "episodes",
+    "diff_mean",
+    "diff_ci95",
+    "wins",
+    "ties",
+    "losses",
+)
 
 #: Columns every episodes.csv has (:meth:`Evaluation.episode_rows`); ``time_to_detection_s``,
 #: ``steps`` and ``random_prior`` came later and are optional when reading.

@@ -49,7 +49,8 @@ def test_evaluate_without_the_plot_extra_writes_its_tables_and_says_so(tmp_path)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "no posc_over_time.png: it needs the 'plot' extra" in done.stdout
-    assert sorted(p.name for p in out.iterdir()) == ["episodes.csv", "evaluate.csv", "evaluate.txt"]
+    names = ["episodes.csv", "evaluate.csv", "evaluate.txt", "paired.csv"]
+    assert sorted(p.name for p in out.iterdir()) == names
 
 
 def test_plan_plot_without_the_plot_extra_fails_before_planning(tmp_path):

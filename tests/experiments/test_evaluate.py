@@ -239,3 +239,23 @@ def test_one_episode_prints_no_interval():
     assert one.paired_table("random").splitlines()[3].split()[2] == "-"
     two = evaluate("small", ["lawnmower", "random"], episodes=2)
     assert two.table().splitlines()[2].split()[2] == f"{two.rows()[0]['posc_ci95']:.4f}"
+
+
+def test_a_folder_evaluated_again_without_baseline_keeps_no_old_pairings(tmp_path, capsys):
+    """Audit (exp-audit, noticed): a second ``evaluate --out DIR`` without ``--baseline`` left
+    the first run's paired.csv beside the new episodes, and ``summarise`` then paired them
+    against that old baseline. paired.csv is now always written (its header alone)."""
+    from poc_env.agents.experiments.evaluate import PAIRED_COLUMNS
+
+    out = tmp_path / "ev"
+    argv = ["evaluate", "--scenario", "small", "--episodes", "2", "--quiet", "--out", str(out)]
+    assert main([*argv, "--policies", "lawnmower,random", "--baseline", "random"]) == 0
+    assert "random" in (out / "paired.csv").read_text()
+    assert main([*argv, "--policies", "lawnmower,greedy_bayes"]) == 0
+    rows = list(csv.DictReader((out / "paired.csv").open()))
+    assert rows == [] and (out / "paired.csv").read_bytes().decode().split("\r\n")[0] == ",".join(
+        PAIRED_COLUMNS
+    )
+    capsys.readouterr()
+    assert main(["summarise", str(out)]) == 0
+    assert "paired differences" not in capsys.readouterr().out
