@@ -30,7 +30,8 @@ import numpy as np
 from scipy.ndimage import shift as nd_shift
 
 from poc_env.agents.planning.allocation import make_allocation_plan, sampled_sweep
-from poc_env.config import Airfield, FleetGroup, Scenario
+from poc_env.config import KMH, Airfield, FleetGroup, Scenario
+from poc_env.errors import ConfigError
 from poc_env.theory import motion as motion_mod
 from poc_env.theory.probability_map import Grid
 
@@ -80,8 +81,13 @@ def intercept(start, waypoints, velocity, speeds) -> tuple[np.ndarray, np.ndarra
         d = x - here
         u = float(speeds[k])
         a = u * u - vv
-        if a <= 0:
-            raise ValueError(f"ground speed {u} m/s not above the drift {np.sqrt(vv)} m/s")
+        if a <= 0:  # a ConfigError (a ValueError): the current given is what to change
+            raise ConfigError(
+                "target.current_kmh",
+                float(np.sqrt(vv)) / KMH,
+                f"a drift (km/h: the current plus target.random_current_kmh's draw) below the "
+                f"UAVs' ground speed {u / KMH:.1f} km/h: the space-time plan meets the mass",
+            )
         dv = float(d @ v)
         dt = (dv + np.sqrt(dv * dv + a * float(d @ d))) / a
         t += dt
