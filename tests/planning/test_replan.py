@@ -390,3 +390,22 @@ def test_kml_gx_tracks_of_one_fix_are_skipped_like_gpx_segments(first, tmp_path)
     f.write_text(kml.format(track(lines[0][:1])))
     with pytest.raises(ConfigError, match="at least one track of 2 or more points"):
         read_tracks(f, plan["crs"])
+
+
+def test_plan_and_replan_of_a_moving_target_say_they_plan_a_standing_one(first, tmp_path, capsys):
+    """Issue 25 audit: ``plan`` and ``replan`` on a scenario whose target drifts planned on the
+    prior at take-off (replan: swept on it, no drift over the elapsed sortie) and printed the
+    static bounds "for the environment" without a word. Both now warn, naming the model and
+    the moving-target planners; a standing target gets no warning."""
+    _, p1 = first
+    drift = ["--overrides", "target.model=drift", "target.current_kmh=[25,0]"]
+    out = tmp_path / "p.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*argv, *drift, "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "warning: target.model 'drift'" in said and "spacetime_receding" in said
+    assert main(["replan", "--plan", str(p1), *drift, "--out", str(tmp_path / "r.json")]) == 0
+    said = capsys.readouterr().out
+    assert "warning: target.model 'drift'" in said and "elapsed" in said
+    assert main(["replan", "--plan", str(p1), "--out", str(tmp_path / "s.json")]) == 0
+    assert "warning" not in capsys.readouterr().out
