@@ -284,6 +284,10 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
         f"law {sc.sensor.law}, usable endurance {sc.uav.usable_endurance_s / 3600:.2f} h)"
     )
     print(result.table())
+    from poc_env.agents.planning.planner import moving_target_warning
+
+    if (warning := moving_target_warning(sc)) is not None:
+        print(f"warning: {warning}")
     if stage is not None:
         figure = has_extra("plot")  # the tables still, the figure not
         if not figure:

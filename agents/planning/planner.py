@@ -220,7 +220,7 @@ def make_plan(
 
 
 def moving_target_warning(sc: Scenario, replanned: bool = False) -> str | None:
-    """The warning ``plan`` and ``replan`` print when ``sc``'s target moves (issue 25 audit):
+    """The warning ``plan``, ``replan`` and ``survey`` print when ``sc``'s target moves (issue 25 audit):
     their planners plan a standing target on the prior, and the bounds they print hold for a
     standing target only. None for a static target."""
     if not sc.target.moves:
