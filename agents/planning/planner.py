@@ -220,8 +220,8 @@ def make_plan(
 
 
 def moving_target_warning(sc: Scenario, replanned: bool = False) -> str | None:
-    """The warning ``plan``, ``replan`` and ``survey`` print when ``sc``'s target moves (issue 25 audit):
-    their planners plan a standing target on the prior, and the bounds they print hold for a
+    """The warning ``plan``, ``replan`` and ``survey`` print when ``sc``'s target moves (issue
+    25 audit): they plan a standing target on the prior, and the bounds they print hold for a
     standing target only. None for a static target."""
     if not sc.target.moves:
         return None
