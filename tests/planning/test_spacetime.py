@@ -146,3 +146,25 @@ def test_a_drift_faster_than_the_uavs_is_a_config_error_naming_the_current():
     assert err.value.field == "target.current_kmh"
     assert err.value.value == pytest.approx(300.0)
     assert "km/h" in str(err.value)
+
+
+def test_ground_waypoints_stay_in_the_operating_area():
+    """Issue 25 audit: with a fast current (100 km/h south, within the documented range) the
+    intercept put waypoints up to 13 km beyond eq. 20's operating area, where the mass had
+    drifted off the map: ``spacetime_plan`` flew 8 out-of-bounds steps. Each route now ends at
+    its last waypoint inside the area (every meet time before it kept)."""
+    from poc_env.sim.core import operating_area
+
+    over = {"target.model": "drift", "target.current_kmh": [0.0, -100.0]}
+    sc = load_scenario("small", {**over, "target.diffusion_m2_s": 50.0})
+    prior = build_prior(sc.map)
+    v = (0.0, -100.0 / 3.6)
+    plan = spacetime_plan(sc, _fine(prior, 4), v, 4)
+    x0, y0, x1, y1 = operating_area(sc)
+    n = 0
+    for u in plan["uavs"]:
+        w = np.asarray(u["waypoints_m"], dtype=float).reshape(-1, 2)
+        n += len(w)
+        assert np.all((w[:, 0] >= x0) & (w[:, 0] <= x1) & (w[:, 1] >= y0) & (w[:, 1] <= y1))
+        assert len(u.get("meet_times_s", [])) == len(w)
+    assert n > 0  # routes are left to fly
