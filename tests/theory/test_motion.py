@@ -256,3 +256,15 @@ def test_a_motion_value_the_model_ignores_is_refused(model, field, value):
     assert "target.model" in str(err.value)
     uses = {"wind_kmh": "leeway", "diffusion_m2_s": "diffusion"}.get(field, "drift")
     motion.check(TargetConfig(model=uses, **{field: value}), (9, 9), 3600.0)
+
+
+@pytest.mark.parametrize("key", ["current_kmh", "wind_kmh"])
+def test_a_bad_current_or_wind_says_its_components_and_direction(key):
+    """Issue 25 audit: a bad ``target.current_kmh`` / ``wind_kmh`` was "a pair of finite numbers
+    [x, y]": neither the unit nor the axes nor whether the vector points where the water or
+    air goes (oceanographic, the code's) or where it comes from (a weather report's wind)."""
+    with pytest.raises(ConfigError) as err:
+        TargetConfig(model="leeway", **{key: (25.0,)})
+    assert err.value.field == key
+    for word in ("[east, north]", "km/h", "toward", "from the west"):
+        assert word in str(err.value)
