@@ -151,8 +151,8 @@ def test_a_drift_faster_than_the_uavs_is_a_config_error_naming_the_current():
 def test_ground_waypoints_stay_in_the_operating_area():
     """Issue 25 audit: with a fast current (100 km/h south, within the documented range) the
     intercept put waypoints up to 13 km beyond eq. 20's operating area, where the mass had
-    drifted off the map: ``spacetime_plan`` flew 8 out-of-bounds steps. Each route now ends at
-    its last waypoint inside the area (every meet time before it kept)."""
+    drifted off the map: ``spacetime_plan`` flew 8 out-of-bounds steps. Waypoints outside the
+    area are now dropped (each kept one keeps its meet time)."""
     from poc_env.sim.core import operating_area
 
     over = {"target.model": "drift", "target.current_kmh": [0.0, -100.0]}
