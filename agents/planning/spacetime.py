@@ -118,8 +118,9 @@ def ground_plan(plan: dict, starts, velocity, area=None) -> dict:
     waypoint outside it (where the mass has drifted off the map) is dropped, the route flying
     on to its next waypoint inside (chosen over ending the route there: +0.0044 and -0.0003
     POSC on the two ``UAVSearch-Paper61-Drift-Heading-v1`` seeds of 5000-5002 that differ);
-    the plan records how many were dropped in ``cut_outside_area`` (absent when none). The plan's POS figures (``posc``, per-UAV
-    ``pos``) stay those of the co-moving POC it was made on."""
+    the plan records how many were dropped in ``cut_outside_area`` (absent when none). The
+    plan's POS figures (``posc``, per-UAV ``pos``) stay those of the co-moving POC it was made
+    on."""
     v = plan.get("speeds_mps") or {}
     out = dict(plan)
     uavs = []
