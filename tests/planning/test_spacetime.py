@@ -150,7 +150,7 @@ def test_a_drift_faster_than_the_uavs_is_a_config_error_naming_the_current():
 
 def test_ground_waypoints_stay_in_the_operating_area():
     """Issue 25 audit: with a fast current (100 km/h south, within the documented range) the
-    intercept put waypoints up to 13 km beyond eq. 20's operating area, where the mass had
+    intercept put waypoints up to 25 km beyond eq. 20's operating area, where the mass had
     drifted off the map: ``spacetime_plan`` flew 8 out-of-bounds steps. Waypoints outside the
     area are now dropped (each kept one keeps its meet time)."""
     from poc_env.sim.core import operating_area
