@@ -286,6 +286,10 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
         f"law {sc.sensor.law}, usable endurance {sc.uav.usable_endurance_s / 3600:.2f} h)"
     )
     print(result.table())
+    from poc_env.agents.planning.planner import moving_target_warning
+
+    if (warning := moving_target_warning(sc)) is not None:
+        print(f"warning: {warning}")
     if stage is not None:
         figure = has_extra("plot")  # the tables still, the figure not
         if not figure:
@@ -676,7 +680,12 @@ def _plan(
     ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
     """
     from poc_env.agents.mission.plan import with_scenario_file, write_plan
-    from poc_env.agents.planning.planner import make_plan, plan_table, plot_plan
+    from poc_env.agents.planning.planner import (
+        make_plan,
+        moving_target_warning,
+        plan_table,
+        plot_plan,
+    )
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -724,6 +733,8 @@ def _plan(
 
         plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
     print(plan_table(plan))
+    if (warning := moving_target_warning(sc)) is not None:
+        print(f"warning: {warning}")
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)

@@ -119,9 +119,14 @@ def _int_or(x: float | None) -> int | None:
     return None if x is None else int(x)
 
 
-def _vec2(name: str, value: Any, bound: float = MAX_COORD_M) -> tuple[float, float]:
-    """A pair of finite numbers, each within ``bound`` in magnitude."""
-    allowed = "a pair of finite numbers [x, y]"
+def _vec2(
+    name: str,
+    value: Any,
+    bound: float = MAX_COORD_M,
+    allowed: str = "a pair of finite numbers [x, y]",
+) -> tuple[float, float]:
+    """A pair of finite numbers, each within ``bound`` in magnitude (``allowed``: what the
+    error says is allowed)."""
     if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)) or len(value) != 2:
         raise ConfigError(name, value, allowed)
     x, y = (as_number(name, v, allowed=allowed) for v in value)
@@ -599,6 +604,14 @@ class EpisodeConfig:
         _coerce(self)
 
 
+#: What ``target.current_kmh`` and ``target.wind_kmh`` allow: a velocity, pointing where the
+#: water or air goes (oceanographic; a weather report gives the wind's "from" direction).
+VELOCITY_ALLOWED = (
+    "a pair of finite numbers [east, north] km/h: the velocity, toward where the water or air "
+    "goes (a wind from the west is [+speed, 0])"
+)
+
+
 @dataclass(frozen=True)
 class TargetConfig:
     """How the lost target moves (issue 25): a model of the table in
@@ -608,7 +621,8 @@ class TargetConfig:
     coefficient ``diffusion_m2_s``), ``drift`` (advection by the current plus diffusion) or
     ``leeway`` (current plus the leeway of ``leeway_class`` in the 10 m wind ``wind_kmh`` or
     the gridded wind of ``wind_file``, plus diffusion). The current is ``current_kmh`` (east,
-    north), plus at each reset one of speed ``U(0, random_current_kmh)`` in a uniform direction
+    north; toward where the water goes, as ``wind_kmh`` is toward where the air goes), plus at
+    each reset one of speed ``U(0, random_current_kmh)`` in a uniform direction
     drawn from the env's generator, plus (``drift``, ``leeway``) the gridded field of
     ``field_file`` (a ``.npy`` of m/s, ``(2, ny, nx)`` or ``(T, 2, ny, nx)`` frames
     ``field_dt_s`` apart, or a ``.csv`` / CF NetCDF ``.nc`` current interpolated onto the
@@ -654,7 +668,7 @@ class TargetConfig:
         _choice("model", self.model, MOTION_MODEL_NAMES)  # a typo is refused at load
         _choice("leeway_class", self.leeway_class, LEEWAY_CLASS_NAMES)  # whatever the model
         for key in ("current_kmh", "wind_kmh"):
-            u, v = _vec2(key, getattr(self, key), bound=400.0)
+            u, v = _vec2(key, getattr(self, key), bound=400.0, allowed=VELOCITY_ALLOWED)
             object.__setattr__(self, key, (u, v))
         if self.field_file is not None and self.model not in ("drift", "leeway"):
             raise ConfigError(

@@ -219,6 +219,26 @@ def make_plan(
     )
 
 
+def moving_target_warning(sc: Scenario, replanned: bool = False) -> str | None:
+    """The warning ``plan``, ``replan`` and ``survey`` print when ``sc``'s target moves (issue
+    25 audit): they plan a standing target on the prior, and the bounds they print hold for a
+    standing target only. None for a static target."""
+    if not sc.target.moves:
+        return None
+    swept = (
+        "; the flights so far are swept on the prior where it was, not moved over the "
+        "elapsed sortie"
+        if replanned
+        else ""
+    )
+    return (
+        f"target.model {sc.target.model!r} moves the target, but this plan is for a standing "
+        f"one: it searches the prior at take-off{swept}, and the bounds above hold for a "
+        "standing target only. For a moving target evaluate the policies spacetime_plan or "
+        "spacetime_receding (docs/PLANNER.md, Moving targets)"
+    )
+
+
 def plan_table(plan: dict[str, Any]) -> str:
     """Table 6 analog: rectangles, spacing and angle per UAV, with POD, POC, POS and time."""
     head = (

@@ -376,7 +376,7 @@ def cli_main(args: Any) -> int:
         with_scenario_file,
         write_plan,
     )
-    from poc_env.agents.planning.planner import plan_table
+    from poc_env.agents.planning.planner import moving_target_warning, plan_table
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -406,6 +406,8 @@ def cli_main(args: Any) -> int:
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
     print(swept_text(args.plan, args.tracks, tracks))
     print(plan_table(nxt))
+    if (warning := moving_target_warning(sc, replanned=True)) is not None:
+        print(f"warning: {warning}")
     print(
         f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "
         f"{nxt['posc']:.4f}; cumulative {nxt['cumulative_posc']:.4f}"

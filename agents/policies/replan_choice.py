@@ -749,12 +749,17 @@ def shipped_choosers() -> list[str]:
 
 
 def _minutes(field: str, text: str) -> tuple[float, ...]:
+    """The decision times of ``text`` (``10-20-30``): each a number, none empty (``-5`` or
+    ``10--20`` was read as 5 or 10, 20), none twice (issue 25 audit)."""
+    allowed = "distinct decision times in minutes joined by '-' (10-20-30)"
+    parts = text.split("-")
     try:
-        return tuple(float(t) for t in text.split("-") if t)
-    except ValueError:
-        raise ConfigError(
-            field, text, "decision times in minutes joined by '-' (10-20-30)"
-        ) from None
+        times = tuple(float(t) for t in parts)
+    except ValueError:  # an empty part (a leading, trailing or doubled '-') is one too
+        raise ConfigError(field, text, allowed) from None
+    if len(set(times)) != len(times):
+        raise ConfigError(field, text, allowed)
+    return times
 
 
 def from_spec(spec: str, **kwargs: Any) -> ReplanChoicePolicy:
@@ -768,7 +773,7 @@ def from_spec(spec: str, **kwargs: Any) -> ReplanChoicePolicy:
     come (``oracle~5+value.json@10-20``)."""
     if not isinstance(spec, str) or not spec:
         raise ConfigError("spec", spec, "a chooser or a chooser model")
-    head, _, times = spec.partition("@")
+    head, at, times = spec.partition("@")
     head, plus, value = head.partition("+")
     head, tilde, h = head.partition("~")
     head, star, k = head.partition("*")
@@ -786,7 +791,7 @@ def from_spec(spec: str, **kwargs: Any) -> ReplanChoicePolicy:
             raise ConfigError("spec", spec, "NAME~H+VALUE.json: a value ends truncated rollouts")
         kwargs = {**kwargs, "value_path": value}
     if head in CHOOSERS and head != "model":
-        decide = _minutes("spec", times) if times else (20.0,)
+        decide = _minutes("spec", times) if at else (20.0,)
         return ReplanChoicePolicy(head, decide_min=decide, **kwargs)
     path: str | Path = head
     if head in shipped_choosers():
@@ -805,6 +810,6 @@ def from_spec(spec: str, **kwargs: Any) -> ReplanChoicePolicy:
         )
     model = ChooserModel.load(path)
     decide = tuple(float(t) for t in model.meta.get("decide_min", (20.0,)))
-    if times:
+    if at:
         decide = _minutes("spec", times)
     return ReplanChoicePolicy("model", str(path), decide_min=decide, **kwargs)

@@ -412,6 +412,21 @@ def check(target: Any, shape: tuple[int, int], span_s: float, map_cfg: Any = Non
     the scenario's :class:`~poc_env.config.MapConfig`, where a ``.csv``/``.nc`` field is placed);
     ConfigError naming the field for an unknown model or leeway class or a bad field file."""
     model = motion_model(target.model)
+    unused = (  # a value the model ignores: refused, not silently dropped (issue 25 audit)
+        ("current_kmh", any(target.current_kmh), model.uses_current, "drift or leeway"),
+        ("random_current_kmh", target.random_current_kmh, model.uses_current, "drift or leeway"),
+        ("wind_kmh", any(target.wind_kmh), model.uses_wind, "leeway"),
+        ("diffusion_m2_s", target.diffusion_m2_s, model.moves, "any model but static"),
+    )
+    for key, given, used, models in unused:
+        if given and not used:
+            value = getattr(target, key)
+            raise ConfigError(
+                f"target.{key}",
+                list(value) if isinstance(value, tuple) else value,
+                f"0 with target.model {model.name!r}, which ignores it (it moves the target "
+                f"with target.model {models})",
+            )
     cls = leeway_class(target.leeway_class) if model.uses_wind else None
     field = None
     if target.field_file is not None:

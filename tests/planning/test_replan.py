@@ -429,3 +429,22 @@ def test_geojson_points_and_areas_beside_the_tracks_are_skipped(first, tmp_path)
     with pytest.raises(ConfigError) as err:
         read_tracks(only, plan["crs"])
     assert err.value.field == "tracks.features[0].geometry.type" and err.value.value == "Point"
+
+
+def test_plan_and_replan_of_a_moving_target_say_they_plan_a_standing_one(first, tmp_path, capsys):
+    """Issue 25 audit: ``plan`` and ``replan`` on a scenario whose target drifts planned on the
+    prior at take-off (replan: swept on it, no drift over the elapsed sortie) and printed the
+    static bounds "for the environment" without a word. Both now warn, naming the model and
+    the moving-target planners; a standing target gets no warning."""
+    _, p1 = first
+    drift = ["--overrides", "target.model=drift", "target.current_kmh=[25,0]"]
+    out = tmp_path / "p.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*argv, *drift, "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "warning: target.model 'drift'" in said and "spacetime_receding" in said
+    assert main(["replan", "--plan", str(p1), *drift, "--out", str(tmp_path / "r.json")]) == 0
+    said = capsys.readouterr().out
+    assert "warning: target.model 'drift'" in said and "elapsed" in said
+    assert main(["replan", "--plan", str(p1), "--out", str(tmp_path / "s.json")]) == 0
+    assert "warning" not in capsys.readouterr().out

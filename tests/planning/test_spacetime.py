@@ -15,6 +15,7 @@ from poc_env.agents.planning.spacetime import (
     spacetime_plan,
 )
 from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid, build_prior
 
 
@@ -132,3 +133,38 @@ def test_switch_rule_never_takes_a_worse_scored_plan():
     assert pick([(none, none_v), (good, good_v)], margin=gap + 1e-6)[0] == 0
     assert pick([(none, none_v), (good, good_v)], margin=gap - 1e-6)[0] == 1
     assert pick([(good, good_v)])[0] == 0
+
+
+def test_a_drift_faster_than_the_uavs_is_a_config_error_naming_the_current():
+    """Issue 25 audit: a current faster than the UAVs (accepted up to 400 km/h) stopped
+    ``poc-env evaluate --policies spacetime_plan`` with a bare ValueError traceback; it is a
+    ConfigError naming ``target.current_kmh``, the drift in km/h and the UAVs' speed."""
+    sc = load_scenario("small", {"target.model": "drift", "target.current_kmh": [300.0, 0.0]})
+    prior = build_prior(sc.map)
+    with pytest.raises(ConfigError) as err:
+        spacetime_plan(sc, _fine(prior, 4), (300.0 / 3.6, 0.0), 4)
+    assert err.value.field == "target.current_kmh"
+    assert err.value.value == pytest.approx(300.0)
+    assert "km/h" in str(err.value)
+
+
+def test_ground_waypoints_stay_in_the_operating_area():
+    """Issue 25 audit: with a fast current (100 km/h south, within the documented range) the
+    intercept put waypoints up to 25 km beyond eq. 20's operating area, where the mass had
+    drifted off the map: ``spacetime_plan`` flew 8 out-of-bounds steps. Waypoints outside the
+    area are now dropped (each kept one keeps its meet time)."""
+    from poc_env.sim.core import operating_area
+
+    over = {"target.model": "drift", "target.current_kmh": [0.0, -100.0]}
+    sc = load_scenario("small", {**over, "target.diffusion_m2_s": 50.0})
+    prior = build_prior(sc.map)
+    v = (0.0, -100.0 / 3.6)
+    plan = spacetime_plan(sc, _fine(prior, 4), v, 4)
+    x0, y0, x1, y1 = operating_area(sc)
+    n = 0
+    for u in plan["uavs"]:
+        w = np.asarray(u["waypoints_m"], dtype=float).reshape(-1, 2)
+        n += len(w)
+        assert np.all((w[:, 0] >= x0) & (w[:, 0] <= x1) & (w[:, 1] >= y0) & (w[:, 1] <= y1))
+        assert len(u.get("meet_times_s", [])) == len(w)
+    assert n > 0  # routes are left to fly

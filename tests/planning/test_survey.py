@@ -123,3 +123,14 @@ def test_cli_bad_input_is_a_clear_error(argv, needle, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("error:") and needle in err and "Traceback" not in err
+
+
+def test_cli_survey_of_a_moving_target_says_it_surveys_a_standing_one(capsys):
+    """Issue 25 audit: ``survey`` (as ``plan`` and ``replan``) on a drifting target scored the
+    regions on the prior at take-off, its optimum "for the same effort" a standing target's,
+    without a word; it now warns. A standing target gets no warning."""
+    drift = ["--overrides", "target.model=drift", "target.current_kmh=[25,0]"]
+    assert main(["survey", "--scenario", "paper_6_1", *drift]) == 0
+    assert "warning: target.model 'drift'" in capsys.readouterr().out
+    assert main(["survey", "--scenario", "paper_6_1"]) == 0
+    assert "warning" not in capsys.readouterr().out

@@ -216,3 +216,14 @@ def test_shipped_chooser_replays_its_card_and_flies_an_unseen_episode(name):
     unseen = run_episode(_scenario(), spec, 987_654)
     assert unseen.landed == _scenario().n_uavs and unseen.crashed == 0
     assert unseen.posc >= ev["floor"] > 0.0
+
+
+@pytest.mark.parametrize("spec", ["rule@-5", "rule@", "oracle@10--20", "best@10-", "rule@20-20"])
+def test_decision_times_outside_their_form_are_refused(spec):
+    """Issue 25 audit: ``rule@-5`` decided at +5 min (the minus read as the separator), ``rule@``
+    at the default 20 min, ``10--20`` as 10 and 20, and a time given twice passed: each is now
+    a ConfigError naming the spec's times."""
+    with pytest.raises(ConfigError) as err:
+        from_spec(spec)
+    assert err.value.field == "spec" and "minutes" in str(err.value)
+    assert from_spec("rule@5-20").decide_s == (300.0, 1200.0)  # the form itself still loads

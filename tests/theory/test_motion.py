@@ -46,13 +46,14 @@ def test_every_model_conserves_mass_over_many_steps(model, tmp_path):
         walk[:, 0] = 0.0  # the start
         xy = rng.uniform(0, 40e3, (2000, 1, 2)) + walk.cumsum(axis=1)
         np.savez(tracks, x_m=xy[..., 0], y_m=xy[..., 1], t_s=600.0 * np.arange(11))
+    mm = motion.MODELS[model]  # each value only where the model uses it (else refused)
     cfg = TargetConfig(
         model=model,
-        diffusion_m2_s=0.0 if tracks else 200.0,
+        diffusion_m2_s=200.0 if mm.moves and not tracks else 0.0,
         particles_file=tracks,
-        current_kmh=(7.0, -3.0),
-        random_current_kmh=10.0,
-        wind_kmh=(30.0, 20.0),
+        current_kmh=(7.0, -3.0) if mm.uses_current else (0.0, 0.0),
+        random_current_kmh=10.0 if mm.uses_current else 0.0,
+        wind_kmh=(30.0, 20.0) if mm.uses_wind else (0.0, 0.0),
         leeway_class="life_raft_deep_ballast",
         field_file=field,
         field_dt_s=600.0 if field else None,
@@ -230,3 +231,40 @@ def test_a_stationary_field_and_a_time_varying_one(tmp_path):
         TargetConfig(model="drift", field_file=_field(tmp_path, frames[1], "s.npy")), (2, 2), 1e9
     )
     assert one.field is not None and one.field.frames.shape == (1, 2, 2, 2)
+
+
+@pytest.mark.parametrize(
+    ("model", "field", "value"),
+    [
+        ("static", "current_kmh", [25.0, 0.0]),
+        ("diffusion", "current_kmh", [0.0, -10.0]),
+        ("diffusion", "random_current_kmh", 25.0),
+        ("static", "random_current_kmh", 25.0),
+        ("drift", "wind_kmh", [30.0, 0.0]),
+        ("static", "diffusion_m2_s", 50.0),
+    ],
+)
+def test_a_motion_value_the_model_ignores_is_refused(model, field, value):
+    """Issue 25 audit: ``target.current_kmh=[25,0]`` with ``target.model`` left ``static`` (or
+    a wind on a drift) was accepted and ignored: the target stood still and ``evaluate`` ran.
+    Each is refused naming the field and the models that use it; the same values load under a
+    model that uses them."""
+    target = TargetConfig(model=model, **{field: value})
+    with pytest.raises(ConfigError) as err:
+        motion.check(target, (9, 9), 3600.0)
+    assert err.value.field == f"target.{field}"
+    assert "target.model" in str(err.value)
+    uses = {"wind_kmh": "leeway", "diffusion_m2_s": "diffusion"}.get(field, "drift")
+    motion.check(TargetConfig(model=uses, **{field: value}), (9, 9), 3600.0)
+
+
+@pytest.mark.parametrize("key", ["current_kmh", "wind_kmh"])
+def test_a_bad_current_or_wind_says_its_components_and_direction(key):
+    """Issue 25 audit: a bad ``target.current_kmh`` / ``wind_kmh`` was "a pair of finite numbers
+    [x, y]": neither the unit nor the axes nor whether the vector points where the water or
+    air goes (oceanographic, the code's) or where it comes from (a weather report's wind)."""
+    with pytest.raises(ConfigError) as err:
+        TargetConfig(model="leeway", **{key: (25.0,)})
+    assert err.value.field == key
+    for word in ("[east, north]", "km/h", "toward", "from the west"):
+        assert word in str(err.value)
