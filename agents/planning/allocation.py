@@ -86,10 +86,10 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from poc_env.agents.mission.plan import SCHEMA
 from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sampled_boxes
+from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -121,8 +121,6 @@ LEVELS = PlanOptions.levels
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
-#: coverage laid at most (eq. 10: POD erf(sqrt(pi)/2 x 3) > 0.9999; more only adds lines).
-COVER_CAP = 3.0
 #: least bearing difference between field-mates flying out (degrees, :func:`_fan_out`).
 FAN_DEG = 20.0
 
@@ -149,76 +147,6 @@ def _check(sc: Scenario, prior: np.ndarray, grid: Grid) -> str | None:
     if float(prior.sum()) <= 0:
         return "the prior has no mass on the map"
     return None
-
-
-def _tracks(cov: np.ndarray, grid: Grid, w: float, levels: int) -> list[list[tuple]]:
-    """Search lines per region: lists of (y, x_start, x_end, row) in boustrophedon order
-    (coverage capped at :data:`COVER_CAP`)."""
-    cov = np.minimum(cov, COVER_CAP)
-    cmax = float(cov.max())
-    if cmax <= 0:
-        return []
-    k = max(1, int(levels))
-    delta = cmax / k
-    h = w / cmax
-    ox, oy = grid.origin_m
-    c = grid.cell_m
-    layer_of = np.clip(np.rint(cov / delta), 0, k).astype(int)  # layers crossing each cell
-    labels, nreg = ndimage.label(layer_of > 0, structure=np.ones((3, 3)))
-    nlines = int(np.floor(grid.ny * c / h))
-    ys = oy + h * (np.arange(nlines) + 0.5)
-    # runs of consecutive cells each line crosses: consecutive cells of positive coverage are
-    # 8-connected, so a run lies in one region (its first cell's label)
-    per_region: list[list[list[tuple]]] = [[] for _ in range(nreg + 1)]  # [label][line] runs
-    for i, y in enumerate(ys):
-        r = int((y - oy) // c)
-        if r < 0 or r >= grid.ny:
-            continue
-        ok = layer_of[r] >= i % k + 1
-        if not ok.any():
-            continue
-        edges = np.diff(np.concatenate([[0], ok.astype(int), [0]]))
-        starts = np.flatnonzero(edges == 1)
-        ends = np.flatnonzero(edges == -1)
-        seen: set[int] = set()
-        for a, b in zip(starts, ends, strict=True):
-            reg = int(labels[r, a])
-            if reg not in seen:  # this line's runs in the region, in order of x
-                per_region[reg].append([])
-                seen.add(reg)
-            per_region[reg][-1].append((float(y), ox + a * c, ox + b * c, r))
-    regions: list[list[tuple]] = []
-    for reg in range(1, nreg + 1):
-        # boustrophedon: line by line (in order of x on a line), direction alternating per line
-        out = []
-        flip = False
-        for row in per_region[reg]:
-            seq = reversed(row) if flip else row
-            out += [(y, b, a, r) if flip else (y, a, b, r) for (y, a, b, r) in seq]
-            flip = not flip
-        if out:
-            regions.append(out)
-    return regions
-
-
-def _order(regions: list[list[tuple]], start: np.ndarray) -> list[tuple]:
-    """Chain regions nearest-first from ``start`` (each may be flown reversed)."""
-    left = list(regions)
-    # each region's first point flown forward (its first line's start) and reversed (its last
-    # line's end), as (x, y) rows: [2 i] forward, [2 i + 1] reversed
-    ends = np.array([[(reg[0][1], reg[0][0]), (reg[-1][2], reg[-1][0])] for reg in left])
-    ends = ends.reshape(-1, 2)
-    pos = np.asarray(start, dtype=float)
-    route: list[tuple] = []
-    while left:
-        j = int(np.argmin(np.hypot(ends[:, 0] - pos[0], ends[:, 1] - pos[1])))
-        i, rev = divmod(j, 2)
-        reg = left.pop(i)
-        ends = np.delete(ends, [2 * i, 2 * i + 1], axis=0)
-        seq = [(y, b, a, r) for (y, a, b, r) in reversed(reg)] if rev else reg
-        route += seq
-        pos = np.array([seq[-1][2], seq[-1][0]])
-    return route
 
 
 def _split(route, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
@@ -282,7 +210,7 @@ def _assign(regions, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     leftover: list[tuple] = []
     for f, g in enumerate(groups):
         mine = [[ln for ln in reg if field_of(ln) == f] for reg in regions]
-        sub = _order([r for r in mine if r], heads[f, 0])
+        sub = chain_regions([r for r in mine if r], heads[f, 0])
         sp, st, _ = _split(sub, takeoff[g], landing[g], sc, margin, v)
         used = {j for p in sp for j in p}
         leftover += [ln for j, ln in enumerate(sub) if j not in used]
@@ -293,7 +221,7 @@ def _assign(regions, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
             times[k] = st[i]
     idle = [k for k in range(n) if not pieces[k]]
     if leftover and idle:
-        sub = _order([leftover], takeoff[idle].mean(axis=0))
+        sub = chain_regions([leftover], takeoff[idle].mean(axis=0))
         sp, st, _ = _split(sub, takeoff[idle], landing[idle], sc, margin, v)
         used = {j for p in sp for j in p}
         base = len(route)
@@ -637,7 +565,7 @@ def make_allocation_plan(
     def build(alloc, k: int, swap: bool):
         g_f, to_f, la_f, _ = frames[swap]
         cov = alloc.coverage.T if swap else alloc.coverage
-        regions = _tracks(cov, g_f, w, k)
+        regions = layered_tracks(cov, g_f, w, k)
         route, pieces, times, left = _assign(regions, to_f, la_f, sc, margin, v)
         return alloc, route, pieces, times, left, swap
 

@@ -23,8 +23,9 @@ allocation; for each effort scale ``eta`` of ``PlanOptions.etas`` (the pattern s
    blocks by recursive bisection were tried too and scored less on every field of four
    validation priors; not kept.)
 3. **Lines** (:func:`relax_routes`). In each patch the coverage, scaled by each of
-   ``PlanOptions.relax_scales``, is laid with the allocation start's ``_tracks`` (each of the
-   ``levels`` and both line directions; lines flown row by row or layer by layer,
+   ``PlanOptions.relax_scales``, is laid with the allocation start's lines
+   (:func:`~poc_env.agents.planning.coverage_lines.layered_tracks`, each of the ``levels`` and
+   both line directions; lines flown row by row or layer by layer,
    :func:`by_layer`), chained nearest first from the take-off and cut at its far end until eq.
    17-18 hold (:func:`~poc_env.agents.planning.coverage_boxes.cut_lines`,
    :func:`~poc_env.agents.planning.refine.route_fits`); each UAV keeps the variant of most POS
@@ -43,6 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from poc_env.agents.planning.coverage_boxes import cut_lines
+from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
 from poc_env.agents.planning.flight_rules import Speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.options import PlanOptions
@@ -96,8 +98,6 @@ def dedicated_allocation(
     segments fill in order); a cell may be shared by fields. Coverage at most ``COVER_CAP``."""
     from scipy.optimize import linprog
     from scipy.sparse import coo_matrix
-
-    from poc_env.agents.planning.allocation import COVER_CAP
 
     nf = t_f.shape[0]
     out = np.zeros((nf, *prior.shape))
@@ -225,10 +225,11 @@ def patches(
 
 
 def by_layer(regions: list[list[tuple]], h: float, levels: int) -> list[list[tuple]]:
-    """The lines of ``_tracks`` regions (``(y, x_start, x_end, row)``, lattice spacing ``h``
-    from the frame's origin... as ``_tracks`` lays them) regrouped by layer: each layer's lines
-    (every ``levels``-th lattice line, spacing ``levels h``) flown boustrophedon on their own,
-    so consecutive lines differ by one layer spacing instead of by the layers' extents."""
+    """The lines of :func:`~poc_env.agents.planning.coverage_lines.layered_tracks` regions
+    (``(y, x_start, x_end, row)``, lattice spacing ``h`` from the frame's origin, as it lays
+    them) regrouped by layer: each layer's lines (every ``levels``-th lattice line, spacing
+    ``levels h``) flown boustrophedon on their own, so consecutive lines differ by one layer
+    spacing instead of by the layers' extents."""
     lines = [ln for reg in regions for ln in reg]
     if not lines:
         return []
@@ -270,7 +271,6 @@ def relax_routes(
     relaxation's ``C_j`` at effort scale ``eta``): lawnmower lines, two waypoints a line, each
     route within the map and flown whole under eq. 17-18 (``budget`` the usable endurance,
     ``reserve`` eq. 18's reserve, ``headings`` the take-off headings)."""
-    from poc_env.agents.planning.allocation import COVER_CAP, _order, _tracks
 
     n = len(takeoff)
     groups = field_groups(takeoff, landing)
@@ -300,11 +300,14 @@ def relax_routes(
                 g_f = mirrored if swap else grid
                 start = takeoff[k][::-1] if swap else takeoff[k]
                 for lv in levels:
-                    regions = _tracks(cov.T if swap else cov, g_f, w, lv)
+                    regions = layered_tracks(cov.T if swap else cov, g_f, w, lv)
                     if not regions:
                         continue
-                    h = w / float(cov.max())  # the lattice of _tracks
-                    for order in (_order(regions, start), _order(by_layer(regions, h, lv), start)):
+                    h = w / float(cov.max())  # the lattice of layered_tracks
+                    for order in (
+                        chain_regions(regions, start),
+                        chain_regions(by_layer(regions, h, lv), start),
+                    ):
                         wps = np.array([[x, y] for (y, a, b, _) in order for x in (a, b)])
                         if swap:
                             wps = wps[:, ::-1]
