@@ -38,18 +38,12 @@ from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
 
-def operating_area(sc: Scenario, prior: np.ndarray) -> tuple[float, float, float, float]:
-    """Eq. 20's boundary of ``sc``: the map grown to hold its airfields (x0, y0, x1, y1, m)."""
-    from poc_env.sim.core import make_params
-
-    x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)
-    return x0, y0, x1, y1
-
-
-def check_paths(sc: Scenario, prior: np.ndarray, paths, names) -> list[np.ndarray]:
+def check_paths(sc: Scenario, paths, names) -> list[np.ndarray]:
     """``paths`` as (k, 2) arrays, each point inside the operating area; else a ConfigError
     naming ``names[i]`` and the point's index."""
-    x0, y0, x1, y1 = operating_area(sc, prior)
+    from poc_env.sim.core import operating_area
+
+    x0, y0, x1, y1 = operating_area(sc)  # eq. 20's boundary: the map grown to hold its fields
     tol = 1e-6 * max(x1 - x0, y1 - y0)
     out = []
     for i, path in enumerate(paths):
@@ -343,7 +337,7 @@ def next_sortie(
         flights += plan_paths(plan)
     if tracks is not None:
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
-    paths = check_paths(sc, prior, flights, names)
+    paths = check_paths(sc, flights, names)
     belief, searched = searched_belief(sc, prior, paths)
     nxt = make_plan(sc, prior=belief, planner=planner, seed=seed, refine=refine)
     if plans and plans[-1].get("crs") is not None:
