@@ -82,6 +82,7 @@ from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.greedy_rectangles import SCALES, _lines, _side_lengths
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.refine import arrival_times, route_fits
+from poc_env.theory.bound import field_key
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage, sweep_segments
 
@@ -583,7 +584,7 @@ def box_routes(
                 best = ex
         return best
 
-    keys = [tuple(np.round(np.concatenate([takeoff[k], landing[k]]), 3)) for k in range(n)]
+    keys = [field_key(takeoff[k], landing[k]) for k in range(n)]
     routes: list[np.ndarray] = [np.zeros((0, 2)) for _ in range(n)]
     covs = [np.zeros(grid.shape) for _ in range(n)]
     total = np.zeros(grid.shape)

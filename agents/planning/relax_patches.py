@@ -49,6 +49,7 @@ from poc_env.agents.planning.flight_rules import Speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.refine import route_fits
+from poc_env.theory.bound import field_key
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage
 
@@ -73,7 +74,7 @@ def field_groups(takeoff: np.ndarray, landing: np.ndarray) -> list[list[int]]:
     """The UAVs of each airfield (same take-off and landing to the millimetre), fields in
     order of their coordinates."""
     n = len(takeoff)
-    keys = [tuple(np.round(np.concatenate([takeoff[k], landing[k]]), 3)) for k in range(n)]
+    keys = [field_key(takeoff[k], landing[k]) for k in range(n)]
     fields = sorted(set(keys))
     return [[k for k in range(n) if keys[k] == f] for f in fields]
 

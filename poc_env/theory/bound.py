@@ -245,6 +245,15 @@ class EnvLimits:
         return float(len(self.takeoff_m) * self.rate_m2_s * self.time_s)
 
 
+def field_key(takeoff_m, landing_m) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The airfield of a UAV: its take-off and landing points to the millimetre. UAVs of equal
+    keys share a field (the bounds' and the planners' one rule for "field-mates")."""
+    return (
+        tuple(float(v) for v in np.round(np.asarray(takeoff_m, dtype=float), 3)),
+        tuple(float(v) for v in np.round(np.asarray(landing_m, dtype=float), 3)),
+    )
+
+
 def env_limits(scenario: Scenario) -> EnvLimits:
     """The environment's limits for ``scenario`` (a :class:`poc_env.config.Scenario`)."""
     sc = scenario
@@ -582,7 +591,7 @@ def rule_bound(scenario: Scenario, prior, spill_m: float | None = None) -> RuleB
     field_of: list[int] = []
     k = 0
     for g in groups:
-        key = (tuple(np.round(lim.takeoff_m[k], 3)), tuple(np.round(lim.landing_m[k], 3)))
+        key = field_key(lim.takeoff_m[k], lim.landing_m[k])
         if key not in keys:
             keys.append(key)
         field_of.append(keys.index(key))
