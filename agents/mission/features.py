@@ -86,6 +86,17 @@ def clockwise(ring_xy: list) -> list:
     return list(ring_xy[::-1]) if area2 > 0 else list(ring_xy)
 
 
+def drawn_ring(ring_xy: list, crs: Any, *, clockwise_order: bool) -> list:
+    """The planner's polygon ``ring_xy`` (map metres, edges straight there; not closed) as
+    every export hands it to a reader that joins vertices straight in latitude/longitude (a
+    GIS, Google Earth, QGroundControl and the autopilot's geofence): clockwise (QGC) or
+    counter-clockwise (GeoJSON, RFC 7946), long edges given points along them so that each
+    piece stays within :data:`poc_env.crs.EDGE_TOLERANCE_M` of the planner's edge
+    (:func:`poc_env.crs.densify_ring`), as ``(lat, lon)`` pairs, not closed."""
+    ring = clockwise(ring_xy) if clockwise_order else clockwise(ring_xy)[::-1]
+    return to_geographic(densify_ring(ring, crs, straight_in="local").tolist(), crs)
+
+
 def r6(v: float) -> float:
     """Degrees rounded to 1e-6 (about 0.1 m)."""
     return round(float(v), 6)
@@ -167,12 +178,11 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
     for i, z in enumerate(plan.get("no_fly_zones_m") or []):
         polys.append(("no_fly_zone", zone_label(i, znames), z))
     for kind, name, ring in polys:
-        # long edges straight in metres, as the planner has them, where a GIS draws lon/lat
-        ccw = densify_ring(clockwise(ring)[::-1], crs, straight_in="local").tolist()
+        ccw = drawn_ring(ring, crs, clockwise_order=False)
         out.append(
             {
                 "geometry": "Polygon",
-                "latlon": to_geographic([*ccw, ccw[0]], crs),
+                "latlon": [*ccw, ccw[0]],
                 "z": None,
                 "properties": {"kind": kind, "name": name},
             }

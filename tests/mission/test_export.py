@@ -9,7 +9,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 from pyproj import Geod, Transformer
-from shapely.geometry import Point
+from shapely.geometry import LineString, Point
 
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_geographic, to_local
 from poc_env.agents.mission.export import export_plan
@@ -457,7 +457,10 @@ def test_qgc_geofence_and_rally_points(tmp_path):
         xy = np.array(to_local(poly["polygon"], ORIGIN))
         area2 = np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1])
         assert area2 < 0  # clockwise, as QGC's plan format asks
-        assert sorted(map(tuple, xy.round(3))) == sorted(map(tuple, np.round(ring, 3)))
+        # the ring's vertices, and points on its long edges (densified as QGC joins lat/lon)
+        assert set(map(tuple, np.round(ring, 3))) <= set(map(tuple, xy.round(3)))
+        edge = LineString([*ring, ring[0]])
+        assert max(edge.distance(Point(p)) for p in xy) < 1e-3
     rally = doc["rallyPoints"]
     assert rally["version"] == 2
     ((lat, lon, alt),) = rally["points"]  # take-off and landing at the same field
@@ -815,6 +818,36 @@ def test_large_polygons_are_drawn_where_the_planner_has_them(tmp_path):
         assert worst < 10.5, (kind, worst)
         if kind == "no_fly_zone":
             assert len(lonlat) == 5  # 10 km edges: left as they are
+
+
+def test_qgc_geofence_is_drawn_where_the_planner_has_its_polygons(tmp_path):
+    """A QGC geofence polygon is a list of (lat, lon) vertices that the autopilot and QGC join
+    straight in latitude/longitude; the planner's operating area is straight in the map's
+    metres. On a 600 km operating area near 46 N the inclusion fence ran kilometres inside
+    or outside the area the routes were checked against (the other exports were densified by
+    the i24 audit, the fence was not). Its long edges now get points along them, the same
+    rule as the other exports (:func:`poc_env.crs.densify_ring`): every piece within 10 m of
+    the planner's edge, short edges (the zone's) left as they are, still clockwise."""
+    from shapely.geometry import Polygon
+
+    big = [[-300e3, -300e3], [300e3, -300e3], [300e3, 300e3], [-300e3, 300e3]]
+    zone = [[-200e3, 200e3], [-190e3, 200e3], [-190e3, 210e3], [-200e3, 210e3]]  # off the routes
+    path, _ = _plan(tmp_path, operating_area_m=big, no_fly_zones_m=[zone])
+    doc = json.loads(export_plan(path, "qgc", "45.75,126.65", tmp_path / "o")[0].read_text())
+    inc, exc = doc["geoFence"]["polygons"]
+    t = np.linspace(0, 1, 21)[:, None]
+    for poly, ring_m in ((inc, big), (exc, zone)):
+        latlon = np.array(poly["polygon"])
+        edge = Polygon(ring_m).exterior
+        worst = 0.0
+        for a, b in itertools.pairwise([*latlon, latlon[0]]):  # each piece as QGC joins it
+            xy = to_local(a + t * (b - a), ORIGIN)
+            worst = max(worst, max(edge.distance(Point(p)) for p in xy))
+        assert worst < 10.5, (poly["inclusion"], worst)
+        xy = np.array(to_local(latlon, ORIGIN))
+        area2 = np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1])
+        assert area2 < 0  # still clockwise
+    assert len(exc["polygon"]) == 4  # 10 km edges: left as they are
 
 
 def test_kml_overlay_href_survives_any_plan_file_name(tmp_path):

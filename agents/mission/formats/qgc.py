@@ -16,7 +16,7 @@ from poc_env.agents.mission.features import (
     approach_altitude,
     approach_point,
     check_altitude_ref,
-    clockwise,
+    drawn_ring,
 )
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import DEFAULT_FLIGHT, Plan, UavPlan, flight, route
@@ -173,15 +173,11 @@ def _document(
     for k, it in enumerate(items):
         it["doJumpId"] = k + 1
     polygons = []
-    if operating_area_m:
-        ring = to_geographic(clockwise(operating_area_m), crs)
+    fences = [(True, operating_area_m)] if operating_area_m else []
+    for inclusion, ring_m in [*fences, *((False, z) for z in no_fly_zones_m or [])]:
+        ring = drawn_ring(ring_m, crs, clockwise_order=True)  # QGC joins vertices in lat/lon
         polygons.append(
-            {"inclusion": True, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
-        )
-    for z in no_fly_zones_m or []:
-        ring = to_geographic(clockwise(z), crs)
-        polygons.append(
-            {"inclusion": False, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
+            {"inclusion": inclusion, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
         )
     fields = [start] if start == end else [start, end]
     rally = [[lat, lon, APPROACH_HEIGHT_M] for lat, lon in to_geographic(fields, crs)]
