@@ -644,11 +644,14 @@ def cmd_plan(args: argparse.Namespace) -> int:
     _check_plan_args(args)
     if args.plot:  # asked for: checked before the planning, not after
         require_extra("plot", "poc-env plan --plot", *EXTRA_MODULES["plot"])
+    out = Path(args.out)
     if not args.plot:
-        return _plan(args, Path(args.out), None)
+        _say(_plan(args, out, None), out.parent)
+        return 0
     with atomic_path(args.plot) as plot_tmp:  # published after plan.json, or not at all
-        code = _plan(args, Path(args.out), plot_tmp, shown=(Path(args.out), Path(args.plot)))
-    return code
+        lines = _plan(args, out, plot_tmp, shown=(out, Path(args.plot)))
+    _say(lines, out.parent)  # once both are in place
+    return 0
 
 
 def cmd_replan(args: argparse.Namespace) -> int:
@@ -674,10 +677,11 @@ def _plan(
     out: Path,
     plot: Path | None,
     shown: tuple[Path, Path | None] | None = None,
-) -> int:
+) -> list[str]:
     """Optimise the plan; draw it to ``plot`` (if any), then write plan.json to ``out``.
 
-    ``shown``: the names printed for ``out`` and ``plot`` (where they will be once published).
+    Returns the ``wrote`` lines for the caller to say once the files are in place; ``shown``:
+    the names they give for ``out`` and ``plot`` (where they will be once published).
     """
     from poc_env.agents.mission.plan import with_scenario_file, write_plan
     from poc_env.agents.planning.planner import (
@@ -739,9 +743,7 @@ def _plan(
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
-    lines = [f"wrote {shown_out}"] + ([f"wrote {shown_plot}"] if plot is not None else [])
-    _say(lines, out.parent)  # staged by demo: said once in place
-    return 0
+    return [f"wrote {shown_out}"] + ([f"wrote {shown_plot}"] if plot is not None else [])
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -821,12 +823,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
         plot = has_extra("plot")
         if not plot:
             print(skipped_for_extra("plot", "plan.png"))
-        _plan(
+        lines = _plan(
             plan_args,
             stage / "plan.json",
             stage / "plan.png" if plot else None,
             (out / "plan.json", out / "plan.png" if plot else None),
         )
+        _say(lines, stage)  # staged: said once the folder is in place
         print("\n== policies flown in the environment, same seeds ==")
         # parsed by the real parser, so every option evaluate reads has its default
         eval_args = build_parser().parse_args(

@@ -1,6 +1,7 @@
 """`poc-env plan`: schema-1 plan.json, feasible plans inside their rectangles, reproducible."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -75,6 +76,29 @@ def test_cli_plan_writes_a_plan_that_exports(tmp_path, capsys):
         main(["plan", "--scenario", "small", "--optimizer", "magic", "--quiet", "--out", str(out)])
         == 2
     )
+
+
+def test_cli_plan_says_wrote_only_once_both_files_are_in_place(tmp_path, monkeypatch):
+    """``plan --plot`` printed ``wrote PLOT`` while the PNG was still staged (published after
+    the line): every ``wrote PATH`` line must name a file that is there when it is printed."""
+    import io
+    import sys
+
+    seen: list[tuple[str, bool]] = []
+
+    class Watch(io.StringIO):
+        def write(self, text):
+            for line in text.splitlines():
+                if line.startswith("wrote "):
+                    seen.append((line[6:], Path(line[6:]).is_file()))
+            return super().write(text)
+
+    monkeypatch.setattr(sys, "stdout", Watch())
+    out, png = tmp_path / "plan.json", tmp_path / "plan.png"
+    argv = ["plan", "--scenario", "small", "--popsize", "12", "--maxiter", "5", "--quiet",
+            "--out", str(out), "--plot", str(png)]  # fmt: skip
+    assert main(argv) == 0
+    assert sorted(seen) == [(str(out), True), (str(png), True)]
 
 
 def test_an_allocation_plan_that_reaches_nothing_says_why(tmp_path, capsys):
