@@ -82,7 +82,7 @@ def _output_folder(field: str, path: str | os.PathLike[str]) -> Iterator[Path]:
     from poc_env.io import atomic_dir
 
     try:
-        stage_cm = atomic_dir(path)
+        stage_cm = atomic_dir(path, field)
         stage = stage_cm.__enter__()
     except OSError as err:
         raise ConfigError(

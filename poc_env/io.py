@@ -166,7 +166,7 @@ def _clean_stale_staging(dest: Path) -> None:
             shutil.rmtree(p, ignore_errors=True)
 
 
-def _check_merge(src: Path, dest: Path) -> None:
+def _check_merge(src: Path, dest: Path, field: str = "output") -> None:
     """Before :func:`_merge_into` moves anything: every file it would replace is a regular
     file (:func:`check_replaceable`: a folder of the user's in the way is refused, never
     deleted), and a folder it writes goes into a folder or a new path, so a merge is whole or
@@ -177,14 +177,14 @@ def _check_merge(src: Path, dest: Path) -> None:
         target = dest / entry.name
         if entry.is_dir() and not entry.is_symlink():
             if target.is_dir():
-                _check_merge(entry, target)
+                _check_merge(entry, target, field)
             elif os.path.lexists(target):
                 raise ConfigError(
-                    "output", os.fspath(target), "a new path or a folder to write a folder into; "
+                    field, os.fspath(target), "a new path or a folder to write a folder into; "
                     "it is a file",
                 )  # fmt: skip
         else:
-            check_replaceable(target)
+            check_replaceable(target, field)
 
 
 def _merge_into(src: Path, dest: Path) -> None:
@@ -237,7 +237,7 @@ def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> No
 
 
 @contextlib.contextmanager
-def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
+def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[Path]:
     """Yield a staging folder beside ``path``; put its files in place if the block succeeds.
 
     A command writes its whole output into the staging folder (a hidden sibling
@@ -252,6 +252,8 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
 
     On an exception the staging folder is removed and the exception propagates. Staging
     folders of killed runs (whose process is gone) are removed by the next run into ``path``.
+    A merge refused at the end (a file where a folder goes, a device or a folder where a file
+    goes) is a :class:`~poc_env.errors.ConfigError` naming ``field`` (the user's option).
     """
     import shutil
 
@@ -273,7 +275,7 @@ def atomic_dir(path: str | os.PathLike[str]) -> Iterator[Path]:
         if not dest.exists():
             os.rename(stage, dest)
         else:
-            _check_merge(stage, dest)
+            _check_merge(stage, dest, field)
             _merge_into(stage, dest)
         done = True
     finally:

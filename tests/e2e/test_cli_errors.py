@@ -144,3 +144,17 @@ def test_overrides_on_every_scenario_command(tmp_path, capsys):
     assert main(["render", "--out", str(tmp_path / "e.gif"), "--overrides", "episode.dt_s=-1"]) == 2
     assert main(["survey", "--overrides", "sensor.sweep_width_km=abc"]) == 2
     assert "sensor.sweep_width_km" in capsys.readouterr().err
+
+
+def test_a_merge_refused_at_the_end_names_the_out_option(tmp_path, capsys):
+    """``--out DIR`` where DIR holds a file named as a folder the command writes (here
+    ``figures``' ``survey_paper_6_1``): the merge is refused, nothing written, and the error
+    named a field ``output`` no command has; it names ``out``, the option the user gave."""
+    out = tmp_path / "figs"
+    out.mkdir()
+    (out / "survey_paper_6_1").write_text("mine")
+    assert main(["figures", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "error: out: " in err and "survey_paper_6_1" in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["survey_paper_6_1"]
+    assert (out / "survey_paper_6_1").read_text() == "mine"
