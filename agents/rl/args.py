@@ -680,6 +680,17 @@ def check_used(args: TrainArgs, given: Sequence[str]) -> None:
             )
 
 
+def changed_fields(args: TrainArgs) -> list[str]:
+    """The TrainArgs fields set away from their defaults (what a Python caller "gave"; the
+    CLI's counterpart is :func:`given_options`)."""
+    out = []
+    for f in dataclasses.fields(TrainArgs):
+        default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+        if getattr(args, f.name) != default:
+            out.append(f.name)
+    return out
+
+
 def parse_train_args(argv: Sequence[str] | None = None) -> TrainArgs:
     """TrainArgs from ``poc-env train`` options (the rest: the dataclass defaults).
 

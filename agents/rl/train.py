@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
-from poc_env.agents.rl.args import TrainArgs, parse_overrides
+from poc_env.agents.rl.args import TrainArgs, changed_fields, check_used, parse_overrides
 from poc_env.agents.rl.checkpoint import (
     Checkpoint,
     checkpoint_callback,
@@ -473,6 +473,7 @@ def train(args: TrainArgs, callback: BaseCallback | None = None) -> Path:
         return _resume(Path(args.resume), args.progress, callback)
     if _same_run_killed_early(args):  # the same command again after a kill: as --resume does
         return _resume(Path(str(args.run_dir)), args.progress, callback)
+    check_used(args, changed_fields(args))  # as the CLI refuses options the run would ignore
     if args.engine == "rllib":
         from poc_env.agents.rl.rllib import train_rllib
 

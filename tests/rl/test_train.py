@@ -560,7 +560,11 @@ def test_curve_joins_attempts_in_the_order_they_started(tmp_path):
 @pytest.mark.parametrize(
     ("kw", "field", "said"),
     [
-        ({"net_arch": [10**6, 10**6]}, "net_arch", "policy and value networks"),
+        (
+            {"recipe": "central", "net_arch": [10**6, 10**6]},
+            "net_arch",
+            "policy and value networks",
+        ),
         ({"n_steps": 10**6, "n_envs": 1024, "batch_size": 64}, "n_steps", "rollout buffer"),
         ({"batch_size": 10**7}, "batch_size", "at most the rollout"),
         ({"recipe": "central", "n_steps": 1, "n_envs": 1, "batch_size": 2}, "n_steps", ">= 2"),
@@ -575,4 +579,31 @@ def test_train_sizes_are_checked_before_anything_is_allocated(tmp_path, kw, fiel
     with pytest.raises(ConfigError, match=said) as err:
         train(_args(kw.pop("recipe", "shared"), run, **kw))
     assert err.value.field == field
+    assert not run.exists()
+
+
+@pytest.mark.parametrize(
+    "fields,name",
+    [
+        ({"engine": "rllib", "task": "UAVSearch-Paper62-Random-Set-Heading-v1", "net": "set"},
+         "net"),  # RLlib's own model flies a set task: --net set was silently ignored
+        ({"task": "UAVSearch-Small-Heading-v0", "num_env_runners": 3}, "num_env_runners"),
+        ({"scenario": "small", "recipe": "shared", "n_envs": 2, "engine": "rllib"}, "n_envs"),
+    ],
+)  # fmt: skip
+def test_train_from_python_refuses_fields_its_run_would_ignore(tmp_path, fields, name, monkeypatch):
+    """The CLI refuses an option its run would ignore (``USED_WHEN``); from Python,
+    ``train(TrainArgs(engine="rllib", net="set", ...))`` trained RLlib's own model and said
+    nothing. A fresh run now refuses any field set away from its default that the run would
+    ignore, naming it, before its folder is made."""
+    import poc_env.agents.rl.train as train_mod
+
+    def made(*_a, **_k):
+        raise AssertionError("the run was started")
+
+    monkeypatch.setattr(train_mod, "_new_run_dir", made)  # nothing trains, whatever happens
+    run = tmp_path / "run"
+    with pytest.raises(ConfigError, match="would ignore it") as err:
+        train(TrainArgs(**fields, run_dir=str(run), progress=False))
+    assert err.value.field == name
     assert not run.exists()
