@@ -73,3 +73,12 @@ def test_dependency_table_matches_pyproject():
     named_groups = set().union(*(named for _, named in rows))
     wrong += [f"extra {g!r}: not in the table" for g in groups if g not in named_groups]
     assert not wrong, "\n".join(wrong)
+
+
+def test_readme_names_every_extra():
+    """The README's install section names every extra of pyproject.toml (it left out `ocean`,
+    `all` and `bench`)."""
+    readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    section = readme[readme.index("## Install") : readme.index("## The environment in")]
+    named = set(re.findall(r"`([\w-]+)`", section))
+    assert sorted(set(_groups()) - {"core"} - named) == []
