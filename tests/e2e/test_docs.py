@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
-PAGES = ("environment.md", "tasks.md", "theory.md", "rl.md", "BOUND.md")
+PAGES = ("environment.md", "tasks.md", "theory.md", "rl.md", "BOUND.md", "planning.md")
 BLOCKS = [
     (page, k, code)
     for page in PAGES
