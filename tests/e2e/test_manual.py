@@ -158,3 +158,72 @@ def test_every_image_is_named_with_the_command_that_makes_it():
         if not COMMAND.search(near) or not any(n in near for n in names):
             unnamed.append(f"{where}: {image}")
     assert not unnamed, "no command named beside:\n" + "\n".join(unnamed)
+
+
+def _command_lines() -> list[tuple[str, str]]:
+    """(where, line) of every ``poc-env ...`` command the README and the pages write: each line
+    of a fenced block (continuations joined) and each back-quoted span."""
+    found = []
+    for page in [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]:
+        text = page.read_text(encoding="utf-8")
+        fence = re.compile(r"^```\w*\n(.*?)^```", flags=re.S | re.M)
+        for m in fence.finditer(text):
+            for line in m.group(1).replace("\\\n", " ").splitlines():
+                for part in re.split(r"&&|;|\|(?=\s*\w)", line):
+                    i = part.find("poc-env ")
+                    if i >= 0 and (i == 0 or part[i - 1] in " /(\t"):
+                        found.append((f"{page.relative_to(ROOT)}:{m.start()}", part[i:]))
+        prose = fence.sub("", text)
+        for m in re.finditer(r"`(poc-env [^`]+)`", prose):
+            found.append((f"{page.relative_to(ROOT)}", " ".join(m.group(1).split())))
+    return found
+
+
+def _flags_of() -> dict[str, set[str]]:
+    """Every command path of ``poc-env`` (subcommands, ``scenario import``, each ``bench``
+    benchmark, ``train``'s tyro options) and the option strings its parser takes (with the
+    top-level options, which every command takes)."""
+    import contextlib
+    import io
+
+    from poc_env.agents.rl.args import parse_train_args
+    from poc_env.cli import BENCHMARKS, build_parser
+    from poc_env.helptext import walk
+
+    parsers = dict(walk(build_parser()))
+    for name, module in BENCHMARKS.items():
+        parsers[f"poc-env bench {name}"] = importlib.import_module(module).build_parser()
+    top = set(parsers["poc-env"]._option_string_actions)
+    flags = {path: set(p._option_string_actions) | top for path, p in parsers.items()}
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.suppress(SystemExit):
+        parse_train_args(["--help"])
+    flags["poc-env train"] = set(re.findall(r"--[a-z][\w-]*", out.getvalue())) | top
+    return flags
+
+
+def test_every_flag_in_the_manual_exists():
+    """Every ``--flag`` of a ``poc-env`` command line in the README and the pages is an option of
+    that command (its subcommand, ``scenario import``, the ``bench`` benchmark named, or
+    ``train``'s generated options): a renamed or dropped option cannot stay documented."""
+    flags = _flags_of()
+    lines = _command_lines()
+    assert len(lines) > 200
+    wrong = []
+    for where, line in lines:
+        line = re.split(r"\s#|\s{2,}#", line)[0]
+        words = line.replace("[", " ").replace("]", " ").replace("|", " ").split()
+        if len(words) < 2 or not re.fullmatch(r"[a-z][\w-]*", words[1]):
+            continue
+        path, rest = f"poc-env {words[1]}", words[2:]
+        if rest and not rest[0].startswith("-") and f"{path} {rest[0]}" in flags:
+            path, rest = f"{path} {rest[0]}", rest[1:]
+        if path not in flags:
+            if words[1] not in ("command", "developers"):  # prose: "the poc-env command"
+                wrong.append(f"{where}: {line}: no command {path!r}")
+            continue
+        for word in rest:
+            flag = word.split("=")[0]
+            if re.fullmatch(r"--[a-z][\w-]*", flag) and flag not in flags[path]:
+                wrong.append(f"{where}: {line}: {path} has no {flag}")
+    assert not wrong, "\n".join(wrong)
