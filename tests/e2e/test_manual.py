@@ -168,11 +168,12 @@ def _command_lines() -> list[tuple[str, str]]:
         text = page.read_text(encoding="utf-8")
         fence = re.compile(r"^```\w*\n(.*?)^```", flags=re.S | re.M)
         for m in fence.finditer(text):
+            where = f"{page.relative_to(ROOT)}:{text.count(chr(10), 0, m.start()) + 2}"
             for line in m.group(1).replace("\\\n", " ").splitlines():
                 for part in re.split(r"&&|;|\|(?=\s*\w)", line):
                     i = part.find("poc-env ")
                     if i >= 0 and (i == 0 or part[i - 1] in " /(\t"):
-                        found.append((f"{page.relative_to(ROOT)}:{m.start()}", part[i:]))
+                        found.append((where, part[i:]))  # the block's first line
         prose = fence.sub("", text)
         for m in re.finditer(r"`(poc-env [^`]+)`", prose):
             found.append((f"{page.relative_to(ROOT)}", " ".join(m.group(1).split())))
