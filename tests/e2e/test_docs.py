@@ -54,6 +54,11 @@ def test_missions_gis_walkthrough_runs_as_written(tmp_path):
             timeout=600, check=False,
         )  # fmt: skip
         assert done.returncode == 0, done.stderr[-2000:]
+    # the figure the page quotes is the one the plan prints (audit docs-audit: it said 0.8799
+    # where the command printed 0.8604)
+    said = re.search(r"The plan gave POS_C = (\d\.\d{4}) here", section)
+    assert said, "the page quotes the plan's POS_C"
+    assert f"POS_C = {said.group(1)} " in done.stdout, done.stdout[-1500:]
     out = tmp_path / "missions"
     assert sorted(p.name for p in out.iterdir()) == [
         "plan.html",
