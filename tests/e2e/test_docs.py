@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
-PAGES = ("environment.md", "tasks.md", "theory.md", "rl.md", "BOUND.md")
+PAGES = ("environment.md", "tasks.md", "theory.md", "rl.md", "BOUND.md", "planning.md")
 BLOCKS = [
     (page, k, code)
     for page in PAGES
@@ -54,6 +54,11 @@ def test_missions_gis_walkthrough_runs_as_written(tmp_path):
             timeout=600, check=False,
         )  # fmt: skip
         assert done.returncode == 0, done.stderr[-2000:]
+    # the figure the page quotes is the one the plan prints (audit docs-audit: it said 0.8799
+    # where the command printed 0.8604)
+    said = re.search(r"The plan gave POS_C = (\d\.\d{4}) here", section)
+    assert said, "the page quotes the plan's POS_C"
+    assert f"POS_C = {said.group(1)} " in done.stdout, done.stdout[-1500:]
     out = tmp_path / "missions"
     assert sorted(p.name for p in out.iterdir()) == [
         "plan.html",
@@ -66,3 +71,30 @@ def test_missions_gis_walkthrough_runs_as_written(tmp_path):
     assert plan["crs"]["origin_deg"] == [45.4, 126.2]
     for name in ("harbin.yaml", "harbin.npy", "harbin.crs.json", "plan.json"):
         assert (tmp_path / name).is_file(), name
+
+
+def test_planning_replan_example_prints_what_the_page_says(tmp_path):
+    """docs/planning.md, 'The next sortie': the three commands, run as written, print the
+    figures of their ``# sortie k: found ...; plan ...; cumulative ...`` comments (audit
+    docs-audit: sortie 3's plan and cumulative figures were stale, 0.0842 and 0.9019 where the
+    commands print 0.0906 and 0.9084)."""
+    text = (DOCS / "planning.md").read_text(encoding="utf-8")
+    section = text[text.index("## The next sortie: `poc-env replan`") :]
+    block = re.search(r"```\n(poc-env plan --scenario small.*?)```", section, flags=re.S)
+    assert block
+    exe = shutil.which("poc-env", path=str(Path(sys.executable).parent))
+    assert exe is not None
+    said = 0
+    for line in block.group(1).splitlines():
+        command, _, comment = line.partition("#")
+        done = subprocess.run(
+            [exe, *command.split()[1:]], cwd=tmp_path, capture_output=True, text=True,
+            timeout=600, check=False,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr[-2000:]
+        if comment.strip():
+            said += 1
+            figures = comment.strip().replace("found", "the flights so far found", 1)
+            figures = figures.replace("; plan ", "; this plan ")
+            assert figures in done.stdout, (figures, done.stdout[-500:])
+    assert said == 2

@@ -88,6 +88,14 @@ def test_sar_walkthrough_runs_as_written(tmp_path):
     dem = terrain._dem(tmp_path / "dem.tif")
     out = _run(flight, tmp_path)
     assert "sortie 2" in out
+    # the printed lines the page shows under the commands (its "..." elide the rest) are what
+    # the commands print: its figures stay the commands' (docs-audit)
+    text = PAGE.read_text(encoding="utf-8")
+    shown = re.search(r"```\n(area \d+ km\^2.*?)```", text[text.index(SECTION) :], flags=re.S)
+    assert shown, "the walkthrough's printed lines"
+    for line in shown.group(1).splitlines():
+        part = " ".join(line.split("...")[0].split())
+        assert part in " ".join(out.split()), part
 
     # the zone as the officer drew it (lon/lat), and every route of both sorties around it
     zone_doc = json.loads((tmp_path / "zone.geojson").read_text())
