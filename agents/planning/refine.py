@@ -229,6 +229,9 @@ class AirspaceCount:
         self.near = np.sum(both & (d <= airspace.range_m), axis=2)
         self.flying = self.act.sum(axis=1)
         self.value = self._total(self.close, self.near, self.flying, self.act)
+        # UAV k's pairs at its current positions (:meth:`_pairs`), kept until a move is kept:
+        # the refinement tries several moves of one UAV against the same others
+        self._current: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def _total(self, close, near, flying, act) -> int:
         need = np.minimum(self.air.min_neighbours, flying - 1)[:, None]
@@ -248,7 +251,9 @@ class AirspaceCount:
         that :meth:`keep` makes current (the counts are not changed until then)."""
         pos_k = np.asarray(pos_k, dtype=float)
         act_k = np.asarray(act_k, dtype=bool)
-        old_c, old_n = self._pairs(k, self.pos[:, k], self.act[:, k])
+        if k not in self._current:
+            self._current[k] = self._pairs(k, self.pos[:, k], self.act[:, k])
+        old_c, old_n = self._current[k]
         new_c, new_n = self._pairs(k, pos_k, act_k)
         close = self.close + new_c - old_c
         near = self.near + new_n - old_n
@@ -265,9 +270,51 @@ class AirspaceCount:
         k, pos_k, act, close, near, flying, value = state
         self.pos[:, k] = pos_k
         self.act, self.close, self.near, self.flying, self.value = act, close, near, flying, value
+        self._current.clear()  # every UAV's pairs with k changed
 
 
-def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old):
+def candidate_edits(path: np.ndarray, i: int, offsets: np.ndarray, across: np.ndarray, lo, hi):
+    """The refinement's candidate edits of waypoint ``i`` of ``path`` (take-off, waypoints,
+    landing; module docstring) and the legs they fly, in :func:`move_gains`' form: ``qs``
+    (C, 2) the new points; ``ops`` (C,) 0 move waypoint ``i`` to ``qs[c]`` (one per
+    ``offsets`` row, then) 1 delete it (when it is not the landing), 2 insert ``qs[c]``
+    before it (one per ``across``: the leg's midpoint moved across the leg); ``starts``,
+    ``ends`` the new legs (a moved or inserted point's two legs, a deletion's one), ``rows``
+    their candidate and ``kinds`` per candidate 0 (legs ``i-1, i`` and ``i, i+1`` replaced)
+    or 1 (leg ``i-1, i``). Points are clipped to ``lo``-``hi``. One pass of numpy over all
+    candidates, elementwise the same operations as candidate by candidate (the same points,
+    bit for bit: tests/planning/test_speed.py)."""
+    a = path[i - 1]
+    b = path[i]
+    d = b - a
+    length = float(np.hypot(*d))
+    normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
+    ins = np.clip(0.5 * (a + b) + across[:, None] * normal[None, :], lo, hi)  # (I, 2)
+    n_i = len(ins)
+    i_starts = np.stack([np.broadcast_to(a, ins.shape), ins], axis=1).reshape(-1, 2)
+    i_ends = np.stack([ins, np.broadcast_to(b, ins.shape)], axis=1).reshape(-1, 2)
+    i_rows = np.repeat(np.arange(n_i), 2)
+    if i >= len(path) - 1:  # the landing: inserts only
+        return ins, np.full(n_i, 2), i_starts, i_ends, i_rows, np.ones(n_i, dtype=np.int64)
+    nxt = path[i + 1]
+    mv = np.clip(b + offsets, lo, hi)  # (M, 2)
+    n_m = len(mv)
+    qs = np.vstack([mv, b[None], ins])
+    ops = np.concatenate([np.zeros(n_m, dtype=np.int64), [1], np.full(n_i, 2)])
+    starts = np.vstack(
+        [np.stack([np.broadcast_to(a, mv.shape), mv], axis=1).reshape(-1, 2), a[None], i_starts]
+    )
+    ends = np.vstack(
+        [np.stack([mv, np.broadcast_to(nxt, mv.shape)], axis=1).reshape(-1, 2), nxt[None], i_ends]
+    )
+    rows = np.concatenate([np.repeat(np.arange(n_m), 2), [n_m], n_m + 1 + i_rows])
+    kinds = np.concatenate([np.zeros(n_m + 1, dtype=np.int64), np.ones(n_i, dtype=np.int64)])
+    return qs, ops, starts, ends, rows, kinds
+
+
+def move_gains(
+    total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old, scratch=None
+):
     """Candidate moves of one waypoint scored on the cells they change only.
 
     ``total`` (ny * nx): the swarm's coverage; ``p_flat``: the prior; candidate ``r`` replaces
@@ -277,7 +324,9 @@ def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows
     their gain in planned POS ``sum_j p_j (POD(C'_j) - POD(C_j))`` (R,): the full score's change,
     since every other cell keeps its coverage. The coverage equals the full
     ``total - old legs + new legs`` of :func:`leg_coverage` bit for bit (same samples, summed in
-    the same order)."""
+    the same order). ``scratch``: an int64 array of ``ny * nx`` zeros, kept zero on return, to
+    mark the cells in (the cells and their positions found without sorting; the same
+    cells)."""
     leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
     _, cell_a, wt_a = leg_samples(old[0], old[1], grid, w)
     movable = len(old) > 2
@@ -285,18 +334,25 @@ def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows
         _, cell_b, wt_b = leg_samples(old[1], old[2], grid, w)
     else:
         cell_b, wt_b = cell_a[:0], wt_a[:0]
-    cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+    if scratch is None:
+        cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+        pos_n, pos_a, pos_b = (np.searchsorted(cells, q) for q in (cell_n, cell_a, cell_b))
+    else:  # mark the cells, read them back in order, number them (the marks then cleared)
+        for q in (cell_n, cell_a, cell_b):
+            scratch[q] = 1
+        cells = np.flatnonzero(scratch)
+        scratch[cells] = np.arange(len(cells))
+        pos_n, pos_a, pos_b = scratch[cell_n], scratch[cell_a], scratch[cell_b]
+        scratch[cells] = 0
     nu = len(cells)
     n_rows = len(kinds)
     new = np.bincount(
-        np.asarray(rows, dtype=np.int64)[leg_n] * nu + np.searchsorted(cells, cell_n),
+        np.asarray(rows, dtype=np.int64)[leg_n] * nu + pos_n,
         weights=wt_n,
         minlength=n_rows * nu,
     ).reshape(n_rows, nu)
-    old_a = np.bincount(np.searchsorted(cells, cell_a), weights=wt_a, minlength=nu)
-    old_b = (
-        np.bincount(np.searchsorted(cells, cell_b), weights=wt_b, minlength=nu) if movable else 0.0
-    )
+    old_a = np.bincount(pos_a, weights=wt_a, minlength=nu)
+    old_b = np.bincount(pos_b, weights=wt_b, minlength=nu) if movable else 0.0
     here = total[cells]
     base0 = here - old_a - old_b
     base1 = here - old_a
@@ -394,48 +450,17 @@ def refine_routes(
     radii = np.asarray(RADII) * c
     offsets = (radii[:, None, None] * _DIRS[None]).reshape(-1, 2)
     across = np.concatenate([[0.0], radii, -radii]) if len(radii) else np.zeros(1)
+    scratch = np.zeros(p_flat.size, dtype=np.int64)  # move_gains' cell marks
     for _ in range(max(0, int(sweeps))):
         kept = 0
         for k in range(n):
             i = 1
             while i < len(paths[k]):  # i: the waypoint moved/deleted, or inserted before
                 path = paths[k]
-                qs: list[np.ndarray] = []  # the candidates: ops 0 move, 1 delete, 2 insert
-                ops: list[int] = []
-                starts: list[np.ndarray] = []
-                ends: list[np.ndarray] = []
-                rows: list[int] = []
-                kinds: list[int] = []  # 0: legs (i-1, i), (i, i+1) replaced; 1: leg (i-1, i)
-                a = path[i - 1]
-                b = path[i]
-                movable = i < len(path) - 1
-                if movable:
-                    nxt = path[i + 1]
-                    for off in offsets:
-                        q = np.clip(b + off, lo, hi)
-                        qs.append(q)
-                        ops.append(0)
-                        starts += [a, q]
-                        ends += [q, nxt]
-                        rows += [len(kinds)] * 2
-                        kinds.append(0)
-                    qs.append(b)
-                    ops.append(1)
-                    starts.append(a)
-                    ends.append(nxt)
-                    rows.append(len(kinds))
-                    kinds.append(0)
-                d = b - a
-                length = float(np.hypot(*d))
-                normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
-                for s in across:
-                    q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
-                    qs.append(q)
-                    ops.append(2)
-                    starts += [a, q]
-                    ends += [q, b]
-                    rows += [len(kinds)] * 2
-                    kinds.append(1)
+                # the candidates (:func:`candidate_edits`): qs, ops 0 move, 1 delete, 2 insert
+                qs, ops, starts, ends, rows, kinds = candidate_edits(
+                    path, i, offsets, across, lo, hi
+                )
 
                 def cand(c: int, path=path, i=i, qs=qs, ops=ops) -> np.ndarray:
                     if ops[c] == 0:
@@ -446,8 +471,9 @@ def refine_routes(
 
                 ok = fits_all(path, i, qs, ops, k)
                 cells, cand_here, gain = move_gains(
-                    total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2]
-                )
+                    total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2],
+                    scratch,
+                )  # fmt: skip
                 vals = value + gain
                 vals = np.where(ok, vals, -np.inf)
                 j = -1
