@@ -81,7 +81,7 @@ from poc_env.agents.planning.flight_rules import Speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.greedy_rectangles import SCALES, _lines, _side_lengths
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.refine import arrival_times, route_fits
+from poc_env.agents.planning.refine import TURN_SHARE, arrival_times, route_fits
 from poc_env.theory.bound import field_key
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage, sweep_segments
@@ -178,6 +178,42 @@ def cut_lines(
     return out, kept
 
 
+def cut_route(
+    head,
+    wps,
+    landing,
+    speeds: Speeds,
+    turn_rate: float,
+    budget: float,
+    reserve: float,
+    heading0: float | None = None,
+    min_part: float = 0.0,
+    options: PlanOptions | None = None,
+) -> tuple[np.ndarray, int]:
+    """:func:`cut_lines` of the lawnmower ``wps`` flown after ``head`` (take-off and any
+    waypoints before it) and home to ``landing`` with the fit of
+    :func:`~poc_env.agents.planning.refine.route_fits` (``speeds``, ``turn_rate``, ``budget``,
+    ``reserve``, ``heading0``): the same waypoints bit for bit, its fits in one compiled pass
+    (:func:`poc_env.agents.planning._kernels.cut_fit`; tests/planning/test_speed.py)."""
+    wps = np.asarray(wps, dtype=float).reshape(-1, 2)
+    opt = _DEFAULT if options is None else options
+    h0 = np.nan if heading0 is None else float(heading0)
+    kept, lo = _kernels.cut_fit(
+        np.ascontiguousarray(np.asarray(head, dtype=float).reshape(-1, 2)),
+        np.ascontiguousarray(wps),
+        np.ascontiguousarray(np.asarray(landing, dtype=float)),
+        speeds.out, speeds.line, speeds.home, TURN_SHARE / turn_rate, float(budget),
+        float(reserve), h0, bool(opt.part), int(opt.part_steps),
+    )  # fmt: skip
+    kept = int(kept)
+    out = wps[:kept]
+    if lo >= 0.0:
+        a, b = wps[kept], wps[kept + 1]
+        if lo * float(np.hypot(*(b - a))) >= max(min_part, 1e-9):
+            out = np.vstack([out, a, a + lo * (b - a)])
+    return out, kept
+
+
 def graded_offsets(
     prior: np.ndarray,
     cov: np.ndarray,
@@ -216,6 +252,17 @@ def graded_offsets(
     t = np.arange(lines) + 0.5
     r = np.searchsorted(cum, t, side="left") - 1
     return (r + (t - cum[r]) / counts[r]) * cell
+
+
+def block_sums(block: np.ndarray, my: int, mx: int, f: int) -> np.ndarray:
+    """The sums of the ``f x f`` blocks of ``block`` ``(my f, mx f)``: ``block.reshape(my, f,
+    mx, f).sum(axis=(1, 3))``, whose order numpy sums in (a row's pair first, then the two
+    rows) is written out for ``f = 2`` (12 times faster on 80 x 80 blocks; the same sums bit
+    for bit: tests/planning/test_speed.py)."""
+    b = block.reshape(my, f, mx, f)
+    if f != 2:
+        return b.sum(axis=(1, 3))
+    return (b[:, 0, :, 0] + b[:, 0, :, 1]) + (b[:, 1, :, 0] + b[:, 1, :, 1])
 
 
 def added_gain(
@@ -331,7 +378,7 @@ def box_routes(
             gain = np.where(idx >= 0, cell_gain.ravel()[np.maximum(idx, 0)], 0.0).sum(axis=-1)
         else:
             block[: grid.ny, : grid.nx] = cell_gain
-            gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
+            gain = block_sums(block, my, mx, f)
         table = np.zeros((gain.shape[0] + 1, gain.shape[1] + 1))
         table[1:, 1:] = gain.cumsum(0).cumsum(1)
         return table
@@ -451,19 +498,10 @@ def box_routes(
                 hi = np.minimum(lo + np.array([nw, nh]) * f * grid.cell_m, hi_map)
                 wps = _lines(lo, hi, s * w, frm)
             full = len(wps)
-            wps, kept = cut_lines(
-                wps,
-                lambda q: route_fits(
-                    np.vstack([takeoff[k], lead, q, landing[k]]),
-                    speeds,
-                    turn_rate,
-                    budget,
-                    reserve,
-                    h0[k],
-                ),
-                w,
-                opt,
-            )
+            wps, kept = cut_route(
+                np.vstack([takeoff[k], lead]), wps, landing[k], speeds, turn_rate, budget,
+                reserve, h0[k], w, opt,
+            )  # fmt: skip
             if kept >= full // 2:
                 break
         return wps

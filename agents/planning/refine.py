@@ -30,6 +30,7 @@ only (:class:`AirspaceCount`); both give the full computation's numbers.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -291,25 +292,48 @@ def candidate_edits(path: np.ndarray, i: int, offsets: np.ndarray, across: np.nd
     normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
     ins = np.clip(0.5 * (a + b) + across[:, None] * normal[None, :], lo, hi)  # (I, 2)
     n_i = len(ins)
-    i_starts = np.stack([np.broadcast_to(a, ins.shape), ins], axis=1).reshape(-1, 2)
-    i_ends = np.stack([ins, np.broadcast_to(b, ins.shape)], axis=1).reshape(-1, 2)
-    i_rows = np.repeat(np.arange(n_i), 2)
-    if i >= len(path) - 1:  # the landing: inserts only
-        return ins, np.full(n_i, 2), i_starts, i_ends, i_rows, np.ones(n_i, dtype=np.int64)
-    nxt = path[i + 1]
-    mv = np.clip(b + offsets, lo, hi)  # (M, 2)
-    n_m = len(mv)
-    qs = np.vstack([mv, b[None], ins])
-    ops = np.concatenate([np.zeros(n_m, dtype=np.int64), [1], np.full(n_i, 2)])
-    starts = np.vstack(
-        [np.stack([np.broadcast_to(a, mv.shape), mv], axis=1).reshape(-1, 2), a[None], i_starts]
-    )
-    ends = np.vstack(
-        [np.stack([mv, np.broadcast_to(nxt, mv.shape)], axis=1).reshape(-1, 2), nxt[None], i_ends]
-    )
-    rows = np.concatenate([np.repeat(np.arange(n_m), 2), [n_m], n_m + 1 + i_rows])
-    kinds = np.concatenate([np.zeros(n_m + 1, dtype=np.int64), np.ones(n_i, dtype=np.int64)])
+    movable = i < len(path) - 1  # the landing is not moved or deleted
+    n_m = len(offsets) if movable else 0
+    o = 2 * n_m + 1 if movable else 0  # the inserts' first leg
+    starts = np.empty((o + 2 * n_i, 2))
+    ends = np.empty((o + 2 * n_i, 2))
+    if movable:
+        nxt = path[i + 1]
+        mv = np.clip(b + offsets, lo, hi)  # (M, 2)
+        starts[0 : 2 * n_m : 2] = a
+        starts[1 : 2 * n_m : 2] = mv
+        ends[0 : 2 * n_m : 2] = mv
+        ends[1 : 2 * n_m : 2] = nxt
+        starts[2 * n_m] = a
+        ends[2 * n_m] = nxt
+        qs = np.concatenate([mv, b[None], ins])
+    else:
+        qs = ins
+    starts[o::2] = a
+    starts[o + 1 :: 2] = ins
+    ends[o::2] = ins
+    ends[o + 1 :: 2] = b
+    ops, rows, kinds = _edit_layout(n_m, n_i, movable)
     return qs, ops, starts, ends, rows, kinds
+
+
+@functools.lru_cache(maxsize=16)
+def _edit_layout(n_m: int, n_i: int, movable: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``ops``, ``rows`` and ``kinds`` of :func:`candidate_edits` (read-only): they depend on
+    the numbers of moves and inserts only."""
+    if movable:
+        ops = np.concatenate([np.zeros(n_m, dtype=np.int64), [1], np.full(n_i, 2)])
+        rows = np.concatenate(
+            [np.repeat(np.arange(n_m), 2), [n_m], n_m + 1 + np.repeat(np.arange(n_i), 2)]
+        )
+        kinds = np.concatenate([np.zeros(n_m + 1, dtype=np.int64), np.ones(n_i, dtype=np.int64)])
+    else:
+        ops = np.full(n_i, 2, dtype=np.int64)
+        rows = np.repeat(np.arange(n_i), 2)
+        kinds = np.ones(n_i, dtype=np.int64)
+    for arr in (ops, rows, kinds):
+        arr.setflags(write=False)
+    return ops, rows, kinds
 
 
 def move_gains(
@@ -324,9 +348,9 @@ def move_gains(
     their gain in planned POS ``sum_j p_j (POD(C'_j) - POD(C_j))`` (R,): the full score's change,
     since every other cell keeps its coverage. The coverage equals the full
     ``total - old legs + new legs`` of :func:`leg_coverage` bit for bit (same samples, summed in
-    the same order). ``scratch``: an int64 array of ``ny * nx`` zeros, kept zero on return, to
-    mark the cells in (the cells and their positions found without sorting; the same
-    cells)."""
+    the same order). ``scratch``: an int64 array of ``ny * nx`` zeros, kept zero on return,
+    in which the cells are numbered (their positions found without a search; the same
+    cells and positions)."""
     leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
     _, cell_a, wt_a = leg_samples(old[0], old[1], grid, w)
     movable = len(old) > 2
@@ -337,10 +361,11 @@ def move_gains(
     if scratch is None:
         cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
         pos_n, pos_a, pos_b = (np.searchsorted(cells, q) for q in (cell_n, cell_a, cell_b))
-    else:  # mark the cells, read them back in order, number them (the marks then cleared)
-        for q in (cell_n, cell_a, cell_b):
-            scratch[q] = 1
-        cells = np.flatnonzero(scratch)
+    else:  # the cells sorted, duplicates dropped; numbered in the scratch (then cleared)
+        cat = np.sort(np.concatenate([cell_n, cell_a, cell_b]))
+        keep = np.ones(len(cat), dtype=bool)
+        keep[1:] = cat[1:] != cat[:-1]
+        cells = cat[keep]
         scratch[cells] = np.arange(len(cells))
         pos_n, pos_a, pos_b = scratch[cell_n], scratch[cell_a], scratch[cell_b]
         scratch[cells] = 0
