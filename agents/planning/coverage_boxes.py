@@ -607,11 +607,14 @@ def box_routes(
                 t_end = float(arrival_times(path, speeds, turn_rate, h0[k])[-2])
                 c1 = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
                 cov2 = cov + c1
-                # the coverage and its POD change where the first lawnmower flies only
-                flown = c1 != 0.0
-                base2 = base.copy()
-                base2[flown] = pod_from_coverage(cov2[flown], law)
-                tab2 = Tables(cov2, base2, tab, flown)
+                if opt.share_tables:  # the POD changes where the first lawnmower flies only
+                    flown = c1 != 0.0
+                    base2 = base.copy()
+                    base2[flown] = pod_from_coverage(cov2[flown], law)
+                    tab2 = Tables(cov2, base2, tab, flown)
+                else:  # all of it recomputed (the same numbers; for the tests)
+                    base2 = pod_from_coverage(cov2, law)
+                    tab2 = tables(cov2, base2)
                 more = [
                     lawn(
                         k,

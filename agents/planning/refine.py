@@ -348,9 +348,9 @@ def move_gains(
     their gain in planned POS ``sum_j p_j (POD(C'_j) - POD(C_j))`` (R,): the full score's change,
     since every other cell keeps its coverage. The coverage equals the full
     ``total - old legs + new legs`` of :func:`leg_coverage` bit for bit (same samples, summed in
-    the same order). ``scratch``: an int64 array of ``ny * nx`` zeros, kept zero on return,
-    in which the cells are numbered (their positions found without a search; the same
-    cells and positions)."""
+    the same order). ``scratch``: a boolean array of ``ny * nx`` False (kept so on return)
+    and an int64 array of ``ny * nx``, in which the cells are marked and numbered (the same
+    cells and positions as without, found without sorting)."""
     leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
     _, cell_a, wt_a = leg_samples(old[0], old[1], grid, w)
     movable = len(old) > 2
@@ -361,14 +361,14 @@ def move_gains(
     if scratch is None:
         cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
         pos_n, pos_a, pos_b = (np.searchsorted(cells, q) for q in (cell_n, cell_a, cell_b))
-    else:  # the cells sorted, duplicates dropped; numbered in the scratch (then cleared)
-        cat = np.sort(np.concatenate([cell_n, cell_a, cell_b]))
-        keep = np.ones(len(cat), dtype=bool)
-        keep[1:] = cat[1:] != cat[:-1]
-        cells = cat[keep]
-        scratch[cells] = np.arange(len(cells))
-        pos_n, pos_a, pos_b = scratch[cell_n], scratch[cell_a], scratch[cell_b]
-        scratch[cells] = 0
+    else:  # the cells marked and read back in order, numbered (the scratch then cleared)
+        mark, number = scratch
+        for q in (cell_n, cell_a, cell_b):
+            mark[q] = True
+        cells = np.flatnonzero(mark)
+        mark[cells] = False
+        number[cells] = np.arange(len(cells))
+        pos_n, pos_a, pos_b = number[cell_n], number[cell_a], number[cell_b]
     nu = len(cells)
     n_rows = len(kinds)
     new = np.bincount(
@@ -475,7 +475,7 @@ def refine_routes(
     radii = np.asarray(RADII) * c
     offsets = (radii[:, None, None] * _DIRS[None]).reshape(-1, 2)
     across = np.concatenate([[0.0], radii, -radii]) if len(radii) else np.zeros(1)
-    scratch = np.zeros(p_flat.size, dtype=np.int64)  # move_gains' cell marks
+    scratch = (np.zeros(p_flat.size, dtype=bool), np.zeros(p_flat.size, dtype=np.int64))
     for _ in range(max(0, int(sweeps))):
         kept = 0
         for k in range(n):
