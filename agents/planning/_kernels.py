@@ -271,6 +271,59 @@ def leg_samples(sx, sy, dx, dy, length, ox, oy, c, nx, ny, w, area):
 
 
 @_jit
+def airspace_move(pos, act, close, near, flying, k, pos_k, act_k, old_c, old_n, sep, rng, min_nb,
+                  close_out, near_out, flying_out):  # fmt: skip
+    """``poc_env.agents.planning.refine.AirspaceCount.move`` in one pass: the counts with UAV
+    ``k`` at ``pos_k (S, 2)``, flying ``act_k (S,)``, from the swarm's ``pos (S, n, 2)``,
+    ``act``, counts ``close``, ``near`` (S, n), ``flying`` (S,) and UAV ``k``'s current pairs
+    ``old_c``, ``old_n`` (S, n) into ``close_out``, ``near_out`` and ``flying_out``; returns the
+    violation count. The distances are numpy's (``sqrt(dx dx + dy dy)``, same operations), so
+    the pairs and counts are the same."""
+    n_s = act.shape[0]
+    n = act.shape[1]
+    value = 0
+    for s in range(n_s):
+        ak = act_k[s]
+        fl = flying[s] + (1 if ak else 0) - (1 if act[s, k] else 0)
+        flying_out[s] = fl
+        need = min(min_nb, fl - 1)
+        ck = 0
+        nk = 0
+        for j in range(n):
+            if j == k:
+                continue
+            nc = 0
+            nn = 0
+            if ak and act[s, j]:
+                cx = pos[s, j, 0] - pos_k[s, 0]
+                cy = pos[s, j, 1] - pos_k[s, 1]
+                d = math.sqrt(cx * cx + cy * cy)
+                if d < sep:
+                    nc = 1
+                if d <= rng:
+                    nn = 1
+            c = close[s, j] + nc - (1 if old_c[s, j] else 0)
+            m = near[s, j] + nn - (1 if old_n[s, j] else 0)
+            close_out[s, j] = c
+            near_out[s, j] = m
+            ck += nc
+            nk += nn
+            if act[s, j]:
+                if c > 0:
+                    value += 1
+                if m < need:
+                    value += 1
+        close_out[s, k] = ck
+        near_out[s, k] = nk
+        if ak:
+            if ck > 0:
+                value += 1
+            if nk < need:
+                value += 1
+    return value
+
+
+@_jit
 def route_sample(p, arrive, dep, times, out, act):
     """Positions ``out (S, 2)`` at ``times (S,)`` (ascending) along the path ``p`` flown with
     arrival times ``arrive`` and departure times ``dep`` (:func:`route_timeline`): still at a point
@@ -300,7 +353,6 @@ def route_sample(p, arrive, dep, times, out, act):
 
 #: the box search bounds the boxes of a row band in runs of this many positions (i24-speed).
 _CHUNK = 8
-
 
 
 @_jit

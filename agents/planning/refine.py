@@ -215,9 +215,11 @@ class AirspaceCount:
     ``separation_m`` (eq. 21) and within ``range_m`` (eq. 24) and the number of UAVs flying;
     moving UAV ``k`` (:meth:`move`) changes the pairs ``(k, j)`` only, so the counts are
     updated from UAV ``k``'s distances to the others (O(steps x n) instead of the full pass's
-    O(steps x n^2)). The count is :func:`swarm_violations`'s exactly: a flying UAV-step with a
-    partner too close, plus one with fewer than ``min(min_neighbours, flying - 1)`` others in
-    range (:func:`poc_env.sim.comms.two_neighbour_ok` with the flying UAVs)."""
+    O(steps x n^2); one compiled pass, :func:`poc_env.agents.planning._kernels.airspace_move`,
+    with UAV ``k``'s current pairs kept until a move is kept). The count is
+    :func:`swarm_violations`'s exactly: a flying UAV-step with a partner too close, plus one
+    with fewer than ``min(min_neighbours, flying - 1)`` others in range
+    (:func:`poc_env.sim.comms.two_neighbour_ok` with the flying UAVs)."""
 
     def __init__(self, airspace: Airspace, pos: np.ndarray, act: np.ndarray) -> None:
         self.air = airspace
@@ -255,15 +257,19 @@ class AirspaceCount:
         if k not in self._current:
             self._current[k] = self._pairs(k, self.pos[:, k], self.act[:, k])
         old_c, old_n = self._current[k]
-        new_c, new_n = self._pairs(k, pos_k, act_k)
-        close = self.close + new_c - old_c
-        near = self.near + new_n - old_n
-        close[:, k] = new_c.sum(axis=1)
-        near[:, k] = new_n.sum(axis=1)
-        flying = self.flying + act_k.astype(np.int64) - self.act[:, k]
+        close = np.empty_like(self.close)
+        near = np.empty_like(self.near)
+        flying = np.empty_like(self.flying)
+        value = int(
+            _kernels.airspace_move(
+                self.pos, self.act, self.close, self.near, self.flying, k,
+                np.ascontiguousarray(pos_k), np.ascontiguousarray(act_k), old_c, old_n,
+                float(self.air.separation_m), float(self.air.range_m),
+                int(self.air.min_neighbours), close, near, flying,
+            )
+        )  # fmt: skip
         act = self.act.copy()
         act[:, k] = act_k
-        value = self._total(close, near, flying, act)
         return value, (k, pos_k, act, close, near, flying, value)
 
     def keep(self, state: tuple) -> None:

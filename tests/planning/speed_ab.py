@@ -17,6 +17,10 @@ blobs"): a script, not a test.
     tar -x -C BASE``; run with ``PYTHONPATH=BASE``, this tree first), one thread each: per
     round both trees' wall and CPU time of the plan and the load; the records and the paired
     ratios' medians written to ``OUT.json`` after every round.
+``parts CASE RUNS``
+    As ``time``, with the CPU time of the plan's steps (the allocation planner's module
+    names wrapped: the refinement, the box start, the allocation start's lines and their
+    assignment, the sampled scores, ...), one JSON line per plan.
 ``profile CASE OUT.prof``
     One default plan of a case under cProfile (after the warm-up), the stats written to
     ``OUT.prof`` and the top 30 by cumulative and by own time printed.
@@ -35,10 +39,10 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from effort_ab import _digest  # noqa: E402
+from effort_ab import _digest
 
-from poc_env.agents.experiments.evaluate import episode_prior  # noqa: E402
-from poc_env.config import load_scenario  # noqa: E402
+from poc_env.agents.experiments.evaluate import episode_prior
+from poc_env.config import load_scenario
 
 
 def blobs_case():
@@ -120,8 +124,8 @@ def pair(base: str, name: str, rounds: int, out: str) -> None:
             if tree == "base":
                 env["PYTHONPATH"] = base
                 cwd = base
-            res = subprocess.run([sys.executable, os.path.join(here, script), "time", name, "1"],
-                                 cwd=cwd, env=env, capture_output=True, text=True, check=True)  # fmt: skip
+            cmd = [sys.executable, os.path.join(here, script), "time", name, "1"]
+            res = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, check=True)
             rec = json.loads(res.stdout.strip().splitlines()[-1])
             recs.append({"round": r, "tree": tree, **rec})
             print(recs[-1], flush=True)
@@ -141,6 +145,46 @@ def pair(base: str, name: str, rounds: int, out: str) -> None:
             json.dump({"case": name, "records": recs, "summary": summary}, f, indent=1)
         os.replace(out + ".tmp", out)
     print(json.dumps(summary), flush=True)
+
+
+#: the steps :func:`parts` times (names in :mod:`poc_env.agents.planning.allocation`).
+STEPS = ("refine_routes", "box_routes", "layered_tracks", "_assign", "reach_optimum",
+         "sampled_sweep", "_cell_pos", "fit_lawnmowers", "_swept_areas", "plan_geography",
+         "_fan_out", "_trim", "make_greedy_rectangles_plan")  # fmt: skip
+
+
+def parts(name: str, runs: int) -> None:
+    import collections
+
+    import poc_env.agents.planning.allocation as alloc
+    import poc_env.agents.planning.greedy_rectangles as greedy
+
+    acc: dict[str, float] = collections.defaultdict(float)
+
+    def wrap(mod, step: str) -> None:
+        f = getattr(mod, step)
+
+        def timed(*a, **k):
+            c0 = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                acc[step] += time.process_time() - c0
+
+        setattr(mod, step, timed)
+
+    for step in STEPS:
+        wrap(greedy if step == "make_greedy_rectangles_plan" else alloc, step)
+    sc, uavs, prior = case(name)
+    alloc.make_allocation_plan(sc, prior=prior, uavs=uavs, refine=1)  # warm-up (JIT)
+    for _ in range(runs):
+        acc.clear()
+        w0, c0 = time.perf_counter(), time.process_time()
+        alloc.make_allocation_plan(sc, prior=prior, uavs=uavs)
+        rec = {"case": name, "wall_s": round(time.perf_counter() - w0, 3),
+               "cpu_s": round(time.process_time() - c0, 3), "load": os.getloadavg()[0]}  # fmt: skip
+        rec.update({k: round(v, 3) for k, v in sorted(acc.items(), key=lambda t: -t[1])})
+        print(json.dumps(rec), flush=True)
 
 
 def profile(name: str, out: str) -> None:
@@ -169,6 +213,8 @@ if __name__ == "__main__":
         timing(args[0], int(args[1]))
     elif cmd == "pair":
         pair(args[0], args[1], int(args[2]), args[3])
+    elif cmd == "parts":
+        parts(args[0], int(args[1]))
     elif cmd == "profile":
         profile(args[0], args[1])
     else:
