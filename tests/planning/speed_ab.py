@@ -9,7 +9,8 @@ blobs"): a script, not a test.
     (a speed-up must leave them equal).
 ``time CASE RUNS``
     ``RUNS`` default plans of a timing case (``paper_6_2``, ``large_400_160x160_24uav``,
-    ``large_400_160x160_24uav_300blobs``) after a warm-up plan (``refine=0``: JIT, caches),
+    ``large_400_160x160_24uav_300blobs``; ``paper_6_2_thorough_SEED``: the ``thorough`` plan
+    of ``paper_6_2``'s random prior ``SEED``) after a warm-up plan (``refine=0``: JIT, caches),
     each plan's wall and CPU time printed (one process: run it under another tree for a pair).
 ``pair BASE CASE ROUNDS OUT.json``
     ``ROUNDS`` rounds of ``time CASE 1``, one process per tree and round, alternating this
@@ -65,7 +66,18 @@ def case(name: str):
         return load_scenario("large_400", {"map.cell_km": 2.5}), 24, None
     if name == "large_400_160x160_24uav_300blobs":
         return blobs_case()
+    if name.startswith("paper_6_2_thorough_"):  # planned with options(name): thorough
+        sc = load_scenario("paper_6_2")
+        return sc, None, episode_prior(sc, int(name.rsplit("_", 1)[1]))
     raise SystemExit(f"unknown case {name}")
+
+
+def options(name: str):
+    """The plan options of a case: ``thorough`` for ``paper_6_2_thorough_SEED``, else the
+    defaults (None)."""
+    from poc_env.agents.planning.options import PlanOptions
+
+    return PlanOptions.preset("thorough") if "thorough" in name else None
 
 
 def digest(out: str, thorough: bool) -> None:
@@ -104,7 +116,7 @@ def timing(name: str, runs: int) -> None:
     make_allocation_plan(sc, prior=prior, uavs=uavs, refine=0)  # warm-up (JIT)
     for _ in range(runs):
         w0, c0 = time.perf_counter(), time.process_time()
-        p = make_allocation_plan(sc, prior=prior, uavs=uavs)
+        p = make_allocation_plan(sc, prior=prior, uavs=uavs, options=options(name))
         print(json.dumps({"case": name, "wall_s": time.perf_counter() - w0,
                           "cpu_s": time.process_time() - c0, "load": os.getloadavg()[0],
                           "digest": _digest(p)[:12]}), flush=True)  # fmt: skip
