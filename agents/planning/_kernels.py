@@ -184,6 +184,60 @@ def fits_batch(p, i, qs, ops, v_out, v_line, v_home, turn_cost, budget, reserve,
 
 
 @_jit
+def cut_fit(head, wps, landing, v_out, v_line, v_home, turn_cost, budget, reserve, heading0,
+            part, steps):  # fmt: skip
+    """The fits of ``poc_env.agents.planning.coverage_boxes.cut_lines`` for a route
+    ``head`` (take-off and any waypoints before the lawnmower), ``wps`` (the lawnmower, a line
+    = two waypoints), ``landing``, each a :func:`route_timeline` of the same points: the most
+    whole lines' waypoints ``kept`` (even) for which the route fits (scanning down from all
+    of them; 0 if none), then, with ``part`` and a next line, the bisection (``steps``
+    halvings) of the share ``lo`` of that line's length that still fits (-1: not even its
+    start fits, or no part tried). Returns ``(kept, lo)``; the part's point ``a + t (b - a)``
+    is computed as numpy computes it (no fused operations)."""
+    nh = head.shape[0]
+    nw = wps.shape[0]
+    buf = np.empty((nh + nw + 2, 2))
+    out = np.empty(nh + nw + 2)
+    dep = np.empty(nh + nw + 2)
+    buf[:nh] = head
+    buf[nh : nh + nw] = wps
+    kept = nw - nw % 2
+    while kept > 0:
+        m = nh + kept + 1
+        buf[nh + kept, 0] = landing[0]
+        buf[nh + kept, 1] = landing[1]
+        if route_timeline(buf[:m], v_out, v_line, v_home, turn_cost, budget, reserve, heading0,
+                          out[:m], dep[:m]):  # fmt: skip
+            break
+        kept -= 2
+    lo = -1.0
+    if part and kept + 1 < nw:
+        ax, ay = wps[kept, 0], wps[kept, 1]
+        dx, dy = wps[kept + 1, 0] - ax, wps[kept + 1, 1] - ay
+        m = nh + kept + 3
+        buf[nh + kept, 0] = ax
+        buf[nh + kept, 1] = ay
+        buf[nh + kept + 2, 0] = landing[0]
+        buf[nh + kept + 2, 1] = landing[1]
+        buf[nh + kept + 1, 0] = ax + 0.0 * dx
+        buf[nh + kept + 1, 1] = ay + 0.0 * dy
+        if route_timeline(buf[:m], v_out, v_line, v_home, turn_cost, budget, reserve, heading0,
+                          out[:m], dep[:m]):  # fmt: skip
+            lo = 0.0
+            hi = 1.0
+            for _ in range(steps):
+                mid = 0.5 * (lo + hi)
+                buf[nh + kept + 1, 0] = ax + mid * dx
+                buf[nh + kept + 1, 1] = ay + mid * dy
+                if route_timeline(buf[:m], v_out, v_line, v_home, turn_cost, budget, reserve,
+                                  heading0, out[:m], dep[:m]):  # fmt: skip
+                    lo = mid
+                else:
+                    hi = mid
+    return kept, lo
+
+
+@_jit
 def leg_samples(sx, sy, dx, dy, length, ox, oy, c, nx, ny, w, area):
     """The coverage samples of legs from ``(sx, sy)`` by ``(dx, dy)`` of ``length`` (numpy's
     ``hypot``, computed by the caller: transcendentals stay in numpy), ``m = max(1, ceil(4 L /
@@ -217,6 +271,59 @@ def leg_samples(sx, sy, dx, dy, length, ox, oy, c, nx, ny, w, area):
 
 
 @_jit
+def airspace_move(pos, act, close, near, flying, k, pos_k, act_k, old_c, old_n, sep, rng, min_nb,
+                  close_out, near_out, flying_out):  # fmt: skip
+    """``poc_env.agents.planning.refine.AirspaceCount.move`` in one pass: the counts with UAV
+    ``k`` at ``pos_k (S, 2)``, flying ``act_k (S,)``, from the swarm's ``pos (S, n, 2)``,
+    ``act``, counts ``close``, ``near`` (S, n), ``flying`` (S,) and UAV ``k``'s current pairs
+    ``old_c``, ``old_n`` (S, n) into ``close_out``, ``near_out`` and ``flying_out``; returns the
+    violation count. The distances are numpy's (``sqrt(dx dx + dy dy)``, same operations), so
+    the pairs and counts are the same."""
+    n_s = act.shape[0]
+    n = act.shape[1]
+    value = 0
+    for s in range(n_s):
+        ak = act_k[s]
+        fl = flying[s] + (1 if ak else 0) - (1 if act[s, k] else 0)
+        flying_out[s] = fl
+        need = min(min_nb, fl - 1)
+        ck = 0
+        nk = 0
+        for j in range(n):
+            if j == k:
+                continue
+            nc = 0
+            nn = 0
+            if ak and act[s, j]:
+                cx = pos[s, j, 0] - pos_k[s, 0]
+                cy = pos[s, j, 1] - pos_k[s, 1]
+                d = math.sqrt(cx * cx + cy * cy)
+                if d < sep:
+                    nc = 1
+                if d <= rng:
+                    nn = 1
+            c = close[s, j] + nc - (1 if old_c[s, j] else 0)
+            m = near[s, j] + nn - (1 if old_n[s, j] else 0)
+            close_out[s, j] = c
+            near_out[s, j] = m
+            ck += nc
+            nk += nn
+            if act[s, j]:
+                if c > 0:
+                    value += 1
+                if m < need:
+                    value += 1
+        close_out[s, k] = ck
+        near_out[s, k] = nk
+        if ak:
+            if ck > 0:
+                value += 1
+            if nk < need:
+                value += 1
+    return value
+
+
+@_jit
 def route_sample(p, arrive, dep, times, out, act):
     """Positions ``out (S, 2)`` at ``times (S,)`` (ascending) along the path ``p`` flown with
     arrival times ``arrive`` and departure times ``dep`` (:func:`route_timeline`): still at a point
@@ -244,6 +351,9 @@ def route_sample(p, arrive, dep, times, out, act):
 
 # ------------------------------------------------------------------------- the greedy box search
 
+#: the box search bounds the boxes of a row band in runs of this many positions (i24-speed).
+_CHUNK = 8
+
 
 @_jit
 def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, landing):
@@ -257,7 +367,10 @@ def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, 
     the longer side at ``line`` and a ``turn`` per line end; ``orig`` the map's lower-left
     corner, ``h`` the cell size) is within ``budget`` and its mass beats the best so far (ties:
     the first in this order, lower-left cells row by row). Returns ``(mass, i, j, nw, nh)``;
-    mass 0 and ``nw = 0`` when no box has mass and fits."""
+    mass 0 and ``nw = 0`` when no box has mass and fits. Rows, and runs of :data:`_CHUNK`
+    positions in a row, whose masses together (an upper bound: masses >= 0) cannot beat the
+    best so far are skipped: the boxes skipped are ones the search would not keep, so the
+    result is the full search's (tests/planning/test_speed.py)."""
     ny = table.shape[0] - 1
     nx = table.shape[1] - 1
     best = 0.0
@@ -302,15 +415,22 @@ def best_box(table, widths, heights, orig, h, w, speeds, turn, budget, takeoff, 
                 band = table[j + nh, e] - table[j, e] - table[j + nh, i0] + table[j, i0]
                 if band + slack < cur:
                     continue  # the row's band (masses >= 0) cannot beat the best
-                for i in range(i0, i1 + 1):
-                    mass = table[j + nh, i + nw] - table[j, i + nw] - table[j + nh, i] + table[j, i]
-                    if not mass > cur:
-                        continue
-                    xlo = orig[0] + h * i
-                    dxt = max(max(xlo - takeoff[0], takeoff[0] - xlo - lx), 0.0)
-                    dxl = max(max(xlo - landing[0], landing[0] - xlo - lx), 0.0)
-                    t = math.hypot(dxt, dyt) / speeds[0] + math.hypot(dxl, dyl) / speeds[2]
-                    if t + search <= budget:
-                        cur, bi, bj, bw, bh = mass, i, j, nw, nh
+                for c0 in range(i0, i1 + 1, _CHUNK):
+                    c1 = min(c0 + _CHUNK - 1, i1)
+                    e = c1 + nw
+                    part = table[j + nh, e] - table[j, e] - table[j + nh, c0] + table[j, c0]
+                    if part + slack < cur:
+                        continue  # no box starting in c0..c1 (inside this band) beats it
+                    for i in range(c0, c1 + 1):
+                        mass = (table[j + nh, i + nw] - table[j, i + nw] - table[j + nh, i]
+                                + table[j, i])  # fmt: skip
+                        if not mass > cur:
+                            continue
+                        xlo = orig[0] + h * i
+                        dxt = max(max(xlo - takeoff[0], takeoff[0] - xlo - lx), 0.0)
+                        dxl = max(max(xlo - landing[0], landing[0] - xlo - lx), 0.0)
+                        t = math.hypot(dxt, dyt) / speeds[0] + math.hypot(dxl, dyl) / speeds[2]
+                        if t + search <= budget:
+                            cur, bi, bj, bw, bh = mass, i, j, nw, nh
             best = cur
     return best, bi, bj, bw, bh

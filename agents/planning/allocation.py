@@ -191,6 +191,22 @@ def _split(route, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     return pieces, times, dropped + len(route) - i
 
 
+def nearest_field(lines, heads: np.ndarray) -> np.ndarray:
+    """The field of least out-and-back distance of each line ``(y, x_start, x_end, row)``:
+    the index into ``heads`` ``(F, 2, 2)`` (per field its take-off and landing) of least
+    ``|take-off - mid| + |landing - mid|``, ``mid`` the line's midpoint (ties: the lower
+    index). All lines in one pass (elementwise the same operations as line by line, so the
+    same fields: tests/planning/test_speed.py)."""
+    if not len(lines):
+        return np.zeros(0, dtype=np.int64)
+    arr = np.asarray([ln[:3] for ln in lines], dtype=float)  # (L, 3): y, x_start, x_end
+    mid = np.stack([0.5 * (arr[:, 1] + arr[:, 2]), arr[:, 0]], axis=1)  # (L, 2)
+    to = heads[None, :, 0] - mid[:, None]  # (L, F, 2)
+    la = heads[None, :, 1] - mid[:, None]
+    d = np.hypot(to[..., 0], to[..., 1]) + np.hypot(la[..., 0], la[..., 1])
+    return np.argmin(d, axis=1)
+
+
 def _assign(regions, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     """Route and pieces per UAV: lines go to the field of least out-and-back distance, each
     field's lines are chained from it and cut among its UAVs (:func:`_split`); lines left over
@@ -198,18 +214,14 @@ def _assign(regions, takeoff, landing, sc: Scenario, margin: float, v: Speeds):
     n = len(takeoff)
     groups = field_groups(takeoff, landing)
     heads = np.array([[takeoff[g[0]], landing[g[0]]] for g in groups])  # (F, 2, 2)
-
-    def field_of(line) -> int:
-        mid = np.array([0.5 * (line[1] + line[2]), line[0]])
-        d = np.hypot(*(heads[:, 0] - mid).T) + np.hypot(*(heads[:, 1] - mid).T)
-        return int(np.argmin(d))
-
+    fid = [nearest_field(reg, heads) for reg in regions]  # each line's field, once
     route: list[tuple] = []
     pieces: list[list[int]] = [[] for _ in range(n)]
     times = np.zeros(n)
     leftover: list[tuple] = []
     for f, g in enumerate(groups):
-        mine = [[ln for ln in reg if field_of(ln) == f] for reg in regions]
+        mine = [[ln for ln, q in zip(reg, fr, strict=True) if q == f]
+                for reg, fr in zip(regions, fid, strict=True)]  # fmt: skip
         sub = chain_regions([r for r in mine if r], heads[f, 0])
         sp, st, _ = _split(sub, takeoff[g], landing[g], sc, margin, v)
         used = {j for p in sp for j in p}

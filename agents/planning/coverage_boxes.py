@@ -81,7 +81,7 @@ from poc_env.agents.planning.flight_rules import Speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.greedy_rectangles import SCALES, _lines, _side_lengths
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.planning.refine import arrival_times, route_fits
+from poc_env.agents.planning.refine import TURN_SHARE, arrival_times, route_fits
 from poc_env.theory.bound import field_key
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import pod_from_coverage, sweep_segments
@@ -178,6 +178,42 @@ def cut_lines(
     return out, kept
 
 
+def cut_route(
+    head,
+    wps,
+    landing,
+    speeds: Speeds,
+    turn_rate: float,
+    budget: float,
+    reserve: float,
+    heading0: float | None = None,
+    min_part: float = 0.0,
+    options: PlanOptions | None = None,
+) -> tuple[np.ndarray, int]:
+    """:func:`cut_lines` of the lawnmower ``wps`` flown after ``head`` (take-off and any
+    waypoints before it) and home to ``landing`` with the fit of
+    :func:`~poc_env.agents.planning.refine.route_fits` (``speeds``, ``turn_rate``, ``budget``,
+    ``reserve``, ``heading0``): the same waypoints bit for bit, its fits in one compiled pass
+    (:func:`poc_env.agents.planning._kernels.cut_fit`; tests/planning/test_speed.py)."""
+    wps = np.asarray(wps, dtype=float).reshape(-1, 2)
+    opt = _DEFAULT if options is None else options
+    h0 = np.nan if heading0 is None else float(heading0)
+    kept, lo = _kernels.cut_fit(
+        np.ascontiguousarray(np.asarray(head, dtype=float).reshape(-1, 2)),
+        np.ascontiguousarray(wps),
+        np.ascontiguousarray(np.asarray(landing, dtype=float)),
+        speeds.out, speeds.line, speeds.home, TURN_SHARE / turn_rate, float(budget),
+        float(reserve), h0, bool(opt.part), int(opt.part_steps),
+    )  # fmt: skip
+    kept = int(kept)
+    out = wps[:kept]
+    if lo >= 0.0:
+        a, b = wps[kept], wps[kept + 1]
+        if lo * float(np.hypot(*(b - a))) >= max(min_part, 1e-9):
+            out = np.vstack([out, a, a + lo * (b - a)])
+    return out, kept
+
+
 def graded_offsets(
     prior: np.ndarray,
     cov: np.ndarray,
@@ -216,6 +252,30 @@ def graded_offsets(
     t = np.arange(lines) + 0.5
     r = np.searchsorted(cum, t, side="left") - 1
     return (r + (t - cum[r]) / counts[r]) * cell
+
+
+def block_sums(block: np.ndarray, my: int, mx: int, f: int) -> np.ndarray:
+    """The sums of the ``f x f`` blocks of ``block`` ``(my f, mx f)``: ``block.reshape(my, f,
+    mx, f).sum(axis=(1, 3))``, whose order numpy sums in (a row's pair first, then the two
+    rows) is written out for ``f = 2`` (12 times faster on 80 x 80 blocks; the same sums bit
+    for bit: tests/planning/test_speed.py)."""
+    b = block.reshape(my, f, mx, f)
+    if f != 2:
+        return b.sum(axis=(1, 3))
+    return (b[:, 0, :, 0] + b[:, 0, :, 1]) + (b[:, 1, :, 0] + b[:, 1, :, 1])
+
+
+def added_gain(
+    prior: np.ndarray, cov: np.ndarray, base: np.ndarray, add: np.ndarray, law: str
+) -> float:
+    """``sum(prior * (POD(cov + add) - base))`` (``base`` = POD(cov), eq. 10 per cell): the
+    mass coverage ``add`` finds beyond ``cov``. POD is computed only where ``add`` is not 0
+    (elsewhere the term is exactly 0) and the same full array summed, so the sum is the
+    straightforward one's bit for bit (tests/planning/test_speed.py)."""
+    m = add != 0.0
+    g = np.zeros(np.shape(prior))
+    g[m] = prior[m] * (pod_from_coverage(cov[m] + add[m], law) - base[m])
+    return float(np.sum(g))
 
 
 def sampled_boxes(grid: Grid, options: PlanOptions | None = None) -> bool:
@@ -305,36 +365,68 @@ def box_routes(
             side_cache[m] = _side_lengths(m).astype(np.int64)
         return side_cache[m]
 
-    def gain_table(cov: np.ndarray, base: np.ndarray, s: float, angle: float = 0.0) -> np.ndarray:
+    def cell_gains(cov: np.ndarray, base: np.ndarray, s: float) -> np.ndarray:
+        """Step 1 per cell: the gain of lines ``s`` sweep widths apart against the coverage
+        ``cov`` (``base`` its POD), eq. 10."""
+        return prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
+
+    def gain_table(cell_gain: np.ndarray, angle: float = 0.0) -> np.ndarray:
         """Step 1: the summed-area table (on ``f x f`` blocks; turned by ``angle``,
-        :func:`turned_raster`) of the gains of lines ``s`` sweep widths apart against the
-        coverage ``cov`` (``base`` its POD)."""
-        cell_gain = prior * (pod_from_coverage(cov + 1.0 / s, law) - base)
+        :func:`turned_raster`) of the gains ``cell_gain`` per cell (:func:`cell_gains`)."""
         if angle:
             idx = turned_of(angle)[1]
             gain = np.where(idx >= 0, cell_gain.ravel()[np.maximum(idx, 0)], 0.0).sum(axis=-1)
         else:
             block[: grid.ny, : grid.nx] = cell_gain
-            gain = block.reshape(my, f, mx, f).sum(axis=(1, 3))
+            gain = block_sums(block, my, mx, f)
         table = np.zeros((gain.shape[0] + 1, gain.shape[1] + 1))
         table[1:, 1:] = gain.cumsum(0).cumsum(1)
         return table
 
-    def tables(
-        cov: np.ndarray, base: np.ndarray | None = None
-    ) -> Callable[[float, float], np.ndarray]:
-        """The gain tables against ``cov`` by spacing, each computed on first use (the
-        lawnmowers of all shares, and all second lawnmowers after one first, share one
-        coverage; ``options.share_tables`` False recomputes them per lawnmower, same routes)."""
-        pod0 = pod_from_coverage(cov, law) if base is None else base
-        done: dict[tuple[float, float], np.ndarray] = {}
+    class Tables:
+        """The gain tables against ``cov`` by spacing (called with a spacing and an angle),
+        each computed on first use (the lawnmowers of all shares, and all second lawnmowers
+        after one first, share one coverage; ``options.share_tables`` False recomputes them
+        per lawnmower, same routes). With ``parent`` (the tables of a coverage that differs
+        from ``cov`` only in the cells ``changed``), a spacing's gains per cell are the
+        parent's with those cells recomputed: elementwise the same operations on the same
+        numbers, so the same tables bit for bit (a second lawnmower's coverage differs from
+        the first's only where the first flies)."""
 
-        def get(s: float, angle: float = 0.0) -> np.ndarray:
-            if (s, angle) not in done or not opt.share_tables:
-                done[s, angle] = gain_table(cov, pod0, s, angle)
-            return done[s, angle]
+        def __init__(
+            self,
+            cov: np.ndarray,
+            base: np.ndarray | None = None,
+            parent: Tables | None = None,
+            changed: np.ndarray | None = None,
+        ) -> None:
+            self.cov = cov
+            self.base = pod_from_coverage(cov, law) if base is None else base
+            self.parent, self.changed = parent, changed
+            self.cells: dict[float, np.ndarray] = {}
+            self.done: dict[tuple[float, float], np.ndarray] = {}
 
-        return get
+        def cell(self, s: float) -> np.ndarray:
+            if s not in self.cells:
+                if self.parent is None or self.changed is None:
+                    self.cells[s] = cell_gains(self.cov, self.base, s)
+                else:
+                    m = self.changed
+                    g = self.parent.cell(s).copy()
+                    g[m] = prior[m] * (pod_from_coverage(self.cov[m] + 1.0 / s, law) - self.base[m])
+                    self.cells[s] = g
+            return self.cells[s]
+
+        def __call__(self, s: float, angle: float = 0.0) -> np.ndarray:
+            if not opt.share_tables:
+                return gain_table(cell_gains(self.cov, self.base, s), angle)
+            if (s, angle) not in self.done:
+                self.done[s, angle] = gain_table(self.cell(s), angle)
+            return self.done[s, angle]
+
+    def tables(cov: np.ndarray, base: np.ndarray | None = None) -> Tables:
+        """The gain tables against ``cov`` (:class:`Tables`)."""
+        return Tables(cov, base)
 
     def graded(lo, hi, s: float, frm, cov: np.ndarray, base: np.ndarray) -> np.ndarray:
         """The box's lawnmower with its lines at graded spacing (:func:`graded_offsets`), as
@@ -406,19 +498,10 @@ def box_routes(
                 hi = np.minimum(lo + np.array([nw, nh]) * f * grid.cell_m, hi_map)
                 wps = _lines(lo, hi, s * w, frm)
             full = len(wps)
-            wps, kept = cut_lines(
-                wps,
-                lambda q: route_fits(
-                    np.vstack([takeoff[k], lead, q, landing[k]]),
-                    speeds,
-                    turn_rate,
-                    budget,
-                    reserve,
-                    h0[k],
-                ),
-                w,
-                opt,
-            )
+            wps, kept = cut_route(
+                np.vstack([takeoff[k], lead]), wps, landing[k], speeds, turn_rate, budget,
+                reserve, h0[k], w, opt,
+            )  # fmt: skip
             if kept >= full // 2:
                 break
         return wps
@@ -496,7 +579,7 @@ def box_routes(
             c = _path_coverage(path, grid, w)
             if bel is not None and not cell:
                 return swept(bel, path)[0], c
-            return float(np.sum(prior * (pod_from_coverage(cov + c, law) - base))), c
+            return added_gain(prior, cov, base, c, law), c
 
         modes = (False, True) if opt.graded == "both" else (bool(opt.graded),)
         if not graded_here:
@@ -524,8 +607,14 @@ def box_routes(
                 t_end = float(arrival_times(path, speeds, turn_rate, h0[k])[-2])
                 c1 = _path_coverage(np.vstack([takeoff[k], wps, landing[k]]), grid, w)
                 cov2 = cov + c1
-                base2 = pod_from_coverage(cov2, law)
-                tab2 = tables(cov2, base2)
+                if opt.share_tables:  # the POD changes where the first lawnmower flies only
+                    flown = c1 != 0.0
+                    base2 = base.copy()
+                    base2[flown] = pod_from_coverage(cov2[flown], law)
+                    tab2 = Tables(cov2, base2, tab, flown)
+                else:  # all of it recomputed (the same numbers; for the tests)
+                    base2 = pod_from_coverage(cov2, law)
+                    tab2 = tables(cov2, base2)
                 more = [
                     lawn(
                         k,

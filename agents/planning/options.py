@@ -146,8 +146,9 @@ class PlanOptions:
     part: bool = True
     #: halvings of the bisection for the part of a line that fits.
     part_steps: int = 12
-    #: share one coverage's gain tables among the lawnmowers searched against it (same
-    #: routes; False recomputes them per lawnmower, slower; for the tests).
+    #: share one coverage's gain tables among the lawnmowers searched against it, and derive
+    #: a second lawnmower's from its first's where the first flies (i24-speed) (same routes;
+    #: False recomputes them per lawnmower, slower; for the tests).
     share_tables: bool = True
     #: box orientations tried besides the map's axes (degrees; i24-quality4).
     angles: tuple[float, ...] = ()

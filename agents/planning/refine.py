@@ -30,6 +30,7 @@ only (:class:`AirspaceCount`); both give the full computation's numbers.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -214,9 +215,11 @@ class AirspaceCount:
     ``separation_m`` (eq. 21) and within ``range_m`` (eq. 24) and the number of UAVs flying;
     moving UAV ``k`` (:meth:`move`) changes the pairs ``(k, j)`` only, so the counts are
     updated from UAV ``k``'s distances to the others (O(steps x n) instead of the full pass's
-    O(steps x n^2)). The count is :func:`swarm_violations`'s exactly: a flying UAV-step with a
-    partner too close, plus one with fewer than ``min(min_neighbours, flying - 1)`` others in
-    range (:func:`poc_env.sim.comms.two_neighbour_ok` with the flying UAVs)."""
+    O(steps x n^2); one compiled pass, :func:`poc_env.agents.planning._kernels.airspace_move`,
+    with UAV ``k``'s current pairs kept until a move is kept). The count is
+    :func:`swarm_violations`'s exactly: a flying UAV-step with a partner too close, plus one
+    with fewer than ``min(min_neighbours, flying - 1)`` others in range
+    (:func:`poc_env.sim.comms.two_neighbour_ok` with the flying UAVs)."""
 
     def __init__(self, airspace: Airspace, pos: np.ndarray, act: np.ndarray) -> None:
         self.air = airspace
@@ -229,6 +232,9 @@ class AirspaceCount:
         self.near = np.sum(both & (d <= airspace.range_m), axis=2)
         self.flying = self.act.sum(axis=1)
         self.value = self._total(self.close, self.near, self.flying, self.act)
+        # UAV k's pairs at its current positions (:meth:`_pairs`), kept until a move is kept:
+        # the refinement tries several moves of one UAV against the same others
+        self._current: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def _total(self, close, near, flying, act) -> int:
         need = np.minimum(self.air.min_neighbours, flying - 1)[:, None]
@@ -248,16 +254,22 @@ class AirspaceCount:
         that :meth:`keep` makes current (the counts are not changed until then)."""
         pos_k = np.asarray(pos_k, dtype=float)
         act_k = np.asarray(act_k, dtype=bool)
-        old_c, old_n = self._pairs(k, self.pos[:, k], self.act[:, k])
-        new_c, new_n = self._pairs(k, pos_k, act_k)
-        close = self.close + new_c - old_c
-        near = self.near + new_n - old_n
-        close[:, k] = new_c.sum(axis=1)
-        near[:, k] = new_n.sum(axis=1)
-        flying = self.flying + act_k.astype(np.int64) - self.act[:, k]
+        if k not in self._current:
+            self._current[k] = self._pairs(k, self.pos[:, k], self.act[:, k])
+        old_c, old_n = self._current[k]
+        close = np.empty_like(self.close)
+        near = np.empty_like(self.near)
+        flying = np.empty_like(self.flying)
+        value = int(
+            _kernels.airspace_move(
+                self.pos, self.act, self.close, self.near, self.flying, k,
+                np.ascontiguousarray(pos_k), np.ascontiguousarray(act_k), old_c, old_n,
+                float(self.air.separation_m), float(self.air.range_m),
+                int(self.air.min_neighbours), close, near, flying,
+            )
+        )  # fmt: skip
         act = self.act.copy()
         act[:, k] = act_k
-        value = self._total(close, near, flying, act)
         return value, (k, pos_k, act, close, near, flying, value)
 
     def keep(self, state: tuple) -> None:
@@ -265,9 +277,74 @@ class AirspaceCount:
         k, pos_k, act, close, near, flying, value = state
         self.pos[:, k] = pos_k
         self.act, self.close, self.near, self.flying, self.value = act, close, near, flying, value
+        self._current.clear()  # every UAV's pairs with k changed
 
 
-def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old):
+def candidate_edits(path: np.ndarray, i: int, offsets: np.ndarray, across: np.ndarray, lo, hi):
+    """The refinement's candidate edits of waypoint ``i`` of ``path`` (take-off, waypoints,
+    landing; module docstring) and the legs they fly, in :func:`move_gains`' form: ``qs``
+    (C, 2) the new points; ``ops`` (C,) 0 move waypoint ``i`` to ``qs[c]`` (one per
+    ``offsets`` row, then) 1 delete it (when it is not the landing), 2 insert ``qs[c]``
+    before it (one per ``across``: the leg's midpoint moved across the leg); ``starts``,
+    ``ends`` the new legs (a moved or inserted point's two legs, a deletion's one), ``rows``
+    their candidate and ``kinds`` per candidate 0 (legs ``i-1, i`` and ``i, i+1`` replaced)
+    or 1 (leg ``i-1, i``). Points are clipped to ``lo``-``hi``. One pass of numpy over all
+    candidates, elementwise the same operations as candidate by candidate (the same points,
+    bit for bit: tests/planning/test_speed.py)."""
+    a = path[i - 1]
+    b = path[i]
+    d = b - a
+    length = float(np.hypot(*d))
+    normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
+    ins = np.clip(0.5 * (a + b) + across[:, None] * normal[None, :], lo, hi)  # (I, 2)
+    n_i = len(ins)
+    movable = i < len(path) - 1  # the landing is not moved or deleted
+    n_m = len(offsets) if movable else 0
+    o = 2 * n_m + 1 if movable else 0  # the inserts' first leg
+    starts = np.empty((o + 2 * n_i, 2))
+    ends = np.empty((o + 2 * n_i, 2))
+    if movable:
+        nxt = path[i + 1]
+        mv = np.clip(b + offsets, lo, hi)  # (M, 2)
+        starts[0 : 2 * n_m : 2] = a
+        starts[1 : 2 * n_m : 2] = mv
+        ends[0 : 2 * n_m : 2] = mv
+        ends[1 : 2 * n_m : 2] = nxt
+        starts[2 * n_m] = a
+        ends[2 * n_m] = nxt
+        qs = np.concatenate([mv, b[None], ins])
+    else:
+        qs = ins
+    starts[o::2] = a
+    starts[o + 1 :: 2] = ins
+    ends[o::2] = ins
+    ends[o + 1 :: 2] = b
+    ops, rows, kinds = _edit_layout(n_m, n_i, movable)
+    return qs, ops, starts, ends, rows, kinds
+
+
+@functools.lru_cache(maxsize=16)
+def _edit_layout(n_m: int, n_i: int, movable: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``ops``, ``rows`` and ``kinds`` of :func:`candidate_edits` (read-only): they depend on
+    the numbers of moves and inserts only."""
+    if movable:
+        ops = np.concatenate([np.zeros(n_m, dtype=np.int64), [1], np.full(n_i, 2)])
+        rows = np.concatenate(
+            [np.repeat(np.arange(n_m), 2), [n_m], n_m + 1 + np.repeat(np.arange(n_i), 2)]
+        )
+        kinds = np.concatenate([np.zeros(n_m + 1, dtype=np.int64), np.ones(n_i, dtype=np.int64)])
+    else:
+        ops = np.full(n_i, 2, dtype=np.int64)
+        rows = np.repeat(np.arange(n_i), 2)
+        kinds = np.ones(n_i, dtype=np.int64)
+    for arr in (ops, rows, kinds):
+        arr.setflags(write=False)
+    return ops, rows, kinds
+
+
+def move_gains(
+    total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows, kinds, old, scratch=None
+):
     """Candidate moves of one waypoint scored on the cells they change only.
 
     ``total`` (ny * nx): the swarm's coverage; ``p_flat``: the prior; candidate ``r`` replaces
@@ -277,7 +354,9 @@ def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows
     their gain in planned POS ``sum_j p_j (POD(C'_j) - POD(C_j))`` (R,): the full score's change,
     since every other cell keeps its coverage. The coverage equals the full
     ``total - old legs + new legs`` of :func:`leg_coverage` bit for bit (same samples, summed in
-    the same order)."""
+    the same order). ``scratch``: a boolean array of ``ny * nx`` False (kept so on return)
+    and an int64 array of ``ny * nx``, in which the cells are marked and numbered (the same
+    cells and positions as without, found without sorting)."""
     leg_n, cell_n, wt_n = leg_samples(starts, ends, grid, w)
     _, cell_a, wt_a = leg_samples(old[0], old[1], grid, w)
     movable = len(old) > 2
@@ -285,18 +364,26 @@ def move_gains(total, p_flat, grid: Grid, w: float, law: str, starts, ends, rows
         _, cell_b, wt_b = leg_samples(old[1], old[2], grid, w)
     else:
         cell_b, wt_b = cell_a[:0], wt_a[:0]
-    cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+    if scratch is None:
+        cells = np.unique(np.concatenate([cell_n, cell_a, cell_b]))
+        pos_n, pos_a, pos_b = (np.searchsorted(cells, q) for q in (cell_n, cell_a, cell_b))
+    else:  # the cells marked and read back in order, numbered (the scratch then cleared)
+        mark, number = scratch
+        for q in (cell_n, cell_a, cell_b):
+            mark[q] = True
+        cells = np.flatnonzero(mark)
+        mark[cells] = False
+        number[cells] = np.arange(len(cells))
+        pos_n, pos_a, pos_b = number[cell_n], number[cell_a], number[cell_b]
     nu = len(cells)
     n_rows = len(kinds)
     new = np.bincount(
-        np.asarray(rows, dtype=np.int64)[leg_n] * nu + np.searchsorted(cells, cell_n),
+        np.asarray(rows, dtype=np.int64)[leg_n] * nu + pos_n,
         weights=wt_n,
         minlength=n_rows * nu,
     ).reshape(n_rows, nu)
-    old_a = np.bincount(np.searchsorted(cells, cell_a), weights=wt_a, minlength=nu)
-    old_b = (
-        np.bincount(np.searchsorted(cells, cell_b), weights=wt_b, minlength=nu) if movable else 0.0
-    )
+    old_a = np.bincount(pos_a, weights=wt_a, minlength=nu)
+    old_b = np.bincount(pos_b, weights=wt_b, minlength=nu) if movable else 0.0
     here = total[cells]
     base0 = here - old_a - old_b
     base1 = here - old_a
@@ -394,48 +481,17 @@ def refine_routes(
     radii = np.asarray(RADII) * c
     offsets = (radii[:, None, None] * _DIRS[None]).reshape(-1, 2)
     across = np.concatenate([[0.0], radii, -radii]) if len(radii) else np.zeros(1)
+    scratch = (np.zeros(p_flat.size, dtype=bool), np.zeros(p_flat.size, dtype=np.int64))
     for _ in range(max(0, int(sweeps))):
         kept = 0
         for k in range(n):
             i = 1
             while i < len(paths[k]):  # i: the waypoint moved/deleted, or inserted before
                 path = paths[k]
-                qs: list[np.ndarray] = []  # the candidates: ops 0 move, 1 delete, 2 insert
-                ops: list[int] = []
-                starts: list[np.ndarray] = []
-                ends: list[np.ndarray] = []
-                rows: list[int] = []
-                kinds: list[int] = []  # 0: legs (i-1, i), (i, i+1) replaced; 1: leg (i-1, i)
-                a = path[i - 1]
-                b = path[i]
-                movable = i < len(path) - 1
-                if movable:
-                    nxt = path[i + 1]
-                    for off in offsets:
-                        q = np.clip(b + off, lo, hi)
-                        qs.append(q)
-                        ops.append(0)
-                        starts += [a, q]
-                        ends += [q, nxt]
-                        rows += [len(kinds)] * 2
-                        kinds.append(0)
-                    qs.append(b)
-                    ops.append(1)
-                    starts.append(a)
-                    ends.append(nxt)
-                    rows.append(len(kinds))
-                    kinds.append(0)
-                d = b - a
-                length = float(np.hypot(*d))
-                normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
-                for s in across:
-                    q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
-                    qs.append(q)
-                    ops.append(2)
-                    starts += [a, q]
-                    ends += [q, b]
-                    rows += [len(kinds)] * 2
-                    kinds.append(1)
+                # the candidates (:func:`candidate_edits`): qs, ops 0 move, 1 delete, 2 insert
+                qs, ops, starts, ends, rows, kinds = candidate_edits(
+                    path, i, offsets, across, lo, hi
+                )
 
                 def cand(c: int, path=path, i=i, qs=qs, ops=ops) -> np.ndarray:
                     if ops[c] == 0:
@@ -446,8 +502,9 @@ def refine_routes(
 
                 ok = fits_all(path, i, qs, ops, k)
                 cells, cand_here, gain = move_gains(
-                    total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2]
-                )
+                    total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2],
+                    scratch,
+                )  # fmt: skip
                 vals = value + gain
                 vals = np.where(ok, vals, -np.inf)
                 j = -1

@@ -1,0 +1,297 @@
+"""The planner's fast paths (i24-speed, issue 24: the 10 s target on priors of many small blobs)
+give the straightforward computations' results bit for bit, on random inputs: so the plans do
+not change (docs/PLANNER.md, "Faster planning on priors of many small blobs")."""
+
+import math
+
+import numpy as np
+
+from poc_env.agents.planning import _kernels
+from poc_env.agents.planning.allocation import nearest_field
+from poc_env.agents.planning.coverage_boxes import (
+    added_gain,
+    block_sums,
+    box_routes,
+    cut_lines,
+    cut_route,
+)
+from poc_env.agents.planning.flight_rules import Speeds, plan_speeds, reserve_s
+from poc_env.agents.planning.greedy_rectangles import _lines, _side_lengths
+from poc_env.agents.planning.options import PlanOptions
+from poc_env.agents.planning.refine import (
+    Airspace,
+    AirspaceCount,
+    candidate_edits,
+    move_gains,
+    route_fits,
+    swarm_violations,
+)
+from poc_env.config import load_scenario
+from poc_env.sim.core import takeoff_heading
+from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.search_theory import pod_from_coverage
+
+
+def test_nearest_field_is_the_line_by_line_field():
+    """Each line's field in one pass equals the field found line by line (the old
+    ``field_of``: out-and-back distance to the line's midpoint, ties to the lower index)."""
+    rng = np.random.default_rng(0)
+    for trial in range(30):
+        f = int(rng.integers(1, 5))
+        heads = rng.uniform(0, 4e5, (f, 2, 2))
+        if f > 1 and trial % 3 == 0:
+            heads[1] = heads[0]  # two fields at the same place: the tie goes to the first
+        lines = []
+        for _ in range(int(rng.integers(0, 40))):
+            y, a, b = rng.uniform(0, 4e5, 3)
+            lines.append((float(y), np.float64(a), np.float64(b), int(rng.integers(0, 80))))
+        got = nearest_field(lines, heads)
+        want = []
+        for ln in lines:
+            mid = np.array([0.5 * (ln[1] + ln[2]), ln[0]])
+            d = np.hypot(*(heads[:, 0] - mid).T) + np.hypot(*(heads[:, 1] - mid).T)
+            want.append(int(np.argmin(d)))
+        assert got.tolist() == want, trial
+
+
+def _edits_by_loop(path, i, offsets, across, lo, hi):
+    """The refinement's candidate edits built candidate by candidate (before i24-speed)."""
+    qs, ops, starts, ends, rows, kinds = [], [], [], [], [], []
+    a, b = path[i - 1], path[i]
+    if i < len(path) - 1:
+        nxt = path[i + 1]
+        for off in offsets:
+            q = np.clip(b + off, lo, hi)
+            qs.append(q)
+            ops.append(0)
+            starts += [a, q]
+            ends += [q, nxt]
+            rows += [len(kinds)] * 2
+            kinds.append(0)
+        qs.append(b)
+        ops.append(1)
+        starts.append(a)
+        ends.append(nxt)
+        rows.append(len(kinds))
+        kinds.append(0)
+    d = b - a
+    length = float(np.hypot(*d))
+    normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
+    for s in across:
+        q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
+        qs.append(q)
+        ops.append(2)
+        starts += [a, q]
+        ends += [q, b]
+        rows += [len(kinds)] * 2
+        kinds.append(1)
+    return [np.array(x) for x in (qs, ops, starts, ends, rows, kinds)]
+
+
+def test_candidate_edits_are_the_loops():
+    """The candidate moves, deletions and insertions of a waypoint built in one numpy pass are
+    the loop's, bit for bit (points clipped at the map's edge, the landing only inserted
+    before, a zero-length leg)."""
+    rng = np.random.default_rng(1)
+    lo, hi = np.array([0.0, 0.0]), np.array([2e5, 1.5e5])
+    radii = np.array([0.5, 1.0, 2.0, 4.0]) * 5000.0
+    dirs = np.array([[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4])
+    offsets = (radii[:, None, None] * dirs[None]).reshape(-1, 2)
+    across = np.concatenate([[0.0], radii, -radii])
+    for trial in range(40):
+        path = rng.uniform(-1e4, 2.1e5, (int(rng.integers(2, 9)), 2))
+        if trial % 5 == 0:
+            path[1] = path[0]  # a zero-length leg
+        for i in range(1, len(path)):
+            got = candidate_edits(path, i, offsets, across, lo, hi)
+            want = _edits_by_loop(path, i, offsets, across, lo, hi)
+            for g, x in zip(got, want, strict=True):
+                assert g.shape == x.shape and np.array_equal(g, x), (trial, i)
+
+
+def test_move_gains_with_scratch_equal_without():
+    """``move_gains`` with its scratch arrays (cells marked, not sorted) gives the same cells,
+    coverage and gains bit for bit, and leaves the scratch clear."""
+    sc = load_scenario("small")
+    grid = Grid.from_config(sc.map)
+    w, law = sc.sensor.sweep_width_m, sc.sensor.law
+    rng = np.random.default_rng(2)
+    p_flat = rng.gamma(0.3, size=grid.nx * grid.ny)
+    x0, y0, x1, y1 = grid.bounds
+    lo, hi = np.array([x0, y0]), np.array([x1, y1])
+    offsets = rng.normal(0, 2 * grid.cell_m, (12, 2))
+    across = rng.normal(0, 2 * grid.cell_m, 5)
+    scratch = (np.zeros(p_flat.size, dtype=bool), np.zeros(p_flat.size, dtype=np.int64))
+    for trial in range(30):
+        path = lo - 0.1 * (hi - lo) + rng.random((5, 2)) * 1.2 * (hi - lo)
+        total = rng.gamma(0.5, size=p_flat.size) * (rng.random(p_flat.size) < 0.5)
+        i = int(rng.integers(1, 5))
+        _, _, starts, ends, rows, kinds = candidate_edits(path, i, offsets, across, lo, hi)
+        args = (total, p_flat, grid, w, law, starts, ends, rows, kinds, path[i - 1 : i + 2])
+        want = move_gains(*args)
+        got = move_gains(*args, scratch)
+        for g, x in zip(got, want, strict=True):
+            assert np.array_equal(g, x), trial
+        assert not scratch[0].any()
+
+
+def test_airspace_count_keeps_a_uavs_pairs_only_until_a_move_is_kept():
+    """The airspace count keeps a UAV's pairs between its tried moves; once any move is kept
+    they are stale: every count after tries, drops and keeps of different UAVs equals the
+    full count from scratch."""
+    rng = np.random.default_rng(4)
+    air = Airspace(60.0, 1500.0, 5000.0, 2)
+    pos = rng.normal(0, 3000.0, (40, 6, 2))
+    act = rng.random((40, 6)) > 0.2
+    count = AirspaceCount(air, pos, act)
+    for trial, (k, keep) in enumerate(
+        [(0, False), (0, False), (1, True), (0, False), (0, True), (2, False), (1, True),
+         (2, False), (2, True), (0, False)]
+    ):  # fmt: skip
+        new_pos = rng.normal(0, 3000.0, (40, 2))
+        new_act = rng.random(40) > 0.2
+        value, state = count.move(k, new_pos, new_act)
+        trial_pos, trial_act = pos.copy(), act.copy()
+        trial_pos[:, k], trial_act[:, k] = new_pos, new_act
+        assert value == swarm_violations(trial_pos, trial_act, 1500.0, 5000.0, 2), trial
+        if keep:
+            count.keep(state)
+            pos, act = trial_pos, trial_act
+        assert count.value == swarm_violations(pos, act, 1500.0, 5000.0, 2), trial
+
+
+def test_cut_route_is_cut_lines():
+    """A lawnmower cut to eq. 18 with its fits in one compiled pass (``cut_route``) is
+    ``cut_lines`` with ``route_fits`` called per prefix and per bisection step, bit for bit:
+    whole lines dropped, the first dropped one flown in part or not (``part``), a waypoint
+    before the lawnmower, budgets from nothing fitting to everything fitting."""
+    rng = np.random.default_rng(5)
+    speeds = Speeds(40.0, 40.0, 30.0)
+    turn = math.radians(20.0)
+    for trial in range(60):
+        lo = rng.uniform(0, 2e5, 2)
+        hi = lo + rng.uniform(2e3, 6e4, 2)
+        head = rng.uniform(-2e4, 2.2e5, (int(rng.integers(1, 3)), 2))
+        landing = rng.uniform(-2e4, 2.2e5, 2)
+        wps = _lines(lo, hi, 5000.0, head[-1])
+        budget = float(rng.uniform(2e3, 2e4))
+        reserve = float(rng.uniform(0, 300))
+        h0 = None if trial % 4 == 0 else float(rng.uniform(-np.pi, np.pi))
+        opt = PlanOptions(part=trial % 3 != 0, part_steps=int(rng.integers(1, 14)))
+        min_part = float(rng.choice([0.0, 5000.0]))
+
+        def fits(q, head=head, landing=landing, budget=budget, reserve=reserve, h0=h0):
+            path = np.vstack([head, q, landing])
+            return route_fits(path, speeds, turn, budget, reserve, h0)
+
+        want, want_kept = cut_lines(wps, fits, min_part, opt)
+        got, got_kept = cut_route(head, wps, landing, speeds, turn, budget, reserve, h0,
+                                  min_part, opt)  # fmt: skip
+        assert got_kept == want_kept, trial
+        assert got.shape == want.shape and np.array_equal(got, want), trial
+
+
+def _best_box_brute(table, widths, heights, orig, h, w, speeds, turn, budget, to, la):
+    """The box search without any bound: every box in the kernel's order, kept when it fits
+    and beats the best so far."""
+    ny, nx = table.shape[0] - 1, table.shape[1] - 1
+    best, found = 0.0, (0, 0, 0, 0)
+    for nw in widths:
+        for nh in heights:
+            lx, ly = nw * h, nh * h
+            long_, short = max(lx, ly), min(lx, ly)
+            n = max(1.0, math.ceil(short / w - 1e-9))
+            search = (n * long_ + (n - 1.0) * short / n) / speeds[1] + (n - 1.0) * turn
+            if search > budget:
+                continue
+            for j in range(ny - nh + 1):
+                for i in range(nx - nw + 1):
+                    mass = table[j + nh, i + nw] - table[j, i + nw] - table[j + nh, i] + table[j, i]
+                    if not mass > best:
+                        continue
+                    xlo, ylo = orig[0] + h * i, orig[1] + h * j
+                    dxt = max(xlo - to[0], to[0] - xlo - lx, 0.0)
+                    dxl = max(xlo - la[0], la[0] - xlo - lx, 0.0)
+                    dyt = max(ylo - to[1], to[1] - ylo - ly, 0.0)
+                    dyl = max(ylo - la[1], la[1] - ylo - ly, 0.0)
+                    t = math.hypot(dxt, dyt) / speeds[0] + math.hypot(dxl, dyl) / speeds[2]
+                    if t + search <= budget:
+                        best, found = mass, (i, j, int(nw), int(nh))
+    return (best, *found)
+
+
+def test_box_search_bounds_skip_only_losing_boxes():
+    """The compiled box search (rows and runs of positions skipped when their mass cannot
+    beat the best so far) finds the box of the search without bounds: same mass, position
+    and size, ties included (sparse random masses, many exact zeros and equal values)."""
+    rng = np.random.default_rng(6)
+    speeds = np.array([40.0, 40.0, 30.0])
+    for trial in range(25):
+        ny, nx = (int(x) for x in rng.integers(3, 22, 2))
+        cells = rng.gamma(0.2, size=(ny, nx)) * (rng.random((ny, nx)) < 0.3)
+        if trial % 4 == 0:
+            cells = np.round(cells * 4) / 4  # equal masses: ties
+        table = np.zeros((ny + 1, nx + 1))
+        table[1:, 1:] = cells.cumsum(0).cumsum(1)
+        widths = _side_lengths(nx).astype(np.int64)
+        heights = _side_lengths(ny).astype(np.int64)
+        h, w = 5000.0, 5000.0 * float(rng.choice([0.75, 1.0, 2.0]))
+        orig = np.array([0.0, 0.0])
+        to = rng.uniform(-2e4, nx * h + 2e4, 2)
+        la = rng.uniform(-2e4, nx * h + 2e4, 2)
+        budget = float(rng.uniform(2e3, 3e4))
+        args = (table, widths, heights, orig, h, w, speeds, 60.0, budget, to, la)
+        got = _kernels.best_box(*args)
+        want = _best_box_brute(*args)
+        assert tuple(float(x) for x in got) == tuple(float(x) for x in want), trial
+
+
+def test_block_sums_are_numpys():
+    """The ``f x f`` block sums written out for ``f = 2`` are numpy's ``sum(axis=(1, 3))`` bit
+    for bit (values over many magnitudes, so a different order would round differently)."""
+    rng = np.random.default_rng(7)
+    for f in (1, 2, 3):
+        for my, mx in ((80, 80), (7, 13), (1, 1)):
+            block = rng.random((my * f, mx * f)) * 10.0 ** rng.uniform(-12, 0, (my * f, mx * f))
+            block[rng.random(block.shape) < 0.2] = 0.0
+            want = block.reshape(my, f, mx, f).sum(axis=(1, 3))
+            assert np.array_equal(block_sums(block, my, mx, f), want), (f, my, mx)
+
+
+def test_added_gain_is_the_full_sum():
+    """The mass a coverage adds, POD computed only where it adds, is the full array's sum bit
+    for bit (``sum(prior * (POD(cov + add) - POD(cov)))``)."""
+    rng = np.random.default_rng(8)
+    for trial in range(30):
+        shape = (int(rng.integers(1, 60)), int(rng.integers(1, 60)))
+        prior = rng.gamma(0.3, size=shape)
+        cov = rng.gamma(0.5, size=shape) * (rng.random(shape) < 0.6)
+        add = rng.gamma(0.5, size=shape) * (rng.random(shape) < 0.1 * (trial % 10))
+        base = pod_from_coverage(cov)
+        want = float(np.sum(prior * (pod_from_coverage(cov + add) - base)))
+        assert added_gain(prior, cov, base, add, "inverse_cube") == want, trial
+
+
+def test_derived_gain_tables_give_the_recomputed_routes():
+    """Second lawnmowers' gain tables derived from the first's (recomputed where the first
+    flies) give the routes of tables recomputed whole (``share_tables=False``), on boxes of
+    2 x 2 cells (``max_cells=20`` on ``paper_6_2``: the written-out block sums) and of single
+    cells, its own prior and a random one."""
+    sc = load_scenario("paper_6_2")
+    grid = Grid.from_config(sc.map)
+    to = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    la = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    u = sc.uav
+    rand = np.random.default_rng(9).gamma(0.3, size=grid.shape)
+    for prior in (build_prior(sc.map), rand / rand.sum()):
+        for cells in (20, 80):
+
+            def routes(share: bool, prior=prior, cells=cells):
+                return box_routes(
+                    prior, grid, sc.sensor.sweep_width_m, sc.sensor.law, plan_speeds(sc), to,
+                    la, u.usable_endurance_s, u.max_turn_rate_rad_s, reserve_s(sc),
+                    takeoff_heading(grid.bounds, to), rounds=1,
+                    options=PlanOptions(max_cells=cells, share_tables=share),
+                )  # fmt: skip
+
+            assert routes(True) == routes(False), cells
