@@ -22,7 +22,10 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
   the point and the ground;
 - eq. 19 bounds the pitch by ``beta_max`` (``uav.max_pitch_deg``), so the altitude changes by at
   most ``tan(beta_max)`` per metre flown: the profile is the least such function above the
-  wanted one (a forward and a backward pass), raised where a climb must start early;
+  wanted one (a forward and a backward pass), raised where a climb must start early; with a
+  landing field, lowered where the descent must start early so that the final glide from the
+  approach point to the field keeps the same bound (:func:`_glide_cap`; refused when the
+  clearance needs more height than that glide allows);
 - legs are sampled every half cell; the profile keeps the route's vertices and, between them,
   the fewest intermediate points whose straight altitude legs stay above the required altitude
   and within :data:`PROFILE_TOLERANCE_M` below the profile.
@@ -475,6 +478,8 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         z[i] = max(z[i], z[i - 1] - grad * (dist[i] - dist[i - 1]))
     for i in range(len(z) - 2, -1, -1):
         z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
+    if landing_xy is not None:
+        z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -485,6 +490,39 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         field_m=t.field_elevation(path[0]),
         landing_field_m=t.field_elevation(land),
     )
+
+
+def _glide_cap(
+    t: Terrain, p: np.ndarray, z: np.ndarray, req: np.ndarray, dist: np.ndarray, land: Any,
+    where: str,
+) -> np.ndarray:
+    """``z`` lowered so that the final glide, straight from the approach point ``p[-1]`` to the
+    landing field ``land`` (on the ground), keeps eq. 19's ``tan(beta_max)`` too: at most
+    ``field + tan(beta_max) x (distance flown to the field)`` at every point (a descent started
+    early enough; the lower of two such limited profiles is one).
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named: the clearance needs more height than that glide allows.
+    """
+    grad = math.tan(t.max_pitch_rad)
+    field = t.field_elevation(land)
+    to_go = dist[-1] - dist + float(np.hypot(*(land - p[-1])))
+    out = np.minimum(z, field + grad * to_go)
+    low = out < req - 1e-6
+    if low.any():
+        i = int(np.argmax(low))
+        x, y = p[i]
+        raise ConfigError(
+            where, f"ground {req[i] - t.min_clearance_m:.0f} m AMSL near ({x / 1e3:.1f}, "
+            f"{y / 1e3:.1f}) km, {to_go[i] / 1e3:.1f} km before a landing field at {field:.0f} m",
+            "a glide to the landing field within eq. 19's pitch bound uav.max_pitch_deg = "
+            f"{math.degrees(t.max_pitch_rad):g} deg that keeps terrain.min_clearance_m = "
+            f"{t.min_clearance_m:g} m (re-plan the last search leg or the landing field away "
+            "from the high ground, or a UAV that can glide steeper)",
+        )  # fmt: skip
+    return out
 
 
 def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.ndarray) -> list:

@@ -325,3 +325,38 @@ def test_dem_heights_beyond_the_earths_are_refused_by_import_nothing_written(tmp
     with pytest.raises(ConfigError, match="within \\+-12000 m") as err:
         load_terrain(load_scenario(_scenario(dem)))
     assert err.value.field == "terrain.dem"
+
+
+# --------------------------------------------------------------------------- audit (terrain-audit)
+
+
+def _slope(m_per_km: float) -> list:
+    """120 x 100 cells of 1 km from (-40, -30) km: ground rising east from 600 m at x = -10 km
+    (to at most 5,000 m)."""
+    x = -40 + np.arange(120) + 0.5
+    return np.tile(np.minimum(VALLEY_M + m_per_km * (x + 10.0), 5000.0), (100, 1)).tolist()
+
+
+def test_final_glide_to_the_field_keeps_the_pitch_bound():
+    """The approach point 4 km up a slope from the field: the glide from it to the field (the
+    mission's last leg, approach -> NAV_LAND) is flown within eq. 19's tan(beta_max) too; a
+    slope too steep for any such glide that keeps the clearance is refused, naming the UAV
+    and the landing field's glide (audit: glides of 0.278-0.308 against tan 15 deg = 0.268
+    were exported)."""
+    sc = load_scenario(_scenario(None, terrain={"elevation_m": _slope(30.0), "cell_km": 1.0,
+                                                "origin_km": [-40, -30]}))  # fmt: skip
+    t = load_terrain(sc)
+    field, approach = np.array([-10e3, 20e3]), np.array([-6e3, 20e3])
+    p = profile(t, [field, [20e3, 20e3], [20e3, 25e3], approach], "UAV 3", field)
+    grad = math.tan(sc.uav.max_pitch_rad)
+    glide = (p.amsl_m[-1] - t.field_elevation(field)) / float(np.hypot(*(approach - field)))
+    assert glide <= grad + 1e-9
+    legs = np.abs(np.diff(p.amsl_m)) / np.hypot(*np.diff(p.points_m, axis=0).T)
+    assert legs.max() <= grad + 1e-9
+    assert clearance_violations(t, p, step_m=50.0) == 0
+    assert p.amsl_m.max() >= t.field_elevation(field) + sc.uav.cruise_altitude_m  # still cruising
+    steep = load_scenario(_scenario(None, terrain={"elevation_m": _slope(250.0), "cell_km": 1.0,
+                                                   "origin_km": [-40, -30]}))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"UAV 3.*glide to the landing field.*max_pitch_deg"):
+        profile(load_terrain(steep), [field, [-2e3, 20e3], approach], "UAV 3", field)
+
