@@ -360,3 +360,24 @@ def test_final_glide_to_the_field_keeps_the_pitch_bound():
     with pytest.raises(ConfigError, match=r"UAV 3.*glide to the landing field.*max_pitch_deg"):
         profile(load_terrain(steep), [field, [-2e3, 20e3], approach], "UAV 3", field)
 
+
+def test_geojson_approach_height_is_the_approach_drawn(tmp_path):
+    """The landing approach's ``approach_height_m`` is the height its own LineString descends
+    over (approach point -> field), with terrain and on a flat map below 300 m (audit: it was
+    the constant 300 m while a terrain approach started 826 m above its field)."""
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif")))
+    plan = make_plan(sc, planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    flat = {k: v for k, v in plan.items() if k != "terrain"}
+    write_plan(flat, tmp_path / "flat.json")
+    cases = [("plan.json", {}), ("flat.json", {"altitude_m": 200.0})]
+    seen = []
+    for name, kw in cases:
+        (f,) = export_plan(tmp_path / name, "geojson", out_dir=tmp_path / name[:-5], **kw)
+        for ft in json.loads(f.read_text())["features"]:
+            if ft["properties"]["kind"] == "landing_approach":
+                (_, _, za), (_, _, zf) = ft["geometry"]["coordinates"]
+                assert ft["properties"]["approach_height_m"] == pytest.approx(za - zf, abs=0.1)
+                seen.append(za - zf)
+    assert max(seen) > 300.0 + 1.0 and min(seen) == pytest.approx(200.0)
+
