@@ -381,3 +381,22 @@ def test_geojson_approach_height_is_the_approach_drawn(tmp_path):
                 seen.append(za - zf)
     assert max(seen) > 300.0 + 1.0 and min(seen) == pytest.approx(200.0)
 
+
+def test_camera_search_legs_below_the_search_height_are_warned(tmp_path):
+    """A camera's W is resolved at ``uav.cruise_altitude_m`` above the ground; where the ceiling
+    holds a search leg lower over the ridge, its footprint is narrower than the plan assumes:
+    the plan says so, naming the UAV, the least height and the W there (audit: 32-50 % of the
+    search-leg points flew as low as 602 m, W 695 m against the planned 1155 m, silently). The
+    fixed width (the paper's) does not depend on the height: no warning."""
+    import warnings
+
+    cam = {"sensor": {"model": "camera", "fov_deg": 60.0}}
+    dem = _dem(tmp_path / "d.tif")
+    low = _scenario(dem, uav={"max_altitude_m": 4600}, **cam)
+    with pytest.warns(UserWarning, match=r"UAV \d.*as low as \d+ m above the ground.*"
+                      r"uav\.cruise_altitude_m = 1000 m.*W \d+ m .*1155 m"):  # fmt: skip
+        make_plan(load_scenario(low), planner="allocation", refine=0)
+    for data in (_scenario(dem, **cam), _scenario(dem, uav={"max_altitude_m": 4600})):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            make_plan(load_scenario(data), planner="allocation", refine=0)
