@@ -8,7 +8,8 @@ area (the scenario's own projected CRS, the local metres of
 bilinear ground (``ground_m``, drawn by the map report) and the highest ground of each cell
 (``ground_max_m``, ``Resampling.max``), which the clearance reads; the airfields' elevations
 are sampled bilinearly from the DEM itself. A DEM without a CRS, one that does not cover the
-operating area, or nodata/NaN over it is refused naming ``terrain.dem``.
+operating area, or nodata/NaN over it is refused naming ``terrain.dem``. Heights are read in
+metres (:func:`dem_metres`): the GeoTIFF's scale and offset applied, feet converted.
 
 A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
 :func:`terrain_record`), so an export needs no DEM. :func:`profile` gives a UAV's altitudes
@@ -280,7 +281,7 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
             from poc_env import limits
 
             limits.check_memory(field, str(path), 8.0 * src.width * src.height, "DEM band")
-            band = src.read(1, masked=True).astype(float).filled(np.nan)
+            band = dem_metres(src, src.read(1, masked=True).astype(float).filled(np.nan))
             band[~np.isfinite(band)] = np.nan
             _check_dem_covers(field, path, src, dst_crs, px0, py0, need)
             out = {}
@@ -304,6 +305,37 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
             )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
     return out["mean"], gmax, elev
+
+
+#: The height units a DEM band may declare (GDAL's unit type, lower case): metres per unit.
+#: An empty unit is read as metres (the scenario's ``terrain.dem``: metres AMSL).
+HEIGHT_UNITS = {
+    **dict.fromkeys(("", "m", "metre", "metres", "meter", "meters"), 1.0),
+    **dict.fromkeys(("ft", "foot", "feet", "international foot"), 0.3048),
+    **dict.fromkeys(("us-ft", "ftus", "us survey foot", "us survey feet"), 1200.0 / 3937.0),
+}
+
+
+def dem_metres(src: Any, raw: np.ndarray, field: str = "terrain.dem") -> np.ndarray:
+    """Band 1 of the open GeoTIFF ``src`` (``raw``, as stored) in metres: GDAL's scale and offset
+    applied (``raw x scale + offset``, as an int16 of decimetres declares), then the band's
+    height unit (:data:`HEIGHT_UNITS`: metres, feet or US survey feet).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``field``: a unit other than those.
+    """
+    unit = str((src.units or (None,))[0] or "").strip()
+    factor = HEIGHT_UNITS.get(unit.lower())
+    if factor is None:
+        raise ConfigError(
+            field, f"{Path(src.name).name}: heights in {unit!r}",
+            "a DEM whose band declares its heights in metres or feet (or no unit: metres)",
+        )  # fmt: skip
+    scale = float((src.scales or (1.0,))[0])
+    offset = float((src.offsets or (0.0,))[0])
+    return (np.asarray(raw, dtype=float) * scale + offset) * factor
 
 
 def _check_dem_covers(
@@ -600,7 +632,7 @@ def dem_heights_at(dem: str | Path, latlon: Any) -> np.ndarray:
 
     pts = np.asarray(latlon, dtype=float).reshape(-1, 2)
     with rasterio.open(dem) as src:
-        band = src.read(1).astype(float)
+        band = dem_metres(src, src.read(1))
         to_src = Transformer.from_crs("EPSG:4326", src.crs, always_xy=True)
         sx, sy = to_src.transform(pts[:, 1], pts[:, 0])
         cols, rows = ~src.transform @ (np.asarray(sx), np.asarray(sy))

@@ -400,3 +400,46 @@ def test_camera_search_legs_below_the_search_height_are_warned(tmp_path):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             make_plan(load_scenario(data), planner="allocation", refine=0)
+
+
+def _rewrite(src: Path, dst: Path, scale: float, dtype: str, offset: float = 0.0, **meta) -> Path:
+    """``src``'s heights stored as ``(height - offset) / scale`` in ``dtype``, with GDAL
+    metadata ``meta`` (``scales``/``offsets``, ``units``)."""
+    with rasterio.open(src) as s:
+        z, prof = s.read(1).astype(float), s.profile
+    prof.update(dtype=dtype, nodata=-32768 if dtype == "int16" else -9999.0)
+    with rasterio.open(dst, "w", **prof) as d:
+        raw = (z - offset) / scale
+        d.write(np.round(raw).astype(dtype) if dtype == "int16" else raw.astype(dtype), 1)
+        for key, value in meta.items():
+            setattr(d, key, value)
+    return dst
+
+
+@pytest.mark.parametrize(
+    ("scale", "dtype", "meta"),
+    [(0.2, "int16", {"offset": 100.0, "scales": (0.2,), "offsets": (100.0,)}),  # GDAL scale
+     (0.3048, "float32", {"units": ("ft",)}),  # feet, the band's unit type
+     (1200 / 3937, "float32", {"units": ("US survey foot",)})],
+    ids=["int16-scale-offset", "feet", "us-survey-feet"],
+)  # fmt: skip
+def test_dem_scale_offset_and_feet_are_read_as_metres(tmp_path, scale, dtype, meta):
+    """The heights a GeoTIFF declares (GDAL scale/offset; a band unit in feet) are read as
+    metres AMSL, as the same DEM written in metres (audit: a 2,412 m DEM in feet was read as
+    7,913 m, one in int16 decimetres as 24,119 m)."""
+    metres = _dem(tmp_path / "m.tif")
+    other = _rewrite(metres, tmp_path / "o.tif", scale, dtype, **meta)
+    want, got = (load_terrain(load_scenario(_scenario(p))) for p in (metres, other))
+    assert got.ground_max_m.max() == pytest.approx(RIDGE_M, abs=5.0)
+    assert np.allclose(got.ground_m, want.ground_m, atol=0.1)
+    assert got.fields[0][2] == pytest.approx(want.fields[0][2], abs=0.1)
+    lat_lon = [[46.6, 8.3], [46.7, 7.8]]
+    assert np.allclose(dem_heights_at(other, lat_lon), dem_heights_at(metres, lat_lon), atol=0.1)
+
+
+def test_dem_in_an_unknown_height_unit_is_refused(tmp_path):
+    dem = _rewrite(_dem(tmp_path / "m.tif"), tmp_path / "o.tif", 1.0, "float32",
+                   units=("fathom",))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"fathom.*metres or feet") as err:
+        load_terrain(load_scenario(_scenario(dem)))
+    assert err.value.field == "terrain.dem"
