@@ -169,7 +169,7 @@ def load_terrain(sc: Any) -> Terrain | None:
     else:
         cell = t.cell_m or min(sc.map.cell_m, DEFAULT_TERRAIN_CELL_M)
         origin, shape = _aligned_grid(sc, area, cell)
-        gmean, gmax, elev = _read_dem(sc, Path(str(t.dem)), origin, shape, cell)
+        gmean, gmax, elev = _read_dem(sc, Path(str(t.dem)), origin, shape, cell, area)
         source = Path(str(t.dem)).name
         fields = tuple((a.name, a.position_m, e) for a, e in zip(sc.airfields, elev))
     key = "terrain.elevation_m" if t.elevation_m is not None else "terrain.dem"
@@ -237,8 +237,14 @@ def _aligned_grid(sc: Any, area: tuple, cell: float) -> tuple[tuple[float, float
     return (mx + i0 * cell, my + j0 * cell), (ny, nx)
 
 
-def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> tuple:
-    """(bilinear ground, cell-max ground, airfield elevations) from the GeoTIFF ``path``."""
+def _read_dem(
+    sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, area: tuple
+) -> tuple:
+    """(bilinear ground, cell-max ground, airfield elevations) from the GeoTIFF ``path``.
+
+    The DEM must cover the operating area ``area`` (x0, y0, x1, y1); the grid's outer cells,
+    aligned with the map, may reach beyond it and beyond the DEM (reproject fills them from the
+    DEM's pixels they overlap; a cell it cannot fill is refused as nodata)."""
     from poc_env.errors import require_extra
 
     require_extra("geo", "a terrain.dem GeoTIFF", "rasterio")
@@ -266,7 +272,6 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
     px0, py0 = fwd.transform(lon0, lat0)
     ny, nx = shape
     dst_transform = Affine(cell, 0.0, origin[0] + px0, 0.0, -cell, origin[1] + ny * cell + py0)
-    need = (origin[0], origin[1], origin[0] + nx * cell, origin[1] + ny * cell)
     try:
         src = rasterio.open(path)
     except RasterioIOError as err:
@@ -283,7 +288,7 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
             limits.check_memory(field, str(path), 8.0 * src.width * src.height, "DEM band")
             band = dem_metres(src, src.read(1, masked=True).astype(float).filled(np.nan))
             band[~np.isfinite(band)] = np.nan
-            _check_dem_covers(field, path, src, dst_crs, px0, py0, need)
+            _check_dem_covers(field, path, src, dst_crs, px0, py0, area)
             out = {}
             for name, how in (("mean", Resampling.bilinear), ("max", Resampling.max)):
                 dst = np.full((ny, nx), np.nan)

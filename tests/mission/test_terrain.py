@@ -443,3 +443,37 @@ def test_dem_in_an_unknown_height_unit_is_refused(tmp_path):
     with pytest.raises(ConfigError, match=r"fathom.*metres or feet") as err:
         load_terrain(load_scenario(_scenario(dem)))
     assert err.value.field == "terrain.dem"
+
+
+def test_dem_covering_the_operating_area_is_enough(tmp_path):
+    """A DEM clipped to the operating area (as the error states it) loads, though the terrain
+    grid, aligned with the map, reaches up to a cell beyond it (audit: a DEM from x = -30.65
+    km was refused for an area from -30.3 km, the message giving -31.0 km as the area's edge);
+    one short of the area is refused, naming the area's own edge."""
+    from rasterio.transform import from_origin
+
+    from poc_env.agents.mission.crs import crs_text, make_crs
+    from poc_env.sim.core import operating_area
+
+    def dem(x0_km: float) -> Path:
+        x0, y1, res = x0_km * 1e3, 61e3, 250.0
+        nx, ny = round((81e3 - x0) / res), round((y1 + 21e3) / res)
+        path = tmp_path / f"edge{x0_km}.tif"
+        with rasterio.open(
+            path, "w", driver="GTiff", width=nx, height=ny, count=1, dtype="float32",
+            transform=from_origin(x0, y1, res, res), crs=crs_text(make_crs("aeqd", ORIGIN)),
+        ) as dst:  # fmt: skip
+            dst.write(np.full((ny, nx), 800.0, dtype="float32"), 1)
+        return path
+
+    def scenario(path: Path):
+        data = _scenario(path)
+        data["airfields"][0]["position_km"] = [-10.3, 20.7]
+        return load_scenario(data)
+
+    sc = scenario(dem(-30.65))
+    assert operating_area(sc)[0] == pytest.approx(-30.3e3)
+    t = load_terrain(sc)
+    assert t.bounds[0] == pytest.approx(-31e3) and np.allclose(t.ground_max_m, 800.0)
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*x0, y0, x1, y1 = \[-30\.3, -20\.0"):
+        load_terrain(scenario(dem(-30.2)))
