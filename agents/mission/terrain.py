@@ -237,9 +237,7 @@ def _aligned_grid(sc: Any, area: tuple, cell: float) -> tuple[tuple[float, float
     return (mx + i0 * cell, my + j0 * cell), (ny, nx)
 
 
-def _read_dem(
-    sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, area: tuple
-) -> tuple:
+def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, area: tuple) -> tuple:
     """(bilinear ground, cell-max ground, airfield elevations) from the GeoTIFF ``path``.
 
     The DEM must cover the operating area ``area`` (x0, y0, x1, y1); the grid's outer cells,
@@ -530,7 +528,12 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
 
 
 def _glide_cap(
-    t: Terrain, p: np.ndarray, z: np.ndarray, req: np.ndarray, dist: np.ndarray, land: Any,
+    t: Terrain,
+    p: np.ndarray,
+    z: np.ndarray,
+    req: np.ndarray,
+    dist: np.ndarray,
+    land: Any,
     where: str,
 ) -> np.ndarray:
     """``z`` lowered so that the final glide, straight from the approach point ``p[-1]`` to the
