@@ -41,6 +41,17 @@ def height(lon, lat, kind="valleys"):
     raise ValueError(kind)
 
 
+def write_tif(path, z, transform, crs, nodata=-9999.0):
+    """Write the float32 grid ``z`` (rows from the north) as a one-band GeoTIFF."""
+    ny, nx = z.shape
+    with rasterio.open(
+        path, "w", driver="GTiff", width=nx, height=ny, count=1, dtype="float32",
+        transform=transform, crs=crs, nodata=nodata,
+    ) as dst:  # fmt: skip
+        dst.write(np.asarray(z, dtype="float32"), 1)
+    return path
+
+
 def write_geo(
     path,
     kind,
@@ -49,7 +60,6 @@ def write_geo(
     lat=(45.9, 47.1),
     res=0.005,
     south_up=False,
-    point=False,
     void=None,
     nodata=-9999.0,
 ):
@@ -63,23 +73,7 @@ def write_geo(
     if south_up:
         z = z[::-1].copy()
         tr = Affine(res, 0, lon[0], 0, res, lat[0])
-    if point:  # pixel-is-point: the transform's origin is the first pixel's centre
-        tr = tr * Affine.translation(0.5, 0.5)
-    with rasterio.open(
-        path,
-        "w",
-        driver="GTiff",
-        width=nx,
-        height=ny,
-        count=1,
-        dtype="float32",
-        transform=tr,
-        crs=crs,
-        nodata=nodata,
-    ) as dst:
-        dst.write(z, 1)
-        if point:
-            dst.update_tags(AREA_OR_POINT="Point")
+    write_tif(path, z, tr, crs, nodata)
     return path
 
 
@@ -105,19 +99,7 @@ def write_projected(path, kind, crs, res_m=250.0, rot_deg=0.0, units_per_m=1.0, 
     xs, ys = tr * (cols, rows)
     lon, lat = inv.transform(xs, ys)
     z = height(np.asarray(lon), np.asarray(lat), kind).astype("float32")
-    with rasterio.open(
-        path,
-        "w",
-        driver="GTiff",
-        width=n,
-        height=n,
-        count=1,
-        dtype="float32",
-        transform=tr,
-        crs=crs,
-        nodata=-9999.0,
-    ) as dst:
-        dst.write(z, 1)
+    write_tif(path, z, tr, crs)
     return path
 
 

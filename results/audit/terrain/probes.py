@@ -12,6 +12,7 @@ from probe import (
     scenario,
     write_geo,
     write_projected,
+    write_tif,
 )
 
 which = sys.argv[1:] or ["all"]
@@ -117,19 +118,7 @@ if want("edge"):  # a DEM covering the operating area but not the terrain grid's
     res = 250.0
     nx, ny = round((x1 - x0) / res), round((y1 - y0) / res)
     z = np.full((ny, nx), 800.0, dtype="float32")
-    with rasterio.open(
-        D / "edge.tif",
-        "w",
-        driver="GTiff",
-        width=nx,
-        height=ny,
-        count=1,
-        dtype="float32",
-        transform=_fo(x0, y1, res, res),
-        crs=crs,
-        nodata=-9999.0,
-    ) as d:
-        d.write(z, 1)
+    write_tif(D / "edge.tif", z, _fo(x0, y1, res, res), crs)
     data = scenario(D / "edge.tif")
     data["airfields"][0]["position_km"] = [-10.3, 20.7]
     sc = load_scenario(data)
