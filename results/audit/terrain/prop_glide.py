@@ -53,5 +53,7 @@ for s in map(int, seeds):
         c["glide_over"] += g > tan + 1e-9
         rows.append({"seed": s, "uav": u["id"], "glide": round(g, 4), "tan": round(tan, 4)})
     c["cases"] += 1
+    (out / "rows.json").write_text(json.dumps(rows, indent=0))  # after every case
+    print(s, dict(c), flush=True)
 print(dict(c))
 (out / "rows.json").write_text(json.dumps(rows, indent=0))
