@@ -157,7 +157,7 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
                     "kind": "landing_approach",
                     "name": f"UAV {u['id']} landing approach",
                     "approach_km": APPROACH_DISTANCE_M / 1e3,
-                    "approach_height_m": APPROACH_HEIGHT_M,
+                    "approach_height_m": round(app_z[0] - app_z[1], 1),  # as drawn
                 },
             }
         )

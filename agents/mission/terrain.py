@@ -8,7 +8,8 @@ area (the scenario's own projected CRS, the local metres of
 bilinear ground (``ground_m``, drawn by the map report) and the highest ground of each cell
 (``ground_max_m``, ``Resampling.max``), which the clearance reads; the airfields' elevations
 are sampled bilinearly from the DEM itself. A DEM without a CRS, one that does not cover the
-operating area, or nodata/NaN over it is refused naming ``terrain.dem``.
+operating area, or nodata/NaN over it is refused naming ``terrain.dem``. Heights are read in
+metres (:func:`dem_metres`): the GeoTIFF's scale and offset applied, feet converted.
 
 A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
 :func:`terrain_record`), so an export needs no DEM. :func:`profile` gives a UAV's altitudes
@@ -22,7 +23,10 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
   the point and the ground;
 - eq. 19 bounds the pitch by ``beta_max`` (``uav.max_pitch_deg``), so the altitude changes by at
   most ``tan(beta_max)`` per metre flown: the profile is the least such function above the
-  wanted one (a forward and a backward pass), raised where a climb must start early;
+  wanted one (a forward and a backward pass), raised where a climb must start early; with a
+  landing field, lowered where the descent must start early so that the final glide from the
+  approach point to the field keeps the same bound (:func:`_glide_cap`; refused when the
+  clearance needs more height than that glide allows);
 - legs are sampled every half cell; the profile keeps the route's vertices and, between them,
   the fewest intermediate points whose straight altitude legs stay above the required altitude
   and within :data:`PROFILE_TOLERANCE_M` below the profile.
@@ -165,7 +169,7 @@ def load_terrain(sc: Any) -> Terrain | None:
     else:
         cell = t.cell_m or min(sc.map.cell_m, DEFAULT_TERRAIN_CELL_M)
         origin, shape = _aligned_grid(sc, area, cell)
-        gmean, gmax, elev = _read_dem(sc, Path(str(t.dem)), origin, shape, cell)
+        gmean, gmax, elev = _read_dem(sc, Path(str(t.dem)), origin, shape, cell, area)
         source = Path(str(t.dem)).name
         fields = tuple((a.name, a.position_m, e) for a, e in zip(sc.airfields, elev))
     key = "terrain.elevation_m" if t.elevation_m is not None else "terrain.dem"
@@ -233,8 +237,12 @@ def _aligned_grid(sc: Any, area: tuple, cell: float) -> tuple[tuple[float, float
     return (mx + i0 * cell, my + j0 * cell), (ny, nx)
 
 
-def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> tuple:
-    """(bilinear ground, cell-max ground, airfield elevations) from the GeoTIFF ``path``."""
+def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, area: tuple) -> tuple:
+    """(bilinear ground, cell-max ground, airfield elevations) from the GeoTIFF ``path``.
+
+    The DEM must cover the operating area ``area`` (x0, y0, x1, y1); the grid's outer cells,
+    aligned with the map, may reach beyond it and beyond the DEM (reproject fills them from the
+    DEM's pixels they overlap; a cell it cannot fill is refused as nodata)."""
     from poc_env.errors import require_extra
 
     require_extra("geo", "a terrain.dem GeoTIFF", "rasterio")
@@ -262,7 +270,6 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
     px0, py0 = fwd.transform(lon0, lat0)
     ny, nx = shape
     dst_transform = Affine(cell, 0.0, origin[0] + px0, 0.0, -cell, origin[1] + ny * cell + py0)
-    need = (origin[0], origin[1], origin[0] + nx * cell, origin[1] + ny * cell)
     try:
         src = rasterio.open(path)
     except RasterioIOError as err:
@@ -277,9 +284,9 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
             from poc_env import limits
 
             limits.check_memory(field, str(path), 8.0 * src.width * src.height, "DEM band")
-            band = src.read(1, masked=True).astype(float).filled(np.nan)
+            band = dem_metres(src, src.read(1, masked=True).astype(float).filled(np.nan))
             band[~np.isfinite(band)] = np.nan
-            _check_dem_covers(field, path, src, dst_crs, px0, py0, need)
+            _check_dem_covers(field, path, src, dst_crs, px0, py0, area)
             out = {}
             for name, how in (("mean", Resampling.bilinear), ("max", Resampling.max)):
                 dst = np.full((ny, nx), np.nan)
@@ -301,6 +308,37 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float) -> 
             )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
     return out["mean"], gmax, elev
+
+
+#: The height units a DEM band may declare (GDAL's unit type, lower case): metres per unit.
+#: An empty unit is read as metres (the scenario's ``terrain.dem``: metres AMSL).
+HEIGHT_UNITS = {
+    **dict.fromkeys(("", "m", "metre", "metres", "meter", "meters"), 1.0),
+    **dict.fromkeys(("ft", "foot", "feet", "international foot"), 0.3048),
+    **dict.fromkeys(("us-ft", "ftus", "us survey foot", "us survey feet"), 1200.0 / 3937.0),
+}
+
+
+def dem_metres(src: Any, raw: np.ndarray, field: str = "terrain.dem") -> np.ndarray:
+    """Band 1 of the open GeoTIFF ``src`` (``raw``, as stored) in metres: GDAL's scale and offset
+    applied (``raw x scale + offset``, as an int16 of decimetres declares), then the band's
+    height unit (:data:`HEIGHT_UNITS`: metres, feet or US survey feet).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``field``: a unit other than those.
+    """
+    unit = str((src.units or (None,))[0] or "").strip()
+    factor = HEIGHT_UNITS.get(unit.lower())
+    if factor is None:
+        raise ConfigError(
+            field, f"{Path(src.name).name}: heights in {unit!r}",
+            "a DEM whose band declares its heights in metres or feet (or no unit: metres)",
+        )  # fmt: skip
+    scale = float((src.scales or (1.0,))[0])
+    offset = float((src.offsets or (0.0,))[0])
+    return (np.asarray(raw, dtype=float) * scale + offset) * factor
 
 
 def _check_dem_covers(
@@ -475,6 +513,8 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         z[i] = max(z[i], z[i - 1] - grad * (dist[i] - dist[i - 1]))
     for i in range(len(z) - 2, -1, -1):
         z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
+    if landing_xy is not None:
+        z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -485,6 +525,44 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         field_m=t.field_elevation(path[0]),
         landing_field_m=t.field_elevation(land),
     )
+
+
+def _glide_cap(
+    t: Terrain,
+    p: np.ndarray,
+    z: np.ndarray,
+    req: np.ndarray,
+    dist: np.ndarray,
+    land: Any,
+    where: str,
+) -> np.ndarray:
+    """``z`` lowered so that the final glide, straight from the approach point ``p[-1]`` to the
+    landing field ``land`` (on the ground), keeps eq. 19's ``tan(beta_max)`` too: at most
+    ``field + tan(beta_max) x (distance flown to the field)`` at every point (a descent started
+    early enough; the lower of two such limited profiles is one).
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named: the clearance needs more height than that glide allows.
+    """
+    grad = math.tan(t.max_pitch_rad)
+    field = t.field_elevation(land)
+    to_go = dist[-1] - dist + float(np.hypot(*(land - p[-1])))
+    out = np.minimum(z, field + grad * to_go)
+    low = out < req - 1e-6
+    if low.any():
+        i = int(np.argmax(low))
+        x, y = p[i]
+        raise ConfigError(
+            where, f"ground {req[i] - t.min_clearance_m:.0f} m AMSL near ({x / 1e3:.1f}, "
+            f"{y / 1e3:.1f}) km, {to_go[i] / 1e3:.1f} km before a landing field at {field:.0f} m",
+            "a glide to the landing field within eq. 19's pitch bound uav.max_pitch_deg = "
+            f"{math.degrees(t.max_pitch_rad):g} deg that keeps terrain.min_clearance_m = "
+            f"{t.min_clearance_m:g} m (re-plan the last search leg or the landing field away "
+            "from the high ground, or a UAV that can glide steeper)",
+        )  # fmt: skip
+    return out
 
 
 def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.ndarray) -> list:
@@ -562,7 +640,7 @@ def dem_heights_at(dem: str | Path, latlon: Any) -> np.ndarray:
 
     pts = np.asarray(latlon, dtype=float).reshape(-1, 2)
     with rasterio.open(dem) as src:
-        band = src.read(1).astype(float)
+        band = dem_metres(src, src.read(1))
         to_src = Transformer.from_crs("EPSG:4326", src.crs, always_xy=True)
         sx, sy = to_src.transform(pts[:, 1], pts[:, 0])
         cols, rows = ~src.transform @ (np.asarray(sx), np.asarray(sy))

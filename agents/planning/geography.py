@@ -9,6 +9,7 @@ bounds (the optional fields of
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -86,10 +87,16 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
     return out
 
 
-def check_terrain(plan: dict[str, Any]) -> dict[str, Any]:
+def check_terrain(plan: dict[str, Any], sc: Scenario | None = None) -> dict[str, Any]:
     """``plan``, after checking that every UAV's mission keeps the terrain clearance within
     the ceiling (:func:`poc_env.agents.mission.terrain.plan_profiles`, the export's own
     profile): a plan the planner writes is one the export accepts.
+
+    With the scenario ``sc`` and a sensor model whose W depends on the height (``camera``,
+    :meth:`poc_env.config.SensorConfig.sweep_width_at`, resolved at ``uav.cruise_altitude_m``):
+    a UserWarning per UAV whose search legs (first to last waypoint) the profile flies lower
+    above the ground than that height (the ceiling or the glide to the field hold it down), with
+    the least height and the model's W there, since the plan's POS assumes the planned W.
 
     Raises
     ------
@@ -98,5 +105,24 @@ def check_terrain(plan: dict[str, Any]) -> dict[str, Any]:
     """
     from poc_env.agents.mission.terrain import plan_profiles
 
-    plan_profiles(plan)
+    profs = plan_profiles(plan)
+    if profs is None or sc is None or sc.sensor.model == "fixed":
+        return plan
+    h = sc.uav.cruise_altitude_m
+    for u, p in zip(plan["uavs"], profs):
+        n = len(u["waypoints_m"])
+        if n == 0:
+            continue
+        first, last = (int(np.flatnonzero(p.vertex == v)[0]) for v in (1, n))
+        agl = float(np.min((p.amsl_m - p.ground_m)[first : last + 1]))
+        if agl < h - 1.0:
+            warnings.warn(
+                f"UAV {u['id']}: its search legs fly as low as {agl:.0f} m above the ground "
+                f"(the ceiling uav.max_altitude_m = {sc.uav.max_altitude_m:g} m AMSL or the "
+                f"glide to the field hold them below uav.cruise_altitude_m = {h:g} m): the "
+                f"{sc.sensor.model} sensor's W {sc.sensor.sweep_width_at(max(agl, 1e-3)):.0f} m "
+                f"there, against the {sc.sensor.sweep_width_m:.0f} m the plan's POS assumes",
+                UserWarning,
+                stacklevel=3,
+            )
     return plan

@@ -108,7 +108,8 @@ def make_plan(
                 speed=SPEED if speed is None else speed,
                 refine=REFINE if refine is None else refine,
                 options=PlanOptions.preset("default" if effort is None else effort),
-            )
+            ),
+            load_scenario(scenario),
         )
     for name, value in (("speed", speed), ("refine", refine), ("effort", effort)):
         if value is not None:
@@ -215,7 +216,8 @@ def make_plan(
             "uavs": uav_out,
             # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
             **plan_geography(obj.scenario, full_prior, crs),
-        }
+        },
+        sc,
     )
 
 

@@ -443,5 +443,6 @@ def survey_plan(
             "rectangle_rule": RECTANGLE_RULE,
             "uavs": uavs,
             **plan_geography(scenario, prior, crs),
-        }
+        },
+        scenario,
     )

@@ -325,3 +325,155 @@ def test_dem_heights_beyond_the_earths_are_refused_by_import_nothing_written(tmp
     with pytest.raises(ConfigError, match="within \\+-12000 m") as err:
         load_terrain(load_scenario(_scenario(dem)))
     assert err.value.field == "terrain.dem"
+
+
+# --------------------------------------------------------------------------- audit (terrain-audit)
+
+
+def _slope(m_per_km: float) -> list:
+    """120 x 100 cells of 1 km from (-40, -30) km: ground rising east from 600 m at x = -10 km
+    (to at most 5,000 m)."""
+    x = -40 + np.arange(120) + 0.5
+    return np.tile(np.minimum(VALLEY_M + m_per_km * (x + 10.0), 5000.0), (100, 1)).tolist()
+
+
+def test_final_glide_to_the_field_keeps_the_pitch_bound():
+    """The approach point 4 km up a slope from the field: the glide from it to the field (the
+    mission's last leg, approach -> NAV_LAND) is flown within eq. 19's tan(beta_max) too; a
+    slope too steep for any such glide that keeps the clearance is refused, naming the UAV
+    and the landing field's glide (audit: glides of 0.278-0.308 against tan 15 deg = 0.268
+    were exported)."""
+    sc = load_scenario(_scenario(None, terrain={"elevation_m": _slope(30.0), "cell_km": 1.0,
+                                                "origin_km": [-40, -30]}))  # fmt: skip
+    t = load_terrain(sc)
+    field, approach = np.array([-10e3, 20e3]), np.array([-6e3, 20e3])
+    p = profile(t, [field, [20e3, 20e3], [20e3, 25e3], approach], "UAV 3", field)
+    grad = math.tan(sc.uav.max_pitch_rad)
+    glide = (p.amsl_m[-1] - t.field_elevation(field)) / float(np.hypot(*(approach - field)))
+    assert glide <= grad + 1e-9
+    legs = np.abs(np.diff(p.amsl_m)) / np.hypot(*np.diff(p.points_m, axis=0).T)
+    assert legs.max() <= grad + 1e-9
+    assert clearance_violations(t, p, step_m=50.0) == 0
+    assert p.amsl_m.max() >= t.field_elevation(field) + sc.uav.cruise_altitude_m  # still cruising
+    steep = load_scenario(_scenario(None, terrain={"elevation_m": _slope(250.0), "cell_km": 1.0,
+                                                   "origin_km": [-40, -30]}))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"UAV 3.*glide to the landing field.*max_pitch_deg"):
+        profile(load_terrain(steep), [field, [-2e3, 20e3], approach], "UAV 3", field)
+
+
+def test_geojson_approach_height_is_the_approach_drawn(tmp_path):
+    """The landing approach's ``approach_height_m`` is the height its own LineString descends
+    over (approach point -> field), with terrain and on a flat map below 300 m (audit: it was
+    the constant 300 m while a terrain approach started 826 m above its field)."""
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif")))
+    plan = make_plan(sc, planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    flat = {k: v for k, v in plan.items() if k != "terrain"}
+    write_plan(flat, tmp_path / "flat.json")
+    cases = [("plan.json", {}), ("flat.json", {"altitude_m": 200.0})]
+    seen = []
+    for name, kw in cases:
+        (f,) = export_plan(tmp_path / name, "geojson", out_dir=tmp_path / name[:-5], **kw)
+        for ft in json.loads(f.read_text())["features"]:
+            if ft["properties"]["kind"] == "landing_approach":
+                (_, _, za), (_, _, zf) = ft["geometry"]["coordinates"]
+                assert ft["properties"]["approach_height_m"] == pytest.approx(za - zf, abs=0.1)
+                seen.append(za - zf)
+    assert max(seen) > 300.0 + 1.0 and min(seen) == pytest.approx(200.0)
+
+
+def test_camera_search_legs_below_the_search_height_are_warned(tmp_path):
+    """A camera's W is resolved at ``uav.cruise_altitude_m`` above the ground; where the ceiling
+    holds a search leg lower over the ridge, its footprint is narrower than the plan assumes:
+    the plan says so, naming the UAV, the least height and the W there (audit: 32-50 % of the
+    search-leg points flew as low as 602 m, W 695 m against the planned 1155 m, silently). The
+    fixed width (the paper's) does not depend on the height: no warning."""
+    import warnings
+
+    cam = {"sensor": {"model": "camera", "fov_deg": 60.0}}
+    dem = _dem(tmp_path / "d.tif")
+    low = _scenario(dem, uav={"max_altitude_m": 4600}, **cam)
+    with pytest.warns(UserWarning, match=r"UAV \d.*as low as \d+ m above the ground.*"
+                      r"uav\.cruise_altitude_m = 1000 m.*W \d+ m .*1155 m"):  # fmt: skip
+        make_plan(load_scenario(low), planner="allocation", refine=0)
+    for data in (_scenario(dem, **cam), _scenario(dem, uav={"max_altitude_m": 4600})):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            make_plan(load_scenario(data), planner="allocation", refine=0)
+
+
+def _rewrite(src: Path, dst: Path, scale: float, dtype: str, offset: float = 0.0, **meta) -> Path:
+    """``src``'s heights stored as ``(height - offset) / scale`` in ``dtype``, with GDAL
+    metadata ``meta`` (``scales``/``offsets``, ``units``)."""
+    with rasterio.open(src) as s:
+        z, prof = s.read(1).astype(float), s.profile
+    prof.update(dtype=dtype, nodata=-32768 if dtype == "int16" else -9999.0)
+    with rasterio.open(dst, "w", **prof) as d:
+        raw = (z - offset) / scale
+        d.write(np.round(raw).astype(dtype) if dtype == "int16" else raw.astype(dtype), 1)
+        for key, value in meta.items():
+            setattr(d, key, value)
+    return dst
+
+
+@pytest.mark.parametrize(
+    ("scale", "dtype", "meta"),
+    [(0.2, "int16", {"offset": 100.0, "scales": (0.2,), "offsets": (100.0,)}),  # GDAL scale
+     (0.3048, "float32", {"units": ("ft",)}),  # feet, the band's unit type
+     (1200 / 3937, "float32", {"units": ("US survey foot",)})],
+    ids=["int16-scale-offset", "feet", "us-survey-feet"],
+)  # fmt: skip
+def test_dem_scale_offset_and_feet_are_read_as_metres(tmp_path, scale, dtype, meta):
+    """The heights a GeoTIFF declares (GDAL scale/offset; a band unit in feet) are read as
+    metres AMSL, as the same DEM written in metres (audit: a 2,412 m DEM in feet was read as
+    7,913 m, one in int16 decimetres as 24,119 m)."""
+    metres = _dem(tmp_path / "m.tif")
+    other = _rewrite(metres, tmp_path / "o.tif", scale, dtype, **meta)
+    want, got = (load_terrain(load_scenario(_scenario(p))) for p in (metres, other))
+    assert got.ground_max_m.max() == pytest.approx(RIDGE_M, abs=5.0)
+    assert np.allclose(got.ground_m, want.ground_m, atol=0.1)
+    assert got.fields[0][2] == pytest.approx(want.fields[0][2], abs=0.1)
+    lat_lon = [[46.6, 8.3], [46.7, 7.8]]
+    assert np.allclose(dem_heights_at(other, lat_lon), dem_heights_at(metres, lat_lon), atol=0.1)
+
+
+def test_dem_in_an_unknown_height_unit_is_refused(tmp_path):
+    dem = _rewrite(_dem(tmp_path / "m.tif"), tmp_path / "o.tif", 1.0, "float32",
+                   units=("fathom",))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"fathom.*metres or feet") as err:
+        load_terrain(load_scenario(_scenario(dem)))
+    assert err.value.field == "terrain.dem"
+
+
+def test_dem_covering_the_operating_area_is_enough(tmp_path):
+    """A DEM clipped to the operating area (as the error states it) loads, though the terrain
+    grid, aligned with the map, reaches up to a cell beyond it (audit: a DEM from x = -30.65
+    km was refused for an area from -30.3 km, the message giving -31.0 km as the area's edge);
+    one short of the area is refused, naming the area's own edge."""
+    from rasterio.transform import from_origin
+
+    from poc_env.agents.mission.crs import crs_text, make_crs
+    from poc_env.sim.core import operating_area
+
+    def dem(x0_km: float) -> Path:
+        x0, y1, res = x0_km * 1e3, 61e3, 250.0
+        nx, ny = round((81e3 - x0) / res), round((y1 + 21e3) / res)
+        path = tmp_path / f"edge{x0_km}.tif"
+        with rasterio.open(
+            path, "w", driver="GTiff", width=nx, height=ny, count=1, dtype="float32",
+            transform=from_origin(x0, y1, res, res), crs=crs_text(make_crs("aeqd", ORIGIN)),
+        ) as dst:  # fmt: skip
+            dst.write(np.full((ny, nx), 800.0, dtype="float32"), 1)
+        return path
+
+    def scenario(path: Path):
+        data = _scenario(path)
+        data["airfields"][0]["position_km"] = [-10.3, 20.7]
+        return load_scenario(data)
+
+    sc = scenario(dem(-30.65))
+    assert operating_area(sc)[0] == pytest.approx(-30.3e3)
+    t = load_terrain(sc)
+    assert t.bounds[0] == pytest.approx(-31e3) and np.allclose(t.ground_max_m, 800.0)
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*x0, y0, x1, y1 = \[-30\.3, -20\.0"):
+        load_terrain(scenario(dem(-30.2)))
