@@ -171,10 +171,10 @@ def gaussian_mixture(
     ``v = (-s dx + c dy) / sigma_y`` (``c, s``: cosine and sine of the rotation), density
     ``exp(-0.5 (u^2 + v^2))``, summed per cell (:meth:`Grid.coarsen`); a component so narrow
     that every sample's density underflows puts its mass in the cell holding its mean (the
-    limit of the cell integral), and one wholly off the grid contributes nothing. The exponent and the
-    sums are compiled passes over the sub-cell axes (:mod:`poc_env._kernels.priors`: the same
-    floating-point operations, in the same order, as numpy on the stacked points; numpy's
-    ``exp`` between them), so a reset draws a random prior in a fraction of the time.
+    limit of the cell integral), and one wholly off the grid contributes nothing. The exponent
+    and the sums are compiled passes over the sub-cell axes (:mod:`poc_env._kernels.priors`:
+    the same floating-point operations, in the same order, as numpy on the stacked points;
+    numpy's ``exp`` between them), so a reset draws a random prior in a fraction of the time.
     """
     xs, ys = _sample_axes(grid, oversample)
     mass = np.zeros(grid.shape)
