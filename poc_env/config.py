@@ -791,6 +791,15 @@ class Scenario:
             raise ConfigError(
                 "fleet", [dataclasses.asdict(g) for g in self.fleet], f"1 to {MAX_UAVS} UAVs"
             )
+        c, d_s = self.comms, self.constraints.safety_distance_m
+        if self.n_uavs > 1 and c.min_neighbours > 0 and c.range_m < d_s:
+            raise ConfigError(
+                "comms.range_km", c.range_m / KM,
+                f"at least constraints.safety_distance_km = {d_s / KM:g} while "
+                f"comms.min_neighbours is {c.min_neighbours} (eq. 24's neighbours in range "
+                "and eq. 21's separation cannot both hold: every step would be a violation), "
+                "or comms.min_neighbours: 0",
+            )  # fmt: skip
         steps = self.horizon_steps
         if steps > limits.MAX_STEPS:
             raise ConfigError(

@@ -52,3 +52,18 @@ def test_a_mixture_off_the_map_without_background_is_refused_at_load():
         load_scenario("small", off)
     on = {**off, "map.prior.components": [{"mean_km": [20, 20], "sigma_km": [1, 1]}]}
     _episode_is_sane(poc_env.parallel_env("small", obs_type="compass", overrides=on))
+
+
+def test_a_comms_range_below_the_safety_distance_is_refused():
+    """Eq. 24 wants neighbours within the comms range, eq. 21 every pair at least the safety
+    distance apart: with range < d_s no position satisfies both, so every step of every UAV
+    was a violation whatever it did (config-audit). Refused, unless no neighbour is needed."""
+    from poc_env.config import load_scenario
+    from poc_env.errors import ConfigError
+
+    bad = {"comms.range_km": 0.5, "constraints.safety_distance_km": 2.0}
+    with pytest.raises(ConfigError, match=r"comms\.range_km: got 0\.5; allowed: .*at least"):
+        load_scenario("small", bad)
+    load_scenario("small", {**bad, "comms.min_neighbours": 0})  # no link needed: fine
+    load_scenario("small", {**bad, "fleet": [{"takeoff": "A", "count": 1}]})  # nobody to link
+    load_scenario("small", {**bad, "comms.range_km": 2.0})  # range = d_s: one distance fits

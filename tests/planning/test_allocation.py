@@ -92,7 +92,9 @@ def test_mass_only_outside_reach_gives_an_empty_plan():
 def test_bad_input_is_a_config_error():
     sc = _small()
     with pytest.raises(ConfigError, match="safety_distance"):
-        make_allocation_plan(_small(**{"constraints.safety_distance_km": 1000}))
+        make_allocation_plan(
+            _small(**{"constraints.safety_distance_km": 1000, "comms.range_km": 1000})
+        )
     with pytest.raises(ConfigError, match="prior"):
         make_allocation_plan(sc, prior=np.ones((3, 3)))
     bad = build_prior(sc.map).copy()
