@@ -800,6 +800,14 @@ class Scenario:
                 "and eq. 21's separation cannot both hold: every step would be a violation), "
                 "or comms.min_neighbours: 0",
             )  # fmt: skip
+        if self.episode.dt_s > self.uav.endurance_s:
+            raise ConfigError(
+                "episode.dt_s", self.episode.dt_s,
+                f"at most the endurance, uav.endurance_h x 3600 = {self.uav.endurance_s:g} s (UAVs "
+                "fly whole steps: "
+                "with a longer step each one flies and senses past its endurance in its first "
+                "step and crashes, whatever it does)",
+            )  # fmt: skip
         steps = self.horizon_steps
         if steps > limits.MAX_STEPS:
             raise ConfigError(

@@ -67,3 +67,17 @@ def test_a_comms_range_below_the_safety_distance_is_refused():
     load_scenario("small", {**bad, "comms.min_neighbours": 0})  # no link needed: fine
     load_scenario("small", {**bad, "fleet": [{"takeoff": "A", "count": 1}]})  # nobody to link
     load_scenario("small", {**bad, "comms.range_km": 2.0})  # range = d_s: one distance fits
+
+
+def test_a_step_longer_than_the_endurance_is_refused():
+    """dt > T: the episode was one step, in which every UAV flew (and sensed) past its
+    endurance and crashed, whatever it did (config-audit: dt = 3600 s on small, T = 40 min:
+    POSC 0, every UAV crashed, for every policy). Refused; dt = T still loads."""
+    from poc_env.config import load_scenario
+    from poc_env.errors import ConfigError
+
+    with pytest.raises(
+        ConfigError, match=r"episode\.dt_s: got 1801.*allowed: at most the endurance.* 1800 s"
+    ):
+        load_scenario("small", {"episode.dt_s": 1801, "uav.endurance_h": 0.5})
+    assert load_scenario("small", {"episode.dt_s": 1800, "uav.endurance_h": 0.5}).horizon_steps == 1
