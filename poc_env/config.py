@@ -808,6 +808,7 @@ class Scenario:
                 "with a longer step each one flies and senses past its endurance in its first "
                 "step and crashes, whatever it does)",
             )  # fmt: skip
+        self._check_filter_work()
         steps = self.horizon_steps
         if steps > limits.MAX_STEPS:
             raise ConfigError(
@@ -826,6 +827,37 @@ class Scenario:
                         [c / KM for c in a.position_m],
                         f"a point outside {self.map.zone_label(k)}",
                     )
+
+    def _check_filter_work(self) -> None:
+        """A moving target's predict step within :data:`poc_env.limits.MAX_FILTER_UPDATES`:
+        its sub-steps (:func:`poc_env.theory.motion.substeps`, the one stability rule, at the
+        largest uniform current a reset can draw) times the filter's sub-cells (``cell_km /
+        samples_per_cell``); ConfigError naming the diffusion (or the current) otherwise."""
+        t = self.target
+        if not t.moves or t.model == "particles":
+            return
+        from poc_env.theory.motion import substeps
+
+        s = self.sensor.samples_per_cell
+        h, dt, d = self.map.cell_m / s, self.episode.dt_s, t.diffusion_m2_s
+        rand = t.random_current_kmh * KMH
+        u, v = abs(t.current_kmh[0]) * KMH + rand, abs(t.current_kmh[1]) * KMH + rand
+        cells = self.map.nx * self.map.ny * s * s
+        if substeps(u, v, d, dt, h) * cells <= limits.MAX_FILTER_UPDATES:
+            return
+        most = math.floor(limits.MAX_FILTER_UPDATES / cells)
+        d_max = (most / dt - (u + v) / h) * h * h / 4.0
+        where = (
+            f"on {self.map.nx * s} x {self.map.ny * s} filter sub-cells of {h:g} m at dt "
+            f"{dt:g} s (its predict step is at most {limits.MAX_FILTER_UPDATES:g} cell "
+            "updates; raise map.cell_km or lower episode.dt_s)"
+        )
+        if d_max > 0:
+            raise ConfigError("target.diffusion_m2_s", d, f"at most {d_max:.3g} m^2/s {where}")
+        raise ConfigError(
+            "target.current_kmh", list(t.current_kmh),
+            f"a current (with random_current_kmh) slow enough {where}",
+        )  # fmt: skip
 
     def _resolve_sweep_width(self) -> None:
         """``sensor.sweep_width_m`` from ``sensor.model`` (:meth:`SensorConfig.sweep_width_at`)

@@ -81,3 +81,20 @@ def test_a_step_longer_than_the_endurance_is_refused():
     ):
         load_scenario("small", {"episode.dt_s": 1801, "uav.endurance_h": 0.5})
     assert load_scenario("small", {"episode.dt_s": 1800, "uav.endurance_h": 0.5}).horizon_steps == 1
+
+
+def test_a_diffusion_whose_filter_step_would_take_minutes_is_refused():
+    """D = 1e7 m^2/s on a 400 x 400 km map of 2 km cells at dt = 600 s: the predict step's
+    sub-steps (4 D dt / h^2 on the filter's sub-cells) made one env step about 6e10 cell
+    updates, minutes a step (config-audit: the fuzzer's case ran past its time limit inside
+    the compiled kernel). Refused at load, naming the largest diffusion that fits."""
+    from poc_env.config import load_scenario
+    from poc_env.errors import ConfigError
+
+    big = {"map.width_km": 400, "map.height_km": 400, "map.cell_km": 2, "episode.dt_s": 600}
+    big["target.model"] = "drift"
+    with pytest.raises(
+        ConfigError, match=r"target\.diffusion_m2_s: got 10000000\.0; allowed: at most 1\.63e\+05"
+    ):
+        load_scenario("small", {**big, "target.diffusion_m2_s": 1e7})
+    load_scenario("small", {**big, "target.diffusion_m2_s": 50})  # the Drift tasks' D
