@@ -9,6 +9,7 @@ bounds (the optional fields of
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -47,7 +48,8 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
     """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
     the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
     and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value) and the rule-aware
-    bound (``bound_rule``: :func:`~poc_env.theory.bound.rule_bound`'s certified upper value)."""
+    bound (``bound_rule``: :func:`~poc_env.theory.bound.rule_bound`'s certified upper value,
+    for the plan's whole endurance whatever ``episode.horizon_steps`` cuts the episodes to)."""
     from poc_env.sim.core import make_params
     from poc_env.theory.bound import honest_optimum, reach_bound, rule_bound
 
@@ -73,8 +75,13 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
             "reach": probability(reach_bound(sc, prior).upper),
         }
         # the rule-aware bound (plan rules: back by 0.85 T, home at v_c) beside them; its own
-        # field, as plan.json's ``bounds`` holds the environment's two
-        out["bound_rule"] = probability(rule_bound(sc, prior).upper)
+        # field, as plan.json's ``bounds`` holds the environment's two. The plan's: the
+        # planners plan the endurance, so a short episode.horizon_steps (the environment's
+        # truncation) does not cut it (config-audit: it did, far below the planned POS_C)
+        whole = dataclasses.replace(sc.episode, horizon_steps=None)
+        out["bound_rule"] = probability(
+            rule_bound(dataclasses.replace(sc, episode=whole), prior).upper
+        )
     if crs is not None:
         out["crs"] = crs
     if sc.terrain.given:  # the DEM resampled onto the scenario: exports need no DEM

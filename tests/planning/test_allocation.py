@@ -154,3 +154,13 @@ def test_lines_follow_an_elongated_prior():
             assert np.allclose(lines[:, 0, across], lines[:, 1, across])  # straight lines
             assert u["flight_time_s"] <= sc.uav.usable_endurance_s
         assert plan["posc"] <= reach_bound(sc, prior).upper + 1e-12
+
+
+def test_the_plans_rule_bound_is_the_plans_not_a_short_episodes():
+    """``episode.horizon_steps`` cuts the environment's episodes, not a plan (the planners plan
+    the endurance): with 2 steps the plan.json's ``bound_rule`` was the 2-step episode's bound,
+    0.023 under a planned POS_C of 0.59 (config-audit). The plan's bound is its own."""
+    sc = _small(**{"episode.horizon_steps": 2})
+    plan = make_allocation_plan(sc, refine=0)
+    assert plan["posc"] <= plan["bound_rule"] * 1.02
+    assert plan["bound_rule"] == make_allocation_plan(_small(), refine=0)["bound_rule"]
