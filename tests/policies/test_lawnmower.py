@@ -55,8 +55,7 @@ def test_more_uavs_than_lines_share_the_lines():
     """A 5 km wide map at W = 5 km has one line for three UAVs: the split gave two UAVs an
     empty strip, a zero-area polygon and an error with nothing of what is allowed
     (config-audit). With fewer lines than UAVs each block is one line, shared by neighbouring
-    UAVs: every UAV searches, and lands (a UAV left without waypoints never leaves its field's
-    landing radius, so it cannot land and runs out of endurance)."""
+    UAVs: every UAV searches, and lands."""
     one_line = {"map.width_km": 5, "sensor.sweep_width_km": 5, "episode.horizon_steps": 400}
     env = poc_env.parallel_env(poc_env.load_scenario("small", one_line))
     obs, _ = env.reset(seed=0)
