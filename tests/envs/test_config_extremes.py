@@ -98,3 +98,16 @@ def test_a_diffusion_whose_filter_step_would_take_minutes_is_refused():
     ):
         load_scenario("small", {**big, "target.diffusion_m2_s": 1e7})
     load_scenario("small", {**big, "target.diffusion_m2_s": 50})  # the Drift tasks' D
+
+
+def test_a_diffusion_at_the_stability_limit_keeps_the_belief_non_negative():
+    """D = 1e7 m^2/s on 2.5 km filter sub-cells at dt = 30 s: 768 sub-steps, each exactly at
+    the stability limit 4 D tau / h^2 = 1, where a cell keeps none of its own mass and
+    rounding left belief entries of -5e-324 (config-audit; eq. 14's belief must stay >= 0)."""
+    over = {"map.width_km": 135, "map.height_km": 5, "target.model": "drift"}
+    over["target.diffusion_m2_s"] = 1e7
+    env = poc_env.parallel_env("small", obs_type="compass", control="heading", overrides=over)
+    env.reset(seed=0)
+    for _ in range(12):
+        env.step({a: np.array([1.0, 0.0]) for a in env.agents})
+        assert env.sim_state.belief.min() >= 0.0
