@@ -118,7 +118,7 @@ def draw_fleet(rng: np.random.Generator) -> dict[str, Any]:
     if kind == "many_fields":
         k = int(rng.integers(2, 12))
         fields = [
-            {"name": f"F{i}", "position_km": [float(rng.uniform(-50, 90)), float(rng.uniform(-50, 90))]}
+            {"name": f"F{i}", "position_km": [float(x) for x in rng.uniform(-50, 90, 2)]}
             for i in range(k)
         ]
         fleet = [{"takeoff": f"F{i}", "count": int(rng.integers(1, 4)),
@@ -350,7 +350,7 @@ def check_env(sc: Any, env_kw: dict[str, Any], seed: int, max_steps: int, api: b
         actions = {
             a: rng.uniform(-1, 1, env.action_space(a).shape).astype(np.float32) for a in env.agents
         }
-        obs, rew, term, trunc, infos = env.step(actions)
+        obs, rew, _, _, infos = env.step(actions)
         steps += 1
         check_obs(obs, f"step {steps}")
         for a, r in rew.items():
@@ -377,9 +377,10 @@ def check_env(sc: Any, env_kw: dict[str, Any], seed: int, max_steps: int, api: b
     aec = poc_env.env(sc, **env_kw)
     aec.reset(seed=seed)
     for _, agent in zip(range(3 * len(aec.possible_agents)), aec.agent_iter()):
-        ob, r, te, tr, _ = aec.last()
+        _, r, te, tr, _ = aec.last()
         check(math.isfinite(float(r)), f"AEC reward of {agent} = {r!r}")
-        aec.step(None if te or tr else rng.uniform(-1, 1, aec.action_space(agent).shape).astype(np.float32))
+        act = rng.uniform(-1, 1, aec.action_space(agent).shape).astype(np.float32)
+        aec.step(None if te or tr else act)
     aec.close()
     if api:
         from pettingzoo.test import parallel_api_test
@@ -417,8 +418,8 @@ def check_plans(sc: Any, folder: Path) -> None:
         plans[planner] = plan
     rule = plans["allocation"].get("bound_rule")
     if rule is not None and not sc.target.moves:  # a plan that beats the certified bound
-        check(plans["allocation"]["posc"] <= BOUND_SLACK * rule + 1e-9,
-              f"allocation plan POS_C {plans['allocation']['posc']!r} > rule bound {rule!r}")  # fmt: skip
+        posc = plans["allocation"]["posc"]
+        check(posc <= BOUND_SLACK * rule + 1e-9, f"allocation POS_C {posc!r} > rule bound {rule!r}")
     ev = evaluate(sc, ["greedy_bayes", "greedy_rectangles", "lawnmower"], episodes=1, seed0=5000)
     for e in ev.episodes:
         for key in ("posc", "bound", "bound_reach", "bound_rule"):
@@ -427,7 +428,7 @@ def check_plans(sc: Any, folder: Path) -> None:
                   f"evaluate {e.policy} {key} = {v!r}")  # fmt: skip
         if not sc.target.moves and e.bound_reach is not None:  # flown above the bound
             check(e.posc <= BOUND_SLACK * e.bound_reach + 1e-9,
-                  f"evaluate {e.policy} POSC {e.posc!r} > reach bound {e.bound_reach!r}")  # fmt: skip
+                  f"{e.policy} POSC {e.posc!r} > reach bound {e.bound_reach!r}")  # fmt: skip
     plan = {**plans["allocation"], "scenario_file": str(yaml_path.resolve())}
     plan_path = write_plan(plan, folder / "plan.json")
     for fmt in ("geojson", "qgc"):
@@ -566,14 +567,15 @@ def main(argv: list[str] | None = None) -> int:
         if outcome != "refused":
             loaded += 1
         counts[outcome] += 1
-        rec = {"case": i, "axes": axes, "overrides": shown, "env_kw": env_kw, "heavy": heavy, "cli": cli,
-               "outcome": outcome, "stage": stage, "seconds": round(seconds, 2),
+        rec = {"case": i, "axes": axes, "overrides": shown, "env_kw": env_kw, "heavy": heavy,
+               "cli": cli, "outcome": outcome, "stage": stage, "seconds": round(seconds, 2),
                "detail": detail[-1500:]}  # fmt: skip
         if out:
             out.write(json.dumps(rec, default=str) + "\n")
             out.flush()
         if outcome not in ("refused", "ok", "refused_later"):
-            print(f"case {i} {outcome} at {stage}: {axes} {shown} {env_kw}\n  {detail[-600:]}", flush=True)
+            print(f"case {i} {outcome} at {stage}: {axes} {shown} {env_kw}", flush=True)
+            print(f"  {detail[-600:]}", flush=True)
     if out:
         out.close()
     print("counts:", dict(sorted(counts.items())), flush=True)
