@@ -526,6 +526,22 @@ def run_case(
     return "ok", stage, ""
 
 
+OUTCOMES = ("ok", "refused", "refused_later", "unclear", "traceback", "wrong", "hang")
+
+
+def summarise(paths: list[str]) -> str:
+    """A markdown table of the outcomes of fuzzer records (JSON lines files), one row each."""
+    head = "| records | tried | " + " | ".join(OUTCOMES) + " | seconds |"
+    rows = [head, "|" + "---|" * (len(OUTCOMES) + 3)]
+    for path in paths:
+        recs = [json.loads(line) for line in Path(path).read_text().splitlines() if line]
+        c = Counter(r["outcome"] for r in recs)
+        secs = sum(float(r.get("seconds", 0.0)) for r in recs)
+        cells = " | ".join(str(c[o]) for o in OUTCOMES)
+        rows.append(f"| {Path(path).name} | {len(recs)} | {cells} | {secs:.0f} |")
+    return "\n".join(rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seed", type=int, default=1)
@@ -537,7 +553,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cli", type=float, default=0.1, help="share of cases run by poc-env")
     p.add_argument("--case-timeout", type=float, default=300.0)
     p.add_argument("--only", default=None, help="run only this case index (a re-run)")
+    p.add_argument("--summarise", nargs="+", default=None, help="print records' counts only")
     args = p.parse_args(argv)
+    if args.summarise:
+        print(summarise(args.summarise))
+        return 0
     rng = np.random.default_rng(args.seed)
     counts: Counter = Counter()
     loaded = 0
