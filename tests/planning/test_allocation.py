@@ -164,3 +164,14 @@ def test_the_plans_rule_bound_is_the_plans_not_a_short_episodes():
     plan = make_allocation_plan(sc, refine=0)
     assert plan["posc"] <= plan["bound_rule"] * 1.02
     assert plan["bound_rule"] == make_allocation_plan(_small(), refine=0)["bound_rule"]
+
+
+def test_an_operating_area_beyond_plan_json_is_refused_naming_the_scenario():
+    """A 2,000 km map (the largest side a scenario takes) grows by the 20 km boundary margin
+    past plan.json's +-2,000 km: the plan was made, then refused naming its own
+    ``plan.operating_area_m[1]`` (config-audit). Refused naming the margin; without it the
+    plan is written."""
+    big = {"map.cell_km": 2000, "map.width_km": 2000, "map.height_km": 2000}
+    with pytest.raises(ConfigError, match=r"episode\.boundary_margin_km: got 20(\.0)?; allowed"):
+        make_allocation_plan(_small(**big), refine=0)
+    make_allocation_plan(_small(**big, **{"episode.boundary_margin_km": 0}), refine=0)
