@@ -829,9 +829,10 @@ class Scenario:
                     )
 
     def _check_filter_work(self) -> None:
-        """A moving target's predict step within :data:`poc_env.limits.MAX_FILTER_UPDATES`:
-        its sub-steps (:func:`poc_env.theory.motion.substeps`, the one stability rule, at the
-        largest uniform current a reset can draw) times the filter's sub-cells (``cell_km /
+        """A moving target's predict step within :data:`poc_env.limits.MAX_FILTER_SUBSTEPS`
+        sub-steps (:func:`poc_env.theory.motion.substeps`, the one stability rule, at the
+        largest uniform current a reset can draw) and :data:`~poc_env.limits.
+        MAX_FILTER_UPDATES` sub-steps times the filter's sub-cells (``cell_km /
         samples_per_cell``); ConfigError naming the diffusion (or the current) otherwise."""
         t = self.target
         if not t.moves or t.model == "particles":
@@ -843,14 +844,16 @@ class Scenario:
         rand = t.random_current_kmh * KMH
         u, v = abs(t.current_kmh[0]) * KMH + rand, abs(t.current_kmh[1]) * KMH + rand
         cells = self.map.nx * self.map.ny * s * s
-        if substeps(u, v, d, dt, h) * cells <= limits.MAX_FILTER_UPDATES:
+        n = substeps(u, v, d, dt, h)
+        if n * cells <= limits.MAX_FILTER_UPDATES and n <= limits.MAX_FILTER_SUBSTEPS:
             return
-        most = math.floor(limits.MAX_FILTER_UPDATES / cells)
+        most = min(math.floor(limits.MAX_FILTER_UPDATES / cells), limits.MAX_FILTER_SUBSTEPS)
         d_max = (most / dt - (u + v) / h) * h * h / 4.0
         where = (
             f"on {self.map.nx * s} x {self.map.ny * s} filter sub-cells of {h:g} m at dt "
-            f"{dt:g} s (its predict step is at most {limits.MAX_FILTER_UPDATES:g} cell "
-            "updates; raise map.cell_km or lower episode.dt_s)"
+            f"{dt:g} s (its predict step is at most {limits.MAX_FILTER_SUBSTEPS} stability "
+            f"sub-steps and {limits.MAX_FILTER_UPDATES:g} cell updates; raise map.cell_km or "
+            "lower episode.dt_s)"
         )
         if d_max > 0:
             raise ConfigError("target.diffusion_m2_s", d, f"at most {d_max:.3g} m^2/s {where}")

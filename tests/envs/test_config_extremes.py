@@ -94,7 +94,8 @@ def test_a_diffusion_whose_filter_step_would_take_minutes_is_refused():
     big = {"map.width_km": 400, "map.height_km": 400, "map.cell_km": 2, "episode.dt_s": 600}
     big["target.model"] = "drift"
     with pytest.raises(
-        ConfigError, match=r"target\.diffusion_m2_s: got 10000000\.0; allowed: at most 1\.63e\+05"
+        ConfigError,
+        match=r"target\.diffusion_m2_s: got 10000000\.0; allowed: at most 1\.04e\+05 m\^2/s",
     ):
         load_scenario("small", {**big, "target.diffusion_m2_s": 1e7})
     load_scenario("small", {**big, "target.diffusion_m2_s": 50})  # the Drift tasks' D
@@ -111,3 +112,18 @@ def test_a_diffusion_at_the_stability_limit_keeps_the_belief_non_negative():
     for _ in range(12):
         env.step({a: np.array([1.0, 0.0]) for a in env.agents})
         assert env.sim_state.belief.min() >= 0.0
+
+
+def test_a_diffusion_needing_thousands_of_filter_sub_steps_is_refused():
+    """D = 1e7 m^2/s on 125 m filter sub-cells: 76,800 stability sub-steps every 30 s step,
+    cheap on a 1 x 29 cell map for the environment (3.6e7 updates a step) but the moving
+    target's bound of ``evaluate`` runs them forwards and backwards per sweep and ran past the
+    fuzzer's 300 s (config-audit). At most ``limits.MAX_FILTER_SUBSTEPS`` a step."""
+    from poc_env.config import load_scenario
+    from poc_env.errors import ConfigError
+
+    thin = {"map.cell_km": 0.5, "map.width_km": 0.5, "map.height_km": 14.5}
+    thin["target.model"] = "drift"
+    with pytest.raises(ConfigError, match=r"target\.diffusion_m2_s: got 10000000\.0; allowed"):
+        load_scenario("small", {**thin, "target.diffusion_m2_s": 1e7})
+    load_scenario("small", {**thin, "target.diffusion_m2_s": 50})
