@@ -272,6 +272,7 @@ class MapConfig:
             limits.map_bytes(self.nx * self.ny),
             f"{self.nx} x {self.ny} cell map",
         )
+        self._check_prior_mass()
         if not isinstance(self.no_fly_zones_m, (list, tuple)):
             raise ConfigError("no_fly_zones_km", self.no_fly_zones_m, "a list of polygons")
         zones = tuple(
@@ -296,6 +297,28 @@ class MapConfig:
             area = box(self.origin_m[0], self.origin_m[1], self.origin_m[0] + self.width_m,
                        self.origin_m[1] + self.height_m)  # fmt: skip
             check_zones_leave_room(zones, self.no_fly_names, area, "the search area")
+
+    def _check_prior_mass(self) -> None:
+        """A Gaussian-mixture prior without background needs mass on the grid: built once here
+        (:func:`poc_env.theory.probability_map.gaussian_mixture`, the prior's one
+        implementation), so a mixture wholly off the map is refused at load, naming it."""
+        p = self.prior
+        if p.kind != "gaussian_mixture" or p.background > 0:
+            return
+        from poc_env.errors import MapFileError
+        from poc_env.theory.probability_map import Grid, gaussian_mixture
+
+        try:
+            gaussian_mixture(Grid.from_config(self), p.components)
+        except MapFileError:
+            x0, y0 = (c / KM for c in self.origin_m)
+            raise ConfigError(
+                "prior.components",
+                [{"mean_km": [c / KM for c in g.mean_m]} for g in p.components],
+                f"components with mass on the {self.nx} x {self.ny} grid (x {x0:g} to "
+                f"{x0 + self.width_m / KM:g} km, y {y0:g} to {y0 + self.height_m / KM:g} km), "
+                "or prior.background > 0",
+            ) from None
 
     def zone_label(self, i: int) -> str:
         """How messages name no-fly zone ``i`` (:func:`poc_env.geometry.zone_label`)."""
@@ -768,6 +791,24 @@ class Scenario:
             raise ConfigError(
                 "fleet", [dataclasses.asdict(g) for g in self.fleet], f"1 to {MAX_UAVS} UAVs"
             )
+        c, d_s = self.comms, self.constraints.safety_distance_m
+        if self.n_uavs > 1 and c.min_neighbours > 0 and c.range_m < d_s:
+            raise ConfigError(
+                "comms.range_km", c.range_m / KM,
+                f"at least constraints.safety_distance_km = {d_s / KM:g} while "
+                f"comms.min_neighbours is {c.min_neighbours} (eq. 24's neighbours in range "
+                "and eq. 21's separation cannot both hold: every step would be a violation), "
+                "or comms.min_neighbours: 0",
+            )  # fmt: skip
+        if self.episode.dt_s > self.uav.endurance_s:
+            raise ConfigError(
+                "episode.dt_s", self.episode.dt_s,
+                f"at most the endurance, uav.endurance_h x 3600 = {self.uav.endurance_s:g} s (UAVs "
+                "fly whole steps: "
+                "with a longer step each one flies and senses past its endurance in its first "
+                "step and crashes, whatever it does)",
+            )  # fmt: skip
+        self._check_filter_work()
         steps = self.horizon_steps
         if steps > limits.MAX_STEPS:
             raise ConfigError(
@@ -786,6 +827,40 @@ class Scenario:
                         [c / KM for c in a.position_m],
                         f"a point outside {self.map.zone_label(k)}",
                     )
+
+    def _check_filter_work(self) -> None:
+        """A moving target's predict step within :data:`poc_env.limits.MAX_FILTER_SUBSTEPS`
+        sub-steps (:func:`poc_env.theory.motion.substeps`, the one stability rule, at the
+        largest uniform current a reset can draw) and :data:`~poc_env.limits.
+        MAX_FILTER_UPDATES` sub-steps times the filter's sub-cells (``cell_km /
+        samples_per_cell``); ConfigError naming the diffusion (or the current) otherwise."""
+        t = self.target
+        if not t.moves or t.model == "particles":
+            return
+        from poc_env.theory.motion import substeps
+
+        s = self.sensor.samples_per_cell
+        h, dt, d = self.map.cell_m / s, self.episode.dt_s, t.diffusion_m2_s
+        rand = t.random_current_kmh * KMH
+        u, v = abs(t.current_kmh[0]) * KMH + rand, abs(t.current_kmh[1]) * KMH + rand
+        cells = self.map.nx * self.map.ny * s * s
+        n = substeps(u, v, d, dt, h)
+        if n * cells <= limits.MAX_FILTER_UPDATES and n <= limits.MAX_FILTER_SUBSTEPS:
+            return
+        most = min(math.floor(limits.MAX_FILTER_UPDATES / cells), limits.MAX_FILTER_SUBSTEPS)
+        d_max = (most / dt - (u + v) / h) * h * h / 4.0
+        where = (
+            f"on {self.map.nx * s} x {self.map.ny * s} filter sub-cells of {h:g} m at dt "
+            f"{dt:g} s (its predict step is at most {limits.MAX_FILTER_SUBSTEPS} stability "
+            f"sub-steps and {limits.MAX_FILTER_UPDATES:g} cell updates; raise map.cell_km or "
+            "lower episode.dt_s)"
+        )
+        if d_max > 0:
+            raise ConfigError("target.diffusion_m2_s", d, f"at most {d_max:.3g} m^2/s {where}")
+        raise ConfigError(
+            "target.current_kmh", list(t.current_kmh),
+            f"a current (with random_current_kmh) slow enough {where}",
+        )  # fmt: skip
 
     def _resolve_sweep_width(self) -> None:
         """``sensor.sweep_width_m`` from ``sensor.model`` (:meth:`SensorConfig.sweep_width_at`)

@@ -51,6 +51,14 @@ MAX_RANGE_KM = 20_000.0
 #: Longest time step: one hour; most steps per episode: 10^7.
 MAX_DT_S = 3600.0
 MAX_STEPS = 10_000_000
+#: Most cell updates of a moving target's predict step in one env step: its sub-steps (the
+#: stability rule of :func:`poc_env.theory.motion.substeps`, 4 D dt / h^2 for the diffusion)
+#: times the filter's sub-cells. About 3e8 updates a second on one core: a few seconds a step.
+MAX_FILTER_UPDATES = 1e9
+#: Most of those sub-steps in one env step: more means the diffusion spreads over hundreds of
+#: sub-cells a step, which the grid cannot resolve, and the moving-target bound of
+#: ``evaluate`` (which runs the sub-steps forwards and backwards per sweep) takes minutes.
+MAX_FILTER_SUBSTEPS = 1000
 #: Largest reward weight or penalty (keeps sums of rewards far from float overflow).
 MAX_WEIGHT = 1e9
 #: Largest planner population (``planner.population``, ``plan --popsize``; the paper: 100),

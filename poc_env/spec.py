@@ -74,7 +74,7 @@ VECTOR = (
     _e("x", "position in the operating area, 0 .. 1 across it", -1.0, 2.0),
     _e("y", "position in the operating area, 0 .. 1 along it", -1.0, 2.0),
     _e("z", "altitude / ceiling"),
-    _e("speed", "(v - v_min) / (v_max - v_min)"),
+    _e("speed", "(v - v_min) / (v_max - v_min); 0 when v_min = v_max (a fixed-speed UAV)"),
     _e("sin", "sine of the heading alpha", -1.0),
     _e("cos", "cosine of the heading alpha", -1.0),
     _e("pitch", "beta / beta_max", -1.0),

@@ -9,6 +9,7 @@ bounds (the optional fields of
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from typing import Any
 
@@ -44,15 +45,40 @@ def probability(value: float) -> float:
     return float(min(max(float(value), 0.0), 1.0))
 
 
+def _check_extent(sc: Scenario, area: tuple[float, float, float, float]) -> None:
+    """ConfigError naming the scenario when eq. 20's operating area ``area`` reaches past the
+    points plan.json holds (:data:`~poc_env.agents.mission.plan.MAX_EXTENT_M` from the map
+    origin; a scenario allows more), before a plan is made that could not be written."""
+    from poc_env.agents.mission.plan import MAX_EXTENT_M
+
+    if max(abs(v) for v in area) <= MAX_EXTENT_M:
+        return
+    margin = sc.episode.boundary_margin_m
+    core = max(abs(v) for v in area) - margin  # the map and airfields' box
+    lim = f"within +-{MAX_EXTENT_M / 1e3:g} km of the map origin (the points a plan.json holds)"
+    if core <= MAX_EXTENT_M:
+        raise ConfigError(
+            "episode.boundary_margin_km", margin / 1e3,
+            f"at most {(MAX_EXTENT_M - core) / 1e3:.4g} km for a plan here: the operating area "
+            f"(the map and airfields' box grown by it) must lie {lim}",
+        )  # fmt: skip
+    raise ConfigError(
+        "map", [round(v / 1e3, 3) for v in area],
+        f"a map and airfields {lim}, for a plan (the environment takes them farther out)",
+    )  # fmt: skip
+
+
 def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) -> dict[str, Any]:
     """The optional plan.json fields an export reads: flight, area, zones, airfields, crs, and
     the two bounds of the plan's prior (``bounds``: :func:`~poc_env.theory.bound.honest_optimum`
     and :func:`~poc_env.theory.bound.reach_bound`'s certified upper value) and the rule-aware
-    bound (``bound_rule``: :func:`~poc_env.theory.bound.rule_bound`'s certified upper value)."""
+    bound (``bound_rule``: :func:`~poc_env.theory.bound.rule_bound`'s certified upper value,
+    for the plan's whole endurance whatever ``episode.horizon_steps`` cuts the episodes to)."""
     from poc_env.sim.core import make_params
     from poc_env.theory.bound import honest_optimum, reach_bound, rule_bound
 
     x0, y0, x1, y1 = (float(v) for v in make_params(sc, prior).bounds)  # eq. 20's boundary
+    _check_extent(sc, (x0, y0, x1, y1))
     out: dict[str, Any] = {
         "flight": {
             "cruise_speed_mps": sc.uav.cruise_speed_mps,
@@ -74,8 +100,13 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
             "reach": probability(reach_bound(sc, prior).upper),
         }
         # the rule-aware bound (plan rules: back by 0.85 T, home at v_c) beside them; its own
-        # field, as plan.json's ``bounds`` holds the environment's two
-        out["bound_rule"] = probability(rule_bound(sc, prior).upper)
+        # field, as plan.json's ``bounds`` holds the environment's two. The plan's: the
+        # planners plan the endurance, so a short episode.horizon_steps (the environment's
+        # truncation) does not cut it (config-audit: it did, far below the planned POS_C)
+        whole = dataclasses.replace(sc.episode, horizon_steps=None)
+        out["bound_rule"] = probability(
+            rule_bound(dataclasses.replace(sc, episode=whole), prior).upper
+        )
     if crs is not None:
         out["crs"] = crs
     if sc.terrain.given:  # the DEM resampled onto the scenario: exports need no DEM

@@ -92,7 +92,7 @@ from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.geometry import rectangle_polygon
 from poc_env.theory.bound import physical_optimum
-from poc_env.theory.patterns import parallel_line_search
+from poc_env.theory.patterns import MAX_LINES, parallel_line_search
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.regions import area_fractions, exclusive_fractions
 from poc_env.theory.search_theory import pod_from_coverage, swarm_pos
@@ -336,6 +336,14 @@ class PlanObjective:
             raise ConfigError(
                 "sensor.sweep_width_km", w / 1000, "less than twice the map's longer side"
             )
+        diagonal = math.hypot(self.grid.width_m, self.grid.height_m)
+        if diagonal / (0.5 * w) > MAX_LINES:  # a pattern at d >= W/2 across the map
+            raise ConfigError(
+                "sensor.sweep_width_km", w / 1000,
+                f"at least {2 * diagonal / MAX_LINES / 1000:.3g} km for the DE plan on this map "
+                f"(its lines at spacing W/2 or more, at most {MAX_LINES} across the map's "
+                f"{diagonal / 1000:.4g} km diagonal)",
+            )  # fmt: skip
         one = np.array(
             [[x0, x1], [y0, y1], [lo_side, side], [lo_side, side], [0.0, np.pi], [0.5 * w, 4 * w]]
         )

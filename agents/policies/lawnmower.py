@@ -1,7 +1,8 @@
 """``lawnmower``: the classical baseline, flown through the waypoint follower.
 
 The area's north-south lines at spacing S = W are split into N contiguous blocks (one strip per
-UAV, in take-off order from west to east); each UAV flies the parallel search (§2.2, eq. 5-6)
+UAV, in take-off order from west to east; with fewer lines than UAVs, one line a block, shared
+by neighbouring UAVs); each UAV flies the parallel search (§2.2, eq. 5-6)
 of its strip, starting at the corner nearest its airfield, then returns to land. It ignores the
 prior: the reference every prior-aware method must beat.
 """
@@ -26,10 +27,12 @@ def lawnmower_waypoints(params: Params, spacing_m: float | None = None) -> list[
     n = params.n_agents
     order = np.argsort(params.takeoff[:, 0], kind="stable")
     lines = int(np.ceil((x1 - x0) / s - 1e-9))  # the whole area's lines at spacing S ...
-    edges = x0 + np.round(np.linspace(0, lines, n + 1)) * s  # ... split into N blocks
+    blocks = min(n, lines)  # ... split into N blocks (one a line when there are fewer lines:
+    edges = x0 + np.round(np.linspace(0, lines, blocks + 1)) * s  # neighbours share a block)
     edges[-1] = max(edges[-1], x1)
     out: list[np.ndarray] = [np.empty((0, 2))] * n
-    for strip, agent in enumerate(order):
+    for rank, agent in enumerate(order):
+        strip = rank * blocks // n
         region = box(edges[strip], y0, edges[strip + 1], y1)
         out[agent] = parallel_search(region, s, 0.0, start=params.takeoff[agent]).waypoints
     return out

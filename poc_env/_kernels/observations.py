@@ -194,7 +194,8 @@ def vectors(
             v[0] = (x - bx0) / w
             v[1] = (y - by0) / h
             v[2] = pos[e, i, 2] / max_alt
-            v[3] = (speed[e, i] - min_speed) / speed_span
+            # a fixed-speed UAV (v_min = v_max) is at its one speed: 0, not 0 / 0
+            v[3] = (speed[e, i] - min_speed) / speed_span if speed_span > 0.0 else 0.0
             v[4] = sin_h[e, i]
             v[5] = cos_h[e, i]
             v[6] = pitch[e, i] / max_pitch

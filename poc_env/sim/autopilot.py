@@ -128,6 +128,24 @@ def _lookahead(p, q, xy, ahead: float) -> np.ndarray:
     return p + d * min(max(t, 0.0), length) / length
 
 
+def _leave_field(params: Params, k: int, wps: np.ndarray) -> np.ndarray:
+    """``wps`` of UAV ``k``, or, when it is empty and the UAV takes off inside its landing
+    field's landing radius, one point twice that radius out towards the map's centre: a UAV
+    lands only after having left the radius (:func:`poc_env.sim.core.step`), so one given
+    nothing to fly circled there until it crashed at T (config-audit)."""
+    if len(wps):
+        return wps
+    land = np.asarray(params.landing[k], dtype=float)
+    radius = params.scenario.episode.landing_radius_m
+    if float(np.hypot(*(np.asarray(params.takeoff[k]) - land))) > radius:
+        return wps  # it leaves the radius on its way home
+    x0, y0, x1, y1 = params.grid.bounds
+    d = np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)]) - land
+    norm = float(np.hypot(*d))
+    d = d / norm if norm > 0 else np.array([1.0, 0.0])
+    return (land + 2.0 * radius * d).reshape(1, 2)
+
+
 class WaypointFollower:
     """Policy that flies each agent's waypoint list (metres), then returns to land.
 
@@ -163,7 +181,10 @@ class WaypointFollower:
                 raise ConfigError(
                     name, v, f"within [{u.min_speed_mps:g}, {u.max_speed_mps:g}] m/s (eq. 19)"
                 )
-        self.waypoints = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
+        self.waypoints = [
+            _leave_field(params, k, np.asarray(w, dtype=float).reshape(-1, 2))
+            for k, w in enumerate(waypoints)
+        ]
         self.index = np.zeros(len(self.agents), dtype=int)
         # the closest-approach rule's memory: the last distance to the current waypoint and
         # whether it has shrunk since the waypoint became current

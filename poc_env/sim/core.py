@@ -523,7 +523,15 @@ def predict(params: Params, state: State) -> None:
     """The predict step of the filter (moving targets): the motion model moves the fine
     belief over this step (mass leaving the map goes to ``state.mass_out``) and the hidden
     targets (:func:`poc_env.theory.motion.predict`, :func:`~poc_env.theory.motion.
-    move_targets`)."""
+    move_targets`). The belief stays a probability: at the scheme's stability limit a cell
+    keeps none of its own mass and rounding can leave entries of -5e-324, set to 0 here
+    (config-audit; the linear kernels also carry signed vectors for the moving bound)."""
+    _predict_moves(params, state)
+    np.maximum(state.belief, 0.0, out=state.belief)
+
+
+def _predict_moves(params: Params, state: State) -> None:
+    """:func:`predict`'s moves, before the belief's rounding below 0 is cleared."""
     motion = params.motion
     assert motion is not None and state.mass_out is not None and state.drift is not None
     assert state.target_out is not None and state.target_noise is not None

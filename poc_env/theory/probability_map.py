@@ -169,10 +169,12 @@ def gaussian_mixture(
     Per component, on the sub-cell centres ``(x, y)`` (:meth:`Grid.sample_points`) with
     ``(dx, dy)`` their offsets from the mean: ``u = (c dx + s dy) / sigma_x``,
     ``v = (-s dx + c dy) / sigma_y`` (``c, s``: cosine and sine of the rotation), density
-    ``exp(-0.5 (u^2 + v^2))``, summed per cell (:meth:`Grid.coarsen`). The exponent and the
-    sums are compiled passes over the sub-cell axes (:mod:`poc_env._kernels.priors`: the same
-    floating-point operations, in the same order, as numpy on the stacked points; numpy's
-    ``exp`` between them), so a reset draws a random prior in a fraction of the time.
+    ``exp(-0.5 (u^2 + v^2))``, summed per cell (:meth:`Grid.coarsen`); a component so narrow
+    that every sample's density underflows puts its mass in the cell holding its mean (the
+    limit of the cell integral), and one wholly off the grid contributes nothing. The exponent
+    and the sums are compiled passes over the sub-cell axes (:mod:`poc_env._kernels.priors`:
+    the same floating-point operations, in the same order, as numpy on the stacked points;
+    numpy's ``exp`` between them), so a reset draws a random prior in a fraction of the time.
     """
     xs, ys = _sample_axes(grid, oversample)
     mass = np.zeros(grid.shape)
@@ -188,8 +190,11 @@ def gaussian_mixture(
         _priors.mixture_exponent(xs, ys, mx, my, float(c), float(s), sx, sy, q)
         np.exp(q, out=q)
         part = _coarsen_in_order(grid, q, oversample)
-        if part.sum() > 0:  # a component wholly off the grid contributes nothing
+        if part.sum() > 0:
             mass += w * part / part.sum()
+        elif grid.contains(np.array((mx, my))):  # narrower than the sub-cell spacing: every
+            mass[grid.cell_of(np.array((mx, my)))] += w  # sample underflowed; its cell holds it
+        # (a component wholly off the grid contributes nothing)
     total = mass.sum()
     if total > 0:
         mass = mass / total * (1.0 - background)

@@ -92,7 +92,9 @@ def test_mass_only_outside_reach_gives_an_empty_plan():
 def test_bad_input_is_a_config_error():
     sc = _small()
     with pytest.raises(ConfigError, match="safety_distance"):
-        make_allocation_plan(_small(**{"constraints.safety_distance_km": 1000}))
+        make_allocation_plan(
+            _small(**{"constraints.safety_distance_km": 1000, "comms.range_km": 1000})
+        )
     with pytest.raises(ConfigError, match="prior"):
         make_allocation_plan(sc, prior=np.ones((3, 3)))
     bad = build_prior(sc.map).copy()
@@ -152,3 +154,24 @@ def test_lines_follow_an_elongated_prior():
             assert np.allclose(lines[:, 0, across], lines[:, 1, across])  # straight lines
             assert u["flight_time_s"] <= sc.uav.usable_endurance_s
         assert plan["posc"] <= reach_bound(sc, prior).upper + 1e-12
+
+
+def test_the_plans_rule_bound_is_the_plans_not_a_short_episodes():
+    """``episode.horizon_steps`` cuts the environment's episodes, not a plan (the planners plan
+    the endurance): with 2 steps the plan.json's ``bound_rule`` was the 2-step episode's bound,
+    0.023 under a planned POS_C of 0.59 (config-audit). The plan's bound is its own."""
+    sc = _small(**{"episode.horizon_steps": 2})
+    plan = make_allocation_plan(sc, refine=0)
+    assert plan["posc"] <= plan["bound_rule"] * 1.02
+    assert plan["bound_rule"] == make_allocation_plan(_small(), refine=0)["bound_rule"]
+
+
+def test_an_operating_area_beyond_plan_json_is_refused_naming_the_scenario():
+    """A 2,000 km map (the largest side a scenario takes) grows by the 20 km boundary margin
+    past plan.json's +-2,000 km: the plan was made, then refused naming its own
+    ``plan.operating_area_m[1]`` (config-audit). Refused naming the margin; without it the
+    plan is written."""
+    big = {"map.cell_km": 2000, "map.width_km": 2000, "map.height_km": 2000}
+    with pytest.raises(ConfigError, match=r"episode\.boundary_margin_km: got 20(\.0)?; allowed"):
+        make_allocation_plan(_small(**big), refine=0)
+    make_allocation_plan(_small(**big, **{"episode.boundary_margin_km": 0}), refine=0)

@@ -405,3 +405,13 @@ def test_compiled_plan_pass_equals_split_lawnmower_and_exclusive_masses(paper):
     excl = np.sum(exclusive_fractions(*args) * prior, axis=(-2, -1))
     assert np.all(excl[:10, 1] < 1e-9 * plain[:10, 1]) and np.all(plain[:10, 1] > 0)
     assert np.all(np.abs(terms[..., 5] - excl) <= 1e-12 * plain)
+
+
+def test_a_sweep_width_too_narrow_for_the_line_limit_is_refused_naming_it():
+    """W = 1 mm on a 40 km map: the DE plan's lines at d >= W/2 could number millions; the
+    plan was optimised, then decoding it failed naming ``spacing_m``, an internal value the
+    user never set (config-audit). Refused when the objective is built, naming the sensor."""
+    narrow = load_scenario("small", {"sensor.sweep_width_km": 1e-6})
+    with pytest.raises(ConfigError, match=r"sensor\.sweep_width_km: .*allowed: at least 0\.00113"):
+        PlanObjective(narrow)
+    PlanObjective(load_scenario("small", {"sensor.sweep_width_km": 0.0012}))  # just enough

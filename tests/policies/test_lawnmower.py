@@ -49,3 +49,20 @@ def test_lawnmower_returns_to_land_within_the_usable_endurance():
     st = env.sim_state
     assert st.landed.all() and not st.crashed.any()
     assert st.elapsed.max() <= env.scenario.uav.usable_endurance_s + env.params.dt
+
+
+def test_more_uavs_than_lines_share_the_lines():
+    """A 5 km wide map at W = 5 km has one line for three UAVs: the split gave two UAVs an
+    empty strip, a zero-area polygon and an error with nothing of what is allowed
+    (config-audit). With fewer lines than UAVs each block is one line, shared by neighbouring
+    UAVs: every UAV searches, and lands."""
+    one_line = {"map.width_km": 5, "sensor.sweep_width_km": 5, "episode.horizon_steps": 400}
+    env = poc_env.parallel_env(poc_env.load_scenario("small", one_line))
+    obs, _ = env.reset(seed=0)
+    wps = lawnmower_waypoints(env.params)
+    assert all(len(w) > 0 for w in wps)
+    pol = lawnmower_policy(env.params, env.possible_agents)
+    while env.agents:
+        obs, *_ = env.step(pol.predict(obs)[0])
+    st = env.sim_state
+    assert st.landed.all() and not st.crashed.any() and st.posc[0] > 0

@@ -59,3 +59,17 @@ def test_follower_actions_stay_within_limits_and_land():
         if not env.agents:
             break
     assert landed == set(env.possible_agents)
+
+
+def test_a_uav_with_no_waypoints_leaves_its_field_and_lands():
+    """A plan that gives a UAV nothing to search (greedy_rectangles on a 2 x 2 map of 20 km
+    cells, where no whole cell fits the endurance) left it circling inside its field's landing
+    radius, which it must leave before it may land: every UAV crashed at T, every step a
+    violation (config-audit). The follower flies it out of the radius and back to land."""
+    env = poc_env.parallel_env("small", obs_type="flat", overrides={"map.cell_km": 20})
+    obs, _ = env.reset(seed=0)
+    follower = WaypointFollower(env.params, [np.empty((0, 2))] * 3, env.possible_agents)
+    while env.agents:
+        obs, *_ = env.step(follower.predict(obs)[0])
+    st = env.sim_state
+    assert st.landed.all() and not st.crashed.any()

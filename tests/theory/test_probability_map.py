@@ -113,3 +113,18 @@ def test_sample_axes_are_the_sample_points():
     assert np.array_equal(pts[..., 0], np.broadcast_to(xs, pts.shape[:2]))
     assert np.array_equal(pts[..., 1], np.broadcast_to(ys[:, None], pts.shape[:2]))
     assert not xs.flags.writeable and not ys.flags.writeable
+
+
+@pytest.mark.parametrize("sigma_m", [1e-3, 1.0])
+def test_a_component_narrower_than_the_samples_keeps_its_mass_in_its_cell(sigma_m):
+    """A component far narrower than the sub-cell spacing falls between the sample points
+    (every density underflows to 0): it was dropped as if it lay off the grid, so the prior
+    was the background alone (config-audit). Its mass belongs to the cell holding its mean."""
+    grid = Grid(8, 8, 5000.0)
+    comp = GaussianComponent(mean_m=(12_000.0, 25_000.0), sigma_m=(sigma_m, sigma_m))
+    prior = pm.gaussian_mixture(grid, [comp], background=0.05)
+    j, i = grid.cell_of(np.array(comp.mean_m))
+    assert prior[j, i] == pytest.approx(0.95 + 0.05 / 64, rel=1e-12)
+    assert prior.sum() == pytest.approx(1.0, rel=1e-12)
+    alone = pm.gaussian_mixture(grid, [comp])  # no background: refused before the fix
+    assert alone[j, i] == 1.0
