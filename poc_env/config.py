@@ -272,7 +272,6 @@ class MapConfig:
             limits.map_bytes(self.nx * self.ny),
             f"{self.nx} x {self.ny} cell map",
         )
-        self._check_prior_mass()
         if not isinstance(self.no_fly_zones_m, (list, tuple)):
             raise ConfigError("no_fly_zones_km", self.no_fly_zones_m, "a list of polygons")
         zones = tuple(
@@ -297,28 +296,6 @@ class MapConfig:
             area = box(self.origin_m[0], self.origin_m[1], self.origin_m[0] + self.width_m,
                        self.origin_m[1] + self.height_m)  # fmt: skip
             check_zones_leave_room(zones, self.no_fly_names, area, "the search area")
-
-    def _check_prior_mass(self) -> None:
-        """A Gaussian-mixture prior without background needs mass on the grid: built once here
-        (:func:`poc_env.theory.probability_map.gaussian_mixture`, the prior's one
-        implementation), so a mixture wholly off the map is refused at load, naming it."""
-        p = self.prior
-        if p.kind != "gaussian_mixture" or p.background > 0:
-            return
-        from poc_env.errors import MapFileError
-        from poc_env.theory.probability_map import Grid, gaussian_mixture
-
-        try:
-            gaussian_mixture(Grid.from_config(self), p.components)
-        except MapFileError:
-            x0, y0 = (c / KM for c in self.origin_m)
-            raise ConfigError(
-                "prior.components",
-                [{"mean_km": [c / KM for c in g.mean_m]} for g in p.components],
-                f"components with mass on the {self.nx} x {self.ny} grid (x {x0:g} to "
-                f"{x0 + self.width_m / KM:g} km, y {y0:g} to {y0 + self.height_m / KM:g} km), "
-                "or prior.background > 0",
-            ) from None
 
     def zone_label(self, i: int) -> str:
         """How messages name no-fly zone ``i`` (:func:`poc_env.geometry.zone_label`)."""
@@ -837,14 +814,14 @@ class Scenario:
         t = self.target
         if not t.moves or t.model == "particles":
             return
-        from poc_env.theory.motion import substeps
+        from poc_env._kernels.motion import substeps  # the stability rule's one kernel
 
         s = self.sensor.samples_per_cell
         h, dt, d = self.map.cell_m / s, self.episode.dt_s, t.diffusion_m2_s
         rand = t.random_current_kmh * KMH
         u, v = abs(t.current_kmh[0]) * KMH + rand, abs(t.current_kmh[1]) * KMH + rand
         cells = self.map.nx * self.map.ny * s * s
-        n = substeps(u, v, d, dt, h)
+        n = int(substeps(float(u), float(v), float(d), float(dt), float(h)))
         if n * cells <= limits.MAX_FILTER_UPDATES and n <= limits.MAX_FILTER_SUBSTEPS:
             return
         most = min(math.floor(limits.MAX_FILTER_UPDATES / cells), limits.MAX_FILTER_SUBSTEPS)

@@ -107,7 +107,7 @@ from poc_env.agents.planning.refine import (
 from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
-from poc_env.sim.core import takeoff_heading
+from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.bound import reach_optimum
 from poc_env.theory.probability_map import Grid, build_prior
@@ -269,6 +269,7 @@ def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
     wps = [list(w) for w in wps]
     keys = [tuple(np.round(t, 3)) for t in takeoff]
     d_out = 8000.0 + 2 * sc.constraints.safety_distance_m
+    box = operating_area(sc)  # eq. 20: a dog-leg stays inside, or is not flown
     for field in set(keys):
         mates = [k for k in range(len(takeoff)) if keys[k] == field and wps[k]]
         if len(mates) < 2:
@@ -285,10 +286,24 @@ def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
                 continue
             dist = float(np.hypot(wps[k][0][0] - a[0], wps[k][0][1] - a[1]))
             reach = max(min(0.5 * dist, d_out), 4.0 * sc.constraints.safety_distance_m)
+            if reach > _inside_reach(a, ang, box):  # only where the field is near eq. 20's edge
+                continue
             wps[k] = [[float(a[0] + reach * np.cos(ang)), float(a[1] + reach * np.sin(ang))]] + wps[
                 k
             ]
     return wps
+
+
+def _inside_reach(a, ang: float, box: tuple[float, float, float, float]) -> float:
+    """How far from ``a`` a straight leg on bearing ``ang`` (radians) stays inside the box
+    ``(x0, y0, x1, y1)`` (eq. 20's operating area)."""
+    out = np.inf
+    for d, p, lo, hi in ((np.cos(ang), a[0], box[0], box[2]), (np.sin(ang), a[1], box[1], box[3])):
+        if d > 1e-12:
+            out = min(out, (hi - p) / d)
+        elif d < -1e-12:
+            out = min(out, (lo - p) / d)
+    return float(out)
 
 
 def fit_lawnmowers(

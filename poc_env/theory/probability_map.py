@@ -25,7 +25,7 @@ from shapely.geometry import box
 
 import poc_env._kernels.priors as _priors
 from poc_env.config import GaussianComponent, MapConfig, PriorConfig
-from poc_env.errors import MapFileError
+from poc_env.errors import ConfigError, MapFileError
 
 
 @dataclass(frozen=True)
@@ -198,8 +198,13 @@ def gaussian_mixture(
     total = mass.sum()
     if total > 0:
         mass = mass / total * (1.0 - background)
-    elif background <= 0:
-        raise MapFileError("gaussian mixture has no mass on the grid and no background")
+    elif background <= 0:  # every component wholly off the grid (config-audit)
+        (x0, x1), (y0, y1) = (grid.bounds[0], grid.bounds[2]), (grid.bounds[1], grid.bounds[3])
+        raise ConfigError(
+            "map.prior.components", [{"mean_km": [m / 1e3 for m in c.mean_m]} for c in components],
+            f"components with mass on the {grid.nx} x {grid.ny} grid (x {x0 / 1e3:g} to "
+            f"{x1 / 1e3:g} km, y {y0 / 1e3:g} to {y1 / 1e3:g} km), or map.prior.background > 0",
+        )  # fmt: skip
     else:
         background = 1.0
     mass = mass + background / (grid.nx * grid.ny)

@@ -38,9 +38,11 @@ def test_a_fixed_speed_uav_observes_a_finite_speed(obs_type):
     _episode_is_sane(env)
 
 
-def test_a_mixture_off_the_map_without_background_is_refused_at_load():
+def test_a_mixture_off_the_map_without_background_is_refused_naming_it():
     """A prior whose every component lies off the grid, with no background, loaded and then
-    failed when the env was built, with a message that said nothing of what is allowed."""
+    failed when the env was built, with a message that said nothing of what is allowed. It
+    is refused where the prior is built (the layout keeps the prior out of the config layer),
+    naming the components, the grid and what is allowed."""
     from poc_env.config import load_scenario
     from poc_env.errors import ConfigError
 
@@ -48,8 +50,9 @@ def test_a_mixture_off_the_map_without_background_is_refused_at_load():
         "map.prior.components": [{"mean_km": [5000, 5000], "sigma_km": [1, 1]}],
         "map.prior.background": 0.0,
     }
+    sc = load_scenario("small", off)
     with pytest.raises(ConfigError, match=r"map\.prior\.components: .*allowed: .*on the 8 x 8"):
-        load_scenario("small", off)
+        poc_env.parallel_env(sc)
     on = {**off, "map.prior.components": [{"mean_km": [20, 20], "sigma_km": [1, 1]}]}
     _episode_is_sane(poc_env.parallel_env("small", obs_type="compass", overrides=on))
 

@@ -175,3 +175,21 @@ def test_an_operating_area_beyond_plan_json_is_refused_naming_the_scenario():
     with pytest.raises(ConfigError, match=r"episode\.boundary_margin_km: got 20(\.0)?; allowed"):
         make_allocation_plan(_small(**big), refine=0)
     make_allocation_plan(_small(**big, **{"episode.boundary_margin_km": 0}), refine=0)
+
+
+@pytest.mark.parametrize("refine", [0, None])
+def test_field_mates_dog_legs_stay_inside_the_operating_area(refine):
+    """config-audit, left for the lead: with ``episode.boundary_margin_km: 0`` the airfield of
+    ``small`` sits on eq. 20's boundary, and a field-mate's fan-out dog-leg (``_spread``) was
+    laid 0.55 km outside it, on the spread bearing; the flight breaks eq. 20 and the QGC export
+    refuses the geofence. Every waypoint is now inside the operating area."""
+    from poc_env.sim.core import operating_area
+
+    ov = {"episode.boundary_margin_km": 0.0, "map.cell_km": 5.0, "map.height_km": 5.0,
+          "map.width_km": 45.0}  # fmt: skip
+    sc = load_scenario("small", ov)
+    x0, y0, x1, y1 = operating_area(sc)
+    plan = make_allocation_plan(sc, refine=refine)
+    wps = np.array([w for u in plan["uavs"] for w in u["waypoints_m"]])
+    assert len(wps) > 0
+    assert np.all((wps[:, 0] >= x0) & (wps[:, 0] <= x1) & (wps[:, 1] >= y0) & (wps[:, 1] <= y1))
