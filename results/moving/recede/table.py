@@ -1,6 +1,7 @@
 """Paired tables of the instrument records (``instrument.py``'s JSON lines):
 
-    PYTHONPATH=. python results/moving/recede/table.py BEFORE.jsonl[,MORE.jsonl] AFTER.jsonl[,...]
+    PYTHONPATH=. python results/moving/recede/table.py A.jsonl[,MORE.jsonl] [B.jsonl[,...]] \
+        [--names A_NAME B_NAME]
 
 For each side: seeds, mean POSC of ``spacetime_plan`` and ``spacetime_receding``, receding - plan
 (Student's t 95 %, wins/ties/losses), re-plans due / made / flown per episode and how the made
@@ -65,14 +66,20 @@ def side(name: str, recs: dict[int, dict]) -> None:
 
 
 def main() -> None:
-    before, after = load(sys.argv[1]), load(sys.argv[2]) if len(sys.argv) > 2 else {}
-    side("before", before)
+    args = sys.argv[1:]
+    names = ["main", "variant"]
+    if "--names" in args:
+        i = args.index("--names")
+        names[: len(args) - i - 1] = args[i + 1 :]
+        args = args[:i]
+    before, after = load(args[0]), load(args[1]) if len(args) > 1 else {}
+    side(names[0], before)
     if after:
-        side("after", after)
+        side(names[1], after)
         seeds = sorted(
             s for s in before if s in after and "plan" in before[s] and "plan" in after[s]
         )
-        print(f"## after - before, paired (n={len(seeds)})")
+        print(f"## {names[1]} - {names[0]}, paired (n={len(seeds)})")
         for pol in ("plan", "receding"):
             d = [after[s][pol] - before[s][pol] for s in seeds]
             print(f"{pol}: {paired(d)}")
