@@ -22,11 +22,10 @@ from poc_env.agents.planning.spacetime import (
     spacetime_plan,
 )
 from poc_env.agents.policies.moving import SpacetimeRecedingPolicy, drift_of
+from poc_env.agents.policies.replan_choice import ReplanChoicePolicy, _kept, _plan_routes
 from poc_env.config import parse_overrides
 from poc_env.envs.parallel import UAVSearchParallelEnv
-from poc_env.sim.autopilot import must_return
 from poc_env.sim.core import operating_area
-from poc_env.sim.observations import decode_vector, split_observation
 from poc_env.tasks import get_task
 from poc_env.theory.probability_map import Grid
 
@@ -68,16 +67,7 @@ def main() -> None:
             actions, _ = pol.predict(obs)
             obs, *_ = env.step(actions)
         now = float(env.sim_state.step[0]) * p.dt
-        ks, pos = [], []
-        for k, agent in enumerate(pol.agents):
-            if agent not in obs:
-                continue
-            q = decode_vector(p, split_observation(obs[agent], p.grid.shape)[1])
-            if must_return(p, q, k) or pol.follower.index[k] >= len(pol.follower.waypoints[k]):
-                continue
-            ks.append(k)
-            pos.append(np.asarray(q["xy"], dtype=float))
-        xy = np.array(pos)
+        ks, xy = ReplanChoicePolicy.searching(pol, obs)  # type: ignore[arg-type]
         drift = drift_of(env)
         belief = np.array(env.sim_state.belief[0], dtype=float)
         poc = airborne_poc(sc, belief, drift, p.s, xy, now, ks)
@@ -86,40 +76,12 @@ def main() -> None:
         plan = ground_plan(raw, xy, drift, operating_area(sc))  # what replan returns
         nocut = ground_plan(raw, xy, drift, None)  # the same routes, none dropped
         old = pol.follower
-        kept, kept_v = [], []
-        for k in ks:
-            i = int(old.index[k])
-            kept.append(old.waypoints[k][i:])
-            kept_v.append(
-                [old.transit_speed if i == 0 else old.pattern_speed]
-                + [old.pattern_speed] * (len(old.waypoints[k]) - i)
-            )
-        v = plan.get("speeds_mps") or {}
-        new = [
-            np.asarray(plan["uavs"][j]["waypoints_m"], dtype=float).reshape(-1, 2)
-            for j in range(len(ks))
-        ]
-        new_v = [
-            [v.get("out", old.transit_speed)] + [v.get("line", old.pattern_speed)] * len(w)
-            for w in new
-        ]
-        new_nc = [
-            np.asarray(plan_u["waypoints_m"], dtype=float).reshape(-1, 2)
-            for plan_u in nocut["uavs"]
-        ]
-        new_nc_v = [[v.get("out")] + [v.get("line")] * len(w) for w in new_nc]
-        pick, scores = choose_routes(
-            sc,
-            belief,
-            drift,
-            p.s,
-            xy,
-            now,
-            ks,
-            [(kept, kept_v), (new, new_v), (new_nc, new_nc_v)],
-            pol.margin,
-            poc=poc,
-        )
+        kept, kept_v = _kept(old, ks)
+        new, new_v, v = _plan_routes(plan, len(ks), old)
+        new_nc, new_nc_v, _ = _plan_routes(nocut, len(ks), old)
+        cands = [(kept, kept_v), (new, new_v), (new_nc, new_nc_v)]
+        at_now = (sc, belief, drift, p.s, xy, now, ks)
+        pick, scores = choose_routes(*at_now, cands, pol.margin, poc=poc)
         grid = Grid.from_config(asc.map)
         usable = asc.uav.usable_endurance_s
 
