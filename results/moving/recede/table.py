@@ -2,6 +2,7 @@
 
     PYTHONPATH=. python results/moving/recede/table.py A.jsonl[,MORE.jsonl] [B.jsonl[,...]] \
         [--names A_NAME B_NAME]
+    PYTHONPATH=. python results/moving/recede/table.py --rows A.jsonl[,MORE.jsonl]
 
 For each side: seeds, mean POSC of ``spacetime_plan`` and ``spacetime_receding``, receding - plan
 (Student's t 95 %, wins/ties/losses), re-plans due / made / flown per episode and how the made
@@ -65,8 +66,28 @@ def side(name: str, recs: dict[int, dict]) -> None:
         )
 
 
+def rows(recs: dict[int, dict]) -> None:
+    """One markdown row a seed: drift, both POSCs, the difference, re-plans made / flown (when),
+    the made ones' model score - kept below 0 / within the margin / above it."""
+    for s in sorted(x for x in recs if "plan" in recs[x]):
+        r = recs[s]
+        made = [x for x in r["log"] if x["made"]]
+        d = [x["diff"] for x in made]
+        at = ", ".join(f"{x['min']:g}" for x in made if x["switched"])
+        neg = sum(1 for x in d if x < 0)
+        mid = sum(1 for x in d if 0 <= x <= MARGIN)
+        print(
+            f"| {s} | {r['drift_kmh']:.1f} | {r['plan']:.4f} | {r['receding']:.4f} | "
+            f"{r['receding'] - r['plan']:+.4f} | {len(made)} / {r['switches']} ({at}) | "
+            f"{neg} / {mid} / {len(d) - neg - mid} |"
+        )
+
+
 def main() -> None:
     args = sys.argv[1:]
+    if args[0] == "--rows":
+        rows(load(args[1]))
+        return
     names = ["main", "variant"]
     if "--names" in args:
         i = args.index("--names")
