@@ -98,17 +98,24 @@ def intercept(start, waypoints, velocity, speeds) -> tuple[np.ndarray, np.ndarra
     return out, times
 
 
+def flight_times(start, waypoints, speeds) -> np.ndarray:
+    """The times ``(k,)`` at which the ground ``waypoints`` are reached flown in turn from
+    ``start`` (time 0), leg ``k`` at ground speed ``speeds[k]`` (m/s): the sums of leg
+    lengths over speeds."""
+    g = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+    legs = np.diff(np.vstack([np.asarray(start, dtype=float).reshape(1, 2), g]), axis=0)
+    return np.cumsum(np.hypot(legs[:, 0], legs[:, 1]) / np.asarray(speeds, dtype=float)[: len(g)])
+
+
 def comoving_route(start, waypoints, velocity, speeds) -> np.ndarray:
     """The inverse of :func:`intercept`: the co-moving waypoints ``(k, 2)`` of the ground
     ``waypoints`` flown from ``start`` (ground position at time 0), leg ``k`` at ground speed
-    ``speeds[k]`` (m/s): ``x_k = g_k - v t_k`` with ``t_k`` the sum of leg lengths over speeds."""
+    ``speeds[k]`` (m/s): ``x_k = g_k - v t_k`` with ``t_k`` their :func:`flight_times`."""
     g = np.asarray(waypoints, dtype=float).reshape(-1, 2)
     v = np.asarray(velocity, dtype=float)
     if not len(g):
         return g.copy()
-    legs = np.diff(np.vstack([np.asarray(start, dtype=float), g]), axis=0)
-    times = np.cumsum(np.hypot(legs[:, 0], legs[:, 1]) / np.asarray(speeds, dtype=float)[: len(g)])
-    return g - times[:, None] * v
+    return g - flight_times(start, g, speeds)[:, None] * v
 
 
 def ground_plan(plan: dict, starts, velocity, area=None) -> dict:
@@ -118,9 +125,12 @@ def ground_plan(plan: dict, starts, velocity, area=None) -> dict:
     waypoint outside it (where the mass has drifted off the map) is dropped, the route flying
     on to its next waypoint inside (chosen over ending the route there: +0.0044 and -0.0003
     POSC on the two ``UAVSearch-Paper61-Drift-Heading-v1`` seeds of 5000-5002 that differ);
-    the plan records how many were dropped in ``cut_outside_area`` (absent when none). The
-    plan's POS figures (``posc``, per-UAV ``pos``) stay those of the co-moving POC it was made
-    on."""
+    the plan records how many were dropped in ``cut_outside_area`` (absent when none). After a
+    dropped waypoint the route is shorter, so the later ones are reached before their co-moving
+    points pass there: ``meet_times_s`` are then the times they are reached
+    (:func:`flight_times` at the plan's speeds, the follower's; what :func:`choose_routes`
+    scores), not the intercept's. The plan's POS figures (``posc``, per-UAV ``pos``) stay those
+    of the co-moving POC it was made on."""
     v = plan.get("speeds_mps") or {}
     out = dict(plan)
     uavs = []
@@ -135,7 +145,9 @@ def ground_plan(plan: dict, starts, velocity, area=None) -> dict:
                 x0, y0, x1, y1 = area
                 inside = (g[:, 0] >= x0) & (g[:, 0] <= x1) & (g[:, 1] >= y0) & (g[:, 1] <= y1)
                 cut += int((~inside).sum())
-                g, times = g[inside], times[inside]
+                if not inside.all():  # reached early after a drop (docstring)
+                    g = g[inside]
+                    times = flight_times(starts[k], g, speeds)
             u2["waypoints_m"] = g.tolist()
             u2["meet_times_s"] = times.tolist()
         uavs.append(u2)

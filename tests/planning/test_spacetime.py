@@ -168,3 +168,30 @@ def test_ground_waypoints_stay_in_the_operating_area():
         assert np.all((w[:, 0] >= x0) & (w[:, 0] <= x1) & (w[:, 1] >= y0) & (w[:, 1] <= y1))
         assert len(u.get("meet_times_s", [])) == len(w)
     assert n > 0  # routes are left to fly
+
+
+def test_meet_times_after_a_dropped_waypoint_are_when_it_is_reached():
+    """drift-recede: a ground waypoint outside eq. 20's area is dropped and the route flies
+    straight on, so the later waypoints are reached before the intercept's times (and before
+    their co-moving points pass there). ``meet_times_s`` kept the intercept's times; they are
+    the times the follower reaches each kept waypoint at the plan's speeds, and the co-moving
+    points those times give (:func:`comoving_route`, what the switch rule scores) are the plan's
+    up to the first drop."""
+    from poc_env.agents.planning.spacetime import ground_plan
+
+    wps = np.array([[0.0, 0.0], [8e3, 0.0], [8e3, 6e3], [0.0, 6e3], [-4e3, 9e3]])
+    v, start = np.array([4.0, 0.0]), np.array([-1e4, 0.0])
+    speeds = {"out": 60.0, "line": 40.0}
+    plan = {"uavs": [{"waypoints_m": wps.tolist()}], "speeds_mps": speeds}
+    full = ground_plan(plan, [start], v)["uavs"][0]
+    x1 = float(np.asarray(full["waypoints_m"])[1, 0]) - 1.0  # the second one is outside
+    cut = ground_plan(plan, [start], v, area=(-2e4, -2e4, x1, 2e4))
+    g = np.asarray(cut["uavs"][0]["waypoints_m"], dtype=float).reshape(-1, 2)
+    assert cut["cut_outside_area"] >= 1 and len(g) >= 2
+    flown = [speeds["out"]] + [speeds["line"]] * (len(g) - 1)
+    legs = np.hypot(*np.diff(np.vstack([start, g]), axis=0).T)
+    reached = np.cumsum(legs / flown)
+    np.testing.assert_allclose(cut["uavs"][0]["meet_times_s"], reached)
+    kept = np.isin(np.asarray(full["waypoints_m"])[:, 0], g[:, 0])
+    assert np.all(reached[1:] < np.asarray(full["meet_times_s"])[kept][1:])  # early after it
+    np.testing.assert_allclose(comoving_route(start, g, v, flown)[:1], wps[:1], atol=1e-6)
