@@ -477,3 +477,29 @@ def test_dem_covering_the_operating_area_is_enough(tmp_path):
     assert t.bounds[0] == pytest.approx(-31e3) and np.allclose(t.ground_max_m, 800.0)
     with pytest.raises(ConfigError, match=r"terrain\.dem.*x0, y0, x1, y1 = \[-30\.3, -20\.0"):
         load_terrain(scenario(dem(-30.2)))
+
+
+def test_geojson_route_altitude_properties_describe_the_line(tmp_path):
+    """A route over terrain carries no flat ``altitude_m`` (it was field + search height while
+    its z follow the DEM, terrain audit follow-up): its search height above the ground and the
+    AMSL range its own z span; a flat plan keeps ``altitude_m``, the z of its search points."""
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif")))
+    plan = make_plan(sc, planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    flat = {k: v for k, v in plan.items() if k != "terrain"}
+    write_plan(flat, tmp_path / "flat.json")
+    for name in ("plan.json", "flat.json"):
+        (f,) = export_plan(tmp_path / name, "geojson", out_dir=tmp_path / name[:-5])
+        routes = [ft for ft in json.loads(f.read_text())["features"]
+                  if ft["properties"]["kind"] == "route"]  # fmt: skip
+        assert routes
+        for ft in routes:
+            p, z = ft["properties"], [c[2] for c in ft["geometry"]["coordinates"][1:-1]]
+            if name == "flat.json":
+                assert p["altitude_m"] == pytest.approx(max(z)) == pytest.approx(min(z))
+                continue
+            assert "altitude_m" not in p and p["altitude_ref"] == "amsl"
+            assert p["search_height_m"] == sc.uav.cruise_altitude_m
+            assert p["altitude_min_m"] == pytest.approx(min(z), abs=0.05)
+            assert p["altitude_max_m"] == pytest.approx(max(z), abs=0.05)
+            assert p["altitude_max_m"] - p["altitude_min_m"] > 100.0  # the DEM's relief
