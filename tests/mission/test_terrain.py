@@ -503,3 +503,26 @@ def test_geojson_route_altitude_properties_describe_the_line(tmp_path):
             assert p["altitude_min_m"] == pytest.approx(min(z), abs=0.05)
             assert p["altitude_max_m"] == pytest.approx(max(z), abs=0.05)
             assert p["altitude_max_m"] - p["altitude_min_m"] > 100.0  # the DEM's relief
+
+
+def test_a_width_given_beside_a_camera_model_is_refused_even_the_default():
+    """Terrain audit follow-up: ``sensor.sweep_width_km: 5`` (the default's value) given beside
+    ``sensor.model: camera`` was silently replaced by the model's W; a width given with a model
+    that computes it is refused by name, whatever its value, unless it is the model's own W
+    (a scenario's ``to_dict`` writes that, and loads back)."""
+    from poc_env.config import SensorConfig
+
+    cam = {"sensor.model": "camera", "sensor.fov_deg": 60.0}
+    w = load_scenario("paper_6_2", cam).sensor.sweep_width_m
+    for given in (5, 5.0, 3):
+        with pytest.raises(ConfigError, match=r"sensor\.sweep_width_km.*absent when sensor\.model"):
+            load_scenario("paper_6_2", {**cam, "sensor.sweep_width_km": given})
+    data = load_scenario("paper_6_2").to_dict()  # a file giving both, as the audit wrote it
+    data["sensor"].update(model="camera", sweep_width_km=5)
+    with pytest.raises(ConfigError, match=r"sensor\.sweep_width_km: got 5"):
+        load_scenario(data)
+    assert load_scenario("paper_6_2", {**cam, "sensor.sweep_width_km": w / 1e3}).sensor == (
+        load_scenario("paper_6_2", cam).sensor
+    )
+    assert SensorConfig().sweep_width_m == 5000.0  # the fixed model's default is unchanged
+    assert load_scenario("paper_6_2", {"sensor.sweep_width_km": 5}).sensor.sweep_width_m == 5000.0
