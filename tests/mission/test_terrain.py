@@ -526,3 +526,19 @@ def test_a_width_given_beside_a_camera_model_is_refused_even_the_default():
     )
     assert SensorConfig().sweep_width_m == 5000.0  # the fixed model's default is unchanged
     assert load_scenario("paper_6_2", {"sensor.sweep_width_km": 5}).sensor.sweep_width_m == 5000.0
+
+
+def test_dem_nodata_refusal_counts_a_small_hole(tmp_path):
+    """Terrain audit follow-up: a 2 x 2 pixel hole was refused as ``nodata or NaN over 0.0% of
+    the operating area``; the message counts the grid cells and gives a share that is not 0.
+    (A one-pixel hole is filled by the resampling from its neighbours and not refused.)"""
+    import re
+
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif", void=(slice(150, 152), slice(150, 152)))))
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*nodata or NaN") as err:
+        make_plan(sc, planner="allocation", refine=0)
+    m = re.search(r"at (\d+) of the (\d+) cells .*\(([0-9.e+-]+) %", str(err.value))
+    assert m is not None, str(err.value)
+    n, total, pct = int(m[1]), int(m[2]), float(m[3])
+    assert 0 < n < total / 1000  # a small hole
+    assert pct == pytest.approx(100 * n / total, rel=5e-3)  # 3 significant digits, not 0.0
