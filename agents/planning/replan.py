@@ -115,10 +115,11 @@ def read_tracks(
         raw = file.read_bytes()
     except OSError as err:
         raise ConfigError("tracks", os.fspath(path), f"a readable track file ({err})") from None
+    parts: list[tuple[str, np.ndarray | None]]
     if suffix == ".kml":
         parts = _kml_tracks(raw, path)
     elif suffix == ".gpx":
-        parts = _gpx_tracks(raw, path)
+        parts = list(_gpx_tracks(raw, path))
     else:
         parts = _geojson_tracks(raw, path)
     approaches = [f for f, arr in parts if arr is None]
