@@ -382,10 +382,14 @@ class SensorConfig:
     the table checks it covers.
     """
 
+    #: W; not given (None): :data:`DEFAULT_SWEEP_WIDTH_M` for ``fixed``, the model's W for
+    #: ``camera``. Whether it was given is kept (``width_given``): a width given beside a
+    #: model that computes it is refused unless it is the model's own (terrain follow-up: a
+    #: given 5 km, the default's value, was silently replaced).
     sweep_width_m: float = _f(
         "sweep_width_km",
         KM,
-        default=DEFAULT_SWEEP_WIDTH_M,
+        default=None,
         lo=limits.MIN_POSITIVE,
         hi=limits.MAX_SWEEP_WIDTH_KM,
     )
@@ -409,6 +413,10 @@ class SensorConfig:
     detection_factor: float = _f(default=1.0, lo=limits.MIN_POSITIVE, hi=1.0)
 
     def __post_init__(self) -> None:
+        given = self.sweep_width_m is not None
+        object.__setattr__(self, "width_given", given)  # not a field: no YAML key, no compare
+        if not given:
+            object.__setattr__(self, "sweep_width_m", DEFAULT_SWEEP_WIDTH_M)
         _coerce(self)
         _choice("law", self.law, tuple(LAW_CODES))
         _choice("model", self.model, SENSOR_MODELS)
@@ -847,7 +855,7 @@ class Scenario:
             return
         w = s.sweep_width_at(self.uav.cruise_altitude_m)
         given = s.sweep_width_m
-        if abs(given - DEFAULT_SWEEP_WIDTH_M) > 1e-6 and abs(given - w) > 1e-6 * max(w, 1.0):
+        if getattr(s, "width_given", True) and abs(given - w) > 1e-6 * max(w, 1.0):
             raise ConfigError(
                 "sensor.sweep_width_km", given / KM,
                 f"absent when sensor.model is {s.model!r} (the model gives {w / KM:.6g} km at "
@@ -1146,7 +1154,17 @@ def load_scenario(
         data = read_yaml(path)
         data.setdefault("name", Path(path).stem)
         _resolve_prior_file(data, Path(path).parent)
-    for key, value in (overrides or {}).items():
+    over = dict(overrides or {})
+    sensor = data.get("sensor")
+    if (
+        over.get("sensor.model", "fixed") != "fixed"
+        and "sensor.sweep_width_km" not in over
+        and isinstance(sensor, dict)
+        and sensor.get("model", "fixed") == "fixed"
+    ):  # the file's width is its fixed model's, which the override replaces; a width given
+        # beside a model that computes W is refused (SensorConfig.width_given)
+        data["sensor"] = {k: v for k, v in sensor.items() if k != "sweep_width_km"}
+    for key, value in over.items():
         _set_dotted(data, key, value)
     return _from_mapping(Scenario, data, "")
 

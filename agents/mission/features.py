@@ -30,6 +30,11 @@ from poc_env.geometry import zone_label
 ALTITUDE_REFS = ("home", "amsl")
 
 
+#: The ``kind`` (GeoJSON property, KML style id) of the landing approach drawn beside each
+#: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
+APPROACH_KIND = "landing_approach"
+
+
 def check_altitude_ref(altitude_ref: str) -> str:
     """``altitude_ref`` if it is one of :data:`ALTITUDE_REFS`, else ConfigError."""
     if altitude_ref not in ALTITUDE_REFS:
@@ -154,7 +159,7 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
                 "z": app_z,
                 "properties": {
                     "id": u["id"],
-                    "kind": "landing_approach",
+                    "kind": APPROACH_KIND,
                     "name": f"UAV {u['id']} landing approach",
                     "approach_km": APPROACH_DISTANCE_M / 1e3,
                     "approach_height_m": round(app_z[0] - app_z[1], 1),  # as drawn

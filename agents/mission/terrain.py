@@ -299,13 +299,13 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
             elev = _sample_fields(field, sc, band, src, rec)
     except RasterioError as err:
         raise ConfigError(field, f"{path} unreadable ({err})", "a complete GeoTIFF") from None
-    for name in ("mean", "max"):
-        bad = ~np.isfinite(out[name])
-        if bad.any():
-            raise ConfigError(
-                field, f"nodata or NaN over {bad.mean():.1%} of the operating area ({path.name})",
-                "a DEM with a height at every point of the operating area (fill the voids)",
-            )  # fmt: skip
+    bad = ~(np.isfinite(out["mean"]) & np.isfinite(out["max"]))
+    if bad.any():  # a count and a share that a small hole does not round to 0
+        raise ConfigError(
+            field, f"nodata or NaN at {int(bad.sum())} of the {bad.size} cells of the "
+            f"operating area's terrain grid ({100 * bad.mean():.3g} %, {path.name})",
+            "a DEM with a height at every point of the operating area (fill the voids)",
+        )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
     return out["mean"], gmax, elev
 

@@ -89,13 +89,20 @@ KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://earth.google.com/kml
                   "http://earth.google.com/kml/2.1")  # fmt: skip
 
 
-def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.ndarray]]:
+def read_tracks(
+    path: str | os.PathLike[str], crs: Any, skipped: list[str] | None = None
+) -> list[tuple[str, np.ndarray]]:
     """The flown tracks of a GeoJSON (LineString / MultiLineString), KML (``LineString`` and
     ``gx:Track`` placemarks) or GPX 1.1 (``trk/trkseg/trkpt``) file, in WGS 84 longitude/
     latitude, put into map metres by ``crs`` (a plan's CRS record or a (lat, lon) origin,
     :func:`poc_env.agents.mission.crs.to_local`); each with the field that holds its points
     (``tracks.features[1].geometry.coordinates``, ``tracks.Placemark[0].LineString``,
-    ``tracks.trk[0].trkseg[1]``). The format is the file's suffix."""
+    ``tracks.trk[0].trkseg[1]``). The format is the file's suffix.
+
+    The landing approaches ``poc-env export`` draws beside each route (GeoJSON ``kind``, KML
+    ``styleUrl`` :data:`~poc_env.agents.mission.features.APPROACH_KIND`) are not read: the
+    route already flies to the field (over terrain its last leg is that approach), so they are
+    no second flight; their fields are appended to ``skipped`` when it is given."""
     file = Path(path)
     suffix = file.suffix.lower()
     if suffix not in TRACK_SUFFIXES:
@@ -108,13 +115,17 @@ def read_tracks(path: str | os.PathLike[str], crs: Any) -> list[tuple[str, np.nd
         raw = file.read_bytes()
     except OSError as err:
         raise ConfigError("tracks", os.fspath(path), f"a readable track file ({err})") from None
+    parts: list[tuple[str, np.ndarray | None]]
     if suffix == ".kml":
         parts = _kml_tracks(raw, path)
     elif suffix == ".gpx":
-        parts = _gpx_tracks(raw, path)
+        parts = list(_gpx_tracks(raw, path))
     else:
         parts = _geojson_tracks(raw, path)
-    lines = [(f, _to_map(f, arr, crs)) for f, arr in parts]
+    approaches = [f for f, arr in parts if arr is None]
+    if skipped is not None:
+        skipped += approaches
+    lines = [(f, _to_map(f, arr, crs)) for f, arr in parts if arr is not None]
     if not lines:
         raise ConfigError("tracks", os.fspath(path), "at least one track of 2 or more points")
     return lines
@@ -138,13 +149,16 @@ def _to_map(field: str, arr: np.ndarray, crs: Any) -> np.ndarray:
 GEOJSON_OTHER = ("Point", "MultiPoint", "Polygon", "MultiPolygon")
 
 
-def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
+def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]]:
+    """The lines of a GeoJSON object; an exported landing approach as ``(field, None)``."""
+    from poc_env.agents.mission.features import APPROACH_KIND
     from poc_env.io import loads_json
 
     where = "tracks"
     data = loads_json(raw, where, os.fspath(path))  # NaN, Infinity, deep nesting refused
     if not isinstance(data, dict):
         raise ConfigError(where, type(data).__name__, "a GeoJSON object")
+    out: list[tuple[str, np.ndarray | None]] = []
     crs_member = data.get("crs")
     props = crs_member.get("properties") if isinstance(crs_member, dict) else None
     name = props.get("name") if isinstance(props, dict) else None
@@ -159,15 +173,18 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
         feats = data.get("features")
         if not isinstance(feats, list):
             raise ConfigError(f"{where}.features", feats, "a list of features")
-        geoms = [
-            (f"{where}.features[{i}].geometry", f.get("geometry") if isinstance(f, dict) else f)
-            for i, f in enumerate(feats)
-        ]
+        geoms = []
+        for i, f in enumerate(feats):
+            field = f"{where}.features[{i}].geometry"
+            props = f.get("properties") if isinstance(f, dict) else None
+            if isinstance(props, dict) and props.get("kind") == APPROACH_KIND:
+                out.append((field, None))  # drawn beside the route: not a second flight
+                continue
+            geoms.append((field, f.get("geometry") if isinstance(f, dict) else f))
     elif data.get("type") == "Feature":
         geoms = [(f"{where}.geometry", data.get("geometry"))]
     else:
         geoms = [(where, data)]
-    out = []
     lines = ("LineString", "MultiLineString")
     # a collection's points and areas (a logger's waypoints, the search area drawn beside the
     # tracks) sweep no line: skipped, as KML's other placemarks and GPX's waypoints are; a
@@ -224,15 +241,23 @@ def _number(text: str | None, field: str) -> float:
         raise ConfigError(field, text, "a number (decimal degrees, WGS 84)") from None
 
 
-def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
+def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]]:
     """Every ``LineString`` (its ``coordinates``: ``lon,lat[,alt]`` tuples) and ``gx:Track``
     (its ``gx:coord``: ``lon lat alt``) of every Placemark. KML is WGS 84 longitude/latitude by
-    definition (OGC KML 2.2, section 6.2)."""
+    definition (OGC KML 2.2, section 6.2). An exported landing approach (``styleUrl``
+    ``#landing_approach``) as ``(field, None)``."""
+    from poc_env.agents.mission.features import APPROACH_KIND
+
     root = _xml_root(raw, path, "KML", KML_NAMESPACES)
-    out = []
+    out: list[tuple[str, np.ndarray | None]] = []
     placemarks = [e for e in root.iter() if isinstance(e.tag, str) and e.tag.endswith("}Placemark")]
     seen = 0  # LineStrings and gx:Tracks read, kept or not
     for i, pm in enumerate(placemarks):
+        style = next((x for x in pm if str(x.tag).endswith("}styleUrl")), None)
+        if style is not None and (style.text or "").strip() == "#" + APPROACH_KIND:
+            out.append((f"tracks.Placemark[{i}]", None))  # drawn beside the route
+            seen += 1
+            continue
         n = 0
         for e in pm.iter():
             if not isinstance(e.tag, str):
@@ -348,17 +373,26 @@ def next_sortie(
     return nxt
 
 
-def swept_text(plans: list[str], files: list[str] | None, tracks: list | None) -> str:
+def swept_text(
+    plans: list[str], files: list[str] | None, tracks: list | None, skipped: int = 0
+) -> str:
     """What ``replan`` swept, in one line: the routes of the ``plans``, or the ``tracks`` read
-    from ``files``, which stand for the flights of every plan (:func:`next_sortie`)."""
+    from ``files``, which stand for the flights of every plan (:func:`next_sortie`), and how
+    many exported landing approaches :func:`read_tracks` ``skipped``."""
     routes = ", ".join(str(p) for p in plans)
     if not files or tracks is None:
         return f"swept: the routes of {routes}"
     n = len(tracks)
-    return (
+    text = (
         f"swept: {n} track{'s' if n != 1 else ''} from {', '.join(str(f) for f in files)}, "
         f"in place of the routes of {routes}"
     )
+    if skipped:
+        text += (
+            f"; {skipped} landing-approach line{'s' if skipped != 1 else ''} skipped (drawn "
+            "beside the routes by export: each route already flies to its field)"
+        )
+    return text
 
 
 def cli_main(args: Any) -> int:
@@ -387,6 +421,7 @@ def cli_main(args: Any) -> int:
     sc = load_scenario(name, parse_overrides(args.overrides or []))
     prior = build_prior(sc.map, args.map_file)
     tracks = None
+    skipped: list[str] = []  # exported landing approaches, not flights
     if args.tracks:
         crs = plans[-1].get("crs") or args.origin
         if crs is None:
@@ -396,9 +431,9 @@ def cli_main(args: Any) -> int:
             )  # fmt: skip
         tracks = []
         for t in args.tracks:
-            tracks += read_tracks(t, crs)
+            tracks += read_tracks(t, crs, skipped)
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
-    print(swept_text(args.plan, args.tracks, tracks))
+    print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
     print(plan_table(nxt))
     if (warning := moving_target_warning(sc, replanned=True)) is not None:
         print(f"warning: {warning}")

@@ -477,3 +477,68 @@ def test_dem_covering_the_operating_area_is_enough(tmp_path):
     assert t.bounds[0] == pytest.approx(-31e3) and np.allclose(t.ground_max_m, 800.0)
     with pytest.raises(ConfigError, match=r"terrain\.dem.*x0, y0, x1, y1 = \[-30\.3, -20\.0"):
         load_terrain(scenario(dem(-30.2)))
+
+
+def test_geojson_route_altitude_properties_describe_the_line(tmp_path):
+    """A route over terrain carries no flat ``altitude_m`` (it was field + search height while
+    its z follow the DEM, terrain audit follow-up): its search height above the ground and the
+    AMSL range its own z span; a flat plan keeps ``altitude_m``, the z of its search points."""
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif")))
+    plan = make_plan(sc, planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    flat = {k: v for k, v in plan.items() if k != "terrain"}
+    write_plan(flat, tmp_path / "flat.json")
+    for name in ("plan.json", "flat.json"):
+        (f,) = export_plan(tmp_path / name, "geojson", out_dir=tmp_path / name[:-5])
+        routes = [ft for ft in json.loads(f.read_text())["features"]
+                  if ft["properties"]["kind"] == "route"]  # fmt: skip
+        assert routes
+        for ft in routes:
+            p, z = ft["properties"], [c[2] for c in ft["geometry"]["coordinates"][1:-1]]
+            if name == "flat.json":
+                assert p["altitude_m"] == pytest.approx(max(z)) == pytest.approx(min(z))
+                continue
+            assert "altitude_m" not in p and p["altitude_ref"] == "amsl"
+            assert p["search_height_m"] == sc.uav.cruise_altitude_m
+            assert p["altitude_min_m"] == pytest.approx(min(z), abs=0.05)
+            assert p["altitude_max_m"] == pytest.approx(max(z), abs=0.05)
+            assert p["altitude_max_m"] - p["altitude_min_m"] > 100.0  # the DEM's relief
+
+
+def test_a_width_given_beside_a_camera_model_is_refused_even_the_default():
+    """Terrain audit follow-up: ``sensor.sweep_width_km: 5`` (the default's value) given beside
+    ``sensor.model: camera`` was silently replaced by the model's W; a width given with a model
+    that computes it is refused by name, whatever its value, unless it is the model's own W
+    (a scenario's ``to_dict`` writes that, and loads back)."""
+    from poc_env.config import SensorConfig
+
+    cam = {"sensor.model": "camera", "sensor.fov_deg": 60.0}
+    w = load_scenario("paper_6_2", cam).sensor.sweep_width_m
+    for given in (5, 5.0, 3):
+        with pytest.raises(ConfigError, match=r"sensor\.sweep_width_km.*absent when sensor\.model"):
+            load_scenario("paper_6_2", {**cam, "sensor.sweep_width_km": given})
+    data = load_scenario("paper_6_2").to_dict()  # a file giving both, as the audit wrote it
+    data["sensor"].update(model="camera", sweep_width_km=5)
+    with pytest.raises(ConfigError, match=r"sensor\.sweep_width_km: got 5"):
+        load_scenario(data)
+    assert load_scenario("paper_6_2", {**cam, "sensor.sweep_width_km": w / 1e3}).sensor == (
+        load_scenario("paper_6_2", cam).sensor
+    )
+    assert SensorConfig().sweep_width_m == 5000.0  # the fixed model's default is unchanged
+    assert load_scenario("paper_6_2", {"sensor.sweep_width_km": 5}).sensor.sweep_width_m == 5000.0
+
+
+def test_dem_nodata_refusal_counts_a_small_hole(tmp_path):
+    """Terrain audit follow-up: a 2 x 2 pixel hole was refused as ``nodata or NaN over 0.0% of
+    the operating area``; the message counts the grid cells and gives a share that is not 0.
+    (A one-pixel hole is filled by the resampling from its neighbours and not refused.)"""
+    import re
+
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif", void=(slice(150, 152), slice(150, 152)))))
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*nodata or NaN") as err:
+        make_plan(sc, planner="allocation", refine=0)
+    m = re.search(r"at (\d+) of the (\d+) cells .*\(([0-9.e+-]+) %", str(err.value))
+    assert m is not None, str(err.value)
+    n, total, pct = int(m[1]), int(m[2]), float(m[3])
+    assert 0 < n < total / 1000  # a small hole
+    assert pct == pytest.approx(100 * n / total, rel=5e-3)  # 3 significant digits, not 0.0

@@ -448,3 +448,25 @@ def test_plan_and_replan_of_a_moving_target_say_they_plan_a_standing_one(first, 
     assert "warning: target.model 'drift'" in said and "elapsed" in said
     assert main(["replan", "--plan", str(p1), "--out", str(tmp_path / "s.json")]) == 0
     assert "warning" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("fmt", ["kml", "geojson"])
+def test_the_plans_own_export_as_tracks_sweeps_its_routes_once(first, tmp_path, capsys, fmt):
+    """Terrain audit follow-up: the exporter draws each UAV's landing approach beside its route
+    (KML style ``#landing_approach``, GeoJSON ``kind: landing_approach``); the route already
+    flies to the field (over terrain its last leg is that very approach), so the approach is
+    not a second flown track. ``replan --tracks`` of the plan's own export sweeps the routes
+    once: the same POS as replanning from the plan, and it says what it skipped."""
+    from poc_env.agents.mission.export import export_plan
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    (f,) = [f for f in export_plan(p1, fmt, out_dir=tmp_path / "x") if f.suffix == "." + fmt]
+    out = tmp_path / "next.json"
+    argv = ["replan", "--scenario", "small", "--plan", str(p1), "--tracks", str(f)]
+    assert main([*argv, "--out", str(out)]) == 0
+    n = sum(1 for u in plan["uavs"] if u["waypoints_m"])
+    text = capsys.readouterr().out
+    assert f"swept: {n} track{'s' if n != 1 else ''} from {f}" in text
+    assert f"{len(plan['uavs'])} landing-approach lines skipped" in text
+    assert json.loads(out.read_text())["searched_pos"] == pytest.approx(plan["posc"], rel=1e-3)

@@ -43,7 +43,7 @@ def geojson(
             "poc_pct": round(100 * u["poc"], 2),
             "pos_pct": round(100 * u["pos"], 2),
             "feasible": u["feasible"],
-            "altitude_m": round(alt, 1),
+            **_altitude_properties(plan, alt, zs),
             "altitude_ref": altitude_ref,
             "cruise_speed_kmh": round(fl["cruise_speed_mps"] * 3.6, 1),
             "search_speed_kmh": round(fl["search_speed_mps"] * 3.6, 1),
@@ -87,6 +87,27 @@ def geojson(
             "local_crs": crs_text(crs) if isinstance(crs, dict) else None,
             "altitude_ref": altitude_ref,
         },
+    }
+
+
+def _altitude_properties(plan: Plan, alt: float, zs: list[float]) -> dict[str, float]:
+    """What a route's altitudes are, in the words the line flies.
+
+    Flat: ``altitude_m``, the search altitude every airborne point has. With the plan's
+    ``terrain`` the z follow the DEM, so no single altitude describes the line: the search
+    height above the ground (``search_height_m``, the UAV's cruise altitude, where the climb and
+    the ceiling allow), the least clearance and the AMSL range the airborne points span
+    (``altitude_min_m``, ``altitude_max_m``; the fields are at their own elevations).
+    """
+    t = plan.get("terrain")
+    if t is None:
+        return {"altitude_m": round(alt, 1)}
+    air = zs[1:-1]
+    return {
+        "search_height_m": round(float(t["search_height_m"]), 1),
+        "min_clearance_m": round(float(t["min_clearance_m"]), 1),
+        "altitude_min_m": round(min(air), 1),
+        "altitude_max_m": round(max(air), 1),
     }
 
 

@@ -21,7 +21,13 @@ from urllib.parse import quote
 from lxml import etree
 
 from poc_env.agents.mission.crs import to_geographic
-from poc_env.agents.mission.features import altitudes, check_altitude_ref, overlays, routes_3d
+from poc_env.agents.mission.features import (
+    APPROACH_KIND,
+    altitudes,
+    check_altitude_ref,
+    overlays,
+    routes_3d,
+)
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import plan_prior, png_bytes, warp_prior
 from poc_env.agents.mission.plan import Plan, flight, search_rings
@@ -37,7 +43,7 @@ SCHEMA = Path(__file__).resolve().parents[1] / "assets" / "kml22" / "ogckml22.xs
 #: (id, [(sub-style, [(element, text)])]) in the schema's order.
 _STYLES: tuple[tuple[str, tuple[tuple[str, tuple[tuple[str, str], ...]], ...]], ...] = (
     ("route", (("LineStyle", (("color", "ff00a5ff"), ("width", "2"))),)),
-    ("landing_approach", (("LineStyle", (("color", "ffffffff"), ("width", "2"))),)),
+    (APPROACH_KIND, (("LineStyle", (("color", "ffffffff"), ("width", "2"))),)),
     (
         "rectangle",
         (
