@@ -16,6 +16,7 @@ from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.plan import (
     APPROACH_DISTANCE_M,
     APPROACH_HEIGHT_M,
+    APPROACH_KIND,
     Plan,
     approach_point,
     flight,
@@ -28,11 +29,6 @@ from poc_env.geometry import zone_label
 
 #: Altitude references: ``home`` (above the take-off field) or ``amsl`` (above mean sea level).
 ALTITUDE_REFS = ("home", "amsl")
-
-
-#: The ``kind`` (GeoJSON property, KML style id) of the landing approach drawn beside each
-#: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
-APPROACH_KIND = "landing_approach"
 
 
 def check_altitude_ref(altitude_ref: str) -> str:

@@ -128,6 +128,9 @@ _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 #: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
 APPROACH_DISTANCE_M = 4000.0
 APPROACH_HEIGHT_M = 300.0
+#: The ``kind`` (GeoJSON property, KML style id) of the landing approach drawn beside each
+#: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
+APPROACH_KIND = "landing_approach"
 
 
 class Rectangle(TypedDict):

@@ -100,7 +100,7 @@ def read_tracks(
     ``tracks.trk[0].trkseg[1]``). The format is the file's suffix.
 
     The landing approaches ``poc-env export`` draws beside each route (GeoJSON ``kind``, KML
-    ``styleUrl`` :data:`~poc_env.agents.mission.features.APPROACH_KIND`) are not read: the
+    ``styleUrl`` :data:`~poc_env.agents.mission.plan.APPROACH_KIND`) are not read: the
     route already flies to the field (over terrain its last leg is that approach), so they are
     no second flight; their fields are appended to ``skipped`` when it is given."""
     file = Path(path)
@@ -151,7 +151,7 @@ GEOJSON_OTHER = ("Point", "MultiPoint", "Polygon", "MultiPolygon")
 
 def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]]:
     """The lines of a GeoJSON object; an exported landing approach as ``(field, None)``."""
-    from poc_env.agents.mission.features import APPROACH_KIND
+    from poc_env.agents.mission.plan import APPROACH_KIND
     from poc_env.io import loads_json
 
     where = "tracks"
@@ -246,7 +246,7 @@ def _kml_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]]:
     (its ``gx:coord``: ``lon lat alt``) of every Placemark. KML is WGS 84 longitude/latitude by
     definition (OGC KML 2.2, section 6.2). An exported landing approach (``styleUrl``
     ``#landing_approach``) as ``(field, None)``."""
-    from poc_env.agents.mission.features import APPROACH_KIND
+    from poc_env.agents.mission.plan import APPROACH_KIND
 
     root = _xml_root(raw, path, "KML", KML_NAMESPACES)
     out: list[tuple[str, np.ndarray | None]] = []
