@@ -682,12 +682,18 @@ def check_used(args: TrainArgs, given: Sequence[str]) -> None:
 
 def changed_fields(args: TrainArgs) -> list[str]:
     """The TrainArgs fields set away from their defaults (what a Python caller "gave"; the
-    CLI's counterpart is :func:`given_options`)."""
+    CLI's counterpart is :func:`given_options`). A ``scenario`` equal to ``task``'s own is not
+    counted: a run's config.json and a card record it so (``--from-card ppo_drift_small``)."""
     out = []
     for f in dataclasses.fields(TrainArgs):
         default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
         if getattr(args, f.name) != default:
             out.append(f.name)
+    if "scenario" in out and args.task is not None:
+        from poc_env.tasks import get_task
+
+        if args.scenario == get_task(args.task).scenario:
+            out.remove("scenario")
     return out
 
 

@@ -7,7 +7,14 @@ import json
 
 import pytest
 
-from poc_env.agents.rl.args import TrainArgs, card_names, card_options, parse_train_args
+from poc_env.agents.rl.args import (
+    TrainArgs,
+    card_names,
+    card_options,
+    changed_fields,
+    check_used,
+    parse_train_args,
+)
 from poc_env.errors import ConfigError
 
 CARD = "ppo_set_increments_anysize"
@@ -21,6 +28,9 @@ def test_every_card_is_a_recipe_train_accepts() -> None:
         args = parse_train_args(["--from-card", name, "--run-dir", "runs/x"])
         assert args.from_card == name
         assert args.task == card_options(name).get("task")
+        # and train() takes it: no field the run would ignore (a card records the task's own
+        # scenario, which the Python-side check of train() once refused for ppo_drift_small)
+        check_used(args, changed_fields(args))
 
 
 def test_card_options_are_the_defaults_and_given_options_replace_them() -> None:
