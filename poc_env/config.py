@@ -815,8 +815,9 @@ class Scenario:
 
     def _check_filter_work(self) -> None:
         """A moving target's predict step within :data:`poc_env.limits.MAX_FILTER_SUBSTEPS`
-        sub-steps (:func:`poc_env.theory.motion.substeps`, the one stability rule, at the
-        largest uniform current a reset can draw) and :data:`~poc_env.limits.
+        sub-steps (the one stability rule, ``poc_env._kernels.motion.substeps``, which
+        :func:`poc_env.theory.motion.substeps` wraps; at the largest uniform current a reset
+        can draw) and :data:`~poc_env.limits.
         MAX_FILTER_UPDATES` sub-steps times the filter's sub-cells (``cell_km /
         samples_per_cell``); ConfigError naming the diffusion (or the current) otherwise."""
         t = self.target
