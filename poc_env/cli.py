@@ -685,6 +685,7 @@ def _plan(
     """
     from poc_env.agents.mission.plan import with_scenario_file, write_plan
     from poc_env.agents.planning.planner import (
+        lattice_warning,
         make_plan,
         moving_target_warning,
         plan_table,
@@ -737,8 +738,9 @@ def _plan(
 
         plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
     print(plan_table(plan))
-    if (warning := moving_target_warning(sc)) is not None:
-        print(f"warning: {warning}")
+    for warning in (moving_target_warning(sc), lattice_warning(sc)):
+        if warning is not None:
+            print(f"warning: {warning}")
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)

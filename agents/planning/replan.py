@@ -404,7 +404,7 @@ def cli_main(args: Any) -> int:
         with_scenario_file,
         write_plan,
     )
-    from poc_env.agents.planning.planner import moving_target_warning, plan_table
+    from poc_env.agents.planning.planner import lattice_warning, moving_target_warning, plan_table
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -435,8 +435,9 @@ def cli_main(args: Any) -> int:
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
     print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
     print(plan_table(nxt))
-    if (warning := moving_target_warning(sc, replanned=True)) is not None:
-        print(f"warning: {warning}")
+    for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):
+        if warning is not None:
+            print(f"warning: {warning}")
     print(
         f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "
         f"{nxt['posc']:.4f}; cumulative {nxt['cumulative_posc']:.4f}"

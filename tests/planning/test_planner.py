@@ -119,3 +119,19 @@ def test_an_allocation_plan_that_reaches_nothing_says_why(tmp_path, capsys):
     plan = json.loads(out.read_text())
     assert plan["posc"] == 0 and plan["reason"]
     assert f"no search planned: {plan['reason']}" in capsys.readouterr().out
+
+
+def test_plan_warns_when_the_sample_points_are_wider_apart_than_the_sweep(tmp_path, capsys):
+    """config-audit: with ``cell_km / samples_per_cell`` above the sweep width, eq. 14 sees a
+    track only on the sample rows, and an allocation plan laid on them planned more than the
+    rule-aware bound (0.883 against 0.856; flown 0.852). ``plan`` now says so, naming the
+    field and the samples that would do; a lattice at most W apart gets no warning."""
+    out = tmp_path / "p.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--refine", "0",
+            "--quiet", "--out", str(out)]  # fmt: skip
+    assert main([*argv, "--overrides", "map.cell_km=20"]) == 0  # 20 / 4 = 5 km > W 2.5 km
+    said = capsys.readouterr().out
+    assert "warning: sensor.samples_per_cell 4: the sensor's sample points are 5 km apart" in said
+    assert "samples_per_cell >= 8" in said
+    assert main(argv) == 0  # 5 / 4 = 1.25 km <= W
+    assert "samples_per_cell" not in capsys.readouterr().out
