@@ -296,6 +296,15 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
                     resampling=how,
                 )  # fmt: skip
                 out[name] = dst[::-1].copy()  # rows from the south
+            # a nodata pixel the resampling would fill from its neighbours (a peak under it
+            # would be invisible to the clearance): any under a cell of the area is refused
+            holes = np.zeros((ny, nx))
+            reproject(
+                np.isnan(band).astype(float), holes, src_transform=src.transform,
+                src_crs=src.crs, dst_transform=dst_transform, dst_crs=dst_crs,
+                resampling=Resampling.max,
+            )  # fmt: skip
+            out["max"][(holes[::-1] > 0) & _cells_in(origin, shape, cell, area)] = np.nan
             elev = _sample_fields(field, sc, band, src, rec)
     except RasterioError as err:
         raise ConfigError(field, f"{path} unreadable ({err})", "a complete GeoTIFF") from None
@@ -308,6 +317,17 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
         )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
     return out["mean"], gmax, elev
+
+
+def _cells_in(origin: tuple, shape: tuple, cell: float, area: tuple) -> np.ndarray:
+    """Which cells of the terrain grid (``origin`` its south-west corner, rows from the south)
+    overlap the operating area ``area`` (x0, y0, x1, y1) by more than a millimetre."""
+    ny, nx = shape
+    x = origin[0] + np.arange(nx) * cell
+    y = origin[1] + np.arange(ny) * cell
+    in_x = (np.minimum(x + cell, area[2]) - np.maximum(x, area[0])) > 1e-3
+    in_y = (np.minimum(y + cell, area[3]) - np.maximum(y, area[1])) > 1e-3
+    return in_y[:, None] & in_x[None, :]
 
 
 #: The height units a DEM band may declare (GDAL's unit type, lower case): metres per unit.

@@ -531,7 +531,7 @@ def test_a_width_given_beside_a_camera_model_is_refused_even_the_default():
 def test_dem_nodata_refusal_counts_a_small_hole(tmp_path):
     """Terrain audit follow-up: a 2 x 2 pixel hole was refused as ``nodata or NaN over 0.0% of
     the operating area``; the message counts the grid cells and gives a share that is not 0.
-    (A one-pixel hole is filled by the resampling from its neighbours and not refused.)"""
+    (A one-pixel hole, which the resampling fills, is refused too: the test below.)"""
     import re
 
     sc = load_scenario(_scenario(_dem(tmp_path / "d.tif", void=(slice(150, 152), slice(150, 152)))))
@@ -542,3 +542,15 @@ def test_dem_nodata_refusal_counts_a_small_hole(tmp_path):
     n, total, pct = int(m[1]), int(m[2]), float(m[3])
     assert 0 < n < total / 1000  # a small hole
     assert pct == pytest.approx(100 * n / total, rel=5e-3)  # 3 significant digits, not 0.0
+
+
+def test_dem_one_pixel_hole_inside_the_area_is_refused(tmp_path):
+    """Terrain follow-up, left open: a one-pixel nodata hole inside the operating area was
+    filled by the resampling from its neighbours and accepted, so a peak under that pixel was
+    invisible to the clearance check. Any nodata pixel under a cell of the operating area is
+    now refused, naming the DEM; the same DEM without the hole plans."""
+    hole = (slice(150, 151), slice(150, 151))
+    sc = load_scenario(_scenario(_dem(tmp_path / "d.tif", void=hole)))
+    with pytest.raises(ConfigError, match=r"terrain\.dem.*nodata or NaN"):
+        make_plan(sc, planner="allocation", refine=0)
+    make_plan(load_scenario(_scenario(_dem(tmp_path / "e.tif"))), planner="allocation", refine=0)
