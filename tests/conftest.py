@@ -41,3 +41,33 @@ def fly():
     from poc_env.agents.testing.flights import fly
 
     return fly
+
+
+#: How far a figure a page quotes may be from what its command prints on another CPU: the
+#: planners' floating point may differ in its last bits across x86-64 CPUs, and a page rounds
+#: to 4 decimals; the stale figures the docs audit found were 0.0064-0.0195 off.
+FIGURE_TOL = 0.005
+
+
+def _figures_in(expected: str, printed: str, tol: float = FIGURE_TOL) -> str | None:
+    """None if ``printed`` holds ``expected`` (spaces normalised) with each decimal number in it
+    within ``tol``; else what went wrong."""
+    import re
+
+    want = " ".join(expected.split())
+    numbers = re.findall(r"\d+\.\d+", want)
+    pattern = r"\d+\.\d+".join(re.escape(part) for part in re.split(r"\d+\.\d+", want))
+    pattern = pattern.replace(r"\d+\.\d+", r"(\d+\.\d+)")
+    found = re.search(pattern, " ".join(printed.split()))
+    if found is None:
+        return f"{want!r} (its numbers aside) not printed"
+    for w, got in zip(numbers, found.groups()):
+        if abs(float(w) - float(got)) > tol:
+            return f"{want!r}: printed {got} for {w} (tolerance {tol})"
+    return None
+
+
+@pytest.fixture
+def figures_in():
+    """:func:`_figures_in`: a page's quoted figures against what its command printed."""
+    return _figures_in

@@ -37,7 +37,7 @@ def test_docs_python_block_runs(page, code, capsys):
     assert capsys.readouterr().out.strip()
 
 
-def test_missions_gis_walkthrough_runs_as_written(tmp_path):
+def test_missions_gis_walkthrough_runs_as_written(tmp_path, figures_in):
     """docs/missions.md, 'From a GIS to a ground station': the shell blocks, run verbatim with
     the installed ``poc-env``, give the scenario, a plan and six QGC missions plus a KML."""
     text = (DOCS / "missions.md").read_text(encoding="utf-8")
@@ -58,7 +58,8 @@ def test_missions_gis_walkthrough_runs_as_written(tmp_path):
     # where the command printed 0.8604)
     said = re.search(r"The plan gave POS_C = (\d\.\d{4}) here", section)
     assert said, "the page quotes the plan's POS_C"
-    assert f"POS_C = {said.group(1)} " in done.stdout, done.stdout[-1500:]
+    wrong = figures_in(f"POS_C = {said.group(1)}", done.stdout)
+    assert wrong is None, (wrong, done.stdout[-1500:])
     out = tmp_path / "missions"
     assert sorted(p.name for p in out.iterdir()) == [
         "plan.html",
@@ -73,7 +74,7 @@ def test_missions_gis_walkthrough_runs_as_written(tmp_path):
         assert (tmp_path / name).is_file(), name
 
 
-def test_planning_replan_example_prints_what_the_page_says(tmp_path):
+def test_planning_replan_example_prints_what_the_page_says(tmp_path, figures_in):
     """docs/planning.md, 'The next sortie': the three commands, run as written, print the
     figures of their ``# sortie k: found ...; plan ...; cumulative ...`` comments (audit
     docs-audit: sortie 3's plan and cumulative figures were stale, 0.0842 and 0.9019 where the
@@ -96,5 +97,6 @@ def test_planning_replan_example_prints_what_the_page_says(tmp_path):
             said += 1
             figures = comment.strip().replace("found", "the flights so far found", 1)
             figures = figures.replace("; plan ", "; this plan ")
-            assert figures in done.stdout, (figures, done.stdout[-500:])
+            wrong = figures_in(figures, done.stdout)
+            assert wrong is None, (wrong, done.stdout[-500:])
     assert said == 2
