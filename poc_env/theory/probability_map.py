@@ -199,7 +199,7 @@ def gaussian_mixture(
     if total > 0:
         mass = mass / total * (1.0 - background)
     elif background <= 0:  # every component wholly off the grid (config-audit)
-        (x0, x1), (y0, y1) = (grid.bounds[0], grid.bounds[2]), (grid.bounds[1], grid.bounds[3])
+        x0, y0, x1, y1 = grid.bounds
         raise ConfigError(
             "map.prior.components", [{"mean_km": [m / 1e3 for m in c.mean_m]} for c in components],
             f"components with mass on the {grid.nx} x {grid.ny} grid (x {x0 / 1e3:g} to "
