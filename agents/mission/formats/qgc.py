@@ -153,7 +153,7 @@ def _terrain_plan(
     items.append(_nav(MAV_CMD_NAV_LAND, *ll[-1], round(prof.landing_field_m, 1), ref))
     return _document(
         items, u, crs, ref, cruise_speed_mps, ll[0], round(prof.field_m, 1), operating_area_m,
-        no_fly_zones_m,
+        no_fly_zones_m, landing_above_home_m=prof.landing_field_m - prof.field_m,
     )  # fmt: skip
 
 
@@ -167,8 +167,15 @@ def _document(
     home_amsl_m: float,
     operating_area_m: list | None,
     no_fly_zones_m: list | None,
+    landing_above_home_m: float = 0.0,
 ) -> dict:
-    """The ``.plan`` document around mission ``items``: jump ids, geofence, rally points."""
+    """The ``.plan`` document around mission ``items``: jump ids, geofence, rally points.
+
+    Rally points stand :data:`APPROACH_HEIGHT_M` above the take-off and the landing field; QGC
+    sends them in MAV_FRAME_GLOBAL_RELATIVE_ALT (``RallyPointManager.cc``), so their altitude
+    is above home (the take-off field): the landing field's is ``landing_above_home_m`` (its
+    elevation less home's; 0 on a flat map) + :data:`APPROACH_HEIGHT_M`.
+    """
     start, end = list(u["takeoff_m"]), list(u["landing_m"])
     for k, it in enumerate(items):
         it["doJumpId"] = k + 1
@@ -180,7 +187,10 @@ def _document(
             {"inclusion": inclusion, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
         )
     fields = [start] if start == end else [start, end]
-    rally = [[lat, lon, APPROACH_HEIGHT_M] for lat, lon in to_geographic(fields, crs)]
+    above = [0.0, round(float(landing_above_home_m), 1)]
+    rally = [
+        [lat, lon, h + APPROACH_HEIGHT_M] for (lat, lon), h in zip(to_geographic(fields, crs), above)
+    ]
     return {
         "fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
         "mission": {

@@ -1,0 +1,67 @@
+"""export-audit (2026-11-29): the exported missions checked against the definitions of the tools
+that read them (results/audit/export/README.md has every probe).
+
+- QGroundControl sends a ``.plan``'s rally points as MAV_CMD_NAV_RALLY_POINT in
+  MAV_FRAME_GLOBAL_RELATIVE_ALT (src/MissionManager/RallyPointManager.cc): their altitude is
+  above home, the take-off field, not above the field they stand over.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.plan import APPROACH_HEIGHT_M, write_plan
+from poc_env.agents.mission.terrain import from_record
+from poc_env.agents.planning.planner import make_plan
+from poc_env.config import load_scenario
+
+pytest.importorskip("rasterio")
+HERE = Path(__file__).resolve().parent
+
+
+def _terrain_test():
+    """tests/mission/test_terrain.py as a module (its scenario and terrain grids: one copy)."""
+    spec = importlib.util.spec_from_file_location("_terrain_test", HERE / "test_terrain.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _uphill_plan(tmp_path: Path) -> Path:
+    """A terrain plan whose UAVs take off in the 600 m valley and land at a field 1,300 m up a
+    20 m/km slope (65 km east of it)."""
+    tt = _terrain_test()
+    data = tt._scenario(None, terrain={"elevation_m": tt._slope(20.0), "cell_km": 1.0,
+                                       "origin_km": [-40, -30]})  # fmt: skip
+    data["airfields"] = [*data["airfields"], {"name": "upper", "position_km": [55, 20]}]
+    data["fleet"] = [{"takeoff": "valley", "landing": "upper", "count": 2}]
+    plan = make_plan(load_scenario(data), planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    return tmp_path / "plan.json"
+
+
+def test_qgc_rally_points_stand_above_their_own_field_not_above_home(tmp_path):
+    """Each rally point is APPROACH_HEIGHT_M above the field it marks: relative to home (QGC's
+    frame for rally points) that is the field's elevation less home's plus 300 m. Before, both
+    were written 300 m above home, so the rally point over a landing field 1,300 m higher than
+    the take-off field was 1,000 m under the ground there."""
+    path = _uphill_plan(tmp_path)
+    plan = json.loads(path.read_text(encoding="utf-8"))
+    t = from_record(plan["terrain"])
+    fields = [plan["uavs"][0]["takeoff_m"], plan["uavs"][0]["landing_m"]]
+    elev = [t.field_elevation(f) for f in fields]
+    assert elev[1] - elev[0] > 1000.0  # the case: a landing field far above home
+    for f in export_plan(path, "qgc", out_dir=tmp_path / "qgc"):
+        doc = json.loads(f.read_text(encoding="utf-8"))
+        home_amsl = doc["mission"]["plannedHomePosition"][2]
+        assert home_amsl == pytest.approx(elev[0], abs=0.1)
+        points = doc["rallyPoints"]["points"]
+        assert len(points) == 2
+        for (_, _, rel), ground in zip(points, elev):
+            assert home_amsl + rel - ground == pytest.approx(APPROACH_HEIGHT_M, abs=0.1)
