@@ -9,13 +9,14 @@ that read them (results/audit/export/README.md has every probe).
 from __future__ import annotations
 
 import importlib.util
+import math
 import json
 from pathlib import Path
 
 import pytest
 
 from poc_env.agents.mission.export import export_plan
-from poc_env.agents.mission.plan import APPROACH_HEIGHT_M, write_plan
+from poc_env.agents.mission.plan import APPROACH_DISTANCE_M, APPROACH_HEIGHT_M, write_plan
 from poc_env.agents.mission.terrain import from_record
 from poc_env.agents.planning.planner import make_plan
 from poc_env.config import load_scenario
@@ -65,3 +66,35 @@ def test_qgc_rally_points_stand_above_their_own_field_not_above_home(tmp_path):
         assert len(points) == 2
         for (_, _, rel), ground in zip(points, elev):
             assert home_amsl + rel - ground == pytest.approx(APPROACH_HEIGHT_M, abs=0.1)
+
+
+def _glides_deg(plan_files: list[Path]) -> list[float]:
+    """The final glide of each QGC mission, approach waypoint -> NAV_LAND, in degrees, as PX4's
+    mission feasibility check measures it (AMSL heights, horizontal distance)."""
+    from pyproj import Geod
+
+    out = []
+    for f in plan_files:
+        doc = json.loads(f.read_text(encoding="utf-8"))
+        home = doc["mission"]["plannedHomePosition"][2]
+        nav = [it for it in doc["mission"]["items"] if it["command"] in (16, 21, 22)]
+        app, land = nav[-2]["params"], nav[-1]["params"]
+        assert nav[-1]["command"] == 21
+        amsl = [it["params"][6] + (home if it["frame"] == 3 else 0.0) for it in nav[-2:]]
+        dist = Geod(ellps="WGS84").inv(app[5], app[4], land[5], land[4])[2]
+        out.append(math.degrees(math.atan2(amsl[0] - amsl[1], dist)))
+    return out
+
+
+def test_terrain_missions_glide_to_the_field_no_steeper_than_px4_lands(tmp_path):
+    """PX4 (the ``.plan``'s firmwareType 12) refuses a mission whose last waypoint -> NAV_LAND
+    glide is steeper than FW_LND_ANG + 0.1 deg (navigator FeasibilityChecker; FW_LND_ANG
+    default 5 deg). The flat export glides 300 m over 4 km (4.29 deg); a terrain mission now
+    glides no steeper. Before, the Alps plan's approach started at the search height and glided
+    at eq. 19's 15 deg bound: 14.0 deg, a mission PX4 would not take."""
+    tt = _terrain_test()
+    sc = load_scenario(tt._scenario(tt._dem(tmp_path / "d.tif")))
+    write_plan(make_plan(sc, planner="allocation", refine=0), tmp_path / "plan.json")
+    glides = _glides_deg(export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q"))
+    flat = math.degrees(math.atan2(APPROACH_HEIGHT_M, APPROACH_DISTANCE_M))
+    assert max(glides) <= flat + 1e-3 < 5.0

@@ -189,7 +189,8 @@ def _document(
     fields = [start] if start == end else [start, end]
     above = [0.0, round(float(landing_above_home_m), 1)]
     rally = [
-        [lat, lon, h + APPROACH_HEIGHT_M] for (lat, lon), h in zip(to_geographic(fields, crs), above)
+        [lat, lon, h + APPROACH_HEIGHT_M]
+        for (lat, lon), h in zip(to_geographic(fields, crs), above)
     ]
     return {
         "fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
