@@ -9,8 +9,8 @@ that read them (results/audit/export/README.md has every probe).
 from __future__ import annotations
 
 import importlib.util
-import math
 import json
+import math
 from pathlib import Path
 
 import pytest

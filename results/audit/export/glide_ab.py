@@ -65,7 +65,8 @@ def main(n: int, out: Path) -> None:
                     continue
             assert profs is not None
             for u, p in zip(plan["uavs"], profs):
-                deg = math.degrees(math.atan((p.amsl_m[-1] - p.landing_field_m) / APPROACH_DISTANCE_M))
+                rise = p.amsl_m[-1] - p.landing_field_m
+                deg = math.degrees(math.atan(rise / APPROACH_DISTANCE_M))
                 rows.append({"seed": s, "uav": u["id"], "glide_deg": round(deg, 3)})
     g = np.array([r["glide_deg"] for r in rows if "glide_deg" in r])
     summary = {
