@@ -98,3 +98,23 @@ def test_terrain_missions_glide_to_the_field_no_steeper_than_px4_lands(tmp_path)
     glides = _glides_deg(export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q"))
     flat = math.degrees(math.atan2(APPROACH_HEIGHT_M, APPROACH_DISTANCE_M))
     assert max(glides) <= flat + 1e-3 < 5.0
+
+
+def test_qgc_refuses_a_geofence_across_the_antimeridian(tmp_path):
+    """PX4 tests a fence point in latitude/longitude (navigator Geofence::insidePolygon, PNPOLY,
+    "only supports non-complex polygons"): a fence polygon whose longitudes jump from 180 to
+    -180 is, to it, the rest of the globe. The small scenario 10 km west of the antimeridian
+    near Fiji: its operating area crosses it, so the QGC export is refused naming
+    plan.operating_area_m (nothing written); without the inclusion fence it is written. Before,
+    the .plan carried that fence, and a UAV on its own airfield was outside it."""
+    from poc_env.errors import ConfigError
+
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(-16.5, 179.8))
+    write_plan(plan, tmp_path / "plan.json")
+    with pytest.raises(ConfigError, match=r"plan\.operating_area_m.*antimeridian"):
+        export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q")
+    assert not (tmp_path / "q").exists() or not any((tmp_path / "q").iterdir())
+    files = export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q", geofence=False)
+    for f in files:
+        doc = json.loads(f.read_text(encoding="utf-8"))
+        assert doc["geoFence"]["polygons"] == []  # small has no zones; no inclusion fence

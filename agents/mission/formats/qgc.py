@@ -10,6 +10,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.features import (
     APPROACH_HEIGHT_M,
@@ -239,15 +241,39 @@ def check_fences(plan: Plan, area: list | None) -> None:
                 )  # fmt: skip
 
 
+def check_antimeridian(plan: Plan, area: list | None, crs: Any) -> None:
+    """ConfigError if a fence polygon (the inclusion ``area``, a no-fly zone) crosses the 180th
+    meridian. PX4 tests a point against a fence in latitude/longitude (navigator
+    ``Geofence::insidePolygon``, PNPOLY, for polygons that do not intersect themselves): one
+    whose longitudes jump from 180 to -180 is to it the rest of the globe, and QGC draws it so."""
+    rings = [("plan.operating_area_m", area)] if area else []
+    rings += [
+        (f"plan.no_fly_zones_m[{i}]", z) for i, z in enumerate(plan.get("no_fly_zones_m") or [])
+    ]
+    for field, ring_m in rings:
+        lon = np.array([q[1] for q in drawn_ring(ring_m, crs, clockwise_order=True)])
+        if np.any(np.abs(np.diff(np.append(lon, lon[0]))) > 180.0):
+            raise ConfigError(
+                field, f"a polygon across the antimeridian (longitudes {lon.min():.3f} to "
+                f"{lon.max():.3f})",
+                "a geofence polygon on one side of the 180th meridian: PX4 and QGroundControl "
+                "test fences in latitude/longitude, where this one is the rest of the globe "
+                "(export without the inclusion fence, geofence=False / --no-geofence, or "
+                "move the zone)",
+            )  # fmt: skip
+
+
 def write(job: ExportJob) -> list[Path]:
-    """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` (the operating area as the
-    inclusion fence unless ``job.geofence`` is false)."""
+    """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` and
+    :func:`check_antimeridian` (the operating area as the inclusion fence unless
+    ``job.geofence`` is false)."""
     from poc_env.agents.mission.terrain import plan_profiles
 
     plan = job.plan
     fl = flight(plan)
     area = plan.get("operating_area_m") if job.geofence else None
     check_fences(plan, area)
+    check_antimeridian(plan, area, job.crs)
     found = plan_profiles(plan)
     profiles: list[Any] = [None] * len(plan["uavs"]) if found is None else list(found)
     docs = [
