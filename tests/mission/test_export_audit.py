@@ -118,3 +118,39 @@ def test_qgc_refuses_a_geofence_across_the_antimeridian(tmp_path):
     for f in files:
         doc = json.loads(f.read_text(encoding="utf-8"))
         assert doc["geoFence"]["polygons"] == []  # small has no zones; no inclusion fence
+
+
+#: An allocation plan's search area (the Chile probe's UAV 2, metres): a cut line runs out and
+#: back along y = 9166.67 m, its two ends 2e-12 m apart, so the ring is valid in metres.
+_CUT_RING = [
+    [35000.0, 5000.0], [35000.0, 6250.0], [34583.333333333336, 6250.0],
+    [34583.333333333336, 7083.333333333334], [35000.0, 7083.333333333334],
+    [35000.0, 7916.666666666668], [34583.333333333336, 7916.666666666668],
+    [34583.333333333336, 8750.0], [35000.0, 8750.0], [35000.0, 9166.666666666666],
+    [39583.333333333336, 9166.666666666666], [35000.0, 9166.666666666668], [35000.0, 10000.0],
+    [40000.0, 10000.0], [40000.0, 9583.333333333334], [40416.666666666664, 9583.333333333334],
+    [40416.666666666664, 8750.0], [40000.0, 8750.0], [40000.0, 7916.666666666668],
+    [40416.666666666664, 7916.666666666668], [40416.666666666664, 7083.333333333334],
+    [40000.0, 7083.333333333334], [40000.0, 6250.0], [40416.666666666664, 6250.0],
+    [40416.666666666664, 5416.666666666668], [40000.0, 5416.666666666668], [40000.0, 5000.0],
+]  # fmt: skip
+
+
+def test_geojson_polygons_stay_valid_after_rounding(tmp_path):
+    """A ring valid in metres whose two vertices 2e-12 m apart become one at 1e-6 degree: the
+    rounded ring must not fold back on itself (OGC simple-feature validity, what a GIS's
+    "check validity" and shapely's ``is_valid`` test). Before, 5 search areas of the probes'
+    allocation plans (Chile, near 60 N, 24 UAVs) were self-intersecting in the GeoJSON."""
+    from shapely.geometry import Polygon, shape
+
+    from poc_env.agents.mission.crs import plan_crs
+    from poc_env.agents.mission.formats.geojson import geojson
+
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(-33.7, -71.0))
+    assert Polygon(_CUT_RING).is_valid  # in the planner's metres
+    plan["uavs"][0]["areas_m"] = [_CUT_RING]
+    doc = geojson(plan, plan_crs(plan["crs"], None, "aeqd", None))
+    polys = [f for f in doc["features"] if f["geometry"]["type"] == "Polygon"]
+    assert any(f["properties"]["kind"] == "search_area" for f in polys)
+    for f in polys:
+        assert shape(f["geometry"]).is_valid, f["properties"]
