@@ -128,6 +128,11 @@ _SAFE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 #: the side the UAV comes from, this high above the field (a 4.3 degree glide slope).
 APPROACH_DISTANCE_M = 4000.0
 APPROACH_HEIGHT_M = 300.0
+#: The final glide's gradient, approach waypoint -> landing field (300 m over 4 km, 4.29 deg):
+#: PX4 refuses a mission whose last leg to NAV_LAND is steeper than its FW_LND_ANG (default
+#: 5 deg) + 0.1 deg (navigator's FeasibilityChecker), so no export glides steeper unless a
+#: terrain clearance needs it (:func:`poc_env.agents.mission.terrain.profile` warns then).
+LANDING_GLIDE = APPROACH_HEIGHT_M / APPROACH_DISTANCE_M
 #: The ``kind`` (GeoJSON property, KML style id) of the landing approach drawn beside each
 #: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
 APPROACH_KIND = "landing_approach"

@@ -24,9 +24,11 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
 - eq. 19 bounds the pitch by ``beta_max`` (``uav.max_pitch_deg``), so the altitude changes by at
   most ``tan(beta_max)`` per metre flown: the profile is the least such function above the
   wanted one (a forward and a backward pass), raised where a climb must start early; with a
-  landing field, lowered where the descent must start early so that the final glide from the
-  approach point to the field keeps the same bound (:func:`_glide_cap`; refused when the
-  clearance needs more height than that glide allows);
+  landing field, lowered where the descent must start early so that it keeps the same bound
+  and the final glide from the approach point to the field is no steeper than the flat
+  export's 300 m over 4 km (:data:`~poc_env.agents.mission.plan.LANDING_GLIDE`, under PX4's
+  FW_LND_ANG) unless the clearance needs it steeper (warned; :func:`_glide_cap`; refused when
+  it needs more height than a glide within the pitch bound allows);
 - legs are sampled every half cell; the profile keeps the route's vertices and, between them,
   the fewest intermediate points whose straight altitude legs stay above the required altitude
   and within :data:`PROFILE_TOLERANCE_M` below the profile.
@@ -46,7 +48,12 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.mission.plan import MAX_GROUND_M, MAX_TERRAIN_CELLS, approach_point
+from poc_env.agents.mission.plan import (
+    LANDING_GLIDE,
+    MAX_GROUND_M,
+    MAX_TERRAIN_CELLS,
+    approach_point,
+)
 from poc_env.errors import ConfigError
 
 #: How far the straight legs between kept profile points may sag below the profile (metres);
@@ -556,23 +563,30 @@ def _glide_cap(
     land: Any,
     where: str,
 ) -> np.ndarray:
-    """``z`` lowered so that the final glide, straight from the approach point ``p[-1]`` to the
-    landing field ``land`` (on the ground), keeps eq. 19's ``tan(beta_max)`` too: at most
-    ``field + tan(beta_max) x (distance flown to the field)`` at every point (a descent started
-    early enough; the lower of two such limited profiles is one).
+    """``z`` lowered so that the descent to the landing field ``land`` (on the ground) keeps
+    eq. 19's ``tan(beta_max)`` and the final glide, straight from the approach point ``p[-1]``
+    to the field, is no steeper than it must be: at most ``field + g x final + tan(beta_max) x
+    (distance flown to the approach point)`` at every point (a descent started early enough;
+    the lower of two such limited profiles is one), with ``g`` the least gradient from
+    :data:`~poc_env.agents.mission.plan.LANDING_GLIDE` (the flat export's 300 m over 4 km,
+    which PX4's FW_LND_ANG accepts) up to ``tan(beta_max)`` that keeps the clearance. A ``g``
+    above LANDING_GLIDE is warned (UserWarning, ``where`` named, the angle PX4's FW_LND_ANG
+    must allow).
 
     Raises
     ------
     ConfigError
-        ``where`` named: the clearance needs more height than that glide allows.
+        ``where`` named: the clearance needs more height than a glide at ``tan(beta_max)``
+        allows.
     """
     grad = math.tan(t.max_pitch_rad)
     field = t.field_elevation(land)
-    to_go = dist[-1] - dist + float(np.hypot(*(land - p[-1])))
-    out = np.minimum(z, field + grad * to_go)
-    low = out < req - 1e-6
-    if low.any():
-        i = int(np.argmax(low))
+    final = max(float(np.hypot(*(land - p[-1]))), 1e-9)
+    to_go = dist[-1] - dist + final
+    need = (req - field - grad * (dist[-1] - dist)) / final  # the least g each point allows
+    g = max(min(grad, LANDING_GLIDE), float(need.max()))
+    if g > grad + 1e-12:
+        i = int(np.argmax(need > grad + 1e-12))
         x, y = p[i]
         raise ConfigError(
             where, f"ground {req[i] - t.min_clearance_m:.0f} m AMSL near ({x / 1e3:.1f}, "
@@ -582,6 +596,20 @@ def _glide_cap(
             f"{t.min_clearance_m:g} m (re-plan the last search leg or the landing field away "
             "from the high ground, or a UAV that can glide steeper)",
         )  # fmt: skip
+    out = np.minimum(z, field + g * final + grad * (dist[-1] - dist))
+    glide = (float(out[-1]) - field) / final
+    if glide > LANDING_GLIDE * (1 + 1e-9):
+        import warnings
+
+        warnings.warn(
+            f"{where}: the clearance holds the landing approach point {out[-1] - field:.0f} m "
+            f"above the landing field at {field:.0f} m, {final / 1e3:g} km from it: a final "
+            f"glide of {math.degrees(math.atan(glide)):.1f} deg, steeper than the "
+            f"{math.degrees(math.atan(LANDING_GLIDE)):.2f} deg of the flat export; PX4 refuses "
+            "the mission unless its FW_LND_ANG (default 5 deg) allows it",
+            UserWarning,
+            stacklevel=4,
+        )
     return out
 
 

@@ -379,7 +379,9 @@ def test_geojson_approach_height_is_the_approach_drawn(tmp_path):
                 (_, _, za), (_, _, zf) = ft["geometry"]["coordinates"]
                 assert ft["properties"]["approach_height_m"] == pytest.approx(za - zf, abs=0.1)
                 seen.append(za - zf)
-    assert max(seen) > 300.0 + 1.0 and min(seen) == pytest.approx(200.0)
+    # the terrain approach glides at most 300 m over 4 km (PX4's landing slope, export-audit;
+    # it was 826 m at the audit), the flat one at 200 m from a 200 m cruise
+    assert max(seen) <= 300.0 + 0.1 and min(seen) == pytest.approx(200.0)
 
 
 def test_camera_search_legs_below_the_search_height_are_warned(tmp_path):

@@ -115,12 +115,35 @@ def exterior_ring(latlon: Any) -> list[list[float]]:
     """A polygon's exterior ring as RFC 7946 wants it: [lon, lat] rounded to 1e-6 degree,
     closed (last position = first) and counter-clockwise (section 3.1.6: exterior rings
     follow the right-hand rule); a ring with no area keeps its order."""
-    ring = [[r6(lon), r6(lat)] for lat, lon in latlon]
+    ring = _unfolded([[r6(lon), r6(lat)] for lat, lon in latlon])
     if ring and ring[0] != ring[-1]:
         ring.append(list(ring[0]))
     if ring_area(ring) < 0:
         ring.reverse()
     return ring
+
+
+def _unfolded(ring: list[list[float]]) -> list[list[float]]:
+    """``ring`` (not closed) without the folds the rounding makes: a vertex equal to the one
+    before it, and a spike ``a, b, a`` (out to ``b`` and back) whose two ``a`` were apart by
+    less than the rounding (an allocation plan's cut line: 2e-12 m in its metres) and would
+    make the ring cross itself, invalid as a simple feature (export-audit)."""
+    out = [list(p) for p in ring]
+    if len(out) > 1 and out[0] == out[-1]:
+        out.pop()
+    i = 0
+    while len(out) > 3 and i < len(out):
+        n = len(out)
+        a, b, c = out[i - 1], out[i], out[(i + 1) % n]
+        if a == b:
+            del out[i]
+        elif a == c:
+            del out[max(i, (i + 1) % n)], out[min(i, (i + 1) % n)]
+        else:
+            i += 1
+            continue
+        i = max(i - 1, 0)
+    return out
 
 
 def ring_area(ring: list[list[float]]) -> float:

@@ -10,6 +10,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.features import (
     APPROACH_HEIGHT_M,
@@ -153,7 +155,7 @@ def _terrain_plan(
     items.append(_nav(MAV_CMD_NAV_LAND, *ll[-1], round(prof.landing_field_m, 1), ref))
     return _document(
         items, u, crs, ref, cruise_speed_mps, ll[0], round(prof.field_m, 1), operating_area_m,
-        no_fly_zones_m,
+        no_fly_zones_m, landing_above_home_m=prof.landing_field_m - prof.field_m,
     )  # fmt: skip
 
 
@@ -167,8 +169,15 @@ def _document(
     home_amsl_m: float,
     operating_area_m: list | None,
     no_fly_zones_m: list | None,
+    landing_above_home_m: float = 0.0,
 ) -> dict:
-    """The ``.plan`` document around mission ``items``: jump ids, geofence, rally points."""
+    """The ``.plan`` document around mission ``items``: jump ids, geofence, rally points.
+
+    Rally points stand :data:`APPROACH_HEIGHT_M` above the take-off and the landing field; QGC
+    sends them in MAV_FRAME_GLOBAL_RELATIVE_ALT (``RallyPointManager.cc``), so their altitude
+    is above home (the take-off field): the landing field's is ``landing_above_home_m`` (its
+    elevation less home's; 0 on a flat map) + :data:`APPROACH_HEIGHT_M`.
+    """
     start, end = list(u["takeoff_m"]), list(u["landing_m"])
     for k, it in enumerate(items):
         it["doJumpId"] = k + 1
@@ -180,7 +189,11 @@ def _document(
             {"inclusion": inclusion, "polygon": [[lat, lon] for lat, lon in ring], "version": 1}
         )
     fields = [start] if start == end else [start, end]
-    rally = [[lat, lon, APPROACH_HEIGHT_M] for lat, lon in to_geographic(fields, crs)]
+    above = [0.0, round(float(landing_above_home_m), 1)]
+    rally = [
+        [lat, lon, h + APPROACH_HEIGHT_M]
+        for (lat, lon), h in zip(to_geographic(fields, crs), above)
+    ]
     return {
         "fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
         "mission": {
@@ -228,15 +241,39 @@ def check_fences(plan: Plan, area: list | None) -> None:
                 )  # fmt: skip
 
 
+def check_antimeridian(plan: Plan, area: list | None, crs: Any) -> None:
+    """ConfigError if a fence polygon (the inclusion ``area``, a no-fly zone) crosses the 180th
+    meridian. PX4 tests a point against a fence in latitude/longitude (navigator
+    ``Geofence::insidePolygon``, PNPOLY, for polygons that do not intersect themselves): one
+    whose longitudes jump from 180 to -180 is to it the rest of the globe, and QGC draws it so."""
+    rings = [("plan.operating_area_m", area)] if area else []
+    rings += [
+        (f"plan.no_fly_zones_m[{i}]", z) for i, z in enumerate(plan.get("no_fly_zones_m") or [])
+    ]
+    for field, ring_m in rings:
+        lon = np.array([q[1] for q in drawn_ring(ring_m, crs, clockwise_order=True)])
+        if np.any(np.abs(np.diff(np.append(lon, lon[0]))) > 180.0):
+            raise ConfigError(
+                field, f"a polygon across the antimeridian (longitudes {lon.min():.3f} to "
+                f"{lon.max():.3f})",
+                "a geofence polygon on one side of the 180th meridian: PX4 and QGroundControl "
+                "test fences in latitude/longitude, where this one is the rest of the globe "
+                "(export without the inclusion fence, geofence=False / --no-geofence, or "
+                "move the zone)",
+            )  # fmt: skip
+
+
 def write(job: ExportJob) -> list[Path]:
-    """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` (the operating area as the
-    inclusion fence unless ``job.geofence`` is false)."""
+    """``<stem>_uav<ID>.plan`` per UAV, after :func:`check_fences` and
+    :func:`check_antimeridian` (the operating area as the inclusion fence unless
+    ``job.geofence`` is false)."""
     from poc_env.agents.mission.terrain import plan_profiles
 
     plan = job.plan
     fl = flight(plan)
     area = plan.get("operating_area_m") if job.geofence else None
     check_fences(plan, area)
+    check_antimeridian(plan, area, job.crs)
     found = plan_profiles(plan)
     profiles: list[Any] = [None] * len(plan["uavs"]) if found is None else list(found)
     docs = [

@@ -1,0 +1,156 @@
+"""export-audit (2026-11-29): the exported missions checked against the definitions of the tools
+that read them (results/audit/export/README.md has every probe).
+
+- QGroundControl sends a ``.plan``'s rally points as MAV_CMD_NAV_RALLY_POINT in
+  MAV_FRAME_GLOBAL_RELATIVE_ALT (src/MissionManager/RallyPointManager.cc): their altitude is
+  above home, the take-off field, not above the field they stand over.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.plan import APPROACH_DISTANCE_M, APPROACH_HEIGHT_M, write_plan
+from poc_env.agents.mission.terrain import from_record
+from poc_env.agents.planning.planner import make_plan
+from poc_env.config import load_scenario
+
+pytest.importorskip("rasterio")
+HERE = Path(__file__).resolve().parent
+
+
+def _terrain_test():
+    """tests/mission/test_terrain.py as a module (its scenario and terrain grids: one copy)."""
+    spec = importlib.util.spec_from_file_location("_terrain_test", HERE / "test_terrain.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _uphill_plan(tmp_path: Path) -> Path:
+    """A terrain plan whose UAVs take off in the 600 m valley and land at a field 1,300 m up a
+    20 m/km slope (65 km east of it)."""
+    tt = _terrain_test()
+    data = tt._scenario(None, terrain={"elevation_m": tt._slope(20.0), "cell_km": 1.0,
+                                       "origin_km": [-40, -30]})  # fmt: skip
+    data["airfields"] = [*data["airfields"], {"name": "upper", "position_km": [55, 20]}]
+    data["fleet"] = [{"takeoff": "valley", "landing": "upper", "count": 2}]
+    plan = make_plan(load_scenario(data), planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    return tmp_path / "plan.json"
+
+
+def test_qgc_rally_points_stand_above_their_own_field_not_above_home(tmp_path):
+    """Each rally point is APPROACH_HEIGHT_M above the field it marks: relative to home (QGC's
+    frame for rally points) that is the field's elevation less home's plus 300 m. Before, both
+    were written 300 m above home, so the rally point over a landing field 1,300 m higher than
+    the take-off field was 1,000 m under the ground there."""
+    path = _uphill_plan(tmp_path)
+    plan = json.loads(path.read_text(encoding="utf-8"))
+    t = from_record(plan["terrain"])
+    fields = [plan["uavs"][0]["takeoff_m"], plan["uavs"][0]["landing_m"]]
+    elev = [t.field_elevation(f) for f in fields]
+    assert elev[1] - elev[0] > 1000.0  # the case: a landing field far above home
+    for f in export_plan(path, "qgc", out_dir=tmp_path / "qgc"):
+        doc = json.loads(f.read_text(encoding="utf-8"))
+        home_amsl = doc["mission"]["plannedHomePosition"][2]
+        assert home_amsl == pytest.approx(elev[0], abs=0.1)
+        points = doc["rallyPoints"]["points"]
+        assert len(points) == 2
+        for (_, _, rel), ground in zip(points, elev):
+            assert home_amsl + rel - ground == pytest.approx(APPROACH_HEIGHT_M, abs=0.1)
+
+
+def _glides_deg(plan_files: list[Path]) -> list[float]:
+    """The final glide of each QGC mission, approach waypoint -> NAV_LAND, in degrees, as PX4's
+    mission feasibility check measures it (AMSL heights, horizontal distance)."""
+    from pyproj import Geod
+
+    out = []
+    for f in plan_files:
+        doc = json.loads(f.read_text(encoding="utf-8"))
+        home = doc["mission"]["plannedHomePosition"][2]
+        nav = [it for it in doc["mission"]["items"] if it["command"] in (16, 21, 22)]
+        app, land = nav[-2]["params"], nav[-1]["params"]
+        assert nav[-1]["command"] == 21
+        amsl = [it["params"][6] + (home if it["frame"] == 3 else 0.0) for it in nav[-2:]]
+        dist = Geod(ellps="WGS84").inv(app[5], app[4], land[5], land[4])[2]
+        out.append(math.degrees(math.atan2(amsl[0] - amsl[1], dist)))
+    return out
+
+
+def test_terrain_missions_glide_to_the_field_no_steeper_than_px4_lands(tmp_path):
+    """PX4 (the ``.plan``'s firmwareType 12) refuses a mission whose last waypoint -> NAV_LAND
+    glide is steeper than FW_LND_ANG + 0.1 deg (navigator FeasibilityChecker; FW_LND_ANG
+    default 5 deg). The flat export glides 300 m over 4 km (4.29 deg); a terrain mission now
+    glides no steeper. Before, the Alps plan's approach started at the search height and glided
+    at eq. 19's 15 deg bound: 14.0 deg, a mission PX4 would not take."""
+    tt = _terrain_test()
+    sc = load_scenario(tt._scenario(tt._dem(tmp_path / "d.tif")))
+    write_plan(make_plan(sc, planner="allocation", refine=0), tmp_path / "plan.json")
+    glides = _glides_deg(export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q"))
+    flat = math.degrees(math.atan2(APPROACH_HEIGHT_M, APPROACH_DISTANCE_M))
+    assert max(glides) <= flat + 1e-3 < 5.0
+
+
+def test_qgc_refuses_a_geofence_across_the_antimeridian(tmp_path):
+    """PX4 tests a fence point in latitude/longitude (navigator Geofence::insidePolygon, PNPOLY,
+    "only supports non-complex polygons"): a fence polygon whose longitudes jump from 180 to
+    -180 is, to it, the rest of the globe. The small scenario 10 km west of the antimeridian
+    near Fiji: its operating area crosses it, so the QGC export is refused naming
+    plan.operating_area_m (nothing written); without the inclusion fence it is written. Before,
+    the .plan carried that fence, and a UAV on its own airfield was outside it."""
+    from poc_env.errors import ConfigError
+
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(-16.5, 179.8))
+    write_plan(plan, tmp_path / "plan.json")
+    with pytest.raises(ConfigError, match=r"plan\.operating_area_m.*antimeridian"):
+        export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q")
+    assert not (tmp_path / "q").exists() or not any((tmp_path / "q").iterdir())
+    files = export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q", geofence=False)
+    for f in files:
+        doc = json.loads(f.read_text(encoding="utf-8"))
+        assert doc["geoFence"]["polygons"] == []  # small has no zones; no inclusion fence
+
+
+#: An allocation plan's search area (the Chile probe's UAV 2, metres): a cut line runs out and
+#: back along y = 9166.67 m, its two ends 2e-12 m apart, so the ring is valid in metres.
+_CUT_RING = [
+    [35000.0, 5000.0], [35000.0, 6250.0], [34583.333333333336, 6250.0],
+    [34583.333333333336, 7083.333333333334], [35000.0, 7083.333333333334],
+    [35000.0, 7916.666666666668], [34583.333333333336, 7916.666666666668],
+    [34583.333333333336, 8750.0], [35000.0, 8750.0], [35000.0, 9166.666666666666],
+    [39583.333333333336, 9166.666666666666], [35000.0, 9166.666666666668], [35000.0, 10000.0],
+    [40000.0, 10000.0], [40000.0, 9583.333333333334], [40416.666666666664, 9583.333333333334],
+    [40416.666666666664, 8750.0], [40000.0, 8750.0], [40000.0, 7916.666666666668],
+    [40416.666666666664, 7916.666666666668], [40416.666666666664, 7083.333333333334],
+    [40000.0, 7083.333333333334], [40000.0, 6250.0], [40416.666666666664, 6250.0],
+    [40416.666666666664, 5416.666666666668], [40000.0, 5416.666666666668], [40000.0, 5000.0],
+]  # fmt: skip
+
+
+def test_geojson_polygons_stay_valid_after_rounding(tmp_path):
+    """A ring valid in metres whose two vertices 2e-12 m apart become one at 1e-6 degree: the
+    rounded ring must not fold back on itself (OGC simple-feature validity, what a GIS's
+    "check validity" and shapely's ``is_valid`` test). Before, 5 search areas of the probes'
+    allocation plans (Chile, near 60 N, 24 UAVs) were self-intersecting in the GeoJSON."""
+    from shapely.geometry import Polygon, shape
+
+    from poc_env.agents.mission.crs import plan_crs
+    from poc_env.agents.mission.formats.geojson import geojson
+
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(-33.7, -71.0))
+    assert Polygon(_CUT_RING).is_valid  # in the planner's metres
+    plan["uavs"][0]["areas_m"] = [_CUT_RING]
+    doc = geojson(plan, plan_crs(plan["crs"], None, "aeqd", None))
+    polys = [f for f in doc["features"] if f["geometry"]["type"] == "Polygon"]
+    assert any(f["properties"]["kind"] == "search_area" for f in polys)
+    for f in polys:
+        assert shape(f["geometry"]).is_valid, f["properties"]
