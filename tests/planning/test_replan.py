@@ -54,6 +54,8 @@ def test_three_sorties_add_up(first, capsys):
     # sortie 2 was scored on the cells' belief spread evenly over each cell's sample points;
     # the chain keeps the sample points' own belief (sortie 1 left it uneven within cells)
     assert c["searched_pos"] == pytest.approx(a["posc"] + b["posc"], rel=1e-2)
+    # ... and sortie 2's own POS on that belief, point by point, is what sortie 3 starts from
+    assert c["searched_pos"] == pytest.approx(b["cumulative_posc"], abs=1e-9)
     assert c["searched_pos"] > b["searched_pos"]
     assert a["posc"] < b["cumulative_posc"] < c["cumulative_posc"] <= 1.0
     load_plan(p3)  # a plan export accepts
@@ -470,3 +472,24 @@ def test_the_plans_own_export_as_tracks_sweeps_its_routes_once(first, tmp_path, 
     assert f"swept: {n} track{'s' if n != 1 else ''} from {f}" in text
     assert f"{len(plan['uavs'])} landing-approach lines skipped" in text
     assert json.loads(out.read_text())["searched_pos"] == pytest.approx(plan["posc"], rel=1e-3)
+
+
+def test_cumulative_pos_is_eq14_over_every_flight(first):
+    """replan-audit: the next plan was scored by the planner on each cell's belief spread
+    evenly over its sample points, though sortie 1 left it uneven within the cells, and
+    ``cumulative_posc`` added that score to what sortie 1 found (Alps walkthrough: 0.8480
+    promised, 0.8108 found by the two sorties' routes). The next sortie's POS is now its routes
+    swept over the belief the flights left, point by point (``sortie_posc``), and
+    ``cumulative_posc`` is eq. 14 over every flight, as sweeping them all from the prior."""
+    from poc_env.agents.planning.replan import next_sortie, plan_paths
+
+    _, p1 = first
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    a = json.loads(p1.read_text())
+    b = next_sortie(sc, prior, [a], refine=0)
+    _, one = searched_belief(sc, prior, plan_paths(a))
+    _, both = searched_belief(sc, prior, plan_paths(a) + plan_paths(b))
+    assert b["searched_pos"] == pytest.approx(one, abs=1e-12)
+    assert b["sortie_posc"] == pytest.approx(both - one, abs=1e-9)
+    assert b["cumulative_posc"] == pytest.approx(both, abs=1e-9)
