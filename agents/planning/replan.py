@@ -372,6 +372,14 @@ def next_sortie(
                 f"{where}.scenario", plan.get("scenario"), f"the scenario replanned, {sc.name!r} "
                 "(the flights are in its map's metres)",
             )  # fmt: skip
+        k = plan.get("sortie", 1)  # plans made by `plan` record none: they go anywhere
+        if "sortie" in plan and k != i + 1:
+            nth = {1: "st", 2: "nd", 3: "rd"}.get(k if k < 20 else k % 10, "th")
+            raise ConfigError(
+                f"{where}.sortie", k, f"a plan of sortie {k} as the {k}{nth} --plan, after the "
+                "plans of the sorties it was planned after, in order (--plan p1.json --plan "
+                "p2.json ...; replan swept only the flights of the plans given)",
+            )  # fmt: skip
         uavs = enumerate(plan["uavs"])
         names += [f"{where}.uavs[{k}].waypoints_m" for k, u in uavs if u["waypoints_m"]]
         flights += plan_paths(plan)

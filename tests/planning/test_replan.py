@@ -493,3 +493,21 @@ def test_cumulative_pos_is_eq14_over_every_flight(first):
     assert b["searched_pos"] == pytest.approx(one, abs=1e-12)
     assert b["sortie_posc"] == pytest.approx(both - one, abs=1e-9)
     assert b["cumulative_posc"] == pytest.approx(both, abs=1e-9)
+
+
+def test_a_replanned_sortie_needs_the_plans_it_was_planned_after(first, tmp_path, capsys):
+    """replan-audit: ``replan --plan p2.json`` alone (replan on its own output, sortie 1's plan
+    forgotten) swept sortie 2's routes over the full prior and printed "sortie 2: the flights
+    so far found 0.5763 ... cumulative 0.8322" -- sortie 1's search lost, its area planned
+    again. A plan that records ``sortie: k`` must now be the k-th ``--plan``; plans made by
+    ``plan`` (no ``sortie``) go anywhere (another seed flown as sortie 2 is a sortie)."""
+    _, p1 = first
+    p2, out = tmp_path / "p2.json", tmp_path / "p3.json"
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p2), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "plan.sortie: got 2" in err and "the 2nd --plan" in err
+    assert main(["replan", "--plan", str(p2), "--plan", str(p1), "--out", str(out)]) == 2
+    assert "plan[0].sortie: got 2" in capsys.readouterr().err
+    assert not out.exists()
