@@ -447,12 +447,14 @@ def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
     from poc_env.agents.mission.plan import (
         load_plan,
+        map_file_candidates,
         scenario_not_found,
         scenario_source,
         with_scenario_file,
         write_plan,
     )
     from poc_env.agents.planning.planner import lattice_warning, moving_target_warning, plan_table
+    from poc_env.cli import _check_map_option, _map_source
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
@@ -467,7 +469,20 @@ def cli_main(args: Any) -> int:
         raise ConfigError("scenario", plans[0]["scenario"], f"the plan's scenario ({why}), or "
                           "--scenario FILE.yaml")  # fmt: skip
     sc = load_scenario(name, parse_overrides(args.overrides or []))
-    prior = build_prior(sc.map, args.map_file)
+    _check_map_option(sc, args.map_file)
+    # the prior the first plan was made on: its --map file (map_source), unless --map gives
+    # another (new information); replan-audit: the built-in prior was swept silently
+    map_file = args.map_file
+    src = str(plans[0].get("map_source") or "builtin")
+    if map_file is None and sc.map.prior.kind != "file" and src != "builtin":
+        cands = map_file_candidates(src, args.plan[0])
+        map_file = next((c for c in cands if c.is_file()), None)
+        if map_file is None:
+            raise ConfigError(
+                "map", src, f"the prior file {args.plan[0]} was planned on (its map_source; "
+                f"looked for {', '.join(str(c) for c in cands)}), or --map FILE",
+            )  # fmt: skip
+    prior = build_prior(sc.map, map_file)
     tracks = None
     skipped: list[str] = []  # exported landing approaches, not flights
     if args.tracks:
@@ -481,6 +496,7 @@ def cli_main(args: Any) -> int:
         for t in args.tracks:
             tracks += read_tracks(t, crs, skipped)
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
+    nxt["map_source"] = _map_source(sc, map_file)  # export draws this prior, replan sweeps it
     print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
     print(plan_table(nxt))
     for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):

@@ -511,3 +511,28 @@ def test_a_replanned_sortie_needs_the_plans_it_was_planned_after(first, tmp_path
     assert main(["replan", "--plan", str(p2), "--plan", str(p1), "--out", str(out)]) == 2
     assert "plan[0].sortie: got 2" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_replan_sweeps_the_prior_the_plan_was_made_on(tmp_path, capsys):
+    """replan-audit: a plan made with ``--map prior.npy`` was replanned on the scenario's
+    built-in prior (``--map`` not given again): sortie 1 "found" 0.5418 of the wrong prior
+    instead of its 0.5568, sortie 2 was planned on it and recorded ``map_source: builtin``
+    (export then drew the wrong prior). replan now reads the plan's ``map_source``, records
+    it, and refuses, naming ``map``, when that file is gone."""
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    f = tmp_path / "flipped.npy"
+    np.save(f, prior[::-1, ::-1] / prior.sum())
+    p1, p2 = tmp_path / "p1.json", tmp_path / "p2.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*argv, "--map", str(f), "--origin", "46.5,7.9", "--out", str(p1)]) == 0
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0
+    a, b = json.loads(p1.read_text()), json.loads(p2.read_text())
+    assert b["searched_pos"] == pytest.approx(a["posc"], abs=1e-9)
+    assert b["map_source"] == a["map_source"] == str(f)
+    f.rename(tmp_path / "moved.npy")
+    out = tmp_path / "p2b.json"
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p1), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: map: got") and str(f) in err and not out.exists()
