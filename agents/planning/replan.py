@@ -456,6 +456,7 @@ def cli_main(args: Any) -> int:
     from poc_env.agents.planning.planner import lattice_warning, moving_target_warning, plan_table
     from poc_env.cli import _check_map_option, _map_source
     from poc_env.config import load_scenario, parse_overrides
+    from poc_env.crs import plan_crs
     from poc_env.theory.probability_map import build_prior
 
     plans = [dict(load_plan(p)) for p in args.plan]
@@ -485,8 +486,10 @@ def cli_main(args: Any) -> int:
     prior = build_prior(sc.map, map_file)
     tracks = None
     skipped: list[str] = []  # exported landing approaches, not flights
+    crs = plans[-1].get("crs")
+    if crs is not None or args.origin is not None:  # --origin checked as export checks it
+        crs = plan_crs(crs, args.origin, "aeqd", None)  # (replan-audit: it was ignored)
     if args.tracks:
-        crs = plans[-1].get("crs") or args.origin
         if crs is None:
             raise ConfigError(
                 "origin", None, "LAT,LON of the map's (0, 0): the plan records no crs, and the "
@@ -497,6 +500,8 @@ def cli_main(args: Any) -> int:
             tracks += read_tracks(t, crs, skipped)
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
     nxt["map_source"] = _map_source(sc, map_file)  # export draws this prior, replan sweeps it
+    if crs is not None:
+        nxt["crs"] = crs  # the plan's, or --origin's for a plan without one
     print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
     print(plan_table(nxt))
     for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):

@@ -536,3 +536,24 @@ def test_replan_sweeps_the_prior_the_plan_was_made_on(tmp_path, capsys):
     assert main(["replan", "--plan", str(p1), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: map: got") and str(f) in err and not out.exists()
+
+
+def test_replan_origin_must_agree_with_the_plans_crs(first, tmp_path, capsys):
+    """replan-audit: ``replan --tracks t.geojson --origin 46.6,7.95`` on a plan whose crs is at
+    46.5, 7.9 ignored the origin without a word (export refuses it); it is now refused as
+    export refuses it, naming ``origin``. For a plan that records no crs, ``--origin`` gives the
+    tracks' frame and the next plan records it (export and the next replan need no origin)."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    _tracks(tmp_path / "t.geojson", plan)
+    out = tmp_path / "next.json"
+    argv = ["replan", "--plan", str(p1), "--tracks", str(tmp_path / "t.geojson")]
+    capsys.readouterr()
+    assert main([*argv, "--origin", "46.6,7.95", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: origin: got") and "crs.origin_deg" in err and not out.exists()
+    bare = {k: v for k, v in plan.items() if k != "crs"}
+    (tmp_path / "bare.json").write_text(json.dumps(bare))
+    argv[2] = str(tmp_path / "bare.json")
+    assert main([*argv, "--origin", "46.5,7.9", "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["crs"] == plan["crs"]
