@@ -187,12 +187,22 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
     else:
         geoms = [(where, data)]
     lines = ("LineString", "MultiLineString")
+    flat: list[tuple[str, Any]] = []  # a GeometryCollection's members (RFC 7946 3.1.8)
+    for field, g in geoms:
+        gc = isinstance(g, dict) and g.get("type") == "GeometryCollection"
+        members = g.get("geometries") if gc else None
+        if isinstance(members, list):
+            flat += [(f"{field}.geometries[{k}]", m) for k, m in enumerate(members)]
+        else:
+            flat.append((field, g))
+    geoms = flat
     # a collection's points and areas (a logger's waypoints, the search area drawn beside the
-    # tracks) sweep no line: skipped, as KML's other placemarks and GPX's waypoints are; a
+    # tracks) and null geometries (RFC 7946 3.2: an unlocated feature, a UAV that did not
+    # fly) sweep no line: skipped, as KML's other placemarks and GPX's waypoints are; a
     # collection without a line is refused, as a lone geometry of another type is
     skip = len(geoms) > 1 and any(isinstance(g, dict) and g.get("type") in lines for _, g in geoms)
     for field, g in geoms:
-        if skip and isinstance(g, dict) and g.get("type") in GEOJSON_OTHER:
+        if skip and (g is None or (isinstance(g, dict) and g.get("type") in GEOJSON_OTHER)):
             continue
         if not isinstance(g, dict) or g.get("type") not in lines:
             kind = g.get("type") if isinstance(g, dict) else g

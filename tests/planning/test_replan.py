@@ -557,3 +557,37 @@ def test_replan_origin_must_agree_with_the_plans_crs(first, tmp_path, capsys):
     argv[2] = str(tmp_path / "bare.json")
     assert main([*argv, "--origin", "46.5,7.9", "--out", str(out)]) == 0
     assert json.loads(out.read_text())["crs"] == plan["crs"]
+
+
+def test_geojson_null_geometries_and_geometry_collections_are_read(first, tmp_path):
+    """replan-audit: RFC 7946 lets a Feature's geometry be null (an unlocated feature: a GIS
+    layer's row for a UAV that did not fly) and a GeometryCollection hold the lines; both were
+    refused whole (``tracks.features[3].geometry.type: got None``, ``tracks.type: got
+    'GeometryCollection'``). A null geometry beside lines is skipped as a Point is; a
+    collection's lines are read, each named by its place; neither alone is a track."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = tmp_path / "lines.geojson"
+    feats = _tracks(lines, plan)
+    want = read_tracks(lines, plan["crs"])
+    unlocated = {"type": "Feature", "properties": {"uav": 4}, "geometry": None}
+    mixed = tmp_path / "mixed.geojson"
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": [*feats, unlocated]}))
+    gc = {"type": "GeometryCollection", "geometries": [f["geometry"] for f in feats]}
+    coll = tmp_path / "gc.geojson"
+    coll.write_text(json.dumps({"type": "Feature", "properties": {}, "geometry": gc}))
+    for path, names in [
+        (mixed, [f"tracks.features[{i}].geometry.coordinates" for i in range(len(feats))]),
+        (coll, [f"tracks.geometry.geometries[{i}].coordinates" for i in range(len(feats))]),
+    ]:
+        got = read_tracks(path, plan["crs"])
+        assert [f for f, _ in got] == names
+        for (_, a), (_, b) in zip(got, want, strict=True):
+            np.testing.assert_array_equal(a, b)
+    alone = tmp_path / "alone.geojson"
+    alone.write_text(json.dumps({"type": "FeatureCollection", "features": [unlocated] * 2}))
+    with pytest.raises(ConfigError) as err:
+        read_tracks(alone, plan["crs"])
+    assert err.value.field == "tracks.features[0].geometry.type" and err.value.value is None
