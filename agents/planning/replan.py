@@ -305,8 +305,10 @@ def _gpx_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     1.1 (or 1.0) file; GPX is WGS 84 by definition. Routes (``rte``) and waypoints are not
     flown tracks and are ignored, and so are segments of fewer than two points (they sweep no
     line)."""
+    from lxml import etree
+
     root = _xml_root(raw, path, "GPX", GPX_NAMESPACES)
-    ns = root.nsmap.get(None) or GPX_NAMESPACES[0]
+    ns = etree.QName(root).namespace  # the root's, prefixed or not (checked by _xml_root)
     out = []
     segments = 0
     for i, trk in enumerate(root.findall(f"{{{ns}}}trk")):

@@ -591,3 +591,33 @@ def test_geojson_null_geometries_and_geometry_collections_are_read(first, tmp_pa
     with pytest.raises(ConfigError) as err:
         read_tracks(alone, plan["crs"])
     assert err.value.field == "tracks.features[0].geometry.type" and err.value.value is None
+
+
+@pytest.mark.parametrize(
+    "old, new",
+    [  # GPX 1.0 written with a namespace prefix; KML 2.3 (OGC 12-007r2, the current standard)
+        ("<gpx ", "<g:gpx xmlns:g='http://www.topografix.com/GPX/1/0' "),
+    ],
+)
+def test_gpx_with_a_prefix_and_kml_2_3_are_read(first, tmp_path, old, new):
+    """replan-audit: a GPX file whose elements carry a namespace prefix was refused as having
+    no ``trk/trkseg/trkpt`` (the reader looked in the default namespace only), and a KML 2.3
+    file for its namespace; both read now, the same tracks as the plain files."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    gpx = old.startswith("<gpx")
+    plain = tmp_path / ("plain.gpx" if gpx else "plain.kml")
+    (_gpx if gpx else _kml)(plain, _lonlat_lines(plan))
+    text = plain.read_text().replace(old, new)
+    if gpx:  # every element in the prefixed namespace; the 1.1 default declaration dropped
+        text = text.replace(' xmlns="http://www.topografix.com/GPX/1/1"', "")
+        text = text.replace("<", "<g:").replace("<g:/", "</g:").replace("<g:?", "<?")
+        text = text.replace("<g:g:", "<g:").replace("</g:g:", "</g:")
+    other = tmp_path / plain.name.replace("plain", "other")
+    other.write_text(text)
+    want, got = read_tracks(plain, plan["crs"]), read_tracks(other, plan["crs"])
+    assert [f for f, _ in got] == [f for f, _ in want] and len(got) == len(_lonlat_lines(plan))
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
