@@ -86,8 +86,8 @@ MAX_TRACK_BYTES = 128 * 1024 * 1024
 MAX_XML_DEPTH = 64
 TRACK_SUFFIXES = (".geojson", ".json", ".kml", ".gpx")
 GPX_NAMESPACES = ("http://www.topografix.com/GPX/1/1", "http://www.topografix.com/GPX/1/0")
-KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://earth.google.com/kml/2.2",
-                  "http://earth.google.com/kml/2.1")  # fmt: skip
+KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://www.opengis.net/kml/2.3",
+                  "http://earth.google.com/kml/2.2", "http://earth.google.com/kml/2.1")  # fmt: skip
 
 
 def read_tracks(

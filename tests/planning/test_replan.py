@@ -597,6 +597,7 @@ def test_geojson_null_geometries_and_geometry_collections_are_read(first, tmp_pa
     "old, new",
     [  # GPX 1.0 written with a namespace prefix; KML 2.3 (OGC 12-007r2, the current standard)
         ("<gpx ", "<g:gpx xmlns:g='http://www.topografix.com/GPX/1/0' "),
+        ("kml/2.2", "kml/2.3"),
     ],
 )
 def test_gpx_with_a_prefix_and_kml_2_3_are_read(first, tmp_path, old, new):
