@@ -39,33 +39,65 @@ from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
 
-def check_paths(sc: Scenario, paths, names) -> list[np.ndarray]:
+def check_paths(sc: Scenario, paths, names, crs: Any = None) -> list[np.ndarray]:
     """``paths`` as (k, 2) arrays, each point inside the operating area; else a ConfigError
-    naming ``names[i]`` and the point's index."""
+    naming ``names[i]`` and the point's index. With ``crs`` (the tracks were read in
+    longitude/latitude, :func:`read_tracks`) the error gives the point as read, its distance
+    from the area, and whether reading it as (lat, lon) would put it inside (a slip of order)."""
     from poc_env.sim.core import operating_area
 
     x0, y0, x1, y1 = operating_area(sc)  # eq. 20's boundary: the map grown to hold its fields
     tol = 1e-6 * max(x1 - x0, y1 - y0)
+
+    def inside(p: np.ndarray) -> np.ndarray:
+        return (
+            np.isfinite(p).all(axis=1)
+            & (p[:, 0] >= x0 - tol)
+            & (p[:, 0] <= x1 + tol)
+            & (p[:, 1] >= y0 - tol)
+            & (p[:, 1] <= y1 + tol)
+        )
+
     out = []
     for i, path in enumerate(paths):
         pts = np.asarray(path, dtype=float).reshape(-1, 2)
-        bad = ~(
-            np.isfinite(pts).all(axis=1)
-            & (pts[:, 0] >= x0 - tol)
-            & (pts[:, 0] <= x1 + tol)
-            & (pts[:, 1] >= y0 - tol)
-            & (pts[:, 1] <= y1 + tol)
-        )
+        bad = ~inside(pts)
         if bad.any():
             j = int(np.argmax(bad))
-            raise ConfigError(
-                f"{names[i]}[{j}]",
-                [round(float(v), 1) for v in pts[j]],
-                f"a point in metres inside the operating area x {x0:g}..{x1:g}, y {y0:g}..{y1:g} "
-                f"of scenario {sc.name!r} (the map and its airfields)",
+            text = (
+                f"a point in metres inside the operating area x {x0:g}..{x1:g}, y "
+                f"{y0:g}..{y1:g} of scenario {sc.name!r} (the map and its airfields)"
             )
+            if crs is None or not np.isfinite(pts[j]).all():
+                got = [round(float(v), 1) for v in pts[j]]
+                raise ConfigError(f"{names[i]}[{j}]", got, text)
+            area = (text.replace(" in metres", ""), (x0, y0), (x1, y1))
+            raise ConfigError(f"{names[i]}[{j}]", *_off_area(pts[j], crs, area, inside))
         out.append(pts)
     return out
+
+
+def _off_area(xy: np.ndarray, crs: Any, area: tuple[str, Any, Any], inside: Any) -> tuple[str, str]:
+    """The (value, allowed) of :func:`check_paths`'s error for a track point ``xy`` (map
+    metres) read in longitude/latitude and projected by ``crs``: the point as read, how far it
+    lies from the area (``area``: its text and its (x0, y0) and (x1, y1) corners), and a hint
+    when its two numbers swapped would lie inside."""
+    from poc_env.agents.mission.crs import to_geographic, to_local
+
+    text, lo, hi = area
+    ((lat, lon),) = to_geographic([xy], crs)
+    off = np.hypot(*np.maximum(np.maximum(np.subtract(lo, xy), np.subtract(xy, hi)), 0.0))
+    allowed = f"{text}; it maps to x {xy[0]:.0f}, y {xy[1]:.0f} m, {off / 1e3:.0f} km from it"
+    try:
+        flipped = np.array(to_local([(lon, lat)], crs)) if abs(lon) <= 90 else None
+    except ConfigError:
+        flipped = None
+    if flipped is not None and inside(flipped).all():
+        allowed += (
+            f"; read as lat {lon:.5f}, lon {lat:.5f} it would lie inside: are the file's "
+            "coordinates in lat, lon order? (GeoJSON and KML write lon, lat)"
+        )
+    return f"lon {lon:.5f}, lat {lat:.5f}", allowed
 
 
 def plan_paths(plan: dict[str, Any]) -> list[np.ndarray]:
@@ -510,6 +542,7 @@ def cli_main(args: Any) -> int:
         tracks = []
         for t in args.tracks:
             tracks += read_tracks(t, crs, skipped)
+        check_paths(sc, [t for _, t in tracks], [f for f, _ in tracks], crs)  # named in degrees
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
     nxt["map_source"] = _map_source(sc, map_file)  # export draws this prior, replan sweeps it
     if crs is not None:

@@ -622,3 +622,36 @@ def test_gpx_with_a_prefix_and_kml_2_3_are_read(first, tmp_path, old, new):
     assert [f for f, _ in got] == [f for f, _ in want] and len(got) == len(_lonlat_lines(plan))
     for (_, a), (_, b) in zip(got, want, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_track_off_the_area_is_named_in_degrees_and_a_swap_is_suspected(first, tmp_path, capsys):
+    """replan-audit: GeoJSON written in lat, lon order (a common slip) was refused as
+    ``got [4493731.8, -3360645.2]; allowed: a point in metres inside the operating area``: the
+    metres of a point the officer wrote in degrees. The error now gives the point as read
+    (lon, lat) and its distance from the area, and says when swapping the two would put it
+    inside; a point merely far off gets no such hint."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    feats = _tracks(tmp_path / "t.geojson", plan)
+    for f in feats:
+        f["geometry"]["coordinates"] = [[lat, lon] for lon, lat in f["geometry"]["coordinates"]]
+    swapped = tmp_path / "swapped.geojson"
+    swapped.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    out = tmp_path / "next.json"
+    argv = ["replan", "--plan", str(p1), "--out", str(out), "--tracks"]
+    capsys.readouterr()
+    assert main([*argv, str(swapped)]) == 2
+    err = capsys.readouterr().err
+    a, b = feats[0]["geometry"]["coordinates"][0]  # the file's first pair: lat, lon by mistake
+    assert err.startswith("error: tracks.features[0].geometry.coordinates[0]: got 'lon ")
+    assert f"'lon {a:.5f}, lat {b:.5f}'" in err and "km from it" in err
+    assert "lat, lon order" in err
+    far = tmp_path / "far.geojson"
+    _tracks(far, plan)
+    text = json.loads(far.read_text())
+    text["features"][1]["geometry"]["coordinates"][2] = [9.5, 47.5]  # ~150 km off
+    far.write_text(json.dumps(text))
+    assert main([*argv, str(far)]) == 2
+    err = capsys.readouterr().err
+    assert "tracks.features[1].geometry.coordinates[2]: got 'lon 9.50000, lat 47.50000'" in err
+    assert "lat, lon order" not in err and not out.exists()
