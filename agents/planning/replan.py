@@ -386,6 +386,30 @@ def sweep_points(sc: Scenario, belief_fine: np.ndarray, paths) -> float:
     return float(found)
 
 
+def map_frame(sc: Scenario, plans: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The ``crs`` of the map's metres: the scenario's own (``map.origin_deg``: every plan made
+    on it records it), else the last plan's (a scenario without a place on the globe is put
+    there by ``plan --origin``), else None."""
+    from poc_env.agents.planning.geography import scenario_crs
+
+    frame = scenario_crs(sc, None, sc.map.projection, None)
+    return frame if frame is not None else (plans[-1].get("crs") if plans else None)
+
+
+def _in_frame(paths: list[np.ndarray], crs: Any, frame: Any) -> list[np.ndarray]:
+    """A plan's ``paths`` (metres of its own ``crs``) in the metres of ``frame``, through
+    longitude/latitude when the two differ (replan-audit: a plan made before the area was
+    re-imported with another origin was swept in the new map's metres, kilometres off)."""
+    from poc_env.agents.mission.crs import to_geographic, to_local
+    from poc_env.crs import crs_text
+
+    if crs is None or frame is None:
+        return paths
+    if crs_text(crs) == crs_text(frame) and list(crs["origin_deg"]) == list(frame["origin_deg"]):
+        return paths
+    return [np.array(to_local(to_geographic(p, crs), frame)) for p in paths]
+
+
 def next_sortie(
     sc: Scenario,
     prior: np.ndarray,
@@ -409,6 +433,7 @@ def next_sortie(
 
     names: list[str] = []
     flights: list[np.ndarray] = []
+    frame = map_frame(sc, plans)
     for i, plan in enumerate(plans):
         where = f"plan[{i}]" if len(plans) > 1 else "plan"
         if plan.get("scenario") != sc.name:
@@ -426,7 +451,7 @@ def next_sortie(
             )  # fmt: skip
         uavs = enumerate(plan["uavs"])
         names += [f"{where}.uavs[{k}].waypoints_m" for k, u in uavs if u["waypoints_m"]]
-        flights += plan_paths(plan)
+        flights += _in_frame(plan_paths(plan), plan.get("crs"), frame)
     if tracks is not None:
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
     paths = check_paths(sc, flights, names)
@@ -440,8 +465,8 @@ def next_sortie(
     # 0.1835 on the cells, 0.1463 on the points)
     nxt = make_plan(sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine)
     gain = sweep_points(sc, fine, plan_paths(nxt))
-    if plans and plans[-1].get("crs") is not None:
-        nxt["crs"] = plans[-1]["crs"]  # the same map, the same frame
+    if frame is not None:
+        nxt["crs"] = frame  # the scenario's (make_plan's), else the last plan's: the same map
     nxt["sortie"] = len(plans) + 1
     nxt["searched_pos"] = searched
     nxt["sortie_posc"] = gain
@@ -530,7 +555,7 @@ def cli_main(args: Any) -> int:
     prior = build_prior(sc.map, map_file)
     tracks = None
     skipped: list[str] = []  # exported landing approaches, not flights
-    crs = plans[-1].get("crs")
+    crs = map_frame(sc, plans)  # the tracks are put into this map's metres
     if crs is not None or args.origin is not None:  # --origin checked as export checks it
         crs = plan_crs(crs, args.origin, "aeqd", None)  # (replan-audit: it was ignored)
     if args.tracks:

@@ -9,7 +9,7 @@ from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.plan import load_plan
 from poc_env.agents.planning.replan import searched_belief
 from poc_env.cli import main
-from poc_env.config import load_scenario
+from poc_env.config import load_scenario, parse_overrides
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import build_prior
 
@@ -655,3 +655,27 @@ def test_a_track_off_the_area_is_named_in_degrees_and_a_swap_is_suspected(first,
     err = capsys.readouterr().err
     assert "tracks.features[1].geometry.coordinates[2]: got 'lon 9.50000, lat 47.50000'" in err
     assert "lat, lon order" not in err and not out.exists()
+
+
+def test_flights_of_a_plan_in_another_frame_are_swept_where_they_were_flown(tmp_path):
+    """replan-audit: the search area re-imported a little larger (``scenario import`` over the
+    same YAML: the map's origin moved 5.6 km south) and sortie 1's plan, in the old frame, was
+    swept in the new map's metres -- 5.6 km off where it was flown (Alps: found 0.4888 for
+    0.6645) -- and sortie 2's plan, made in the new frame, recorded the old frame's crs, so
+    its export put every route 5.6 km off. A plan whose crs is not the scenario's frame is now
+    carried over through longitude/latitude, and the next plan records the scenario's frame."""
+    from poc_env.agents.planning.replan import plan_paths
+    from poc_env.crs import to_local
+
+    old, new = "map.origin_deg=[46.5,7.9]", "map.origin_deg=[46.45,7.9]"
+    p1, p2 = tmp_path / "p1.json", tmp_path / "p2.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*argv, "--overrides", old, "--out", str(p1)]) == 0
+    assert main(["replan", "--plan", str(p1), "--overrides", new, "--out", str(p2)]) == 0
+    a, b = json.loads(p1.read_text()), json.loads(p2.read_text())
+    assert a["crs"]["origin_deg"] == [46.5, 7.9] and b["crs"]["origin_deg"] == [46.45, 7.9]
+    sc = load_scenario("small", parse_overrides([new]))
+    flown = [np.array(to_local(to_geographic(p, a["crs"]), b["crs"])) for p in plan_paths(a)]
+    assert abs(flown[0][0][1] - plan_paths(a)[0][0][1] - 5560) < 10  # 5.6 km north in the new map
+    _, want = searched_belief(sc, build_prior(sc.map), flown)
+    assert b["searched_pos"] == pytest.approx(want, abs=1e-9)
