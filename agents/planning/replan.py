@@ -116,7 +116,7 @@ MAX_TRACK_BYTES = 128 * 1024 * 1024
 #: Element nesting deeper than this in a KML or GPX file is refused (GPX 1.1 needs 4 levels,
 #: KML Documents in Folders a few more).
 MAX_XML_DEPTH = 64
-TRACK_SUFFIXES = (".geojson", ".json", ".kml", ".gpx")
+TRACK_SUFFIXES = (".geojson", ".json", ".kml", ".kmz", ".gpx")
 GPX_NAMESPACES = ("http://www.topografix.com/GPX/1/1", "http://www.topografix.com/GPX/1/0")
 KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://www.opengis.net/kml/2.3",
                   "http://earth.google.com/kml/2.2", "http://earth.google.com/kml/2.1")  # fmt: skip
@@ -149,7 +149,9 @@ def read_tracks(
     except OSError as err:
         raise ConfigError("tracks", os.fspath(path), f"a readable track file ({err})") from None
     parts: list[tuple[str, np.ndarray | None]]
-    if suffix == ".kml":
+    if suffix == ".kmz":
+        parts = _kml_tracks(_kmz_kml(raw, path), path)
+    elif suffix == ".kml":
         parts = _kml_tracks(raw, path)
     elif suffix == ".gpx":
         parts = list(_gpx_tracks(raw, path))
@@ -162,6 +164,30 @@ def read_tracks(
     if not lines:
         raise ConfigError("tracks", os.fspath(path), "at least one track of 2 or more points")
     return lines
+
+
+def _kmz_kml(raw: bytes, path: Any) -> bytes:
+    """The KML of a KMZ archive (a zip; KML 2.2 section 15: ``doc.kml``, else the first
+    ``.kml`` file in it), at most :data:`MAX_TRACK_BYTES` unpacked (read so, whatever the
+    archive's directory claims)."""
+    import io
+    import zipfile
+
+    allowed = "a KMZ file: a zip archive holding a .kml file (doc.kml)"
+    try:
+        with zipfile.ZipFile(io.BytesIO(raw)) as z:
+            names = [n for n in z.namelist() if n.lower().endswith(".kml")]
+            if not names:
+                raise ConfigError("tracks", os.fspath(path), allowed)
+            name = "doc.kml" if "doc.kml" in names else names[0]
+            with z.open(name) as f:
+                kml = f.read(MAX_TRACK_BYTES + 1)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, OSError) as err:
+        raise ConfigError("tracks", os.fspath(path), f"{allowed} ({err})") from None
+    if len(kml) > MAX_TRACK_BYTES:
+        raise ConfigError("tracks", f"{os.fspath(path)}: {name} unpacks to more than "
+                          f"{MAX_TRACK_BYTES} bytes", allowed)  # fmt: skip
+    return kml
 
 
 def _to_map(field: str, arr: np.ndarray, crs: Any) -> np.ndarray:

@@ -679,3 +679,34 @@ def test_flights_of_a_plan_in_another_frame_are_swept_where_they_were_flown(tmp_
     assert abs(flown[0][0][1] - plan_paths(a)[0][0][1] - 5560) < 10  # 5.6 km north in the new map
     _, want = searched_belief(sc, build_prior(sc.map), flown)
     assert b["searched_pos"] == pytest.approx(want, abs=1e-9)
+
+
+def test_kmz_tracks_are_read_as_their_kml(first, tmp_path):
+    """replan-audit: Google Earth and QGC save KMZ (EXPORT.md even zips the exported KML into
+    one); ``--tracks flown.kmz`` was refused for its suffix. Its KML (``doc.kml``, else the
+    first ``.kml`` in the archive, as KML 2.2 says) is read now, the same tracks; an archive
+    without one, or not a zip, is refused naming ``tracks``."""
+    import zipfile
+
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    kml = tmp_path / "flown.kml"
+    _kml(kml, _lonlat_lines(plan))
+    want = read_tracks(kml, plan["crs"])
+    kmz = tmp_path / "flown.kmz"
+    with zipfile.ZipFile(kmz, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("files/prior.png", b"\x89PNG")
+        z.writestr("doc.kml", kml.read_text())
+    got = read_tracks(kmz, plan["crs"])
+    assert [f for f, _ in got] == [f for f, _ in want]
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    empty = tmp_path / "empty.kmz"
+    with zipfile.ZipFile(empty, "w") as z:
+        z.writestr("prior.png", b"\x89PNG")
+    for bad in (empty, kml.rename(tmp_path / "plain.kmz")):
+        with pytest.raises(ConfigError) as err:
+            read_tracks(bad, plan["crs"])
+        assert err.value.field == "tracks" and "KMZ" in err.value.allowed
