@@ -268,13 +268,30 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
         parts = [g.get("coordinates")] if g["type"] == "LineString" else g.get("coordinates")
         for p, coords in enumerate(parts or []):
             f = f"{field}.coordinates" + (f"[{p}]" if g["type"] == "MultiLineString" else "")
-            try:
-                arr = np.asarray(coords, dtype=float)
-            except (TypeError, ValueError, OverflowError):  # 10**400 is a JSON integer
-                shown = coords if len(str(coords)) < 200 else "array"
-                raise ConfigError(f, shown, "2 or more [lon, lat] number pairs") from None
-            out.append((f, arr))
+            out.append((f, _positions(coords, f)))
     return out
+
+
+def _positions(coords: Any, field: str) -> np.ndarray:
+    """A GeoJSON line's positions (RFC 7946 3.1.1: 2 or more numbers each, 3 with an altitude,
+    mixed as a logger writes them) as an (n, 2) lon/lat array; else a ConfigError naming the
+    first position that is not numbers."""
+    if not isinstance(coords, list):
+        shown = coords if len(str(coords)) < 200 else type(coords).__name__
+        raise ConfigError(field, shown, "a list of [lon, lat] or [lon, lat, altitude] positions")
+    rows = []
+    for j, c in enumerate(coords):
+        ok = isinstance(c, list) and len(c) >= 2
+        ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in c)
+        try:
+            rows.append([float(c[0]), float(c[1])] if ok else None)
+        except OverflowError:  # 10**400 is a JSON integer
+            ok = False
+        if not ok:
+            shown = c if len(str(c)) < 200 else "array"
+            raise ConfigError(f"{field}[{j}]", shown, "a position [lon, lat] or [lon, lat, "
+                              "altitude] of numbers")  # fmt: skip
+    return np.array(rows, dtype=float).reshape(-1, 2)
 
 
 def _xml_root(raw: bytes, path: Any, kind: str, namespaces: tuple[str, ...]) -> Any:

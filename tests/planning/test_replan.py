@@ -111,7 +111,7 @@ def test_bad_tracks_name_the_field_and_write_nothing(first, tmp_path, capsys):
         ('{"type": "LineString", "coordinates": [[NaN, 45], [126, 45]]}', "tracks"),
         (
             '{"type": "LineString", "coordinates": [[1' + "0" * 400 + ", 45], [126, 45]]}",
-            "tracks.coordinates",
+            "tracks.coordinates[0]",
         ),
     ],
 )
@@ -710,3 +710,29 @@ def test_kmz_tracks_are_read_as_their_kml(first, tmp_path):
         with pytest.raises(ConfigError) as err:
             read_tracks(bad, plan["crs"])
         assert err.value.field == "tracks" and "KMZ" in err.value.allowed
+
+
+def test_geojson_positions_with_and_without_altitude_are_read(first, tmp_path):
+    """replan-audit: RFC 7946 positions hold 2 or 3 numbers; a line mixing both (a logger that
+    lost its altitude fix for a while) was refused as ``coordinates: got 'array'``. Each
+    position's lon, lat is read now; a position that is not numbers is named by its index."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = tmp_path / "lines.geojson"
+    feats = _tracks(lines, plan)
+    want = read_tracks(lines, plan["crs"])
+    for f in feats:
+        cs = f["geometry"]["coordinates"]
+        f["geometry"]["coordinates"] = [[*c, 1500.0] if k % 2 else c for k, c in enumerate(cs)]
+    mixed = tmp_path / "mixed.geojson"
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    got = read_tracks(mixed, plan["crs"])
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    feats[1]["geometry"]["coordinates"][3] = [8.0, "46.5", 1500.0]
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    with pytest.raises(ConfigError) as err:
+        read_tracks(mixed, plan["crs"])
+    assert err.value.field == "tracks.features[1].geometry.coordinates[3]"
