@@ -247,8 +247,9 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
     lines = ("LineString", "MultiLineString")
     flat: list[tuple[str, Any]] = []  # a GeometryCollection's members (RFC 7946 3.1.8)
     for field, g in geoms:
-        gc = isinstance(g, dict) and g.get("type") == "GeometryCollection"
-        members = g.get("geometries") if gc else None
+        members = None
+        if isinstance(g, dict) and g.get("type") == "GeometryCollection":
+            members = g.get("geometries")
         if isinstance(members, list):
             flat += [(f"{field}.geometries[{k}]", m) for k, m in enumerate(members)]
         else:

@@ -2,12 +2,14 @@
 plan's cumulative_posc eq. 14 over every flight so far, 1 - prod(1 - conditional POS_i), and
 below the honest bound for k sorties?
 
-Usage: python results/audit/replan/chain_check.py SCENARIO [--overrides K=V ...] -- P1.json P2.json ...
+Usage: python results/audit/replan/chain_check.py SCENARIO [--overrides K=V ...] -- P1.json ...
 (the plans of sorties 1..n in order: P1 from `poc-env plan`, the others from `poc-env replan`).
 """
 
+import itertools
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -22,7 +24,7 @@ name, over = args[0], [a for a in args[1:cut] if a != "--overrides"]
 sc = load_scenario(name, parse_overrides(over))
 prior = build_prior(sc.map)
 grid = Grid.from_config(sc.map)
-plans = [json.loads(open(p).read()) for p in args[cut + 1 :]]
+plans = [json.loads(Path(p).read_text()) for p in args[cut + 1 :]]
 print(f"{sc.name}: {len(plans)} sorties, prior mass {prior.sum():.6f}")
 prev, paths, cond = prior, [], []
 for k, plan in enumerate(plans, start=1):
@@ -33,10 +35,13 @@ for k, plan in enumerate(plans, start=1):
     # where sortie k searched: cells within half a sweep width of its routes' sample points
     fine = np.zeros((grid.ny, grid.nx), dtype=bool)
     for path in mine:
-        for a, b in zip(path[:-1], path[1:]):
+        for a, b in itertools.pairwise(path):
             for t in np.linspace(0, 1, 50):
                 x, y = a + t * (b - a)
-                i, j = int((y - grid.origin_m[1]) // grid.cell_m), int((x - grid.origin_m[0]) // grid.cell_m)
+                i, j = (
+                    int((y - grid.origin_m[1]) // grid.cell_m),
+                    int((x - grid.origin_m[0]) // grid.cell_m),
+                )
                 if 0 <= i < grid.ny and 0 <= j < grid.nx:
                     fine[i, j] = True
     share = drop[fine].sum() / drop.sum() if drop.sum() > 0 else float("nan")

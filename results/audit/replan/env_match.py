@@ -40,7 +40,9 @@ env_belief = grid.coarsen(st.belief[0], sc.sensor.samples_per_cell)
 print(f"{name} seed {seed}: {len(track) - 1} steps of {env.params.dt:g} s, {len(paths)} UAVs")
 print(f"  env posc                      {float(st.posc[0]):.6f}")
 print(f"  replan on the env's own paths {found:.6f}  (diff {found - float(st.posc[0]):+.2e})")
-print(f"  max |belief diff| per cell    {np.abs(belief - env_belief).max():.2e} "
-      f"(prior max {prior.max():.2e})")
+print(
+    f"  max |belief diff| per cell    {np.abs(belief - env_belief).max():.2e} "
+    f"(prior max {prior.max():.2e})"
+)
 _, planned = searched_belief(sc, prior, plan_paths(pol.plan))
 print(f"  replan on the plan's routes   {planned:.6f}  (plan posc {pol.plan['posc']:.6f})")
