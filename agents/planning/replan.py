@@ -7,9 +7,10 @@ detection law and cut-off, the one implementation of the update); :func:`next_so
 the next sortie on what is left (the allocation planner by default). The flown paths are
 either the previous plan's routes (take-off, waypoints, landing: what the plan said would be
 flown) or the tracks actually flown -- GeoJSON LineStrings (RFC 7946), KML LineStrings or
-``gx:Track``, GPX 1.1 track segments, all WGS 84 longitude/latitude -- put into the map's
-metres with the previous plan's CRS record (or ``--origin``)
-(:func:`read_tracks`).
+``gx:Track`` (also in KMZ), GPX 1.1 track segments, all WGS 84 longitude/latitude -- put into
+the map's metres with its frame (:func:`map_frame`: the scenario's CRS, else the last plan's,
+else ``--origin``) (:func:`read_tracks`). A plan made in another frame (the area re-imported
+with another origin) is carried into the map's metres through longitude/latitude.
 
 The belief is not renormalised: the next plan's POS is then a share of the original prior, and
 the sorties' POS add up to the cumulative POS (eq. 13) -- ``searched_pos`` plus the next
@@ -445,13 +446,19 @@ def _in_frame(paths: list[np.ndarray], crs: Any, frame: Any) -> list[np.ndarray]
     longitude/latitude when the two differ (replan-audit: a plan made before the area was
     re-imported with another origin was swept in the new map's metres, kilometres off)."""
     from poc_env.agents.mission.crs import to_geographic, to_local
+
+    if same_frame(crs, frame):
+        return paths
+    return [np.array(to_local(to_geographic(p, crs), frame)) for p in paths]
+
+
+def same_frame(crs: Any, frame: Any) -> bool:
+    """Whether a plan's ``crs`` puts its metres where ``frame`` does (or either is unknown)."""
     from poc_env.crs import crs_text
 
     if crs is None or frame is None:
-        return paths
-    if crs_text(crs) == crs_text(frame) and list(crs["origin_deg"]) == list(frame["origin_deg"]):
-        return paths
-    return [np.array(to_local(to_geographic(p, crs), frame)) for p in paths]
+        return True
+    return crs_text(crs) == crs_text(frame) and list(crs["origin_deg"]) == list(frame["origin_deg"])
 
 
 def next_sortie(
@@ -485,12 +492,12 @@ def next_sortie(
                 f"{where}.scenario", plan.get("scenario"), f"the scenario replanned, {sc.name!r} "
                 "(the flights are in its map's metres)",
             )  # fmt: skip
-        k = plan.get("sortie", 1)  # plans made by `plan` record none: they go anywhere
-        if "sortie" in plan and k != i + 1:
-            nth = {1: "st", 2: "nd", 3: "rd"}.get(k if k < 20 else k % 10, "th")
+        num = plan.get("sortie", 1)  # plans made by `plan` record none: they go anywhere
+        if "sortie" in plan and num != i + 1:
+            nth = {1: "st", 2: "nd", 3: "rd"}.get(num if num < 20 else num % 10, "th")
             raise ConfigError(
-                f"{where}.sortie", k, f"a plan of sortie {k} as the {k}{nth} --plan, after the "
-                "plans of the sorties it was planned after, in order (--plan p1.json --plan "
+                f"{where}.sortie", num, f"a plan of sortie {num} as the {num}{nth} --plan, after "
+                "the plans of the sorties it was planned after, in order (--plan p1.json --plan "
                 "p2.json ...; replan swept only the flights of the plans given)",
             )  # fmt: skip
         uavs = enumerate(plan["uavs"])
@@ -617,6 +624,13 @@ def cli_main(args: Any) -> int:
     if crs is not None:
         nxt["crs"] = crs  # the plan's, or --origin's for a plan without one
     print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
+    for f, plan in zip(args.plan, plans, strict=True):
+        rec: Any = plan.get("crs")
+        if not args.tracks and crs is not None and not same_frame(rec, crs):
+            print(
+                f"note: {f} was made with its map's (0, 0) at {rec['origin_deg']}; its routes "
+                f"are carried through longitude/latitude into this map's, at {crs['origin_deg']}"
+            )
     print(plan_table(nxt))
     for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):
         if warning is not None:

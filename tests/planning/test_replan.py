@@ -657,7 +657,7 @@ def test_a_track_off_the_area_is_named_in_degrees_and_a_swap_is_suspected(first,
     assert "lat, lon order" not in err and not out.exists()
 
 
-def test_flights_of_a_plan_in_another_frame_are_swept_where_they_were_flown(tmp_path):
+def test_flights_of_a_plan_in_another_frame_are_swept_where_they_were_flown(tmp_path, capsys):
     """replan-audit: the search area re-imported a little larger (``scenario import`` over the
     same YAML: the map's origin moved 5.6 km south) and sortie 1's plan, in the old frame, was
     swept in the new map's metres -- 5.6 km off where it was flown (Alps: found 0.4888 for
@@ -671,7 +671,9 @@ def test_flights_of_a_plan_in_another_frame_are_swept_where_they_were_flown(tmp_
     p1, p2 = tmp_path / "p1.json", tmp_path / "p2.json"
     argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
     assert main([*argv, "--overrides", old, "--out", str(p1)]) == 0
+    capsys.readouterr()
     assert main(["replan", "--plan", str(p1), "--overrides", new, "--out", str(p2)]) == 0
+    assert "carried through longitude/latitude into this map's" in capsys.readouterr().out
     a, b = json.loads(p1.read_text()), json.loads(p2.read_text())
     assert a["crs"]["origin_deg"] == [46.5, 7.9] and b["crs"]["origin_deg"] == [46.45, 7.9]
     sc = load_scenario("small", parse_overrides([new]))
