@@ -515,8 +515,9 @@ def test_a_replanned_sortie_needs_the_plans_it_was_planned_after(first, tmp_path
 
 def test_replan_sweeps_the_prior_the_plan_was_made_on(tmp_path, capsys):
     """replan-audit: a plan made with ``--map prior.npy`` was replanned on the scenario's
-    built-in prior (``--map`` not given again): sortie 1 "found" 0.5418 of the wrong prior
-    instead of its 0.5568, sortie 2 was planned on it and recorded ``map_source: builtin``
+    built-in prior (``--map`` not given again): sortie 1 "found" 0.6336 of the wrong prior
+    where its routes find 0.6441 of its own (the plan's ``posc``), sortie 2 was planned on it
+    and recorded ``map_source: builtin``
     (export then drew the wrong prior). replan now reads the plan's ``map_source``, records
     it, and refuses, naming ``map``, when that file is gone."""
     sc = load_scenario("small")
