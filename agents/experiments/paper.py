@@ -782,8 +782,9 @@ def _sorties_job(job: tuple[str, int, int | None]) -> list[dict[str, Any]]:
     rows = []
     for k, plan in enumerate(plans, start=1):
         cum = float(plan.get("cumulative_posc", plan["posc"]))
+        own = float(plan.get("sortie_posc", plan["posc"]))  # on the belief the flights left
         bound = honest_optimum(sc, prior, sorties=k).pos
-        rows.append({"scenario": name, "seed": seed, "sortie": k, "sortie_posc": plan["posc"],
+        rows.append({"scenario": name, "seed": seed, "sortie": k, "sortie_posc": own,
                      "posc": cum, "bound": bound, "ratio": cum / bound})  # fmt: skip
     return rows
 

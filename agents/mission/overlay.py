@@ -44,7 +44,12 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.mission.crs import to_geographic, to_local
-from poc_env.agents.mission.plan import Plan, scenario_not_found, scenario_source
+from poc_env.agents.mission.plan import (
+    Plan,
+    map_file_candidates,
+    scenario_not_found,
+    scenario_source,
+)
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 
@@ -256,7 +261,7 @@ def plan_prior(
     src = str(plan.get("map_source") or "builtin")
     if src == "builtin":
         return PriorOverlay(grid, build_prior(sc.map), f"{name} (built in)"), f"prior: {name}"
-    for cand in (Path(src), Path(plan_path).parent / src):
+    for cand in map_file_candidates(src, plan_path):
         if cand.is_file():
             try:
                 return PriorOverlay(grid, build_prior(sc.map, cand), str(cand)), f"prior: {cand}"

@@ -621,6 +621,13 @@ def _scenario_candidates(name: str, plan_path: str | os.PathLike[str], plan: Any
     return list(dict.fromkeys(cands))
 
 
+def map_file_candidates(src: str, plan_path: str | os.PathLike[str]) -> list[Path]:
+    """Where the prior file a plan records (``map_source``, the ``--map`` of ``poc-env plan``,
+    as given then) may be: as recorded, else beside the plan (export's prior overlay,
+    ``replan``'s prior)."""
+    return list(dict.fromkeys([Path(src), Path(plan_path).parent / src]))
+
+
 def with_scenario_file(plan: dict, scenario: object) -> dict:
     """``plan`` recording ``scenario_file`` (absolute) when the scenario came from a YAML file:
     export finds the prior's scenario by it (its ``name:`` may differ from the file name)."""

@@ -7,13 +7,15 @@ detection law and cut-off, the one implementation of the update); :func:`next_so
 the next sortie on what is left (the allocation planner by default). The flown paths are
 either the previous plan's routes (take-off, waypoints, landing: what the plan said would be
 flown) or the tracks actually flown -- GeoJSON LineStrings (RFC 7946), KML LineStrings or
-``gx:Track``, GPX 1.1 track segments, all WGS 84 longitude/latitude -- put into the map's
-metres with the previous plan's CRS record (or ``--origin``)
-(:func:`read_tracks`).
+``gx:Track`` (also in KMZ), GPX 1.1 track segments, all WGS 84 longitude/latitude -- put into
+the map's metres with its frame (:func:`map_frame`: the scenario's CRS, else the last plan's,
+else ``--origin``) (:func:`read_tracks`). A plan made in another frame (the area re-imported
+with another origin) is carried into the map's metres through longitude/latitude.
 
 The belief is not renormalised: the next plan's POS is then a share of the original prior, and
-the sorties' POS add up to the cumulative POS (eq. 13) -- ``searched`` plus the next plan's
-``posc``.
+the sorties' POS add up to the cumulative POS (eq. 13) -- ``searched_pos`` plus the next
+plan's ``sortie_posc``, its routes swept over the sample points' belief the flights left (the
+planner plans on cells and scores its ``posc`` on each cell's belief spread evenly).
 
 Bad input is a :class:`~poc_env.errors.ConfigError` naming the field: a track point outside
 the operating area (the map grown to its airfields, eq. 20's boundary), NaN or out of range, a
@@ -38,33 +40,65 @@ from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
 
-def check_paths(sc: Scenario, paths, names) -> list[np.ndarray]:
+def check_paths(sc: Scenario, paths, names, crs: Any = None) -> list[np.ndarray]:
     """``paths`` as (k, 2) arrays, each point inside the operating area; else a ConfigError
-    naming ``names[i]`` and the point's index."""
+    naming ``names[i]`` and the point's index. With ``crs`` (the tracks were read in
+    longitude/latitude, :func:`read_tracks`) the error gives the point as read, its distance
+    from the area, and whether reading it as (lat, lon) would put it inside (a slip of order)."""
     from poc_env.sim.core import operating_area
 
     x0, y0, x1, y1 = operating_area(sc)  # eq. 20's boundary: the map grown to hold its fields
     tol = 1e-6 * max(x1 - x0, y1 - y0)
+
+    def inside(p: np.ndarray) -> np.ndarray:
+        return (
+            np.isfinite(p).all(axis=1)
+            & (p[:, 0] >= x0 - tol)
+            & (p[:, 0] <= x1 + tol)
+            & (p[:, 1] >= y0 - tol)
+            & (p[:, 1] <= y1 + tol)
+        )
+
     out = []
     for i, path in enumerate(paths):
         pts = np.asarray(path, dtype=float).reshape(-1, 2)
-        bad = ~(
-            np.isfinite(pts).all(axis=1)
-            & (pts[:, 0] >= x0 - tol)
-            & (pts[:, 0] <= x1 + tol)
-            & (pts[:, 1] >= y0 - tol)
-            & (pts[:, 1] <= y1 + tol)
-        )
+        bad = ~inside(pts)
         if bad.any():
             j = int(np.argmax(bad))
-            raise ConfigError(
-                f"{names[i]}[{j}]",
-                [round(float(v), 1) for v in pts[j]],
-                f"a point in metres inside the operating area x {x0:g}..{x1:g}, y {y0:g}..{y1:g} "
-                f"of scenario {sc.name!r} (the map and its airfields)",
+            text = (
+                f"a point in metres inside the operating area x {x0:g}..{x1:g}, y "
+                f"{y0:g}..{y1:g} of scenario {sc.name!r} (the map and its airfields)"
             )
+            if crs is None or not np.isfinite(pts[j]).all():
+                got = [round(float(v), 1) for v in pts[j]]
+                raise ConfigError(f"{names[i]}[{j}]", got, text)
+            area = (text.replace(" in metres", ""), (x0, y0), (x1, y1))
+            raise ConfigError(f"{names[i]}[{j}]", *_off_area(pts[j], crs, area, inside))
         out.append(pts)
     return out
+
+
+def _off_area(xy: np.ndarray, crs: Any, area: tuple[str, Any, Any], inside: Any) -> tuple[str, str]:
+    """The (value, allowed) of :func:`check_paths`'s error for a track point ``xy`` (map
+    metres) read in longitude/latitude and projected by ``crs``: the point as read, how far it
+    lies from the area (``area``: its text and its (x0, y0) and (x1, y1) corners), and a hint
+    when its two numbers swapped would lie inside."""
+    from poc_env.agents.mission.crs import to_geographic, to_local
+
+    text, lo, hi = area
+    ((lat, lon),) = to_geographic([xy], crs)
+    off = np.hypot(*np.maximum(np.maximum(np.subtract(lo, xy), np.subtract(xy, hi)), 0.0))
+    allowed = f"{text}; it maps to x {xy[0]:.0f}, y {xy[1]:.0f} m, {off / 1e3:.0f} km from it"
+    try:
+        flipped = np.array(to_local([(lon, lat)], crs)) if abs(lon) <= 90 else None
+    except ConfigError:
+        flipped = None
+    if flipped is not None and inside(flipped).all():
+        allowed += (
+            f"; read as lat {lon:.5f}, lon {lat:.5f} it would lie inside: are the file's "
+            "coordinates in lat, lon order? (GeoJSON and KML write lon, lat)"
+        )
+    return f"lon {lon:.5f}, lat {lat:.5f}", allowed
 
 
 def plan_paths(plan: dict[str, Any]) -> list[np.ndarray]:
@@ -83,10 +117,10 @@ MAX_TRACK_BYTES = 128 * 1024 * 1024
 #: Element nesting deeper than this in a KML or GPX file is refused (GPX 1.1 needs 4 levels,
 #: KML Documents in Folders a few more).
 MAX_XML_DEPTH = 64
-TRACK_SUFFIXES = (".geojson", ".json", ".kml", ".gpx")
+TRACK_SUFFIXES = (".geojson", ".json", ".kml", ".kmz", ".gpx")
 GPX_NAMESPACES = ("http://www.topografix.com/GPX/1/1", "http://www.topografix.com/GPX/1/0")
-KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://earth.google.com/kml/2.2",
-                  "http://earth.google.com/kml/2.1")  # fmt: skip
+KML_NAMESPACES = ("http://www.opengis.net/kml/2.2", "http://www.opengis.net/kml/2.3",
+                  "http://earth.google.com/kml/2.2", "http://earth.google.com/kml/2.1")  # fmt: skip
 
 
 def read_tracks(
@@ -116,7 +150,9 @@ def read_tracks(
     except OSError as err:
         raise ConfigError("tracks", os.fspath(path), f"a readable track file ({err})") from None
     parts: list[tuple[str, np.ndarray | None]]
-    if suffix == ".kml":
+    if suffix == ".kmz":
+        parts = _kml_tracks(_kmz_kml(raw, path), path)
+    elif suffix == ".kml":
         parts = _kml_tracks(raw, path)
     elif suffix == ".gpx":
         parts = list(_gpx_tracks(raw, path))
@@ -129,6 +165,30 @@ def read_tracks(
     if not lines:
         raise ConfigError("tracks", os.fspath(path), "at least one track of 2 or more points")
     return lines
+
+
+def _kmz_kml(raw: bytes, path: Any) -> bytes:
+    """The KML of a KMZ archive (a zip; KML 2.2 section 15: ``doc.kml``, else the first
+    ``.kml`` file in it), at most :data:`MAX_TRACK_BYTES` unpacked (read so, whatever the
+    archive's directory claims)."""
+    import io
+    import zipfile
+
+    allowed = "a KMZ file: a zip archive holding a .kml file (doc.kml)"
+    try:
+        with zipfile.ZipFile(io.BytesIO(raw)) as z:
+            names = [n for n in z.namelist() if n.lower().endswith(".kml")]
+            if not names:
+                raise ConfigError("tracks", os.fspath(path), allowed)
+            name = "doc.kml" if "doc.kml" in names else names[0]
+            with z.open(name) as f:
+                kml = f.read(MAX_TRACK_BYTES + 1)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, OSError) as err:
+        raise ConfigError("tracks", os.fspath(path), f"{allowed} ({err})") from None
+    if len(kml) > MAX_TRACK_BYTES:
+        raise ConfigError("tracks", f"{os.fspath(path)}: {name} unpacks to more than "
+                          f"{MAX_TRACK_BYTES} bytes", allowed)  # fmt: skip
+    return kml
 
 
 def _to_map(field: str, arr: np.ndarray, crs: Any) -> np.ndarray:
@@ -186,12 +246,23 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
     else:
         geoms = [(where, data)]
     lines = ("LineString", "MultiLineString")
+    flat: list[tuple[str, Any]] = []  # a GeometryCollection's members (RFC 7946 3.1.8)
+    for field, g in geoms:
+        members = None
+        if isinstance(g, dict) and g.get("type") == "GeometryCollection":
+            members = g.get("geometries")
+        if isinstance(members, list):
+            flat += [(f"{field}.geometries[{k}]", m) for k, m in enumerate(members)]
+        else:
+            flat.append((field, g))
+    geoms = flat
     # a collection's points and areas (a logger's waypoints, the search area drawn beside the
-    # tracks) sweep no line: skipped, as KML's other placemarks and GPX's waypoints are; a
+    # tracks) and null geometries (RFC 7946 3.2: an unlocated feature, a UAV that did not
+    # fly) sweep no line: skipped, as KML's other placemarks and GPX's waypoints are; a
     # collection without a line is refused, as a lone geometry of another type is
     skip = len(geoms) > 1 and any(isinstance(g, dict) and g.get("type") in lines for _, g in geoms)
     for field, g in geoms:
-        if skip and isinstance(g, dict) and g.get("type") in GEOJSON_OTHER:
+        if skip and (g is None or (isinstance(g, dict) and g.get("type") in GEOJSON_OTHER)):
             continue
         if not isinstance(g, dict) or g.get("type") not in lines:
             kind = g.get("type") if isinstance(g, dict) else g
@@ -199,13 +270,30 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
         parts = [g.get("coordinates")] if g["type"] == "LineString" else g.get("coordinates")
         for p, coords in enumerate(parts or []):
             f = f"{field}.coordinates" + (f"[{p}]" if g["type"] == "MultiLineString" else "")
-            try:
-                arr = np.asarray(coords, dtype=float)
-            except (TypeError, ValueError, OverflowError):  # 10**400 is a JSON integer
-                shown = coords if len(str(coords)) < 200 else "array"
-                raise ConfigError(f, shown, "2 or more [lon, lat] number pairs") from None
-            out.append((f, arr))
+            out.append((f, _positions(coords, f)))
     return out
+
+
+def _positions(coords: Any, field: str) -> np.ndarray:
+    """A GeoJSON line's positions (RFC 7946 3.1.1: 2 or more numbers each, 3 with an altitude,
+    mixed as a logger writes them) as an (n, 2) lon/lat array; else a ConfigError naming the
+    first position that is not numbers."""
+    if not isinstance(coords, list):
+        shown = coords if len(str(coords)) < 200 else type(coords).__name__
+        raise ConfigError(field, shown, "a list of [lon, lat] or [lon, lat, altitude] positions")
+    rows = []
+    for j, c in enumerate(coords):
+        ok = isinstance(c, list) and len(c) >= 2
+        ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in c)
+        try:
+            rows.append([float(c[0]), float(c[1])] if ok else None)
+        except OverflowError:  # 10**400 is a JSON integer
+            ok = False
+        if not ok:
+            shown = c if len(str(c)) < 200 else "array"
+            raise ConfigError(f"{field}[{j}]", shown, "a position [lon, lat] or [lon, lat, "
+                              "altitude] of numbers")  # fmt: skip
+    return np.array(rows, dtype=float).reshape(-1, 2)
 
 
 def _xml_root(raw: bytes, path: Any, kind: str, namespaces: tuple[str, ...]) -> Any:
@@ -294,8 +382,10 @@ def _gpx_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
     1.1 (or 1.0) file; GPX is WGS 84 by definition. Routes (``rte``) and waypoints are not
     flown tracks and are ignored, and so are segments of fewer than two points (they sweep no
     line)."""
+    from lxml import etree
+
     root = _xml_root(raw, path, "GPX", GPX_NAMESPACES)
-    ns = root.nsmap.get(None) or GPX_NAMESPACES[0]
+    ns = etree.QName(root).namespace  # the root's, prefixed or not (checked by _xml_root)
     out = []
     segments = 0
     for i, trk in enumerate(root.findall(f"{{{ns}}}trk")):
@@ -316,18 +406,59 @@ def _gpx_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray]]:
 
 def searched_belief(sc: Scenario, prior: np.ndarray, paths) -> tuple[np.ndarray, float]:
     """The prior less what ``paths`` (flights in map metres) searched, by eq. 14 on the sample
-    points (:func:`poc_env.theory.search_theory.sweep_track`), summed back to cells; and the
-    POS the flights achieved (eq. 13: the sum of their POS)."""
+    points (:func:`sweep_points`), summed back to cells; and the POS the flights achieved
+    (eq. 13: the sum of their POS)."""
     grid = Grid.from_config(sc.map)
     s = sc.sensor.samples_per_cell
     belief = np.ascontiguousarray(grid.refine(prior, s))
+    found = sweep_points(sc, belief, paths)
+    return grid.coarsen(belief, s), found
+
+
+def sweep_points(sc: Scenario, belief_fine: np.ndarray, paths) -> float:
+    """Sweep ``paths`` (flights in map metres, in order) over the sample points' belief
+    ``belief_fine`` (updated in place by eq. 14,
+    :func:`poc_env.theory.search_theory.sweep_track`, steps of at most a cell as the planner
+    scores its routes); return the POS they achieve (eq. 13)."""
+    grid = Grid.from_config(sc.map)
     w = sc.sensor.sweep_width_m
     cutoff = sc.sensor.cutoff_sweep_widths * w
+    s = sc.sensor.samples_per_cell
     found = 0.0
     for path in paths:
         if len(path) >= 2:
-            found += sweep_track(belief, grid, s, path, w, sc.sensor.law, cutoff, grid.cell_m)
-    return grid.coarsen(belief, s), float(found)
+            found += sweep_track(belief_fine, grid, s, path, w, sc.sensor.law, cutoff, grid.cell_m)
+    return float(found)
+
+
+def map_frame(sc: Scenario, plans: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The ``crs`` of the map's metres: the scenario's own (``map.origin_deg``: every plan made
+    on it records it), else the last plan's (a scenario without a place on the globe is put
+    there by ``plan --origin``), else None."""
+    from poc_env.agents.planning.geography import scenario_crs
+
+    frame = scenario_crs(sc, None, sc.map.projection, None)
+    return frame if frame is not None else (plans[-1].get("crs") if plans else None)
+
+
+def _in_frame(paths: list[np.ndarray], crs: Any, frame: Any) -> list[np.ndarray]:
+    """A plan's ``paths`` (metres of its own ``crs``) in the metres of ``frame``, through
+    longitude/latitude when the two differ (replan-audit: a plan made before the area was
+    re-imported with another origin was swept in the new map's metres, kilometres off)."""
+    from poc_env.agents.mission.crs import to_geographic, to_local
+
+    if same_frame(crs, frame):
+        return paths
+    return [np.array(to_local(to_geographic(p, crs), frame)) for p in paths]
+
+
+def same_frame(crs: Any, frame: Any) -> bool:
+    """Whether a plan's ``crs`` puts its metres where ``frame`` does (or either is unknown)."""
+    from poc_env.crs import crs_text
+
+    if crs is None or frame is None:
+        return True
+    return crs_text(crs) == crs_text(frame) and list(crs["origin_deg"]) == list(frame["origin_deg"])
 
 
 def next_sortie(
@@ -343,13 +474,17 @@ def next_sortie(
     """The plan of the next sortie after ``plans`` (the sorties so far, in order: their routes,
     or the flown ``tracks`` of all of them when given) on ``prior``: eq. 14 along every flight
     (:func:`searched_belief`), then the planner on what is left. Extra fields: ``sortie``
-    (``len(plans) + 1``), ``searched_pos`` (what the flights so far found, eq. 13) and
-    ``cumulative_posc`` (that plus the new plan's ``posc``). ``refine``: the allocation
-    planner's refinement passes (``None``: its default)."""
+    (``len(plans) + 1``), ``searched_pos`` (what the flights so far found, eq. 13),
+    ``sortie_posc`` (what the new plan's routes find on the belief the flights left, swept
+    point by point: the planner's own ``posc`` sees each cell's belief spread evenly over the
+    cell) and ``cumulative_posc`` (their sum: eq. 14 over every flight, as sweeping them all
+    from the prior). ``refine``: the allocation planner's refinement passes (``None``: its
+    default)."""
     from poc_env.agents.planning.planner import make_plan
 
     names: list[str] = []
     flights: list[np.ndarray] = []
+    frame = map_frame(sc, plans)
     for i, plan in enumerate(plans):
         where = f"plan[{i}]" if len(plans) > 1 else "plan"
         if plan.get("scenario") != sc.name:
@@ -357,19 +492,36 @@ def next_sortie(
                 f"{where}.scenario", plan.get("scenario"), f"the scenario replanned, {sc.name!r} "
                 "(the flights are in its map's metres)",
             )  # fmt: skip
+        num = plan.get("sortie", 1)  # plans made by `plan` record none: they go anywhere
+        if "sortie" in plan and num != i + 1:
+            nth = {1: "st", 2: "nd", 3: "rd"}.get(num if num < 20 else num % 10, "th")
+            raise ConfigError(
+                f"{where}.sortie", num, f"a plan of sortie {num} as the {num}{nth} --plan, after "
+                "the plans of the sorties it was planned after, in order (--plan p1.json --plan "
+                "p2.json ...; replan swept only the flights of the plans given)",
+            )  # fmt: skip
         uavs = enumerate(plan["uavs"])
         names += [f"{where}.uavs[{k}].waypoints_m" for k, u in uavs if u["waypoints_m"]]
-        flights += plan_paths(plan)
+        flights += _in_frame(plan_paths(plan), plan.get("crs"), frame)
     if tracks is not None:
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
     paths = check_paths(sc, flights, names)
-    belief, searched = searched_belief(sc, prior, paths)
-    nxt = make_plan(sc, prior=belief, planner=planner, seed=seed, refine=refine)
-    if plans and plans[-1].get("crs") is not None:
-        nxt["crs"] = plans[-1]["crs"]  # the same map, the same frame
+    grid = Grid.from_config(sc.map)
+    s = sc.sensor.samples_per_cell
+    fine = np.ascontiguousarray(grid.refine(prior, s))
+    searched = sweep_points(sc, fine, paths)
+    # the planner sees each cell's belief spread evenly over the cell (it plans on cells); the
+    # flights left it uneven within cells, so the plan's POS is its routes swept over the
+    # sample points' own belief (replan-audit: the Alps walkthrough's sortie 2 was scored
+    # 0.1835 on the cells, 0.1463 on the points)
+    nxt = make_plan(sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine)
+    gain = sweep_points(sc, fine, plan_paths(nxt))
+    if frame is not None:
+        nxt["crs"] = frame  # the scenario's (make_plan's), else the last plan's: the same map
     nxt["sortie"] = len(plans) + 1
     nxt["searched_pos"] = searched
-    nxt["cumulative_posc"] = min(searched + float(nxt["posc"]), 1.0)
+    nxt["sortie_posc"] = gain
+    nxt["cumulative_posc"] = min(searched + gain, 1.0)
     return nxt
 
 
@@ -395,17 +547,36 @@ def swept_text(
     return text
 
 
+def sortie_text(nxt: dict[str, Any]) -> str:
+    """The summary line of a :func:`next_sortie` plan: what the flights so far found, what this
+    plan finds on the belief they left, the cumulative POS; and the planner's own score (on
+    each cell's belief spread evenly over the cell) when it differs."""
+    text = (
+        f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "
+        f"{nxt['sortie_posc']:.4f}; cumulative {nxt['cumulative_posc']:.4f}"
+    )
+    if abs(float(nxt["posc"]) - nxt["sortie_posc"]) >= 5e-5:
+        text += (
+            f" (this plan on the belief the flights left, point by point; the planner's POS_C "
+            f"{float(nxt['posc']):.4f} sees each cell's belief spread evenly over the cell)"
+        )
+    return text
+
+
 def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
     from poc_env.agents.mission.plan import (
         load_plan,
+        map_file_candidates,
         scenario_not_found,
         scenario_source,
         with_scenario_file,
         write_plan,
     )
     from poc_env.agents.planning.planner import lattice_warning, moving_target_warning, plan_table
+    from poc_env.cli import _check_map_option, _map_source
     from poc_env.config import load_scenario, parse_overrides
+    from poc_env.crs import plan_crs
     from poc_env.theory.probability_map import build_prior
 
     plans = [dict(load_plan(p)) for p in args.plan]
@@ -419,11 +590,26 @@ def cli_main(args: Any) -> int:
         raise ConfigError("scenario", plans[0]["scenario"], f"the plan's scenario ({why}), or "
                           "--scenario FILE.yaml")  # fmt: skip
     sc = load_scenario(name, parse_overrides(args.overrides or []))
-    prior = build_prior(sc.map, args.map_file)
+    _check_map_option(sc, args.map_file)
+    # the prior the first plan was made on: its --map file (map_source), unless --map gives
+    # another (new information); replan-audit: the built-in prior was swept silently
+    map_file = args.map_file
+    src = str(plans[0].get("map_source") or "builtin")
+    if map_file is None and sc.map.prior.kind != "file" and src != "builtin":
+        cands = map_file_candidates(src, args.plan[0])
+        map_file = next((c for c in cands if c.is_file()), None)
+        if map_file is None:
+            raise ConfigError(
+                "map", src, f"the prior file {args.plan[0]} was planned on (its map_source; "
+                f"looked for {', '.join(str(c) for c in cands)}), or --map FILE",
+            )  # fmt: skip
+    prior = build_prior(sc.map, map_file)
     tracks = None
     skipped: list[str] = []  # exported landing approaches, not flights
+    crs = map_frame(sc, plans)  # the tracks are put into this map's metres
+    if crs is not None or args.origin is not None:  # --origin checked as export checks it
+        crs = plan_crs(crs, args.origin, "aeqd", None)  # (replan-audit: it was ignored)
     if args.tracks:
-        crs = plans[-1].get("crs") or args.origin
         if crs is None:
             raise ConfigError(
                 "origin", None, "LAT,LON of the map's (0, 0): the plan records no crs, and the "
@@ -432,16 +618,24 @@ def cli_main(args: Any) -> int:
         tracks = []
         for t in args.tracks:
             tracks += read_tracks(t, crs, skipped)
+        check_paths(sc, [t for _, t in tracks], [f for f, _ in tracks], crs)  # named in degrees
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
+    nxt["map_source"] = _map_source(sc, map_file)  # export draws this prior, replan sweeps it
+    if crs is not None:
+        nxt["crs"] = crs  # the plan's, or --origin's for a plan without one
     print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
+    for f, plan in zip(args.plan, plans, strict=True):
+        rec: Any = plan.get("crs")
+        if not args.tracks and crs is not None and not same_frame(rec, crs):
+            print(
+                f"note: {f} was made with its map's (0, 0) at {rec['origin_deg']}; its routes "
+                f"are carried through longitude/latitude into this map's, at {crs['origin_deg']}"
+            )
     print(plan_table(nxt))
     for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):
         if warning is not None:
             print(f"warning: {warning}")
-    print(
-        f"sortie {nxt['sortie']}: the flights so far found {nxt['searched_pos']:.4f}; this plan "
-        f"{nxt['posc']:.4f}; cumulative {nxt['cumulative_posc']:.4f}"
-    )
+    print(sortie_text(nxt))
     write_plan(with_scenario_file(nxt, name), args.out)  # export finds the prior by it
     print(f"wrote {args.out}")
     return 0

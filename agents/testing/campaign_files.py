@@ -602,9 +602,13 @@ def run_tracks(variant: str, value: Any, where: int) -> None:
             check(not any(out.iterdir()), f"an error left {sorted(p.name for p in out.iterdir())}")
             raise
         nxt: dict[str, Any] = dict(load_plan(out / "p2.json"))
-        s, c, posc = nxt["searched_pos"], nxt["cumulative_posc"], nxt["posc"]
-        check(all(0.0 <= v <= 1.0 for v in (s, c, posc)), f"POS out of [0, 1]: {s}, {c}, {posc}")
-        check(abs(c - min(s + posc, 1.0)) < 1e-9, "cumulative POS is not searched + posc")
+        s, c, own = nxt["searched_pos"], nxt["cumulative_posc"], nxt["sortie_posc"]
+        posc = nxt["posc"]
+        check(
+            all(0.0 <= v <= 1.0 for v in (s, c, own, posc)), f"POS out of [0, 1]: {s}, {c}, {own}"
+        )
+        # the sortie's own POS is its routes swept over the belief the flights left (replan-audit)
+        check(abs(c - min(s + own, 1.0)) < 1e-9, "cumulative POS is not searched + sortie_posc")
 
 
 # ------------------------------------------------------------------------ the target

@@ -9,7 +9,7 @@ from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.plan import load_plan
 from poc_env.agents.planning.replan import searched_belief
 from poc_env.cli import main
-from poc_env.config import load_scenario
+from poc_env.config import load_scenario, parse_overrides
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import build_prior
 
@@ -54,6 +54,8 @@ def test_three_sorties_add_up(first, capsys):
     # sortie 2 was scored on the cells' belief spread evenly over each cell's sample points;
     # the chain keeps the sample points' own belief (sortie 1 left it uneven within cells)
     assert c["searched_pos"] == pytest.approx(a["posc"] + b["posc"], rel=1e-2)
+    # ... and sortie 2's own POS on that belief, point by point, is what sortie 3 starts from
+    assert c["searched_pos"] == pytest.approx(b["cumulative_posc"], abs=1e-9)
     assert c["searched_pos"] > b["searched_pos"]
     assert a["posc"] < b["cumulative_posc"] < c["cumulative_posc"] <= 1.0
     load_plan(p3)  # a plan export accepts
@@ -109,7 +111,7 @@ def test_bad_tracks_name_the_field_and_write_nothing(first, tmp_path, capsys):
         ('{"type": "LineString", "coordinates": [[NaN, 45], [126, 45]]}', "tracks"),
         (
             '{"type": "LineString", "coordinates": [[1' + "0" * 400 + ", 45], [126, 45]]}",
-            "tracks.coordinates",
+            "tracks.coordinates[0]",
         ),
     ],
 )
@@ -470,3 +472,270 @@ def test_the_plans_own_export_as_tracks_sweeps_its_routes_once(first, tmp_path, 
     assert f"swept: {n} track{'s' if n != 1 else ''} from {f}" in text
     assert f"{len(plan['uavs'])} landing-approach lines skipped" in text
     assert json.loads(out.read_text())["searched_pos"] == pytest.approx(plan["posc"], rel=1e-3)
+
+
+def test_cumulative_pos_is_eq14_over_every_flight(first):
+    """replan-audit: the next plan was scored by the planner on each cell's belief spread
+    evenly over its sample points, though sortie 1 left it uneven within the cells, and
+    ``cumulative_posc`` added that score to what sortie 1 found (Alps walkthrough: 0.8480
+    promised, 0.8108 found by the two sorties' routes). The next sortie's POS is now its routes
+    swept over the belief the flights left, point by point (``sortie_posc``), and
+    ``cumulative_posc`` is eq. 14 over every flight, as sweeping them all from the prior."""
+    from poc_env.agents.planning.replan import next_sortie, plan_paths
+
+    _, p1 = first
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    a = json.loads(p1.read_text())
+    b = next_sortie(sc, prior, [a], refine=0)
+    _, one = searched_belief(sc, prior, plan_paths(a))
+    _, both = searched_belief(sc, prior, plan_paths(a) + plan_paths(b))
+    assert b["searched_pos"] == pytest.approx(one, abs=1e-12)
+    assert b["sortie_posc"] == pytest.approx(both - one, abs=1e-9)
+    assert b["cumulative_posc"] == pytest.approx(both, abs=1e-9)
+
+
+def test_a_replanned_sortie_needs_the_plans_it_was_planned_after(first, tmp_path, capsys):
+    """replan-audit: ``replan --plan p2.json`` alone (replan on its own output, sortie 1's plan
+    forgotten) swept sortie 2's routes over the full prior and printed "sortie 2: the flights
+    so far found 0.5763 ... cumulative 0.8322" -- sortie 1's search lost, its area planned
+    again. A plan that records ``sortie: k`` must now be the k-th ``--plan``; plans made by
+    ``plan`` (no ``sortie``) go anywhere (another seed flown as sortie 2 is a sortie)."""
+    _, p1 = first
+    p2, out = tmp_path / "p2.json", tmp_path / "p3.json"
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p2), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "plan.sortie: got 2" in err and "the 2nd --plan" in err
+    assert main(["replan", "--plan", str(p2), "--plan", str(p1), "--out", str(out)]) == 2
+    assert "plan[0].sortie: got 2" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_replan_sweeps_the_prior_the_plan_was_made_on(tmp_path, capsys):
+    """replan-audit: a plan made with ``--map prior.npy`` was replanned on the scenario's
+    built-in prior (``--map`` not given again): sortie 1 "found" 0.6336 of the wrong prior
+    where its routes find 0.6441 of its own (the plan's ``posc``), sortie 2 was planned on it
+    and recorded ``map_source: builtin``
+    (export then drew the wrong prior). replan now reads the plan's ``map_source``, records
+    it, and refuses, naming ``map``, when that file is gone."""
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    f = tmp_path / "flipped.npy"
+    np.save(f, prior[::-1, ::-1] / prior.sum())
+    p1, p2 = tmp_path / "p1.json", tmp_path / "p2.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*argv, "--map", str(f), "--origin", "46.5,7.9", "--out", str(p1)]) == 0
+    assert main(["replan", "--plan", str(p1), "--out", str(p2)]) == 0
+    a, b = json.loads(p1.read_text()), json.loads(p2.read_text())
+    assert b["searched_pos"] == pytest.approx(a["posc"], abs=1e-9)
+    assert b["map_source"] == a["map_source"] == str(f)
+    f.rename(tmp_path / "moved.npy")
+    out = tmp_path / "p2b.json"
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p1), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: map: got") and str(f) in err and not out.exists()
+
+
+def test_replan_origin_must_agree_with_the_plans_crs(first, tmp_path, capsys):
+    """replan-audit: ``replan --tracks t.geojson --origin 46.6,7.95`` on a plan whose crs is at
+    46.5, 7.9 ignored the origin without a word (export refuses it); it is now refused as
+    export refuses it, naming ``origin``. For a plan that records no crs, ``--origin`` gives the
+    tracks' frame and the next plan records it (export and the next replan need no origin)."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    _tracks(tmp_path / "t.geojson", plan)
+    out = tmp_path / "next.json"
+    argv = ["replan", "--plan", str(p1), "--tracks", str(tmp_path / "t.geojson")]
+    capsys.readouterr()
+    assert main([*argv, "--origin", "46.6,7.95", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: origin: got") and "crs.origin_deg" in err and not out.exists()
+    bare = {k: v for k, v in plan.items() if k != "crs"}
+    (tmp_path / "bare.json").write_text(json.dumps(bare))
+    argv[2] = str(tmp_path / "bare.json")
+    assert main([*argv, "--origin", "46.5,7.9", "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["crs"] == plan["crs"]
+
+
+def test_geojson_null_geometries_and_geometry_collections_are_read(first, tmp_path):
+    """replan-audit: RFC 7946 lets a Feature's geometry be null (an unlocated feature: a GIS
+    layer's row for a UAV that did not fly) and a GeometryCollection hold the lines; both were
+    refused whole (``tracks.features[3].geometry.type: got None``, ``tracks.type: got
+    'GeometryCollection'``). A null geometry beside lines is skipped as a Point is; a
+    collection's lines are read, each named by its place; neither alone is a track."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = tmp_path / "lines.geojson"
+    feats = _tracks(lines, plan)
+    want = read_tracks(lines, plan["crs"])
+    unlocated = {"type": "Feature", "properties": {"uav": 4}, "geometry": None}
+    mixed = tmp_path / "mixed.geojson"
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": [*feats, unlocated]}))
+    gc = {"type": "GeometryCollection", "geometries": [f["geometry"] for f in feats]}
+    coll = tmp_path / "gc.geojson"
+    coll.write_text(json.dumps({"type": "Feature", "properties": {}, "geometry": gc}))
+    for path, names in [
+        (mixed, [f"tracks.features[{i}].geometry.coordinates" for i in range(len(feats))]),
+        (coll, [f"tracks.geometry.geometries[{i}].coordinates" for i in range(len(feats))]),
+    ]:
+        got = read_tracks(path, plan["crs"])
+        assert [f for f, _ in got] == names
+        for (_, a), (_, b) in zip(got, want, strict=True):
+            np.testing.assert_array_equal(a, b)
+    alone = tmp_path / "alone.geojson"
+    alone.write_text(json.dumps({"type": "FeatureCollection", "features": [unlocated] * 2}))
+    with pytest.raises(ConfigError) as err:
+        read_tracks(alone, plan["crs"])
+    assert err.value.field == "tracks.features[0].geometry.type" and err.value.value is None
+
+
+@pytest.mark.parametrize(
+    "old, new",
+    [  # GPX 1.0 written with a namespace prefix; KML 2.3 (OGC 12-007r2, the current standard)
+        ("<gpx ", "<g:gpx xmlns:g='http://www.topografix.com/GPX/1/0' "),
+        ("kml/2.2", "kml/2.3"),
+    ],
+)
+def test_gpx_with_a_prefix_and_kml_2_3_are_read(first, tmp_path, old, new):
+    """replan-audit: a GPX file whose elements carry a namespace prefix was refused as having
+    no ``trk/trkseg/trkpt`` (the reader looked in the default namespace only), and a KML 2.3
+    file for its namespace; both read now, the same tracks as the plain files."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    gpx = old.startswith("<gpx")
+    plain = tmp_path / ("plain.gpx" if gpx else "plain.kml")
+    (_gpx if gpx else _kml)(plain, _lonlat_lines(plan))
+    text = plain.read_text().replace(old, new)
+    if gpx:  # every element in the prefixed namespace; the 1.1 default declaration dropped
+        text = text.replace(' xmlns="http://www.topografix.com/GPX/1/1"', "")
+        text = text.replace("<", "<g:").replace("<g:/", "</g:").replace("<g:?", "<?")
+        text = text.replace("<g:g:", "<g:").replace("</g:g:", "</g:")
+    other = tmp_path / plain.name.replace("plain", "other")
+    other.write_text(text)
+    want, got = read_tracks(plain, plan["crs"]), read_tracks(other, plan["crs"])
+    assert [f for f, _ in got] == [f for f, _ in want] and len(got) == len(_lonlat_lines(plan))
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_track_off_the_area_is_named_in_degrees_and_a_swap_is_suspected(first, tmp_path, capsys):
+    """replan-audit: GeoJSON written in lat, lon order (a common slip) was refused as
+    ``got [4493731.8, -3360645.2]; allowed: a point in metres inside the operating area``: the
+    metres of a point the officer wrote in degrees. The error now gives the point as read
+    (lon, lat) and its distance from the area, and says when swapping the two would put it
+    inside; a point merely far off gets no such hint."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    feats = _tracks(tmp_path / "t.geojson", plan)
+    for f in feats:
+        f["geometry"]["coordinates"] = [[lat, lon] for lon, lat in f["geometry"]["coordinates"]]
+    swapped = tmp_path / "swapped.geojson"
+    swapped.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    out = tmp_path / "next.json"
+    argv = ["replan", "--plan", str(p1), "--out", str(out), "--tracks"]
+    capsys.readouterr()
+    assert main([*argv, str(swapped)]) == 2
+    err = capsys.readouterr().err
+    a, b = feats[0]["geometry"]["coordinates"][0]  # the file's first pair: lat, lon by mistake
+    assert err.startswith("error: tracks.features[0].geometry.coordinates[0]: got 'lon ")
+    assert f"'lon {a:.5f}, lat {b:.5f}'" in err and "km from it" in err
+    assert "lat, lon order" in err
+    far = tmp_path / "far.geojson"
+    _tracks(far, plan)
+    text = json.loads(far.read_text())
+    text["features"][1]["geometry"]["coordinates"][2] = [9.5, 47.5]  # ~150 km off
+    far.write_text(json.dumps(text))
+    assert main([*argv, str(far)]) == 2
+    err = capsys.readouterr().err
+    assert "tracks.features[1].geometry.coordinates[2]: got 'lon 9.50000, lat 47.50000'" in err
+    assert "lat, lon order" not in err and not out.exists()
+
+
+def test_flights_of_a_plan_in_another_frame_are_swept_where_they_were_flown(tmp_path, capsys):
+    """replan-audit: the search area re-imported a little larger (``scenario import`` over the
+    same YAML: the map's origin moved 5.6 km south) and sortie 1's plan, in the old frame, was
+    swept in the new map's metres -- 5.6 km off where it was flown (Alps: found 0.4888 for
+    0.6645) -- and sortie 2's plan, made in the new frame, recorded the old frame's crs, so
+    its export put every route 5.6 km off. A plan whose crs is not the scenario's frame is now
+    carried over through longitude/latitude, and the next plan records the scenario's frame."""
+    from poc_env.agents.planning.replan import plan_paths
+    from poc_env.crs import to_local
+
+    old, new = "map.origin_deg=[46.5,7.9]", "map.origin_deg=[46.45,7.9]"
+    p1, p2 = tmp_path / "p1.json", tmp_path / "p2.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main([*argv, "--overrides", old, "--out", str(p1)]) == 0
+    capsys.readouterr()
+    assert main(["replan", "--plan", str(p1), "--overrides", new, "--out", str(p2)]) == 0
+    assert "carried through longitude/latitude into this map's" in capsys.readouterr().out
+    a, b = json.loads(p1.read_text()), json.loads(p2.read_text())
+    assert a["crs"]["origin_deg"] == [46.5, 7.9] and b["crs"]["origin_deg"] == [46.45, 7.9]
+    sc = load_scenario("small", parse_overrides([new]))
+    flown = [np.array(to_local(to_geographic(p, a["crs"]), b["crs"])) for p in plan_paths(a)]
+    assert abs(flown[0][0][1] - plan_paths(a)[0][0][1] - 5560) < 10  # 5.6 km north in the new map
+    _, want = searched_belief(sc, build_prior(sc.map), flown)
+    assert b["searched_pos"] == pytest.approx(want, abs=1e-9)
+
+
+def test_kmz_tracks_are_read_as_their_kml(first, tmp_path):
+    """replan-audit: Google Earth and QGC save KMZ (EXPORT.md even zips the exported KML into
+    one); ``--tracks flown.kmz`` was refused for its suffix. Its KML (``doc.kml``, else the
+    first ``.kml`` in the archive, as KML 2.2 says) is read now, the same tracks; an archive
+    without one, or not a zip, is refused naming ``tracks``."""
+    import zipfile
+
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    kml = tmp_path / "flown.kml"
+    _kml(kml, _lonlat_lines(plan))
+    want = read_tracks(kml, plan["crs"])
+    kmz = tmp_path / "flown.kmz"
+    with zipfile.ZipFile(kmz, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("files/prior.png", b"\x89PNG")
+        z.writestr("doc.kml", kml.read_text())
+    got = read_tracks(kmz, plan["crs"])
+    assert [f for f, _ in got] == [f for f, _ in want]
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    empty = tmp_path / "empty.kmz"
+    with zipfile.ZipFile(empty, "w") as z:
+        z.writestr("prior.png", b"\x89PNG")
+    for bad in (empty, kml.rename(tmp_path / "plain.kmz")):
+        with pytest.raises(ConfigError) as err:
+            read_tracks(bad, plan["crs"])
+        assert err.value.field == "tracks" and "KMZ" in err.value.allowed
+
+
+def test_geojson_positions_with_and_without_altitude_are_read(first, tmp_path):
+    """replan-audit: RFC 7946 positions hold 2 or 3 numbers; a line mixing both (a logger that
+    lost its altitude fix for a while) was refused as ``coordinates: got 'array'``. Each
+    position's lon, lat is read now; a position that is not numbers is named by its index."""
+    from poc_env.agents.planning.replan import read_tracks
+
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    lines = tmp_path / "lines.geojson"
+    feats = _tracks(lines, plan)
+    want = read_tracks(lines, plan["crs"])
+    for f in feats:
+        cs = f["geometry"]["coordinates"]
+        f["geometry"]["coordinates"] = [[*c, 1500.0] if k % 2 else c for k, c in enumerate(cs)]
+    mixed = tmp_path / "mixed.geojson"
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    got = read_tracks(mixed, plan["crs"])
+    for (_, a), (_, b) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    feats[1]["geometry"]["coordinates"][3] = [8.0, "46.5", 1500.0]
+    mixed.write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+    with pytest.raises(ConfigError) as err:
+        read_tracks(mixed, plan["crs"])
+    assert err.value.field == "tracks.features[1].geometry.coordinates[3]"
