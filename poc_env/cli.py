@@ -164,27 +164,6 @@ def _add_scenario(p: argparse.ArgumentParser, default: str | None) -> None:
     p.add_argument("--map", dest="map_file", default=None, help="prior map (.npy or .csv)")
 
 
-def _check_map_option(sc, map_file) -> None:
-    """``--map`` replaces a scenario's prior; over a scenario whose prior already is a file it
-    would silently win over that file: refused, naming both."""
-    prior = sc.map.prior
-    if map_file is not None and prior.kind == "file":
-        raise ConfigError(
-            "map", os.fspath(map_file), f"no --map with scenario {sc.name!r}, whose prior is "
-            f"the file {prior.file} (map.prior.file): change that key with --overrides "
-            "map.prior.file=PATH, or leave --map out",
-        )  # fmt: skip
-
-
-def _map_source(sc, map_file) -> str:
-    """plan.json's ``map_source``: the ``--map`` file, else the scenario's prior file, else
-    ``builtin`` (a prior computed from the scenario's components)."""
-    if map_file is not None:
-        return os.fspath(map_file)
-    prior = sc.map.prior
-    return str(prior.file) if prior.kind == "file" else "builtin"
-
-
 def cmd_scenarios(args: argparse.Namespace) -> int:
     from poc_env.config import builtin_scenarios, load_scenario
 
@@ -262,12 +241,13 @@ def cmd_survey(args: argparse.Namespace) -> int:
 
 def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> int:
     """The survey of ``cmd_survey``, its files written into ``stage`` (shown as ``dest``)."""
+    from poc_env.agents.mission.plan import check_map_option, map_source
     from poc_env.agents.planning.survey import load_regions, run_survey, write_survey
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.theory.probability_map import build_prior
 
     sc = load_scenario(args.scenario, parse_overrides(args.overrides or []))
-    _check_map_option(sc, args.map_file)
+    check_map_option(sc, args.map_file)
     plan = load_regions(args.regions or f"{sc.name}_polygons")
     prior = build_prior(sc.map, args.map_file)
     if getattr(args, "optimise", False):
@@ -305,7 +285,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
             sc,
             plan,
             prior,
-            map_source=_map_source(sc, args.map_file),
+            map_source=map_source(sc, args.map_file),
             origin_deg=args.origin,
             projection=args.projection,
             zone=args.utm_zone,
@@ -530,7 +510,9 @@ def _evaluate(
         sc = task.load_scenario(parse_overrides(args.overrides or []))
     else:
         sc = load_scenario(scenario or "paper_6_2", parse_overrides(args.overrides or []))
-    _check_map_option(sc, args.map_file)
+    from poc_env.agents.mission.plan import check_map_option
+
+    check_map_option(sc, args.map_file)
     ev = evaluate(
         sc,
         names,
@@ -708,15 +690,17 @@ def _plan(
                     name, getattr(args, name), "only with --planner de (the allocation "
                     "planner has no optimiser: leave it out)",
                 )  # fmt: skip
+    from poc_env.agents.mission.plan import check_map_option, map_source
+
     sc = load_scenario(args.scenario, overrides)
     if args.uavs is not None:
         sc = sc.with_uavs(args.uavs)
-    _check_map_option(sc, args.map_file)
+    check_map_option(sc, args.map_file)
     prior = build_prior(sc.map, args.map_file)
     plan = make_plan(
         sc,
         prior=prior,
-        map_source=_map_source(sc, args.map_file),
+        map_source=map_source(sc, args.map_file),
         optimizer=args.optimizer or "adaptive_de",
         seed=args.seed,
         popsize=args.popsize,

@@ -634,3 +634,24 @@ def with_scenario_file(plan: dict, scenario: object) -> dict:
     if isinstance(scenario, str) and Path(scenario).is_file():
         return {**plan, "scenario_file": str(Path(scenario).resolve())}
     return plan
+
+
+def check_map_option(sc: Any, map_file: Any) -> None:
+    """``--map`` replaces a scenario's prior; over a scenario whose prior already is a file it
+    would silently win over that file: refused, naming both."""
+    prior = sc.map.prior
+    if map_file is not None and prior.kind == "file":
+        raise ConfigError(
+            "map", os.fspath(map_file), f"no --map with scenario {sc.name!r}, whose prior is "
+            f"the file {prior.file} (map.prior.file): change that key with --overrides "
+            "map.prior.file=PATH, or leave --map out",
+        )  # fmt: skip
+
+
+def map_source(sc: Any, map_file: Any) -> str:
+    """plan.json's ``map_source``: the ``--map`` file, else the scenario's prior file, else
+    ``builtin`` (a prior computed from the scenario's components)."""
+    if map_file is not None:
+        return os.fspath(map_file)
+    prior = sc.map.prior
+    return str(prior.file) if prior.kind == "file" else "builtin"

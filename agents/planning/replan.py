@@ -566,15 +566,16 @@ def sortie_text(nxt: dict[str, Any]) -> str:
 def cli_main(args: Any) -> int:
     """``poc-env replan``: read, check, plan, then write ``--out`` (nothing written on error)."""
     from poc_env.agents.mission.plan import (
+        check_map_option,
         load_plan,
         map_file_candidates,
+        map_source,
         scenario_not_found,
         scenario_source,
         with_scenario_file,
         write_plan,
     )
     from poc_env.agents.planning.planner import lattice_warning, moving_target_warning, plan_table
-    from poc_env.cli import _check_map_option, _map_source
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.crs import plan_crs
     from poc_env.theory.probability_map import build_prior
@@ -590,7 +591,7 @@ def cli_main(args: Any) -> int:
         raise ConfigError("scenario", plans[0]["scenario"], f"the plan's scenario ({why}), or "
                           "--scenario FILE.yaml")  # fmt: skip
     sc = load_scenario(name, parse_overrides(args.overrides or []))
-    _check_map_option(sc, args.map_file)
+    check_map_option(sc, args.map_file)
     # the prior the first plan was made on: its --map file (map_source), unless --map gives
     # another (new information); replan-audit: the built-in prior was swept silently
     map_file = args.map_file
@@ -620,7 +621,7 @@ def cli_main(args: Any) -> int:
             tracks += read_tracks(t, crs, skipped)
         check_paths(sc, [t for _, t in tracks], [f for f, _ in tracks], crs)  # named in degrees
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
-    nxt["map_source"] = _map_source(sc, map_file)  # export draws this prior, replan sweeps it
+    nxt["map_source"] = map_source(sc, map_file)  # export draws this prior, replan sweeps it
     if crs is not None:
         nxt["crs"] = crs  # the plan's, or --origin's for a plan without one
     print(swept_text(args.plan, args.tracks, tracks, len(skipped)))
