@@ -655,3 +655,19 @@ def map_source(sc: Any, map_file: Any) -> str:
         return os.fspath(map_file)
     prior = sc.map.prior
     return str(prior.file) if prior.kind == "file" else "builtin"
+
+
+def sortie_figures(plan: Any) -> dict[str, float]:
+    """A replanned sortie's own figures (``poc-env replan``), ``{}`` for a first sortie.
+
+    Its ``posc`` is the planner's model (each cell's belief spread evenly over the cell);
+    ``sortie_posc`` is what its routes find on the belief the flights left, point by point, and
+    ``cumulative_posc`` the search's POS with this sortie (eq. 14 over every flight): the two an
+    officer reads in the exports."""
+    if "sortie_posc" not in plan:
+        return {}
+    return {
+        "sortie": int(plan.get("sortie", 0)),
+        "sortie_posc": float(plan["sortie_posc"]),
+        "cumulative_posc": float(plan["cumulative_posc"]),
+    }

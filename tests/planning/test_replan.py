@@ -739,3 +739,27 @@ def test_geojson_positions_with_and_without_altitude_are_read(first, tmp_path):
     with pytest.raises(ConfigError) as err:
         read_tracks(mixed, plan["crs"])
     assert err.value.field == "tracks.features[1].geometry.coordinates[3]"
+
+
+def test_exports_of_a_replanned_sortie_show_what_it_finds_and_the_cumulative_pos(first, tmp_path):
+    """A replanned plan's ``posc`` is the planner's model (each cell's belief spread evenly);
+    what its routes find on the belief the flights left is ``sortie_posc`` and the search so
+    far ``cumulative_posc`` (replan-audit): the report and the GeoJSON give those two."""
+    from poc_env.agents.mission.export import export_plan
+
+    _, p1 = first
+    p2 = tmp_path / "p2.json"
+    assert main(["replan", "--scenario", "small", "--plan", str(p1), "--out", str(p2)]) == 0
+    plan = json.loads(p2.read_text())
+    assert abs(plan["posc"] - plan["sortie_posc"]) >= 5e-5  # the two differ here
+    (gj,) = export_plan(p2, "geojson", None, tmp_path / "gj")
+    props = json.loads(gj.read_text())["properties"]
+    assert props["sortie"] == 2
+    assert props["sortie_posc_pct"] == round(100 * plan["sortie_posc"], 2)
+    assert props["cumulative_posc_pct"] == round(100 * plan["cumulative_posc"], 2)
+    (html,) = export_plan(p2, "html", None, tmp_path / "html")
+    text = html.read_text()
+    assert f"sortie 2: POS_C {100 * plan['sortie_posc']:.2f} %" in text
+    assert f"cumulative {100 * plan['cumulative_posc']:.2f} %" in text
+    (gj1,) = export_plan(p1, "geojson", None, tmp_path / "gj1")  # a first sortie: as before
+    assert "sortie_posc_pct" not in json.loads(gj1.read_text())["properties"]

@@ -10,7 +10,7 @@ from typing import Any
 from poc_env.agents.mission.crs import crs_text, to_geographic
 from poc_env.agents.mission.features import altitudes, overlays, r6, routes_3d
 from poc_env.agents.mission.job import ExportJob
-from poc_env.agents.mission.plan import Plan, flight, search_rings
+from poc_env.agents.mission.plan import Plan, flight, search_rings, sortie_figures
 from poc_env.io import write_text_atomic
 
 
@@ -78,16 +78,17 @@ def geojson(
                 "properties": o["properties"],
             }
         )
-    return {
-        "type": "FeatureCollection",
-        "features": feats,
-        "properties": {
-            "scenario": plan["scenario"],
-            "posc_pct": round(100 * plan["posc"], 2),
-            "local_crs": crs_text(crs) if isinstance(crs, dict) else None,
-            "altitude_ref": altitude_ref,
-        },
+    about: dict[str, Any] = {
+        "scenario": plan["scenario"],
+        "posc_pct": round(100 * plan["posc"], 2),
+        "local_crs": crs_text(crs) if isinstance(crs, dict) else None,
+        "altitude_ref": altitude_ref,
     }
+    if sortie := sortie_figures(plan):  # a replanned sortie: what it finds, the search's POS
+        about["sortie"] = int(sortie["sortie"])
+        about["sortie_posc_pct"] = round(100 * sortie["sortie_posc"], 2)
+        about["cumulative_posc_pct"] = round(100 * sortie["cumulative_posc"], 2)
+    return {"type": "FeatureCollection", "features": feats, "properties": about}
 
 
 def _altitude_properties(plan: Plan, alt: float, zs: list[float]) -> dict[str, float]:

@@ -43,7 +43,7 @@ from poc_env.agents.mission.overlay import (
     png_bytes,
     warp_prior,
 )
-from poc_env.agents.mission.plan import Plan, flight, route, search_rings
+from poc_env.agents.mission.plan import Plan, flight, route, search_rings, sortie_figures
 from poc_env.io import write_text_atomic
 
 ASSETS = Path(__file__).resolve().parents[1] / "assets" / "leaflet"
@@ -259,9 +259,16 @@ def html_report(
         else ""
     )
     title = f"poc-env plan: {plan['scenario']}"
+    pos = f"POS_C {100 * plan['posc']:.2f} %"
+    if sortie := sortie_figures(plan):  # a replanned sortie: what it finds, the search's POS
+        pos = (
+            f"sortie {sortie['sortie']:.0f}: POS_C {100 * sortie['sortie_posc']:.2f} % on the "
+            f"belief the flights left (the planner's model {100 * plan['posc']:.2f} %), "
+            f"cumulative {100 * sortie['cumulative_posc']:.2f} %"
+        )
     summary = (
-        f"scenario {plan['scenario']}, {len(plan['uavs'])} UAVs, POS_C "
-        f"{100 * plan['posc']:.2f} %{bounds}; optimiser {plan['optimizer'].get('name')}, "
+        f"scenario {plan['scenario']}, {len(plan['uavs'])} UAVs, {pos}{bounds}; "
+        f"optimiser {plan['optimizer'].get('name')}, "
         f"seed {plan['seed']}; CRS {crs_text(crs) if isinstance(crs, dict) else crs}"
     )
     return _template().render(
