@@ -144,13 +144,15 @@ def summary(recs: list[dict], key: str, base_name: str) -> None:
         half = ci95(d) if len(d) > 1 else float("nan")
         wtl = f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}"
         ratio = [r["plan_s"] / base[r["seed"]]["plan_s"] for r in rs if "plan_s" in r]
+        cpu = [r["cpu_s"] / base[r["seed"]]["cpu_s"] for r in rs if "cpu_s" in r]
         mean0 = statistics.mean(b[key] / b["rule_bound"] for b in base.values())
         mean1 = statistics.mean(r[key] / r["rule_bound"] for r in rs)
         med = statistics.median(r["plan_s"] for r in rs if "plan_s" in r) if ratio else float("nan")
         print(f"{v} - {base_name} ({key}/rule): {d.mean():+.4f} +- {half:.4f} {wtl} (n {len(d)}); "
               f"{base_name} {mean0:.4f}, {v} {mean1:.4f}; time ratio median "
-              f"{statistics.median(ratio) if ratio else float('nan'):.2f}, {v} median {med:.1f} s",
-              flush=True)  # fmt: skip
+              f"{statistics.median(ratio) if ratio else float('nan'):.2f}, {v} median {med:.1f} s"
+              + (f"; CPU time ratio median {statistics.median(cpu):.2f} (max {max(cpu):.2f})"
+                 if cpu else ""), flush=True)  # fmt: skip
 
 
 def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
@@ -204,6 +206,8 @@ def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> Non
 
     sc = load_scenario(name)
     recs, done = resumed(out)
+    # warm-up (JIT, caches), so the first plan's CPU time is the plan's own
+    make_allocation_plan(sc, options=_options("default+polish=1+polish_grade=1+polish_lines=1"))
     for seed in range(seed0, seed1):  # seed -1: the scenario's own prior
         prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
@@ -211,14 +215,14 @@ def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> Non
             if (seed, v) in done:
                 continue
             opt = _options(v)
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             p = make_allocation_plan(sc, prior=prior, options=opt)
-            dt = time.perf_counter() - t0
+            dt, dc = time.perf_counter() - t0, time.process_time() - c0
             moves = p["optimizer"]["settings"].get("polish", {}).get("moves", 0)
             recs.append(
                 {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
                  "fine_posc": fine_posc(sc, prior, p), "rule_bound": bound,
-                 "start": p["start"], "moves": moves, "plan_s": dt,
+                 "start": p["start"], "moves": moves, "plan_s": dt, "cpu_s": dc,
                  "load": os.getloadavg()[0]}
             )  # fmt: skip
             r = recs[-1]
