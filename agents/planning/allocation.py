@@ -855,6 +855,8 @@ def make_allocation_plan(
     polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes)
     if polishing and router.active:  # eq. 20: the polish does not see the zones
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
+    elif polishing and not opt.polish_here(grid.nx, grid.ny):  # the size rule (i24-fastpolish)
+        polished = {"passes": 0, "moves": 0, "skipped": "map larger than polish_max_cells"}
     elif polishing and any(routes):
         # the chosen plan polished, and with ``polish_starts`` the next best of the starts
         # (refined or not) too: the best polished one kept (by POS less the penalty)

@@ -332,3 +332,21 @@ def test_exposure_rows_are_the_scalar_loop():
         k.leg_exposure(k.INVERSE_CUBE, ax, ay, bx, by, w, cutoff, cutoff, 5000.0, h, sign,
                        expo, box)  # fmt: skip
         assert np.array_equal(expo, want), trial
+
+
+def test_framed_candidates_are_the_stacked_ones():
+    """The polish's candidates built as views of one array (i24-fastpolish, ``_framed``)
+    are the points ``np.vstack([head, body[c], tail])`` gives, candidate by candidate, for
+    bodies and tails of every length the polish uses (a tail of none to two points)."""
+    from poc_env.agents.planning.polish import _framed
+
+    rng = np.random.default_rng(6)
+    for trial in range(30):
+        c, n, t = int(rng.integers(1, 20)), int(rng.integers(1, 9)), int(rng.integers(0, 3))
+        head = rng.normal(0, 1e5, 2)
+        body = rng.normal(0, 1e5, (c, n, 2))
+        tail = rng.normal(0, 1e5, (t, 2))
+        got = _framed(head, body, tail)
+        assert len(got) == c, trial
+        for q, b in zip(got, body, strict=True):
+            assert np.array_equal(q, np.vstack([head, b, tail])), trial

@@ -24,11 +24,11 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "..", "tests", "planning"))
-from effort_ab import _options  # noqa: E402
+from effort_ab import _options
 
-from poc_env.agents.experiments.evaluate import episode_prior  # noqa: E402
-from poc_env.config import load_scenario  # noqa: E402
-from poc_env.theory.probability_map import build_prior  # noqa: E402
+from poc_env.agents.experiments.evaluate import episode_prior
+from poc_env.config import load_scenario
+from poc_env.theory.probability_map import build_prior
 
 
 def _prior(sc, seed: int):
@@ -45,6 +45,7 @@ def parts(seeds: list[int], variant: str, out: str) -> None:
     calls: dict[str, int] = collections.defaultdict(int)
     stack: list[list] = []  # [name, start, child time]
     tag = ["?"]
+    stage = [""]  # the polish stage being timed ("polish", "lines") or ""
 
     def wrap(mod, name: str, label=None):
         f = getattr(mod, name)
@@ -52,10 +53,16 @@ def parts(seeds: list[int], variant: str, out: str) -> None:
         def timed(*a, **k):
             lab = label(a, k) if label else name
             key = f"{tag[0]}:{lab}"
+            if stage[0] and not lab.startswith("polish_for"):  # inside a polish stage
+                key = f"{tag[0]}:{stage[0]}:{lab}"
+            if lab.startswith("polish_for"):
+                stage[0] = lab.split(":")[1]
             stack.append([key, time.process_time(), 0.0])
             try:
                 return f(*a, **k)
             finally:
+                if lab.startswith("polish_for"):
+                    stage[0] = ""
                 key, t0, child = stack.pop()
                 dt = time.process_time() - t0
                 acc[key] += dt - child
