@@ -314,7 +314,8 @@ THOROUGH: dict[str, Any] = {
 #: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"); only on maps of at most 80
 #: cells a side (the 160 x 160 timing case keeps the default plan and its time).
 STANDARD: dict[str, Any] = {
-    "polish": 3,
+    "polish": 2,
     "polish_grade": True,
+    "polish_lines": 1,
     "polish_max_cells": 80,
 }
