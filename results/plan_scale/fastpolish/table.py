@@ -23,9 +23,8 @@ def table(path: str) -> None:
         recs = json.load(f)
     base = {r["seed"]: r for r in recs if r["variant"] == "default"}
     names = list(dict.fromkeys(r["variant"] for r in recs if r["variant"] != "default"))
-    print(
-        f"priors: {sorted(base)}; default planned {statistics.mean(b['planned_posc'] / b['rule_bound'] for b in base.values()):.4f}"
-    )
+    mean0 = statistics.mean(b["planned_posc"] / b["rule_bound"] for b in base.values())
+    print(f"priors: {sorted(base)}; default planned {mean0:.4f}")
     for v in names:
         rs = [r for r in recs if r["variant"] == v and r["seed"] in base]
         if not rs:
