@@ -50,7 +50,9 @@
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
    17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
-   no-fly zones. The plan's optimizer settings record its passes and kept moves (``polish``).
+   no-fly zones, nor on maps of more than ``options.polish_max_cells`` cells a side where it
+   is set (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
+   settings record its passes and kept moves (``polish``).
    With ``options.polish_lines`` passes (off by default; i24-lines) a second polish follows,
    with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as
    one) at radii ``options.polish_lines_radii``; the settings then also record its kept moves

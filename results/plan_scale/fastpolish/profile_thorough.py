@@ -8,8 +8,6 @@
     stage (the polish, the second polish with block moves) and by what the polish calls
     (the exposure kernels, ``route_fits``, the airspace count and ``track``). One JSON line per
     plan. Exclusive times: a step's time excludes the wrapped steps it calls.
-``profile SEED VARIANT OUT.prof``
-    One plan under cProfile; the top 40 by own time printed.
 
 Run from the repository root, one thread: ``OMP_NUM_THREADS=1 python
 results/plan_scale/fastpolish/profile_thorough.py parts -1,5000 thorough OUT.jsonl``.
@@ -113,31 +111,9 @@ def parts(seeds: list[int], variant: str, out: str) -> None:
             f.write(json.dumps(rec) + "\n")
 
 
-def profile(seed: int, variant: str, out: str) -> None:
-    import cProfile
-    import pstats
-
-    from poc_env.agents.planning.allocation import make_allocation_plan
-
-    sc = load_scenario("paper_6_2")
-    make_allocation_plan(sc, refine=0)
-    pr = cProfile.Profile()
-    prior = _prior(sc, seed)
-    opt = _options(variant)
-    pr.enable()
-    make_allocation_plan(sc, prior=prior, options=opt)
-    pr.disable()
-    pr.dump_stats(out)
-    st = pstats.Stats(out)
-    st.sort_stats("tottime").print_stats(40)
-    st.sort_stats("cumulative").print_stats(40)
-
-
 if __name__ == "__main__":
     cmd, *args = sys.argv[1:]
     if cmd == "parts":
         parts([int(x) for x in args[0].split(",")], args[1], args[2])
-    elif cmd == "profile":
-        profile(int(args[0]), args[1], args[2])
     else:
         raise SystemExit(__doc__)
