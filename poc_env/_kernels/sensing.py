@@ -663,6 +663,10 @@ def leg_exposure(law, ax, ay, bx, by, w, cutoff, reach, cell, h, sign, expo, box
         if capsule:
             lo, hi = _capsule_row(py, ax, ay, bx, by, ux, uy, length, reach, iux, iuy)
             k0, k1 = _index_range(lo, hi, 0.0, h, nx)
+            span = -(-(k1 - k0) // _LANES) * _LANES  # padded as sweep pads: no scalar remainder
+            if k0 < k1 and span <= nx:
+                k1 = min(k0 + span, nx)
+                k0 = k1 - span
         if k1 <= k0:
             continue
         box[0] = min(box[0], j)
