@@ -13,7 +13,7 @@ allowed).
 wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and ``poc-env plan``
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
 ``"standard"`` (i24-fastpolish) is the default plan polished (2 passes with the grade moves, 1
-of the second polish) on maps of at most 80 cells a side: about 1.8 s on ``paper_6_2`` (3.3
+of the second polish) on maps of at most 80 cells a side: 1.6-1.9 s on ``paper_6_2`` (3.0
 times the default's CPU time), flown 0.887 of the rule-aware bound on its 50 reported priors
 against the default's 0.852 (docs/PLANNER.md, "A faster polish (i24-fastpolish)"), policy
 ``allocation_plan_standard``;
