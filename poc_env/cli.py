@@ -1115,8 +1115,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--effort",
         default=None,
-        help="allocation planner: default (seconds) or thorough (a minute or two on one core, "
-        "more POS: docs/PLANNER.md, effort levels)",
+        help="allocation planner: default (seconds), standard (the default plan polished, "
+        "within 2 s on paper_6_2) or thorough (a minute or two on one core, more POS: "
+        "docs/PLANNER.md, effort levels)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

@@ -50,7 +50,9 @@
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
    17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
-   no-fly zones. The plan's optimizer settings record its passes and kept moves (``polish``).
+   no-fly zones, nor on maps of more than ``options.polish_max_cells`` cells a side where it
+   is set (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
+   settings record its passes and kept moves (``polish``).
    With ``options.polish_lines`` passes (off by default; i24-lines) a second polish follows,
    with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as
    one) at radii ``options.polish_lines_radii``; the settings then also record its kept moves
@@ -855,6 +857,8 @@ def make_allocation_plan(
     polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes)
     if polishing and router.active:  # eq. 20: the polish does not see the zones
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
+    elif polishing and not opt.polish_here(grid.nx, grid.ny):  # the size rule (i24-fastpolish)
+        polished = {"passes": 0, "moves": 0, "skipped": "map larger than polish_max_cells"}
     elif polishing and any(routes):
         # the chosen plan polished, and with ``polish_starts`` the next best of the starts
         # (refined or not) too: the best polished one kept (by POS less the penalty)

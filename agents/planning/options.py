@@ -12,6 +12,11 @@ allowed).
 **Effort levels** (:meth:`PlanOptions.preset`): a planning officer plans a sortie once and can
 wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and ``poc-env plan``
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
+``"standard"`` (i24-fastpolish) is the default plan polished (2 passes with the grade moves, 1
+of the second polish) on maps of at most 80 cells a side: 1.6-1.9 s on ``paper_6_2`` (3.0
+times the default's CPU time), flown 0.887 of the rule-aware bound on its 50 reported priors
+against the default's 0.852 (docs/PLANNER.md, "A faster polish (i24-fastpolish)"), policy
+``allocation_plan_standard``;
 ``"thorough"`` is the combination that gained most on the validation priors within about a
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
 (i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
@@ -40,7 +45,7 @@ from typing import Any
 from poc_env.errors import ConfigError
 
 #: the effort levels of :meth:`PlanOptions.preset`.
-EFFORTS = ("default", "thorough")
+EFFORTS = ("default", "standard", "thorough")
 
 
 def _positive_tuple(name: str, value: Any, *, integer: bool = False, low: float = 0.0,
@@ -199,6 +204,10 @@ class PlanOptions:
     polish_boxes: int = 0
     #: the box moves' translations, in sweep widths.
     polish_boxes_radii: tuple[float, ...] = (2.0, 4.0, 8.0, 16.0)
+    #: polish only maps of at most this many cells a side (0: any size; i24-fastpolish: a
+    #: deterministic size rule, no clock, so a preset keeps its time on large maps; elsewhere
+    #: the plan is the unpolished one and its settings say why).
+    polish_max_cells: int = 0
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -239,6 +248,7 @@ class PlanOptions:
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
+        _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
         _positive_tuple("relax_etas", self.relax_etas, high=1.0)
         _positive_tuple("relax_scales", self.relax_scales, high=1.0)
@@ -252,6 +262,11 @@ class PlanOptions:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")
 
+    def polish_here(self, nx: int, ny: int) -> bool:
+        """Whether the polish stages run on a map of ``nx x ny`` cells
+        (:attr:`polish_max_cells`)."""
+        return not self.polish_max_cells or max(nx, ny) <= self.polish_max_cells
+
     def sampled_here(self, nx: int, ny: int) -> bool:
         """Whether graded lines and sampled scores apply on a map of ``nx x ny`` cells: where
         boxes are searched cell by cell (at most :attr:`max_cells` a side; on 24 UAVs over
@@ -261,12 +276,15 @@ class PlanOptions:
     @classmethod
     def preset(cls, effort: str = "default") -> PlanOptions:
         """The options of an effort level (:data:`EFFORTS`): ``"default"`` the planner of
-        ``allocation_plan``; ``"thorough"`` the combination chosen on the validation priors
-        (module docstring)."""
+        ``allocation_plan``; ``"standard"`` the default plan polished within the issue's 2 s on
+        ``paper_6_2``; ``"thorough"`` the combination chosen on the validation priors (module
+        docstring)."""
         if effort == "default":
             return cls()
         if effort == "thorough":
             return cls(**THOROUGH)
+        if effort == "standard":
+            return cls(**STANDARD)
         raise ConfigError("effort", effort, f"one of {', '.join(EFFORTS)}")
 
     def changed(self) -> dict[str, Any]:
@@ -294,4 +312,15 @@ THOROUGH: dict[str, Any] = {
     # i24-lines: docs/PLANNER.md, "Block moves and a second polish"
     "polish_lines": 6,
     "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
+}
+
+#: the ``standard`` effort level's changes to the defaults (i24-fastpolish: the default plan
+#: polished, the most POS within the issue's 2 s on ``paper_6_2``, chosen on its validation
+#: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"); only on maps of at most 80
+#: cells a side (the 160 x 160 timing case keeps the default plan and its time).
+STANDARD: dict[str, Any] = {
+    "polish": 2,
+    "polish_grade": True,
+    "polish_lines": 1,
+    "polish_max_cells": 80,
 }

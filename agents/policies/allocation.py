@@ -6,7 +6,9 @@ belief summed to the grid's cells) and flies each UAV's waypoints with the waypo
 (transit at cruise speed, the route at search speed, home on eq. 18), as ``de_plan`` does.
 
 ``allocation_plan_thorough`` is the same policy at the ``"thorough"`` effort level
-(:meth:`poc_env.agents.planning.options.PlanOptions.preset`): a slower plan of more POS.
+(:meth:`poc_env.agents.planning.options.PlanOptions.preset`): a slower plan of more POS;
+``allocation_plan_standard`` at the ``"standard"`` one (i24-fastpolish): the default plan
+polished, within the issue's 2 s on ``paper_6_2``.
 """
 
 from __future__ import annotations

@@ -228,6 +228,13 @@ register(
     "(docs/PLANNER.md, effort levels)",
 )
 register(
+    "allocation_plan_standard",
+    "poc_env.agents.policies.allocation:AllocationPlanPolicy",
+    kwargs={"effort": "standard"},
+    summary="allocation_plan at the standard effort level: the default plan polished by the "
+    "environment's sensor model, within 2 s on paper_6_2 (docs/PLANNER.md, i24-fastpolish)",
+)
+register(
     "greedy_rectangles",
     "poc_env.agents.policies.greedy_rectangles:GreedyRectanglesPolicy",
     summary="each UAV the best remaining axis-aligned rectangle it can search, flown as lines",

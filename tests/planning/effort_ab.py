@@ -5,6 +5,10 @@
     the default allocation plan on ``paper_6_2``'s own prior, two of its random priors
     (episode seeds 0, 1), ``small`` and ``large_400``'s own prior: run before and after a
     change that must not alter the default plans, and compare the two files.
+``digest OUT.json --effort VARIANT``
+    The same digest of the plans of a variant (:func:`_options`: ``thorough``,
+    ``default+polish=2``, ...) on ``paper_6_2``'s own prior and its random priors 0-2
+    (i24-fastpolish: a speed-up of the polish must leave ``thorough``'s plans equal).
 ``plan MAP SEED0 SEED1 VARIANT[,VARIANT...] OUT.json``
     Planned POS_C over the rule-aware bound on ``MAP``'s random priors (the priors of
     ``poc-env bench plan --scale``; validation priors: 5000-5011 on ``paper_6_2``, 5000-5002
@@ -100,23 +104,30 @@ def _digest(plan: dict) -> str:
     return h.hexdigest()
 
 
-def digest(out: str) -> None:
+def digest(out: str, effort: str | None = None) -> None:
     from poc_env.agents.planning.allocation import make_allocation_plan
 
     cases = [("paper_6_2", None), ("paper_6_2", 0), ("paper_6_2", 1), ("small", None),
              ("large_400", None)]  # fmt: skip
+    if effort is not None:
+        cases = [("paper_6_2", None), ("paper_6_2", 0), ("paper_6_2", 1), ("paper_6_2", 2)]
+    opt = None if effort is None else _options(effort)
     recs = {}
     for name, seed in cases:
         sc = load_scenario(name)
         prior = None if seed is None else episode_prior(sc, seed)
-        t0 = time.perf_counter()
-        p = make_allocation_plan(sc, prior=prior)
+        t0, c0 = time.perf_counter(), time.process_time()
+        p = make_allocation_plan(sc, prior=prior, options=opt)
         key = f"{name}:{'scenario' if seed is None else seed}"
+        if effort is not None:
+            key += f":{effort}"
         recs[key] = {"digest": _digest(p), "posc": float(p["posc"]), "start": p["start"],
-                     "plan_s": time.perf_counter() - t0}  # fmt: skip
+                     "plan_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
+                     "load": os.getloadavg()[0]}  # fmt: skip
         print(key, recs[key], flush=True)
-    with open(out, "w") as f:
+    with open(out + ".tmp", "w") as f:
         json.dump(recs, f, indent=1)
+    os.replace(out + ".tmp", out)
 
 
 def summary(recs: list[dict], key: str, base_name: str) -> None:
@@ -133,13 +144,15 @@ def summary(recs: list[dict], key: str, base_name: str) -> None:
         half = ci95(d) if len(d) > 1 else float("nan")
         wtl = f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}"
         ratio = [r["plan_s"] / base[r["seed"]]["plan_s"] for r in rs if "plan_s" in r]
+        cpu = [r["cpu_s"] / base[r["seed"]]["cpu_s"] for r in rs if "cpu_s" in r]
         mean0 = statistics.mean(b[key] / b["rule_bound"] for b in base.values())
         mean1 = statistics.mean(r[key] / r["rule_bound"] for r in rs)
         med = statistics.median(r["plan_s"] for r in rs if "plan_s" in r) if ratio else float("nan")
         print(f"{v} - {base_name} ({key}/rule): {d.mean():+.4f} +- {half:.4f} {wtl} (n {len(d)}); "
               f"{base_name} {mean0:.4f}, {v} {mean1:.4f}; time ratio median "
-              f"{statistics.median(ratio) if ratio else float('nan'):.2f}, {v} median {med:.1f} s",
-              flush=True)  # fmt: skip
+              f"{statistics.median(ratio) if ratio else float('nan'):.2f}, {v} median {med:.1f} s"
+              + (f"; CPU time ratio median {statistics.median(cpu):.2f} (max {max(cpu):.2f})"
+                 if cpu else ""), flush=True)  # fmt: skip
 
 
 def plan(name: str, seed0: int, seed1: int, names: list[str], out: str) -> None:
@@ -193,6 +206,8 @@ def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> Non
 
     sc = load_scenario(name)
     recs, done = resumed(out)
+    # warm-up (JIT, caches), so the first plan's CPU time is the plan's own
+    make_allocation_plan(sc, options=_options("default+polish=1+polish_grade=1+polish_lines=1"))
     for seed in range(seed0, seed1):  # seed -1: the scenario's own prior
         prior = build_prior(sc.map) if seed < 0 else episode_prior(sc, seed)
         bound = rule_bound(sc, prior).upper
@@ -200,14 +215,14 @@ def polish(name: str, seed0: int, seed1: int, names: list[str], out: str) -> Non
             if (seed, v) in done:
                 continue
             opt = _options(v)
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             p = make_allocation_plan(sc, prior=prior, options=opt)
-            dt = time.perf_counter() - t0
+            dt, dc = time.perf_counter() - t0, time.process_time() - c0
             moves = p["optimizer"]["settings"].get("polish", {}).get("moves", 0)
             recs.append(
                 {"map": name, "seed": seed, "variant": v, "planned_posc": float(p["posc"]),
                  "fine_posc": fine_posc(sc, prior, p), "rule_bound": bound,
-                 "start": p["start"], "moves": moves, "plan_s": dt,
+                 "start": p["start"], "moves": moves, "plan_s": dt, "cpu_s": dc,
                  "load": os.getloadavg()[0]}
             )  # fmt: skip
             r = recs[-1]
@@ -390,7 +405,8 @@ def old_policies(old: dict) -> set[str]:
 
 if __name__ == "__main__":
     if sys.argv[1] == "digest":
-        digest(sys.argv[2])
+        eff = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--effort" else None
+        digest(sys.argv[2], eff)
         sys.exit()
     if sys.argv[1] == "violations":
         violations(sys.argv[2], [int(x) for x in sys.argv[3].split(",")], sys.argv[4:])

@@ -10,7 +10,7 @@ from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.coverage_boxes import box_routes
 from poc_env.agents.planning.flight_rules import plan_speeds, reserve_s
-from poc_env.agents.planning.options import EFFORTS, THOROUGH, PlanOptions
+from poc_env.agents.planning.options import EFFORTS, STANDARD, THOROUGH, PlanOptions
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim.core import takeoff_heading
@@ -58,8 +58,11 @@ def test_presets():
     assert PlanOptions.preset() == PlanOptions() == PlanOptions.preset("default")
     thorough = PlanOptions.preset("thorough")
     assert thorough.changed() == THOROUGH and PlanOptions().changed() == {}
-    assert set(EFFORTS) == {"default", "thorough"}
-    with pytest.raises(ConfigError, match="effort: got 'fast'; allowed: one of default, thorough"):
+    assert set(EFFORTS) == {"default", "standard", "thorough"}
+    assert PlanOptions.preset("standard").changed() == STANDARD
+    with pytest.raises(
+        ConfigError, match="effort: got 'fast'; allowed: one of default, standard, thorough"
+    ):
         PlanOptions.preset("fast")
     with pytest.raises(ConfigError, match="options"):
         make_allocation_plan("small", options={"refine": 1})
@@ -131,7 +134,9 @@ def test_cli_plan_effort(tmp_path, capsys):
     capsys.readouterr()
     bad = tmp_path / "bad.json"
     assert main([*args, "--effort", "max", "--out", str(bad)]) == 2
-    assert "effort: got 'max'; allowed: one of default, thorough" in capsys.readouterr().err
+    assert "effort: got 'max'; allowed: one of default, standard, thorough" in (
+        capsys.readouterr().err
+    )
     assert main(["plan", "--scenario", "small", "--effort", "thorough", "--out", str(bad)]) == 2
     assert "effort: got 'thorough'; allowed: only with planner allocation" in (
         capsys.readouterr().err

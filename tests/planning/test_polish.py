@@ -137,7 +137,9 @@ def test_default_options_leave_plans_unchanged_and_polish_is_recorded():
     [({"polish": -1}, "options.polish"), ({"polish": 1.5}, "options.polish"),
      ({"polish_radii": ()}, "options.polish_radii"),
      ({"polish_radii": (0.5, -1.0)}, "options.polish_radii"),
-     ({"polish_starts": 0}, "options.polish_starts")],
+     ({"polish_starts": 0}, "options.polish_starts"),
+     ({"polish_max_cells": -1}, "options.polish_max_cells"),
+     ({"polish_max_cells": 8.5}, "options.polish_max_cells")],
 )  # fmt: skip
 def test_polish_options_are_checked(change, field):
     with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
@@ -164,6 +166,41 @@ def test_no_polish_on_maps_with_no_fly_zones():
     pol = make_allocation_plan(sc, options=PlanOptions(polish=2))
     assert [u["waypoints_m"] for u in pol["uavs"]] == [u["waypoints_m"] for u in base["uavs"]]
     assert pol["optimizer"]["settings"]["polish"]["skipped"] == "no-fly zones"
+
+
+def test_the_size_rule_skips_the_polish_on_larger_maps_only():
+    """``polish_max_cells`` (i24-fastpolish): on a map of more cells a side than it allows the
+    plan is the unpolished one and the settings say why; at its size the polish runs (0: any
+    size). ``small`` has 8 x 8 cells."""
+    sc = load_scenario("small")
+    base = make_allocation_plan(sc)
+    big = make_allocation_plan(sc, options=PlanOptions(polish=1, polish_max_cells=7))
+    assert [u["waypoints_m"] for u in big["uavs"]] == [u["waypoints_m"] for u in base["uavs"]]
+    assert big["optimizer"]["settings"]["polish"]["skipped"] == "map larger than polish_max_cells"
+    assert big["posc"] == base["posc"]
+    for limit in (8, 0):
+        fits = make_allocation_plan(sc, options=PlanOptions(polish=1, polish_max_cells=limit))
+        assert fits["optimizer"]["settings"]["polish"]["moves"] > 0, limit
+        assert "skipped" not in fits["optimizer"]["settings"]["polish"]
+        assert fits["posc"] > base["posc"]
+
+
+def test_standard_effort_polishes_the_default_plan():
+    """The ``standard`` effort level (i24-fastpolish) is the default plan polished: never less
+    planned POS than the default's, the same start, the polish recorded; and the policy
+    ``allocation_plan_standard`` plans with it."""
+    from poc_env.agents.experiments.evaluate import episode_prior
+    from poc_env.agents.policies.registry import make_policy
+
+    sc = load_scenario("paper_6_2")
+    prior = episode_prior(sc, 2)
+    base = make_allocation_plan(sc, prior=prior)
+    std = make_allocation_plan(sc, prior=prior, options=PlanOptions.preset("standard"))
+    assert std["posc"] > base["posc"]
+    assert std["start"] == base["start"]
+    assert std["optimizer"]["settings"]["polish"]["moves"] > 0
+    pol = make_policy("allocation_plan_standard")
+    assert pol.options == PlanOptions.preset("standard") and pol.name == "allocation_plan_standard"
 
 
 def test_polishing_more_starts_never_plans_less():

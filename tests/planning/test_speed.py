@@ -295,3 +295,58 @@ def test_derived_gain_tables_give_the_recomputed_routes():
                 )  # fmt: skip
 
             assert routes(True) == routes(False), cells
+
+
+def test_exposure_rows_are_the_scalar_loop():
+    """The inverse-cube exposure of a step, row by row in the branch-free loop that vectorises
+    (i24-fastpolish, ``_ic_exposure_row``), is the point-by-point definition bit for bit: for
+    every sample point within the cut-off, ``sign x min(F, EXPOSURE_CAP)`` added to what it
+    held (F the compiled scalar exponent of the step at the point), every other point as it
+    was. Random steps (some through sample points, some off the grid, some tiny), both signs,
+    a grid already holding exposure."""
+    from poc_env._kernels import sensing as k
+
+    rng = np.random.default_rng(5)
+    h, ny, nx = 2500.0, 24, 31
+    w = 5000.0
+    cutoff = 4 * w
+    px = (np.arange(nx) + 0.5) * h
+    py = (np.arange(ny) + 0.5) * h
+    for trial in range(40):
+        ax, ay = rng.uniform(-0.2, 1.2) * nx * h, rng.uniform(-0.2, 1.2) * ny * h
+        d = rng.normal(0, 4000.0, 2) * (1e-6 if trial % 13 == 0 else 1.0)
+        if trial % 5 == 0:  # the step starts on a sample point: F there is infinite
+            ax, ay = px[int(rng.integers(nx))], py[int(rng.integers(ny))]
+        bx, by = ax + d[0], ay + d[1]
+        sign = 1.0 if trial % 2 else -1.0
+        expo = rng.gamma(0.5, size=(ny, nx)) * (rng.random((ny, nx)) < 0.7)
+        want = expo.copy()
+        ux, uy, length = k._seg_axis(ax, ay, bx, by)
+        for j in range(ny):
+            for i in range(nx):
+                lateral, along, beyond = k._frame(px[i], py[j], ax, ay, ux, uy, length)
+                if lateral * lateral + beyond * beyond <= cutoff * cutoff:
+                    f = k._ic_exponent(lateral, -along, length - along, w * w)
+                    want[j, i] += sign * min(f, k.EXPOSURE_CAP)
+        box = np.array([ny, 0, nx, 0])
+        k.leg_exposure(k.INVERSE_CUBE, ax, ay, bx, by, w, cutoff, cutoff, 5000.0, h, sign,
+                       expo, box)  # fmt: skip
+        assert np.array_equal(expo, want), trial
+
+
+def test_framed_candidates_are_the_stacked_ones():
+    """The polish's candidates built as views of one array (i24-fastpolish, ``_framed``)
+    are the points ``np.vstack([head, body[c], tail])`` gives, candidate by candidate, for
+    bodies and tails of every length the polish uses (a tail of none to two points)."""
+    from poc_env.agents.planning.polish import _framed
+
+    rng = np.random.default_rng(6)
+    for trial in range(30):
+        c, n, t = int(rng.integers(1, 20)), int(rng.integers(1, 9)), int(rng.integers(0, 3))
+        head = rng.normal(0, 1e5, 2)
+        body = rng.normal(0, 1e5, (c, n, 2))
+        tail = rng.normal(0, 1e5, (t, 2))
+        got = _framed(head, body, tail)
+        assert len(got) == c, trial
+        for q, b in zip(got, body, strict=True):
+            assert np.array_equal(q, np.vstack([head, b, tail])), trial

@@ -11,6 +11,7 @@ from poc_env.errors import ConfigError
 
 BUILTIN = (
     "allocation_plan",
+    "allocation_plan_standard",
     "allocation_plan_thorough",
     "de_plan",
     "de_receding",
