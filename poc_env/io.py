@@ -359,16 +359,34 @@ def loads_json(text: str | bytes, field: str, value: object = None) -> Any:
         raise ConfigError(field, shown, f"a valid JSON document ({err})") from None
 
 
-def read_json(path: str | os.PathLike[str], field: str) -> Any:
-    """The JSON document in the file ``path`` (:func:`loads_json`'s rules); a file that cannot
-    be read is a :class:`~poc_env.errors.ConfigError` naming ``field`` and the path too."""
+def read_bytes(path: str | os.PathLike[str], field: str, what: str) -> bytes:
+    """The bytes of the file ``path``; one that cannot be read (missing, a folder, no
+    permission) is a :class:`~poc_env.errors.ConfigError` naming ``field``, the path and
+    ``what`` is allowed (with the system's reason), never a traceback."""
     from poc_env.errors import ConfigError
 
     try:
-        data = Path(path).read_bytes()
+        return Path(path).read_bytes()
     except OSError as err:
-        allowed = f"a readable JSON file ({err.strerror})"
-        raise ConfigError(field, os.fspath(path), allowed) from None
+        raise ConfigError(field, os.fspath(path), f"{what} ({err.strerror})") from None
+
+
+def read_text(path: str | os.PathLike[str], field: str, what: str) -> str:
+    """The UTF-8 text of the file ``path`` (:func:`read_bytes`'s refusals; text that is not
+    UTF-8 is refused too, naming ``field``)."""
+    from poc_env.errors import ConfigError
+
+    data = read_bytes(path, field, what)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ConfigError(field, os.fspath(path), f"{what} in UTF-8 ({err.reason})") from None
+
+
+def read_json(path: str | os.PathLike[str], field: str) -> Any:
+    """The JSON document in the file ``path`` (:func:`loads_json`'s rules); a file that cannot
+    be read is a :class:`~poc_env.errors.ConfigError` naming ``field`` and the path too."""
+    data = read_bytes(path, field, "a readable JSON file")
     return loads_json(data, field, os.fspath(path))
 
 
