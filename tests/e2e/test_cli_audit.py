@@ -1,0 +1,105 @@
+"""Defects the command-line audit found (cli-audit, results/audit/cli/README.md): each test
+failed before its fix. Bad input ends in ``error: <field>: got ...; allowed: ...`` with exit
+status 2 and nothing written; a command's outputs are complete or absent."""
+
+from __future__ import annotations
+
+import pytest
+
+from poc_env import recorded, spec, tasks
+from poc_env.cli import main
+
+
+def _tree(root):
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
+
+
+def _refused(capsys, argv, field) -> str:
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"error: {field}: got " in err and "allowed:" in err, err
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.mark.parametrize("what", ["missing", "folder", "no markers", "not utf-8"])
+def test_spec_doc_that_cannot_be_read_is_a_clear_error(tmp_path, capsys, what):
+    """``spec --doc`` a missing file, a folder, a page without the generated sections' markers
+    or one that is not UTF-8: a traceback (FileNotFoundError, IsADirectoryError, KeyError,
+    UnicodeDecodeError) before; now an error naming ``doc`` -- as from a wheel install, where
+    the default docs/environment.md does not exist."""
+    page = tmp_path / "ENV.md"
+    if what == "folder":
+        page.mkdir()
+    elif what == "no markers":
+        page.write_text("no markers", encoding="utf-8")
+    elif what == "not utf-8":
+        page.write_bytes(b"\xff\xfe<!-- spec:tasks -->")
+    before = _tree(tmp_path)
+    err = _refused(capsys, ["spec", "--write", "--doc", str(page)], "doc")
+    if what == "no markers":
+        assert "spec:tasks" in err
+    assert _tree(tmp_path) == before
+
+
+def test_spec_write_replaces_the_page_atomically(tmp_path, capsys, monkeypatch):
+    """``spec --write`` rewrote the page in place (``Path.write_text``): a failure part-way
+    left it truncated. It is now written through :func:`poc_env.io.write_text_atomic`: a
+    failing write leaves the old page whole."""
+    page = tmp_path / "ENV.md"
+    stale = "".join(f"<!-- spec:{n} -->\nSTALE\n<!-- /spec:{n} -->\n" for n in spec.SECTIONS)
+    page.write_text(stale, encoding="utf-8")
+
+    def broken_fsync(fd):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("os.fsync", broken_fsync)
+    with pytest.raises(OSError):
+        main(["spec", "--write", "--doc", str(page)])
+    assert page.read_text(encoding="utf-8") == stale
+    assert _tree(tmp_path) == ["ENV.md"]  # no temporary file left either
+    capsys.readouterr()
+
+
+def test_record_dir_that_is_a_file_is_refused_before_flying(tmp_path, capsys, monkeypatch):
+    """``record --dir FILE``: a traceback (FileExistsError) after flying the episode; now
+    refused up front, naming ``dir``."""
+    f = tmp_path / "f"
+    f.write_text("a file")
+    flown = []
+    monkeypatch.setattr(recorded, "run", lambda tid, *a: flown.append(tid))
+    tid = f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}"
+    _refused(capsys, ["record", "--task", tid, "--dir", str(f)], "dir")
+    _refused(capsys, ["record", "--task", tid, "--dir", str(f / "sub")], "dir")
+    assert flown == [] and f.read_text() == "a file"
+
+
+def test_record_writes_all_its_files_or_none(tmp_path, capsys, monkeypatch):
+    """``record --task A --task B`` failing on B left A's new recording in the folder (a set
+    of outputs part-written); now the recordings are staged and put in place together."""
+    tids = [f"poc_env/UAVSearch-Small-{c}-v{tasks.VERSION}" for c in ("Heading", "Waypoint")]
+    real = recorded.run
+
+    def fails_on_the_second(tid, *a):
+        if tid == tids[1]:
+            raise RuntimeError("killed")
+        return real(tid, *a)
+
+    monkeypatch.setattr(recorded, "run", fails_on_the_second)
+    out = tmp_path / "rec"
+    with pytest.raises(RuntimeError):
+        main(["record", "--task", tids[0], "--task", tids[1], "--dir", str(out)])
+    assert _tree(tmp_path) == []
+    capsys.readouterr()
+
+
+def test_record_without_dir_outside_a_checkout_is_refused(tmp_path, capsys, monkeypatch):
+    """From a wheel install ``record`` without ``--dir`` wrote into
+    ``site-packages/tests/recorded`` (the source tree's folder, computed from the package's
+    location); with no such folder it is now refused, naming ``dir``."""
+    monkeypatch.setattr(recorded, "DEFAULT_DIR", tmp_path / "site-packages" / "tests" / "rec")
+    tid = f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}"
+    err = _refused(capsys, ["record", "--task", tid], "dir")
+    assert "--dir" in err
+    assert _tree(tmp_path) == []
