@@ -1324,6 +1324,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PocEnvError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: one line, no traceback; staged outputs never placed
+        print(
+            f"interrupted: poc-env {args.command} stopped before its end; its outputs not yet "
+            "in place were not written",
+            file=sys.stderr,
+        )
+        return 130  # 128 + SIGINT, as shells report a process the signal ended
     except BrokenPipeError:  # `poc-env tasks | head -3`: the reader had what it wanted
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
         return 0

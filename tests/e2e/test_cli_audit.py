@@ -103,3 +103,21 @@ def test_record_without_dir_outside_a_checkout_is_refused(tmp_path, capsys, monk
     err = _refused(capsys, ["record", "--task", tid], "dir")
     assert "--dir" in err
     assert _tree(tmp_path) == []
+
+
+def test_ctrl_c_is_one_line_and_status_130(tmp_path, capsys, monkeypatch):
+    """Ctrl-C (SIGINT) during a command printed a Python traceback (KeyboardInterrupt, from
+    wherever the run was: scipy, numba, a worker's wait) and the process died by the signal;
+    now one line on stderr, exit status 130 (128 + SIGINT, as ``train`` already returned), and
+    nothing written: the staged output never reaches its place."""
+    import poc_env.agents.planning.survey as survey
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(survey, "run_survey", interrupted)
+    monkeypatch.chdir(tmp_path)
+    assert main(["survey", "--out", str(tmp_path / "s")]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("interrupted") and err.count("\n") == 1, err
+    assert _tree(tmp_path) == []
