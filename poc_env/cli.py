@@ -1334,6 +1334,43 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # `poc-env tasks | head -3`: the reader had what it wanted
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
         return 0
+    except OSError as err:  # a path the system refused where no check named it first
+        if err.filename is None:
+            raise
+        name = os.fsdecode(err.filename)
+        refused = ConfigError(_field_of_path(args, name), name, f"a path poc-env can use "
+                              f"({err.strerror or err})")  # fmt: skip
+        print(f"error: {refused}", file=sys.stderr)
+        return 2
+
+
+def _field_of_path(args: argparse.Namespace, path: str) -> str:
+    """The option of ``args`` whose value holds ``path`` (the file an OSError names): its
+    whole value, a part of it (``ppo:PATH``, ``map.prior.file=PATH``) or a folder above it;
+    within ``train``'s and ``bench``'s own options, the option before the value. ``path``
+    when no option holds it (a file named inside a YAML scenario, say)."""
+
+    def holds(value: object) -> int:  # 3: the value itself, 2: part of it, 1: a folder above
+        if not isinstance(value, str) or not value:
+            return 0
+        return 3 if value == path else 2 if path in value else int(
+            path.startswith(value.rstrip(os.sep) + os.sep))  # fmt: skip
+
+    found: list[tuple[int, str]] = []
+    for key, value in vars(args).items():
+        if key in ("train_options", "rest") and isinstance(value, list):
+            for i, item in enumerate(value):
+                before = value[i - 1] if i > 0 else ""
+                option, eq, inline = item.partition("=")
+                if option.startswith("--") and eq and holds(inline):  # --resume=PATH
+                    found.append((holds(inline), option[2:].replace("-", "_")))
+                elif holds(item) and before.startswith("--"):
+                    found.append((holds(item), before[2:].replace("-", "_")))
+        elif isinstance(value, list):
+            found += [(holds(v), key) for v in value if holds(v)]
+        elif holds(value):
+            found.append((holds(value), key))
+    return max(found)[1] if found else "path"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -172,11 +172,11 @@ class RegionPlan:
 def load_regions(source: str | os.PathLike[str]) -> RegionPlan:
     """Load a region plan by built-in name (``configs/regions/NAME.yaml``) or YAML path."""
     text = str(source)
-    path = CONFIG_DIR / "regions" / f"{text}.yaml"
+    names = sorted(p.stem for p in (CONFIG_DIR / "regions").glob("*.yaml"))
+    # a built-in by its name only: never a path joined under configs/regions (an absolute
+    # path or ../ would leave it), so a too-long path is the OSError of the user's own file
+    path = CONFIG_DIR / "regions" / f"{text}.yaml" if text in names else Path(text)
     if not path.is_file():
-        path = Path(text)
-    if not path.is_file():
-        names = sorted(p.stem for p in (CONFIG_DIR / "regions").glob("*.yaml"))
         raise ConfigError("regions", text, f"a YAML file or one of {names}")
     data = read_yaml(path)
     data.setdefault("name", path.stem)

@@ -121,3 +121,36 @@ def test_ctrl_c_is_one_line_and_status_130(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     assert err.startswith("interrupted") and err.count("\n") == 1, err
     assert _tree(tmp_path) == []
+
+
+LONG = "y" * 300  # one name longer than any file system's limit (255 bytes): ENAMETOOLONG
+
+
+TOO_LONG = [
+    (["export", "{L}.json", "--format", "kml", "--out", "x"], "plan"),
+    (["plan", "--scenario", "{L}.yaml", "--out", "p.json"], "scenario"),
+    (["plan", "--scenario", "small", "--map", "{L}.npy", "--out", "p.json"], "map_file"),
+    (["replan", "--plan", "{L}.json", "--out", "n.json"], "plan"),
+    (["survey", "--regions", "{L}.yaml"], "regions"),
+    (["summarise", "{L}"], "results_dir"),
+    (["curve", "{L}", "--out", "c.png"], "run_dir"),
+    (["train", "--resume", "{L}"], "resume"),
+    (["evaluate", "--policies", "ppo:{L},random", "--episodes", "1"], "policies"),
+    (["scenario", "import", "{L}.geojson", "--airfields", "f.geojson", "--out", "h.yaml"],
+     "area"),
+    (["plan", "--scenario", "small", "--overrides", "map.prior.kind=file",
+     "map.prior.file={L}.npy", "--out", "p.json"], "overrides"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("argv, field", TOO_LONG, ids=[" ".join(a)[:40] for a, _ in TOO_LONG])
+def test_a_path_too_long_for_the_file_system_is_a_clear_error(
+    tmp_path, capsys, monkeypatch, argv, field
+):
+    """An input path with a name over the file system's limit: ``Path.is_file()`` and its kin
+    raise OSError (ENAMETOOLONG) instead of answering False, and every command with an input
+    file ended in that traceback. Now one error naming the option the path came from."""
+    monkeypatch.chdir(tmp_path)
+    err = _refused(capsys, [a.replace("{L}", str(tmp_path / LONG)) for a in argv], field)
+    assert "File name too long" in err
+    assert _tree(tmp_path) == []
