@@ -30,6 +30,7 @@ from poc_env.errors import (
     skipped_for_extra,
 )
 from poc_env.helptext import examples, use_everywhere, walk
+from poc_env.io import check_distinct
 from poc_env.io import check_out as _check_out
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
@@ -250,6 +251,7 @@ def cmd_spec(args: argparse.Namespace) -> int:
 def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
+    check_distinct({"plan_out": args.plan_out}, _inputs_of(args))
     if args.origin is not None:
         from poc_env.agents.mission.crs import make_crs
 
@@ -660,6 +662,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
 
     _check_int("seed", args.seed, 0, limits.MAX_SEED)
     _check_out("out", args.out, "file")
+    check_distinct({"out": args.out}, _inputs_of(args))
     return cli_main(args)
 
 
@@ -670,6 +673,15 @@ def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
     _check_out("out", args.out, "file")
     _check_out("plot", args.plot, "file")
+    check_distinct({"out": args.out, "plot": args.plot}, _inputs_of(args))
+
+
+def _inputs_of(args: argparse.Namespace) -> dict[str, str | list | None]:
+    """The input files a command line names (for :func:`poc_env.io.check_distinct`), by
+    option."""
+    names = {"scenario": "scenario", "map": "map_file", "regions": "regions", "plan": "plan",
+             "tracks": "tracks"}  # fmt: skip
+    return {n: getattr(args, d) for n, d in names.items() if getattr(args, d, None) is not None}
 
 
 def _plan(

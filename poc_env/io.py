@@ -236,6 +236,53 @@ def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> No
         raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
 
 
+def _same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """``a`` and ``b`` name the same file: the same inode when both exist (hard and symbolic
+    links included), else the same absolute path once resolved."""
+    try:
+        if os.path.exists(a) and os.path.exists(b):
+            return os.path.samefile(a, b)
+        return Path(a).resolve() == Path(b).resolve()
+    except (OSError, ValueError):  # a path the system refuses: its own check reports it
+        return False
+
+
+def check_distinct(
+    outputs: dict[str, str | os.PathLike[str] | None],
+    inputs: dict[str, str | os.PathLike[str] | list | None],
+) -> None:
+    """Refuse an output file that is one of the command's inputs, or another of its outputs,
+    before any work: ``plan --out P --plot P`` kept only the last one written, and ``--out``
+    naming the scenario YAML or the previous sortie's plan.json replaced the user's file.
+
+    ``outputs``: option -> file path (None: not given); ``inputs``: option -> path or list of
+    paths (a value that is not an existing file, such as a built-in scenario name, is skipped).
+
+    Raises
+    ------
+    ConfigError
+        Naming the output option, its path, and the option it collides with.
+    """
+    from poc_env.errors import ConfigError
+
+    given = [(f, v) for f, v in outputs.items() if v is not None]
+    for k, (field, path) in enumerate(given):
+        for other, theirs in given[:k]:
+            if _same_path(path, theirs):
+                option = "--" + other.replace("_", "-")
+                raise ConfigError(field, os.fspath(path), f"a path other than {option}'s "
+                                  "(both would be written to one file)")  # fmt: skip
+        for name, value in inputs.items():
+            values = value if isinstance(value, list) else [value]
+            for v in values:
+                if v is not None and os.path.isfile(v) and _same_path(path, v):
+                    option = "--" + name.replace("_", "-")
+                    raise ConfigError(
+                        field, os.fspath(path), f"a path other than the input {option} "
+                        f"{os.fspath(v)} (writing it would replace that file)",
+                    )  # fmt: skip
+
+
 @contextlib.contextmanager
 def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[Path]:
     """Yield a staging folder beside ``path``; put its files in place if the block succeeds.

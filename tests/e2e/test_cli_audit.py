@@ -154,3 +154,43 @@ def test_a_path_too_long_for_the_file_system_is_a_clear_error(
     err = _refused(capsys, [a.replace("{L}", str(tmp_path / LONG)) for a in argv], field)
     assert "File name too long" in err
     assert _tree(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (
+            ["plan", "--scenario", "small", "--quiet", "--out", "{d}/p.png", "--plot", "{d}/p.png"],
+            "plot",
+        ),
+        (["plan", "--scenario", "{d}/sc.yaml", "--quiet", "--out", "{d}/sc.yaml"], "out"),
+        (["replan", "--plan", "{d}/p1.json", "--out", "{d}/p1.json"], "out"),
+        (["replan", "--plan", "{d}/p1.json", "--out", "{d}/../d/p1.json"], "out"),
+        (["survey", "--plan-out", "{d}/sc.yaml", "--scenario", "{d}/sc.yaml"], "plan_out"),
+    ],
+    ids=[
+        "plan out=plot",
+        "plan out=scenario",
+        "replan out=plan",
+        "replan out=plan (path)",
+        "survey plan-out=scenario",
+    ],
+)
+def test_an_output_over_an_input_or_another_output_is_refused(tmp_path, capsys, argv, field):
+    """``plan --out P --plot P`` wrote the PNG and then plan.json over it (one output lost,
+    exit 0); ``--out`` naming the command's own input (the scenario YAML, the previous
+    sortie's plan.json that the next replan needs again) replaced the user's file. Refused
+    before any work, naming the output option; the inputs are untouched."""
+    import shutil
+
+    from poc_env.config import CONFIG_DIR
+
+    d = tmp_path / "d"
+    d.mkdir()
+    shutil.copy(CONFIG_DIR / "paper_6_1.yaml", d / "sc.yaml")
+    assert main(["plan", "--scenario", "small", "--quiet", "--maxiter", "1", "--popsize", "8",
+                 "--out", str(d / "p1.json")]) == 0  # fmt: skip
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in d.iterdir()}
+    _refused(capsys, [a.replace("{d}", str(d)) for a in argv], field)
+    assert {p.name: p.read_bytes() for p in d.iterdir()} == before
