@@ -83,26 +83,35 @@ def atomic_path(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path
     """Yield a temporary path beside ``path``; publish it over ``path`` if the block succeeds.
 
     ``suffix`` keeps an extension that writers infer the format from (``".png"``, ``".zip"``).
-    Creates the destination folder. On an exception the temporary file is deleted and the
-    exception propagates. The temporary file is named ``.NAME.tmp-PID-XXXX``: one left by a
-    killed process (its PID gone) is removed by the next atomic write into the same folder.
+    The temporary file waits in the nearest existing folder of ``path`` (the same file system
+    as the folders to be made under it); the destination's missing folders are made only when
+    it is published, so a failure or a kill before then leaves no empty folders behind. On an
+    exception the temporary file is deleted and the exception propagates. The temporary file
+    is named ``.NAME.tmp-PID-XXXX``: one left by a killed process (its PID gone) is removed by
+    the next atomic write staged in the same folder.
     """
     p = Path(path)
     check_replaceable(p)  # before any work: never a device, FIFO or socket
-    p.parent.mkdir(parents=True, exist_ok=True)
-    clean_stale_temp_files(p.parent)
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{p.name}{_TEMP}{os.getpid()}-", suffix=suffix, dir=p.parent
-    )
+    missing = [q for q in (p.parent, *p.parent.parents) if not q.is_dir()]  # deepest first
+    staging = missing[-1].parent if missing else p.parent
+    clean_stale_temp_files(staging)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}{_TEMP}{os.getpid()}-", suffix=suffix, dir=staging)
     os.close(fd)
+    published = False
     try:
         yield Path(tmp)
         with open(tmp, "rb+") as fh:  # on disk before the rename, so a crash leaves old or new
             os.fsync(fh.fileno())
+        p.parent.mkdir(parents=True, exist_ok=True)
         publish_atomic(tmp, p)
+        published = True
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if not published:
+            for folder in missing:  # made by this call (a refused publish), deepest first
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
 
 
 def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:

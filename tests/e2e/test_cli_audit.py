@@ -194,3 +194,30 @@ def test_an_output_over_an_input_or_another_output_is_refused(tmp_path, capsys, 
     before = {p.name: p.read_bytes() for p in d.iterdir()}
     _refused(capsys, [a.replace("{d}", str(d)) for a in argv], field)
     assert {p.name: p.read_bytes() for p in d.iterdir()} == before
+
+
+def test_a_refused_plan_leaves_no_empty_folders(tmp_path, capsys):
+    """``plan --plot new/sub/p.png`` refused after its checks (here --uavs with --overrides
+    fleet...): the plot's temporary file had created ``new/sub/`` first, and the error left
+    those empty folders (a SIGKILL left them holding only the temporary file). The temporary
+    file now waits in the nearest existing folder and the folders are made when it is
+    published."""
+    argv = ["plan", "--scenario", "small", "--uavs", "2", "--overrides", "fleet.uavs=1",
+            "--quiet", "--out", str(tmp_path / "new" / "p.json"),
+            "--plot", str(tmp_path / "new" / "sub" / "p.png")]  # fmt: skip
+    _refused(capsys, argv, "uavs")
+    assert _tree(tmp_path) == []
+
+
+def test_atomic_path_makes_its_folders_only_when_it_publishes(tmp_path):
+    from poc_env.io import atomic_path
+
+    dest = tmp_path / "a" / "b" / "f.txt"
+    with pytest.raises(RuntimeError), atomic_path(dest) as tmp:
+        tmp.write_text("half")
+        assert _tree(tmp_path) == [tmp.name]  # staged beside the nearest existing folder
+        raise RuntimeError("killed")
+    assert _tree(tmp_path) == []
+    with atomic_path(dest) as tmp:
+        tmp.write_text("whole")
+    assert dest.read_text() == "whole" and _tree(tmp_path) == ["a", "a/b", "a/b/f.txt"]
