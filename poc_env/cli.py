@@ -415,14 +415,35 @@ BENCHMARKS = {
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    """Run a benchmark in a fresh interpreter, so one-thread settings precede numpy's import."""
+    """Run a benchmark in a fresh interpreter, so one-thread settings precede numpy's import.
+
+    On Linux the benchmark dies with ``poc-env`` (:func:`_die_with_parent`): a SIGKILL or
+    SIGTERM of the command (a scheduler ending the job) left it running on, orphaned, writing
+    its ``--out`` folder after the kill.
+    """
     import os
     import subprocess
 
     modules = BENCHMARKS
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
-    return subprocess.call(cmd, env=env)
+    if not sys.platform.startswith("linux"):
+        return subprocess.call(cmd, env=env)
+    parent = os.getpid()
+    return subprocess.call(cmd, env=env, preexec_fn=lambda: _die_with_parent(parent))
+
+
+def _die_with_parent(parent: int) -> None:
+    """In a child process (before it runs its program): ask Linux for SIGTERM when the parent
+    dies (``prctl(PR_SET_PDEATHSIG)``), and end now if the parent ``parent`` is already gone."""
+    import ctypes
+    import signal
+
+    pr_set_pdeathsig = 1
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(pr_set_pdeathsig, int(signal.SIGTERM), 0, 0, 0)
+    if os.getppid() != parent:  # died before the request took effect
+        os._exit(143)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:

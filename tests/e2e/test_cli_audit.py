@@ -4,6 +4,8 @@ status 2 and nothing written; a command's outputs are complete or absent."""
 
 from __future__ import annotations
 
+import sys
+
 import pytest
 
 from poc_env import recorded, spec, tasks
@@ -221,3 +223,50 @@ def test_atomic_path_makes_its_folders_only_when_it_publishes(tmp_path):
     with atomic_path(dest) as tmp:
         tmp.write_text("whole")
     assert dest.read_text() == "whole" and _tree(tmp_path) == ["a", "a/b", "a/b/f.txt"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+def test_a_killed_bench_takes_its_benchmark_with_it(tmp_path):
+    """``poc-env bench`` runs the benchmark in a child interpreter; SIGKILL (or SIGTERM) of
+    ``poc-env`` -- a scheduler ending the job -- left that child running on, orphaned, and it
+    wrote its --out folder after the kill (the kill harness saw a "complete" output from a run
+    killed 1.3 s in). The child now dies with its parent."""
+    import os
+    import signal
+    import subprocess
+    import time
+
+    argv = [sys.executable, "-m", "poc_env.cli", "bench", "baselines", "--tasks",
+            f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}", "--policies", "lawnmower",
+            "--episodes", "10000", "--out", str(tmp_path / "b")]  # fmt: skip
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    children: list[int] = []
+    try:
+        for _ in range(600):  # until the benchmark's interpreter is started
+            task = f"/proc/{proc.pid}/task/{proc.pid}/children"
+            with open(task) as fh:
+                children = [int(c) for c in fh.read().split()]
+            if children:
+                break
+            time.sleep(0.05)
+        assert children, "the benchmark's child process never started"
+    finally:
+        proc.kill()
+        proc.wait()
+    for _ in range(200):  # the child goes within moments of its parent
+        if not os.path.exists(f"/proc/{children[0]}") or _zombie(children[0]):
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(children[0], signal.SIGKILL)
+        pytest.fail("the benchmark outlived the killed poc-env bench")
+    assert not (tmp_path / "b").exists()
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
