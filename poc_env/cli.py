@@ -248,9 +248,27 @@ def cmd_spec(args: argparse.Namespace) -> int:
     return main_args(args)
 
 
+def _check_crs_options(args: argparse.Namespace, recorded_in: str | None = None) -> None:
+    """``--projection`` and ``--utm-zone`` shape the crs made at ``--origin``: without an
+    origin they would be ignored, and so would ``--origin`` itself without the output that
+    records it (``recorded_in``, an option such as ``plan_out``, when one is needed)."""
+    if args.origin is None:
+        why = ("without it the crs is the scenario's own map.projection at map.origin_deg, if it "
+               "records one")  # fmt: skip
+        if args.projection != "aeqd":
+            raise ConfigError("projection", args.projection, f"only with --origin ({why})")
+        if args.utm_zone is not None:
+            raise ConfigError("utm_zone", args.utm_zone, f"only with --origin ({why})")
+    elif recorded_in is not None and getattr(args, recorded_in) is None:
+        option = "--" + recorded_in.replace("_", "-")
+        raise ConfigError("origin", args.origin, f"only with {option} (the file that records "
+                          "the crs; nothing else uses it)")  # fmt: skip
+
+
 def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
+    _check_crs_options(args, "plan_out")
     check_distinct({"plan_out": args.plan_out}, _inputs_of(args))
     if args.origin is not None:
         from poc_env.agents.mission.crs import make_crs
@@ -695,6 +713,7 @@ def _check_plan_args(args: argparse.Namespace) -> None:
     _check_out("out", args.out, "file")
     _check_out("plot", args.plot, "file")
     check_distinct({"out": args.out, "plot": args.plot}, _inputs_of(args))
+    _check_crs_options(args)
 
 
 def _inputs_of(args: argparse.Namespace) -> dict[str, str | list | None]:

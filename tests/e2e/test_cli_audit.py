@@ -270,3 +270,37 @@ def _zombie(pid: int) -> bool:
             return fh.read().rsplit(")", 1)[1].split()[0] == "Z"
     except OSError:
         return True
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["export", "{p}", "--format", "geojson", "--projection", "utm", "--out", "{d}/x"],
+         "projection"),
+        (["export", "{p}", "--format", "geojson", "--utm-zone", "32", "--out", "{d}/x"],
+         "utm_zone"),
+        (["plan", "--scenario", "small", "--quiet", "--projection", "utm", "--out", "{d}/q.json"],
+         "projection"),
+        (["plan", "--scenario", "small", "--quiet", "--utm-zone", "32", "--out", "{d}/q.json"],
+         "utm_zone"),
+        (["survey", "--origin", "45,7"], "origin"),
+        (["survey", "--projection", "utm", "--plan-out", "{d}/s.json"], "projection"),
+    ],
+    ids=["export utm over an aeqd plan", "export zone over an aeqd plan", "plan utm, no origin",
+         "plan zone, no origin", "survey origin, no plan-out", "survey utm, no origin"],
+)  # fmt: skip
+def test_a_projection_option_that_would_be_ignored_is_refused(tmp_path, capsys, argv, field):
+    """``export --projection utm`` (or ``--utm-zone``) of a plan that records its crs wrote the
+    plan's own projection and said nothing (only ``--origin`` was compared with the plan's);
+    ``plan``/``survey`` with ``--projection``/``--utm-zone`` but no ``--origin``, and
+    ``survey --origin`` without ``--plan-out``, ignored them. Now each is an error naming the
+    option, as ``plan --effort`` with the de planner is."""
+    d = tmp_path / "d"
+    d.mkdir()
+    plan = d / "p.json"
+    assert main(["plan", "--scenario", "small", "--quiet", "--maxiter", "1", "--popsize", "8",
+                 "--origin", "45.5,126.6", "--out", str(plan)]) == 0  # fmt: skip
+    capsys.readouterr()
+    before = _tree(tmp_path)
+    _refused(capsys, [a.replace("{p}", str(plan)).replace("{d}", str(d)) for a in argv], field)
+    assert _tree(tmp_path) == before
