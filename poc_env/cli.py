@@ -640,7 +640,7 @@ def cmd_curve(args: argparse.Namespace) -> int:
     from poc_env.agents.rl.curve import plot_training_curve
 
     _check_int("until", args.until, 1, 2**53)
-    _check_out("out", args.out, "file")
+    _check_out("out", args.out, "file", ".png")
     print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
     return 0
 
@@ -711,7 +711,7 @@ def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("popsize", args.popsize, 4, limits.POPSIZE_MAX)
     _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
     _check_out("out", args.out, "file")
-    _check_out("plot", args.plot, "file")
+    _check_out("plot", args.plot, "file", ".png")
     check_distinct({"out": args.out, "plot": args.plot}, _inputs_of(args))
     _check_crs_options(args)
 

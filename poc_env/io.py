@@ -207,12 +207,15 @@ def _merge_into(src: Path, dest: Path) -> None:
             os.replace(entry, target)
 
 
-def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
-    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
+def check_out(
+    field: str, value: str | os.PathLike[str] | None, kind: str, suffix: str | None = None
+) -> None:
+    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``;
+    ``suffix`` (a file's, e.g. ``".png"``): the one its format needs.
 
     Refused: an empty path, a file where a folder is expected (or the reverse), a path under a
-    file, and a path whose nearest existing folder poc-env cannot write into (tried by
-    creating and removing a temporary folder there).
+    file, a file not ending in ``suffix`` (case ignored), and a path whose nearest existing
+    folder poc-env cannot write into (tried by creating and removing a temporary folder there).
     """
     from poc_env.errors import ConfigError
 
@@ -223,6 +226,9 @@ def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> No
     allowed = f"{what} that poc-env can create or write"
     if not text or "\0" in text:
         raise ConfigError(field, text, allowed)
+    if suffix is not None and not text.lower().endswith(suffix):
+        raise ConfigError(field, text, f"a path ending in {suffix} (the file is written in "
+                          "that format whatever its name)")  # fmt: skip
     path = Path(text)
     try:
         if kind == "file":

@@ -304,3 +304,23 @@ def test_a_projection_option_that_would_be_ignored_is_refused(tmp_path, capsys, 
     before = _tree(tmp_path)
     _refused(capsys, [a.replace("{p}", str(plan)).replace("{d}", str(d)) for a in argv], field)
     assert _tree(tmp_path) == before
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["plan", "--scenario", "small", "--quiet", "--out", "{d}/p.json", "--plot", "{d}/p.jpg"],
+         "plot"),
+        (["curve", "{d}", "--out", "{d}/curve.txt"], "out"),
+    ],
+    ids=["plan --plot p.jpg", "curve --out c.txt"],
+)  # fmt: skip
+def test_a_png_under_another_name_is_refused(tmp_path, capsys, argv, field):
+    """``plan --plot p.jpg`` and ``curve --out curve.txt`` wrote PNG data under those names
+    (exit 0; a viewer then refuses the file), where ``render --out ep.png`` is refused for not
+    ending in .gif. Refused before any work now, naming the option."""
+    d = tmp_path / "d"
+    d.mkdir()
+    err = _refused(capsys, [a.replace("{d}", str(d)) for a in argv], field)
+    assert ".png" in err
+    assert _tree(tmp_path) == ["d"]
