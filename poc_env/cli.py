@@ -269,7 +269,10 @@ def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
     _check_crs_options(args, "plan_out")
-    check_distinct({"plan_out": args.plan_out}, _inputs_of(args))
+    from poc_env.agents.planning.survey import SURVEY_FILES
+
+    written = [Path(args.out) / n for n in SURVEY_FILES] if args.out else None
+    check_distinct({"out": written, "plan_out": args.plan_out}, _inputs_of(args))
     if args.origin is not None:
         from poc_env.agents.mission.crs import make_crs
 

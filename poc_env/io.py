@@ -263,15 +263,16 @@ def _same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
 
 
 def check_distinct(
-    outputs: dict[str, str | os.PathLike[str] | None],
+    outputs: dict[str, str | os.PathLike[str] | list | None],
     inputs: dict[str, str | os.PathLike[str] | list | None],
 ) -> None:
     """Refuse an output file that is one of the command's inputs, or another of its outputs,
     before any work: ``plan --out P --plot P`` kept only the last one written, and ``--out``
     naming the scenario YAML or the previous sortie's plan.json replaced the user's file.
 
-    ``outputs``: option -> file path (None: not given); ``inputs``: option -> path or list of
-    paths (a value that is not an existing file, such as a built-in scenario name, is skipped).
+    ``outputs``: option -> file path or list of the files it writes (None: not given);
+    ``inputs``: option -> path or list of paths (a value that is not an existing file, such as
+    a built-in scenario name, is skipped).
 
     Raises
     ------
@@ -280,10 +281,15 @@ def check_distinct(
     """
     from poc_env.errors import ConfigError
 
-    given = [(f, v) for f, v in outputs.items() if v is not None]
+    given = [
+        (f, one)
+        for f, v in outputs.items()
+        if v is not None
+        for one in (v if isinstance(v, list) else [v])
+    ]
     for k, (field, path) in enumerate(given):
         for other, theirs in given[:k]:
-            if _same_path(path, theirs):
+            if other != field and _same_path(path, theirs):
                 option = "--" + other.replace("_", "-")
                 raise ConfigError(field, os.fspath(path), f"a path other than {option}'s "
                                   "(both would be written to one file)")  # fmt: skip

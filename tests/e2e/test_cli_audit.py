@@ -169,6 +169,7 @@ def test_a_path_too_long_for_the_file_system_is_a_clear_error(
         (["replan", "--plan", "{d}/p1.json", "--out", "{d}/p1.json"], "out"),
         (["replan", "--plan", "{d}/p1.json", "--out", "{d}/../d/p1.json"], "out"),
         (["survey", "--plan-out", "{d}/sc.yaml", "--scenario", "{d}/sc.yaml"], "plan_out"),
+        (["survey", "--out", "{d}/s", "--plan-out", "{d}/s/survey.csv"], "plan_out"),
     ],
     ids=[
         "plan out=plot",
@@ -176,13 +177,15 @@ def test_a_path_too_long_for_the_file_system_is_a_clear_error(
         "replan out=plan",
         "replan out=plan (path)",
         "survey plan-out=scenario",
+        "survey plan-out=its survey.csv",
     ],
 )
 def test_an_output_over_an_input_or_another_output_is_refused(tmp_path, capsys, argv, field):
     """``plan --out P --plot P`` wrote the PNG and then plan.json over it (one output lost,
-    exit 0); ``--out`` naming the command's own input (the scenario YAML, the previous
-    sortie's plan.json that the next replan needs again) replaced the user's file. Refused
-    before any work, naming the output option; the inputs are untouched."""
+    exit 0), as ``survey --out S --plan-out S/survey.csv`` did the CSV; ``--out`` naming the
+    command's own input (the scenario YAML, the previous sortie's plan.json that the next
+    replan needs again) replaced the user's file. Refused before any work, naming the output
+    option; the inputs are untouched."""
     import shutil
 
     from poc_env.config import CONFIG_DIR
