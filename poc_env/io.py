@@ -158,13 +158,14 @@ def clean_stale_temp_files(folder: Path) -> None:
                 os.unlink(e.path)
 
 
-def _clean_stale_staging(dest: Path) -> None:
-    """Remove staging folders of ``dest`` left by runs that were killed (their PID is gone)."""
+def _clean_stale_staging(dest: Path, where: Path) -> None:
+    """Remove staging folders of ``dest`` in the folder ``where`` left by runs that were killed
+    (their PID is gone)."""
     import shutil
 
     prefix = f".{dest.name}{_STAGING}"
     try:
-        siblings = list(dest.parent.iterdir())
+        siblings = list(where.iterdir())
     except OSError:
         return
     for p in siblings:
@@ -309,8 +310,10 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
     """Yield a staging folder beside ``path``; put its files in place if the block succeeds.
 
     A command writes its whole output into the staging folder (a hidden sibling
-    ``.NAME.partial-PID-XXXX`` on the same file system), so a kill or an error during the run
-    leaves the destination as it was. When the block succeeds:
+    ``.NAME.partial-PID-XXXX`` on the same file system; in the nearest existing folder above
+    ``path`` when its parent does not exist yet, which is made only at the end), so a kill or
+    an error during the run leaves the destination as it was, and no new folder. When the
+    block succeeds:
 
     * ``path`` absent or an empty folder: the staging folder is renamed to ``path`` -- the
       output appears complete, in one step, or not at all;
@@ -329,9 +332,9 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
     if dest.is_symlink() and dest.is_dir():  # stage beside the real folder (same file system)
         dest = dest.resolve()
     created = [p for p in (dest.parent, *dest.parent.parents) if not p.exists()]
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    _clean_stale_staging(dest)
-    stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=dest.parent))
+    staging = created[-1].parent if created else dest.parent  # made at the end, if ever
+    _clean_stale_staging(dest, staging)
+    stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=staging))
     done = False
     try:
         umask = os.umask(0)
@@ -341,6 +344,7 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
         if dest.is_dir() and not dest.is_symlink() and not any(dest.iterdir()):
             dest.rmdir()
         if not dest.exists():
+            dest.parent.mkdir(parents=True, exist_ok=True)
             os.rename(stage, dest)
         else:
             _check_merge(stage, dest, field)

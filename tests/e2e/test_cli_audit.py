@@ -327,3 +327,28 @@ def test_a_png_under_another_name_is_refused(tmp_path, capsys, argv, field):
     err = _refused(capsys, [a.replace("{d}", str(d)) for a in argv], field)
     assert ".png" in err
     assert _tree(tmp_path) == ["d"]
+
+
+def test_a_run_in_progress_shows_no_output_folder_yet(tmp_path, capsys, monkeypatch):
+    """``experiment table4 --out t`` killed (SIGKILL) part-way left ``t/`` holding only a
+    hidden staging folder (the kill harness's one PARTIAL state after the fixes): the staging
+    folder's parents were made before the run. Now the staging folder waits in the nearest
+    existing folder and the destination's folders are made when it is put in place, so at any
+    moment of the run nothing but hidden staging is visible."""
+    import poc_env.agents.planning.survey as survey
+
+    seen: list[list[str]] = []
+    real = survey.run_survey
+
+    def watched(*a, **k):
+        seen.append([p for p in _tree(tmp_path) if ".partial-" not in p])  # a kill now
+        return real(*a, **k)
+
+    monkeypatch.setattr(survey, "run_survey", watched)
+    out = tmp_path / "new" / "s"
+    assert main(["survey", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert seen == [[]]
+    assert sorted(p.name for p in out.iterdir()) == ["survey.csv", "survey.png", "survey.txt"]
+    assert _tree(tmp_path) == ["new", "new/s", *(f"new/s/survey.{e}" for e in ("csv", "png",
+                                                                             "txt"))]  # fmt: skip
