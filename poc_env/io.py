@@ -13,7 +13,7 @@ import contextlib
 import os
 import re
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -264,8 +264,8 @@ def _same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
 
 
 def check_distinct(
-    outputs: dict[str, str | os.PathLike[str] | list | None],
-    inputs: dict[str, str | os.PathLike[str] | list | None],
+    outputs: Mapping[str, str | os.PathLike[str] | list | None],
+    inputs: Mapping[str, str | os.PathLike[str] | list | None],
 ) -> None:
     """Refuse an output file that is one of the command's inputs, or another of its outputs,
     before any work: ``plan --out P --plot P`` kept only the last one written, and ``--out``
