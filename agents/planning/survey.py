@@ -178,7 +178,7 @@ def load_regions(source: str | os.PathLike[str]) -> RegionPlan:
     path = CONFIG_DIR / "regions" / f"{text}.yaml" if text in names else Path(text)
     if not path.is_file():
         raise ConfigError("regions", text, f"a YAML file or one of {names}")
-    data = read_yaml(path)
+    data = read_yaml(path, "regions")
     data.setdefault("name", path.stem)
     return _from_mapping(RegionPlan, data, "regions")
 

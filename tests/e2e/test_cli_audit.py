@@ -4,6 +4,7 @@ status 2 and nothing written; a command's outputs are complete or absent."""
 
 from __future__ import annotations
 
+import os
 import sys
 
 import pytest
@@ -352,3 +353,23 @@ def test_a_run_in_progress_shows_no_output_folder_yet(tmp_path, capsys, monkeypa
     assert sorted(p.name for p in out.iterdir()) == ["survey.csv", "survey.png", "survey.txt"]
     assert _tree(tmp_path) == ["new", "new/s", *(f"new/s/survey.{e}" for e in ("csv", "png",
                                                                              "txt"))]  # fmt: skip
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/mem"), reason="needs Linux's /proc/self/mem")
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["plan", "--scenario", "/proc/self/mem", "--out", "{d}/p.json"], "scenario"),
+        (["survey", "--regions", "/proc/self/mem"], "regions"),
+    ],
+    ids=["plan --scenario", "survey --regions"],
+)
+def test_a_yaml_file_that_cannot_be_read_is_a_clear_error(tmp_path, capsys, argv, field):
+    """A scenario or region file that exists but cannot be read (``/proc/self/mem``: EIO; an
+    unreadable file, a failing disk) ended in an ``OSError`` traceback: the read's error names
+    no file, so no handler could say which option it was. The YAML reader now reads through
+    :func:`poc_env.io.read_text`, naming the option (``regions``, not ``scenario``, for a
+    region file)."""
+    err = _refused(capsys, [a.replace("{d}", str(tmp_path)) for a in argv], field)
+    assert "Input/output error" in err
+    assert _tree(tmp_path) == []
