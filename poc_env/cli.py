@@ -30,6 +30,7 @@ from poc_env.errors import (
     skipped_for_extra,
 )
 from poc_env.helptext import examples, use_everywhere, walk
+from poc_env.io import check_distinct
 from poc_env.io import check_out as _check_out
 
 #: Optional dependencies and the extra that installs each (pyproject.toml).
@@ -226,9 +227,31 @@ def cmd_spec(args: argparse.Namespace) -> int:
     return main_args(args)
 
 
+def _check_crs_options(args: argparse.Namespace, recorded_in: str | None = None) -> None:
+    """``--projection`` and ``--utm-zone`` shape the crs made at ``--origin``: without an
+    origin they would be ignored, and so would ``--origin`` itself without the output that
+    records it (``recorded_in``, an option such as ``plan_out``, when one is needed)."""
+    if args.origin is None:
+        why = ("without it the crs is the scenario's own map.projection at map.origin_deg, if it "
+               "records one")  # fmt: skip
+        if args.projection != "aeqd":
+            raise ConfigError("projection", args.projection, f"only with --origin ({why})")
+        if args.utm_zone is not None:
+            raise ConfigError("utm_zone", args.utm_zone, f"only with --origin ({why})")
+    elif recorded_in is not None and getattr(args, recorded_in) is None:
+        option = "--" + recorded_in.replace("_", "-")
+        raise ConfigError("origin", args.origin, f"only with {option} (the file that records "
+                          "the crs; nothing else uses it)")  # fmt: skip
+
+
 def cmd_survey(args: argparse.Namespace) -> int:
     _check_out("out", args.out, "folder")
     _check_out("plan_out", args.plan_out, "file")
+    _check_crs_options(args, "plan_out")
+    from poc_env.agents.planning.survey import SURVEY_FILES
+
+    written = [Path(args.out) / n for n in SURVEY_FILES] if args.out else None
+    check_distinct({"out": written, "plan_out": args.plan_out}, _inputs_of(args))
     if args.origin is not None:
         from poc_env.agents.mission.crs import make_crs
 
@@ -393,14 +416,35 @@ BENCHMARKS = {
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    """Run a benchmark in a fresh interpreter, so one-thread settings precede numpy's import."""
+    """Run a benchmark in a fresh interpreter, so one-thread settings precede numpy's import.
+
+    On Linux the benchmark dies with ``poc-env`` (:func:`_die_with_parent`): a SIGKILL or
+    SIGTERM of the command (a scheduler ending the job) left it running on, orphaned, writing
+    its ``--out`` folder after the kill.
+    """
     import os
     import subprocess
 
     modules = BENCHMARKS
     env = dict(os.environ, OMP_NUM_THREADS="1", NUMBA_NUM_THREADS="1", MKL_NUM_THREADS="1")
     cmd = [sys.executable, "-m", modules[args.what], *args.rest]
-    return subprocess.call(cmd, env=env)
+    if not sys.platform.startswith("linux"):
+        return subprocess.call(cmd, env=env)
+    parent = os.getpid()
+    return subprocess.call(cmd, env=env, preexec_fn=lambda: _die_with_parent(parent))
+
+
+def _die_with_parent(parent: int) -> None:
+    """In a child process (before it runs its program): ask Linux for SIGTERM when the parent
+    dies (``prctl(PR_SET_PDEATHSIG)``), and end now if the parent ``parent`` is already gone."""
+    import ctypes
+    import signal
+
+    pr_set_pdeathsig = 1
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(pr_set_pdeathsig, int(signal.SIGTERM), 0, 0, 0)
+    if os.getppid() != parent:  # died before the request took effect
+        os._exit(143)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
@@ -581,7 +625,7 @@ def cmd_curve(args: argparse.Namespace) -> int:
     from poc_env.agents.rl.curve import plot_training_curve
 
     _check_int("until", args.until, 1, 2**53)
-    _check_out("out", args.out, "file")
+    _check_out("out", args.out, "file", ".png")
     print(f"wrote {plot_training_curve(args.run_dir, args.out, args.until)}")
     return 0
 
@@ -642,6 +686,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
 
     _check_int("seed", args.seed, 0, limits.MAX_SEED)
     _check_out("out", args.out, "file")
+    check_distinct({"out": args.out}, _inputs_of(args))
     return cli_main(args)
 
 
@@ -651,7 +696,17 @@ def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("popsize", args.popsize, 4, limits.POPSIZE_MAX)
     _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
     _check_out("out", args.out, "file")
-    _check_out("plot", args.plot, "file")
+    _check_out("plot", args.plot, "file", ".png")
+    check_distinct({"out": args.out, "plot": args.plot}, _inputs_of(args))
+    _check_crs_options(args)
+
+
+def _inputs_of(args: argparse.Namespace) -> dict[str, str | list | None]:
+    """The input files a command line names (for :func:`poc_env.io.check_distinct`), by
+    option."""
+    names = {"scenario": "scenario", "map": "map_file", "regions": "regions", "plan": "plan",
+             "tracks": "tracks"}  # fmt: skip
+    return {n: getattr(args, d) for n, d in names.items() if getattr(args, d, None) is not None}
 
 
 def _plan(
@@ -1309,9 +1364,53 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PocEnvError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: one line, no traceback; staged outputs never placed
+        print(
+            f"interrupted: poc-env {args.command} stopped before its end; its outputs not yet "
+            "in place were not written",
+            file=sys.stderr,
+        )
+        return 130  # 128 + SIGINT, as shells report a process the signal ended
     except BrokenPipeError:  # `poc-env tasks | head -3`: the reader had what it wanted
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
         return 0
+    except OSError as err:  # a path the system refused where no check named it first
+        if err.filename is None:
+            raise
+        name = os.fsdecode(err.filename)
+        refused = ConfigError(_field_of_path(args, name), name, f"a path poc-env can use "
+                              f"({err.strerror or err})")  # fmt: skip
+        print(f"error: {refused}", file=sys.stderr)
+        return 2
+
+
+def _field_of_path(args: argparse.Namespace, path: str) -> str:
+    """The option of ``args`` whose value holds ``path`` (the file an OSError names): its
+    whole value, a part of it (``ppo:PATH``, ``map.prior.file=PATH``) or a folder above it;
+    within ``train``'s and ``bench``'s own options, the option before the value. ``path``
+    when no option holds it (a file named inside a YAML scenario, say)."""
+
+    def holds(value: object) -> int:  # 3: the value itself, 2: part of it, 1: a folder above
+        if not isinstance(value, str) or not value:
+            return 0
+        return 3 if value == path else 2 if path in value else int(
+            path.startswith(value.rstrip(os.sep) + os.sep))  # fmt: skip
+
+    found: list[tuple[int, str]] = []
+    for key, value in vars(args).items():
+        if key in ("train_options", "rest") and isinstance(value, list):
+            for i, item in enumerate(value):
+                before = value[i - 1] if i > 0 else ""
+                option, eq, inline = item.partition("=")
+                if option.startswith("--") and eq and holds(inline):  # --resume=PATH
+                    found.append((holds(inline), option[2:].replace("-", "_")))
+                elif holds(item) and before.startswith("--"):
+                    found.append((holds(item), before[2:].replace("-", "_")))
+        elif isinstance(value, list):
+            found += [(holds(v), key) for v in value if holds(v)]
+        elif holds(value):
+            found.append((holds(value), key))
+    return max(found)[1] if found else "path"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1108,20 +1108,24 @@ def load_yaml_text(text: str) -> Any:
     return yaml.load(text, Loader=_LimitedLoader)  # a SafeLoader subclass: safe types only
 
 
-def read_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
+def read_yaml(path: str | os.PathLike[str], field: str = "scenario") -> dict[str, Any]:
     """Read a YAML mapping safely (:func:`load_yaml_text`: safe types only, no alias bombs, at
-    most :data:`MAX_YAML_BYTES`); clear errors for missing, oversized or corrupt files."""
+    most :data:`MAX_YAML_BYTES`); clear errors naming ``field`` (the option or key the path
+    came from) for missing, unreadable, oversized or corrupt files."""
+    from poc_env.io import read_text
+
     p = Path(path)
     if not p.is_file():
-        raise ConfigError("scenario", str(p), "an existing YAML file or a built-in scenario name")
+        raise ConfigError(field, str(p), "an existing YAML file or a built-in scenario name")
     if p.stat().st_size > MAX_YAML_BYTES:
-        raise ConfigError("scenario", str(p), f"a YAML file of at most {MAX_YAML_BYTES} bytes")
+        raise ConfigError(field, str(p), f"a YAML file of at most {MAX_YAML_BYTES} bytes")
+    text = read_text(p, field, "a readable YAML file")  # a read error names no file
     try:
-        data = load_yaml_text(p.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as err:
-        raise ConfigError("scenario", str(p), f"valid YAML ({err})") from None
+        data = load_yaml_text(text)
+    except yaml.YAMLError as err:
+        raise ConfigError(field, str(p), f"valid YAML ({err})") from None
     if not isinstance(data, dict):
-        raise ConfigError("scenario", str(p), "a YAML mapping at the top level")
+        raise ConfigError(field, str(p), "a YAML mapping at the top level")
     return data
 
 

@@ -305,9 +305,19 @@ def plan_crs(
     Raises
     ------
     ConfigError
-        ``origin`` disagrees with the plan's, or is missing when the plan records no CRS.
+        ``origin`` disagrees with the plan's, or is missing when the plan records no CRS; a
+        ``projection`` other than the default ``aeqd``, or a ``zone``, that disagrees with the
+        plan's record (it would be ignored: the plan's CRS is the one its metres are in).
     """
     if rec is not None:
+        kind = rec.get("kind")
+        if projection != "aeqd" and projection != kind:
+            raise ConfigError("projection", projection, f"{kind} (the plan's crs.kind) or "
+                              "omitted: a plan's metres are in the crs it records")  # fmt: skip
+        own_zone = rec["epsg"] % 100 if kind == "utm" and "epsg" in rec else None
+        if zone is not None and zone != own_zone:
+            shown = "no zone: its crs is " + str(kind) if own_zone is None else own_zone
+            raise ConfigError("utm_zone", zone, f"omitted (the plan records its crs: {shown})")
         if origin is not None:
             lat, lon = check_origin(origin)
             lat0, lon0 = rec["origin_deg"]

@@ -13,7 +13,7 @@ import contextlib
 import os
 import re
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -83,26 +83,35 @@ def atomic_path(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path
     """Yield a temporary path beside ``path``; publish it over ``path`` if the block succeeds.
 
     ``suffix`` keeps an extension that writers infer the format from (``".png"``, ``".zip"``).
-    Creates the destination folder. On an exception the temporary file is deleted and the
-    exception propagates. The temporary file is named ``.NAME.tmp-PID-XXXX``: one left by a
-    killed process (its PID gone) is removed by the next atomic write into the same folder.
+    The temporary file waits in the nearest existing folder of ``path`` (the same file system
+    as the folders to be made under it); the destination's missing folders are made only when
+    it is published, so a failure or a kill before then leaves no empty folders behind. On an
+    exception the temporary file is deleted and the exception propagates. The temporary file
+    is named ``.NAME.tmp-PID-XXXX``: one left by a killed process (its PID gone) is removed by
+    the next atomic write staged in the same folder.
     """
     p = Path(path)
     check_replaceable(p)  # before any work: never a device, FIFO or socket
-    p.parent.mkdir(parents=True, exist_ok=True)
-    clean_stale_temp_files(p.parent)
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{p.name}{_TEMP}{os.getpid()}-", suffix=suffix, dir=p.parent
-    )
+    missing = [q for q in (p.parent, *p.parent.parents) if not q.is_dir()]  # deepest first
+    staging = missing[-1].parent if missing else p.parent
+    clean_stale_temp_files(staging)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}{_TEMP}{os.getpid()}-", suffix=suffix, dir=staging)
     os.close(fd)
+    published = False
     try:
         yield Path(tmp)
         with open(tmp, "rb+") as fh:  # on disk before the rename, so a crash leaves old or new
             os.fsync(fh.fileno())
+        p.parent.mkdir(parents=True, exist_ok=True)
         publish_atomic(tmp, p)
+        published = True
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if not published:
+            for folder in missing:  # made by this call (a refused publish), deepest first
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
 
 
 def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:
@@ -149,13 +158,14 @@ def clean_stale_temp_files(folder: Path) -> None:
                 os.unlink(e.path)
 
 
-def _clean_stale_staging(dest: Path) -> None:
-    """Remove staging folders of ``dest`` left by runs that were killed (their PID is gone)."""
+def _clean_stale_staging(dest: Path, where: Path) -> None:
+    """Remove staging folders of ``dest`` in the folder ``where`` left by runs that were killed
+    (their PID is gone)."""
     import shutil
 
     prefix = f".{dest.name}{_STAGING}"
     try:
-        siblings = list(dest.parent.iterdir())
+        siblings = list(where.iterdir())
     except OSError:
         return
     for p in siblings:
@@ -198,12 +208,15 @@ def _merge_into(src: Path, dest: Path) -> None:
             os.replace(entry, target)
 
 
-def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> None:
-    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``.
+def check_out(
+    field: str, value: str | os.PathLike[str] | None, kind: str, suffix: str | None = None
+) -> None:
+    """Check an output path before any work: ``kind`` is ``"file"`` or ``"folder"``;
+    ``suffix`` (a file's, e.g. ``".png"``): the one its format needs.
 
     Refused: an empty path, a file where a folder is expected (or the reverse), a path under a
-    file, and a path whose nearest existing folder poc-env cannot write into (tried by
-    creating and removing a temporary folder there).
+    file, a file not ending in ``suffix`` (case ignored), and a path whose nearest existing
+    folder poc-env cannot write into (tried by creating and removing a temporary folder there).
     """
     from poc_env.errors import ConfigError
 
@@ -214,6 +227,9 @@ def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> No
     allowed = f"{what} that poc-env can create or write"
     if not text or "\0" in text:
         raise ConfigError(field, text, allowed)
+    if suffix is not None and not text.lower().endswith(suffix):
+        raise ConfigError(field, text, f"a path ending in {suffix} (the file is written in "
+                          "that format whatever its name)")  # fmt: skip
     path = Path(text)
     try:
         if kind == "file":
@@ -236,13 +252,68 @@ def check_out(field: str, value: str | os.PathLike[str] | None, kind: str) -> No
         raise ConfigError(field, text, f"{allowed} ({err.strerror})") from None
 
 
+def _same_path(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """``a`` and ``b`` name the same file: the same inode when both exist (hard and symbolic
+    links included), else the same absolute path once resolved."""
+    try:
+        if os.path.exists(a) and os.path.exists(b):
+            return os.path.samefile(a, b)
+        return Path(a).resolve() == Path(b).resolve()
+    except (OSError, ValueError):  # a path the system refuses: its own check reports it
+        return False
+
+
+def check_distinct(
+    outputs: Mapping[str, str | os.PathLike[str] | list | None],
+    inputs: Mapping[str, str | os.PathLike[str] | list | None],
+) -> None:
+    """Refuse an output file that is one of the command's inputs, or another of its outputs,
+    before any work: ``plan --out P --plot P`` kept only the last one written, and ``--out``
+    naming the scenario YAML or the previous sortie's plan.json replaced the user's file.
+
+    ``outputs``: option -> file path or list of the files it writes (None: not given);
+    ``inputs``: option -> path or list of paths (a value that is not an existing file, such as
+    a built-in scenario name, is skipped).
+
+    Raises
+    ------
+    ConfigError
+        Naming the output option, its path, and the option it collides with.
+    """
+    from poc_env.errors import ConfigError
+
+    given = [
+        (f, one)
+        for f, v in outputs.items()
+        if v is not None
+        for one in (v if isinstance(v, list) else [v])
+    ]
+    for k, (field, path) in enumerate(given):
+        for other, theirs in given[:k]:
+            if other != field and _same_path(path, theirs):
+                option = "--" + other.replace("_", "-")
+                raise ConfigError(field, os.fspath(path), f"a path other than {option}'s "
+                                  "(both would be written to one file)")  # fmt: skip
+        for name, value in inputs.items():
+            values = value if isinstance(value, list) else [value]
+            for v in values:
+                if v is not None and os.path.isfile(v) and _same_path(path, v):
+                    option = "--" + name.replace("_", "-")
+                    raise ConfigError(
+                        field, os.fspath(path), f"a path other than the input {option} "
+                        f"{os.fspath(v)} (writing it would replace that file)",
+                    )  # fmt: skip
+
+
 @contextlib.contextmanager
 def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[Path]:
     """Yield a staging folder beside ``path``; put its files in place if the block succeeds.
 
     A command writes its whole output into the staging folder (a hidden sibling
-    ``.NAME.partial-PID-XXXX`` on the same file system), so a kill or an error during the run
-    leaves the destination as it was. When the block succeeds:
+    ``.NAME.partial-PID-XXXX`` on the same file system; in the nearest existing folder above
+    ``path`` when its parent does not exist yet, which is made only at the end), so a kill or
+    an error during the run leaves the destination as it was, and no new folder. When the
+    block succeeds:
 
     * ``path`` absent or an empty folder: the staging folder is renamed to ``path`` -- the
       output appears complete, in one step, or not at all;
@@ -261,9 +332,9 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
     if dest.is_symlink() and dest.is_dir():  # stage beside the real folder (same file system)
         dest = dest.resolve()
     created = [p for p in (dest.parent, *dest.parent.parents) if not p.exists()]
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    _clean_stale_staging(dest)
-    stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=dest.parent))
+    staging = created[-1].parent if created else dest.parent  # made at the end, if ever
+    _clean_stale_staging(dest, staging)
+    stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=staging))
     done = False
     try:
         umask = os.umask(0)
@@ -273,6 +344,7 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
         if dest.is_dir() and not dest.is_symlink() and not any(dest.iterdir()):
             dest.rmdir()
         if not dest.exists():
+            dest.parent.mkdir(parents=True, exist_ok=True)
             os.rename(stage, dest)
         else:
             _check_merge(stage, dest, field)
@@ -359,16 +431,34 @@ def loads_json(text: str | bytes, field: str, value: object = None) -> Any:
         raise ConfigError(field, shown, f"a valid JSON document ({err})") from None
 
 
-def read_json(path: str | os.PathLike[str], field: str) -> Any:
-    """The JSON document in the file ``path`` (:func:`loads_json`'s rules); a file that cannot
-    be read is a :class:`~poc_env.errors.ConfigError` naming ``field`` and the path too."""
+def read_bytes(path: str | os.PathLike[str], field: str, what: str) -> bytes:
+    """The bytes of the file ``path``; one that cannot be read (missing, a folder, no
+    permission) is a :class:`~poc_env.errors.ConfigError` naming ``field``, the path and
+    ``what`` is allowed (with the system's reason), never a traceback."""
     from poc_env.errors import ConfigError
 
     try:
-        data = Path(path).read_bytes()
+        return Path(path).read_bytes()
     except OSError as err:
-        allowed = f"a readable JSON file ({err.strerror})"
-        raise ConfigError(field, os.fspath(path), allowed) from None
+        raise ConfigError(field, os.fspath(path), f"{what} ({err.strerror})") from None
+
+
+def read_text(path: str | os.PathLike[str], field: str, what: str) -> str:
+    """The UTF-8 text of the file ``path`` (:func:`read_bytes`'s refusals; text that is not
+    UTF-8 is refused too, naming ``field``)."""
+    from poc_env.errors import ConfigError
+
+    data = read_bytes(path, field, what)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ConfigError(field, os.fspath(path), f"{what} in UTF-8 ({err.reason})") from None
+
+
+def read_json(path: str | os.PathLike[str], field: str) -> Any:
+    """The JSON document in the file ``path`` (:func:`loads_json`'s rules); a file that cannot
+    be read is a :class:`~poc_env.errors.ConfigError` naming ``field`` and the path too."""
+    data = read_bytes(path, field, "a readable JSON file")
     return loads_json(data, field, os.fspath(path))
 
 

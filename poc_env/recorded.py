@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -154,18 +153,13 @@ def replay(recording: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 
 def write(task_id: str, directory: str | os.PathLike | None = None) -> Path:
-    """Record ``task_id`` and write it atomically (temporary file, then ``os.replace``)."""
+    """Record ``task_id`` and write it atomically (:func:`poc_env.io.atomic_path`)."""
+    from poc_env.io import atomic_path
+
     path = path_of(task_id, directory)
-    path.parent.mkdir(parents=True, exist_ok=True)
     arrays = run(task_id)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez_compressed(fh, **arrays)  # type: ignore[arg-type]
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:
+        np.savez_compressed(fh, **arrays)  # type: ignore[arg-type]
     return path
 
 
@@ -179,10 +173,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_args(args: argparse.Namespace) -> int:
     """Record the tasks ``args`` name (:func:`add_arguments`), one line per file written."""
+    from poc_env.errors import ConfigError
+    from poc_env.io import atomic_dir, check_out
+
     ids = list(tasks.TASKS) if args.all else [tasks.get_task(t).id for t in args.task]
-    for tid in ids:
-        path = write(tid, args.dir)
-        print(f"{tid}: {path} ({path.stat().st_size} bytes)")
+    if args.dir is None and not DEFAULT_DIR.is_dir():  # a wheel install: no source tree
+        raise ConfigError(
+            "dir",
+            None,
+            f"--dir FOLDER (the default {DEFAULT_DIR} is the "
+            "tests/recorded/ folder of a source checkout; this install has none)",
+        )
+    folder = Path(DEFAULT_DIR if args.dir is None else args.dir)
+    check_out("dir", folder, "folder")  # before any episode is flown
+    lines = []
+    with atomic_dir(folder, "dir") as stage:  # every recording in place, or none
+        for tid in ids:
+            path = write(tid, stage)
+            lines.append(f"{tid}: {folder / path.name} ({path.stat().st_size} bytes)")
+    print(*lines, sep="\n")
     return 0
 
 

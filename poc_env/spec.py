@@ -676,12 +676,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def main_args(args: argparse.Namespace) -> int:
     """Check (exit status 1 if stale) or, with ``--write``, rewrite the generated sections of
     ``docs/environment.md``."""
+    from poc_env.errors import ConfigError
+    from poc_env.io import read_text, write_text_atomic
+
     path = Path(args.doc)
-    old = path.read_text(encoding="utf-8")
-    new = render_doc(old)
+    page = "docs/environment.md of a source checkout, or a page with its spec markers"
+    old = read_text(path, "doc", f"a readable page ({page})")
+    try:
+        new = render_doc(old)
+    except KeyError as err:  # a page without the generated sections' markers
+        raise ConfigError("doc", str(path), f"a page with every section's markers "
+                          f"({err.args[0]})") from None  # fmt: skip
     if args.write:
         if new != old:
-            path.write_text(new, encoding="utf-8")
+            write_text_atomic(path, new)
         print(f"{path}: {'rewritten' if new != old else 'up to date'}")
         return 0
     if new != old:

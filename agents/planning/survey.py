@@ -172,13 +172,13 @@ class RegionPlan:
 def load_regions(source: str | os.PathLike[str]) -> RegionPlan:
     """Load a region plan by built-in name (``configs/regions/NAME.yaml``) or YAML path."""
     text = str(source)
-    path = CONFIG_DIR / "regions" / f"{text}.yaml"
+    names = sorted(p.stem for p in (CONFIG_DIR / "regions").glob("*.yaml"))
+    # a built-in by its name only: never a path joined under configs/regions (an absolute
+    # path or ../ would leave it), so a too-long path is the OSError of the user's own file
+    path = CONFIG_DIR / "regions" / f"{text}.yaml" if text in names else Path(text)
     if not path.is_file():
-        path = Path(text)
-    if not path.is_file():
-        names = sorted(p.stem for p in (CONFIG_DIR / "regions").glob("*.yaml"))
         raise ConfigError("regions", text, f"a YAML file or one of {names}")
-    data = read_yaml(path)
+    data = read_yaml(path, "regions")
     data.setdefault("name", path.stem)
     return _from_mapping(RegionPlan, data, "regions")
 
@@ -353,6 +353,10 @@ def _airfields_for(sc: Scenario, plan: RegionPlan):
     return takeoffs, landings
 
 
+#: The files :func:`write_survey` writes into its folder (the figure only with a prior).
+SURVEY_FILES = ("survey.csv", "survey.txt", "survey.png")
+
+
 def write_survey(
     result: SurveyResult,
     out_dir: str | os.PathLike[str],
@@ -362,14 +366,15 @@ def write_survey(
 ) -> list[Path]:
     """Write ``survey.csv``, ``survey.txt`` and the figure ``survey.png`` into ``out_dir``."""
     out = Path(out_dir)
+    csv_name, txt_name, png_name = SURVEY_FILES
     paths = [
-        write_text_atomic(out / "survey.csv", result.to_csv()),
-        write_text_atomic(out / "survey.txt", result.table() + "\n"),
+        write_text_atomic(out / csv_name, result.to_csv()),
+        write_text_atomic(out / txt_name, result.table() + "\n"),
     ]
     if prior is not None and scenario is not None and plan is not None:
         from poc_env.viz.plots import plot_survey
 
-        paths.append(plot_survey(result, scenario, plan, prior, out / "survey.png"))
+        paths.append(plot_survey(result, scenario, plan, prior, out / png_name))
     return paths
 
 

@@ -84,8 +84,7 @@ def test_failed_survey_leaves_the_previous_output(tmp_path, monkeypatch):
         raise KeyboardInterrupt  # a kill while the figure is drawn, after the CSV was written
 
     monkeypatch.setattr(plots, "plot_survey", broken)
-    with pytest.raises(KeyboardInterrupt):
-        main(["survey", "--scenario", "paper_6_1", "--out", str(out)])
+    assert main(["survey", "--scenario", "paper_6_1", "--out", str(out)]) == 130  # Ctrl-C
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert not _leftovers(tmp_path)
 
@@ -99,8 +98,7 @@ def test_failed_evaluate_writes_nothing(tmp_path, monkeypatch):
     monkeypatch.setattr(evaluate, "plot_curves", broken)
     out = tmp_path / "ev"
     argv = ["evaluate", "--scenario", "small", "--episodes", "1", "--quiet", "--out", str(out)]
-    with pytest.raises(KeyboardInterrupt):
-        main(argv)
+    assert main(argv) == 130  # Ctrl-C's status
     assert list(tmp_path.iterdir()) == []
 
 
@@ -113,8 +111,7 @@ def test_plan_and_its_plot_are_written_together(tmp_path, monkeypatch):
     monkeypatch.setattr(planner, "plot_plan", broken)
     plan, plot = tmp_path / "plan.json", tmp_path / "plan.png"
     argv = ["plan", "--scenario", "small", "--popsize", "8", "--maxiter", "1", "--quiet"]
-    with pytest.raises(KeyboardInterrupt):
-        main([*argv, "--out", str(plan), "--plot", str(plot)])
+    assert main([*argv, "--out", str(plan), "--plot", str(plot)]) == 130  # Ctrl-C's status
     assert list(tmp_path.iterdir()) == []
     monkeypatch.undo()
     assert main([*argv, "--out", str(plan), "--plot", str(plot)]) == 0

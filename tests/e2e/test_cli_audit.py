@@ -1,0 +1,375 @@
+"""Defects the command-line audit found (cli-audit, results/audit/cli/README.md): each test
+failed before its fix. Bad input ends in ``error: <field>: got ...; allowed: ...`` with exit
+status 2 and nothing written; a command's outputs are complete or absent."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import pytest
+
+from poc_env import recorded, spec, tasks
+from poc_env.cli import main
+
+
+def _tree(root):
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
+
+
+def _refused(capsys, argv, field) -> str:
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"error: {field}: got " in err and "allowed:" in err, err
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.mark.parametrize("what", ["missing", "folder", "no markers", "not utf-8"])
+def test_spec_doc_that_cannot_be_read_is_a_clear_error(tmp_path, capsys, what):
+    """``spec --doc`` a missing file, a folder, a page without the generated sections' markers
+    or one that is not UTF-8: a traceback (FileNotFoundError, IsADirectoryError, KeyError,
+    UnicodeDecodeError) before; now an error naming ``doc`` -- as from a wheel install, where
+    the default docs/environment.md does not exist."""
+    page = tmp_path / "ENV.md"
+    if what == "folder":
+        page.mkdir()
+    elif what == "no markers":
+        page.write_text("no markers", encoding="utf-8")
+    elif what == "not utf-8":
+        page.write_bytes(b"\xff\xfe<!-- spec:tasks -->")
+    before = _tree(tmp_path)
+    err = _refused(capsys, ["spec", "--write", "--doc", str(page)], "doc")
+    if what == "no markers":
+        assert "spec:tasks" in err
+    assert _tree(tmp_path) == before
+
+
+def test_spec_write_replaces_the_page_atomically(tmp_path, capsys, monkeypatch):
+    """``spec --write`` rewrote the page in place (``Path.write_text``): a failure part-way
+    left it truncated. It is now written through :func:`poc_env.io.write_text_atomic`: a
+    failing write leaves the old page whole."""
+    page = tmp_path / "ENV.md"
+    stale = "".join(f"<!-- spec:{n} -->\nSTALE\n<!-- /spec:{n} -->\n" for n in spec.SECTIONS)
+    page.write_text(stale, encoding="utf-8")
+
+    def broken_fsync(fd):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("os.fsync", broken_fsync)
+    with pytest.raises(OSError):
+        main(["spec", "--write", "--doc", str(page)])
+    assert page.read_text(encoding="utf-8") == stale
+    assert _tree(tmp_path) == ["ENV.md"]  # no temporary file left either
+    capsys.readouterr()
+
+
+def test_record_dir_that_is_a_file_is_refused_before_flying(tmp_path, capsys, monkeypatch):
+    """``record --dir FILE``: a traceback (FileExistsError) after flying the episode; now
+    refused up front, naming ``dir``."""
+    f = tmp_path / "f"
+    f.write_text("a file")
+    flown = []
+    monkeypatch.setattr(recorded, "run", lambda tid, *a: flown.append(tid))
+    tid = f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}"
+    _refused(capsys, ["record", "--task", tid, "--dir", str(f)], "dir")
+    _refused(capsys, ["record", "--task", tid, "--dir", str(f / "sub")], "dir")
+    assert flown == [] and f.read_text() == "a file"
+
+
+def test_record_writes_all_its_files_or_none(tmp_path, capsys, monkeypatch):
+    """``record --task A --task B`` failing on B left A's new recording in the folder (a set
+    of outputs part-written); now the recordings are staged and put in place together."""
+    tids = [f"poc_env/UAVSearch-Small-{c}-v{tasks.VERSION}" for c in ("Heading", "Waypoint")]
+    real = recorded.run
+
+    def fails_on_the_second(tid, *a):
+        if tid == tids[1]:
+            raise RuntimeError("killed")
+        return real(tid, *a)
+
+    monkeypatch.setattr(recorded, "run", fails_on_the_second)
+    out = tmp_path / "rec"
+    with pytest.raises(RuntimeError):
+        main(["record", "--task", tids[0], "--task", tids[1], "--dir", str(out)])
+    assert _tree(tmp_path) == []
+    capsys.readouterr()
+
+
+def test_record_without_dir_outside_a_checkout_is_refused(tmp_path, capsys, monkeypatch):
+    """From a wheel install ``record`` without ``--dir`` wrote into
+    ``site-packages/tests/recorded`` (the source tree's folder, computed from the package's
+    location); with no such folder it is now refused, naming ``dir``."""
+    monkeypatch.setattr(recorded, "DEFAULT_DIR", tmp_path / "site-packages" / "tests" / "rec")
+    tid = f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}"
+    err = _refused(capsys, ["record", "--task", tid], "dir")
+    assert "--dir" in err
+    assert _tree(tmp_path) == []
+
+
+def test_ctrl_c_is_one_line_and_status_130(tmp_path, capsys, monkeypatch):
+    """Ctrl-C (SIGINT) during a command printed a Python traceback (KeyboardInterrupt, from
+    wherever the run was: scipy, numba, a worker's wait) and the process died by the signal;
+    now one line on stderr, exit status 130 (128 + SIGINT, as ``train`` already returned), and
+    nothing written: the staged output never reaches its place."""
+    import poc_env.agents.planning.survey as survey
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(survey, "run_survey", interrupted)
+    monkeypatch.chdir(tmp_path)
+    assert main(["survey", "--out", str(tmp_path / "s")]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("interrupted") and err.count("\n") == 1, err
+    assert _tree(tmp_path) == []
+
+
+LONG = "y" * 300  # one name longer than any file system's limit (255 bytes): ENAMETOOLONG
+
+
+TOO_LONG = [
+    (["export", "{L}.json", "--format", "kml", "--out", "x"], "plan"),
+    (["plan", "--scenario", "{L}.yaml", "--out", "p.json"], "scenario"),
+    (["plan", "--scenario", "small", "--map", "{L}.npy", "--out", "p.json"], "map_file"),
+    (["replan", "--plan", "{L}.json", "--out", "n.json"], "plan"),
+    (["survey", "--regions", "{L}.yaml"], "regions"),
+    (["summarise", "{L}"], "results_dir"),
+    (["curve", "{L}", "--out", "c.png"], "run_dir"),
+    (["train", "--resume", "{L}"], "resume"),
+    (["evaluate", "--policies", "ppo:{L},random", "--episodes", "1"], "policies"),
+    (["scenario", "import", "{L}.geojson", "--airfields", "f.geojson", "--out", "h.yaml"],
+     "area"),
+    (["plan", "--scenario", "small", "--overrides", "map.prior.kind=file",
+     "map.prior.file={L}.npy", "--out", "p.json"], "overrides"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("argv, field", TOO_LONG, ids=[" ".join(a)[:40] for a, _ in TOO_LONG])
+def test_a_path_too_long_for_the_file_system_is_a_clear_error(
+    tmp_path, capsys, monkeypatch, argv, field
+):
+    """An input path with a name over the file system's limit: ``Path.is_file()`` and its kin
+    raise OSError (ENAMETOOLONG) instead of answering False, and every command with an input
+    file ended in that traceback. Now one error naming the option the path came from."""
+    monkeypatch.chdir(tmp_path)
+    err = _refused(capsys, [a.replace("{L}", str(tmp_path / LONG)) for a in argv], field)
+    assert "File name too long" in err
+    assert _tree(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (
+            ["plan", "--scenario", "small", "--quiet", "--out", "{d}/p.png", "--plot", "{d}/p.png"],
+            "plot",
+        ),
+        (["plan", "--scenario", "{d}/sc.yaml", "--quiet", "--out", "{d}/sc.yaml"], "out"),
+        (["replan", "--plan", "{d}/p1.json", "--out", "{d}/p1.json"], "out"),
+        (["replan", "--plan", "{d}/p1.json", "--out", "{d}/../d/p1.json"], "out"),
+        (["survey", "--plan-out", "{d}/sc.yaml", "--scenario", "{d}/sc.yaml"], "plan_out"),
+        (["survey", "--out", "{d}/s", "--plan-out", "{d}/s/survey.csv"], "plan_out"),
+    ],
+    ids=[
+        "plan out=plot",
+        "plan out=scenario",
+        "replan out=plan",
+        "replan out=plan (path)",
+        "survey plan-out=scenario",
+        "survey plan-out=its survey.csv",
+    ],
+)
+def test_an_output_over_an_input_or_another_output_is_refused(tmp_path, capsys, argv, field):
+    """``plan --out P --plot P`` wrote the PNG and then plan.json over it (one output lost,
+    exit 0), as ``survey --out S --plan-out S/survey.csv`` did the CSV; ``--out`` naming the
+    command's own input (the scenario YAML, the previous sortie's plan.json that the next
+    replan needs again) replaced the user's file. Refused before any work, naming the output
+    option; the inputs are untouched."""
+    import shutil
+
+    from poc_env.config import CONFIG_DIR
+
+    d = tmp_path / "d"
+    d.mkdir()
+    shutil.copy(CONFIG_DIR / "paper_6_1.yaml", d / "sc.yaml")
+    assert main(["plan", "--scenario", "small", "--quiet", "--maxiter", "1", "--popsize", "8",
+                 "--out", str(d / "p1.json")]) == 0  # fmt: skip
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in d.iterdir()}
+    _refused(capsys, [a.replace("{d}", str(d)) for a in argv], field)
+    assert {p.name: p.read_bytes() for p in d.iterdir()} == before
+
+
+def test_a_refused_plan_leaves_no_empty_folders(tmp_path, capsys):
+    """``plan --plot new/sub/p.png`` refused after its checks (here --uavs with --overrides
+    fleet...): the plot's temporary file had created ``new/sub/`` first, and the error left
+    those empty folders (a SIGKILL left them holding only the temporary file). The temporary
+    file now waits in the nearest existing folder and the folders are made when it is
+    published."""
+    argv = ["plan", "--scenario", "small", "--uavs", "2", "--overrides", "fleet.uavs=1",
+            "--quiet", "--out", str(tmp_path / "new" / "p.json"),
+            "--plot", str(tmp_path / "new" / "sub" / "p.png")]  # fmt: skip
+    _refused(capsys, argv, "uavs")
+    assert _tree(tmp_path) == []
+
+
+def test_atomic_path_makes_its_folders_only_when_it_publishes(tmp_path):
+    from poc_env.io import atomic_path
+
+    dest = tmp_path / "a" / "b" / "f.txt"
+    with pytest.raises(RuntimeError), atomic_path(dest) as tmp:
+        tmp.write_text("half")
+        assert _tree(tmp_path) == [tmp.name]  # staged beside the nearest existing folder
+        raise RuntimeError("killed")
+    assert _tree(tmp_path) == []
+    with atomic_path(dest) as tmp:
+        tmp.write_text("whole")
+    assert dest.read_text() == "whole" and _tree(tmp_path) == ["a", "a/b", "a/b/f.txt"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+def test_a_killed_bench_takes_its_benchmark_with_it(tmp_path):
+    """``poc-env bench`` runs the benchmark in a child interpreter; SIGKILL (or SIGTERM) of
+    ``poc-env`` -- a scheduler ending the job -- left that child running on, orphaned, and it
+    wrote its --out folder after the kill (the kill harness saw a "complete" output from a run
+    killed 1.3 s in). The child now dies with its parent."""
+    import os
+    import signal
+    import subprocess
+    import time
+
+    argv = [sys.executable, "-m", "poc_env.cli", "bench", "baselines", "--tasks",
+            f"poc_env/UAVSearch-Small-Heading-v{tasks.VERSION}", "--policies", "lawnmower",
+            "--episodes", "10000", "--out", str(tmp_path / "b")]  # fmt: skip
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    children: list[int] = []
+    try:
+        for _ in range(600):  # until the benchmark's interpreter is started
+            task = f"/proc/{proc.pid}/task/{proc.pid}/children"
+            with open(task) as fh:
+                children = [int(c) for c in fh.read().split()]
+            if children:
+                break
+            time.sleep(0.05)
+        assert children, "the benchmark's child process never started"
+    finally:
+        proc.kill()
+        proc.wait()
+    for _ in range(200):  # the child goes within moments of its parent
+        if not os.path.exists(f"/proc/{children[0]}") or _zombie(children[0]):
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(children[0], signal.SIGKILL)
+        pytest.fail("the benchmark outlived the killed poc-env bench")
+    assert not (tmp_path / "b").exists()
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except OSError:
+        return True
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["export", "{p}", "--format", "geojson", "--projection", "utm", "--out", "{d}/x"],
+         "projection"),
+        (["export", "{p}", "--format", "geojson", "--utm-zone", "32", "--out", "{d}/x"],
+         "utm_zone"),
+        (["plan", "--scenario", "small", "--quiet", "--projection", "utm", "--out", "{d}/q.json"],
+         "projection"),
+        (["plan", "--scenario", "small", "--quiet", "--utm-zone", "32", "--out", "{d}/q.json"],
+         "utm_zone"),
+        (["survey", "--origin", "45,7"], "origin"),
+        (["survey", "--projection", "utm", "--plan-out", "{d}/s.json"], "projection"),
+    ],
+    ids=["export utm over an aeqd plan", "export zone over an aeqd plan", "plan utm, no origin",
+         "plan zone, no origin", "survey origin, no plan-out", "survey utm, no origin"],
+)  # fmt: skip
+def test_a_projection_option_that_would_be_ignored_is_refused(tmp_path, capsys, argv, field):
+    """``export --projection utm`` (or ``--utm-zone``) of a plan that records its crs wrote the
+    plan's own projection and said nothing (only ``--origin`` was compared with the plan's);
+    ``plan``/``survey`` with ``--projection``/``--utm-zone`` but no ``--origin``, and
+    ``survey --origin`` without ``--plan-out``, ignored them. Now each is an error naming the
+    option, as ``plan --effort`` with the de planner is."""
+    d = tmp_path / "d"
+    d.mkdir()
+    plan = d / "p.json"
+    assert main(["plan", "--scenario", "small", "--quiet", "--maxiter", "1", "--popsize", "8",
+                 "--origin", "45.5,126.6", "--out", str(plan)]) == 0  # fmt: skip
+    capsys.readouterr()
+    before = _tree(tmp_path)
+    _refused(capsys, [a.replace("{p}", str(plan)).replace("{d}", str(d)) for a in argv], field)
+    assert _tree(tmp_path) == before
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["plan", "--scenario", "small", "--quiet", "--out", "{d}/p.json", "--plot", "{d}/p.jpg"],
+         "plot"),
+        (["curve", "{d}", "--out", "{d}/curve.txt"], "out"),
+    ],
+    ids=["plan --plot p.jpg", "curve --out c.txt"],
+)  # fmt: skip
+def test_a_png_under_another_name_is_refused(tmp_path, capsys, argv, field):
+    """``plan --plot p.jpg`` and ``curve --out curve.txt`` wrote PNG data under those names
+    (exit 0; a viewer then refuses the file), where ``render --out ep.png`` is refused for not
+    ending in .gif. Refused before any work now, naming the option."""
+    d = tmp_path / "d"
+    d.mkdir()
+    err = _refused(capsys, [a.replace("{d}", str(d)) for a in argv], field)
+    assert ".png" in err
+    assert _tree(tmp_path) == ["d"]
+
+
+def test_a_run_in_progress_shows_no_output_folder_yet(tmp_path, capsys, monkeypatch):
+    """``experiment table4 --out t`` killed (SIGKILL) part-way left ``t/`` holding only a
+    hidden staging folder (the kill harness's one PARTIAL state after the fixes): the staging
+    folder's parents were made before the run. Now the staging folder waits in the nearest
+    existing folder and the destination's folders are made when it is put in place, so at any
+    moment of the run nothing but hidden staging is visible."""
+    import poc_env.agents.planning.survey as survey
+
+    seen: list[list[str]] = []
+    real = survey.run_survey
+
+    def watched(*a, **k):
+        seen.append([p for p in _tree(tmp_path) if ".partial-" not in p])  # a kill now
+        return real(*a, **k)
+
+    monkeypatch.setattr(survey, "run_survey", watched)
+    out = tmp_path / "new" / "s"
+    assert main(["survey", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert seen == [[]]
+    assert sorted(p.name for p in out.iterdir()) == ["survey.csv", "survey.png", "survey.txt"]
+    assert _tree(tmp_path) == ["new", "new/s", *(f"new/s/survey.{e}" for e in ("csv", "png",
+                                                                             "txt"))]  # fmt: skip
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/mem"), reason="needs Linux's /proc/self/mem")
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["plan", "--scenario", "/proc/self/mem", "--out", "{d}/p.json"], "scenario"),
+        (["survey", "--regions", "/proc/self/mem"], "regions"),
+    ],
+    ids=["plan --scenario", "survey --regions"],
+)
+def test_a_yaml_file_that_cannot_be_read_is_a_clear_error(tmp_path, capsys, argv, field):
+    """A scenario or region file that exists but cannot be read (``/proc/self/mem``: EIO; an
+    unreadable file, a failing disk) ended in an ``OSError`` traceback: the read's error names
+    no file, so no handler could say which option it was. The YAML reader now reads through
+    :func:`poc_env.io.read_text`, naming the option (``regions``, not ``scenario``, for a
+    region file)."""
+    err = _refused(capsys, [a.replace("{d}", str(tmp_path)) for a in argv], field)
+    assert "Input/output error" in err
+    assert _tree(tmp_path) == []
