@@ -41,9 +41,18 @@ def compare(want: dict[str, np.ndarray], got: dict[str, np.ndarray]) -> dict:
 
 
 def main(out: str) -> None:
-    env = {k: os.environ.get(k) for k in (
-        "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NPY_DISABLE_CPU_FEATURES",
-        "ATEN_CPU_CAPABILITY", "MKL_ENABLE_INSTRUCTIONS", "DNNL_MAX_CPU_ISA", "GLIBC_TUNABLES")}
+    env = {
+        k: os.environ.get(k)
+        for k in (
+            "NUMBA_CPU_NAME",
+            "NUMBA_CPU_FEATURES",
+            "NPY_DISABLE_CPU_FEATURES",
+            "ATEN_CPU_CAPABILITY",
+            "MKL_ENABLE_INSTRUCTIONS",
+            "DNNL_MAX_CPU_ISA",
+            "GLIBC_TUNABLES",
+        )
+    }
     res = {"env": env, "tasks": {}}
     for tid in tasks.TASKS:
         want = recorded.load(tid)
