@@ -55,11 +55,16 @@ def test_missions_gis_walkthrough_runs_as_written(tmp_path, figures_in):
         )  # fmt: skip
         assert done.returncode == 0, done.stderr[-2000:]
     # the figure the page quotes is the one the plan prints (audit docs-audit: it said 0.8799
-    # where the command printed 0.8604)
-    said = re.search(r"The plan gave POS_C = (\d\.\d{4}) here", section)
+    # where the command printed 0.8604). The page quotes one figure per CPU class: numpy's
+    # AVX-512 math and its AVX2/baseline math round a few last bits differently, and the
+    # differential evolution's selections then take another path (cpu-audit measured 0.8604
+    # with AVX-512, 0.8738 with numpy's dispatch held below it: results/audit/cpu/README.md);
+    # the printed figure must be one of them.
+    said = re.search(r"The plan gave (POS_C = \d\.\d{4}) here \(([^)]*)\)", section)
     assert said, "the page quotes the plan's POS_C"
-    wrong = figures_in(f"POS_C = {said.group(1)}", done.stdout)
-    assert wrong is None, (wrong, done.stdout[-1500:])
+    quoted = [said.group(1), *re.findall(r"POS_C = \d\.\d{4}", said.group(2))]
+    wrong = [figures_in(q, done.stdout) for q in quoted]
+    assert None in wrong, (wrong, done.stdout[-1500:])
     out = tmp_path / "missions"
     assert sorted(p.name for p in out.iterdir()) == [
         "plan.html",
