@@ -53,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
         description=__doc__.split("\n")[0],
     )
     p.add_argument("--tasks", nargs="*", default=None, help="task ids (default: every task)")
-    p.add_argument("--episodes", type=int, default=20)
+    p.add_argument("--episodes", type=int, default=None, help="episodes per task (default 20)")
     p.add_argument("--seed", type=int, default=1000, help="first episode seed")
     p.add_argument("--policies", default=None, help="comma-separated: replaces the default set")
     p.add_argument(
@@ -82,7 +82,12 @@ def run(args: argparse.Namespace) -> list[dict[str, Any]]:
 
     ids = args.tasks or [t for t in tasks.TASKS if not args.quick or "-Small-" in t]
     chosen = [tasks.get_task(t) for t in ids]
-    episodes = 2 if args.quick else args.episodes
+    if args.quick and args.episodes is not None:  # --quick fixes it (cli-audit: was replaced)
+        raise ConfigError(
+            "episodes", args.episodes, "absent with --quick (which flies 2 episodes a task); "
+            "leave --quick out to fly this many",
+        )  # fmt: skip
+    episodes = 2 if args.quick else (20 if args.episodes is None else args.episodes)
     learned: list[tuple[str, str | None, str]] = []
     controls = {v: k for k, v in tasks.CONTROL_NAMES.items()}
     for item in args.learned:

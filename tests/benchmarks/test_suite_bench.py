@@ -86,3 +86,11 @@ def test_tasks_command_lists_every_task(capsys):
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 1 + len(tasks.TASKS)
     assert any("UAVSearch-Paper62-Random-Heading-v0" in line and "heading" in line for line in out)
+
+
+def test_quick_baselines_refuse_an_episode_count_they_would_replace():
+    """``--quick`` flies 2 episodes; an ``--episodes`` beside it was silently replaced (cli-audit):
+    refused, naming the option, before any episode flies."""
+    with pytest.raises(ConfigError, match="--quick") as err:
+        baselines.run(baselines._parse(["--quick", "--episodes", "5"]))
+    assert err.value.field == "episodes"

@@ -16,9 +16,10 @@ the X86_V2 baseline and numba compiling for a generic CPU
 (``NPY_DISABLE_CPU_FEATURES="X86_V3 X86_V4 AVX512_ICL AVX512_SPR" NUMBA_CPU_NAME=generic``)
 moved float64 infos and rewards by at most 3.9e-16 absolute (1.6e-13 relative on values near
 1e-3) and no float32 observation at all. The compiled kernels have changed since (which
-change moved which bits was not traced): on 2026-11-29 the replays differ from the files in the last bits of 7,429 of 129,262 float64 values, at most
-2.3e-15 absolute (2.8e-13 relative), natively and under the emulated Haswell and oldest x86-64
-CPUs alike (results/audit/cpu). A changed environment moves POS, POSC and the observations by
+change moved which bits was not traced): on 2026-11-29 the replays differ from the files in
+the last bits of 7,429 of 129,262 float64 values, at most 2.3e-15 absolute (2.8e-13
+relative), natively and under the emulated Haswell and oldest x86-64 CPUs alike
+(results/audit/cpu). A changed environment moves POS, POSC and the observations by
 1e-6 and far more; booleans, integers and shapes are compared exactly.
 """
 
