@@ -437,12 +437,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def _die_with_parent(parent: int) -> None:
     """In a child process (before it runs its program): ask Linux for SIGTERM when the parent
     dies (``prctl(PR_SET_PDEATHSIG)``), and end now if the parent ``parent`` is already gone."""
-    import ctypes
     import signal
 
-    pr_set_pdeathsig = 1
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(pr_set_pdeathsig, int(signal.SIGTERM), 0, 0, 0)
+    from poc_env.proc import die_with_parent
+
+    die_with_parent(signal.SIGTERM)
     if os.getppid() != parent:  # died before the request took effect
         os._exit(143)
 

@@ -29,12 +29,14 @@ import contextlib
 import contextvars
 import multiprocessing
 import os
+import signal
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any
 
 from poc_env.errors import ConfigError, PocEnvError, as_number
+from poc_env.proc import die_with_parent
 
 DEFAULT_TIMEOUT_S = 1800.0
 #: seconds between a worker's checks that the command that started it still runs
@@ -122,16 +124,9 @@ def _alive(pid: int) -> bool:
 
 def _die_with(owner: int) -> None:
     """Worker initializer: end this worker when the command ``owner`` (a pid) is gone."""
-    import sys
     import threading
 
-    if sys.platform.startswith("linux"):  # the fork server's death ends the worker at once
-        import ctypes
-        import signal
-
-        with contextlib.suppress(OSError, AttributeError):
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+    die_with_parent(signal.SIGKILL)  # Linux: the fork server's death ends the worker at once
 
     def watch() -> None:
         while _alive(owner):
