@@ -1,6 +1,11 @@
 """poc-env: UAV-swarm search over a probability-of-containment map (Fan et al., Drones 2024)."""
 
-from poc_env.config import Scenario, load_scenario
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from poc_env.config import Scenario, load_scenario
 
 __version__ = "0.1.0"
 
@@ -44,5 +49,17 @@ def _register() -> None:
 
 
 _register()
+
+
+def __getattr__(name: str) -> Any:
+    """``poc_env.Scenario`` and ``poc_env.load_scenario`` load the configuration (and its
+    compiled kernels) when first used, not when the package is imported: ``poc-env`` starts
+    without them, so its Ctrl-C handler is in place before the slow imports (cli-audit)."""
+    if name in ("Scenario", "load_scenario"):
+        from poc_env import config
+
+        return getattr(config, name)
+    raise AttributeError(f"module 'poc_env' has no attribute {name!r}")
+
 
 __all__ = ["ENV_ID", "Scenario", "__version__", "env", "load_scenario", "parallel_env"]

@@ -126,6 +126,23 @@ def test_ctrl_c_is_one_line_and_status_130(tmp_path, capsys, monkeypatch):
     assert _tree(tmp_path) == []
 
 
+def test_the_command_line_starts_without_the_compiled_kernels():
+    """Ctrl-C in the first moments of a command, while the package imported, printed Python's
+    traceback (cli-audit: 42 of 99 SIGINTs; ``poc_env`` imported its configuration and with
+    it numba and the compiled kernels before ``main`` could catch anything). The package and
+    its command line now import without them; ``poc_env.load_scenario`` loads them on use."""
+    import subprocess
+
+    code = (
+        "import sys, poc_env.cli; assert 'numba' not in sys.modules, 'numba'; "
+        "assert 'poc_env.config' not in sys.modules, 'config'; "
+        "print(poc_env.load_scenario('small').name, 'numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["small", "True"]
+
+
 LONG = "y" * 300  # one name longer than any file system's limit (255 bytes): ENAMETOOLONG
 
 
