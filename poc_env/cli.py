@@ -1349,7 +1349,11 @@ def parse_command_line(argv: Sequence[str]) -> argparse.Namespace:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = parse_command_line(sys.argv[1:] if argv is None else argv)
+    try:  # the parser reads the configuration, whose first import loads the compiled kernels
+        args = parse_command_line(sys.argv[1:] if argv is None else argv)
+    except KeyboardInterrupt:
+        print("interrupted: poc-env stopped while starting; nothing was written", file=sys.stderr)
+        return 130
     try:
         try:
             if args.max_memory_gb is not None:

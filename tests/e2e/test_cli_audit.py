@@ -143,6 +143,20 @@ def test_the_command_line_starts_without_the_compiled_kernels():
     assert out.stdout.split() == ["small", "True"]
 
 
+def test_ctrl_c_while_the_command_line_is_parsed_is_one_line_too(capsys, monkeypatch):
+    """The parser reads the configuration (and so loads the compiled kernels the first time):
+    a Ctrl-C there ends as one inside a command does, one line and status 130."""
+    from poc_env import cli
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "parse_command_line", interrupted)
+    assert main(["tasks"]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("interrupted") and err.count("\n") == 1, err
+
+
 LONG = "y" * 300  # one name longer than any file system's limit (255 bytes): ENAMETOOLONG
 
 
