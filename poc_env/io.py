@@ -78,6 +78,14 @@ def publish_atomic(tmp: str | os.PathLike[str], path: str | os.PathLike[str]) ->
     os.replace(tmp, path)
 
 
+def _staging_folder(path: Path) -> tuple[list[Path], Path]:
+    """The folders above ``path`` that do not exist yet (deepest first) and the nearest one
+    that does: an atomic write stages there (the same file system as the folders it makes
+    when it publishes), so a failure or a kill before then leaves no new folder behind."""
+    missing = [q for q in (path.parent, *path.parent.parents) if not q.is_dir()]
+    return missing, (missing[-1].parent if missing else path.parent)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path]:
     """Yield a temporary path beside ``path``; publish it over ``path`` if the block succeeds.
@@ -92,8 +100,7 @@ def atomic_path(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path
     """
     p = Path(path)
     check_replaceable(p)  # before any work: never a device, FIFO or socket
-    missing = [q for q in (p.parent, *p.parent.parents) if not q.is_dir()]  # deepest first
-    staging = missing[-1].parent if missing else p.parent
+    missing, staging = _staging_folder(p)
     clean_stale_temp_files(staging)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}{_TEMP}{os.getpid()}-", suffix=suffix, dir=staging)
     os.close(fd)
@@ -331,8 +338,7 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
     dest = Path(path)
     if dest.is_symlink() and dest.is_dir():  # stage beside the real folder (same file system)
         dest = dest.resolve()
-    created = [p for p in (dest.parent, *dest.parent.parents) if not p.exists()]
-    staging = created[-1].parent if created else dest.parent  # made at the end, if ever
+    created, staging = _staging_folder(dest)  # dest's folders made at the end, if ever
     _clean_stale_staging(dest, staging)
     stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_STAGING}{os.getpid()}-", dir=staging))
     done = False
