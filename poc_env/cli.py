@@ -1170,8 +1170,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--effort",
         default=None,
         help="allocation planner: default (seconds), standard (the default plan polished, "
-        "within 2 s on paper_6_2) or thorough (a minute or two on one core, more POS: "
-        "docs/PLANNER.md, effort levels)",
+        "within 2 s on paper_6_2) or thorough (about 20 s on paper_6_2, longer on 400 km "
+        "maps; more POS: docs/PLANNER.md, effort levels)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
