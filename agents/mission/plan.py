@@ -294,6 +294,9 @@ def check_plan(plan: Any) -> Plan:
     if not isinstance(plan["uavs"], list) or not plan["uavs"]:
         raise ConfigError("plan.uavs", plan["uavs"], "a non-empty list of UAV plans")
     as_number("plan.posc", plan["posc"], 0.0, 1.0)
+    if "sortie_posc" in plan or "cumulative_posc" in plan:  # a replanned sortie's (replan)
+        for key in ("sortie_posc", "cumulative_posc"):
+            as_number(f"plan.{key}", plan.get(key), 0.0, 1.0)
     if not isinstance(plan["optimizer"], dict):  # the map report names its optimiser
         raise ConfigError("plan.optimizer", plan["optimizer"], "a mapping of name, settings")
     ids: set[str] = set()

@@ -763,3 +763,28 @@ def test_exports_of_a_replanned_sortie_show_what_it_finds_and_the_cumulative_pos
     assert f"cumulative {100 * plan['cumulative_posc']:.2f} %" in text
     (gj1,) = export_plan(p1, "geojson", None, tmp_path / "gj1")  # a first sortie: as before
     assert "sortie_posc_pct" not in json.loads(gj1.read_text())["properties"]
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [("sortie_posc", "x"), ("sortie_posc", float("nan")), ("cumulative_posc", 1.5),
+     ("cumulative_posc", None)],
+)  # fmt: skip
+def test_a_replanned_sortie_s_figures_are_checked_before_an_export(first, tmp_path, key, value):
+    """A hand-edited replanned plan whose sortie figures are not probabilities is refused by
+    the export, naming the field (it was a ValueError/KeyError traceback, or 'nan %' printed)."""
+    from poc_env.agents.mission.export import export_plan
+
+    _, p1 = first
+    p2 = tmp_path / "p2.json"
+    assert main(["replan", "--scenario", "small", "--plan", str(p1), "--out", str(p2)]) == 0
+    plan = json.loads(p2.read_text())
+    if value is None:
+        del plan[key]
+    else:
+        plan[key] = value
+    p2.write_text(json.dumps(plan))
+    with pytest.raises(ConfigError) as err:
+        export_plan(p2, "geojson", None, tmp_path / "gj")
+    assert err.value.field == f"plan.{key}"
+    assert not (tmp_path / "gj").exists()
