@@ -129,8 +129,18 @@ def env_bytes(cells: int, samples_per_cell: int, n_agents: int, n_envs: int, com
     (:func:`map_bytes`) plus, per env, the fine belief (``samples_per_cell``^2 points a cell,
     one copy per agent under ``belief_sharing: comms``) and its temporaries. Calibrated like
     :data:`MAP_BYTES_PER_CELL` (measured about a quarter of it: 290 B a cell and env with one
-    shared belief, 2,960 with three agents' beliefs, s = 4)."""
-    per_cell = 256 + 64 * samples_per_cell**2 * (n_agents if comms else 1)
+    shared belief, 2,960 with three agents' beliefs, s = 4).
+
+    Under ``belief_sharing: comms`` each env also holds ``N x N`` fine maps of float64
+    (``State.known``: UAV i's copy of UAV j's survival), and holds them twice at its peaks
+    (the copy step's temporary; a reset's new state beside the old one): ``16 s^2 N^2`` bytes
+    a cell more. Counting N maps only, the estimate was a third of the measured peak at 12
+    UAVs and a fifth at 24 (tests/test_validation.py), so the guard passed sizes the kernel
+    then killed."""
+    s2 = samples_per_cell**2
+    per_cell = 256 + 64 * s2 * (n_agents if comms else 1)
+    if comms:
+        per_cell += 16 * s2 * n_agents**2
     return map_bytes(cells) + float(n_envs) * cells * per_cell
 
 
