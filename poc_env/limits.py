@@ -145,7 +145,14 @@ def env_bytes(cells: int, samples_per_cell: int, n_agents: int, n_envs: int, com
 
 
 def plan_bytes(popsize: int, n_uavs: int, cells: int) -> float:
-    """Estimated peak bytes of a planner population: the objective scores the whole population
-    at once, about 22 B per member, UAV and cell (measured with tracemalloc on paper_6_2 at
-    popsize 1,000 and 4,000); 48 B keeps it an upper bound."""
-    return map_bytes(cells) + 48.0 * popsize * n_uavs * cells
+    """Estimated peak bytes of a DE planner population: the map (:func:`map_bytes`), the
+    ``(P, P)`` keys from which DE/rand/1 draws each member's three partners (float64 keys and
+    their int64 partition, about 24 B per pair), and the compiled plan pass's per-member arrays
+    (about 260 B per member and UAV; no ``(P, n, cells)`` array since the pass integrates the
+    rectangles' boundaries). Measured with tracemalloc (scale-audit): ``small`` at popsize
+    1,000 and 10,000 (24 and 2,297 MiB), ``paper_6_2`` at 1,000 and 4,000, 160 x 160 cells
+    with 24 and 64 UAVs at 100 to 2,000 (32 to 124 MiB); 32 B per pair and 512 B per member
+    and UAV keep it an upper bound (tests/test_validation.py). The former 48 B per member,
+    UAV and cell was 86 times the peak at 24 UAVs on 160 x 160 cells and refused 64 UAVs
+    there (7.4 GiB estimated, 68 MiB used), and a quarter of it at popsize 10,000."""
+    return map_bytes(cells) + 32.0 * float(popsize) ** 2 + 512.0 * popsize * n_uavs

@@ -211,6 +211,41 @@ def test_memory_estimate_is_an_upper_bound(cells, n_envs, comms, uavs):
     assert peak <= est, f"peak {peak / 2**20:.1f} MiB, estimate {est / 2**20:.1f} MiB"
 
 
+@pytest.mark.parametrize(
+    ("name", "over", "uavs", "popsize"),
+    [
+        # many members on a small map: DE/rand/1 draws its (P, P) keys, quadratic in P
+        ("small", {}, 3, 2000),
+        # the issue-24 size: 160 x 160 cells, 24 UAVs; the compiled plan pass keeps no
+        # (P, n, cells) array, so the old 48 B a member, UAV and cell was 86 times the peak
+        ("large_400", {"map.cell_km": 2.5}, 24, 100),
+    ],
+)
+def test_planner_population_estimate_is_an_upper_bound_and_not_far_over(
+    name, over, uavs, popsize
+):
+    """``limits.plan_bytes`` (scale-audit): at least the DE plan's measured peak, and within
+    ten times it, so that the guard neither lets a 2.3 GB population (popsize 10,000 on
+    ``small``, estimated 88 MiB) through nor refuses a 70 MB plan (64 UAVs on 160 x 160 cells,
+    estimated 7.4 GiB)."""
+    import tracemalloc
+
+    from poc_env.agents.planning.planner import make_plan
+
+    sc = load_scenario(name, over)
+    cells = sc.map.nx * sc.map.ny
+    est = limits.plan_bytes(popsize, uavs, cells)
+    tracemalloc.start()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a one-generation plan may be infeasible
+            make_plan(sc, uavs=uavs, popsize=popsize, maxiter=1)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= est <= 10 * peak, f"peak {peak / 2**20:.1f} MiB, estimate {est / 2**20:.1f} MiB"
+
+
 # --------------------------------------------------------------------------- maps
 
 
