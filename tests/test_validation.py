@@ -221,9 +221,7 @@ def test_memory_estimate_is_an_upper_bound(cells, n_envs, comms, uavs):
         ("large_400", {"map.cell_km": 2.5}, 24, 100),
     ],
 )
-def test_planner_population_estimate_is_an_upper_bound_and_not_far_over(
-    name, over, uavs, popsize
-):
+def test_planner_population_estimate_is_an_upper_bound_and_not_far_over(name, over, uavs, popsize):
     """``limits.plan_bytes`` (scale-audit): at least the DE plan's measured peak, and within
     ten times it, so that the guard neither lets a 2.3 GB population (popsize 10,000 on
     ``small``, estimated 88 MiB) through nor refuses a 70 MB plan (64 UAVs on 160 x 160 cells,
