@@ -98,7 +98,6 @@ from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_for
-from poc_env.agents.planning.regrade import regrade_routes
 from poc_env.agents.planning.refine import (
     Airspace,
     fly_around,
@@ -107,6 +106,7 @@ from poc_env.agents.planning.refine import (
     route_time,
     track,
 )
+from poc_env.agents.planning.regrade import regrade_routes
 from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int

@@ -294,12 +294,15 @@ def regrade_routes(
         half = np.full(len(off), 0.5 * w)
         if len(off) > 1:
             gaps = np.diff(so)
-            h_s = np.maximum(0.5 * w, 0.5 * np.concatenate([[gaps[0]], np.maximum(gaps[:-1], gaps[1:]), [gaps[-1]]]))
+            h_s = np.maximum(
+                0.5 * w,
+                0.5 * np.concatenate([[gaps[0]], np.maximum(gaps[:-1], gaps[1:]), [gaps[-1]]]),
+            )
             half[order] = h_s
         cdfs = []
         for j in range(len(off)):
-            mj = np.bincount(b_w[np.abs(s_w - off[j]) <= half[j]],
-                             weights=m_w[np.abs(s_w - off[j]) <= half[j]], minlength=nt)  # fmt: skip
+            strip = np.abs(s_w - off[j]) <= half[j]
+            mj = np.bincount(b_w[strip], weights=m_w[strip], minlength=nt)
             tot = float(mj.sum())
             if tot <= 0.0:
                 return None

@@ -158,8 +158,10 @@ def test_regrade_option_reaches_the_plan(where):
     base = PlanOptions(polish=1, polish_lines=1, polish_grade=True)
     a = make_allocation_plan(sc, options=base)
     b = make_allocation_plan(
-        sc, options=PlanOptions(polish=1, polish_lines=1, polish_grade=True, regrade=1,
-                                regrade_at=where)  # fmt: skip
+        sc,
+        options=PlanOptions(
+            polish=1, polish_lines=1, polish_grade=True, regrade=1, regrade_at=where
+        ),
     )
     assert "regrade_moves" not in a["optimizer"]["settings"]["polish"]
     st = b["optimizer"]["settings"]["polish"]

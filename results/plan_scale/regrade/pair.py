@@ -13,7 +13,10 @@ from stage import t95
 
 
 def main(paths: list[str], a: str, b: str) -> None:
-    recs = [r for p in paths for r in json.load(open(p))]
+    recs = []
+    for p in paths:
+        with open(p) as f:
+            recs += json.load(f)
     ra = {r["seed"]: r for r in recs if r["variant"] == a}
     rb = {r["seed"]: r for r in recs if r["variant"] == b}
     seeds = sorted(set(ra) & set(rb))
@@ -22,8 +25,10 @@ def main(paths: list[str], a: str, b: str) -> None:
         print(f"{b} - {a} ({key}, n {len(d)}): {t95(d)}")
     ca = [ra[s]["stage_cpu_s"] for s in seeds]
     cb = [rb[s]["stage_cpu_s"] for s in seeds]
-    print(f"stage CPU median {statistics.median(ca):.2f} s -> {statistics.median(cb):.2f} s; "
-          f"ratio median {statistics.median(y / x for x, y in zip(ca, cb)):.3f}")
+    print(
+        f"stage CPU median {statistics.median(ca):.2f} s -> {statistics.median(cb):.2f} s; "
+        f"ratio median {statistics.median(y / x for x, y in zip(ca, cb)):.3f}"
+    )
 
 
 if __name__ == "__main__":

@@ -3,12 +3,12 @@ without re-planning (README).
 
 ``python results/plan_scale/regrade/stage.py PLANS.json[,...] VARIANT[;VARIANT...] OUT.json``
 
-A variant is a sequence of stages (:func:`run_variant`), e.g. ``rg=1/0:-1:1/2/3/+lines=1``:
-the regrade ``passes/counts/sweeps/min_lines/radii`` (``counts`` ``:``-joined of 0, -1, 1;
-``radii`` ``:``-joined sweep widths, empty for the default), then one pass of the second
-polish at the polish's radii, as ``standard``'s. Each stored plan's routes are regraded as the allocation
-planner does it (``polish_for(..., routine=regrade_routes)``: the plan's speeds, budget,
-reserve, headings and airspace margins), then scored on the 2 x 2 lattice (the planned POS)
+A variant is a sequence of stages (:func:`run_variant`), e.g.
+``rg=2/0:-1:1:2/2/2/+polish=2+lines=1``: the regrade ``passes/counts/sweeps/min_lines/radii``
+(``counts`` ``:``-joined integers; ``radii`` ``:``-joined sweep widths, empty for the
+default), then ``standard``'s two polish stages. Each stored plan's routes are regraded (and
+polished) as the allocation planner does it (``polish_for(..., routine=regrade_routes)``:
+the plan's speeds, budget, reserve, headings and airspace margins), then scored on the 2 x 2 lattice (the planned POS)
 and on 8 x 8 points a cell (``effort_ab.fine_posc``); the gains over the stored plan, paired
 per seed (Student's t 95 %), are printed and stored with the stage's CPU time.
 """
