@@ -10,7 +10,8 @@ default), then ``standard``'s two polish stages. Each stored plan's routes are r
 polished) as the allocation planner does it (``polish_for(..., routine=regrade_routes)``:
 the plan's speeds, budget, reserve, headings and airspace margins), then scored on the 2 x 2
 lattice (the planned POS) and on 8 x 8 points a cell (``effort_ab.fine_posc``); the gains over
-the stored plan, paired per seed (Student's t 95 %), are printed and stored with the stage's CPU time.
+the stored plan, paired per seed (Student's t 95 %), are printed and stored with the stage's
+CPU time.
 """
 
 from __future__ import annotations
