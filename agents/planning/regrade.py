@@ -258,6 +258,22 @@ def regrade_routes(
         d = (s_lo + new - o)[:, None] * nrm[None]
         return np.clip(P + d, lo, hi), np.clip(Q + d, lo, hi)
 
+    def most_fitting(k, head, tail, win, safe: float, want: float):
+        """``win(x)`` (a window) at ``want`` if the route fits with it, else at the ``x``
+        nearest ``want`` between ``safe`` and ``want`` at which it fits (:data:`BISECT`
+        halvings), None if it does not fit at ``safe``."""
+        if fits(k, np.concatenate([head, win(want), tail])):
+            return win(want)
+        if not fits(k, np.concatenate([head, win(safe), tail])):
+            return None
+        for _ in range(BISECT):
+            mid = 0.5 * (safe + want)
+            if fits(k, np.concatenate([head, win(mid), tail])):
+                safe = mid
+            else:
+                want = mid
+        return win(safe)
+
     def fitted(k, head, win0, tail, P, Q, u, centre, f_lo, f_hi):
         """The window with lines ``P -> Q`` scaled along ``u`` about ``centre`` by the largest
         factor in ``[f_lo, f_hi]`` (bisection) at which the route fits, or None."""
@@ -269,18 +285,7 @@ def regrade_routes(
                 mid[j::2] = np.clip(E + along[:, None] * u[None], lo, hi)
             return np.vstack([win0[0], mid, win0[-1]])
 
-        if fits(k, np.concatenate([head, win(f_hi), tail])):
-            return win(f_hi)
-        if not fits(k, np.concatenate([head, win(f_lo), tail])):
-            return None
-        a_, b_ = f_lo, f_hi
-        for _ in range(BISECT):
-            c_ = 0.5 * (a_ + b_)
-            if fits(k, np.concatenate([head, win(c_), tail])):
-                a_ = c_
-            else:
-                b_ = c_
-        return win(a_)
+        return most_fitting(k, head, tail, win, f_lo, f_hi)
 
     def clipped(k, head, win0, tail, P, Q, u, nrm, along):
         """The window with each line ``P_j -> Q_j`` (at its offset) running between the
@@ -324,18 +329,7 @@ def regrade_routes(
                 mid[2 * j + 1] = off[j] * nrm + tb * u
             return np.vstack([win0[0], np.clip(mid, lo, hi), win0[-1]])
 
-        if fits(k, np.concatenate([head, win(0.0), tail])):
-            return win(0.0)
-        if not fits(k, np.concatenate([head, win(ALPHA_HIGH), tail])):
-            return None
-        a_, b_ = ALPHA_HIGH, 0.0
-        for _ in range(BISECT):
-            c_ = 0.5 * (a_ + b_)
-            if fits(k, np.concatenate([head, win(c_), tail])):
-                a_ = c_
-            else:
-                b_ = c_
-        return win(a_)
+        return most_fitting(k, head, tail, win, ALPHA_HIGH, 0.0)
 
     def regrade_run(k: int, a: int, m: int) -> tuple[int, int]:
         """Regrade the run of ``m`` lines from waypoint ``a`` of UAV ``k``'s route: (kept 0/1,

@@ -23,8 +23,10 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "..", "tests", "planning"))
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "lines"))
 
 from effort_ab import fine_posc
+from stage2 import t95
 
 from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.agents.planning.allocation import sampled_sweep
@@ -32,18 +34,6 @@ from poc_env.agents.planning.polish import KINDS, polish_for
 from poc_env.agents.planning.regrade import SEARCH_RADII, regrade_routes
 from poc_env.config import load_scenario
 from poc_env.theory.probability_map import Grid, build_prior
-
-
-def t95(xs: list[float]) -> str:
-    if len(xs) < 2:
-        return f"{xs[0]:+.4f}" if xs else "-"
-    m = statistics.mean(xs)
-    from scipy import stats
-
-    h = stats.t.ppf(0.975, len(xs) - 1) * statistics.stdev(xs) / len(xs) ** 0.5
-    w = sum(x > 1e-9 for x in xs)
-    lo = sum(x < -1e-9 for x in xs)
-    return f"{m:+.4f} ± {h:.4f} ({w} / {len(xs) - w - lo} / {lo})"
 
 
 def run_variant(sc, prior, routes, variant: str):
