@@ -154,3 +154,48 @@ def test_geojson_polygons_stay_valid_after_rounding(tmp_path):
     assert any(f["properties"]["kind"] == "search_area" for f in polys)
     for f in polys:
         assert shape(f["geometry"]).is_valid, f["properties"]
+
+
+def _idle(u: dict) -> None:
+    """``u`` as the allocation planner writes a UAV it gives no search (no mass in reach)."""
+    u.update(rectangle=None, areas_m=[], spacing_m=0.0, waypoints_m=[], transit_waypoints=0,
+             track_length_m=0.0, flight_time_s=0.0, pod=0.0, poc=0.0, pos=0.0)  # fmt: skip
+
+
+@pytest.mark.parametrize("fmt", ["qgc", "kml", "geojson", "html"])
+def test_a_uav_without_a_search_route_is_left_out_and_named(tmp_path, capsys, fmt):
+    """A UAV with no waypoints (no reachable mass, or a teammate covers it) is left out of every
+    format with a warning naming it; the others are written (leftovers #2: before, GeoJSON and
+    KML drew a zero-length route for it, QGC a take-off and landing on the spot)."""
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(45.75, 126.65))
+    _idle(plan["uavs"][1])
+    write_plan(plan, tmp_path / "plan.json")
+    files = export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / "o")
+    assert "warning: plan.uavs[1] (UAV 2): no search planned" in capsys.readouterr().out
+    text = "\n".join(f.read_text(encoding="utf-8") for f in files if f.suffix != ".png")
+    if fmt == "qgc":
+        assert sorted(f.name for f in files) == ["plan_uav1.plan", "plan_uav3.plan"]
+    elif fmt == "geojson":
+        ids = {f["properties"].get("id") for f in json.loads(text)["features"]}
+        assert ids == {None, 1, 3}  # areas and fields (no id), UAVs 1 and 3
+    elif fmt == "kml":
+        assert "UAV 1" in text and "UAV 3" in text and "UAV 2" not in text
+    else:  # the page's data: one entry per UAV drawn
+        assert '"id": "1"' in text and '"id": "3"' in text and '"id": "2"' not in text
+
+
+@pytest.mark.parametrize("fmt", ["qgc", "kml", "geojson", "html"])
+def test_a_plan_that_reaches_nothing_is_refused_by_every_format(tmp_path, fmt):
+    """The airfield 80 km south of ``small``: no UAV reaches any mass, the plan says why, and an
+    export of it is refused naming ``plan.uavs`` and the plan's reason; nothing is written."""
+    from poc_env.errors import ConfigError
+
+    data = load_scenario("small").to_dict()
+    data["airfields"] = [{"name": "A", "position_km": [20, -80]}]
+    plan = make_plan(load_scenario(data), planner="allocation", refine=0,
+                     origin_deg=(45.75, 126.65))  # fmt: skip
+    assert plan["reason"] and not any(u["waypoints_m"] for u in plan["uavs"])
+    write_plan(plan, tmp_path / "plan.json")
+    with pytest.raises(ConfigError, match=r"plan\.uavs: .*none with a search route.*0\.85 T"):
+        export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / "o")
+    assert not (tmp_path / "o").exists()
