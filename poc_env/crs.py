@@ -281,6 +281,22 @@ def to_geographic(xy, origin: Any) -> list[tuple[float, float]]:
     return [(float(a), float(b)) for a, b in zip(lat, lon)]
 
 
+def continuous_lon(lon: Any, origin: Any) -> np.ndarray:
+    """Longitudes ``lon`` (degrees) shifted by whole turns to lie within 180 degrees of the map
+    origin's (``origin``: as :func:`to_geographic` takes it), so that a map drawn around the
+    180th meridian is continuous (179.9 then 180.1, not -179.9): what Google Earth and Leaflet
+    need to draw a line or polygon across it the short way (OGC 07-147r2 section 9.14.3.4 lets
+    a ``LatLonBox`` extend beyond 180 for it). Away from the meridian nothing changes.
+
+    >>> continuous_lon([179.9, -179.9, 10.0], (-16.5, 179.8)).tolist()
+    [179.9, 180.1, 10.0]
+    """
+    lon0 = float(origin["origin_deg"][1]) if isinstance(origin, dict) else check_origin(origin)[1]
+    a = np.asarray(lon, dtype=float)
+    shift = 360.0 * np.round((a - lon0) / 360.0)
+    return np.where(np.abs(a - lon0) <= 180.0, a, a - shift)
+
+
 def to_local(latlon, origin: Any) -> list[tuple[float, float]]:
     """The inverse of :func:`to_geographic`: [(lat, lon), ...] degrees -> [(x, y), ...] m."""
     pts = np.asarray(latlon, dtype=float).reshape(-1, 2)

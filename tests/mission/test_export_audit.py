@@ -199,3 +199,75 @@ def test_a_plan_that_reaches_nothing_is_refused_by_every_format(tmp_path, fmt):
     with pytest.raises(ConfigError, match=r"plan\.uavs: .*none with a search route.*0\.85 T"):
         export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / "o")
     assert not (tmp_path / "o").exists()
+
+
+def _plan_imported_at_the_antimeridian(tmp_path: Path) -> Path:
+    """A search area imported from GeoJSON at 179.6-179.98 E near Fiji, its airfield at
+    179.97 W (across the 180th meridian): routes, approaches and the operating area cross it."""
+    from poc_env.agents.mission.geoimport import import_scenario, write_imported
+
+    def fc(geometry: dict, **props) -> str:
+        feat = {"type": "Feature", "properties": props, "geometry": geometry}
+        return json.dumps({"type": "FeatureCollection", "features": [feat]})
+
+    ring = [[179.6, -16.7], [179.98, -16.7], [179.98, -16.3], [179.6, -16.3], [179.6, -16.7]]
+    (tmp_path / "area.geojson").write_text(fc({"type": "Polygon", "coordinates": [ring]}))
+    field = {"type": "Point", "coordinates": [-179.97, -16.45]}
+    (tmp_path / "fields.geojson").write_text(fc(field, name="Taveuni"))
+    res = import_scenario(tmp_path / "area.geojson", airfields=tmp_path / "fields.geojson",
+                          base="small", name="fiji")  # fmt: skip
+    write_imported(res, tmp_path / "fiji.yaml")
+    plan = make_plan(load_scenario(str(tmp_path / "fiji.yaml")), planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    return tmp_path / "plan.json"
+
+
+def _lines_of(coords: list) -> list[list[list[float]]]:
+    """Every line or ring of a GeoJSON geometry's coordinates."""
+    if coords and isinstance(coords[0], (int, float)):
+        return [[coords]]
+    if coords and isinstance(coords[0][0], (int, float)):
+        return [coords]
+    return [line for c in coords for line in _lines_of(c)]
+
+
+def test_exports_across_the_antimeridian_are_cut_or_continuous(tmp_path):
+    """Leftovers #3. GeoJSON (RFC 7946 section 3.1.9): a geometry crossing the antimeridian is cut
+    into a Multi* of its parts, every longitude in [-180, 180], no part jumping across the
+    globe, each valid. KML and the report: longitudes continuous around the area (Google Earth
+    and Leaflet join points the short way only then; OGC KML 2.2 section 9.14.3.4 lets the
+    prior's LatLonBox go beyond 180). Before, all three drew routes and the operating area
+    from 180 to -180, across the globe, and the prior's box spanned every longitude."""
+    import re
+
+    from shapely.geometry import shape
+
+    path = _plan_imported_at_the_antimeridian(tmp_path)
+    (gj,) = export_plan(path, "geojson", out_dir=tmp_path / "g")
+    multi = set()
+    for f in json.loads(gj.read_text(encoding="utf-8"))["features"]:
+        geom = f["geometry"]
+        assert shape(geom).is_valid, f["properties"]
+        for line in _lines_of(geom["coordinates"]):
+            lon = [p[0] for p in line]
+            assert all(-180.0 <= v <= 180.0 for v in lon)
+            assert all(abs(b - a) < 1.0 for a, b in zip(lon, lon[1:])), f["properties"]
+        if geom["type"].startswith("Multi"):
+            multi.add(f["properties"]["kind"])
+    assert {"route", "operating_area"} <= multi  # the case: they cross it
+    files = export_plan(path, "kml", out_dir=tmp_path / "k")
+    text = next(f for f in files if f.suffix == ".kml").read_text(encoding="utf-8")
+    for coords in re.findall(r"<coordinates>([^<]*)</coordinates>", text):
+        lon = [float(t.split(",")[0]) for t in coords.split()]
+        assert all(179.0 < v < 181.0 for v in lon)  # continuous around 180
+    box = {k: float(v) for k, v in re.findall(r"<(east|west)>([^<]*)</", text)}
+    assert 179.0 < box["west"] < 180.0 < box["east"] < 181.0
+    (page,) = export_plan(path, "html", out_dir=tmp_path / "h")
+    m = re.search(r'id="plan-data">(.*?)</script>', page.read_text(encoding="utf-8"), re.S)
+    assert m
+    data = json.loads(m.group(1))
+    lons = [float(v) for v in re.findall(r"\[-?[0-9.]+, (-?[0-9.]+)\]", json.dumps(data["uavs"]))]
+    lons += [a["latlon"][1] for a in data["airfields"]]
+    lons += [p[1] for z in data["operating_area"] for p in z["latlon"]]
+    lons += [data["overlay"]["bounds"][0][1], data["overlay"]["bounds"][1][1]]
+    assert lons and all(179.0 < v < 181.0 for v in lons)
