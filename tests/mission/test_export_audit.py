@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
@@ -251,7 +252,7 @@ def test_exports_across_the_antimeridian_are_cut_or_continuous(tmp_path):
         for line in _lines_of(geom["coordinates"]):
             lon = [p[0] for p in line]
             assert all(-180.0 <= v <= 180.0 for v in lon)
-            assert all(abs(b - a) < 1.0 for a, b in zip(lon, lon[1:])), f["properties"]
+            assert all(abs(b - a) < 1.0 for a, b in pairwise(lon)), f["properties"]
         if geom["type"].startswith("Multi"):
             multi.add(f["properties"]["kind"])
     assert {"route", "operating_area"} <= multi  # the case: they cross it
