@@ -368,6 +368,47 @@ def is_wgs84_name(name: Any) -> bool:
     return isinstance(name, str) and name.strip().lower() in WGS84_NAMES
 
 
+def geojson_crs_to_lonlat(member: Any, field: str) -> Any:
+    """The reprojection a GeoJSON object's ``crs`` member asks for, or None.
+
+    RFC 7946 (2016) removed ``crs``: positions are WGS 84 longitude/latitude. The 2008 GeoJSON
+    specification allowed a named CRS (``{"type": "name", "properties": {"name":
+    "urn:ogc:def:crs:EPSG::32632"}}``), positions then in its x, y (easting, northing) order,
+    and older files (a logger's, a GIS's export) still carry one. Absent, or a name of
+    :data:`WGS84_NAMES`: None (nothing to do). Any other name pyproj reads (UTM, Web Mercator,
+    another datum's longitude/latitude): a function ``(n, 2) x, y -> (n, 2) lon, lat``.
+
+    Raises
+    ------
+    ConfigError
+        ``field`` (the member, e.g. ``tracks.crs``): not a named CRS, or a name pyproj cannot
+        read.
+    """
+    if member is None:
+        return None
+    props = member.get("properties") if isinstance(member, dict) else None
+    name = props.get("name") if isinstance(props, dict) else None
+    if is_wgs84_name(name):
+        return None
+    allowed = (
+        "no crs member (RFC 7946: WGS 84 longitude/latitude), or a named CRS that pyproj "
+        'reads ({"type": "name", "properties": {"name": "EPSG:32632"}}, GeoJSON 2008)'
+    )
+    if not isinstance(name, str):
+        raise ConfigError(field, member if len(str(member)) < 200 else "object", allowed)
+    try:
+        src = CRS.from_user_input(name.strip())
+    except CRSError as err:
+        raise ConfigError(field, name, f"{allowed}; pyproj: {err}") from None
+    to_wgs = Transformer.from_crs(src, "EPSG:4326", always_xy=True)
+
+    def lonlat(xy: np.ndarray) -> np.ndarray:
+        lon, lat = to_wgs.transform(xy[:, 0], xy[:, 1])
+        return np.stack([np.atleast_1d(lon), np.atleast_1d(lat)], axis=1).astype(float)
+
+    return lonlat
+
+
 #: Largest distance (m) allowed between a polygon edge, straight where it was drawn (in
 #: longitude/latitude for a GeoJSON layer, in the map's metres for the planner's areas), and
 #: the straight lines that stand for it once it is drawn in the other space

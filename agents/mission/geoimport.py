@@ -43,7 +43,7 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
-from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, is_wgs84_name
+from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, geojson_crs_to_lonlat
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
@@ -98,18 +98,27 @@ def _lonlat(file: Path, i: int, coords: Any) -> np.ndarray:
     return arr
 
 
-def _geojson_crs(file: Path, doc: Any) -> None:
-    crs = doc.get("crs") if isinstance(doc, dict) else None
-    if crs is None:
-        return
-    name = crs.get("properties", {}).get("name") if isinstance(crs, dict) else None
-    if not is_wgs84_name(name):
-        raise ConfigError(
-            f"{file} crs",
-            name if name is not None else crs,
-            "no crs member, or WGS84 longitude/latitude (EPSG:4326, OGC CRS84): "
-            "reproject the layer to EPSG:4326 in your GIS first",
-        )
+def _geojson_crs(file: Path, doc: Any, outer: Any = None) -> Any:
+    """The reprojection to longitude/latitude of ``doc``'s GeoJSON 2008 ``crs`` member
+    (:func:`poc_env.crs.geojson_crs_to_lonlat`; a UTM or Web Mercator layer is reprojected, a
+    CRS pyproj cannot read refused naming the file); ``outer``: the enclosing collection's,
+    which a Feature without its own keeps."""
+    if not isinstance(doc, dict) or doc.get("crs") is None:
+        return outer
+    return geojson_crs_to_lonlat(doc["crs"], f"{file} crs")
+
+
+def _reprojected(coords: Any, reproject: Any) -> Any:
+    """GeoJSON ``coordinates`` (nested lists of positions) with every position reprojected
+    to [lon, lat] (altitudes kept); anything that is not numbers is left for the checks."""
+    if reproject is None or not isinstance(coords, list) or not coords:
+        return coords
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in coords):
+        if len(coords) < 2:
+            return coords
+        lon, lat = reproject(np.array([coords[:2]], dtype=float))[0]
+        return [float(lon), float(lat), *coords[2:]]
+    return [_reprojected(c, reproject) for c in coords]
 
 
 def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
@@ -123,7 +132,7 @@ def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
         raise ConfigError(str(file), why, "a GeoJSON file (RFC 7946)") from None
     if not isinstance(doc, dict) or "type" not in doc:
         raise ConfigError(str(file), type(doc).__name__, "a GeoJSON object with a type member")
-    _geojson_crs(file, doc)
+    reproject = _geojson_crs(file, doc)
     if doc["type"] == "FeatureCollection":
         feats = doc.get("features")
         if not isinstance(feats, list):
@@ -136,12 +145,12 @@ def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
     for i, f in enumerate(feats):
         if not isinstance(f, dict):
             raise ConfigError(_feature(file, i), f, "a GeoJSON Feature")
-        _geojson_crs(file, f)
+        own = _geojson_crs(file, f, reproject)
         g = f.get("geometry")
         props = f.get("properties") or {}
         if not isinstance(g, dict) or not isinstance(props, dict):
             raise ConfigError(_feature(file, i), g, "a Feature with a geometry and properties")
-        out.append((str(g.get("type")), g.get("coordinates"), props))
+        out.append((str(g.get("type")), _reprojected(g.get("coordinates"), own), props))
     return out
 
 
