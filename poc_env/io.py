@@ -59,13 +59,53 @@ def check_replaceable(path: str | os.PathLike[str], field: str = "output") -> No
         raise ConfigError(field, os.fspath(path), f"a path poc-env can write ({err})") from None
     if stat.S_ISREG(mode):
         return
+    raise ConfigError(
+        field, os.fspath(path), f"a new path or a regular file to replace; it is {_kind(mode)}"
+    )
+
+
+def _kind(mode: int) -> str:
+    """What a path that is not a regular file is, from its ``st_mode``."""
+    import stat
+
     kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
              (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
              (stat.S_ISSOCK, "a socket"))  # fmt: skip
-    kind = next((k for test, k in kinds if test(mode)), "not a regular file")
-    raise ConfigError(
-        field, os.fspath(path), f"a new path or a regular file to replace; it is {kind}"
-    )
+    return next((k for test, k in kinds if test(mode)), "not a regular file")
+
+
+def check_input_file(
+    field: str, path: str | os.PathLike[str], allowed: str, *, missing_ok: bool = False
+) -> None:
+    """Refuse an input ``path`` that cannot be read as a file, before anything reads it, naming
+    ``field`` (the option it came from), the path and why, after ``allowed``: missing (unless
+    ``missing_ok``: a value that may be a name, such as a built-in scenario), not a regular
+    file (a FIFO or a device: a read would block, or never end), or unreadable (no permission:
+    said so, not called empty). An empty file passes (what is empty is the reader's to say).
+
+    Raises
+    ------
+    ConfigError
+    """
+    import stat
+
+    from poc_env.errors import ConfigError
+
+    text = os.fspath(path)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        if missing_ok:
+            return
+        raise ConfigError(field, text, f"{allowed}; it does not exist") from None
+    except OSError as err:
+        raise ConfigError(field, text, f"{allowed}; unreadable ({err.strerror})") from None
+    if not stat.S_ISREG(mode):
+        raise ConfigError(field, text, f"{allowed}; it is {_kind(mode)}, not a regular file")
+    try:
+        os.close(os.open(path, os.O_RDONLY))
+    except OSError as err:
+        raise ConfigError(field, text, f"{allowed}; unreadable ({err.strerror})") from None
 
 
 def publish_atomic(tmp: str | os.PathLike[str], path: str | os.PathLike[str]) -> None:

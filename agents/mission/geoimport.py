@@ -60,15 +60,21 @@ MAX_SAMPLES = 4_000_000
 
 
 # --------------------------------------------------------------------------- reading features
-def _check_file(path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...]) -> Path:
+def _check_file(
+    path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...], field: str
+) -> Path:
+    """``path`` checked as the input ``field`` (the option it came from, named in the error
+    with the path): its suffix, then readable as a regular file
+    (:func:`poc_env.io.check_input_file`: missing, a FIFO, no permission), then not empty."""
+    from poc_env.io import check_input_file
+
     p = Path(path)
     allowed = f"an existing {' / '.join(suffixes)} file ({what})"
     if p.suffix.lower() not in suffixes:
-        raise ConfigError(str(p), p.suffix or "(no suffix)", allowed)
-    if not p.is_file():
-        raise ConfigError(str(p), "missing or not a regular file", allowed)
+        raise ConfigError(field, str(p), f"{allowed}; it ends in {p.suffix or '(no suffix)'!r}")
+    check_input_file(field, p, allowed)
     if p.stat().st_size == 0:
-        raise ConfigError(str(p), "an empty file", allowed)
+        raise ConfigError(field, str(p), f"{allowed}; it is an empty file")
     return p
 
 
@@ -220,9 +226,12 @@ def _one(polys: list) -> Any:
     return polys[0] if len(polys) == 1 else polys
 
 
-def read_features(path: str | os.PathLike[str], what: str) -> tuple[Path, list]:
-    """(checked path, [(type, coordinates, properties)]) of a GeoJSON or KML file."""
-    file = _check_file(path, what, VECTOR_SUFFIXES)
+def read_features(
+    path: str | os.PathLike[str], what: str, field: str = "file"
+) -> tuple[Path, list]:
+    """(checked path, [(type, coordinates, properties)]) of a GeoJSON or KML file (``field``:
+    the option it came from, named when the file cannot be read)."""
+    file = _check_file(path, what, VECTOR_SUFFIXES, field)
     feats = _kml_features(file) if file.suffix.lower() == ".kml" else _geojson_features(file)
     if not feats:
         raise ConfigError(str(file), "no features", f"at least one feature ({what})")
@@ -515,7 +524,7 @@ def _prior(
         m = _uniform_prior(grid, area)
         return m / m.sum(), {"source": "uniform over the area", "outside_share": 0.0}
     else:
-        file = _check_file(path, "prior", PRIOR_SUFFIXES)
+        file = _check_file(path, "prior", PRIOR_SUFFIXES, "prior")
         if file.suffix.lower() == ".csv":
             x, y, w = _read_csv(file, crs)
         else:
@@ -646,7 +655,7 @@ def import_scenario(
             "airfields", None,
             "a GeoJSON/KML file of named airfield points (the base scenario's are in its own km)",
         )  # fmt: skip
-    file, feats = read_features(area, "the search area: one Polygon")
+    file, feats = read_features(area, "the search area: one Polygon", "area")
     polys = _polygons(file, feats)
     if len(polys) != 1:
         raise ConfigError(str(file), f"{len(polys)} polygons", "exactly one Polygon (the area)")
@@ -668,7 +677,7 @@ def import_scenario(
         )  # fmt: skip
     grid = _Grid(poly, cell_km * KM)
 
-    ffile, ffeats = read_features(airfields, "airfields: named Points")
+    ffile, ffeats = read_features(airfields, "airfields: named Points", "airfields")
     fields = []
     for i, fname, ll in _points(ffile, ffeats):
         xy = np.array(to_local([(ll[1], ll[0])], crs)[0])
@@ -681,7 +690,7 @@ def import_scenario(
     zones = []
     zone_names: list[str] = []
     if no_fly is not None:
-        zfile, zfeats = read_features(no_fly, "no-fly zones: Polygons")
+        zfile, zfeats = read_features(no_fly, "no-fly zones: Polygons", "no_fly")
         for i, zr in _polygons(zfile, zfeats):
             z = _local_polygon(zfile, i, zr, crs)
             for v in np.asarray(z.exterior.coords)[:-1]:

@@ -302,14 +302,16 @@ def test_bad_points(tmp_path, layers):
 
 def test_bad_files(tmp_path, layers):
     (tmp_path / "empty.geojson").write_text("")
-    _bad(tmp_path, layers, r"empty\.geojson: got 'an empty file'", area=tmp_path / "empty.geojson")
+    _bad(tmp_path, layers, r"area: got '.*empty\.geojson'.*it is an empty file",
+         area=tmp_path / "empty.geojson")  # fmt: skip
     (tmp_path / "area.shp").write_text("x")
-    _bad(tmp_path, layers, r"area\.shp: got '\.shp'.*geojson", area=tmp_path / "area.shp")
-    _bad(tmp_path, layers, r"missing or not a regular file", area=tmp_path / "nope.geojson")
+    _bad(tmp_path, layers, r"area: got '.*area\.shp'.*geojson.*it ends in '\.shp'",
+         area=tmp_path / "area.shp")  # fmt: skip
+    _bad(tmp_path, layers, r"area: got .*it does not exist", area=tmp_path / "nope.geojson")
     (tmp_path / "junk.geojson").write_text("{not json")
     _bad(tmp_path, layers, r"junk\.geojson: got 'not JSON", area=tmp_path / "junk.geojson")
     (tmp_path / "p.png").write_text("x")
-    _bad(tmp_path, layers, r"p\.png.*\.tif / \.tiff / \.csv", prior=tmp_path / "p.png")
+    _bad(tmp_path, layers, r"prior: got .*p\.png.*\.tif / \.tiff / \.csv", prior=tmp_path / "p.png")
     (tmp_path / "bomb.kml").write_text('<!DOCTYPE kml [<!ENTITY a "x">]><kml/>')
     _bad(tmp_path, layers, r"bomb\.kml.*no DTD", area=tmp_path / "bomb.kml")
 
