@@ -13,6 +13,7 @@ import argparse
 import contextlib
 import os
 import sys
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
@@ -1384,7 +1385,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         try:
             _check_inputs(args)
-            with limits.memory_limit_gb(args.max_memory_gb):  # this call's; restored after it
+            with limits.memory_limit_gb(args.max_memory_gb), warnings.catch_warnings():
+                warnings.showwarning = _show_warning  # this call's; restored after it
                 return int(args.func(args) or 0)
         except ModuleNotFoundError as err:
             extra = _EXTRA_OF.get((err.name or "").split(".")[0])
@@ -1412,6 +1414,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                               f"({err.strerror or err})")  # fmt: skip
         print(f"error: {refused}", file=sys.stderr)
         return 2
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning a command raises, as the command line says the rest: ``warning: <text>`` on
+    stderr, without Python's file, line and source (``terrain.py:673: UserWarning: ...
+    return [``)."""
+    print(f"warning: {message}", file=sys.stderr if file is None else file)
 
 
 def _field_of_path(args: argparse.Namespace, path: str) -> str:

@@ -272,3 +272,33 @@ def test_exports_across_the_antimeridian_are_cut_or_continuous(tmp_path):
     lons += [p[1] for z in data["operating_area"] for p in z["latlon"]]
     lons += [data["overlay"]["bounds"][0][1], data["overlay"]["bounds"][1][1]]
     assert lons and all(179.0 < v < 181.0 for v in lons)
+
+
+def test_a_steep_final_glide_is_said_by_plan_and_the_qgc_export_only(tmp_path, capsys):
+    """Leftovers #6: the warning that a UAV's final glide needs FW_LND_ANG above PX4's default
+    is for the officer who can still re-plan (``plan``) and for the mission that flies
+    (``export --format qgc``), once per UAV each, as a ``warning:`` line; the viewing formats
+    (KML, GeoJSON, HTML) say nothing. Before, every export printed it in Python's warning
+    format (file, line and a source line ``return [``)."""
+    import yaml
+
+    from poc_env.cli import main
+
+    tt = _terrain_test()
+    data = tt._scenario(None, terrain={"elevation_m": tt._slope(150.0), "cell_km": 1.0,
+                                       "origin_km": [-40, -30]})  # fmt: skip
+    (tmp_path / "steep.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
+    plan = tmp_path / "p.json"
+    argv = ["plan", "--scenario", str(tmp_path / "steep.yaml"), "--planner", "allocation"]
+    assert main([*argv, "--quiet", "--out", str(plan)]) == 0
+
+    def glides() -> list[str]:
+        err = capsys.readouterr().err
+        assert "UserWarning" not in err and "Warning:" not in err
+        return [ln for ln in err.splitlines() if "final glide of" in ln]
+
+    said = glides()
+    assert len(said) == 2 and all(ln.startswith("warning: plan.uavs[") for ln in said)
+    for fmt, expected in (("qgc", said), ("kml", []), ("geojson", []), ("html", [])):
+        assert main(["export", str(plan), "--format", fmt, "--out", str(tmp_path / fmt)]) == 0
+        assert glides() == expected, fmt
