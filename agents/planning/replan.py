@@ -452,11 +452,19 @@ def searched_belief(sc: Scenario, prior: np.ndarray, paths) -> tuple[np.ndarray,
     """The prior less what ``paths`` (flights in map metres) searched, by eq. 14 on the sample
     points (:func:`sweep_points`), summed back to cells; and the POS the flights achieved
     (eq. 13: the sum of their POS)."""
+    grid, s, belief, found = _swept(sc, prior, paths)
+    return grid.coarsen(belief, s), found
+
+
+def _swept(sc: Scenario, prior: np.ndarray, paths) -> tuple[Grid, int, np.ndarray, float]:
+    """``(grid, samples per cell side, the sample points' belief after paths, the POS they
+    achieved)``: the prior spread onto the sample points and ``paths`` swept over them
+    (:func:`sweep_points`); what :func:`searched_belief` and :func:`next_sortie` both start
+    from."""
     grid = Grid.from_config(sc.map)
     s = sc.sensor.samples_per_cell
     belief = np.ascontiguousarray(grid.refine(prior, s))
-    found = sweep_points(sc, belief, paths)
-    return grid.coarsen(belief, s), found
+    return grid, s, belief, sweep_points(sc, belief, paths)
 
 
 def sweep_points(sc: Scenario, belief_fine: np.ndarray, paths) -> float:
@@ -550,10 +558,7 @@ def next_sortie(
     if tracks is not None:
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
     paths = check_paths(sc, flights, names)
-    grid = Grid.from_config(sc.map)
-    s = sc.sensor.samples_per_cell
-    fine = np.ascontiguousarray(grid.refine(prior, s))
-    searched = sweep_points(sc, fine, paths)
+    grid, s, fine, searched = _swept(sc, prior, paths)
     # the planner sees each cell's belief spread evenly over the cell (it plans on cells); the
     # flights left it uneven within cells, so the plan's POS is its routes swept over the
     # sample points' own belief (replan-audit: the Alps walkthrough's sortie 2 was scored
