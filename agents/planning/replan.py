@@ -33,6 +33,7 @@ of another scenario's map. Nothing is written then.
 from __future__ import annotations
 
 import os
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -122,34 +123,59 @@ def clip_tracks(
     point more than :data:`~poc_env.agents.mission.geoimport.MAX_DISTANCE_KM` from the area
     (the wrong side of the globe, a sign or lat/lon slip: no aircraft of this planner flies so
     far), or none of it inside (another area's log)."""
-    from shapely.geometry import LineString, box
-
     from poc_env.agents.mission.geoimport import MAX_DISTANCE_KM
     from poc_env.sim.core import operating_area
 
     x0, y0, x1, y1 = operating_area(sc)
-    area = box(x0, y0, x1, y1)
+    tol = 1e-6 * max(x1 - x0, y1 - y0)  # check_paths's: points on the edge stay whole
+    lo, hi = np.array([x0 - tol, y0 - tol]), np.array([x1 + tol, y1 + tol])
     out = []
     for field, pts in tracks:
         off = np.hypot(*np.maximum(np.maximum([x0, y0] - pts, pts - [x1, y1]), 0.0).T)
-        if off.max() <= 1e-6 * max(x1 - x0, y1 - y0):  # check_paths's tolerance
+        if off.max() <= tol:
             out.append((field, pts))
             continue
-        line = LineString(pts)
-        inside = line.intersection(area)
-        parts = [g for g in getattr(inside, "geoms", [inside]) if g.geom_type == "LineString"]
-        parts = [g for g in parts if g.length > 0.0]
         check_paths(sc, [pts], [field], crs, MAX_DISTANCE_KM * 1e3)  # raises for a far point
+        parts = _inside_stretches(pts, lo, hi)
         if not parts:
             check_paths(sc, [pts], [field], crs)  # raises: none of it inside
-        kept = sum(g.length for g in parts)
+        total = float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
+        kept = sum(float(np.sum(np.hypot(*np.diff(q, axis=0).T))) for q in parts)
         print(
-            f"warning: {field}: {(line.length - kept) / 1e3:.1f} of {line.length / 1e3:.1f} km "
-            f"flown outside the operating area (up to {off.max() / 1e3:.1f} km from it); the "
+            f"warning: {field}: {(total - kept) / 1e3:.1f} of {total / 1e3:.1f} km flown "
+            f"outside the operating area (up to {off.max() / 1e3:.1f} km from it); the "
             f"{len(parts)} stretch(es) inside are swept"
         )
-        out += [(field, np.asarray(g.coords, dtype=float)) for g in parts]
+        out += [(field, q) for q in parts]
     return out
+
+
+def _inside_stretches(pts: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[np.ndarray]:
+    """The stretches of the polyline ``pts`` inside the box ``lo``-``hi``, in flight order:
+    each leg clipped to the box (Liang-Barsky), consecutive clipped legs that meet joined into
+    one stretch; stretches of no length dropped."""
+    out: list[list[np.ndarray]] = []
+    joined = False  # the previous leg reached its end inside: this one continues its stretch
+    for a, b in pairwise(pts):
+        d = b - a
+        t0, t1 = 0.0, 1.0
+        for k in range(2):
+            if d[k] == 0.0:
+                if not lo[k] <= a[k] <= hi[k]:
+                    t0, t1 = 1.0, 0.0
+            else:
+                ta, tb = sorted(((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]))
+                t0, t1 = max(t0, ta), min(t1, tb)
+        if t0 > t1:
+            joined = False
+            continue
+        p, q = np.clip(a + t0 * d, lo, hi), np.clip(a + t1 * d, lo, hi)  # no ulp outside
+        if joined and t0 == 0.0:
+            out[-1].append(q)
+        else:
+            out.append([p, q])
+        joined = t1 == 1.0
+    return [np.array(s) for s in out if np.sum(np.hypot(*np.diff(np.array(s), axis=0).T)) > 0]
 
 
 def plan_paths(plan: dict[str, Any]) -> list[np.ndarray]:

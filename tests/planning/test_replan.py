@@ -120,7 +120,7 @@ def test_a_track_partly_outside_the_area_counts_the_part_inside(first, tmp_path,
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "warning: tracks.features[1].geometry.coordinates:" in text
-    assert "outside the operating area" in text and "inside are swept" in text
+    assert "outside the operating area" in text and "the 1 stretch(es) inside are swept" in text
     # every planned route was flown inside (plus a stretch of the diversion): at least plan 1's
     assert json.loads(out.read_text())["searched_pos"] >= plan["posc"] * (1 - 1e-3)
     out.unlink()
