@@ -718,14 +718,15 @@ def _check_inputs(args: argparse.Namespace) -> None:
     """Refuse, before the command runs, an input file that exists but cannot be read as one
     (:func:`poc_env.io.check_input_file`): a FIFO or a device (a read would block: ``replan
     --tracks`` on a FIFO never ended), or no permission; named by its option. A missing path is
-    left to the command (a built-in scenario's or region plan's name is no file)."""
+    left to the command, and so is a folder (a built-in scenario's or region plan's name may
+    be a folder's in the working directory)."""
     from poc_env.io import check_input_file
 
     for field in _INPUTS.values():  # named as the rest of the command line names them
         value = getattr(args, field, None)
         for v in value if isinstance(value, list) else [value]:
             if isinstance(v, str) and v:
-                check_input_file(field, v, "a file poc-env can read", missing_ok=True)
+                check_input_file(field, v, "a file poc-env can read", strict=False)
 
 
 def _plan(

@@ -75,13 +75,14 @@ def _kind(mode: int) -> str:
 
 
 def check_input_file(
-    field: str, path: str | os.PathLike[str], allowed: str, *, missing_ok: bool = False
+    field: str, path: str | os.PathLike[str], allowed: str, *, strict: bool = True
 ) -> None:
     """Refuse an input ``path`` that cannot be read as a file, before anything reads it, naming
-    ``field`` (the option it came from), the path and why, after ``allowed``: missing (unless
-    ``missing_ok``: a value that may be a name, such as a built-in scenario), not a regular
-    file (a FIFO or a device: a read would block, or never end), or unreadable (no permission:
-    said so, not called empty). An empty file passes (what is empty is the reader's to say).
+    ``field`` (the option it came from), the path and why, after ``allowed``: missing, a folder
+    or another file that is not a regular one (a FIFO or a device: a read would block, or never
+    end), or unreadable (no permission: said so, not called empty). An empty file passes (what
+    is empty is the reader's to say). ``strict=False``: a value that may also be a name (a
+    built-in scenario, a run folder) -- a missing path or a folder passes, to the command.
 
     Raises
     ------
@@ -95,11 +96,13 @@ def check_input_file(
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
-        if missing_ok:
+        if not strict:
             return
         raise ConfigError(field, text, f"{allowed}; it does not exist") from None
     except OSError as err:
         raise ConfigError(field, text, f"{allowed}; unreadable ({err.strerror})") from None
+    if stat.S_ISDIR(mode) and not strict:
+        return
     if not stat.S_ISREG(mode):
         raise ConfigError(field, text, f"{allowed}; it is {_kind(mode)}, not a regular file")
     try:

@@ -488,9 +488,12 @@ def _unblock_readers_of(fifo, seconds: float = 20.0) -> None:
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="FIFOs are POSIX")
-def test_a_fifo_given_as_an_input_is_refused_not_read(tmp_path, capsys):
+def test_a_fifo_given_as_an_input_is_refused_not_read(tmp_path, capsys, monkeypatch):
     """``replan --tracks`` on a FIFO blocked forever (a read that never ends); every input file
-    option that is not a regular file is refused before the command runs, naming the option."""
+    option that is not a regular file is refused before the command runs, naming the option. A
+    folder named like a built-in scenario in the working directory is no file: still the name."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "small").mkdir()
     plan = tmp_path / "p1.json"
     argv = ["plan", "--scenario", "small", "--planner", "allocation", "--origin", "46.5,7.9"]
     assert main([*argv, "--quiet", "--out", str(plan)]) == 0
