@@ -139,6 +139,8 @@ def antimeridian_parts(latlon: Any, *, ring: bool = False) -> list[list[list[flo
             parts[-1].append(x.tolist())
             parts.append([x.tolist()])
         parts[-1].append(q.tolist())
+    # a vertex exactly on the meridian leaves a part of no length there: dropped
+    parts = [q for q in parts if len({(v[0], v[1]) for v in q}) > 1] or parts[:1]
     for part in parts:  # into [-180, 180]: the turn its points' mean is in (one copy each)
         turns = float(np.floor((np.mean([v[1] for v in part]) + 180.0) / 360.0))
         for v in part:
