@@ -533,25 +533,29 @@ def test_max_memory_gb_is_each_call_s_own(tmp_path, capsys, monkeypatch):
     assert "POC_ENV_MAX_MEMORY_GB" not in os.environ
 
 
+#: A ``poc-env`` process (``sys.argv[0]`` its script) sent SIGINT when it starts importing
+#: gymnasium, inside ``import poc_env`` (results/audit/leftovers/probes.py runs it too).
+KICK_WHILE_IMPORTING = (
+    "import os, signal, sys\n"
+    "class Kick:\n"
+    "    def find_spec(self, name, path, target=None):\n"
+    "        if name == 'gymnasium':\n"
+    "            os.kill(os.getpid(), signal.SIGINT)\n"
+    "sys.meta_path.insert(0, Kick())\n"
+    "sys.argv[0] = os.path.join(os.path.dirname(sys.executable), 'poc-env')\n"
+    "from poc_env.cli import main\n"
+    "sys.exit(main(['--version']))\n"
+)
+
+
 def test_ctrl_c_while_the_command_imports_its_packages_is_one_line(tmp_path):
     """A Ctrl-C in the first fraction of a second, while ``poc-env`` imports numpy and
     Gymnasium (before main() runs), printed Python's KeyboardInterrupt traceback; now one line
     and status 130. The SIGINT is sent when the import of gymnasium starts (an import hook)."""
     import subprocess
 
-    script = (
-        "import os, signal, sys\n"
-        "class Kick:\n"
-        "    def find_spec(self, name, path, target=None):\n"
-        "        if name == 'gymnasium':\n"
-        "            os.kill(os.getpid(), signal.SIGINT)\n"
-        "sys.meta_path.insert(0, Kick())\n"
-        "sys.argv[0] = os.path.join(os.path.dirname(sys.executable), 'poc-env')\n"
-        "from poc_env.cli import main\n"
-        "sys.exit(main(['--version']))\n"
-    )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=120, check=False)  # fmt: skip
+    argv = [sys.executable, "-c", KICK_WHILE_IMPORTING]
+    proc = subprocess.run(argv, capture_output=True, text=True, timeout=120, check=False)
     assert proc.returncode == 130, proc.stderr
     assert "Traceback" not in proc.stderr
     assert proc.stderr.strip() == "interrupted: poc-env stopped while starting; nothing was written"

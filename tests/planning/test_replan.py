@@ -134,24 +134,28 @@ def test_a_track_partly_outside_the_area_counts_the_part_inside(first, tmp_path,
     assert not out.exists()
 
 
-def test_tracks_in_a_projected_geojson_crs_are_reprojected(first, tmp_path):
-    """Leftovers #4: a GeoJSON of 2008 style with a ``crs`` member in metres (UTM 32N, as a
-    logger or GIS may still write) is reprojected by pyproj and sweeps what the same tracks in
-    longitude/latitude sweep (before: refused)."""
+def _utm_tracks(path, plan):
+    """The plan's routes as tracks in UTM 32N metres, with a GeoJSON 2008 ``crs`` member."""
     from pyproj import Transformer
 
-    _, p1 = first
-    plan = json.loads(p1.read_text())
-    feats = _tracks(tmp_path / "ll.geojson", plan)
+    feats = _tracks(path, plan)
     utm = Transformer.from_crs("EPSG:4326", "EPSG:32632", always_xy=True)
     for f in feats:
         f["geometry"]["coordinates"] = [
             list(utm.transform(*p)) for p in f["geometry"]["coordinates"]
         ]
     crs = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}}
-    (tmp_path / "utm.geojson").write_text(
-        json.dumps({"type": "FeatureCollection", "crs": crs, "features": feats})
-    )
+    path.write_text(json.dumps({"type": "FeatureCollection", "crs": crs, "features": feats}))
+
+
+def test_tracks_in_a_projected_geojson_crs_are_reprojected(first, tmp_path):
+    """Leftovers #4: a GeoJSON of 2008 style with a ``crs`` member in metres (UTM 32N, as a
+    logger or GIS may still write) is reprojected by pyproj and sweeps what the same tracks in
+    longitude/latitude sweep (before: refused)."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    _tracks(tmp_path / "ll.geojson", plan)
+    _utm_tracks(tmp_path / "utm.geojson", plan)
     got = []
     for name in ("ll", "utm"):
         out = tmp_path / f"{name}.json"

@@ -23,12 +23,22 @@ HERE = Path(__file__).resolve()
 RUN_MAIN = HERE.parents[1] / "export" / "run_main.py"
 
 
-def child(code: str, timeout: float = 120.0, argv0: str | None = None, lines: int = 3) -> dict:
+def test_module(rel: str):
+    """A test module of this checkout by its path under tests/ (its helpers: one copy)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(Path(rel).stem, HERE.parents[3] / "tests" / rel)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def child(code: str, timeout: float = 120.0, lines: int = 3) -> dict:
     """``code`` run by a fresh interpreter importing the same ``poc_env`` as this process: its
     status and the last ``lines`` lines of its stderr."""
     path = Path(os.environ.get("PROBE_DIR", ".")) / "child.py"
-    head = f"import sys\nsys.argv[0] = {argv0!r}\n" if argv0 else ""
-    path.write_text(head + code, encoding="utf-8")
+    path.write_text(code, encoding="utf-8")
     cmd = [sys.executable, str(path)]
     if os.environ.get("POC_ENV_TREE"):
         cmd = [sys.executable, str(RUN_MAIN), str(path)]
@@ -109,26 +119,10 @@ def _jumps(lons: list[float]) -> int:
 def p3_antimeridian(work: Path) -> dict:
     """An area imported at 179.6-179.98 E, its airfield at 179.97 W."""
     from poc_env.agents.mission.export import export_plan
-    from poc_env.agents.mission.geoimport import import_scenario, write_imported
-    from poc_env.agents.mission.plan import write_plan
-    from poc_env.agents.planning.planner import make_plan
-    from poc_env.config import load_scenario
 
-    def fc(geometry, **props):
-        feat = {"type": "Feature", "properties": props, "geometry": geometry}
-        return json.dumps({"type": "FeatureCollection", "features": [feat]})
-
-    ring = [[179.6, -16.7], [179.98, -16.7], [179.98, -16.3], [179.6, -16.3], [179.6, -16.7]]
-    (work / "area.geojson").write_text(fc({"type": "Polygon", "coordinates": [ring]}))
-    pt = {"type": "Point", "coordinates": [-179.97, -16.45]}
-    (work / "fields.geojson").write_text(fc(pt, name="Taveuni"))
-    res = import_scenario(work / "area.geojson", airfields=work / "fields.geojson", base="small",
-                          name="fiji")  # fmt: skip
-    write_imported(res, work / "fiji.yaml")
-    write_plan(make_plan(load_scenario(str(work / "fiji.yaml")), planner="allocation", refine=0),
-               work / "fiji.json")  # fmt: skip
+    fiji = test_module("mission/test_export_audit.py")._plan_imported_at_the_antimeridian(work)
     rec = {}
-    (g,), _, _ = _say(export_plan, work / "fiji.json", "geojson", out_dir=work / "fg")
+    (g,), _, _ = _say(export_plan, fiji, "geojson", out_dir=work / "fg")
     feats = json.loads(g.read_text())["features"]
     lines = []
     for f in feats:
@@ -141,7 +135,7 @@ def p3_antimeridian(work: Path) -> dict:
         _jumps([p[0] for p in ln]) > 0 for ln in lines if ln and isinstance(ln[0], list)
     )
     rec["geojson Multi* geometries"] = sum(f["geometry"]["type"].startswith("Multi") for f in feats)
-    files, _, _ = _say(export_plan, work / "fiji.json", "kml", out_dir=work / "fk")
+    files, _, _ = _say(export_plan, fiji, "kml", out_dir=work / "fk")
     text = next(f for f in files if f.suffix == ".kml").read_text()
     coords = re.findall(r"<coordinates>([^<]*)</coordinates>", text)
     rec["kml coordinates jumping"] = sum(
@@ -149,7 +143,7 @@ def p3_antimeridian(work: Path) -> dict:
     )
     box = {k: float(v) for k, v in re.findall(r"<(east|west)>([^<]*)</", text)}
     rec["kml prior box west, east"] = [box.get("west"), box.get("east")]
-    (h,), _, _ = _say(export_plan, work / "fiji.json", "html", out_dir=work / "fh")
+    (h,), _, _ = _say(export_plan, fiji, "html", out_dir=work / "fh")
     m = re.search(r'id="plan-data">(.*?)</script>', h.read_text(), re.S)
     data = json.loads(m.group(1)) if m else {}
     rows = [seg for u in data.get("uavs", []) for seg in [*u["transit"], u["search"]] if seg]
@@ -172,18 +166,6 @@ def _first_plan(work: Path) -> Path:
     return p1
 
 
-def _tracks(plan: dict) -> list[dict]:
-    from poc_env.agents.mission.crs import to_geographic
-
-    feats = []
-    for u in plan["uavs"]:
-        pts = [u["takeoff_m"], *u["waypoints_m"], u["landing_m"]]
-        coords = [[lon, lat] for lat, lon in to_geographic(pts, plan["crs"])]
-        feats.append({"type": "Feature", "properties": {},
-                      "geometry": {"type": "LineString", "coordinates": coords}})  # fmt: skip
-    return feats
-
-
 def _cli(argv: list[str]) -> dict:
     from poc_env.cli import main
 
@@ -197,25 +179,15 @@ def _cli(argv: list[str]) -> dict:
 
 def p4_tracks(work: Path) -> dict:
     """replan with UAV 2's track ending at a field ~100 km east; tracks in UTM 32N (a crs)."""
-    from pyproj import Transformer
-
     p1 = _first_plan(work)
     plan = json.loads(p1.read_text())
-    feats = _tracks(plan)
+    helpers = test_module("planning/test_replan.py")  # the routes written as tracks
+    feats = helpers._tracks(work / "div.geojson", plan)
     feats[1]["geometry"]["coordinates"].append([9.2, 46.6])
     (work / "div.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
     rec = {"diverted": _cli(["replan", "--plan", str(p1), "--tracks", str(work / "div.geojson"),
                              "--out", str(work / "n_div.json")])}  # fmt: skip
-    utm = Transformer.from_crs("EPSG:4326", "EPSG:32632", always_xy=True)
-    feats = _tracks(plan)
-    for f in feats:
-        f["geometry"]["coordinates"] = [
-            list(utm.transform(*c)) for c in f["geometry"]["coordinates"]
-        ]
-    crs = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}}
-    (work / "utm.geojson").write_text(
-        json.dumps({"type": "FeatureCollection", "crs": crs, "features": feats})
-    )
+    helpers._utm_tracks(work / "utm.geojson", plan)
     rec["utm crs"] = _cli(["replan", "--plan", str(p1), "--tracks", str(work / "utm.geojson"),
                            "--out", str(work / "n_utm.json")])  # fmt: skip
     for key, name in (("diverted", "n_div.json"), ("utm crs", "n_utm.json")):
@@ -276,32 +248,16 @@ def p5_cli(work: Path) -> dict:
         "print(f'GiB seen: first call {first}, second call (no option) {second}',\n"
         "      file=sys.stderr)\n"
     )
-    rec["Ctrl-C while importing"] = child(
-        "import os, signal, sys\n"
-        "class Kick:\n"
-        "    def find_spec(self, name, path, target=None):\n"
-        "        if name == 'gymnasium':\n"
-        "            os.kill(os.getpid(), signal.SIGINT)\n"
-        "sys.meta_path.insert(0, Kick())\n"
-        "from poc_env.cli import main\n"
-        "sys.exit(main(['--version']))\n",
-        argv0=str(Path(sys.executable).parent / "poc-env"),
-    )
+    kick = test_module("e2e/test_cli_audit.py").KICK_WHILE_IMPORTING
+    rec["Ctrl-C while importing"] = child(kick)
     return rec
 
 
 def p6_glide(work: Path) -> dict:
     """A plan landing at the foot of a 150 m/km slope: glide warnings per command."""
-    import importlib.util
-
     import yaml
 
-    spec = importlib.util.spec_from_file_location(
-        "tt", HERE.parents[3] / "tests" / "mission" / "test_terrain.py"
-    )
-    assert spec is not None and spec.loader is not None
-    tt = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tt)
+    tt = test_module("mission/test_terrain.py")
     data = tt._scenario(None, terrain={"elevation_m": tt._slope(150.0), "cell_km": 1.0,
                                        "origin_km": [-40, -30]})  # fmt: skip
     (work / "steep.yaml").write_text(yaml.safe_dump(data))
