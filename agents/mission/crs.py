@@ -11,6 +11,7 @@ from poc_env.crs import (  # noqa: F401 -- the public API, unchanged
     check_crs,
     check_origin,
     check_utm_zone,
+    continuous_lon,
     crs_text,
     make_crs,
     parse_origin,
