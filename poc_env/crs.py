@@ -82,6 +82,10 @@ def utm_zone(origin: tuple[float, float]) -> int:
 #: the zone's own half width (3) plus the usual one-zone overlap (6). A zone farther off puts
 #: the map where the projection's scale error is large (about 19 % short at 180 degrees).
 UTM_MAX_OFFSET_DEG = 9.0
+#: Points (airfields, no-fly vertices, CSV rows, flown tracks) farther than this from the
+#: search area are refused: no aircraft of this planner flies so far, and the local
+#: projection's scale error grows with the distance.
+MAX_DISTANCE_KM = 1000.0
 
 
 def utm_zones_near(lon: float) -> list[int]:

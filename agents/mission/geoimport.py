@@ -42,7 +42,7 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
-from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
+from poc_env.agents.mission.crs import MAX_DISTANCE_KM, make_crs, parse_origin, to_local
 from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, geojson_crs_to_lonlat
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
@@ -51,8 +51,6 @@ from poc_env.io import atomic_path
 KM = 1000.0
 VECTOR_SUFFIXES = (".geojson", ".json", ".kml")
 PRIOR_SUFFIXES = (".tif", ".tiff", ".csv")
-#: Points (airfields, no-fly vertices, CSV rows) farther than this from the area are refused.
-MAX_DISTANCE_KM = 1000.0
 #: Mass outside the area above this share of the prior's total gives a warning.
 OUTSIDE_WARN = 0.01
 #: At most this many sub-pixel samples of a GeoTIFF are projected (s is lowered to fit).

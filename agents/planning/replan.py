@@ -120,10 +120,10 @@ def clip_tracks(
     track and how much of it was outside; what was flown outside searched nothing on the map.
 
     Refused (:func:`check_paths`'s error, naming the track's first such point): a track with a
-    point more than :data:`~poc_env.agents.mission.geoimport.MAX_DISTANCE_KM` from the area
+    point more than :data:`~poc_env.crs.MAX_DISTANCE_KM` from the area
     (the wrong side of the globe, a sign or lat/lon slip: no aircraft of this planner flies so
     far), or none of it inside (another area's log)."""
-    from poc_env.agents.mission.geoimport import MAX_DISTANCE_KM
+    from poc_env.agents.mission.crs import MAX_DISTANCE_KM
     from poc_env.sim.core import operating_area
 
     x0, y0, x1, y1 = operating_area(sc)
