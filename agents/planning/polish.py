@@ -83,7 +83,7 @@ polishes only on maps without zones.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,27 +159,17 @@ class Exposure:
         self._base = np.zeros_like(self.mass)
         self._work = np.zeros_like(self.mass)
 
-    def _rel(self, pts) -> np.ndarray:
-        return np.ascontiguousarray(np.asarray(pts, dtype=float).reshape(-1, 2) - self.origin)
-
     def steps(self, a, b) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The legs ``a -> b`` (L, 2) cut into steps no longer than a cell, as
         ``sampled_sweep`` flies them (:func:`~poc_env.theory.search_theory.sweep_track` with
         ``step_m`` the cell: the cut-off applies per step), relative to the grid's origin:
         (starts, ends, steps per leg)."""
-        a = self._rel(a)
-        b = self._rel(b)
-        d = b - a
-        n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / self.grid.cell_m)).astype(np.int64)
-        leg = np.repeat(np.arange(len(a)), n)
-        j = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
-        nl = n[leg].astype(float)
-        t0 = (j / nl)[:, None]
-        t1 = ((j + 1) / nl)[:, None]
-        return (
-            np.ascontiguousarray(a[leg] + t0 * d[leg]),
-            np.ascontiguousarray(a[leg] + t1 * d[leg]),
-            n,
+        return _sensing.cut_steps(  # i24-cheapolish: compiled, the same steps bit for bit
+            np.asarray(a, dtype=float).reshape(-1, 2),
+            np.asarray(b, dtype=float).reshape(-1, 2),
+            self.origin[0],
+            self.origin[1],
+            float(self.grid.cell_m),
         )
 
     def add(self, a, b, sign: float = 1.0) -> None:
@@ -244,6 +234,10 @@ def polish_routes(
     airspace: Airspace | None = None,
     moves: Sequence[str] = MOVES,
     box_radii: Sequence[float] = BOX_RADII,
+    trace: Callable[..., None] | None = None,
+    block_windows: Sequence[int] = BLOCK_WINDOWS,
+    block_radii: Sequence[float] | None = None,
+    focus: int | None = None,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
@@ -254,7 +248,11 @@ def polish_routes(
     A route that does not fit ``budget`` to begin with is only changed by moves after which
     it does. ``box_radii``: the box moves' translations, in sweep widths. Returns ``(routes,
     pos, {"passes", "moves"})`` (and ``"block_moves"``, ``"box_moves"``, the kept moves that
-    were block moves, box or stretch moves, where ``moves`` names them)."""
+    were block moves, box or stretch moves, where ``moves`` names them). ``trace`` (profiling
+    only; no effect on the result): called after every choice of a set of candidates as
+    ``trace(kind, pass, k, i, window, candidates, kept)`` (``kind`` ``"waypoint"``,
+    ``"grade"``, ``"block"`` or ``"box"``; ``kept`` the index of the kept
+    candidate or -1)."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
@@ -305,6 +303,8 @@ def polish_routes(
                 pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
         count = AirspaceCount(airspace, pos, act)
 
+    tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
+
     def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray]) -> bool:
         """Keep the best of the candidates ``seqs`` for ``paths[k][i0 : i1 + 1]`` (same first
         and last points) that gains more than :data:`TOL` and keeps the route flyable."""
@@ -333,7 +333,12 @@ def polish_routes(
             ex.add(seqs[cj][:-1], seqs[cj][1:], 1.0)
             value += float(gain[cj])
             paths[k] = cand
+            if trace is not None:
+                trace(tag[0], tag[1], k, i0 + 1, tag[2], len(seqs), int(cj), float(gain[cj]))
+            hot_now[k].append((i0 + 1, i1 - 1))
             return True
+        if trace is not None:
+            trace(tag[0], tag[1], k, i0 + 1, tag[2], len(seqs), -1, 0.0)
         return False
 
     def windows(k: int, i: int, sizes, moved) -> int:
@@ -351,6 +356,7 @@ def polish_routes(
             if ln <= 1e-3:
                 break
             body = np.stack(moved(path[i : i + m_], d / ln))
+            tag[2] = m_
             got += int(
                 choose(k, i - 1, i + m_, _framed(path[i - 1], body, path[i + m_ : i + m_ + 1]))
             )
@@ -369,9 +375,9 @@ def polish_routes(
 
     def blocked(pts: np.ndarray, tan: np.ndarray) -> np.ndarray:
         """Block moves (module docstring): the window translated across or along its first
-        leg by each signed radius (``(2 len(signed), len(pts), 2)``)."""
+        leg by each signed radius (``(2 len(bsigned), len(pts), 2)``)."""
         shifts = np.concatenate(
-            [signed[:, None] * u[None] for u in (np.array([-tan[1], tan[0]]), tan)]
+            [bsigned[:, None] * u[None] for u in (np.array([-tan[1], tan[0]]), tan)]
         )
         return np.clip(pts[None] + shifts[:, None], lo, hi)
 
@@ -447,6 +453,7 @@ def polish_routes(
                 seqs += rotated(pts, (path[i0 - 1], path[i1 + 1]))
             seqs = [np.vstack([path[i0 - 1], q, path[i1 + 1]]) for q in seqs]
             if seqs:
+                tag[0], tag[2] = "box", 0
                 got += int(choose(k, i0 - 1, i1 + 1, seqs))
             if len(paths[k]) != len(path):  # trimmed: the windows are the next pass's
                 break
@@ -516,6 +523,18 @@ def polish_routes(
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
+    bsteps = steps if block_radii is None else np.asarray(tuple(block_radii), dtype=float) * w
+    bsigned = np.concatenate([bsteps, -bsteps])
+    bwin = tuple(int(m_) for m_ in block_windows)
+    # focus (i24-cheapolish): after the first pass, the window moves only near the waypoints
+    # changed in the pass before (``hot``: per UAV the ranges of inner waypoints kept moves
+    # changed, in that pass's numbering)
+    hot: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+    hot_now: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+
+    def near(k: int, i: int) -> bool:
+        return focus is None or done == 1 or any(a - focus <= i <= b + focus for a, b in hot[k])
+
     n_moves = 0
     n_block = 0  # of them block moves
     n_box = 0  # of them box or stretch moves
@@ -523,6 +542,8 @@ def polish_routes(
     for _ in range(max(0, int(passes))):
         kept = 0
         done += 1
+        tag[1] = done
+        hot, hot_now = hot_now, [[] for _ in range(n)]
         if "group" in kinds:  # i24-boxes: the groups' search parts first
             for g in groups:
                 if len(g) > 1:
@@ -570,14 +591,18 @@ def polish_routes(
                     across = signed[:, None] * (np.array([-d[1], d[0]]) / ln)[None]
                     q = np.clip(0.5 * (a + b) + across, lo, hi)
                     seqs += _framed(a, np.stack([q, np.broadcast_to(b, q.shape)], axis=1), tail)
+                tag[0], tag[2] = "waypoint", 0
                 if seqs and choose(k, i - 1, j_end, seqs):
                     kept += 1
                     if len(paths[k]) < m:
                         continue  # deleted: the next waypoint is now at i
-                if "grade" in kinds:
+                hot_i = near(k, i)
+                if "grade" in kinds and hot_i:
+                    tag[0] = "grade"
                     kept += windows(k, i, GRADE_WINDOWS, graded)
-                if "block" in kinds:
-                    got = windows(k, i, BLOCK_WINDOWS, blocked)
+                if "block" in kinds and hot_i:
+                    tag[0] = "block"
+                    got = windows(k, i, bwin, blocked)
                     kept += got
                     n_block += got
                 i += 1
