@@ -205,16 +205,35 @@ def _legs(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return points[:-1], points[1:]
 
 
-def _framed(head: np.ndarray, body: np.ndarray, tail: np.ndarray) -> list[np.ndarray]:
-    """Candidates ``[head, body[c], tail]`` (``body`` (C, L, 2), ``tail`` (T, 2)) as views of
-    one array: per candidate the points ``np.vstack([head, body[c], tail])`` gives, built in
-    one pass (i24-fastpolish: no array per candidate)."""
+def _framed_array(head: np.ndarray, body: np.ndarray, tail: np.ndarray) -> np.ndarray:
+    """Candidates ``[head, body[c], tail]`` (``body`` (C, L, 2), ``tail`` (T, 2)) as one array
+    (C, 1 + L + T, 2): per candidate the points ``np.vstack([head, body[c], tail])`` gives,
+    built in one pass (i24-fastpolish: no array per candidate)."""
     c, n = body.shape[0], body.shape[1]
     out = np.empty((c, 1 + n + len(tail), 2))
     out[:, 0] = head
     out[:, 1 : 1 + n] = body
     out[:, 1 + n :] = tail
-    return list(out)
+    return out
+
+
+def _framed(head: np.ndarray, body: np.ndarray, tail: np.ndarray) -> list[np.ndarray]:
+    """:func:`_framed_array` as a list of views, one per candidate."""
+    return list(_framed_array(head, body, tail))
+
+
+def _graded(pts: np.ndarray, tan: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The grade moves' windows (module docstring; (2 len(GRADE_SCALES), len(pts), 2)): the
+    window ``pts`` squeezed or spread across its first leg (unit direction ``tan``) about its
+    first or its last point by each factor of :data:`GRADE_SCALES`, clipped to ``[lo, hi]``
+    (i24-cheapolish: one expression for the list of one array per pivot and factor, the same
+    operations per point)."""
+    nrm = np.array([-tan[1], tan[0]])
+    off = (pts - pts[0]) @ nrm  # offsets across the first leg
+    f = np.asarray(GRADE_SCALES, dtype=float) - 1.0
+    pivot = np.array([0.0, float(off[-1])])
+    scaled = (f[None, :, None] * (off[None, None, :] - pivot[:, None, None])).reshape(-1, len(off))
+    return np.clip(pts[None] + scaled[:, :, None] * nrm[None, None], lo, hi)
 
 
 def polish_routes(
@@ -305,16 +324,22 @@ def polish_routes(
 
     tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
 
-    def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray]) -> bool:
+    def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray] | np.ndarray) -> bool:
         """Keep the best of the candidates ``seqs`` for ``paths[k][i0 : i1 + 1]`` (same first
-        and last points) that gains more than :data:`TOL` and keeps the route flyable."""
+        and last points; a list, or one array (C, P, 2) of candidates of P points) that gains
+        more than :data:`TOL` and keeps the route flyable."""
         nonlocal value
         path = paths[k]
         old = path[i0 : i1 + 1]
-        first = np.zeros(len(seqs) + 1, dtype=np.int64)
-        first[1:] = np.cumsum([len(q) - 1 for q in seqs])
-        starts = np.concatenate([q[:-1] for q in seqs])
-        ends = np.concatenate([q[1:] for q in seqs])
+        if isinstance(seqs, np.ndarray):  # i24-cheapolish: the same steps, no list
+            first = np.arange(len(seqs) + 1, dtype=np.int64) * (seqs.shape[1] - 1)
+            starts = seqs[:, :-1].reshape(-1, 2)
+            ends = seqs[:, 1:].reshape(-1, 2)
+        else:
+            first = np.zeros(len(seqs) + 1, dtype=np.int64)
+            first[1:] = np.cumsum([len(q) - 1 for q in seqs])
+            starts = np.concatenate([q[:-1] for q in seqs])
+            ends = np.concatenate([q[1:] for q in seqs])
         gain = ex.gains(old[:-1], old[1:], starts, ends, first)
         tried = 0
         for cj in np.argsort(-gain, kind="stable"):
@@ -355,23 +380,18 @@ def polish_routes(
             ln = float(np.hypot(*d))
             if ln <= 1e-3:
                 break
-            body = np.stack(moved(path[i : i + m_], d / ln))
+            body = moved(path[i : i + m_], d / ln)
             tag[2] = m_
             got += int(
-                choose(k, i - 1, i + m_, _framed(path[i - 1], body, path[i + m_ : i + m_ + 1]))
+                choose(
+                    k, i - 1, i + m_, _framed_array(path[i - 1], body, path[i + m_ : i + m_ + 1])
+                )
             )
         return got
 
-    def graded(pts: np.ndarray, tan: np.ndarray) -> list[np.ndarray]:
-        """Grade moves (module docstring): the window squeezed or spread across its first
-        leg about its first or its last point."""
-        nrm = np.array([-tan[1], tan[0]])
-        off = (pts - pts[0]) @ nrm  # offsets across the first leg
-        return [
-            np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
-            for pivot in (0.0, float(off[-1]))
-            for f in GRADE_SCALES
-        ]
+    def graded(pts: np.ndarray, tan: np.ndarray) -> np.ndarray:
+        """Grade moves (module docstring): :func:`_graded`."""
+        return _graded(pts, tan, lo, hi)
 
     def blocked(pts: np.ndarray, tan: np.ndarray) -> np.ndarray:
         """Block moves (module docstring): the window translated across or along its first

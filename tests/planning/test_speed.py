@@ -402,3 +402,32 @@ def test_compiled_steps_are_the_numpy_steps():
         ex.steps(a[:, :], b), _steps_reference(a, b, ex.origin, grid.cell_m), strict=True
     ):
         assert np.array_equal(g, w_)
+
+
+def test_graded_candidates_are_the_listed_ones():
+    """The grade moves' windows built in one expression (i24-cheapolish, ``polish._graded``)
+    equal the list of one clipped array per pivot and factor the polish built before, bit for
+    bit, on random windows (some clipped at the map's edge) and directions; and
+    ``_framed_array`` holds the candidates ``_framed`` lists."""
+    from poc_env.agents.planning.polish import GRADE_SCALES, _framed, _framed_array, _graded
+
+    rng = np.random.default_rng(12)
+    for trial in range(40):
+        m = int(rng.integers(2, 9))
+        pts = rng.uniform(-1e5, 3e5, (m, 2))
+        ang = rng.uniform(0, 2 * np.pi)
+        tan = np.array([np.cos(ang), np.sin(ang)])
+        lo, hi = np.zeros(2), np.array([2e5, 1.5e5])
+        nrm = np.array([-tan[1], tan[0]])
+        off = (pts - pts[0]) @ nrm
+        want = [
+            np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
+            for pivot in (0.0, float(off[-1]))
+            for f in GRADE_SCALES
+        ]
+        got = _graded(pts, tan, lo, hi)
+        assert got.shape == (len(want), m, 2), trial
+        for g, w_ in zip(got, want, strict=True):
+            assert np.array_equal(g, w_), trial
+        head, tail = rng.normal(0, 1e5, 2), rng.normal(0, 1e5, (trial % 3, 2))
+        assert np.array_equal(_framed_array(head, got, tail), np.stack(_framed(head, got, tail)))

@@ -17,7 +17,7 @@ import time
 
 from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.agents.planning.allocation import make_allocation_plan
-from poc_env.agents.planning.polish import KINDS, polish_for
+from poc_env.agents.planning.polish import KINDS, MOVES, polish_for
 from poc_env.config import load_scenario
 from poc_env.stats import ci95
 from poc_env.theory.bound import rule_bound
@@ -60,6 +60,17 @@ VARIANTS = {
     "lines3_w8_f2": [(2, KINDS, {"radii": R4}), (3, B, {"radii": R5, "focus": 2})],
     "lines3_w8_f1": [(2, KINDS, {"radii": R4}), (3, B, {"radii": R5, "focus": 1})],
     "lines2_w8_f1": [(2, KINDS, {"radii": R4}), (2, B, {"radii": R5, "focus": 1})],
+    "p1_lines1_w8": [(1, KINDS, {"radii": R4}), (1, B, {"radii": R5})],
+    "p1_lines2_w8_bw24": [(1, KINDS, {"radii": R4}), (2, B, {"radii": R5, "block_windows": (2, 4)})],
+    "p1_lines2_w8_bw24_br3": [
+        (1, KINDS, {"radii": R4}),
+        (2, B, {"radii": R5, "block_windows": (2, 4), "block_radii": (0.125, 0.25, 0.5)}),
+    ],
+    "p1_lines2_w8_ng_bw24": [
+        (1, KINDS, {"radii": R4}),
+        (2, (*MOVES, "block"), {"radii": R5, "block_windows": (2, 4)}),
+    ],
+    "p0_lines2_w8_bw24": [(2, B, {"radii": R5, "block_windows": (2, 4)})],
     "lines2_w8_f0": [(2, KINDS, {"radii": R4}), (2, B, {"radii": R5, "focus": 0})],
 }
 
