@@ -850,6 +850,7 @@ def make_allocation_plan(
             range_margin=opt.range_margin,
             radii=radii,
             moves=moves,
+            block_windows=opt.polish_lines_windows,  # i24-cheapolish (block moves only)
             **({} if box_radii is None else {"box_radii": box_radii}),
         )
 

@@ -280,6 +280,16 @@ def polish_routes(
     brad = tuple(box_radii)
     if not brad or any(not np.isfinite(r) or r <= 0 for r in brad):
         raise ConfigError("box_radii", box_radii, "positive numbers (sweep widths), not empty")
+    bwin = tuple(block_windows)
+    if not bwin or any(isinstance(m_, bool) or not isinstance(m_, int | np.integer) or m_ < 1
+                       for m_ in bwin):  # fmt: skip
+        raise ConfigError("block_windows", block_windows, "integers >= 1 (waypoints), not empty")
+    if block_radii is not None and (
+        not tuple(block_radii) or any(not np.isfinite(r) or r <= 0 for r in block_radii)
+    ):
+        raise ConfigError("block_radii", block_radii, "positive numbers (sweep widths), not empty")
+    if focus is not None and (isinstance(focus, bool) or not isinstance(focus, int) or focus < 0):
+        raise ConfigError("focus", focus, "None or an integer >= 0 (waypoints)")
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):
         raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
@@ -545,7 +555,7 @@ def polish_routes(
     signed = np.concatenate([steps, -steps])
     bsteps = steps if block_radii is None else np.asarray(tuple(block_radii), dtype=float) * w
     bsigned = np.concatenate([bsteps, -bsteps])
-    bwin = tuple(int(m_) for m_ in block_windows)
+    bwin = tuple(int(m_) for m_ in bwin)
     # focus (i24-cheapolish): after the first pass, the window moves only near the waypoints
     # changed in the pass before (``hot``: per UAV the ranges of inner waypoints kept moves
     # changed, in that pass's numbering)

@@ -7,6 +7,8 @@ default plan's routes with :func:`~poc_env.agents.planning.polish.polish_for`, i
 process: the polished POS (``polish_routes``' own score, ``sampled_sweep``'s to 1e-9) over the
 rule-aware bound and the stages' CPU time; the estimated CPU ratio of the plan is (default +
 stages) / default. Screening only: the choice is confirmed with ``effort_ab.py polish``.
+``replay.py table FILE...``: the paired table of several runs' records together (each
+record's ratio is paired within its own process).
 """
 
 import json
@@ -51,7 +53,7 @@ VARIANTS = {
                 "block_radii": (0.125, 0.25, 0.5),
             },
         ),
-    ],  # fmt: skip
+    ],
     "p2f1_lines2_w8_f2": [(2, KINDS, {"radii": R4, "focus": 1}), (2, B, {"radii": R5, "focus": 2})],
     "p1_lines2_w8_f2": [(1, KINDS, {"radii": R4}), (2, B, {"radii": R5, "focus": 2})],
     "lines1_w8": [(2, KINDS, {"radii": R4}), (1, B, {"radii": R5})],
@@ -61,7 +63,10 @@ VARIANTS = {
     "lines3_w8_f1": [(2, KINDS, {"radii": R4}), (3, B, {"radii": R5, "focus": 1})],
     "lines2_w8_f1": [(2, KINDS, {"radii": R4}), (2, B, {"radii": R5, "focus": 1})],
     "p1_lines1_w8": [(1, KINDS, {"radii": R4}), (1, B, {"radii": R5})],
-    "p1_lines2_w8_bw24": [(1, KINDS, {"radii": R4}), (2, B, {"radii": R5, "block_windows": (2, 4)})],
+    "p1_lines2_w8_bw24": [
+        (1, KINDS, {"radii": R4}),
+        (2, B, {"radii": R5, "block_windows": (2, 4)}),
+    ],
     "p1_lines2_w8_bw24_br3": [
         (1, KINDS, {"radii": R4}),
         (2, B, {"radii": R5, "block_windows": (2, 4), "block_radii": (0.125, 0.25, 0.5)}),
@@ -71,6 +76,14 @@ VARIANTS = {
         (2, (*MOVES, "block"), {"radii": R5, "block_windows": (2, 4)}),
     ],
     "p0_lines2_w8_bw24": [(2, B, {"radii": R5, "block_windows": (2, 4)})],
+    "p0_lines3_w8_bw24": [(3, B, {"radii": R5, "block_windows": (2, 4)})],
+    "p0_lines2_w8": [(2, B, {"radii": R5})],
+    "p1_lines2": [(1, KINDS, {"radii": R4}), (2, B, {"radii": R4})],
+    "p0_lines3_w8_ng_bw24": [(3, (*MOVES, "block"), {"radii": R5, "block_windows": (2, 4)})],
+    "p1_lines1_w8_bw24": [
+        (1, KINDS, {"radii": R4}),
+        (1, B, {"radii": R5, "block_windows": (2, 4)}),
+    ],
     "lines2_w8_f0": [(2, KINDS, {"radii": R4}), (2, B, {"radii": R5, "focus": 0})],
 }
 
@@ -138,8 +151,11 @@ def table(recs):
 
 
 if __name__ == "__main__":
-    if sys.argv[1] == "table":
-        with open(sys.argv[2]) as f:
-            table(json.load(f))
+    if sys.argv[1] == "table":  # table FILE...: the records of several runs together
+        rows = []
+        for path in sys.argv[2:]:
+            with open(path) as f:
+                rows += json.load(f)
+        table(rows)
     else:
         main(seeds_of(sys.argv[1]), sys.argv[2].split(","), sys.argv[3])
