@@ -18,13 +18,13 @@ from collections import defaultdict
 
 sys.path.insert(0, "tests/planning")
 
-from effort_ab import _digest, _options  # noqa: E402
+from effort_ab import _digest, _options
 
-from poc_env.agents.experiments.evaluate import episode_prior  # noqa: E402
-from poc_env.agents.planning.allocation import make_allocation_plan  # noqa: E402
-from poc_env.agents.planning.polish import KINDS, MOVES, polish_for  # noqa: E402
-from poc_env.config import load_scenario  # noqa: E402
-from poc_env.theory.probability_map import build_prior  # noqa: E402
+from poc_env.agents.experiments.evaluate import episode_prior
+from poc_env.agents.planning.allocation import make_allocation_plan
+from poc_env.agents.planning.polish import KINDS, MOVES, polish_for
+from poc_env.config import load_scenario
+from poc_env.theory.probability_map import build_prior
 
 
 def stages(opt):
@@ -51,18 +51,20 @@ def main(seeds, out, variant="standard"):
         ref = make_allocation_plan(sc, prior=prior, options=opt)
         c_variant = time.process_time() - c0
         routes = [u["waypoints_m"] for u in base["uavs"]]
-        cost = defaultdict(lambda: [0, 0, 0, 0.0])  # calls, candidates, kept, cpu
-        kept_idx = defaultdict(lambda: defaultdict(int))
+        cost: dict = defaultdict(lambda: [0, 0, 0, 0.0, 0.0])  # calls, cands, kept, cpu, gain
+        kept_idx: dict = defaultdict(lambda: defaultdict(int))
         clock = [0.0]
         stage_name = [""]
 
-        def trace(kind, pss, k, i, window, n, kept):
+        def trace(kind, pss, k, i, window, n, kept, gain, cost=cost, kept_idx=kept_idx,
+                  clock=clock, stage_name=stage_name):  # fmt: skip
             now = time.process_time()
             row = cost[f"{stage_name[0]}:{pss}:{kind}"]
             row[0] += 1
             row[1] += n
             row[2] += kept >= 0
             row[3] += now - clock[0]
+            row[4] += gain
             clock[0] = now
             if kept >= 0:
                 kept_idx[f"{stage_name[0]}:{kind}:{window}:{n}"][kept] += 1
@@ -72,7 +74,7 @@ def main(seeds, out, variant="standard"):
             stage_name[0] = name
             c0 = time.process_time()
             clock[0] = c0
-            routes, val, stats = polish_for(sc, routes, prior, passes, moves=moves, radii=radii,
+            routes, _, stats = polish_for(sc, routes, prior, passes, moves=moves, radii=radii,
                                             trace=trace)  # fmt: skip
             setup[name] = {"cpu_s": time.process_time() - c0, "stats": stats}
         same = [[list(map(float, w)) for w in r] for r in routes] == [
