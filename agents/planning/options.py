@@ -201,6 +201,8 @@ class PlanOptions:
     #: the block moves' windows: waypoints translated together (2 per lawnmower line;
     #: :data:`~poc_env.agents.planning.polish.BLOCK_WINDOWS`; i24-cheapolish).
     polish_lines_windows: tuple[int, ...] = (2, 4, 6, 8)
+    #: the block moves' radii, in sweep widths (empty: ``polish_lines_radii``; i24-cheapolish).
+    polish_lines_block_radii: tuple[float, ...] = ()
     #: passes of a third polish after the polishes (0: none), with the box moves only (a
     #: route's box translated, stretched or turned as one, an airfield's group translated or
     #: turned together: :data:`~poc_env.agents.planning.polish.BOX_KINDS`; i24-boxes).
@@ -251,6 +253,8 @@ class PlanOptions:
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
         _positive_tuple("polish_lines_windows", self.polish_lines_windows, integer=True, high=16)
+        _positive_tuple("polish_lines_block_radii", self.polish_lines_block_radii, high=8.0,
+                        empty=True)  # fmt: skip
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)

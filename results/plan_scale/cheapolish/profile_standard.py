@@ -88,10 +88,10 @@ def main(seeds, out, variant="standard"):
         recs.append(rec)
         print(seed, variant, f"default {c_default:.2f} s, variant {c_variant:.2f} s, "
               f"replay same {same}, load {rec['load']:.1f}", flush=True)  # fmt: skip
-        for key, (calls, cands, kept, cpu) in sorted(cost.items()):
+        for key, (calls, cands, kept, cpu, gain) in sorted(cost.items()):
             print(
                 f"  {key:24s} calls {calls:5d} cands {cands:6d} kept {kept:4d} "
-                f"cpu {cpu:6.3f} s  per kept {cpu / max(kept, 1) * 1e3:7.1f} ms",
+                f"cpu {cpu:6.3f} s  per kept {cpu / max(kept, 1) * 1e3:7.1f} ms gain {gain:.5f}",
                 flush=True,
             )
         with open(out + ".tmp", "w") as f:

@@ -77,6 +77,7 @@ VARIANTS = {
     ],
     "p0_lines2_w8_bw24": [(2, B, {"radii": R5, "block_windows": (2, 4)})],
     "p0_lines3_w8_bw24": [(3, B, {"radii": R5, "block_windows": (2, 4)})],
+    "p0_lines3_w8to1_bw24": [(3, B, {"radii": R5[:-1], "block_windows": (2, 4)})],
     "p0_lines2_w8": [(2, B, {"radii": R5})],
     "p1_lines2": [(1, KINDS, {"radii": R4}), (2, B, {"radii": R4})],
     "p0_lines3_w8_ng_bw24": [(3, (*MOVES, "block"), {"radii": R5, "block_windows": (2, 4)})],
