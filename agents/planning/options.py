@@ -12,11 +12,13 @@ allowed).
 **Effort levels** (:meth:`PlanOptions.preset`): a planning officer plans a sortie once and can
 wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and ``poc-env plan``
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
-``"standard"`` (i24-fastpolish) is the default plan polished (2 passes with the grade moves, 1
-of the second polish) on maps of at most 80 cells a side: 1.6-1.9 s on ``paper_6_2`` (3.0
-times the default's CPU time), flown 0.887 of the rule-aware bound on its 50 reported priors
-against the default's 0.852 (docs/PLANNER.md, "A faster polish (i24-fastpolish)"), policy
-``allocation_plan_standard``;
+``"standard"`` (i24-fastpolish, i24-cheapolish) is the default plan polished (1 pass with the
+grade moves, 2 of the second polish at radii W/8-2W with the block moves on windows of 1 and
+2 lawnmower lines) on maps of at most 80 cells a side: within 2 s on ``paper_6_2`` (2.9 times
+the default's CPU time, median; docs/PLANNER.md, "Cheaper candidates (i24-cheapolish)"; before
+it 2 passes and 1 of the second polish at the polish's radii, flown 0.887 of the rule-aware
+bound on the 50 reported priors against the default's 0.852: "A faster polish
+(i24-fastpolish)"), policy ``allocation_plan_standard``;
 ``"thorough"`` is the combination that gained most on the validation priors within about a
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
 (i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
@@ -324,11 +326,16 @@ THOROUGH: dict[str, Any] = {
 
 #: the ``standard`` effort level's changes to the defaults (i24-fastpolish: the default plan
 #: polished, the most POS within the issue's 2 s on ``paper_6_2``, chosen on its validation
-#: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"); only on maps of at most 80
-#: cells a side (the 160 x 160 timing case keeps the default plan and its time).
+#: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"; its passes and candidates
+#: chosen again by i24-cheapolish, "Cheaper candidates"); only on maps of at most 80 cells a
+#: side (the 160 x 160 timing case keeps the default plan and its time).
 STANDARD: dict[str, Any] = {
-    "polish": 2,
+    "polish": 1,
     "polish_grade": True,
-    "polish_lines": 1,
+    # i24-cheapolish: fewer passes of the polish, more of the second at thorough's radii with
+    # the block moves' windows that are kept (docs/PLANNER.md, "Cheaper candidates")
+    "polish_lines": 2,
+    "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
+    "polish_lines_windows": (2, 4),
     "polish_max_cells": 80,
 }
