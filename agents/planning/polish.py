@@ -269,9 +269,13 @@ def polish_routes(
     pos, {"passes", "moves"})`` (and ``"block_moves"``, ``"box_moves"``, the kept moves that
     were block moves, box or stretch moves, where ``moves`` names them). ``trace`` (profiling
     only; no effect on the result): called after every choice of a set of candidates as
-    ``trace(kind, pass, k, i, window, candidates, kept)`` (``kind`` ``"waypoint"``,
+    ``trace(kind, pass, k, i, window, candidates, kept, gain)`` (``kind`` ``"waypoint"``,
     ``"grade"``, ``"block"`` or ``"box"``; ``kept`` the index of the kept
-    candidate or -1)."""
+    candidate or -1, ``gain`` its gain or 0). i24-cheapolish: ``block_windows`` the block
+    moves' windows (waypoints; default :data:`BLOCK_WINDOWS`), ``block_radii`` their radii in
+    sweep widths (None: ``radii``); ``focus`` (None: off) -- after the first pass, the grade
+    and block moves only at waypoints within ``focus`` of those a move kept in the pass before
+    changed (measured not to pay on ``paper_6_2``: docs/PLANNER.md, "Cheaper candidates")."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
