@@ -24,6 +24,7 @@ from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.polish import KINDS, MOVES, polish_for
 from poc_env.config import load_scenario
+from poc_env.io import write_text_atomic
 from poc_env.theory.probability_map import build_prior
 
 
@@ -94,9 +95,7 @@ def main(seeds, out, variant="standard"):
                 f"cpu {cpu:6.3f} s  per kept {cpu / max(kept, 1) * 1e3:7.1f} ms gain {gain:.5f}",
                 flush=True,
             )
-        with open(out + ".tmp", "w") as f:
-            json.dump(recs, f, indent=1)
-        os.replace(out + ".tmp", out)
+        write_text_atomic(out, json.dumps(recs, indent=1))
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.polish import KINDS, MOVES, polish_for
 from poc_env.config import load_scenario
+from poc_env.io import write_text_atomic
 from poc_env.stats import ci95
 from poc_env.theory.bound import rule_bound
 from poc_env.theory.probability_map import build_prior
@@ -129,9 +130,7 @@ def main(seeds, names, out):
             r = recs[-1]
             print(seed, v, f"{r['value']:.4f} polish {cpu:.2f} s ratio {r['ratio']:.2f} "
                   f"load {r['load']:.1f}", flush=True)  # fmt: skip
-            with open(out + ".tmp", "w") as f:
-                json.dump(recs, f, indent=1)
-            os.replace(out + ".tmp", out)
+            write_text_atomic(out, json.dumps(recs, indent=1))
     table(recs)
 
 
