@@ -75,8 +75,10 @@ def main(seeds, out, variant="standard"):
             stage_name[0] = name
             c0 = time.process_time()
             clock[0] = c0
+            kw = {"block_windows": opt.polish_lines_windows,
+                  "block_radii": opt.polish_lines_block_radii or None}  # fmt: skip
             routes, _, stats = polish_for(sc, routes, prior, passes, moves=moves, radii=radii,
-                                            trace=trace)  # fmt: skip
+                                          trace=trace, **kw)  # fmt: skip
             setup[name] = {"cpu_s": time.process_time() - c0, "stats": stats}
         same = [[list(map(float, w)) for w in r] for r in routes] == [
             u["waypoints_m"] for u in ref["uavs"]
