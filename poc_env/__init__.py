@@ -2,7 +2,28 @@
 
 from __future__ import annotations
 
+import os as _os
+import sys as _sys
 from typing import TYPE_CHECKING, Any
+
+#: What the ``poc-env`` command prints when Ctrl-C ends it before it has started.
+STARTING_INTERRUPTED = "interrupted: poc-env stopped while starting; nothing was written"
+
+
+def _interrupted_while_starting(signum: int, frame: Any) -> None:
+    """SIGINT while the ``poc-env`` command imports its packages: one line and exit status 130,
+    as a later Ctrl-C ends (``poc_env.cli.main``), not Python's traceback. A SystemExit raised
+    in an import propagates out of it and ends the interpreter quietly."""
+    print(STARTING_INTERRUPTED, file=_sys.stderr)
+    raise SystemExit(130)
+
+
+if _os.path.basename(_sys.argv[0] if _sys.argv else "").removesuffix(".exe") == "poc-env":
+    # the command line only (its script is named poc-env): in Python, `import poc_env` keeps
+    # the interpreter's own Ctrl-C; main() puts Python's handler back once it runs
+    import signal as _signal
+
+    _signal.signal(_signal.SIGINT, _interrupted_while_starting)
 
 if TYPE_CHECKING:
     from poc_env.config import Scenario, load_scenario

@@ -13,6 +13,7 @@ import argparse
 import contextlib
 import os
 import sys
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
@@ -703,9 +704,29 @@ def _check_plan_args(args: argparse.Namespace) -> None:
 def _inputs_of(args: argparse.Namespace) -> dict[str, str | list | None]:
     """The input files a command line names (for :func:`poc_env.io.check_distinct`), by
     option."""
-    names = {"scenario": "scenario", "map": "map_file", "regions": "regions", "plan": "plan",
-             "tracks": "tracks"}  # fmt: skip
-    return {n: getattr(args, d) for n, d in names.items() if getattr(args, d, None) is not None}
+    return {n: getattr(args, d) for n, d in _INPUTS.items() if getattr(args, d, None) is not None}
+
+
+#: The options that name input files (option -> its ``args`` attribute): every command's, and
+#: ``scenario import``'s layers.
+_INPUTS = {"scenario": "scenario", "map": "map_file", "regions": "regions", "plan": "plan",
+           "tracks": "tracks", "area": "area", "prior": "prior", "airfields": "airfields",
+           "no_fly": "no_fly", "dem": "dem", "particles": "particles"}  # fmt: skip
+
+
+def _check_inputs(args: argparse.Namespace) -> None:
+    """Refuse, before the command runs, an input file that exists but cannot be read as one
+    (:func:`poc_env.io.check_input_file`): a FIFO or a device (a read would block: ``replan
+    --tracks`` on a FIFO never ended), or no permission; named by its option. A missing path is
+    left to the command, and so is a folder (a built-in scenario's or region plan's name may
+    be a folder's in the working directory)."""
+    from poc_env.io import check_input_file
+
+    for field in _INPUTS.values():  # named as the rest of the command line names them
+        value = getattr(args, field, None)
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, str) and v:
+                check_input_file(field, v, "a file poc-env can read", strict=False)
 
 
 def _plan(
@@ -1349,16 +1370,25 @@ def parse_command_line(argv: Sequence[str]) -> argparse.Namespace:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    import signal
+
+    from poc_env import STARTING_INTERRUPTED
+
+    # from here on Ctrl-C is a KeyboardInterrupt this function reports (during the imports
+    # before it, poc_env's own handler did: poc_env/__init__.py)
+    with contextlib.suppress(ValueError):  # main() called outside the main thread: no signals
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:  # the parser reads the configuration, whose first import loads the compiled kernels
         args = parse_command_line(sys.argv[1:] if argv is None else argv)
     except KeyboardInterrupt:
-        print("interrupted: poc-env stopped while starting; nothing was written", file=sys.stderr)
+        print(STARTING_INTERRUPTED, file=sys.stderr)
         return 130
     try:
         try:
-            if args.max_memory_gb is not None:
-                limits.set_memory_limit_gb(args.max_memory_gb)
-            return int(args.func(args) or 0)
+            _check_inputs(args)
+            with limits.memory_limit_gb(args.max_memory_gb), warnings.catch_warnings():
+                warnings.showwarning = _show_warning  # this call's; restored after it
+                return int(args.func(args) or 0)
         except ModuleNotFoundError as err:
             extra = _EXTRA_OF.get((err.name or "").split(".")[0])
             if extra is None:
@@ -1385,6 +1415,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                               f"({err.strerror or err})")  # fmt: skip
         print(f"error: {refused}", file=sys.stderr)
         return 2
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning a command raises, as the command line says the rest: ``warning: <text>`` on
+    stderr, without Python's file, line and source (``terrain.py:673: UserWarning: ...
+    return [``)."""
+    print(f"warning: {message}", file=sys.stderr if file is None else file)
 
 
 def _field_of_path(args: argparse.Namespace, path: str) -> str:

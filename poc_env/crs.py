@@ -82,6 +82,10 @@ def utm_zone(origin: tuple[float, float]) -> int:
 #: the zone's own half width (3) plus the usual one-zone overlap (6). A zone farther off puts
 #: the map where the projection's scale error is large (about 19 % short at 180 degrees).
 UTM_MAX_OFFSET_DEG = 9.0
+#: Points (airfields, no-fly vertices, CSV rows, flown tracks) farther than this from the
+#: search area are refused: no aircraft of this planner flies so far, and the local
+#: projection's scale error grows with the distance.
+MAX_DISTANCE_KM = 1000.0
 
 
 def utm_zones_near(lon: float) -> list[int]:
@@ -281,6 +285,22 @@ def to_geographic(xy, origin: Any) -> list[tuple[float, float]]:
     return [(float(a), float(b)) for a, b in zip(lat, lon)]
 
 
+def continuous_lon(lon: Any, origin: Any) -> np.ndarray:
+    """Longitudes ``lon`` (degrees) shifted by whole turns to lie within 180 degrees of the map
+    origin's (``origin``: as :func:`to_geographic` takes it), so that a map drawn around the
+    180th meridian is continuous (179.9 then 180.1, not -179.9): what Google Earth and Leaflet
+    need to draw a line or polygon across it the short way (OGC 07-147r2 section 9.14.3.4 lets
+    a ``LatLonBox`` extend beyond 180 for it). Away from the meridian nothing changes.
+
+    >>> continuous_lon([179.9, -179.9, 10.0], (-16.5, 179.8)).tolist()
+    [179.9, 180.1, 10.0]
+    """
+    lon0 = float(origin["origin_deg"][1]) if isinstance(origin, dict) else check_origin(origin)[1]
+    a = np.asarray(lon, dtype=float)
+    shift = 360.0 * np.round((a - lon0) / 360.0)
+    return np.where(np.abs(a - lon0) <= 180.0, a, a - shift)
+
+
 def to_local(latlon, origin: Any) -> list[tuple[float, float]]:
     """The inverse of :func:`to_geographic`: [(lat, lon), ...] degrees -> [(x, y), ...] m."""
     pts = np.asarray(latlon, dtype=float).reshape(-1, 2)
@@ -350,6 +370,47 @@ def is_wgs84_name(name: Any) -> bool:
     """Whether a GeoJSON ``crs`` member's name means WGS 84 longitude/latitude
     (:data:`WGS84_NAMES`, case and surrounding spaces ignored)."""
     return isinstance(name, str) and name.strip().lower() in WGS84_NAMES
+
+
+def geojson_crs_to_lonlat(member: Any, field: str) -> Any:
+    """The reprojection a GeoJSON object's ``crs`` member asks for, or None.
+
+    RFC 7946 (2016) removed ``crs``: positions are WGS 84 longitude/latitude. The 2008 GeoJSON
+    specification allowed a named CRS (``{"type": "name", "properties": {"name":
+    "urn:ogc:def:crs:EPSG::32632"}}``), positions then in its x, y (easting, northing) order,
+    and older files (a logger's, a GIS's export) still carry one. Absent, or a name of
+    :data:`WGS84_NAMES`: None (nothing to do). Any other name pyproj reads (UTM, Web Mercator,
+    another datum's longitude/latitude): a function ``(n, 2) x, y -> (n, 2) lon, lat``.
+
+    Raises
+    ------
+    ConfigError
+        ``field`` (the member, e.g. ``tracks.crs``): not a named CRS, or a name pyproj cannot
+        read.
+    """
+    if member is None:
+        return None
+    props = member.get("properties") if isinstance(member, dict) else None
+    name = props.get("name") if isinstance(props, dict) else None
+    if is_wgs84_name(name):
+        return None
+    allowed = (
+        "no crs member (RFC 7946: WGS 84 longitude/latitude), or a named CRS that pyproj "
+        'reads ({"type": "name", "properties": {"name": "EPSG:32632"}}, GeoJSON 2008)'
+    )
+    if not isinstance(name, str):
+        raise ConfigError(field, member if len(str(member)) < 200 else "object", allowed)
+    try:
+        src = CRS.from_user_input(name.strip())
+    except CRSError as err:
+        raise ConfigError(field, name, f"{allowed}; pyproj: {err}") from None
+    to_wgs = Transformer.from_crs(src, "EPSG:4326", always_xy=True)
+
+    def lonlat(xy: np.ndarray) -> np.ndarray:
+        lon, lat = to_wgs.transform(xy[:, 0], xy[:, 1])
+        return np.stack([np.atleast_1d(lon), np.atleast_1d(lat)], axis=1).astype(float)
+
+    return lonlat
 
 
 #: Largest distance (m) allowed between a polygon edge, straight where it was drawn (in

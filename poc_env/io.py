@@ -59,13 +59,56 @@ def check_replaceable(path: str | os.PathLike[str], field: str = "output") -> No
         raise ConfigError(field, os.fspath(path), f"a path poc-env can write ({err})") from None
     if stat.S_ISREG(mode):
         return
+    raise ConfigError(
+        field, os.fspath(path), f"a new path or a regular file to replace; it is {_kind(mode)}"
+    )
+
+
+def _kind(mode: int) -> str:
+    """What a path that is not a regular file is, from its ``st_mode``."""
+    import stat
+
     kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
              (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO"),
              (stat.S_ISSOCK, "a socket"))  # fmt: skip
-    kind = next((k for test, k in kinds if test(mode)), "not a regular file")
-    raise ConfigError(
-        field, os.fspath(path), f"a new path or a regular file to replace; it is {kind}"
-    )
+    return next((k for test, k in kinds if test(mode)), "not a regular file")
+
+
+def check_input_file(
+    field: str, path: str | os.PathLike[str], allowed: str, *, strict: bool = True
+) -> None:
+    """Refuse an input ``path`` that cannot be read as a file, before anything reads it, naming
+    ``field`` (the option it came from), the path and why, after ``allowed``: missing, a folder
+    or another file that is not a regular one (a FIFO or a device: a read would block, or never
+    end), or unreadable (no permission: said so, not called empty). An empty file passes (what
+    is empty is the reader's to say). ``strict=False``: a value that may also be a name (a
+    built-in scenario, a run folder) -- a missing path or a folder passes, to the command.
+
+    Raises
+    ------
+    ConfigError
+    """
+    import stat
+
+    from poc_env.errors import ConfigError
+
+    text = os.fspath(path)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        if not strict:
+            return
+        raise ConfigError(field, text, f"{allowed}; it does not exist") from None
+    except OSError as err:
+        raise ConfigError(field, text, f"{allowed}; unreadable ({err.strerror})") from None
+    if stat.S_ISDIR(mode) and not strict:
+        return
+    if not stat.S_ISREG(mode):
+        raise ConfigError(field, text, f"{allowed}; it is {_kind(mode)}, not a regular file")
+    try:
+        os.close(os.open(path, os.O_RDONLY))
+    except OSError as err:
+        raise ConfigError(field, text, f"{allowed}; unreadable ({err.strerror})") from None
 
 
 def publish_atomic(tmp: str | os.PathLike[str], path: str | os.PathLike[str]) -> None:
@@ -166,21 +209,29 @@ def clean_stale_temp_files(folder: Path) -> None:
 
 
 def _clean_stale_staging(dest: Path, where: Path) -> None:
-    """Remove staging folders of ``dest`` in the folder ``where`` left by runs that were killed
-    (their PID is gone)."""
+    """Tidy up after runs into ``dest`` that were killed (their PID is gone): a merge killed
+    half-way is rolled back (:func:`_roll_back`: ``dest`` as it was before that run), then
+    their staging folders in the folder ``where`` are removed."""
     import shutil
 
-    prefix = f".{dest.name}{_STAGING}"
     try:
-        siblings = list(where.iterdir())
+        siblings = sorted(where.iterdir())
     except OSError:
         return
-    for p in siblings:
-        if not p.name.startswith(prefix) or not p.is_dir() or p.is_symlink():
-            continue
-        pid = p.name[len(prefix) :].split("-", 1)[0]
-        if pid.isdigit() and not _pid_alive(int(pid)):
-            shutil.rmtree(p, ignore_errors=True)
+    for kind in (_ASIDE, _STAGING):  # the roll-back first: it reads nothing from the staging
+        prefix = f".{dest.name}{kind}"
+        for p in siblings:
+            if not p.name.startswith(prefix) or not p.is_dir() or p.is_symlink():
+                continue
+            pid = p.name[len(prefix) :].split("-", 1)[0]
+            if not pid.isdigit() or _pid_alive(int(pid)):
+                continue
+            if kind == _STAGING:
+                shutil.rmtree(p, ignore_errors=True)
+            elif (p / _JOURNAL).is_file() and dest.is_dir():
+                _roll_back(p, dest)
+            else:  # killed before its journal was written: nothing had moved
+                shutil.rmtree(p, ignore_errors=True)
 
 
 def _check_merge(src: Path, dest: Path, field: str = "output") -> None:
@@ -204,15 +255,81 @@ def _check_merge(src: Path, dest: Path, field: str = "output") -> None:
             check_replaceable(target, field)
 
 
-def _merge_into(src: Path, dest: Path) -> None:
-    """Move every file of ``src`` into ``dest`` (same file system), replacing same-named files
+def _merges(src: Path, dest: Path) -> list[tuple[Path, Path]]:
+    """The renames that put ``src``'s files into ``dest``: (staged entry, target) pairs, a
+    staged folder whose namesake is a folder merged file by file, any other entry moved whole
     (checked first by :func:`_check_merge`: only regular files are replaced)."""
+    moves = []
     for entry in sorted(src.iterdir()):
         target = dest / entry.name
         if entry.is_dir() and not entry.is_symlink() and target.is_dir():
-            _merge_into(entry, target)
+            moves += _merges(entry, target)
         else:
+            moves.append((entry, target))
+    return moves
+
+
+#: Prefix of the folder where a merge keeps the files it replaces until it has published them
+#: all: ``.NAME.old-PID-XXXX`` beside the staging folder.
+_ASIDE = ".old-"
+#: The journal in that folder: every target of the merge, with the name its old file was
+#: moved to (``null``: the target was new), written before anything moves.
+_JOURNAL = "journal.json"
+
+
+def _roll_back(aside: Path, dest: Path, moved: int | None = None) -> None:
+    """Undo a merge into ``dest`` from its folder ``aside`` (:func:`_merge_into`): every new
+    file or folder it put in place is removed, every old file goes back. ``moved``: the number
+    of journal entries this process reached (``None``: a killed run's, all entries checked)."""
+    import json
+    import shutil
+
+    entries = json.loads((aside / _JOURNAL).read_text("utf-8"))
+    for rel, saved in reversed(entries[:moved] if moved is not None else entries):
+        target = dest / rel
+        if saved is None or (aside / saved).exists() or (aside / saved).is_symlink():
+            if target.is_dir() and not target.is_symlink():
+                shutil.rmtree(target)
+            elif os.path.lexists(target):
+                os.unlink(target)
+        if saved is not None and os.path.lexists(aside / saved):
+            os.replace(aside / saved, target)
+    shutil.rmtree(aside)
+
+
+def _merge_into(src: Path, dest: Path, where: Path) -> None:
+    """Move every file of ``src`` into ``dest`` (same file system), all or none.
+
+    The files it replaces are first moved aside, one rename each, into a folder
+    ``.NAME.old-PID-XXXX`` in ``where`` (beside the staging folder), with a journal of every
+    move written before the first; only when every new file is in place is that folder
+    removed. An error or a Ctrl-C in between puts the old files back and removes the new ones
+    (:func:`_roll_back`); a run killed in between leaves the folder, and the next run into
+    ``dest`` rolls it back first (:func:`_clean_stale_staging`). POSIX has no rename of many
+    files at once, so another process looking at ``dest`` during the merge can see it half
+    done; no outcome leaves it so.
+    """
+    import json
+    import shutil
+
+    moves = _merges(src, dest)
+    aside = Path(tempfile.mkdtemp(prefix=f".{dest.name}{_ASIDE}{os.getpid()}-", dir=where))
+    journal = [
+        (os.path.relpath(target, dest), str(k) if os.path.lexists(target) else None)
+        for k, (_, target) in enumerate(moves)
+    ]
+    write_text_atomic(aside / _JOURNAL, json.dumps(journal))
+    reached = 0
+    try:
+        for k, ((entry, target), (_, saved)) in enumerate(zip(moves, journal, strict=True)):
+            reached = k + 1
+            if saved is not None:
+                os.replace(target, aside / saved)
             os.replace(entry, target)
+    except BaseException:
+        _roll_back(aside, dest, reached)
+        raise
+    shutil.rmtree(aside, ignore_errors=True)
 
 
 def check_out(
@@ -325,8 +442,9 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
     * ``path`` absent or an empty folder: the staging folder is renamed to ``path`` -- the
       output appears complete, in one step, or not at all;
     * ``path`` an existing folder with files (a previous run, or a folder the user keeps other
-      files in, such as ``--out .``): each new file replaces its namesake with an atomic
-      rename, at the very end; files the command does not write are left alone.
+      files in, such as ``--out .``): the new files replace their namesakes at the very end,
+      all or none (:func:`_merge_into`: the old ones moved aside first, put back on a failure,
+      and by the next run after a kill); files the command does not write are left alone.
 
     On an exception the staging folder is removed and the exception propagates. Staging
     folders of killed runs (whose process is gone) are removed by the next run into ``path``.
@@ -354,7 +472,7 @@ def atomic_dir(path: str | os.PathLike[str], field: str = "output") -> Iterator[
             os.rename(stage, dest)
         else:
             _check_merge(stage, dest, field)
-            _merge_into(stage, dest)
+            _merge_into(stage, dest, staging)
         done = True
     finally:
         if stage.exists():

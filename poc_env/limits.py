@@ -14,7 +14,9 @@ killing the process.
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 
 from poc_env.errors import ConfigError, as_number
 
@@ -83,6 +85,25 @@ def set_memory_limit_gb(gb: float | None) -> None:
         os.environ.pop(_ENV_VAR, None)
         return
     os.environ[_ENV_VAR] = repr(as_number("max_memory_gb", gb, 0.0, 1e6, lo_open=True))
+
+
+@contextlib.contextmanager
+def memory_limit_gb(gb: float | None) -> Iterator[None]:
+    """:func:`set_memory_limit_gb` for the block (None: leave the limit as it is), then the
+    limit as it was before: ``poc_env.cli.main`` called twice in one process with different
+    ``--max-memory-gb`` (or the second time without it) gets each call's own limit, where the
+    first call's stayed in ``os.environ`` (cli-audit). Workers started in the block inherit
+    it."""
+    before = os.environ.get(_ENV_VAR)
+    if gb is not None:
+        set_memory_limit_gb(gb)
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(_ENV_VAR, None)
+        else:
+            os.environ[_ENV_VAR] = before
 
 
 def memory_limit_bytes() -> float:

@@ -7,10 +7,12 @@ from __future__ import annotations
 
 from poc_env.crs import (  # noqa: F401 -- the public API, unchanged
     CRS_KINDS,
+    MAX_DISTANCE_KM,
     UTM_MAX_OFFSET_DEG,
     check_crs,
     check_origin,
     check_utm_zone,
+    continuous_lon,
     crs_text,
     make_crs,
     parse_origin,

@@ -11,14 +11,17 @@ settles the CRS (:func:`poc_env.agents.mission.crs.plan_crs`) and the altitudes
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
 from poc_env.agents.mission.crs import check_origin, plan_crs
 from poc_env.agents.mission.features import altitudes, check_altitude_ref
 from poc_env.agents.mission.formats import FORMATS
+from poc_env.agents.mission.formats.qgc import check_fences
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import load_plan
+from poc_env.agents.mission.terrain import SteepGlideWarning
 from poc_env.errors import ConfigError, as_number
 
 
@@ -84,47 +87,81 @@ def export_plan(
         raise ConfigError("projection", projection, "aeqd or utm")
     if altitude_ref is not None:
         check_altitude_ref(altitude_ref)
-    plan = load_plan(plan_path)
-    crs = plan_crs(plan.get("crs"), origin, projection, zone)
-    if plan.get("terrain") is not None:
-        altitude_ref, field_elevation_m = _terrain_altitudes(
-            plan, altitude_m, altitude_ref, field_elevation_m
+    with warnings.catch_warnings():
+        if fmt != "qgc":  # the glide is PX4's check of the mission that flies: QGC's
+            warnings.simplefilter("ignore", SteepGlideWarning)
+        plan = load_plan(plan_path)
+        flown = searching_uavs(plan)  # a plan that reaches nothing: refused before any work
+        crs = plan_crs(plan.get("crs"), origin, projection, zone)
+        if plan.get("terrain") is not None:
+            altitude_ref, field_elevation_m = _terrain_altitudes(
+                plan, altitude_m, altitude_ref, field_elevation_m
+            )
+        altitude_ref = altitude_ref or "home"
+        field_elevation_m = 0.0 if field_elevation_m is None else field_elevation_m
+        alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+        elevation = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
+        # the whole plan checked, so a refusal names the UAV's index in the file
+        area = plan.get("operating_area_m") if geofence or fmt != "qgc" else None
+        warning = airspace_warning(plan, area)
+        if fmt == "qgc" and warning is not None:
+            check_fences(plan, area)  # QGC refuses such a plan (the error itself, raised)
+        if warning is not None:  # the other formats show it, and say so
+            print(f"warning: {warning}")
+        kept = {id(u) for u in flown}
+        for k, u in enumerate(plan["uavs"]):
+            if id(u) not in kept:
+                print(f"warning: plan.uavs[{k}] (UAV {u['id']}): no search planned for it (no "
+                      "waypoints_m); left out of the export")  # fmt: skip
+        job = ExportJob(
+            plan={**plan, "uavs": flown},
+            plan_path=Path(plan_path),
+            crs=crs,
+            altitude_m=alt,
+            ground_m=ground,
+            altitude_ref=altitude_ref,
+            field_elevation_m=elevation,
+            geofence=geofence,
+            prior=prior,
+            out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
+            warning=warning,
         )
-    altitude_ref = altitude_ref or "home"
-    field_elevation_m = 0.0 if field_elevation_m is None else field_elevation_m
-    alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
-    elevation = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
-    warning = None if fmt == "qgc" else airspace_warning(plan)
-    if warning is not None:  # QGC refuses such a plan; the other formats show it, and say so
-        print(f"warning: {warning}")
-    job = ExportJob(
-        plan=plan,
-        plan_path=Path(plan_path),
-        crs=crs,
-        altitude_m=alt,
-        ground_m=ground,
-        altitude_ref=altitude_ref,
-        field_elevation_m=elevation,
-        geofence=geofence,
-        prior=prior,
-        out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
-        warning=warning,
-    )
-    return FORMATS[fmt].write(job)
+        return FORMATS[fmt].write(job)
 
 
-def airspace_warning(plan: Any) -> str | None:
+def airspace_warning(plan: Any, area: list | None) -> str | None:
     """The QGC export's airspace refusal (:func:`~poc_env.agents.mission.formats.qgc.check_fences`:
-    a mission point outside the operating area, a leg through a no-fly zone) as text, or None:
-    what the viewing formats (GeoJSON, KML, the HTML report) say about a plan, edited by hand,
-    that QGC would not fly."""
-    from poc_env.agents.mission.formats.qgc import check_fences
-
+    a mission point outside the inclusion fence ``area``, a leg through a no-fly zone) as text,
+    or None: what the viewing formats (GeoJSON, KML, the HTML report) say about a plan, edited
+    by hand, that QGC would not fly."""
     try:
-        check_fences(plan, plan.get("operating_area_m"))
+        check_fences(plan, area)
     except ConfigError as err:
         return str(err)
     return None
+
+
+def searching_uavs(plan: Any) -> list[Any]:
+    """The plan's UAVs that have a search route (``waypoints_m`` not empty): what an export
+    writes. A UAV without one (the allocation planner found no mass it could reach, or a
+    teammate's route already covers it) would be a zero-length route in GeoJSON and KML and a
+    take-off and landing on the spot in QGC; the export leaves it out and names it.
+
+    Raises
+    ------
+    ConfigError
+        ``plan.uavs``: no UAV has a search route (nothing to fly; the plan's ``reason`` said
+        why), so nothing is written.
+    """
+    flown = [u for u in plan["uavs"] if u["waypoints_m"]]
+    if not flown:
+        why = f" (no search planned: {plan['reason']})" if plan.get("reason") else ""
+        raise ConfigError(
+            "plan.uavs", f"{len(plan['uavs'])} UAV(s), none with a search route{why}",
+            "a plan with at least one UAV's search route (waypoints_m) to export: re-plan "
+            "(another airfield, more endurance, or a prior with mass in reach)",
+        )  # fmt: skip
+    return flown
 
 
 def _terrain_altitudes(

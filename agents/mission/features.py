@@ -98,6 +98,56 @@ def drawn_ring(ring_xy: list, crs: Any, *, clockwise_order: bool) -> list:
     return to_geographic(densify_ring(ring, crs, straight_in="local").tolist(), crs)
 
 
+def antimeridian_parts(latlon: Any, *, ring: bool = False) -> list[list[list[float]]]:
+    """A line or a polygon's ring, ``[(lat, lon, *more), ...]`` (``more``: a z, interpolated
+    where the line is cut), cut at the 180th meridian into the parts on each side, as RFC 7946
+    section 3.1.9 asks of GeoJSON (a GIS joins vertices straight in longitude, so a line from
+    179.9 to -179.9 is drawn across the globe). Longitudes are first made continuous along the
+    line (np.unwrap); each part is then shifted into [-180, 180], the cut points at exactly 180
+    or -180. A geometry that does not cross it is returned whole, unchanged (one part).
+
+    ``ring``: ``latlon`` is a polygon's ring (closed or not); its parts are the rings of the
+    polygon cut by the meridian (shapely), each closed, without z.
+
+    >>> antimeridian_parts([(0.0, 179.0, 5.0), (2.0, -179.0, 7.0)])
+    [[[0.0, 179.0, 5.0], [1.0, 180.0, 6.0]], [[1.0, -180.0, 6.0], [2.0, -179.0, 7.0]]]
+    """
+    lon = np.array([p[1] for p in latlon], dtype=float)
+    if np.all(np.abs(np.diff(lon)) <= 180.0):
+        return [[list(p) for p in latlon]]  # as given, numbers untouched
+    pts = np.asarray(latlon, dtype=float)
+    pts[:, 1] = np.unwrap(pts[:, 1], period=360.0)
+    turn = np.floor((pts[:, 1] + 180.0) / 360.0)  # which copy of [-180, 180) each point is in
+    if ring:
+        from shapely.geometry import Polygon, box
+
+        poly = Polygon(pts[:, 1::-1])  # (lon, lat)
+        out = []
+        for k in range(int(turn.min()), int(turn.max()) + 1):
+            piece = poly.intersection(box(360.0 * k - 180.0, -90.0, 360.0 * k + 180.0, 90.0))
+            for g in getattr(piece, "geoms", [piece]):
+                if g.geom_type == "Polygon" and not g.is_empty:
+                    out.append([[lat, lon - 360.0 * k] for lon, lat in g.exterior.coords])
+        return out
+    parts = [[pts[0].tolist()]]
+    for i in range(1, len(pts)):
+        p, q = pts[i - 1], pts[i]
+        for k in range(int(turn[i - 1]), int(turn[i]), 1 if turn[i] > turn[i - 1] else -1):
+            b = 360.0 * k + (180.0 if turn[i] > turn[i - 1] else -180.0)  # the meridian crossed
+            x = p + (b - p[1]) / (q[1] - p[1]) * (q - p)
+            x[1] = b
+            parts[-1].append(x.tolist())
+            parts.append([x.tolist()])
+        parts[-1].append(q.tolist())
+    # a vertex exactly on the meridian leaves a part of no length there: dropped
+    parts = [q for q in parts if len({(v[0], v[1]) for v in q}) > 1] or parts[:1]
+    for part in parts:  # into [-180, 180]: the turn its points' mean is in (one copy each)
+        turns = float(np.floor((np.mean([v[1] for v in part]) + 180.0) / 360.0))
+        for v in part:
+            v[1] -= 360.0 * turns
+    return parts
+
+
 def r6(v: float) -> float:
     """Degrees rounded to 1e-6 (about 0.1 m)."""
     return round(float(v), 6)

@@ -42,8 +42,8 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
-from poc_env.agents.mission.crs import make_crs, parse_origin, to_local
-from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, is_wgs84_name
+from poc_env.agents.mission.crs import MAX_DISTANCE_KM, make_crs, parse_origin, to_local
+from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, geojson_crs_to_lonlat
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
@@ -51,8 +51,6 @@ from poc_env.io import atomic_path
 KM = 1000.0
 VECTOR_SUFFIXES = (".geojson", ".json", ".kml")
 PRIOR_SUFFIXES = (".tif", ".tiff", ".csv")
-#: Points (airfields, no-fly vertices, CSV rows) farther than this from the area are refused.
-MAX_DISTANCE_KM = 1000.0
 #: Mass outside the area above this share of the prior's total gives a warning.
 OUTSIDE_WARN = 0.01
 #: At most this many sub-pixel samples of a GeoTIFF are projected (s is lowered to fit).
@@ -60,15 +58,21 @@ MAX_SAMPLES = 4_000_000
 
 
 # --------------------------------------------------------------------------- reading features
-def _check_file(path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...]) -> Path:
+def _check_file(
+    path: str | os.PathLike[str], what: str, suffixes: tuple[str, ...], field: str
+) -> Path:
+    """``path`` checked as the input ``field`` (the option it came from, named in the error
+    with the path): its suffix, then readable as a regular file
+    (:func:`poc_env.io.check_input_file`: missing, a FIFO, no permission), then not empty."""
+    from poc_env.io import check_input_file
+
     p = Path(path)
     allowed = f"an existing {' / '.join(suffixes)} file ({what})"
     if p.suffix.lower() not in suffixes:
-        raise ConfigError(str(p), p.suffix or "(no suffix)", allowed)
-    if not p.is_file():
-        raise ConfigError(str(p), "missing or not a regular file", allowed)
+        raise ConfigError(field, str(p), f"{allowed}; it ends in {p.suffix or '(no suffix)'!r}")
+    check_input_file(field, p, allowed)
     if p.stat().st_size == 0:
-        raise ConfigError(str(p), "an empty file", allowed)
+        raise ConfigError(field, str(p), f"{allowed}; it is an empty file")
     return p
 
 
@@ -98,18 +102,27 @@ def _lonlat(file: Path, i: int, coords: Any) -> np.ndarray:
     return arr
 
 
-def _geojson_crs(file: Path, doc: Any) -> None:
-    crs = doc.get("crs") if isinstance(doc, dict) else None
-    if crs is None:
-        return
-    name = crs.get("properties", {}).get("name") if isinstance(crs, dict) else None
-    if not is_wgs84_name(name):
-        raise ConfigError(
-            f"{file} crs",
-            name if name is not None else crs,
-            "no crs member, or WGS84 longitude/latitude (EPSG:4326, OGC CRS84): "
-            "reproject the layer to EPSG:4326 in your GIS first",
-        )
+def _geojson_crs(file: Path, doc: Any, outer: Any = None) -> Any:
+    """The reprojection to longitude/latitude of ``doc``'s GeoJSON 2008 ``crs`` member
+    (:func:`poc_env.crs.geojson_crs_to_lonlat`; a UTM or Web Mercator layer is reprojected, a
+    CRS pyproj cannot read refused naming the file); ``outer``: the enclosing collection's,
+    which a Feature without its own keeps."""
+    if not isinstance(doc, dict) or doc.get("crs") is None:
+        return outer
+    return geojson_crs_to_lonlat(doc["crs"], f"{file} crs")
+
+
+def _reprojected(coords: Any, reproject: Any) -> Any:
+    """GeoJSON ``coordinates`` (nested lists of positions) with every position reprojected
+    to [lon, lat] (altitudes kept); anything that is not numbers is left for the checks."""
+    if reproject is None or not isinstance(coords, list) or not coords:
+        return coords
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in coords):
+        if len(coords) < 2:
+            return coords
+        lon, lat = reproject(np.array([coords[:2]], dtype=float))[0]
+        return [float(lon), float(lat), *coords[2:]]
+    return [_reprojected(c, reproject) for c in coords]
 
 
 def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
@@ -123,7 +136,7 @@ def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
         raise ConfigError(str(file), why, "a GeoJSON file (RFC 7946)") from None
     if not isinstance(doc, dict) or "type" not in doc:
         raise ConfigError(str(file), type(doc).__name__, "a GeoJSON object with a type member")
-    _geojson_crs(file, doc)
+    reproject = _geojson_crs(file, doc)
     if doc["type"] == "FeatureCollection":
         feats = doc.get("features")
         if not isinstance(feats, list):
@@ -136,12 +149,12 @@ def _geojson_features(file: Path) -> list[tuple[str, Any, dict]]:
     for i, f in enumerate(feats):
         if not isinstance(f, dict):
             raise ConfigError(_feature(file, i), f, "a GeoJSON Feature")
-        _geojson_crs(file, f)
+        own = _geojson_crs(file, f, reproject)
         g = f.get("geometry")
         props = f.get("properties") or {}
         if not isinstance(g, dict) or not isinstance(props, dict):
             raise ConfigError(_feature(file, i), g, "a Feature with a geometry and properties")
-        out.append((str(g.get("type")), g.get("coordinates"), props))
+        out.append((str(g.get("type")), _reprojected(g.get("coordinates"), own), props))
     return out
 
 
@@ -211,9 +224,12 @@ def _one(polys: list) -> Any:
     return polys[0] if len(polys) == 1 else polys
 
 
-def read_features(path: str | os.PathLike[str], what: str) -> tuple[Path, list]:
-    """(checked path, [(type, coordinates, properties)]) of a GeoJSON or KML file."""
-    file = _check_file(path, what, VECTOR_SUFFIXES)
+def read_features(
+    path: str | os.PathLike[str], what: str, field: str = "file"
+) -> tuple[Path, list]:
+    """(checked path, [(type, coordinates, properties)]) of a GeoJSON or KML file (``field``:
+    the option it came from, named when the file cannot be read)."""
+    file = _check_file(path, what, VECTOR_SUFFIXES, field)
     feats = _kml_features(file) if file.suffix.lower() == ".kml" else _geojson_features(file)
     if not feats:
         raise ConfigError(str(file), "no features", f"at least one feature ({what})")
@@ -506,7 +522,7 @@ def _prior(
         m = _uniform_prior(grid, area)
         return m / m.sum(), {"source": "uniform over the area", "outside_share": 0.0}
     else:
-        file = _check_file(path, "prior", PRIOR_SUFFIXES)
+        file = _check_file(path, "prior", PRIOR_SUFFIXES, "prior")
         if file.suffix.lower() == ".csv":
             x, y, w = _read_csv(file, crs)
         else:
@@ -637,7 +653,7 @@ def import_scenario(
             "airfields", None,
             "a GeoJSON/KML file of named airfield points (the base scenario's are in its own km)",
         )  # fmt: skip
-    file, feats = read_features(area, "the search area: one Polygon")
+    file, feats = read_features(area, "the search area: one Polygon", "area")
     polys = _polygons(file, feats)
     if len(polys) != 1:
         raise ConfigError(str(file), f"{len(polys)} polygons", "exactly one Polygon (the area)")
@@ -659,7 +675,7 @@ def import_scenario(
         )  # fmt: skip
     grid = _Grid(poly, cell_km * KM)
 
-    ffile, ffeats = read_features(airfields, "airfields: named Points")
+    ffile, ffeats = read_features(airfields, "airfields: named Points", "airfields")
     fields = []
     for i, fname, ll in _points(ffile, ffeats):
         xy = np.array(to_local([(ll[1], ll[0])], crs)[0])
@@ -672,7 +688,7 @@ def import_scenario(
     zones = []
     zone_names: list[str] = []
     if no_fly is not None:
-        zfile, zfeats = read_features(no_fly, "no-fly zones: Polygons")
+        zfile, zfeats = read_features(no_fly, "no-fly zones: Polygons", "no_fly")
         for i, zr in _polygons(zfile, zfeats):
             z = _local_polygon(zfile, i, zr, crs)
             for v in np.asarray(z.exterior.coords)[:-1]:

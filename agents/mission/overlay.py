@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from poc_env.agents.mission.crs import to_geographic, to_local
+from poc_env.agents.mission.crs import continuous_lon, to_geographic, to_local
 from poc_env.agents.mission.plan import (
     Plan,
     map_file_candidates,
@@ -109,7 +109,10 @@ def _inverse_mercator(y: np.ndarray) -> np.ndarray:
 
 def overlay_bounds(grid: Any, crs: Any) -> tuple[float, float, float, float]:
     """(south, west, north, east) degrees enclosing the grid (its outline sampled densely;
-    ``grid``: anything with ``bounds`` (x0, y0, x1, y1) in local metres)."""
+    ``grid``: anything with ``bounds`` (x0, y0, x1, y1) in local metres). A grid across the
+    180th meridian has ``east`` beyond 180 (OGC 07-147r2 section 9.14.3.4: "for overlays that
+    overlap the meridian of 180 degrees longitude, values can extend beyond that range";
+    Leaflet draws it so too), not a box around the globe."""
     x0, y0, x1, y1 = grid.bounds
     s = np.linspace(0.0, 1.0, 65)
     edge = np.concatenate(
@@ -121,12 +124,8 @@ def overlay_bounds(grid: Any, crs: Any) -> tuple[float, float, float, float]:
         ]
     )
     ll = np.array(to_geographic(edge, crs))
-    return (
-        float(ll[:, 0].min()),
-        float(ll[:, 1].min()),
-        float(ll[:, 0].max()),
-        float(ll[:, 1].max()),
-    )
+    lon = continuous_lon(ll[:, 1], crs)  # across the 180th meridian: east beyond 180
+    return (float(ll[:, 0].min()), float(lon.min()), float(ll[:, 0].max()), float(lon.max()))
 
 
 def warp_prior(

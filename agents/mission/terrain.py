@@ -554,6 +554,15 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
     )
 
 
+class SteepGlideWarning(UserWarning):
+    """A UAV's final glide to its landing field steeper than the flat export's (the
+    clearance holds the approach point high): PX4 refuses the mission unless FW_LND_ANG allows
+    it. Said by ``poc-env plan`` (the officer may re-plan the landing) and by ``export
+    --format qgc`` (the mission that flies; the vehicle's parameter to set); the viewing
+    formats draw the glide and say nothing (:func:`poc_env.agents.mission.export.export_plan`).
+    """
+
+
 def _glide_cap(
     t: Terrain,
     p: np.ndarray,
@@ -607,7 +616,7 @@ def _glide_cap(
             f"glide of {math.degrees(math.atan(glide)):.1f} deg, steeper than the "
             f"{math.degrees(math.atan(LANDING_GLIDE)):.2f} deg of the flat export; PX4 refuses "
             "the mission unless its FW_LND_ANG (default 5 deg) allows it",
-            UserWarning,
+            SteepGlideWarning,
             stacklevel=4,
         )
     return out

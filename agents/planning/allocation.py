@@ -106,6 +106,7 @@ from poc_env.agents.planning.refine import (
     route_time,
     track,
 )
+from poc_env.agents.planning.regrade import regrade_routes
 from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
@@ -811,20 +812,31 @@ def make_allocation_plan(
     def _polish(rs):
         """The polish stages in turn -- the polish, the second polish with the block moves too
         (i24-lines), the third with the box moves only (i24-boxes; boxes and groups moved as
-        one) -- each from the routes the one before left; passes and moves summed, each later
-        stage's own kept moves as ``lines_moves`` and ``box_moves``."""
+        one), and the regrade (i24-regrade: runs of lines re-spaced jointly) first, between the
+        polishes or last (``regrade_at``) -- each from the routes the one before left; passes
+        and moves summed, each later stage's own kept moves as ``regrade_moves``,
+        ``lines_moves`` and ``box_moves``."""
         moves = KINDS if opt.polish_grade else MOVES
-        out = (
-            _polish_stage(rs, opt.polish, moves, opt.polish_radii) if opt.polish else (rs, 0.0, {})
-        )
+        out: tuple = (rs, 0.0, {})
         later = (
+            ("regrade", opt.regrade if opt.regrade_at == "first" else 0, (), (), None),
+            ("polish", opt.polish, moves, opt.polish_radii, None),
+            ("regrade", opt.regrade if opt.regrade_at == "between" else 0, (), (), None),
             ("lines", opt.polish_lines, (*moves, "block"), opt.polish_lines_radii, None),
             ("box", opt.polish_boxes, BOX_KINDS, opt.polish_lines_radii, opt.polish_boxes_radii),
+            ("regrade", opt.regrade if opt.regrade_at == "end" else 0, (), (), None),
         )
         for stage, passes, kinds, radii, box_radii in later:
             if not passes:
                 continue
-            pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii)
+            if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly
+                pr, val, stats = polish_for(
+                    sc, out[0], full_prior, passes, speeds=v,
+                    separation_margin=opt.separation_margin, range_margin=opt.range_margin,
+                    routine=regrade_routes,
+                )  # fmt: skip
+            else:
+                pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii)
             st0 = out[2]
             out = (
                 pr,
@@ -834,7 +846,7 @@ def make_allocation_plan(
                     **stats,
                     "passes": st0.get("passes", 0) + stats["passes"],
                     "moves": st0.get("moves", 0) + stats["moves"],
-                    f"{stage}_moves": stats["moves"],
+                    **({} if stage == "polish" else {f"{stage}_moves": stats["moves"]}),
                 },
             )
         return out
@@ -856,7 +868,7 @@ def make_allocation_plan(
         )
 
     polished: dict[str, Any] | None = None
-    polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes)
+    polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes or opt.regrade)
     if polishing and router.active:  # eq. 20: the polish does not see the zones
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
     elif polishing and not opt.polish_here(grid.nx, grid.ny):  # the size rule (i24-fastpolish)

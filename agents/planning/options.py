@@ -211,6 +211,15 @@ class PlanOptions:
     polish_boxes: int = 0
     #: the box moves' translations, in sweep widths.
     polish_boxes_radii: tuple[float, ...] = (2.0, 4.0, 8.0, 16.0)
+    #: passes of the regrade (0: none; i24-regrade): each route's runs of lawnmower lines
+    #: re-spaced jointly in the environment's sensor model -- water-filled across the run,
+    #: then a coordinate search per line, with one line more or fewer tried
+    #: (:func:`~poc_env.agents.planning.regrade.regrade_routes`); a polish stage.
+    regrade: int = 0
+    #: where the regrade runs: ``"first"`` before the polish (on the plan as the starts laid
+    #: it), ``"between"`` after the polish and before the second polish, ``"end"`` after
+    #: every polish stage.
+    regrade_at: str = "first"
     #: polish only maps of at most this many cells a side (0: any size; i24-fastpolish: a
     #: deterministic size rule, no clock, so a preset keeps its time on large maps; elsewhere
     #: the plan is the unpolished one and its settings say why).
@@ -259,6 +268,9 @@ class PlanOptions:
                         empty=True)  # fmt: skip
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
+        _number("regrade", self.regrade, 0, 100, integer=True)
+        if self.regrade_at not in ("first", "between", "end"):
+            raise ConfigError("options.regrade_at", self.regrade_at, '"first", "between" or "end"')
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
         _positive_tuple("relax_etas", self.relax_etas, high=1.0)
         _positive_tuple("relax_scales", self.relax_scales, high=1.0)

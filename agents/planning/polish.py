@@ -665,9 +665,12 @@ def polish_for(
     separation_margin: float = 2.0,
     range_margin: float = 0.9,
     airspace: bool = True,
+    routine=None,
     **kw,
 ) -> tuple[list[list[list[float]]], float, dict]:
-    """:func:`polish_routes` of scenario ``sc``'s routes as the allocation planner calls it:
+    """:func:`polish_routes` (or ``routine``, which takes its arguments: i24-regrade's
+    :func:`~poc_env.agents.planning.regrade.regrade_routes`) of scenario ``sc``'s routes as the
+    allocation planner calls it:
     its map, fields, sensor, usable endurance, turn rate and reserve, the headings at take-off,
     ``speeds`` (default :func:`~poc_env.agents.planning.flight_rules.plan_speeds`) and, with
     ``airspace``, eq. 21 / 24 counted with ``separation_margin`` on d_s and ``range_margin`` on
@@ -686,7 +689,7 @@ def polish_for(
         sc.comms.min_neighbours,
     )
     u = sc.uav
-    return polish_routes(
+    return (polish_routes if routine is None else routine)(
         routes,
         takeoff,
         landing,

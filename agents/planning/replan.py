@@ -17,9 +17,14 @@ the sorties' POS add up to the cumulative POS (eq. 13) -- ``searched_pos`` plus 
 plan's ``sortie_posc``, its routes swept over the sample points' belief the flights left (the
 planner plans on cells and scores its ``posc`` on each cell's belief spread evenly).
 
-Bad input is a :class:`~poc_env.errors.ConfigError` naming the field: a track point outside
-the operating area (the map grown to its airfields, eq. 20's boundary), NaN or out of range, a
-GeoJSON ``crs`` member that is not WGS 84, a geometry that is not a LineString, nesting deeper
+A track that leaves the operating area (the map grown to its airfields, eq. 20's boundary) is
+cut to it, with a warning, and its part inside swept (:func:`clip_tracks`); a GeoJSON ``crs``
+member of the 2008 specification (UTM, Web Mercator) is reprojected
+(:func:`poc_env.crs.geojson_crs_to_lonlat`).
+
+Bad input is a :class:`~poc_env.errors.ConfigError` naming the field: a track with no point
+inside the operating area or one more than 1,000 km from it, a track point NaN or out of range,
+a GeoJSON ``crs`` member pyproj cannot read, a geometry that is not a LineString, nesting deeper
 than the JSON reader's limit or :data:`MAX_XML_DEPTH`, a DTD or entity in KML/GPX (the XML is
 parsed with no entity resolution and no network), a file above :data:`MAX_TRACK_BYTES`, a plan
 of another scenario's map. Nothing is written then.
@@ -28,27 +33,32 @@ of another scenario's map. Nothing is written then.
 from __future__ import annotations
 
 import os
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from poc_env.config import Scenario
-from poc_env.crs import is_wgs84_name
+from poc_env.crs import geojson_crs_to_lonlat
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
 
-def check_paths(sc: Scenario, paths, names, crs: Any = None) -> list[np.ndarray]:
-    """``paths`` as (k, 2) arrays, each point inside the operating area; else a ConfigError
-    naming ``names[i]`` and the point's index. With ``crs`` (the tracks were read in
+def check_paths(
+    sc: Scenario, paths, names, crs: Any = None, margin_m: float = 0.0
+) -> list[np.ndarray]:
+    """``paths`` as (k, 2) arrays, each point inside the operating area (or, with
+    ``margin_m``, within that many metres beyond its edges); else a ConfigError naming
+    ``names[i]`` and the point's index. With ``crs`` (the tracks were read in
     longitude/latitude, :func:`read_tracks`) the error gives the point as read, its distance
     from the area, and whether reading it as (lat, lon) would put it inside (a slip of order)."""
     from poc_env.sim.core import operating_area
 
     x0, y0, x1, y1 = operating_area(sc)  # eq. 20's boundary: the map grown to hold its fields
-    tol = 1e-6 * max(x1 - x0, y1 - y0)
+    tol = 1e-6 * max(x1 - x0, y1 - y0) + margin_m
+    where = f"within {margin_m / 1e3:g} km of " if margin_m else "inside "
 
     def inside(p: np.ndarray) -> np.ndarray:
         return (
@@ -66,7 +76,7 @@ def check_paths(sc: Scenario, paths, names, crs: Any = None) -> list[np.ndarray]
         if bad.any():
             j = int(np.argmax(bad))
             text = (
-                f"a point in metres inside the operating area x {x0:g}..{x1:g}, y "
+                f"a point in metres {where}the operating area x {x0:g}..{x1:g}, y "
                 f"{y0:g}..{y1:g} of scenario {sc.name!r} (the map and its airfields)"
             )
             if crs is None or not np.isfinite(pts[j]).all():
@@ -99,6 +109,73 @@ def _off_area(xy: np.ndarray, crs: Any, area: tuple[str, Any, Any], inside: Any)
             "coordinates in lat, lon order? (GeoJSON and KML write lon, lat)"
         )
     return f"lon {lon:.5f}, lat {lat:.5f}", allowed
+
+
+def clip_tracks(
+    sc: Scenario, tracks: list[tuple[str, np.ndarray]], crs: Any
+) -> list[tuple[str, np.ndarray]]:
+    """The flown ``tracks`` (map metres, each with its field) cut to the operating area: a
+    UAV that diverted to a field outside it, or flew its approach over the sea beside it, has
+    its part inside swept (each stretch inside one flight) and a warning printed naming the
+    track and how much of it was outside; what was flown outside searched nothing on the map.
+
+    Refused (:func:`check_paths`'s error, naming the track's first such point): a track with a
+    point more than :data:`~poc_env.crs.MAX_DISTANCE_KM` from the area
+    (the wrong side of the globe, a sign or lat/lon slip: no aircraft of this planner flies so
+    far), or none of it inside (another area's log)."""
+    from poc_env.agents.mission.crs import MAX_DISTANCE_KM
+    from poc_env.sim.core import operating_area
+
+    x0, y0, x1, y1 = operating_area(sc)
+    tol = 1e-6 * max(x1 - x0, y1 - y0)  # check_paths's: points on the edge stay whole
+    lo, hi = np.array([x0 - tol, y0 - tol]), np.array([x1 + tol, y1 + tol])
+    out = []
+    for field, pts in tracks:
+        off = np.hypot(*np.maximum(np.maximum([x0, y0] - pts, pts - [x1, y1]), 0.0).T)
+        if off.max() <= tol:
+            out.append((field, pts))
+            continue
+        check_paths(sc, [pts], [field], crs, MAX_DISTANCE_KM * 1e3)  # raises for a far point
+        parts = _inside_stretches(pts, lo, hi)
+        if not parts:
+            check_paths(sc, [pts], [field], crs)  # raises: none of it inside
+        total = float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
+        kept = sum(float(np.sum(np.hypot(*np.diff(q, axis=0).T))) for q in parts)
+        print(
+            f"warning: {field}: {(total - kept) / 1e3:.1f} of {total / 1e3:.1f} km flown "
+            f"outside the operating area (up to {off.max() / 1e3:.1f} km from it); the "
+            f"{len(parts)} stretch(es) inside are swept"
+        )
+        out += [(field, q) for q in parts]
+    return out
+
+
+def _inside_stretches(pts: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[np.ndarray]:
+    """The stretches of the polyline ``pts`` inside the box ``lo``-``hi``, in flight order:
+    each leg clipped to the box (Liang-Barsky), consecutive clipped legs that meet joined into
+    one stretch; stretches of no length dropped."""
+    out: list[list[np.ndarray]] = []
+    joined = False  # the previous leg reached its end inside: this one continues its stretch
+    for a, b in pairwise(pts):
+        d = b - a
+        t0, t1 = 0.0, 1.0
+        for k in range(2):
+            if d[k] == 0.0:
+                if not lo[k] <= a[k] <= hi[k]:
+                    t0, t1 = 1.0, 0.0
+            else:
+                ta, tb = sorted(((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]))
+                t0, t1 = max(t0, ta), min(t1, tb)
+        if t0 > t1:
+            joined = False
+            continue
+        p, q = np.clip(a + t0 * d, lo, hi), np.clip(a + t1 * d, lo, hi)  # no ulp outside
+        if joined and t0 == 0.0:
+            out[-1].append(q)
+        else:
+            out.append([p, q])
+        joined = t1 == 1.0
+    return [np.array(s) for s in out if np.sum(np.hypot(*np.diff(np.array(s), axis=0).T)) > 0]
 
 
 def plan_paths(plan: dict[str, Any]) -> list[np.ndarray]:
@@ -219,16 +296,8 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
     if not isinstance(data, dict):
         raise ConfigError(where, type(data).__name__, "a GeoJSON object")
     out: list[tuple[str, np.ndarray | None]] = []
-    crs_member = data.get("crs")
-    props = crs_member.get("properties") if isinstance(crs_member, dict) else None
-    name = props.get("name") if isinstance(props, dict) else None
-    if "crs" in data and not is_wgs84_name(name):
-        raise ConfigError(
-            f"{where}.crs",
-            name if name is not None else data.get("crs"),
-            "WGS 84 longitude/latitude (RFC 7946: leave crs out, or "
-            "urn:ogc:def:crs:OGC:1.3:CRS84, urn:ogc:def:crs:EPSG::4326, EPSG:4326)",
-        )  # fmt: skip
+    # a 2008-style crs member (UTM, Web Mercator...): reprojected; one pyproj cannot read: refused
+    reproject = geojson_crs_to_lonlat(data.get("crs"), f"{where}.crs") if "crs" in data else None
     if data.get("type") == "FeatureCollection":
         feats = data.get("features")
         if not isinstance(feats, list):
@@ -270,7 +339,8 @@ def _geojson_tracks(raw: bytes, path: Any) -> list[tuple[str, np.ndarray | None]
         parts = [g.get("coordinates")] if g["type"] == "LineString" else g.get("coordinates")
         for p, coords in enumerate(parts or []):
             f = f"{field}.coordinates" + (f"[{p}]" if g["type"] == "MultiLineString" else "")
-            out.append((f, _positions(coords, f)))
+            xy = _positions(coords, f)
+            out.append((f, xy if reproject is None or not len(xy) else reproject(xy)))
     return out
 
 
@@ -408,11 +478,19 @@ def searched_belief(sc: Scenario, prior: np.ndarray, paths) -> tuple[np.ndarray,
     """The prior less what ``paths`` (flights in map metres) searched, by eq. 14 on the sample
     points (:func:`sweep_points`), summed back to cells; and the POS the flights achieved
     (eq. 13: the sum of their POS)."""
+    grid, s, belief, found = _swept(sc, prior, paths)
+    return grid.coarsen(belief, s), found
+
+
+def _swept(sc: Scenario, prior: np.ndarray, paths) -> tuple[Grid, int, np.ndarray, float]:
+    """``(grid, samples per cell side, the sample points' belief after paths, the POS they
+    achieved)``: the prior spread onto the sample points and ``paths`` swept over them
+    (:func:`sweep_points`); what :func:`searched_belief` and :func:`next_sortie` both start
+    from."""
     grid = Grid.from_config(sc.map)
     s = sc.sensor.samples_per_cell
     belief = np.ascontiguousarray(grid.refine(prior, s))
-    found = sweep_points(sc, belief, paths)
-    return grid.coarsen(belief, s), found
+    return grid, s, belief, sweep_points(sc, belief, paths)
 
 
 def sweep_points(sc: Scenario, belief_fine: np.ndarray, paths) -> float:
@@ -506,10 +584,7 @@ def next_sortie(
     if tracks is not None:
         names, flights = [f for f, _ in tracks], [t for _, t in tracks]
     paths = check_paths(sc, flights, names)
-    grid = Grid.from_config(sc.map)
-    s = sc.sensor.samples_per_cell
-    fine = np.ascontiguousarray(grid.refine(prior, s))
-    searched = sweep_points(sc, fine, paths)
+    grid, s, fine, searched = _swept(sc, prior, paths)
     # the planner sees each cell's belief spread evenly over the cell (it plans on cells); the
     # flights left it uneven within cells, so the plan's POS is its routes swept over the
     # sample points' own belief (replan-audit: the Alps walkthrough's sortie 2 was scored
@@ -619,7 +694,7 @@ def cli_main(args: Any) -> int:
         tracks = []
         for t in args.tracks:
             tracks += read_tracks(t, crs, skipped)
-        check_paths(sc, [t for _, t in tracks], [f for f, _ in tracks], crs)  # named in degrees
+        tracks = clip_tracks(sc, tracks, crs)  # the part inside counts; refusals in degrees
     nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
     nxt["map_source"] = map_source(sc, map_file)  # export draws this prior, replan sweeps it
     if crs is not None:

@@ -404,3 +404,158 @@ def test_a_yaml_file_that_cannot_be_read_is_a_clear_error(tmp_path, capsys, argv
     err = _refused(capsys, [a.replace("{d}", str(tmp_path)) for a in argv], field)
     assert "Input/output error" in err
     assert _tree(tmp_path) == []
+
+
+# ---------------------------------------------------------------- leftovers #5 (cli-audit's)
+def _layers(tmp_path):
+    """A minimal area and airfield for ``scenario import``."""
+    import json
+
+    ring = [[126.0, 45.3], [127.2, 45.3], [127.2, 46.1], [126.0, 46.1], [126.0, 45.3]]
+    area = {
+        "type": "Feature",
+        "properties": {},
+        "geometry": {"type": "Polygon", "coordinates": [ring]},
+    }
+    field = {"type": "Feature", "properties": {"name": "A"},
+             "geometry": {"type": "Point", "coordinates": [126.5, 45.2]}}  # fmt: skip
+    (tmp_path / "area.geojson").write_text(json.dumps(area))
+    (tmp_path / "fields.geojson").write_text(json.dumps(field))
+    return ["scenario", "import", str(tmp_path / "area.geojson"), "--airfields",
+            str(tmp_path / "fields.geojson"), "--out", str(tmp_path / "s.yaml")]  # fmt: skip
+
+
+@pytest.mark.parametrize("option", ["area", "airfields", "no_fly", "prior"])
+def test_scenario_import_names_the_option_of_a_bad_file(tmp_path, capsys, option):
+    """A missing layer is named by its option (``no_fly``), the path given as the value; before,
+    the error's field was the path itself (``error: /x/nope.geojson: got 'missing or not a
+    regular file'``)."""
+    argv = _layers(tmp_path)
+    nope = str(tmp_path / ("nope.csv" if option == "prior" else "nope.geojson"))
+    if option == "area":
+        argv[2] = nope
+    elif option == "airfields":
+        argv[4] = nope
+    else:
+        argv += [f"--{option.replace('_', '-')}", nope]
+    err = _refused(capsys, argv, option)
+    assert nope in err and "it does not exist" in err
+    assert not (tmp_path / "s.yaml").exists()
+
+
+def test_an_unreadable_empty_layer_is_called_unreadable(tmp_path, capsys, monkeypatch):
+    """A zero-size file poc-env may not read (EACCES on open; the sessions run as root, so the
+    refusal is injected) is unreadable, not 'an empty file'; an empty readable one is empty."""
+    argv = _layers(tmp_path)
+    empty = tmp_path / "zones.geojson"
+    empty.write_text("")
+    argv += ["--no-fly", str(empty)]
+    real_open = os.open
+
+    def no_permission(path, flags, *args, **kwargs):
+        if os.fspath(path) == str(empty):
+            raise PermissionError(13, "Permission denied", os.fspath(path))
+        return real_open(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", no_permission)
+    err = _refused(capsys, argv, "no_fly")
+    assert "unreadable (Permission denied)" in err and "an empty file" not in err
+    from poc_env.agents.mission.geoimport import import_scenario
+    from poc_env.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"^no_fly: .*unreadable \(Permission denied\)$"):
+        import_scenario(argv[2], airfields=argv[4], no_fly=empty)  # the library call too
+    monkeypatch.undo()
+    err = _refused(capsys, argv, "no_fly")
+    assert "it is an empty file" in err
+
+
+def _unblock_readers_of(fifo, seconds: float = 20.0) -> None:
+    """A daemon thread that, for ``seconds``, opens ``fifo`` for writing whenever a reader is
+    blocked on it and closes it at once (the reader gets end of file)."""
+    import contextlib
+    import threading
+    import time
+
+    def run():
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            with contextlib.suppress(OSError):  # ENXIO: no reader yet
+                os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+            time.sleep(0.05)
+
+    threading.Thread(target=run, daemon=True).start()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="FIFOs are POSIX")
+def test_a_fifo_given_as_an_input_is_refused_not_read(tmp_path, capsys, monkeypatch):
+    """``replan --tracks`` on a FIFO blocked forever (a read that never ends); every input file
+    option that is not a regular file is refused before the command runs, naming the option. A
+    folder named like a built-in scenario in the working directory is no file: still the name."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "small").mkdir()
+    plan = tmp_path / "p1.json"
+    argv = ["plan", "--scenario", "small", "--planner", "allocation", "--origin", "46.5,7.9"]
+    assert main([*argv, "--quiet", "--out", str(plan)]) == 0
+    fifo = tmp_path / "t.geojson"
+    os.mkfifo(fifo)
+    _unblock_readers_of(fifo)  # were the FIFO read, the test would end in an error, not hang
+    argv = ["replan", "--plan", str(plan), "--tracks", str(fifo), "--out", str(tmp_path / "n.json")]
+    err = _refused(capsys, argv, "tracks")
+    assert "it is a FIFO, not a regular file" in err
+    argv = _layers(tmp_path)
+    argv += ["--dem", str(fifo)]
+    assert "a FIFO" in _refused(capsys, argv, "dem")
+
+
+def test_max_memory_gb_is_each_call_s_own(tmp_path, capsys, monkeypatch):
+    """``main()`` called twice in one process: the second call without ``--max-memory-gb`` gets
+    the default limit, not the first call's (it stayed in os.environ)."""
+    from poc_env import limits
+
+    monkeypatch.delenv("POC_ENV_MAX_MEMORY_GB", raising=False)
+    seen = []
+    real = limits.memory_limit_bytes
+
+    def spy(*args, **kwargs):
+        seen.append(real())
+        return real()
+
+    monkeypatch.setattr(limits, "memory_limit_bytes", spy)
+    plan = tmp_path / "p.json"
+    base = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet"]
+    assert main(["--max-memory-gb", "3", *base, "--out", str(plan)]) == 0
+    during = list(seen)
+    seen.clear()
+    assert main([*base, "--out", str(plan)]) == 0
+    assert during and set(during) == {3 * 2**30}
+    assert seen and set(seen) == {limits.DEFAULT_MEMORY_GB * 2**30}
+    assert "POC_ENV_MAX_MEMORY_GB" not in os.environ
+
+
+#: A ``poc-env`` process (``sys.argv[0]`` its script) sent SIGINT when it starts importing
+#: gymnasium, inside ``import poc_env`` (results/audit/leftovers/probes.py runs it too).
+KICK_WHILE_IMPORTING = (
+    "import os, signal, sys\n"
+    "class Kick:\n"
+    "    def find_spec(self, name, path, target=None):\n"
+    "        if name == 'gymnasium':\n"
+    "            os.kill(os.getpid(), signal.SIGINT)\n"
+    "sys.meta_path.insert(0, Kick())\n"
+    "sys.argv[0] = os.path.join(os.path.dirname(sys.executable), 'poc-env')\n"
+    "from poc_env.cli import main\n"
+    "sys.exit(main(['--version']))\n"
+)
+
+
+def test_ctrl_c_while_the_command_imports_its_packages_is_one_line(tmp_path):
+    """A Ctrl-C in the first fraction of a second, while ``poc-env`` imports numpy and
+    Gymnasium (before main() runs), printed Python's KeyboardInterrupt traceback; now one line
+    and status 130. The SIGINT is sent when the import of gymnasium starts (an import hook)."""
+    import subprocess
+
+    argv = [sys.executable, "-c", KICK_WHILE_IMPORTING]
+    proc = subprocess.run(argv, capture_output=True, text=True, timeout=120, check=False)
+    assert proc.returncode == 130, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == "interrupted: poc-env stopped while starting; nothing was written"

@@ -48,6 +48,88 @@ def test_atomic_dir_existing_folder_keeps_other_files(tmp_path):
     assert not _leftovers(tmp_path)
 
 
+def _old_folder(dest):
+    """A folder of a previous run plus a file of the user's."""
+    dest.mkdir()
+    for name in ("a.txt", "b.txt"):
+        (dest / name).write_text("old")
+    (dest / "notes.txt").write_text("the user's")
+    return {"a.txt": "old", "b.txt": "old", "notes.txt": "the user's"}
+
+
+def _stage_new_run(stage):
+    for name in ("a.txt", "b.txt", "c.txt", "d.txt"):
+        (stage / name).write_text("new")
+    (stage / "sub").mkdir()
+    (stage / "sub" / "e.txt").write_text("new")
+
+
+def _contents(folder):
+    return {
+        str(p.relative_to(folder)): p.read_text() for p in sorted(folder.rglob("*")) if p.is_file()
+    }
+
+
+def test_a_merge_that_fails_half_way_leaves_the_old_folder(tmp_path, monkeypatch):
+    """A merge into an existing folder is all or nothing: a rename failing after some new files
+    are in place (here the third, ``c.txt``) puts the old ones back and removes the new ones
+    (leftovers #1: the merge renamed the files one at a time, so a failure left old and new
+    side by side)."""
+    import os
+
+    dest = tmp_path / "out"
+    before = _old_folder(dest)
+    real_replace = os.replace
+
+    def failing(src, dst, *args, **kwargs):
+        if os.fspath(dst).endswith("c.txt"):
+            raise OSError(28, "No space left on device")
+        return real_replace(src, dst, *args, **kwargs)
+
+    monkeypatch.setattr(os, "replace", failing)
+    with pytest.raises(OSError, match="No space"), atomic_dir(dest) as stage:
+        _stage_new_run(stage)
+    assert _contents(dest) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no staging, nothing set aside
+    monkeypatch.undo()
+    with atomic_dir(dest) as stage:
+        _stage_new_run(stage)
+    assert _contents(dest) == {
+        **{n: "new" for n in ("a.txt", "b.txt", "c.txt", "d.txt", "sub/e.txt")},
+        "notes.txt": "the user's",
+    }
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_a_merge_killed_half_way_is_rolled_back_by_the_next_run(tmp_path):
+    """A run killed (``os._exit``, no clean-up) after two of its files replaced their namesakes:
+    the next run into the folder puts the old files back and removes the killed run's new ones
+    before its own merge."""
+    dest = tmp_path / "out"
+    before = _old_folder(dest)
+    script = f"""
+import os
+from pathlib import Path
+from poc_env.io import atomic_dir
+real = os.replace
+def kill(src, dst, *a, **k):
+    if os.fspath(dst).endswith("c.txt"):
+        os._exit(9)
+    return real(src, dst, *a, **k)
+os.replace = kill
+with atomic_dir(Path({str(dest)!r})) as stage:
+    for name in ("a.txt", "b.txt", "c.txt", "d.txt"):
+        (stage / name).write_text("new")
+"""
+    proc = subprocess.run([sys.executable, "-c", script], check=False)
+    assert proc.returncode == 9
+    assert (dest / "a.txt").read_text() == "new"  # the killed run got this far
+    with atomic_dir(dest) as stage:
+        (stage / "x.txt").write_text("next run")
+    assert _contents(dest) == {**before, "x.txt": "next run"}
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
 def _dead_pid() -> int:
     """The PID of a process that has exited (a killed writer's, as far as files can tell)."""
     proc = subprocess.run(

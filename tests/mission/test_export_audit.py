@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
@@ -154,3 +155,150 @@ def test_geojson_polygons_stay_valid_after_rounding(tmp_path):
     assert any(f["properties"]["kind"] == "search_area" for f in polys)
     for f in polys:
         assert shape(f["geometry"]).is_valid, f["properties"]
+
+
+def _idle(u: dict) -> None:
+    """``u`` as the allocation planner writes a UAV it gives no search (no mass in reach)."""
+    u.update(rectangle=None, areas_m=[], spacing_m=0.0, waypoints_m=[], transit_waypoints=0,
+             track_length_m=0.0, flight_time_s=0.0, pod=0.0, poc=0.0, pos=0.0)  # fmt: skip
+
+
+@pytest.mark.parametrize("fmt", ["qgc", "kml", "geojson", "html"])
+def test_a_uav_without_a_search_route_is_left_out_and_named(tmp_path, capsys, fmt):
+    """A UAV with no waypoints (no reachable mass, or a teammate covers it) is left out of every
+    format with a warning naming it; the others are written (leftovers #2: before, GeoJSON and
+    KML drew a zero-length route for it, QGC a take-off and landing on the spot)."""
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(45.75, 126.65))
+    _idle(plan["uavs"][1])
+    write_plan(plan, tmp_path / "plan.json")
+    files = export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / "o")
+    assert "warning: plan.uavs[1] (UAV 2): no search planned" in capsys.readouterr().out
+    text = "\n".join(f.read_text(encoding="utf-8") for f in files if f.suffix != ".png")
+    if fmt == "qgc":
+        assert sorted(f.name for f in files) == ["plan_uav1.plan", "plan_uav3.plan"]
+    elif fmt == "geojson":
+        ids = {f["properties"].get("id") for f in json.loads(text)["features"]}
+        assert ids == {None, 1, 3}  # areas and fields (no id), UAVs 1 and 3
+    elif fmt == "kml":
+        assert "UAV 1" in text and "UAV 3" in text and "UAV 2" not in text
+    else:  # the page's data: one entry per UAV drawn
+        assert '"id": "1"' in text and '"id": "3"' in text and '"id": "2"' not in text
+
+
+@pytest.mark.parametrize("fmt", ["qgc", "kml", "geojson", "html"])
+def test_a_plan_that_reaches_nothing_is_refused_by_every_format(tmp_path, fmt):
+    """The airfield 80 km south of ``small``: no UAV reaches any mass, the plan says why, and an
+    export of it is refused naming ``plan.uavs`` and the plan's reason; nothing is written."""
+    from poc_env.errors import ConfigError
+
+    data = load_scenario("small").to_dict()
+    data["airfields"] = [{"name": "A", "position_km": [20, -80]}]
+    plan = make_plan(load_scenario(data), planner="allocation", refine=0,
+                     origin_deg=(45.75, 126.65))  # fmt: skip
+    assert plan["reason"] and not any(u["waypoints_m"] for u in plan["uavs"])
+    write_plan(plan, tmp_path / "plan.json")
+    with pytest.raises(ConfigError, match=r"plan\.uavs: .*none with a search route.*0\.85 T"):
+        export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / "o")
+    assert not (tmp_path / "o").exists()
+
+
+def _plan_imported_at_the_antimeridian(tmp_path: Path) -> Path:
+    """A search area imported from GeoJSON at 179.6-179.98 E near Fiji, its airfield at
+    179.97 W (across the 180th meridian): routes, approaches and the operating area cross it."""
+    from poc_env.agents.mission.geoimport import import_scenario, write_imported
+
+    def fc(geometry: dict, **props) -> str:
+        feat = {"type": "Feature", "properties": props, "geometry": geometry}
+        return json.dumps({"type": "FeatureCollection", "features": [feat]})
+
+    ring = [[179.6, -16.7], [179.98, -16.7], [179.98, -16.3], [179.6, -16.3], [179.6, -16.7]]
+    (tmp_path / "area.geojson").write_text(fc({"type": "Polygon", "coordinates": [ring]}))
+    field = {"type": "Point", "coordinates": [-179.97, -16.45]}
+    (tmp_path / "fields.geojson").write_text(fc(field, name="Taveuni"))
+    res = import_scenario(tmp_path / "area.geojson", airfields=tmp_path / "fields.geojson",
+                          base="small", name="fiji")  # fmt: skip
+    write_imported(res, tmp_path / "fiji.yaml")
+    plan = make_plan(load_scenario(str(tmp_path / "fiji.yaml")), planner="allocation", refine=0)
+    write_plan(plan, tmp_path / "plan.json")
+    return tmp_path / "plan.json"
+
+
+def _lines_of(coords: list) -> list[list[list[float]]]:
+    """Every line or ring of a GeoJSON geometry's coordinates."""
+    if coords and isinstance(coords[0], (int, float)):
+        return [[coords]]
+    if coords and isinstance(coords[0][0], (int, float)):
+        return [coords]
+    return [line for c in coords for line in _lines_of(c)]
+
+
+def test_exports_across_the_antimeridian_are_cut_or_continuous(tmp_path):
+    """Leftovers #3. GeoJSON (RFC 7946 section 3.1.9): a geometry crossing the antimeridian is cut
+    into a Multi* of its parts, every longitude in [-180, 180], no part jumping across the
+    globe, each valid. KML and the report: longitudes continuous around the area (Google Earth
+    and Leaflet join points the short way only then; OGC KML 2.2 section 9.14.3.4 lets the
+    prior's LatLonBox go beyond 180). Before, all three drew routes and the operating area
+    from 180 to -180, across the globe, and the prior's box spanned every longitude."""
+    import re
+
+    from shapely.geometry import shape
+
+    path = _plan_imported_at_the_antimeridian(tmp_path)
+    (gj,) = export_plan(path, "geojson", out_dir=tmp_path / "g")
+    multi = set()
+    for f in json.loads(gj.read_text(encoding="utf-8"))["features"]:
+        geom = f["geometry"]
+        assert shape(geom).is_valid, f["properties"]
+        for line in _lines_of(geom["coordinates"]):
+            lon = [p[0] for p in line]
+            assert all(-180.0 <= v <= 180.0 for v in lon)
+            assert all(abs(b - a) < 1.0 for a, b in pairwise(lon)), f["properties"]
+        if geom["type"].startswith("Multi"):
+            multi.add(f["properties"]["kind"])
+    assert {"route", "operating_area"} <= multi  # the case: they cross it
+    files = export_plan(path, "kml", out_dir=tmp_path / "k")
+    text = next(f for f in files if f.suffix == ".kml").read_text(encoding="utf-8")
+    for coords in re.findall(r"<coordinates>([^<]*)</coordinates>", text):
+        lon = [float(t.split(",")[0]) for t in coords.split()]
+        assert all(179.0 < v < 181.0 for v in lon)  # continuous around 180
+    box = {k: float(v) for k, v in re.findall(r"<(east|west)>([^<]*)</", text)}
+    assert 179.0 < box["west"] < 180.0 < box["east"] < 181.0
+    (page,) = export_plan(path, "html", out_dir=tmp_path / "h")
+    m = re.search(r'id="plan-data">(.*?)</script>', page.read_text(encoding="utf-8"), re.S)
+    assert m
+    data = json.loads(m.group(1))
+    lons = [float(v) for v in re.findall(r"\[-?[0-9.]+, (-?[0-9.]+)\]", json.dumps(data["uavs"]))]
+    lons += [a["latlon"][1] for a in data["airfields"]]
+    lons += [p[1] for z in data["operating_area"] for p in z["latlon"]]
+    lons += [data["overlay"]["bounds"][0][1], data["overlay"]["bounds"][1][1]]
+    assert lons and all(179.0 < v < 181.0 for v in lons)
+
+
+def test_a_steep_final_glide_is_said_by_plan_and_the_qgc_export_only(tmp_path, capsys):
+    """Leftovers #6: the warning that a UAV's final glide needs FW_LND_ANG above PX4's default
+    is for the officer who can still re-plan (``plan``) and for the mission that flies
+    (``export --format qgc``), once per UAV each, as a ``warning:`` line; the viewing formats
+    (KML, GeoJSON, HTML) say nothing. Before, every export printed it in Python's warning
+    format (file, line and a source line ``return [``)."""
+    import yaml
+
+    from poc_env.cli import main
+
+    tt = _terrain_test()
+    data = tt._scenario(None, terrain={"elevation_m": tt._slope(150.0), "cell_km": 1.0,
+                                       "origin_km": [-40, -30]})  # fmt: skip
+    (tmp_path / "steep.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
+    plan = tmp_path / "p.json"
+    argv = ["plan", "--scenario", str(tmp_path / "steep.yaml"), "--planner", "allocation"]
+    assert main([*argv, "--quiet", "--out", str(plan)]) == 0
+
+    def glides() -> list[str]:
+        err = capsys.readouterr().err
+        assert "UserWarning" not in err and "Warning:" not in err
+        return [ln for ln in err.splitlines() if "final glide of" in ln]
+
+    said = glides()
+    assert len(said) == 2 and all(ln.startswith("warning: plan.uavs[") for ln in said)
+    for fmt, expected in (("qgc", said), ("kml", []), ("geojson", []), ("html", [])):
+        assert main(["export", str(plan), "--format", fmt, "--out", str(tmp_path / fmt)]) == 0
+        assert glides() == expected, fmt

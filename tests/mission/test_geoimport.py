@@ -245,9 +245,9 @@ def test_bad_polygons(tmp_path, layers):
     f = _write(tmp_path / "sw.geojson", _fc([_poly([swapped])]))
     _bad(tmp_path, layers, r"sw\.geojson feature 0 vertex 0.*swapped", area=f)
     doc = _fc([_poly([AREA])])
-    doc["crs"] = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3857"}}
-    f = _write(tmp_path / "merc.geojson", doc)
-    _bad(tmp_path, layers, r"merc\.geojson crs.*EPSG:4326", area=f)
+    doc["crs"] = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::99999"}}
+    f = _write(tmp_path / "bad_crs.geojson", doc)
+    _bad(tmp_path, layers, r"bad_crs\.geojson crs: got .*EPSG::99999.*pyproj", area=f)
     doc["crs"]["properties"]["name"] = "urn:ogc:def:crs:OGC:1.3:CRS84"
     f = _write(tmp_path / "ok.geojson", doc)
     import_scenario(f, airfields=layers["fields"])  # the declared WGS84 crs is accepted
@@ -255,6 +255,23 @@ def test_bad_polygons(tmp_path, layers):
     _bad(tmp_path, layers, r"2 polygons.*exactly one Polygon", area=f)
     f = _write(tmp_path / "pt.geojson", _fc([_pt(126.5, 45.5)]))
     _bad(tmp_path, layers, r"pt\.geojson feature 0.*a Polygon", area=f)
+
+
+def test_a_layer_in_a_projected_geojson_crs_is_reprojected(tmp_path, layers):
+    """Leftovers #4: a GeoJSON of 2008 style whose ``crs`` member is Web Mercator (positions in
+    metres) is reprojected by pyproj and imports as the same area in longitude/latitude does
+    (before: refused, 'reproject the layer to EPSG:4326 in your GIS first')."""
+    from pyproj import Transformer
+
+    merc = Transformer.from_crs("EPSG:4326", "EPSG:3857", always_xy=True)
+    doc = _fc([_poly([[list(merc.transform(lon, lat)) for lon, lat in AREA]])])
+    doc["crs"] = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3857"}}
+    f = _write(tmp_path / "merc.geojson", doc)
+    got = import_scenario(f, airfields=layers["fields"])
+    want = import_scenario(layers["area"], airfields=layers["fields"])
+    assert np.allclose(got["crs"]["origin_deg"], want["crs"]["origin_deg"], atol=1e-9)
+    assert got["report"]["area_km2"] == pytest.approx(want["report"]["area_km2"], rel=1e-9)
+    assert got["report"]["cells"] == want["report"]["cells"]
 
 
 def test_bad_points(tmp_path, layers):
@@ -285,14 +302,16 @@ def test_bad_points(tmp_path, layers):
 
 def test_bad_files(tmp_path, layers):
     (tmp_path / "empty.geojson").write_text("")
-    _bad(tmp_path, layers, r"empty\.geojson: got 'an empty file'", area=tmp_path / "empty.geojson")
+    _bad(tmp_path, layers, r"area: got '.*empty\.geojson'.*it is an empty file",
+         area=tmp_path / "empty.geojson")  # fmt: skip
     (tmp_path / "area.shp").write_text("x")
-    _bad(tmp_path, layers, r"area\.shp: got '\.shp'.*geojson", area=tmp_path / "area.shp")
-    _bad(tmp_path, layers, r"missing or not a regular file", area=tmp_path / "nope.geojson")
+    _bad(tmp_path, layers, r"area: got '.*area\.shp'.*geojson.*it ends in '\.shp'",
+         area=tmp_path / "area.shp")  # fmt: skip
+    _bad(tmp_path, layers, r"area: got .*it does not exist", area=tmp_path / "nope.geojson")
     (tmp_path / "junk.geojson").write_text("{not json")
     _bad(tmp_path, layers, r"junk\.geojson: got 'not JSON", area=tmp_path / "junk.geojson")
     (tmp_path / "p.png").write_text("x")
-    _bad(tmp_path, layers, r"p\.png.*\.tif / \.tiff / \.csv", prior=tmp_path / "p.png")
+    _bad(tmp_path, layers, r"prior: got .*p\.png.*\.tif / \.tiff / \.csv", prior=tmp_path / "p.png")
     (tmp_path / "bomb.kml").write_text('<!DOCTYPE kml [<!ENTITY a "x">]><kml/>')
     _bad(tmp_path, layers, r"bomb\.kml.*no DTD", area=tmp_path / "bomb.kml")
 

@@ -85,20 +85,84 @@ def test_bad_tracks_name_the_field_and_write_nothing(first, tmp_path, capsys):
     out = tmp_path / "next.json"
     argv = ["replan", "--plan", str(p1), "--out", str(out), "--tracks", str(tmp_path / "t.geojson")]
     feats = _tracks(tmp_path / "t.geojson", plan)
-    feats[1]["geometry"]["coordinates"][2] = [9.5, 47.5]  # ~100 km off the map
+    feats[1]["geometry"]["coordinates"][2] = [-7.9, -46.5]  # signs slipped: the other hemisphere
     (tmp_path / "t.geojson").write_text(
         json.dumps({"type": "FeatureCollection", "features": feats})
     )
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert "tracks.features[1].geometry.coordinates[2]" in err and "operating area" in err
-    _tracks(tmp_path / "t.geojson", plan, crs={"type": "name", "properties": {"name": "EPSG:3857"}})
+    assert "tracks.features[1].geometry.coordinates[2]" in err
+    assert "within 1000 km of the operating area" in err
+    _tracks(
+        tmp_path / "t.geojson", plan, crs={"type": "name", "properties": {"name": "EPSG:99999"}}
+    )
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert "tracks.crs" in err and "EPSG:3857" in err
+    assert "tracks.crs" in err and "EPSG:99999" in err and "pyproj" in err
     assert main(["replan", "--scenario", "paper_6_2", "--plan", str(p1), "--out", str(out)]) == 2
     assert "plan.scenario" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_track_partly_outside_the_area_counts_the_part_inside(first, tmp_path, capsys):
+    """Leftovers #4: UAV 2 diverted to a field about 100 km east of the map after its search.
+    Its track is cut to the operating area with a warning naming it, and what it flew inside
+    counts (before, the whole file was refused); a track with no point inside is refused."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    out = tmp_path / "next.json"
+    argv = ["replan", "--plan", str(p1), "--out", str(out), "--tracks", str(tmp_path / "t.geojson")]
+    feats = _tracks(tmp_path / "t.geojson", plan)
+    feats[1]["geometry"]["coordinates"].append([9.2, 46.6])  # the diversion, ~100 km east
+    (tmp_path / "t.geojson").write_text(
+        json.dumps({"type": "FeatureCollection", "features": feats})
+    )
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "warning: tracks.features[1].geometry.coordinates:" in text
+    assert "outside the operating area" in text and "the 1 stretch(es) inside are swept" in text
+    # every planned route was flown inside (plus a stretch of the diversion): at least plan 1's
+    assert json.loads(out.read_text())["searched_pos"] >= plan["posc"] * (1 - 1e-3)
+    out.unlink()
+    feats[1]["geometry"]["coordinates"] = [[9.2, 46.6], [9.3, 46.7]]  # none of it inside
+    (tmp_path / "t.geojson").write_text(
+        json.dumps({"type": "FeatureCollection", "features": feats})
+    )
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "tracks.features[1].geometry.coordinates[0]" in err and "inside the operating" in err
+    assert not out.exists()
+
+
+def _utm_tracks(path, plan):
+    """The plan's routes as tracks in UTM 32N metres, with a GeoJSON 2008 ``crs`` member."""
+    from pyproj import Transformer
+
+    feats = _tracks(path, plan)
+    utm = Transformer.from_crs("EPSG:4326", "EPSG:32632", always_xy=True)
+    for f in feats:
+        f["geometry"]["coordinates"] = [
+            list(utm.transform(*p)) for p in f["geometry"]["coordinates"]
+        ]
+    crs = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}}
+    path.write_text(json.dumps({"type": "FeatureCollection", "crs": crs, "features": feats}))
+
+
+def test_tracks_in_a_projected_geojson_crs_are_reprojected(first, tmp_path):
+    """Leftovers #4: a GeoJSON of 2008 style with a ``crs`` member in metres (UTM 32N, as a
+    logger or GIS may still write) is reprojected by pyproj and sweeps what the same tracks in
+    longitude/latitude sweep (before: refused)."""
+    _, p1 = first
+    plan = json.loads(p1.read_text())
+    _tracks(tmp_path / "ll.geojson", plan)
+    _utm_tracks(tmp_path / "utm.geojson", plan)
+    got = []
+    for name in ("ll", "utm"):
+        out = tmp_path / f"{name}.json"
+        argv = ["replan", "--plan", str(p1), "--tracks", str(tmp_path / f"{name}.geojson")]
+        assert main([*argv, "--out", str(out)]) == 0
+        got.append(json.loads(out.read_text())["searched_pos"])
+    assert got[1] == pytest.approx(got[0], rel=1e-4)  # float round trips through UTM
 
 
 @pytest.mark.parametrize(
@@ -650,11 +714,11 @@ def test_a_track_off_the_area_is_named_in_degrees_and_a_swap_is_suspected(first,
     far = tmp_path / "far.geojson"
     _tracks(far, plan)
     text = json.loads(far.read_text())
-    text["features"][1]["geometry"]["coordinates"][2] = [9.5, 47.5]  # ~150 km off
+    text["features"][1]["geometry"]["coordinates"][2] = [30.0, 47.5]  # ~1,700 km off
     far.write_text(json.dumps(text))
     assert main([*argv, str(far)]) == 2
     err = capsys.readouterr().err
-    assert "tracks.features[1].geometry.coordinates[2]: got 'lon 9.50000, lat 47.50000'" in err
+    assert "tracks.features[1].geometry.coordinates[2]: got 'lon 30.00000, lat 47.50000'" in err
     assert "lat, lon order" not in err and not out.exists()
 
 

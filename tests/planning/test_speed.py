@@ -57,34 +57,29 @@ def test_nearest_field_is_the_line_by_line_field():
 def _edits_by_loop(path, i, offsets, across, lo, hi):
     """The refinement's candidate edits built candidate by candidate (before i24-speed)."""
     qs, ops, starts, ends, rows, kinds = [], [], [], [], [], []
+
+    def add(q, op, legs, kind):  # one candidate: its point, operation, legs and kind
+        qs.append(q)
+        ops.append(op)
+        for start, end in legs:
+            starts.append(start)
+            ends.append(end)
+            rows.append(len(kinds))
+        kinds.append(kind)
+
     a, b = path[i - 1], path[i]
     if i < len(path) - 1:
         nxt = path[i + 1]
         for off in offsets:
             q = np.clip(b + off, lo, hi)
-            qs.append(q)
-            ops.append(0)
-            starts += [a, q]
-            ends += [q, nxt]
-            rows += [len(kinds)] * 2
-            kinds.append(0)
-        qs.append(b)
-        ops.append(1)
-        starts.append(a)
-        ends.append(nxt)
-        rows.append(len(kinds))
-        kinds.append(0)
+            add(q, 0, [(a, q), (q, nxt)], 0)
+        add(b, 1, [(a, nxt)], 0)
     d = b - a
     length = float(np.hypot(*d))
     normal = np.array([-d[1], d[0]]) / length if length > 0 else np.zeros(2)
     for s in across:
         q = np.clip(0.5 * (a + b) + s * normal, lo, hi)
-        qs.append(q)
-        ops.append(2)
-        starts += [a, q]
-        ends += [q, b]
-        rows += [len(kinds)] * 2
-        kinds.append(1)
+        add(q, 2, [(a, q), (q, b)], 1)
     return [np.array(x) for x in (qs, ops, starts, ends, rows, kinds)]
 
 

@@ -8,7 +8,13 @@ from pathlib import Path
 from typing import Any
 
 from poc_env.agents.mission.crs import crs_text, to_geographic
-from poc_env.agents.mission.features import altitudes, overlays, r6, routes_3d
+from poc_env.agents.mission.features import (
+    altitudes,
+    antimeridian_parts,
+    overlays,
+    r6,
+    routes_3d,
+)
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import Plan, flight, search_rings, sortie_figures
 from poc_env.io import write_text_atomic
@@ -32,7 +38,6 @@ def geojson(
     feats = []
     for u, (xy, zs) in zip(plan["uavs"], routes_3d(plan, alt, ground)):
         pts = to_geographic(xy, crs)
-        line = [[r6(lon), r6(lat), z] for (lat, lon), z in zip(pts, zs)]
         props = {
             "id": u["id"],
             "kind": "route",
@@ -52,29 +57,30 @@ def geojson(
         feats.append(
             {
                 "type": "Feature",
-                "geometry": {"type": "LineString", "coordinates": line},
+                "geometry": line_geometry(pts, zs),
                 "properties": props,
             }
         )
         for kind, ring_m, ring_props in search_rings(u):
-            ring = exterior_ring(to_geographic(ring_m, crs))
             feats.append(
                 {
                     "type": "Feature",
-                    "geometry": {"type": "Polygon", "coordinates": [ring]},
+                    "geometry": polygon_geometry(to_geographic(ring_m, crs)),
                     "properties": {"id": u["id"], "kind": kind, **ring_props},
                 }
             )
     for o in overlays(plan, crs, alt, ground):
         if o["geometry"] == "Polygon":
-            coords: Any = [exterior_ring(o["latlon"])]
+            geometry = polygon_geometry(o["latlon"])
+        elif o["geometry"] == "LineString":
+            geometry = line_geometry(o["latlon"], o["z"])
         else:
-            coords = [[r6(lon), r6(lat), z] for (lat, lon), z in zip(o["latlon"], o["z"])]
-            coords = coords[0] if o["geometry"] == "Point" else coords
+            (lat, lon), z = o["latlon"][0], o["z"][0]
+            geometry = {"type": "Point", "coordinates": [r6(lon), r6(lat), z]}
         feats.append(
             {
                 "type": "Feature",
-                "geometry": {"type": o["geometry"], "coordinates": coords},
+                "geometry": geometry,
                 "properties": o["properties"],
             }
         )
@@ -110,6 +116,26 @@ def _altitude_properties(plan: Plan, alt: float, zs: list[float]) -> dict[str, f
         "altitude_min_m": round(min(air), 1),
         "altitude_max_m": round(max(air), 1),
     }
+
+
+def line_geometry(latlon: Any, zs: list[float]) -> dict[str, Any]:
+    """A LineString of ``[lon, lat, z]`` (degrees rounded to 1e-6), or a MultiLineString of its
+    parts on each side when it crosses the antimeridian (RFC 7946 section 3.1.9:
+    :func:`~poc_env.agents.mission.features.antimeridian_parts`)."""
+    parts = antimeridian_parts([(lat, lon, z) for (lat, lon), z in zip(latlon, zs)])
+    coords = [[[r6(lon), r6(lat), z] for lat, lon, z in part] for part in parts]
+    if len(coords) == 1:
+        return {"type": "LineString", "coordinates": coords[0]}
+    return {"type": "MultiLineString", "coordinates": coords}
+
+
+def polygon_geometry(latlon: Any) -> dict[str, Any]:
+    """A Polygon (:func:`exterior_ring`), or a MultiPolygon of its parts on each side when it
+    crosses the antimeridian (RFC 7946 section 3.1.9)."""
+    rings = [exterior_ring(part) for part in antimeridian_parts(latlon, ring=True)]
+    if len(rings) == 1:
+        return {"type": "Polygon", "coordinates": rings}
+    return {"type": "MultiPolygon", "coordinates": [[r] for r in rings]}
 
 
 def exterior_ring(latlon: Any) -> list[list[float]]:

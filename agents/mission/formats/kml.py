@@ -20,7 +20,7 @@ from urllib.parse import quote
 
 from lxml import etree
 
-from poc_env.agents.mission.crs import to_geographic
+from poc_env.agents.mission.crs import continuous_lon, to_geographic
 from poc_env.agents.mission.features import (
     APPROACH_KIND,
     altitudes,
@@ -137,20 +137,20 @@ def kml(
             f"{3.6 * fl['search_speed_mps']:.0f} km/h, home "
             f"{3.6 * fl['cruise_speed_mps']:.0f} km/h",
         )
-        _line(pm, "LineString", mode, _kml_coords(pts, zs))
+        _line(pm, "LineString", mode, _kml_coords(pts, crs, zs))
         for kind, ring_m, props in search_rings(u):
             pm = _placemark(
                 folder, f"UAV {uid} {kind.replace('_', ' ')}", "rectangle", _kml_props(props)
             )
-            _polygon(pm, _kml_coords(to_geographic(ring_m, crs)))
+            _polygon(pm, _kml_coords(to_geographic(ring_m, crs), crs))
         for o in extras:
             if o["properties"].get("id") == u["id"]:
-                _kml_placemark(folder, o, mode)
+                _kml_placemark(folder, o, mode, crs)
     folder = _el(doc, "Folder")
     _el(folder, "name", "Area, airfields, no-fly zones")
     for o in extras:
         if "id" not in o["properties"]:
-            _kml_placemark(folder, o, mode)
+            _kml_placemark(folder, o, mode, crs)
     body = etree.tostring(root, encoding="unicode")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + body + "\n"
 
@@ -192,18 +192,24 @@ def _kml_props(props: dict[str, Any]) -> str:
     return "; ".join(f"{k.replace('_', ' ')}: {v}" for k, v in props.items())
 
 
-def _kml_coords(latlon, zs=None) -> str:
+def _kml_coords(latlon: Any, crs: Any, zs: Any = None) -> str:
+    """``lon,lat[,z]`` tuples, longitudes continuous around the map's origin
+    (:func:`poc_env.crs.continuous_lon`): Google Earth joins two points the short way only when
+    their longitudes are (a polygon from 179.9 to -179.9 is drawn around the globe); the OGC
+    KML 2.2 schema's ``coordinates`` is a string that sets no range on them."""
+    lats = [p[0] for p in latlon]
+    lons = continuous_lon([p[1] for p in latlon], crs).tolist()
     if zs is None:
-        return " ".join(f"{lon:.8f},{lat:.8f}" for lat, lon in latlon)
-    return " ".join(f"{lon:.8f},{lat:.8f},{z:g}" for (lat, lon), z in zip(latlon, zs))
+        return " ".join(f"{lon:.8f},{lat:.8f}" for lat, lon in zip(lats, lons))
+    return " ".join(f"{lon:.8f},{lat:.8f},{z:g}" for lat, lon, z in zip(lats, lons, zs))
 
 
-def _kml_placemark(parent: Any, o: dict, mode: str) -> None:
+def _kml_placemark(parent: Any, o: dict, mode: str, crs: Any) -> None:
     pm = _placemark(parent, str(o["properties"]["name"]), str(o["properties"]["kind"]))
     if o["geometry"] == "Polygon":
-        _polygon(pm, _kml_coords(o["latlon"]))
+        _polygon(pm, _kml_coords(o["latlon"], crs))
     else:
-        _line(pm, o["geometry"], mode, _kml_coords(o["latlon"], o["z"]))
+        _line(pm, o["geometry"], mode, _kml_coords(o["latlon"], crs, o["z"]))
 
 
 @functools.lru_cache(maxsize=1)

@@ -32,7 +32,7 @@ import jinja2
 import numpy as np
 from markupsafe import Markup
 
-from poc_env.agents.mission.crs import crs_text, to_geographic
+from poc_env.agents.mission.crs import continuous_lon, crs_text, to_geographic
 from poc_env.agents.mission.features import overlays, r6
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import (
@@ -57,7 +57,15 @@ TILE_ATTRIBUTION = '&copy; <a href="https://www.openstreetmap.org/copyright">Ope
 
 
 def _latlon(points: Any, crs: Any) -> list[list[float]]:
-    return [[r6(lat), r6(lon)] for lat, lon in to_geographic(points, crs)]
+    return _continuous(to_geographic(points, crs), crs)
+
+
+def _continuous(latlon: Any, crs: Any) -> list[list[float]]:
+    """``[lat, lon]`` rounded to 1e-6, longitudes continuous around the map's origin
+    (:func:`poc_env.crs.continuous_lon`): Leaflet joins points straight in longitude, so a
+    route from 179.9 to -179.9 would cross the whole map; at 180.1 it goes on past 180."""
+    lons = continuous_lon([p[1] for p in latlon], crs)
+    return [[r6(p[0]), r6(lon)] for p, lon in zip(latlon, lons)]
 
 
 def _field_name(plan: Plan, xy: Any) -> str:
@@ -87,9 +95,7 @@ def report_data(
         else:
             transit, search = [_latlon([start, end], crs)], []
         approach = [
-            [[r6(a), r6(b)] for a, b in o["latlon"]]
-            for o in extra
-            if o["properties"].get("id") == u["id"]
+            _continuous(o["latlon"], crs) for o in extra if o["properties"].get("id") == u["id"]
         ]
         rings = [{"kind": kind, "latlon": _latlon(ring, crs)} for kind, ring, _ in search_rings(u)]
         uavs.append(
@@ -133,7 +139,7 @@ def report_data(
             polys[kind].append(
                 {
                     "name": o["properties"]["name"],
-                    "latlon": [[r6(a), r6(b)] for a, b in o["latlon"]],
+                    "latlon": _continuous(o["latlon"], crs),
                 }
             )
     fields = [
