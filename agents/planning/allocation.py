@@ -862,6 +862,8 @@ def make_allocation_plan(
             range_margin=opt.range_margin,
             radii=radii,
             moves=moves,
+            block_windows=opt.polish_lines_windows,  # i24-cheapolish (block moves only)
+            block_radii=opt.polish_lines_block_radii or None,
             **({} if box_radii is None else {"box_radii": box_radii}),
         )
 

@@ -12,11 +12,13 @@ allowed).
 **Effort levels** (:meth:`PlanOptions.preset`): a planning officer plans a sortie once and can
 wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and ``poc-env plan``
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
-``"standard"`` (i24-fastpolish) is the default plan polished (2 passes with the grade moves, 1
-of the second polish) on maps of at most 80 cells a side: 1.6-1.9 s on ``paper_6_2`` (3.0
-times the default's CPU time), flown 0.887 of the rule-aware bound on its 50 reported priors
-against the default's 0.852 (docs/PLANNER.md, "A faster polish (i24-fastpolish)"), policy
-``allocation_plan_standard``;
+``"standard"`` (i24-fastpolish, i24-cheapolish) is the default plan polished (1 pass with the
+grade moves, 2 of the second polish at radii W/8-2W with the block moves on windows of 1 and
+2 lawnmower lines) on maps of at most 80 cells a side: within 2 s on ``paper_6_2`` (2.9 times
+the default's CPU time, median; docs/PLANNER.md, "Cheaper candidates (i24-cheapolish)"; before
+it 2 passes and 1 of the second polish at the polish's radii, flown 0.887 of the rule-aware
+bound on the 50 reported priors against the default's 0.852: "A faster polish
+(i24-fastpolish)"), policy ``allocation_plan_standard``;
 ``"thorough"`` is the combination that gained most on the validation priors within about a
 minute on ``paper_6_2`` and two on ``large_400`` (one thread; docs/PLANNER.md, "Effort levels
 (i24-effort, 2026-11-28)"), with 6 passes of the polish by the environment's own sensor model
@@ -198,6 +200,11 @@ class PlanOptions:
     polish_lines: int = 0
     #: the second polish's move radii, in sweep widths.
     polish_lines_radii: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0)
+    #: the block moves' windows: waypoints translated together (2 per lawnmower line;
+    #: :data:`~poc_env.agents.planning.polish.BLOCK_WINDOWS`; i24-cheapolish).
+    polish_lines_windows: tuple[int, ...] = (2, 4, 6, 8)
+    #: the block moves' radii, in sweep widths (empty: ``polish_lines_radii``; i24-cheapolish).
+    polish_lines_block_radii: tuple[float, ...] = ()
     #: passes of a third polish after the polishes (0: none), with the box moves only (a
     #: route's box translated, stretched or turned as one, an airfield's group translated or
     #: turned together: :data:`~poc_env.agents.planning.polish.BOX_KINDS`; i24-boxes).
@@ -256,6 +263,9 @@ class PlanOptions:
         _number("polish_lines", self.polish_lines, 0, 100, integer=True)
         _positive_tuple("polish_radii", self.polish_radii, high=8.0)
         _positive_tuple("polish_lines_radii", self.polish_lines_radii, high=8.0)
+        _positive_tuple("polish_lines_windows", self.polish_lines_windows, integer=True, high=16)
+        _positive_tuple("polish_lines_block_radii", self.polish_lines_block_radii, high=8.0,
+                        empty=True)  # fmt: skip
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
         _number("regrade", self.regrade, 0, 100, integer=True)
@@ -328,11 +338,16 @@ THOROUGH: dict[str, Any] = {
 
 #: the ``standard`` effort level's changes to the defaults (i24-fastpolish: the default plan
 #: polished, the most POS within the issue's 2 s on ``paper_6_2``, chosen on its validation
-#: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"); only on maps of at most 80
-#: cells a side (the 160 x 160 timing case keeps the default plan and its time).
+#: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"; its passes and candidates
+#: chosen again by i24-cheapolish, "Cheaper candidates"); only on maps of at most 80 cells a
+#: side (the 160 x 160 timing case keeps the default plan and its time).
 STANDARD: dict[str, Any] = {
-    "polish": 2,
+    "polish": 1,
     "polish_grade": True,
-    "polish_lines": 1,
+    # i24-cheapolish: fewer passes of the polish, more of the second at thorough's radii with
+    # the block moves' windows that are kept (docs/PLANNER.md, "Cheaper candidates")
+    "polish_lines": 2,
+    "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
+    "polish_lines_windows": (2, 4),
     "polish_max_cells": 80,
 }

@@ -83,7 +83,7 @@ polishes only on maps without zones.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,27 +159,17 @@ class Exposure:
         self._base = np.zeros_like(self.mass)
         self._work = np.zeros_like(self.mass)
 
-    def _rel(self, pts) -> np.ndarray:
-        return np.ascontiguousarray(np.asarray(pts, dtype=float).reshape(-1, 2) - self.origin)
-
     def steps(self, a, b) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The legs ``a -> b`` (L, 2) cut into steps no longer than a cell, as
         ``sampled_sweep`` flies them (:func:`~poc_env.theory.search_theory.sweep_track` with
         ``step_m`` the cell: the cut-off applies per step), relative to the grid's origin:
         (starts, ends, steps per leg)."""
-        a = self._rel(a)
-        b = self._rel(b)
-        d = b - a
-        n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / self.grid.cell_m)).astype(np.int64)
-        leg = np.repeat(np.arange(len(a)), n)
-        j = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
-        nl = n[leg].astype(float)
-        t0 = (j / nl)[:, None]
-        t1 = ((j + 1) / nl)[:, None]
-        return (
-            np.ascontiguousarray(a[leg] + t0 * d[leg]),
-            np.ascontiguousarray(a[leg] + t1 * d[leg]),
-            n,
+        return _sensing.cut_steps(  # i24-cheapolish: compiled, the same steps bit for bit
+            np.asarray(a, dtype=float).reshape(-1, 2),
+            np.asarray(b, dtype=float).reshape(-1, 2),
+            self.origin[0],
+            self.origin[1],
+            float(self.grid.cell_m),
         )
 
     def add(self, a, b, sign: float = 1.0) -> None:
@@ -215,16 +205,35 @@ def _legs(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return points[:-1], points[1:]
 
 
-def _framed(head: np.ndarray, body: np.ndarray, tail: np.ndarray) -> list[np.ndarray]:
-    """Candidates ``[head, body[c], tail]`` (``body`` (C, L, 2), ``tail`` (T, 2)) as views of
-    one array: per candidate the points ``np.vstack([head, body[c], tail])`` gives, built in
-    one pass (i24-fastpolish: no array per candidate)."""
+def _framed_array(head: np.ndarray, body: np.ndarray, tail: np.ndarray) -> np.ndarray:
+    """Candidates ``[head, body[c], tail]`` (``body`` (C, L, 2), ``tail`` (T, 2)) as one array
+    (C, 1 + L + T, 2): per candidate the points ``np.vstack([head, body[c], tail])`` gives,
+    built in one pass (i24-fastpolish: no array per candidate)."""
     c, n = body.shape[0], body.shape[1]
     out = np.empty((c, 1 + n + len(tail), 2))
     out[:, 0] = head
     out[:, 1 : 1 + n] = body
     out[:, 1 + n :] = tail
-    return list(out)
+    return out
+
+
+def _framed(head: np.ndarray, body: np.ndarray, tail: np.ndarray) -> list[np.ndarray]:
+    """:func:`_framed_array` as a list of views, one per candidate."""
+    return list(_framed_array(head, body, tail))
+
+
+def _graded(pts: np.ndarray, tan: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The grade moves' windows (module docstring; (2 len(GRADE_SCALES), len(pts), 2)): the
+    window ``pts`` squeezed or spread across its first leg (unit direction ``tan``) about its
+    first or its last point by each factor of :data:`GRADE_SCALES`, clipped to ``[lo, hi]``
+    (i24-cheapolish: one expression for the list of one array per pivot and factor, the same
+    operations per point)."""
+    nrm = np.array([-tan[1], tan[0]])
+    off = (pts - pts[0]) @ nrm  # offsets across the first leg
+    f = np.asarray(GRADE_SCALES, dtype=float) - 1.0
+    pivot = np.array([0.0, float(off[-1])])
+    scaled = (f[None, :, None] * (off[None, None, :] - pivot[:, None, None])).reshape(-1, len(off))
+    return np.clip(pts[None] + scaled[:, :, None] * nrm[None, None], lo, hi)
 
 
 def polish_routes(
@@ -244,6 +253,10 @@ def polish_routes(
     airspace: Airspace | None = None,
     moves: Sequence[str] = MOVES,
     box_radii: Sequence[float] = BOX_RADII,
+    trace: Callable[..., None] | None = None,
+    block_windows: Sequence[int] = BLOCK_WINDOWS,
+    block_radii: Sequence[float] | None = None,
+    focus: int | None = None,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
@@ -254,7 +267,15 @@ def polish_routes(
     A route that does not fit ``budget`` to begin with is only changed by moves after which
     it does. ``box_radii``: the box moves' translations, in sweep widths. Returns ``(routes,
     pos, {"passes", "moves"})`` (and ``"block_moves"``, ``"box_moves"``, the kept moves that
-    were block moves, box or stretch moves, where ``moves`` names them)."""
+    were block moves, box or stretch moves, where ``moves`` names them). ``trace`` (profiling
+    only; no effect on the result): called after every choice of a set of candidates as
+    ``trace(kind, pass, k, i, window, candidates, kept, gain)`` (``kind`` ``"waypoint"``,
+    ``"grade"``, ``"block"`` or ``"box"``; ``kept`` the index of the kept
+    candidate or -1, ``gain`` its gain or 0). i24-cheapolish: ``block_windows`` the block
+    moves' windows (waypoints; default :data:`BLOCK_WINDOWS`), ``block_radii`` their radii in
+    sweep widths (None: ``radii``); ``focus`` (None: off) -- after the first pass, the grade
+    and block moves only at waypoints within ``focus`` of those a move kept in the pass before
+    changed (measured not to pay on ``paper_6_2``: docs/PLANNER.md, "Cheaper candidates")."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
@@ -263,6 +284,16 @@ def polish_routes(
     brad = tuple(box_radii)
     if not brad or any(not np.isfinite(r) or r <= 0 for r in brad):
         raise ConfigError("box_radii", box_radii, "positive numbers (sweep widths), not empty")
+    bwin = tuple(block_windows)
+    if not bwin or any(isinstance(m_, bool) or not isinstance(m_, int | np.integer) or m_ < 1
+                       for m_ in bwin):  # fmt: skip
+        raise ConfigError("block_windows", block_windows, "integers >= 1 (waypoints), not empty")
+    if block_radii is not None and (
+        not tuple(block_radii) or any(not np.isfinite(r) or r <= 0 for r in block_radii)
+    ):
+        raise ConfigError("block_radii", block_radii, "positive numbers (sweep widths), not empty")
+    if focus is not None and (isinstance(focus, bool) or not isinstance(focus, int) or focus < 0):
+        raise ConfigError("focus", focus, "None or an integer >= 0 (waypoints)")
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):
         raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
@@ -305,16 +336,24 @@ def polish_routes(
                 pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
         count = AirspaceCount(airspace, pos, act)
 
-    def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray]) -> bool:
+    tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
+
+    def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray] | np.ndarray) -> bool:
         """Keep the best of the candidates ``seqs`` for ``paths[k][i0 : i1 + 1]`` (same first
-        and last points) that gains more than :data:`TOL` and keeps the route flyable."""
+        and last points; a list, or one array (C, P, 2) of candidates of P points) that gains
+        more than :data:`TOL` and keeps the route flyable."""
         nonlocal value
         path = paths[k]
         old = path[i0 : i1 + 1]
-        first = np.zeros(len(seqs) + 1, dtype=np.int64)
-        first[1:] = np.cumsum([len(q) - 1 for q in seqs])
-        starts = np.concatenate([q[:-1] for q in seqs])
-        ends = np.concatenate([q[1:] for q in seqs])
+        if isinstance(seqs, np.ndarray):  # i24-cheapolish: the same steps, no list
+            first = np.arange(len(seqs) + 1, dtype=np.int64) * (seqs.shape[1] - 1)
+            starts = seqs[:, :-1].reshape(-1, 2)
+            ends = seqs[:, 1:].reshape(-1, 2)
+        else:
+            first = np.zeros(len(seqs) + 1, dtype=np.int64)
+            first[1:] = np.cumsum([len(q) - 1 for q in seqs])
+            starts = np.concatenate([q[:-1] for q in seqs])
+            ends = np.concatenate([q[1:] for q in seqs])
         gain = ex.gains(old[:-1], old[1:], starts, ends, first)
         tried = 0
         for cj in np.argsort(-gain, kind="stable"):
@@ -333,7 +372,12 @@ def polish_routes(
             ex.add(seqs[cj][:-1], seqs[cj][1:], 1.0)
             value += float(gain[cj])
             paths[k] = cand
+            if trace is not None:
+                trace(tag[0], tag[1], k, i0 + 1, tag[2], len(seqs), int(cj), float(gain[cj]))
+            hot_now[k].append((i0 + 1, i1 - 1))
             return True
+        if trace is not None:
+            trace(tag[0], tag[1], k, i0 + 1, tag[2], len(seqs), -1, 0.0)
         return False
 
     def windows(k: int, i: int, sizes, moved) -> int:
@@ -350,28 +394,24 @@ def polish_routes(
             ln = float(np.hypot(*d))
             if ln <= 1e-3:
                 break
-            body = np.stack(moved(path[i : i + m_], d / ln))
+            body = moved(path[i : i + m_], d / ln)
+            tag[2] = m_
             got += int(
-                choose(k, i - 1, i + m_, _framed(path[i - 1], body, path[i + m_ : i + m_ + 1]))
+                choose(
+                    k, i - 1, i + m_, _framed_array(path[i - 1], body, path[i + m_ : i + m_ + 1])
+                )
             )
         return got
 
-    def graded(pts: np.ndarray, tan: np.ndarray) -> list[np.ndarray]:
-        """Grade moves (module docstring): the window squeezed or spread across its first
-        leg about its first or its last point."""
-        nrm = np.array([-tan[1], tan[0]])
-        off = (pts - pts[0]) @ nrm  # offsets across the first leg
-        return [
-            np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
-            for pivot in (0.0, float(off[-1]))
-            for f in GRADE_SCALES
-        ]
+    def graded(pts: np.ndarray, tan: np.ndarray) -> np.ndarray:
+        """Grade moves (module docstring): :func:`_graded`."""
+        return _graded(pts, tan, lo, hi)
 
     def blocked(pts: np.ndarray, tan: np.ndarray) -> np.ndarray:
         """Block moves (module docstring): the window translated across or along its first
-        leg by each signed radius (``(2 len(signed), len(pts), 2)``)."""
+        leg by each signed radius (``(2 len(bsigned), len(pts), 2)``)."""
         shifts = np.concatenate(
-            [signed[:, None] * u[None] for u in (np.array([-tan[1], tan[0]]), tan)]
+            [bsigned[:, None] * u[None] for u in (np.array([-tan[1], tan[0]]), tan)]
         )
         return np.clip(pts[None] + shifts[:, None], lo, hi)
 
@@ -447,6 +487,7 @@ def polish_routes(
                 seqs += rotated(pts, (path[i0 - 1], path[i1 + 1]))
             seqs = [np.vstack([path[i0 - 1], q, path[i1 + 1]]) for q in seqs]
             if seqs:
+                tag[0], tag[2] = "box", 0
                 got += int(choose(k, i0 - 1, i1 + 1, seqs))
             if len(paths[k]) != len(path):  # trimmed: the windows are the next pass's
                 break
@@ -516,6 +557,18 @@ def polish_routes(
     steps = np.asarray(rad, dtype=float) * w
     offsets = (steps[:, None, None] * _DIRS[None]).reshape(-1, 2)
     signed = np.concatenate([steps, -steps])
+    bsteps = steps if block_radii is None else np.asarray(tuple(block_radii), dtype=float) * w
+    bsigned = np.concatenate([bsteps, -bsteps])
+    bwin = tuple(int(m_) for m_ in bwin)
+    # focus (i24-cheapolish): after the first pass, the window moves only near the waypoints
+    # changed in the pass before (``hot``: per UAV the ranges of inner waypoints kept moves
+    # changed, in that pass's numbering)
+    hot: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+    hot_now: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+
+    def near(k: int, i: int) -> bool:
+        return focus is None or done == 1 or any(a - focus <= i <= b + focus for a, b in hot[k])
+
     n_moves = 0
     n_block = 0  # of them block moves
     n_box = 0  # of them box or stretch moves
@@ -523,6 +576,8 @@ def polish_routes(
     for _ in range(max(0, int(passes))):
         kept = 0
         done += 1
+        tag[1] = done
+        hot, hot_now = hot_now, [[] for _ in range(n)]
         if "group" in kinds:  # i24-boxes: the groups' search parts first
             for g in groups:
                 if len(g) > 1:
@@ -570,14 +625,18 @@ def polish_routes(
                     across = signed[:, None] * (np.array([-d[1], d[0]]) / ln)[None]
                     q = np.clip(0.5 * (a + b) + across, lo, hi)
                     seqs += _framed(a, np.stack([q, np.broadcast_to(b, q.shape)], axis=1), tail)
+                tag[0], tag[2] = "waypoint", 0
                 if seqs and choose(k, i - 1, j_end, seqs):
                     kept += 1
                     if len(paths[k]) < m:
                         continue  # deleted: the next waypoint is now at i
-                if "grade" in kinds:
+                hot_i = near(k, i)
+                if "grade" in kinds and hot_i:
+                    tag[0] = "grade"
                     kept += windows(k, i, GRADE_WINDOWS, graded)
-                if "block" in kinds:
-                    got = windows(k, i, BLOCK_WINDOWS, blocked)
+                if "block" in kinds and hot_i:
+                    tag[0] = "block"
+                    got = windows(k, i, bwin, blocked)
                     kept += got
                     n_block += got
                 i += 1

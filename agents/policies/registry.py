@@ -232,7 +232,8 @@ register(
     "poc_env.agents.policies.allocation:AllocationPlanPolicy",
     kwargs={"effort": "standard"},
     summary="allocation_plan at the standard effort level: the default plan polished by the "
-    "environment's sensor model, within 2 s on paper_6_2 (docs/PLANNER.md, i24-fastpolish)",
+    "environment's sensor model, within 2 s on paper_6_2 (docs/PLANNER.md, i24-fastpolish, "
+    "i24-cheapolish)",
 )
 register(
     "greedy_rectangles",

@@ -84,6 +84,8 @@ def _options(name: str):
         cur = getattr(opt, key)
         if isinstance(cur, bool):
             new: object = val.lower() in ("1", "true", "yes", "on")
+        elif isinstance(cur, tuple) and cur and all(isinstance(x, int) for x in cur):
+            new = tuple(int(x) for x in val.split(":") if x)  # i24-cheapolish: windows
         elif isinstance(cur, tuple):
             new = tuple(float(x) for x in val.split(":") if x)
         elif isinstance(cur, int):

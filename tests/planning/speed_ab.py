@@ -10,8 +10,9 @@ blobs"): a script, not a test.
 ``time CASE RUNS``
     ``RUNS`` default plans of a timing case (``paper_6_2``, ``large_400_160x160_24uav``,
     ``large_400_160x160_24uav_300blobs``; ``paper_6_2_thorough_SEED``: the ``thorough`` plan
-    of ``paper_6_2``'s random prior ``SEED``) after a warm-up plan (``refine=0``: JIT, caches),
-    each plan's wall and CPU time printed (one process: run it under another tree for a pair).
+    of ``paper_6_2``'s random prior ``SEED``; ``paper_6_2_standard_SEED`` its ``standard``
+    plan) after a warm-up plan (``refine=0``: JIT, caches), each plan's wall and CPU time
+    printed (one process: run it under another tree for a pair).
 ``pair BASE CASE ROUNDS OUT.json``
     ``ROUNDS`` rounds of ``time CASE 1``, one process per tree and round, alternating this
     tree and the tree ``BASE`` (a checkout of the base commit, e.g. ``git archive 50dfd7a |
@@ -66,18 +67,21 @@ def case(name: str):
         return load_scenario("large_400", {"map.cell_km": 2.5}), 24, None
     if name == "large_400_160x160_24uav_300blobs":
         return blobs_case()
-    if name.startswith("paper_6_2_thorough_"):  # planned with options(name): thorough
+    if name.startswith(("paper_6_2_thorough_", "paper_6_2_standard_")):  # options(name)
         sc = load_scenario("paper_6_2")
         return sc, None, episode_prior(sc, int(name.rsplit("_", 1)[1]))
     raise SystemExit(f"unknown case {name}")
 
 
 def options(name: str):
-    """The plan options of a case: ``thorough`` for ``paper_6_2_thorough_SEED``, else the
-    defaults (None)."""
+    """The plan options of a case: ``thorough`` for ``paper_6_2_thorough_SEED``, ``standard``
+    for ``paper_6_2_standard_SEED`` (i24-cheapolish), else the defaults (None)."""
     from poc_env.agents.planning.options import PlanOptions
 
-    return PlanOptions.preset("thorough") if "thorough" in name else None
+    for effort in ("thorough", "standard"):
+        if f"_{effort}_" in name:
+            return PlanOptions.preset(effort)
+    return None
 
 
 def digest(out: str, thorough: bool) -> None:

@@ -396,3 +396,106 @@ def test_polish_lines_radii_reach_the_second_polish():
     assert [u["waypoints_m"] for u in a["uavs"]] != [u["waypoints_m"] for u in b["uavs"]]
     sa, sb = a["optimizer"]["settings"]["polish"], b["optimizer"]["settings"]["polish"]
     assert sa["moves"] - sa["lines_moves"] == sb["moves"] - sb["lines_moves"]
+
+
+@pytest.mark.parametrize("bad", [(), (0,), (2, 1.5), (2, True), (17,), [2, 4]])
+def test_polish_lines_windows_option_is_checked(bad):
+    with pytest.raises(ConfigError, match=r"options\.polish_lines_windows"):
+        PlanOptions(polish_lines_windows=bad)
+
+
+@pytest.mark.parametrize(
+    ("field", "bad"),
+    [("block_windows", ()), ("block_windows", (2, 0)), ("block_windows", (2.0,)),
+     ("block_radii", ()), ("block_radii", (0.5, -1.0)), ("focus", -1), ("focus", 1.5)],
+)  # fmt: skip
+def test_block_window_arguments_are_checked(field, bad):
+    sc = load_scenario("small")
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    with pytest.raises(ConfigError, match=field):
+        _polish(sc, routes, build_prior(sc.map), moves=("move", "block"), **{field: bad})
+
+
+def test_block_windows_are_the_ones_asked_and_the_trace_sees_every_kept_move():
+    """``block_windows`` (i24-cheapolish) are the block moves' windows: traced, the block
+    moves of a polish with windows of 2 waypoints are tried on windows of 2 only, those of the
+    default on :data:`BLOCK_WINDOWS`; the trace sees as many kept moves as the polish counts
+    and does not change its routes; and ``polish_lines_windows`` reaches the planner's second
+    polish (its plan is the second polish of those windows replayed)."""
+    from poc_env.agents.planning.polish import BLOCK_WINDOWS, KINDS
+
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    kinds = (*KINDS, "block")
+    seen: list[tuple] = []
+    a = _polish(sc, routes, prior, moves=kinds, block_windows=(2,), trace=lambda *t: seen.append(t))
+    assert a[:2] == _polish(sc, routes, prior, moves=kinds, block_windows=(2,))[:2]
+    assert {t[4] for t in seen if t[0] == "block"} == {2}
+    assert sum(t[6] >= 0 for t in seen) == a[2]["moves"] > 0
+    seen.clear()
+    _polish(sc, routes, prior, moves=kinds, trace=lambda *t: seen.append(t))
+    assert {t[4] for t in seen if t[0] == "block"} == set(BLOCK_WINDOWS)
+    opt = PlanOptions(polish_lines=2, polish_grade=True, polish_lines_windows=(2,))
+    plan = make_allocation_plan(sc, options=opt)
+    assert [u["waypoints_m"] for u in plan["uavs"]] == a[0]
+
+
+@pytest.mark.parametrize("bad", [(0.5, -1.0), (9.0,), (float("nan"),), [0.5]])
+def test_polish_lines_block_radii_option_is_checked(bad):
+    with pytest.raises(ConfigError, match=r"options\.polish_lines_block_radii"):
+        PlanOptions(polish_lines_block_radii=bad)
+
+
+def test_block_radii_reach_the_block_moves_only():
+    """``block_radii`` (i24-cheapolish) are the block moves' radii: traced, a polish with one
+    block radius tries 4 candidates a block window (across and along, both signs) and its
+    other moves as many as without it; ``polish_lines_block_radii`` reaches the planner's
+    second polish (its plan is that polish replayed)."""
+    from poc_env.agents.planning.polish import KINDS
+
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    kinds = (*KINDS, "block")
+    seen: list[tuple] = []
+    a = _polish(sc, routes, prior, passes=1, moves=kinds, block_radii=(0.25,),
+                trace=lambda *t: seen.append(t))  # fmt: skip
+    assert {t[5] for t in seen if t[0] == "block"} == {4}
+    first = next(t for t in seen if t[0] == "waypoint")  # before any move is kept
+    seen.clear()
+    _polish(sc, routes, prior, passes=1, moves=kinds, trace=lambda *t: seen.append(t))
+    assert first[5] == next(t for t in seen if t[0] == "waypoint")[5]
+    assert {t[5] for t in seen if t[0] == "block"} == {16}
+    opt = PlanOptions(polish_lines=1, polish_grade=True, polish_lines_block_radii=(0.25,))
+    plan = make_allocation_plan(sc, options=opt)
+    assert [u["waypoints_m"] for u in plan["uavs"]] == a[0]
+
+
+def test_focus_tries_window_moves_only_near_the_last_pass_kept_moves():
+    """``focus`` (i24-cheapolish): in the second pass of a polish with ``focus=0`` every grade
+    and block move is tried at a waypoint that a move kept in the first pass changed (in the
+    first pass's numbering), and fewer are tried than without the focus; the first pass is
+    the same as without it."""
+    from poc_env.agents.planning.polish import KINDS
+
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    kinds = (*KINDS, "block")
+    runs = []
+    for focus in (0, None):
+        seen: list[tuple] = []
+        _polish(sc, routes, prior, passes=2, moves=kinds, focus=focus,
+                trace=lambda *t, seen=seen: seen.append(t))  # fmt: skip
+        runs.append(seen)
+    focused, free = runs
+    assert [t for t in focused if t[1] == 1] == [t for t in free if t[1] == 1]
+    changed: dict[int, list[tuple[int, int]]] = {}
+    for _kind, pss, k, i, window, _, kept, _ in focused:
+        if pss == 1 and kept >= 0:  # the inner waypoints the kept move changed
+            changed.setdefault(k, []).append((i, i + window - 1 if window else i + 1))
+    tried = [(k, i) for kind, pss, k, i, *_ in focused if pss == 2 and kind in ("grade", "block")]
+    assert tried and all(any(a <= i <= b for a, b in changed.get(k, [])) for k, i in tried)
+    n_free = sum(1 for t in free if t[1] == 2 and t[0] in ("grade", "block"))
+    assert len(tried) < n_free

@@ -345,3 +345,84 @@ def test_framed_candidates_are_the_stacked_ones():
         assert len(got) == c, trial
         for q, b in zip(got, body, strict=True):
             assert np.array_equal(q, np.vstack([head, b, tail])), trial
+
+
+def _steps_reference(a, b, origin, cell):
+    """The polish's legs cut into steps as numpy expressions (``Exposure.steps`` before
+    i24-cheapolish compiled it)."""
+    a = np.asarray(a, dtype=float).reshape(-1, 2) - origin
+    b = np.asarray(b, dtype=float).reshape(-1, 2) - origin
+    d = b - a
+    n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / cell)).astype(np.int64)
+    leg = np.repeat(np.arange(len(a)), n)
+    j = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+    nl = n[leg].astype(float)
+    t0 = (j / nl)[:, None]
+    t1 = ((j + 1) / nl)[:, None]
+    return a[leg] + t0 * d[leg], a[leg] + t1 * d[leg], n
+
+
+def test_compiled_steps_are_the_numpy_steps():
+    """The polish's compiled step cutting (i24-cheapolish, ``_kernels.sensing.cut_steps``)
+    gives the numpy expressions' steps bit for bit: random legs of every scale (none, shorter
+    than a cell, exact multiples of it, across the map), a random origin, through
+    ``Exposure.steps`` as the polish calls it."""
+    from poc_env._kernels.sensing import cut_steps
+    from poc_env.agents.planning.polish import Exposure
+    from poc_env.config import load_scenario
+    from poc_env.theory.probability_map import Grid, build_prior
+
+    rng = np.random.default_rng(11)
+    cell = 5000.0
+    for trial in range(60):
+        m = int(rng.integers(1, 12))
+        a = rng.uniform(-3e5, 3e5, (m, 2))
+        scale = [0.0, 1e-3, 0.7 * cell, 3 * cell, 2e5][trial % 5]
+        d = rng.normal(0, 1, (m, 2)) * scale
+        if trial % 7 == 0:  # exact multiples of the cell along an axis
+            d = np.zeros((m, 2))
+            d[:, trial % 2] = cell * rng.integers(0, 5, m)
+        b = a + d
+        origin = rng.uniform(-1e5, 1e5, 2)
+        got = cut_steps(a, b, origin[0], origin[1], cell)
+        want = _steps_reference(a, b, origin, cell)
+        for g, w_ in zip(got, want, strict=True):
+            assert g.dtype == w_.dtype and np.array_equal(g, w_), trial
+    sc = load_scenario("paper_6_2")
+    grid = Grid.from_config(sc.map)
+    ex = Exposure(grid, 2, 10000.0, "inverse_cube", 30000.0, grid.refine(build_prior(sc.map), 2))
+    a = rng.uniform(0, 2e5, (9, 2))
+    b = rng.uniform(0, 2e5, (9, 2))
+    for g, w_ in zip(
+        ex.steps(a[:, :], b), _steps_reference(a, b, ex.origin, grid.cell_m), strict=True
+    ):
+        assert np.array_equal(g, w_)
+
+
+def test_graded_candidates_are_the_listed_ones():
+    """The grade moves' windows built in one expression (i24-cheapolish, ``polish._graded``)
+    equal the list of one clipped array per pivot and factor the polish built before, bit for
+    bit, on random windows (some clipped at the map's edge) and directions; and
+    ``_framed_array`` holds the candidates ``_framed`` lists."""
+    from poc_env.agents.planning.polish import GRADE_SCALES, _framed, _framed_array, _graded
+
+    rng = np.random.default_rng(12)
+    for trial in range(40):
+        m = int(rng.integers(2, 9))
+        pts = rng.uniform(-1e5, 3e5, (m, 2))
+        ang = rng.uniform(0, 2 * np.pi)
+        tan = np.array([np.cos(ang), np.sin(ang)])
+        lo, hi = np.zeros(2), np.array([2e5, 1.5e5])
+        nrm = np.array([-tan[1], tan[0]])
+        off = (pts - pts[0]) @ nrm
+        want = [
+            np.clip(pts + ((f - 1.0) * (off - pivot))[:, None] * nrm[None], lo, hi)
+            for pivot in (0.0, float(off[-1]))
+            for f in GRADE_SCALES
+        ]
+        got = _graded(pts, tan, lo, hi)
+        assert got.shape == (len(want), m, 2), trial
+        for g, w_ in zip(got, want, strict=True):
+            assert np.array_equal(g, w_), trial
+        head, tail = rng.normal(0, 1e5, 2), rng.normal(0, 1e5, (trial % 3, 2))
+        assert np.array_equal(_framed_array(head, got, tail), np.stack(_framed(head, got, tail)))
