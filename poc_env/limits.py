@@ -150,13 +150,30 @@ def env_bytes(cells: int, samples_per_cell: int, n_agents: int, n_envs: int, com
     (:func:`map_bytes`) plus, per env, the fine belief (``samples_per_cell``^2 points a cell,
     one copy per agent under ``belief_sharing: comms``) and its temporaries. Calibrated like
     :data:`MAP_BYTES_PER_CELL` (measured about a quarter of it: 290 B a cell and env with one
-    shared belief, 2,960 with three agents' beliefs, s = 4)."""
-    per_cell = 256 + 64 * samples_per_cell**2 * (n_agents if comms else 1)
+    shared belief, 2,960 with three agents' beliefs, s = 4).
+
+    Under ``belief_sharing: comms`` each env also holds ``N x N`` fine maps of float64
+    (``State.known``: UAV i's copy of UAV j's survival), and holds them twice at its peaks
+    (the copy step's temporary; a reset's new state beside the old one): ``16 s^2 N^2`` bytes
+    a cell more. Counting N maps only, the estimate was a third of the measured peak at 12
+    UAVs and a fifth at 24 (tests/test_validation.py), so the guard passed sizes the kernel
+    then killed."""
+    s2 = samples_per_cell**2
+    per_cell = 256 + 64 * s2 * (n_agents if comms else 1)
+    if comms:
+        per_cell += 16 * s2 * n_agents**2
     return map_bytes(cells) + float(n_envs) * cells * per_cell
 
 
 def plan_bytes(popsize: int, n_uavs: int, cells: int) -> float:
-    """Estimated peak bytes of a planner population: the objective scores the whole population
-    at once, about 22 B per member, UAV and cell (measured with tracemalloc on paper_6_2 at
-    popsize 1,000 and 4,000); 48 B keeps it an upper bound."""
-    return map_bytes(cells) + 48.0 * popsize * n_uavs * cells
+    """Estimated peak bytes of a DE planner population: the map (:func:`map_bytes`), the
+    ``(P, P)`` keys from which DE/rand/1 draws each member's three partners (float64 keys and
+    their int64 partition, about 24 B per pair), and the compiled plan pass's per-member arrays
+    (about 260 B per member and UAV; no ``(P, n, cells)`` array since the pass integrates the
+    rectangles' boundaries). Measured with tracemalloc (scale-audit): ``small`` at popsize
+    1,000 and 10,000 (24 and 2,297 MiB), ``paper_6_2`` at 1,000 and 4,000, 160 x 160 cells
+    with 24 and 64 UAVs at 100 to 2,000 (32 to 124 MiB); 32 B per pair and 512 B per member
+    and UAV keep it an upper bound (tests/test_validation.py). The former 48 B per member,
+    UAV and cell was 86 times the peak at 24 UAVs on 160 x 160 cells and refused 64 UAVs
+    there (7.4 GiB estimated, 68 MiB used), and a quarter of it at popsize 10,000."""
+    return map_bytes(cells) + 32.0 * float(popsize) ** 2 + 512.0 * popsize * n_uavs

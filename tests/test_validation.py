@@ -169,9 +169,19 @@ def test_planner_settings_are_checked_not_defaulted():
 
 
 @pytest.mark.parametrize(
-    ("cells", "n_envs", "comms"), [(10_000, 1, False), (40_000, 4, False), (10_000, 2, True)]
+    ("cells", "n_envs", "comms", "uavs"),
+    [
+        (10_000, 1, False, 3),
+        (40_000, 4, False, 3),
+        (10_000, 2, True, 3),
+        (10_000, 1, False, 24),
+        # comms beliefs keep N x N fine maps per env (State.known): at 12 UAVs the estimate of
+        # N maps was a third of the peak, so the guard let through sizes the kernel then killed
+        (2_500, 1, True, 12),
+        (2_500, 2, True, 24),
+    ],
 )
-def test_memory_estimate_is_an_upper_bound(cells, n_envs, comms):
+def test_memory_estimate_is_an_upper_bound(cells, n_envs, comms, uavs):
     import tracemalloc
 
     from poc_env.envs.vector import SwarmVecEnv
@@ -184,18 +194,54 @@ def test_memory_estimate_is_an_upper_bound(cells, n_envs, comms):
             "map.height_km": side,
             "map.cell_km": 0.5,
             "comms.belief_sharing": "comms" if comms else "global",
+            "comms.range_km": 1000,  # one connected swarm: every UAV copies every other's map
         },
-    )
+    ).with_uavs(uavs)
     tracemalloc.start()
     try:
         env = SwarmVecEnv(sc, n_envs=n_envs, obs_type="flat")
-        env.reset()
-        env.step(np.zeros((env.num_envs, 3), np.float32))
+        for _ in range(2):  # a second reset builds a new state while the old one is held
+            env.reset()
+            env.step(np.zeros((env.num_envs, 3), np.float32))
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
     est = limits.env_bytes(cells, sc.sensor.samples_per_cell, sc.n_uavs, n_envs, comms)
-    assert peak <= est
+    assert sc.n_uavs == uavs
+    assert peak <= est, f"peak {peak / 2**20:.1f} MiB, estimate {est / 2**20:.1f} MiB"
+
+
+@pytest.mark.parametrize(
+    ("name", "over", "uavs", "popsize"),
+    [
+        # many members on a small map: DE/rand/1 draws its (P, P) keys, quadratic in P
+        ("small", {}, 3, 2000),
+        # the issue-24 size: 160 x 160 cells, 24 UAVs; the compiled plan pass keeps no
+        # (P, n, cells) array, so the old 48 B a member, UAV and cell was 86 times the peak
+        ("large_400", {"map.cell_km": 2.5}, 24, 100),
+    ],
+)
+def test_planner_population_estimate_is_an_upper_bound_and_not_far_over(name, over, uavs, popsize):
+    """``limits.plan_bytes`` (scale-audit): at least the DE plan's measured peak, and within
+    ten times it, so that the guard neither lets a 2.3 GB population (popsize 10,000 on
+    ``small``, estimated 88 MiB) through nor refuses a 70 MB plan (64 UAVs on 160 x 160 cells,
+    estimated 7.4 GiB)."""
+    import tracemalloc
+
+    from poc_env.agents.planning.planner import make_plan
+
+    sc = load_scenario(name, over)
+    cells = sc.map.nx * sc.map.ny
+    est = limits.plan_bytes(popsize, uavs, cells)
+    tracemalloc.start()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a one-generation plan may be infeasible
+            make_plan(sc, uavs=uavs, popsize=popsize, maxiter=1)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= est <= 10 * peak, f"peak {peak / 2**20:.1f} MiB, estimate {est / 2**20:.1f} MiB"
 
 
 # --------------------------------------------------------------------------- maps

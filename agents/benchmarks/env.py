@@ -28,7 +28,8 @@ scratch inside the kernels is not seen) over a step of the episode engine with i
 (``--obs-type``, default the tasks' ``compass``) and infos, beyond the state, per env.
 
 ``main(argv)`` returns ``{figure: agent-steps/s, ...}``; ``--set KEY=VALUE`` applies scenario
-overrides (e.g. ``sensor.samples_per_cell=2``).
+overrides (e.g. ``sensor.samples_per_cell=2``); ``--uavs N`` flies N UAVs spread over the
+scenario's airfields (:meth:`~poc_env.config.Scenario.with_uavs`).
 """
 
 from __future__ import annotations
@@ -293,9 +294,17 @@ def build_parser() -> argparse.ArgumentParser:
             "poc-env bench env --envs 1 64 --runs 3",
             "poc-env bench env --scenario small --set sensor.samples_per_cell=2 --no-mpe",
             "poc-env bench env --motion drift --envs 64 --no-memory",
+            "poc-env bench env --scenario wide_400 --uavs 24 --envs 1 16 --no-mpe",
         ),
     )
     ap.add_argument("--scenario", default="paper_6_2")
+    ap.add_argument(
+        "--uavs",
+        type=int,
+        default=None,
+        help="fleet size, 1 to 64, spread over the scenario's airfields round-robin "
+        "(Scenario.with_uavs; default: the scenario's fleet)",
+    )
     ap.add_argument("--envs", type=int, nargs="+", default=[1, 64, 256])
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--no-mpe", action="store_true", help="skip MPE2 simple_spread")
@@ -328,6 +337,9 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     for item in args.set:
         key, _, value = item.partition("=")
         overrides[key] = yaml.safe_load(value)
+    if args.uavs is not None:  # the fleet override of Scenario.with_uavs's spread
+        fleet = load_scenario(args.scenario, overrides).with_uavs(args.uavs).fleet
+        overrides["fleet"] = [{"takeoff": g.takeoff, "count": g.count} for g in fleet]
     params = sim.make_params(load_scenario(args.scenario, overrides))
     n = params.n_agents
     out: dict[str, float] = {}

@@ -200,6 +200,7 @@ def make_plan(
                 "feasible": u["feasible"],
             }
         )
+    _infeasible_warning(uav_out, u_cfg.usable_endurance_s, settings)
     return check_terrain(
         {
             "schema": SCHEMA,
@@ -219,6 +220,30 @@ def make_plan(
             **plan_geography(obj.scenario, full_prior, crs),
         },
         sc,
+    )
+
+
+def _infeasible_warning(uavs: list[dict[str, Any]], usable_s: float, settings: dict) -> None:
+    """Warn (UserWarning) when a DE plan's UAVs are infeasible: the optimiser's budget found no
+    rectangle whose flight fits the usable endurance 0.85 T (eq. 18) for them. The plan is
+    returned as it is (its table says "NO"); the warning names the UAVs, so that ``plan`` and
+    ``replan`` do not write missions that cannot be flown without a word (scale-audit)."""
+    bad = [(k, u) for k, u in enumerate(uavs) if not u["feasible"]]
+    if not bad:
+        return
+    import warnings
+
+    k, u = max(bad, key=lambda ku: ku[1]["flight_time_s"])
+    names = ", ".join(f"plan.uavs[{j}] (UAV {v['id']})" for j, v in bad[:6])
+    more = f" and {len(bad) - 6} more" if len(bad) > 6 else ""
+    warnings.warn(
+        f"{names}{more}: flight time {u['flight_time_s'] / 3600:.2f} h (the longest, "
+        f"plan.uavs[{k}]) beyond the usable endurance {usable_s / 3600:.2f} h (0.85 T, eq. 18): "
+        f"{len(bad)} of {len(uavs)} UAVs' missions cannot be flown. The optimiser's budget "
+        f"(popsize {settings['popsize']}, maxiter {settings['maxiter']}) found no feasible "
+        "plan for them: raise --maxiter or --popsize, or plan with --planner allocation",
+        UserWarning,
+        stacklevel=3,
     )
 
 

@@ -269,11 +269,24 @@ class CompassFeatures:
     raster and vector observations of any number of UAVs at once.
 
     ``agent_index=False`` leaves the index block at zero: the ablation of the credit-and-sharing
-    table (a shared policy that cannot tell the UAVs of one airfield apart)."""
+    table (a shared policy that cannot tell the UAVs of one airfield apart). With the index and
+    more than :data:`N_IDS` UAVs, UAVs ``k`` and ``k + N_IDS`` read the same index: a
+    UserWarning says so (the set observation, ``obs_type="set"``, has no index width)."""
 
     def __init__(self, params: Params, agent_index: bool = True) -> None:
         self.params = params
         self.agent_index = bool(agent_index)
+        if self.agent_index and params.n_agents > N_IDS:
+            import warnings
+
+            warnings.warn(
+                f"the compass observation of {params.n_agents} UAVs: its index block is a "
+                f"one-hot of k mod {N_IDS}, so UAVs 0 and {N_IDS} (and every k, k + {N_IDS}) "
+                "read the same index; a policy on it cannot tell them apart (obs_type='set', "
+                "the -Set tasks, observes any fleet size)",
+                UserWarning,
+                stacklevel=2,
+            )
         self.centers = params.grid.centers.reshape(-1, 2).astype(float)
         self._cx = np.ascontiguousarray(self.centers[:, 0])
         self._cy = np.ascontiguousarray(self.centers[:, 1])

@@ -116,3 +116,28 @@ def test_bench_baselines_random_column_is_each_tasks_own_floor():
     inc, head = cell(0.085, 0.085), cell(0.036, 0.036)
     assert lines[2] == f"| UAVSearch-Small-Increments-v0 | {inc} | {head} | - |"
     assert lines[3] == f"| UAVSearch-Small-Heading-v0 | {head} | - | {inc} |"
+
+
+def test_bench_env_flies_the_fleet_size_asked(monkeypatch, capsys):
+    """``bench env --uavs N`` (scale-audit): the core, the PettingZoo env and the memory figure
+    fly N UAVs spread over the scenario's airfields (as ``Scenario.with_uavs``), the lines say
+    N and not a YAML fleet; a size outside 1-64 is refused naming ``uavs``."""
+    from poc_env.agents.benchmarks import env as bench
+
+    seen = {}
+    monkeypatch.setattr(bench, "bench_core", lambda p, e, r: seen.setdefault("core", p.n_agents))
+    monkeypatch.setattr(
+        bench, "bench_pettingzoo", lambda s, o, r: seen.setdefault("pz", o["fleet"]) and 1.0
+    )
+    monkeypatch.setattr(
+        bench, "peak_memory", lambda s, o, e, t: seen.setdefault("mem", o) and (1, 1)
+    )
+    bench.main(["--scenario", "wide_400", "--uavs", "24", "--envs", "1", "16", "--runs", "1",
+                "--no-mpe"])  # fmt: skip
+    assert seen["core"] == 24
+    assert seen["pz"] == [{"takeoff": a, "count": 8} for a in "ABC"]
+    assert seen["mem"]["fleet"] == seen["pz"]
+    out = capsys.readouterr().out
+    assert "N=24" in out and "fleet" not in out
+    with pytest.raises(ConfigError, match=r"^uavs: got 65; allowed: an integer in \[1, 64\]"):
+        bench.main(["--scenario", "wide_400", "--uavs", "65", "--no-mpe", "--no-memory"])

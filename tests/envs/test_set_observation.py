@@ -135,3 +135,21 @@ def test_roles_rank_the_uavs_of_each_airfield():
     np.testing.assert_allclose(
         obs_mod.roles(eng.params), [1 / 6, 3 / 6, 5 / 6, 1 / 4, 3 / 4, 1 / 4, 3 / 4]
     )
+
+
+def test_the_compass_index_says_when_a_fleet_outgrows_it():
+    """The compass's index block is a one-hot of k mod 8: beyond 8 UAVs two UAVs read the same
+    index. Documented (docs/environment.md); said where it happens too, as a warning naming
+    the fleet, so a compass policy flown or trained at 12 or 24 UAVs does not alias silently
+    (scale-audit). The set observation, and the compass without the index, say nothing."""
+    import warnings
+
+    with pytest.warns(UserWarning, match=r"12 UAVs.*k mod 8.*UAVs 0 and 8"):
+        _engine(12, steps=0, obs_type="compass")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _engine(8, steps=0, obs_type="compass")
+        _engine(12, steps=0, obs_type="set")
+        sc = load_scenario("wide_400")
+        eng = make_engine(1, scenario=sc, obs_type="compass", control="heading", agent_index=False)
+        assert eng.scenario.n_uavs == 12

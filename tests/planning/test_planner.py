@@ -135,3 +135,21 @@ def test_plan_warns_when_the_sample_points_are_wider_apart_than_the_sweep(tmp_pa
     assert "samples_per_cell >= 8" in said
     assert main(argv) == 0  # 5 / 4 = 1.25 km <= W
     assert "samples_per_cell" not in capsys.readouterr().out
+
+
+def test_a_de_plan_beyond_the_endurance_says_so():
+    """A DE plan whose optimiser budget found no feasible rectangle for a UAV (flight time
+    beyond 0.85 T, eq. 18; the table's ``ok`` column "NO") is returned as it is, with a
+    warning naming the UAV (scale-audit: a 24-UAV DE plan at popsize 16 / maxiter 20 had every
+    UAV at 6-30 h on a 5 h UAV, exit status 0 and not a word, then 24 QGC missions). A
+    feasible plan says nothing."""
+    import warnings
+
+    with pytest.warns(UserWarning, match=r"plan\.uavs\[1\] \(UAV 2\): flight time [\d.]+ h.*"
+                      r"usable endurance [\d.]+ h.*eq\. 18.*--maxiter"):  # fmt: skip
+        plan = make_plan("small", popsize=4, maxiter=1)
+    assert [u["feasible"] for u in plan["uavs"]] == [True, False, True]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        plan = make_plan("small", popsize=8, maxiter=1)
+    assert all(u["feasible"] for u in plan["uavs"])
