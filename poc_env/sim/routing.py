@@ -25,9 +25,12 @@ follower's transit legs (:mod:`poc_env.sim.autopilot`).
 - **Clipping** (:meth:`ZoneRouter.reroute`): every leg of a polyline is cut to its parts
   outside the keep-out area and consecutive parts are joined by shortest paths, so search legs
   fly only searchable airspace and transit goes around.
-- **Reach** (:meth:`ZoneRouter.reach_share`): the share of each cell's area within ``W/2`` of
-  flyable airspace, i.e. the part of a zone's interior a sensor of sweep width ``W`` reaches from
-  outside; planners multiply the prior by it (the zone-interior mass discount).
+- **Reach** (:meth:`ZoneRouter.reach_share`): the share of each cell within a lateral range
+  of flyable airspace, i.e. the part of a zone's interior a sensor reaches from outside.
+  Planners multiply the prior by the share of each cell's area within ``W/2`` of the keep-out
+  area's outside (the zone-interior mass discount, a conservative model); the bounds
+  (:func:`poc_env.theory.bound.zone_reach`) use the share of its sample points within the
+  detection law's reach (the inverse cube's cut-off) of the zones' outside.
 
 **Speed** (issue 24: planning with zones within 2 s on ``paper_6_2``). A segment's test
 against the obstacle, the keep-out area or the zones (shapely's ``intersects``) first goes
@@ -477,13 +480,44 @@ class ZoneRouter:
             return True
         return not bool(shapely.intersects(LineString(pts), shapely.union_all(self.zones)))
 
-    def reach_share(self, grid: Any, sweep_width: float) -> np.ndarray:
-        """(ny, nx): the share of each cell's area within ``W/2`` of flyable airspace (1 away
-        from zones): the part of a zone's interior a sensor reaches from outside."""
+    def reach_share(
+        self,
+        grid: Any,
+        reach_m: float,
+        *,
+        zones_only: bool = False,
+        samples_per_cell: int | None = None,
+    ) -> np.ndarray:
+        """(ny, nx): the share of each cell within ``reach_m`` of flyable airspace (1 away from
+        zones): the part of a zone's interior a sensor of lateral range ``reach_m`` reaches from
+        outside. The one implementation of the zone-interior discount (eq. 20).
+
+        Parameters
+        ----------
+        grid:
+            The :class:`~poc_env.theory.probability_map.Grid` of the cells.
+        reach_m:
+            The sensor's lateral range: ``W / 2`` in the planners' model (a sweep of width
+            ``W``); the detection law's reach (:attr:`DetectionLaw.reach
+            <poc_env.theory.detection.DetectionLaw>`, the inverse cube's cut-off) for the
+            bounds (:func:`poc_env.theory.bound.zone_reach`).
+        zones_only:
+            Measure depth into the zones themselves (what the environment forbids, eq. 20)
+            instead of the keep-out area (the zones grown by the clearance, where the planners
+            route). The bounds use the zones: a flight may pass closer than the clearance.
+        samples_per_cell:
+            ``None``: the share of the cell's **area** (shapely's buffer of the region by
+            ``-reach_m``; the planners' measure). An integer ``s``: the share of the cell's
+            ``s x s`` **sample points** (the centres of its fine cells, where the environment
+            puts the target, :mod:`poc_env.sim.core`) whose exact distance to the region's
+            boundary is at most ``reach_m`` or that lie outside it (the bounds' measure: what a
+            flight can detect in the environment).
+        """
         share = np.ones(grid.shape)
         if not self.active:
             return share
-        hidden = self.keep_out.buffer(-0.5 * float(sweep_width))
+        region = self._zones_union if zones_only else self.keep_out
+        hidden = region.buffer(-float(reach_m))
         if hidden.is_empty:
             return share
         ox, oy = grid.origin_m
@@ -492,6 +526,19 @@ class ZoneRouter:
         c0, c1 = max(int((x0 - ox) // c), 0), min(int((x1 - ox) // c) + 1, grid.nx)
         r0, r1 = max(int((y0 - oy) // c), 0), min(int((y1 - oy) // c) + 1, grid.ny)
         if c0 >= c1 or r0 >= r1:
+            return share
+        if samples_per_cell is not None:  # exact point distances, no polygon approximation
+            s = int(samples_per_cell)
+            h = c / s
+            xs = ox + c0 * c + (np.arange((c1 - c0) * s) + 0.5) * h
+            ys = oy + r0 * c + (np.arange((r1 - r0) * s) + 0.5) * h
+            px, py = np.meshgrid(xs, ys)
+            deep = shapely.contains_xy(region, px, py)
+            deep[deep] = shapely.distance(region.boundary, shapely.points(px[deep], py[deep])) > (
+                float(reach_m)
+            )
+            hid = deep.reshape(r1 - r0, s, c1 - c0, s).sum(axis=(1, 3))
+            share[r0:r1, c0:c1] = 1.0 - hid / float(s * s)
             return share
         rr, cc = np.mgrid[r0:r1, c0:c1]
         cells = shapely.box(ox + cc * c, oy + rr * c, ox + (cc + 1) * c, oy + (rr + 1) * c)
