@@ -27,7 +27,7 @@ from poc_env.theory.bound import zone_reach
 from poc_env.theory.probability_map import Grid
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "..", "tests", "theory"))
-from test_bound_zones import _random_case, _sightings  # noqa: E402
+from test_bound_zones import _random_case, _sightings
 
 
 def old_zone_reach(sc, prior):
