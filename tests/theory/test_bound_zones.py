@@ -32,15 +32,16 @@ def _printed_bounds(plan) -> dict[str, float]:
     return out
 
 
-def _random_case(seed: int):
-    """``small`` with one random rectangular zone and 5 point sightings, 2 of them inside the
-    zone deeper than the planners' W/2 (seeded; the zone's mass is what the old bound hid)."""
+def _random_case(seed: int, law: str = "inverse_cube"):
+    """``small`` (detection ``law``) with one random rectangular zone and 5 point sightings, 2
+    of them inside the zone deeper than the planners' W/2 (seeded; the zone's mass is what the
+    old bound hid)."""
     rng = np.random.default_rng(seed)
     w_km, h_km = rng.uniform(10.0, 18.0, size=2)
     x0 = rng.uniform(2.0, 38.0 - w_km)
     y0 = rng.uniform(4.0, 38.0 - h_km)
     zone = [[x0, y0], [x0 + w_km, y0], [x0 + w_km, y0 + h_km], [x0, y0 + h_km]]
-    sc = load_scenario("small", {"map.no_fly_zones_km": [zone]})
+    sc = load_scenario("small", {"map.no_fly_zones_km": [zone], "sensor.law": law})
     grid = Grid.from_config(sc.map)
     # inside: at least 2.5 km (W) from the zone's edge, i.e. hidden from W/2 of the keep-out
     inside = np.column_stack(
@@ -53,9 +54,13 @@ def _random_case(seed: int):
 
 
 @pytest.mark.filterwarnings("ignore:.*beyond the usable endurance")
-@pytest.mark.parametrize("seed", range(4))
-def test_plans_stay_below_every_printed_bound_with_zones(seed, fly):
-    sc, prior = _random_case(seed)
+@pytest.mark.parametrize(
+    ("seed", "law"),
+    [(0, "inverse_cube"), (1, "inverse_cube"), (2, "inverse_cube"), (3, "inverse_cube"),
+     (4, "exponential"), (5, "definite_range")],
+)  # fmt: skip
+def test_plans_stay_below_every_printed_bound_with_zones(seed, law, fly):
+    sc, prior = _random_case(seed, law)
     plan = make_allocation_plan(sc, prior=prior)
     bounds = _printed_bounds(plan)
     for name, b in bounds.items():
