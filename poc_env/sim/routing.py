@@ -58,6 +58,7 @@ from shapely.geometry import LineString, Point
 from poc_env._kernels.segments import edge_contacts
 from poc_env.geometry import as_polygon
 from poc_env.sim.constraints import NoFlyZones
+from poc_env.theory.regions import reach_share
 
 __all__ = ["ZoneRouter", "clearance_m"]
 
@@ -490,7 +491,7 @@ class ZoneRouter:
     ) -> np.ndarray:
         """(ny, nx): the share of each cell within ``reach_m`` of flyable airspace (1 away from
         zones): the part of a zone's interior a sensor of lateral range ``reach_m`` reaches from
-        outside. The one implementation of the zone-interior discount (eq. 20).
+        outside (:func:`poc_env.theory.regions.reach_share`, the one implementation).
 
         Parameters
         ----------
@@ -498,49 +499,17 @@ class ZoneRouter:
             The :class:`~poc_env.theory.probability_map.Grid` of the cells.
         reach_m:
             The sensor's lateral range: ``W / 2`` in the planners' model (a sweep of width
-            ``W``); the detection law's reach (:attr:`DetectionLaw.reach
-            <poc_env.theory.detection.DetectionLaw>`, the inverse cube's cut-off) for the
-            bounds (:func:`poc_env.theory.bound.zone_reach`).
+            ``W``); the detection law's reach for the bounds
+            (:func:`poc_env.theory.bound.zone_reach`).
         zones_only:
             Measure depth into the zones themselves (what the environment forbids, eq. 20)
             instead of the keep-out area (the zones grown by the clearance, where the planners
             route). The bounds use the zones: a flight may pass closer than the clearance.
         samples_per_cell:
-            ``None``: the share of the cell's **area** (shapely's buffer of the region by
-            ``-reach_m``; the planners' measure). An integer ``s``: the share of the cell's
-            ``s x s`` **sample points** (the centres of its fine cells, where the environment
-            puts the target, :mod:`poc_env.sim.core`) whose exact distance to the region's
-            boundary is at most ``reach_m`` or that lie outside it (the bounds' measure: what a
-            flight can detect in the environment).
+            ``None``: the share of each cell's area (the planners' measure); an integer: the
+            share of its sample points (the bounds' measure).
         """
-        share = np.ones(grid.shape)
         if not self.active:
-            return share
+            return np.ones(grid.shape)
         region = self._zones_union if zones_only else self.keep_out
-        hidden = region.buffer(-float(reach_m))
-        if hidden.is_empty:
-            return share
-        ox, oy = grid.origin_m
-        c = grid.cell_m
-        x0, y0, x1, y1 = hidden.bounds
-        c0, c1 = max(int((x0 - ox) // c), 0), min(int((x1 - ox) // c) + 1, grid.nx)
-        r0, r1 = max(int((y0 - oy) // c), 0), min(int((y1 - oy) // c) + 1, grid.ny)
-        if c0 >= c1 or r0 >= r1:
-            return share
-        if samples_per_cell is not None:  # exact point distances, no polygon approximation
-            s = int(samples_per_cell)
-            h = c / s
-            xs = ox + c0 * c + (np.arange((c1 - c0) * s) + 0.5) * h
-            ys = oy + r0 * c + (np.arange((r1 - r0) * s) + 0.5) * h
-            px, py = np.meshgrid(xs, ys)
-            deep = shapely.contains_xy(region, px, py)
-            deep[deep] = shapely.distance(region.boundary, shapely.points(px[deep], py[deep])) > (
-                float(reach_m)
-            )
-            hid = deep.reshape(r1 - r0, s, c1 - c0, s).sum(axis=(1, 3))
-            share[r0:r1, c0:c1] = 1.0 - hid / float(s * s)
-            return share
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        cells = shapely.box(ox + cc * c, oy + rr * c, ox + (cc + 1) * c, oy + (rr + 1) * c)
-        share[r0:r1, c0:c1] = 1.0 - shapely.area(shapely.intersection(cells, hidden)) / (c * c)
-        return np.clip(share, 0.0, 1.0)
+        return reach_share(region, grid, reach_m, samples_per_cell=samples_per_cell)

@@ -110,12 +110,15 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from scipy.optimize import brentq
 
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError, check_positive
+from poc_env.geometry import as_polygon
 from poc_env.theory.detection import DetectionLaw, detection_law
 from poc_env.theory.probability_map import Grid
+from poc_env.theory.regions import reach_share
 from poc_env.theory.search_theory import pod_from_coverage
 
 
@@ -292,7 +295,7 @@ def zone_reach(scenario: Scenario, prior) -> tuple[np.ndarray, np.ndarray]:
     """The cell masses and cell areas a flight keeping eq. 20 can detect (module docstring,
     "With no-fly zones"): ``(s m, s a)`` with ``s`` the share of each cell's sample points
     within the detection law's reach of the zones' outside
-    (:meth:`poc_env.sim.routing.ZoneRouter.reach_share`); cells with ``s = 0`` keep their
+    (:func:`poc_env.theory.regions.reach_share`); cells with ``s = 0`` keep their
     area (and no mass). Without zones: ``(prior, cell area)`` unchanged, so every bound on
     them is the zone-free bound to the last digit.
 
@@ -310,20 +313,21 @@ def zone_reach(scenario: Scenario, prior) -> tuple[np.ndarray, np.ndarray]:
         The masses and the areas (m^2), both of the grid's shape; pass them as ``prior`` and
         ``cell_area_m2`` to :func:`physical_optimum` or :func:`reach_optimum`.
     """
-    from poc_env.sim.routing import ZoneRouter  # routing imports the simulator's constraints
-
     grid = Grid.from_config(scenario.map)
     m = np.asarray(prior, dtype=float)
     if m.shape != grid.shape:
         raise ConfigError("prior", m.shape, f"an array of the grid's shape {grid.shape}")
     area = np.full(grid.shape, grid.cell_area_m2)
-    router = ZoneRouter.for_scenario(scenario)
-    if not router.active:
+    polys = scenario.map.no_fly_zones_m
+    if not len(polys):
         return m, area
+    zones = shapely.union_all(  # as the router builds them (ZoneRouter.zones)
+        [as_polygon(z, f"no_fly_zones[{i}]") for i, z in enumerate(polys)]
+    )
     sen = scenario.sensor
     w = float(sen.sweep_width_m)
     rho = float(detection_law(sen.law).reach(w, sen.cutoff_sweep_widths * w, grid.cell_m))
-    share = router.reach_share(grid, rho, zones_only=True, samples_per_cell=sen.samples_per_cell)
+    share = reach_share(zones, grid, rho, samples_per_cell=sen.samples_per_cell)
     return m * share, np.where(share > 0, area * share, area)
 
 
