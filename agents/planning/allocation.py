@@ -566,7 +566,7 @@ def make_allocation_plan(
     router = ZoneRouter.for_scenario(sc)
     full_prior = prior
     if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
-        prior = prior * router.reach_share(grid, 0.5 * sc.sensor.sweep_width_m)
+        prior = prior * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
         if reason is None and float(prior.sum()) <= 0:
             reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav

@@ -123,7 +123,7 @@ def make_plan(
     router = ZoneRouter.for_scenario(sc)
     if router.active:  # POC inside a zone counts as far as the sensor reaches it from outside
         prior = full_prior * router.reach_share(
-            Grid.from_config(sc.map), 0.5 * sc.sensor.sweep_width_m
+            Grid.from_config(sc.map), reach_m=0.5 * sc.sensor.sweep_width_m
         )
     obj = PlanObjective(sc, prior, uavs=uavs, bound_prior=full_prior)
     pl = preset_settings(preset, sc.planner)

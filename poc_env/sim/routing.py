@@ -484,8 +484,8 @@ class ZoneRouter:
     def reach_share(
         self,
         grid: Any,
-        reach_m: float,
         *,
+        reach_m: float,
         zones_only: bool = False,
         samples_per_cell: int | None = None,
     ) -> np.ndarray:
@@ -500,7 +500,9 @@ class ZoneRouter:
         reach_m:
             The sensor's lateral range: ``W / 2`` in the planners' model (a sweep of width
             ``W``); the detection law's reach for the bounds
-            (:func:`poc_env.theory.bound.zone_reach`).
+            (:func:`poc_env.theory.bound.zone_reach`). Keyword-only: the method used to take
+            the sweep width ``W`` in its place, and an old call now fails instead of
+            discounting with twice the reach.
         zones_only:
             Measure depth into the zones themselves (what the environment forbids, eq. 20)
             instead of the keep-out area (the zones grown by the clearance, where the planners

@@ -114,10 +114,10 @@ def test_zone_reach_credits_the_law_reach_and_nothing_without_zones():
     # a reach of 11 km: in cell (3, 3) the points at 11.875 km or deeper on both axes
     # (3 x 3 of 16) are hidden
     router = ZoneRouter.for_scenario(big)
-    part = router.reach_share(grid, 11000.0, zones_only=True, samples_per_cell=4)
+    part = router.reach_share(grid, reach_m=11000.0, zones_only=True, samples_per_cell=4)
     assert part[3, 3] == 7 / 16
     # the planners' W/2 discount hides far more than the sensor's reach does
-    planner = ZoneRouter.for_scenario(big).reach_share(grid, 0.5 * sc.sensor.sweep_width_m)
+    planner = ZoneRouter.for_scenario(big).reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
     assert planner.sum() < share.sum()
 
 
@@ -134,7 +134,7 @@ def test_de_objective_bound_holds_for_a_flight_along_a_zone_edge():
     prior = np.zeros(grid.shape)
     prior[2, 3] = 0.9  # y 10-15 km, x 15-20 km: 0.6-4.4 km inside the zone's south edge
     prior[0, 0] = 0.1
-    share = ZoneRouter.for_scenario(sc).reach_share(grid, 0.5 * sc.sensor.sweep_width_m)
+    share = ZoneRouter.for_scenario(sc).reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
     obj = PlanObjective(sc, prior * share, bound_prior=prior)  # as the DE planner builds it
     x = obj.bounds.mean(axis=1)
     effort = obj.sweep_width_m * float(np.sum(obj.evaluate(x[None]).search_length_m))

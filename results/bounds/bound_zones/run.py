@@ -36,7 +36,7 @@ def old_zone_reach(sc, prior):
     m = np.asarray(prior, dtype=float)
     router = ZoneRouter.for_scenario(sc)
     if router.active:
-        m = m * router.reach_share(grid, 0.5 * sc.sensor.sweep_width_m)
+        m = m * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
     return m, np.full(grid.shape, grid.cell_area_m2)
 
 
