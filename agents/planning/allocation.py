@@ -112,7 +112,7 @@ from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.bound import reach_optimum
+from poc_env.theory.bound import reach_optimum, zone_reach
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
@@ -566,7 +566,7 @@ def make_allocation_plan(
     router = ZoneRouter.for_scenario(sc)
     full_prior = prior
     if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
-        prior = prior * router.reach_share(grid, sc.sensor.sweep_width_m)
+        prior = prior * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
         if reason is None and float(prior.sum()) <= 0:
             reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav
@@ -655,7 +655,9 @@ def make_allocation_plan(
                 val = _cell_pos(paths, takeoff, landing, prior, grid, w, law)
                 if val > best_val:
                     best, best_val, eta, chosen = res, val, cand, k
-        fleet = reach_optimum(prior, grid.cell_area_m2, tau, np.full(n, w * v.line), budget, law)
+        # the bound credits what the environment's sensor detects from outside the zones (its
+        # law's reach), not the planner's W/2 discount above (zone_reach; unchanged without)
+        fleet = reach_optimum(*zone_reach(sc, full_prior), tau, np.full(n, w * v.line), budget, law)
         if best is None or not any(best[2]):
             reason = "no UAV can fly any search line within 0.85 T (eq. 18)"
             best = None

@@ -138,7 +138,7 @@ def make_greedy_rectangles_plan(
         raise ConfigError("prior", "array", "finite cell masses >= 0")
     router = ZoneRouter.for_scenario(sc)
     if router.active:
-        prior = prior * router.reach_share(grid, sc.sensor.sweep_width_m)
+        prior = prior * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
     u = sc.uav
     w = sc.sensor.sweep_width_m
     v = plan_speeds(sc, speed)

@@ -91,7 +91,7 @@ from poc_env.agents.planning.geography import probability
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError
 from poc_env.geometry import rectangle_polygon
-from poc_env.theory.bound import physical_optimum
+from poc_env.theory.bound import physical_optimum, zone_reach
 from poc_env.theory.patterns import MAX_LINES, parallel_line_search
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.regions import area_fractions, exclusive_fractions
@@ -262,6 +262,11 @@ class PlanObjective:
     alpha, beta, penalty_m:
         Weights of eq. 25 and the penalty factor M of eq. 26 (default: the scenario's
         ``planner.alpha``, ``planner.beta`` and ``planner.penalty_m``; never the RL reward's).
+    bound_prior:
+        The prior :meth:`upper_bound` bounds (default ``prior``): the planner passes the
+        undiscounted prior when ``prior`` carries its no-fly-zone discount, and the bound
+        credits what the sensor detects from outside the zones
+        (:func:`poc_env.theory.bound.zone_reach`).
 
     Raises
     ------
@@ -286,6 +291,7 @@ class PlanObjective:
         alpha: float | None = None,
         beta: float | None = None,
         penalty_m: float | None = None,
+        bound_prior: np.ndarray | None = None,
     ) -> None:
         sc = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
         if uavs is not None:
@@ -302,6 +308,9 @@ class PlanObjective:
                 "prior", getattr(p, "shape", p), f"finite values >= 0 of shape {self.grid.shape}"
             )
         self.prior = p
+        #: the prior :meth:`upper_bound` bounds (the planner's ``prior`` may be discounted
+        #: for no-fly zones; the bound takes the undiscounted one and :func:`zone_reach`)
+        self.bound_prior = p if bound_prior is None else np.asarray(bound_prior, dtype=float)
         self._prior_flat = np.ascontiguousarray(p, dtype=float).reshape(-1)
         self._prior_grid = np.ascontiguousarray(p, dtype=float)
         self._box = np.array(self.grid.bounds, dtype=float)
@@ -525,10 +534,13 @@ class PlanObjective:
         return out
 
     def upper_bound(self, x) -> float:
-        """The physical optimum (:func:`physical_optimum`) for the plan's total effort."""
+        """The physical optimum (:func:`physical_optimum`) for the plan's total effort, on
+        what a flight keeping eq. 20 can detect of :attr:`bound_prior` (:func:`zone_reach`:
+        the whole prior without no-fly zones)."""
         sc = self.evaluate(np.asarray(x, dtype=float).reshape(1, -1))
         effort = float(self.sweep_width_m * np.sum(sc.search_length_m))
-        return physical_optimum(self.prior, self.grid.cell_area_m2, effort, self.law).pos
+        mass, area = zone_reach(self.scenario, self.bound_prior)
+        return physical_optimum(mass, area, effort, self.law).pos
 
     def scalar_score(self, x) -> float:
         """Eq. 26 for one individual, the slow obviously-correct way (the tests' reference).

@@ -122,8 +122,10 @@ def make_plan(
     full_prior = np.asarray(prior, dtype=float)
     router = ZoneRouter.for_scenario(sc)
     if router.active:  # POC inside a zone counts as far as the sensor reaches it from outside
-        prior = full_prior * router.reach_share(Grid.from_config(sc.map), sc.sensor.sweep_width_m)
-    obj = PlanObjective(sc, prior, uavs=uavs)
+        prior = full_prior * router.reach_share(
+            Grid.from_config(sc.map), reach_m=0.5 * sc.sensor.sweep_width_m
+        )
+    obj = PlanObjective(sc, prior, uavs=uavs, bound_prior=full_prior)
     pl = preset_settings(preset, sc.planner)
     settings: dict[str, Any] = {
         "popsize": pl["popsize"]

@@ -25,9 +25,12 @@ follower's transit legs (:mod:`poc_env.sim.autopilot`).
 - **Clipping** (:meth:`ZoneRouter.reroute`): every leg of a polyline is cut to its parts
   outside the keep-out area and consecutive parts are joined by shortest paths, so search legs
   fly only searchable airspace and transit goes around.
-- **Reach** (:meth:`ZoneRouter.reach_share`): the share of each cell's area within ``W/2`` of
-  flyable airspace, i.e. the part of a zone's interior a sensor of sweep width ``W`` reaches from
-  outside; planners multiply the prior by it (the zone-interior mass discount).
+- **Reach** (:meth:`ZoneRouter.reach_share`): the share of each cell within a lateral range
+  of flyable airspace, i.e. the part of a zone's interior a sensor reaches from outside.
+  Planners multiply the prior by the share of each cell's area within ``W/2`` of the keep-out
+  area's outside (the zone-interior mass discount, a conservative model); the bounds
+  (:func:`poc_env.theory.bound.zone_reach`) use the share of its sample points within the
+  detection law's reach (the inverse cube's cut-off) of the zones' outside.
 
 **Speed** (issue 24: planning with zones within 2 s on ``paper_6_2``). A segment's test
 against the obstacle, the keep-out area or the zones (shapely's ``intersects``) first goes
@@ -55,6 +58,7 @@ from shapely.geometry import LineString, Point
 from poc_env._kernels.segments import edge_contacts
 from poc_env.geometry import as_polygon
 from poc_env.sim.constraints import NoFlyZones
+from poc_env.theory.regions import reach_share
 
 __all__ = ["ZoneRouter", "clearance_m"]
 
@@ -477,23 +481,37 @@ class ZoneRouter:
             return True
         return not bool(shapely.intersects(LineString(pts), shapely.union_all(self.zones)))
 
-    def reach_share(self, grid: Any, sweep_width: float) -> np.ndarray:
-        """(ny, nx): the share of each cell's area within ``W/2`` of flyable airspace (1 away
-        from zones): the part of a zone's interior a sensor reaches from outside."""
-        share = np.ones(grid.shape)
+    def reach_share(
+        self,
+        grid: Any,
+        *,
+        reach_m: float,
+        zones_only: bool = False,
+        samples_per_cell: int | None = None,
+    ) -> np.ndarray:
+        """(ny, nx): the share of each cell within ``reach_m`` of flyable airspace (1 away from
+        zones): the part of a zone's interior a sensor of lateral range ``reach_m`` reaches from
+        outside (:func:`poc_env.theory.regions.reach_share`, the one implementation).
+
+        Parameters
+        ----------
+        grid:
+            The :class:`~poc_env.theory.probability_map.Grid` of the cells.
+        reach_m:
+            The sensor's lateral range: ``W / 2`` in the planners' model (a sweep of width
+            ``W``); the detection law's reach for the bounds
+            (:func:`poc_env.theory.bound.zone_reach`). Keyword-only: the method used to take
+            the sweep width ``W`` in its place, and an old call now fails instead of
+            discounting with twice the reach.
+        zones_only:
+            Measure depth into the zones themselves (what the environment forbids, eq. 20)
+            instead of the keep-out area (the zones grown by the clearance, where the planners
+            route). The bounds use the zones: a flight may pass closer than the clearance.
+        samples_per_cell:
+            ``None``: the share of each cell's area (the planners' measure); an integer: the
+            share of its sample points (the bounds' measure).
+        """
         if not self.active:
-            return share
-        hidden = self.keep_out.buffer(-0.5 * float(sweep_width))
-        if hidden.is_empty:
-            return share
-        ox, oy = grid.origin_m
-        c = grid.cell_m
-        x0, y0, x1, y1 = hidden.bounds
-        c0, c1 = max(int((x0 - ox) // c), 0), min(int((x1 - ox) // c) + 1, grid.nx)
-        r0, r1 = max(int((y0 - oy) // c), 0), min(int((y1 - oy) // c) + 1, grid.ny)
-        if c0 >= c1 or r0 >= r1:
-            return share
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        cells = shapely.box(ox + cc * c, oy + rr * c, ox + (cc + 1) * c, oy + (rr + 1) * c)
-        share[r0:r1, c0:c1] = 1.0 - shapely.area(shapely.intersection(cells, hidden)) / (c * c)
-        return np.clip(share, 0.0, 1.0)
+            return np.ones(grid.shape)
+        region = self._zones_union if zones_only else self.keep_out
+        return reach_share(region, grid, reach_m, samples_per_cell=samples_per_cell)

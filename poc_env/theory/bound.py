@@ -79,6 +79,20 @@ rho)^+ / v_max + (d(landing, j) - rho)^+ / v_c`` with the usable endurance as bu
 what a plan that keeps the rules can reach and normalises plans (``plan`` and ``evaluate`` print
 it beside the honest and reach-aware bounds).
 
+**With no-fly zones** (:func:`zone_reach`). A flight that keeps eq. 20 never enters a zone,
+so it detects a sample point only from track outside the zones, within the law's reach ``rho``
+(:attr:`DetectionLaw.reach <poc_env.theory.detection.DetectionLaw>`: W/2 for the definite
+range, the lateral cut-off ``cutoff_sweep_widths x W`` for the inverse cube, the cell's
+diagonal for the exponential law). A cell's sample points deeper than ``rho`` inside the zones
+are never detected; the rest, a share ``s_j`` of its points, is a sub-cell of mass ``s_j m_j``
+and area ``s_j a_j`` (the cell's density). Every bound above on those sub-cells bounds every
+flight that keeps eq. 20: the hidden points add nothing to its POS and the sub-cell is no
+larger than where its detections happen. The planners' own zone discount
+(:meth:`poc_env.sim.routing.ZoneRouter.reach_share` at ``W/2`` of the keep-out area, by area)
+is smaller -- a conservative planning model, not a bound: the inverse-cube sensor detects up to
+its cut-off (4 W by default) from a zone's edge. Bounds that ignore the zones (honest,
+reach-aware, rule-aware) stay valid, looser, and also bound flights that enter zones.
+
 The solver (:func:`reach_optimum`) is exact: the feasible efforts form a polymatroid (its rank is
 ``g(A) = sum_i r (t_i - min_{j in A} tau_ij)^+``) and the decomposition algorithm for separable
 concave objectives over a polymatroid reduces it to water-fillings (:func:`physical_optimum`)
@@ -96,12 +110,15 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from scipy.optimize import brentq
 
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError, check_positive
+from poc_env.geometry import as_polygon
 from poc_env.theory.detection import DetectionLaw, detection_law
 from poc_env.theory.probability_map import Grid
+from poc_env.theory.regions import reach_share
 from poc_env.theory.search_theory import pod_from_coverage
 
 
@@ -272,6 +289,46 @@ def env_limits(scenario: Scenario) -> EnvLimits:
         spill_m=spill,
         law=entry.name,
     )
+
+
+def zone_reach(scenario: Scenario, prior) -> tuple[np.ndarray, np.ndarray]:
+    """The cell masses and cell areas a flight keeping eq. 20 can detect (module docstring,
+    "With no-fly zones"): ``(s m, s a)`` with ``s`` the share of each cell's sample points
+    within the detection law's reach of the zones' outside
+    (:func:`poc_env.theory.regions.reach_share`); cells with ``s = 0`` keep their
+    area (and no mass). Without zones: ``(prior, cell area)`` unchanged, so every bound on
+    them is the zone-free bound to the last digit.
+
+    Parameters
+    ----------
+    scenario:
+        A :class:`poc_env.config.Scenario` (its zones, sensor law, sweep width, cut-off and
+        samples per cell).
+    prior:
+        Cell masses of the scenario's grid shape.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The masses and the areas (m^2), both of the grid's shape; pass them as ``prior`` and
+        ``cell_area_m2`` to :func:`physical_optimum` or :func:`reach_optimum`.
+    """
+    grid = Grid.from_config(scenario.map)
+    m = np.asarray(prior, dtype=float)
+    if m.shape != grid.shape:
+        raise ConfigError("prior", m.shape, f"an array of the grid's shape {grid.shape}")
+    area = np.full(grid.shape, grid.cell_area_m2)
+    polys = scenario.map.no_fly_zones_m
+    if not len(polys):
+        return m, area
+    zones = shapely.union_all(  # as the router builds them (ZoneRouter.zones)
+        [as_polygon(z, f"no_fly_zones[{i}]") for i, z in enumerate(polys)]
+    )
+    sen = scenario.sensor
+    w = float(sen.sweep_width_m)
+    rho = float(detection_law(sen.law).reach(w, sen.cutoff_sweep_widths * w, grid.cell_m))
+    share = reach_share(zones, grid, rho, samples_per_cell=sen.samples_per_cell)
+    return m * share, np.where(share > 0, area * share, area)
 
 
 def honest_optimum(scenario: Scenario, prior, sorties: int = 1) -> Bound:

@@ -439,3 +439,61 @@ def average_poc(regions: Region | Sequence[Region], grid: Grid, prior: np.ndarra
     if denominator <= 0:
         raise GeometryError("regions: total area is zero")
     return numerator / denominator
+
+
+def reach_share(
+    region: Any, grid: Grid, reach_m: float, samples_per_cell: int | None = None
+) -> np.ndarray:
+    """(ny, nx): the share of each cell within ``reach_m`` of the outside of ``region`` (a
+    shapely geometry: no-fly zones, or the zones grown by a clearance): the part of a zone's
+    interior a sensor of lateral range ``reach_m`` reaches from outside it (eq. 20). The one
+    implementation of the zone reach share; :meth:`poc_env.sim.routing.ZoneRouter.reach_share`
+    gives the planners' and :func:`poc_env.theory.bound.zone_reach` the bounds'.
+
+    Parameters
+    ----------
+    region:
+        The area nothing may fly in (shapely (multi)polygon).
+    grid:
+        The cells.
+    reach_m:
+        The sensor's lateral range (m).
+    samples_per_cell:
+        ``None``: the share of each cell's **area** outside ``region`` shrunk by ``reach_m``
+        (shapely's buffer; the planners' measure). An integer ``s``: the share of the cell's
+        ``s x s`` **sample points** (the centres of its fine cells, where the environment puts
+        the target, :mod:`poc_env.sim.core`) outside ``region`` or within ``reach_m`` of its
+        boundary, by exact point distances (the bounds' measure).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shares in [0, 1], 1 away from ``region``.
+    """
+    share = np.ones(grid.shape)
+    hidden = region.buffer(-float(reach_m))
+    if hidden.is_empty:
+        return share
+    ox, oy = grid.origin_m
+    c = grid.cell_m
+    x0, y0, x1, y1 = hidden.bounds
+    c0, c1 = max(int((x0 - ox) // c), 0), min(int((x1 - ox) // c) + 1, grid.nx)
+    r0, r1 = max(int((y0 - oy) // c), 0), min(int((y1 - oy) // c) + 1, grid.ny)
+    if c0 >= c1 or r0 >= r1:
+        return share
+    if samples_per_cell is not None:  # exact point distances, no polygon approximation
+        s = int(samples_per_cell)
+        h = c / s
+        xs = ox + c0 * c + (np.arange((c1 - c0) * s) + 0.5) * h
+        ys = oy + r0 * c + (np.arange((r1 - r0) * s) + 0.5) * h
+        px, py = np.meshgrid(xs, ys)
+        deep = shapely.contains_xy(region, px, py)
+        far = shapely.distance(region.boundary, shapely.points(px[deep], py[deep]))
+        deep[deep] = far > float(reach_m)
+        hid = deep.reshape(r1 - r0, s, c1 - c0, s).sum(axis=(1, 3))
+        share[r0:r1, c0:c1] = 1.0 - hid / float(s * s)
+        return share
+    rr, cc = np.mgrid[r0:r1, c0:c1]
+    cells = shapely.box(ox + cc * c, oy + rr * c, ox + (cc + 1) * c, oy + (rr + 1) * c)
+    share[r0:r1, c0:c1] = 1.0 - shapely.area(shapely.intersection(cells, hidden)) / (c * c)
+    return np.clip(share, 0.0, 1.0)

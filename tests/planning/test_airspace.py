@@ -51,7 +51,7 @@ def test_router_goes_around_and_stays_in_the_area():
 def test_reach_share_discounts_only_what_the_sensor_cannot_reach():
     sc = load_scenario("paper_6_2", {"map.no_fly_zones_km": [[[60, 20], [90, 20], [90, 120],
                                                                 [60, 120]]]})  # fmt: skip
-    share = ZoneRouter.for_scenario(sc).reach_share(Grid.from_config(sc.map), 5000.0)
+    share = ZoneRouter.for_scenario(sc).reach_share(Grid.from_config(sc.map), reach_m=2500.0)
     assert share[10, 14] == 0.0  # deep inside
     assert share[10, 5] == 1.0 and share[0, 30] == 1.0  # far away
     assert 0.0 < share[10, 11] < 1.0  # the rim: reached from outside in part
