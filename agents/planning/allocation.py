@@ -105,7 +105,6 @@ from poc_env.agents.planning.refine import (
     refine_routes,
     route_fits,
     route_time,
-    track,
 )
 from poc_env.agents.planning.regrade import regrade_routes
 from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
@@ -683,6 +682,8 @@ def make_allocation_plan(
 
         gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed)
         g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
+        if router.active:  # its UAVs in lanes too (i24-deconflict: it routes each alone)
+            g_routes = _around_all(g_routes)
         g_val = _cell_pos(g_routes, takeoff, landing, prior, grid, w, law)
         starts.append((g_val, "greedy_rectangles", g_routes, _lines_of(g_routes)))
     if best is not None and box_start:

@@ -21,8 +21,7 @@ import numpy as np
 import shapely
 
 from poc_env.agents.planning.flight_rules import Speeds
-from poc_env.agents.planning.flight_rules import reserve_s as _reserve
-from poc_env.agents.planning.refine import arrival_times, route_fits, track
+from poc_env.agents.planning.refine import track
 from poc_env.config import Scenario
 from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
@@ -148,11 +147,27 @@ def lanes(path, lane: int, d_s: float, router: ZoneRouter) -> np.ndarray:
     return out
 
 
+def _on_path(wps: np.ndarray, other, takeoff, landing, d_s: float) -> bool:
+    """Whether most of the waypoints ``wps`` ``(m, 2)`` lie within ``d_s`` of the flight path of
+    the route ``other`` (take-off, waypoints, landing): the same box, or the same lines."""
+    if not len(other):
+        return False
+    path = np.vstack([takeoff, np.asarray(other, dtype=float).reshape(-1, 2), landing])
+    a, b = path[:-1], path[1:]
+    d = b - a
+    t = np.einsum("mpk,pk->mp", wps[:, None] - a[None], d) / np.maximum(np.sum(d * d, 1), 1e-12)
+    near = a[None] + np.clip(t, 0.0, 1.0)[..., None] * d[None]
+    gap = np.hypot(*np.moveaxis(wps[:, None] - near, -1, 0)).min(axis=1)
+    return bool(np.mean(gap < d_s) > 0.5)
+
+
 def in_lanes(sc: Scenario, routes, v: Speeds, around) -> list[list[list[float]]]:
     """``routes`` made flyable round the zones UAV by UAV, each in the lowest lane
     (:func:`lanes`) whose planned flight has no conflict (:func:`conflicts`) with the UAVs
-    before it; failing that, the whole route moved by ``LANE x d_s`` or twice that along x or
-    y (two UAVs given the same box fly it as two interleaved ones); failing that, the
+    before it; failing that, the same in reverse (two UAVs given the same lines fly them from
+    opposite ends); failing that, if most of its waypoints lie on the path of a UAV before it
+    (the same box twice, :func:`_on_path`), the whole route moved by ``LANE x d_s`` or twice
+    that along x or y (two interleaved boxes); failing that, the
     candidate of fewest conflicts (the first on ties: lane 0 before the others). A candidate is
     taken only if eq. 17-18 cut no more of the route than in lane 0 (a lane costs a little
     transit, never search) and the moved route stays in eq. 20's operating area.
@@ -177,7 +192,9 @@ def in_lanes(sc: Scenario, routes, v: Speeds, around) -> list[list[list[float]]]
             out.append([])
             continue
         wps0 = np.asarray(routes[k], dtype=float).reshape(-1, 2)
-        cands = [(lane, wps0) for lane in range(MAX_LANES)] + [(0, wps0 + s) for s in shifts]
+        cands = [(lane, q) for q in (wps0, wps0[::-1]) for lane in range(MAX_LANES)]
+        if any(_on_path(wps0, out[j], takeoff[j], landing[j], d_s) for j in range(k)):
+            cands += [(0, wps0 + s) for s in shifts]  # the same box as a UAV before it
         best: tuple[int, list, np.ndarray, np.ndarray] | None = None
         for lane, q in cands:
             if np.any((q[:, 0] < x0) | (q[:, 0] > x1) | (q[:, 1] < y0) | (q[:, 1] > y1)):
