@@ -28,7 +28,10 @@
    goes to the airfield of least out-and-back distance and each field's lines are chained and
    cut among that field's UAVs; lines a field cannot fly go to UAVs left without a piece. Contiguous
    pieces put UAVs on different lines of the route at different times (deconfliction by
-   construction; flown separation is measured, see docs/PLANNER.md).
+   construction; flown separation is measured, see docs/PLANNER.md). With no-fly zones every
+   start's routes are made flyable round them UAV by UAV, each in its own lane where the
+   router's way round (the same for every UAV) would break eq. 21 at the planned positions
+   (:func:`poc_env.agents.planning.deconflict.in_lanes`; i24-deconflict).
 5. **Effort scale.** Turns, connections and the cut into pieces cost time the allocation does
    not see, so steps 1-4 run for each ``eta`` of ``options.etas`` and each ``K`` and the plan keeps
    the one of highest planned POS (lines no UAV can fit are left unflown).
