@@ -20,12 +20,19 @@ for n in (12, 24):
     p = make_allocation_plan(sc, prior=prior)
     to = np.asarray(sc.takeoff_m, float).reshape(-1, 2)
     la = np.asarray(sc.landing_m, float).reshape(-1, 2)
-    paths = [[to[k], *u["waypoints_m"], la[k]] if u["waypoints_m"] else [] for k, u in enumerate(p["uavs"])]
+    paths = [
+        [to[k], *u["waypoints_m"], la[k]] if u["waypoints_m"] else []
+        for k, u in enumerate(p["uavs"])
+    ]
     _, found = sampled_sweep(sc, g, prior, paths)
     got = sum(found)
-    print(f"uavs {n} posc {p['posc']:.4f} reachable {float((prior * share).sum()):.4f} "
-          f"idle {sum(1 for u in p['uavs'] if not u['waypoints_m'])}")
+    print(
+        f"uavs {n} posc {p['posc']:.4f} reachable {float((prior * share).sum()):.4f} "
+        f"idle {sum(1 for u in p['uavs'] if not u['waypoints_m'])}"
+    )
     for x, y, _ in SIGHTINGS:
         i, j = int(y // 10), int(x // 10)
-        print(f"  sighting ({x}, {y}) km: mass {prior[i, j]:.4f} reachable share {share[i, j]:.3f} "
-              f"found {got[i, j]:.4f}")
+        print(
+            f"  sighting ({x}, {y}) km: mass {prior[i, j]:.4f} reachable share {share[i, j]:.3f} "
+            f"found {got[i, j]:.4f}"
+        )
