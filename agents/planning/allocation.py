@@ -28,7 +28,10 @@
    goes to the airfield of least out-and-back distance and each field's lines are chained and
    cut among that field's UAVs; lines a field cannot fly go to UAVs left without a piece. Contiguous
    pieces put UAVs on different lines of the route at different times (deconfliction by
-   construction; flown separation is measured, see docs/PLANNER.md).
+   construction; flown separation is measured, see docs/PLANNER.md). With no-fly zones every
+   start's routes are made flyable round them UAV by UAV, each in its own lane where the
+   router's way round (the same for every UAV) would break eq. 21 at the planned positions
+   (:func:`poc_env.agents.planning.deconflict.in_lanes`; i24-deconflict).
 5. **Effort scale.** Turns, connections and the cut into pieces cost time the allocation does
    not see, so steps 1-4 run for each ``eta`` of ``options.etas`` and each ``K`` and the plan keeps
    the one of highest planned POS (lines no UAV can fit are left unflown).
@@ -92,6 +95,7 @@ import numpy as np
 from poc_env.agents.mission.plan import SCHEMA
 from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sampled_boxes
 from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
+from poc_env.agents.planning.deconflict import FAN_DEG, in_lanes, lanes, planned_positions
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -104,7 +108,6 @@ from poc_env.agents.planning.refine import (
     refine_routes,
     route_fits,
     route_time,
-    track,
 )
 from poc_env.agents.planning.regrade import regrade_routes
 from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
@@ -124,8 +127,6 @@ LEVELS = PlanOptions.levels
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
-#: least bearing difference between field-mates flying out (degrees, :func:`_fan_out`).
-FAN_DEG = 20.0
 
 
 def _lines_of(routes) -> list[list[int]]:
@@ -434,27 +435,16 @@ def violation_penalty(
     route, not its timing, to the second) over ``alpha`` x UAVs (team
     credit: every UAV is credited the swarm's POS, so this is the reward's own exchange rate),
     times ``options.penalty_weight``."""
-    u = sc.uav
     opt = PlanOptions() if options is None else options
     v = plan_speeds(sc, SPEED) if v is None else v
-    grid = Grid.from_config(sc.map)
-    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
-    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
-    n = len(takeoff)
-    heading0 = takeoff_heading(grid.bounds, takeoff)
     air = Airspace(
         sc.episode.dt_s,
         opt.penalty_separation * sc.constraints.safety_distance_m,
         opt.penalty_range * sc.comms.range_m,
         sc.comms.min_neighbours,
     )
-    times = np.arange(int(np.ceil(u.usable_endurance_s / air.dt_s)) + 1) * air.dt_s
-    pos = np.zeros((len(times), n, 2))
-    act = np.zeros((len(times), n), dtype=bool)
-    for k in range(n):
-        if len(routes[k]):
-            path = np.vstack([takeoff[k], np.asarray(routes[k], dtype=float), landing[k]])
-            pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
+    _, pos, act = planned_positions(sc, routes, v, air.dt_s)
+    n = pos.shape[1]
     rw = sc.reward
     rate = opt.penalty_weight * rw.violation_penalty / (max(rw.alpha, 1e-12) * n)
     return rate * air.violations(pos, act)
@@ -609,28 +599,36 @@ def make_allocation_plan(
         if swap:
             paths = [[[q[1], q[0]] for q in path] for path in paths]
         if router.active:
-            paths = [_around(k, paths[k]) if paths[k] else [] for k in range(n)]
+            paths = _around_all(paths)
         return paths, idx
 
     heading0 = takeoff_heading(grid.bounds, takeoff)
 
-    def _around(k: int, wps) -> list[list[float]]:
-        """UAV ``k``'s waypoints made flyable around the zones, cut to fit eq. 18."""
+    def _around(k: int, wps, lane: int = 0) -> list[list[float]]:
+        """UAV ``k``'s waypoints made flyable around the zones in lane ``lane``
+        (:func:`~poc_env.agents.planning.deconflict.lanes`), cut to fit eq. 18."""
         path = fly_around(
             router,
             np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]]),
             lambda p: route_fits(
                 p, v, u.max_turn_rate_rad_s, u.usable_endurance_s, _reserve(sc), heading0[k]
             ),
+            lambda p: lanes(p, lane, sc.constraints.safety_distance_m, router),
         )
         return [[float(a), float(b)] for a, b in path[1:-1]]
+
+    def _around_all(rs) -> list[list[list[float]]]:
+        """Every UAV's waypoints made flyable around the zones, each in its own lane where the
+        router's way round would put it within d_s of another (i24-deconflict: the router
+        gives field-mates the same way round, eq. 21)."""
+        return in_lanes(sc, rs, v, _around)
 
     def _lawnmower_start(rs) -> list[list[list[float]]]:
         """A start's lawnmower routes fitted (:func:`fit_lawnmowers`) and routed around the
         zones."""
         rs = fit_lawnmowers(rs, takeoff, landing, sc, v, heading0, opt)
         if router.active:
-            rs = [_around(k, rs[k]) if rs[k] else [] for k in range(n)]
+            rs = _around_all(rs)
         return rs
 
     eta = 0.0
@@ -689,6 +687,8 @@ def make_allocation_plan(
 
         gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed)
         g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
+        if router.active:  # its UAVs in lanes too (i24-deconflict: it routes each alone)
+            g_routes = _around_all(g_routes)
         g_val = _cell_pos(g_routes, takeoff, landing, prior, grid, w, law)
         starts.append((g_val, "greedy_rectangles", g_routes, _lines_of(g_routes)))
     if best is not None and box_start:
@@ -786,7 +786,7 @@ def make_allocation_plan(
                 ),
             )
             if router.active:  # the refined routes made flyable: they keep c (issue 24)
-                r_routes = [_around(k, r_routes[k]) if r_routes[k] else [] for k in range(n)]
+                r_routes = _around_all(r_routes)
             # the refinement scores W x length per cell; kept only if the environment's model
             # agrees (on cells wider than W it can lose: large_400 at 10 km, 0.463 -> 0.416)
             for was_refined in (True, False):

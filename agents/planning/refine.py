@@ -535,18 +535,25 @@ def refine_routes(
     return out, float(p_flat @ pod_from_coverage(total, law))
 
 
-def fly_around(router: ZoneRouter, path, fits) -> np.ndarray:
+def fly_around(router: ZoneRouter, path, fits, shape=None) -> np.ndarray:
     """``path`` (take-off, waypoints, landing) made flyable by ``router``
     (:meth:`~poc_env.sim.routing.ZoneRouter.reroute`: search legs clipped to searchable
     airspace, transit around the zones), keeping the longest prefix of its waypoints for which
-    ``fits(rerouted path)`` holds (bisection; none kept: take-off then landing, rerouted)."""
+    ``fits(rerouted path)`` holds (bisection; none kept: take-off then landing, rerouted).
+    ``shape``: applied to each rerouted path before ``fits`` (the allocation planner's lanes
+    round the zones, :func:`poc_env.agents.planning.deconflict.lanes`)."""
     p = np.asarray(path, dtype=float).reshape(-1, 2)
-    full = router.reroute(p)
+
+    def route(q: np.ndarray) -> np.ndarray:
+        r = router.reroute(q)
+        return r if shape is None else shape(r)
+
+    full = route(p)
     if len(p) <= 2 or fits(full):
         return full
 
     def cut(m: int) -> np.ndarray:
-        return router.reroute(np.vstack([p[: m + 1], p[-1:]]))
+        return route(np.vstack([p[: m + 1], p[-1:]]))
 
     lo, hi = 0, len(p) - 3  # lo: inner waypoints known to fit (0 is the fallback)
     while lo < hi:

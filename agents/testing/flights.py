@@ -3,7 +3,8 @@
 The airspace tests and scripts (``tests/conftest.py``'s ``fly`` fixture,
 ``tests/mission/airspace_figures.py``, ``tests/mission/nofly_ab.py``) all ask the same
 question of a flight: how many UAV-steps broke the no-fly rule or left the operating area
-(the environment's ``violation_no_fly`` / ``violation_out_of_bounds`` infos, eq. 20), how
+(the environment's ``violation_no_fly`` / ``violation_out_of_bounds`` infos, eq. 20) or came
+within d_s of another UAV (``violation_collision``, eq. 21), how
 many UAVs landed and what POS the episode reached. :func:`fly` is that loop, once.
 """
 
@@ -25,6 +26,8 @@ class Flight:
     landed: int
     #: POS at the episode's end (``posc``)
     posc: float
+    #: UAV-steps with ``violation_collision`` (eq. 21), summed likewise (i24-deconflict)
+    collision_steps: int = 0
 
 
 def fly(scenario: Any, policy: Any, seed: int = 0, prior: Any = None) -> Flight:
@@ -35,15 +38,16 @@ def fly(scenario: Any, policy: Any, seed: int = 0, prior: Any = None) -> Flight:
     from poc_env.envs.parallel import UAVSearchParallelEnv
 
     env = UAVSearchParallelEnv(scenario=scenario)
-    counts = [0, 0]
+    counts = [0, 0, 0]
 
     def count(info) -> None:
         counts[0] += sum(int(i["violation_no_fly"]) for i in info.values())
         counts[1] += sum(int(i["violation_out_of_bounds"]) for i in info.values())
+        counts[2] += sum(int(i["violation_collision"]) for i in info.values())
 
     play(env, policy, seed, prior, count)
-    nofly, oob = counts
+    nofly, oob, collision = counts
     st = env.sim_state
-    flight = Flight(nofly, oob, int(st.landed[0].sum()), float(st.posc[0]))
+    flight = Flight(nofly, oob, int(st.landed[0].sum()), float(st.posc[0]), collision)
     env.close()
     return flight
