@@ -21,7 +21,7 @@ from poc_env.agents.mission.formats import FORMATS
 from poc_env.agents.mission.formats.qgc import check_fences
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import load_plan
-from poc_env.agents.mission.terrain import SteepGlideWarning
+from poc_env.agents.mission.terrain import SteepGlideWarning, profiles_once
 from poc_env.errors import ConfigError, as_number
 
 
@@ -87,7 +87,7 @@ def export_plan(
         raise ConfigError("projection", projection, "aeqd or utm")
     if altitude_ref is not None:
         check_altitude_ref(altitude_ref)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), profiles_once():  # each UAV's terrain profile once
         if fmt != "qgc":  # the glide is PX4's check of the mission that flies: QGC's
             warnings.simplefilter("ignore", SteepGlideWarning)
         plan = load_plan(plan_path)
