@@ -820,6 +820,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         altitude_ref=args.altitude_ref,
         field_elevation_m=args.field_elevation_m,
         geofence=not args.no_geofence,
+        allow_infeasible=args.allow_infeasible,
         max_mission_items=args.max_mission_items,
     )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
@@ -1281,6 +1282,12 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="QGC: leave the inclusion fence out (by default a mission leaving its own "
         "operating area or crossing a no-fly zone is refused)",
+    )
+    p.add_argument(
+        "--allow-infeasible",
+        action="store_true",
+        help="QGC: write the missions of UAVs the plan marks infeasible (flight beyond the "
+        "usable endurance, eq. 18), with a warning (by default refused, naming the UAVs)",
     )
     p.add_argument(
         "--max-mission-items",

@@ -38,6 +38,7 @@ def export_plan(
     field_elevation_m: float | None = None,
     geofence: bool = True,
     prior: Any = None,
+    allow_infeasible: bool = False,
     max_mission_items: int | None = None,
 ) -> list[Path]:
     """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
@@ -69,6 +70,10 @@ def export_plan(
         The prior overlay of ``kml`` and ``html`` (an array of the scenario grid's shape or a
         map file); by default the plan's scenario prior rebuilt by
         :func:`poc_env.agents.mission.overlay.plan_prior`.
+    allow_infeasible : bool
+        A UAV the plan marks infeasible (``feasible: false``: its flight beyond the usable
+        endurance, eq. 18) is refused by the QGC export unless this is set; then, and in the
+        viewing formats always, it is warned (:func:`check_endurance`).
     max_mission_items : int, optional
         QGC: refuse a mission of more items than this (the autopilot's limit; see
         :data:`~poc_env.agents.mission.formats.qgc.MISSION_ITEM_LIMITS`). Without it a mission
@@ -116,6 +121,7 @@ def export_plan(
             check_fences(plan, area)  # QGC refuses such a plan (the error itself, raised)
         if warning is not None:  # the other formats show it, and say so
             print(f"warning: {warning}")
+        check_endurance(plan, flown, refuse=fmt == "qgc" and not allow_infeasible)
         kept = {id(u) for u in flown}
         for k, u in enumerate(plan["uavs"]):
             if id(u) not in kept:
@@ -137,6 +143,41 @@ def export_plan(
             max_mission_items=max_mission_items,
         )
         return FORMATS[fmt].write(job)
+
+
+def check_endurance(plan: Any, flown: list[Any], *, refuse: bool) -> None:
+    """Refuse (``refuse``: the QGC export, the missions that fly) or warn (UserWarning: the
+    viewing formats, or QGC with ``allow_infeasible``) when a UAV exported, one of ``flown``,
+    is marked infeasible by the plan (``feasible: false``: its flight time beyond the usable
+    endurance 0.85 T, eq. 18, as the planner checked it). Each such UAV is named with its
+    index in the file and its flight time; the HTML report's table says "NO" too.
+
+    Raises
+    ------
+    ConfigError
+        ``plan.uavs[k]`` (the first such UAV) with ``refuse``; nothing is written then.
+    """
+    kept = {id(u) for u in flown}
+    bad = [(k, u) for k, u in enumerate(plan["uavs"]) if id(u) in kept and not u["feasible"]]
+    if not bad:
+        return
+    names = ", ".join(
+        f"plan.uavs[{k}] (UAV {u['id']}, {u['flight_time_s'] / 3600:.2f} h)" for k, u in bad[:6]
+    )
+    more = f" and {len(bad) - 6} more" if len(bad) > 6 else ""
+    what = (
+        f"{names}{more}: marked infeasible by the plan (feasible: false: a flight time beyond "
+        "the usable endurance 0.85 T, eq. 18)"
+    )
+    if refuse:
+        raise ConfigError(
+            f"plan.uavs[{bad[0][0]}]",
+            f"{len(bad)} of {len(flown)} missions marked infeasible by the plan",
+            f"missions within the usable endurance: {what}; re-plan (raise --maxiter or "
+            "--popsize, or --planner allocation), or export them anyway with "
+            "allow_infeasible=True (--allow-infeasible: warned)",
+        )
+    warnings.warn(f"{what}: {len(bad)} of {len(flown)} missions exported anyway", UserWarning, stacklevel=3)
 
 
 def check_max_items(value: Any) -> int:

@@ -71,6 +71,14 @@ def test_a_mission_beyond_what_autopilots_hold_is_said(tmp_path):
     assert "plan.uavs[0]" in said[0] and str(n) in said[0]
 
 
+def test_a_mission_beyond_the_endurance_is_refused_or_said(tmp_path):
+    _, said, err = _export(_plan(tmp_path, hours=30.4), tmp_path / "out")
+    if err is not None:
+        assert "plan.uavs[0]" in str(err)
+        return
+    assert [m for m in said if "plan.uavs[0]" in m], "a 30.4 h mission written without a word"
+
+
 def test_a_short_feasible_mission_says_nothing(tmp_path):
     files, said, err = _export(_plan(tmp_path), tmp_path / "out")
     assert err is None and len(files) == 1
@@ -101,3 +109,13 @@ def test_a_mission_beyond_every_autopilot_is_refused(tmp_path):
         warnings.simplefilter("always")
         check_mission_size("plan.uavs[3] (UAV 4)", top)
     assert len(seen) == 1 and "PX4 on RAM-constrained boards (500)" in str(seen[0].message)
+
+
+def test_infeasible_missions_are_written_when_allowed_with_a_warning(tmp_path):
+    files, said, err = _export(_plan(tmp_path, hours=30.4), tmp_path / "q", allow_infeasible=True)
+    assert err is None and len(files) == 1
+    assert [m for m in said if "plan.uavs[0] (UAV 1, 30.40 h)" in m and "eq. 18" in m], said
+    for fmt in ("geojson", "kml"):  # the viewing formats draw it and say so
+        files, said, err = _export(_plan(tmp_path, hours=30.4), tmp_path / fmt, fmt)
+        assert err is None and files
+        assert [m for m in said if "plan.uavs[0] (UAV 1, 30.40 h)" in m], (fmt, said)
