@@ -119,3 +119,22 @@ def test_infeasible_missions_are_written_when_allowed_with_a_warning(tmp_path):
         files, said, err = _export(_plan(tmp_path, hours=30.4), tmp_path / fmt, fmt)
         assert err is None and files
         assert [m for m in said if "plan.uavs[0] (UAV 1, 30.40 h)" in m], (fmt, said)
+
+
+def test_plan_says_when_the_standard_effort_skipped_its_polish(tmp_path, capsys):
+    from poc_env.cli import effort_skip_note, main
+
+    args = ["plan", "--scenario", "small", "--planner", "allocation", "--quiet", "--effort",
+            "standard", "--out", str(tmp_path / "p.json")]  # fmt: skip
+    zone = "map.no_fly_zones_km=[[[15, 10], [25, 10], [25, 30], [15, 30]]]"
+    assert main([*args, "--overrides", zone]) == 0
+    out = capsys.readouterr().out
+    assert "note: --effort standard skipped its polish (no-fly zones): this is the default " \
+        "plan" in out, out  # fmt: skip
+    assert main(args) == 0  # no zone, a small map: polished, nothing said
+    assert "skipped its polish" not in capsys.readouterr().out
+    big = {"optimizer": {"settings": {"polish": {"skipped": "map larger than polish_max_cells"}}}}
+    assert "--effort thorough skipped its polish (map larger than polish_max_cells)" in str(
+        effort_skip_note(big, "thorough")
+    )
+    assert effort_skip_note(big, None) is None
