@@ -177,7 +177,9 @@ def check_endurance(plan: Any, flown: list[Any], *, refuse: bool) -> None:
             "--popsize, or --planner allocation), or export them anyway with "
             "allow_infeasible=True (--allow-infeasible: warned)",
         )
-    warnings.warn(f"{what}: {len(bad)} of {len(flown)} missions exported anyway", UserWarning, stacklevel=3)
+    warnings.warn(
+        f"{what}: {len(bad)} of {len(flown)} missions exported anyway", UserWarning, stacklevel=3
+    )
 
 
 def check_max_items(value: Any) -> int:
@@ -185,7 +187,8 @@ def check_max_items(value: Any) -> int:
     ConfigError."""
     from poc_env.agents.mission.formats.qgc import MAVLINK_MAX_ITEMS
 
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAVLINK_MAX_ITEMS:
+    is_int = isinstance(value, int) and not isinstance(value, bool)
+    if not is_int or not 1 <= value <= MAVLINK_MAX_ITEMS:
         raise ConfigError(
             "max_mission_items", value,
             f"an integer from 1 to {MAVLINK_MAX_ITEMS} (MAVLink's MISSION_COUNT is a uint16): "

@@ -61,7 +61,8 @@ def _simplify_by_samples(dist, z, floor, vertex):
 def _random_profile(rng, m):
     """Profiles as :func:`terrain.profile` makes them, and harder ones: ramps at a pitch
     bound (points on one line, where the floor touches the legs), plateaus, noise, a floor
-    at the profile or 25 m below it, a few vertices, steps of equal or random length."""
+    at the profile or 25 m below it, or 1e-6 m above it (the sample test's slack: there
+    rounding decides), a few vertices, steps of equal or random length."""
     step = rng.choice([500.0, rng.uniform(1.0, 1e3)])
     gaps = np.full(m - 1, step) if rng.random() < 0.5 else rng.uniform(0.1, 2.0, m - 1) * step
     dist = np.concatenate([[0.0], np.cumsum(gaps)])
@@ -77,6 +78,9 @@ def _random_profile(rng, m):
         z = 2000 + 0.05 * dist  # one straight ramp
     req = z - rng.choice([0.0, rng.uniform(0, 60)], m) * (rng.random(m) < 0.7)
     floor = np.maximum(req, z - terrain.PROFILE_TOLERANCE_M)
+    if rng.random() < 0.3:  # the sample test's 1e-6 m slack used up: decided by rounding
+        tie = rng.random(m) < 0.5
+        floor[tie] = z[tie] + 1e-6
     vertex = -np.ones(m, dtype=int)
     vertex[0], vertex[-1] = 0, m
     vertex[rng.choice(m, size=rng.integers(0, 4))] = 1

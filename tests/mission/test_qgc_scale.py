@@ -92,7 +92,7 @@ def test_the_officers_limit_refuses_a_longer_mission_and_nothing_is_written(tmp_
     assert err is not None and err.field == "plan.uavs[0] (UAV 1)", err
     assert f"{n} items" in str(err) and f"at most {n - 1}" in str(err)
     assert not (tmp_path / "b").exists() or not any((tmp_path / "b").iterdir())
-    files, said, err = _export(_plan(tmp_path, n_waypoints=600), tmp_path / "c",
+    files, _, err = _export(_plan(tmp_path, n_waypoints=600), tmp_path / "c",
                                max_mission_items=n)  # fmt: skip
     assert err is None and len(files) == 1
     with pytest.raises(ConfigError, match="max_mission_items"):
