@@ -797,6 +797,9 @@ def _plan(
 
         plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
     print(plan_table(plan))
+    skipped = effort_skip_note(plan, getattr(args, "effort", None))
+    if skipped is not None:
+        print(skipped)
     for warning in (moving_target_warning(sc), lattice_warning(sc)):
         if warning is not None:
             print(f"warning: {warning}")
@@ -805,6 +808,25 @@ def _plan(
     write_plan(with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
     return [f"wrote {shown_out}"] + ([f"wrote {shown_plot}"] if plot is not None else [])
+
+
+def effort_skip_note(plan: dict, effort: str | None) -> str | None:
+    """One line for ``plan``'s summary when ``--effort standard`` or ``thorough`` skipped its
+    polish (no-fly zones, or a map above ``polish_max_cells`` a side: docs/PLANNER.md, effort
+    levels), naming why, or None. Only plan.json recorded it before (scale audit): a standard
+    plan so skipped is exactly the default plan, a thorough one lacks its polish stages."""
+    if effort not in ("standard", "thorough"):
+        return None
+    polish = plan.get("optimizer", {}).get("settings", {}).get("polish") or {}
+    why = polish.get("skipped")
+    if not why:
+        return None
+    what = (
+        "this is the default plan (the polish is all standard adds)"
+        if effort == "standard"
+        else "its other settings apply, its polish stages do not"
+    )
+    return f"note: --effort {effort} skipped its polish ({why}): {what}"
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -820,6 +842,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         altitude_ref=args.altitude_ref,
         field_elevation_m=args.field_elevation_m,
         geofence=not args.no_geofence,
+        allow_infeasible=args.allow_infeasible,
+        max_mission_items=args.max_mission_items,
     )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
         _wrote(export(args.plan, args.format, args.origin, args.out))
@@ -1280,6 +1304,20 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="QGC: leave the inclusion fence out (by default a mission leaving its own "
         "operating area or crossing a no-fly zone is refused)",
+    )
+    p.add_argument(
+        "--allow-infeasible",
+        action="store_true",
+        help="QGC: write the missions of UAVs the plan marks infeasible (flight beyond the "
+        "usable endurance, eq. 18), with a warning (by default refused, naming the UAVs)",
+    )
+    p.add_argument(
+        "--max-mission-items",
+        type=int,
+        default=None,
+        metavar="N",
+        help="QGC: refuse a mission of more than N items, your autopilot's limit (by default "
+        "a mission past 500 items, PX4's smallest boards, is warned: docs/EXPORT.md)",
     )
     p.set_defaults(func=cmd_export)
 

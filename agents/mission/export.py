@@ -21,7 +21,7 @@ from poc_env.agents.mission.formats import FORMATS
 from poc_env.agents.mission.formats.qgc import check_fences
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import load_plan
-from poc_env.agents.mission.terrain import SteepGlideWarning
+from poc_env.agents.mission.terrain import SteepGlideWarning, profiles_once
 from poc_env.errors import ConfigError, as_number
 
 
@@ -38,6 +38,8 @@ def export_plan(
     field_elevation_m: float | None = None,
     geofence: bool = True,
     prior: Any = None,
+    allow_infeasible: bool = False,
+    max_mission_items: int | None = None,
 ) -> list[Path]:
     """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
 
@@ -68,6 +70,15 @@ def export_plan(
         The prior overlay of ``kml`` and ``html`` (an array of the scenario grid's shape or a
         map file); by default the plan's scenario prior rebuilt by
         :func:`poc_env.agents.mission.overlay.plan_prior`.
+    allow_infeasible : bool
+        A UAV the plan marks infeasible (``feasible: false``: its flight beyond the usable
+        endurance, eq. 18) is refused by the QGC export unless this is set; then, and in the
+        viewing formats always, it is warned (:func:`check_endurance`).
+    max_mission_items : int, optional
+        QGC: refuse a mission of more items than this (the autopilot's limit; see
+        :data:`~poc_env.agents.mission.formats.qgc.MISSION_ITEM_LIMITS`). Without it a mission
+        beyond the smallest autopilot's limit is warned, and one beyond every autopilot's
+        refused (:func:`~poc_env.agents.mission.formats.qgc.check_mission_size`).
 
     Returns
     -------
@@ -87,11 +98,13 @@ def export_plan(
         raise ConfigError("projection", projection, "aeqd or utm")
     if altitude_ref is not None:
         check_altitude_ref(altitude_ref)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), profiles_once():  # each UAV's terrain profile once
         if fmt != "qgc":  # the glide is PX4's check of the mission that flies: QGC's
             warnings.simplefilter("ignore", SteepGlideWarning)
         plan = load_plan(plan_path)
         flown = searching_uavs(plan)  # a plan that reaches nothing: refused before any work
+        if max_mission_items is not None:
+            check_max_items(max_mission_items)
         crs = plan_crs(plan.get("crs"), origin, projection, zone)
         if plan.get("terrain") is not None:
             altitude_ref, field_elevation_m = _terrain_altitudes(
@@ -108,6 +121,7 @@ def export_plan(
             check_fences(plan, area)  # QGC refuses such a plan (the error itself, raised)
         if warning is not None:  # the other formats show it, and say so
             print(f"warning: {warning}")
+        check_endurance(plan, flown, refuse=fmt == "qgc" and not allow_infeasible)
         kept = {id(u) for u in flown}
         for k, u in enumerate(plan["uavs"]):
             if id(u) not in kept:
@@ -125,8 +139,62 @@ def export_plan(
             prior=prior,
             out_dir=Path(out_dir) if out_dir else Path(plan_path).parent,
             warning=warning,
+            indices=tuple(k for k, u in enumerate(plan["uavs"]) if id(u) in kept),
+            max_mission_items=max_mission_items,
         )
         return FORMATS[fmt].write(job)
+
+
+def check_endurance(plan: Any, flown: list[Any], *, refuse: bool) -> None:
+    """Refuse (``refuse``: the QGC export, the missions that fly) or warn (UserWarning: the
+    viewing formats, or QGC with ``allow_infeasible``) when a UAV exported, one of ``flown``,
+    is marked infeasible by the plan (``feasible: false``: its flight time beyond the usable
+    endurance 0.85 T, eq. 18, as the planner checked it). Each such UAV is named with its
+    index in the file and its flight time; the HTML report's table says "NO" too.
+
+    Raises
+    ------
+    ConfigError
+        ``plan.uavs[k]`` (the first such UAV) with ``refuse``; nothing is written then.
+    """
+    kept = {id(u) for u in flown}
+    bad = [(k, u) for k, u in enumerate(plan["uavs"]) if id(u) in kept and not u["feasible"]]
+    if not bad:
+        return
+    names = ", ".join(
+        f"plan.uavs[{k}] (UAV {u['id']}, {u['flight_time_s'] / 3600:.2f} h)" for k, u in bad[:6]
+    )
+    more = f" and {len(bad) - 6} more" if len(bad) > 6 else ""
+    what = (
+        f"{names}{more}: marked infeasible by the plan (feasible: false: a flight time beyond "
+        "the usable endurance 0.85 T, eq. 18)"
+    )
+    if refuse:
+        raise ConfigError(
+            f"plan.uavs[{bad[0][0]}]",
+            f"{len(bad)} of {len(flown)} missions marked infeasible by the plan",
+            f"missions within the usable endurance: {what}; re-plan (raise --maxiter or "
+            "--popsize, or --planner allocation), or export them anyway with "
+            "allow_infeasible=True (--allow-infeasible: warned)",
+        )
+    warnings.warn(
+        f"{what}: {len(bad)} of {len(flown)} missions exported anyway", UserWarning, stacklevel=3
+    )
+
+
+def check_max_items(value: Any) -> int:
+    """``max_mission_items`` if it is an integer from 1 to MAVLink's uint16 count, else
+    ConfigError."""
+    from poc_env.agents.mission.formats.qgc import MAVLINK_MAX_ITEMS
+
+    is_int = isinstance(value, int) and not isinstance(value, bool)
+    if not is_int or not 1 <= value <= MAVLINK_MAX_ITEMS:
+        raise ConfigError(
+            "max_mission_items", value,
+            f"an integer from 1 to {MAVLINK_MAX_ITEMS} (MAVLink's MISSION_COUNT is a uint16): "
+            "your autopilot's mission size",
+        )  # fmt: skip
+    return value
 
 
 def airspace_warning(plan: Any, area: list | None) -> str | None:

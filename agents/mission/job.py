@@ -36,6 +36,11 @@ class ExportJob:
     warning : str or None
         What the plan breaks that the QGC export refuses (a leg through a no-fly zone, a point
         outside the operating area), shown by the viewing formats (the HTML report's note).
+    indices : tuple of int
+        Each of ``plan["uavs"]``'s index in the plan file (the export leaves out UAVs without
+        a search route); empty: the same. :meth:`where` names a UAV so.
+    max_mission_items : int or None
+        QGC: refuse a mission of more items (None: warn past the smallest autopilot's limit).
     """
 
     plan: Plan
@@ -49,6 +54,13 @@ class ExportJob:
     prior: Any
     out_dir: Path
     warning: str | None = None
+    indices: tuple[int, ...] = ()
+    max_mission_items: int | None = None
+
+    def where(self, k: int) -> str:
+        """``plan.uavs[i] (UAV id)`` of ``plan["uavs"][k]``, ``i`` its index in the file."""
+        i = self.indices[k] if self.indices else k
+        return f"plan.uavs[{i}] (UAV {self.plan['uavs'][k]['id']})"
 
     def path(self, suffix: str) -> Path:
         """``out_dir / (plan stem + suffix)``: every file an export writes is named so."""

@@ -678,6 +678,10 @@ def test_survey_plans_reach_every_export_format(tmp_path, capsys, regions):
         capsys.readouterr()
         assert main(qgc) == 2 and "inclusion geofence" in capsys.readouterr().err
         qgc.append("--no-geofence")
+        # two of its UAVs fly beyond the usable endurance (eq. 18): refused, then allowed
+        assert main(qgc) == 2
+        assert "plan.uavs[2]: got '2 of 6 missions marked infeasible" in capsys.readouterr().err
+        qgc.append("--allow-infeasible")
     assert main(qgc) == 0
     doc = json.loads((tmp_path / "geojson" / "survey_plan.geojson").read_text())
     crs = plan["crs"]

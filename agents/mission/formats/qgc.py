@@ -34,6 +34,22 @@ MAV_CMD_DO_LAND_START = 189
 MAV_FRAME_GLOBAL = 0
 MAV_FRAME_MISSION = 2
 MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
+#: MAVLink's MISSION_COUNT ``count`` is a uint16: no mission protocol upload holds more.
+MAVLINK_MAX_ITEMS = 65535
+#: How many mission items autopilots hold (docs/EXPORT.md, "Mission size", with the sources):
+#: a mission beyond the smallest is warned, one beyond the largest refused.
+MISSION_ITEM_LIMITS: dict[str, int] = {
+    # PX4 dataman, NUM_MISSIONS_SUPPORTED on NuttX boards: 2000 until PX4-Autopilot PR
+    # #18827 (2021, the RAM backend), 500 since; PR #24252 (2025) keeps 500 on boards defined
+    # RAM_CONSTRAINED_SYSTEM and allows 1000 on the others
+    "PX4 on RAM-constrained boards": 500,
+    # ArduPilot AP_Mission in the Pixhawk's storage: about 700 commands (ArduPilot issues
+    # #2391 and #7254; more with the mission on the SD card)
+    "ArduPilot on Pixhawk-class storage": 700,
+    "PX4 on other NuttX boards (since 2025)": 1000,
+    # PX4 on POSIX (SITL): UINT16_MAX - 1, allocated as needed
+    "PX4 SITL": 65534,
+}
 #: altitude reference -> (MAV_FRAME, QGC AltitudeMode (1 relative, 2 absolute))
 ALTITUDE_FRAMES = {
     "home": (MAV_FRAME_GLOBAL_RELATIVE_ALT, 1),
@@ -241,6 +257,45 @@ def check_fences(plan: Plan, area: list | None) -> None:
                 )  # fmt: skip
 
 
+def check_mission_size(where: str, items: int, limit: int | None = None) -> None:
+    """Warn (UserWarning) when a mission of ``items`` items is more than the smallest
+    autopilot of :data:`MISSION_ITEM_LIMITS` holds (its upload is refused there, PX4 and
+    ArduPilot answering MAV_MISSION_NO_SPACE), naming ``where`` (the UAV), the count and the
+    limits it passes; refuse it beyond ``limit`` (the officer's autopilot, ``max_mission_items``)
+    or, without one, beyond every autopilot's (:data:`MISSION_ITEM_LIMITS`' largest).
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named: more items than ``limit`` (or any autopilot) holds.
+    """
+    largest = max(MISSION_ITEM_LIMITS.values())
+    top = largest if limit is None else limit
+    if items > top:
+        whose = f"max_mission_items = {limit}" if limit is not None else "any autopilot"
+        raise ConfigError(
+            where, f"a QGC mission of {items} items",
+            f"at most {top} items ({whose} holds; autopilots: {_limits_text()}): re-plan with "
+            "a wider sweep (fewer turns), fewer or more UAVs, or split the search",
+        )  # fmt: skip
+    passed = [f"{name} ({n})" for name, n in MISSION_ITEM_LIMITS.items() if items > n]
+    if passed:
+        import warnings
+
+        warnings.warn(
+            f"{where}: a QGC mission of {items} items, more than "
+            f"{', '.join(passed)} hold{'s' if len(passed) == 1 else ''} (the upload is "
+            "refused there: MAV_MISSION_NO_SPACE); check your autopilot's limit, or export "
+            "with max_mission_items (--max-mission-items N) to refuse missions above it",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
+def _limits_text() -> str:
+    return ", ".join(f"{name} {n}" for name, n in MISSION_ITEM_LIMITS.items())
+
+
 def check_antimeridian(plan: Plan, area: list | None, crs: Any) -> None:
     """ConfigError if a fence polygon (the inclusion ``area``, a no-fly zone) crosses the 180th
     meridian. PX4 tests a point against a fence in latitude/longitude (navigator
@@ -290,6 +345,8 @@ def write(job: ExportJob) -> list[Path]:
         )
         for u, prof in zip(plan["uavs"], profiles)
     ]  # fmt: skip
+    for k, (_, doc) in enumerate(docs):  # every mission checked before any is written
+        check_mission_size(job.where(k), len(doc["mission"]["items"]), job.max_mission_items)
     return [
         write_text_atomic(job.path(f"_uav{uid}.plan"), json.dumps(doc, indent=1, allow_nan=False))
         for uid, doc in docs
