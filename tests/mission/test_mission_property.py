@@ -266,8 +266,9 @@ def check_case(fly, seed: int, folder: Path, planners: tuple[str, ...] = PLANNER
     """One random case of ``seed``, planned, written and exported through the command line as a
     user would: counts of ``plans``, ``flown``, ``nofly_steps``, ``oob_steps``, ``clearance``
     (profile samples below the clearance), ``refused`` (plans or exports), ``bad_probability``
-    and ``qgc_low`` (QGC missions below the clearance over the GeoTIFF itself), and a
-    ``what:detail`` key per failure."""
+    and ``qgc_low`` (QGC missions below the clearance over the GeoTIFF itself),
+    ``infeasible_not_refused`` (a UAV beyond the endurance whose mission the QGC export wrote
+    without ``--allow-infeasible``), and a ``what:detail`` key per failure."""
     rng = np.random.default_rng(seed)
     lay = _layout(rng)
     c: Counter = Counter()
@@ -309,9 +310,26 @@ def check_case(fly, seed: int, folder: Path, planners: tuple[str, ...] = PLANNER
         for prof in plan_profiles(plan) or []:
             c["clearance"] += clearance_violations(t, prof)
         if name in argv:
+            infeasible = [k for k, u in enumerate(plan["uavs"]) if not u["feasible"]]
             for fmt in FORMATS:
-                error = _cli(["export", str(out / "plan.json"), "--format", fmt,
-                              "--out", str(out / fmt)])  # fmt: skip
+                export = [
+                    "export",
+                    str(out / "plan.json"),
+                    "--format",
+                    fmt,
+                    "--out",
+                    str(out / fmt),
+                ]
+                if fmt == "qgc" and infeasible:  # missions beyond the endurance never fly: the
+                    # export refuses them naming the first (export-scale), and writes them
+                    # only when asked (tiny DE budgets and survey patterns do plan such UAVs)
+                    error = _cli(export)
+                    if not error or f"plan.uavs[{infeasible[0]}]" not in error:
+                        c["infeasible_not_refused"] += 1
+                        c[f"infeasible_not_refused:{name}: {error}"] += 1
+                    c["infeasible_refused"] += 1
+                    export.append("--allow-infeasible")
+                error = _cli(export)
                 if error:
                     c["refused"] += 1
                     c[f"refused:{name}.{fmt}: {error}"] += 1
@@ -329,7 +347,15 @@ def check_case(fly, seed: int, folder: Path, planners: tuple[str, ...] = PLANNER
     return c
 
 
-BAD = ("nofly_steps", "oob_steps", "clearance", "refused", "bad_probability", "qgc_low")
+BAD = (
+    "nofly_steps",
+    "oob_steps",
+    "clearance",
+    "refused",
+    "bad_probability",
+    "qgc_low",
+    "infeasible_not_refused",
+)
 
 
 def run_property(fly, n: int, seed: int, tmp_path: Path, planners: tuple[str, ...] = PLANNERS):
