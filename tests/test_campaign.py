@@ -259,3 +259,18 @@ def test_the_datafile_generators_catch_broken_checks(monkeypatch):
     assert classify(run_datafiles, deep)[0] == "traceback"
     monkeypatch.undo()
     assert loads_json("[1]", "x") == [1]
+
+
+def test_the_geojson_check_reads_parts_cut_at_the_antimeridian():
+    """GeoJSON exports cut a line crossing 180 into a MultiLineString of parts of unequal
+    length (RFC 7946 3.1.9); the campaign's coordinate check made one numpy array of them and
+    raised (a 'traceback' case for a valid file, seed 1 of the long run). It reads every
+    position of every part, and still catches one off the globe inside a part."""
+    from poc_env.agents.testing.campaign import _check_coordinates
+
+    def feature(parts):
+        return {"features": [{"geometry": {"type": "MultiLineString", "coordinates": parts}}]}
+
+    _check_coordinates(feature([[[179.9, -88.0], [180.0, -88.0]], [[-180.0, -88.0]]]), "geojson")
+    with pytest.raises(SilentWrong, match="off the globe"):
+        _check_coordinates(feature([[[179.9, -88.0]], [[-180.5, -88.0], [-179, -88.0]]]), "geojson")

@@ -556,12 +556,18 @@ def _refuse_constant(name: str) -> float:
     raise SilentWrong(f"not strict JSON: {name}")
 
 
+def _positions(coords: Any) -> list[list[float]]:
+    """The positions of a GeoJSON ``coordinates`` member, however deeply its parts nest."""
+    if coords and isinstance(coords[0], (int, float)):
+        return [[float(v) for v in coords]]
+    return [p for part in coords for p in _positions(part)]
+
+
 def _check_coordinates(data: Any, fmt: str) -> None:
     pairs: list[tuple[float, float]] = []
     if fmt == "geojson":
-        for feat in data["features"]:
-            coords = np.asarray(feat["geometry"]["coordinates"], dtype=float)
-            pairs += [(lat, lon) for lon, lat in coords.reshape(-1, coords.shape[-1])[:, :2]]
+        for feat in data["features"]:  # Multi* parts (cut at the antimeridian) nest deeper
+            pairs += [(p[1], p[0]) for p in _positions(feat["geometry"]["coordinates"])]
     else:
         for item in data["mission"]["items"]:
             if item.get("params") and item["params"][4] is not None:

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.formats.kml import validate_kml
 from poc_env.agents.mission.plan import APPROACH_DISTANCE_M, APPROACH_HEIGHT_M, write_plan
 from poc_env.agents.mission.terrain import from_record
 from poc_env.agents.planning.planner import make_plan
@@ -263,6 +264,7 @@ def test_exports_across_the_antimeridian_are_cut_or_continuous(tmp_path):
         assert all(179.0 < v < 181.0 for v in lon)  # continuous around 180
     box = {k: float(v) for k, v in re.findall(r"<(east|west)>([^<]*)</", text)}
     assert 179.0 < box["west"] < 180.0 < box["east"] < 181.0
+    assert validate_kml(text) == []  # the box across 180 as the KML reference allows it
     (page,) = export_plan(path, "html", out_dir=tmp_path / "h")
     m = re.search(r'id="plan-data">(.*?)</script>', page.read_text(encoding="utf-8"), re.S)
     assert m
@@ -302,3 +304,23 @@ def test_a_steep_final_glide_is_said_by_plan_and_the_qgc_export_only(tmp_path, c
     for fmt, expected in (("qgc", said), ("kml", []), ("geojson", []), ("html", [])):
         assert main(["export", str(plan), "--format", fmt, "--out", str(tmp_path / fmt)]) == 0
         assert glides() == expected, fmt
+
+
+def test_validate_kml_takes_a_box_across_the_antimeridian_and_nothing_else_past_180():
+    """The KML reference lets a LatLonBox that overlaps the 180 degree meridian give ``east``
+    beyond 180, which the OGC XSD's maxInclusive refuses; the campaign (seed 1, an origin at
+    88 S) counted every such KML export as invalid. ``validate_kml`` takes exactly that case:
+    an ``east`` past 180 whose box does not cross it (wider than the globe) stays a complaint."""
+
+    def doc(west: float, east: float) -> str:
+        return (
+            '<kml xmlns="http://www.opengis.net/kml/2.2"><Document><GroundOverlay>'
+            "<Icon><href>p.png</href></Icon><LatLonBox><north>-87</north><south>-89</south>"
+            f"<east>{east!r}</east><west>{west!r}</west></LatLonBox></GroundOverlay>"
+            "</Document></kml>"
+        )
+
+    assert validate_kml(doc(150.0, 170.0)) == []
+    assert validate_kml(doc(150.0, 191.85)) == []  # across 180
+    assert validate_kml(doc(-170.0, 191.0)) != []  # 361 degrees wide: not a crossing box
+    assert validate_kml(doc(150.0, 560.0)) != []

@@ -13,6 +13,7 @@ against that schema, vendored in ``agents/mission/assets/kml22`` so it works off
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from pathlib import Path
 from typing import Any
@@ -222,6 +223,12 @@ def validate_kml(data: bytes | str | Path) -> list[str]:
 
     ``data``: the document's bytes or text, or a path to it. A document that is not well-formed
     XML is one complaint (lxml's parse error); no network access (the schema is vendored).
+
+    One deviation from the XSD, which the KML reference itself makes: a ``LatLonBox`` across
+    the antimeridian has its ``east`` beyond 180 ("for overlays that overlap the meridian of
+    180 degrees longitude, values can extend beyond that range"), which the schema's
+    ``maxInclusive`` of 180 refuses; such a box (``west <= 180 < east < west + 360``) is checked
+    with ``east - 360`` in its place, and any other ``east`` above 180 is still a complaint.
     """
     if isinstance(data, Path):
         data = data.read_bytes()
@@ -230,6 +237,12 @@ def validate_kml(data: bytes | str | Path) -> list[str]:
         doc = etree.fromstring(raw, etree.XMLParser(resolve_entities=False, no_network=True))
     except etree.XMLSyntaxError as err:
         return [f"not well-formed XML: {err}"]
+    for box in doc.iter(f"{{{KML_NS}}}LatLonBox"):
+        w, e = box.find(f"{{{KML_NS}}}west"), box.find(f"{{{KML_NS}}}east")
+        with contextlib.suppress(TypeError, ValueError, AttributeError):
+            west, east = float(w.text), float(e.text)  # type: ignore[union-attr, arg-type]
+            if -180.0 <= west <= 180.0 < east < west + 360.0:
+                e.text = repr(east - 360.0)  # type: ignore[union-attr]
     schema = _schema()
     if schema.validate(doc):
         return []
