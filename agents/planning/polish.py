@@ -85,6 +85,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -236,6 +237,70 @@ def _graded(pts: np.ndarray, tan: np.ndarray, lo: np.ndarray, hi: np.ndarray) ->
     return np.clip(pts[None] + scaled[:, :, None] * nrm[None, None], lo, hi)
 
 
+@dataclass
+class Start:
+    """What a local search on a plan's routes starts from (:func:`start`): the swarm's
+    exposure ``ex`` of every flying UAV's legs, the map's inner corners ``lo``, ``hi`` (points
+    are kept inside), which UAVs fly, their ``paths`` (take-off, waypoints, landing), headings
+    ``h0`` and the airspace's count of the planned positions (``count``; None without one)."""
+
+    ex: Exposure
+    w: float
+    lo: np.ndarray
+    hi: np.ndarray
+    flying: list[bool]
+    paths: list[np.ndarray]
+    h0: list
+    count: AirspaceCount | None
+    times: np.ndarray | None
+
+
+def start(
+    routes, takeoff, landing, prior, grid: Grid, sensor, speeds, budget: float,
+    turn_rate: float, headings=None, airspace: Airspace | None = None,
+) -> Start:  # fmt: skip
+    """The :class:`Start` of :func:`polish_routes` and of the regrade
+    (:func:`poc_env.agents.planning.regrade.regrade_routes`): the arguments as theirs."""
+    takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
+    landing = np.asarray(landing, dtype=float).reshape(-1, 2)
+    n = len(takeoff)
+    w = float(sensor.sweep_width_m)
+    s = int(sensor.samples_per_cell)
+    ex = Exposure(
+        grid,
+        s,
+        w,
+        sensor.law,
+        float(sensor.cutoff_sweep_widths) * w,
+        grid.refine(np.asarray(prior, dtype=float), s),
+    )
+    x0, y0, x1, y1 = grid.bounds
+    c = grid.cell_m
+    lo = np.array([x0 + 1e-6 * c, y0 + 1e-6 * c])
+    hi = np.array([x1 - 1e-6 * c, y1 - 1e-6 * c])
+    flying = [len(r) > 0 for r in routes]
+    paths = [
+        np.vstack([takeoff[k], np.asarray(routes[k], dtype=float).reshape(-1, 2), landing[k]])
+        if flying[k]
+        else np.zeros((0, 2))
+        for k in range(n)
+    ]
+    h0 = [None] * n if headings is None else [float(h) for h in headings]
+    for k in range(n):
+        if flying[k]:
+            ex.add(*_legs(paths[k]))
+    count, times = None, None
+    if airspace is not None:
+        times = np.arange(int(np.ceil(budget / airspace.dt_s)) + 1) * airspace.dt_s
+        pos = np.zeros((len(times), n, 2))
+        act = np.zeros((len(times), n), dtype=bool)
+        for k in range(n):
+            if flying[k]:
+                pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
+        count = AirspaceCount(airspace, pos, act)
+    return Start(ex, w, lo, hi, flying, paths, h0, count, times)
+
+
 def polish_routes(
     routes: Sequence[Sequence[Sequence[float]]],
     takeoff,
@@ -297,44 +362,13 @@ def polish_routes(
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):
         raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
-    takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
-    landing = np.asarray(landing, dtype=float).reshape(-1, 2)
-    n = len(takeoff)
-    w = float(sensor.sweep_width_m)
-    s = int(sensor.samples_per_cell)
-    ex = Exposure(
-        grid,
-        s,
-        w,
-        sensor.law,
-        float(sensor.cutoff_sweep_widths) * w,
-        grid.refine(np.asarray(prior, dtype=float), s),
-    )
-    x0, y0, x1, y1 = grid.bounds
-    c = grid.cell_m
-    lo = np.array([x0 + 1e-6 * c, y0 + 1e-6 * c])
-    hi = np.array([x1 - 1e-6 * c, y1 - 1e-6 * c])
-    flying = [len(r) > 0 for r in routes]
-    paths = [
-        np.vstack([takeoff[k], np.asarray(routes[k], dtype=float).reshape(-1, 2), landing[k]])
-        if flying[k]
-        else np.zeros((0, 2))
-        for k in range(n)
-    ]
-    h0 = [None] * n if headings is None else [float(h) for h in headings]
-    for k in range(n):
-        if flying[k]:
-            ex.add(*_legs(paths[k]))
+    st = start(routes, takeoff, landing, prior, grid, sensor, speeds, budget, turn_rate,
+               headings, airspace)  # fmt: skip
+    ex, lo, hi, flying, paths, h0 = st.ex, st.lo, st.hi, st.flying, st.paths, st.h0
+    count: Any = st.count  # used only where ``airspace`` is given, as ``times``
+    times: Any = st.times
+    n, w = len(paths), st.w
     value = ex.pos()
-
-    if airspace is not None:
-        times = np.arange(int(np.ceil(budget / airspace.dt_s)) + 1) * airspace.dt_s
-        pos = np.zeros((len(times), n, 2))
-        act = np.zeros((len(times), n), dtype=bool)
-        for k in range(n):
-            if flying[k]:
-                pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
-        count = AirspaceCount(airspace, pos, act)
 
     tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
 

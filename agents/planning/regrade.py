@@ -41,12 +41,13 @@ allocation planner regrades only on maps without zones).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from poc_env.agents.planning.coverage_boxes import graded_offsets
-from poc_env.agents.planning.polish import TOL, Exposure
-from poc_env.agents.planning.refine import Airspace, AirspaceCount, _dedupe, route_fits, track
+from poc_env.agents.planning.polish import TOL, start
+from poc_env.agents.planning.refine import Airspace, _dedupe, route_fits, track
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
 
@@ -158,41 +159,16 @@ def regrade_routes(
         raise ConfigError("counts", counts, f"integers in [-{MAX_COUNT}, {MAX_COUNT}]")
     if not isinstance(min_lines, int) or min_lines < 2:
         raise ConfigError("min_lines", min_lines, "an integer >= 2")
-    takeoff = np.asarray(takeoff, dtype=float).reshape(-1, 2)
-    landing = np.asarray(landing, dtype=float).reshape(-1, 2)
-    n = len(takeoff)
-    w = float(sensor.sweep_width_m)
-    s = int(sensor.samples_per_cell)
-    ex = Exposure(
-        grid, s, w, sensor.law, float(sensor.cutoff_sweep_widths) * w,
-        grid.refine(np.asarray(prior, dtype=float), s),
-    )  # fmt: skip
-    x0, y0, x1, y1 = grid.bounds
-    c = grid.cell_m
-    lo = np.array([x0 + 1e-6 * c, y0 + 1e-6 * c])
-    hi = np.array([x1 - 1e-6 * c, y1 - 1e-6 * c])
+    st = start(routes, takeoff, landing, prior, grid, sensor, speeds, budget, turn_rate,
+               headings, airspace)  # fmt: skip
+    ex, lo, hi, flying, paths, h0 = st.ex, st.lo, st.hi, st.flying, st.paths, st.h0
+    count: Any = st.count  # used only where ``airspace`` is given, as ``times``
+    times: Any = st.times
+    n, w = len(paths), st.w
+    x0, y0 = grid.bounds[:2]
     ny_s, nx_s = ex.mass.shape
     px = np.broadcast_to(x0 + (np.arange(nx_s) + 0.5) * ex.h, (ny_s, nx_s)).ravel()
     py = np.broadcast_to((y0 + (np.arange(ny_s) + 0.5) * ex.h)[:, None], (ny_s, nx_s)).ravel()
-    flying = [len(r) > 0 for r in routes]
-    paths = [
-        np.vstack([takeoff[k], np.asarray(routes[k], dtype=float).reshape(-1, 2), landing[k]])
-        if flying[k]
-        else np.zeros((0, 2))
-        for k in range(n)
-    ]
-    h0 = [None] * n if headings is None else [float(h) for h in headings]
-    for k in range(n):
-        if flying[k]:
-            ex.add(paths[k][:-1], paths[k][1:])
-    if airspace is not None:
-        times = np.arange(int(np.ceil(budget / airspace.dt_s)) + 1) * airspace.dt_s
-        pos = np.zeros((len(times), n, 2))
-        act = np.zeros((len(times), n), dtype=bool)
-        for k in range(n):
-            if flying[k]:
-                pos[:, k], act[:, k] = track(paths[k], speeds, turn_rate, times, h0[k])
-        count = AirspaceCount(airspace, pos, act)
     signed = np.concatenate([np.asarray(rad, dtype=float), -np.asarray(rad, dtype=float)]) * w
 
     def fits(k: int, full: np.ndarray) -> bool:
