@@ -62,8 +62,11 @@ def test_workers_die_with_a_killed_command(tmp_path):
             os.kill(pid, 0)
         except ProcessLookupError:
             return False
-        with open(f"/proc/{pid}/stat") as f:  # a reaped-later zombie is dead too
-            return f.read().split(")")[-1].split()[0] != "Z"
+        try:  # a reaped-later zombie is dead too
+            with open(f"/proc/{pid}/stat") as f:
+                return f.read().split(")")[-1].split()[0] != "Z"
+        except OSError:  # reaped between the two looks (ESRCH, ENOENT)
+            return False
 
     deadline = time.monotonic() + 30
     while any(alive(p) for p in workers) and time.monotonic() < deadline:
