@@ -779,16 +779,12 @@ def exposure_gains(
             if o < 0:
                 leg_exposure(law, ax, ay, bx, by, w, cutoff, reach, cell, h, 1.0, work, box)
                 continue
-            tb = tbox[o]
+            tb = tbox[o]  # inside box_o, so inside the box: nothing to grow
             s = toff[o]
             for j in range(tb[0], tb[1]):
                 for k in range(tb[2], tb[3]):
                     work[j, k] += tiles[s]
                     s += 1
-            box[0] = min(box[0], tb[0])
-            box[1] = max(box[1], tb[1])
-            box[2] = min(box[2], tb[2])
-            box[3] = max(box[3], tb[3])
         g = 0.0
         for j in range(box[0], box[1]):
             for k in range(box[2], box[3]):
