@@ -548,17 +548,12 @@ def test_first_fitting_is_route_fits_in_turn():
         budget = float(times[len(times) // 2]) + 1.0  # about half the candidates fit
         reserve = float(rng.uniform(0, 600))
         for t0 in range(len(cands) + 1):
-            want = next(
-                (
-                    t
-                    for t in range(t0, len(cands))
-                    if route_fits(
-                        np.concatenate([path[:i0], cands[order[t]], path[i1 + 1 :]]),
-                        speeds, turn, budget, reserve, heading,
-                    )  # fmt: skip
-                ),
-                len(cands),
-            )
+            want = len(cands)
+            for t in range(t0, len(cands)):
+                cand = np.concatenate([path[:i0], cands[order[t]], path[i1 + 1 :]])
+                if route_fits(cand, speeds, turn, budget, reserve, heading):
+                    want = t
+                    break
             got = _kernels.first_fitting(
                 path, i0, i1, pts, off, order, t0, len(cands), speeds.out, speeds.line,
                 speeds.home, 0.5 / turn, budget, reserve,
