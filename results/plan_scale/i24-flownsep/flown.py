@@ -1,0 +1,94 @@
+"""i24-flownsep: flown ``allocation_plan`` episodes (a script, not a test).
+
+``python flown.py priors MAP SEED0 SEED1 OUT.jsonl``
+    Per episode seed, the prior :func:`~poc_env.agents.experiments.evaluate.episode_prior`
+    of that seed, flown with that seed.
+``python flown.py case CASE N OUT.jsonl``
+    ``mono2`` / ``lanes`` (results/plan_scale/i24-deconflict/repro.py's smoke cases at N UAVs)
+    or a scenario file on its own prior at N UAVs (0: the file's fleet), flown with seed 5000.
+
+Each flight's record: flown POSC (``repr``), collision UAV-steps (the environment's
+``violation_collision``), those away from the fields (farther than ``d_s / sin FAN_DEG`` from
+the UAV's take-off and landing fields), UAVs without a route and a sha256 of every step's
+actions (equal digests: the same flight bit for bit). Records are appended to OUT.jsonl.
+Run "before" from outside the checkout with ``PYTHONPATH=/path/to/main`` (the README).
+"""
+
+import hashlib
+import json
+import sys
+
+from pathlib import Path
+
+import numpy as np
+
+from poc_env.agents.experiments.evaluate import episode_prior, play
+from poc_env.agents.planning import deconflict
+from poc_env.agents.policies.registry import make_policy
+from poc_env.config import load_scenario
+from poc_env.envs.parallel import UAVSearchParallelEnv
+
+
+def flight(sc, seed: int, prior) -> dict:
+    env = UAVSearchParallelEnv(scenario=sc)
+    pol = make_policy("allocation_plan")
+    takeoff = np.asarray(sc.takeoff_m, float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, float).reshape(-1, 2)
+    near = sc.constraints.safety_distance_m / np.sin(np.radians(deconflict.FAN_DEG))
+    h = hashlib.sha256()
+    steps = [0, 0]
+    predict = pol.predict
+
+    def logged(obs, *a, **k):
+        act, st = predict(obs, *a, **k)
+        for name in sorted(act):
+            h.update(name.encode() + np.asarray(act[name], np.float32).tobytes())
+        return act, st
+
+    pol.predict = logged
+
+    def count(infos) -> None:
+        flag = np.zeros(len(takeoff), bool)
+        for a, i in infos.items():
+            flag[int(a.rsplit("_", 1)[1])] = bool(i["violation_collision"])
+        xy = env.sim_state.pos[0, :, :2]
+        away = (np.hypot(*(xy - takeoff).T) > near) & (np.hypot(*(xy - landing).T) > near)
+        steps[0] += int(flag.sum())
+        steps[1] += int((flag & away).sum())
+
+    play(env, pol, seed, prior, count)
+    return {
+        "seed": seed,
+        "posc": repr(float(env.sim_state.posc[0])),
+        "collision_steps": steps[0],
+        "away_from_fields": steps[1],
+        "no_route": sum(1 for u in pol.plan["uavs"] if not u["waypoints_m"]),
+        "actions_sha256": h.hexdigest()[:16],
+    }
+
+
+if __name__ == "__main__":
+    import poc_env
+
+    code = str(Path(poc_env.__file__).resolve().parents[1])
+    with open(sys.argv[-1], "a") as f:
+        if sys.argv[1] == "priors":
+            sc = load_scenario(sys.argv[2])
+            for seed in range(int(sys.argv[3]), int(sys.argv[4])):
+                rec = {"map": sys.argv[2], **flight(sc, seed, episode_prior(sc, seed))}
+                print(json.dumps({"code": code, **rec}), file=f, flush=True)
+        else:
+            name, n = sys.argv[2], int(sys.argv[3])
+            if name in ("mono2", "lanes"):
+                sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "i24-deconflict"))
+                from repro import case
+
+                sc, prior = case(name, n)
+            else:
+                from poc_env.theory.probability_map import build_prior
+
+                sc = load_scenario(name)
+                sc = sc.with_uavs(n) if n else sc
+                prior = build_prior(sc.map)
+            rec = {"case": Path(name).name, "uavs": sc.n_uavs, **flight(sc, 5000, prior)}
+            print(json.dumps({"code": code, **rec}), file=f, flush=True)
