@@ -17,7 +17,6 @@ Run "before" from outside the checkout with ``PYTHONPATH=/path/to/main`` (the RE
 import hashlib
 import json
 import sys
-
 from pathlib import Path
 
 import numpy as np
@@ -67,18 +66,18 @@ def flight(sc, seed: int, prior) -> dict:
     }
 
 
-if __name__ == "__main__":
+def main(argv: list[str]) -> None:
     import poc_env
 
     code = str(Path(poc_env.__file__).resolve().parents[1])
-    with open(sys.argv[-1], "a") as f:
-        if sys.argv[1] == "priors":
-            sc = load_scenario(sys.argv[2])
-            for seed in range(int(sys.argv[3]), int(sys.argv[4])):
-                rec = {"map": sys.argv[2], **flight(sc, seed, episode_prior(sc, seed))}
+    with open(argv[-1], "a") as f:
+        if argv[1] == "priors":
+            sc = load_scenario(argv[2])
+            for seed in range(int(argv[3]), int(argv[4])):
+                rec = {"map": argv[2], **flight(sc, seed, episode_prior(sc, seed))}
                 print(json.dumps({"code": code, **rec}), file=f, flush=True)
         else:
-            name, n = sys.argv[2], int(sys.argv[3])
+            name, n = argv[2], int(argv[3])
             if name in ("mono2", "lanes"):
                 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "i24-deconflict"))
                 from repro import case
@@ -92,3 +91,7 @@ if __name__ == "__main__":
                 prior = build_prior(sc.map)
             rec = {"case": Path(name).name, "uavs": sc.n_uavs, **flight(sc, 5000, prior)}
             print(json.dumps({"code": code, **rec}), file=f, flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
