@@ -21,21 +21,17 @@ from pathlib import Path
 
 import numpy as np
 
-from poc_env.agents.experiments.evaluate import episode_prior, play
-from poc_env.agents.planning import deconflict
+from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.agents.policies.registry import make_policy
 from poc_env.config import load_scenario
-from poc_env.envs.parallel import UAVSearchParallelEnv
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "i24-deconflict"))
+from repro import case, flown_collisions
 
 
 def flight(sc, seed: int, prior) -> dict:
-    env = UAVSearchParallelEnv(scenario=sc)
     pol = make_policy("allocation_plan")
-    takeoff = np.asarray(sc.takeoff_m, float).reshape(-1, 2)
-    landing = np.asarray(sc.landing_m, float).reshape(-1, 2)
-    near = sc.constraints.safety_distance_m / np.sin(np.radians(deconflict.FAN_DEG))
     h = hashlib.sha256()
-    steps = [0, 0]
     predict = pol.predict
 
     def logged(obs, *a, **k):
@@ -45,20 +41,10 @@ def flight(sc, seed: int, prior) -> dict:
         return act, st
 
     pol.predict = logged
-
-    def count(infos) -> None:
-        flag = np.zeros(len(takeoff), bool)
-        for a, i in infos.items():
-            flag[int(a.rsplit("_", 1)[1])] = bool(i["violation_collision"])
-        xy = env.sim_state.pos[0, :, :2]
-        away = (np.hypot(*(xy - takeoff).T) > near) & (np.hypot(*(xy - landing).T) > near)
-        steps[0] += int(flag.sum())
-        steps[1] += int((flag & away).sum())
-
-    play(env, pol, seed, prior, count)
+    steps = flown_collisions(sc, prior, seed, pol)  # repro.py's count
     return {
         "seed": seed,
-        "posc": repr(float(env.sim_state.posc[0])),
+        "posc": repr(steps[2]),
         "collision_steps": steps[0],
         "away_from_fields": steps[1],
         "no_route": sum(1 for u in pol.plan["uavs"] if not u["waypoints_m"]),
@@ -79,9 +65,6 @@ def main(argv: list[str]) -> None:
         else:
             name, n = argv[2], int(argv[3])
             if name in ("mono2", "lanes"):
-                sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "i24-deconflict"))
-                from repro import case
-
                 sc, prior = case(name, n)
             else:
                 from poc_env.theory.probability_map import build_prior
