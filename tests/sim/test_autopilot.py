@@ -103,7 +103,11 @@ def test_field_mates_given_nothing_hop_out_apart():
     env = poc_env.parallel_env("small", overrides={"fleet": [{"takeoff": "A", "count": 4}]})
     centre = np.array([[20e3, 20e3], [20e3, 35e3]])  # UAV 0 flies out towards the centre
     follower = WaypointFollower(env.params, [centre] + [np.empty((0, 2))] * 3, env.possible_agents)
-    hops = np.array([w[0] for w in follower.waypoints[1:]]) - np.asarray(env.params.landing[1:])
-    assert len({tuple(np.round(h)) for h in hops}) == 3  # three different points
+    from poc_env.sim.autopilot import FAN_DEG
+
+    out = np.array([w[0] for w in follower.waypoints]) - np.asarray(env.params.takeoff)
+    bearing = np.arctan2(out[:, 1], out[:, 0])
+    apart = np.abs((bearing[:, None] - bearing[None] + np.pi) % (2 * np.pi) - np.pi)
+    assert apart[~np.eye(4, dtype=bool)].min() >= np.radians(FAN_DEG) - 1e-9
     assert _fly_counting_collisions_away(env, follower) == 0
     assert env.sim_state.landed.all() and not env.sim_state.crashed.any()
