@@ -556,7 +556,7 @@ def make_allocation_plan(
     router = ZoneRouter.for_scenario(sc)
     full_prior = prior
     if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
-        prior = prior * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
+        prior = prior * router.reach_share(grid, reach_m=opt.zone_reach * sc.sensor.sweep_width_m)
         if reason is None and float(prior.sum()) <= 0:
             reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav
@@ -831,6 +831,9 @@ def make_allocation_plan(
         for stage, passes, kinds, radii, box_radii in later:
             if not passes:
                 continue
+            if stage == "regrade" and router.active:  # the regrade does not see the zones
+                out = (out[0], out[1], {**out[2], "regrade_skipped": "no-fly zones"})
+                continue
             if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly
                 pr, val, stats = polish_for(
                     sc, out[0], full_prior, passes, speeds=v,
@@ -867,11 +870,13 @@ def make_allocation_plan(
             block_windows=opt.polish_lines_windows,  # i24-cheapolish (block moves only)
             block_radii=opt.polish_lines_block_radii or None,
             **({} if box_radii is None else {"box_radii": box_radii}),
+            # i24-zonepolish: with zones, no candidate enters one (eq. 20; polish.zone_guard)
+            **({"router": router} if router.active and opt.polish_zones else {}),
         )
 
     polished: dict[str, Any] | None = None
     polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes or opt.regrade)
-    if polishing and router.active:  # eq. 20: the polish does not see the zones
+    if polishing and router.active and not opt.polish_zones:  # eq. 20: zones not seen
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
     elif polishing and not opt.polish_here(grid.nx, grid.ny):  # the size rule (i24-fastpolish)
         polished = {"passes": 0, "moves": 0, "skipped": "map larger than polish_max_cells"}
