@@ -52,9 +52,12 @@
 7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
-   17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
-   no-fly zones, nor on maps of more than ``options.polish_max_cells`` cells a side where it
-   is set (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
+   17-18 and the refinement's airspace check hold), so ``posc`` never drops; on maps with
+   no-fly zones no candidate may enter a zone or cut the router's clearance ring
+   (:func:`~poc_env.agents.planning.polish.zone_guard`; i24-zonepolish; ``options.
+   polish_zones=False`` skips the polish there as before, and the regrade always does); not
+   on maps of more than ``options.polish_max_cells`` cells a side where it is set
+   (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
    settings record its passes and kept moves (``polish``).
    With ``options.polish_lines`` passes (off by default; i24-lines) a second polish follows,
    with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as

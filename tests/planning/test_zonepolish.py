@@ -91,3 +91,32 @@ def test_zone_guard_rejects_entering_and_deepening_legs_only():
 def test_polish_zones_option_is_checked(bad):
     with pytest.raises(ConfigError, match="options.polish_zones"):
         PlanOptions(polish_zones=bad)
+
+
+def test_zone_reach_option_reaches_the_objective_on_maps_with_zones_only():
+    """``zone_reach`` (the zone credit's reach, sweep widths; default the W/2 discount, which
+    flew best on the validation maps: docs/PLANNER.md, "Polish and credit with no-fly zones"):
+    with a sighting just inside a zone, crediting the interior within 4 W of the outside
+    changes the plan (its allocation; the default is ``0.5``); without zones nothing
+    changes."""
+    sc = load_scenario("small", ZONE)
+    prior = np.full((8, 8), 1e-4)
+    prior[3, 3] = 1.0  # the cell 15-20 km x 15-20 km: inside the zone's west edge
+    prior /= prior.sum()
+    base = make_allocation_plan(sc, prior=prior)
+    same = make_allocation_plan(sc, prior=prior, options=PlanOptions(zone_reach=0.5))
+    wide = make_allocation_plan(sc, prior=prior, options=PlanOptions(zone_reach=4.0))
+    assert same["uavs"] == base["uavs"] and same["allocation_pos"] == base["allocation_pos"]
+    assert wide["allocation_pos"] > base["allocation_pos"] + 1e-3
+    assert _entering(sc, [u["waypoints_m"] for u in wide["uavs"]]) == (0, 0)
+    free = load_scenario("small")
+    plain = make_allocation_plan(free, prior=prior)
+    assert make_allocation_plan(free, prior=prior, options=PlanOptions(zone_reach=4.0))[
+        "uavs"
+    ] == plain["uavs"]
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, 17.0, "2", True, float("nan")])
+def test_zone_reach_option_is_checked(bad):
+    with pytest.raises(ConfigError, match="options.zone_reach"):
+        PlanOptions(zone_reach=bad)

@@ -6,7 +6,9 @@ test.
     property test (:func:`test_mission_property._layout` and ``_mapping_case``: a 30-50 km area,
     1-3 zones, several concave or beside an airfield, 1-3 UAVs from 1-2 fields, 5 km cells,
     its one-blob prior) is planned by the allocation planner with each variant's options
-    (:data:`VARIANTS`), variants interleaved per seed, and each plan flown once in the
+    (:data:`VARIANTS`), variants interleaved per seed (``--family near``: the prior's blob
+    centred near a zone's edge; ``--family paper``: ``paper_6_2`` with 2 random zones and its
+    random priors, :func:`scenario`), and each plan flown once in the
     environment by the plan policies' follower (:func:`poc_env.agents.testing.flights.fly`,
     episode seed = case seed): one JSON line per plan with the planned ``posc``, the flown POSC,
     the no-fly, out-of-bounds and eq. 21 collision steps, the planning time and the 1-minute
@@ -75,27 +77,56 @@ class _Fly(PlanPolicy):
         return self.given
 
 
-def scenario(seed: int):
-    """The property test's mapping case of ``seed`` (zones, fields, fleet, one-blob prior)."""
+def scenario(seed: int, family: str = "prop"):
+    """The property test's mapping case of ``seed`` (zones, fields, fleet, one-blob prior).
+    ``family`` ``"near"``: the prior's blob centred near a zone's edge instead (a point of the
+    first zone's boundary, uniform along it, moved by up to 2 sweep widths (5 km) in a
+    uniform direction, kept in the area): the mass the zone credit is about."""
+    import shapely
     import test_mission_property as T
 
     rng = np.random.default_rng(seed)
     lay = T._layout(rng)
-    return load_scenario(T._mapping_case(rng, lay))
+    if family == "near":
+        edge = shapely.Polygon(lay["zones"][0]).exterior
+        p = edge.interpolate(float(rng.uniform(0, edge.length)))
+        r, a = float(rng.uniform(0, 5)), float(rng.uniform(0, 2 * np.pi))
+        lay["mean"] = [float(np.clip(p.x + r * np.cos(a), 0, lay["w"])),
+                       float(np.clip(p.y + r * np.sin(a), 0, lay["h"]))]  # fmt: skip
+    elif family == "paper":
+        return _paper(seed)
+    elif family != "prop":
+        raise ValueError(family)
+    sc = load_scenario(T._mapping_case(rng, lay))
+    return sc, build_prior(sc.map)
 
 
-def run(out: Path, seeds: range, variants: list[str]) -> None:
+def _paper(seed: int):
+    """``paper_6_2`` (6 UAVs, 40 x 30 cells) with 2 random zones inside its search area
+    (:func:`~poc_env.agents.benchmarks.plan_scale.random_zones`, ``default_rng(seed)``) and
+    its random prior of episode seed ``seed`` (:func:`~poc_env.agents.experiments.evaluate.
+    episode_prior`)."""
+    from poc_env.agents.benchmarks.plan_scale import random_zones
+    from poc_env.agents.experiments.evaluate import episode_prior
+
+    sc0 = load_scenario("paper_6_2")
+    g = sc0.map
+    zones = random_zones(g.width_m / 1e3, g.height_m / 1e3, 2, np.random.default_rng(seed))
+    sc = load_scenario("paper_6_2", {"map.no_fly_zones_km": zones})
+    return sc, episode_prior(sc, seed)
+
+
+def run(out: Path, seeds: range, variants: list[str], family: str = "prop") -> None:
     for s in seeds:
-        sc = scenario(s)
-        prior = build_prior(sc.map)
+        sc, prior = scenario(s, family)
         for v in variants:
             t0 = time.process_time()
             plan = make_allocation_plan(sc, prior=prior, seed=s, options=VARIANTS[v]())
             cpu = time.process_time() - t0
-            f = fly(sc, _Fly(plan), s)
+            f = fly(sc, _Fly(plan), s, prior)
             pol = plan["optimizer"]["settings"].get("polish", {})
             rec = {
-                "seed": s, "variant": v, "planned": plan["posc"], "flown": f.posc,
+                "seed": s, "family": family, "variant": v, "planned": plan["posc"], "flown": f.posc,
                 "nofly": f.nofly_steps, "oob": f.oob_steps, "collision": f.collision_steps,
                 "landed": f.landed, "uavs": len(plan["uavs"]),
                 "zones": len(sc.map.no_fly_zones_m), "plan_cpu_s": round(cpu, 3),
@@ -149,6 +180,7 @@ def main() -> None:
     r.add_argument("out", type=Path)
     r.add_argument("--seeds", required=True)
     r.add_argument("--variants", required=True)
+    r.add_argument("--family", default="prop", choices=("prop", "near", "paper"))
     s = sub.add_parser("summary")
     s.add_argument("files", type=Path, nargs="+")
     s.add_argument("--base", required=True)
@@ -157,7 +189,7 @@ def main() -> None:
     if a.cmd == "run":
         lo, hi = (int(v) for v in a.seeds.split("-"))
         a.out.parent.mkdir(parents=True, exist_ok=True)
-        run(a.out, range(lo, hi), a.variants.split(","))
+        run(a.out, range(lo, hi), a.variants.split(","), a.family)
     else:
         summary(a.files, a.base, a.new)
 
