@@ -89,7 +89,7 @@ def test_zone_guard_rejects_entering_and_deepening_legs_only():
 
 @pytest.mark.parametrize("bad", [1, "yes", None])
 def test_polish_zones_option_is_checked(bad):
-    with pytest.raises(ConfigError, match="options.polish_zones"):
+    with pytest.raises(ConfigError, match=r"options\.polish_zones"):
         PlanOptions(polish_zones=bad)
 
 
@@ -111,12 +111,13 @@ def test_zone_reach_option_reaches_the_objective_on_maps_with_zones_only():
     assert _entering(sc, [u["waypoints_m"] for u in wide["uavs"]]) == (0, 0)
     free = load_scenario("small")
     plain = make_allocation_plan(free, prior=prior)
-    assert make_allocation_plan(free, prior=prior, options=PlanOptions(zone_reach=4.0))[
-        "uavs"
-    ] == plain["uavs"]
+    assert (
+        make_allocation_plan(free, prior=prior, options=PlanOptions(zone_reach=4.0))["uavs"]
+        == plain["uavs"]
+    )
 
 
 @pytest.mark.parametrize("bad", [0, -1.0, 17.0, "2", True, float("nan")])
 def test_zone_reach_option_is_checked(bad):
-    with pytest.raises(ConfigError, match="options.zone_reach"):
+    with pytest.raises(ConfigError, match=r"options\.zone_reach"):
         PlanOptions(zone_reach=bad)
