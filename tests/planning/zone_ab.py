@@ -60,11 +60,30 @@ VARIANTS: dict[str, Any] = {
         f"reach{r:g}": (lambda r=r: _opts("default", zone_reach=r))
         for r in (0.25, 0.75, 1.0, 1.5, 2.0, 4.0)
     },
+    "soft": lambda: PlanOptions(),  # the zone credit by one line's POD (_soft_share)
+    "standard_soft": lambda: _opts("standard"),
     **{
         f"standard_reach{r:g}": (lambda r=r: _opts("standard", zone_reach=r))
         for r in (0.75, 1.0, 1.5, 2.0)
     },
 }
+
+
+def _soft_share(self, grid, *, reach_m, zones_only=False, samples_per_cell=None):
+    """The ``soft`` variant's zone credit (an experiment, patched into the router for the
+    run; not in the planner): each point inside the keep-out area credited by the
+    inverse-cube POD of one line flown along its outside at its depth ``d``,
+    ``1 - exp(-W^2 / (4 pi d^2))`` (1 within W/4), as a sum of the router's binary
+    shares at depths W/4 .. 4 W (``ZoneRouter.reach_share``, the one implementation)."""
+    w = 2.0 * reach_m  # the planner asks for W/2
+    r = w * np.array([0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0])
+    p = 1.0 - np.exp(-(w**2) / (4 * np.pi * r**2))
+    p[0] = 1.0
+    wts = p - np.append(p[1:], 0.0)
+    return sum(wt * _PLAIN_SHARE(self, grid, reach_m=float(rr)) for wt, rr in zip(wts, r))
+
+
+_PLAIN_SHARE: Any = None
 
 
 class _Fly(PlanPolicy):
@@ -120,6 +139,12 @@ def run(out: Path, seeds: range, variants: list[str], family: str = "prop") -> N
     for s in seeds:
         sc, prior = scenario(s, family)
         for v in variants:
+            global _PLAIN_SHARE
+            from poc_env.sim.routing import ZoneRouter
+
+            if _PLAIN_SHARE is None:
+                _PLAIN_SHARE = ZoneRouter.reach_share
+            ZoneRouter.reach_share = _soft_share if v.startswith("soft") else _PLAIN_SHARE
             t0 = time.process_time()
             plan = make_allocation_plan(sc, prior=prior, seed=s, options=VARIANTS[v]())
             cpu = time.process_time() - t0
