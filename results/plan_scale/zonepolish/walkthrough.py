@@ -5,7 +5,6 @@ planned and flown POS_C, no-fly and collision steps. Run from the repository roo
 ``OMP_NUM_THREADS=1 .venv/bin/python results/plan_scale/zonepolish/walkthrough.py``."""
 
 import dataclasses
-import importlib.util
 import json
 import subprocess
 import sys
