@@ -8,7 +8,8 @@ test.
     its one-blob prior) is planned by the allocation planner with each variant's options
     (:data:`VARIANTS`), variants interleaved per seed (``--family near``: the prior's blob
     centred near a zone's edge; ``--family paper``: ``paper_6_2`` with 2 random zones and its
-    random priors, :func:`scenario`), and each plan flown once in the
+    random priors; ``--family free``: the ``prop`` cases without their zones,
+    :func:`scenario`), and each plan flown once in the
     environment by the plan policies' follower (:func:`poc_env.agents.testing.flights.fly`,
     episode seed = case seed): one JSON line per plan with the planned ``posc``, the flown POSC,
     the no-fly, out-of-bounds and eq. 21 collision steps, the planning time and the 1-minute
@@ -114,9 +115,12 @@ def scenario(seed: int, family: str = "prop"):
                        float(np.clip(p.y + r * np.sin(a), 0, lay["h"]))]  # fmt: skip
     elif family == "paper":
         return _paper(seed)
-    elif family != "prop":
+    elif family not in ("prop", "free"):
         raise ValueError(family)
-    sc = load_scenario(T._mapping_case(rng, lay))
+    case = T._mapping_case(rng, lay)
+    if family == "free":  # the same case without its zones (is a change the zones' doing?)
+        case["map"]["no_fly_zones_km"], case["map"]["no_fly_names"] = [], []
+    sc = load_scenario(case)
     return sc, build_prior(sc.map)
 
 
@@ -205,7 +209,7 @@ def main() -> None:
     r.add_argument("out", type=Path)
     r.add_argument("--seeds", required=True)
     r.add_argument("--variants", required=True)
-    r.add_argument("--family", default="prop", choices=("prop", "near", "paper"))
+    r.add_argument("--family", default="prop", choices=("prop", "near", "paper", "free"))
     s = sub.add_parser("summary")
     s.add_argument("files", type=Path, nargs="+")
     s.add_argument("--base", required=True)
