@@ -234,7 +234,8 @@ def zone_guard(router: Any) -> Callable[[np.ndarray, np.ndarray], bool] | None:
         a, b = new[:-1], new[1:]
         if router.enters_zones(a, b).any():
             return True
-        return int(router.crosses(a, b).sum()) > int(router.crosses(old[:-1], old[1:]).sum())
+        n_new = int(router.crosses(a, b).sum())  # the old legs counted only if needed
+        return n_new > 0 and n_new > int(router.crosses(old[:-1], old[1:]).sum())
 
     return bad
 
