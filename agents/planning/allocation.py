@@ -52,9 +52,12 @@
 7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
-   17-18 and the refinement's airspace check hold), so ``posc`` never drops; not on maps with
-   no-fly zones, nor on maps of more than ``options.polish_max_cells`` cells a side where it
-   is set (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
+   17-18 and the refinement's airspace check hold), so ``posc`` never drops; on maps with
+   no-fly zones no candidate may enter a zone or cut the router's clearance ring
+   (:func:`~poc_env.agents.planning.polish.zone_guard`; i24-zonepolish; ``options.
+   polish_zones=False`` skips the polish there as before, and the regrade always does); not
+   on maps of more than ``options.polish_max_cells`` cells a side where it is set
+   (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
    settings record its passes and kept moves (``polish``).
    With ``options.polish_lines`` passes (off by default; i24-lines) a second polish follows,
    with the polish's moves and its ``block`` moves (a run of lawnmower lines translated as
@@ -556,7 +559,7 @@ def make_allocation_plan(
     router = ZoneRouter.for_scenario(sc)
     full_prior = prior
     if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
-        prior = prior * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
+        prior = prior * router.reach_share(grid, reach_m=opt.zone_reach * sc.sensor.sweep_width_m)
         if reason is None and float(prior.sum()) <= 0:
             reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav
@@ -831,6 +834,9 @@ def make_allocation_plan(
         for stage, passes, kinds, radii, box_radii in later:
             if not passes:
                 continue
+            if stage == "regrade" and router.active:  # the regrade does not see the zones
+                out = (out[0], out[1], {**out[2], "regrade_skipped": "no-fly zones"})
+                continue
             if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly
                 pr, val, stats = polish_for(
                     sc, out[0], full_prior, passes, speeds=v,
@@ -867,11 +873,13 @@ def make_allocation_plan(
             block_windows=opt.polish_lines_windows,  # i24-cheapolish (block moves only)
             block_radii=opt.polish_lines_block_radii or None,
             **({} if box_radii is None else {"box_radii": box_radii}),
+            # i24-zonepolish: with zones, no candidate enters one (eq. 20; polish.zone_guard)
+            **({"router": router} if router.active and opt.polish_zones else {}),
         )
 
     polished: dict[str, Any] | None = None
     polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes or opt.regrade)
-    if polishing and router.active:  # eq. 20: the polish does not see the zones
+    if polishing and router.active and not opt.polish_zones:  # eq. 20: zones not seen
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
     elif polishing and not opt.polish_here(grid.nx, grid.ny):  # the size rule (i24-fastpolish)
         polished = {"passes": 0, "moves": 0, "skipped": "map larger than polish_max_cells"}

@@ -23,16 +23,13 @@ import shapely
 from poc_env.agents.planning.flight_rules import Speeds
 from poc_env.agents.planning.refine import track
 from poc_env.config import Scenario
+from poc_env.sim.autopilot import FAN_DEG
 from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.probability_map import Grid
 
 #: the width of a lane round a zone, in units of ``d_s`` (:func:`lanes`).
 LANE = 1.5
-#: least bearing difference between field-mates flying out (degrees; the allocation planner's
-#: fan-out, :func:`poc_env.agents.planning.allocation._fan_out`): within ``d_s / sin FAN_DEG``
-#: of an airfield field-mates are together anyway.
-FAN_DEG = 20.0
 #: planned times (s) within which two UAVs at the same place conflict: the follower's timing
 #: drifts from the planned one (1-2 min on paper_6_2, docs/PLANNER.md).
 SLACK_S = 120.0

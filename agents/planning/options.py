@@ -228,6 +228,15 @@ class PlanOptions:
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
     also_default: bool = False
+    #: polish on maps with no-fly zones too (i24-zonepolish): no candidate may enter a zone or
+    #: cut the router's clearance (:func:`~poc_env.agents.planning.polish.zone_guard`); False:
+    #: the polish is skipped there, as it was before.
+    polish_zones: bool = True
+    #: the zone credit (i24-zonepolish): the planners' objective counts the prior inside and
+    #: near the zones by the share of each cell within this lateral reach, in sweep widths, of
+    #: the keep-out area's outside (:meth:`~poc_env.sim.routing.ZoneRouter.reach_share`); 0.5:
+    #: the sweep's half width, the eq. 10 model.
+    zone_reach: float = 0.5
 
     def __post_init__(self) -> None:
         _positive_tuple("levels", self.levels, integer=True, high=64)
@@ -269,6 +278,7 @@ class PlanOptions:
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
         _number("regrade", self.regrade, 0, 100, integer=True)
+        _number("zone_reach", self.zone_reach, 0.0, 16.0, closed_low=False)
         if self.regrade_at not in ("first", "between", "end"):
             raise ConfigError("options.regrade_at", self.regrade_at, '"first", "between" or "end"')
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)
@@ -279,7 +289,7 @@ class PlanOptions:
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
                  "relax_start", "chain_early", "also_default", "part", "share_tables", "axis",
-                 "excursions", "sampled", "polish_grade")  # fmt: skip
+                 "excursions", "sampled", "polish_grade", "polish_zones")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")

@@ -77,8 +77,15 @@ moved and inserted waypoints inside the map, and, with ``airspace``, no more eq.
 violations at the planned positions (:class:`~poc_env.agents.planning.refine.AirspaceCount`,
 the best :data:`~poc_env.agents.planning.refine.TRIES` fitting candidates tried in turn). The
 search stops after ``passes`` passes over all waypoints or a pass without a kept move:
-deterministic (no clock, no random draw). No-fly zones are not seen: the allocation planner
-polishes only on maps without zones.
+deterministic (no clock, no random draw).
+
+**No-fly zones** (i24-zonepolish; eq. 20): with a ``router`` (the plan's
+:class:`~poc_env.sim.routing.ZoneRouter`) a candidate is also rejected if its legs enter a zone
+or cross the router's obstacle (the zones grown by the clearance ``c``, where the router's own
+ways round run outside) more often than the legs it replaces (:func:`zone_guard`), so the
+polished routes keep ``c`` from every zone as the router's routes do; eq. 21 is held as
+without zones, by the airspace count at the planned positions. Without a router (or without
+zones) nothing changes, bit for bit.
 """
 
 from __future__ import annotations
@@ -204,6 +211,37 @@ class Exposure:
         return out
 
 
+def zone_guard(router: Any) -> Callable[[np.ndarray, np.ndarray], bool] | None:
+    """Eq. 20 for a local search (i24-zonepolish): ``bad(old, new)`` is True if the polyline
+    ``new`` (a candidate's points, (P, 2)) enters a no-fly zone, or crosses ``router``'s
+    obstacle (the zones grown by the clearance, :meth:`~poc_env.sim.routing.ZoneRouter.crosses`:
+    compiled segment tests on prepared edges) on more legs than ``old`` (the points it
+    replaces) does -- a route already inside the clearance ring (an airfield near a zone) may
+    keep, not deepen, that. None (nothing to check) without a router or without zones.
+
+    Parameters
+    ----------
+    router:
+        A :class:`~poc_env.sim.routing.ZoneRouter` or None.
+
+    Returns
+    -------
+    callable or None
+        ``bad(old, new) -> bool``.
+    """
+    if router is None or not router.active:
+        return None
+
+    def bad(old: np.ndarray, new: np.ndarray) -> bool:
+        a, b = new[:-1], new[1:]
+        if router.enters_zones(a, b).any():
+            return True
+        n_new = int(router.crosses(a, b).sum())  # the old legs counted only if needed
+        return n_new > 0 and n_new > int(router.crosses(old[:-1], old[1:]).sum())
+
+    return bad
+
+
 def _legs(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return points[:-1], points[1:]
 
@@ -324,6 +362,7 @@ def polish_routes(
     block_windows: Sequence[int] = BLOCK_WINDOWS,
     block_radii: Sequence[float] | None = None,
     focus: int | None = None,
+    router: Any = None,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
@@ -342,7 +381,9 @@ def polish_routes(
     moves' windows (waypoints; default :data:`BLOCK_WINDOWS`), ``block_radii`` their radii in
     sweep widths (None: ``radii``); ``focus`` (None: off) -- after the first pass, the grade
     and block moves only at waypoints within ``focus`` of those a move kept in the pass before
-    changed (measured not to pay on ``paper_6_2``: docs/PLANNER.md, "Cheaper candidates")."""
+    changed (measured not to pay on ``paper_6_2``: docs/PLANNER.md, "Cheaper candidates").
+    ``router`` (i24-zonepolish): the plan's :class:`~poc_env.sim.routing.ZoneRouter`; with
+    zones, candidates are checked by :func:`zone_guard` (module docstring, "No-fly zones")."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
@@ -371,6 +412,7 @@ def polish_routes(
     times: Any = st.times
     n, w = len(paths), st.w
     value = ex.pos()
+    zone_bad = zone_guard(router)
 
     tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
     turn_cost = TURN_SHARE / turn_rate  # ``route_fits``' turn cost (eq. 17 with the turns)
@@ -413,6 +455,8 @@ def polish_routes(
             cj = int(order[t])
             t += 1
             cand = np.concatenate([path[:i0], seqs[cj], path[i1 + 1 :]])
+            if zone_bad is not None and zone_bad(old, seqs[cj]):
+                continue
             if airspace is not None:
                 tried += 1
                 v_new, state = count.move(k, *track(cand, speeds, turn_rate, times, h0[k]))
@@ -573,6 +617,8 @@ def polish_routes(
             if not all(
                 route_fits(p, speeds, turn_rate, budget, reserve, h0[k]) for k, p in zip(ks, fp)
             ):
+                continue
+            if zone_bad is not None and any(zone_bad(paths[k], p) for k, p in zip(ks, fp)):
                 continue
             if airspace is not None:
                 tried += 1

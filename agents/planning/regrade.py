@@ -34,8 +34,10 @@ offsets of all the lines of a run together (i24-regrade):
    (:func:`~poc_env.agents.planning.refine.route_fits`), inside the map, no more eq. 21 / 24
    violations at the planned positions (:class:`~poc_env.agents.planning.refine.AirspaceCount`).
 
-Deterministic: no clock, no random draw. No-fly zones are not seen (as the polish: the
-allocation planner regrades only on maps without zones).
+Deterministic: no clock, no random draw. No-fly zones are not seen: the allocation planner
+regrades only on maps without zones (the polish sees them since i24-zonepolish, through
+:func:`~poc_env.agents.planning.polish.zone_guard`; the regrade's candidates do not go through
+it yet).
 """
 
 from __future__ import annotations

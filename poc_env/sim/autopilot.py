@@ -31,6 +31,12 @@ from poc_env.sim.core import Params
 from poc_env.sim.observations import decode_vector, split_observation
 from poc_env.sim.routing import ZoneRouter, clearance_m, reach_and_turn_m
 
+#: least bearing difference (degrees) between field-mates flying out: the allocation
+#: planner's fan-out (:func:`poc_env.agents.planning.allocation._fan_out`) and the follower's
+#: hop out of the field for UAVs given nothing (:func:`_leave_fields`); within
+#: ``d_s / sin FAN_DEG`` of an airfield field-mates are together anyway.
+FAN_DEG = 20.0
+
 
 def steer(params: Params, xy, heading, speed, pitch, z, goal, target_speed) -> np.ndarray:
     """Normalised actions (..., 3) that turn towards ``goal`` at ``target_speed``, level."""
@@ -128,22 +134,65 @@ def _lookahead(p, q, xy, ahead: float) -> np.ndarray:
     return p + d * min(max(t, 0.0), length) / length
 
 
-def _leave_field(params: Params, k: int, wps: np.ndarray) -> np.ndarray:
-    """``wps`` of UAV ``k``, or, when it is empty and the UAV takes off inside its landing
-    field's landing radius, one point twice that radius out towards the map's centre: a UAV
-    lands only after having left the radius (:func:`poc_env.sim.core.step`), so one given
-    nothing to fly circled there until it crashed at T (config-audit)."""
-    if len(wps):
-        return wps
-    land = np.asarray(params.landing[k], dtype=float)
+def _leave_fields(params: Params, waypoints: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """``waypoints`` (one ``(m, 2)`` array per UAV) with one point given to every UAV that has
+    none and takes off inside its landing field's landing radius: a UAV lands only after
+    having left the radius (:func:`poc_env.sim.core.step`), so one given nothing to fly
+    circled there until it crashed at T (config-audit). The point lies twice that radius out
+    from the field, towards the map's centre; field-mates given nothing all flew that one
+    point at the same time, in step, eq. 21 collisions on every step of the hop (i24-flownsep:
+    all 20-56 flown collision steps away from the fields on the deconfliction's ``mono2``
+    case). So each such UAV, in index order, takes the first bearing of centre, centre +
+    ``FAN_DEG``, centre - ``FAN_DEG``, centre + 2 ``FAN_DEG``, ... that is at least
+    ``FAN_DEG`` from the outbound bearing of every field-mate (the first waypoint of a routed
+    one, the point of one served before it; straight legs ``FAN_DEG`` apart are ``d_s`` apart
+    from ``d_s / sin FAN_DEG`` out) and whose point lies in eq. 20's operating area and
+    whose leg enters no no-fly zone (the centre bearing is always allowed, as before); failing
+    that, the allowed bearing farthest from them. A UAV without field-mates, or whose
+    field-mates leave on bearings ``FAN_DEG`` from the centre's, flies the centre's point."""
+    out = [np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints]
     radius = params.scenario.episode.landing_radius_m
-    if float(np.hypot(*(np.asarray(params.takeoff[k]) - land))) > radius:
-        return wps  # it leaves the radius on its way home
-    x0, y0, x1, y1 = params.grid.bounds
-    d = np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)]) - land
-    norm = float(np.hypot(*d))
-    d = d / norm if norm > 0 else np.array([1.0, 0.0])
-    return (land + 2.0 * radius * d).reshape(1, 2)
+    takeoff = np.asarray(params.takeoff, dtype=float).reshape(-1, 2)
+    land_all = np.asarray(params.landing, dtype=float).reshape(-1, 2)
+    keys = [tuple(np.round(t, 3)) for t in takeoff]
+    gap = np.radians(FAN_DEG)
+    bx0, by0, bx1, by1 = params.bounds
+    offsets = [0] + [s * j for j in range(1, int(np.ceil(np.pi / gap)) + 1) for s in (1, -1)]
+    for k in range(len(out)):
+        if len(out[k]):
+            continue
+        land = land_all[k]
+        if float(np.hypot(*(takeoff[k] - land))) > radius:
+            continue  # it leaves the radius on its way home
+        x0, y0, x1, y1 = params.grid.bounds
+        d = np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)]) - land
+        norm = float(np.hypot(*d))
+        d = d / norm if norm > 0 else np.array([1.0, 0.0])
+        taken = [
+            float(np.arctan2(*(out[j][0] - takeoff[j])[::-1]))
+            for j in range(len(out))
+            if j != k and keys[j] == keys[k] and len(out[j])
+        ]
+        base = float(np.arctan2(d[1], d[0]))
+        best, best_gap = d, -1.0
+        for i, off in enumerate(offsets):
+            ang = base + off * gap
+            u = d if off == 0 else np.array([np.cos(ang), np.sin(ang)])
+            p = land + 2.0 * radius * u
+            if i and not (bx0 <= p[0] <= bx1 and by0 <= p[1] <= by1):
+                continue
+            if i and len(params.zones) and bool(np.any(params.zones.segment_crosses(land, p))):
+                continue
+            apart = min(
+                (abs((ang - t + np.pi) % (2 * np.pi) - np.pi) for t in taken), default=np.pi
+            )
+            if apart >= gap - 1e-9:
+                best = u
+                break
+            if apart > best_gap:
+                best, best_gap = u, apart
+        out[k] = (land + 2.0 * radius * best).reshape(1, 2)
+    return out
 
 
 class WaypointFollower:
@@ -181,10 +230,7 @@ class WaypointFollower:
                 raise ConfigError(
                     name, v, f"within [{u.min_speed_mps:g}, {u.max_speed_mps:g}] m/s (eq. 19)"
                 )
-        self.waypoints = [
-            _leave_field(params, k, np.asarray(w, dtype=float).reshape(-1, 2))
-            for k, w in enumerate(waypoints)
-        ]
+        self.waypoints = _leave_fields(params, waypoints)
         self.index = np.zeros(len(self.agents), dtype=int)
         # the closest-approach rule's memory: the last distance to the current waypoint and
         # whether it has shrunk since the waypoint became current

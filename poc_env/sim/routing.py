@@ -363,6 +363,15 @@ class ZoneRouter:
             return np.zeros(len(np.asarray(starts).reshape(-1, 2)), dtype=bool)
         return self._edges.segment_crosses(np.asarray(starts, float), np.asarray(ends, float))
 
+    def enters_zones(self, starts, ends) -> np.ndarray:
+        """Bool (L,): legs ``starts -> ends`` ((L, 2) each) that meet the zones themselves
+        (grown by 1 m; eq. 20 proper, not the clearance), shapely's ``intersects`` answered as
+        the module doc's "Speed" says (i24-zonepolish: the polish's check)."""
+        a = np.asarray(starts, dtype=float).reshape(-1, 2)
+        if not self.active or not len(a):
+            return np.zeros(len(a), dtype=bool)
+        return self._hits(self.raw, a, np.asarray(ends, dtype=float).reshape(-1, 2))
+
     def pieces(self, a, b) -> list[tuple[np.ndarray, np.ndarray]]:
         """The parts of the leg ``a -> b`` outside the keep-out area, in flight order."""
         a = np.asarray(a, dtype=float)

@@ -157,17 +157,6 @@ def test_polish_arguments_are_checked():
         _polish(sc, [[], [], []], prior, radii=())
 
 
-def test_no_polish_on_maps_with_no_fly_zones():
-    """The moves do not see the zones (eq. 20): on a map with one the plan is the unpolished
-    one and the settings say the polish was skipped."""
-    zone = {"map.no_fly_zones_km": [[[15, 10], [25, 10], [25, 30], [15, 30]]]}
-    sc = load_scenario("small", zone)
-    base = make_allocation_plan(sc)
-    pol = make_allocation_plan(sc, options=PlanOptions(polish=2))
-    assert [u["waypoints_m"] for u in pol["uavs"]] == [u["waypoints_m"] for u in base["uavs"]]
-    assert pol["optimizer"]["settings"]["polish"]["skipped"] == "no-fly zones"
-
-
 def test_the_size_rule_skips_the_polish_on_larger_maps_only():
     """``polish_max_cells`` (i24-fastpolish): on a map of more cells a side than it allows the
     plan is the unpolished one and the settings say why; at its size the polish runs (0: any

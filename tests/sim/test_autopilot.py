@@ -73,3 +73,41 @@ def test_a_uav_with_no_waypoints_leaves_its_field_and_lands():
         obs, *_ = env.step(follower.predict(obs)[0])
     st = env.sim_state
     assert st.landed.all() and not st.crashed.any()
+
+
+def _fly_counting_collisions_away(env, follower) -> int:
+    """Collision UAV-steps (eq. 21) of a flight farther than ``d_s / sin FAN_DEG`` from the
+    UAV's fields (within it field-mates taking off together are together anyway)."""
+    from poc_env.sim.autopilot import FAN_DEG
+
+    obs, _ = env.reset(seed=0)
+    follower.reset()
+    p = env.params
+    near = env.scenario.constraints.safety_distance_m / np.sin(np.radians(FAN_DEG))
+    count = 0
+    while env.agents:
+        obs, _, _, _, infos = env.step(follower.predict(obs)[0])
+        xy = env.sim_state.pos[0, :, :2]
+        away = (np.hypot(*(xy - p.takeoff).T) > near) & (np.hypot(*(xy - p.landing).T) > near)
+        for a, i in infos.items():
+            count += int(i["violation_collision"] and away[int(a.rsplit("_", 1)[1])])
+    return count
+
+
+def test_field_mates_given_nothing_hop_out_apart():
+    """Field-mates a plan gives nothing all flew one point out of the field at the same time
+    (eq. 21 collisions on every step of the hop: all of the deconfliction's ``mono2`` flown
+    collisions away from the fields, i24-flownsep). Each now hops out on its own bearing, at
+    least FAN_DEG from its field-mates' (a routed one's first waypoint among them): no
+    collision step away from the field, and every UAV lands."""
+    env = poc_env.parallel_env("small", overrides={"fleet": [{"takeoff": "A", "count": 4}]})
+    centre = np.array([[20e3, 20e3], [20e3, 35e3]])  # UAV 0 flies out towards the centre
+    follower = WaypointFollower(env.params, [centre] + [np.empty((0, 2))] * 3, env.possible_agents)
+    from poc_env.sim.autopilot import FAN_DEG
+
+    out = np.array([w[0] for w in follower.waypoints]) - np.asarray(env.params.takeoff)
+    bearing = np.arctan2(out[:, 1], out[:, 0])
+    apart = np.abs((bearing[:, None] - bearing[None] + np.pi) % (2 * np.pi) - np.pi)
+    assert apart[~np.eye(4, dtype=bool)].min() >= np.radians(FAN_DEG) - 1e-9
+    assert _fly_counting_collisions_away(env, follower) == 0
+    assert env.sim_state.landed.all() and not env.sim_state.crashed.any()

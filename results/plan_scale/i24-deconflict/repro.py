@@ -81,11 +81,11 @@ def planned_pairs(sc, plan) -> dict:
     return out
 
 
-def flown_collisions(sc, prior, seed=5000) -> tuple[int, int, float]:
+def flown_collisions(sc, prior, seed=5000, policy=None) -> tuple[int, int, float]:
     """Flown collision UAV-steps (the environment's ``violation_collision``), those of them
     away from the airfields (the UAV farther than ``d_s / sin 20 deg`` from its take-off and
     landing field: what the deconfliction addresses) and POSC of the ``allocation_plan``
-    policy on ``prior``."""
+    policy on ``prior`` (or of ``policy``, when given)."""
     from poc_env.agents.experiments.evaluate import play
     from poc_env.agents.planning.allocation import FAN_DEG
     from poc_env.agents.policies.registry import make_policy
@@ -106,7 +106,7 @@ def flown_collisions(sc, prior, seed=5000) -> tuple[int, int, float]:
         steps[0] += int(flag.sum())
         steps[1] += int((flag & away).sum())
 
-    play(env, make_policy("allocation_plan"), seed, prior, count)
+    play(env, policy or make_policy("allocation_plan"), seed, prior, count)
     return steps[0], steps[1], float(env.sim_state.posc[0])
 
 
