@@ -4,7 +4,8 @@
 :mod:`poc_env.agents.planning.objective` for a population in one pass (the prior masses then
 come from :func:`poc_env._kernels.rectangles.rectangle_masses`, called by the objective);
 :func:`route_timeline` and :func:`route_sample` time and sample a flight along a path and
-:func:`fits_batch` times a waypoint's candidate edits and :func:`leg_samples` samples legs onto
+:func:`fits_batch` times a waypoint's candidate edits, :func:`first_fitting` the polish's
+candidates in turn, and :func:`leg_samples` samples legs onto
 the grid (:mod:`poc_env.agents.planning.refine`);
 :func:`best_box` is the greedy rectangle planner's box search
 (:mod:`poc_env.agents.planning.greedy_rectangles`) and the coverage boxes'
@@ -181,6 +182,47 @@ def fits_batch(p, i, qs, ops, v_out, v_line, v_home, turn_cost, budget, reserve,
         ok[c] = route_timeline(
             buf[:k], v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out[:k], dep[:k]
         )
+
+
+@_jit
+def first_fitting(path, i0, i1, pts, off, order, t0, t1, v_out, v_line, v_home, turn_cost,
+                  budget, reserve, heading0):  # fmt: skip
+    """The first position ``t0 <= t < t1`` in ``order`` whose candidate keeps the path ``path``
+    (m, 2) flyable, or ``t1`` if none (i24-budget: the polish's ``route_fits`` of its candidates
+    in turn, in one call): candidate ``c = order[t]`` replaces ``path[i0 : i1 + 1]`` by the
+    points ``pts[off[c] : off[c + 1]]``, and fits if :func:`route_timeline` of the path so made
+    says so (the same points, so the same answer as ``route_fits`` of
+    ``np.concatenate([path[:i0], points, path[i1 + 1:]])``; a path of fewer than 2 points
+    fits)."""
+    m = path.shape[0]
+    most = 0
+    for t in range(t0, t1):
+        c = order[t]
+        most = max(most, off[c + 1] - off[c])
+    n_max = i0 + most + (m - i1 - 1)
+    buf = np.empty((n_max, 2))
+    out = np.empty(n_max)
+    dep = np.empty(n_max)
+    for j in range(i0):
+        buf[j, 0] = path[j, 0]
+        buf[j, 1] = path[j, 1]
+    for t in range(t0, t1):
+        c = order[t]
+        k = i0
+        for q in range(off[c], off[c + 1]):
+            buf[k, 0] = pts[q, 0]
+            buf[k, 1] = pts[q, 1]
+            k += 1
+        for j in range(i1 + 1, m):
+            buf[k, 0] = path[j, 0]
+            buf[k, 1] = path[j, 1]
+            k += 1
+        if k < 2 or route_timeline(
+            buf[:k], v_out, v_line, v_home, turn_cost, budget, reserve, heading0, out[:k],
+            dep[:k],
+        ):  # fmt: skip
+            return t
+    return t1
 
 
 @_jit

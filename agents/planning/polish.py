@@ -97,8 +97,10 @@ from typing import Any
 import numpy as np
 
 from poc_env._kernels import sensing as _sensing
+from poc_env.agents.planning import _kernels
 from poc_env.agents.planning.refine import (
     TRIES,
+    TURN_SHARE,
     Airspace,
     AirspaceCount,
     _dedupe,
@@ -413,6 +415,7 @@ def polish_routes(
     zone_bad = zone_guard(router)
 
     tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
+    turn_cost = TURN_SHARE / turn_rate  # ``route_fits``' turn cost (eq. 17 with the turns)
 
     def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray] | np.ndarray) -> bool:
         """Keep the best of the candidates ``seqs`` for ``paths[k][i0 : i1 + 1]`` (same first
@@ -425,19 +428,33 @@ def polish_routes(
             first = np.arange(len(seqs) + 1, dtype=np.int64) * (seqs.shape[1] - 1)
             starts = seqs[:, :-1].reshape(-1, 2)
             ends = seqs[:, 1:].reshape(-1, 2)
+            pts = seqs.reshape(-1, 2)
+            off = np.arange(len(seqs) + 1, dtype=np.int64) * seqs.shape[1]
         else:
             first = np.zeros(len(seqs) + 1, dtype=np.int64)
             first[1:] = np.cumsum([len(q) - 1 for q in seqs])
             starts = np.concatenate([q[:-1] for q in seqs])
             ends = np.concatenate([q[1:] for q in seqs])
+            pts = np.concatenate(seqs)
+            off = first + np.arange(len(seqs) + 1, dtype=np.int64)
         gain = ex.gains(old[:-1], old[1:], starts, ends, first)
-        tried = 0
-        for cj in np.argsort(-gain, kind="stable"):
-            if not gain[cj] > TOL or tried >= TRIES:
+        order = np.argsort(-gain, kind="stable")
+        ok = gain[order] > TOL  # the candidates tried: those before the first that gains no more
+        n_ok = len(ok) if ok.all() else int(np.argmin(ok))
+        heading = np.nan if h0[k] is None else float(h0[k])
+        t, tried = 0, 0
+        while tried < TRIES:
+            # i24-budget: the next candidate in order that keeps the route flyable
+            # (``route_fits`` of each in turn, in one compiled call)
+            t = _kernels.first_fitting(
+                path, i0, i1, pts, off, order, t, n_ok, speeds.out, speeds.line, speeds.home,
+                turn_cost, budget, reserve, heading,
+            )  # fmt: skip
+            if t >= n_ok:
                 break
+            cj = int(order[t])
+            t += 1
             cand = np.concatenate([path[:i0], seqs[cj], path[i1 + 1 :]])
-            if not route_fits(cand, speeds, turn_rate, budget, reserve, h0[k]):
-                continue
             if zone_bad is not None and zone_bad(old, seqs[cj]):
                 continue
             if airspace is not None:

@@ -698,6 +698,59 @@ def legs_exposure(law, a, b, w, cutoff, reach, cell, h, sign, expo):
 
 
 @_jit
+def _kept_steps(old_a, old_b, law, w, cutoff, reach, cell, h, base, work, box_o):
+    """:func:`leg_exposure` of the steps ``old_a -> old_b`` taken out of ``base`` (sign -1, in
+    turn, ``box_o`` grown to hold them, as :func:`legs_exposure` would), each step's exposure
+    also kept as a tile (i24-budget): ``(tiles, tbox, toff)``, step ``o``'s values
+    ``min(F, EXPOSURE_CAP)`` (sign +1) over its box ``tbox[o]`` (first row, end row, first
+    column, end column) in row-major order at ``tiles[toff[o]:toff[o + 1]]``. ``work`` (zero)
+    is the scratch a step is computed in, zero again on return. Exact: a step's value is
+    computed once into zero (``0.0 + v == v``) and taken out as ``-1.0 x v``, the same number
+    the sign gives; the box's points outside the step's rows get ``-0.0``, which leaves every
+    value as it is."""
+    ny, nx = work.shape
+    n_old = old_a.shape[0]
+    tbox = np.empty((n_old, 4), np.int64)
+    toff = np.zeros(n_old + 1, np.int64)
+    tiles = np.empty(0)
+    for o in range(n_old):
+        tb = tbox[o]
+        tb[0], tb[1], tb[2], tb[3] = ny, 0, nx, 0
+        leg_exposure(
+            law, old_a[o, 0], old_a[o, 1], old_b[o, 0], old_b[o, 1], w, cutoff, reach, cell,
+            h, 1.0, work, tb,
+        )  # fmt: skip
+        toff[o + 1] = toff[o] + max(tb[1] - tb[0], 0) * max(tb[3] - tb[2], 0)
+        if toff[o + 1] > tiles.shape[0]:
+            grown = np.empty(max(2 * tiles.shape[0], toff[o + 1], 4096))
+            grown[: toff[o]] = tiles[: toff[o]]
+            tiles = grown
+        s = toff[o]
+        for j in range(tb[0], tb[1]):
+            for k in range(tb[2], tb[3]):
+                v = work[j, k]
+                tiles[s] = v
+                s += 1
+                base[j, k] += -1.0 * v
+                work[j, k] = 0.0
+        box_o[0] = min(box_o[0], tb[0])
+        box_o[1] = max(box_o[1], tb[1])
+        box_o[2] = min(box_o[2], tb[2])
+        box_o[3] = max(box_o[3], tb[3])
+    return tiles, tbox, toff
+
+
+@_jit_inline
+def _kept_step(ax, ay, bx, by, old_a, old_b):
+    """The index of the step ``a -> b`` among the steps ``old_a -> old_b`` (the same four
+    coordinates), or -1."""
+    for o in range(old_a.shape[0]):
+        if old_a[o, 0] == ax and old_b[o, 0] == bx and old_a[o, 1] == ay and old_b[o, 1] == by:
+            return o
+    return -1
+
+
+@_jit
 def exposure_gains(
     live, old_a, old_b, new_a, new_b, first, law, w, cutoff, reach, cell, h, base, work,
     out,
@@ -708,14 +761,12 @@ def exposure_gains(
     ``out[c]`` (the points the steps reach only: every other point keeps its exposure).
     ``base`` and ``work`` (the fine grid's shape) are zero scratch arrays, zero again on
     return. Per point ``live (1 - exp(-d))``, ``d`` the change of its exposure (``expm1``: no
-    cancellation)."""
+    cancellation). A candidate's step that is one of the old steps (a leg the move keeps) adds
+    that step's kept values (:func:`_kept_steps`) instead of computing them again
+    (i24-budget: the same numbers added in the same order, so the same gains bit for bit)."""
     ny, nx = live.shape
     box_o = np.array([ny, 0, nx, 0])
-    for o in range(old_a.shape[0]):
-        leg_exposure(
-            law, old_a[o, 0], old_a[o, 1], old_b[o, 0], old_b[o, 1], w, cutoff, reach, cell,
-            h, -1.0, base, box_o,
-        )  # fmt: skip
+    tiles, tbox, toff = _kept_steps(old_a, old_b, law, w, cutoff, reach, cell, h, base, work, box_o)
     box = np.empty(4, np.int64)
     for c in range(first.shape[0] - 1):
         box[:] = box_o
@@ -723,10 +774,17 @@ def exposure_gains(
             for k in range(box_o[2], box_o[3]):
                 work[j, k] = base[j, k]
         for i in range(first[c], first[c + 1]):
-            leg_exposure(
-                law, new_a[i, 0], new_a[i, 1], new_b[i, 0], new_b[i, 1], w, cutoff, reach,
-                cell, h, 1.0, work, box,
-            )  # fmt: skip
+            ax, ay, bx, by = new_a[i, 0], new_a[i, 1], new_b[i, 0], new_b[i, 1]
+            o = _kept_step(ax, ay, bx, by, old_a, old_b)
+            if o < 0:
+                leg_exposure(law, ax, ay, bx, by, w, cutoff, reach, cell, h, 1.0, work, box)
+                continue
+            tb = tbox[o]  # inside box_o, so inside the box: nothing to grow
+            s = toff[o]
+            for j in range(tb[0], tb[1]):
+                for k in range(tb[2], tb[3]):
+                    work[j, k] += tiles[s]
+                    s += 1
         g = 0.0
         for j in range(box[0], box[1]):
             for k in range(box[2], box[3]):

@@ -2,6 +2,7 @@
 give the straightforward computations' results bit for bit, on random inputs: so the plans do
 not change (docs/PLANNER.md, "Faster planning on priors of many small blobs")."""
 
+import functools
 import math
 
 import numpy as np
@@ -24,6 +25,7 @@ from poc_env.agents.planning.refine import (
     candidate_edits,
     move_gains,
     route_fits,
+    route_time,
     swarm_violations,
 )
 from poc_env.config import load_scenario
@@ -426,3 +428,135 @@ def test_graded_candidates_are_the_listed_ones():
             assert np.array_equal(g, w_), trial
         head, tail = rng.normal(0, 1e5, 2), rng.normal(0, 1e5, (trial % 3, 2))
         assert np.array_equal(_framed_array(head, got, tail), np.stack(_framed(head, got, tail)))
+
+
+@functools.cache
+def _gains_reference_kernel():
+    """The polish's candidate gains as ``exposure_gains`` computed them before i24-budget kept
+    the old steps' values: the old steps taken out, then every candidate step computed, each
+    point's ``live (1 - exp(-d))`` summed in row-major order (the same compiled
+    ``leg_exposure`` and ``expm1``)."""
+    from numba import njit
+
+    from poc_env._kernels import sensing as k
+
+    @njit(error_model="numpy")
+    def run(live, old_a, old_b, new_a, new_b, first, law, w, cutoff, reach, cell, h, out):
+        ny, nx = live.shape
+        base = np.zeros((ny, nx))
+        box_o = np.array([ny, 0, nx, 0])
+        for o in range(old_a.shape[0]):
+            k.leg_exposure(law, old_a[o, 0], old_a[o, 1], old_b[o, 0], old_b[o, 1], w, cutoff,
+                           reach, cell, h, -1.0, base, box_o)  # fmt: skip
+        for c in range(first.shape[0] - 1):
+            work = base.copy()
+            box = box_o.copy()
+            for i in range(first[c], first[c + 1]):
+                k.leg_exposure(law, new_a[i, 0], new_a[i, 1], new_b[i, 0], new_b[i, 1], w,
+                               cutoff, reach, cell, h, 1.0, work, box)  # fmt: skip
+            g = 0.0
+            for j in range(ny):
+                for m in range(nx):
+                    if work[j, m] != 0.0:
+                        g += live[j, m] * -math.expm1(-work[j, m])
+            out[c] = g
+
+    return run
+
+
+def _gains_reference(live, old_a, old_b, new_a, new_b, first, law, w, cutoff, reach, cell, h):
+    """:func:`_gains_reference_kernel`'s gains of the candidates."""
+    out = np.empty(len(first) - 1)
+    _gains_reference_kernel()(live, old_a, old_b, new_a, new_b, first, law, w, cutoff, reach,
+                              cell, h, out)  # fmt: skip
+    return out
+
+
+def test_gains_with_kept_steps_are_the_computed_ones():
+    """``exposure_gains`` adds a kept old step's values where a candidate keeps that step
+    (i24-budget) and gives the gains of computing every step, bit for bit: random old legs and
+    candidates of 1-4 legs, some keeping old steps (first, last or inner ones, as the polish's
+    moves keep the legs around the waypoint moved), under every detection law; and the scratch
+    arrays are zero again."""
+    from poc_env._kernels import sensing as k
+
+    rng = np.random.default_rng(24)
+    h, ny, nx = 2500.0, 30, 40
+    w = 5000.0
+    for trial in range(24):
+        law = (k.INVERSE_CUBE, k.EXPONENTIAL, k.DEFINITE_RANGE)[trial % 3]
+        cutoff = 4 * w
+        reach = cutoff if law == k.INVERSE_CUBE else 2 * w
+        live = rng.gamma(0.5, size=(ny, nx)) * (rng.random((ny, nx)) < 0.8)
+        pts = rng.uniform(-0.1, 1.1, (int(rng.integers(2, 6)), 2)) * [nx * h, ny * h]
+        old_a, old_b, _ = k.cut_steps(pts[:-1], pts[1:], 0.0, 0.0, 2 * h)
+        cands = []
+        for _ in range(int(rng.integers(1, 12))):
+            n_new = int(rng.integers(1, 5))
+            sa, sb, _ = k.cut_steps(
+                *(lambda q: (q[:-1], q[1:]))(
+                    rng.uniform(-0.1, 1.1, (n_new + 1, 2)) * [nx * h, ny * h]
+                ),
+                0.0, 0.0, 2 * h,
+            )  # fmt: skip
+            keep = rng.choice(len(old_a), size=min(len(old_a), int(rng.integers(0, 4))),
+                              replace=False)  # fmt: skip
+            at = rng.integers(0, len(sa) + 1, size=len(keep))
+            a_list, b_list = list(sa), list(sb)
+            for o, pos in sorted(zip(keep, at), key=lambda t: -t[1]):
+                a_list.insert(int(pos), old_a[o])
+                b_list.insert(int(pos), old_b[o])
+            cands.append((np.array(a_list), np.array(b_list)))
+        new_a = np.vstack([c[0] for c in cands])
+        new_b = np.vstack([c[1] for c in cands])
+        first = np.concatenate([[0], np.cumsum([len(c[0]) for c in cands])]).astype(np.int64)
+        base, work = np.zeros((ny, nx)), np.zeros((ny, nx))
+        got = np.empty(len(cands))
+        k.exposure_gains(live, old_a, old_b, new_a, new_b, first, law, w, cutoff, reach,
+                         2 * h, h, base, work, got)  # fmt: skip
+        want = _gains_reference(live, old_a, old_b, new_a, new_b, first, law, w, cutoff,
+                                reach, 2 * h, h)  # fmt: skip
+        assert np.array_equal(got.view(np.int64), want.view(np.int64)), trial
+        assert not base.any() and not work.any(), trial
+
+
+def test_first_fitting_is_route_fits_in_turn():
+    """``_kernels.first_fitting`` (i24-budget: the polish's fit checks in one call) returns the
+    first position in the order from ``t0`` whose candidate ``route_fits`` accepts, or the end,
+    on random paths, candidate windows of several lengths (some deleting points, some
+    inserting), budgets some candidates keep and some break, with and without a heading."""
+    rng = np.random.default_rng(25)
+    speeds = Speeds(out=61.0, line=50.0, home=61.0)
+    turn = 0.2
+    for trial in range(60):
+        m = int(rng.integers(3, 9))
+        path = rng.uniform(0, 1e5, (m, 2))
+        i0 = int(rng.integers(0, m - 2))
+        i1 = int(rng.integers(i0 + 1, m))
+        cands = [
+            np.vstack([path[i0], rng.uniform(0, 1e5, (int(rng.integers(0, 4)), 2)), path[i1]])
+            for _ in range(int(rng.integers(1, 15)))
+        ]
+        pts = np.concatenate(cands)
+        off = np.concatenate([[0], np.cumsum([len(q) for q in cands])]).astype(np.int64)
+        order = rng.permutation(len(cands)).astype(np.int64)
+        heading = None if trial % 2 else float(rng.uniform(-np.pi, np.pi))
+        times = sorted(
+            route_time(np.concatenate([path[:i0], q, path[i1 + 1 :]]), speeds, turn, heading)
+            for q in cands
+        )
+        budget = float(times[len(times) // 2]) + 1.0  # about half the candidates fit
+        reserve = float(rng.uniform(0, 600))
+        for t0 in range(len(cands) + 1):
+            want = len(cands)
+            for t in range(t0, len(cands)):
+                cand = np.concatenate([path[:i0], cands[order[t]], path[i1 + 1 :]])
+                if route_fits(cand, speeds, turn, budget, reserve, heading):
+                    want = t
+                    break
+            got = _kernels.first_fitting(
+                path, i0, i1, pts, off, order, t0, len(cands), speeds.out, speeds.line,
+                speeds.home, 0.5 / turn, budget, reserve,
+                np.nan if heading is None else heading,
+            )  # fmt: skip
+            assert got == want, (trial, t0)
