@@ -104,16 +104,22 @@ class Terrain:
         x0, y0 = self.origin_m
         return (x0, y0, x0 + nx * self.cell_m, y0 + ny * self.cell_m)
 
-    def ground_at(self, xy: Any) -> np.ndarray:
-        """The highest ground (``ground_max_m``) of the cells within half a cell of each point
-        (the 2 x 2 cells around it): a bound on the ground anywhere near it."""
+    def near_cells(self, xy: Any) -> tuple[np.ndarray, ...]:
+        """Column and row indices ``(i0, i1, j0, j1)`` of the 2 x 2 cells within half a cell of
+        each point (clipped to the grid): the cells :meth:`ground_at` reads."""
         pts = np.asarray(xy, dtype=float).reshape(-1, 2)
         ny, nx = self.ground_max_m.shape
         fx = (pts[:, 0] - self.origin_m[0]) / self.cell_m - 0.5
         fy = (pts[:, 1] - self.origin_m[1]) / self.cell_m - 0.5
         i0 = np.clip(np.floor(fx).astype(int), 0, nx - 1)
         j0 = np.clip(np.floor(fy).astype(int), 0, ny - 1)
-        i1, j1 = np.clip(i0 + 1, 0, nx - 1), np.clip(j0 + 1, 0, ny - 1)
+        return i0, np.clip(i0 + 1, 0, nx - 1), j0, np.clip(j0 + 1, 0, ny - 1)
+
+    def ground_at(self, xy: Any) -> np.ndarray:
+        """The highest ground (``ground_max_m``) of the cells within half a cell of each point
+        (the 2 x 2 cells around it, :meth:`near_cells`): a bound on the ground anywhere near
+        it."""
+        i0, i1, j0, j1 = self.near_cells(xy)
         g = self.ground_max_m
         return np.maximum.reduce([g[j0, i0], g[j0, i1], g[j1, i0], g[j1, i1]])
 
@@ -545,6 +551,7 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
     if landing_xy is not None:
         z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
+    _check_field_legs(t, p, z, dist, landing_xy, where)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -555,6 +562,59 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         field_m=t.field_elevation(path[0]),
         landing_field_m=t.field_elevation(land),
     )
+
+
+def _check_field_legs(
+    t: Terrain, p: np.ndarray, z: np.ndarray, dist: np.ndarray, landing_xy: Any, where: str
+) -> None:
+    """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``).
+
+    The climb: from the take-off field's elevation at eq. 19's ``tan(beta_max)`` along the
+    mission's path (``p``, ``dist``) until it meets the profile ``z`` (a fixed-wing UAV cannot
+    climb to the profile's first altitude over the field; the profile, checked against the
+    clearance, is flown from there). The glide: straight from the approach point ``p[-1]`` at
+    ``z[-1]`` down to the landing field ``landing_xy`` (none without one). Neither can keep
+    ``min_clearance_m`` near its field, where the UAV leaves or meets the ground, and the
+    highest ground near a point (:meth:`Terrain.ground_at`, which the clearance reads: up to a
+    cell and a half away) is above a UAV on a sloping field by construction: each must stay
+    above the ground itself, the DEM's bilinear resampling (the one the fields' elevations
+    come from). Points near the field's own terrain cell (the 2 x 2 cells around them include
+    it, :meth:`Terrain.near_cells`) are not checked: the UAV stands on the field there.
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named, with the point, its ground, the distance from the field and the
+        altitude flown there.
+    """
+    grad = math.tan(t.max_pitch_rad)
+    field = t.field_elevation(p[0])
+    climb = np.minimum(z, field + grad * dist)
+    legs = [("take-off climb from", "take-off", p[0], p, climb, dist, field)]
+    if landing_xy is not None:
+        land = np.asarray(landing_xy, dtype=float)
+        final = float(np.hypot(*(land - p[-1])))
+        s = np.linspace(0.0, 1.0, max(1, math.ceil(final / (t.cell_m / 2.0))) + 1)[:, None]
+        low = t.field_elevation(land)
+        glide = (p[-1] + (land - p[-1]) * s, z[-1] + (low - z[-1]) * s[:, 0], final * (1 - s[:, 0]))
+        legs.append(("final glide to", "landing", land, *glide, low))
+    for what, name, at, xy, alt, off, elev in legs:
+        ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
+        i0, i1, j0, j1 = t.near_cells(xy)
+        fi, _, fj, _ = (int(v[0]) for v in t.near_cells(at + t.cell_m / 2.0))  # the field's cell
+        own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
+        cut = ~own & (alt <= ground)
+        if cut.any():
+            i = int(np.argmax(cut))
+            x, y = xy[i]
+            raise ConfigError(
+                where, f"ground {ground[i]:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, "
+                f"{off[i] / 1e3:.1f} km from the {name} field (at {elev:.0f} m), flown at "
+                f"{alt[i]:.0f} m",
+                f"a {what} the field within eq. 19's pitch bound uav.max_pitch_deg = "
+                f"{math.degrees(t.max_pitch_rad):g} deg that stays above the ground (re-plan "
+                f"the first or last leg away from the rising ground, or another {name} field)",
+            )  # fmt: skip
 
 
 class SteepGlideWarning(UserWarning):
