@@ -297,6 +297,7 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
                     field, str(path),
                     "a GeoTIFF with a coordinate reference system (georeference it in your GIS)",
                 )  # fmt: skip
+            _check_vertical_datum(field, path, src.crs)
             from poc_env import limits
 
             limits.check_memory(field, str(path), 8.0 * src.width * src.height, "DEM band")
@@ -333,6 +334,29 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
         )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
     return out["mean"], gmax, elev
+
+
+def _check_vertical_datum(field: str, path: Path, crs: Any) -> None:
+    """Refuse a DEM whose CRS declares **ellipsoidal** heights (a geographic or projected 3D CRS
+    on WGS84's ellipsoid, e.g. EPSG:4979): the missions fly altitudes above mean sea level
+    (QGC's MAV_FRAME_GLOBAL, the autopilot's GPS MSL altitude, KML ``absolute``), and an
+    ellipsoidal height differs from it by the geoid undulation, -106 m to +85 m over the Earth:
+    where it is negative the ground would be read that much too low and the clearance cut by
+    it. Converting needs a geoid grid (e.g. PROJ's ``us_nga_egm96_15.tif``), which pyproj does
+    not ship: without it PROJ's only transformation is a "ballpark" one that changes nothing.
+    A 2D CRS (no vertical axis) or a compound CRS with a gravity-related height (EGM96,
+    EGM2008, NAVD88, ...) is read as heights above mean sea level, as before."""
+    from pyproj import CRS
+
+    c = CRS.from_wkt(crs.to_wkt())
+    axes = [a.name.lower() for a in c.axis_info]
+    if "ellipsoidal height" in axes:
+        raise ConfigError(
+            field, f"{path.name}: ellipsoidal heights ({c.name})",
+            "a DEM of heights above mean sea level (a 2D CRS, or a compound CRS with a "
+            "gravity-related height such as EGM96 / EGM2008): convert it first, e.g. gdalwarp "
+            "-t_srs EPSG:4326+5773 with PROJ's geoid grid us_nga_egm96_15.tif installed",
+        )  # fmt: skip
 
 
 def _cells_in(origin: tuple, shape: tuple, cell: float, area: tuple) -> np.ndarray:

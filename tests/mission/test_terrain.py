@@ -621,3 +621,16 @@ def test_export_refuses_a_take_off_climb_into_the_ground(tmp_path):
         with pytest.raises(ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {u['id']}\).*take-off"):
             export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / fmt)
         assert not (tmp_path / fmt).exists()
+
+
+def test_dem_in_ellipsoidal_heights_is_refused_and_msl_heights_are_read(tmp_path):
+    """The missions fly above mean sea level (QGC MAV_FRAME_GLOBAL): a DEM whose CRS declares
+    ellipsoidal heights (EPSG:4979) is refused naming terrain.dem, nothing converted (pyproj
+    ships no geoid grid); one with EGM96 heights (EPSG:4326+5773) reads as the 2D one does
+    (i24-terrainleft: before, both were read alike)."""
+    with pytest.raises(ConfigError, match=r"terrain\.dem: got .*ellipsoidal heights"):
+        load_terrain(load_scenario(_scenario(_dem(tmp_path / "e.tif", crs="EPSG:4979"))))
+    flat = load_terrain(load_scenario(_scenario(_dem(tmp_path / "f.tif"))))
+    egm = load_terrain(load_scenario(_scenario(_dem(tmp_path / "g.tif", crs="EPSG:4326+5773"))))
+    assert np.array_equal(egm.ground_max_m, flat.ground_max_m)
+    assert egm.fields == flat.fields
