@@ -104,24 +104,36 @@ class Terrain:
         x0, y0 = self.origin_m
         return (x0, y0, x0 + nx * self.cell_m, y0 + ny * self.cell_m)
 
-    def near_cells(self, xy: Any) -> tuple[np.ndarray, ...]:
-        """Column and row indices ``(i0, i1, j0, j1)`` of the 2 x 2 cells within half a cell of
-        each point (clipped to the grid): the cells :meth:`ground_at` reads."""
-        pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+    def near_cells(self, xy: Any, to: Any = None) -> tuple[np.ndarray, ...]:
+        """Inclusive column and row index ranges ``(i_lo, i_hi, j_lo, j_hi)`` (clipped to the
+        grid) of the cells within half a cell of each point ``xy`` (the 2 x 2 cells around
+        it), or, with ``to``, of any point of each straight segment ``xy[k] -> to[k]`` (the
+        cells its bounding box grown by half a cell overlaps): the cells :meth:`ground_at`
+        reads."""
+        a = np.asarray(xy, dtype=float).reshape(-1, 2)
+        b = a if to is None else np.asarray(to, dtype=float).reshape(-1, 2)
         ny, nx = self.ground_max_m.shape
-        fx = (pts[:, 0] - self.origin_m[0]) / self.cell_m - 0.5
-        fy = (pts[:, 1] - self.origin_m[1]) / self.cell_m - 0.5
-        i0 = np.clip(np.floor(fx).astype(int), 0, nx - 1)
-        j0 = np.clip(np.floor(fy).astype(int), 0, ny - 1)
-        return i0, np.clip(i0 + 1, 0, nx - 1), j0, np.clip(j0 + 1, 0, ny - 1)
+        half = self.cell_m / 2.0
+        lo = (np.minimum(a, b) - half - np.asarray(self.origin_m)) / self.cell_m
+        hi = (np.maximum(a, b) + half - np.asarray(self.origin_m)) / self.cell_m
+        i_lo = np.clip(np.floor(lo[:, 0]).astype(int), 0, nx - 1)
+        j_lo = np.clip(np.floor(lo[:, 1]).astype(int), 0, ny - 1)
+        # at least the cell after i_lo (as the 2 x 2 cells of a point before the grid's edge)
+        i_hi = np.clip(np.maximum(np.floor(hi[:, 0]).astype(int), i_lo + 1), 0, nx - 1)
+        j_hi = np.clip(np.maximum(np.floor(hi[:, 1]).astype(int), j_lo + 1), 0, ny - 1)
+        return i_lo, i_hi, j_lo, j_hi
 
-    def ground_at(self, xy: Any) -> np.ndarray:
+    def ground_at(self, xy: Any, to: Any = None) -> np.ndarray:
         """The highest ground (``ground_max_m``) of the cells within half a cell of each point
-        (the 2 x 2 cells around it, :meth:`near_cells`): a bound on the ground anywhere near
-        it."""
-        i0, i1, j0, j1 = self.near_cells(xy)
+        (the 2 x 2 cells around it), or with ``to`` of any point of each segment ``xy[k] ->
+        to[k]`` (:meth:`near_cells`): a bound on the ground anywhere near it."""
+        i_lo, i_hi, j_lo, j_hi = self.near_cells(xy, to)
         g = self.ground_max_m
-        return np.maximum.reduce([g[j0, i0], g[j0, i1], g[j1, i0], g[j1, i1]])
+        out = g[j_lo, i_lo]
+        for di in range(int(np.max(i_hi - i_lo, initial=0)) + 1):
+            for dj in range(int(np.max(j_hi - j_lo, initial=0)) + 1):
+                out = np.maximum(out, g[np.minimum(j_lo + dj, j_hi), np.minimum(i_lo + di, i_hi)])
+        return out
 
     def field_elevation(self, xy: Any) -> float:
         """The elevation of the airfield at ``xy`` (within 1 m), else the bilinear ground."""
@@ -555,6 +567,9 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
             f"{[round(v / 1e3, 3) for v in t.bounds]} km): re-plan inside it",
         )  # fmt: skip
     ground = t.ground_at(p)
+    if len(p) > 1:  # and the ground near the sub-legs either side of each sample
+        leg = t.ground_at(p[:-1], p[1:])
+        ground = np.maximum(ground, np.maximum(np.append(leg, leg[-1]), np.insert(leg, 0, leg[0])))
     req = ground + t.min_clearance_m
     worst = int(np.argmax(req))
     if req[worst] > t.ceiling_m + 1e-6:
@@ -624,9 +639,9 @@ def _check_field_legs(
         legs.append(("final glide to", "landing", land, *glide, low))
     for what, name, at, xy, alt, off, elev in legs:
         ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
-        i0, i1, j0, j1 = t.near_cells(xy)
+        i_lo, i_hi, j_lo, j_hi = t.near_cells(xy)
         fi, _, fj, _ = (int(v[0]) for v in t.near_cells(at + t.cell_m / 2.0))  # the field's cell
-        own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
+        own = (i_lo <= fi) & (fi <= i_hi) & (j_lo <= fj) & (fj <= j_hi)
         cut = ~own & (alt <= ground)
         if cut.any():
             i = int(np.argmax(cut))
