@@ -107,9 +107,8 @@ class Terrain:
     def near_cells(self, xy: Any, to: Any = None) -> tuple[np.ndarray, ...]:
         """Inclusive column and row index ranges ``(i_lo, i_hi, j_lo, j_hi)`` (clipped to the
         grid) of the cells within half a cell of each point ``xy`` (the 2 x 2 cells around
-        it), or, with ``to``, of any point of each straight segment ``xy[k] -> to[k]`` (the
-        cells its bounding box grown by half a cell overlaps): the cells :meth:`ground_at`
-        reads."""
+        it), or, with ``to``, of the bounding box of each straight segment ``xy[k] -> to[k]``
+        grown by half a cell (the candidates :meth:`ground_at` tests)."""
         a = np.asarray(xy, dtype=float).reshape(-1, 2)
         b = a if to is None else np.asarray(to, dtype=float).reshape(-1, 2)
         ny, nx = self.ground_max_m.shape
@@ -126,14 +125,39 @@ class Terrain:
     def ground_at(self, xy: Any, to: Any = None) -> np.ndarray:
         """The highest ground (``ground_max_m``) of the cells within half a cell of each point
         (the 2 x 2 cells around it), or with ``to`` of any point of each segment ``xy[k] ->
-        to[k]`` (:meth:`near_cells`): a bound on the ground anywhere near it."""
+        to[k]`` (the candidates of :meth:`near_cells` whose cell, grown by half a cell, the
+        segment meets: a diagonal segment skips the two far corners of its box): a bound on the
+        ground anywhere near it."""
         i_lo, i_hi, j_lo, j_hi = self.near_cells(xy, to)
         g = self.ground_max_m
-        out = g[j_lo, i_lo]
+        out = g[j_lo, i_lo] if to is None else np.full(len(i_lo), -np.inf)
         for di in range(int(np.max(i_hi - i_lo, initial=0)) + 1):
             for dj in range(int(np.max(j_hi - j_lo, initial=0)) + 1):
-                out = np.maximum(out, g[np.minimum(j_lo + dj, j_hi), np.minimum(i_lo + di, i_hi)])
+                i, j = np.minimum(i_lo + di, i_hi), np.minimum(j_lo + dj, j_hi)
+                here = g[j, i]
+                if to is not None:
+                    here = np.where(self._meets(xy, to, i, j), here, -np.inf)
+                out = np.maximum(out, here)
         return out
+
+    def _meets(self, xy: Any, to: Any, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """Whether each segment ``xy[k] -> to[k]`` meets cell ``(i[k], j[k])`` grown by half a
+        cell on every side (a point of it then reads that cell), by clipping the segment's
+        parameter to the grown cell axis by axis (Liang-Barsky)."""
+        a = np.asarray(xy, dtype=float).reshape(-1, 2)
+        d = np.asarray(to, dtype=float).reshape(-1, 2) - a
+        c, eps = self.cell_m, 1e-6
+        t0, t1 = np.zeros(len(a)), np.ones(len(a))
+        for k, idx in ((0, i), (1, j)):
+            lo = self.origin_m[k] + idx * c - c / 2.0 - eps
+            hi = self.origin_m[k] + (idx + 1) * c + c / 2.0 + eps
+            inside = (a[:, k] >= lo) & (a[:, k] <= hi)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ta, tb = (lo - a[:, k]) / d[:, k], (hi - a[:, k]) / d[:, k]
+            still = d[:, k] == 0
+            t0 = np.maximum(t0, np.where(still, np.where(inside, 0.0, np.inf), np.minimum(ta, tb)))
+            t1 = np.minimum(t1, np.where(still, np.where(inside, 1.0, -np.inf), np.maximum(ta, tb)))
+        return t0 <= t1
 
     def field_elevation(self, xy: Any) -> float:
         """The elevation of the airfield at ``xy`` (within 1 m), else the bilinear ground."""
@@ -735,7 +759,7 @@ def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.nda
     of a leg; it made O(m^2) ``np.all`` calls before, 175 s of a 24-UAV export, results/
     audit/scale). A candidate within a rounding margin of the maximum is decided by the
     sample-by-sample test itself, so the points kept are exactly those of that test
-    (tests/mission/test_export_scale.py compares the two on random profiles).
+    (tests/mission/test_export_profiles_once.py compares the two on random profiles).
     """
     d, zz, fl, vx = (np.asarray(a, dtype=float).tolist() for a in (dist, z, floor, vertex))
     keep = [0]
