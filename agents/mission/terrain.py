@@ -104,60 +104,44 @@ class Terrain:
         x0, y0 = self.origin_m
         return (x0, y0, x0 + nx * self.cell_m, y0 + ny * self.cell_m)
 
-    def near_cells(self, xy: Any, to: Any = None) -> tuple[np.ndarray, ...]:
+    def near_cells(self, xy: Any) -> tuple[np.ndarray, ...]:
         """Inclusive column and row index ranges ``(i_lo, i_hi, j_lo, j_hi)`` (clipped to the
-        grid) of the cells within half a cell of each point ``xy`` (the 2 x 2 cells around
-        it), or, with ``to``, of the bounding box of each straight segment ``xy[k] -> to[k]``
-        grown by half a cell (the candidates :meth:`ground_at` tests)."""
-        a = np.asarray(xy, dtype=float).reshape(-1, 2)
-        b = a if to is None else np.asarray(to, dtype=float).reshape(-1, 2)
+        grid) of the 2 x 2 cells within half a cell of each point: the cells :meth:`ground_at`
+        reads."""
+        pts = np.asarray(xy, dtype=float).reshape(-1, 2)
         ny, nx = self.ground_max_m.shape
-        half = self.cell_m / 2.0
-        lo = (np.minimum(a, b) - half - np.asarray(self.origin_m)) / self.cell_m
-        hi = (np.maximum(a, b) + half - np.asarray(self.origin_m)) / self.cell_m
-        i_lo = np.clip(np.floor(lo[:, 0]).astype(int), 0, nx - 1)
-        j_lo = np.clip(np.floor(lo[:, 1]).astype(int), 0, ny - 1)
-        # at least the cell after i_lo (as the 2 x 2 cells of a point before the grid's edge)
-        i_hi = np.clip(np.maximum(np.floor(hi[:, 0]).astype(int), i_lo + 1), 0, nx - 1)
-        j_hi = np.clip(np.maximum(np.floor(hi[:, 1]).astype(int), j_lo + 1), 0, ny - 1)
-        return i_lo, i_hi, j_lo, j_hi
+        fx = (pts[:, 0] - self.origin_m[0]) / self.cell_m - 0.5
+        fy = (pts[:, 1] - self.origin_m[1]) / self.cell_m - 0.5
+        i0 = np.clip(np.floor(fx).astype(int), 0, nx - 1)
+        j0 = np.clip(np.floor(fy).astype(int), 0, ny - 1)
+        return i0, np.clip(i0 + 1, 0, nx - 1), j0, np.clip(j0 + 1, 0, ny - 1)
 
-    def ground_at(self, xy: Any, to: Any = None) -> np.ndarray:
+    def ground_at(self, xy: Any) -> np.ndarray:
         """The highest ground (``ground_max_m``) of the cells within half a cell of each point
-        (the 2 x 2 cells around it), or with ``to`` of any point of each segment ``xy[k] ->
-        to[k]`` (the candidates of :meth:`near_cells` whose cell, grown by half a cell, the
-        segment meets: a diagonal segment skips the two far corners of its box): a bound on the
-        ground anywhere near it."""
-        i_lo, i_hi, j_lo, j_hi = self.near_cells(xy, to)
+        (the 2 x 2 cells around it, :meth:`near_cells`): a bound on the ground anywhere near
+        it."""
+        i0, i1, j0, j1 = self.near_cells(xy)
         g = self.ground_max_m
-        out = g[j_lo, i_lo] if to is None else np.full(len(i_lo), -np.inf)
-        for di in range(int(np.max(i_hi - i_lo, initial=0)) + 1):
-            for dj in range(int(np.max(j_hi - j_lo, initial=0)) + 1):
-                i, j = np.minimum(i_lo + di, i_hi), np.minimum(j_lo + dj, j_hi)
-                here = g[j, i]
-                if to is not None:
-                    here = np.where(self._meets(xy, to, i, j), here, -np.inf)
-                out = np.maximum(out, here)
-        return out
+        return np.maximum.reduce([g[j0, i0], g[j0, i1], g[j1, i0], g[j1, i1]])
 
-    def _meets(self, xy: Any, to: Any, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        """Whether each segment ``xy[k] -> to[k]`` meets cell ``(i[k], j[k])`` grown by half a
-        cell on every side (a point of it then reads that cell), by clipping the segment's
-        parameter to the grown cell axis by axis (Liang-Barsky)."""
-        a = np.asarray(xy, dtype=float).reshape(-1, 2)
-        d = np.asarray(to, dtype=float).reshape(-1, 2) - a
-        c, eps = self.cell_m, 1e-6
-        t0, t1 = np.zeros(len(a)), np.ones(len(a))
-        for k, idx in ((0, i), (1, j)):
-            lo = self.origin_m[k] + idx * c - c / 2.0 - eps
-            hi = self.origin_m[k] + (idx + 1) * c + c / 2.0 + eps
-            inside = (a[:, k] >= lo) & (a[:, k] <= hi)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ta, tb = (lo - a[:, k]) / d[:, k], (hi - a[:, k]) / d[:, k]
-            still = d[:, k] == 0
-            t0 = np.maximum(t0, np.where(still, np.where(inside, 0.0, np.inf), np.minimum(ta, tb)))
-            t1 = np.minimum(t1, np.where(still, np.where(inside, 1.0, -np.inf), np.maximum(ta, tb)))
-        return t0 <= t1
+    def window_changes(self, a: Any, b: Any) -> np.ndarray:
+        """The fractions ``s`` in (0, 1) of the segment ``a -> b`` where the cells
+        :meth:`ground_at` reads change: where it crosses a line through the cells' centres
+        (``floor(f - 0.5)`` steps there). Between two of them every point reads the same
+        cells."""
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        out = []
+        for k in (0, 1):
+            d = b[k] - a[k]
+            if d == 0.0:
+                continue
+            f0, f1 = sorted(
+                ((a[k], b[k])[m] - self.origin_m[k]) / self.cell_m - 0.5 for m in (0, 1)
+            )
+            lines = np.arange(math.ceil(f0), math.floor(f1) + 1)
+            out.append((self.origin_m[k] + (lines + 0.5) * self.cell_m - a[k]) / d)
+        s = np.concatenate(out) if out else np.zeros(0)
+        return s[(s > 0.0) & (s < 1.0)]
 
     def field_elevation(self, xy: Any) -> float:
         """The elevation of the airfield at ``xy`` (within 1 m), else the bilinear ground."""
@@ -576,9 +560,9 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
     for k in range(1, len(path)):
         a, b = path[k - 1], path[k]
         n = max(1, math.ceil(float(np.hypot(*(b - a))) / step))
-        for s in range(1, n + 1):
-            pts.append(a + (b - a) * (s / n))
-            vtx.append(k if s == n else -1)
+        s = np.union1d(np.arange(1, n + 1) / n, t.window_changes(a, b))
+        pts.extend(a + (b - a) * s[:, None])
+        vtx.extend([-1] * (len(s) - 1) + [k])
     p = np.asarray(pts)
     vertex = np.asarray(vtx)
     x0, y0, x1, y1 = t.bounds
@@ -591,8 +575,8 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
             f"{[round(v / 1e3, 3) for v in t.bounds]} km): re-plan inside it",
         )  # fmt: skip
     ground = t.ground_at(p)
-    if len(p) > 1:  # and the ground near the sub-legs either side of each sample
-        leg = t.ground_at(p[:-1], p[1:])
+    if len(p) > 1:  # and the ground the points of the sub-legs either side of each sample read
+        leg = t.ground_at((p[:-1] + p[1:]) / 2.0)  # constant inside: no window change there
         ground = np.maximum(ground, np.maximum(np.append(leg, leg[-1]), np.insert(leg, 0, leg[0])))
     req = ground + t.min_clearance_m
     worst = int(np.argmax(req))
@@ -663,9 +647,9 @@ def _check_field_legs(
         legs.append(("final glide to", "landing", land, *glide, low))
     for what, name, at, xy, alt, off, elev in legs:
         ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
-        i_lo, i_hi, j_lo, j_hi = t.near_cells(xy)
+        i0, i1, j0, j1 = t.near_cells(xy)
         fi, _, fj, _ = (int(v[0]) for v in t.near_cells(at + t.cell_m / 2.0))  # the field's cell
-        own = (i_lo <= fi) & (fi <= i_hi) & (j_lo <= fj) & (fj <= j_hi)
+        own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
         cut = ~own & (alt <= ground)
         if cut.any():
             i = int(np.argmax(cut))

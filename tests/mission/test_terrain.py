@@ -637,18 +637,22 @@ def test_dem_in_ellipsoidal_heights_is_refused_and_msl_heights_are_read(tmp_path
 
 
 def test_profile_keeps_the_clearance_between_its_samples_on_diagonal_legs():
-    """The profile reads the ground at samples half a cell apart; a point between two samples
-    of a diagonal leg reads cells neither sample does (the corner of its 2 x 2 window). Each
-    sample now also reads the cells near its sub-legs (:meth:`Terrain.ground_at` of a segment),
-    so a single 2,500 m cell beside a diagonal leg is cleared all along it (i24-terrainleft:
-    before, 3 points every 50 m flew below the clearance here, and 6 of 40 of the property
-    test's random cases had such points)."""
+    """The profile read the ground at samples half a cell apart; a point between two samples
+    reads cells one or neither sample reads (on a diagonal leg, the corner of its 2 x 2
+    window). The legs are now also sampled where the cells a point reads change
+    (:meth:`Terrain.window_changes`), and each sample takes the ground of the sub-legs either
+    side of it, so a single 2,500 m cell beside a diagonal leg is cleared all along it
+    (i24-terrainleft: before, 3 points every 50 m flew below the clearance here, and 6 of 40 of
+    the property test's random cases had such points)."""
     g = np.full((100, 120), VALLEY_M)
     g[45, 45] = 2500.0  # the cell x in [5, 6] km, y in [15, 16] km
-    t = load_terrain(load_scenario(_scenario(None, terrain={
-        "elevation_m": g.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
-    p = profile(t, [[-10e3, 20e3], [6.8e3, 14.9e3], [2.9e3, 10.5e3], [20e3, 30e3]], "UAV 1")
-    assert clearance_violations(t, p, step_m=10.0) == 0
-    assert p.amsl_m.max() >= 2500.0 + t.min_clearance_m
+    route = [[-10e3, 20e3], [6.8e3, 14.9e3], [2.9e3, 10.5e3], [20e3, 30e3]]
+    terrain = {"elevation_m": g.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]}
+    for uav in ({"max_altitude_m": 6000}, {"max_altitude_m": 6000, "cruise_altitude_m": 150}):
+        # the search height, and a search height at the clearance (no margin above it)
+        t = load_terrain(load_scenario(_scenario(None, terrain=terrain, uav=uav)))
+        p = profile(t, route, "UAV 1")
+        assert clearance_violations(t, p, step_m=10.0) == 0, uav
+        assert p.amsl_m.max() >= 2500.0 + t.min_clearance_m
     # on points, the ground is the 2 x 2 cells around each, as before
     assert t.ground_at([[5.5e3, 16.4e3]])[0] == 2500.0 and t.ground_at([[4.4e3, 15.5e3]]) == 600
