@@ -45,19 +45,22 @@ def vertices(root: Path, out: Path) -> None:
             warnings.simplefilter("ignore")
             profs = plan_profiles(load_plan(pj))
         for k, p in enumerate(profs or []):
-            at = {int(v): float(z) for v, z in zip(p.vertex, p.amsl_m) if v >= 0}
+            at = {str(int(v)): float(z) for v, z in zip(p.vertex, p.amsl_m) if v >= 0}
+            at["points"] = len(p.amsl_m)  # the profile's points kept (QGC waypoints)
             rows[f"{pj.parts[-3]}/uav{k}"] = at
     out.write_text(json.dumps(rows) + "\n")
 
 
 def compare(a: Path, b: Path) -> None:
     old, new = json.loads(a.read_text()), json.loads(b.read_text())
-    d = np.array([new[u][v] - old[u][v] for u in old for v in old[u]])
+    d = np.array([new[u][v] - old[u][v] for u in old for v in old[u] if v != "points"])
+    pts = [(old[u].get("points"), new[u].get("points")) for u in old]
     print(json.dumps({
         "uavs": len(old), "vertices": int(d.size), "higher": int(np.sum(d > 0.05)),
         "lower": int(np.sum(d < -0.05)), "mean_m": round(float(d.mean()), 2),
         "median_m": round(float(np.median(d)), 2), "max_m": round(float(d.max()), 1),
         "min_m": round(float(d.min()), 1),
+        "points_kept": [sum(p[0] or 0 for p in pts), sum(p[1] or 0 for p in pts)],
     }))  # fmt: skip
 
 
