@@ -16,8 +16,9 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
 (AMSL) along its mission, take-off field -> ``waypoints_m`` -> landing approach point:
 
 - the wanted altitude is ``search_height_m`` (the UAV's cruise altitude) above the highest
-  ground near each point (:meth:`Terrain.ground_at`: the cells within half a cell), at most the
-  ceiling ``ceiling_m``;
+  ground near each point (:meth:`Terrain.ground_at`: the cells within half a cell; at a sample,
+  also the ground the points of the sub-legs either side of it read), at most the ceiling
+  ``ceiling_m``;
 - the required altitude is ``min_clearance_m`` above that ground; a required altitude above the
   ceiling is "clearance impossible within the UAV's ceiling", a ConfigError naming the UAV,
   the point and the ground;
@@ -29,13 +30,16 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
   export's 300 m over 4 km (:data:`~poc_env.agents.mission.plan.LANDING_GLIDE`, under PX4's
   FW_LND_ANG) unless the clearance needs it steeper (warned; :func:`_glide_cap`; refused when
   it needs more height than a glide within the pitch bound allows);
-- legs are sampled every half cell; the profile keeps the route's vertices and, between them,
-  the fewest intermediate points whose straight altitude legs stay above the required altitude
-  and within :data:`PROFILE_TOLERANCE_M` below the profile.
+- legs are sampled every half cell and where the cells a point reads change
+  (:meth:`Terrain.window_changes`), so the straight legs between samples keep the clearance
+  too; the profile keeps the route's vertices and, between them, the fewest intermediate
+  points whose straight altitude legs stay above the required altitude and within
+  :data:`PROFILE_TOLERANCE_M` below the profile.
 
-The take-off climb and the final glide to the field are flown over the field by its own
-procedures: the take-off item climbs to the profile's first altitude over the field, and the
-landing approach point is the profile's last point.
+The take-off item climbs to the profile's first altitude over the field, and the landing
+approach point is the profile's last point; the climb from the field's elevation at
+``tan(beta_max)`` along the first legs and the glide from the approach point to the field
+must stay above the ground (:func:`_check_field_legs`).
 """
 
 from __future__ import annotations
