@@ -2,6 +2,8 @@
 mission property test's random cases (allocation planner only; the first N of its seeds).
 
     OMP_NUM_THREADS=1 nice -n 10 .venv/bin/python results/audit/terrainleft/property_probe.py 40
+    # every planner that writes a plan (allocation, de, replan, survey) and the greedy baseline
+    OMP_NUM_THREADS=1 nice -n 10 .venv/bin/python results/audit/terrainleft/property_probe.py 15 all
 """
 
 from __future__ import annotations
@@ -20,15 +22,18 @@ from test_mission_property import check_case
 from poc_env.agents.testing.flights import fly
 
 
-def main(n: int) -> None:
+def main(n: int, every: bool = False) -> None:
+    from test_mission_property import PLANNERS
+
     seeds = np.random.default_rng(2024).integers(0, 2**31, size=n).tolist()
-    out = Path(__file__).with_name("property_probe.json")
+    planners = PLANNERS if every else ("allocation",)
+    out = Path(__file__).with_name("property_probe_all.json" if every else "property_probe.json")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for s in seeds:
             folder = Path(tmp) / f"case{s}"
             folder.mkdir()
-            c: Counter = check_case(fly, int(s), folder, ("allocation",))
+            c: Counter = check_case(fly, int(s), folder, planners)
             why = [k for k in c if ":" in k]
             rows.append(
                 {
@@ -60,4 +65,4 @@ def main(n: int) -> None:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 40)
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 40, sys.argv[2:] == ["all"])
