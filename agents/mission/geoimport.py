@@ -43,7 +43,7 @@ from shapely.geometry.polygon import orient
 
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import MAX_DISTANCE_KM, make_crs, parse_origin, to_local
-from poc_env.crs import EDGE_TOLERANCE_M, densify_ring, geojson_crs_to_lonlat
+from poc_env.crs import EDGE_TOLERANCE_M, continuous_lon, densify_ring, geojson_crs_to_lonlat
 from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
@@ -250,7 +250,36 @@ def _polygons(file: Path, feats: list) -> list[tuple[int, list]]:
     return out
 
 
-def _local_polygon(file: Path, i: int, rings: Any, crs: dict) -> Polygon:
+def _antimeridian_area(file: Path, polys: list) -> np.ndarray | None:
+    """The (lon, lat) ring of an area crossing the 180th meridian written as RFC 7946 section
+    3.1.9 asks (a MultiPolygon cut there: parts of one feature, each with vertices on +-180,
+    that join into one polygon), in longitudes continuous around its first vertex (180.5, not
+    -179.5; :func:`poc_env.crs.continuous_lon`); None when ``polys`` are not such parts."""
+    if len(polys) < 2 or len({i for i, _ in polys}) != 1:
+        return None
+    parts = []
+    for i, rings in polys:
+        if not isinstance(rings, list) or len(rings) != 1:
+            return None
+        ll = _lonlat(file, i, rings[0])
+        if not np.any(np.abs(ll[:, 0]) == 180.0):
+            return None
+        parts.append(ll)
+    lon0 = float(parts[0][0, 0])
+    shapes = [
+        Polygon(np.column_stack([continuous_lon(ll[:, 0], (0.0, lon0)), ll[:, 1]])) for ll in parts
+    ]
+    if not all(p.is_valid for p in shapes):
+        return None
+    joined = shapely.union_all(shapes)
+    if joined.geom_type != "Polygon" or len(joined.interiors):
+        return None
+    return np.asarray(joined.exterior.coords)[:-1]
+
+
+def _local_polygon(
+    file: Path, i: int, rings: Any, crs: dict, joined: np.ndarray | None = None
+) -> Polygon:
     """One GeoJSON polygon (lon/lat rings) -> a valid local-metre shapely polygon, CCW.
 
     Either winding is accepted and re-oriented (RFC 7946 asks for a counter-clockwise exterior;
@@ -266,12 +295,13 @@ def _local_polygon(file: Path, i: int, rings: Any, crs: dict) -> Polygon:
             "(give a hole that must not be flown as a --no-fly polygon, or draw the area "
             "without it)"
         )
-    ll = _lonlat(file, i, rings[0])
+    ll = _lonlat(file, i, rings[0]) if joined is None else joined
     if len(ll) > 1 and np.allclose(ll[0], ll[-1]):
         ll = ll[:-1]
     if np.ptp(ll[:, 0]) > 180:
         raise GeometryError(f"{where}: spans more than 180 deg of longitude; allowed: an area "
-                            "that does not cross the antimeridian")  # fmt: skip
+                            "spanning less, one that crosses the antimeridian cut there into a "
+                            "MultiPolygon (RFC 7946 3.1.9)")  # fmt: skip
     if file.suffix.lower() != ".kml":  # GeoJSON: edges straight in lon/lat (RFC 7946 3.1.1)
         ll = densify_ring(ll, crs, straight_in="lonlat")
     xy = np.array(to_local(ll[:, ::-1], crs))
@@ -655,16 +685,24 @@ def import_scenario(
         )  # fmt: skip
     file, feats = read_features(area, "the search area: one Polygon", "area")
     polys = _polygons(file, feats)
-    if len(polys) != 1:
-        raise ConfigError(str(file), f"{len(polys)} polygons", "exactly one Polygon (the area)")
+    joined = _antimeridian_area(file, polys)  # one area cut at the 180th meridian, or None
+    if len(polys) != 1 and joined is None:
+        raise ConfigError(
+            str(file), f"{len(polys)} polygons",
+            "exactly one Polygon (the area), or one cut at the antimeridian into a "
+            "MultiPolygon (RFC 7946 3.1.9)",
+        )  # fmt: skip
     i_area, rings = polys[0]
     if origin is None:
-        ll = _lonlat(file, i_area, rings[0] if isinstance(rings, list) and rings else [])
-        origin = (float(ll[:, 1].min()), float(ll[:, 0].min()))  # south-west corner
+        ll = joined if joined is not None else _lonlat(
+            file, i_area, rings[0] if isinstance(rings, list) and rings else []
+        )  # fmt: skip
+        west = (float(ll[:, 0].min()) + 180.0) % 360.0 - 180.0  # continuous across 180
+        origin = (float(ll[:, 1].min()), west)  # south-west corner
     elif isinstance(origin, str):
         origin = parse_origin(origin)
     crs = make_crs(projection, origin)
-    poly = _local_polygon(file, i_area, rings, crs)
+    poly = _local_polygon(file, i_area, rings, crs, joined)
     far = poly.distance(Point(0.0, 0.0))  # the origin is local (0, 0) in every projection
     if far > MAX_DISTANCE_KM * KM:  # the projection's scale error grows with the distance
         raise ConfigError(

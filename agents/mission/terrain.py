@@ -16,8 +16,9 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
 (AMSL) along its mission, take-off field -> ``waypoints_m`` -> landing approach point:
 
 - the wanted altitude is ``search_height_m`` (the UAV's cruise altitude) above the highest
-  ground near each point (:meth:`Terrain.ground_at`: the cells within half a cell), at most the
-  ceiling ``ceiling_m``;
+  ground near each point (:meth:`Terrain.ground_at`: the cells within half a cell; at a sample,
+  also the ground the points of the sub-legs either side of it read), at most the ceiling
+  ``ceiling_m``;
 - the required altitude is ``min_clearance_m`` above that ground; a required altitude above the
   ceiling is "clearance impossible within the UAV's ceiling", a ConfigError naming the UAV,
   the point and the ground;
@@ -29,13 +30,16 @@ A plan records the terrain (``terrain`` of :mod:`poc_env.agents.mission.plan`,
   export's 300 m over 4 km (:data:`~poc_env.agents.mission.plan.LANDING_GLIDE`, under PX4's
   FW_LND_ANG) unless the clearance needs it steeper (warned; :func:`_glide_cap`; refused when
   it needs more height than a glide within the pitch bound allows);
-- legs are sampled every half cell; the profile keeps the route's vertices and, between them,
-  the fewest intermediate points whose straight altitude legs stay above the required altitude
-  and within :data:`PROFILE_TOLERANCE_M` below the profile.
+- legs are sampled every half cell and where the cells a point reads change
+  (:meth:`Terrain.window_changes`), so the straight legs between samples keep the clearance
+  too; the profile keeps the route's vertices and, between them, the fewest intermediate
+  points whose straight altitude legs stay above the required altitude and within
+  :data:`PROFILE_TOLERANCE_M` below the profile.
 
-The take-off climb and the final glide to the field are flown over the field by its own
-procedures: the take-off item climbs to the profile's first altitude over the field, and the
-landing approach point is the profile's last point.
+The take-off item climbs to the profile's first altitude over the field, and the landing
+approach point is the profile's last point; the climb from the field's elevation at
+``tan(beta_max)`` along the first legs and the glide from the approach point to the field
+must stay above the ground (:func:`_check_field_legs`).
 """
 
 from __future__ import annotations
@@ -104,18 +108,44 @@ class Terrain:
         x0, y0 = self.origin_m
         return (x0, y0, x0 + nx * self.cell_m, y0 + ny * self.cell_m)
 
-    def ground_at(self, xy: Any) -> np.ndarray:
-        """The highest ground (``ground_max_m``) of the cells within half a cell of each point
-        (the 2 x 2 cells around it): a bound on the ground anywhere near it."""
+    def near_cells(self, xy: Any) -> tuple[np.ndarray, ...]:
+        """Inclusive column and row index ranges ``(i_lo, i_hi, j_lo, j_hi)`` (clipped to the
+        grid) of the 2 x 2 cells within half a cell of each point: the cells :meth:`ground_at`
+        reads."""
         pts = np.asarray(xy, dtype=float).reshape(-1, 2)
         ny, nx = self.ground_max_m.shape
         fx = (pts[:, 0] - self.origin_m[0]) / self.cell_m - 0.5
         fy = (pts[:, 1] - self.origin_m[1]) / self.cell_m - 0.5
         i0 = np.clip(np.floor(fx).astype(int), 0, nx - 1)
         j0 = np.clip(np.floor(fy).astype(int), 0, ny - 1)
-        i1, j1 = np.clip(i0 + 1, 0, nx - 1), np.clip(j0 + 1, 0, ny - 1)
+        return i0, np.clip(i0 + 1, 0, nx - 1), j0, np.clip(j0 + 1, 0, ny - 1)
+
+    def ground_at(self, xy: Any) -> np.ndarray:
+        """The highest ground (``ground_max_m``) of the cells within half a cell of each point
+        (the 2 x 2 cells around it, :meth:`near_cells`): a bound on the ground anywhere near
+        it."""
+        i0, i1, j0, j1 = self.near_cells(xy)
         g = self.ground_max_m
         return np.maximum.reduce([g[j0, i0], g[j0, i1], g[j1, i0], g[j1, i1]])
+
+    def window_changes(self, a: Any, b: Any) -> np.ndarray:
+        """The fractions ``s`` in (0, 1) of the segment ``a -> b`` where the cells
+        :meth:`ground_at` reads change: where it crosses a line through the cells' centres
+        (``floor(f - 0.5)`` steps there). Between two of them every point reads the same
+        cells."""
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        out = []
+        for k in (0, 1):
+            d = b[k] - a[k]
+            if d == 0.0:
+                continue
+            f0, f1 = sorted(
+                ((a[k], b[k])[m] - self.origin_m[k]) / self.cell_m - 0.5 for m in (0, 1)
+            )
+            lines = np.arange(math.ceil(f0), math.floor(f1) + 1)
+            out.append((self.origin_m[k] + (lines + 0.5) * self.cell_m - a[k]) / d)
+        s = np.concatenate(out) if out else np.zeros(0)
+        return s[(s > 0.0) & (s < 1.0)]
 
     def field_elevation(self, xy: Any) -> float:
         """The elevation of the airfield at ``xy`` (within 1 m), else the bilinear ground."""
@@ -291,6 +321,7 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
                     field, str(path),
                     "a GeoTIFF with a coordinate reference system (georeference it in your GIS)",
                 )  # fmt: skip
+            _check_vertical_datum(field, path, src.crs)
             from poc_env import limits
 
             limits.check_memory(field, str(path), 8.0 * src.width * src.height, "DEM band")
@@ -327,6 +358,29 @@ def _read_dem(sc: Any, path: Path, origin: tuple, shape: tuple, cell: float, are
         )  # fmt: skip
     gmax = np.maximum(out["max"], out["mean"])
     return out["mean"], gmax, elev
+
+
+def _check_vertical_datum(field: str, path: Path, crs: Any) -> None:
+    """Refuse a DEM whose CRS declares **ellipsoidal** heights (a geographic or projected 3D CRS
+    on WGS84's ellipsoid, e.g. EPSG:4979): the missions fly altitudes above mean sea level
+    (QGC's MAV_FRAME_GLOBAL, the autopilot's GPS MSL altitude, KML ``absolute``), and an
+    ellipsoidal height differs from it by the geoid undulation, -106 m to +85 m over the Earth:
+    where it is negative the ground would be read that much too low and the clearance cut by
+    it. Converting needs a geoid grid (e.g. PROJ's ``us_nga_egm96_15.tif``), which pyproj does
+    not ship: without it PROJ's only transformation is a "ballpark" one that changes nothing.
+    A 2D CRS (no vertical axis) or a compound CRS with a gravity-related height (EGM96,
+    EGM2008, NAVD88, ...) is read as heights above mean sea level, as before."""
+    from pyproj import CRS
+
+    c = CRS.from_wkt(crs.to_wkt())
+    axes = [a.name.lower() for a in c.axis_info]
+    if "ellipsoidal height" in axes:
+        raise ConfigError(
+            field, f"{path.name}: ellipsoidal heights ({c.name})",
+            "a DEM of heights above mean sea level (a 2D CRS, or a compound CRS with a "
+            "gravity-related height such as EGM96 / EGM2008): convert it first, e.g. gdalwarp "
+            "-t_srs EPSG:4326+5773 with PROJ's geoid grid us_nga_egm96_15.tif installed",
+        )  # fmt: skip
 
 
 def _cells_in(origin: tuple, shape: tuple, cell: float, area: tuple) -> np.ndarray:
@@ -510,9 +564,9 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
     for k in range(1, len(path)):
         a, b = path[k - 1], path[k]
         n = max(1, math.ceil(float(np.hypot(*(b - a))) / step))
-        for s in range(1, n + 1):
-            pts.append(a + (b - a) * (s / n))
-            vtx.append(k if s == n else -1)
+        s = np.union1d(np.arange(1, n + 1) / n, t.window_changes(a, b))
+        pts.extend(a + (b - a) * s[:, None])
+        vtx.extend([-1] * (len(s) - 1) + [k])
     p = np.asarray(pts)
     vertex = np.asarray(vtx)
     x0, y0, x1, y1 = t.bounds
@@ -525,6 +579,9 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
             f"{[round(v / 1e3, 3) for v in t.bounds]} km): re-plan inside it",
         )  # fmt: skip
     ground = t.ground_at(p)
+    if len(p) > 1:  # and the ground the points of the sub-legs either side of each sample read
+        leg = t.ground_at((p[:-1] + p[1:]) / 2.0)  # constant inside: no window change there
+        ground = np.maximum(ground, np.maximum(np.append(leg, leg[-1]), np.insert(leg, 0, leg[0])))
     req = ground + t.min_clearance_m
     worst = int(np.argmax(req))
     if req[worst] > t.ceiling_m + 1e-6:
@@ -545,6 +602,7 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
     if landing_xy is not None:
         z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
+    _check_field_legs(t, p, z, dist, landing_xy, where)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -555,6 +613,59 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
         field_m=t.field_elevation(path[0]),
         landing_field_m=t.field_elevation(land),
     )
+
+
+def _check_field_legs(
+    t: Terrain, p: np.ndarray, z: np.ndarray, dist: np.ndarray, landing_xy: Any, where: str
+) -> None:
+    """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``).
+
+    The climb: from the take-off field's elevation at eq. 19's ``tan(beta_max)`` along the
+    mission's path (``p``, ``dist``) until it meets the profile ``z`` (a fixed-wing UAV cannot
+    climb to the profile's first altitude over the field; the profile, checked against the
+    clearance, is flown from there). The glide: straight from the approach point ``p[-1]`` at
+    ``z[-1]`` down to the landing field ``landing_xy`` (none without one). Neither can keep
+    ``min_clearance_m`` near its field, where the UAV leaves or meets the ground, and the
+    highest ground near a point (:meth:`Terrain.ground_at`, which the clearance reads: up to a
+    cell and a half away) is above a UAV on a sloping field by construction: each must stay
+    above the ground itself, the DEM's bilinear resampling (the one the fields' elevations
+    come from). Points near the field's own terrain cell (the 2 x 2 cells around them include
+    it, :meth:`Terrain.near_cells`) are not checked: the UAV stands on the field there.
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named, with the point, its ground, the distance from the field and the
+        altitude flown there.
+    """
+    grad = math.tan(t.max_pitch_rad)
+    field = t.field_elevation(p[0])
+    climb = np.minimum(z, field + grad * dist)
+    legs = [("take-off climb from", "take-off", p[0], p, climb, dist, field)]
+    if landing_xy is not None:
+        land = np.asarray(landing_xy, dtype=float)
+        final = float(np.hypot(*(land - p[-1])))
+        s = np.linspace(0.0, 1.0, max(1, math.ceil(final / (t.cell_m / 2.0))) + 1)[:, None]
+        low = t.field_elevation(land)
+        glide = (p[-1] + (land - p[-1]) * s, z[-1] + (low - z[-1]) * s[:, 0], final * (1 - s[:, 0]))
+        legs.append(("final glide to", "landing", land, *glide, low))
+    for what, name, at, xy, alt, off, elev in legs:
+        ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
+        i0, i1, j0, j1 = t.near_cells(xy)
+        fi, _, fj, _ = (int(v[0]) for v in t.near_cells(at + t.cell_m / 2.0))  # the field's cell
+        own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
+        cut = ~own & (alt <= ground)
+        if cut.any():
+            i = int(np.argmax(cut))
+            x, y = xy[i]
+            raise ConfigError(
+                where, f"ground {ground[i]:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, "
+                f"{off[i] / 1e3:.1f} km from the {name} field (at {elev:.0f} m), flown at "
+                f"{alt[i]:.0f} m",
+                f"a {what} the field within eq. 19's pitch bound uav.max_pitch_deg = "
+                f"{math.degrees(t.max_pitch_rad):g} deg that stays above the ground (re-plan "
+                f"the first or last leg away from the rising ground, or another {name} field)",
+            )  # fmt: skip
 
 
 class SteepGlideWarning(UserWarning):
@@ -636,7 +747,7 @@ def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.nda
     of a leg; it made O(m^2) ``np.all`` calls before, 175 s of a 24-UAV export, results/
     audit/scale). A candidate within a rounding margin of the maximum is decided by the
     sample-by-sample test itself, so the points kept are exactly those of that test
-    (tests/mission/test_export_scale.py compares the two on random profiles).
+    (tests/mission/test_export_profiles_once.py compares the two on random profiles).
     """
     d, zz, fl, vx = (np.asarray(a, dtype=float).tolist() for a in (dist, z, floor, vertex))
     keep = [0]

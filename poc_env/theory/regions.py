@@ -30,6 +30,7 @@ from shapely.geometry import Point, Polygon
 from shapely.validation import explain_validity
 
 import poc_env._kernels.rectangles as _rectangles
+from poc_env import limits
 from poc_env.errors import ConfigError, GeometryError
 from poc_env.geometry import validate_polygon
 from poc_env.theory.probability_map import Grid
@@ -483,6 +484,12 @@ def reach_share(
         return share
     if samples_per_cell is not None:  # exact point distances, no polygon approximation
         s = int(samples_per_cell)
+        n = (r1 - r0) * (c1 - c0) * s * s
+        limits.check_memory(
+            "sensor.samples_per_cell", s, n * limits.REACH_BYTES_PER_SAMPLE,
+            f"zone reach of {n} sample points ({r1 - r0} x {c1 - c0} cells under the zones, "
+            f"{s} x {s} a cell)",
+        )  # fmt: skip
         h = c / s
         xs = ox + c0 * c + (np.arange((c1 - c0) * s) + 0.5) * h
         ys = oy + r0 * c + (np.arange((r1 - r0) * s) + 0.5) * h

@@ -648,3 +648,40 @@ def test_sightings_on_the_area_s_edge_are_kept(tmp_path, layers):
     with pytest.warns(UserWarning, match="outside the search area"):
         res = import_scenario(layers["area"], prior=csv_path, airfields=layers["fields"])
     assert res["report"]["prior"]["outside"] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_an_area_cut_at_the_antimeridian_is_joined(tmp_path):
+    """RFC 7946 3.1.9 asks for a geometry crossing the 180th meridian to be cut there: an area
+    near Fiji (178.5 E to 178.5 W, 17.5-16.5 S) as a MultiPolygon of its two parts imports as
+    one area, the same as the area 10 degrees west of it (which crosses nothing), its origin at
+    the south-west corner (178.5 E), a CSV sighting on either side kept. A ring whose
+    longitudes jump from 180 to -180 is still refused (read straight in lon/lat it spans the
+    globe), as are parts that do not meet at 180 (i24-terrainleft: before, the cut area was
+    refused as '2 polygons')."""
+    west = [[178.5, -17.5], [180.0, -17.5], [180.0, -16.5], [178.5, -16.5], [178.5, -17.5]]
+    east = [[-180.0, -17.5], [-178.5, -17.5], [-178.5, -16.5], [-180.0, -16.5], [-180.0, -17.5]]
+    multi = {"type": "MultiPolygon", "coordinates": [[west], [east]]}
+    area = _write(tmp_path / "fiji.geojson", _fc([{"type": "Feature", "properties": {},
+                                                   "geometry": multi}]))  # fmt: skip
+    fields = _write(tmp_path / "f.geojson", _fc([_pt(-179.9, -16.3, name="Labasa")]))
+    csv_path = tmp_path / "p.csv"
+    csv_path.write_text("lat,lon,probability\n-17.0,179.5,1\n-17.0,-179.5,1\n")
+    res = import_scenario(area, prior=csv_path, airfields=fields, cell_km=10)
+    assert res["crs"]["origin_deg"] == [-17.5, 178.5]
+    assert res["report"]["prior"]["outside"] == 0.0
+    shifted = [[[lon - 10.0, lat] for lon, lat in [[178.5, -17.5], [181.5, -17.5], [181.5, -16.5],
+                                                   [178.5, -16.5], [178.5, -17.5]]]]  # fmt: skip
+    ref = import_scenario(_write(tmp_path / "ref.geojson", _fc([_poly(shifted)])),
+                          airfields=_write(tmp_path / "g.geojson", _fc([_pt(170.1, -16.3,
+                                                                          name="L")])),
+                          cell_km=10)  # fmt: skip
+    assert res["report"]["area_km2"] == pytest.approx(ref["report"]["area_km2"], rel=1e-6)
+    assert res["scenario"]["map"]["width_km"] == ref["scenario"]["map"]["width_km"]
+    jump = [[178.5, -17.5], [-178.5, -17.5], [-178.5, -16.5], [178.5, -16.5], [178.5, -17.5]]
+    with pytest.raises(GeometryError, match=r"spans more than 180 deg.*MultiPolygon"):
+        import_scenario(_write(tmp_path / "j.geojson", _fc([_poly([jump])])), airfields=fields)
+    apart = {"type": "MultiPolygon", "coordinates": [[west], [[[v[0] + 0.5, v[1]] for v in east]]]}
+    two = _write(tmp_path / "two.geojson", _fc([{"type": "Feature", "properties": {},
+                                                 "geometry": apart}]))  # fmt: skip
+    with pytest.raises(ConfigError, match="2 polygons"):
+        import_scenario(two, airfields=fields)

@@ -69,6 +69,9 @@ def test_a_mission_beyond_what_autopilots_hold_is_said(tmp_path):
     said = [m for m in said if "item" in m]
     assert said, f"{n} mission items written without a warning"
     assert "plan.uavs[0]" in said[0] and str(n) in said[0]
+    # actionable (i24-terrainleft #5): the UAV by id, the count, the option that refuses it
+    assert "plan.uavs[0] (UAV 1)" in said[0] and f"a QGC mission of {n} items" in said[0]
+    assert "--max-mission-items N" in said[0]
 
 
 def test_a_mission_beyond_the_endurance_is_refused_or_said(tmp_path):

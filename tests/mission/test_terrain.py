@@ -556,3 +556,103 @@ def test_dem_one_pixel_hole_inside_the_area_is_refused(tmp_path):
     with pytest.raises(ConfigError, match=r"terrain\.dem.*nodata or NaN"):
         make_plan(sc, planner="allocation", refine=0)
     make_plan(load_scenario(_scenario(_dem(tmp_path / "e.tif"))), planner="allocation", refine=0)
+
+
+# ----------------------------------------------------- the take-off climb (i24-terrainleft)
+
+
+def _bump(height_m: float) -> list:
+    """120 x 100 cells of 1 km from (-40, -30) km at 600 m, the column x in [-8, -7] km at
+    ``height_m`` (2-3 km east of a field at x = -10 km)."""
+    x = -40 + np.arange(120) + 0.5
+    return np.tile(np.where(np.abs(x + 7.5) < 0.5, height_m, VALLEY_M), (100, 1)).tolist()
+
+
+def test_take_off_climb_and_final_glide_stay_above_the_ground():
+    """The climb from the field's elevation at eq. 19's tan(beta_max) along the first leg, and
+    the straight glide from the approach point to the field, are checked against the ground
+    the legs' clearance reads: ground rising 250 m/km from the field (the climb at 268 m/km
+    meets the highest ground 1.5 km out) and a 900 m rise under the 4.29 deg glide are
+    refused, naming the UAV and the phase. Before (i24-terrainleft) both were accepted: the
+    profile starts at the search height over the field and ends at the approach point."""
+    field = np.array([-10e3, 20e3])
+    route = [field, [10e3, 20e3], [10e3, 25e3], [-6e3, 25e3]]
+    slope = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": _slope(400.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"UAV 3: .* km from the take-off field.*climb"):
+        profile(slope, route, "UAV 3")
+    gentle = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": _slope(250.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    assert clearance_violations(gentle, profile(gentle, route, "UAV 3"), step_m=50.0) == 0
+    approach = np.array([-6e3, 20e3])
+    back = [field, [10e3, 20e3], [10e3, 25e3], approach]
+    bump = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": _bump(900.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"UAV 4: .*from the landing field.*final glide"):
+        profile(bump, back, "UAV 4", field)
+    low = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": _bump(700.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    p = profile(low, back, "UAV 4", field)
+    assert p.amsl_m[-1] == pytest.approx(VALLEY_M + 300.0)  # the flat export's glide, above 700
+
+
+def test_export_refuses_a_take_off_climb_into_the_ground(tmp_path):
+    """A plan whose recorded ground rises beside its field faster than the UAV climbs: every
+    export format refuses it naming the UAV, nothing written (QGC must not emit a mission
+    whose take-off meets the ground)."""
+    sc = load_scenario(_scenario(None, terrain={"elevation_m": _slope(30.0), "cell_km": 1.0,
+                                                "origin_km": [-40, -30]}))  # fmt: skip
+    plan = make_plan(sc, planner="allocation", uavs=2, refine=0)
+    (k,) = [k for k, u in enumerate(plan["uavs"]) if u["waypoints_m"][0][1] < 15e3]  # south
+    u = plan["uavs"][k]
+    field, first = np.asarray(u["takeoff_m"]), np.asarray(u["waypoints_m"][0])
+    along = (
+        field + (first - field) / np.hypot(*(first - field)) * np.linspace(1.5e3, 3.5e3, 9)[:, None]
+    )  # a 2,500 m hill across its first leg, 1.5-3.5 km from the field
+    steep = dict(plan["terrain"])
+    cx = steep["origin_m"][0] + (np.arange(120) + 0.5) * 1e3
+    cy = steep["origin_m"][1] + (np.arange(100) + 0.5) * 1e3
+    gx, gy = np.meshgrid(cx, cy)
+    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
+    for key in ("ground_m", "ground_max_m"):
+        steep[key] = np.where(near < 800.0, 2500.0, np.asarray(steep[key])).tolist()
+    write_plan({**plan, "terrain": steep}, tmp_path / "plan.json")
+    for fmt in ("qgc", "kml", "geojson", "html"):
+        with pytest.raises(ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {u['id']}\).*take-off"):
+            export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / fmt)
+        assert not (tmp_path / fmt).exists()
+
+
+def test_dem_in_ellipsoidal_heights_is_refused_and_msl_heights_are_read(tmp_path):
+    """The missions fly above mean sea level (QGC MAV_FRAME_GLOBAL): a DEM whose CRS declares
+    ellipsoidal heights (EPSG:4979) is refused naming terrain.dem, nothing converted (pyproj
+    ships no geoid grid); one with EGM96 heights (EPSG:4326+5773) reads as the 2D one does
+    (i24-terrainleft: before, both were read alike)."""
+    with pytest.raises(ConfigError, match=r"terrain\.dem: got .*ellipsoidal heights"):
+        load_terrain(load_scenario(_scenario(_dem(tmp_path / "e.tif", crs="EPSG:4979"))))
+    flat = load_terrain(load_scenario(_scenario(_dem(tmp_path / "f.tif"))))
+    egm = load_terrain(load_scenario(_scenario(_dem(tmp_path / "g.tif", crs="EPSG:4326+5773"))))
+    assert np.array_equal(egm.ground_max_m, flat.ground_max_m)
+    assert egm.fields == flat.fields
+
+
+def test_profile_keeps_the_clearance_between_its_samples_on_diagonal_legs():
+    """The profile read the ground at samples half a cell apart; a point between two samples
+    reads cells one or neither sample reads (on a diagonal leg, the corner of its 2 x 2
+    window). The legs are now also sampled where the cells a point reads change
+    (:meth:`Terrain.window_changes`), and each sample takes the ground of the sub-legs either
+    side of it, so a single 2,500 m cell beside a diagonal leg is cleared all along it
+    (i24-terrainleft: before, 3 points every 50 m flew below the clearance here, and 6 of 40 of
+    the property test's random cases had such points)."""
+    g = np.full((100, 120), VALLEY_M)
+    g[45, 45] = 2500.0  # the cell x in [5, 6] km, y in [15, 16] km
+    route = [[-10e3, 20e3], [6.8e3, 14.9e3], [2.9e3, 10.5e3], [20e3, 30e3]]
+    terrain = {"elevation_m": g.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]}
+    for uav in ({"max_altitude_m": 6000}, {"max_altitude_m": 6000, "cruise_altitude_m": 150}):
+        # the search height, and a search height at the clearance (no margin above it)
+        t = load_terrain(load_scenario(_scenario(None, terrain=terrain, uav=uav)))
+        p = profile(t, route, "UAV 1")
+        assert clearance_violations(t, p, step_m=10.0) == 0, uav
+        assert p.amsl_m.max() >= 2500.0 + t.min_clearance_m
+    # on points, the ground is the 2 x 2 cells around each, as before
+    assert t.ground_at([[5.5e3, 16.4e3]])[0] == 2500.0 and t.ground_at([[4.4e3, 15.5e3]]) == 600

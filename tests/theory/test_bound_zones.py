@@ -10,6 +10,7 @@ from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.planner import make_plan
 from poc_env.agents.policies.allocation import AllocationPlanPolicy
 from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
 from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.bound import zone_reach
 from poc_env.theory.probability_map import Grid
@@ -145,3 +146,25 @@ def test_de_objective_bound_holds_for_a_flight_along_a_zone_edge():
     assert obj.sweep_width_m * 20000.0 * reps <= effort
     assert found > 0.1  # it finds mass inside the zone
     assert found <= obj.upper_bound(x)
+
+
+def test_zone_reach_is_refused_beyond_the_memory_limit():
+    """The bounds' zone reach builds ``s x s`` sample points (and a shapely point each) for every
+    cell under the zones: sized against the memory guard first, as the other large structures
+    are (``limits.check_memory``: a ConfigError naming the field, the count and the limit).
+    The 30 km zone's 2 x 2 hidden cells at s = 16 need 1,024 points, about 0.5 MiB: refused
+    under a 0.1 MiB limit, accepted at s = 2 (16 points) under it (i24-terrainleft: before,
+    no guard; 273 B a point measured)."""
+    from poc_env import limits
+
+    zone = {"map.no_fly_zones_km": [[[5, 5], [35, 5], [35, 35], [5, 35]]]}
+    grid = Grid.from_config(load_scenario("small").map)
+    prior = np.ones(grid.shape) / grid.shape[0] / grid.shape[1]
+    fine = load_scenario("small", {**zone, "sensor.samples_per_cell": 16})
+    coarse = load_scenario("small", {**zone, "sensor.samples_per_cell": 2})
+    with limits.memory_limit_gb(0.1 / 1024):
+        with pytest.raises(ConfigError, match=r"sensor\.samples_per_cell: got 16.*zone reach of"):
+            zone_reach(fine, prior)
+        mass, _ = zone_reach(coarse, prior)
+    assert mass.sum() < prior.sum()  # the zone hides the cells deep inside it
+    assert zone_reach(fine, prior)[0].sum() < prior.sum()  # the default limit holds it
