@@ -30,7 +30,7 @@ from shapely.geometry import Point, Polygon
 from shapely.validation import explain_validity
 
 import poc_env._kernels.rectangles as _rectangles
-from poc_env import limits
+import poc_env.limits as limits
 from poc_env.errors import ConfigError, GeometryError
 from poc_env.geometry import validate_polygon
 from poc_env.theory.probability_map import Grid
