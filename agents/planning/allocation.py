@@ -88,7 +88,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -127,6 +127,26 @@ LEVELS = PlanOptions.levels
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
+
+
+class _Reordered:
+    """A scenario whose UAVs are taken in ``order`` (take-off and landing positions
+    permuted; every other attribute the scenario's): :func:`~poc_env.agents.planning.
+    deconflict.in_lanes` lanes UAVs in fleet order, each behind the ones before it, and the
+    routes given to idle UAVs (i24-fleet) go behind every route already laid."""
+
+    def __init__(self, sc: Scenario, order: list[int]) -> None:
+        self._sc = sc
+        self.takeoff_m = tuple(sc.takeoff_m[k] for k in order)
+        self.landing_m = tuple(sc.landing_m[k] for k in order)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._sc, name)
+
+
+def _reordered(sc: Scenario, order: list[int]) -> Scenario:
+    """``sc`` with its UAVs in ``order`` (:class:`_Reordered`), typed as a scenario."""
+    return cast(Scenario, _Reordered(sc, order))
 
 
 def _lines_of(routes) -> list[list[int]]:
@@ -631,6 +651,62 @@ def make_allocation_plan(
             rs = _around_all(rs)
         return rs
 
+    def _fill(rs) -> list[list[list[float]]]:
+        """``rs`` with its UAVs without a route given the coverage boxes
+        (:func:`~poc_env.agents.planning.coverage_boxes.box_routes`) of the mass the other
+        routes leave on the sample points (eq. 14, the environment's sensor; the prior as the
+        starts see it, zone interiors discounted), fitted to eq. 18 and, with zones, in lanes
+        behind the routes already laid (i24-fleet). ``rs`` itself (the same object) when no
+        UAV is idle, none is busy (that is the boxes start's own job) or nothing is gained."""
+        idle = [k for k in range(n) if not len(rs[k])]
+        if not idle or len(idle) == n:
+            return rs
+        s = sc.sensor.samples_per_cell
+        cutoff = sc.sensor.cutoff_sweep_widths * w
+        bel = np.ascontiguousarray(grid.refine(prior, s))
+        for k in range(n):
+            if len(rs[k]):
+                path = np.vstack([takeoff[k], np.asarray(rs[k], dtype=float), landing[k]])
+                sweep_track(bel, grid, s, path, w, law, cutoff, grid.cell_m)
+        ix = np.asarray(idle)
+        new = box_routes(
+            grid.coarsen(bel, s),
+            grid,
+            w,
+            law,
+            v,
+            takeoff[ix],
+            landing[ix],
+            u.usable_endurance_s,
+            u.max_turn_rate_rad_s,
+            _reserve(sc),
+            heading0[ix],
+            sampled=(bel, s, cutoff),
+            options=dataclasses.replace(opt, rounds=opt.fill_rounds, chain_rounds=opt.fill_rounds),
+        )
+        new = fit_lawnmowers(new, takeoff[ix], landing[ix], sc, v, heading0[ix], opt)
+        if not any(new):
+            return rs
+        out = [list(r) for r in rs]
+        for j, k in enumerate(idle):
+            out[k] = new[j]
+        if router.active:  # the new routes in lanes behind every route already laid
+            busy = [k for k in range(n) if len(rs[k])]
+            order = busy + idle
+            laid = in_lanes(
+                _reordered(sc, order),
+                [out[k] for k in order],
+                v,
+                lambda j, q, lane: (
+                    rs[order[j]] if len(rs[order[j]]) else _around(order[j], q, lane)
+                ),
+            )
+            for j, k in enumerate(order):
+                out[k] = laid[j] if not len(rs[k]) else rs[k]
+        if not any(out[k] for k in idle):
+            return rs
+        return out
+
     eta = 0.0
     chosen = 0
     best: tuple[Any, ...] | None = None
@@ -741,6 +817,16 @@ def make_allocation_plan(
                 r_best = (r_val, r_routes)
         if r_best is not None:
             starts.append((r_best[0], "relax", r_best[1], _lines_of(r_best[1])))
+    if opt.fill_idle:  # i24-fleet: no UAV idle while a start leaves reachable mass
+        for i, (_, name, s_routes, s_pieces) in enumerate(starts):
+            f_routes = _fill(s_routes)
+            if f_routes is not s_routes:
+                f_pieces = [
+                    list(p_) if len(s_routes[k]) else list(range(len(f_routes[k]) // 2))
+                    for k, p_ in enumerate(s_pieces)
+                ]
+                f_val = _cell_pos(f_routes, takeoff, landing, prior, grid, w, law)
+                starts[i] = (f_val, name, f_routes, f_pieces)
     # the best starts by W x length per cell (stable: allocation, greedy, boxes on ties)
     starts.sort(key=lambda t: -t[0])
     start = starts[0][1] if starts else "allocation"
