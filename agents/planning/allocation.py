@@ -115,7 +115,7 @@ from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.bound import reach_optimum, zone_reach
+from poc_env.theory.bound import field_key, reach_optimum, zone_reach
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
@@ -470,6 +470,47 @@ def violation_penalty(
     return rate * air.violations(pos, act)
 
 
+def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
+    """The routes of ``plan`` (a plan of fewer UAVs, :func:`plan_fleets`) given to ``sc``'s
+    UAVs of the same airfields (take-off and landing to the millimetre,
+    :func:`~poc_env.theory.bound.field_key`), in fleet order; the UAVs left over get none.
+    A plan with more UAVs of a field than ``sc`` has raises :class:`ConfigError`."""
+    keys = [field_key(a, b) for a, b in zip(sc.takeoff_m, sc.landing_m, strict=True)]
+    free = list(range(len(keys)))
+    out: list[list[list[float]]] = [[] for _ in keys]
+    for j, uu in enumerate(plan.get("uavs", [])):
+        key = field_key(uu["takeoff_m"], uu["landing_m"])
+        k = next((i for i in free if keys[i] == key), None)
+        if k is None:
+            raise ConfigError(
+                f"floor.uavs[{j}]", [uu["takeoff_m"], uu["landing_m"]],
+                "a UAV of an airfield with a UAV left in this scenario's fleet (a plan of "
+                "fewer UAVs of the same scenario)",
+            )  # fmt: skip
+        free.remove(k)
+        out[k] = [[float(a), float(b)] for a, b in uu["waypoints_m"]]
+    return out
+
+
+def plan_fleets(
+    scenario: Scenario | str, sizes, *, prior: np.ndarray | None = None, **kw
+) -> list[dict[str, Any]]:
+    """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (UAVs spread
+    round-robin over the airfields, :meth:`~poc_env.config.Scenario.with_uavs`), in
+    increasing order, each planned with the one before as its ``floor``
+    (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
+    float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
+    sc = load_scenario(scenario)
+    ns = sorted({as_int("sizes", n, 1, 64) for n in np.atleast_1d(sizes).tolist()})
+    if not ns:
+        raise ConfigError("sizes", sizes, "one or more fleet sizes in [1, 64]")
+    plans: list[dict[str, Any]] = []
+    for n in ns:
+        floor = plans[-1] if plans else None
+        plans.append(make_allocation_plan(sc.with_uavs(n), prior=prior, floor=floor, **kw))
+    return plans
+
+
 #: the fields of ``opt`` its default plan keeps (:func:`_best_of_default`): the keyword-level
 #: ones and every ``polish*`` field, so a polish option added later is kept without a change
 #: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
@@ -523,6 +564,7 @@ def make_allocation_plan(
     box_start: bool | None = None,
     refine_starts: int | None = None,
     options: PlanOptions | None = None,
+    floor: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
@@ -536,7 +578,12 @@ def make_allocation_plan(
     (:class:`~poc_env.agents.planning.options.PlanOptions`; default ``PlanOptions()``, the
     ``"default"`` effort level; ``PlanOptions.preset("thorough")`` for the slower, better one);
     ``levels``, ``margin``, ``refine``, ``greedy_start``, ``box_start`` and ``refine_starts``
-    given here override its fields of the same names.
+    given here override its fields of the same names. ``floor``: a plan of this scenario and
+    prior for fewer UAVs (:func:`plan_fleets`; i24-fleet): its routes flown by UAVs of the
+    same airfields here, the UAVs left over given coverage boxes on the mass those routes
+    leave (``options.fill_idle``'s fill), kept instead of this plan if that plans more POS, so
+    the plan never plans less than ``floor`` (up to float rounding); ``optimizer.settings.
+    fleet`` records it.
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -565,7 +612,10 @@ def make_allocation_plan(
     if box_start is not None:
         opt = dataclasses.replace(opt, box_start=bool(box_start))
     if opt.also_default:
+        if floor is not None:
+            raise ConfigError("floor", "a plan", "no floor with options.also_default")
         return _best_of_default(sc, prior, map_source, seed, speed, crs, opt, t0)
+    mapped = None if floor is None else _mapped(sc, floor)  # bad input before any planning
     ks = list(opt.levels)
     refine = opt.refine
     margin = opt.margin
@@ -981,6 +1031,17 @@ def make_allocation_plan(
         _, routes, pieces, start, refined, polished = best_polished
         if len(pool) > 1:
             polished = {**polished, "plans": len(pool)}
+    fleet_rec: dict[str, Any] | None = None
+    if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
+        f_routes = _fill(mapped)
+        f_val = _sampled_total(f_routes) - _penalty(f_routes)
+        own = _sampled_total(routes) - _penalty(routes) if any(routes) else 0.0
+        kept = f_val > own
+        fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),
+                     "kept": "floor" if kept else "own"}  # fmt: skip
+        if kept:
+            routes, pieces, refined = f_routes, _lines_of(f_routes), True
+            start = str(floor.get("start", "allocation"))
     moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
@@ -1060,6 +1121,7 @@ def make_allocation_plan(
                 "refine": refine,
                 **({"options": opt.changed()} if opt.changed() else {}),
                 **({"polish": polished} if polished is not None else {}),
+                **({"fleet": fleet_rec} if fleet_rec is not None else {}),
             },
         },
         "runtime_s": runtime,
