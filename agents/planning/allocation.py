@@ -867,16 +867,23 @@ def make_allocation_plan(
                 r_best = (r_val, r_routes)
         if r_best is not None:
             starts.append((r_best[0], "relax", r_best[1], _lines_of(r_best[1])))
-    if opt.fill_idle:  # i24-fleet: no UAV idle while a start leaves reachable mass
-        for i, (_, name, s_routes, s_pieces) in enumerate(starts):
-            f_routes = _fill(s_routes)
-            if f_routes is not s_routes:
-                f_pieces = [
-                    list(p_) if len(s_routes[k]) else list(range(len(f_routes[k]) // 2))
-                    for k, p_ in enumerate(s_pieces)
-                ]
-                f_val = _cell_pos(f_routes, takeoff, landing, prior, grid, w, law)
-                starts[i] = (f_val, name, f_routes, f_pieces)
+
+    def _with_fill(trial, t_pieces, score: float | None):
+        """A candidate plan (routes, pieces, its sampled POS or None) with its idle UAVs filled
+        (:func:`_fill`, ``options.fill_idle``; i24-fleet), pieces and POS updated; as it was
+        when no UAV is idle or nothing is gained. Applied to every candidate the pick compares
+        (each start, refined or not), not to the starts before their ranking: the same starts
+        are ranked and refined as without it, and each candidate only gains, so the plan never
+        plans less than without the fill."""
+        if not opt.fill_idle:
+            return trial, t_pieces, score
+        filled = _fill(trial)
+        if filled is trial:
+            return trial, t_pieces, score
+        f_pieces = [list(p_) if len(trial[k]) else list(range(len(filled[k]) // 2))
+                    for k, p_ in enumerate(t_pieces)]  # fmt: skip
+        return filled, f_pieces, None if score is None else _sampled_total(filled)
+
     # the best starts by W x length per cell (stable: allocation, greedy, boxes on ties)
     starts.sort(key=lambda t: -t[0])
     start = starts[0][1] if starts else "allocation"
@@ -886,6 +893,8 @@ def make_allocation_plan(
         routes, pieces = starts[0][2], starts[0][3]
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
+        if not refine:  # the start kept as it is, its idle UAVs filled
+            routes, pieces, _ = _with_fill(routes, pieces, None)
     ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
         best_sampled = -1.0
@@ -928,12 +937,13 @@ def make_allocation_plan(
             for was_refined in (True, False):
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
                 score = _sampled_total(trial) if was_refined else sampled_of[name]
+                trial, t_pieces, score = _with_fill(trial, s_pieces, score)
                 score -= _penalty(trial)
-                ranked.append((score, trial, s_pieces, name, was_refined))
+                ranked.append((score, trial, t_pieces, name, was_refined))
                 if score > best_sampled:
                     best_sampled = score
                     routes = trial
-                    pieces = s_pieces
+                    pieces = t_pieces
                     start = name
                     refined = was_refined
         # the starts not refined are kept as they are if the environment's model scores them
@@ -941,10 +951,11 @@ def make_allocation_plan(
         for _, name, s_routes, s_pieces in starts:
             if any(name == t[1] for t in tried):
                 continue
-            score = sampled_of[name] - _penalty(s_routes)
-            ranked.append((score, s_routes, s_pieces, name, False))
+            f_routes, f_pieces, score = _with_fill(s_routes, s_pieces, sampled_of[name])
+            score -= _penalty(f_routes)
+            ranked.append((score, f_routes, f_pieces, name, False))
             if score > best_sampled:
-                best_sampled, routes, pieces = score, s_routes, s_pieces
+                best_sampled, routes, pieces = score, f_routes, f_pieces
                 start, refined = name, False
 
     def _polish(rs):
