@@ -1,10 +1,12 @@
 """i24-fleet: POS_C and idle UAVs of the default allocation plan over the fleet size, with
 the unfound mass split into unreachable and reachable (a script, not a test).
 
-``python fleet.py SCENARIO N [N ...]``
+``python fleet.py SCENARIO N [N ...]`` (from the checkout)
     SCENARIO a scenario file (the audit's ``big.yaml``, imported at any cell size) planned on
-    its own prior, or ``mono2`` (results/plan_scale/i24-deconflict/repro.py's case:
-    ``large_400`` at 10 km, one zone, nine sightings). One JSON line per N.
+    its own prior, ``mono2`` (results/plan_scale/i24-deconflict/repro.py's case:
+    ``large_400`` at 10 km, one zone, nine sightings) or ``mini:SIDE_KM:CELL_KM[:ENDURANCE_H]``
+    (the big scenario built without the import: tests/planning/test_fleet.py's ``mini``).
+    One JSON line per N.
 
 The split (reachable.py's method, i24-deconflict): a cell's mass is *in zones* for the share
 the planner's sensor model cannot reach from outside the zones (1 - ``reach_share`` at W/2),
@@ -28,35 +30,12 @@ from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.probability_map import Grid, build_prior
 
 
-def mini(side_km: float, cell_km: float, n: int, endurance_h: float = 3.0):
-    """The audit's big scenario (results/audit/scale/raw/make_inputs.py) without the import:
-    ``large_400``'s UAV on a ``side_km`` square of ``cell_km`` cells, four airfields 15 km
-    outside the sides, its three zones and twelve weighted sightings (seed 7) at the same
-    relative places, ``n`` UAVs round-robin."""
-    s = side_km
-    fields = {"North": (s / 2, s + 15), "South": (s / 2, -15), "West": (-15, s / 2),
-              "East": (s + 15, s / 2)}  # fmt: skip
-    boxes = [(0.2, 0.3, 0.35, 0.45), (0.6, 0.55, 0.7, 0.62), (0.45, 0.8, 0.55, 0.9)]
-    zones = [[[a * s, b * s], [c * s, b * s], [c * s, d * s], [a * s, d * s]] for a, b, c, d in boxes]
-    sc = load_scenario("large_400", {
-        "map.width_km": s, "map.height_km": s, "map.cell_km": cell_km,
-        "map.no_fly_zones_km": zones, "uav.endurance_h": endurance_h,
-        "airfields": [{"name": k, "position_km": list(v)} for k, v in fields.items()],
-        "fleet": [{"takeoff": "North", "count": 1}],
-    }).with_uavs(n)  # fmt: skip
-    rng = np.random.default_rng(7)
-    pts = rng.uniform(0.05 * s, 0.95 * s, (12, 2))
-    w = rng.uniform(0.2, 1, 12)
-    g = Grid.from_config(sc.map)
-    prior = np.zeros(g.shape)
-    for (x, y), m in zip(pts, w, strict=True):
-        prior[int(y // cell_km), int(x // cell_km)] += m
-    return sc, prior / prior.sum()
-
-
 def scenario(name: str, n: int):
     """The scenario with ``n`` UAVs and its prior."""
-    if name.startswith("mini"):  # mini:SIDE:CELL[:ENDURANCE_H]
+    if name.startswith("mini"):  # mini:SIDE:CELL[:ENDURANCE_H], tests/planning/test_fleet.py
+        sys.path.insert(0, "tests/planning")
+        from test_fleet import mini
+
         return mini(*map(float, name.split(":")[1:3]), n, *map(float, name.split(":")[3:]))
     if name == "mono2":
         sys.path.insert(0, "results/plan_scale/i24-deconflict")
