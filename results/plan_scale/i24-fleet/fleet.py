@@ -13,7 +13,10 @@ the planner's sensor model cannot reach from outside the zones (1 - ``reach_shar
 *beyond endurance* where no UAV's straight out-and-back (out at the transit speed, home at
 cruise) fits 0.85 T, and *reachable* otherwise. Unfound reachable mass per cell is that
 reachable mass less what the plan finds there (``sampled_sweep``), floored at 0 (the
-inverse-cube sensor's tail finds some mass the W/2 model calls unreachable).
+inverse-cube sensor's tail finds some mass the W/2 model calls unreachable; a cell searched
+in part counts its rest); ``idle_reach_unfound`` the same over the cells an idle UAV's own
+out-and-back fits, ``untouched_reachable`` the reachable mass of cells the plan finds nothing
+in.
 """
 
 import json
@@ -59,12 +62,16 @@ def split(sc, prior, plan) -> dict:
     _, found = sampled_sweep(sc, g, prior, paths)
     got = sum(found, np.zeros(g.shape))
     reach = prior * share * near
+    idle = [k for k, u in enumerate(plan["uavs"]) if not u["waypoints_m"]]
+    by_idle = (tau[idle] < sc.uav.usable_endurance_s).any(axis=0) if idle else np.zeros_like(near)
     return {
         "found": round(float(got.sum()), 4),
         "in_zones": round(float((prior * (1 - share)).sum()), 4),
         "beyond_endurance": round(float((prior * share * ~near).sum()), 4),
         "reachable": round(float(reach.sum()), 4),
         "reachable_unfound": round(float(np.maximum(reach - got, 0).sum()), 4),
+        "idle_reach_unfound": round(float(np.maximum(reach * by_idle - got, 0).sum()), 4),
+        "untouched_reachable": round(float((reach * (got <= 0)).sum()), 4),
     }
 
 
