@@ -77,7 +77,7 @@ def test_no_uav_idles_while_reachable_mass_remains():
 
 def test_pos_c_never_falls_as_the_fleet_grows():
     """plan_fleets: each fleet size planned with the plan of the one before as its floor.
-    Without it the default plan falls from 0.9182 (12 UAVs) to 0.9161 (16) on this case
+    Without it the default plan falls from 0.9182 (12 UAVs) to 0.9164 (16) on this case
     (another start wins at 16); with it the 16-UAV plan keeps the 12 UAVs' routes and fills
     the four more (POS_C 0.9213). Exact but for float rounding (the credit's sums run in
     another UAV order)."""
