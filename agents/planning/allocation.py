@@ -95,7 +95,13 @@ import numpy as np
 from poc_env.agents.mission.plan import SCHEMA
 from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sampled_boxes
 from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
-from poc_env.agents.planning.deconflict import FAN_DEG, in_lanes, lanes, planned_positions
+from poc_env.agents.planning.deconflict import (
+    FAN_DEG,
+    conflicts,
+    in_lanes,
+    lanes,
+    planned_positions,
+)
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -753,6 +759,12 @@ def make_allocation_plan(
             )
             for j, k in enumerate(order):
                 out[k] = laid[j] if not len(rs[k]) else rs[k]
+        if opt.fill_apart:  # eq. 21 first: a filled route in conflict with any flying UAV
+            _, pos, act = planned_positions(sc, out, v)  # (busy or filled before) is dropped
+            for k in idle:
+                if len(out[k]) and conflicts(sc, pos, act, one=k)[:, k].any():
+                    out[k] = []
+                    act[:, k] = False
         if not any(out[k] for k in idle):
             return rs
         return out
