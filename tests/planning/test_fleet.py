@@ -12,6 +12,7 @@ from poc_env.agents.planning.allocation import (
     plan_fleets,
     sampled_sweep,
 )
+from poc_env.agents.planning.deconflict import conflicts, planned_positions
 from poc_env.agents.planning.flight_rules import SPEED, plan_speeds
 from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
 from poc_env.agents.planning.options import PlanOptions
@@ -73,6 +74,23 @@ def test_no_uav_idles_while_reachable_mass_remains():
     plan = make_allocation_plan(sc, prior=prior, options=opt)
     assert all(u["waypoints_m"] for u in plan["uavs"])
     assert reachable_unfound(sc, prior, plan) < 1e-3
+
+
+def test_fill_apart_drops_filled_routes_that_break_eq_21():
+    """``fill_apart``: a filled route in planned conflict (eq. 21, the deconfliction's
+    measure) with a UAV already flying is dropped. On this case the 12 UAVs the allocation
+    start leaves idle, filled, are in 11 conflict steps with the others; apart, in none (5
+    stay idle)."""
+    sc, prior = mini(200, 5, 16)
+    base = {"greedy_start": False, "box_start": False, "refine": 0}
+    plain = make_allocation_plan(sc, prior=prior, options=PlanOptions(fill_idle=False, **base))
+    idle = [k for k, u in enumerate(plain["uavs"]) if not u["waypoints_m"]]
+    plan = make_allocation_plan(sc, prior=prior, options=PlanOptions(fill_apart=True, **base))
+    assert any(plan["uavs"][k]["waypoints_m"] for k in idle)
+    _, pos, act = planned_positions(
+        sc, [u["waypoints_m"] for u in plan["uavs"]], plan_speeds(sc, SPEED)
+    )
+    assert not conflicts(sc, pos, act)[:, idle].any()
 
 
 def test_pos_c_never_falls_as_the_fleet_grows():
