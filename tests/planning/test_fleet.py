@@ -113,6 +113,9 @@ def test_a_floor_of_another_fleet_is_refused_before_planning():
                                  for t in sc.with_uavs(8).takeoff_m]}  # fmt: skip
     with pytest.raises(ConfigError, match=r"floor\.uavs\[\d\]"):
         make_allocation_plan(sc, prior=prior, floor=big)
+    small = {"posc": 0.0, "uavs": []}
+    with pytest.raises(ConfigError, match="also_default"):
+        make_allocation_plan(sc, prior=prior, floor=small, options=PlanOptions(also_default=True))
 
 
 #: i24-deconflict's two cases on ``large_400`` at 10 km cells (results/plan_scale/
