@@ -91,14 +91,20 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from poc_env.agents.mission.plan import SCHEMA
 from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sampled_boxes
 from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
-from poc_env.agents.planning.deconflict import FAN_DEG, in_lanes, lanes, planned_positions
+from poc_env.agents.planning.deconflict import (
+    FAN_DEG,
+    conflicts,
+    in_lanes,
+    lanes,
+    planned_positions,
+)
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
@@ -118,7 +124,7 @@ from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.bound import reach_optimum, zone_reach
+from poc_env.theory.bound import field_key, reach_optimum, zone_reach
 from poc_env.theory.probability_map import Grid, build_prior
 from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 
@@ -130,6 +136,26 @@ LEVELS = PlanOptions.levels
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
+
+
+class _Reordered:
+    """A scenario whose UAVs are taken in ``order`` (take-off and landing positions
+    permuted; every other attribute the scenario's): :func:`~poc_env.agents.planning.
+    deconflict.in_lanes` lanes UAVs in fleet order, each behind the ones before it, and the
+    routes given to idle UAVs (i24-fleet) go behind every route already laid."""
+
+    def __init__(self, sc: Scenario, order: list[int]) -> None:
+        self._sc = sc
+        self.takeoff_m = tuple(sc.takeoff_m[k] for k in order)
+        self.landing_m = tuple(sc.landing_m[k] for k in order)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._sc, name)
+
+
+def _reordered(sc: Scenario, order: list[int]) -> Scenario:
+    """``sc`` with its UAVs in ``order`` (:class:`_Reordered`), typed as a scenario."""
+    return cast(Scenario, _Reordered(sc, order))
 
 
 def _lines_of(routes) -> list[list[int]]:
@@ -453,6 +479,47 @@ def violation_penalty(
     return rate * air.violations(pos, act)
 
 
+def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
+    """The routes of ``plan`` (a plan of fewer UAVs, :func:`plan_fleets`) given to ``sc``'s
+    UAVs of the same airfields (take-off and landing to the millimetre,
+    :func:`~poc_env.theory.bound.field_key`), in fleet order; the UAVs left over get none.
+    A plan with more UAVs of a field than ``sc`` has raises :class:`ConfigError`."""
+    keys = [field_key(a, b) for a, b in zip(sc.takeoff_m, sc.landing_m, strict=True)]
+    free = list(range(len(keys)))
+    out: list[list[list[float]]] = [[] for _ in keys]
+    for j, uu in enumerate(plan.get("uavs", [])):
+        key = field_key(uu["takeoff_m"], uu["landing_m"])
+        k = next((i for i in free if keys[i] == key), None)
+        if k is None:
+            raise ConfigError(
+                f"floor.uavs[{j}]", [uu["takeoff_m"], uu["landing_m"]],
+                "a UAV of an airfield with a UAV left in this scenario's fleet (a plan of "
+                "fewer UAVs of the same scenario)",
+            )  # fmt: skip
+        free.remove(k)
+        out[k] = [[float(a), float(b)] for a, b in uu["waypoints_m"]]
+    return out
+
+
+def plan_fleets(
+    scenario: Scenario | str, sizes, *, prior: np.ndarray | None = None, **kw
+) -> list[dict[str, Any]]:
+    """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (UAVs spread
+    round-robin over the airfields, :meth:`~poc_env.config.Scenario.with_uavs`), in
+    increasing order, each planned with the one before as its ``floor``
+    (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
+    float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
+    sc = load_scenario(scenario)
+    ns = sorted({as_int("sizes", n, 1, 64) for n in np.atleast_1d(sizes).tolist()})
+    if not ns:
+        raise ConfigError("sizes", sizes, "one or more fleet sizes in [1, 64]")
+    plans: list[dict[str, Any]] = []
+    for n in ns:
+        floor = plans[-1] if plans else None
+        plans.append(make_allocation_plan(sc.with_uavs(n), prior=prior, floor=floor, **kw))
+    return plans
+
+
 #: the fields of ``opt`` its default plan keeps (:func:`_best_of_default`): the keyword-level
 #: ones and every ``polish*`` field, so a polish option added later is kept without a change
 #: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
@@ -506,6 +573,7 @@ def make_allocation_plan(
     box_start: bool | None = None,
     refine_starts: int | None = None,
     options: PlanOptions | None = None,
+    floor: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
@@ -519,7 +587,12 @@ def make_allocation_plan(
     (:class:`~poc_env.agents.planning.options.PlanOptions`; default ``PlanOptions()``, the
     ``"default"`` effort level; ``PlanOptions.preset("thorough")`` for the slower, better one);
     ``levels``, ``margin``, ``refine``, ``greedy_start``, ``box_start`` and ``refine_starts``
-    given here override its fields of the same names.
+    given here override its fields of the same names. ``floor``: a plan of this scenario and
+    prior for fewer UAVs (:func:`plan_fleets`; i24-fleet): its routes flown by UAVs of the
+    same airfields here, the UAVs left over given coverage boxes on the mass those routes
+    leave (``options.fill_idle``'s fill), kept instead of this plan if that plans more POS, so
+    the plan never plans less than ``floor`` (up to float rounding); ``optimizer.settings.
+    fleet`` records it.
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -548,7 +621,10 @@ def make_allocation_plan(
     if box_start is not None:
         opt = dataclasses.replace(opt, box_start=bool(box_start))
     if opt.also_default:
+        if floor is not None:
+            raise ConfigError("floor", "a plan", "no floor with options.also_default")
         return _best_of_default(sc, prior, map_source, seed, speed, crs, opt, t0)
+    mapped = None if floor is None else _mapped(sc, floor)  # bad input before any planning
     ks = list(opt.levels)
     refine = opt.refine
     margin = opt.margin
@@ -633,6 +709,68 @@ def make_allocation_plan(
         if router.active:
             rs = _around_all(rs)
         return rs
+
+    def _fill(rs) -> list[list[list[float]]]:
+        """``rs`` with its UAVs without a route given the coverage boxes
+        (:func:`~poc_env.agents.planning.coverage_boxes.box_routes`) of the mass the other
+        routes leave on the sample points (eq. 14, the environment's sensor; the prior as the
+        starts see it, zone interiors discounted), fitted to eq. 18 and, with zones, in lanes
+        behind the routes already laid (i24-fleet). ``rs`` itself (the same object) when no
+        UAV is idle, none is busy (that is the boxes start's own job) or nothing is gained."""
+        idle = [k for k in range(n) if not len(rs[k])]
+        if not idle or len(idle) == n:
+            return rs
+        s = sc.sensor.samples_per_cell
+        cutoff = sc.sensor.cutoff_sweep_widths * w
+        bel = np.ascontiguousarray(grid.refine(prior, s))
+        for k in range(n):
+            if len(rs[k]):
+                path = np.vstack([takeoff[k], np.asarray(rs[k], dtype=float), landing[k]])
+                sweep_track(bel, grid, s, path, w, law, cutoff, grid.cell_m)
+        ix = np.asarray(idle)
+        new = box_routes(
+            grid.coarsen(bel, s),
+            grid,
+            w,
+            law,
+            v,
+            takeoff[ix],
+            landing[ix],
+            u.usable_endurance_s,
+            u.max_turn_rate_rad_s,
+            _reserve(sc),
+            heading0[ix],
+            sampled=(bel, s, cutoff),
+            options=dataclasses.replace(opt, rounds=opt.fill_rounds, chain_rounds=opt.fill_rounds),
+        )
+        new = fit_lawnmowers(new, takeoff[ix], landing[ix], sc, v, heading0[ix], opt)
+        if not any(new):
+            return rs
+        out = [list(r) for r in rs]
+        for j, k in enumerate(idle):
+            out[k] = new[j]
+        if router.active:  # the new routes in lanes behind every route already laid
+            busy = [k for k in range(n) if len(rs[k])]
+            order = busy + idle
+            laid = in_lanes(
+                _reordered(sc, order),
+                [out[k] for k in order],
+                v,
+                lambda j, q, lane: (
+                    rs[order[j]] if len(rs[order[j]]) else _around(order[j], q, lane)
+                ),
+            )
+            for j, k in enumerate(order):
+                out[k] = laid[j] if not len(rs[k]) else rs[k]
+        if opt.fill_apart:  # eq. 21 first: a filled route in conflict with any flying UAV
+            _, pos, act = planned_positions(sc, out, v)  # (busy or filled before) is dropped
+            for k in idle:
+                if len(out[k]) and conflicts(sc, pos, act, one=k)[:, k].any():
+                    out[k] = []
+                    act[:, k] = False
+        if not any(out[k] for k in idle):
+            return rs
+        return out
 
     eta = 0.0
     chosen = 0
@@ -744,6 +882,23 @@ def make_allocation_plan(
                 r_best = (r_val, r_routes)
         if r_best is not None:
             starts.append((r_best[0], "relax", r_best[1], _lines_of(r_best[1])))
+
+    def _with_fill(trial, t_pieces, score: float | None):
+        """A candidate plan (routes, pieces, its sampled POS or None) with its idle UAVs filled
+        (:func:`_fill`, ``options.fill_idle``; i24-fleet), pieces and POS updated; as it was
+        when no UAV is idle or nothing is gained. Applied to every candidate the pick compares
+        (each start, refined or not), not to the starts before their ranking: the same starts
+        are ranked and refined as without it, and each candidate only gains, so the plan never
+        plans less than without the fill."""
+        if not opt.fill_idle:
+            return trial, t_pieces, score
+        filled = _fill(trial)
+        if filled is trial:
+            return trial, t_pieces, score
+        f_pieces = [list(p_) if len(trial[k]) else list(range(len(filled[k]) // 2))
+                    for k, p_ in enumerate(t_pieces)]  # fmt: skip
+        return filled, f_pieces, None if score is None else _sampled_total(filled)
+
     # the best starts by W x length per cell (stable: allocation, greedy, boxes on ties)
     starts.sort(key=lambda t: -t[0])
     start = starts[0][1] if starts else "allocation"
@@ -753,6 +908,8 @@ def make_allocation_plan(
         routes, pieces = starts[0][2], starts[0][3]
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
+        if not refine:  # the start kept as it is, its idle UAVs filled
+            routes, pieces, _ = _with_fill(routes, pieces, None)
     ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
         best_sampled = -1.0
@@ -795,12 +952,13 @@ def make_allocation_plan(
             for was_refined in (True, False):
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
                 score = _sampled_total(trial) if was_refined else sampled_of[name]
+                trial, t_pieces, score = _with_fill(trial, s_pieces, score)
                 score -= _penalty(trial)
-                ranked.append((score, trial, s_pieces, name, was_refined))
+                ranked.append((score, trial, t_pieces, name, was_refined))
                 if score > best_sampled:
                     best_sampled = score
                     routes = trial
-                    pieces = s_pieces
+                    pieces = t_pieces
                     start = name
                     refined = was_refined
         # the starts not refined are kept as they are if the environment's model scores them
@@ -808,10 +966,11 @@ def make_allocation_plan(
         for _, name, s_routes, s_pieces in starts:
             if any(name == t[1] for t in tried):
                 continue
-            score = sampled_of[name] - _penalty(s_routes)
-            ranked.append((score, s_routes, s_pieces, name, False))
+            f_routes, f_pieces, score = _with_fill(s_routes, s_pieces, sampled_of[name])
+            score -= _penalty(f_routes)
+            ranked.append((score, f_routes, f_pieces, name, False))
             if score > best_sampled:
-                best_sampled, routes, pieces = score, s_routes, s_pieces
+                best_sampled, routes, pieces = score, f_routes, f_pieces
                 start, refined = name, False
 
     def _polish(rs):
@@ -903,6 +1062,17 @@ def make_allocation_plan(
         _, routes, pieces, start, refined, polished = best_polished
         if len(pool) > 1:
             polished = {**polished, "plans": len(pool)}
+    fleet_rec: dict[str, Any] | None = None
+    if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
+        f_routes = _fill(mapped)
+        f_val = _sampled_total(f_routes) - _penalty(f_routes)
+        own = _sampled_total(routes) - _penalty(routes) if any(routes) else 0.0
+        kept = f_val > own
+        fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),
+                     "kept": "floor" if kept else "own"}  # fmt: skip
+        if kept:
+            routes, pieces, refined = f_routes, _lines_of(f_routes), True
+            start = str(floor.get("start", "allocation"))
     moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
@@ -982,6 +1152,7 @@ def make_allocation_plan(
                 "refine": refine,
                 **({"options": opt.changed()} if opt.changed() else {}),
                 **({"polish": polished} if polished is not None else {}),
+                **({"fleet": fleet_rec} if fleet_rec is not None else {}),
             },
         },
         "runtime_s": runtime,

@@ -15,7 +15,10 @@ when a lower bound of its flight time (straight transit to its nearest point and
 the lines, a half-turn per line end) fits; the route it gives is then checked with eq. 18's
 return rule (:func:`poc_env.agents.planning.refine.route_fits`) and its last lines dropped until
 it fits. No-fly zones are flown around as the allocation planner does
-(:func:`poc_env.agents.planning.refine.fly_around`).
+(:meth:`poc_env.sim.routing.ZoneRouter.reroute`: search legs clipped to searchable airspace,
+transit around), the lines dropped until the rerouted route fits; the cells the kept lines
+cover as laid are taken (i24-fleet: taken as flown, a rectangle inside or behind a zone was
+never taken, and the next UAVs of the field flew the same route).
 
 :func:`make_greedy_rectangles_plan` returns the fields a
 :class:`~poc_env.agents.policies.base.PlanPolicy` flies (``uavs[*].waypoints_m``,
@@ -35,7 +38,7 @@ from poc_env.agents.planning import _kernels
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import plan_speeds
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
-from poc_env.agents.planning.refine import fly_around, route_fits
+from poc_env.agents.planning.refine import route_fits
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.core import takeoff_heading
@@ -159,25 +162,28 @@ def make_greedy_rectangles_plan(
             )
 
         wps: np.ndarray = np.zeros((0, 2))
+        lines: np.ndarray = np.zeros((0, 2))
         for scale in SCALES:  # a route that does not fit eq. 18: a tighter estimate
             box = _best_box(remaining, grid, widths, heights, w, v, turn, scale * budget,
                             takeoff[k], landing[k])  # fmt: skip
             if box is None:
                 break
-            wps = _lines(box[0], box[1], w, takeoff[k])
-            full = len(wps)
-            while len(wps):
-                path = np.vstack([takeoff[k], wps, landing[k]])
-                if router.active:
-                    path = fly_around(router, path, fits)
+            lines = _lines(box[0], box[1], w, takeoff[k])
+            full = len(lines)
+            wps = np.zeros((0, 2))
+            while len(lines):
+                path = np.vstack([takeoff[k], lines, landing[k]])
+                if router.active:  # the whole route round the zones, cut below by lines
+                    path = router.reroute(path)
                 if fits(path):
                     wps = path[1:-1]
                     break
-                wps = wps[:-2]  # drop the last line
-            if len(wps) >= full // 2:
+                lines = lines[:-2]  # drop the last line
+            if len(lines) >= full // 2:  # lines kept, not the waypoints round the zones
                 break
-        if len(wps):  # the cells its lines cover are taken
-            cov = _path_coverage(wps, grid, w)
+        if len(wps):  # the cells its lines cover are taken (i24-fleet: the lines as laid,
+            # not as flown round a zone, else the next UAV takes the same rectangle again)
+            cov = _path_coverage(lines, grid, w)
             remaining[cov >= 0.5] = 0.0
         routes.append([[float(a), float(b)] for a, b in wps])
     cov = sum(

@@ -123,6 +123,19 @@ class PlanOptions:
     #: each UAV its own sector of an allocation with UAVs dedicated to a distance, laid
     #: graded; i24-relax; off: measured below the boxes on ``large_400``).
     relax_start: bool = False
+    #: UAVs a start leaves without a route are given coverage boxes on the mass the start's
+    #: routes leave (i24-fleet: a larger fleet must not leave UAVs idle while reachable mass
+    #: remains; :mod:`~poc_env.agents.planning.allocation`, step 6).
+    fill_idle: bool = True
+    #: the exchange passes (single boxes, then chained) of that fill's coverage boxes
+    #: (``rounds`` and ``chain_rounds`` of the boxes start; 0: the greedy assignment alone).
+    fill_rounds: int = 0
+    #: a filled route whose planned flight breaks eq. 21 with a UAV already flying (the
+    #: deconfliction's measure, :func:`~poc_env.agents.planning.deconflict.conflicts`) is
+    #: dropped: its UAV stays idle (i24-fleet; off: on the audit's 500 km scenario at 48
+    #: UAVs it cost 0.028 of planned POS (0.9142 -> 0.8861) and left 132 of 258 planned
+    #: conflict pair-steps, another start winning).
+    fill_apart: bool = False
     #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
     #: their allocation assumes; the start keeps the one of most W x length per cell) ...
     relax_etas: tuple[float, ...] = (0.65, 0.75, 0.85, 0.95, 1.0)
@@ -251,6 +264,7 @@ class PlanOptions:
         _positive_tuple("dense_spacings", self.dense_spacings, high=20.0, empty=True)
         _number("max_cells", self.max_cells, 8, 400, integer=True)
         _number("rounds", self.rounds, 0, 20, integer=True)
+        _number("fill_rounds", self.fill_rounds, 0, 20, integer=True)
         _positive_tuple("chain", self.chain, high=0.95, empty=True)
         _number("chain_rounds", self.chain_rounds, 0, 20, integer=True)
         _positive_tuple("chain_spacings", self.chain_spacings, high=20.0, empty=True)
@@ -288,8 +302,9 @@ class PlanOptions:
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "relax_start", "chain_early", "also_default", "part", "share_tables", "axis",
-                 "excursions", "sampled", "polish_grade", "polish_zones")  # fmt: skip
+                 "relax_start", "fill_idle", "fill_apart", "chain_early", "also_default", "part",
+                 "share_tables", "axis", "excursions", "sampled", "polish_grade",
+                 "polish_zones")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")

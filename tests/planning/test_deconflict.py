@@ -9,6 +9,7 @@ import shapely
 import poc_env.agents.planning.allocation as allocation
 from poc_env.agents.planning.deconflict import LANE, conflicts, lanes, planned_positions
 from poc_env.agents.planning.flight_rules import SPEED, plan_speeds
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.testing.flights import fly
 from poc_env.config import load_scenario
 from poc_env.sim.routing import ZoneRouter
@@ -27,6 +28,15 @@ def _case():
     for x, y in SIGHTINGS:
         prior[int(y // 10), int(x // 10)] = 0.5
     return sc, prior
+
+
+#: the plan's options and fleet for the two plan tests: since i24-fleet the greedy rectangles
+#: start gives each UAV its own rectangle (it gave field-mates of A one route), wins on this
+#: case with two UAVs (POS_C 1.0) and leaves nothing to part; the boxes start still gives
+#: field-mates the router's way round the zone (9 UAVs: 101 shared waypoints, 327 planned
+#: conflicts that way; 34 and 58 in lanes; POS_C 1.0 both)
+BOXES = PlanOptions(greedy_start=False)
+UAVS = 9
 
 
 def _router_way(sc, routes, v, around):
@@ -73,11 +83,12 @@ def test_lane_moves_the_ring_vertices_out_of_the_zone():
 
 def test_plan_puts_field_mates_in_lanes(monkeypatch):
     sc, prior = _case()
+    sc = sc.with_uavs(UAVS)
     d_s = sc.constraints.safety_distance_m
-    plan = allocation.make_allocation_plan(sc, prior=prior)
+    plan = allocation.make_allocation_plan(sc, prior=prior, options=BOXES)
     with monkeypatch.context() as m:
         m.setattr(allocation, "in_lanes", _router_way)
-        before = allocation.make_allocation_plan(sc, prior=prior)
+        before = allocation.make_allocation_plan(sc, prior=prior, options=BOXES)
     # the reproduction: the router's way puts field-mates on the same waypoints at once
     assert _shared_waypoints(before, d_s) > 0
     assert _planned_conflicts(sc, before) > 0
@@ -96,10 +107,13 @@ def test_flown_collisions_fall_with_lanes(monkeypatch):
     from poc_env.agents.policies.allocation import AllocationPlanPolicy
 
     sc, prior = _case()
-    with_lanes = fly(sc, AllocationPlanPolicy(), seed=5000, prior=prior)
+    sc = sc.with_uavs(UAVS)
+    policy = AllocationPlanPolicy()
+    policy.options = BOXES
+    with_lanes = fly(sc, policy, seed=5000, prior=prior)
     with monkeypatch.context() as m:
         m.setattr(allocation, "in_lanes", _router_way)
-        router_way = fly(sc, AllocationPlanPolicy(), seed=5000, prior=prior)
+        router_way = fly(sc, policy, seed=5000, prior=prior)
     for f in (with_lanes, router_way):
         assert (f.nofly_steps, f.oob_steps, f.landed) == (0, 0, sc.n_uavs)
     assert router_way.collision_steps > 0  # the reproduction: eq. 21 broken in flight
