@@ -104,7 +104,15 @@ def test_pos_c_never_falls_as_the_fleet_grows():
     assert [len(p["uavs"]) for p in plans] == [12, 16]
     assert plans[1]["posc"] >= plans[0]["posc"] - 1e-12
     assert plans[1]["optimizer"]["settings"]["fleet"]["floor_uavs"] == 12
-    assert all(u["waypoints_m"] for u in plans[1]["uavs"])
+    # the floor's routes are kept for the UAVs of their airfields
+    kept = {tuple(map(tuple, u["waypoints_m"])) for u in plans[0]["uavs"] if u["waypoints_m"]}
+    now = {tuple(map(tuple, u["waypoints_m"])) for u in plans[1]["uavs"] if u["waypoints_m"]}
+    assert kept <= now
+    # without fill_apart (on by default: filled routes in eq. 21 conflict are dropped) the
+    # four more UAVs are all filled
+    free = plan_fleets(sc, [16, 12], prior=prior, options=PlanOptions(fill_apart=False))
+    assert free[1]["posc"] >= free[0]["posc"] - 1e-12
+    assert all(u["waypoints_m"] for u in free[1]["uavs"])
 
 
 def test_a_floor_of_another_fleet_is_refused_before_planning():
