@@ -123,6 +123,24 @@ def layer_of(u: Any) -> float:
     return float(u.get("layer_m", 0.0))
 
 
+def layer_text(u: Any) -> str:
+    """``, layer +L m`` for a UAV given a layer by :func:`with_layers` (even ``+0``: the lowest
+    of its field), else empty: the words KML and the map report add to its altitude."""
+    return f", layer +{layer_of(u):g} m" if "layer_m" in u else ""
+
+
+def layers_note(plan: Plan) -> str:
+    """One sentence on the export's altitude layers (:func:`with_layers`), or empty."""
+    a = plan.get("altitude_layers")
+    if not a:
+        return ""
+    per = "take-off field" if a["layer_by"] == "field" else "fleet"
+    return (
+        f"Altitude layers: {a['separation_m']:g} m apart, counted per {per} (the landing "
+        "approach at the plan's height; no time separation)."
+    )
+
+
 def check_layers(plan: Plan, altitude_m: float, ground_m: float) -> None:
     """ConfigError, naming ``plan.uavs[k]`` (UAV id), its altitude and the ceiling, if a UAV's
     layer (:func:`with_layers`) puts its cruise altitude ``altitude_m + layer`` more than the
@@ -223,10 +241,11 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     for GeoJSON and KML.
 
     Without terrain: take-off field, ``waypoints_m``, landing field at ``alt`` plus the UAV's
-    layer (:func:`with_layers`; fields at ``ground``). With the plan's ``terrain``: the take-off field on the ground, the
-    :func:`~poc_env.agents.mission.terrain.profile` points (the climb over the field, the
-    waypoints and the points the clearance needs, the landing approach point) at their AMSL
-    altitudes, the landing field on the ground.
+    layer (:func:`with_layers`; fields at ``ground``). With the plan's ``terrain``: the
+    take-off field on the ground, the :func:`~poc_env.agents.mission.terrain.profile` points
+    (the climb over the field, the waypoints and the points the clearance needs, the landing
+    approach point) at their AMSL altitudes (the layer in them), the landing field on the
+    ground.
     """
     profs = plan_profiles(plan)
     out = []
