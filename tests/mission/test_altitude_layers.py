@@ -95,8 +95,8 @@ def test_two_uavs_of_one_field_fly_layers_s_apart_in_every_format(tmp_path):
 
 
 def test_layers_are_counted_per_take_off_field_or_over_the_fleet(tmp_path):
-    """Field-mates share take-off and homeward legs (results/mission/i24-layers: 306 of the 307
-    flown conflict pair-steps left); ``fleet`` separates every pair."""
+    """Field-mates share take-off and homeward legs (results/mission/i24-layers: 124 of the 125
+    flown conflict pair-steps between routed UAVs); ``fleet`` separates every pair."""
     path = _plan(tmp_path, fields=(FIELD_A, FIELD_B, FIELD_A))
     plan = json.loads(path.read_text())
     assert [u["layer_m"] for u in with_layers(plan, 40.0)["uavs"]] == [0.0, 0.0, 40.0]
