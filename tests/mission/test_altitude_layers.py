@@ -17,6 +17,7 @@ from poc_env.agents.mission.export import export_plan
 from poc_env.agents.mission.features import with_layers
 from poc_env.agents.mission.formats.qgc import validate_qgc
 from poc_env.agents.mission.terrain import clearance_violations, load_terrain, profile
+from poc_env.agents.testing.terrain import wall_scenario
 from poc_env.cli import main
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
@@ -152,19 +153,8 @@ def test_zero_separation_changes_no_byte(tmp_path):
 
 
 def _wall_terrain():
-    """A 600 m valley with a 4,000 m north-south wall at x = 30 km (tests/mission/test_terrain)."""
-    x = -40 + np.arange(120) + 0.5
-    row = np.where(np.abs(x - 30.0) < 2.0, 4000.0, 600.0)
-    sc = load_scenario({
-        "name": "alps",
-        "map": {"width_km": 60, "height_km": 40, "cell_km": 5, "origin_deg": [46.5, 7.9],
-                "prior": {"components": [{"mean_km": [32, 20], "sigma_km": [10, 8]}]}},
-        "airfields": [{"name": "valley", "position_km": [-10, 20]}],
-        "fleet": [{"takeoff": "valley", "count": 2}],
-        "uav": {"max_altitude_m": 6000},
-        "terrain": {"elevation_m": np.tile(row, (100, 1)).tolist(), "cell_km": 1.0,
-                    "origin_km": [-40, -30]},
-    })  # fmt: skip
+    """A 600 m valley with a 4,000 m north-south wall at x = 30 km."""
+    sc = load_scenario(wall_scenario())
     return sc, load_terrain(sc)
 
 

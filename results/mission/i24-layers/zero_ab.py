@@ -21,6 +21,7 @@ def plans(d: Path) -> None:
     from poc_env.agents.mission.crs import make_crs
     from poc_env.agents.mission.plan import write_plan
     from poc_env.agents.planning.planner import make_plan
+    from poc_env.agents.testing.terrain import wall_scenario
     from poc_env.config import load_scenario
 
     d.mkdir(parents=True, exist_ok=True)
@@ -44,17 +45,7 @@ def plans(d: Path) -> None:
     write_plan(flat, d / "flat.json")
     sc = load_scenario("paper_6_2", {"map.origin_deg": [45.75, 126.65]})
     write_plan(make_plan(sc, planner="allocation", refine=0), d / "paper.json")
-    x = -40 + np.arange(120) + 0.5
-    row = np.where(np.abs(x - 30.0) < 2.0, 4000.0, 600.0)
-    wall = load_scenario({
-        "name": "alps",
-        "map": {"width_km": 60, "height_km": 40, "cell_km": 5, "origin_deg": [46.5, 7.9],
-                "prior": {"components": [{"mean_km": [32, 20], "sigma_km": [10, 8]}]}},
-        "airfields": [{"name": "valley", "position_km": [-10, 20]}],
-        "fleet": [{"takeoff": "valley", "count": 2}], "uav": {"max_altitude_m": 6000},
-        "terrain": {"elevation_m": np.tile(row, (100, 1)).tolist(), "cell_km": 1.0,
-                    "origin_km": [-40, -30]},
-    })  # fmt: skip
+    wall = load_scenario(wall_scenario())
     write_plan(make_plan(wall, planner="allocation", refine=0), d / "terrain.json")
 
 
