@@ -1327,14 +1327,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=0.0,
         metavar="S",
         help="vertical separation: UAV k' of each field (--layer-by) flies k' x S m above the "
-        "plan's altitude, take-off to the landing approach (default 0: one altitude; "
-        "docs/EXPORT.md, 'Altitude layers')",
+        "plan's altitude, take-off to the landing approach; 0: one altitude for all "
+        "(docs/EXPORT.md, 'Altitude layers')",
     )
     p.add_argument(
         "--layer-by",
         default="field",
-        help="field (default: layers counted per take-off field, whose UAVs share take-off "
-        "and homeward legs) or fleet (every UAV its own layer)",
+        choices=("field", "fleet"),
+        help="field: layers counted per take-off field, whose UAVs share take-off and homeward "
+        "legs; fleet: every UAV its own layer",
     )
     p.set_defaults(func=cmd_export)
 

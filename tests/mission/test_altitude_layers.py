@@ -103,6 +103,10 @@ def test_layers_are_counted_per_take_off_field_or_over_the_fleet(tmp_path):
     assert [u["layer_m"] for u in with_layers(plan, 40.0)["uavs"]] == [0.0, 0.0, 40.0]
     fleet = with_layers(plan, 40.0, "fleet")["uavs"]
     assert [u["layer_m"] for u in fleet] == [0.0, 40.0, 80.0]
+    idle = {**plan["uavs"][0], "waypoints_m": []}  # not exported: it takes no layer
+    layered = with_layers({**plan, "uavs": [idle, *plan["uavs"]]}, 40.0)["uavs"]
+    assert "layer_m" not in layered[0]
+    assert [u["layer_m"] for u in layered[1:]] == [0.0, 0.0, 40.0]
     (gj,) = export_plan(path, "geojson", out_dir=tmp_path / "g", separation_m=40.0,
                         layer_by="fleet")  # fmt: skip
     routes = [
