@@ -844,6 +844,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         geofence=not args.no_geofence,
         allow_infeasible=args.allow_infeasible,
         max_mission_items=args.max_mission_items,
+        separation_m=args.separation_m,
+        layer_by=args.layer_by,
     )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
         _wrote(export(args.plan, args.format, args.origin, args.out))
@@ -1318,6 +1320,22 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="QGC: refuse a mission of more than N items, your autopilot's limit (by default "
         "a mission past 500 items, PX4's smallest boards, is warned: docs/EXPORT.md)",
+    )
+    p.add_argument(
+        "--separation-m",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="vertical separation: UAV k' of each field (--layer-by) flies k' x S m above the "
+        "plan's altitude, take-off to the landing approach; 0: one altitude for all "
+        "(docs/EXPORT.md, 'Altitude layers')",
+    )
+    p.add_argument(
+        "--layer-by",
+        default="field",
+        choices=("field", "fleet"),
+        help="field: layers counted per take-off field, whose UAVs share take-off and homeward "
+        "legs; fleet: every UAV its own layer",
     )
     p.set_defaults(func=cmd_export)
 

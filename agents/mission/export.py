@@ -16,7 +16,13 @@ from pathlib import Path
 from typing import Any
 
 from poc_env.agents.mission.crs import check_origin, plan_crs
-from poc_env.agents.mission.features import altitudes, check_altitude_ref
+from poc_env.agents.mission.features import (
+    altitudes,
+    check_altitude_ref,
+    check_layers,
+    check_separation,
+    with_layers,
+)
 from poc_env.agents.mission.formats import FORMATS
 from poc_env.agents.mission.formats.qgc import check_fences
 from poc_env.agents.mission.job import ExportJob
@@ -40,6 +46,8 @@ def export_plan(
     prior: Any = None,
     allow_infeasible: bool = False,
     max_mission_items: int | None = None,
+    separation_m: float = 0.0,
+    layer_by: str = "field",
 ) -> list[Path]:
     """Write ``fmt`` files next to the plan (or into ``out_dir``); return their paths.
 
@@ -79,6 +87,14 @@ def export_plan(
         :data:`~poc_env.agents.mission.formats.qgc.MISSION_ITEM_LIMITS`). Without it a mission
         beyond the smallest autopilot's limit is warned, and one beyond every autopilot's
         refused (:func:`~poc_env.agents.mission.formats.qgc.check_mission_size`).
+    separation_m : float
+        Vertical separation (metres, 0: off, the default): UAV ``k'`` flies ``k' x
+        separation_m`` above the plan's altitude (a flat map) or its terrain profile's wanted
+        height, ``k'`` its index among the exported UAVs of its take-off field (``layer_by``
+        ``field``) or of the plan (``fleet``); the landing approach keeps the plan's
+        (:func:`~poc_env.agents.mission.features.with_layers`). A layer above the ceiling is
+        refused, naming the UAV, its altitude and the ceiling.
+    layer_by : {"field", "fleet"}
 
     Returns
     -------
@@ -98,10 +114,11 @@ def export_plan(
         raise ConfigError("projection", projection, "aeqd or utm")
     if altitude_ref is not None:
         check_altitude_ref(altitude_ref)
+    separation_m = check_separation(separation_m, layer_by)
     with warnings.catch_warnings(), profiles_once():  # each UAV's terrain profile once
         if fmt != "qgc":  # the glide is PX4's check of the mission that flies: QGC's
             warnings.simplefilter("ignore", SteepGlideWarning)
-        plan = load_plan(plan_path)
+        plan = with_layers(load_plan(plan_path), separation_m, layer_by)
         flown = searching_uavs(plan)  # a plan that reaches nothing: refused before any work
         if max_mission_items is not None:
             check_max_items(max_mission_items)
@@ -113,6 +130,7 @@ def export_plan(
         altitude_ref = altitude_ref or "home"
         field_elevation_m = 0.0 if field_elevation_m is None else field_elevation_m
         alt, ground = altitudes(plan, altitude_m, altitude_ref, field_elevation_m)
+        check_layers(plan, alt, ground)  # a layer above the ceiling: refused, the UAV named
         elevation = as_number("field_elevation_m", field_elevation_m, -500.0, 9000.0)
         # the whole plan checked, so a refusal names the UAV's index in the file
         area = plan.get("operating_area_m") if geofence or fmt != "qgc" else None

@@ -75,6 +75,89 @@ def altitudes(
     return float(alt), ground
 
 
+#: How an export orders the UAVs into altitude layers (:func:`with_layers`): ``field``, by
+#: index among the UAVs of one take-off field (field-mates share the take-off and homeward
+#: legs); ``fleet``, by index among all the UAVs exported.
+LAYER_ORDERS = ("field", "fleet")
+#: The largest ``separation_m`` an export takes (metres; more is a typo, not a layer).
+MAX_SEPARATION_M = 1000.0
+
+
+def check_separation(separation_m: Any, layer_by: Any) -> float:
+    """``separation_m`` (metres, from 0: off to :data:`MAX_SEPARATION_M`) as a float if it and
+    ``layer_by`` (one of :data:`LAYER_ORDERS`) are valid, else ConfigError naming the field."""
+    if layer_by not in LAYER_ORDERS:
+        raise ConfigError("layer_by", layer_by, "one of " + ", ".join(LAYER_ORDERS))
+    return as_number("separation_m", separation_m, 0.0, MAX_SEPARATION_M)
+
+
+def with_layers(plan: Plan, separation_m: float, layer_by: str = "field") -> Plan:
+    """The plan with each UAV of a search route given its altitude layer (``layer_m``).
+
+    UAV k is flown ``k' x separation_m`` above the plan's altitude (a flat map) or its terrain
+    profile's wanted height (:func:`~poc_env.agents.mission.terrain.profile`, which keeps the
+    clearance and the ceiling), ``k'`` its index among the UAVs with a route of its take-off
+    field (``layer_by="field"``) or of the whole plan (``"fleet"``). The take-off climb,
+    transit, search and homeward legs fly the layer; the landing approach point keeps the
+    plan's approach height (the glide to the field is the landing's, one per field). The plan
+    records ``altitude_layers`` (``separation_m``, ``layer_by``) for the formats' metadata.
+    ``separation_m = 0`` returns ``plan`` itself: every export as without layers.
+    """
+    if separation_m == 0:
+        return plan
+    count: dict[Any, int] = {}
+    uavs = []
+    for u in plan["uavs"]:
+        if not u["waypoints_m"]:  # not exported (export.searching_uavs): no layer used
+            uavs.append(u)
+            continue
+        key = tuple(u["takeoff_m"]) if layer_by == "field" else None
+        count[key] = count.get(key, -1) + 1
+        uavs.append({**u, "layer_m": count[key] * float(separation_m)})
+    layers = {"separation_m": float(separation_m), "layer_by": layer_by}
+    return {**plan, "uavs": uavs, "altitude_layers": layers}
+
+
+def layer_of(u: Any) -> float:
+    """A UAV's altitude layer above the plan's altitude (metres; 0 without layers)."""
+    return float(u.get("layer_m", 0.0))
+
+
+def layer_text(u: Any) -> str:
+    """``, layer +L m`` for a UAV given a layer by :func:`with_layers` (even ``+0``: the lowest
+    of its field), else empty: the words KML and the map report add to its altitude."""
+    return f", layer +{layer_of(u):g} m" if "layer_m" in u else ""
+
+
+def layers_note(plan: Plan) -> str:
+    """One sentence on the export's altitude layers (:func:`with_layers`), or empty."""
+    a = plan.get("altitude_layers")
+    if not a:
+        return ""
+    per = "take-off field" if a["layer_by"] == "field" else "fleet"
+    return (
+        f"Altitude layers: {a['separation_m']:g} m apart, counted per {per} (the landing "
+        "approach at the plan's height; no time separation)."
+    )
+
+
+def check_layers(plan: Plan, altitude_m: float, ground_m: float) -> None:
+    """ConfigError, naming ``plan.uavs[k]`` (UAV id), its altitude and the ceiling, if a UAV's
+    layer (:func:`with_layers`) puts its cruise altitude ``altitude_m + layer`` more than the
+    ceiling ``flight.max_altitude_m`` above the field ``ground_m`` (a flat map; over terrain
+    the profile refuses it)."""
+    top = flight(plan)["max_altitude_m"]
+    for k, u in enumerate(plan["uavs"]):
+        z = altitude_m + layer_of(u)
+        if z - ground_m > top + 1e-9:
+            raise ConfigError(
+                f"plan.uavs[{k}] (UAV {u['id']})",
+                f"altitude {z:g} m ({altitude_m:g} m + layer {layer_of(u):g} m)",
+                f"at most the UAV ceiling flight.max_altitude_m = {top:g} m above the field: "
+                "a smaller separation_m, layer_by=field, or a lower altitude_m",
+            )  # fmt: skip
+
+
 def approach_altitude(altitude_m: float, ground_m: float) -> float:
     """:data:`APPROACH_HEIGHT_M` above the field (lower if the cruise altitude is lower)."""
     return ground_m + min(APPROACH_HEIGHT_M, altitude_m - ground_m)
@@ -157,18 +240,19 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     """Each UAV's route as flown, ``(points in local metres, altitudes)``: one implementation
     for GeoJSON and KML.
 
-    Without terrain: take-off field, ``waypoints_m``, landing field at ``alt`` (fields at
-    ``ground``). With the plan's ``terrain``: the take-off field on the ground, the
-    :func:`~poc_env.agents.mission.terrain.profile` points (the climb over the field, the
-    waypoints and the points the clearance needs, the landing approach point) at their AMSL
-    altitudes, the landing field on the ground.
+    Without terrain: take-off field, ``waypoints_m``, landing field at ``alt`` plus the UAV's
+    layer (:func:`with_layers`; fields at ``ground``). With the plan's ``terrain``: the
+    take-off field on the ground, the :func:`~poc_env.agents.mission.terrain.profile` points
+    (the climb over the field, the waypoints and the points the clearance needs, the landing
+    approach point) at their AMSL altitudes (the layer in them), the landing field on the
+    ground.
     """
     profs = plan_profiles(plan)
     out = []
     for k, u in enumerate(plan["uavs"]):
         if profs is None:
             pts = route(u)
-            out.append((pts, [ground, *[alt] * (len(pts) - 2), ground]))
+            out.append((pts, [ground, *[alt + layer_of(u)] * (len(pts) - 2), ground]))
             continue
         p = profs[k]
         pts = [list(u["takeoff_m"]), *p.points_m.tolist(), list(u["landing_m"])]

@@ -177,6 +177,9 @@ class UavPlan(_UavRequired, total=False):
 
     flown_rectangle: FlownRectangle | None
     areas_m: list[list[list[float]]] | None
+    #: set by an export only (:func:`poc_env.agents.mission.features.with_layers`): the UAV's
+    #: altitude layer above the plan's altitude, metres
+    layer_m: float
 
 
 class Airfield(TypedDict):
@@ -227,6 +230,9 @@ class Plan(_PlanRequired, total=False):
     no_fly_zone_names: list[str] | None
     airfields: list[Airfield] | None
     terrain: dict[str, Any] | None
+    #: set by an export only (:func:`poc_env.agents.mission.features.with_layers`):
+    #: ``{separation_m, layer_by}``
+    altitude_layers: dict[str, Any] | None
 
 
 def write_plan(plan: Any, path: str | os.PathLike[str]) -> Path:

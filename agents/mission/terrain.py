@@ -550,13 +550,20 @@ class Profile:
     landing_field_m: float
 
 
-def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = None) -> Profile:
+def profile(
+    t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = None, layer_m: float = 0.0
+) -> Profile:
     """The altitudes along ``path_xy`` (take-off field, waypoints, approach point) over ``t``.
+
+    ``layer_m``: the UAV's altitude layer (:func:`poc_env.agents.mission.features.with_layers`),
+    added to the wanted altitude (at least the clearance) before eq. 19's passes and the glide
+    cap, so a layered profile keeps the clearance, the pitch bound and the final glide.
 
     Raises
     ------
     ConfigError
-        ``where`` named: clearance impossible within the UAV's ceiling.
+        ``where`` named: clearance impossible within the UAV's ceiling, or a layer that would
+        take the wanted altitude above it.
     """
     path = np.asarray(path_xy, dtype=float).reshape(-1, 2)
     step = t.cell_m / 2.0
@@ -593,6 +600,17 @@ def profile(t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = No
             "impossible: re-plan around the high ground, or raise the ceiling if the UAV can)",
         )  # fmt: skip
     base = np.maximum(np.minimum(ground + t.search_height_m, t.ceiling_m), req)
+    if layer_m:
+        base = base + layer_m
+        top = int(np.argmax(base))
+        if base[top] > t.ceiling_m + 1e-6:
+            x, y = p[top]
+            raise ConfigError(
+                where, f"altitude {base[top]:.0f} m AMSL near ({x / 1e3:.1f}, {y / 1e3:.1f}) km "
+                f"(layer {layer_m:g} m over ground {ground[top]:.0f} m)",
+                f"at most the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g} m AMSL: a "
+                "smaller separation_m, layer_by=field, or a higher ceiling if the UAV can",
+            )  # fmt: skip
     dist = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
     grad = math.tan(t.max_pitch_rad)
     z = base.copy()
@@ -846,7 +864,8 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
             out.append(memo[key][-1])
             continue
         t = t or from_record(rec)
-        p = profile(t, mission_path(u, zones), f"plan.uavs[{k}] (UAV {u['id']})", u["landing_m"])
+        where = f"plan.uavs[{k}] (UAV {u['id']})"
+        p = profile(t, mission_path(u, zones), where, u["landing_m"], u.get("layer_m", 0.0))
         if memo is not None:
             memo[key] = (rec, u, zones, p)
         out.append(p)

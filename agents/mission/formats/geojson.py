@@ -11,6 +11,7 @@ from poc_env.agents.mission.crs import crs_text, to_geographic
 from poc_env.agents.mission.features import (
     altitudes,
     antimeridian_parts,
+    layer_of,
     overlays,
     r6,
     routes_3d,
@@ -48,7 +49,7 @@ def geojson(
             "poc_pct": round(100 * u["poc"], 2),
             "pos_pct": round(100 * u["pos"], 2),
             "feasible": u["feasible"],
-            **_altitude_properties(plan, alt, zs),
+            **_altitude_properties(plan, alt, zs, u),
             "altitude_ref": altitude_ref,
             "cruise_speed_kmh": round(fl["cruise_speed_mps"] * 3.6, 1),
             "search_speed_kmh": round(fl["search_speed_mps"] * 3.6, 1),
@@ -90,6 +91,8 @@ def geojson(
         "local_crs": crs_text(crs) if isinstance(crs, dict) else None,
         "altitude_ref": altitude_ref,
     }
+    if layers := plan.get("altitude_layers"):  # with_layers: the export's vertical separation
+        about["altitude_layers"] = dict(layers)
     if sortie := sortie_figures(plan):  # a replanned sortie: what it finds, the search's POS
         about["sortie"] = int(sortie["sortie"])
         about["sortie_posc_pct"] = round(100 * sortie["sortie_posc"], 2)
@@ -97,20 +100,24 @@ def geojson(
     return {"type": "FeatureCollection", "features": feats, "properties": about}
 
 
-def _altitude_properties(plan: Plan, alt: float, zs: list[float]) -> dict[str, float]:
+def _altitude_properties(plan: Plan, alt: float, zs: list[float], u: Any) -> dict[str, float]:
     """What a route's altitudes are, in the words the line flies.
 
     Flat: ``altitude_m``, the search altitude every airborne point has. With the plan's
     ``terrain`` the z follow the DEM, so no single altitude describes the line: the search
     height above the ground (``search_height_m``, the UAV's cruise altitude, where the climb and
     the ceiling allow), the least clearance and the AMSL range the airborne points span
-    (``altitude_min_m``, ``altitude_max_m``; the fields are at their own elevations).
+    (``altitude_min_m``, ``altitude_max_m``; the fields are at their own elevations). With
+    altitude layers (:func:`~poc_env.agents.mission.features.with_layers`) the UAV's
+    ``layer_m`` too, included in the altitudes.
     """
     t = plan.get("terrain")
+    layer = {"layer_m": round(layer_of(u), 1)} if "layer_m" in u else {}
     if t is None:
-        return {"altitude_m": round(alt, 1)}
+        return {"altitude_m": round(alt + layer_of(u), 1), **layer}
     air = zs[1:-1]
     return {
+        **layer,
         "search_height_m": round(float(t["search_height_m"]), 1),
         "min_clearance_m": round(float(t["min_clearance_m"]), 1),
         "altitude_min_m": round(min(air), 1),

@@ -26,6 +26,9 @@ from poc_env.agents.mission.features import (
     APPROACH_KIND,
     altitudes,
     check_altitude_ref,
+    layer_of,
+    layer_text,
+    layers_note,
     overlays,
     routes_3d,
 )
@@ -103,8 +106,9 @@ def kml(
     doc = _el(root, "Document")
     _el(doc, "name", str(plan["scenario"]))
     g = ground_overlay
-    if g is not None:
-        _el(doc, "description", str(g.get("note", "")))
+    if g is not None or plan.get("altitude_layers"):  # the note, the export's layers
+        text = " ".join(v for v in (str((g or {}).get("note", "")), layers_note(plan)) if v)
+        _el(doc, "description", text)
     for sid, subs in _STYLES:
         style = _el(doc, "Style", id=sid)
         for sub, fields in subs:
@@ -133,7 +137,7 @@ def kml(
             f"UAV {uid} route",
             "route",
             f"POS {100 * u['pos']:.2f} %, track {u['track_length_m'] / 1000:.1f} km"
-            f", {u['flight_time_s'] / 60:.0f} min, {_alt_text(plan, alt, altitude_ref)}; out "
+            f", {u['flight_time_s'] / 60:.0f} min, {_alt_text(plan, alt, altitude_ref, u)}; out "
             f"{3.6 * fl['transit_speed_mps']:.0f} km/h, search "
             f"{3.6 * fl['search_speed_mps']:.0f} km/h, home "
             f"{3.6 * fl['cruise_speed_mps']:.0f} km/h",
@@ -156,14 +160,15 @@ def kml(
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + body + "\n"
 
 
-def _alt_text(plan: Plan, alt: float, altitude_ref: str) -> str:
-    """The route's altitude rule in words: flat, or following the plan's terrain."""
+def _alt_text(plan: Plan, alt: float, altitude_ref: str, u: Any) -> str:
+    """The route's altitude rule in words: flat, or following the plan's terrain; and the UAV's
+    altitude layer (:func:`~poc_env.agents.mission.features.with_layers`), if any."""
     t = plan.get("terrain")
     if t is None:
-        return f"{alt:g} m ({altitude_ref})"
+        return f"{alt + layer_of(u):g} m ({altitude_ref}{layer_text(u)})"
     return (
-        f"{t['search_height_m']:g} m above ground where the climb allows, at least "
-        f"{t['min_clearance_m']:g} m, altitudes AMSL from {t['source']}"
+        f"{t['search_height_m']:g} m above ground where the climb allows{layer_text(u)}, at "
+        f"least {t['min_clearance_m']:g} m, altitudes AMSL from {t['source']}"
     )
 
 

@@ -19,6 +19,7 @@ from poc_env.agents.mission.features import (
     approach_point,
     check_altitude_ref,
     drawn_ring,
+    layer_of,
 )
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import DEFAULT_FLIGHT, Plan, UavPlan, flight, route
@@ -103,7 +104,9 @@ def qgc_plan(
     inclusion polygon (empty without one) and the no-fly zones as exclusion polygons, clockwise;
     rally points at the take-off and landing fields. ``altitude_ref`` ``home`` writes
     MAV_FRAME_GLOBAL_RELATIVE_ALT (3), ``amsl`` MAV_FRAME_GLOBAL (0) with ``ground_m`` the
-    field elevation; ``home_amsl_m`` is the planned home position's AMSL altitude.
+    field elevation; ``home_amsl_m`` is the planned home position's AMSL altitude. The UAV's
+    altitude layer (``layer_m``, :func:`~poc_env.agents.mission.features.with_layers`) is added
+    to the take-off and every waypoint's altitude, not to the approach's.
 
     ``profile`` (a :class:`poc_env.agents.mission.terrain.Profile`, for a plan with terrain):
     every altitude is AMSL (MAV_FRAME_GLOBAL) from the profile, which clears the DEM; the
@@ -123,12 +126,13 @@ def qgc_plan(
     ll = to_geographic([start, *wps, approach, end], crs)
     t_ll, w_ll, a_ll, l_ll = ll[0], ll[1:-2], ll[-2], ll[-1]
     app_alt = approach_altitude(altitude_m, ground_m)
-    items = [_nav(MAV_CMD_NAV_TAKEOFF, *t_ll, altitude_m, ref, (15, 0, 0, None))]
+    alt = altitude_m + layer_of(u)  # the UAV's layer (with_layers): take-off to approach
+    items = [_nav(MAV_CMD_NAV_TAKEOFF, *t_ll, alt, ref, (15, 0, 0, None))]
     if w_ll:
         items.append(_speed(cruise_speed_mps if transit_speed_mps is None else transit_speed_mps))
-        items.append(_nav(MAV_CMD_NAV_WAYPOINT, *w_ll[0], altitude_m, ref))
+        items.append(_nav(MAV_CMD_NAV_WAYPOINT, *w_ll[0], alt, ref))
         items.append(_speed(search_speed_mps))
-        items += [_nav(MAV_CMD_NAV_WAYPOINT, lat, lon, altitude_m, ref) for lat, lon in w_ll[1:]]
+        items += [_nav(MAV_CMD_NAV_WAYPOINT, lat, lon, alt, ref) for lat, lon in w_ll[1:]]
     items.append(_speed(cruise_speed_mps))
     items.append(_do(MAV_CMD_DO_LAND_START, [0, 0, 0, 0, 0, 0, 0]))
     items.append(_nav(MAV_CMD_NAV_WAYPOINT, *a_ll, app_alt, ref))

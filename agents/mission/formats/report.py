@@ -33,7 +33,7 @@ import numpy as np
 from markupsafe import Markup
 
 from poc_env.agents.mission.crs import continuous_lon, crs_text, to_geographic
-from poc_env.agents.mission.features import overlays, r6
+from poc_env.agents.mission.features import layer_of, layer_text, layers_note, overlays, r6
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import (
     ALPHA_RANGE,
@@ -200,12 +200,12 @@ def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
     profs = plan_profiles(plan)
     rows = []
     for k, u in enumerate(plan["uavs"]):
-        alt_text = f"{alt:g} ({altitude_ref})"
+        alt_text = f"{alt + layer_of(u):g} ({altitude_ref}{layer_text(u)})"
         if profs is not None:  # the terrain profile: AMSL range and the least height
             p = profs[k]
             alt_text = (
-                f"{float(p.amsl_m.min()):.0f}-{float(p.amsl_m.max()):.0f} (amsl), at least "
-                f"{float((p.amsl_m - p.ground_m).min()):.0f} above ground"
+                f"{float(p.amsl_m.min()):.0f}-{float(p.amsl_m.max()):.0f} (amsl{layer_text(u)}),"
+                f" at least {float((p.amsl_m - p.ground_m).min()):.0f} above ground"
             )
         pts = np.asarray(route(u), dtype=float)
         route_km = float(np.sum(np.hypot(*np.diff(pts, axis=0).T))) / 1e3
@@ -241,7 +241,9 @@ def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
         + "</tr></thead><tbody>"
         + "".join(rows)
         + f'</tbody></table><p class="small">Speeds: {speeds}. Route: take-off field, '
-        "search pattern, landing field (the landing approach is not counted).</p>"
+        "search pattern, landing field (the landing approach is not counted)."
+        + (" " + html.escape(layers_note(plan)) if plan.get("altitude_layers") else "")
+        + "</p>"
     )
 
 

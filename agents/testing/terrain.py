@@ -1,0 +1,34 @@
+"""A terrain case the mission tests and scripts share: an Alps-like valley with a wall.
+
+:func:`wall_scenario` is the scenario of tests/mission/test_altitude_layers.py and
+results/mission/i24-layers/zero_ab.py (tests/mission/test_terrain.py and
+results/audit/terrainleft/probes.py build the same one their own way).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+#: The valley floor and the wall's top, metres AMSL; the wall runs north-south at x = 30 km.
+VALLEY_M, WALL_M, WALL_X_KM = 600.0, 4000.0, 30.0
+
+
+def wall_scenario(**over: Any) -> dict[str, Any]:
+    """A 60 x 40 km search area near 46.5 N 7.9 E, one airfield ``valley`` at (-10, 20) km with
+    two UAVs (ceiling 6,000 m), over an elevation grid of 1 km cells from (-40, -30) km: the
+    valley floor, and a wall 4 km wide at x = 30 km. ``over``: top-level sections replaced."""
+    x = -40 + np.arange(120) + 0.5
+    row = np.where(np.abs(x - WALL_X_KM) < 2.0, WALL_M, VALLEY_M)
+    data: dict[str, Any] = {
+        "name": "alps",
+        "map": {"width_km": 60, "height_km": 40, "cell_km": 5, "origin_deg": [46.5, 7.9],
+                "prior": {"components": [{"mean_km": [32, 20], "sigma_km": [10, 8]}]}},
+        "airfields": [{"name": "valley", "position_km": [-10, 20]}],
+        "fleet": [{"takeoff": "valley", "count": 2}],
+        "uav": {"max_altitude_m": 6000},
+        "terrain": {"elevation_m": np.tile(row, (100, 1)).tolist(), "cell_km": 1.0,
+                    "origin_km": [-40, -30]},
+    }  # fmt: skip
+    return {**data, **over}
