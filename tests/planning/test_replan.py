@@ -859,7 +859,7 @@ def test_replan_takes_plan_s_effort(first, tmp_path, capsys):
     standard`` plans (the default plan polished; the SAR walkthrough replans so), the default
     without it; ``--effort`` with the DE planner is refused as ``plan`` refuses it, nothing
     written."""
-    d, p1 = first
+    _, p1 = first
     base = ["replan", "--scenario", "small", "--plan", str(p1)]
     outs = {e: tmp_path / f"p2_{e}.json" for e in ("default", "standard")}
     assert main([*base, "--out", str(outs["default"])]) == 0
