@@ -811,22 +811,11 @@ def _plan(
 
 
 def effort_skip_note(plan: dict, effort: str | None) -> str | None:
-    """One line for ``plan``'s summary when ``--effort standard`` or ``thorough`` skipped its
-    polish (no-fly zones, or a map above ``polish_max_cells`` a side: docs/PLANNER.md, effort
-    levels), naming why, or None. Only plan.json recorded it before (scale audit): a standard
-    plan so skipped is exactly the default plan, a thorough one lacks its polish stages."""
-    if effort not in ("standard", "thorough"):
-        return None
-    polish = plan.get("optimizer", {}).get("settings", {}).get("polish") or {}
-    why = polish.get("skipped")
-    if not why:
-        return None
-    what = (
-        "this is the default plan (the polish is all standard adds)"
-        if effort == "standard"
-        else "its other settings apply, its polish stages do not"
-    )
-    return f"note: --effort {effort} skipped its polish ({why}): {what}"
+    """:func:`poc_env.agents.planning.planner.effort_skip_note` (``plan`` and ``replan`` print
+    it)."""
+    from poc_env.agents.planning.planner import effort_skip_note as note
+
+    return note(plan, effort)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -1259,6 +1248,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--planner", default="allocation", choices=["allocation", "de"], help="the next sortie's"
     )
     p.add_argument("--seed", type=int, default=0, help="the planner's generator seed")
+    p.add_argument(
+        "--effort",
+        default=None,
+        help="allocation planner: default, standard or thorough, as plan's --effort (the next "
+        "sortie's; docs/PLANNER.md, effort levels)",
+    )
     p.add_argument("--out", default="next_plan.json", help="the next sortie's plan.json")
     p.set_defaults(func=cmd_replan)
 

@@ -288,6 +288,26 @@ def lattice_warning(sc: Scenario) -> str | None:
     )
 
 
+def effort_skip_note(plan: dict[str, Any], effort: str | None) -> str | None:
+    """One line for ``plan``'s and ``replan``'s summary when ``--effort standard`` or
+    ``thorough`` skipped its polish (a map above ``polish_max_cells`` a side, or no-fly zones
+    with ``PlanOptions.polish_zones=False``: docs/PLANNER.md, effort levels), naming why, or
+    None. Only plan.json recorded it before (scale audit): a standard
+    plan so skipped is exactly the default plan, a thorough one lacks its polish stages."""
+    if effort not in ("standard", "thorough"):
+        return None
+    polish = plan.get("optimizer", {}).get("settings", {}).get("polish") or {}
+    why = polish.get("skipped")
+    if not why:
+        return None
+    what = (
+        "this is the default plan (the polish is all standard adds)"
+        if effort == "standard"
+        else "its other settings apply, its polish stages do not"
+    )
+    return f"note: --effort {effort} skipped its polish ({why}): {what}"
+
+
 def plan_table(plan: dict[str, Any]) -> str:
     """Table 6 analog: rectangles, spacing and angle per UAV, with POD, POC, POS and time."""
     head = (

@@ -548,6 +548,7 @@ def next_sortie(
     planner: str = "allocation",
     seed: int = 0,
     refine: int | None = None,
+    effort: str | None = None,
 ) -> dict[str, Any]:
     """The plan of the next sortie after ``plans`` (the sorties so far, in order: their routes,
     or the flown ``tracks`` of all of them when given) on ``prior``: eq. 14 along every flight
@@ -557,7 +558,9 @@ def next_sortie(
     point by point: the planner's own ``posc`` sees each cell's belief spread evenly over the
     cell) and ``cumulative_posc`` (their sum: eq. 14 over every flight, as sweeping them all
     from the prior). ``refine``: the allocation planner's refinement passes (``None``: its
-    default)."""
+    default); ``effort``: its effort level (``None``: the default;
+    :meth:`poc_env.agents.planning.options.PlanOptions.preset`), refused with ``planner="de"``
+    as ``plan`` refuses it."""
     from poc_env.agents.planning.planner import make_plan
 
     names: list[str] = []
@@ -589,7 +592,8 @@ def next_sortie(
     # flights left it uneven within cells, so the plan's POS is its routes swept over the
     # sample points' own belief (replan-audit: the Alps walkthrough's sortie 2 was scored
     # 0.1835 on the cells, 0.1463 on the points)
-    nxt = make_plan(sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine)
+    nxt = make_plan(sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine,
+                    effort=effort)  # fmt: skip
     gain = sweep_points(sc, fine, plan_paths(nxt))
     if frame is not None:
         nxt["crs"] = frame  # the scenario's (make_plan's), else the last plan's: the same map
@@ -650,7 +654,12 @@ def cli_main(args: Any) -> int:
         with_scenario_file,
         write_plan,
     )
-    from poc_env.agents.planning.planner import lattice_warning, moving_target_warning, plan_table
+    from poc_env.agents.planning.planner import (
+        effort_skip_note,
+        lattice_warning,
+        moving_target_warning,
+        plan_table,
+    )
     from poc_env.config import load_scenario, parse_overrides
     from poc_env.crs import plan_crs
     from poc_env.theory.probability_map import build_prior
@@ -695,7 +704,10 @@ def cli_main(args: Any) -> int:
         for t in args.tracks:
             tracks += read_tracks(t, crs, skipped)
         tracks = clip_tracks(sc, tracks, crs)  # the part inside counts; refusals in degrees
-    nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
+    nxt = next_sortie(
+        sc, prior, plans, tracks, planner=args.planner, seed=args.seed,
+        effort=getattr(args, "effort", None),
+    )  # fmt: skip
     nxt["map_source"] = map_source(sc, map_file)  # export draws this prior, replan sweeps it
     if crs is not None:
         nxt["crs"] = crs  # the plan's, or --origin's for a plan without one
@@ -708,6 +720,9 @@ def cli_main(args: Any) -> int:
                 f"are carried through longitude/latitude into this map's, at {crs['origin_deg']}"
             )
     print(plan_table(nxt))
+    skipped_polish = effort_skip_note(nxt, getattr(args, "effort", None))
+    if skipped_polish is not None:
+        print(skipped_polish)
     for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):
         if warning is not None:
             print(f"warning: {warning}")

@@ -68,6 +68,7 @@ def test_the_walkthrough_lists_every_step():
         "--dem dem.tif",
         "--no-fly zone.geojson",
         "--planner allocation",
+        "--effort standard",
         "--format qgc",
         "--format kml",
         "--format geojson",
@@ -136,6 +137,11 @@ def test_sar_walkthrough_runs_as_written(tmp_path, figures_in):
     # sortie 2 starts where sortie 1 left the belief, and adds to it
     p1 = json.loads((tmp_path / "p1.json").read_text())
     p2 = json.loads((tmp_path / "p2.json").read_text())
+    # both sorties polished round the zone at --effort standard, as the page says (a polish
+    # skipped would give the default plan: i24-walkstandard)
+    for plan in (p1, p2):
+        polish = plan["optimizer"]["settings"]["polish"]
+        assert polish["moves"] > 0 and "skipped" not in polish, polish
     assert p2["sortie"] == 2
     assert p2["searched_pos"] == pytest.approx(p1["posc"], abs=1e-9)
     assert p1["posc"] < p2["cumulative_posc"] <= 1.0

@@ -852,3 +852,26 @@ def test_a_replanned_sortie_s_figures_are_checked_before_an_export(first, tmp_pa
         export_plan(p2, "geojson", None, tmp_path / "gj")
     assert err.value.field == f"plan.{key}"
     assert not (tmp_path / "gj").exists()
+
+
+def test_replan_takes_plan_s_effort(first, tmp_path, capsys):
+    """i24-walkstandard: ``replan --effort standard`` plans the next sortie as ``plan --effort
+    standard`` plans (the default plan polished; the SAR walkthrough replans so), the default
+    without it; ``--effort`` with the DE planner is refused as ``plan`` refuses it, nothing
+    written."""
+    _, p1 = first
+    base = ["replan", "--scenario", "small", "--plan", str(p1)]
+    outs = {e: tmp_path / f"p2_{e}.json" for e in ("default", "standard")}
+    assert main([*base, "--out", str(outs["default"])]) == 0
+    assert main([*base, "--effort", "standard", "--out", str(outs["standard"])]) == 0
+    plain, polished = (json.loads(p.read_text()) for p in outs.values())
+    assert not plain["optimizer"]["settings"].get("polish")
+    assert polished["optimizer"]["settings"]["polish"]["moves"] > 0
+    assert polished["posc"] > plain["posc"]
+    assert polished["searched_pos"] == plain["searched_pos"]  # the same flights swept
+    bad = tmp_path / "p2_de.json"
+    capsys.readouterr()
+    assert main([*base, "--planner", "de", "--effort", "standard", "--out", str(bad)]) != 0
+    err = capsys.readouterr().err
+    assert "effort" in err and "standard" in err and "allocation" in err
+    assert not bad.exists()
