@@ -697,7 +697,9 @@ def import_scenario(
         ll = joined if joined is not None else _lonlat(
             file, i_area, rings[0] if isinstance(rings, list) and rings else []
         )  # fmt: skip
-        west = (float(ll[:, 0].min()) + 180.0) % 360.0 - 180.0  # continuous across 180
+        west = float(ll[:, 0].min())  # continuous across 180: wrapped only past it (the
+        if not -180.0 <= west < 180.0:  # modulo would round 126.2 to 126.19999999999999)
+            west = (west + 180.0) % 360.0 - 180.0
         origin = (float(ll[:, 1].min()), west)  # south-west corner
     elif isinstance(origin, str):
         origin = parse_origin(origin)
