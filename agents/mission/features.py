@@ -8,7 +8,7 @@ airfields, operating area and no-fly zones (:func:`overlays`).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -101,8 +101,14 @@ def with_layers(plan: Plan, separation_m: float, layer_by: str = "field") -> Pla
     transit, search and homeward legs fly the layer; the landing approach point keeps the
     plan's approach height (the glide to the field is the landing's, one per field). The plan
     records ``altitude_layers`` (``separation_m``, ``layer_by``) for the formats' metadata.
-    ``separation_m = 0`` returns ``plan`` itself: every export as without layers.
+    ``separation_m = 0`` returns ``plan`` itself: every export as without layers. ``layer_m``
+    and ``altitude_layers`` are an export's own: a plan.json carrying them (written by hand,
+    or a plan exported in memory) has them dropped first, so only ``separation_m`` decides.
     """
+    if "altitude_layers" in plan or any("layer_m" in u for u in plan["uavs"]):
+        kept = {k: v for k, v in plan.items() if k != "altitude_layers"}
+        plan = cast(Plan, {**kept, "uavs": [{k: v for k, v in u.items() if k != "layer_m"}
+                                            for u in plan["uavs"]]})  # fmt: skip
     if separation_m == 0:
         return plan
     count: dict[Any, int] = {}

@@ -153,6 +153,29 @@ def test_zero_separation_changes_no_byte(tmp_path):
             )
 
 
+def test_layers_carried_by_a_plan_file_are_not_flown(tmp_path):
+    """``layer_m`` and ``altitude_layers`` are an export's own: a plan.json carrying them (a
+    hand edit, or a plan exported in memory and saved) exports as the plan without them, and
+    ``separation_m`` alone decides the layers."""
+    (tmp_path / "a").mkdir()
+    plain = _plan(tmp_path / "a")
+    doc = json.loads(plain.read_text())
+    for u in doc["uavs"]:
+        u["layer_m"] = 1e6
+    doc["altitude_layers"] = {"separation_m": 1e6, "layer_by": "fleet"}
+    (tmp_path / "b").mkdir()
+    stale = tmp_path / "b" / "plan.json"
+    stale.write_text(json.dumps(doc))
+    for fmt in ("qgc", "geojson", "kml", "html"):
+        a = export_plan(plain, fmt, out_dir=tmp_path / fmt / "plain")
+        b = export_plan(stale, fmt, out_dir=tmp_path / fmt / "stale")
+        for x, y in zip(a, b, strict=True):
+            assert x.read_bytes() == y.read_bytes(), (fmt, x.name)
+    layered = with_layers(doc, 50.0, "field")
+    assert [u["layer_m"] for u in layered["uavs"]] == [0.0, 50.0]
+    assert layered["altitude_layers"] == {"separation_m": 50.0, "layer_by": "field"}
+
+
 # --------------------------------------------------------------------------- terrain
 
 
