@@ -834,6 +834,11 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     from poc_env.agents.mission.export import export_plan
 
+    if args.layer_by is not None and not args.separation_m:  # i24-dayaudit: silently no layers
+        raise ConfigError(
+            "layer_by", args.layer_by, "only with --separation-m S > 0, the layers' spacing "
+            "(without it every UAV flies the plan's altitude): give both, or leave --layer-by out",
+        )  # fmt: skip
     export = functools.partial(
         export_plan,
         projection=args.projection,
@@ -845,7 +850,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         allow_infeasible=args.allow_infeasible,
         max_mission_items=args.max_mission_items,
         separation_m=args.separation_m,
-        layer_by=args.layer_by,
+        layer_by=args.layer_by or "field",
     )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
         _wrote(export(args.plan, args.format, args.origin, args.out))
@@ -1332,10 +1337,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--layer-by",
-        default="field",
+        default=None,
         choices=("field", "fleet"),
-        help="field: layers counted per take-off field, whose UAVs share take-off and homeward "
-        "legs; fleet: every UAV its own layer",
+        help="with --separation-m: field (the default), layers counted per take-off field, whose "
+        "UAVs share take-off and homeward legs; fleet: every UAV its own layer",
     )
     p.set_defaults(func=cmd_export)
 

@@ -211,3 +211,16 @@ def test_terrain_ceiling_refusal_adds_up():
     assert m, str(e.value)
     alt, plan, above, ground, layer = map(int, m.groups())
     assert layer == 300 and plan + layer == alt and abs(above + ground - plan) <= 1
+
+
+def test_cli_layer_by_without_a_separation_is_refused(tmp_path, capsys):
+    """``--layer-by fleet`` alone wrote every UAV at one altitude without a word (i24-dayaudit):
+    refused naming the option, nothing written; with ``--separation-m`` it layers."""
+    path = _plan(tmp_path)
+    out = tmp_path / "o"
+    args = ["export", str(path), "--format", "qgc", "--out", str(out), "--layer-by", "fleet"]
+    assert main(args) == 2
+    assert "layer_by: got 'fleet'" in capsys.readouterr().err
+    assert not out.exists()
+    assert main([*args, "--separation-m", "30"]) == 0
+    assert [a[0] for a in _qgc_alts(sorted(out.glob("plan_uav*.plan")))] == [1200.0, 1230.0]
