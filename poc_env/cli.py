@@ -1166,7 +1166,15 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     _add_scenario(p, "paper_6_2")
-    p.add_argument("--uavs", type=int, default=None, help="number of UAVs (default: fleet)")
+    p.add_argument(
+        "--uavs",
+        type=int,
+        default=None,
+        help="number of UAVs, spread round-robin over the scenario's airfields, each landing "
+        "where it took off (default: the scenario's fleet). To compare fleet sizes: one plan "
+        "per size can plan a larger fleet a little less; the Python API's plan_fleets plans "
+        "each size on the one before, never less (docs/PLANNER.md, 'Larger fleets')",
+    )
     p.add_argument(
         "--optimizer",
         default=None,
