@@ -680,6 +680,15 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+#: ``plan`` and ``replan``'s ``--effort`` (:meth:`~poc_env.agents.planning.options.PlanOptions.
+#: preset`).
+EFFORT_HELP = (
+    "allocation planner: default (seconds), standard (the default plan polished, within 2 s on "
+    "paper_6_2) or thorough (about 20 s on paper_6_2, longer on 400 km maps; more POS: "
+    "docs/PLANNER.md, effort levels)"
+)
+
+
 def cmd_replan(args: argparse.Namespace) -> int:
     """The next sortie (:mod:`poc_env.agents.planning.replan`)."""
     from poc_env.agents.planning.replan import cli_main
@@ -1229,9 +1238,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--effort",
         default=None,
-        help="allocation planner: default (seconds), standard (the default plan polished, "
-        "within 2 s on paper_6_2) or thorough (about 20 s on paper_6_2, longer on 400 km "
-        "maps; more POS: docs/PLANNER.md, effort levels)",
+        help=EFFORT_HELP,
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
@@ -1272,6 +1279,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--planner", default="allocation", choices=["allocation", "de"], help="the next sortie's"
     )
     p.add_argument("--seed", type=int, default=0, help="the planner's generator seed")
+    p.add_argument("--effort", default=None, help=EFFORT_HELP)
     p.add_argument("--out", default="next_plan.json", help="the next sortie's plan.json")
     p.set_defaults(func=cmd_replan)
 
