@@ -519,7 +519,11 @@ def plan_fleets(
     (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
     float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
     sc = load_scenario(scenario)
-    ns = sorted({as_int("sizes", n, 1, 64) for n in np.atleast_1d(sizes).tolist()})
+    one = np.ndim(sizes) == 0  # a list's bad entry named by its index (i24-dayaudit)
+    ns = sorted({
+        as_int("sizes" if one else f"sizes[{i}]", n, 1, 64)
+        for i, n in enumerate([sizes] if one else np.asarray(sizes, dtype=object).tolist())
+    })  # fmt: skip
     if not ns:
         raise ConfigError("sizes", sizes, "one or more fleet sizes in [1, 64]")
     plans: list[dict[str, Any]] = []

@@ -152,6 +152,19 @@ def test_a_floor_that_is_not_a_plan_is_refused_naming_the_field(floor, field):
         make_allocation_plan(sc, prior=prior, floor=floor)
 
 
+@pytest.mark.parametrize(
+    ("sizes", "message"),
+    [(0, "sizes: got 0"), (65, "sizes: got 65"), ([], "sizes: got []"), ("x", "sizes: got 'x'"),
+     ([4, 0], "sizes[1]: got 0"), ([4, "x"], "sizes[1]: got 'x'"), ([4.5], "sizes[0]: got 4.5")],
+)  # fmt: skip
+def test_plan_fleets_names_a_bad_size(sizes, message):
+    """Every fleet size in [1, 64], a list's bad entry named by its index (i24-dayaudit: ``[4,
+    0]`` was refused as ``sizes: got 0``), before any planning."""
+    sc, prior = mini(200, 5, 2)
+    with pytest.raises(ConfigError, match="^" + re.escape(message) + "; allowed: "):
+        plan_fleets(sc, sizes, prior=prior)
+
+
 #: i24-deconflict's two cases on ``large_400`` at 10 km cells (results/plan_scale/
 #: i24-deconflict/repro.py): the zone, the sightings (x km, y km, weight) and the UAVs
 LANES = ([[40, 20], [120, 20], [120, 60], [40, 60]], [(80, 110, 0.5), (80, 200, 0.5)], 6)
