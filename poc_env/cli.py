@@ -684,8 +684,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
 #: preset`).
 EFFORT_HELP = (
     "allocation planner: default (seconds), standard (the default plan polished, within 2 s on "
-    "paper_6_2) or thorough (about 20 s on paper_6_2, longer on 400 km maps; more POS: "
-    "docs/PLANNER.md, effort levels)"
+    "paper_6_2; on a map of more than 80 cells a side the default plan, with a note) or "
+    "thorough (about 20 s on paper_6_2, longer on 400 km maps; more POS: docs/PLANNER.md, "
+    "effort levels)"
 )
 
 
