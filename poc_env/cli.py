@@ -685,8 +685,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
 EFFORT_HELP = (
     "allocation planner: default (seconds), standard (the default plan polished, within 2 s on "
     "paper_6_2; on a map of more than 80 cells a side the default plan, with a note) or "
-    "thorough (about 20 s on paper_6_2, longer on 400 km maps; more POS: docs/PLANNER.md, "
-    "effort levels)"
+    "thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min at 160 x 160 "
+    "cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)"
 )
 
 
