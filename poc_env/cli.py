@@ -680,16 +680,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0
 
 
-#: ``plan`` and ``replan``'s ``--effort`` (:meth:`~poc_env.agents.planning.options.PlanOptions.
-#: preset`).
-EFFORT_HELP = (
-    "allocation planner: default (seconds), standard (the default plan polished, within 2 s on "
-    "paper_6_2; on a map of more than 80 cells a side the default plan, with a note) or "
-    "thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min at 160 x 160 "
-    "cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)"
-)
-
-
 def cmd_replan(args: argparse.Namespace) -> int:
     """The next sortie (:mod:`poc_env.agents.planning.replan`)."""
     from poc_env.agents.planning.replan import cli_main
@@ -1239,7 +1229,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--effort",
         default=None,
-        help=EFFORT_HELP,
+        help="allocation planner: default (seconds), standard (the default plan polished, "
+        "within 2 s on paper_6_2; on a map of more than 80 cells a side the default plan, with "
+        "a note) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min at "
+        "160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
@@ -1280,7 +1273,6 @@ def build_parser() -> argparse.ArgumentParser:
         "--planner", default="allocation", choices=["allocation", "de"], help="the next sortie's"
     )
     p.add_argument("--seed", type=int, default=0, help="the planner's generator seed")
-    p.add_argument("--effort", default=None, help=EFFORT_HELP)
     p.add_argument("--out", default="next_plan.json", help="the next sortie's plan.json")
     p.set_defaults(func=cmd_replan)
 

@@ -548,7 +548,6 @@ def next_sortie(
     planner: str = "allocation",
     seed: int = 0,
     refine: int | None = None,
-    effort: str | None = None,
 ) -> dict[str, Any]:
     """The plan of the next sortie after ``plans`` (the sorties so far, in order: their routes,
     or the flown ``tracks`` of all of them when given) on ``prior``: eq. 14 along every flight
@@ -557,8 +556,8 @@ def next_sortie(
     ``sortie_posc`` (what the new plan's routes find on the belief the flights left, swept
     point by point: the planner's own ``posc`` sees each cell's belief spread evenly over the
     cell) and ``cumulative_posc`` (their sum: eq. 14 over every flight, as sweeping them all
-    from the prior). ``refine``: the allocation planner's refinement passes, ``effort`` its
-    effort level (:func:`~poc_env.agents.planning.planner.make_plan`; ``None``: its defaults)."""
+    from the prior). ``refine``: the allocation planner's refinement passes (``None``: its
+    default)."""
     from poc_env.agents.planning.planner import make_plan
 
     names: list[str] = []
@@ -590,9 +589,7 @@ def next_sortie(
     # flights left it uneven within cells, so the plan's POS is its routes swept over the
     # sample points' own belief (replan-audit: the Alps walkthrough's sortie 2 was scored
     # 0.1835 on the cells, 0.1463 on the points)
-    nxt = make_plan(
-        sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine, effort=effort
-    )
+    nxt = make_plan(sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine)
     gain = sweep_points(sc, fine, plan_paths(nxt))
     if frame is not None:
         nxt["crs"] = frame  # the scenario's (make_plan's), else the last plan's: the same map
@@ -698,9 +695,7 @@ def cli_main(args: Any) -> int:
         for t in args.tracks:
             tracks += read_tracks(t, crs, skipped)
         tracks = clip_tracks(sc, tracks, crs)  # the part inside counts; refusals in degrees
-    nxt = next_sortie(
-        sc, prior, plans, tracks, planner=args.planner, seed=args.seed, effort=args.effort
-    )
+    nxt = next_sortie(sc, prior, plans, tracks, planner=args.planner, seed=args.seed)
     nxt["map_source"] = map_source(sc, map_file)  # export draws this prior, replan sweeps it
     if crs is not None:
         nxt["crs"] = crs  # the plan's, or --origin's for a plan without one

@@ -852,22 +852,3 @@ def test_a_replanned_sortie_s_figures_are_checked_before_an_export(first, tmp_pa
         export_plan(p2, "geojson", None, tmp_path / "gj")
     assert err.value.field == f"plan.{key}"
     assert not (tmp_path / "gj").exists()
-
-
-def test_replan_plans_the_next_sortie_at_the_effort_asked(first, tmp_path):
-    """``replan --effort standard`` polishes sortie 2 as ``plan --effort standard`` does
-    sortie 1 (i24-dayaudit: replan had no ``--effort``, so a standard search fell back to the
-    default plan from sortie 2 on); without it sortie 2 is the default plan."""
-    _, p1 = first
-    out = {}
-    for effort in (None, "standard"):
-        out[effort] = tmp_path / f"p2_{effort}.json"
-        argv = ["replan", "--plan", str(p1), "--out", str(out[effort])]
-        assert main([*argv, *(["--effort", effort] if effort else [])]) == 0
-    plain, std = (json.loads(out[e].read_text()) for e in (None, "standard"))
-    assert "polish" not in plain["optimizer"]["settings"]
-    assert "polish" in std["optimizer"]["settings"]
-    assert std["sortie"] == 2 and std["posc"] >= plain["posc"]
-    assert main(["replan", "--plan", str(p1), "--planner", "de", "--effort", "standard",
-                 "--out", str(tmp_path / "x.json")]) == 2  # fmt: skip
-    assert not (tmp_path / "x.json").exists()
