@@ -823,6 +823,11 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     from poc_env.agents.mission.export import export_plan
 
+    if args.layer_by is not None and not args.separation_m:  # i24-dayaudit: silently no layers
+        raise ConfigError(
+            "layer_by", args.layer_by, "only with --separation-m S > 0, the layers' spacing "
+            "(without it every UAV flies the plan's altitude): give both, or leave --layer-by out",
+        )  # fmt: skip
     export = functools.partial(
         export_plan,
         projection=args.projection,
@@ -834,7 +839,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         allow_infeasible=args.allow_infeasible,
         max_mission_items=args.max_mission_items,
         separation_m=args.separation_m,
-        layer_by=args.layer_by,
+        layer_by=args.layer_by or "field",
     )
     if not Path(args.plan).is_file():  # the plan loader names what is wrong with it
         _wrote(export(args.plan, args.format, args.origin, args.out))
@@ -1150,7 +1155,15 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     _add_scenario(p, "paper_6_2")
-    p.add_argument("--uavs", type=int, default=None, help="number of UAVs (default: fleet)")
+    p.add_argument(
+        "--uavs",
+        type=int,
+        default=None,
+        help="number of UAVs, spread round-robin over the scenario's airfields, each landing "
+        "where it took off (default: the scenario's fleet). To compare fleet sizes: one plan "
+        "per size can plan a larger fleet a little less; the Python API's plan_fleets plans "
+        "each size on the one before, never less (docs/PLANNER.md, 'Larger fleets')",
+    )
     p.add_argument(
         "--optimizer",
         default=None,
@@ -1206,8 +1219,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--effort",
         default=None,
         help="allocation planner: default (seconds), standard (the default plan polished, "
-        "within 2 s on paper_6_2) or thorough (about 20 s on paper_6_2, longer on 400 km "
-        "maps; more POS: docs/PLANNER.md, effort levels)",
+        "within 2 s on paper_6_2; on a map of more than 80 cells a side the default plan, with "
+        "a note) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min at "
+        "160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
@@ -1327,10 +1341,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--layer-by",
-        default="field",
+        default=None,
         choices=("field", "fleet"),
-        help="field: layers counted per take-off field, whose UAVs share take-off and homeward "
-        "legs; fleet: every UAV its own layer",
+        help="with --separation-m: field (the default), layers counted per take-off field, whose "
+        "UAVs share take-off and homeward legs; fleet: every UAV its own layer",
     )
     p.set_defaults(func=cmd_export)
 

@@ -607,7 +607,8 @@ def profile(
             x, y = p[top]
             raise ConfigError(
                 where, f"altitude {base[top]:.0f} m AMSL near ({x / 1e3:.1f}, {y / 1e3:.1f}) km "
-                f"(layer {layer_m:g} m over ground {ground[top]:.0f} m)",
+                f"({base[top] - layer_m:.0f} m: {base[top] - layer_m - ground[top]:.0f} m over "
+                f"ground {ground[top]:.0f} m, + layer {layer_m:g} m)",
                 f"at most the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g} m AMSL: a "
                 "smaller separation_m, layer_by=field, or a higher ceiling if the UAV can",
             )  # fmt: skip

@@ -483,7 +483,16 @@ def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
     """The routes of ``plan`` (a plan of fewer UAVs, :func:`plan_fleets`) given to ``sc``'s
     UAVs of the same airfields (take-off and landing to the millimetre,
     :func:`~poc_env.theory.bound.field_key`), in fleet order; the UAVs left over get none.
-    A plan with more UAVs of a field than ``sc`` has raises :class:`ConfigError`."""
+    A plan with more UAVs of a field than ``sc`` has, or one that is not a plan
+    (:func:`~poc_env.agents.mission.plan.check_plan`, its fields named ``floor...``), raises
+    :class:`ConfigError`."""
+    from poc_env.agents.mission.plan import check_plan
+
+    try:
+        check_plan(plan)
+    except ConfigError as e:  # i24-dayaudit: a str or {} floor raised AttributeError / KeyError
+        field = "floor" + e.field[len("plan") :] if e.field.startswith("plan") else e.field
+        raise ConfigError(field, e.value, e.allowed) from None
     keys = [field_key(a, b) for a, b in zip(sc.takeoff_m, sc.landing_m, strict=True)]
     free = list(range(len(keys)))
     out: list[list[list[float]]] = [[] for _ in keys]
@@ -510,7 +519,11 @@ def plan_fleets(
     (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
     float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
     sc = load_scenario(scenario)
-    ns = sorted({as_int("sizes", n, 1, 64) for n in np.atleast_1d(sizes).tolist()})
+    one = np.ndim(sizes) == 0  # a list's bad entry named by its index (i24-dayaudit)
+    ns = sorted({
+        as_int("sizes" if one else f"sizes[{i}]", n, 1, 64)
+        for i, n in enumerate([sizes] if one else np.asarray(sizes, dtype=object).tolist())
+    })  # fmt: skip
     if not ns:
         raise ConfigError("sizes", sizes, "one or more fleet sizes in [1, 64]")
     plans: list[dict[str, Any]] = []

@@ -217,3 +217,33 @@ def test_terrain_export_gives_field_mates_layers(tmp_path):
     (a, b) = _qgc_alts(files)
     assert b[0] == pytest.approx(a[0] + s)  # take-off climb targets over the one field
     assert a[3] == b[3]  # one field, one landing elevation
+
+
+def test_terrain_ceiling_refusal_adds_up():
+    """The refusal's figures add up (i24-dayaudit: it read "altitude 5152 m AMSL (layer 2000 m
+    over ground 2152 m)", leaving out the 1000 m over the ground the plan flies there)."""
+    _, t = _wall_terrain()
+    low = dataclasses.replace(t, ceiling_m=4000.0 + t.min_clearance_m + 200.0)
+    over = [[-10e3, 20e3], [27e3, 0.0], [33e3, 0.0], [0.0, 18e3]]
+    with pytest.raises(ConfigError) as e:
+        profile(low, over, "UAV 2", [-10e3, 20e3], layer_m=300.0)
+    m = re.search(
+        r"altitude (\d+) m AMSL .*\((\d+) m: (\d+) m over ground (\d+) m, \+ layer (\d+) m\)",
+        str(e.value),
+    )
+    assert m, str(e.value)
+    alt, plan, above, ground, layer = map(int, m.groups())
+    assert layer == 300 and plan + layer == alt and abs(above + ground - plan) <= 1
+
+
+def test_cli_layer_by_without_a_separation_is_refused(tmp_path, capsys):
+    """``--layer-by fleet`` alone wrote every UAV at one altitude without a word (i24-dayaudit):
+    refused naming the option, nothing written; with ``--separation-m`` it layers."""
+    path = _plan(tmp_path)
+    out = tmp_path / "o"
+    args = ["export", str(path), "--format", "qgc", "--out", str(out), "--layer-by", "fleet"]
+    assert main(args) == 2
+    assert "layer_by: got 'fleet'" in capsys.readouterr().err
+    assert not out.exists()
+    assert main([*args, "--separation-m", "30"]) == 0
+    assert [a[0] for a in _qgc_alts(sorted(out.glob("plan_uav*.plan")))] == [1200.0, 1230.0]

@@ -4,6 +4,8 @@ The case (:func:`mini`) is the scale audit's big scenario (results/audit/scale/r
 make_inputs.py: four airfields outside the sides, three zones, twelve weighted sightings)
 built without the import, shrunk to 40 x 40 cells."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -115,15 +117,52 @@ def test_pos_c_never_falls_as_the_fleet_grows():
     assert all(u["waypoints_m"] for u in free[1]["uavs"])
 
 
+def _idle_plan(sc, fields):
+    """A schema-2 plan of one UAV without a route per take-off field in ``fields``."""
+    uavs = [{"id": k + 1, "rectangle": None, "spacing_m": 0.0, "takeoff_m": list(t),
+             "landing_m": list(t), "waypoints_m": [], "track_length_m": 0.0,
+             "flight_time_s": 0.0, "pod": 0.0, "poc": 0.0, "pos": 0.0, "feasible": True}
+            for k, t in enumerate(fields)]  # fmt: skip
+    return {"schema": 2, "scenario": sc.name, "seed": 0, "map_source": "builtin",
+            "optimizer": {"name": "allocation", "settings": {}}, "runtime_s": 0.0,
+            "posc": 0.5, "upper_bound": 1.0, "uavs": uavs}  # fmt: skip
+
+
 def test_a_floor_of_another_fleet_is_refused_before_planning():
     sc, prior = mini(200, 5, 2)
-    big = {"posc": 0.5, "uavs": [{"takeoff_m": t, "landing_m": t, "waypoints_m": []}
-                                 for t in sc.with_uavs(8).takeoff_m]}  # fmt: skip
+    big = _idle_plan(sc, sc.with_uavs(8).takeoff_m)
     with pytest.raises(ConfigError, match=r"floor\.uavs\[\d\]"):
         make_allocation_plan(sc, prior=prior, floor=big)
     small = {"posc": 0.0, "uavs": []}
     with pytest.raises(ConfigError, match="also_default"):
         make_allocation_plan(sc, prior=prior, floor=small, options=PlanOptions(also_default=True))
+
+
+@pytest.mark.parametrize(
+    ("floor", "field"),
+    [("x", "floor"), ({}, "floor.schema"), ({"posc": 2.0}, "floor.posc"),
+     ({"uavs": [{"id": 1}]}, "floor.uavs[0].feasible")],
+)  # fmt: skip
+def test_a_floor_that_is_not_a_plan_is_refused_naming_the_field(floor, field):
+    """i24-dayaudit: ``floor="x"`` raised AttributeError, ``{}`` KeyError."""
+    sc, prior = mini(200, 5, 2)
+    if isinstance(floor, dict) and floor:  # a plan with that field wrong
+        floor = {**_idle_plan(sc, sc.takeoff_m[:1]), **floor}
+    with pytest.raises(ConfigError, match=rf"^{re.escape(field)}: got "):
+        make_allocation_plan(sc, prior=prior, floor=floor)
+
+
+@pytest.mark.parametrize(
+    ("sizes", "message"),
+    [(0, "sizes: got 0"), (65, "sizes: got 65"), ([], "sizes: got []"), ("x", "sizes: got 'x'"),
+     ([4, 0], "sizes[1]: got 0"), ([4, "x"], "sizes[1]: got 'x'"), ([4.5], "sizes[0]: got 4.5")],
+)  # fmt: skip
+def test_plan_fleets_names_a_bad_size(sizes, message):
+    """Every fleet size in [1, 64], a list's bad entry named by its index (i24-dayaudit: ``[4,
+    0]`` was refused as ``sizes: got 0``), before any planning."""
+    sc, prior = mini(200, 5, 2)
+    with pytest.raises(ConfigError, match="^" + re.escape(message) + "; allowed: "):
+        plan_fleets(sc, sizes, prior=prior)
 
 
 #: i24-deconflict's two cases on ``large_400`` at 10 km cells (results/plan_scale/
