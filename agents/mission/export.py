@@ -141,10 +141,13 @@ def export_plan(
             print(f"warning: {warning}")
         check_endurance(plan, flown, refuse=fmt == "qgc" and not allow_infeasible)
         kept = {id(u) for u in flown}
-        for k, u in enumerate(plan["uavs"]):
-            if id(u) not in kept:
-                print(f"warning: plan.uavs[{k}] (UAV {u['id']}): no search planned for it (no "
-                      "waypoints_m); left out of the export")  # fmt: skip
+        left = [f"plan.uavs[{k}] (UAV {u['id']})"
+                for k, u in enumerate(plan["uavs"]) if id(u) not in kept]  # fmt: skip
+        if left:  # one line, however many (a 64-UAV plan printed 49 lines: i24-dayaudit)
+            more = f" and {len(left) - 6} more" if len(left) > 6 else ""
+            print(f"warning: {', '.join(left[:6])}{more}: no search planned for "
+                  f"{'it' if len(left) == 1 else 'them'} (no waypoints_m); left out of the "
+                  "export")  # fmt: skip
         job = ExportJob(
             plan={**plan, "uavs": flown},
             plan_path=Path(plan_path),

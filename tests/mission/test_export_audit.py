@@ -113,8 +113,9 @@ def test_qgc_refuses_a_geofence_across_the_antimeridian(tmp_path):
 
     plan = make_plan("small", planner="allocation", refine=0, origin_deg=(-16.5, 179.8))
     write_plan(plan, tmp_path / "plan.json")
-    with pytest.raises(ConfigError, match=r"plan\.operating_area_m.*antimeridian"):
+    with pytest.raises(ConfigError, match=r"plan\.operating_area_m.*antimeridian") as err:
         export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q")
+    assert "--no-geofence" in str(err.value) and "zone" not in str(err.value)  # its remedy
     assert not (tmp_path / "q").exists() or not any((tmp_path / "q").iterdir())
     files = export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q", geofence=False)
     for f in files:
@@ -184,6 +185,23 @@ def test_a_uav_without_a_search_route_is_left_out_and_named(tmp_path, capsys, fm
         assert "UAV 1" in text and "UAV 3" in text and "UAV 2" not in text
     else:  # the page's data: one entry per UAV drawn
         assert '"id": "1"' in text and '"id": "3"' in text and '"id": "2"' not in text
+
+
+def test_uavs_left_out_are_named_in_one_warning_line(tmp_path, capsys):
+    """Many UAVs without a search route give one warning line naming the first six and the
+    count of the rest (a 64-UAV plan printed 49 lines, one per idle UAV: i24-dayaudit)."""
+    plan = make_plan("small", planner="allocation", refine=0, origin_deg=(45.75, 126.65))
+    plan["uavs"] = [dict(plan["uavs"][0], id=k + 1) for k in range(10)]
+    for u in plan["uavs"][1:]:
+        _idle(u)
+    write_plan(plan, tmp_path / "plan.json")
+    export_plan(tmp_path / "plan.json", "geojson", out_dir=tmp_path / "o")
+    lines = [x for x in capsys.readouterr().out.splitlines() if "no search planned" in x]
+    assert lines == [
+        "warning: plan.uavs[1] (UAV 2), plan.uavs[2] (UAV 3), plan.uavs[3] (UAV 4), "
+        "plan.uavs[4] (UAV 5), plan.uavs[5] (UAV 6), plan.uavs[6] (UAV 7) and 3 more: no search "
+        "planned for them (no waypoints_m); left out of the export"
+    ]
 
 
 @pytest.mark.parametrize("fmt", ["qgc", "kml", "geojson", "html"])

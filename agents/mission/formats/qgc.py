@@ -317,8 +317,9 @@ def check_antimeridian(plan: Plan, area: list | None, crs: Any) -> None:
                 f"{lon.max():.3f})",
                 "a geofence polygon on one side of the 180th meridian: PX4 and QGroundControl "
                 "test fences in latitude/longitude, where this one is the rest of the globe "
-                "(export without the inclusion fence, geofence=False / --no-geofence, or "
-                "move the zone)",
+                + ("(export without the inclusion fence: geofence=False / --no-geofence)"
+                   if field == "plan.operating_area_m" else
+                   "(move the zone off the meridian, or split it there into two zones)"),
             )  # fmt: skip
 
 
