@@ -10,6 +10,7 @@ from poc_env.agents.planning.flight_rules import plan_speeds, reserve_s
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.polish import Exposure, polish_for
 from poc_env.agents.planning.refine import route_fits
+from poc_env.agents.testing.routes import assert_flyable_inside
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim.core import takeoff_heading
@@ -60,17 +61,7 @@ def test_polish_never_lowers_planned_pos_and_keeps_routes_flyable():
     out, value, stats = _polish(sc, routes, prior, passes=1)
     assert stats["moves"] > 0
     assert value > _sampled(sc, routes, prior) + 1e-4
-    v = plan_speeds(sc)
-    heading = takeoff_heading(grid.bounds, takeoff)
-    x0, y0, x1, y1 = grid.bounds
-    for k, r in enumerate(out):
-        old = np.asarray(routes[k])
-        new = np.asarray(r)
-        path = np.vstack([takeoff[k], new, landing[k]])
-        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
-                          reserve_s(sc), heading[k])  # fmt: skip
-        moved = ~np.isin(new, old).all(axis=1)  # waypoints the polish placed
-        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+    assert_flyable_inside(sc, grid, takeoff, landing, out, routes)
 
 
 def test_a_leg_shift_moves_coincident_lines_apart():
@@ -265,18 +256,7 @@ def test_grade_moves_never_lower_planned_pos_and_keep_routes_flyable():
     out, value, _ = _polish(sc, routes, prior, passes=2, moves=KINDS)
     assert value > before and value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
     assert v_only == pytest.approx(_sampled(sc, only, prior), rel=1e-9)
-    v = plan_speeds(sc)
-    heading = takeoff_heading(grid.bounds, takeoff)
-    x0, y0, x1, y1 = grid.bounds
-    n = len(takeoff)
-    for j, r in enumerate((*only, *out)):
-        k = j % n
-        new = np.asarray(r).reshape(-1, 2)
-        path = np.vstack([takeoff[k], new, landing[k]])
-        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
-                          reserve_s(sc), heading[k])  # fmt: skip
-        moved = ~np.isin(new, np.asarray(routes[k]).reshape(-1, 2)).all(axis=1)
-        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+    assert_flyable_inside(sc, grid, takeoff, landing, (*only, *out), routes)
 
 
 def test_polish_grade_option_is_checked_and_reaches_the_polish():
@@ -336,16 +316,7 @@ def test_block_moves_never_lower_planned_pos_and_keep_routes_flyable():
     out, value, stats = _polish(sc, first, prior, passes=2, moves=(*KINDS, "block"))
     assert stats["block_moves"] > 0 and value > v_first + 1e-5
     assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
-    v = plan_speeds(sc)
-    heading = takeoff_heading(grid.bounds, takeoff)
-    x0, y0, x1, y1 = grid.bounds
-    for k, r in enumerate(out):
-        new = np.asarray(r).reshape(-1, 2)
-        path = np.vstack([takeoff[k], new, landing[k]])
-        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
-                          reserve_s(sc), heading[k])  # fmt: skip
-        moved = ~np.isin(new, np.asarray(first[k]).reshape(-1, 2)).all(axis=1)
-        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+    assert_flyable_inside(sc, grid, takeoff, landing, out, first)
 
 
 @pytest.mark.parametrize("bad", [-1, 1.5, True, 101])

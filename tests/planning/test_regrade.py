@@ -10,6 +10,7 @@ from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.polish import polish_for
 from poc_env.agents.planning.refine import Airspace, route_fits, track
 from poc_env.agents.planning.regrade import find_runs, regrade_routes
+from poc_env.agents.testing.routes import assert_flyable_inside
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.sim.core import takeoff_heading
@@ -111,7 +112,6 @@ def test_regrade_never_lowers_planned_pos_and_keeps_routes_flyable():
     assert value == pytest.approx(_sampled(sc, out, prior), rel=1e-9)
     v = plan_speeds(sc)
     heading = takeoff_heading(grid.bounds, takeoff)
-    x0, y0, x1, y1 = grid.bounds
     air = Airspace(sc.episode.dt_s, 2.0 * sc.constraints.safety_distance_m,
                    0.9 * sc.comms.range_m, sc.comms.min_neighbours)  # fmt: skip
     times = np.arange(int(np.ceil(sc.uav.usable_endurance_s / air.dt_s)) + 1) * air.dt_s
@@ -126,13 +126,7 @@ def test_regrade_never_lowers_planned_pos_and_keeps_routes_flyable():
                                              heading[k])  # fmt: skip
         return air.violations(pos, act)
 
-    for k, r in enumerate(out):
-        new = np.asarray(r).reshape(-1, 2)
-        path = np.vstack([takeoff[k], new, landing[k]])
-        assert route_fits(path, v, sc.uav.max_turn_rate_rad_s, sc.uav.usable_endurance_s,
-                          reserve_s(sc), heading[k])  # fmt: skip
-        moved = ~np.isin(new, np.asarray(routes[k]).reshape(-1, 2)).all(axis=1)
-        assert np.all((new[moved] >= [x0, y0]) & (new[moved] <= [x1, y1]))
+    assert_flyable_inside(sc, grid, takeoff, landing, out, routes)
     assert count(out) <= count(routes)
 
 
