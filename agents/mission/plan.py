@@ -137,8 +137,9 @@ LANDING_GLIDE = APPROACH_HEIGHT_M / APPROACH_DISTANCE_M
 #: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
 APPROACH_KIND = "landing_approach"
 #: The ``kind`` (GeoJSON property) of the climb spiral over the take-off field drawn beside a
-#: route whose straight climb meets the ground (:func:`poc_env.agents.mission.terrain.climb_spiral`):
-#: flown (KML draws it in the route's style, ``replan --tracks`` reads it as flown).
+#: route whose straight climb meets the ground
+#: (:func:`poc_env.agents.mission.terrain.climb_spiral`): flown (KML draws it in the route's
+#: style, ``replan --tracks`` reads it as flown).
 CLIMB_KIND = "climb_spiral"
 
 

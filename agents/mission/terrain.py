@@ -534,7 +534,9 @@ def from_record(rec: dict[str, Any]) -> Terrain:
         ceiling_m=float(rec["ceiling_m"]),
         max_pitch_rad=math.radians(float(rec["max_pitch_deg"])),
         source=str(rec["source"]),
-        turn_rate_rad_s=math.radians(float(rec.get("max_turn_rate_deg_s", DEFAULT_TURN_RATE_DEG_S))),
+        turn_rate_rad_s=math.radians(
+            float(rec.get("max_turn_rate_deg_s", DEFAULT_TURN_RATE_DEG_S))
+        ),
         usable_endurance_s=(
             None if rec.get("usable_endurance_s") is None else float(rec["usable_endurance_s"])
         ),
@@ -596,7 +598,10 @@ class Spiral:
         s = np.linspace(0.0, self.length_m, n + 1)
         a = self.start_rad - s / self.radius_m
         xy = np.column_stack(
-            [self.center_m[0] + self.radius_m * np.cos(a), self.center_m[1] + self.radius_m * np.sin(a)]
+            [
+                self.center_m[0] + self.radius_m * np.cos(a),
+                self.center_m[1] + self.radius_m * np.sin(a),
+            ]
         )
         return xy, self.from_m + (self.to_m - self.from_m) * (s / max(self.length_m, 1e-9))
 
@@ -764,7 +769,9 @@ def _check_field_legs(
     if _first_cut(t, p[0], p, climb) is not None:  # the straight climb meets the ground
         spiral = climb_spiral(t, p, z, dist, where, speed_mps)
         straight = field + grad * dist  # the take-off to the orbit's first altitude, then on
-        climb = np.where(straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist))
+        climb = np.where(
+            straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist)
+        )
     legs = [("take-off climb from", "take-off", p[0], p, climb, dist, field)]
     if landing_xy is not None:
         land = np.asarray(landing_xy, dtype=float)
@@ -1063,9 +1070,7 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
             continue
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
-        p = profile(
-            t, mission_path(u, zones), where, u["landing_m"], u.get("layer_m", 0.0), speed
-        )
+        p = profile(t, mission_path(u, zones), where, u["landing_m"], u.get("layer_m", 0.0), speed)
         if p.climb is not None:
             _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
         if memo is not None:
@@ -1124,7 +1129,8 @@ def dem_heights_at(dem: str | Path, latlon: Any) -> np.ndarray:
 def qgc_clearance(doc: dict[str, Any], dem: str | Path, step_m: float = 100.0) -> tuple[float, int]:
     """(least height above the DEM, legs checked) along a QGC ``.plan`` mission ``doc`` from
     its take-off item to its last waypoint (commands 22, 31 and 16, altitudes AMSL, linear
-    between items; a climb spiral, command 31 over the field, as a climb there), legs sampled about every ``step_m`` metres (:func:`dem_heights_at`)."""
+    between items; a climb spiral, command 31 over the field, as a climb there), legs sampled
+    about every ``step_m`` metres (:func:`dem_heights_at`)."""
     from pyproj import Geod
 
     nav = [it for it in doc["mission"]["items"] if it.get("command") in (16, 22, 31)]

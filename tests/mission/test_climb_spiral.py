@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -80,7 +79,9 @@ def test_a_wall_beside_the_field_is_climbed_over_on_a_spiral(tmp_path, flat_plan
     t = from_record(loaded["terrain"])
     prof = plan_profiles(loaded)[k]
     sp = prof.climb
-    assert sp is not None and all(p.climb is None for j, p in enumerate(plan_profiles(loaded)) if j != k)
+    assert sp is not None and all(
+        p.climb is None for j, p in enumerate(plan_profiles(loaded)) if j != k
+    )
     clear = t.min_clearance_m - 1e-6
     xy, z = sp.points()
     assert np.all(z - t.ground_at(xy) >= clear)  # every point of the orbit, the clearance's ground
@@ -140,7 +141,9 @@ def test_a_spiral_beyond_the_endurance_is_refused_naming_the_uav(tmp_path, flat_
     uid = plan["uavs"][k]["id"]
     missing = f"{(sp.time_s / 2) / 60:.1f} min missing"
     for fmt in ("qgc", "kml", "geojson", "html"):
-        with pytest.raises(ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {uid}\).*spiral.*{missing}"):
+        with pytest.raises(
+            ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {uid}\).*spiral.*{missing}"
+        ):
             export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / fmt)
         assert not (tmp_path / fmt).exists()
     enough = {**plan["terrain"], "usable_endurance_s": flight_s + sp.time_s + 1.0}
@@ -155,7 +158,9 @@ def test_a_mission_whose_climb_clears_exports_as_before(tmp_path, flat_plan):
     (recorded since) or not (a plan written before)."""
     rec = flat_plan["terrain"]
     assert {"max_turn_rate_deg_s", "usable_endurance_s"} <= set(rec)
-    old = {key: v for key, v in rec.items() if key not in ("max_turn_rate_deg_s", "usable_endurance_s")}
+    old = {
+        key: v for key, v in rec.items() if key not in ("max_turn_rate_deg_s", "usable_endurance_s")
+    }
     assert all(p.climb is None for p in plan_profiles(flat_plan))
     for fmt in ("qgc", "kml", "geojson", "html"):
         outs = []
@@ -165,4 +170,6 @@ def test_a_mission_whose_climb_clears_exports_as_before(tmp_path, flat_plan):
             files = sorted((tmp_path / f"{name}_{fmt}").iterdir())
             outs.append([(p.name, p.read_bytes()) for p in files])
         assert outs[0] == outs[1]
-        assert all(b"climb spiral" not in data and b'"command": 31' not in data for _, data in outs[0])
+        assert all(
+            b"climb spiral" not in data and b'"command": 31' not in data for _, data in outs[0]
+        )
