@@ -73,6 +73,8 @@ DEFAULT_TERRAIN_CELL_M = 1000.0
 DEFAULT_TURN_RATE_DEG_S = 3.0
 #: Arc flown between two drawn points of a climb spiral (metres at most).
 SPIRAL_STEP_M = 100.0
+#: Arc between two points of a climb spiral's first turn where its ground is read (metres).
+ORBIT_SAMPLE_M = 10.0
 
 
 @dataclass(frozen=True)
@@ -550,11 +552,12 @@ def from_record(rec: dict[str, Any]) -> Terrain:
 class Spiral:
     """A climb spiral over the take-off field (issue 24, F3 of results/audit/dayaudit).
 
-    The UAV takes off to ``from_m`` (the field's elevation plus the clearance), then orbits the
-    field clockwise at eq. 19's turn-rate bound, radius ``speed / turn rate``, climbing at eq.
-    19's ``tan(beta_max)`` per metre flown up to ``to_m``, from where the straight climb along
-    the mission keeps the clearance (:func:`climb_spiral`). QGC flies it as
-    MAV_CMD_NAV_LOITER_TO_ALT (31) at the field.
+    The UAV takes off to ``from_m`` (at least the field's elevation plus the clearance; more
+    where the ground under the orbit needs it), then orbits the field clockwise at eq. 19's
+    turn-rate bound, radius ``speed / turn rate``, climbing at eq. 19's ``tan(beta_max)`` per
+    metre flown up to ``to_m``, from where the straight climb along the mission keeps the
+    clearance (:func:`climb_spiral`). QGC flies it as MAV_CMD_NAV_LOITER_TO_ALT (31) at the
+    field.
 
     Attributes
     ----------
@@ -772,7 +775,13 @@ def _check_field_legs(
         climb = np.where(
             straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist)
         )
-    legs = [("take-off climb from", "take-off", p[0], p, climb, dist, field)]
+    what = "take-off climb from"
+    if spiral is not None:
+        what = (
+            f"take-off climb (to {spiral.from_m:.0f} m, then an orbit of radius "
+            f"{spiral.radius_m / 1e3:.2f} km over the field) from"
+        )
+    legs = [(what, "take-off", p[0], p, climb, dist, field)]
     if landing_xy is not None:
         land = np.asarray(landing_xy, dtype=float)
         final = float(np.hypot(*(land - p[-1])))
@@ -820,22 +829,26 @@ def climb_spiral(
 
     Eq. 19 in the horizontal plane bounds the turn rate, so the tightest orbit at the speed
     ``v`` (``speed_mps``, default the paper's 220 km/h) has the radius ``v / turn rate``; its
-    pitch bound ``tan(beta_max)`` bounds the climb per metre flown. The orbit starts at the
-    field's elevation plus ``min_clearance_m`` (the take-off item's altitude) and ends at the
-    least altitude ``H`` from which the straight climb on along the mission, ``min(z, H +
-    tan(beta_max) x distance)``, keeps ``min_clearance_m`` above the ground (the bilinear
-    ``ground_m``, as the straight climb's check) at every sample; every point of the orbit
-    keeps it too. ``H`` is at most the profile's altitude over the field (``z`` keeps the
-    clearance and climbs at most ``tan(beta_max)`` a metre), so the profile is flown on from
-    there unchanged. The UAV leaves the orbit heading for the next waypoint (QGC: heading
-    required), at the field's distance along the route and up to a radius beside its line:
-    the clearance after the orbit is read along the line.
+    pitch bound ``tan(beta_max)`` bounds the climb per metre flown. The orbit (clockwise, from
+    the point towards the first waypoint) starts at the least altitude from which it keeps
+    ``min_clearance_m`` over the ground under it (the bilinear ``ground_m``, read every
+    :data:`ORBIT_SAMPLE_M` of its first turn; the later turns are higher over the same
+    ground), at least the field's elevation plus the clearance: the take-off item's altitude,
+    which the UAV climbs to straight, checked as the straight climb is
+    (:func:`_check_field_legs`). It ends at the least altitude ``H`` (at least its start) from
+    which the straight climb on along the mission, ``min(z, H + tan(beta_max) x distance)``,
+    keeps ``min_clearance_m`` above the ground (the bilinear ``ground_m``, as the straight
+    climb's check) at every sample. Unless the ground under the orbit holds it higher, ``H``
+    is at most the profile's altitude over the field (``z`` keeps the clearance and climbs at
+    most ``tan(beta_max)`` a metre), so the profile is flown on from there unchanged. The UAV
+    leaves the orbit heading for the next waypoint (QGC: heading required), at the field's
+    distance along the route and up to a radius beside its line: the clearance after the
+    orbit is read along the line.
 
     Raises
     ------
     ConfigError
-        ``where`` named: ``H`` above the UAV's ceiling, or ground under the orbit closer than
-        the clearance (the point, its ground, the altitude flown there, the radius).
+        ``where`` named: ``H`` above the UAV's ceiling.
     """
     from poc_env.agents.mission.plan import DEFAULT_FLIGHT
 
@@ -844,16 +857,21 @@ def climb_spiral(
     field = t.field_elevation(p[0])
     r = v / t.turn_rate_rad_s
     ground = bilinear(t.ground_m, t.origin_m, t.cell_m, p)
-    low = field + t.min_clearance_m
+    ahead = p[np.argmax(dist > 0.0)] - p[0] if dist[-1] > 0.0 else np.array([1.0, 0.0])
+    start = math.atan2(float(ahead[1]), float(ahead[0]))
+    arc = np.arange(0.0, 2.0 * math.pi * r, ORBIT_SAMPLE_M)  # one turn: the later ones are higher
+    ring = np.column_stack(
+        [p[0][0] + r * np.cos(start - arc / r), p[0][1] + r * np.sin(start - arc / r)]
+    )
+    under = bilinear(t.ground_m, t.origin_m, t.cell_m, ring)
+    low = max(field, float(np.max(under - grad * arc))) + t.min_clearance_m
     top = max(low, float(np.max(ground + t.min_clearance_m - grad * dist)))
-    deg = math.degrees(t.max_pitch_rad)
     if top > t.ceiling_m + 1e-6:
         raise ConfigError(
             where, f"a climb spiral over the take-off field (at {field:.0f} m) to {top:.0f} m AMSL",
             f"a climb within the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g} m AMSL from "
             "which the straight climb keeps terrain.min_clearance_m (another take-off field)",
         )  # fmt: skip
-    ahead = p[np.argmax(dist > 0.0)] - p[0] if dist[-1] > 0.0 else np.array([1.0, 0.0])
     sp = Spiral(
         center_m=(float(p[0][0]), float(p[0][1])),
         radius_m=r,
@@ -861,23 +879,8 @@ def climb_spiral(
         to_m=top,
         speed_mps=v,
         pitch_rad=t.max_pitch_rad,
-        start_rad=math.atan2(float(ahead[1]), float(ahead[0])),
+        start_rad=start,
     )
-    xy, alt = sp.points()
-    under = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
-    bad = alt - under < t.min_clearance_m - 1e-6
-    if bad.any():
-        i = int(np.argmax(bad))
-        x, y = xy[i]
-        raise ConfigError(
-            where, f"ground {under[i]:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km under a "
-            f"take-off climb spiral of radius {r / 1e3:.2f} km, flown at {alt[i]:.0f} m",
-            f"a take-off climb from the field (at {field:.0f} m) within eq. 19's pitch bound "
-            f"uav.max_pitch_deg = {deg:g} deg, straight or on an orbit over the field of radius "
-            f"v / uav.max_turn_rate_deg_s = {v:g} m/s / {math.degrees(t.turn_rate_rad_s):g} "
-            f"deg/s, that keeps terrain.min_clearance_m = {t.min_clearance_m:g} m (another "
-            "take-off field, or a UAV that turns tighter)",
-        )  # fmt: skip
     return sp
 
 

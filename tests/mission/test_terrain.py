@@ -576,14 +576,22 @@ def test_take_off_climb_and_final_glide_stay_above_the_ground():
     refused, naming the UAV and the phase. Before (i24-terrainleft) both were accepted: the
     profile starts at the search height over the field and ends at the approach point. Since
     i24-climb a straight climb that meets the ground is flown on a spiral over the field
-    (tests/mission/test_climb_spiral.py): on ground rising 400 m/km the orbit of 1.17 km
-    meets it too, refused naming the UAV and the spiral."""
+    (tests/mission/test_climb_spiral.py): on ground rising 400 m/km it is; on ground rising
+    1,000 m/km the orbit of 1.17 km must start so high over the rising ground that the
+    straight take-off to it meets the ground, refused naming the UAV, the take-off and the
+    orbit."""
     field = np.array([-10e3, 20e3])
     route = [field, [10e3, 20e3], [10e3, 25e3], [-6e3, 25e3]]
     slope = load_terrain(load_scenario(_scenario(None, terrain={
         "elevation_m": _slope(400.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
-    with pytest.raises(ConfigError, match=r"UAV 3: .*under a take-off climb spiral.*take-off"):
-        profile(slope, route, "UAV 3")
+    assert profile(slope, route, "UAV 3").climb is not None
+    steep_m = np.maximum(np.asarray(_slope(1000.0)), 0.0).tolist()  # sea level to the west
+    steep = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": steep_m, "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    with pytest.raises(
+        ConfigError, match=r"UAV 3: .* km from the take-off field.*climb \(to .*orbit"
+    ):
+        profile(steep, route, "UAV 3")
     gentle = load_terrain(load_scenario(_scenario(None, terrain={
         "elevation_m": _slope(250.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
     assert clearance_violations(gentle, profile(gentle, route, "UAV 3"), step_m=50.0) == 0
