@@ -50,5 +50,6 @@ for k, (u, p) in enumerate(zip(plan["uavs"], profs)):
                                  "usable_endurance_s": u["flight_time_s"] + sp.time_s / 2}}
     try:
         plan_profiles(short)
-    except ConfigError as err:
-        print(f"  with 0.85 T half the spiral short: {err}")
+    except ConfigError as err:  # 0.85 T is the plan's: the first UAV it does not fit is named
+        mine = f"(UAV {u['id']})" in str(err)
+        print(f"  with 0.85 T half its spiral short: {err if mine else 'another UAV named first'}")
