@@ -23,29 +23,24 @@ from poc_env.agents.mission.formats.qgc import MAV_CMD_NAV_LOITER_TO_ALT, valida
 from poc_env.agents.mission.plan import CLIMB_KIND, load_plan, write_plan
 from poc_env.agents.mission.terrain import bilinear, from_record, mission_path, plan_profiles
 from poc_env.agents.planning.planner import make_plan
+from poc_env.agents.testing.terrain import VALLEY_M, hill_across_first_leg, wall_scenario
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
-VALLEY_M, WALL_M = 600.0, 2500.0
+WALL_M = 2500.0
 
 
 @pytest.fixture(scope="module")
 def flat_plan() -> dict:
     """A 2-UAV allocation plan over a flat valley (120 x 100 cells of 1 km from (-40, -30) km),
     taking off at x = -10 km and landing at x = 60 km (so the wall is on no final glide)."""
-    sc = load_scenario({
-        "name": "valley",
-        "map": {
-            "width_km": 60, "height_km": 40, "cell_km": 5, "origin_deg": [46.5, 7.9],
-            "prior": {"components": [{"mean_km": [32, 20], "sigma_km": [10, 8]}]},
-        },
-        "airfields": [{"name": "valley", "position_km": [-10, 20]},
-                      {"name": "east", "position_km": [60, 20]}],
-        "fleet": [{"takeoff": "valley", "landing": "east", "count": 2}],
-        "uav": {"max_altitude_m": 6000},
-        "terrain": {"elevation_m": np.full((100, 120), VALLEY_M).tolist(), "cell_km": 1.0,
-                    "origin_km": [-40, -30]},
-    })  # fmt: skip
+    flat = {"elevation_m": np.full((100, 120), VALLEY_M).tolist(), "cell_km": 1.0,
+            "origin_km": [-40, -30]}  # fmt: skip
+    sc = load_scenario(wall_scenario(
+        airfields=[{"name": "valley", "position_km": [-10, 20]},
+                   {"name": "east", "position_km": [60, 20]}],
+        fleet=[{"takeoff": "valley", "landing": "east", "count": 2}], terrain=flat,
+    ))  # fmt: skip
     return make_plan(sc, planner="allocation", uavs=2, refine=0)
 
 
@@ -54,16 +49,7 @@ def _walled(plan: dict) -> tuple[dict, int]:
     that UAV's index."""
     legs = [np.hypot(*np.subtract(u["waypoints_m"][0], u["takeoff_m"])) for u in plan["uavs"]]
     k = int(np.argmax(legs))
-    u = plan["uavs"][k]
-    field, first = np.asarray(u["takeoff_m"]), np.asarray(u["waypoints_m"][0])
-    along = field + (first - field) / legs[k] * np.linspace(3e3, 4e3, 5)[:, None]
-    rec = dict(plan["terrain"])
-    cx = rec["origin_m"][0] + (np.arange(120) + 0.5) * 1e3
-    cy = rec["origin_m"][1] + (np.arange(100) + 0.5) * 1e3
-    gx, gy = np.meshgrid(cx, cy)
-    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
-    for key in ("ground_m", "ground_max_m"):
-        rec[key] = np.where(near < 500.0, WALL_M, np.asarray(rec[key])).tolist()
+    rec = hill_across_first_leg(plan, k, 3e3, 4e3, 500.0, WALL_M)
     return {**plan, "terrain": rec}, k
 
 

@@ -32,6 +32,7 @@ from poc_env.agents.mission.terrain import (
     qgc_clearance,
 )
 from poc_env.agents.planning.planner import make_plan
+from poc_env.agents.testing.terrain import hill_across_first_leg
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
@@ -616,17 +617,8 @@ def test_export_refuses_a_take_off_climb_into_the_ground(tmp_path):
     plan = make_plan(sc, planner="allocation", uavs=2, refine=0)
     (k,) = [k for k, u in enumerate(plan["uavs"]) if u["waypoints_m"][0][1] < 15e3]  # south
     u = plan["uavs"][k]
-    field, first = np.asarray(u["takeoff_m"]), np.asarray(u["waypoints_m"][0])
-    along = (
-        field + (first - field) / np.hypot(*(first - field)) * np.linspace(1.5e3, 3.5e3, 9)[:, None]
-    )  # a 2,500 m hill across its first leg, 1.5-3.5 km from the field
-    steep = dict(plan["terrain"])
-    cx = steep["origin_m"][0] + (np.arange(120) + 0.5) * 1e3
-    cy = steep["origin_m"][1] + (np.arange(100) + 0.5) * 1e3
-    gx, gy = np.meshgrid(cx, cy)
-    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
-    for key in ("ground_m", "ground_max_m"):
-        steep[key] = np.where(near < 800.0, 2500.0, np.asarray(steep[key])).tolist()
+    # a 2,500 m hill across its first leg, 1.5-3.5 km from the field
+    steep = hill_across_first_leg(plan, k, 1.5e3, 3.5e3, 800.0, 2500.0)
     write_plan({**plan, "terrain": steep}, tmp_path / "plan.json")
     for fmt in ("qgc", "kml", "geojson", "html"):
         with pytest.raises(ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {u['id']}\).*take-off"):
