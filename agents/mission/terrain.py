@@ -660,7 +660,8 @@ def profile(
     ------
     ConfigError
         ``where`` named: clearance impossible within the UAV's ceiling, or a layer that would
-        take the wanted altitude above it, or a climb spiral that cannot keep the clearance.
+        take the wanted altitude above it, or a take-off climb that meets the ground even
+        on a climb spiral (or whose spiral would end above the ceiling).
     """
     path = np.asarray(path_xy, dtype=float).reshape(-1, 2)
     step = t.cell_m / 2.0
@@ -1052,9 +1053,9 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
     Raises
     ------
     ConfigError
-        Naming ``plan.uavs[k]``: clearance impossible within the ceiling; a climb spiral that
-        cannot keep the clearance, or whose time takes the flight beyond 0.85 T (the minutes
-        missing named).
+        Naming ``plan.uavs[k]``: clearance impossible within the ceiling; a take-off climb
+        that meets the ground even on a climb spiral, or a spiral whose time takes the flight
+        beyond 0.85 T (the minutes missing named).
     """
     rec = plan.get("terrain")
     if rec is None:
