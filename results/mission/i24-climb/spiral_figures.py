@@ -12,8 +12,6 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.plan import load_plan
 from poc_env.agents.mission.terrain import dem_heights_at, from_record, plan_profiles, qgc_clearance
@@ -25,13 +23,15 @@ t = from_record(plan["terrain"])
 profs = plan_profiles(plan)
 T = t.usable_endurance_s / 0.85 if t.usable_endurance_s else float("nan")
 print(f"UAVs {len(plan['uavs'])}; usable endurance 0.85 T = {t.usable_endurance_s / 60:.1f} min")
-for k, (u, p) in enumerate(zip(plan["uavs"], profs)):
+for u, p in zip(plan["uavs"], profs):
     sp = p.climb
     doc = json.loads((qgc_dir / f"{Path(plan_path).stem}_uav{u['id']}.plan").read_text())
     least, legs = qgc_clearance(doc, dem)
     cmds = [it["command"] for it in doc["mission"]["items"]]
     if sp is None:
-        print(f"UAV {u['id']}: no spiral; QGC least height above the DEM {least:.0f} m ({legs} legs)")
+        print(
+            f"UAV {u['id']}: no spiral; QGC least height above the DEM {least:.0f} m ({legs} legs)"
+        )
         continue
     xy, z = sp.points()
     ll = to_geographic(xy.tolist(), plan["crs"])
@@ -46,8 +46,10 @@ for k, (u, p) in enumerate(zip(plan["uavs"], profs)):
         f"{above.min():.0f} m (clearance {t.min_clearance_m:g}); QGC least height above the DEM "
         f"{least:.0f} m ({legs} legs), commands {cmds[:4]}"
     )
-    short = {**plan, "terrain": {**plan["terrain"],
-                                 "usable_endurance_s": u["flight_time_s"] + sp.time_s / 2}}
+    short = {
+        **plan,
+        "terrain": {**plan["terrain"], "usable_endurance_s": u["flight_time_s"] + sp.time_s / 2},
+    }
     try:
         plan_profiles(short)
     except ConfigError as err:  # 0.85 T is the plan's: the first UAV it does not fit is named
