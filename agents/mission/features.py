@@ -17,6 +17,7 @@ from poc_env.agents.mission.plan import (
     APPROACH_DISTANCE_M,
     APPROACH_HEIGHT_M,
     APPROACH_KIND,
+    CLIMB_KIND,
     Plan,
     approach_point,
     flight,
@@ -302,6 +303,26 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
                 },
             }
         )
+        sp = profs[k].climb if profs is not None else None
+        if sp is not None:  # the climb spiral over the take-off field (terrain.climb_spiral)
+            xy, zs = sp.points()
+            out.append(
+                {
+                    "geometry": "LineString",
+                    "latlon": to_geographic(xy.tolist(), crs),
+                    "z": [round(float(v), 1) for v in zs],
+                    "properties": {
+                        "id": u["id"],
+                        "kind": CLIMB_KIND,
+                        "name": f"UAV {u['id']} climb spiral over the take-off field",
+                        "radius_km": round(sp.radius_m / 1e3, 3),
+                        "turns": round(sp.turns, 2),
+                        "from_m": round(sp.from_m, 1),
+                        "to_m": round(sp.to_m, 1),
+                        "minutes": round(sp.time_s / 60.0, 1),
+                    },
+                }
+            )
     for a in plan.get("airfields") or []:
         out.append(
             {

@@ -136,6 +136,11 @@ LANDING_GLIDE = APPROACH_HEIGHT_M / APPROACH_DISTANCE_M
 #: The ``kind`` (GeoJSON property, KML style id) of the landing approach drawn beside each
 #: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
 APPROACH_KIND = "landing_approach"
+#: The ``kind`` (GeoJSON property) of the climb spiral over the take-off field drawn beside a
+#: route whose straight climb meets the ground
+#: (:func:`poc_env.agents.mission.terrain.climb_spiral`): flown (KML draws it in the route's
+#: style, ``replan --tracks`` reads it as flown).
+CLIMB_KIND = "climb_spiral"
 
 
 class Rectangle(TypedDict):
@@ -540,12 +545,29 @@ def _check_terrain(field: str, rec: Any) -> None:
     checked field by field (ConfigError naming it)."""
     import numpy as np
 
+    from poc_env import limits
+
     keys = sorted(
         ["origin_m", "cell_m", "ground_m", "ground_max_m", "fields", "min_clearance_m",
          "search_height_m", "ceiling_m", "max_pitch_deg", "source"]
     )  # fmt: skip
-    if not isinstance(rec, dict) or sorted(rec) != keys:
-        raise ConfigError(field, rec if not isinstance(rec, dict) else sorted(rec), ", ".join(keys))
+    optional = {"max_turn_rate_deg_s", "usable_endurance_s"}  # recorded since issue 24's F3
+    if not isinstance(rec, dict) or sorted(set(rec) - optional) != keys:
+        raise ConfigError(
+            field,
+            rec if not isinstance(rec, dict) else sorted(rec),
+            ", ".join(keys) + " (optional: " + ", ".join(sorted(optional)) + ")",
+        )
+    if "max_turn_rate_deg_s" in rec:
+        as_number(
+            f"{field}.max_turn_rate_deg_s", rec["max_turn_rate_deg_s"], limits.MIN_POSITIVE,
+            limits.MAX_RATE_DEG_S,
+        )  # fmt: skip
+    if "usable_endurance_s" in rec:  # 0.85 T (eq. 18): at most the largest endurance
+        as_number(
+            f"{field}.usable_endurance_s", rec["usable_endurance_s"], limits.MIN_POSITIVE,
+            limits.MAX_ENDURANCE_H * 3600.0,
+        )  # fmt: skip
     o = rec["origin_m"]
     if not isinstance(o, list) or len(o) != 2:
         raise ConfigError(f"{field}.origin_m", o, "[x, y] in metres")

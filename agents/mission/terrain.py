@@ -68,6 +68,13 @@ from poc_env.errors import ConfigError
 PROFILE_TOLERANCE_M = 25.0
 #: Finest default terrain cell (metres) when ``terrain.cell_km`` is not given.
 DEFAULT_TERRAIN_CELL_M = 1000.0
+#: The UAV's turn-rate bound (eq. 19) a plan's terrain record without one is read with: the
+#: scenario default ``uav.max_turn_rate_deg_s`` = 3 deg/s (:class:`poc_env.config.UavConfig`).
+DEFAULT_TURN_RATE_DEG_S = 3.0
+#: Arc flown between two drawn points of a climb spiral (metres at most).
+SPIRAL_STEP_M = 100.0
+#: Arc between two points of a climb spiral's first turn where its ground is read (metres).
+ORBIT_SAMPLE_M = 10.0
 
 
 @dataclass(frozen=True)
@@ -88,6 +95,11 @@ class Terrain:
         pitch bound.
     source : str
         Where the ground came from (the DEM's file name, or ``scenario``).
+    turn_rate_rad_s : float
+        Eq. 19's turn-rate bound: a climb spiral's radius is the speed over it.
+    usable_endurance_s : float or None
+        Eq. 18's 0.85 T, which a climb spiral's time is charged against (None: a plan recorded
+        before it, not checked).
     """
 
     origin_m: tuple[float, float]
@@ -100,6 +112,8 @@ class Terrain:
     ceiling_m: float
     max_pitch_rad: float
     source: str
+    turn_rate_rad_s: float = math.radians(DEFAULT_TURN_RATE_DEG_S)
+    usable_endurance_s: float | None = None
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -232,6 +246,8 @@ def load_terrain(sc: Any) -> Terrain | None:
         ceiling_m=float(sc.uav.max_altitude_m),
         max_pitch_rad=float(sc.uav.max_pitch_rad),
         source=source,
+        turn_rate_rad_s=float(sc.uav.max_turn_rate_rad_s),
+        usable_endurance_s=float(sc.uav.usable_endurance_s),
     )
 
 
@@ -495,6 +511,8 @@ def terrain_record(t: Terrain) -> dict[str, Any]:
         "ceiling_m": t.ceiling_m,
         "max_pitch_deg": math.degrees(t.max_pitch_rad),
         "source": t.source,
+        "max_turn_rate_deg_s": math.degrees(t.turn_rate_rad_s),
+        **({} if t.usable_endurance_s is None else {"usable_endurance_s": t.usable_endurance_s}),
     }
 
 
@@ -518,10 +536,77 @@ def from_record(rec: dict[str, Any]) -> Terrain:
         ceiling_m=float(rec["ceiling_m"]),
         max_pitch_rad=math.radians(float(rec["max_pitch_deg"])),
         source=str(rec["source"]),
+        turn_rate_rad_s=math.radians(
+            float(rec.get("max_turn_rate_deg_s", DEFAULT_TURN_RATE_DEG_S))
+        ),
+        usable_endurance_s=(
+            None if rec.get("usable_endurance_s") is None else float(rec["usable_endurance_s"])
+        ),
     )
 
 
 # --------------------------------------------------------------------------- profiles
+
+
+@dataclass(frozen=True)
+class Spiral:
+    """A climb spiral over the take-off field (issue 24, F3 of results/audit/dayaudit).
+
+    The UAV takes off to ``from_m`` (at least the field's elevation plus the clearance; more
+    where the ground under the orbit needs it), then orbits the field clockwise at eq. 19's
+    turn-rate bound, radius ``speed / turn rate``, climbing at eq. 19's ``tan(beta_max)`` per
+    metre flown up to ``to_m``, from where the straight climb along the mission keeps the
+    clearance (:func:`climb_spiral`). QGC flies it as MAV_CMD_NAV_LOITER_TO_ALT (31) at the
+    field.
+
+    Attributes
+    ----------
+    center_m : (float, float)
+        The take-off field, local metres.
+    radius_m, from_m, to_m, speed_mps, pitch_rad : float
+        The orbit's radius, its first and last altitude (AMSL), the speed flown on it and the
+        pitch it climbs at.
+    start_rad : float
+        The angle (from east, counter-clockwise) of its first point round the field.
+    """
+
+    center_m: tuple[float, float]
+    radius_m: float
+    from_m: float
+    to_m: float
+    speed_mps: float
+    pitch_rad: float
+    start_rad: float
+
+    @property
+    def length_m(self) -> float:
+        """The horizontal distance flown on the orbit: the climb over ``tan(beta_max)``."""
+        return (self.to_m - self.from_m) / math.tan(self.pitch_rad)
+
+    @property
+    def time_s(self) -> float:
+        """The orbit's flight time, at ``speed_mps``: what the 2-D time model does not fly."""
+        return self.length_m / self.speed_mps
+
+    @property
+    def turns(self) -> float:
+        """Orbits flown."""
+        return self.length_m / (2.0 * math.pi * self.radius_m)
+
+    def points(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(xy, amsl)``: the orbit sampled every :data:`SPIRAL_STEP_M` of arc (at least 8
+        points a turn), clockwise from ``start_rad``, climbing linearly with the arc."""
+        step = min(SPIRAL_STEP_M, 2.0 * math.pi * self.radius_m / 8.0)
+        n = max(1, math.ceil(self.length_m / step))
+        s = np.linspace(0.0, self.length_m, n + 1)
+        a = self.start_rad - s / self.radius_m
+        xy = np.column_stack(
+            [
+                self.center_m[0] + self.radius_m * np.cos(a),
+                self.center_m[1] + self.radius_m * np.sin(a),
+            ]
+        )
+        return xy, self.from_m + (self.to_m - self.from_m) * (s / max(self.length_m, 1e-9))
 
 
 @dataclass(frozen=True)
@@ -540,6 +625,9 @@ class Profile:
         point is, or -1 for an intermediate point.
     field_m : float
         The take-off field's elevation (AMSL); ``landing_field_m`` the landing field's.
+    climb : Spiral or None
+        The climb spiral over the take-off field, where the straight climb meets the ground
+        (:func:`climb_spiral`); None where it does not (the mission as before).
     """
 
     points_m: np.ndarray
@@ -548,22 +636,32 @@ class Profile:
     vertex: np.ndarray
     field_m: float
     landing_field_m: float
+    climb: Spiral | None = None
 
 
 def profile(
-    t: Terrain, path_xy: Any, where: str = "route", landing_xy: Any = None, layer_m: float = 0.0
+    t: Terrain,
+    path_xy: Any,
+    where: str = "route",
+    landing_xy: Any = None,
+    layer_m: float = 0.0,
+    speed_mps: float | None = None,
 ) -> Profile:
     """The altitudes along ``path_xy`` (take-off field, waypoints, approach point) over ``t``.
 
     ``layer_m``: the UAV's altitude layer (:func:`poc_env.agents.mission.features.with_layers`),
     added to the wanted altitude (at least the clearance) before eq. 19's passes and the glide
     cap, so a layered profile keeps the clearance, the pitch bound and the final glide.
+    ``speed_mps``: the speed out of the field (the plan's transit speed; default the paper's
+    220 km/h, :data:`~poc_env.agents.mission.plan.DEFAULT_FLIGHT`), which sets a climb
+    spiral's radius and time (:func:`climb_spiral`).
 
     Raises
     ------
     ConfigError
         ``where`` named: clearance impossible within the UAV's ceiling, or a layer that would
-        take the wanted altitude above it.
+        take the wanted altitude above it, or a take-off climb that meets the ground even
+        on a climb spiral (or whose spiral would end above the ceiling).
     """
     path = np.asarray(path_xy, dtype=float).reshape(-1, 2)
     step = t.cell_m / 2.0
@@ -621,7 +719,7 @@ def profile(
         z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
     if landing_xy is not None:
         z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
-    _check_field_legs(t, p, z, dist, landing_xy, where)
+    climb = _check_field_legs(t, p, z, dist, landing_xy, where, speed_mps)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -631,19 +729,30 @@ def profile(
         vertex=vertex[keep],
         field_m=t.field_elevation(path[0]),
         landing_field_m=t.field_elevation(land),
+        climb=climb,
     )
 
 
 def _check_field_legs(
-    t: Terrain, p: np.ndarray, z: np.ndarray, dist: np.ndarray, landing_xy: Any, where: str
-) -> None:
-    """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``).
+    t: Terrain,
+    p: np.ndarray,
+    z: np.ndarray,
+    dist: np.ndarray,
+    landing_xy: Any,
+    where: str,
+    speed_mps: float | None = None,
+) -> Spiral | None:
+    """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``);
+    the climb spiral the take-off needs, if any.
 
     The climb: from the take-off field's elevation at eq. 19's ``tan(beta_max)`` along the
     mission's path (``p``, ``dist``) until it meets the profile ``z`` (a fixed-wing UAV cannot
     climb to the profile's first altitude over the field; the profile, checked against the
-    clearance, is flown from there). The glide: straight from the approach point ``p[-1]`` at
-    ``z[-1]`` down to the landing field ``landing_xy`` (none without one). Neither can keep
+    clearance, is flown from there). Where that straight climb meets the ground, the UAV climbs
+    over the field first (:func:`climb_spiral`): it takes off to the spiral's first altitude,
+    orbits up to its last and climbs straight on from there. The glide: straight from the
+    approach point ``p[-1]`` at ``z[-1]`` down to the landing field ``landing_xy`` (none
+    without one). Neither can keep
     ``min_clearance_m`` near its field, where the UAV leaves or meets the ground, and the
     highest ground near a point (:meth:`Terrain.ground_at`, which the clearance reads: up to a
     cell and a half away) is above a UAV on a sloping field by construction: each must stay
@@ -660,7 +769,20 @@ def _check_field_legs(
     grad = math.tan(t.max_pitch_rad)
     field = t.field_elevation(p[0])
     climb = np.minimum(z, field + grad * dist)
-    legs = [("take-off climb from", "take-off", p[0], p, climb, dist, field)]
+    spiral = None
+    if _first_cut(t, p[0], p, climb) is not None:  # the straight climb meets the ground
+        spiral = climb_spiral(t, p, z, dist, where, speed_mps)
+        straight = field + grad * dist  # the take-off to the orbit's first altitude, then on
+        climb = np.where(
+            straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist)
+        )
+    what = "take-off climb from"
+    if spiral is not None:
+        what = (
+            f"take-off climb (to {spiral.from_m:.0f} m, then an orbit of radius "
+            f"{spiral.radius_m / 1e3:.2f} km over the field) from"
+        )
+    legs = [(what, "take-off", p[0], p, climb, dist, field)]
     if landing_xy is not None:
         land = np.asarray(landing_xy, dtype=float)
         final = float(np.hypot(*(land - p[-1])))
@@ -669,22 +791,98 @@ def _check_field_legs(
         glide = (p[-1] + (land - p[-1]) * s, z[-1] + (low - z[-1]) * s[:, 0], final * (1 - s[:, 0]))
         legs.append(("final glide to", "landing", land, *glide, low))
     for what, name, at, xy, alt, off, elev in legs:
-        ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
-        i0, i1, j0, j1 = t.near_cells(xy)
-        fi, _, fj, _ = (int(v[0]) for v in t.near_cells(at + t.cell_m / 2.0))  # the field's cell
-        own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
-        cut = ~own & (alt <= ground)
-        if cut.any():
-            i = int(np.argmax(cut))
+        i = _first_cut(t, at, xy, alt)
+        if i is not None:
+            ground = float(bilinear(t.ground_m, t.origin_m, t.cell_m, xy[i])[0])
             x, y = xy[i]
             raise ConfigError(
-                where, f"ground {ground[i]:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, "
+                where, f"ground {ground:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, "
                 f"{off[i] / 1e3:.1f} km from the {name} field (at {elev:.0f} m), flown at "
                 f"{alt[i]:.0f} m",
                 f"a {what} the field within eq. 19's pitch bound uav.max_pitch_deg = "
                 f"{math.degrees(t.max_pitch_rad):g} deg that stays above the ground (re-plan "
                 f"the first or last leg away from the rising ground, or another {name} field)",
             )  # fmt: skip
+    return spiral
+
+
+def _first_cut(t: Terrain, at: Any, xy: np.ndarray, alt: np.ndarray) -> int | None:
+    """The first of the points ``xy`` flown at ``alt`` at or below the bilinear ground, outside
+    the cells around the field ``at`` (:func:`_check_field_legs`); None if none is."""
+    ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
+    i0, i1, j0, j1 = t.near_cells(xy)
+    fi, _, fj, _ = (int(v[0]) for v in t.near_cells(np.asarray(at) + t.cell_m / 2.0))
+    own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
+    cut = ~own & (alt <= ground)
+    return int(np.argmax(cut)) if cut.any() else None
+
+
+def climb_spiral(
+    t: Terrain,
+    p: np.ndarray,
+    z: np.ndarray,
+    dist: np.ndarray,
+    where: str,
+    speed_mps: float | None = None,
+) -> Spiral:
+    """The climb spiral over the take-off field ``p[0]`` for a mission whose straight climb
+    meets the ground (:class:`Spiral`).
+
+    Eq. 19 in the horizontal plane bounds the turn rate, so the tightest orbit at the speed
+    ``v`` (``speed_mps``, default the paper's 220 km/h) has the radius ``v / turn rate``; its
+    pitch bound ``tan(beta_max)`` bounds the climb per metre flown. The orbit (clockwise, from
+    the point towards the first waypoint) starts at the least altitude from which it keeps
+    ``min_clearance_m`` over the ground under it (the bilinear ``ground_m``, read every
+    :data:`ORBIT_SAMPLE_M` of its first turn; the later turns are higher over the same
+    ground), at least the field's elevation plus the clearance: the take-off item's altitude,
+    which the UAV climbs to straight, checked as the straight climb is
+    (:func:`_check_field_legs`). It ends at the least altitude ``H`` (at least its start) from
+    which the straight climb on along the mission, ``min(z, H + tan(beta_max) x distance)``,
+    keeps ``min_clearance_m`` above the ground (the bilinear ``ground_m``, as the straight
+    climb's check) at every sample. Unless the ground under the orbit holds it higher, ``H``
+    is at most the profile's altitude over the field (``z`` keeps the clearance and climbs at
+    most ``tan(beta_max)`` a metre), so the profile is flown on from there unchanged. The UAV
+    leaves the orbit heading for the next waypoint (QGC: heading required), at the field's
+    distance along the route and up to a radius beside its line: the clearance after the
+    orbit is read along the line.
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named: ``H`` above the UAV's ceiling.
+    """
+    from poc_env.agents.mission.plan import DEFAULT_FLIGHT
+
+    v = float(DEFAULT_FLIGHT["transit_speed_mps"] if speed_mps is None else speed_mps)
+    grad = math.tan(t.max_pitch_rad)
+    field = t.field_elevation(p[0])
+    r = v / t.turn_rate_rad_s
+    ground = bilinear(t.ground_m, t.origin_m, t.cell_m, p)
+    ahead = p[np.argmax(dist > 0.0)] - p[0] if dist[-1] > 0.0 else np.array([1.0, 0.0])
+    start = math.atan2(float(ahead[1]), float(ahead[0]))
+    arc = np.arange(0.0, 2.0 * math.pi * r, ORBIT_SAMPLE_M)  # one turn: the later ones are higher
+    ring = np.column_stack(
+        [p[0][0] + r * np.cos(start - arc / r), p[0][1] + r * np.sin(start - arc / r)]
+    )
+    under = bilinear(t.ground_m, t.origin_m, t.cell_m, ring)
+    low = max(field, float(np.max(under - grad * arc))) + t.min_clearance_m
+    top = max(low, float(np.max(ground + t.min_clearance_m - grad * dist)))
+    if top > t.ceiling_m + 1e-6:
+        raise ConfigError(
+            where, f"a climb spiral over the take-off field (at {field:.0f} m) to {top:.0f} m AMSL",
+            f"a climb within the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g} m AMSL from "
+            "which the straight climb keeps terrain.min_clearance_m (another take-off field)",
+        )  # fmt: skip
+    sp = Spiral(
+        center_m=(float(p[0][0]), float(p[0][1])),
+        radius_m=r,
+        from_m=low,
+        to_m=top,
+        speed_mps=v,
+        pitch_rad=t.max_pitch_rad,
+        start_rad=start,
+    )
+    return sp
 
 
 class SteepGlideWarning(UserWarning):
@@ -847,16 +1045,26 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
     terrain; None without terrain. Within :func:`profiles_once`, a UAV's profile computed
     before (the same record, UAV and zone objects) is reused.
 
+    A UAV whose straight take-off climb meets the ground climbs on a spiral over its field
+    first (:func:`climb_spiral`, at the plan's transit speed): its time is charged against eq.
+    18's 0.85 T (the terrain record's ``usable_endurance_s``) on top of the plan's
+    ``flight_time_s``, which the 2-D time model flies without it.
+
     Raises
     ------
     ConfigError
-        Naming ``plan.uavs[k]``: clearance impossible within the ceiling.
+        Naming ``plan.uavs[k]``: clearance impossible within the ceiling; a take-off climb
+        that meets the ground even on a climb spiral, or a spiral whose time takes the flight
+        beyond 0.85 T (the minutes missing named).
     """
     rec = plan.get("terrain")
     if rec is None:
         return None
+    from poc_env.agents.mission.plan import flight
+
     memo = _PROFILES.get()
     zones = plan.get("no_fly_zones_m") or ()
+    speed = flight(plan)["transit_speed_mps"]
     t: Terrain | None = None
     out = []
     for k, u in enumerate(plan["uavs"]):
@@ -866,11 +1074,37 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
             continue
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
-        p = profile(t, mission_path(u, zones), where, u["landing_m"], u.get("layer_m", 0.0))
+        p = profile(t, mission_path(u, zones), where, u["landing_m"], u.get("layer_m", 0.0), speed)
+        if p.climb is not None:
+            _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
         if memo is not None:
             memo[key] = (rec, u, zones, p)
         out.append(p)
     return out
+
+
+def _check_spiral_time(t: Terrain, sp: Spiral, flight_s: float, where: str) -> None:
+    """Eq. 18 with the climb spiral: ``flight_s + sp.time_s <= 0.85 T`` (``t``'s usable
+    endurance; not checked when the plan records none).
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named, with the flight time, the spiral's and the minutes missing.
+    """
+    if t.usable_endurance_s is None:
+        return
+    total = flight_s + sp.time_s
+    if total > t.usable_endurance_s + 1e-6:
+        raise ConfigError(
+            where, f"flight {flight_s / 60:.1f} min + take-off climb spiral {sp.time_s / 60:.1f} "
+            f"min = {total / 60:.1f} min",
+            f"at most eq. 18's 0.85 T = {t.usable_endurance_s / 60:.1f} min: "
+            f"{(total - t.usable_endurance_s) / 60:.1f} min missing for the climb spiral over "
+            f"the take-off field ({sp.turns:.1f} turns of radius {sp.radius_m / 1e3:.2f} km up "
+            f"to {sp.to_m:.0f} m AMSL; re-plan this UAV with a shorter route, or from another "
+            "take-off field)",
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- checking exports
@@ -898,11 +1132,12 @@ def dem_heights_at(dem: str | Path, latlon: Any) -> np.ndarray:
 
 def qgc_clearance(doc: dict[str, Any], dem: str | Path, step_m: float = 100.0) -> tuple[float, int]:
     """(least height above the DEM, legs checked) along a QGC ``.plan`` mission ``doc`` from
-    its take-off item to its last waypoint (commands 22 and 16, altitudes AMSL, linear between
-    items), legs sampled about every ``step_m`` metres (:func:`dem_heights_at`)."""
+    its take-off item to its last waypoint (commands 22, 31 and 16, altitudes AMSL, linear
+    between items; a climb spiral, command 31 over the field, as a climb there), legs sampled
+    about every ``step_m`` metres (:func:`dem_heights_at`)."""
     from pyproj import Geod
 
-    nav = [it for it in doc["mission"]["items"] if it.get("command") in (16, 22)]
+    nav = [it for it in doc["mission"]["items"] if it.get("command") in (16, 22, 31)]
     pts = np.array([[it["params"][4], it["params"][5], it["params"][6]] for it in nav], float)
     geod = Geod(ellps="WGS84")
     legs = []

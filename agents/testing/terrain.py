@@ -3,6 +3,7 @@
 :func:`wall_scenario` is the scenario of tests/mission/test_altitude_layers.py and
 results/mission/i24-layers/zero_ab.py (tests/mission/test_terrain.py and
 results/audit/terrainleft/probes.py build the same one their own way).
+:func:`hill_across_first_leg` raises a plan's recorded ground across a UAV's take-off climb.
 """
 
 from __future__ import annotations
@@ -32,3 +33,32 @@ def wall_scenario(**over: Any) -> dict[str, Any]:
                     "origin_km": [-40, -30]},
     }  # fmt: skip
     return {**data, **over}
+
+
+def hill_across_first_leg(
+    plan: dict[str, Any], k: int, start_m: float, end_m: float, half_width_m: float, height_m: float
+) -> dict[str, Any]:
+    """The terrain record of ``plan`` with ground ``height_m`` (both layers) in every cell whose
+    centre lies within ``half_width_m`` of UAV ``k``'s first leg between ``start_m`` and
+    ``end_m`` from its take-off field: a hill across its take-off climb
+    (tests/mission/test_terrain.py, tests/mission/test_climb_spiral.py)."""
+    u = plan["uavs"][k]
+    field, first = np.asarray(u["takeoff_m"], float), np.asarray(u["waypoints_m"][0], float)
+    step = max(1, int(np.ceil((end_m - start_m) / 250.0)))
+    along = (
+        field
+        + (first - field)
+        / np.hypot(*(first - field))
+        * np.linspace(start_m, end_m, step + 1)[:, None]
+    )
+    rec = dict(plan["terrain"])
+    ny, nx = np.asarray(rec["ground_m"]).shape
+    cell = float(rec["cell_m"])
+    gx, gy = np.meshgrid(
+        rec["origin_m"][0] + (np.arange(nx) + 0.5) * cell,
+        rec["origin_m"][1] + (np.arange(ny) + 0.5) * cell,
+    )
+    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
+    for key in ("ground_m", "ground_max_m"):
+        rec[key] = np.where(near < half_width_m, height_m, np.asarray(rec[key])).tolist()
+    return rec

@@ -32,6 +32,7 @@ from poc_env.agents.mission.terrain import (
     qgc_clearance,
 )
 from poc_env.agents.planning.planner import make_plan
+from poc_env.agents.testing.terrain import hill_across_first_leg
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
@@ -574,13 +575,24 @@ def test_take_off_climb_and_final_glide_stay_above_the_ground():
     the legs' clearance reads: ground rising 250 m/km from the field (the climb at 268 m/km
     meets the highest ground 1.5 km out) and a 900 m rise under the 4.29 deg glide are
     refused, naming the UAV and the phase. Before (i24-terrainleft) both were accepted: the
-    profile starts at the search height over the field and ends at the approach point."""
+    profile starts at the search height over the field and ends at the approach point. Since
+    i24-climb a straight climb that meets the ground is flown on a spiral over the field
+    (tests/mission/test_climb_spiral.py): on ground rising 400 m/km it is; on ground rising
+    1,000 m/km the orbit of 1.17 km must start so high over the rising ground that the
+    straight take-off to it meets the ground, refused naming the UAV, the take-off and the
+    orbit."""
     field = np.array([-10e3, 20e3])
     route = [field, [10e3, 20e3], [10e3, 25e3], [-6e3, 25e3]]
     slope = load_terrain(load_scenario(_scenario(None, terrain={
         "elevation_m": _slope(400.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
-    with pytest.raises(ConfigError, match=r"UAV 3: .* km from the take-off field.*climb"):
-        profile(slope, route, "UAV 3")
+    assert profile(slope, route, "UAV 3").climb is not None
+    steep_m = np.maximum(np.asarray(_slope(1000.0)), 0.0).tolist()  # sea level to the west
+    steep = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": steep_m, "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    with pytest.raises(
+        ConfigError, match=r"UAV 3: .* km from the take-off field.*climb \(to .*orbit"
+    ):
+        profile(steep, route, "UAV 3")
     gentle = load_terrain(load_scenario(_scenario(None, terrain={
         "elevation_m": _slope(250.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
     assert clearance_violations(gentle, profile(gentle, route, "UAV 3"), step_m=50.0) == 0
@@ -605,17 +617,8 @@ def test_export_refuses_a_take_off_climb_into_the_ground(tmp_path):
     plan = make_plan(sc, planner="allocation", uavs=2, refine=0)
     (k,) = [k for k, u in enumerate(plan["uavs"]) if u["waypoints_m"][0][1] < 15e3]  # south
     u = plan["uavs"][k]
-    field, first = np.asarray(u["takeoff_m"]), np.asarray(u["waypoints_m"][0])
-    along = (
-        field + (first - field) / np.hypot(*(first - field)) * np.linspace(1.5e3, 3.5e3, 9)[:, None]
-    )  # a 2,500 m hill across its first leg, 1.5-3.5 km from the field
-    steep = dict(plan["terrain"])
-    cx = steep["origin_m"][0] + (np.arange(120) + 0.5) * 1e3
-    cy = steep["origin_m"][1] + (np.arange(100) + 0.5) * 1e3
-    gx, gy = np.meshgrid(cx, cy)
-    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
-    for key in ("ground_m", "ground_max_m"):
-        steep[key] = np.where(near < 800.0, 2500.0, np.asarray(steep[key])).tolist()
+    # a 2,500 m hill across its first leg, 1.5-3.5 km from the field
+    steep = hill_across_first_leg(plan, k, 1.5e3, 3.5e3, 800.0, 2500.0)
     write_plan({**plan, "terrain": steep}, tmp_path / "plan.json")
     for fmt in ("qgc", "kml", "geojson", "html"):
         with pytest.raises(ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {u['id']}\).*take-off"):

@@ -34,7 +34,7 @@ from poc_env.agents.mission.features import (
 )
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import plan_prior, png_bytes, warp_prior
-from poc_env.agents.mission.plan import Plan, flight, search_rings
+from poc_env.agents.mission.plan import CLIMB_KIND, Plan, flight, search_rings
 from poc_env.io import write_bytes_atomic, write_text_atomic
 
 #: altitude reference -> KML altitudeMode
@@ -211,7 +211,9 @@ def _kml_coords(latlon: Any, crs: Any, zs: Any = None) -> str:
 
 
 def _kml_placemark(parent: Any, o: dict, mode: str, crs: Any) -> None:
-    pm = _placemark(parent, str(o["properties"]["name"]), str(o["properties"]["kind"]))
+    kind = str(o["properties"]["kind"])
+    style = "route" if kind == CLIMB_KIND else kind  # a climb spiral is flown: a route's style
+    pm = _placemark(parent, str(o["properties"]["name"]), style)
     if o["geometry"] == "Polygon":
         _polygon(pm, _kml_coords(o["latlon"], crs))
     else:

@@ -30,6 +30,11 @@ from poc_env.io import write_text_atomic
 MAV_CMD_NAV_WAYPOINT = 16
 MAV_CMD_NAV_LAND = 21
 MAV_CMD_NAV_TAKEOFF = 22
+#: Loiter at a point until an altitude is reached (MAVLink common.xml; params: heading
+#: required (1: leave heading for the next waypoint), radius (m, positive clockwise), empty,
+#: exit xtrack (1: straight from the exit point to the next waypoint)); the climb spiral over
+#: the take-off field (:func:`poc_env.agents.mission.terrain.climb_spiral`).
+MAV_CMD_NAV_LOITER_TO_ALT = 31
 MAV_CMD_DO_CHANGE_SPEED = 178
 MAV_CMD_DO_LAND_START = 189
 MAV_FRAME_GLOBAL = 0
@@ -112,7 +117,10 @@ def qgc_plan(
     every altitude is AMSL (MAV_FRAME_GLOBAL) from the profile, which clears the DEM; the
     take-off climbs to the profile's first altitude over the field, the profile's intermediate
     points become waypoints, the approach waypoint is its last point, NAV_LAND and the planned
-    home position are at the fields' DEM elevations.
+    home position are at the fields' DEM elevations. Where the straight climb meets the ground
+    (the profile's ``climb`` spiral), the take-off climbs to the spiral's first altitude and
+    NAV_LOITER_TO_ALT (31) at the field, clockwise at the spiral's radius, climbs to its last
+    before the transit.
     """
     if profile is not None:
         return _terrain_plan(
@@ -158,8 +166,13 @@ def _terrain_plan(
     ll = to_geographic([*pts, list(u["landing_m"])], crs)
     ref = "amsl"
     z = [round(float(v), 1) for v in prof.amsl_m]
-    items = [_nav(MAV_CMD_NAV_TAKEOFF, *ll[0], z[0], ref, (15, 0, 0, None))]
+    sp = prof.climb
+    up = z[0] if sp is None else round(float(sp.from_m), 1)
+    items = [_nav(MAV_CMD_NAV_TAKEOFF, *ll[0], up, ref, (15, 0, 0, None))]
     items.append(_speed(cruise_speed_mps if transit_speed_mps is None else transit_speed_mps))
+    if sp is not None:  # orbit the field up to where the straight climb clears the ground
+        orbit = (1, round(float(sp.radius_m), 1), 0, 1)  # leave it heading for the next point
+        items.append(_nav(MAV_CMD_NAV_LOITER_TO_ALT, *ll[0], round(float(sp.to_m), 1), ref, orbit))
     last = len(pts) - 1  # the approach point
     for k in range(1, last):
         items.append(_nav(MAV_CMD_NAV_WAYPOINT, *ll[k], z[k], ref))

@@ -207,6 +207,13 @@ def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
                 f"{float(p.amsl_m.min()):.0f}-{float(p.amsl_m.max()):.0f} (amsl{layer_text(u)}),"
                 f" at least {float((p.amsl_m - p.ground_m).min()):.0f} above ground"
             )
+            if p.climb is not None:  # the straight climb met the ground: an orbit first
+                sp = p.climb
+                alt_text += (
+                    f"; climb spiral over the take-off field {sp.from_m:.0f}-{sp.to_m:.0f}, "
+                    f"{sp.turns:.1f} turns of {sp.radius_m / 1e3:.2f} km, {sp.time_s / 60:.1f} "
+                    "min not in the flight time"
+                )
         pts = np.asarray(route(u), dtype=float)
         route_km = float(np.sum(np.hypot(*np.diff(pts, axis=0).T))) / 1e3
         t = u["flight_time_s"]
