@@ -210,3 +210,42 @@ def in_lanes(sc: Scenario, routes, v: Speeds, around) -> list[list[list[float]]]
         out.append(best[1])
         pos[:, k], act[:, k] = best[2], best[3]
     return out
+
+
+def apart(
+    sc: Scenario, routes, v: Speeds, order, alternatives=None
+) -> tuple[list[list[list[float]]], dict[int, np.ndarray]]:
+    """``routes`` with the UAVs of ``order`` (each with a route, the others' routes fixed)
+    taken in turn, each kept only if its planned flight (:func:`planned_positions`) keeps eq.
+    21 (:func:`conflicts`) with the fixed UAVs and those of ``order`` kept before it
+    (i24-stagger). ``alternatives(k, waypoints)``: other waypoint lists for UAV ``k``'s route
+    (e.g. the same box entered from its other end), tried in turn before the UAV is dropped.
+    Returns the routes (dropped UAVs without a route, kept ones as taken) and, per dropped
+    UAV, its planned positions ``(m, 2)`` in conflict (those of its route as given)."""
+    u = sc.uav
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    heading0 = takeoff_heading(Grid.from_config(sc.map).bounds, takeoff)
+    times, pos, act = planned_positions(sc, routes, v)
+    order = [k for k in order if len(routes[k])]
+    act[:, order] = False
+    out = [list(r) for r in routes]
+    where: dict[int, np.ndarray] = {}
+    for k in order:
+        wps0 = out[k]
+        cands = [wps0] + (list(alternatives(k, wps0)) if alternatives is not None else [])
+        first = np.zeros((0, 2))
+        for i, wps in enumerate(cands):
+            path = np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]])
+            pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
+            hit = conflicts(sc, pos, act, one=k)[:, k].any(axis=1)
+            if i == 0:
+                first = pos[hit, k].copy()
+            if not hit.any():
+                out[k] = [list(map(float, q)) for q in wps]
+                break
+        else:
+            act[:, k] = False
+            out[k] = []
+            where[k] = first
+    return out, where
