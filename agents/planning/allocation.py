@@ -101,7 +101,6 @@ from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, lay
 from poc_env.agents.planning.deconflict import (
     FAN_DEG,
     apart,
-    conflicts,
     in_lanes,
     lanes,
     planned_positions,
@@ -846,8 +845,8 @@ def make_allocation_plan(
                     _reordered(sc, order),
                     [out[k] for k in order],
                     v,
-                    lambda j, q, lane, order=order, fixed=fixed: (
-                        out[order[j]] if order[j] in fixed else _around(order[j], q, lane)
+                    lambda j, q, lane, order=order, fixed=fixed, now=out: (
+                        now[order[j]] if order[j] in fixed else _around(order[j], q, lane)
                     ),
                 )
                 for j, k in enumerate(order):
