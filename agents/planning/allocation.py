@@ -788,13 +788,14 @@ def make_allocation_plan(
         (:func:`~poc_env.agents.planning.coverage_boxes.box_routes`) of the mass the other
         routes leave on the sample points (eq. 14, the environment's sensor; the prior as the
         starts see it, zone interiors discounted), fitted to eq. 18 and, with zones, in lanes
-        behind the routes already laid (i24-fleet). With ``fill_apart``, a filled route whose
-        planned flight breaks eq. 21 with a UAV flying (busy, or filled and kept before it;
-        :func:`~poc_env.agents.planning.deconflict.apart`, after its box flown from the other
-        end) is not dropped at once: its UAV is filled again, up to :data:`FILL_TRIES` times,
-        on the mass the routes kept leave with the mass near its conflicts taken out (within
-        ``d_s + W/2`` of its conflicting positions; from its second drop on, its whole box
-        swept as if flown), so it takes a box away from the UAVs it met (i24-stagger).
+        behind the routes already laid (i24-fleet). With ``fill_apart`` (i24-stagger) the
+        fill fans out clear of the bearings its busy field-mates fly (:func:`_spread`), and a
+        filled route whose planned flight comes within ``LANE x d_s`` of a UAV flying (busy,
+        or filled and kept before it; :func:`~poc_env.agents.planning.deconflict.apart`; on
+        maps without zones after its box flown from the other end) is not dropped at once:
+        its UAV is filled again, up to :data:`FILL_TRIES` times, on the mass the routes kept
+        leave with the mass within ``d_s + W/2`` of its conflicting positions taken out, so
+        it takes a box away from the UAVs it met.
         ``rs`` itself (the same object) when no UAV is idle, none is busy (that is the boxes
         start's own job) or nothing is gained."""
         idle = [k for k in range(n) if not len(rs[k])]
@@ -806,7 +807,7 @@ def make_allocation_plan(
         fine = np.ascontiguousarray(grid.refine(prior, s))
         keep = np.ones_like(fine)  # the share of each sample point's mass offered to the fill
         out = [list(r) for r in rs]
-        todo, drops = idle, dict.fromkeys(idle, 0)
+        todo = idle
         for _ in range(1 + (FILL_TRIES if opt.fill_apart else 0)):
             bel = fine * keep
             for k in range(n):
@@ -854,16 +855,11 @@ def make_allocation_plan(
                         out[k] = laid[j]
             if not opt.fill_apart:
                 break
-            was = {k: out[k] for k in todo}
             out, where = apart(sc, out, v, todo, None if router.active else _reversed)
             if not where:
                 break
-            for k, at in where.items():  # the mass it met taken out of its next fill
+            for at in where.values():  # the mass it met taken out of its next fill
                 _mask_near(keep, grid, s, at, d_s + w / 2)
-                if drops[k]:  # dropped again: its box (the waypoints, not the way there)
-                    box = np.asarray(was[k], dtype=float).reshape(-1, 2)
-                    sweep_track(keep, grid, s, box, w, law, cutoff, grid.cell_m)
-                drops[k] += 1
             todo = sorted(where)
         if not any(out[k] for k in idle):
             return rs

@@ -60,13 +60,13 @@ def planned_positions(
     return times, pos, act
 
 
-def _away(sc: Scenario, pos: np.ndarray, act: np.ndarray) -> np.ndarray:
-    """``act`` where the UAV ``(..., n, 2)`` is farther than ``d_s / sin(FAN_DEG)`` from its
-    take-off and landing fields (field-mates take off and land together; the fan-out spreads
-    them from there)."""
+def _away(sc: Scenario, pos: np.ndarray, act: np.ndarray, within: float = 1.0) -> np.ndarray:
+    """``act`` where the UAV ``(..., n, 2)`` is farther than ``within x d_s / sin(FAN_DEG)``
+    from its take-off and landing fields (field-mates take off and land together; the fan-out
+    spreads them from there: legs ``FAN_DEG`` apart are ``within x d_s`` apart from there)."""
     takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
-    near = sc.constraints.safety_distance_m / np.sin(np.radians(FAN_DEG))
+    near = within * sc.constraints.safety_distance_m / np.sin(np.radians(FAN_DEG))
     return (
         act
         & (np.hypot(*np.moveaxis(pos - takeoff, -1, 0)) > near)
@@ -74,13 +74,17 @@ def _away(sc: Scenario, pos: np.ndarray, act: np.ndarray) -> np.ndarray:
     )
 
 
-def conflicts(sc: Scenario, pos: np.ndarray, act: np.ndarray, one: int | None = None) -> np.ndarray:
+def conflicts(
+    sc: Scenario, pos: np.ndarray, act: np.ndarray, one: int | None = None, within: float = 1.0
+) -> np.ndarray:
     """Conflict steps ``(S, n, n)`` (symmetric): two flying UAVs closer than ``d_s`` (eq. 21)
     at planned times at most :data:`SLACK_S` apart (the follower's timing drifts from the
     planned one), neither within ``d_s / sin(FAN_DEG)`` of its fields (:func:`_away`).
-    ``one``: only the pairs of UAV ``one`` with the others (the rest False)."""
-    d_s = sc.constraints.safety_distance_m
-    ok = _away(sc, pos, act)
+    ``one``: only the pairs of UAV ``one`` with the others (the rest False); ``within``:
+    closer than ``within x d_s`` instead (and away from the fields by ``within`` times as
+    much)."""
+    d_s = sc.constraints.safety_distance_m * within
+    ok = _away(sc, pos, act, within)
     n_s, n = ok.shape
     rows = np.arange(n) if one is None else np.array([one])
     close = np.zeros((n_s, n, n), dtype=bool)
@@ -238,7 +242,7 @@ def apart(
         for i, wps in enumerate(cands):
             path = np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]])
             pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
-            hit = conflicts(sc, pos, act, one=k)[:, k].any(axis=1)
+            hit = conflicts(sc, pos, act, one=k, within=LANE)[:, k].any(axis=1)
             if i == 0:
                 first = pos[hit, k].copy()
             if not hit.any():

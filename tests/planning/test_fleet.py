@@ -81,8 +81,8 @@ def test_no_uav_idles_while_reachable_mass_remains():
 def test_fill_apart_drops_filled_routes_that_break_eq_21():
     """``fill_apart``: a filled route in planned conflict (eq. 21, the deconfliction's
     measure) with a UAV already flying is dropped. On this case the 12 UAVs the allocation
-    start leaves idle, filled, are in 11 conflict steps with the others; apart, in none (5
-    stay idle)."""
+    start leaves idle, filled, are in 11 conflict steps with the others; apart, in none (the
+    drop alone left 5 idle; i24-stagger fills them again, the test below)."""
     sc, prior = mini(200, 5, 16)
     base = {"greedy_start": False, "box_start": False, "refine": 0}
     plain = make_allocation_plan(sc, prior=prior, options=PlanOptions(fill_idle=False, **base))
