@@ -100,6 +100,7 @@ from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sample
 from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
 from poc_env.agents.planning.deconflict import (
     FAN_DEG,
+    LANE,
     apart,
     in_lanes,
     lanes,
@@ -161,6 +162,9 @@ def _reordered(sc: Scenario, order: list[int]) -> Scenario:
 #: the fills again of a UAV whose filled route breaks eq. 21 (``PlanOptions.fill_apart``)
 #: before it is left without a route (i24-stagger; ``_fill`` in :func:`make_allocation_plan`).
 FILL_TRIES = 3
+#: the distance, in ``d_s``, a filled route keeps from the flying UAVs at planned times
+#: (:func:`~poc_env.agents.planning.deconflict.apart`; i24-stagger).
+FILL_WITHIN = LANE
 
 
 def _mask_near(keep: np.ndarray, grid: Grid, s: int, at: np.ndarray, radius: float) -> None:
@@ -855,7 +859,7 @@ def make_allocation_plan(
                         out[k] = laid[j]
             if not opt.fill_apart:
                 break
-            out, where = apart(sc, out, v, todo, None if router.active else _reversed)
+            out, where = apart(sc, out, v, todo, None if router.active else _reversed, FILL_WITHIN)
             if not where:
                 break
             for at in where.values():  # the mass it met taken out of its next fill

@@ -217,15 +217,16 @@ def in_lanes(sc: Scenario, routes, v: Speeds, around) -> list[list[list[float]]]
 
 
 def apart(
-    sc: Scenario, routes, v: Speeds, order, alternatives=None
+    sc: Scenario, routes, v: Speeds, order, alternatives=None, within: float = LANE
 ) -> tuple[list[list[list[float]]], dict[int, np.ndarray]]:
     """``routes`` with the UAVs of ``order`` (each with a route, the others' routes fixed)
     taken in turn, each kept only if its planned flight (:func:`planned_positions`) keeps eq.
-    21 (:func:`conflicts`) with the fixed UAVs and those of ``order`` kept before it
-    (i24-stagger). ``alternatives(k, waypoints)``: other waypoint lists for UAV ``k``'s route
-    (e.g. the same box entered from its other end), tried in turn before the UAV is dropped.
-    Returns the routes (dropped UAVs without a route, kept ones as taken) and, per dropped
-    UAV, its planned positions ``(m, 2)`` in conflict (those of its route as given)."""
+    21 (:func:`conflicts`, ``within``: ``LANE x d_s`` by default, a lane's margin for the
+    follower's drift) with the fixed UAVs and those of ``order`` kept before it (i24-stagger).
+    ``alternatives(k, waypoints)``: other waypoint lists for UAV ``k``'s route (e.g. the same
+    box entered from its other end), tried in turn before the UAV is dropped. Returns the
+    routes (dropped UAVs without a route, kept ones as taken) and, per dropped UAV, its
+    planned positions ``(m, 2)`` in conflict (those of its route as given)."""
     u = sc.uav
     takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
@@ -242,7 +243,7 @@ def apart(
         for i, wps in enumerate(cands):
             path = np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]])
             pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
-            hit = conflicts(sc, pos, act, one=k, within=LANE)[:, k].any(axis=1)
+            hit = conflicts(sc, pos, act, one=k, within=within)[:, k].any(axis=1)
             if i == 0:
                 first = pos[hit, k].copy()
             if not hit.any():
