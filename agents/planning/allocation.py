@@ -100,6 +100,7 @@ from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sample
 from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
 from poc_env.agents.planning.deconflict import (
     FAN_DEG,
+    LANE,
     apart,
     in_lanes,
     lanes,
@@ -162,11 +163,12 @@ def _reordered(sc: Scenario, order: list[int]) -> Scenario:
 #: before it is left without a route (i24-stagger; ``_fill`` in :func:`make_allocation_plan`).
 FILL_TRIES = 3
 #: the distance, in ``d_s``, a filled route keeps from the flying UAVs at planned times
-#: (:func:`~poc_env.agents.planning.deconflict.apart`; i24-stagger): eq. 21's own. ``LANE``
-#: (1.5, a lane's width) was measured too (results/plan_scale/i24-stagger/README.md): fewer
-#: flown collision steps, but 18 UAVs idle and 0.008 less planned at 48 UAVs on the audit's
-#: 500 km scenario.
-FILL_WITHIN = 1.0
+#: (:func:`~poc_env.agents.planning.deconflict.apart`; i24-stagger): a lane's width, for the
+#: follower's drift (routes planned 1.1-1.4 km apart were flown 0.7 km apart). 1.0 (eq.
+#: 21's d_s) was measured too (results/plan_scale/i24-stagger/README.md): 0.008 more planned
+#: and 14 fewer idle UAVs at 48 UAVs on the audit's 500 km scenario, but 22 and 136 flown
+#: collision steps away from the fields on two 40 x 40 cases where main flies 4 and 14.
+FILL_WITHIN = LANE
 
 
 def _mask_near(keep: np.ndarray, grid: Grid, s: int, at: np.ndarray, radius: float) -> None:
