@@ -100,7 +100,8 @@ from poc_env.agents.planning.coverage_boxes import box_routes, cut_lines, sample
 from poc_env.agents.planning.coverage_lines import COVER_CAP, chain_regions, layered_tracks
 from poc_env.agents.planning.deconflict import (
     FAN_DEG,
-    conflicts,
+    LANE,
+    apart,
     in_lanes,
     lanes,
     planned_positions,
@@ -156,6 +157,36 @@ class _Reordered:
 def _reordered(sc: Scenario, order: list[int]) -> Scenario:
     """``sc`` with its UAVs in ``order`` (:class:`_Reordered`), typed as a scenario."""
     return cast(Scenario, _Reordered(sc, order))
+
+
+#: the fills again of a UAV whose filled route breaks eq. 21 (``PlanOptions.fill_apart``)
+#: before it is left without a route (i24-stagger; ``_fill`` in :func:`make_allocation_plan`).
+FILL_TRIES = 3
+#: the distance, in ``d_s``, a filled route keeps from the flying UAVs at planned times
+#: (:func:`~poc_env.agents.planning.deconflict.apart`; i24-stagger): a lane's width, for the
+#: follower's drift (routes planned 1.1-1.4 km apart were flown 0.7 km apart). 1.0 (eq.
+#: 21's d_s) was measured too (results/plan_scale/i24-stagger/README.md): 0.008 more planned
+#: and 14 fewer idle UAVs at 48 UAVs on the audit's 500 km scenario, but 22 and 136 flown
+#: collision steps away from the fields on two 40 x 40 cases where main flies 4 and 14.
+FILL_WITHIN = LANE
+
+
+def _mask_near(keep: np.ndarray, grid: Grid, s: int, at: np.ndarray, radius: float) -> None:
+    """Zero ``keep`` (a value per sample point, :meth:`~poc_env.theory.probability_map.Grid.
+    sample_points` with ``s``) within ``radius`` of each point of ``at`` ``(m, 2)``, in
+    place."""
+    h = grid.cell_m / s
+    x0, y0 = grid.origin_m
+    ny, nx = keep.shape
+    for px, py in np.asarray(at, dtype=float).reshape(-1, 2):
+        i0, i1 = max(int((px - radius - x0) // h), 0), min(int((px + radius - x0) // h) + 1, nx)
+        j0, j1 = max(int((py - radius - y0) // h), 0), min(int((py + radius - y0) // h) + 1, ny)
+        if i0 >= i1 or j0 >= j1:
+            continue
+        xs = x0 + (np.arange(i0, i1) + 0.5) * h
+        ys = y0 + (np.arange(j0, j1) + 0.5) * h
+        near = np.hypot(xs[None, :] - px, ys[:, None] - py) < radius
+        keep[j0:j1, i0:i1][near] = 0.0
 
 
 def _lines_of(routes) -> list[list[int]]:
@@ -296,16 +327,19 @@ def _fan_out(route, pieces, takeoff, sc: Scenario) -> list[list[list[float]]]:
     return _spread(wps, takeoff, sc)
 
 
-def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
+def _spread(wps, takeoff, sc: Scenario, taken=None) -> list[list[list[float]]]:
     """``wps`` (waypoints per UAV) with field-mates' outbound bearings spread by dog-legs
-    (:func:`_fan_out`); lists are copied, ``wps`` is not changed."""
+    (:func:`_fan_out`); lists are copied, ``wps`` is not changed. ``taken``: per UAV the
+    outbound bearings (radians) field-mates not in ``wps`` fly already (the busy UAVs a fill
+    joins, i24-stagger); each bearing is also moved up to ``FAN_DEG`` clear of those."""
     wps = [list(w) for w in wps]
     keys = [tuple(np.round(t, 3)) for t in takeoff]
     d_out = 8000.0 + 2 * sc.constraints.safety_distance_m
     box = operating_area(sc)  # eq. 20: a dog-leg stays inside, or is not flown
     for field in set(keys):
         mates = [k for k in range(len(takeoff)) if keys[k] == field and wps[k]]
-        if len(mates) < 2:
+        flown = sorted({float(b) for k in mates for b in (taken[k] if taken else ())})
+        if len(mates) < 2 and not (mates and flown):
             continue
         a = takeoff[mates[0]]
         bearing = {k: float(np.arctan2(wps[k][0][1] - a[1], wps[k][0][0] - a[0])) for k in mates}
@@ -314,6 +348,11 @@ def _spread(wps, takeoff, sc: Scenario) -> list[list[list[float]]]:
         prev = -np.inf
         for k in ranked:
             ang = max(bearing[k], prev + gap)
+            for _ in flown:  # clear of the bearings flown already, moving up
+                off = [(ang - b + np.pi) % (2 * np.pi) - np.pi for b in flown]
+                if all(abs(d) >= gap for d in off):
+                    break
+                ang += gap - min(d for d in off if abs(d) < gap)
             prev = ang
             if ang == bearing[k]:
                 continue
@@ -340,16 +379,16 @@ def _inside_reach(a, ang: float, box: tuple[float, float, float, float]) -> floa
 
 
 def fit_lawnmowers(
-    routes, takeoff, landing, sc: Scenario, v: Speeds, headings, options: PlanOptions
+    routes, takeoff, landing, sc: Scenario, v: Speeds, headings, options: PlanOptions, taken=None
 ) -> list[list[list[float]]]:
     """A start's lawnmower routes (a line = two waypoints) with field-mates fanned out as the
     allocation's routes are (:func:`_spread`: eq. 21 on the way out), and each route's last
     lines dropped, the first dropped one flown in part (:func:`~poc_env.agents.planning.
     coverage_boxes.cut_lines`), until it keeps eq. 18 again (:func:`~poc_env.agents.planning.
-    refine.route_fits`)."""
+    refine.route_fits`). ``taken``: :func:`_spread`'s bearings flown already, per UAV."""
     u = sc.uav
     w = sc.sensor.sweep_width_m
-    rs = _spread(routes, takeoff, sc)
+    rs = _spread(routes, takeoff, sc, taken)
     for k in range(len(takeoff)):
         arr = np.asarray(rs[k], dtype=float).reshape(-1, 2)
         lead = len(arr) % 2  # the dog-leg's waypoint before the lines
@@ -723,64 +762,113 @@ def make_allocation_plan(
             rs = _around_all(rs)
         return rs
 
+    def _reversed(k: int, wps) -> list:
+        """UAV ``k``'s lawnmower waypoints flown from the other end (the fan-out's dog-leg
+        first, as laid), if that keeps eq. 18: an alternative for :func:`apart` on maps
+        without zones (with zones :func:`in_lanes` has tried it)."""
+        arr = np.asarray(wps, dtype=float).reshape(-1, 2)
+        lead = len(arr) % 2
+        q = np.vstack([arr[:lead], arr[lead:][::-1]])
+        path = np.vstack([takeoff[k], q, landing[k]])
+        fits = route_fits(
+            path, v, u.max_turn_rate_rad_s, u.usable_endurance_s, _reserve(sc), heading0[k]
+        )
+        return [q.tolist()] if fits and len(arr) - lead > 2 else []
+
+    def _bearings(rs, todo) -> list[list[float]] | None:
+        """Per UAV of ``todo`` the outbound bearings of its field-mates with a route in ``rs``
+        (their first waypoint from the field), for the fill's fan-out (:func:`_spread`);
+        ``None`` without ``fill_apart`` (the i24-fleet fill, fanned among itself)."""
+        if not opt.fill_apart:
+            return None
+        keys = [tuple(np.round(t, 3)) for t in takeoff]
+        return [
+            [
+                float(np.arctan2(rs[j][0][1] - takeoff[j][1], rs[j][0][0] - takeoff[j][0]))
+                for j in range(n)
+                if len(rs[j]) and keys[j] == keys[k]
+            ]
+            for k in todo
+        ]
+
     def _fill(rs) -> list[list[list[float]]]:
         """``rs`` with its UAVs without a route given the coverage boxes
         (:func:`~poc_env.agents.planning.coverage_boxes.box_routes`) of the mass the other
         routes leave on the sample points (eq. 14, the environment's sensor; the prior as the
         starts see it, zone interiors discounted), fitted to eq. 18 and, with zones, in lanes
-        behind the routes already laid (i24-fleet). ``rs`` itself (the same object) when no
-        UAV is idle, none is busy (that is the boxes start's own job) or nothing is gained."""
+        behind the routes already laid (i24-fleet). With ``fill_apart`` (i24-stagger) the
+        fill fans out clear of the bearings its busy field-mates fly (:func:`_spread`), and a
+        filled route whose planned flight comes within ``FILL_WITHIN x d_s`` of a UAV (busy,
+        or filled and kept before it; :func:`~poc_env.agents.planning.deconflict.apart`; on
+        maps without zones after its box flown from the other end) is not dropped at once:
+        its UAV is filled again, up to :data:`FILL_TRIES` times, on the mass the routes kept
+        leave with the mass within ``d_s + W/2`` of its conflicting positions taken out, so
+        it takes a box away from the UAVs it met.
+        ``rs`` itself (the same object) when no UAV is idle, none is busy (that is the boxes
+        start's own job) or nothing is gained."""
         idle = [k for k in range(n) if not len(rs[k])]
         if not idle or len(idle) == n:
             return rs
         s = sc.sensor.samples_per_cell
         cutoff = sc.sensor.cutoff_sweep_widths * w
-        bel = np.ascontiguousarray(grid.refine(prior, s))
-        for k in range(n):
-            if len(rs[k]):
-                path = np.vstack([takeoff[k], np.asarray(rs[k], dtype=float), landing[k]])
-                sweep_track(bel, grid, s, path, w, law, cutoff, grid.cell_m)
-        ix = np.asarray(idle)
-        new = box_routes(
-            grid.coarsen(bel, s),
-            grid,
-            w,
-            law,
-            v,
-            takeoff[ix],
-            landing[ix],
-            u.usable_endurance_s,
-            u.max_turn_rate_rad_s,
-            _reserve(sc),
-            heading0[ix],
-            sampled=(bel, s, cutoff),
-            options=dataclasses.replace(opt, rounds=opt.fill_rounds, chain_rounds=opt.fill_rounds),
-        )
-        new = fit_lawnmowers(new, takeoff[ix], landing[ix], sc, v, heading0[ix], opt)
-        if not any(new):
-            return rs
+        d_s = sc.constraints.safety_distance_m
+        fine = np.ascontiguousarray(grid.refine(prior, s))
+        keep = np.ones_like(fine)  # the share of each sample point's mass offered to the fill
         out = [list(r) for r in rs]
-        for j, k in enumerate(idle):
-            out[k] = new[j]
-        if router.active:  # the new routes in lanes behind every route already laid
-            busy = [k for k in range(n) if len(rs[k])]
-            order = busy + idle
-            laid = in_lanes(
-                _reordered(sc, order),
-                [out[k] for k in order],
+        todo = idle
+        for _ in range(1 + (FILL_TRIES if opt.fill_apart else 0)):
+            bel = fine * keep
+            for k in range(n):
+                if len(out[k]):
+                    path = np.vstack([takeoff[k], np.asarray(out[k], dtype=float), landing[k]])
+                    sweep_track(bel, grid, s, path, w, law, cutoff, grid.cell_m)
+            ix = np.asarray(todo)
+            new = box_routes(
+                grid.coarsen(bel, s),
+                grid,
+                w,
+                law,
                 v,
-                lambda j, q, lane: (
-                    rs[order[j]] if len(rs[order[j]]) else _around(order[j], q, lane)
+                takeoff[ix],
+                landing[ix],
+                u.usable_endurance_s,
+                u.max_turn_rate_rad_s,
+                _reserve(sc),
+                heading0[ix],
+                sampled=(bel, s, cutoff),
+                options=dataclasses.replace(
+                    opt, rounds=opt.fill_rounds, chain_rounds=opt.fill_rounds
                 ),
             )
-            for j, k in enumerate(order):
-                out[k] = laid[j] if not len(rs[k]) else rs[k]
-        if opt.fill_apart:  # eq. 21 first: a filled route in conflict with any flying UAV
-            _, pos, act = planned_positions(sc, out, v)  # (busy or filled before) is dropped
-            for k in idle:
-                if len(out[k]) and conflicts(sc, pos, act, one=k)[:, k].any():
-                    out[k] = []
-                    act[:, k] = False
+            fixed = [k for k in range(n) if len(out[k])]
+            new = fit_lawnmowers(
+                new, takeoff[ix], landing[ix], sc, v, heading0[ix], opt, _bearings(out, todo)
+            )
+            if not any(new):
+                break
+            for j, k in enumerate(todo):
+                out[k] = new[j]
+            if router.active:  # the new routes in lanes behind every route already laid
+                order = fixed + todo
+                laid = in_lanes(
+                    _reordered(sc, order),
+                    [out[k] for k in order],
+                    v,
+                    lambda j, q, lane, order=order, fixed=fixed, now=out: (
+                        now[order[j]] if order[j] in fixed else _around(order[j], q, lane)
+                    ),
+                )
+                for j, k in enumerate(order):
+                    if k not in fixed:
+                        out[k] = laid[j]
+            if not opt.fill_apart:
+                break
+            out, where = apart(sc, out, v, todo, None if router.active else _reversed, FILL_WITHIN)
+            if not where:
+                break
+            for at in where.values():  # the mass it met taken out of its next fill
+                _mask_near(keep, grid, s, at, d_s + w / 2)
+            todo = sorted(where)
         if not any(out[k] for k in idle):
             return rs
         return out

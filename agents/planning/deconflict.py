@@ -60,13 +60,13 @@ def planned_positions(
     return times, pos, act
 
 
-def _away(sc: Scenario, pos: np.ndarray, act: np.ndarray) -> np.ndarray:
-    """``act`` where the UAV ``(..., n, 2)`` is farther than ``d_s / sin(FAN_DEG)`` from its
-    take-off and landing fields (field-mates take off and land together; the fan-out spreads
-    them from there)."""
+def _away(sc: Scenario, pos: np.ndarray, act: np.ndarray, within: float = 1.0) -> np.ndarray:
+    """``act`` where the UAV ``(..., n, 2)`` is farther than ``within x d_s / sin(FAN_DEG)``
+    from its take-off and landing fields (field-mates take off and land together; the fan-out
+    spreads them from there: legs ``FAN_DEG`` apart are ``within x d_s`` apart from there)."""
     takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
-    near = sc.constraints.safety_distance_m / np.sin(np.radians(FAN_DEG))
+    near = within * sc.constraints.safety_distance_m / np.sin(np.radians(FAN_DEG))
     return (
         act
         & (np.hypot(*np.moveaxis(pos - takeoff, -1, 0)) > near)
@@ -74,13 +74,17 @@ def _away(sc: Scenario, pos: np.ndarray, act: np.ndarray) -> np.ndarray:
     )
 
 
-def conflicts(sc: Scenario, pos: np.ndarray, act: np.ndarray, one: int | None = None) -> np.ndarray:
+def conflicts(
+    sc: Scenario, pos: np.ndarray, act: np.ndarray, one: int | None = None, within: float = 1.0
+) -> np.ndarray:
     """Conflict steps ``(S, n, n)`` (symmetric): two flying UAVs closer than ``d_s`` (eq. 21)
     at planned times at most :data:`SLACK_S` apart (the follower's timing drifts from the
     planned one), neither within ``d_s / sin(FAN_DEG)`` of its fields (:func:`_away`).
-    ``one``: only the pairs of UAV ``one`` with the others (the rest False)."""
-    d_s = sc.constraints.safety_distance_m
-    ok = _away(sc, pos, act)
+    ``one``: only the pairs of UAV ``one`` with the others (the rest False); ``within``:
+    closer than ``within x d_s`` instead (and away from the fields by ``within`` times as
+    much)."""
+    d_s = sc.constraints.safety_distance_m * within
+    ok = _away(sc, pos, act, within)
     n_s, n = ok.shape
     rows = np.arange(n) if one is None else np.array([one])
     close = np.zeros((n_s, n, n), dtype=bool)
@@ -210,3 +214,43 @@ def in_lanes(sc: Scenario, routes, v: Speeds, around) -> list[list[list[float]]]
         out.append(best[1])
         pos[:, k], act[:, k] = best[2], best[3]
     return out
+
+
+def apart(
+    sc: Scenario, routes, v: Speeds, order, alternatives=None, within: float = LANE
+) -> tuple[list[list[list[float]]], dict[int, np.ndarray]]:
+    """``routes`` with the UAVs of ``order`` (each with a route, the others' routes fixed)
+    taken in turn, each kept only if its planned flight (:func:`planned_positions`) keeps eq.
+    21 (:func:`conflicts`, ``within``: ``LANE x d_s`` by default, a lane's margin for the
+    follower's drift) with the fixed UAVs and those of ``order`` kept before it (i24-stagger).
+    ``alternatives(k, waypoints)``: other waypoint lists for UAV ``k``'s route (e.g. the same
+    box entered from its other end), tried in turn before the UAV is dropped. Returns the
+    routes (dropped UAVs without a route, kept ones as taken) and, per dropped UAV, its
+    planned positions ``(m, 2)`` in conflict (those of its route as given)."""
+    u = sc.uav
+    takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
+    landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
+    heading0 = takeoff_heading(Grid.from_config(sc.map).bounds, takeoff)
+    times, pos, act = planned_positions(sc, routes, v)
+    order = [k for k in order if len(routes[k])]
+    act[:, order] = False
+    out = [list(r) for r in routes]
+    where: dict[int, np.ndarray] = {}
+    for k in order:
+        wps0 = out[k]
+        cands = [wps0] + (list(alternatives(k, wps0)) if alternatives is not None else [])
+        first = np.zeros((0, 2))
+        for i, wps in enumerate(cands):
+            path = np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]])
+            pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
+            hit = conflicts(sc, pos, act, one=k, within=within)[:, k].any(axis=1)
+            if i == 0:
+                first = pos[hit, k].copy()
+            if not hit.any():
+                out[k] = [list(map(float, q)) for q in wps]
+                break
+        else:
+            act[:, k] = False
+            out[k] = []
+            where[k] = first
+    return out, where

@@ -132,11 +132,13 @@ class PlanOptions:
     fill_rounds: int = 0
     #: a filled route whose planned flight breaks eq. 21 with a UAV already flying (the
     #: deconfliction's measure, :func:`~poc_env.agents.planning.deconflict.conflicts`) is
-    #: dropped: its UAV stays idle (i24-fleet). On by default, safety first as the lanes
-    #: (a planning officer cannot send converging routes): on the audit's 500 km scenario at
-    #: 48 UAVs it costs 0.028 of planned POS (0.9142 -> 0.8861, still above the 0.8223 planned
-    #: before the fill) and the filled routes add no planned conflict, where without it they
-    #: added 210 planned conflict pair-steps and the flight 177 collision steps (44 before).
+    #: dropped (i24-fleet), its UAV filled again clear of the others up to ``FILL_TRIES``
+    #: times before it stays idle (i24-stagger). On by default, safety first as the lanes (a
+    #: planning officer cannot send converging routes): on the audit's 500 km scenario at 48
+    #: UAVs it costs 0.018 of planned POS (0.9142 -> 0.8962 with the refill; 0.8861 with the
+    #: drop alone; 0.8223 before the fill), and the flight has 29 collision steps, where
+    #: without it the filled routes added 210 planned conflict pair-steps and the flight 177
+    #: collision steps (44 before the fill).
     fill_apart: bool = True
     #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
     #: their allocation assumes; the start keeps the one of most W x length per cell) ...

@@ -14,7 +14,7 @@ from poc_env.agents.planning.allocation import (
     plan_fleets,
     sampled_sweep,
 )
-from poc_env.agents.planning.deconflict import conflicts, planned_positions
+from poc_env.agents.planning.deconflict import apart, conflicts, planned_positions
 from poc_env.agents.planning.flight_rules import SPEED, plan_speeds
 from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
 from poc_env.agents.planning.options import PlanOptions
@@ -81,8 +81,8 @@ def test_no_uav_idles_while_reachable_mass_remains():
 def test_fill_apart_drops_filled_routes_that_break_eq_21():
     """``fill_apart``: a filled route in planned conflict (eq. 21, the deconfliction's
     measure) with a UAV already flying is dropped. On this case the 12 UAVs the allocation
-    start leaves idle, filled, are in 11 conflict steps with the others; apart, in none (5
-    stay idle)."""
+    start leaves idle, filled, are in 11 conflict steps with the others; apart, in none (the
+    drop alone left 5 idle; i24-stagger fills them again, the test below)."""
     sc, prior = mini(200, 5, 16)
     base = {"greedy_start": False, "box_start": False, "refine": 0}
     plain = make_allocation_plan(sc, prior=prior, options=PlanOptions(fill_idle=False, **base))
@@ -93,6 +93,36 @@ def test_fill_apart_drops_filled_routes_that_break_eq_21():
         sc, [u["waypoints_m"] for u in plan["uavs"]], plan_speeds(sc, SPEED)
     )
     assert not conflicts(sc, pos, act)[:, idle].any()
+
+
+def test_fill_apart_refills_a_dropped_uav_instead_of_leaving_it_idle():
+    """i24-stagger: on the case above, dropping the filled routes in conflict left 5 of the 12
+    filled UAVs idle (two in conflict on the way out with a busy field-mate's bearing, the
+    others in their boxes). The fill now fans its routes out clear of the bearings the busy
+    field-mates fly and fills a dropped UAV again on the mass left with the mass near its
+    conflicts taken out: every UAV flies, and the whole plan keeps eq. 21 away from the
+    fields at its planned times."""
+    sc, prior = mini(200, 5, 16)
+    opt = PlanOptions(greedy_start=False, box_start=False, refine=0)
+    plan = make_allocation_plan(sc, prior=prior, options=opt)
+    assert all(u["waypoints_m"] for u in plan["uavs"])
+    routes = [u["waypoints_m"] for u in plan["uavs"]]
+    _, pos, act = planned_positions(sc, routes, plan_speeds(sc, SPEED))
+    assert not conflicts(sc, pos, act).any()
+
+
+def test_apart_keeps_an_alternative_and_drops_what_has_none():
+    """``apart``: a route on top of a fixed UAV's route is replaced by the first alternative
+    that keeps eq. 21, and dropped (its conflicting positions returned) when none does."""
+    sc, _ = mini(200, 5, 8)  # UAVs 0 and 1 share the North field
+    v = plan_speeds(sc, SPEED)
+    box = [[60e3, 150e3], [140e3, 150e3], [140e3, 145e3], [60e3, 145e3]]
+    far = [[150e3, 60e3], [190e3, 60e3], [190e3, 55e3], [150e3, 55e3]]
+    routes = [box, box] + [[]] * 6
+    out, where = apart(sc, routes, v, [1], lambda k, q: [box, far])
+    assert out[0] == box and out[1] == far and not where
+    out, where = apart(sc, routes, v, [1])
+    assert out[0] == box and out[1] == [] and len(where[1])
 
 
 def test_pos_c_never_falls_as_the_fleet_grows():
