@@ -133,6 +133,14 @@ from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 #: of coverage layers (K) tried, the share of 0.85 T a route may fill, the refinement's passes
 #: and the starts refined. Kept as names for the callers that read them.
 LEVELS = PlanOptions.levels
+#: "Nothing", as a share of the prior's mass (i24-smallfix, F1): a UAV whose route adds less
+#: than this to the plan's POS stays home, and candidate plans whose planned POS lie within it
+#: of the best are tied, the one of least total eq. 17 flight time kept; a plan loses at most
+#: twice this by them. 1e-4 of the mass: below the 4 decimals POS_C is reported at, and below
+#: what any flying UAV finds on the reference maps (``paper_6_2`` 0.06, 64 UAVs on a 150 km map
+#: 0.003); 1e-6 left F1 as it was (the North UAV's 1.77 h route adds 3.2e-5 to the South UAV's
+#: 0.28 h one).
+NOTHING = 1e-4
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
@@ -823,6 +831,60 @@ def make_allocation_plan(
         paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
         return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
 
+    nothing = NOTHING * float(full_prior.sum())
+
+    def _hours(rs) -> float:
+        """The plan's total eq. 17 flight time (every UAV's route, take-off to landing)."""
+        return sum(_flight_time(rs[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in range(n))
+
+    def _pick(cands: list[tuple]) -> tuple:
+        """The candidate kept among ``cands`` (``(score, routes, ...)``, in order of
+        preference): the one of least total flight time (:func:`_hours`) among those whose score
+        lies within :data:`NOTHING` of the prior's mass of the best (F1: a tie on POS_C is
+        broken by the flying, not by the order); the first of them on equal times. Without a
+        tie, the first of the highest score, as before."""
+        top = max(c[0] for c in cands)
+        tied = [c for c in cands if c[0] >= top - nothing]
+        if len(tied) == 1:
+            return tied[0]
+        hours = [_hours(c[1]) for c in tied]
+        return tied[int(np.argmin(hours))]
+
+    def _home(trial, t_pieces, score: float | None):
+        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that find nothing
+        kept home (F1: no aircraft sent for nothing), pieces and POS updated. A UAV's own
+        marginal POS (what the plan finds less without it) is at most what it finds when swept
+        first-to-last or last-to-first (:func:`sampled_sweep`, eq. 14, a point credited to the
+        first path that finds it); the UAVs of either credit below :data:`NOTHING` of the
+        prior's mass are tried, longest flight first, and each kept home if the plan without it
+        (and the ones already kept home) still finds within :data:`NOTHING` of the mass of what
+        it found: the plan loses less than that in all."""
+        paths = [[takeoff[k], *trial[k], landing[k]] if trial[k] else [] for k in range(n)]
+        fwd = sampled_sweep(sc, grid, full_prior, paths)[0]
+        if all(f >= nothing for k, f in enumerate(fwd) if trial[k]):  # the common case
+            rev = fwd
+        else:
+            rev = sampled_sweep(sc, grid, full_prior, paths[::-1])[0][::-1]
+        own = [min(f, r) for f, r in zip(fwd, rev)]
+        tried = [k for k in range(n) if len(trial[k]) and own[k] < nothing]
+        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in tried}
+        home: list[int] = []
+        total = float(sum(fwd))
+        for k in sorted(tried, key=lambda k: -hours[k]):
+            without = [[] if j in home or j == k else trial[j] for j in range(n)]
+            if _sampled_total(without) >= total - nothing:
+                home.append(k)
+        if not home:
+            return trial, t_pieces, score
+        kept = [[] if k in home else trial[k] for k in range(n)]
+        k_pieces = [[] if k in home else list(p_) for k, p_ in enumerate(t_pieces)]
+        return kept, k_pieces, None if score is None else _sampled_total(kept)
+
+    def _flown(trial, t_pieces, score: float | None):
+        """A candidate as the pick compares it: idle UAVs filled (:func:`_with_fill`), then
+        UAVs that find nothing kept home (:func:`_home`)."""
+        return _home(*_with_fill(trial, t_pieces, score))
+
     # the starts: (W x length per cell score, name, routes, line pieces)
     starts: list[tuple[float, str, list, list]] = []
     routes: list[list[list[float]]] = [[] for _ in range(n)]
@@ -922,10 +984,9 @@ def make_allocation_plan(
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
         if not refine:  # the start kept as it is, its idle UAVs filled
-            routes, pieces, _ = _with_fill(routes, pieces, None)
+            routes, pieces, _ = _flown(routes, pieces, None)
     ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
-        best_sampled = -1.0
         sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
         top = starts[: max(1, refine_starts)]
         top_s = max(sampled_of[t[1]] for t in top)
@@ -965,26 +1026,19 @@ def make_allocation_plan(
             for was_refined in (True, False):
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
                 score = _sampled_total(trial) if was_refined else sampled_of[name]
-                trial, t_pieces, score = _with_fill(trial, s_pieces, score)
+                trial, t_pieces, score = _flown(trial, s_pieces, score)
                 score -= _penalty(trial)
                 ranked.append((score, trial, t_pieces, name, was_refined))
-                if score > best_sampled:
-                    best_sampled = score
-                    routes = trial
-                    pieces = t_pieces
-                    start = name
-                    refined = was_refined
         # the starts not refined are kept as they are if the environment's model scores them
         # higher (W x length per cell ranks the starts, and misjudges cells wider than W)
         for _, name, s_routes, s_pieces in starts:
             if any(name == t[1] for t in tried):
                 continue
-            f_routes, f_pieces, score = _with_fill(s_routes, s_pieces, sampled_of[name])
+            f_routes, f_pieces, score = _flown(s_routes, s_pieces, sampled_of[name])
             score -= _penalty(f_routes)
             ranked.append((score, f_routes, f_pieces, name, False))
-            if score > best_sampled:
-                best_sampled, routes, pieces = score, f_routes, f_pieces
-                start, refined = name, False
+        # the best by the environment's model; on a tie, the least flying (F1)
+        _, routes, pieces, start, refined = _pick(ranked)
 
     def _polish(rs):
         """The polish stages in turn -- the polish, the second polish with the block moves too
@@ -1065,14 +1119,12 @@ def make_allocation_plan(
             if any(r_ is q[0] for q in pool) or not any(r_):
                 continue
             pool.append((r_, p_, name, was_refined))
-        best_polished: tuple | None = None
+        polished_pool = []
         for r_, p_, name, was_refined in pool:
             pr, val, stats = _polish(r_)
             score = val - (_penalty(pr) if len(pool) > 1 else 0.0)
-            if best_polished is None or score > best_polished[0]:
-                best_polished = (score, pr, p_, name, was_refined, stats)
-        assert best_polished is not None
-        _, routes, pieces, start, refined, polished = best_polished
+            polished_pool.append((score, pr, p_, name, was_refined, stats))
+        _, routes, pieces, start, refined, polished = _pick(polished_pool)
         if len(pool) > 1:
             polished = {**polished, "plans": len(pool)}
     fleet_rec: dict[str, Any] | None = None
