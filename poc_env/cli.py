@@ -1159,8 +1159,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--uavs",
         type=int,
         default=None,
-        help="number of UAVs, spread round-robin over the scenario's airfields, each landing "
-        "where it took off (default: the scenario's fleet). To compare fleet sizes: one plan "
+        help="number of UAVs flying the fleet's own take-off/landing pairs: one from each of "
+        "the fleet's groups in turn, so N equal to the fleet's size is the fleet itself and "
+        "larger N cycle its groups (default: the scenario's fleet). To compare fleet sizes: one plan "
         "per size can plan a larger fleet a little less; the Python API's plan_fleets plans "
         "each size on the one before, never less (docs/PLANNER.md, 'Larger fleets')",
     )

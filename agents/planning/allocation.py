@@ -521,8 +521,9 @@ def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
 def plan_fleets(
     scenario: Scenario | str, sizes, *, prior: np.ndarray | None = None, **kw
 ) -> list[dict[str, Any]]:
-    """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (UAVs spread
-    round-robin over the airfields, :meth:`~poc_env.config.Scenario.with_uavs`), in
+    """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (the fleet's own
+    take-off/landing pairs, one from each group in turn, :meth:`~poc_env.config.Scenario.
+    with_uavs`), in
     increasing order, each planned with the one before as its ``floor``
     (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
     float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
