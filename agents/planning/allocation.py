@@ -55,7 +55,8 @@
    17-18 and the refinement's airspace check hold), so ``posc`` never drops; on maps with
    no-fly zones no candidate may enter a zone or cut the router's clearance ring
    (:func:`~poc_env.agents.planning.polish.zone_guard`; i24-zonepolish; ``options.
-   polish_zones=False`` skips the polish there as before, and the regrade always does); not
+   polish_zones=False`` skips the polish there as before, the regrade too; the regrade keeps
+   its runs out of the zones by the same check since i24-smallfix); not
    on maps of more than ``options.polish_max_cells`` cells a side where it is set
    (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
    settings record its passes and kept moves (``polish``).
@@ -1061,14 +1062,11 @@ def make_allocation_plan(
         for stage, passes, kinds, radii, box_radii in later:
             if not passes:
                 continue
-            if stage == "regrade" and router.active:  # the regrade does not see the zones
-                out = (out[0], out[1], {**out[2], "regrade_skipped": "no-fly zones"})
-                continue
-            if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly
-                pr, val, stats = polish_for(
+            if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly; with zones
+                pr, val, stats = polish_for(  # its runs kept out of them (i24-smallfix)
                     sc, out[0], full_prior, passes, speeds=v,
                     separation_margin=opt.separation_margin, range_margin=opt.range_margin,
-                    routine=regrade_routes,
+                    routine=regrade_routes, **({"router": router} if router.active else {}),
                 )  # fmt: skip
             else:
                 pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii)
