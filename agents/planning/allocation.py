@@ -109,7 +109,7 @@ from poc_env.agents.planning.deconflict import (
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
-from poc_env.agents.planning.geography import plan_geography, probability
+from poc_env.agents.planning.geography import plan_geography, probability, zone_prior
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_for
 from poc_env.agents.planning.refine import (
@@ -658,7 +658,7 @@ def make_allocation_plan(
     router = ZoneRouter.for_scenario(sc)
     full_prior = prior
     if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
-        prior = prior * router.reach_share(grid, reach_m=opt.zone_reach * sc.sensor.sweep_width_m)
+        prior = zone_prior(sc, prior, router, opt.zone_reach)
         if reason is None and float(prior.sum()) <= 0:
             reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav
@@ -903,7 +903,8 @@ def make_allocation_plan(
     if best is not None and greedy_start:
         from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
 
-        gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed)
+        gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed,
+                                         zone_reach=opt.zone_reach)  # fmt: skip
         g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
         if router.active:  # its UAVs in lanes too (i24-deconflict: it routes each alone)
             g_routes = _around_all(g_routes)

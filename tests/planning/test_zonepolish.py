@@ -153,3 +153,29 @@ def test_the_regrade_keeps_its_runs_out_of_the_zones():
     settings = plan["optimizer"]["settings"]["polish"]
     assert "regrade_skipped" not in settings and settings["regrade_moves"] > 0
     assert _entering(sc, [u["waypoints_m"] for u in plan["uavs"]]) == (0, 0)
+
+
+def test_one_zone_discount_for_the_greedy_rectangles_and_its_start(monkeypatch):
+    """i24-smallfix: the greedy rectangle planner counts the prior near the zones by the
+    allocation's ``zone_reach`` (``geography.zone_prior``), not a W/2 of its own: its default
+    is the option's default, another reach changes its planned POS, and the allocation's
+    greedy start is planned at the allocation's own ``zone_reach``."""
+    from poc_env.agents.planning import greedy_rectangles
+
+    sc = load_scenario("paper_6_2", TWO_ZONES)
+    prior = build_prior(sc.map)
+    plan = greedy_rectangles.make_greedy_rectangles_plan
+    default = plan(sc, prior=prior)["posc"]
+    assert plan(sc, prior=prior, zone_reach=PlanOptions.zone_reach)["posc"] == default
+    assert abs(plan(sc, prior=prior, zone_reach=2.0)["posc"] - default) > 1e-3
+    with pytest.raises(ConfigError, match=r"zone_reach"):
+        plan(sc, prior=prior, zone_reach=-1.0)
+    seen = []
+
+    def spy(*a, **kw):
+        seen.append(kw.get("zone_reach"))
+        return plan(*a, **kw)
+
+    monkeypatch.setattr(greedy_rectangles, "make_greedy_rectangles_plan", spy)
+    make_allocation_plan(sc, prior=prior, options=PlanOptions(zone_reach=1.5, refine=0))
+    assert seen == [1.5]
