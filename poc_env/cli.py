@@ -1159,11 +1159,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--uavs",
         type=int,
         default=None,
-        help="number of UAVs flying the fleet's own take-off/landing pairs: one from each of "
-        "the fleet's groups in turn, so N equal to the fleet's size is the fleet itself and "
-        "larger N cycle its groups (default: the scenario's fleet). To compare fleet sizes: one plan "
-        "per size can plan a larger fleet a little less; the Python API's plan_fleets plans "
-        "each size on the one before, never less (docs/PLANNER.md, 'Larger fleets')",
+        help="number of UAVs (default: the scenario's fleet). The fleet's own take-off/landing "
+        "pairs come first, one from each of its groups in turn, so N equal to the fleet's size is "
+        "the fleet itself; UAVs beyond it take off from the airfields in turn and land there. To "
+        "compare fleet sizes: one plan per size can plan a larger fleet a little less; the "
+        "Python API's plan_fleets plans each size on the one before, never less "
+        "(docs/PLANNER.md, 'Larger fleets')",
     )
     p.add_argument(
         "--optimizer",

@@ -943,11 +943,11 @@ class Scenario:
             more[j % len(self.airfields)] += 1
         fleet = [dataclasses.replace(g, count=c) for g, c in zip(self.fleet, own, strict=True)]
         for a, c in zip(self.airfields, more, strict=True):  # into the field's own group if any
-            i = next((i for i, g in enumerate(fleet) if g.takeoff == g.landing == a.name), None)
-            if i is None:
+            at = next((i for i, g in enumerate(fleet) if g.takeoff == g.landing == a.name), None)
+            if at is None:
                 fleet.append(FleetGroup(takeoff=a.name, count=c))
             else:
-                fleet[i] = dataclasses.replace(fleet[i], count=fleet[i].count + c)
+                fleet[at] = dataclasses.replace(fleet[at], count=fleet[at].count + c)
         return dataclasses.replace(self, fleet=tuple(g for g in fleet if g.count))
 
     def to_dict(self) -> dict[str, Any]:

@@ -837,7 +837,9 @@ def make_allocation_plan(
 
     def _hours(rs) -> float:
         """The plan's total eq. 17 flight time (every UAV's route, take-off to landing)."""
-        return sum(_flight_time(rs[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in range(n))
+        return sum(
+            _flight_time(rs[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in range(n)
+        )
 
     def _pick(cands: list[tuple]) -> tuple:
         """The candidate kept among ``cands`` (``(score, routes, ...)``, in order of
@@ -869,7 +871,8 @@ def make_allocation_plan(
             rev = sampled_sweep(sc, grid, full_prior, paths[::-1])[0][::-1]
         own = [min(f, r) for f, r in zip(fwd, rev)]
         tried = [k for k in range(n) if len(trial[k]) and own[k] < nothing]
-        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in tried}
+        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k])
+                 for k in tried}  # fmt: skip
         home: list[int] = []
         total = float(sum(fwd))
         for k in sorted(tried, key=lambda k: -hours[k]):

@@ -41,7 +41,7 @@ from poc_env.agents.planning.refine import route_time
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.probability_map import build_prior
 
 
 class _Speeds(NamedTuple):

@@ -153,9 +153,9 @@ def regrade_routes(
     tried (0: as many; -1 one fewer; 1 one more); ``sweeps``: the coordinate search's sweeps
     over a candidate's lines; ``step``, ``least``: the water-filling's step (lines) and least
     spacing (sweep widths), as ``graded_offsets``'; ``router``: the plan's
-    :class:`~poc_env.sim.routing.ZoneRouter`, with zones every kept run passes
-    :func:`~poc_env.agents.planning.polish.zone_guard` (module docstring). Returns ``(routes, pos, {"passes",
-    "moves", "runs", "lines_added", "lines_dropped"})``."""
+    :class:`~poc_env.sim.routing.ZoneRouter`: with zones every kept run passes
+    :func:`~poc_env.agents.planning.polish.zone_guard` (module docstring). Returns
+    ``(routes, pos, {"passes", "moves", "runs", "lines_added", "lines_dropped"})``."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)

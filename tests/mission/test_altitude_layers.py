@@ -257,7 +257,8 @@ def test_a_separation_below_a_metre_is_refused(tmp_path, capsys):
     out = tmp_path / "o"
     args = ["export", str(path), "--format", "geojson", "--out", str(out), "--separation-m"]
     assert main([*args, "1e-9"]) == 2
-    assert "separation_m: got 1e-09; allowed: 0 (no layers) or 1 to 1000 m" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "separation_m: got 1e-09; allowed: 0 (no layers) or 1 to 1000 m" in err
     assert not out.exists()
     with pytest.raises(ConfigError, match=r"^separation_m: got 0\.5"):
         export_plan(path, "qgc", out_dir=tmp_path / "x", separation_m=0.5)
