@@ -48,7 +48,9 @@
    refined and the plan keeps the best of them, refined or not, by the environment's model
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
    (``options.airspace_penalty``, off by default); ``start`` records which start and
-   ``refined`` whether the refined routes were kept.
+   ``refined`` whether the refined routes were kept. Each candidate's UAVs that add less than
+   :data:`NOTHING` of the prior's mass are kept home, and among the candidates within
+   :data:`NOTHING` of the best the one of least total flight time is kept (i24-smallfix, F1).
 7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
