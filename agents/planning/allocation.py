@@ -136,14 +136,14 @@ from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 #: of coverage layers (K) tried, the share of 0.85 T a route may fill, the refinement's passes
 #: and the starts refined. Kept as names for the callers that read them.
 LEVELS = PlanOptions.levels
-#: "Nothing", as a share of the prior's mass (i24-smallfix, F1): a UAV whose route adds less
-#: than this to the plan's POS stays home, and candidate plans whose planned POS lie within it
-#: of the best are tied, the one of least total eq. 17 flight time kept; a plan loses at most
-#: twice this by them. 1e-4 of the mass: below the 4 decimals POS_C is reported at, and below
-#: what any flying UAV finds on the reference maps (``paper_6_2`` 0.06, 64 UAVs on a 150 km map
-#: 0.003); 1e-6 left F1 as it was (the North UAV's 1.77 h route adds 3.2e-5 to the South UAV's
-#: 0.28 h one).
-NOTHING = 1e-4
+#: "Nothing", as a share of the prior's mass (``PlanOptions.nothing``; i24-smallfix, F1): a
+#: UAV whose route adds less than this to the plan's POS stays home, and candidate plans whose
+#: planned POS lie within it of the best are tied, the one of least total eq. 17 flight time
+#: kept; a plan loses at most twice this by them. 1e-4 of the mass: below the 4 decimals POS_C
+#: is reported at, and below what any flying UAV finds on the reference maps (``paper_6_2``
+#: 0.06, 64 UAVs on a 150 km map 0.003); 1e-6 left F1 as it was (the North UAV's 1.77 h route
+#: adds 3.2e-5 to the South UAV's 0.28 h one).
+NOTHING = PlanOptions.nothing
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
@@ -835,7 +835,7 @@ def make_allocation_plan(
         paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
         return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
 
-    nothing = NOTHING * float(full_prior.sum())
+    nothing = opt.nothing * float(full_prior.sum())
 
     def _hours(rs) -> float:
         """The plan's total eq. 17 flight time (every UAV's route, take-off to landing)."""
@@ -843,14 +843,24 @@ def make_allocation_plan(
             _flight_time(rs[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in range(n)
         )
 
-    def _pick(cands: list[tuple]) -> tuple:
-        """The candidate kept among ``cands`` (``(score, routes, ...)``, in order of
-        preference): the one of least total flight time (:func:`_hours`) among those whose score
-        lies within :data:`NOTHING` of the prior's mass of the best (F1: a tie on POS_C is
-        broken by the flying, not by the order); the first of them on equal times. Without a
-        tie, the first of the highest score, as before."""
+    def _pick(cands: list[tuple], home: bool = False) -> tuple:
+        """The candidate kept among ``cands`` (``(score, routes, pieces, ...)``, in order of
+        preference; score the sampled POS less the penalty): the candidates whose score lies
+        within ``options.nothing`` (:data:`NOTHING`) of the prior's mass of the best are tied,
+        with ``home`` each has its UAVs that add nothing kept home (:func:`_home`; F1), and the
+        one of least total flight time (:func:`_hours`) is kept, the first of them on equal
+        times (F1: a tie on POS_C is broken by the flying, not by the order). Without a tie,
+        or with ``options.nothing`` 0, the first of the highest score, as before (kept home
+        too: only the tied are, so the candidates that lose cost no sweeps)."""
         top = max(c[0] for c in cands)
         tied = [c for c in cands if c[0] >= top - nothing]
+        if opt.nothing == 0:
+            return tied[0]
+        if home:
+            for i, c in enumerate(tied):
+                r_, p_, s_ = _home(c[1], c[2], c[0] + _penalty(c[1]))
+                if r_ is not c[1]:
+                    tied[i] = (s_ - _penalty(r_), r_, p_, *c[3:])
         if len(tied) == 1:
             return tied[0]
         hours = [_hours(c[1]) for c in tied]
@@ -864,7 +874,9 @@ def make_allocation_plan(
         first path that finds it); the UAVs of either credit below :data:`NOTHING` of the
         prior's mass are tried, longest flight first, and each kept home if the plan without it
         (and the ones already kept home) still finds within :data:`NOTHING` of the mass of what
-        it found: the plan loses less than that in all."""
+        it found: the plan loses less than that in all. As it is with ``options.nothing`` 0."""
+        if opt.nothing == 0:
+            return trial, t_pieces, score
         paths = [[takeoff[k], *trial[k], landing[k]] if trial[k] else [] for k in range(n)]
         fwd = sampled_sweep(sc, grid, full_prior, paths)[0]
         if all(f >= nothing for k, f in enumerate(fwd) if trial[k]):  # the common case
@@ -1034,7 +1046,7 @@ def make_allocation_plan(
             for was_refined in (True, False):
                 trial: list[list[list[float]]] = r_routes if was_refined else s_routes
                 score = _sampled_total(trial) if was_refined else sampled_of[name]
-                trial, t_pieces, score = _flown(trial, s_pieces, score)
+                trial, t_pieces, score = _with_fill(trial, s_pieces, score)
                 score -= _penalty(trial)
                 ranked.append((score, trial, t_pieces, name, was_refined))
         # the starts not refined are kept as they are if the environment's model scores them
@@ -1042,11 +1054,11 @@ def make_allocation_plan(
         for _, name, s_routes, s_pieces in starts:
             if any(name == t[1] for t in tried):
                 continue
-            f_routes, f_pieces, score = _flown(s_routes, s_pieces, sampled_of[name])
+            f_routes, f_pieces, score = _with_fill(s_routes, s_pieces, sampled_of[name])
             score -= _penalty(f_routes)
             ranked.append((score, f_routes, f_pieces, name, False))
         # the best by the environment's model; on a tie, the least flying (F1)
-        _, routes, pieces, start, refined = _pick(ranked)
+        _, routes, pieces, start, refined = _pick(ranked, home=True)
 
     def _polish(rs):
         """The polish stages in turn -- the polish, the second polish with the block moves too

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from poc_env.agents.planning.allocation import NOTHING, make_allocation_plan, sampled_sweep
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.config import load_scenario
 from poc_env.theory.probability_map import Grid
 
@@ -68,3 +69,14 @@ def test_every_uav_flown_adds_something_and_the_nearer_field_flies(scenario, cel
     # (b) on a tie on POS_C the least flying is kept: the field next to the sighting flies
     names = [f.takeoff for f in sc.fleet for _ in range(f.count)]
     assert flying and {names[k] for k in flying} == {field}, [names[k] for k in flying]
+
+
+def test_nothing_zero_flies_every_route_as_before():
+    """``PlanOptions(nothing=0)`` turns both off: on the ``paper_6_2`` one-sighting case the
+    plan flies UAVs that add nothing, as main did (UAV 1 from A 1.12 h, two B UAVs for 0.000)."""
+    sc = load_scenario("paper_6_2")
+    grid = Grid.from_config(sc.map)
+    prior = np.zeros(grid.shape)
+    prior[1, 24] = 1.0
+    plan = make_allocation_plan(sc, prior=prior, options=PlanOptions(nothing=0.0))
+    assert sum(bool(u["waypoints_m"]) and u["pos"] == 0.0 for u in plan["uavs"]) >= 1
