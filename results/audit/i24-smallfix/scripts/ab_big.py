@@ -6,12 +6,12 @@ size the digest, planned POS_C, UAVs flying and total flight hours. Run with mai
 branch's interpreter and compare.
 """
 
-import hashlib
 import json
-import os
 import sys
 import time
 from pathlib import Path
+
+from ab_f1 import record
 
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.config import load_scenario
@@ -21,18 +21,6 @@ for n in [int(a) for a in sys.argv[2:]]:
     sc = load_scenario("/tmp/dayaudit/big_3.125.yaml").with_uavs(n)
     t = time.perf_counter()
     p = make_allocation_plan(sc)
-    h = hashlib.sha256()
-    for u in p["uavs"]:
-        h.update(repr([[float(a), float(b)] for a, b in u["waypoints_m"]]).encode())
-    h.update(repr(float(p["posc"])).encode())
-    recs[str(n)] = {
-        "digest": h.hexdigest(),
-        "posc": p["posc"],
-        "start": p["start"],
-        "flying": sum(1 for u in p["uavs"] if u["waypoints_m"]),
-        "hours": sum(u["flight_time_s"] for u in p["uavs"]) / 3600,
-        "plan_s": time.perf_counter() - t,
-        "load": os.getloadavg()[0],
-    }
+    recs[str(n)] = record(p, t)
     print(n, recs[str(n)], flush=True)
     Path(sys.argv[1]).write_text(json.dumps(recs, indent=1))

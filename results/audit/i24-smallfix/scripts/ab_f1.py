@@ -6,7 +6,6 @@ the digest (as ``tests/planning/effort_ab.py digest``), planned POS_C, start, UA
 total flight hours. Run with main's and the branch's interpreter and compare the digests.
 """
 
-import hashlib
 import json
 import os
 import sys
@@ -17,33 +16,39 @@ import poc_env.agents.planning.allocation as al
 from poc_env.agents.experiments.evaluate import episode_prior
 from poc_env.config import load_scenario
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[4] / "tests" / "planning"))
+from effort_ab import _digest
+
 HERE = Path(__file__).resolve().parent.parent
 CASES = [("paper_6_2", s, None) for s in range(5000, 5010)] + [
     ("/tmp/dayaudit/s150.yaml", None, 64),
     (str(HERE / "sone_min.yaml"), None, None),
 ]
 
-recs = {}
-for name, seed, nu in CASES:
-    sc = load_scenario(name)
-    if nu:
-        sc = sc.with_uavs(nu)
-    prior = None if seed is None else episode_prior(sc, seed)
-    t = time.perf_counter()
-    p = al.make_allocation_plan(sc, prior=prior)
-    h = hashlib.sha256()
-    for u in p["uavs"]:
-        h.update(repr([[float(a), float(b)] for a, b in u["waypoints_m"]]).encode())
-    h.update(repr(float(p["posc"])).encode())
-    key = f"{os.path.basename(name)}:{seed}:{nu}"
-    recs[key] = {
-        "digest": h.hexdigest(),
+
+def record(p: dict, t0: float) -> dict:
+    """A plan's record: digest, planned POS_C, start, UAVs flying, flight hours, time, load."""
+    return {
+        "digest": _digest(p),
         "posc": p["posc"],
         "start": p["start"],
         "flying": sum(1 for u in p["uavs"] if u["waypoints_m"]),
         "hours": sum(u["flight_time_s"] for u in p["uavs"]) / 3600,
-        "plan_s": time.perf_counter() - t,
+        "plan_s": time.perf_counter() - t0,
         "load": os.getloadavg()[0],
     }
-    print(key, recs[key], flush=True)
-Path(sys.argv[1]).write_text(json.dumps(recs, indent=1))
+
+
+if __name__ == "__main__":
+    recs = {}
+    for name, seed, nu in CASES:
+        sc = load_scenario(name)
+        if nu:
+            sc = sc.with_uavs(nu)
+        prior = None if seed is None else episode_prior(sc, seed)
+        t = time.perf_counter()
+        p = al.make_allocation_plan(sc, prior=prior)
+        key = f"{os.path.basename(name)}:{seed}:{nu}"
+        recs[key] = record(p, t)
+        print(key, recs[key], flush=True)
+    Path(sys.argv[1]).write_text(json.dumps(recs, indent=1))

@@ -7,7 +7,6 @@ waypoint follower (``agents.testing.flights.fly``): digest, planned and flown PO
 flying, total flight hours, no-fly and collision steps.
 """
 
-import hashlib
 import json
 import os
 import sys
@@ -16,20 +15,12 @@ from pathlib import Path
 
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.options import PlanOptions
-from poc_env.agents.policies.base import PlanPolicy
 from poc_env.agents.testing.flights import fly
 from poc_env.config import load_scenario
 
-
-class Saved(PlanPolicy):
-    """A plan policy that flies a plan made before."""
-
-    def __init__(self, plan):
-        self._plan = plan
-
-    def make(self, env, prior, seed):
-        return self._plan
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[4] / "tests" / "planning"))
+from effort_ab import _digest
+from flyseeds import Saved
 
 out, n = sys.argv[1], int(sys.argv[2])
 sc = load_scenario("/tmp/dayaudit/big_3.125.yaml").with_uavs(n)
@@ -38,13 +29,9 @@ for name, opt in (("default", PlanOptions()), ("nothing=0", PlanOptions(nothing=
     t = time.perf_counter()
     p = make_allocation_plan(sc, options=opt)
     plan_s = time.perf_counter() - t
-    h = hashlib.sha256()
-    for u in p["uavs"]:
-        h.update(repr([[float(a), float(b)] for a, b in u["waypoints_m"]]).encode())
-    h.update(repr(float(p["posc"])).encode())
     r = fly(sc, Saved(p), seed=5000)
     recs[name] = {
-        "digest": h.hexdigest(),
+        "digest": _digest(p),
         "planned": p["posc"],
         "flown": r.posc,
         "flying": sum(1 for u in p["uavs"] if u["waypoints_m"]),

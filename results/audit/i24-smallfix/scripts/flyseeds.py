@@ -23,13 +23,14 @@ class Saved(PlanPolicy):
         return self._plan
 
 
-sc = load_scenario(sys.argv[1])
-for f in sys.argv[2:]:
-    p = json.loads(Path(f).read_text())
-    hours = sum(u["flight_time_s"] for u in p["uavs"]) / 3600
-    for seed in (0, 1, 2):
-        r = fly(sc, Saved(p), seed=seed)
-        print(
-            f, seed, f"planned={p['posc']:.6f} flown={r.posc:.4f} hours={hours:.2f} "
-            f"collision={r.collision_steps}", flush=True,
-        )  # fmt: skip
+if __name__ == "__main__":
+    sc = load_scenario(sys.argv[1])
+    for f in sys.argv[2:]:
+        p = json.loads(Path(f).read_text())
+        hours = sum(u["flight_time_s"] for u in p["uavs"]) / 3600
+        for seed in (0, 1, 2):
+            r = fly(sc, Saved(p), seed=seed)
+            print(
+                f, seed, f"planned={p['posc']:.6f} flown={r.posc:.4f} hours={hours:.2f} "
+                f"collision={r.collision_steps}", flush=True,
+            )  # fmt: skip

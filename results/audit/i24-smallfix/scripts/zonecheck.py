@@ -5,7 +5,6 @@ its TWO_ZONES, the allocation plan at the default and ``standard`` efforts and t
 rectangle plan: digest and planned POS_C, to compare main and the branch.
 """
 
-import hashlib
 import json
 import os
 import sys
@@ -16,6 +15,9 @@ from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.config import load_scenario
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[4] / "tests" / "planning"))
+from effort_ab import _digest
 
 ZONE = {"map.no_fly_zones_km": [[[15, 10], [25, 10], [25, 30], [15, 30]]]}
 TWO = {
@@ -33,12 +35,8 @@ for name, ov in [("small", ZONE), ("paper_6_2", TWO)]:
             p = make_greedy_rectangles_plan(sc)
         else:
             p = make_allocation_plan(sc, options=PlanOptions.preset(eff))
-        h = hashlib.sha256()
-        for u in p["uavs"]:
-            h.update(repr([[float(a), float(b)] for a, b in u["waypoints_m"]]).encode())
-        h.update(repr(float(p["posc"])).encode())
         recs[f"{name}:{eff}"] = {
-            "digest": h.hexdigest(),
+            "digest": _digest(p),
             "posc": p["posc"],
             "plan_s": time.perf_counter() - t,
             "load": os.getloadavg()[0],
