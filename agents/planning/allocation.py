@@ -889,9 +889,21 @@ def make_allocation_plan(
                  for k in tried}  # fmt: skip
         home: list[int] = []
         total = float(sum(fwd))
+        s_ = sc.sensor.samples_per_cell
+        cut = sc.sensor.cutoff_sweep_widths * w
+        base = np.ascontiguousarray(grid.refine(full_prior, s_))
+        mass = float(base.sum())
+        for j in range(n):  # the routes never tried swept once (eq. 14, as sampled_sweep)
+            if paths[j] and j not in tried:
+                sweep_track(base, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
+                            grid.cell_m)  # fmt: skip
         for k in sorted(tried, key=lambda k: -hours[k]):
-            without = [[] if j in home or j == k else trial[j] for j in range(n)]
-            if _sampled_total(without) >= total - nothing:
+            left = base.copy()  # the plan without k and the ones already home
+            for j in tried:
+                if j != k and j not in home:
+                    sweep_track(left, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
+                                grid.cell_m)  # fmt: skip
+            if mass - float(left.sum()) >= total - nothing:
                 home.append(k)
         if not home:
             return trial, t_pieces, score
