@@ -548,9 +548,11 @@ def plan_fleets(
 #: the fields of ``opt`` its default plan keeps (:func:`_best_of_default`): the keyword-level
 #: ones and every ``polish*`` field, so a polish option added later is kept without a change
 #: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
-#: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did).
+#: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did); and ``nothing``
+#: (i24-smallfix: ``nothing=0`` flies every route in both plans).
 _DEFAULT_KEPT = (
     "levels", "etas", "margin", "refine", "refine_starts", "greedy_start", "box_start",
+    "nothing",
     *(f.name for f in dataclasses.fields(PlanOptions)
       if f.name.startswith("polish") and f.name != "polish_starts"),
 )  # fmt: skip
