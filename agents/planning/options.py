@@ -239,6 +239,15 @@ class PlanOptions:
     #: deterministic size rule, no clock, so a preset keeps its time on large maps; elsewhere
     #: the plan is the unpolished one and its settings say why).
     polish_max_cells: int = 0
+    #: on maps of more than :attr:`polish_max_cells` cells a side the polish stages run anyway
+    #: within this work budget (i24-bigpolish; 0: they are skipped there, as before): they stop
+    #: once they have scored this many candidate steps together (the candidates' legs cut into
+    #: steps of at most a cell: the scoring kernel's work; a count, not a clock, so plans are
+    #: reproducible), with :attr:`polish_big_lines` passes of the second polish.
+    polish_big_work: int = 0
+    #: passes of the second polish on such maps (0: :attr:`polish_lines`); the budget usually
+    #: stops it first.
+    polish_big_lines: int = 0
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -293,6 +302,8 @@ class PlanOptions:
                         empty=True)  # fmt: skip
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
+        _number("polish_big_work", self.polish_big_work, 0, 1e12, integer=True)
+        _number("polish_big_lines", self.polish_big_lines, 0, 100, integer=True)
         _number("regrade", self.regrade, 0, 100, integer=True)
         _number("zone_reach", self.zone_reach, 0.0, 16.0, closed_low=False)
         if self.regrade_at not in ("first", "between", "end"):
@@ -377,4 +388,9 @@ STANDARD: dict[str, Any] = {
     "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
     "polish_lines_windows": (2, 4),
     "polish_max_cells": 80,
+    # i24-bigpolish: above 80 cells a side the same stages, the second polish up to 12 passes,
+    # stopped after 15 million candidate steps scored (about 47 s of one core on the 500 km
+    # scenario, 160 x 160 cells, 24 UAVs: docs/PLANNER.md, "Standard on big maps")
+    "polish_big_work": 15_000_000,
+    "polish_big_lines": 12,
 }
