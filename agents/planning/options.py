@@ -14,7 +14,10 @@ wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and `
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
 ``"standard"`` (i24-fastpolish, i24-cheapolish) is the default plan polished (1 pass with the
 grade moves, 2 of the second polish at radii W/8-2W with the block moves on windows of 1 and
-2 lawnmower lines) on maps of at most 80 cells a side: within 2 s on ``paper_6_2`` (2.9 times
+2 lawnmower lines) on maps of at most 80 cells a side -- on larger ones the same stages, the
+second polish up to 12 passes, within a work budget of 12 million candidate steps
+(i24-bigpolish: about a minute of one core at 160 x 160 cells and 24 UAVs; docs/PLANNER.md,
+"Standard on big maps") --: within 2 s on ``paper_6_2`` (2.9 times
 the default's CPU time, median; docs/PLANNER.md, "Cheaper candidates (i24-cheapolish)"; before
 it 2 passes and 1 of the second polish at the polish's radii, flown 0.887 of the rule-aware
 bound on the 50 reported priors against the default's 0.852: "A faster polish
@@ -377,8 +380,8 @@ THOROUGH: dict[str, Any] = {
 #: the ``standard`` effort level's changes to the defaults (i24-fastpolish: the default plan
 #: polished, the most POS within the issue's 2 s on ``paper_6_2``, chosen on its validation
 #: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"; its passes and candidates
-#: chosen again by i24-cheapolish, "Cheaper candidates"); only on maps of at most 80 cells a
-#: side (the 160 x 160 timing case keeps the default plan and its time).
+#: chosen again by i24-cheapolish, "Cheaper candidates"); as chosen on maps of at most 80
+#: cells a side, on larger ones within a work budget (i24-bigpolish).
 STANDARD: dict[str, Any] = {
     "polish": 1,
     "polish_grade": True,
@@ -389,8 +392,8 @@ STANDARD: dict[str, Any] = {
     "polish_lines_windows": (2, 4),
     "polish_max_cells": 80,
     # i24-bigpolish: above 80 cells a side the same stages, the second polish up to 12 passes,
-    # stopped after 15 million candidate steps scored (about 47 s of one core on the 500 km
+    # stopped after 12 million candidate steps scored (about 40 s of one core on the 500 km
     # scenario, 160 x 160 cells, 24 UAVs: docs/PLANNER.md, "Standard on big maps")
-    "polish_big_work": 15_000_000,
+    "polish_big_work": 12_000_000,
     "polish_big_lines": 12,
 }
