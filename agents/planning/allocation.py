@@ -1025,7 +1025,7 @@ def make_allocation_plan(
                     left -= stats["work"]
             st0 = out[2]
             # i24-bigpolish: the budget's steps scored and whether it stopped a stage
-            spent: dict[str, Any] = {}
+            spent = {}
             if "work" in stats:
                 spent = {"work": st0.get("work", 0) + stats["work"],
                          "spent": bool(st0.get("spent")) or stats["spent"]}  # fmt: skip

@@ -18,11 +18,11 @@ import time
 from collections import defaultdict
 
 sys.path.insert(0, "tests/planning")
-from effort_ab import _options  # noqa: E402
+from effort_ab import _options
 
-from poc_env.agents.planning import allocation  # noqa: E402
-from poc_env.config import load_scenario  # noqa: E402
-from poc_env.theory.probability_map import build_prior  # noqa: E402
+from poc_env.agents.planning import allocation
+from poc_env.config import load_scenario
+from poc_env.theory.probability_map import build_prior
 
 _real = allocation.polish_for
 calls: list[dict] = []
@@ -35,7 +35,8 @@ def traced(*a, **kw):
         out = _real(*a, **kw)
         calls.append({"stage": "regrade", "cpu": time.process_time() - t0})
         return out
-    rec = {"stage": ",".join(kw.get("moves", ())), "passes": defaultdict(lambda: defaultdict(float))}
+    passes = defaultdict(lambda: defaultdict(float))
+    rec = {"stage": ",".join(kw.get("moves", ())), "passes": passes}
     last = [time.process_time()]
 
     def trace(kind, p, k, i, window, n, kept, gain):

@@ -12,11 +12,11 @@ import sys
 import time
 
 sys.path.insert(0, "results/plan_scale/i24-deconflict")
-from repro import flown_collisions  # noqa: E402
+from repro import flown_collisions
 
-from poc_env.agents.policies.registry import make_policy  # noqa: E402
-from poc_env.config import load_scenario  # noqa: E402
-from poc_env.theory.probability_map import build_prior  # noqa: E402
+from poc_env.agents.policies.registry import make_policy
+from poc_env.config import load_scenario
+from poc_env.theory.probability_map import build_prior
 
 sc = load_scenario(sys.argv[1])
 prior = build_prior(sc.map)
