@@ -23,7 +23,7 @@ from poc_env.agents.mission.plan import (
     flight,
     route,
 )
-from poc_env.agents.mission.terrain import from_record, plan_profiles
+from poc_env.agents.mission.terrain import DESCENT_KIND, from_record, plan_profiles
 from poc_env.crs import densify_ring
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
@@ -285,14 +285,20 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
     terrain = from_record(rec) if rec is not None else None
     for k, u in enumerate(plan["uavs"]):
         app_z = [approach_altitude(alt, ground), ground]
-        if profs is not None:  # from the terrain profile's last point to the field
-            app_z = [float(profs[k].amsl_m[-1]), profs[k].landing_field_m]
+        app = approach_point(u, plan.get("no_fly_zones_m"))
+        pk = profs[k] if profs is not None else None
+        dsc = pk.descent if pk is not None else None
+        if pk is not None:  # from the terrain profile's last point to the field
+            app_z = [float(pk.amsl_m[-1]), pk.landing_field_m]
+            turned = pk.points_m[-1]  # turned round the field where the glide needs it
+            if float(np.hypot(*(turned - np.asarray(app)))) > 1.0:
+                app = turned.tolist()
+            if dsc is not None:  # the glide from the descent orbit's exit
+                app, app_z = list(dsc.exit_m), [float(dsc.orbit.to_m), pk.landing_field_m]
         out.append(
             {
                 "geometry": "LineString",
-                "latlon": to_geographic(
-                    [approach_point(u, plan.get("no_fly_zones_m")), u["landing_m"]], crs
-                ),
+                "latlon": to_geographic([app, u["landing_m"]], crs),
                 "z": app_z,
                 "properties": {
                     "id": u["id"],
@@ -303,6 +309,25 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
                 },
             }
         )
+        if dsc is not None:  # the descent orbit at the approach point (terrain.descent_orbit)
+            xy, zs = dsc.points()
+            o = dsc.orbit
+            out.append(
+                {
+                    "geometry": "LineString",
+                    "latlon": to_geographic(xy.tolist(), crs),
+                    "z": [round(float(v), 1) for v in zs],
+                    "properties": {
+                        "id": u["id"],
+                        "kind": DESCENT_KIND,
+                        "name": f"UAV {u['id']} descent orbit at the landing approach point",
+                        "radius_km": round(o.radius_m / 1e3, 3),
+                        "from_m": round(o.from_m, 1),
+                        "to_m": round(o.to_m, 1),
+                        "minutes": round(dsc.time_s / 60.0, 1),
+                    },
+                }
+            )
         sp = profs[k].climb if profs is not None else None
         if sp is not None:  # the climb spiral over the take-off field (terrain.climb_spiral)
             xy, zs = sp.points()
