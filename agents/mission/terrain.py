@@ -1081,7 +1081,9 @@ def descent_orbit(
     )
 
 
-def landing_profile(t: Terrain, u: Any, zones: Any, where: str, speed_mps: float) -> Profile:
+def landing_profile(
+    t: Terrain, u: Any, zones: Any, where: str, speed_mps: float, area: Any = None
+) -> Profile:
     """A UAV's :func:`profile` with the final glide it can fly (i24-glide; probe 13 of
     results/audit/dayaudit).
 
@@ -1089,9 +1091,12 @@ def landing_profile(t: Terrain, u: Any, zones: Any, where: str, speed_mps: float
     :func:`~poc_env.agents.mission.plan.approach_point`. Only where that glide cannot keep the
     ground (:class:`GlideError`), the sides of the landing field are searched, nearest first
     (:func:`~poc_env.agents.mission.plan.approach_sides`, 15 degree steps, clear of the no-fly
-    ``zones``, the approach and its orbit on the terrain grid): on each, a straight glide from
-    it, then a descent orbit at it (:func:`descent_orbit`); the first that flies is taken. Only
-    the UAV's own attempt's warnings are said.
+    ``zones``, the approach and its orbit on the terrain grid and inside the operating area
+    ``area``, the QGC inclusion fence): on each, a straight glide from it, then a descent
+    orbit at it (:func:`descent_orbit`); the first that flies with a glide no steeper than
+    :data:`~poc_env.agents.mission.plan.LANDING_GLIDE` (PX4's default FW_LND_ANG accepts it)
+    is taken, else the first that flies (its :class:`SteepGlideWarning` said). Only the
+    attempt taken says its warnings.
 
     Raises
     ------
@@ -1107,26 +1112,37 @@ def landing_profile(t: Terrain, u: Any, zones: Any, where: str, speed_mps: float
     layer = u.get("layer_m", 0.0)
     land = u["landing_m"]
 
-    def attempt(app: Any, loiter: bool) -> Profile:
+    def attempt(app: Any, loiter: bool, steep: bool) -> Profile:
         with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")  # the caller's filters decide when said below
             prof = profile(t, [*path[:-1], app], where, land, layer, speed_mps, loiter)
+        if not steep and any(issubclass(w.category, SteepGlideWarning) for w in said):
+            raise GlideError(where, "a glide steeper than the flat export's", "a gentler one")
         for w in said:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         return prof
 
     try:
-        return attempt(path[-1], False)
+        return attempt(path[-1], False, True)
     except GlideError as err:
         first = err
+    from shapely.geometry import Point, Polygon
+
     x0, y0, x1, y1 = t.bounds
     r = orbit_radius(t, speed_mps, layer)
+    fence = Polygon(area).buffer(1.0) if area else None
     sides = approach_sides(u, zones)
-    for app in sides:
-        if not (x0 + r <= app[0] <= x1 - r and y0 + r <= app[1] <= y1 - r):
-            continue
-        for loiter in (True,) if app == path[-1] else (False, True):
+    tries = [
+        (app, loiter)
+        for app in sides
+        if x0 + r <= app[0] <= x1 - r and y0 + r <= app[1] <= y1 - r
+        for loiter in ((True,) if app == path[-1] else (False, True))
+        if fence is None or fence.covers(Point(app).buffer(r if loiter else 0.0))
+    ]
+    for steep in (False, True):
+        for app, loiter in tries:
             try:
-                return attempt(app, loiter)
+                return attempt(app, loiter, steep)
             except ConfigError:  # this side does not fly (its last leg, its glide, its orbit)
                 continue
     raise ConfigError(
@@ -1332,7 +1348,7 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
             continue
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
-        p = landing_profile(t, u, zones, where, speed)
+        p = landing_profile(t, u, zones, where, speed, plan.get("operating_area_m"))
         if p.descent is not None:
             _check_orbit_time(t, p, float(u["flight_time_s"]), where)
         elif p.climb is not None:
