@@ -140,21 +140,23 @@ def test_no_side_of_the_field_clears_refused_naming_the_uav(tmp_path, bowl_plan)
         assert not (tmp_path / fmt).exists()
 
 
-def test_field_mates_orbits_are_kept_apart_by_their_layers(tmp_path, bowl_plan):
+def test_field_mates_orbits_are_kept_apart_by_their_layers(tmp_path, bowl_plan, capsys):
     """Both UAVs of ``valley`` climb on a spiral over it (a ring 2.5-4.5 km out; the plan's
-    fields edited: both take off at ``valley`` and land at ``bowl``): without layers
-    they orbit one circle (docs/missions.md says so); with ``--separation-m S`` UAV k' orbits
-    ``k' x S`` wider, so every point of one orbit is at least S from every point of the
-    other."""
+    fields edited: both take off at ``valley`` and land at ``bowl``): without layers they
+    orbit one circle, and the export says so (a warning naming both); with ``--separation-m
+    S`` UAV k' orbits ``k' x S`` wider, so every point of one orbit is at least S from every
+    point of the other."""
     plan = _ring(bowl_plan, VALLEY_KM, 2.5, 4.5, VALLEY_M + 1200.0)
     start = [float(v) * 1e3 for v in VALLEY_KM]
     bowl = [float(v) * 1e3 for v in BOWL_KM]  # both land at bowl (the ring is on no glide)
     plan = {**plan, "uavs": [{**u, "takeoff_m": start, "landing_m": bowl} for u in plan["uavs"]]}
     write_plan(plan, tmp_path / "plan.json")
     sep = 30.0
-    radii = {}
+    radii, said = {}, {}
     for tag, opts in (("flat", {}), ("lay", {"separation_m": sep})):
+        capsys.readouterr()
         export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / tag, **opts)
+        said[tag] = capsys.readouterr().out
         export_plan(tmp_path / "plan.json", "geojson", out_dir=tmp_path / f"{tag}_gj", **opts)
         radii[tag] = []
         for u in plan["uavs"]:
@@ -163,7 +165,10 @@ def test_field_mates_orbits_are_kept_apart_by_their_layers(tmp_path, bowl_plan):
                 it for it in doc["mission"]["items"] if it["command"] == MAV_CMD_NAV_LOITER_TO_ALT
             ]
             radii[tag].append(orbit["params"][1])
-    assert radii["flat"][0] == radii["flat"][1]  # without layers: one circle
+    assert radii["flat"][0] == radii["flat"][1]  # without layers: one circle, said
+    ids = ", ".join(str(u["id"]) for u in plan["uavs"])
+    assert f"warning: UAVs {ids} fly one climb spiral over the take-off field" in said["flat"]
+    assert "climb spiral" not in said["lay"]
     assert abs(radii["lay"][1] - radii["lay"][0]) >= sep - 0.1
     gj = json.loads(next((tmp_path / "lay_gj").glob("*.geojson")).read_text())
     orbits = [f for f in gj["features"] if f["properties"]["kind"] == "climb_spiral"]
