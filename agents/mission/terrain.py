@@ -1131,7 +1131,10 @@ def landing_profile(
     x0, y0, x1, y1 = t.bounds
     r = orbit_radius(t, speed_mps, layer)
     fence = Polygon(area).buffer(1.0) if area else None
-    sides = approach_sides(u, zones)
+    sides: list[list[float]] = []
+    for side in approach_sides(u, zones):  # +-180 deg: one side
+        if all(math.dist(side, other) > 1.0 for other in sides):
+            sides.append(side)
     tries = [
         (app, loiter)
         for app in sides
