@@ -267,6 +267,19 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     return out
 
 
+def _orbit_line(
+    u: Any, kind: str, what: str, xy: np.ndarray, zs: np.ndarray, crs: Any, **props: Any
+) -> dict[str, Any]:
+    """An orbit flown over a field (a climb spiral, a descent orbit) as an overlay line: its
+    points at their AMSL altitudes, ``kind`` and ``props`` in its properties."""
+    return {
+        "geometry": "LineString",
+        "latlon": to_geographic(xy.tolist(), crs),
+        "z": [round(float(v), 1) for v in zs],
+        "properties": {"id": u["id"], "kind": kind, "name": f"UAV {u['id']} {what}", **props},
+    }
+
+
 def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, Any]]:
     """What GeoJSON, KML and the map report draw beside the routes and search areas.
 
@@ -310,44 +323,20 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             }
         )
         if dsc is not None:  # the descent orbit at the approach point (terrain.descent_orbit)
-            xy, zs = dsc.points()
             o = dsc.orbit
-            out.append(
-                {
-                    "geometry": "LineString",
-                    "latlon": to_geographic(xy.tolist(), crs),
-                    "z": [round(float(v), 1) for v in zs],
-                    "properties": {
-                        "id": u["id"],
-                        "kind": DESCENT_KIND,
-                        "name": f"UAV {u['id']} descent orbit at the landing approach point",
-                        "radius_km": round(o.radius_m / 1e3, 3),
-                        "from_m": round(o.from_m, 1),
-                        "to_m": round(o.to_m, 1),
-                        "minutes": round(dsc.time_s / 60.0, 1),
-                    },
-                }
-            )
+            out.append(_orbit_line(
+                u, DESCENT_KIND, "descent orbit at the landing approach point", *dsc.points(),
+                crs, radius_km=round(o.radius_m / 1e3, 3), from_m=round(o.from_m, 1),
+                to_m=round(o.to_m, 1), minutes=round(dsc.time_s / 60.0, 1),
+            ))  # fmt: skip
         sp = profs[k].climb if profs is not None else None
         if sp is not None:  # the climb spiral over the take-off field (terrain.climb_spiral)
-            xy, zs = sp.points()
-            out.append(
-                {
-                    "geometry": "LineString",
-                    "latlon": to_geographic(xy.tolist(), crs),
-                    "z": [round(float(v), 1) for v in zs],
-                    "properties": {
-                        "id": u["id"],
-                        "kind": CLIMB_KIND,
-                        "name": f"UAV {u['id']} climb spiral over the take-off field",
-                        "radius_km": round(sp.radius_m / 1e3, 3),
-                        "turns": round(sp.turns, 2),
-                        "from_m": round(sp.from_m, 1),
-                        "to_m": round(sp.to_m, 1),
-                        "minutes": round(sp.time_s / 60.0, 1),
-                    },
-                }
-            )
+            out.append(_orbit_line(
+                u, CLIMB_KIND, "climb spiral over the take-off field", *sp.points(), crs,
+                radius_km=round(sp.radius_m / 1e3, 3), turns=round(sp.turns, 2),
+                from_m=round(sp.from_m, 1), to_m=round(sp.to_m, 1),
+                minutes=round(sp.time_s / 60.0, 1),
+            ))  # fmt: skip
     for a in plan.get("airfields") or []:
         out.append(
             {

@@ -33,7 +33,7 @@ from poc_env.agents.mission.terrain import (
     plan_profiles,
 )
 from poc_env.agents.planning.planner import make_plan
-from poc_env.agents.testing.terrain import VALLEY_M, wall_scenario
+from poc_env.agents.testing.terrain import VALLEY_M, cell_centres, wall_scenario
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
@@ -58,12 +58,7 @@ def _ring(plan: dict, centre_km: tuple, r0_km: float, r1_km: float, height_m: fl
     """``plan`` with ground ``height_m`` (both layers) in every cell whose centre lies
     ``r0_km``-``r1_km`` from ``centre_km``."""
     rec = dict(plan["terrain"])
-    ny, nx = np.asarray(rec["ground_m"]).shape
-    cell = float(rec["cell_m"])
-    gx, gy = np.meshgrid(
-        rec["origin_m"][0] + (np.arange(nx) + 0.5) * cell,
-        rec["origin_m"][1] + (np.arange(ny) + 0.5) * cell,
-    )
+    gx, gy = cell_centres(rec)
     d = np.hypot(gx - centre_km[0] * 1e3, gy - centre_km[1] * 1e3)
     on = (d >= r0_km * 1e3) & (d <= r1_km * 1e3)
     for key in ("ground_m", "ground_max_m"):

@@ -1,0 +1,28 @@
+"""Probe 13: for UAVs 3 and 4, what each approach side gives (straight glide / descent orbit)."""
+import json, math, warnings
+import numpy as np
+from poc_env.agents.mission.plan import approach_sides, flight
+from poc_env.agents.mission.terrain import from_record, mission_path, profile, SteepGlideWarning
+from poc_env.errors import ConfigError
+plan = json.load(open("swall.json"))
+t = from_record(plan["terrain"])
+v = flight(plan)["transit_speed_mps"]
+for k in (2, 3):
+    u = plan["uavs"][k]
+    path = mission_path(u, plan.get("no_fly_zones_m"))
+    land = np.asarray(u["landing_m"], float)
+    first = None
+    for app in approach_sides(u, plan.get("no_fly_zones_m"))[:9]:
+        ang = math.degrees(math.atan2(app[1] - land[1], app[0] - land[0]))
+        first = ang if first is None else first
+        row = []
+        for loiter in (False, True):
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always")
+                try:
+                    profile(t, [*path[:-1], app], "x", land, 0.0, v, loiter)
+                    steep = any(issubclass(w.category, SteepGlideWarning) for w in said)
+                    row.append("steep" if steep else "flies")
+                except ConfigError as e:
+                    row.append("no")
+        print(f"UAV {u['id']} side {(ang - first + 180) % 360 - 180:+.0f} deg: straight {row[0]}, orbit {row[1]}")
