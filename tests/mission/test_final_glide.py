@@ -79,7 +79,7 @@ def test_a_glide_over_high_ground_lands_on_a_descent_orbit(tmp_path, bowl_plan):
     profs = plan_profiles(loaded)
     field = np.asarray(BOWL_KM) * 1e3
     bowl = [k for k, u in enumerate(plan["uavs"]) if np.allclose(u["landing_m"], field)]
-    assert profs is not None and bowl  # the planner sends one UAV home, the other to bowl
+    assert profs is not None and bowl  # the UAVs the plan lands at bowl
     assert all((profs[k].descent is not None) == (k in bowl) for k in range(len(profs)))
     for p in (profs[k] for k in bowl):
         d = p.descent
