@@ -1,10 +1,22 @@
-"""Probe 13: for UAVs 3 and 4, what each approach side gives (straight glide / descent orbit)."""
-import json, math, warnings
+"""Probe 13: for UAVs 3 and 4, what each of the 9 nearest approach sides gives.
+
+Usage (in the work folder holding swall.json): python sides.py
+Per side (turned from approach_point's): a straight glide and a descent orbit, each ``flies``,
+``steep`` (flies with a glide steeper than the flat export's, warned) or ``no`` (refused).
+"""
+
+import json
+import math
+import warnings
+from pathlib import Path
+
 import numpy as np
+
 from poc_env.agents.mission.plan import approach_sides, flight
-from poc_env.agents.mission.terrain import from_record, mission_path, profile, SteepGlideWarning
+from poc_env.agents.mission.terrain import SteepGlideWarning, from_record, mission_path, profile
 from poc_env.errors import ConfigError
-plan = json.load(open("swall.json"))
+
+plan = json.loads(Path("swall.json").read_text())
 t = from_record(plan["terrain"])
 v = flight(plan)["transit_speed_mps"]
 for k in (2, 3):
@@ -23,6 +35,7 @@ for k in (2, 3):
                     profile(t, [*path[:-1], app], "x", land, 0.0, v, loiter)
                     steep = any(issubclass(w.category, SteepGlideWarning) for w in said)
                     row.append("steep" if steep else "flies")
-                except ConfigError as e:
+                except ConfigError:
                     row.append("no")
-        print(f"UAV {u['id']} side {(ang - first + 180) % 360 - 180:+.0f} deg: straight {row[0]}, orbit {row[1]}")
+        turn = (ang - first + 180) % 360 - 180
+        print(f"UAV {u['id']} side {turn:+.0f} deg: straight {row[0]}, orbit {row[1]}")
