@@ -24,7 +24,7 @@ for k in (2, 3):
     path = mission_path(u, plan.get("no_fly_zones_m"))
     land = np.asarray(u["landing_m"], float)
     first = None
-    for app in approach_sides(u, plan.get("no_fly_zones_m"))[:9]:
+    for app in list(approach_sides(u, plan.get("no_fly_zones_m")))[:9]:
         ang = math.degrees(math.atan2(app[1] - land[1], app[0] - land[0]))
         first = ang if first is None else first
         row = []
