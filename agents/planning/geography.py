@@ -202,6 +202,9 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
     bad = [k for k, (u, p) in enumerate(zip(plan["uavs"], profs)) if over(u, p)]
     if not bad:
         return plan
+    import shapely
+
+    from poc_env.agents.mission.formats.qgc import zone_crossed
     from poc_env.agents.planning.allocation import _swept_areas, sampled_sweep
     from poc_env.agents.planning.flight_rules import Speeds, reserve_s
     from poc_env.agents.planning.refine import route_fits, route_time
@@ -222,6 +225,7 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
     out = {**plan, "uavs": uavs}
     dropped: dict[str, dict[str, Any]] = {}
     turn, reserve = u_cfg.max_turn_rate_rad_s, reserve_s(sc)
+    zones = [shapely.Polygon(z) for z in plan.get("no_fly_zones_m") or []]
 
     def trial(k: int, wps: list) -> tuple[dict[str, Any], Any, bool]:
         """UAV ``k`` flying ``wps``: its record, profile, and whether flight + orbits fit
@@ -234,9 +238,15 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
             "track_length_m": float(np.hypot(*np.diff(path, axis=0).T).sum()) if wps else 0.0,
         }
         # named plan.uavs[k] if refused; the UAVs before it read from the memo
-        p = plan_profiles({**out, "uavs": [*uavs[:k], u]}, charge=False)[k]  # type: ignore[index]
-        ok = not over(u, p) and (
-            not wps or route_fits(path, v, turn, usable - orbit_time_s(p), reserve, heads[k])
+        try:
+            p = plan_profiles({**out, "uavs": [*uavs[:k], u]}, charge=False)[k]  # type: ignore[index]
+        except ConfigError:  # this end of the route lands nowhere: not a fit
+            return u, None, False
+        mission = [*path[:-1].tolist(), p.points_m[-1].tolist(), list(u["landing_m"])]
+        ok = (
+            not over(u, p)
+            and zone_crossed(mission, zones) is None  # the export's geofence (check_fences)
+            and (not wps or route_fits(path, v, turn, usable - orbit_time_s(p), reserve, heads[k]))
         )
         return u, p, ok
 
