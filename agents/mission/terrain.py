@@ -1365,7 +1365,10 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
         p = landing_profile(t, u, zones, where, speed, plan.get("operating_area_m"))
-        over = t.usable_endurance_s is not None and u["flight_time_s"] > t.usable_endurance_s + 1e-6
+        f = u.get("flight_time_s")  # (the greedy baseline's routes record none)
+        over = (
+            t.usable_endurance_s is not None and f is not None and f > t.usable_endurance_s + 1e-6
+        )
         if not charge or over:  # the flight itself is over: the over-endurance check's
             pass
         elif p.descent is not None:
