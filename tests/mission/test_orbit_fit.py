@@ -66,8 +66,12 @@ def test_a_route_that_needs_a_descent_orbit_is_trimmed_to_fit(tmp_path, plans):
         assert u["flight_time_s"] + orbit_time_s(p) <= usable + 1e-6
         if u["id"] in trimmed:  # planned to the full 0.85 T: the orbit did not fit before
             assert f["flight_time_s"] + orbit_time_s(p) > usable
-            assert u["waypoints_m"] != f["waypoints_m"]
-            assert u["waypoints_m"][:-1] == f["waypoints_m"][: len(u["waypoints_m"]) - 1]
+            n = len(u["waypoints_m"])
+            assert u["waypoints_m"][:-1] == f["waypoints_m"][: n - 1]  # the route's start kept
+            share = ring["orbit_fit"]["uavs"][str(u["id"])]["last_leg_kept"]
+            assert 0.0 < share < 1.0  # and the last leg flown part of the way
+            a, q = np.asarray(f["waypoints_m"][n - 2]), np.asarray(f["waypoints_m"][n - 1])
+            assert u["waypoints_m"][-1] == pytest.approx((a + share * (q - a)).tolist())
     # POS_C of the routes kept, by the allocation's scorer, below the untrimmed plan's
     grid = Grid.from_config(sc.map)
     pos, _ = sampled_sweep(
