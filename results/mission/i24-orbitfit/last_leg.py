@@ -1,7 +1,7 @@
 """i24-orbitfit: what the last-leg bisection keeps, against whole waypoints only, on the test's
 valley -> bowl case (the 3,100 m ring 6-8 km round bowl) and case 104's allocation plan.
 
-Usage: python results/mission/i24-orbitfit/bisect.py
+Usage: python results/mission/i24-orbitfit/last_leg.py
 """
 
 import sys
