@@ -1339,9 +1339,9 @@ def build_parser() -> argparse.ArgumentParser:
         default=0.0,
         metavar="S",
         help="vertical separation: UAV k' of each field (--layer-by) flies k' x S m above the "
-        "plan's altitude, take-off to the landing approach (a take-off climb spiral over "
-        "terrain is not layered: its altitudes come from the ground, and the layer starts "
-        "after it); 0: one altitude for all, else 1 to 1000 m (docs/EXPORT.md, 'Altitude "
+        "plan's altitude, take-off to the landing approach (a climb spiral or descent orbit "
+        "over terrain keeps the ground's altitudes; the layer widens its radius by k' S "
+        "instead); 0: one altitude for all, else 1 to 1000 m (docs/EXPORT.md, 'Altitude "
         "layers')",
     )
     p.add_argument(
