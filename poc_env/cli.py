@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import itertools
 import os
 import sys
 import warnings
@@ -848,12 +849,11 @@ def fleet_sizes(text: str) -> list[int]:
     tokens = [t.strip() for t in str(text).split(",")]
     sizes = []
     for i, t in enumerate(tokens):
-        try:
-            n = int(t)
-        except ValueError:
-            n = t  # named below with what is allowed
-        sizes.append(as_int(f"fleet_sizes[{i}]", n, 1, MAX_FLEET))
-    if any(b <= a for a, b in zip(sizes, sizes[1:], strict=False)):
+        value: int | str = t  # not a whole number: named by as_int with what is allowed
+        with contextlib.suppress(ValueError):
+            value = int(t)
+        sizes.append(as_int(f"fleet_sizes[{i}]", value, 1, MAX_FLEET))
+    if any(b <= a for a, b in itertools.pairwise(sizes)):
         raise ConfigError(
             "fleet_sizes", text, f"fleet sizes in increasing order, each in [1, {MAX_FLEET}], "
             "comma-separated (e.g. 6,12,24)",

@@ -5,6 +5,7 @@ plan file per size, one table; bad size lists refused before anything is written
 On ``small`` the default plan of 9 UAVs planned alone finds less than that of 8 (0.8862
 against 0.8871): a table of independent plans would fall there."""
 
+import itertools
 import json
 import re
 
@@ -43,7 +44,7 @@ def test_the_table_never_falls_and_each_size_has_its_plan_file(fleet_run):
     folder, rows, text = fleet_run
     assert [int(r[0]) for r in rows] == list(SIZES)
     posc = [float(r[1]) for r in rows]
-    assert all(b >= a for a, b in zip(posc, posc[1:], strict=False)), text
+    assert all(b >= a for a, b in itertools.pairwise(posc)), text
     # one file per size, nothing else (no plan.json itself)
     assert sorted(p.name for p in folder.iterdir()) == [f"plan_n{n}.json" for n in SIZES]
     for n, row in zip(SIZES, rows, strict=True):
@@ -95,8 +96,10 @@ def test_a_written_plan_exports_and_flies_as_any_plan(fleet_run, tmp_path, fly):
         (["--fleet-sizes", "4,6", "--uavs", "4"], "uavs: got 4; allowed: either --uavs or"),
         (["--fleet-sizes", "4,6", "--effort", "thorough"], "effort: got 'thorough'"),
         (["--fleet-sizes", "4,6", "--plot", "p.png"], "plot: got"),
-        (["--fleet-sizes", "4,6", "--overrides", "fleet=[]"], "fleet_sizes: got '4,6'; allowed: "
-         "either --fleet-sizes or --overrides fleet"),
+        (
+            ["--fleet-sizes", "4,6", "--overrides", "fleet=[{takeoff: A, count: 2}]"],
+            "fleet_sizes: got '4,6'; allowed: either --fleet-sizes or --overrides fleet",
+        ),
     ],
 )
 def test_a_refused_size_list_writes_nothing(tmp_path, capsys, monkeypatch, extra, message):
