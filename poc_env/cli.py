@@ -1300,6 +1300,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=examples(
             "poc-env plan --out out/plan.json --plot out/plan.png --origin -45.5,126.6",
             "poc-env plan --scenario small --planner allocation --out out/plan.json",
+            "poc-env plan --scenario small --planner allocation --fleet-sizes 3,6,12 "
+            "--out out/plan.json",
             "poc-env plan --overrides sensor.sweep_width_km=4 --uavs 4 --optimizer cmaes "
             "--maxiter 50",
         ),
