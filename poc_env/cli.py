@@ -1311,10 +1311,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--uavs",
         type=int,
         default=None,
-        help="number of UAVs, spread round-robin over the scenario's airfields, each landing "
-        "where it took off (default: the scenario's fleet). To compare fleet sizes: one plan "
-        "per size can plan a larger fleet a little less; the Python API's plan_fleets plans "
-        "each size on the one before, never less (docs/PLANNER.md, 'Larger fleets')",
+        help="number of UAVs (default: the scenario's fleet). The fleet's own take-off/landing "
+        "pairs come first, one from each of its groups in turn, so N equal to the fleet's size is "
+        "the fleet itself; UAVs beyond it take off from the airfields in turn and land there. To "
+        "compare fleet sizes: one plan per size can plan a larger fleet a little less; the "
+        "Python API's plan_fleets plans each size on the one before, never less "
+        "(docs/PLANNER.md, 'Larger fleets')",
     )
     p.add_argument(
         "--optimizer",
@@ -1498,8 +1500,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=0.0,
         metavar="S",
         help="vertical separation: UAV k' of each field (--layer-by) flies k' x S m above the "
-        "plan's altitude, take-off to the landing approach; 0: one altitude for all "
-        "(docs/EXPORT.md, 'Altitude layers')",
+        "plan's altitude, take-off to the landing approach; 0: one altitude for all, else "
+        "1 to 1000 m (docs/EXPORT.md, 'Altitude layers')",
     )
     p.add_argument(
         "--layer-by",

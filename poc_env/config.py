@@ -903,15 +903,52 @@ class Scenario:
         )
 
     def with_uavs(self, n: int) -> Scenario:
-        """The same scenario with ``n`` UAVs spread over the airfields round-robin."""
+        """The same scenario with ``n`` UAVs, the fleet's own take-off/landing pairs first.
+
+        The fleet's UAVs are taken one from each group in turn (round-robin over ``fleet``, a
+        group left out once its own count is used): ``n`` up to the fleet's size are the first
+        ``n`` of that order, so ``n`` equal to the fleet's size is the fleet itself and each
+        UAV lands where its group lands (i24-smallfix, F4: before, every UAV was spread over
+        the airfields and landed where it took off, the fleet's landing fields dropped). Beyond
+        the fleet's size, UAV ``j`` (from 0) takes off from airfield ``j mod A`` (the
+        scenario's ``A`` airfields in order) and lands there, as before. Where the fleet spreads
+        evenly over the airfields in their order and lands where it took off (every built-in
+        scenario's fleet), the fleets are the same as before for every ``n``.
+
+        Parameters
+        ----------
+        n : int
+            The number of UAVs, 1 to ``MAX_UAVS``.
+
+        Returns
+        -------
+        Scenario
+            The scenario with ``fleet`` replaced: the fleet's groups in its order with their
+            new counts, the UAVs beyond the fleet added to the group that takes off from and
+            lands at their airfield, else in a new group after them (empty groups left out).
+        """
         n = as_int("uavs", n, 1, MAX_UAVS)
-        counts = [0] * len(self.airfields)
-        for i in range(n):
-            counts[i % len(self.airfields)] += 1
-        fleet = tuple(
-            FleetGroup(takeoff=a.name, count=c) for a, c in zip(self.airfields, counts) if c
-        )
-        return dataclasses.replace(self, fleet=fleet)
+        left = [g.count for g in self.fleet]
+        order: list[int] = []  # group of each UAV of the fleet, round-robin over the groups
+        while any(left):
+            for i, c in enumerate(left):
+                if c:
+                    order.append(i)
+                    left[i] -= 1
+        own = [0] * len(self.fleet)
+        for i in order[:n]:
+            own[i] += 1
+        more = [0] * len(self.airfields)
+        for j in range(len(order), n):
+            more[j % len(self.airfields)] += 1
+        fleet = [dataclasses.replace(g, count=c) for g, c in zip(self.fleet, own, strict=True)]
+        for a, c in zip(self.airfields, more, strict=True):  # into the field's own group if any
+            at = next((i for i, g in enumerate(fleet) if g.takeoff == g.landing == a.name), None)
+            if at is None:
+                fleet.append(FleetGroup(takeoff=a.name, count=c))
+            else:
+                fleet[at] = dataclasses.replace(fleet[at], count=fleet[at].count + c)
+        return dataclasses.replace(self, fleet=tuple(g for g in fleet if g.count))
 
     def to_dict(self) -> dict[str, Any]:
         """The YAML mapping (keys with units) that loads back to this scenario."""

@@ -237,3 +237,46 @@ def test_map_geography_keys():
     ):
         with pytest.raises(ConfigError, match=rf"map\.{field}: got"):
             load_scenario("small", bad)
+
+
+def test_with_uavs_keeps_the_fleets_own_takeoff_and_landing_pairs() -> None:
+    """i24-smallfix, F4: ``--uavs N`` (Scenario.with_uavs) flies the fleet's own pairs: N
+    equal to the fleet's size is the fleet, fewer are spread over its groups; the UAVs beyond
+    the fleet take off from the airfields in turn (UAV j from airfield j mod 3) and land
+    there."""
+    sc = load_scenario(
+        "paper_6_2",
+        {
+            "airfields": [
+                {"name": "A", "position_km": [20, -60]},
+                {"name": "B", "position_km": [120, -60]},
+                {"name": "C", "position_km": [220, -60]},
+            ],
+            "fleet": [
+                {"takeoff": "A", "count": 2, "landing": "B"},
+                {"takeoff": "B", "count": 1, "landing": "A"},
+            ],
+        },
+    )
+    same = sc.with_uavs(sc.n_uavs)
+    assert same.fleet == sc.fleet
+    assert np.array_equal(same.landing_m, sc.landing_m)
+    pairs = {n: [(g.takeoff, g.landing, g.count) for g in sc.with_uavs(n).fleet] for n in (1, 2, 5)}
+    assert pairs[1] == [("A", "B", 1)]
+    assert pairs[2] == [("A", "B", 1), ("B", "A", 1)]
+    assert pairs[5] == [("A", "B", 2), ("B", "A", 1), ("A", "A", 1), ("B", "B", 1)]
+
+
+def test_with_uavs_spreads_the_built_in_fleets_as_the_size_tasks_do() -> None:
+    """The built-in scenarios' fleets spread evenly over their airfields in order and land where
+    they took off, so ``with_uavs`` gives them the round-robin fleets the registered size tasks
+    fly (:func:`poc_env.spec.fleet_of`)."""
+    from poc_env import spec
+
+    for name in ("paper_6_2", "small", "wide_400", "large_400"):
+        sc = load_scenario(name)
+        fields = [a.name for a in sc.airfields]
+        for n in (1, 2, 3, 5, sc.n_uavs, 13, 24):
+            want = [(f["takeoff"], f["takeoff"], f["count"]) for f in spec.fleet_of(n, fields)]
+            got = [(g.takeoff, g.landing, g.count) for g in sc.with_uavs(n).fleet]
+            assert got == want, (name, n)

@@ -302,7 +302,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--uavs",
         type=int,
         default=None,
-        help="fleet size, 1 to 64, spread over the scenario's airfields round-robin "
+        help="fleet size, 1 to 64, over the fleet's own take-off/landing pairs round-robin "
         "(Scenario.with_uavs; default: the scenario's fleet)",
     )
     ap.add_argument("--envs", type=int, nargs="+", default=[1, 64, 256])

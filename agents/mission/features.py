@@ -84,12 +84,25 @@ LAYER_ORDERS = ("field", "fleet")
 MAX_SEPARATION_M = 1000.0
 
 
+#: The smallest non-zero ``separation_m`` (metres): less is no separation (the exports write
+#: altitudes to 0.1 m, and 1e-9 wrote every ``layer_m`` as 0.0; i24-smallfix).
+MIN_SEPARATION_M = 1.0
+
+
 def check_separation(separation_m: Any, layer_by: Any) -> float:
-    """``separation_m`` (metres, from 0: off to :data:`MAX_SEPARATION_M`) as a float if it and
-    ``layer_by`` (one of :data:`LAYER_ORDERS`) are valid, else ConfigError naming the field."""
+    """``separation_m`` (metres: 0, off, or :data:`MIN_SEPARATION_M` to
+    :data:`MAX_SEPARATION_M`) as a float if it and ``layer_by`` (one of :data:`LAYER_ORDERS`)
+    are valid, else ConfigError naming the field."""
     if layer_by not in LAYER_ORDERS:
         raise ConfigError("layer_by", layer_by, "one of " + ", ".join(LAYER_ORDERS))
-    return as_number("separation_m", separation_m, 0.0, MAX_SEPARATION_M)
+    s = as_number("separation_m", separation_m, 0.0, MAX_SEPARATION_M)
+    if 0 < s < MIN_SEPARATION_M:
+        raise ConfigError(
+            "separation_m", separation_m,
+            f"0 (no layers) or {MIN_SEPARATION_M:g} to {MAX_SEPARATION_M:g} m: less is no "
+            "separation between the layers",
+        )  # fmt: skip
+    return s
 
 
 def with_layers(plan: Plan, separation_m: float, layer_by: str = "field") -> Plan:

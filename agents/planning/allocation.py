@@ -48,14 +48,17 @@
    refined and the plan keeps the best of them, refined or not, by the environment's model
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
    (``options.airspace_penalty``, off by default); ``start`` records which start and
-   ``refined`` whether the refined routes were kept.
+   ``refined`` whether the refined routes were kept. Each candidate's UAVs that add less than
+   :data:`NOTHING` of the prior's mass are kept home, and among the candidates within
+   :data:`NOTHING` of the best the one of least total flight time is kept (i24-smallfix, F1).
 7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
    17-18 and the refinement's airspace check hold), so ``posc`` never drops; on maps with
    no-fly zones no candidate may enter a zone or cut the router's clearance ring
    (:func:`~poc_env.agents.planning.polish.zone_guard`; i24-zonepolish; ``options.
-   polish_zones=False`` skips the polish there as before, and the regrade always does); not
+   polish_zones=False`` skips the polish there as before, the regrade too; the regrade keeps
+   its runs out of the zones by the same check since i24-smallfix); not
    on maps of more than ``options.polish_max_cells`` cells a side where it is set
    (i24-fastpolish; the settings say why it was skipped). The plan's optimizer
    settings record its passes and kept moves (``polish``).
@@ -109,7 +112,7 @@ from poc_env.agents.planning.deconflict import (
 from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
-from poc_env.agents.planning.geography import plan_geography, probability
+from poc_env.agents.planning.geography import plan_geography, probability, zone_prior
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_for
 from poc_env.agents.planning.refine import (
@@ -134,6 +137,14 @@ from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 #: of coverage layers (K) tried, the share of 0.85 T a route may fill, the refinement's passes
 #: and the starts refined. Kept as names for the callers that read them.
 LEVELS = PlanOptions.levels
+#: "Nothing", as a share of the prior's mass (``PlanOptions.nothing``; i24-smallfix, F1): a
+#: UAV whose route adds less than this to the plan's POS stays home, and candidate plans whose
+#: planned POS lie within it of the best are tied, the one of least total eq. 17 flight time
+#: kept; a plan loses at most twice this by them. 1e-4 of the mass: below the 4 decimals POS_C
+#: is reported at, and below what any flying UAV finds on the reference maps (``paper_6_2``
+#: 0.06, 64 UAVs on a 150 km map 0.003); 1e-6 left F1 as it was (the North UAV's 1.77 h route
+#: adds 3.2e-5 to the South UAV's 0.28 h one).
+NOTHING = PlanOptions.nothing
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
@@ -552,8 +563,9 @@ def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
 def plan_fleets(
     scenario: Scenario | str, sizes, *, prior: np.ndarray | None = None, **kw
 ) -> list[dict[str, Any]]:
-    """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (UAVs spread
-    round-robin over the airfields, :meth:`~poc_env.config.Scenario.with_uavs`), in
+    """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (the fleet's own
+    take-off/landing pairs, one from each group in turn, :meth:`~poc_env.config.Scenario.
+    with_uavs`), in
     increasing order, each planned with the one before as its ``floor``
     (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
     float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
@@ -575,9 +587,11 @@ def plan_fleets(
 #: the fields of ``opt`` its default plan keeps (:func:`_best_of_default`): the keyword-level
 #: ones and every ``polish*`` field, so a polish option added later is kept without a change
 #: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
-#: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did).
+#: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did); and ``nothing``
+#: (i24-smallfix: ``nothing=0`` flies every route in both plans).
 _DEFAULT_KEPT = (
     "levels", "etas", "margin", "refine", "refine_starts", "greedy_start", "box_start",
+    "nothing",
     *(f.name for f in dataclasses.fields(PlanOptions)
       if f.name.startswith("polish") and f.name != "polish_starts"),
 )  # fmt: skip
@@ -687,7 +701,7 @@ def make_allocation_plan(
     router = ZoneRouter.for_scenario(sc)
     full_prior = prior
     if router.active:  # the mass a sensor reaches from outside the zones (eq. 20)
-        prior = prior * router.reach_share(grid, reach_m=opt.zone_reach * sc.sensor.sweep_width_m)
+        prior = zone_prior(sc, prior, router, opt.zone_reach)
         if reason is None and float(prior.sum()) <= 0:
             reason = "the prior has no mass outside the no-fly zones"
     u = sc.uav
@@ -911,6 +925,87 @@ def make_allocation_plan(
         paths = [[takeoff[k], *rs[k], landing[k]] if rs[k] else [] for k in range(n)]
         return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
 
+    nothing = opt.nothing * float(full_prior.sum())
+
+    def _hours(rs) -> float:
+        """The plan's total eq. 17 flight time (every UAV's route, take-off to landing)."""
+        return sum(
+            _flight_time(rs[k], takeoff[k], landing[k], sc, v, heading0[k]) for k in range(n)
+        )
+
+    def _pick(cands: list[tuple], home: bool = False) -> tuple:
+        """The candidate kept among ``cands`` (``(score, routes, pieces, ...)``, in order of
+        preference; score the sampled POS less the penalty): the candidates whose score lies
+        within ``options.nothing`` (:data:`NOTHING`) of the prior's mass of the best are tied,
+        with ``home`` each has its UAVs that add nothing kept home (:func:`_home`; F1), and the
+        one of least total flight time (:func:`_hours`) is kept, the first of them on equal
+        times (F1: a tie on POS_C is broken by the flying, not by the order). Without a tie,
+        or with ``options.nothing`` 0, the first of the highest score, as before (kept home
+        too: only the tied are, so the candidates that lose cost no sweeps)."""
+        top = max(c[0] for c in cands)
+        tied = [c for c in cands if c[0] >= top - nothing]
+        if opt.nothing == 0:
+            return tied[0]
+        if home:
+            for i, c in enumerate(tied):
+                r_, p_, s_ = _home(c[1], c[2], c[0] + _penalty(c[1]))
+                if r_ is not c[1]:
+                    tied[i] = (s_ - _penalty(r_), r_, p_, *c[3:])
+        if len(tied) == 1:
+            return tied[0]
+        hours = [_hours(c[1]) for c in tied]
+        return tied[int(np.argmin(hours))]
+
+    def _home(trial, t_pieces, score: float | None):
+        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that find nothing
+        kept home (F1: no aircraft sent for nothing), pieces and POS updated. A UAV's own
+        marginal POS (what the plan finds less without it) is at most what it finds when swept
+        first-to-last or last-to-first (:func:`sampled_sweep`, eq. 14, a point credited to the
+        first path that finds it); the UAVs of either credit below :data:`NOTHING` of the
+        prior's mass are tried, longest flight first, and each kept home if the plan without it
+        (and the ones already kept home) still finds within :data:`NOTHING` of the mass of what
+        it found: the plan loses less than that in all. As it is with ``options.nothing`` 0."""
+        if opt.nothing == 0:
+            return trial, t_pieces, score
+        paths = [[takeoff[k], *trial[k], landing[k]] if trial[k] else [] for k in range(n)]
+        fwd = sampled_sweep(sc, grid, full_prior, paths)[0]
+        if all(f >= nothing for k, f in enumerate(fwd) if trial[k]):  # the common case
+            rev = fwd
+        else:
+            rev = sampled_sweep(sc, grid, full_prior, paths[::-1])[0][::-1]
+        own = [min(f, r) for f, r in zip(fwd, rev)]
+        tried = [k for k in range(n) if len(trial[k]) and own[k] < nothing]
+        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k])
+                 for k in tried}  # fmt: skip
+        home: list[int] = []
+        total = float(sum(fwd))
+        s_ = sc.sensor.samples_per_cell
+        cut = sc.sensor.cutoff_sweep_widths * w
+        base = np.ascontiguousarray(grid.refine(full_prior, s_))
+        mass = float(base.sum())
+        for j in range(n):  # the routes never tried swept once (eq. 14, as sampled_sweep)
+            if paths[j] and j not in tried:
+                sweep_track(base, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
+                            grid.cell_m)  # fmt: skip
+        for k in sorted(tried, key=lambda k: -hours[k]):
+            left = base.copy()  # the plan without k and the ones already home
+            for j in tried:
+                if j != k and j not in home:
+                    sweep_track(left, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
+                                grid.cell_m)  # fmt: skip
+            if mass - float(left.sum()) >= total - nothing:
+                home.append(k)
+        if not home:
+            return trial, t_pieces, score
+        kept = [[] if k in home else trial[k] for k in range(n)]
+        k_pieces = [[] if k in home else list(p_) for k, p_ in enumerate(t_pieces)]
+        return kept, k_pieces, None if score is None else _sampled_total(kept)
+
+    def _flown(trial, t_pieces, score: float | None):
+        """A candidate as the pick compares it: idle UAVs filled (:func:`_with_fill`), then
+        UAVs that find nothing kept home (:func:`_home`)."""
+        return _home(*_with_fill(trial, t_pieces, score))
+
     # the starts: (W x length per cell score, name, routes, line pieces)
     starts: list[tuple[float, str, list, list]] = []
     routes: list[list[list[float]]] = [[] for _ in range(n)]
@@ -927,7 +1022,8 @@ def make_allocation_plan(
     if best is not None and greedy_start:
         from poc_env.agents.planning.greedy_rectangles import make_greedy_rectangles_plan
 
-        gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed)
+        gp = make_greedy_rectangles_plan(sc, prior=full_prior, speed=speed,
+                                         zone_reach=opt.zone_reach)  # fmt: skip
         g_routes = [list(u_["waypoints_m"]) for u_ in gp["uavs"]]
         if router.active:  # its UAVs in lanes too (i24-deconflict: it routes each alone)
             g_routes = _around_all(g_routes)
@@ -1010,10 +1106,9 @@ def make_allocation_plan(
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
         if not refine:  # the start kept as it is, its idle UAVs filled
-            routes, pieces, _ = _with_fill(routes, pieces, None)
+            routes, pieces, _ = _flown(routes, pieces, None)
     ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
-        best_sampled = -1.0
         sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
         top = starts[: max(1, refine_starts)]
         top_s = max(sampled_of[t[1]] for t in top)
@@ -1056,12 +1151,6 @@ def make_allocation_plan(
                 trial, t_pieces, score = _with_fill(trial, s_pieces, score)
                 score -= _penalty(trial)
                 ranked.append((score, trial, t_pieces, name, was_refined))
-                if score > best_sampled:
-                    best_sampled = score
-                    routes = trial
-                    pieces = t_pieces
-                    start = name
-                    refined = was_refined
         # the starts not refined are kept as they are if the environment's model scores them
         # higher (W x length per cell ranks the starts, and misjudges cells wider than W)
         for _, name, s_routes, s_pieces in starts:
@@ -1070,9 +1159,8 @@ def make_allocation_plan(
             f_routes, f_pieces, score = _with_fill(s_routes, s_pieces, sampled_of[name])
             score -= _penalty(f_routes)
             ranked.append((score, f_routes, f_pieces, name, False))
-            if score > best_sampled:
-                best_sampled, routes, pieces = score, f_routes, f_pieces
-                start, refined = name, False
+        # the best by the environment's model; on a tie, the least flying (F1)
+        _, routes, pieces, start, refined = _pick(ranked, home=True)
 
     def _polish(rs):
         """The polish stages in turn -- the polish, the second polish with the block moves too
@@ -1094,14 +1182,11 @@ def make_allocation_plan(
         for stage, passes, kinds, radii, box_radii in later:
             if not passes:
                 continue
-            if stage == "regrade" and router.active:  # the regrade does not see the zones
-                out = (out[0], out[1], {**out[2], "regrade_skipped": "no-fly zones"})
-                continue
-            if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly
-                pr, val, stats = polish_for(
+            if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly; with zones
+                pr, val, stats = polish_for(  # its runs kept out of them (i24-smallfix)
                     sc, out[0], full_prior, passes, speeds=v,
                     separation_margin=opt.separation_margin, range_margin=opt.range_margin,
-                    routine=regrade_routes,
+                    routine=regrade_routes, **({"router": router} if router.active else {}),
                 )  # fmt: skip
             else:
                 pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii)
@@ -1153,14 +1238,12 @@ def make_allocation_plan(
             if any(r_ is q[0] for q in pool) or not any(r_):
                 continue
             pool.append((r_, p_, name, was_refined))
-        best_polished: tuple | None = None
+        polished_pool = []
         for r_, p_, name, was_refined in pool:
             pr, val, stats = _polish(r_)
             score = val - (_penalty(pr) if len(pool) > 1 else 0.0)
-            if best_polished is None or score > best_polished[0]:
-                best_polished = (score, pr, p_, name, was_refined, stats)
-        assert best_polished is not None
-        _, routes, pieces, start, refined, polished = best_polished
+            polished_pool.append((score, pr, p_, name, was_refined, stats))
+        _, routes, pieces, start, refined, polished = _pick(polished_pool)
         if len(pool) > 1:
             polished = {**polished, "plans": len(pool)}
     fleet_rec: dict[str, Any] | None = None

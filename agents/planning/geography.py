@@ -39,6 +39,41 @@ def scenario_crs(
     return crs
 
 
+def zone_prior(sc: Scenario, prior: np.ndarray, router: Any, zone_reach: float | None = None):
+    """The prior as the planners count it on a map with no-fly zones (eq. 20): each cell's
+    mass times its share within ``zone_reach`` sweep widths of the keep-out area's outside
+    (:meth:`~poc_env.sim.routing.ZoneRouter.reach_share`), the one place of that discount for
+    the allocation, greedy rectangle and DE planners (i24-smallfix; the greedy and DE planners
+    had W/2 written in).
+
+    Parameters
+    ----------
+    sc : Scenario
+        Its map (the grid) and its sensor's sweep width W.
+    prior : ndarray
+        The cell masses, of the grid's shape.
+    router : ZoneRouter
+        The scenario's router; without zones (``router.active`` false) ``prior`` is returned.
+    zone_reach : float, optional
+        The lateral reach in sweep widths; default
+        :attr:`~poc_env.agents.planning.options.PlanOptions.zone_reach` (0.5: W/2, the eq. 10
+        model).
+
+    Returns
+    -------
+    ndarray
+        The discounted prior (``prior`` itself without zones).
+    """
+    from poc_env.agents.planning.options import PlanOptions
+    from poc_env.theory.probability_map import Grid
+
+    if not router.active:
+        return prior
+    reach = PlanOptions.zone_reach if zone_reach is None else zone_reach
+    grid = Grid.from_config(sc.map)
+    return prior * router.reach_share(grid, reach_m=reach * sc.sensor.sweep_width_m)
+
+
 def probability(value: float) -> float:
     """``value`` as a probability of plan.json: clamped to [0, 1] (sums of cell masses round
     to ``1 + 2e-16``; the export checks [0, 1])."""

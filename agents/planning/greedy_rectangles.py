@@ -38,6 +38,8 @@ from poc_env.agents.planning import _kernels
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import plan_speeds
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
+from poc_env.agents.planning.geography import zone_prior
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.refine import route_fits
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
@@ -125,10 +127,13 @@ def make_greedy_rectangles_plan(
     uavs: int | None = None,
     seed: int = 0,
     speed: str = "max",
+    zone_reach: float | None = None,
 ) -> dict[str, Any]:
     """The greedy rectangle plan of ``scenario`` on ``prior`` (module docstring); ``speed`` the
-    rule of :func:`~poc_env.agents.planning.flight_rules.plan_speeds`. Deterministic (``seed`` is
-    recorded only)."""
+    rule of :func:`~poc_env.agents.planning.flight_rules.plan_speeds`; ``zone_reach`` the zone
+    discount's reach in sweep widths (:func:`~poc_env.agents.planning.geography.zone_prior`;
+    default the allocation's ``PlanOptions.zone_reach``, which its greedy start passes).
+    Deterministic (``seed`` is recorded only)."""
     t0 = time.perf_counter()
     sc = load_scenario(scenario)
     if uavs is not None:
@@ -139,9 +144,10 @@ def make_greedy_rectangles_plan(
         raise ConfigError("prior", prior.shape, f"an array of the grid's shape {grid.shape}")
     if not np.all(np.isfinite(prior)) or np.any(prior < 0):
         raise ConfigError("prior", "array", "finite cell masses >= 0")
+    if zone_reach is not None:  # validated as the allocation's option
+        zone_reach = PlanOptions(zone_reach=zone_reach).zone_reach
     router = ZoneRouter.for_scenario(sc)
-    if router.active:
-        prior = prior * router.reach_share(grid, reach_m=0.5 * sc.sensor.sweep_width_m)
+    prior = zone_prior(sc, prior, router, zone_reach)
     u = sc.uav
     w = sc.sensor.sweep_width_m
     v = plan_speeds(sc, speed)

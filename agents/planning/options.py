@@ -254,6 +254,11 @@ class PlanOptions:
     #: the keep-out area's outside (:meth:`~poc_env.sim.routing.ZoneRouter.reach_share`); 0.5:
     #: the sweep's half width, the eq. 10 model.
     zone_reach: float = 0.5
+    #: "nothing", as a share of the prior's mass (i24-smallfix, F1): a UAV whose route adds
+    #: less than this to the plan's POS stays home, and among the candidate plans within it of
+    #: the best planned POS the one of least total flight time is kept; 0: neither (every
+    #: route flown, the first of the highest kept, as before).
+    nothing: float = 1e-4
 
     def __post_init__(self) -> None:
         _positive_tuple("levels", self.levels, integer=True, high=64)
@@ -297,6 +302,7 @@ class PlanOptions:
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
         _number("regrade", self.regrade, 0, 100, integer=True)
         _number("zone_reach", self.zone_reach, 0.0, 16.0, closed_low=False)
+        _number("nothing", self.nothing, 0.0, 0.01)
         if self.regrade_at not in ("first", "between", "end"):
             raise ConfigError("options.regrade_at", self.regrade_at, '"first", "between" or "end"')
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)

@@ -29,14 +29,19 @@ import numpy as np
 
 import poc_env.limits as limits
 from poc_env.agents.mission.plan import RECTANGLE_RULE, SCHEMA
-from poc_env.agents.planning.geography import check_terrain, plan_geography, scenario_crs
+from poc_env.agents.planning.geography import (
+    check_terrain,
+    plan_geography,
+    scenario_crs,
+    zone_prior,
+)
 from poc_env.agents.planning.objective import PlanObjective
 from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.agents.planning.refine import route_time
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
 from poc_env.sim.routing import ZoneRouter
-from poc_env.theory.probability_map import Grid, build_prior
+from poc_env.theory.probability_map import build_prior
 
 
 class _Speeds(NamedTuple):
@@ -121,10 +126,8 @@ def make_plan(
         prior = build_prior(sc.map)
     full_prior = np.asarray(prior, dtype=float)
     router = ZoneRouter.for_scenario(sc)
-    if router.active:  # POC inside a zone counts as far as the sensor reaches it from outside
-        prior = full_prior * router.reach_share(
-            Grid.from_config(sc.map), reach_m=0.5 * sc.sensor.sweep_width_m
-        )
+    # POC inside a zone counts as far as the sensor reaches it from outside (W/2, eq. 20)
+    prior = zone_prior(sc, full_prior, router)
     obj = PlanObjective(sc, prior, uavs=uavs, bound_prior=full_prior)
     pl = preset_settings(preset, sc.planner)
     settings: dict[str, Any] = {

@@ -34,10 +34,12 @@ offsets of all the lines of a run together (i24-regrade):
    (:func:`~poc_env.agents.planning.refine.route_fits`), inside the map, no more eq. 21 / 24
    violations at the planned positions (:class:`~poc_env.agents.planning.refine.AirspaceCount`).
 
-Deterministic: no clock, no random draw. No-fly zones are not seen: the allocation planner
-regrades only on maps without zones (the polish sees them since i24-zonepolish, through
-:func:`~poc_env.agents.planning.polish.zone_guard`; the regrade's candidates do not go through
-it yet).
+Deterministic: no clock, no random draw. No-fly zones (i24-smallfix): with a ``router`` a
+regraded run is kept only if :func:`~poc_env.agents.planning.polish.zone_guard` (the polish's
+check, eq. 20) passes it -- no leg into a zone, no more legs across the router's clearance ring
+than the run it replaces; without one (before), the regrade entered zones on ``paper_6_2`` with
+two zones (2 routes, 5 legs across the ring), so the allocation planner skipped it on maps with
+zones; it now regrades there with the router, as it polishes (``options.polish_zones``).
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from poc_env.agents.planning.coverage_boxes import graded_offsets
-from poc_env.agents.planning.polish import TOL, start
+from poc_env.agents.planning.polish import TOL, start, zone_guard
 from poc_env.agents.planning.refine import Airspace, _dedupe, route_fits, track
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
@@ -142,6 +144,7 @@ def regrade_routes(
     step: float = 0.25,
     least: float = 0.5,
     quantiles: bool = False,
+    router: Any = None,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Regraded waypoints per UAV, their planned POS and counts (module docstring); the
     arguments as :func:`~poc_env.agents.planning.polish.polish_routes`' (``passes`` over every
@@ -149,8 +152,10 @@ def regrade_routes(
     search's translations (sweep widths); ``counts``: the changes of a run's number of lines
     tried (0: as many; -1 one fewer; 1 one more); ``sweeps``: the coordinate search's sweeps
     over a candidate's lines; ``step``, ``least``: the water-filling's step (lines) and least
-    spacing (sweep widths), as ``graded_offsets``'. Returns ``(routes, pos, {"passes",
-    "moves", "runs", "lines_added", "lines_dropped"})``."""
+    spacing (sweep widths), as ``graded_offsets``'; ``router``: the plan's
+    :class:`~poc_env.sim.routing.ZoneRouter`: with zones every kept run passes
+    :func:`~poc_env.agents.planning.polish.zone_guard` (module docstring). Returns
+    ``(routes, pos, {"passes", "moves", "runs", "lines_added", "lines_dropped"})``."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
@@ -172,6 +177,7 @@ def regrade_routes(
     px = np.broadcast_to(x0 + (np.arange(nx_s) + 0.5) * ex.h, (ny_s, nx_s)).ravel()
     py = np.broadcast_to((y0 + (np.arange(ny_s) + 0.5) * ex.h)[:, None], (ny_s, nx_s)).ravel()
     signed = np.concatenate([np.asarray(rad, dtype=float), -np.asarray(rad, dtype=float)]) * w
+    zone_bad = zone_guard(router)
 
     def fits(k: int, full: np.ndarray) -> bool:
         return route_fits(full, speeds, turn_rate, budget, reserve, h0[k])
@@ -376,6 +382,8 @@ def regrade_routes(
             set_expo(other)
             ex.add(win[:-1], win[1:], 1.0)
             win = search(k, head, win, tail, nrm)
+            if zone_bad is not None and zone_bad(win0, win):  # eq. 20 (the polish's check)
+                continue
             gain = ex.pos() - before
             if best is None or gain > best[0]:
                 best = (gain, win, dc)

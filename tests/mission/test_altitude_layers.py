@@ -247,3 +247,20 @@ def test_cli_layer_by_without_a_separation_is_refused(tmp_path, capsys):
     assert not out.exists()
     assert main([*args, "--separation-m", "30"]) == 0
     assert [a[0] for a in _qgc_alts(sorted(out.glob("plan_uav*.plan")))] == [1200.0, 1230.0]
+
+
+def test_a_separation_below_a_metre_is_refused(tmp_path, capsys):
+    """``--separation-m 1e-9`` wrote ``altitude_layers`` with every ``layer_m`` 0.0
+    (i24-dayaudit, i24-smallfix): refused naming the field and value, nothing written; 1 m
+    (:data:`~poc_env.agents.mission.features.MIN_SEPARATION_M`) layers."""
+    path = _plan(tmp_path)
+    out = tmp_path / "o"
+    args = ["export", str(path), "--format", "geojson", "--out", str(out), "--separation-m"]
+    assert main([*args, "1e-9"]) == 2
+    err = capsys.readouterr().err
+    assert "separation_m: got 1e-09; allowed: 0 (no layers) or 1 to 1000 m" in err
+    assert not out.exists()
+    with pytest.raises(ConfigError, match=r"^separation_m: got 0\.5"):
+        export_plan(path, "qgc", out_dir=tmp_path / "x", separation_m=0.5)
+    assert not (tmp_path / "x").exists()
+    assert main([*args, "1"]) == 0

@@ -34,8 +34,10 @@ def _case():
 #: start gives each UAV its own rectangle (it gave field-mates of A one route), wins on this
 #: case with two UAVs (POS_C 1.0) and leaves nothing to part; the boxes start still gives
 #: field-mates the router's way round the zone (9 UAVs: 101 shared waypoints, 327 planned
-#: conflicts that way; 34 and 58 in lanes; POS_C 1.0 both)
-BOXES = PlanOptions(greedy_start=False)
+#: conflicts that way; 34 and 58 in lanes; POS_C 1.0 both). ``nothing=0``: every route flown
+#: (i24-smallfix: by default the field-mates that add nothing to the two sightings stay home,
+#: F1, and leave no conflict to part)
+BOXES = PlanOptions(greedy_start=False, nothing=0.0)
 UAVS = 9
 
 

@@ -4,6 +4,7 @@ The case (:func:`mini`) is the scale audit's big scenario (results/audit/scale/r
 make_inputs.py: four airfields outside the sides, three zones, twelve weighted sightings)
 built without the import, shrunk to 40 x 40 cells."""
 
+import dataclasses
 import re
 
 import numpy as np
@@ -69,12 +70,16 @@ def reachable_unfound(sc, prior, plan) -> float:
 def test_no_uav_idles_while_reachable_mass_remains():
     """The allocation start alone (its route cut among the fleet) leaves 4 of 8 UAVs without
     a route and 0.014 of the prior reachable but unfound on this case (i24-fleet, measured
-    with ``fill_idle=False``); with the fill every UAV flies and nothing reachable is left
-    (the inverse-cube sensor's tail finds more than the W/2 model counts: below 1e-3)."""
+    with ``fill_idle=False``); with the fill the idle UAVs fly and nothing reachable is left
+    (the inverse-cube sensor's tail finds more than the W/2 model counts: below 1e-3). A
+    filled UAV whose route adds less than ``NOTHING`` of the mass stays home (i24-smallfix,
+    F1: UAV 8 flew 2.09 h for 2e-7 here), so fewer stay idle than without the fill, not none."""
     sc, prior = mini(200, 5, 8)
     opt = PlanOptions(greedy_start=False, box_start=False, refine=0)
     plan = make_allocation_plan(sc, prior=prior, options=opt)
-    assert all(u["waypoints_m"] for u in plan["uavs"])
+    plain = make_allocation_plan(sc, prior=prior, options=dataclasses.replace(opt, fill_idle=False))
+    idle = sum(not u["waypoints_m"] for u in plan["uavs"])
+    assert idle < sum(not u["waypoints_m"] for u in plain["uavs"])
     assert reachable_unfound(sc, prior, plan) < 1e-3
 
 
@@ -101,9 +106,10 @@ def test_fill_apart_refills_a_dropped_uav_instead_of_leaving_it_idle():
     others in their boxes). The fill now fans its routes out clear of the bearings the busy
     field-mates fly and fills a dropped UAV again on the mass left with the mass near its
     conflicts taken out: every UAV flies, and the whole plan keeps eq. 21 away from the
-    fields at its planned times."""
+    fields at its planned times. (``nothing=0``: the fill alone; i24-smallfix's rule sends home
+    the UAVs whose filled routes add less than ``nothing`` of the mass, tested on its own.)"""
     sc, prior = mini(200, 5, 16)
-    opt = PlanOptions(greedy_start=False, box_start=False, refine=0)
+    opt = PlanOptions(greedy_start=False, box_start=False, refine=0, nothing=0.0)
     plan = make_allocation_plan(sc, prior=prior, options=opt)
     assert all(u["waypoints_m"] for u in plan["uavs"])
     routes = [u["waypoints_m"] for u in plan["uavs"]]

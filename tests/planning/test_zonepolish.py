@@ -121,3 +121,61 @@ def test_zone_reach_option_reaches_the_objective_on_maps_with_zones_only():
 def test_zone_reach_option_is_checked(bad):
     with pytest.raises(ConfigError, match=r"options\.zone_reach"):
         PlanOptions(zone_reach=bad)
+
+
+#: two 30 x 40 km zones on ``paper_6_2`` where its default routes run beside them
+TWO_ZONES = {
+    "map.no_fly_zones_km": [
+        [[60, 50], [90, 50], [90, 90], [60, 90]],
+        [[120, 80], [150, 80], [150, 120], [120, 120]],
+    ]
+}
+
+
+def test_the_regrade_keeps_its_runs_out_of_the_zones():
+    """The regrade with the router (i24-smallfix): no leg of a regraded route meets a zone or
+    cuts the clearance ring, and it still keeps moves; without the router the same regrade
+    enters the zones here (so the check is what keeps it out). The planner regrades on maps
+    with zones (``options.regrade``), no longer skipping it."""
+    from poc_env.agents.planning.regrade import regrade_routes
+
+    sc = load_scenario("paper_6_2", TWO_ZONES)
+    prior = build_prior(sc.map)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc, prior=prior)["uavs"]]
+    assert _entering(sc, routes) == (0, 0)
+    blind, _, _ = polish_for(sc, routes, prior, 2, routine=regrade_routes)
+    assert _entering(sc, blind)[0] > 0
+    router = ZoneRouter.for_scenario(sc)
+    out, _, stats = polish_for(sc, routes, prior, 2, routine=regrade_routes, router=router)
+    assert stats["moves"] > 0 and out != routes
+    assert _entering(sc, out) == (0, 0)
+    plan = make_allocation_plan(sc, prior=prior, options=PlanOptions(regrade=1))
+    settings = plan["optimizer"]["settings"]["polish"]
+    assert "regrade_skipped" not in settings and settings["regrade_moves"] > 0
+    assert _entering(sc, [u["waypoints_m"] for u in plan["uavs"]]) == (0, 0)
+
+
+def test_one_zone_discount_for_the_greedy_rectangles_and_its_start(monkeypatch):
+    """i24-smallfix: the greedy rectangle planner counts the prior near the zones by the
+    allocation's ``zone_reach`` (``geography.zone_prior``), not a W/2 of its own: its default
+    is the option's default, another reach changes its planned POS, and the allocation's
+    greedy start is planned at the allocation's own ``zone_reach``."""
+    from poc_env.agents.planning import greedy_rectangles
+
+    sc = load_scenario("paper_6_2", TWO_ZONES)
+    prior = build_prior(sc.map)
+    plan = greedy_rectangles.make_greedy_rectangles_plan
+    default = plan(sc, prior=prior)["posc"]
+    assert plan(sc, prior=prior, zone_reach=PlanOptions.zone_reach)["posc"] == default
+    assert abs(plan(sc, prior=prior, zone_reach=2.0)["posc"] - default) > 1e-3
+    with pytest.raises(ConfigError, match=r"zone_reach"):
+        plan(sc, prior=prior, zone_reach=-1.0)
+    seen = []
+
+    def spy(*a, **kw):
+        seen.append(kw.get("zone_reach"))
+        return plan(*a, **kw)
+
+    monkeypatch.setattr(greedy_rectangles, "make_greedy_rectangles_plan", spy)
+    make_allocation_plan(sc, prior=prior, options=PlanOptions(zone_reach=1.5, refine=0))
+    assert seen == [1.5]
