@@ -907,6 +907,8 @@ def _plan_fleet_sizes(args: argparse.Namespace) -> int:
         raise ConfigError("plot", args.plot, "no --plot with --fleet-sizes (one picture per "
                           "plan: plan a size with --uavs N --plot FILE)")  # fmt: skip
     paths = {n: fleet_plan_path(args.out, n) for n in sizes}
+    for path in paths.values():  # a folder or a device of that name: refused before planning
+        _check_out("out", path, "file")
     check_distinct({f"out (fleet size {n})": str(p) for n, p in paths.items()}, _inputs_of(args))
     sc, prior = _plan_inputs(args)
     crs = scenario_crs(sc, args.origin, args.projection, args.utm_zone)
@@ -1314,9 +1316,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="number of UAVs (default: the scenario's fleet). The fleet's own take-off/landing "
         "pairs come first, one from each of its groups in turn, so N equal to the fleet's size is "
         "the fleet itself; UAVs beyond it take off from the airfields in turn and land there. To "
-        "compare fleet sizes: one plan per size can plan a larger fleet a little less; the "
-        "Python API's plan_fleets plans each size on the one before, never less "
-        "(docs/PLANNER.md, 'Larger fleets')",
+        "compare fleet sizes: one plan per size can plan a larger fleet a little less; "
+        "--fleet-sizes plans each size on the one before, never less",
     )
     p.add_argument(
         "--optimizer",

@@ -135,3 +135,12 @@ def test_plan_file_names_stay_beside_out_and_never_overwrite_an_input(tmp_path, 
     assert main([*args, "--fleet-sizes", "4", "--out", str(tmp_path / "sc.yaml")]) == 2
     assert "sc_n4.yaml" in capsys.readouterr().err
     assert scenario.read_bytes() == before and sorted(tmp_path.iterdir()) == [scenario]
+
+
+def test_a_folder_where_a_plan_file_goes_is_refused_before_planning(tmp_path, capsys):
+    (tmp_path / "plan_n6.json").mkdir()
+    args = [*BASE, "--fleet-sizes", "4,6", "--out", str(tmp_path / "plan.json")]
+    assert main(args) == 2
+    err = capsys.readouterr()
+    assert f"out: got '{tmp_path / 'plan_n6.json'}'" in err.err and "UAVs" not in err.out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan_n6.json"]
