@@ -912,14 +912,21 @@ def _plan_fleet_sizes(args: argparse.Namespace) -> int:
     check_distinct({f"out (fleet size {n})": str(p) for n, p in paths.items()}, _inputs_of(args))
     sc, prior = _plan_inputs(args)
     crs = scenario_crs(sc, args.origin, args.projection, args.utm_zone)
+
+    def said(plan: dict) -> None:  # progress: a large map takes minutes a size
+        if not args.quiet:
+            print(f"planned {len(plan['uavs'])} UAVs: POS_C {plan['posc']:.4f} "
+                  f"({plan['runtime_s']:.1f} s)", flush=True)  # fmt: skip
+
     plans = plan_fleets(
         sc,
         sizes,
         prior=prior,
+        each=said,
         map_source=map_source(sc, args.map_file),
         seed=args.seed,
         crs=crs,
-        speed=args.speed or SPEED,  # as make_plan plans one size
+        speed=SPEED if args.speed is None else args.speed,  # as make_plan plans one size
         refine=REFINE if args.refine is None else args.refine,
         options=PlanOptions.preset(args.effort or "default"),
     )

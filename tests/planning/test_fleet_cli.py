@@ -144,3 +144,16 @@ def test_a_folder_where_a_plan_file_goes_is_refused_before_planning(tmp_path, ca
     err = capsys.readouterr()
     assert f"out: got '{tmp_path / 'plan_n6.json'}'" in err.err and "UAVs" not in err.out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plan_n6.json"]
+
+
+def test_each_size_is_said_as_it_is_planned_unless_quiet(tmp_path, capsys):
+    """A 500 km map takes minutes a size: a line per size as it is planned, before the
+    table (none with ``--quiet``)."""
+    args = ["plan", "--scenario", "small", "--planner", "allocation", "--fleet-sizes", "2,3"]
+    assert main([*args, "--out", str(tmp_path / "a" / "plan.json")]) == 0
+    out = capsys.readouterr().out
+    said = [line for line in out.splitlines() if line.startswith("planned ")]
+    assert [s.split(":")[0] for s in said] == ["planned 2 UAVs", "planned 3 UAVs"]
+    assert out.index("planned 3 UAVs") < out.index("UAVs   POS_C")
+    assert main([*args, "--quiet", "--out", str(tmp_path / "b" / "plan.json")]) == 0
+    assert not [x for x in capsys.readouterr().out.splitlines() if x.startswith("planned ")]
