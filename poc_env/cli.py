@@ -1381,9 +1381,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--effort",
         default=None,
         help="allocation planner: default (seconds), standard (the default plan polished, "
-        "within 2 s on paper_6_2; on a map of more than 80 cells a side the default plan, with "
-        "a note) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min at "
-        "160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
+        "within 2 s on paper_6_2; on a map of more than 80 cells a side within a work budget, "
+        "about a minute of one core at 160 x 160 cells and 24 UAVs, with a note when the budget "
+        "stopped it) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min "
+        "at 160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
     )
     p.add_argument(
         "--fleet-sizes",

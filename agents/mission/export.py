@@ -140,6 +140,8 @@ def export_plan(
         if warning is not None:  # the other formats show it, and say so
             print(f"warning: {warning}")
         check_endurance(plan, flown, refuse=fmt == "qgc" and not allow_infeasible)
+        for line in shared_orbits(plan, flown):
+            print(f"warning: {line}")
         kept = {id(u) for u in flown}
         left = [f"plan.uavs[{k}] (UAV {u['id']})"
                 for k, u in enumerate(plan["uavs"]) if id(u) not in kept]  # fmt: skip
@@ -228,6 +230,38 @@ def airspace_warning(plan: Any, area: list | None) -> str | None:
     except ConfigError as err:
         return str(err)
     return None
+
+
+def shared_orbits(plan: Any, flown: list[Any]) -> list[str]:
+    """One sentence per orbit two or more exported UAVs (``flown``) fly on one circle: the
+    climb spirals over one take-off field, or the descent orbits at one approach point, of a
+    plan with terrain exported without altitude layers (``separation_m`` 0; with layers each
+    UAV's orbit is its layer wider, :func:`~poc_env.agents.mission.terrain.orbit_radius`).
+    The export schedules no launch times: the UAVs meet there unless launched apart."""
+    from poc_env.agents.mission.terrain import plan_profiles
+
+    if plan.get("altitude_layers") or plan.get("terrain") is None:
+        return []
+    profs = plan_profiles(plan)
+    kept = {id(u) for u in flown}
+    circles: dict[tuple, list[str]] = {}
+    for u, p in zip(plan["uavs"], profs or ()):
+        if id(u) not in kept:
+            continue
+        for what, o in (
+            ("climb spiral over the take-off field", p.climb),
+            ("descent orbit at the landing approach point", p.descent.orbit if p.descent else None),
+        ):
+            if o is not None:
+                key = (what, round(o.center_m[0]), round(o.center_m[1]), round(o.radius_m))
+                circles.setdefault(key, []).append(str(u["id"]))
+    return [
+        f"UAVs {', '.join(ids)} fly one {what} at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, radius "
+        f"{r / 1e3:.2f} km (no altitude layers): launch them apart in time, or export with "
+        "--separation-m S to widen each UAV's orbit by its layer"
+        for (what, x, y, r), ids in circles.items()
+        if len(ids) > 1
+    ]
 
 
 def searching_uavs(plan: Any) -> list[Any]:

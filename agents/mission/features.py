@@ -23,7 +23,7 @@ from poc_env.agents.mission.plan import (
     flight,
     route,
 )
-from poc_env.agents.mission.terrain import from_record, plan_profiles
+from poc_env.agents.mission.terrain import DESCENT_KIND, from_record, plan_profiles
 from poc_env.crs import densify_ring
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
@@ -280,6 +280,19 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     return out
 
 
+def _orbit_line(
+    u: Any, kind: str, what: str, xy: np.ndarray, zs: np.ndarray, crs: Any, **props: Any
+) -> dict[str, Any]:
+    """An orbit flown over a field (a climb spiral, a descent orbit) as an overlay line: its
+    points at their AMSL altitudes, ``kind`` and ``props`` in its properties."""
+    return {
+        "geometry": "LineString",
+        "latlon": to_geographic(xy.tolist(), crs),
+        "z": [round(float(v), 1) for v in zs],
+        "properties": {"id": u["id"], "kind": kind, "name": f"UAV {u['id']} {what}", **props},
+    }
+
+
 def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, Any]]:
     """What GeoJSON, KML and the map report draw beside the routes and search areas.
 
@@ -298,14 +311,20 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
     terrain = from_record(rec) if rec is not None else None
     for k, u in enumerate(plan["uavs"]):
         app_z = [approach_altitude(alt, ground), ground]
-        if profs is not None:  # from the terrain profile's last point to the field
-            app_z = [float(profs[k].amsl_m[-1]), profs[k].landing_field_m]
+        app = approach_point(u, plan.get("no_fly_zones_m"))
+        pk = profs[k] if profs is not None else None
+        dsc = pk.descent if pk is not None else None
+        if pk is not None:  # from the terrain profile's last point to the field
+            app_z = [float(pk.amsl_m[-1]), pk.landing_field_m]
+            turned = pk.points_m[-1]  # turned round the field where the glide needs it
+            if float(np.hypot(*(turned - np.asarray(app)))) > 1.0:
+                app = turned.tolist()
+            if dsc is not None:  # the glide from the descent orbit's exit
+                app, app_z = list(dsc.exit_m), [float(dsc.orbit.to_m), pk.landing_field_m]
         out.append(
             {
                 "geometry": "LineString",
-                "latlon": to_geographic(
-                    [approach_point(u, plan.get("no_fly_zones_m")), u["landing_m"]], crs
-                ),
+                "latlon": to_geographic([app, u["landing_m"]], crs),
                 "z": app_z,
                 "properties": {
                     "id": u["id"],
@@ -316,26 +335,21 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
                 },
             }
         )
+        if dsc is not None:  # the descent orbit at the approach point (terrain.descent_orbit)
+            o = dsc.orbit
+            out.append(_orbit_line(
+                u, DESCENT_KIND, "descent orbit at the landing approach point", *dsc.points(),
+                crs, radius_km=round(o.radius_m / 1e3, 3), from_m=round(o.from_m, 1),
+                to_m=round(o.to_m, 1), minutes=round(dsc.time_s / 60.0, 1),
+            ))  # fmt: skip
         sp = profs[k].climb if profs is not None else None
         if sp is not None:  # the climb spiral over the take-off field (terrain.climb_spiral)
-            xy, zs = sp.points()
-            out.append(
-                {
-                    "geometry": "LineString",
-                    "latlon": to_geographic(xy.tolist(), crs),
-                    "z": [round(float(v), 1) for v in zs],
-                    "properties": {
-                        "id": u["id"],
-                        "kind": CLIMB_KIND,
-                        "name": f"UAV {u['id']} climb spiral over the take-off field",
-                        "radius_km": round(sp.radius_m / 1e3, 3),
-                        "turns": round(sp.turns, 2),
-                        "from_m": round(sp.from_m, 1),
-                        "to_m": round(sp.to_m, 1),
-                        "minutes": round(sp.time_s / 60.0, 1),
-                    },
-                }
-            )
+            out.append(_orbit_line(
+                u, CLIMB_KIND, "climb spiral over the take-off field", *sp.points(), crs,
+                radius_km=round(sp.radius_m / 1e3, 3), turns=round(sp.turns, 2),
+                from_m=round(sp.from_m, 1), to_m=round(sp.to_m, 1),
+                minutes=round(sp.time_s / 60.0, 1),
+            ))  # fmt: skip
     for a in plan.get("airfields") or []:
         out.append(
             {

@@ -73,6 +73,7 @@ import json
 import math
 import os
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NoReturn, TypedDict
 
@@ -505,8 +506,21 @@ def approach_point(u: UavPlan, zones: Any = ()) -> list[float]:
     ``zones``: the plan's ``no_fly_zones_m``. When the approach from that side would fly through
     one (more than 1 m of the legs last search point -> approach -> field, the QGC geofence's
     test), the side is turned in 15 degree steps, nearest first, to the first clear one (a
-    field beside a zone, issue 24); if none is clear, the first side (the geofence then names
-    the zone)."""
+    field beside a zone, issue 24; :func:`approach_sides`); if none is clear, the first side
+    (the geofence then names the zone)."""
+    for p in approach_sides(u, zones, turn=bool(_valid_polygons(zones))):
+        return p  # the first clear side: the later ones are not computed
+    return next(approach_sides(u, (), turn=False))
+
+
+def approach_sides(u: UavPlan, zones: Any = (), *, turn: bool = True) -> Iterator[list[float]]:
+    """The approach waypoints :data:`APPROACH_DISTANCE_M` round the landing field a UAV may
+    come in from, clear of the no-fly ``zones`` (:func:`approach_point`'s test): the side of
+    the last search point first, then turned in 15 degree steps, nearest first (both ways, all
+    24 sides; only the first without ``turn``), generated one by one.
+    :func:`approach_point` takes the first; the terrain's final glide
+    (:func:`poc_env.agents.mission.terrain.landing_profile`) searches them for one whose glide
+    clears the ground."""
     import numpy as np
 
     end = np.asarray(u["landing_m"], dtype=float)
@@ -515,14 +529,11 @@ def approach_point(u: UavPlan, zones: Any = ()) -> list[float]:
     d = last - end
     first = math.atan2(d[1], d[0]) if float(np.hypot(*d)) > 1.0 else 0.0
     polys = _valid_polygons(zones)
-    for step in (0, *(s * k for k in range(1, 13) for s in (1, -1))) if polys else (0,):
+    for step in (0, *(s * k for k in range(1, 13) for s in (1, -1))) if turn else (0,):
         a = first + math.radians(15.0 * step)
         p = end + APPROACH_DISTANCE_M * np.array([math.cos(a), math.sin(a)])
         if not polys or _clear([last, p, end], polys):
-            return [float(v) for v in p]
-    return [
-        float(v) for v in end + APPROACH_DISTANCE_M * np.array([math.cos(first), math.sin(first)])
-    ]
+            yield [float(v) for v in p]
 
 
 def _valid_polygons(zones: Any) -> list:

@@ -75,6 +75,15 @@ DEFAULT_TURN_RATE_DEG_S = 3.0
 SPIRAL_STEP_M = 100.0
 #: Arc between two points of a climb spiral's first turn where its ground is read (metres).
 ORBIT_SAMPLE_M = 10.0
+#: The ``kind`` (GeoJSON property) of the descent orbit at the landing approach point drawn
+#: beside a route whose straight final glide meets the ground (:func:`descent_orbit`).
+DESCENT_KIND = "descent_orbit"
+
+
+class GlideError(ConfigError):
+    """A final glide to the landing field that cannot keep the ground from this approach
+    point: :func:`landing_profile` tries the other sides of the field (then a descent orbit)
+    before it refuses the mission."""
 
 
 @dataclass(frozen=True)
@@ -580,8 +589,9 @@ class Spiral:
 
     @property
     def length_m(self) -> float:
-        """The horizontal distance flown on the orbit: the climb over ``tan(beta_max)``."""
-        return (self.to_m - self.from_m) / math.tan(self.pitch_rad)
+        """The horizontal distance flown on the orbit: the climb (or descent) over
+        ``tan(beta_max)``."""
+        return abs(self.to_m - self.from_m) / math.tan(self.pitch_rad)
 
     @property
     def time_s(self) -> float:
@@ -595,7 +605,8 @@ class Spiral:
 
     def points(self) -> tuple[np.ndarray, np.ndarray]:
         """``(xy, amsl)``: the orbit sampled every :data:`SPIRAL_STEP_M` of arc (at least 8
-        points a turn), clockwise from ``start_rad``, climbing linearly with the arc."""
+        points a turn), clockwise from ``start_rad``, climbing (descending) linearly with the
+        arc."""
         step = min(SPIRAL_STEP_M, 2.0 * math.pi * self.radius_m / 8.0)
         n = max(1, math.ceil(self.length_m / step))
         s = np.linspace(0.0, self.length_m, n + 1)
@@ -607,6 +618,59 @@ class Spiral:
             ]
         )
         return xy, self.from_m + (self.to_m - self.from_m) * (s / max(self.length_m, 1e-9))
+
+
+@dataclass(frozen=True)
+class Descent:
+    """A descent orbit at the landing approach point (i24-glide): PX4's fixed-wing landing
+    pattern, NAV_LOITER_TO_ALT at the approach point, then the final glide from the orbit's
+    tangent exit to NAV_LAND (:func:`descent_orbit`).
+
+    Attributes
+    ----------
+    orbit : Spiral
+        Centred on the approach point, from the altitude the route arrives at (``from_m``) to
+        the glide's entry altitude (``to_m``), clockwise from the side the UAV comes from.
+    exit_m : (float, float)
+        The tangent point the UAV leaves the orbit at, heading for the landing field.
+    exit_rad : float
+        Its angle round the approach point (from east, counter-clockwise).
+    glide_m : float
+        The final glide's length, from the exit to the landing field (PX4's landing approach
+        distance, ``sqrt(d^2 - r^2)`` for the field ``d`` from the approach point).
+    """
+
+    orbit: Spiral
+    exit_m: tuple[float, float]
+    exit_rad: float
+    glide_m: float
+
+    @property
+    def length_m(self) -> float:
+        """Horizontal distance flown on the orbit: the descent's arc, then round at the
+        glide's altitude to the exit (less than a turn)."""
+        o = self.orbit
+        end = o.start_rad - o.length_m / o.radius_m
+        return o.length_m + ((end - self.exit_rad) % (2.0 * math.pi)) * o.radius_m
+
+    @property
+    def time_s(self) -> float:
+        """The orbit's flight time at its speed: what the 2-D time model does not fly."""
+        return self.length_m / self.orbit.speed_mps
+
+    def points(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(xy, amsl)``: the descent's arc (:meth:`Spiral.points`), then the arc round at the
+        glide's altitude to the exit."""
+        xy, z = self.orbit.points()
+        o = self.orbit
+        end = o.start_rad - o.length_m / o.radius_m
+        rest = (end - self.exit_rad) % (2.0 * math.pi)
+        n = max(1, math.ceil(rest * o.radius_m / SPIRAL_STEP_M))
+        a = end - np.linspace(0.0, rest, n + 1)[1:]
+        arc = np.column_stack(
+            [o.center_m[0] + o.radius_m * np.cos(a), o.center_m[1] + o.radius_m * np.sin(a)]
+        )
+        return np.concatenate([xy, arc]), np.concatenate([z, np.full(len(arc), o.to_m)])
 
 
 @dataclass(frozen=True)
@@ -628,6 +692,9 @@ class Profile:
     climb : Spiral or None
         The climb spiral over the take-off field, where the straight climb meets the ground
         (:func:`climb_spiral`); None where it does not (the mission as before).
+    descent : Descent or None
+        The descent orbit at the landing approach point, where no straight glide from the
+        approach point clears the ground (:func:`landing_profile`); None where one does.
     """
 
     points_m: np.ndarray
@@ -637,6 +704,7 @@ class Profile:
     field_m: float
     landing_field_m: float
     climb: Spiral | None = None
+    descent: Descent | None = None
 
 
 def profile(
@@ -646,6 +714,7 @@ def profile(
     landing_xy: Any = None,
     layer_m: float = 0.0,
     speed_mps: float | None = None,
+    loiter: bool = False,
 ) -> Profile:
     """The altitudes along ``path_xy`` (take-off field, waypoints, approach point) over ``t``.
 
@@ -654,7 +723,10 @@ def profile(
     cap, so a layered profile keeps the clearance, the pitch bound and the final glide.
     ``speed_mps``: the speed out of the field (the plan's transit speed; default the paper's
     220 km/h, :data:`~poc_env.agents.mission.plan.DEFAULT_FLIGHT`), which sets a climb
-    spiral's radius and time (:func:`climb_spiral`).
+    spiral's radius and time (:func:`climb_spiral`). ``loiter``: the UAV descends on an orbit
+    at the approach point to the final glide (:func:`descent_orbit`) instead of gliding
+    straight from it: the profile ends at the approach point at its wanted altitude (no glide
+    cap).
 
     Raises
     ------
@@ -717,9 +789,14 @@ def profile(
         z[i] = max(z[i], z[i - 1] - grad * (dist[i] - dist[i - 1]))
     for i in range(len(z) - 2, -1, -1):
         z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
-    if landing_xy is not None:
+    descent = None
+    if landing_xy is not None and loiter:
+        land_xy = np.asarray(landing_xy, dtype=float)
+        descent = descent_orbit(t, p, z, land_xy, where, speed_mps, layer_m)
+    elif landing_xy is not None:
         z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
-    climb = _check_field_legs(t, p, z, dist, landing_xy, where, speed_mps)
+    glide_to = None if loiter else landing_xy
+    climb = _check_field_legs(t, p, z, dist, glide_to, where, speed_mps, layer_m)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -730,6 +807,7 @@ def profile(
         field_m=t.field_elevation(path[0]),
         landing_field_m=t.field_elevation(land),
         climb=climb,
+        descent=descent,
     )
 
 
@@ -741,6 +819,7 @@ def _check_field_legs(
     landing_xy: Any,
     where: str,
     speed_mps: float | None = None,
+    layer_m: float = 0.0,
 ) -> Spiral | None:
     """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``);
     the climb spiral the take-off needs, if any.
@@ -764,14 +843,14 @@ def _check_field_legs(
     ------
     ConfigError
         ``where`` named, with the point, its ground, the distance from the field and the
-        altitude flown there.
+        altitude flown there (a :class:`GlideError` for the final glide).
     """
     grad = math.tan(t.max_pitch_rad)
     field = t.field_elevation(p[0])
     climb = np.minimum(z, field + grad * dist)
     spiral = None
     if _first_cut(t, p[0], p, climb) is not None:  # the straight climb meets the ground
-        spiral = climb_spiral(t, p, z, dist, where, speed_mps)
+        spiral = climb_spiral(t, p, z, dist, where, speed_mps, layer_m)
         straight = field + grad * dist  # the take-off to the orbit's first altitude, then on
         climb = np.where(
             straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist)
@@ -795,7 +874,7 @@ def _check_field_legs(
         if i is not None:
             ground = float(bilinear(t.ground_m, t.origin_m, t.cell_m, xy[i])[0])
             x, y = xy[i]
-            raise ConfigError(
+            raise (GlideError if name == "landing" else ConfigError)(
                 where, f"ground {ground:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, "
                 f"{off[i] / 1e3:.1f} km from the {name} field (at {elev:.0f} m), flown at "
                 f"{alt[i]:.0f} m",
@@ -824,12 +903,16 @@ def climb_spiral(
     dist: np.ndarray,
     where: str,
     speed_mps: float | None = None,
+    layer_m: float = 0.0,
 ) -> Spiral:
     """The climb spiral over the take-off field ``p[0]`` for a mission whose straight climb
     meets the ground (:class:`Spiral`).
 
     Eq. 19 in the horizontal plane bounds the turn rate, so the tightest orbit at the speed
-    ``v`` (``speed_mps``, default the paper's 220 km/h) has the radius ``v / turn rate``; its
+    ``v`` (``speed_mps``, default the paper's 220 km/h) has the radius ``v / turn rate``, and a
+    UAV given an altitude layer ``layer_m`` (:func:`~poc_env.agents.mission.features.
+    with_layers`) orbits that much wider, so field-mates' orbits are at least the layers'
+    separation apart (:func:`orbit_radius`); its
     pitch bound ``tan(beta_max)`` bounds the climb per metre flown. The orbit (clockwise, from
     the point towards the first waypoint) starts at the least altitude from which it keeps
     ``min_clearance_m`` over the ground under it (the bilinear ``ground_m``, read every
@@ -856,7 +939,7 @@ def climb_spiral(
     v = float(DEFAULT_FLIGHT["transit_speed_mps"] if speed_mps is None else speed_mps)
     grad = math.tan(t.max_pitch_rad)
     field = t.field_elevation(p[0])
-    r = v / t.turn_rate_rad_s
+    r = orbit_radius(t, v, layer_m)
     ground = bilinear(t.ground_m, t.origin_m, t.cell_m, p)
     ahead = p[np.argmax(dist > 0.0)] - p[0] if dist[-1] > 0.0 else np.array([1.0, 0.0])
     start = math.atan2(float(ahead[1]), float(ahead[0]))
@@ -883,6 +966,194 @@ def climb_spiral(
         start_rad=start,
     )
     return sp
+
+
+def orbit_radius(t: Terrain, speed_mps: float, layer_m: float = 0.0) -> float:
+    """An orbit's radius: eq. 19's turn-rate bound at ``speed_mps`` (the tightest circle,
+    ``v / turn rate``), widened by the UAV's altitude layer ``layer_m``
+    (:func:`~poc_env.agents.mission.features.with_layers`). Field-mates' layers differ by at
+    least ``separation_m``, so their concentric orbits over one field (or one approach point)
+    are that far apart horizontally at every altitude, whenever each is flown: their altitudes
+    come from the ground, not from the layer, and two helices on one circle are not kept apart
+    by an altitude offset unless they start together (the export schedules no launch times)."""
+    return speed_mps / t.turn_rate_rad_s + float(layer_m)
+
+
+def _disc(centre: Any, r: float) -> np.ndarray:
+    """Points covering the disc of radius ``r`` round ``centre``: rings at 0, r/4, .., r, each
+    sampled every :data:`ORBIT_SAMPLE_M` of arc (where the UAV flies out to its orbit and
+    round it)."""
+    pts = [np.asarray(centre, dtype=float).reshape(1, 2)]
+    for k in range(1, 5):
+        rk = r * k / 4.0
+        a = np.arange(0.0, 2.0 * math.pi * rk, ORBIT_SAMPLE_M) / rk
+        pts.append(np.column_stack([centre[0] + rk * np.cos(a), centre[1] + rk * np.sin(a)]))
+    return np.concatenate(pts)
+
+
+def descent_orbit(
+    t: Terrain,
+    p: np.ndarray,
+    z: np.ndarray,
+    land: np.ndarray,
+    where: str,
+    speed_mps: float | None = None,
+    layer_m: float = 0.0,
+) -> Descent:
+    """The descent orbit at the approach point ``p[-1]`` (reached at ``z[-1]``) to the final
+    glide to the landing field ``land`` (:class:`Descent`): PX4's fixed-wing landing pattern.
+
+    The orbit (clockwise, radius :func:`orbit_radius`) descends at eq. 19's ``tan(beta_max)``
+    per metre flown to the glide's entry altitude ``H``, and the UAV leaves it at the tangent
+    point heading for the field: PX4 (navigator ``FeasibilityChecker::
+    checkFixedWindLandApproach``) reads the glide from NAV_LOITER_TO_ALT to NAV_LAND as ``(H -
+    field) / sqrt(d^2 - r^2)``, ``d`` the field's distance from the orbit's centre, which must
+    exceed ``r``. ``H`` is the flat export's glide, :data:`~poc_env.agents.mission.plan.
+    LANDING_GLIDE` over that distance, or higher where the orbit needs it: the disc the UAV
+    flies out to and round its orbit keeps ``min_clearance_m`` over the ground under it (the
+    bilinear ``ground_m``, as the climb spiral's) at the lower of ``z[-1]`` and ``H``. A glide
+    steeper than LANDING_GLIDE is warned (:class:`SteepGlideWarning`); the glide from the exit
+    must stay above the ground as a straight glide must (:func:`_check_field_legs`).
+
+    Raises
+    ------
+    GlideError
+        ``where`` named: the field within the orbit, the orbit's clearance above the ceiling or
+        needing a glide steeper than ``tan(beta_max)``, or the glide meeting the ground.
+    """
+    from poc_env.agents.mission.plan import DEFAULT_FLIGHT
+
+    v = float(DEFAULT_FLIGHT["transit_speed_mps"] if speed_mps is None else speed_mps)
+    grad = math.tan(t.max_pitch_rad)
+    c = np.asarray(p[-1], dtype=float)
+    r = orbit_radius(t, v, layer_m)
+    field = t.field_elevation(land)
+    d = float(np.hypot(*(land - c)))
+    deg = math.degrees(t.max_pitch_rad)
+    if d <= r:
+        raise GlideError(
+            where, f"a descent orbit of radius {r / 1e3:.2f} km {d / 1e3:.2f} km from the field",
+            "a landing field outside the orbit (PX4's landing pattern)",
+        )  # fmt: skip
+    glide_m = math.sqrt(d * d - r * r)
+    need = float(np.max(bilinear(t.ground_m, t.origin_m, t.cell_m, _disc(c, r))))
+    need += t.min_clearance_m
+    top = max(field + LANDING_GLIDE * glide_m, need)
+    if top > t.ceiling_m + 1e-6 or (top - field) / glide_m > grad + 1e-12 or z[-1] < need - 1e-6:
+        raise GlideError(
+            where, f"a descent orbit at ({c[0] / 1e3:.1f}, {c[1] / 1e3:.1f}) km over ground up "
+            f"to {need - t.min_clearance_m:.0f} m AMSL, {glide_m / 1e3:.2f} km of glide from a "
+            f"landing field at {field:.0f} m",
+            f"an orbit keeping terrain.min_clearance_m = {t.min_clearance_m:g} m within the "
+            f"ceiling and a glide within eq. 19's pitch bound uav.max_pitch_deg = {deg:g} deg",
+        )  # fmt: skip
+    u = (land - c) / d
+    alpha = math.acos(r / d)  # clockwise: the exit is u turned alpha counter-clockwise
+    ex = math.atan2(u[1], u[0]) + alpha
+    exit_xy = c + r * np.array([math.cos(ex), math.sin(ex)])
+    s = np.linspace(0.0, 1.0, max(1, math.ceil(glide_m / (t.cell_m / 2.0))) + 1)
+    line = exit_xy + (land - exit_xy) * s[:, None]
+    i = _first_cut(t, land, line, top + (field - top) * s)
+    if i is not None:
+        x, y = line[i]
+        ground = float(bilinear(t.ground_m, t.origin_m, t.cell_m, line[i])[0])
+        raise GlideError(
+            where, f"ground {ground:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km under the "
+            f"glide from a descent orbit at {top:.0f} m",
+            "a final glide that stays above the ground",
+        )  # fmt: skip
+    _warn_steep(where, "descent orbit's exit", top - field, field, glide_m)
+    back = p[-2] - c if len(p) > 1 else np.array([1.0, 0.0])
+    orbit = Spiral(
+        center_m=(float(c[0]), float(c[1])),
+        radius_m=r,
+        from_m=float(z[-1]),
+        to_m=float(top),
+        speed_mps=v,
+        pitch_rad=t.max_pitch_rad,
+        start_rad=math.atan2(float(back[1]), float(back[0])),
+    )
+    return Descent(
+        orbit=orbit,
+        exit_m=(float(exit_xy[0]), float(exit_xy[1])),
+        exit_rad=ex,
+        glide_m=glide_m,
+    )
+
+
+def landing_profile(
+    t: Terrain, u: Any, zones: Any, where: str, speed_mps: float, area: Any = None
+) -> Profile:
+    """A UAV's :func:`profile` with the final glide it can fly (i24-glide; probe 13 of
+    results/audit/dayaudit).
+
+    First, as before, straight from the approach point of
+    :func:`~poc_env.agents.mission.plan.approach_point`. Only where that glide cannot keep the
+    ground (:class:`GlideError`), the sides of the landing field are searched, nearest first
+    (:func:`~poc_env.agents.mission.plan.approach_sides`, 15 degree steps, clear of the no-fly
+    ``zones``, the approach and its orbit on the terrain grid and inside the operating area
+    ``area``, the QGC inclusion fence): on each, a straight glide from it, then a descent
+    orbit at it (:func:`descent_orbit`); the first that flies with a glide no steeper than
+    :data:`~poc_env.agents.mission.plan.LANDING_GLIDE` (PX4's default FW_LND_ANG accepts it)
+    is taken, else the first that flies (its :class:`SteepGlideWarning` said). Only the
+    attempt taken says its warnings.
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named: no side of the field gives a glide that clears the ground (the first
+        side's refusal, with the sides tried); or the profile's other refusals.
+    """
+    import warnings
+
+    from poc_env.agents.mission.plan import approach_sides
+
+    path = mission_path(u, zones)
+    layer = u.get("layer_m", 0.0)
+    land = u["landing_m"]
+
+    def attempt(app: Any, loiter: bool, steep: bool) -> Profile:
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")  # the caller's filters decide when said below
+            prof = profile(t, [*path[:-1], app], where, land, layer, speed_mps, loiter)
+        if not steep and any(issubclass(w.category, SteepGlideWarning) for w in said):
+            raise GlideError(where, "a glide steeper than the flat export's", "a gentler one")
+        for w in said:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return prof
+
+    try:
+        return attempt(path[-1], False, True)
+    except GlideError as err:
+        first = err
+    from shapely.geometry import Point, Polygon
+
+    x0, y0, x1, y1 = t.bounds
+    r = orbit_radius(t, speed_mps, layer)
+    fence = Polygon(area).buffer(1.0) if area else None
+    sides: list[list[float]] = []
+    for side in approach_sides(u, zones):  # +-180 deg: one side
+        if all(math.dist(side, other) > 1.0 for other in sides):
+            sides.append(side)
+    tries = [
+        (app, loiter)
+        for app in sides
+        if x0 + r <= app[0] <= x1 - r and y0 + r <= app[1] <= y1 - r
+        for loiter in ((True,) if app == path[-1] else (False, True))
+        if fence is None or fence.covers(Point(app).buffer(r if loiter else 0.0))
+    ]
+    for steep in (False, True):
+        for app, loiter in tries:
+            try:
+                return attempt(app, loiter, steep)
+            except ConfigError:  # this side does not fly (its last leg, its glide, its orbit)
+                continue
+    raise ConfigError(
+        where, first.value,
+        f"{first.allowed}; no side of the landing field clears it either ({len(sides)} "
+        "approach sides 15 deg apart tried, each with a straight glide and with a descent "
+        "orbit at the approach point)",
+    )  # fmt: skip
 
 
 class SteepGlideWarning(UserWarning):
@@ -928,7 +1199,7 @@ def _glide_cap(
     if g > grad + 1e-12:
         i = int(np.argmax(need > grad + 1e-12))
         x, y = p[i]
-        raise ConfigError(
+        raise GlideError(
             where, f"ground {req[i] - t.min_clearance_m:.0f} m AMSL near ({x / 1e3:.1f}, "
             f"{y / 1e3:.1f}) km, {to_go[i] / 1e3:.1f} km before a landing field at {field:.0f} m",
             "a glide to the landing field within eq. 19's pitch bound uav.max_pitch_deg = "
@@ -937,20 +1208,26 @@ def _glide_cap(
             "from the high ground, or a UAV that can glide steeper)",
         )  # fmt: skip
     out = np.minimum(z, field + g * final + grad * (dist[-1] - dist))
-    glide = (float(out[-1]) - field) / final
+    _warn_steep(where, "landing approach point", float(out[-1]) - field, field, final)
+    return out
+
+
+def _warn_steep(where: str, what: str, height_m: float, field: float, final: float) -> None:
+    """:class:`SteepGlideWarning` when a final glide of ``height_m`` over ``final`` metres to
+    a landing field at ``field`` is steeper than :data:`LANDING_GLIDE`."""
+    glide = height_m / final
     if glide > LANDING_GLIDE * (1 + 1e-9):
         import warnings
 
         warnings.warn(
-            f"{where}: the clearance holds the landing approach point {out[-1] - field:.0f} m "
+            f"{where}: the clearance holds the {what} {height_m:.0f} m "
             f"above the landing field at {field:.0f} m, {final / 1e3:g} km from it: a final "
             f"glide of {math.degrees(math.atan(glide)):.1f} deg, steeper than the "
             f"{math.degrees(math.atan(LANDING_GLIDE)):.2f} deg of the flat export; PX4 refuses "
             "the mission unless its FW_LND_ANG (default 5 deg) allows it",
             SteepGlideWarning,
-            stacklevel=4,
+            stacklevel=5,
         )
-    return out
 
 
 def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.ndarray) -> list:
@@ -1074,8 +1351,10 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
             continue
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
-        p = profile(t, mission_path(u, zones), where, u["landing_m"], u.get("layer_m", 0.0), speed)
-        if p.climb is not None:
+        p = landing_profile(t, u, zones, where, speed, plan.get("operating_area_m"))
+        if p.descent is not None:
+            _check_orbit_time(t, p, float(u["flight_time_s"]), where)
+        elif p.climb is not None:
             _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
         if memo is not None:
             memo[key] = (rec, u, zones, p)
@@ -1105,6 +1384,46 @@ def _check_spiral_time(t: Terrain, sp: Spiral, flight_s: float, where: str) -> N
             f"to {sp.to_m:.0f} m AMSL; re-plan this UAV with a shorter route, or from another "
             "take-off field)",
         )  # fmt: skip
+
+
+def _check_orbit_time(t: Terrain, p: Profile, flight_s: float, where: str) -> None:
+    """Eq. 18 with the descent orbit (and the climb spiral, if any): ``flight_s`` + both
+    orbits' time ``<= 0.85 T`` (not checked when the plan records no endurance).
+
+    Raises
+    ------
+    ConfigError
+        ``where`` named, with the flight time, the orbits' and the minutes missing.
+    """
+    if t.usable_endurance_s is None or p.descent is None:
+        return
+    climb_s = 0.0 if p.climb is None else p.climb.time_s
+    total = flight_s + climb_s + p.descent.time_s
+    if total > t.usable_endurance_s + 1e-6:
+        o = p.descent.orbit
+        raise ConfigError(
+            where, f"flight {flight_s / 60:.1f} min + take-off climb spiral {climb_s / 60:.1f} "
+            f"min + descent orbit {p.descent.time_s / 60:.1f} min = {total / 60:.1f} min",
+            f"at most eq. 18's 0.85 T = {t.usable_endurance_s / 60:.1f} min: "
+            f"{(total - t.usable_endurance_s) / 60:.1f} min missing for the orbits (the descent "
+            f"at the landing approach point: radius {o.radius_m / 1e3:.2f} km from {o.from_m:.0f}"
+            f" to {o.to_m:.0f} m AMSL; re-plan this UAV with a shorter route, or to another "
+            "landing field)",
+        )  # fmt: skip
+
+
+def approaches(plan: Any) -> list[list[float]]:
+    """Each UAV's landing approach point as its mission flies it: the terrain profile's (which
+    may have turned it round the field, :func:`landing_profile`) when the plan has terrain and
+    its profiles are found, else :func:`~poc_env.agents.mission.plan.approach_point`'s."""
+    zones = plan.get("no_fly_zones_m")
+    profs = None
+    if plan.get("terrain") is not None:
+        with contextlib.suppress(ConfigError):  # refused elsewhere, naming the UAV
+            profs = plan_profiles(plan)
+    if profs is None:
+        return [approach_point(u, zones) for u in plan["uavs"]]
+    return [pr.points_m[-1].tolist() for pr in profs]
 
 
 # --------------------------------------------------------------------------- checking exports

@@ -1181,16 +1181,20 @@ def make_allocation_plan(
         ``lines_moves`` and ``box_moves``."""
         moves = KINDS if opt.polish_grade else MOVES
         out: tuple = (rs, 0.0, {})
+        # i24-bigpolish: above the cell limit the polish stages share a work budget (candidate
+        # steps scored) and the second polish has its own passes
+        left = opt.polish_big_work if big else None
+        lines = opt.polish_big_lines or opt.polish_lines if big else opt.polish_lines
         later = (
             ("regrade", opt.regrade if opt.regrade_at == "first" else 0, (), (), None),
             ("polish", opt.polish, moves, opt.polish_radii, None),
             ("regrade", opt.regrade if opt.regrade_at == "between" else 0, (), (), None),
-            ("lines", opt.polish_lines, (*moves, "block"), opt.polish_lines_radii, None),
+            ("lines", lines, (*moves, "block"), opt.polish_lines_radii, None),
             ("box", opt.polish_boxes, BOX_KINDS, opt.polish_lines_radii, opt.polish_boxes_radii),
             ("regrade", opt.regrade if opt.regrade_at == "end" else 0, (), (), None),
         )
         for stage, passes, kinds, radii, box_radii in later:
-            if not passes:
+            if not passes or (left is not None and left <= 0 and stage != "regrade"):
                 continue
             if stage == "regrade":  # i24-regrade: runs of lines re-spaced jointly; with zones
                 pr, val, stats = polish_for(  # its runs kept out of them (i24-smallfix)
@@ -1199,8 +1203,15 @@ def make_allocation_plan(
                     routine=regrade_routes, **({"router": router} if router.active else {}),
                 )  # fmt: skip
             else:
-                pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii)
+                pr, val, stats = _polish_stage(out[0], passes, kinds, radii, box_radii, left)
+                if left is not None:  # the budget's rest for the next stage
+                    left -= stats["work"]
             st0 = out[2]
+            # i24-bigpolish: the budget's steps scored and whether it stopped a stage
+            spent = {}
+            if "work" in stats:
+                spent = {"work": st0.get("work", 0) + stats["work"],
+                         "spent": bool(st0.get("spent")) or stats["spent"]}  # fmt: skip
             out = (
                 pr,
                 val,
@@ -1210,11 +1221,12 @@ def make_allocation_plan(
                     "passes": st0.get("passes", 0) + stats["passes"],
                     "moves": st0.get("moves", 0) + stats["moves"],
                     **({} if stage == "polish" else {f"{stage}_moves": stats["moves"]}),
+                    **spent,
                 },
             )
         return out
 
-    def _polish_stage(rs, passes, moves, radii, box_radii=None):
+    def _polish_stage(rs, passes, moves, radii, box_radii=None, work=None):
         return polish_for(
             sc,
             rs,
@@ -1230,13 +1242,15 @@ def make_allocation_plan(
             **({} if box_radii is None else {"box_radii": box_radii}),
             # i24-zonepolish: with zones, no candidate enters one (eq. 20; polish.zone_guard)
             **({"router": router} if router.active and opt.polish_zones else {}),
+            **({} if work is None else {"work": max(0, work)}),  # i24-bigpolish
         )
 
     polished: dict[str, Any] | None = None
+    big = not opt.polish_here(grid.nx, grid.ny)  # above polish_max_cells a side
     polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes or opt.regrade)
     if polishing and router.active and not opt.polish_zones:  # eq. 20: zones not seen
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
-    elif polishing and not opt.polish_here(grid.nx, grid.ny):  # the size rule (i24-fastpolish)
+    elif polishing and big and not opt.polish_big_work:  # the size rule (i24-fastpolish)
         polished = {"passes": 0, "moves": 0, "skipped": "map larger than polish_max_cells"}
     elif polishing and any(routes):
         # the chosen plan polished, and with ``polish_starts`` the next best of the starts

@@ -14,7 +14,10 @@ wait for a better one. ``"default"`` is the planner of ``allocation_plan`` and `
 (within the issue's 2 s on ``paper_6_2`` and 10 s for 24 UAVs on 160 x 160 cells);
 ``"standard"`` (i24-fastpolish, i24-cheapolish) is the default plan polished (1 pass with the
 grade moves, 2 of the second polish at radii W/8-2W with the block moves on windows of 1 and
-2 lawnmower lines) on maps of at most 80 cells a side: within 2 s on ``paper_6_2`` (2.9 times
+2 lawnmower lines) on maps of at most 80 cells a side -- on larger ones the same stages, the
+second polish up to 12 passes, within a work budget of 12 million candidate steps
+(i24-bigpolish: about a minute of one core at 160 x 160 cells and 24 UAVs; docs/PLANNER.md,
+"Standard on big maps") --: within 2 s on ``paper_6_2`` (2.9 times
 the default's CPU time, median; docs/PLANNER.md, "Cheaper candidates (i24-cheapolish)"; before
 it 2 passes and 1 of the second polish at the polish's radii, flown 0.887 of the rule-aware
 bound on the 50 reported priors against the default's 0.852: "A faster polish
@@ -241,6 +244,15 @@ class PlanOptions:
     #: deterministic size rule, no clock, so a preset keeps its time on large maps; elsewhere
     #: the plan is the unpolished one and its settings say why).
     polish_max_cells: int = 0
+    #: on maps of more than :attr:`polish_max_cells` cells a side the polish stages run anyway
+    #: within this work budget (i24-bigpolish; 0: they are skipped there, as before): they stop
+    #: once they have scored this many candidate steps together (the candidates' legs cut into
+    #: steps of at most a cell: the scoring kernel's work; a count, not a clock, so plans are
+    #: reproducible), with :attr:`polish_big_lines` passes of the second polish.
+    polish_big_work: int = 0
+    #: passes of the second polish on such maps (0: :attr:`polish_lines`); the budget usually
+    #: stops it first.
+    polish_big_lines: int = 0
     #: also make the default plan (``PlanOptions()`` with this value's levels, margin, refine
     #: and starts) and keep it if it plans more POS: a plan of these options then never plans
     #: less POS than the default's, at the default's planning time more.
@@ -300,6 +312,8 @@ class PlanOptions:
                         empty=True)  # fmt: skip
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
+        _number("polish_big_work", self.polish_big_work, 0, 1e12, integer=True)
+        _number("polish_big_lines", self.polish_big_lines, 0, 100, integer=True)
         _number("regrade", self.regrade, 0, 100, integer=True)
         _number("zone_reach", self.zone_reach, 0.0, 16.0, closed_low=False)
         _number("nothing", self.nothing, 0.0, 0.01)
@@ -374,8 +388,8 @@ THOROUGH: dict[str, Any] = {
 #: the ``standard`` effort level's changes to the defaults (i24-fastpolish: the default plan
 #: polished, the most POS within the issue's 2 s on ``paper_6_2``, chosen on its validation
 #: priors: docs/PLANNER.md, "A faster polish (i24-fastpolish)"; its passes and candidates
-#: chosen again by i24-cheapolish, "Cheaper candidates"); only on maps of at most 80 cells a
-#: side (the 160 x 160 timing case keeps the default plan and its time).
+#: chosen again by i24-cheapolish, "Cheaper candidates"); as chosen on maps of at most 80
+#: cells a side, on larger ones within a work budget (i24-bigpolish).
 STANDARD: dict[str, Any] = {
     "polish": 1,
     "polish_grade": True,
@@ -385,4 +399,9 @@ STANDARD: dict[str, Any] = {
     "polish_lines_radii": (0.125, 0.25, 0.5, 1.0, 2.0),
     "polish_lines_windows": (2, 4),
     "polish_max_cells": 80,
+    # i24-bigpolish: above 80 cells a side the same stages, the second polish up to 12 passes,
+    # stopped after 12 million candidate steps scored (about 40 s of one core on the 500 km
+    # scenario, 160 x 160 cells, 24 UAVs: docs/PLANNER.md, "Standard on big maps")
+    "polish_big_work": 12_000_000,
+    "polish_big_lines": 12,
 }

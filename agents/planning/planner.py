@@ -296,11 +296,19 @@ def effort_skip_note(plan: dict[str, Any], effort: str | None) -> str | None:
     ``thorough`` skipped its polish (a map above ``polish_max_cells`` a side, or no-fly zones
     with ``PlanOptions.polish_zones=False``: docs/PLANNER.md, effort levels), naming why, or
     None. Only plan.json recorded it before (scale audit): a standard
-    plan so skipped is exactly the default plan, a thorough one lacks its polish stages."""
+    plan so skipped is exactly the default plan, a thorough one lacks its polish stages.
+    i24-bigpolish: also when the polish stopped at its work budget (``polish_big_work``, maps
+    above the cell limit), saying so and that ``thorough`` polishes further."""
     if effort not in ("standard", "thorough"):
         return None
     polish = plan.get("optimizer", {}).get("settings", {}).get("polish") or {}
     why = polish.get("skipped")
+    if polish.get("spent"):
+        return (
+            f"note: --effort {effort} stopped its polish at its work budget (a map above "
+            f"polish_max_cells cells a side: {polish['work']:,} candidate steps scored, "
+            f"{polish['passes']} passes); --effort thorough polishes further, for minutes"
+        )
     if not why:
         return None
     what = (

@@ -168,6 +168,9 @@ class Exposure:
         self.live = self.mass.copy()  # mass exp(-E): not yet found
         self._base = np.zeros_like(self.mass)
         self._work = np.zeros_like(self.mass)
+        #: candidate steps scored by :meth:`gains` so far (the polish's work budget counts
+        #: them: i24-bigpolish).
+        self.scored = 0
 
     def steps(self, a, b) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The legs ``a -> b`` (L, 2) cut into steps no longer than a cell, as
@@ -201,6 +204,7 @@ class Exposure:
         out = np.empty(len(first) - 1)
         oa, ob, _ = self.steps(old_a, old_b)
         na, nb, per_leg = self.steps(new_a, new_b)
+        self.scored += len(na)
         cum = np.concatenate([[0], np.cumsum(per_leg)])
         _sensing.exposure_gains(
             self.live, oa, ob, na, nb, cum[np.asarray(first, dtype=np.int64)],
@@ -363,6 +367,7 @@ def polish_routes(
     block_radii: Sequence[float] | None = None,
     focus: int | None = None,
     router: Any = None,
+    work: int | None = None,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
@@ -383,7 +388,12 @@ def polish_routes(
     and block moves only at waypoints within ``focus`` of those a move kept in the pass before
     changed (measured not to pay on ``paper_6_2``: docs/PLANNER.md, "Cheaper candidates").
     ``router`` (i24-zonepolish): the plan's :class:`~poc_env.sim.routing.ZoneRouter`; with
-    zones, candidates are checked by :func:`zone_guard` (module docstring, "No-fly zones")."""
+    zones, candidates are checked by :func:`zone_guard` (module docstring, "No-fly zones").
+    ``work`` (i24-bigpolish; None: no budget): the search also stops once it has scored this
+    many candidate steps (the candidates' legs cut into steps of at most a cell, as
+    ``sampled_sweep`` flies them: the scoring kernel's work), checked before each set of
+    candidates is scored -- a count, not a clock, so the result is reproducible; the stats
+    then hold ``"work"`` (the steps scored) and ``"spent"`` (True if the budget stopped it)."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
@@ -402,6 +412,9 @@ def polish_routes(
         raise ConfigError("block_radii", block_radii, "positive numbers (sweep widths), not empty")
     if focus is not None and (isinstance(focus, bool) or not isinstance(focus, int) or focus < 0):
         raise ConfigError("focus", focus, "None or an integer >= 0 (waypoints)")
+    if work is not None and (isinstance(work, bool) or not isinstance(work, int | np.integer)
+                             or work < 0):  # fmt: skip
+        raise ConfigError("work", work, "None or an integer >= 0 (candidate steps)")
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):
         raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
@@ -415,6 +428,14 @@ def polish_routes(
     zone_bad = zone_guard(router)
 
     tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
+    spent = [False]  # the work budget used up (i24-bigpolish): no more candidates scored
+
+    def over() -> bool:
+        """Whether the work budget is used up (then no further set of candidates is scored)."""
+        if work is not None and ex.scored >= work:
+            spent[0] = True
+        return spent[0]
+
     turn_cost = TURN_SHARE / turn_rate  # ``route_fits``' turn cost (eq. 17 with the turns)
 
     def choose(k: int, i0: int, i1: int, seqs: list[np.ndarray] | np.ndarray) -> bool:
@@ -422,6 +443,8 @@ def polish_routes(
         and last points; a list, or one array (C, P, 2) of candidates of P points) that gains
         more than :data:`TOL` and keeps the route flyable."""
         nonlocal value
+        if over():
+            return False
         path = paths[k]
         old = path[i0 : i1 + 1]
         if isinstance(seqs, np.ndarray):  # i24-cheapolish: the same steps, no list
@@ -592,6 +615,8 @@ def polish_routes(
         """The group move (module docstring) of the UAVs ``ks``: the best fitting candidate
         kept if it gains."""
         nonlocal value
+        if over():
+            return False
         inner = [paths[k][1:-1] for k in ks]
         c = np.vstack(inner).mean(axis=0)
         cands = [
@@ -682,14 +707,15 @@ def polish_routes(
                     kept += got
                     n_box += got
         for k in range(n):
-            if not flying[k]:
+            if not flying[k] or spent[0]:
                 continue
             if kinds & {"box", "stretch", "rotate", "trim"}:  # i24-boxes: whole boxes first
                 got = boxes(k)
                 kept += got
                 n_box += got
             i = 1
-            while i < len(paths[k]):  # i: the waypoint changed (inserts go before it)
+            # i: the waypoint changed (inserts go before it)
+            while i < len(paths[k]) and not spent[0]:
                 path = paths[k]
                 m = len(path)
                 j_end = min(i + 2, m - 1)  # the legs path[i-1] .. path[j_end] may change
@@ -738,7 +764,7 @@ def polish_routes(
                     n_block += got
                 i += 1
         n_moves += kept
-        if not kept:
+        if not kept or spent[0]:
             break
     out = [
         [[float(x), float(y)] for x, y in _dedupe(p)[1:-1]] if flying[k] else []
@@ -749,6 +775,9 @@ def polish_routes(
         stats["block_moves"] = n_block
     if kinds & {"box", "stretch", "rotate", "group", "trim"}:
         stats["box_moves"] = n_box
+    if work is not None:
+        stats["work"] = int(ex.scored)
+        stats["spent"] = bool(spent[0])
     return out, ex.pos(), stats
 
 

@@ -3,7 +3,8 @@
 :func:`wall_scenario` is the scenario of tests/mission/test_altitude_layers.py and
 results/mission/i24-layers/zero_ab.py (tests/mission/test_terrain.py and
 results/audit/terrainleft/probes.py build the same one their own way).
-:func:`hill_across_first_leg` raises a plan's recorded ground across a UAV's take-off climb.
+:func:`hill_across_first_leg` raises a plan's recorded ground across a UAV's take-off climb;
+:func:`cell_centres` gives a recorded grid's cell centres.
 """
 
 from __future__ import annotations
@@ -52,13 +53,20 @@ def hill_across_first_leg(
         * np.linspace(start_m, end_m, step + 1)[:, None]
     )
     rec = dict(plan["terrain"])
+    gx, gy = cell_centres(rec)
+    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
+    for key in ("ground_m", "ground_max_m"):
+        rec[key] = np.where(near < half_width_m, height_m, np.asarray(rec[key])).tolist()
+    return rec
+
+
+def cell_centres(rec: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, y)`` of every cell centre of a plan's terrain record (local metres, each of the
+    grid's shape, rows from the south)."""
     ny, nx = np.asarray(rec["ground_m"]).shape
     cell = float(rec["cell_m"])
     gx, gy = np.meshgrid(
         rec["origin_m"][0] + (np.arange(nx) + 0.5) * cell,
         rec["origin_m"][1] + (np.arange(ny) + 0.5) * cell,
     )
-    near = np.min(np.hypot(gx[..., None] - along[:, 0], gy[..., None] - along[:, 1]), axis=-1)
-    for key in ("ground_m", "ground_max_m"):
-        rec[key] = np.where(near < half_width_m, height_m, np.asarray(rec[key])).tolist()
-    return rec
+    return gx, gy

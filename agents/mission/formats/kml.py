@@ -35,6 +35,7 @@ from poc_env.agents.mission.features import (
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import plan_prior, png_bytes, warp_prior
 from poc_env.agents.mission.plan import CLIMB_KIND, Plan, flight, search_rings
+from poc_env.agents.mission.terrain import DESCENT_KIND
 from poc_env.io import write_bytes_atomic, write_text_atomic
 
 #: altitude reference -> KML altitudeMode
@@ -212,7 +213,8 @@ def _kml_coords(latlon: Any, crs: Any, zs: Any = None) -> str:
 
 def _kml_placemark(parent: Any, o: dict, mode: str, crs: Any) -> None:
     kind = str(o["properties"]["kind"])
-    style = "route" if kind == CLIMB_KIND else kind  # a climb spiral is flown: a route's style
+    flown = (CLIMB_KIND, DESCENT_KIND)  # the orbits are flown: a route's style
+    style = "route" if kind in flown else kind
     pm = _placemark(parent, str(o["properties"]["name"]), style)
     if o["geometry"] == "Polygon":
         _polygon(pm, _kml_coords(o["latlon"], crs))

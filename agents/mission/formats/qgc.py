@@ -33,7 +33,8 @@ MAV_CMD_NAV_TAKEOFF = 22
 #: Loiter at a point until an altitude is reached (MAVLink common.xml; params: heading
 #: required (1: leave heading for the next waypoint), radius (m, positive clockwise), empty,
 #: exit xtrack (1: straight from the exit point to the next waypoint)); the climb spiral over
-#: the take-off field (:func:`poc_env.agents.mission.terrain.climb_spiral`).
+#: the take-off field (:func:`poc_env.agents.mission.terrain.climb_spiral`) and the descent
+#: orbit at the landing approach point (:func:`poc_env.agents.mission.terrain.descent_orbit`).
 MAV_CMD_NAV_LOITER_TO_ALT = 31
 MAV_CMD_DO_CHANGE_SPEED = 178
 MAV_CMD_DO_LAND_START = 189
@@ -120,7 +121,11 @@ def qgc_plan(
     home position are at the fields' DEM elevations. Where the straight climb meets the ground
     (the profile's ``climb`` spiral), the take-off climbs to the spiral's first altitude and
     NAV_LOITER_TO_ALT (31) at the field, clockwise at the spiral's radius, climbs to its last
-    before the transit.
+    before the transit. Where no straight final glide clears the ground (the profile's
+    ``descent``, :func:`poc_env.agents.mission.terrain.landing_profile`), the approach
+    waypoint is followed by NAV_LOITER_TO_ALT at it down to the glide's entry altitude (PX4's
+    fixed-wing landing pattern: DO_LAND_START, the orbit, NAV_LAND; its feasibility check
+    reads the glide from the orbit's tangent exit).
     """
     if profile is not None:
         return _terrain_plan(
@@ -185,6 +190,11 @@ def _terrain_plan(
         items.append(_speed(cruise_speed_mps))
     items.append(_do(MAV_CMD_DO_LAND_START, [0, 0, 0, 0, 0, 0, 0]))
     items.append(_nav(MAV_CMD_NAV_WAYPOINT, *ll[last], z[last], ref))
+    if prof.descent is not None:  # orbit the approach point down to the glide (PX4's pattern)
+        o = prof.descent.orbit
+        orbit = (1, round(float(o.radius_m), 1), 0, 1)  # leave it heading for the field
+        down = round(float(o.to_m), 1)
+        items.append(_nav(MAV_CMD_NAV_LOITER_TO_ALT, *ll[last], down, ref, orbit))
     items.append(_nav(MAV_CMD_NAV_LAND, *ll[-1], round(prof.landing_field_m, 1), ref))
     return _document(
         items, u, crs, ref, cruise_speed_mps, ll[0], round(prof.field_m, 1), operating_area_m,
@@ -245,12 +255,13 @@ def check_fences(plan: Plan, area: list | None) -> None:
     ``area`` (by more than 1 m) or flies through a no-fly zone (more than 1 m of a leg)."""
     from shapely.geometry import LineString, Point, Polygon
 
+    from poc_env.agents.mission.terrain import approaches
     from poc_env.geometry import zone_label
 
     inc = Polygon(area).buffer(1.0) if area else None
     zones = [Polygon(z) for z in plan.get("no_fly_zones_m") or []]
-    for k, u in enumerate(plan["uavs"]):
-        pts = [*route(u)[:-1], approach_point(u, plan.get("no_fly_zones_m")), list(u["landing_m"])]
+    for k, (u, app) in enumerate(zip(plan["uavs"], approaches(plan))):
+        pts = [*route(u)[:-1], app, list(u["landing_m"])]
         names = [
             "takeoff_m", *(f"waypoints_m[{i}]" for i in range(len(pts) - 3)), "approach",
             "landing_m",

@@ -214,6 +214,13 @@ def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
                     f"{sp.turns:.1f} turns of {sp.radius_m / 1e3:.2f} km, {sp.time_s / 60:.1f} "
                     "min not in the flight time"
                 )
+            if p.descent is not None:  # no straight glide cleared: an orbit to the glide
+                o = p.descent.orbit
+                alt_text += (
+                    f"; descent orbit at the landing approach point {o.from_m:.0f}-{o.to_m:.0f},"
+                    f" radius {o.radius_m / 1e3:.2f} km, {p.descent.time_s / 60:.1f} min not in "
+                    "the flight time"
+                )
         pts = np.asarray(route(u), dtype=float)
         route_km = float(np.sum(np.hypot(*np.diff(pts, axis=0).T))) / 1e3
         t = u["flight_time_s"]

@@ -8,7 +8,7 @@
 set -u
 W=$1
 M=/work/main/.venv/bin/poc-env
-B=/work/wt/i24-climb/.venv/bin/poc-env
+B=${BRANCH_POC_ENV:-/work/wt/i24-climb/.venv/bin/poc-env}  # i24-glide: its own with BRANCH_POC_ENV
 mkdir -p "$W" && cd "$W" || exit 1
 cp -rn /tmp/dayaudit/in /tmp/dayaudit/s150.* /tmp/dayaudit/s150land.* /tmp/dayaudit/swall* /tmp/dayaudit/alps . 2>/dev/null
 cases="s150:s150.yaml: s150land:s150land.yaml: alps:alps/alps.yaml:--overrides=uav.max_altitude_m=6000 swall:swall.yaml: swall2:swall2.yaml:"
