@@ -768,7 +768,7 @@ def _plan(
     )
     _spill_bound(args, plan, sc, prior)
     print(plan_table(plan))
-    _plan_notes(args, plan, sc)
+    _plan_notes(args, [("", plan)], sc)
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)
@@ -819,14 +819,16 @@ def _spill_bound(args: argparse.Namespace, plan: dict, sc, prior) -> None:
         plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
 
 
-def _plan_notes(args: argparse.Namespace, plan: dict, sc) -> None:
-    """Print what the plan's table leaves out: the effort level's skipped polish and the
-    scenario's warnings (a moving target, a coarse lattice)."""
+def _plan_notes(args: argparse.Namespace, plans: list[tuple[str, dict]], sc) -> None:
+    """Print what the plans' table leaves out: per plan (``(label, plan)``, the label put
+    before its line) the effort level's skipped or stopped polish; once, the scenario's
+    warnings (a moving target, a coarse lattice)."""
     from poc_env.agents.planning.planner import lattice_warning, moving_target_warning
 
-    skipped = effort_skip_note(plan, getattr(args, "effort", None))
-    if skipped is not None:
-        print(skipped)
+    for label, plan in plans:
+        skipped = effort_skip_note(plan, getattr(args, "effort", None))
+        if skipped is not None:
+            print(f"{label}{skipped}")
     for warning in (moving_target_warning(sc), lattice_warning(sc)):
         if warning is not None:
             print(f"warning: {warning}")
@@ -934,7 +936,7 @@ def _plan_fleet_sizes(args: argparse.Namespace) -> int:
         check_terrain(plan, sc.with_uavs(n))
         _spill_bound(args, plan, sc.with_uavs(n), prior)
     print(fleet_table(plans))
-    _plan_notes(args, plans[-1], sc)
+    _plan_notes(args, [(f"{len(p['uavs'])} UAVs: ", p) for p in plans], sc)
     folder = Path(args.out).parent
     with _output_folder("out", folder) as stage:
         files = [
