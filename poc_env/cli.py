@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import itertools
 import os
 import sys
 import warnings
@@ -668,6 +669,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from poc_env.io import atomic_path
 
     _check_plan_args(args)
+    if getattr(args, "fleet_sizes", None) is not None:
+        return _plan_fleet_sizes(args)
     if args.plot:  # asked for: checked before the planning, not after
         require_extra("plot", "poc-env plan --plot", *EXTRA_MODULES["plot"])
     out = Path(args.out)
@@ -740,38 +743,11 @@ def _plan(
     Returns the ``wrote`` lines for the caller to say once the files are in place; ``shown``:
     the names they give for ``out`` and ``plot`` (where they will be once published).
     """
-    from poc_env.agents.mission.plan import with_scenario_file, write_plan
-    from poc_env.agents.planning.planner import (
-        lattice_warning,
-        make_plan,
-        moving_target_warning,
-        plan_table,
-        plot_plan,
-    )
-    from poc_env.config import load_scenario, parse_overrides
-    from poc_env.theory.probability_map import build_prior
+    from poc_env.agents.mission.plan import map_source, with_scenario_file, write_plan
+    from poc_env.agents.planning.planner import make_plan, plan_table, plot_plan
 
-    overrides = parse_overrides(args.overrides or [])
-    if args.uavs is not None and any(k.split(".")[0] == "fleet" for k in overrides):
-        raise ConfigError(
-            "uavs", args.uavs, "either --uavs or --overrides fleet..., not both (--uavs "
-            "replaces the fleet)",
-        )  # fmt: skip
+    sc, prior = _plan_inputs(args)
     planner = getattr(args, "planner", "de")
-    if planner == "allocation":  # the optimiser's options do not apply to it
-        for name in ("optimizer", "preset", "popsize", "maxiter"):
-            if getattr(args, name, None) is not None:
-                raise ConfigError(
-                    name, getattr(args, name), "only with --planner de (the allocation "
-                    "planner has no optimiser: leave it out)",
-                )  # fmt: skip
-    from poc_env.agents.mission.plan import check_map_option, map_source
-
-    sc = load_scenario(args.scenario, overrides)
-    if args.uavs is not None:
-        sc = sc.with_uavs(args.uavs)
-    check_map_option(sc, args.map_file)
-    prior = build_prior(sc.map, args.map_file)
     plan = make_plan(
         sc,
         prior=prior,
@@ -790,24 +766,209 @@ def _plan(
         refine=getattr(args, "refine", None),
         effort=getattr(args, "effort", None),
     )
-    if getattr(args, "spill_bound", False) and plan.get("bound_rule"):
-        # the spill-charged bound (docs/PLANNER.md, i24-spill): asked for, a linear program
-        from poc_env.agents.planning.geography import probability
-        from poc_env.theory.spill_bound import spill_bound
-
-        plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
+    _spill_bound(args, plan, sc, prior)
     print(plan_table(plan))
-    skipped = effort_skip_note(plan, getattr(args, "effort", None))
-    if skipped is not None:
-        print(skipped)
-    for warning in (moving_target_warning(sc), lattice_warning(sc)):
-        if warning is not None:
-            print(f"warning: {warning}")
+    _plan_notes(args, [("", plan)], sc)
     if plot is not None:
         plot_plan(plan, sc, prior, plot)
     write_plan(with_scenario_file(plan, args.scenario), out)
     shown_out, shown_plot = shown or (out, plot)
     return [f"wrote {shown_out}"] + ([f"wrote {shown_plot}"] if plot is not None else [])
+
+
+def _plan_inputs(args: argparse.Namespace) -> tuple:
+    """The scenario (its fleet ``--uavs`` UAVs, if given) and prior of a ``plan`` command
+    line, after refusing the options that do not go together: ``--uavs`` (or
+    ``--fleet-sizes``) with ``--overrides fleet...``, the optimiser's options with the
+    allocation planner."""
+    from poc_env.agents.mission.plan import check_map_option
+    from poc_env.config import load_scenario, parse_overrides
+    from poc_env.theory.probability_map import build_prior
+
+    overrides = parse_overrides(args.overrides or [])
+    sizes = getattr(args, "fleet_sizes", None)
+    for name, value in (("uavs", args.uavs), ("fleet_sizes", sizes)):
+        if value is not None and any(k.split(".")[0] == "fleet" for k in overrides):
+            option = "--" + name.replace("_", "-")
+            raise ConfigError(
+                name, value, f"either {option} or --overrides fleet..., not both ({option} "
+                "replaces the fleet)",
+            )  # fmt: skip
+    planner = getattr(args, "planner", "de")
+    if planner == "allocation":  # the optimiser's options do not apply to it
+        for name in ("optimizer", "preset", "popsize", "maxiter"):
+            if getattr(args, name, None) is not None:
+                raise ConfigError(
+                    name, getattr(args, name), "only with --planner de (the allocation "
+                    "planner has no optimiser: leave it out)",
+                )  # fmt: skip
+    sc = load_scenario(args.scenario, overrides)
+    if args.uavs is not None:
+        sc = sc.with_uavs(args.uavs)
+    check_map_option(sc, args.map_file)
+    return sc, build_prior(sc.map, args.map_file)
+
+
+def _spill_bound(args: argparse.Namespace, plan: dict, sc, prior) -> None:
+    """``--spill-bound``: the spill-charged bound (docs/PLANNER.md, i24-spill; a linear
+    program) recorded in ``plan`` as ``bound_spill``."""
+    if getattr(args, "spill_bound", False) and plan.get("bound_rule"):
+        from poc_env.agents.planning.geography import probability
+        from poc_env.theory.spill_bound import spill_bound
+
+        plan["bound_spill"] = probability(spill_bound(sc, prior).upper)
+
+
+def _plan_notes(args: argparse.Namespace, plans: list[tuple[str, dict]], sc) -> None:
+    """Print what the plans' table leaves out: per plan (``(label, plan)``, the label put
+    before its line) the effort level's skipped or stopped polish; once, the scenario's
+    warnings (a moving target, a coarse lattice)."""
+    from poc_env.agents.planning.planner import lattice_warning, moving_target_warning
+
+    for label, plan in plans:
+        skipped = effort_skip_note(plan, getattr(args, "effort", None))
+        if skipped is not None:
+            print(f"{label}{skipped}")
+    for warning in (moving_target_warning(sc), lattice_warning(sc)):
+        if warning is not None:
+            print(f"warning: {warning}")
+
+
+#: The most UAVs a fleet size of ``plan --fleet-sizes`` may have (``--uavs``'s and
+#: :func:`~poc_env.agents.planning.allocation.plan_fleets`'s limit).
+MAX_FLEET = 64
+
+
+def fleet_sizes(text: str) -> list[int]:
+    """``plan --fleet-sizes``'s ``N[,N...]``: the fleet sizes, each in [1, :data:`MAX_FLEET`],
+    strictly increasing (a size given twice or out of order is a typo, not a request).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``fleet_sizes[i]`` (a bad entry) or ``fleet_sizes`` (the order).
+    """
+    tokens = [t.strip() for t in str(text).split(",")]
+    sizes = []
+    for i, t in enumerate(tokens):
+        value: int | str = t  # not a whole number: named by as_int with what is allowed
+        with contextlib.suppress(ValueError):
+            value = int(t)
+        sizes.append(as_int(f"fleet_sizes[{i}]", value, 1, MAX_FLEET))
+    if any(b <= a for a, b in itertools.pairwise(sizes)):
+        raise ConfigError(
+            "fleet_sizes", text, f"fleet sizes in increasing order, each in [1, {MAX_FLEET}], "
+            "comma-separated (e.g. 6,12,24)",
+        )  # fmt: skip
+    return sizes
+
+
+def fleet_plan_path(out: str | os.PathLike[str], n: int) -> Path:
+    """Where ``plan --fleet-sizes`` writes the plan of ``n`` UAVs: beside ``out``, its name
+    with ``_n<n>`` before the suffix (``out/plan.json`` -> ``out/plan_n12.json``).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``out`` if the name would not be a plain file name in ``out``'s folder.
+    """
+    out = Path(out)
+    name = f"{out.stem}_n{as_int('uavs', n, 1, MAX_FLEET)}{out.suffix}"
+    if not out.name or Path(name).name != name or name in (".", ".."):
+        raise ConfigError("out", os.fspath(out), "a file name (plan.json): --fleet-sizes "
+                          "writes NAME_nN.json beside it for each size")  # fmt: skip
+    return out.parent / name
+
+
+def _plan_fleet_sizes(args: argparse.Namespace) -> int:
+    """``plan --fleet-sizes``: the allocation plans of each fleet size, each planned on the
+    one before (:func:`~poc_env.agents.planning.allocation.plan_fleets`: POS_C non-decreasing
+    in the fleet), one plan file per size beside ``--out`` (:func:`fleet_plan_path`), all
+    written or none, and one table of the sizes."""
+    from poc_env.agents.mission.plan import map_source, with_scenario_file, write_plan
+    from poc_env.agents.planning.allocation import REFINE, SPEED, plan_fleets
+    from poc_env.agents.planning.geography import check_terrain, scenario_crs
+    from poc_env.agents.planning.options import PlanOptions
+
+    sizes = fleet_sizes(args.fleet_sizes)
+    how = "--fleet-sizes plans each size on the one before"
+    if args.uavs is not None:
+        raise ConfigError("uavs", args.uavs, "either --uavs or --fleet-sizes, not both")
+    if getattr(args, "planner", "de") != "allocation":
+        raise ConfigError(
+            "planner", args.planner, f"allocation with --fleet-sizes ({how}, with the "
+            "allocation planner): add --planner allocation",
+        )  # fmt: skip
+    if args.effort == "thorough":
+        raise ConfigError(
+            "effort", args.effort, f"default or standard with --fleet-sizes ({how}; thorough "
+            "keeps the better of its plan and the default plan, which takes no floor): plan "
+            "each size with --uavs N --effort thorough",
+        )  # fmt: skip
+    if args.plot is not None:
+        raise ConfigError("plot", args.plot, "no --plot with --fleet-sizes (one picture per "
+                          "plan: plan a size with --uavs N --plot FILE)")  # fmt: skip
+    paths = {n: fleet_plan_path(args.out, n) for n in sizes}
+    for path in paths.values():  # a folder or a device of that name: refused before planning
+        _check_out("out", path, "file")
+    check_distinct({f"out (fleet size {n})": str(p) for n, p in paths.items()}, _inputs_of(args))
+    sc, prior = _plan_inputs(args)
+    crs = scenario_crs(sc, args.origin, args.projection, args.utm_zone)
+
+    def said(plan: dict) -> None:  # progress: a large map takes minutes a size
+        if not args.quiet:
+            print(f"planned {len(plan['uavs'])} UAVs: POS_C {plan['posc']:.4f} "
+                  f"({plan['runtime_s']:.1f} s)", flush=True)  # fmt: skip
+
+    plans = plan_fleets(
+        sc,
+        sizes,
+        prior=prior,
+        each=said,
+        map_source=map_source(sc, args.map_file),
+        seed=args.seed,
+        crs=crs,
+        speed=SPEED if args.speed is None else args.speed,  # as make_plan plans one size
+        refine=REFINE if args.refine is None else args.refine,
+        options=PlanOptions.preset(args.effort or "default"),
+    )
+    for n, plan in zip(sizes, plans, strict=True):
+        plan.update(check_terrain(plan, sc.with_uavs(n), prior))  # orbits fitted (i24-orbitfit)
+        _spill_bound(args, plan, sc.with_uavs(n), prior)
+    print(fleet_table(plans))
+    _plan_notes(args, [(f"{len(p['uavs'])} UAVs: ", p) for p in plans], sc)
+    folder = Path(args.out).parent
+    with _output_folder("out", folder) as stage:
+        files = [
+            write_plan(with_scenario_file(p, args.scenario), stage / paths[n].name)
+            for n, p in zip(sizes, plans, strict=True)
+        ]
+        _wrote(files, stage, folder)
+    return 0
+
+
+def fleet_table(plans: list[dict]) -> str:
+    """``plan --fleet-sizes``'s table: per plan its UAVs, planned POS_C, the rule-aware bound
+    (``bound_rule``, :doc:`BOUND`) and POS_C's share of it, its UAVs without a route and its
+    planning time."""
+    head = (
+        f"{'UAVs':>4} {'POS_C':>7} {'rule-aware bound':>16} {'POS_C/bound':>11} "
+        f"{'without a route':>15} {'time/s':>7}"
+    )
+    lines = [head, "-" * len(head)]
+    for p in plans:
+        rule = p.get("bound_rule")
+        bound, ratio = (f"{rule:.4f}", f"{p['posc'] / rule:.3f}") if rule else ("-", "-")
+        idle = sum(1 for u in p["uavs"] if not u["waypoints_m"])
+        lines.append(
+            f"{len(p['uavs']):>4} {p['posc']:>7.4f} {bound:>16} {ratio:>11} {idle:>15} "
+            f"{p['runtime_s']:>7.1f}"
+        )
+    lines.append("-" * len(head))
+    lines.append(
+        "each size planned on the one before (plan_fleets): POS_C never falls as the fleet grows"
+    )
+    return "\n".join(lines)
 
 
 def effort_skip_note(plan: dict, effort: str | None) -> str | None:
@@ -1150,6 +1311,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=examples(
             "poc-env plan --out out/plan.json --plot out/plan.png --origin -45.5,126.6",
             "poc-env plan --scenario small --planner allocation --out out/plan.json",
+            "poc-env plan --scenario small --planner allocation --fleet-sizes 3,6,12 "
+            "--out out/plan.json",
             "poc-env plan --overrides sensor.sweep_width_km=4 --uavs 4 --optimizer cmaes "
             "--maxiter 50",
         ),
@@ -1162,9 +1325,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="number of UAVs (default: the scenario's fleet). The fleet's own take-off/landing "
         "pairs come first, one from each of its groups in turn, so N equal to the fleet's size is "
         "the fleet itself; UAVs beyond it take off from the airfields in turn and land there. To "
-        "compare fleet sizes: one plan per size can plan a larger fleet a little less; the "
-        "Python API's plan_fleets plans each size on the one before, never less "
-        "(docs/PLANNER.md, 'Larger fleets')",
+        "compare fleet sizes: one plan per size can plan a larger fleet a little less; "
+        "--fleet-sizes plans each size on the one before, never less",
     )
     p.add_argument(
         "--optimizer",
@@ -1225,6 +1387,16 @@ def build_parser() -> argparse.ArgumentParser:
         "about a minute of one core at 160 x 160 cells and 24 UAVs, with a note when the budget "
         "stopped it) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min "
         "at 160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
+    )
+    p.add_argument(
+        "--fleet-sizes",
+        default=None,
+        metavar="N[,N...]",
+        help="compare fleet sizes (--planner allocation; not with --uavs): each size, in "
+        "increasing order, planned on the one before (plan_fleets), so POS_C never falls as "
+        "the fleet grows; one plan per size beside --out, named with _nN (plan_n6.json, "
+        "plan_n12.json, ...: all written or none) and one table of POS_C, the rule-aware bound, "
+        "UAVs without a route and time (docs/planning.md, 'Comparing fleet sizes')",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")
@@ -1339,8 +1511,10 @@ def build_parser() -> argparse.ArgumentParser:
         default=0.0,
         metavar="S",
         help="vertical separation: UAV k' of each field (--layer-by) flies k' x S m above the "
-        "plan's altitude, take-off to the landing approach; 0: one altitude for all, else "
-        "1 to 1000 m (docs/EXPORT.md, 'Altitude layers')",
+        "plan's altitude, take-off to the landing approach (a climb spiral or descent orbit "
+        "over terrain keeps the ground's altitudes; the layer widens its radius by k' S "
+        "instead); 0: one altitude for all, else 1 to 1000 m (docs/EXPORT.md, 'Altitude "
+        "layers')",
     )
     p.add_argument(
         "--layer-by",

@@ -94,6 +94,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 from typing import Any, cast
 
 import numpy as np
@@ -561,14 +562,21 @@ def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
 
 
 def plan_fleets(
-    scenario: Scenario | str, sizes, *, prior: np.ndarray | None = None, **kw
+    scenario: Scenario | str,
+    sizes,
+    *,
+    prior: np.ndarray | None = None,
+    each: Callable[[dict[str, Any]], object] | None = None,
+    **kw,
 ) -> list[dict[str, Any]]:
     """The allocation plans of ``scenario`` with each fleet size of ``sizes`` (the fleet's own
     take-off/landing pairs, one from each group in turn, :meth:`~poc_env.config.Scenario.
     with_uavs`), in
     increasing order, each planned with the one before as its ``floor``
     (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
-    float rounding; i24-fleet). ``kw``: :func:`make_allocation_plan`'s other keywords."""
+    float rounding; i24-fleet). ``each``: called with each plan as it is made (``plan
+    --fleet-sizes``'s progress; i24-fleetcli). ``kw``: :func:`make_allocation_plan`'s other
+    keywords."""
     sc = load_scenario(scenario)
     one = np.ndim(sizes) == 0  # a list's bad entry named by its index (i24-dayaudit)
     ns = sorted({
@@ -581,6 +589,8 @@ def plan_fleets(
     for n in ns:
         floor = plans[-1] if plans else None
         plans.append(make_allocation_plan(sc.with_uavs(n), prior=prior, floor=floor, **kw))
+        if each is not None:
+            each(plans[-1])
     return plans
 
 

@@ -322,6 +322,38 @@ def effort_skip_note(plan: dict[str, Any], effort: str | None) -> str | None:
     return f"note: --effort {effort} skipped its polish ({why}): {what}"
 
 
+def home_note(plan: dict[str, Any]) -> str | None:
+    """One line for ``plan``'s and ``replan``'s summary naming the UAVs that stay home (no
+    search route: empty ``waypoints_m``) and the allocation planner's rule for it, or None
+    when every UAV flies (i24-dayaudit2: their table rows read 0.00 h and ``ok yes``, and
+    only the export named them).
+
+    Parameters
+    ----------
+    plan : dict
+        A plan as :func:`make_plan` returns it (or its plan.json).
+
+    Returns
+    -------
+    str or None
+        ``stay home: UAVs 2, 3 (2 of 3, no search route): ...``; None when no UAV is idle or
+        none flies (the plan's ``reason`` says why then).
+    """
+    uavs = plan["uavs"]
+    home = [str(u["id"]) for u in uavs if not u["waypoints_m"]]
+    if not home or len(home) == len(uavs):
+        return None
+    why = (
+        "no route the planner found for them both adds at least PlanOptions.nothing (1e-4 "
+        "of the prior's mass by default) to the plan's POS (F1: no UAV sent for nothing) "
+        "and keeps clear of the other routes (eq. 21, PlanOptions.fill_apart)"
+        if plan.get("planner") == "allocation"
+        else "the planner gave them no search route"
+    )
+    who = f"UAV{'s' if len(home) > 1 else ''} {', '.join(home)}"
+    return f"stay home: {who} ({len(home)} of {len(uavs)}, no search route): {why}"
+
+
 def plan_table(plan: dict[str, Any]) -> str:
     """Table 6 analog: rectangles, spacing and angle per UAV, with POD, POC, POS and time."""
     head = (
@@ -350,6 +382,10 @@ def plan_table(plan: dict[str, Any]) -> str:
     )
     if plan.get("reason"):  # an allocation plan that reaches nothing says why (not just 0s)
         lines.append(f"no search planned: {plan['reason']}")
+    else:
+        home = home_note(plan)
+        if home:
+            lines.append(home)
     b = plan.get("bounds")
     if b:
         ratio = f" (POS_C / reach {plan['posc'] / b['reach']:.3f})" if b["reach"] > 0 else ""

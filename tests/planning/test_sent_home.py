@@ -80,3 +80,26 @@ def test_nothing_zero_flies_every_route_as_before():
     prior[1, 24] = 1.0
     plan = make_allocation_plan(sc, prior=prior, options=PlanOptions(nothing=0.0))
     assert sum(bool(u["waypoints_m"]) and u["pos"] == 0.0 for u in plan["uavs"]) >= 1
+
+
+def test_the_summary_names_the_uavs_that_stay_home_and_why():
+    """i24-dayaudit2: ``plan``'s and ``replan``'s table printed an idle UAV as a row of 0.00
+    and ``ok yes``; the summary now names the UAVs kept home and F1's rule, and says nothing
+    of it when every UAV flies (nor when none does: the plan's ``reason`` says why)."""
+    from poc_env.agents.planning.planner import home_note, plan_table
+
+    sc = load_scenario("paper_6_2")
+    grid = Grid.from_config(sc.map)
+    prior = np.zeros(grid.shape)
+    prior[1, 24] = 1.0
+    plan = make_allocation_plan(sc, prior=prior)
+    home = [u["id"] for u in plan["uavs"] if not u["waypoints_m"]]
+    assert 0 < len(home) < len(plan["uavs"])
+    (line,) = [x for x in plan_table(plan).splitlines() if x.startswith("stay home:")]
+    named = line.split(": ")[1].split(" (")[0].removeprefix("UAVs ").removeprefix("UAV ")
+    assert [int(i) for i in named.split(", ")] == home
+    assert f"({len(home)} of {len(plan['uavs'])}" in line and "PlanOptions.nothing" in line
+    flying = {**plan, "uavs": [u for u in plan["uavs"] if u["waypoints_m"]]}
+    assert home_note(flying) is None and "stay home" not in plan_table(flying)
+    idle = {**plan, "uavs": [{**u, "waypoints_m": []} for u in plan["uavs"]]}
+    assert home_note(idle) is None
