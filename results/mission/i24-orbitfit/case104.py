@@ -48,7 +48,8 @@ for name, a in argv.items():
     for u, p in zip(plan["uavs"], plan_profiles(plan)):
         r = {"id": u["id"], "flight_min": u["flight_time_s"] / 60,
              "orbits_min": orbit_time_s(p) / 60, "usable_min": usable / 60,
-             "feasible": u["feasible"], "fit": (fit or {}).get("uavs", {}).get(str(u["id"]))}  # fmt: skip
+             "feasible": u["feasible"],
+             "fit": (fit or {}).get("uavs", {}).get(str(u["id"]))}  # fmt: skip
         rows.append(r)
         print(f"  UAV {r['id']}: flight {r['flight_min']:.2f} + orbits {r['orbits_min']:.2f} = "
               f"{r['flight_min'] + r['orbits_min']:.2f} / {r['usable_min']:.2f} min"

@@ -8,9 +8,10 @@ import sys
 
 sys.path[:0] = ["tests/mission", "tests"]
 
+from test_orbit_fit import VALLEY_M, _scenario  # noqa: E402
+
 import poc_env.agents.planning.geography as geo  # noqa: E402
 from poc_env.agents.planning.planner import make_plan  # noqa: E402
-from test_orbit_fit import VALLEY_M, _scenario  # noqa: E402
 
 sc = _scenario(VALLEY_M + 2500.0)
 for steps in (geo.BISECT_STEPS, 0):
