@@ -933,7 +933,7 @@ def _plan_fleet_sizes(args: argparse.Namespace) -> int:
         options=PlanOptions.preset(args.effort or "default"),
     )
     for n, plan in zip(sizes, plans, strict=True):
-        check_terrain(plan, sc.with_uavs(n))
+        plan.update(check_terrain(plan, sc.with_uavs(n), prior))  # orbits fitted (i24-orbitfit)
         _spill_bound(args, plan, sc.with_uavs(n), prior)
     print(fleet_table(plans))
     _plan_notes(args, [(f"{len(p['uavs'])} UAVs: ", p) for p in plans], sc)

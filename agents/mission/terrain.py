@@ -1317,7 +1317,16 @@ def profiles_once() -> Iterator[None]:
         _PROFILES.reset(token)
 
 
-def plan_profiles(plan: Any) -> list[Profile] | None:
+def orbit_time_s(p: Profile) -> float:
+    """The time (s) ``p``'s orbits add to the 2-D flight: the take-off climb spiral's and the
+    descent orbit's (0 without either), charged against eq. 18's 0.85 T by
+    :func:`plan_profiles`."""
+    return (0.0 if p.climb is None else p.climb.time_s) + (
+        0.0 if p.descent is None else p.descent.time_s
+    )
+
+
+def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
     """Every UAV's :func:`~poc_env.agents.mission.terrain.profile` over the plan's recorded
     terrain; None without terrain. Within :func:`profiles_once`, a UAV's profile computed
     before (the same record, UAV and zone objects) is reused.
@@ -1325,7 +1334,11 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
     A UAV whose straight take-off climb meets the ground climbs on a spiral over its field
     first (:func:`climb_spiral`, at the plan's transit speed): its time is charged against eq.
     18's 0.85 T (the terrain record's ``usable_endurance_s``) on top of the plan's
-    ``flight_time_s``, which the 2-D time model flies without it.
+    ``flight_time_s``, which the 2-D time model flies without it (so is a descent orbit's). A
+    UAV whose flight alone is beyond 0.85 T is not charged: the plan marks it infeasible and
+    the export's over-endurance check refuses it (``--allow-infeasible`` writes it). With
+    ``charge`` False no orbit time is checked (the planners'
+    :func:`poc_env.agents.planning.geography.fit_orbits` reads the orbits first).
 
     Raises
     ------
@@ -1345,14 +1358,20 @@ def plan_profiles(plan: Any) -> list[Profile] | None:
     t: Terrain | None = None
     out = []
     for k, u in enumerate(plan["uavs"]):
-        key = (id(rec), id(u), id(zones))
+        key = (id(rec), id(u), id(zones), charge)
         if memo is not None and key in memo:
             out.append(memo[key][-1])
             continue
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
         p = landing_profile(t, u, zones, where, speed, plan.get("operating_area_m"))
-        if p.descent is not None:
+        f = u.get("flight_time_s")  # (the greedy baseline's routes record none)
+        over = (
+            t.usable_endurance_s is not None and f is not None and f > t.usable_endurance_s + 1e-6
+        )
+        if not charge or over:  # the flight itself is over: the over-endurance check's
+            pass
+        elif p.descent is not None:
             _check_orbit_time(t, p, float(u["flight_time_s"]), where)
         elif p.climb is not None:
             _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)

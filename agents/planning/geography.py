@@ -153,10 +153,163 @@ def plan_geography(sc: Scenario, prior: np.ndarray, crs: dict[str, Any] | None) 
     return out
 
 
-def check_terrain(plan: dict[str, Any], sc: Scenario | None = None) -> dict[str, Any]:
+#: Halvings of the last leg :func:`fit_orbits` keeps flying: within 1/256 of its length.
+BISECT_STEPS = 8
+
+
+def fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[str, Any]:
+    """``plan`` with time left for each UAV's orbits (issue 24, i24-orbitfit): a UAV whose
+    take-off climb spiral or descent orbit (:func:`poc_env.agents.mission.terrain.plan_profiles`,
+    the export's own profile) takes its flight beyond eq. 18's 0.85 T, though the flight alone
+    fits, loses its last waypoints by the allocation's trim rule
+    (:func:`poc_env.agents.planning.refine.route_fits`, the budget 0.85 T less the orbits' time,
+    the orbits read again after each cut, since the last waypoint places the approach) until
+    flight + orbits fit; then the plan's POS is scored again by the allocation planner's own
+    scorer (:func:`poc_env.agents.planning.allocation.sampled_sweep`, eq. 14 along every
+    flight path; the DE plan's POS of a trimmed plan too, since its rectangles are no longer
+    flown whole) and the trim recorded in ``orbit_fit``. Nothing changes (the same object is
+    returned) without terrain or when every UAV's orbits fit.
+
+    Parameters
+    ----------
+    plan : dict
+        A schema-2 plan of :func:`poc_env.agents.planning.planner.make_plan` (either planner).
+    sc : Scenario
+        The scenario planned (speeds, turn rate, sensor, grid).
+    prior : numpy.ndarray
+        The map's prior the plan was scored on (the whole map, zones included).
+    """
+    from poc_env.agents.mission.terrain import profiles_once
+
+    with profiles_once():  # each unchanged UAV's profile computed once
+        return _fit_orbits(plan, sc, prior)
+
+
+def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[str, Any]:
+    """:func:`fit_orbits`, within :func:`~poc_env.agents.mission.terrain.profiles_once`."""
+    from poc_env.agents.mission.terrain import orbit_time_s, plan_profiles
+
+    profs = plan_profiles(plan, charge=False)
+    if profs is None:
+        return plan
+    usable = sc.uav.usable_endurance_s
+    eps = 1e-6
+
+    def over(u: dict[str, Any], p: Any) -> bool:
+        f = float(u["flight_time_s"])
+        return f <= usable + eps and f + orbit_time_s(p) > usable + eps
+
+    bad = [k for k, (u, p) in enumerate(zip(plan["uavs"], profs)) if over(u, p)]
+    if not bad:
+        return plan
+    import shapely
+
+    from poc_env.agents.mission.formats.qgc import zone_crossed
+    from poc_env.agents.planning.allocation import _swept_areas, sampled_sweep
+    from poc_env.agents.planning.flight_rules import Speeds, reserve_s
+    from poc_env.agents.planning.refine import route_fits, route_time
+    from poc_env.sim.core import takeoff_heading
+    from poc_env.theory.probability_map import Grid
+
+    grid = Grid.from_config(sc.map)
+    u_cfg = sc.uav
+    if plan.get("speeds_mps"):  # the allocation's (plan_speeds), with its take-off headings
+        v = Speeds(**plan["speeds_mps"])
+        heads: list[Any] = takeoff_heading(
+            grid.bounds, np.array([u["takeoff_m"] for u in plan["uavs"]])
+        ).tolist()
+    else:  # the DE plan's eq. 17 (planner._Speeds), no take-off heading
+        v = Speeds(u_cfg.cruise_speed_mps, u_cfg.search_speed_mps, u_cfg.cruise_speed_mps)
+        heads = [None] * len(plan["uavs"])
+    uavs = [dict(u) for u in plan["uavs"]]
+    out = {**plan, "uavs": uavs}
+    dropped: dict[str, dict[str, Any]] = {}
+    turn, reserve = u_cfg.max_turn_rate_rad_s, reserve_s(sc)
+    zones = [shapely.Polygon(z) for z in plan.get("no_fly_zones_m") or []]
+
+    def trial(k: int, wps: list) -> tuple[dict[str, Any], Any, bool]:
+        """UAV ``k`` flying ``wps``: its record, profile, and whether flight + orbits fit
+        (eq. 18 and the return rule's reserve at every waypoint, as ``_trim``'s)."""
+        path = np.array([uavs[k]["takeoff_m"], *wps, uavs[k]["landing_m"]], dtype=float)
+        u = {
+            **uavs[k],
+            "waypoints_m": [list(w) for w in wps],
+            "flight_time_s": route_time(path, v, turn, heads[k]) if wps else 0.0,
+            "track_length_m": float(np.hypot(*np.diff(path, axis=0).T).sum()) if wps else 0.0,
+        }
+        # named plan.uavs[k] if refused; the UAVs before it read from the memo
+        try:
+            p = plan_profiles({**out, "uavs": [*uavs[:k], u]}, charge=False)[k]  # type: ignore[index]
+        except ConfigError:  # this end of the route lands nowhere: not a fit
+            return u, None, False
+        mission = [*path[:-1].tolist(), p.points_m[-1].tolist(), list(u["landing_m"])]
+        ok = (
+            not over(u, p)
+            and zone_crossed(mission, zones) is None  # the export's geofence (check_fences)
+            and (not wps or route_fits(path, v, turn, usable - orbit_time_s(p), reserve, heads[k]))
+        )
+        return u, p, ok
+
+    for k in bad:
+        wps = [[float(a), float(b)] for a, b in uavs[k]["waypoints_m"]]
+        n0 = len(wps)
+        u, ok = uavs[k], False
+        last, lo = None, 0.0
+        while wps and not ok:  # the allocation's _trim: the last waypoints dropped
+            last = wps.pop()
+            u, _, ok = trial(k, wps)
+        if not ok:  # no waypoint left and still over: the orbit check names it
+            continue
+        if last is not None:  # and the last leg flown as far as it fits (bisection)
+            a = np.asarray(wps[-1] if wps else u["takeoff_m"], dtype=float)
+            hi = 1.0
+            for _ in range(BISECT_STEPS):
+                mid = 0.5 * (lo + hi)
+                q = (a + mid * (np.asarray(last) - a)).tolist()
+                cand = trial(k, [*wps, q])
+                if cand[2]:
+                    lo, u = mid, cand[0]
+                else:
+                    hi = mid
+            wps = u["waypoints_m"]
+        uavs[k] = u
+        lead = min(int(u.get("transit_waypoints", 0)), len(wps))
+        legs = np.array([wps[i : i + 2] for i in range(lead, len(wps) - 1)]).reshape(-1, 2, 2)
+        if "transit_waypoints" in u:
+            u["transit_waypoints"] = lead
+        if "areas_m" in u:
+            u["areas_m"] = _swept_areas(legs, u["spacing_m"]) if len(legs) else []
+        u["feasible"] = bool(u["flight_time_s"] <= usable)
+        dropped[str(u["id"])] = {"waypoints_before": n0, "waypoints_after": len(wps),
+                                 "last_leg_kept": lo}  # fmt: skip
+    if not dropped:
+        return plan
+    pos, found = sampled_sweep(
+        sc, grid, prior, [[u["takeoff_m"], *u["waypoints_m"], u["landing_m"]]
+                          if u["waypoints_m"] else [] for u in uavs],
+    )  # fmt: skip
+    for u, pos_k, f_k in zip(uavs, pos, found):
+        poc_k = float(np.sum(prior * (f_k > 0)))
+        u.update(pos=probability(pos_k), poc=probability(poc_k),
+                 pod=probability(pos_k / poc_k) if poc_k > 0 else 0.0)  # fmt: skip
+    out["orbit_fit"] = {
+        "uavs": dropped,
+        "posc_before": float(plan["posc"]),
+        "scorer": "sampled_sweep",
+    }
+    out["posc"] = float(sum(pos))
+    if "objective" in out and plan.get("speeds_mps"):
+        out["objective"] = -out["posc"]
+    return out
+
+
+def check_terrain(
+    plan: dict[str, Any], sc: Scenario | None = None, prior: np.ndarray | None = None
+) -> dict[str, Any]:
     """``plan``, after checking that every UAV's mission keeps the terrain clearance within
     the ceiling (:func:`poc_env.agents.mission.terrain.plan_profiles`, the export's own
-    profile): a plan the planner writes is one the export accepts.
+    profile): a plan the planner writes is one the export accepts. With ``sc`` and the
+    ``prior``, a UAV whose orbits do not fit in 0.85 T is trimmed first (:func:`fit_orbits`).
 
     With the scenario ``sc`` and a sensor model whose W depends on the height (``camera``,
     :meth:`poc_env.config.SensorConfig.sweep_width_at`, resolved at ``uav.cruise_altitude_m``):
@@ -171,6 +324,8 @@ def check_terrain(plan: dict[str, Any], sc: Scenario | None = None) -> dict[str,
     """
     from poc_env.agents.mission.terrain import plan_profiles
 
+    if sc is not None and prior is not None:
+        plan = fit_orbits(plan, sc, prior)
     profs = plan_profiles(plan)
     if profs is None or sc is None or sc.sensor.model == "fixed":
         return plan

@@ -103,6 +103,7 @@ def make_plan(
         from poc_env.agents.planning.allocation import REFINE, SPEED, make_allocation_plan
         from poc_env.agents.planning.options import PlanOptions
 
+        sc_a = load_scenario(scenario)
         return check_terrain(
             make_allocation_plan(
                 scenario,
@@ -115,7 +116,8 @@ def make_plan(
                 refine=REFINE if refine is None else refine,
                 options=PlanOptions.preset("default" if effort is None else effort),
             ),
-            load_scenario(scenario),
+            sc_a,
+            build_prior(sc_a.map) if prior is None else np.asarray(prior, dtype=float),
         )
     for name, value in (("speed", speed), ("refine", refine), ("effort", effort)):
         if value is not None:
@@ -224,7 +226,8 @@ def make_plan(
             # the bounds of the fleet planned (uavs=n may differ from the scenario's fleet)
             **plan_geography(obj.scenario, full_prior, crs),
         },
-        sc,
+        obj.scenario,
+        full_prior,
     )
 
 

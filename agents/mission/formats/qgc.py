@@ -253,7 +253,7 @@ def _document(
 def check_fences(plan: Plan, area: list | None) -> None:
     """ConfigError if a UAV's mission (route and landing approach) leaves the inclusion fence
     ``area`` (by more than 1 m) or flies through a no-fly zone (more than 1 m of a leg)."""
-    from shapely.geometry import LineString, Point, Polygon
+    from shapely.geometry import Point, Polygon
 
     from poc_env.agents.mission.terrain import approaches
     from poc_env.geometry import zone_label
@@ -275,14 +275,25 @@ def check_fences(plan: Plan, area: list | None) -> None:
                         f"inside the operating area, the mission's inclusion geofence ({out:.1f}"
                         " km outside): re-plan, or export without it (geofence=False)",
                     )  # fmt: skip
-        line = LineString(pts)
-        for i, z in enumerate(zones):
-            if z.is_valid and line.intersection(z).length > 1.0:
-                raise ConfigError(
-                    f"plan.uavs[{k}]", u["id"],
-                    f"a mission outside {zone_label(i, plan.get('no_fly_zone_names') or ())}"
-                    " (an exclusion geofence): re-plan",
-                )  # fmt: skip
+        i = zone_crossed(pts, zones)
+        if i is not None:
+            raise ConfigError(
+                f"plan.uavs[{k}]", u["id"],
+                f"a mission outside {zone_label(i, plan.get('no_fly_zone_names') or ())}"
+                " (an exclusion geofence): re-plan",
+            )  # fmt: skip
+
+
+def zone_crossed(pts: Any, zones: list) -> int | None:
+    """The index of the first of the shapely polygons ``zones`` that the polyline ``pts`` flies
+    through (more than 1 m of it inside), else None: :func:`check_fences`' exclusion rule."""
+    from shapely.geometry import LineString
+
+    line = LineString(pts)
+    for i, z in enumerate(zones):
+        if z.is_valid and line.intersection(z).length > 1.0:
+            return i
+    return None
 
 
 def check_mission_size(where: str, items: int, limit: int | None = None) -> None:
