@@ -171,3 +171,14 @@ def check_zones_leave_room(
         ", ".join(zone_label(i, names) for i in idx),
         allowed,
     )
+
+
+def zone_crossed(pts: ArrayLike, zones: list) -> int | None:
+    """The index of the first of the shapely polygons ``zones`` that the polyline ``pts`` flies
+    through (more than 1 m of it inside), else None: the QGC export's geofence rule
+    (:func:`poc_env.agents.mission.formats.qgc.check_fences`), also the planners' orbit fit's."""
+    line = shapely.LineString(pts)
+    for i, z in enumerate(zones):
+        if z.is_valid and line.intersection(z).length > 1.0:
+            return i
+    return None

@@ -110,7 +110,13 @@ from poc_env.agents.planning.deconflict import (
     lanes,
     planned_positions,
 )
-from poc_env.agents.planning.flight_rules import SPEED, Speeds, plan_speeds
+from poc_env.agents.planning.flight_rules import (  # sampled_sweep: allocation's public scorer
+    SPEED,
+    Speeds,
+    _swept_areas,
+    plan_speeds,
+    sampled_sweep,
+)
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
 from poc_env.agents.planning.geography import plan_geography, probability, zone_prior
@@ -421,19 +427,6 @@ def fit_lawnmowers(
     return rs
 
 
-def _swept_areas(lines: np.ndarray, spacing: float) -> list[list[list[float]]]:
-    """The ground the search lines ``(L, 2, 2)`` sweep, each ``spacing`` wide (flat ends), as
-    outer rings in metres (simplified to 1 m): the ``areas_m`` of plan.json schema 2, for
-    people; ``waypoints_m`` is what is flown."""
-    import shapely
-
-    half = max(0.5 * spacing, 1.0)
-    swaths = [shapely.LineString(seg).buffer(half, cap_style="flat") for seg in lines]
-    union = shapely.union_all(swaths).simplify(1.0)
-    polys = list(getattr(union, "geoms", [union]))
-    return [[[float(x), float(y)] for x, y in p.exterior.coords[:-1]] for p in polys if p.area > 0]
-
-
 def _flight_time(wps, takeoff, landing, sc: Scenario, v: Speeds, heading0=None) -> float:
     """Eq. 17 time of a route (:func:`poc_env.agents.planning.refine.route_time`: out at ``v.out``,
     on the route at ``v.line``, home at ``v.home``, turns at the maximum turn rate)."""
@@ -474,34 +467,6 @@ def _cell_pos(paths, takeoff, landing, prior, grid: Grid, w: float, law: str) ->
         np.zeros(grid.shape),
     )
     return float(np.sum(prior * pod_from_coverage(cov, law)))
-
-
-def sampled_sweep(
-    sc: Scenario, grid: Grid, prior: np.ndarray, paths
-) -> tuple[list[float], list[np.ndarray]]:
-    """The environment's detection model over whole flight paths: each path (take-off,
-    waypoints, landing) swept in turn over the prior spread on the scenario's sample points
-    (:func:`poc_env.theory.search_theory.sweep_track`, eq. 14 with the sensor's own lateral law
-    and cut-off, the same compiled formula the environment steps with). Returns each path's POS
-    (§3.1.6: a point is credited to the first path that finds it) and the mass each path finds
-    per cell. Unlike W x length per cell (eq. 10 per cell), it does not depend on the cell size:
-    a line sweeps the sample points within its lateral reach, whatever cells they lie in."""
-    s = sc.sensor.samples_per_cell
-    belief = np.ascontiguousarray(grid.refine(prior, s))
-    w = sc.sensor.sweep_width_m
-    cutoff = sc.sensor.cutoff_sweep_widths * w
-    pos: list[float] = []
-    found: list[np.ndarray] = []
-    for path in paths:
-        pts = np.asarray(path, dtype=float).reshape(-1, 2)
-        if len(pts) < 2:
-            pos.append(0.0)
-            found.append(np.zeros(grid.shape))
-            continue
-        before = belief.copy()
-        pos.append(sweep_track(belief, grid, s, pts, w, sc.sensor.law, cutoff, grid.cell_m))
-        found.append(grid.coarsen(before - belief, s))
-    return pos, found
 
 
 def violation_penalty(

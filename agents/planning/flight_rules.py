@@ -13,6 +13,7 @@ from poc_env.agents.planning.refine import leg_coverage
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import Grid
+from poc_env.theory.search_theory import sweep_track
 
 #: the default speed rule of :func:`plan_speeds`.
 SPEED = "max"
@@ -65,3 +66,44 @@ def path_coverage(path, grid: Grid, w: float) -> np.ndarray:
     if len(pts) < 2:
         return np.zeros(grid.shape)
     return leg_coverage(pts[:-1], pts[1:], grid, w)[0].reshape(grid.shape)
+
+
+def _swept_areas(lines: np.ndarray, spacing: float) -> list[list[list[float]]]:
+    """The ground the search lines ``(L, 2, 2)`` sweep, each ``spacing`` wide (flat ends), as
+    outer rings in metres (simplified to 1 m): the ``areas_m`` of plan.json schema 2, for
+    people; ``waypoints_m`` is what is flown."""
+    import shapely
+
+    half = max(0.5 * spacing, 1.0)
+    swaths = [shapely.LineString(seg).buffer(half, cap_style="flat") for seg in lines]
+    union = shapely.union_all(swaths).simplify(1.0)
+    polys = list(getattr(union, "geoms", [union]))
+    return [[[float(x), float(y)] for x, y in p.exterior.coords[:-1]] for p in polys if p.area > 0]
+
+
+def sampled_sweep(
+    sc: Scenario, grid: Grid, prior: np.ndarray, paths
+) -> tuple[list[float], list[np.ndarray]]:
+    """The environment's detection model over whole flight paths: each path (take-off,
+    waypoints, landing) swept in turn over the prior spread on the scenario's sample points
+    (:func:`poc_env.theory.search_theory.sweep_track`, eq. 14 with the sensor's own lateral law
+    and cut-off, the same compiled formula the environment steps with). Returns each path's POS
+    (§3.1.6: a point is credited to the first path that finds it) and the mass each path finds
+    per cell. Unlike W x length per cell (eq. 10 per cell), it does not depend on the cell size:
+    a line sweeps the sample points within its lateral reach, whatever cells they lie in."""
+    s = sc.sensor.samples_per_cell
+    belief = np.ascontiguousarray(grid.refine(prior, s))
+    w = sc.sensor.sweep_width_m
+    cutoff = sc.sensor.cutoff_sweep_widths * w
+    pos: list[float] = []
+    found: list[np.ndarray] = []
+    for path in paths:
+        pts = np.asarray(path, dtype=float).reshape(-1, 2)
+        if len(pts) < 2:
+            pos.append(0.0)
+            found.append(np.zeros(grid.shape))
+            continue
+        before = belief.copy()
+        pos.append(sweep_track(belief, grid, s, pts, w, sc.sensor.law, cutoff, grid.cell_m))
+        found.append(grid.coarsen(before - belief, s))
+    return pos, found

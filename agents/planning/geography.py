@@ -18,6 +18,7 @@ import numpy as np
 from poc_env.agents.mission.crs import make_crs
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
+from poc_env.geometry import zone_crossed
 
 
 def scenario_crs(
@@ -181,7 +182,10 @@ def fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[st
     """
     from poc_env.agents.mission.terrain import profiles_once
 
-    with profiles_once():  # each unchanged UAV's profile computed once
+    # each unchanged UAV's profile computed once; its warnings (a steep final glide) are the
+    # plan's, said once by check_terrain's own reading of the fitted plan, not here as well
+    with profiles_once(), warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
         return _fit_orbits(plan, sc, prior)
 
 
@@ -204,9 +208,7 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
         return plan
     import shapely
 
-    from poc_env.agents.mission.formats.qgc import zone_crossed
-    from poc_env.agents.planning.allocation import _swept_areas, sampled_sweep
-    from poc_env.agents.planning.flight_rules import Speeds, reserve_s
+    from poc_env.agents.planning.flight_rules import Speeds, _swept_areas, reserve_s, sampled_sweep
     from poc_env.agents.planning.refine import route_fits, route_time
     from poc_env.sim.core import takeoff_heading
     from poc_env.theory.probability_map import Grid

@@ -24,6 +24,7 @@ from poc_env.agents.mission.features import (
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import DEFAULT_FLIGHT, Plan, UavPlan, flight, route
 from poc_env.errors import ConfigError
+from poc_env.geometry import zone_crossed
 from poc_env.io import write_text_atomic
 
 # MAVLink ids (https://mavlink.io/en/messages/common.html): MAV_CMD and MAV_FRAME.
@@ -282,18 +283,6 @@ def check_fences(plan: Plan, area: list | None) -> None:
                 f"a mission outside {zone_label(i, plan.get('no_fly_zone_names') or ())}"
                 " (an exclusion geofence): re-plan",
             )  # fmt: skip
-
-
-def zone_crossed(pts: Any, zones: list) -> int | None:
-    """The index of the first of the shapely polygons ``zones`` that the polyline ``pts`` flies
-    through (more than 1 m of it inside), else None: :func:`check_fences`' exclusion rule."""
-    from shapely.geometry import LineString
-
-    line = LineString(pts)
-    for i, z in enumerate(zones):
-        if z.is_valid and line.intersection(z).length > 1.0:
-            return i
-    return None
 
 
 def check_mission_size(where: str, items: int, limit: int | None = None) -> None:
