@@ -405,6 +405,12 @@ def plan_table(plan: dict[str, Any]) -> str:
             f"spill-charged bound (the rule-aware one, the sensor's spill charged by its "
             f"lateral law): {spill:.4f} (POS_C / spill {plan['posc'] / spill:.3f})"
         )
+    if plan.get("reason") and (rule or (b and b["reach"] > 0)):  # G4 (results/audit/dayaudit2)
+        lines.append(
+            "(the bounds are relaxations: they credit what the sensor could detect from "
+            "anywhere a UAV can fly, up to its lateral reach beyond, with no whole search line "
+            "needed, so they can stay above 0 where the planner finds no search to plan)"
+        )
     return "\n".join(lines)
 
 

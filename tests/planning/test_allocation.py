@@ -80,6 +80,23 @@ def test_no_uav_reaches_any_mass_gives_an_empty_plan():
     assert plan["posc"] == 0 and all(u["waypoints_m"] == [] for u in plan["uavs"])
 
 
+def test_an_empty_plan_says_why_its_bounds_stay_above_zero():
+    """G4 (results/audit/dayaudit2): beside "no search planned: ..." the rule-aware bound could
+    print 0.2000 with no word of why; the summary now says the bounds are relaxations. A plan
+    whose bounds are 0 prints no such line, nor does a plan with routes."""
+    from poc_env.agents.planning.planner import plan_table
+
+    sc = _small(**{"uav.endurance_h": 0.05})
+    plan = make_allocation_plan(sc)
+    assert plan["reason"]
+    said = "the bounds are relaxations"
+    assert said in plan_table({**plan, "bound_rule": 0.2})
+    assert said in plan_table({**plan, "bound_rule": 0.0, "bounds": {"honest": 1.0, "reach": 0.3}})
+    assert said not in plan_table({**plan, "bound_rule": 0.0, "bounds": None})
+    routed = make_allocation_plan(_small())
+    assert said not in plan_table({**routed, "bound_rule": 0.5})
+
+
 def test_mass_only_outside_reach_gives_an_empty_plan():
     sc = _small(**{"uav.endurance_h": 0.3})  # 0.85 T = 918 s: ~28 km out and back
     grid = Grid.from_config(sc.map)
