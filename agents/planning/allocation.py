@@ -119,7 +119,11 @@ from poc_env.agents.planning.flight_rules import (  # sampled_sweep: allocation'
 )
 from poc_env.agents.planning.flight_rules import path_coverage as _path_coverage
 from poc_env.agents.planning.flight_rules import reserve_s as _reserve
-from poc_env.agents.planning.geography import plan_geography, probability, zone_prior
+from poc_env.agents.planning.geography import (
+    found_scores,
+    plan_geography,
+    zone_prior,
+)
 from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.polish import BOX_KINDS, KINDS, MOVES, polish_for
 from poc_env.agents.planning.refine import (
@@ -133,6 +137,7 @@ from poc_env.agents.planning.regrade import regrade_routes
 from poc_env.agents.planning.relax_patches import field_groups, out_and_back, relax_routes
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
+from poc_env.geometry import polyline_length
 from poc_env.sim.core import operating_area, takeoff_heading
 from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.bound import field_key, reach_optimum, zone_reach
@@ -1275,8 +1280,6 @@ def make_allocation_plan(
             legs = arr[lead:].reshape(-1, 2, 2)
         path = np.vstack([takeoff[k], arr, landing[k]])
         t_k = _flight_time(wps, takeoff[k], landing[k], sc, v, heading_k[k])
-        pos_k = float(flown_pos[k])
-        poc_k = float(np.sum(full_prior * (flown_found[k] > 0)))
         uav_out.append(
             {
                 "id": k + 1,
@@ -1287,11 +1290,9 @@ def make_allocation_plan(
                 "landing_m": [float(c) for c in landing[k]],
                 "waypoints_m": wps,
                 "transit_waypoints": lead if wps else 0,
-                "track_length_m": float(np.hypot(*np.diff(path, axis=0).T).sum()) if wps else 0.0,
+                "track_length_m": polyline_length(path) if wps else 0.0,
                 "flight_time_s": t_k,
-                "pod": probability(pos_k / poc_k) if poc_k > 0 else 0.0,  # sums round to 1 + 2e-16
-                "poc": probability(poc_k),
-                "pos": probability(pos_k),
+                **found_scores(full_prior, float(flown_pos[k]), flown_found[k]),
                 "feasible": bool(t_k <= u.usable_endurance_s),
             }
         )

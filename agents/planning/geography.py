@@ -18,7 +18,7 @@ import numpy as np
 from poc_env.agents.mission.crs import make_crs
 from poc_env.config import Scenario
 from poc_env.errors import ConfigError
-from poc_env.geometry import zone_crossed
+from poc_env.geometry import polyline_length, zone_crossed
 
 
 def scenario_crs(
@@ -79,6 +79,19 @@ def probability(value: float) -> float:
     """``value`` as a probability of plan.json: clamped to [0, 1] (sums of cell masses round
     to ``1 + 2e-16``; the export checks [0, 1])."""
     return float(min(max(float(value), 0.0), 1.0))
+
+
+def found_scores(prior: np.ndarray, pos: float, found: np.ndarray) -> dict[str, float]:
+    """A UAV's ``pos``, ``poc`` and ``pod`` of plan.json from what its flight path finds
+    (:func:`~poc_env.agents.planning.flight_rules.sampled_sweep`'s POS and mass per cell):
+    POC the ``prior`` mass of the cells it finds anything in, POD = POS / POC (§3.1.6), each a
+    :func:`probability`."""
+    poc = float(np.sum(prior * (found > 0)))
+    return {
+        "pod": probability(pos / poc) if poc > 0 else 0.0,  # sums round to 1 + 2e-16
+        "poc": probability(poc),
+        "pos": probability(pos),
+    }
 
 
 def _check_extent(sc: Scenario, area: tuple[float, float, float, float]) -> None:
@@ -237,7 +250,7 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
             **uavs[k],
             "waypoints_m": [list(w) for w in wps],
             "flight_time_s": route_time(path, v, turn, heads[k]) if wps else 0.0,
-            "track_length_m": float(np.hypot(*np.diff(path, axis=0).T).sum()) if wps else 0.0,
+            "track_length_m": polyline_length(path) if wps else 0.0,
         }
         # named plan.uavs[k] if refused; the UAVs before it read from the memo
         try:
@@ -291,9 +304,7 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
                           if u["waypoints_m"] else [] for u in uavs],
     )  # fmt: skip
     for u, pos_k, f_k in zip(uavs, pos, found):
-        poc_k = float(np.sum(prior * (f_k > 0)))
-        u.update(pos=probability(pos_k), poc=probability(poc_k),
-                 pod=probability(pos_k / poc_k) if poc_k > 0 else 0.0)  # fmt: skip
+        u.update(found_scores(prior, pos_k, f_k))
     out["orbit_fit"] = {
         "uavs": dropped,
         "posc_before": float(plan["posc"]),

@@ -40,6 +40,7 @@ from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
 from poc_env.agents.planning.refine import route_time
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
+from poc_env.geometry import polyline_length
 from poc_env.sim.routing import ZoneRouter
 from poc_env.theory.probability_map import build_prior
 
@@ -182,7 +183,7 @@ def make_plan(
         if router.active:  # transit around the zones, search legs clipped to flyable airspace
             path = router.reroute([u["takeoff_m"], *u["waypoints_m"], u["landing_m"]])
             u["waypoints_m"] = [[float(a), float(b)] for a, b in path[1:-1]]
-            u["track_length_m"] = float(np.hypot(*np.diff(path, axis=0).T).sum())
+            u["track_length_m"] = polyline_length(path)
             u["flight_time_s"] = route_time(path, speeds, u_cfg.max_turn_rate_rad_s)
             u["feasible"] = bool(u["feasible"] and u["flight_time_s"] <= u_cfg.usable_endurance_s)
         uav_out.append(
