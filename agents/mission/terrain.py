@@ -1116,10 +1116,7 @@ def descent_orbit(
             f"an orbit keeping terrain.min_clearance_m = {t.min_clearance_m:g} m within the "
             f"ceiling and a glide within {_bound_text(t)}",
         )  # fmt: skip
-    u = (land - c) / d
-    alpha = math.acos(r / d)  # clockwise: the exit is u turned alpha counter-clockwise
-    ex = math.atan2(u[1], u[0]) + alpha
-    exit_xy = c + r * np.array([math.cos(ex), math.sin(ex)])
+    exit_xy, ex = tangent_exit(c, r, land)
     s = np.linspace(0.0, 1.0, max(1, math.ceil(glide_m / (t.cell_m / 2.0))) + 1)
     line = exit_xy + (land - exit_xy) * s[:, None]
     i = _first_cut(t, land, line, top + (field - top) * s)
@@ -1148,6 +1145,118 @@ def descent_orbit(
         exit_rad=ex,
         glide_m=glide_m,
     )
+
+
+def tangent_exit(centre: Any, r: float, target: Any) -> tuple[np.ndarray, float]:
+    """Where a clockwise orbit of radius ``r`` round ``centre`` is left heading straight for
+    ``target`` (outside it): the tangent point (PX4's NAV_LOITER_TO_ALT with heading required)
+    and its angle round the centre (from east, counter-clockwise)."""
+    c = np.asarray(centre, dtype=float)
+    to = np.asarray(target, dtype=float)
+    d = float(np.hypot(*(to - c)))
+    u = (to - c) / d
+    alpha = math.acos(r / d)  # clockwise: the exit is u turned alpha counter-clockwise
+    ex = math.atan2(u[1], u[0]) + alpha
+    return c + r * np.array([math.cos(ex), math.sin(ex)]), ex
+
+
+def separate_orbits(plan: Any, t: Terrain, profs: list[Profile]) -> list[Profile]:
+    """Field-mates' concentric orbits kept apart where one's exit crosses another (i24-rates).
+
+    With altitude layers (``plan["altitude_layers"]``, separation ``S``), field-mates' climb
+    spirals (and descent orbits at one approach point) are concentric, ``S`` apart
+    (:func:`orbit_radius`), and the UAV leaving an inner orbit (at its tangent exit,
+    :func:`tangent_exit`) crosses every outer one ``sqrt(R^2 - r^2)`` further on, where the
+    outer UAV passes once a turn at the altitudes of its helix (and at its last altitude on
+    the way round to its own exit). Measured on probe 13 of results/audit/dayaudit at ``S`` =
+    30 m: the inner UAV crossed 2 m from the outer's top (results/mission/i24-rates). So:
+
+    - a climb spiral inside others tops out at least ``S`` above their highest altitude (their
+      tops, themselves raised first, outermost first) plus what it may descend, at most
+      :func:`vertical_angle`'s sink gradient, over the run to the crossing: it crosses above
+      every altitude they fly there, whatever the timing (more turns: charged);
+    - a descent orbit outside others ends at least ``S`` above the altitude at which each inner
+      UAV's glide (from its exit to the field) crosses it: it flies above that crossing
+      throughout (a steeper glide from its exit, warned above the flat export's
+      :data:`~poc_env.agents.mission.plan.LANDING_GLIDE`).
+
+    Without layers, or with no concentric orbits, ``profs`` is returned as it is.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``plan.uavs[k]``: a raised spiral above the ceiling, or a raised descent orbit
+        whose glide would be steeper than eq. 19's pitch bound.
+    """
+    import dataclasses
+
+    layers = plan.get("altitude_layers")
+    if not layers or not profs:
+        return profs
+    sep = float(layers["separation_m"])
+    from poc_env.agents.mission.plan import flight
+
+    down = math.tan(vertical_angle(t, route_speed_mps(flight(plan)), False))
+    out = list(profs)
+    uavs = plan["uavs"]
+    where = [f"plan.uavs[{k}] (UAV {u['id']})" for k, u in enumerate(uavs)]
+    climbs: dict[tuple, list[int]] = {}
+    falls: dict[tuple, list[int]] = {}
+    for k, p in enumerate(out):
+        if not uavs[k]["waypoints_m"]:
+            continue
+        if p.climb is not None:
+            climbs.setdefault(p.climb.center_m, []).append(k)
+        if p.descent is not None:
+            falls.setdefault(p.descent.orbit.center_m, []).append(k)
+    for ks in climbs.values():  # outermost first: an inner spiral reads the raised tops
+        ks.sort(key=lambda k: -out[k].climb.radius_m)  # type: ignore[union-attr]
+        for i, k in enumerate(ks):
+            sp = out[k].climb
+            assert sp is not None
+            top = sp.to_m
+            for j in ks[:i]:
+                o = out[j].climb
+                assert o is not None
+                if o.radius_m > sp.radius_m + 1e-6:
+                    run = math.sqrt(o.radius_m**2 - sp.radius_m**2)
+                    top = max(top, o.to_m + sep + down * run)
+            if top > sp.to_m:
+                if top > t.ceiling_m + 1e-6:
+                    raise ConfigError(
+                        where[k], f"a climb spiral over the take-off field to {top:.0f} m AMSL "
+                        f"(separation {sep:g} m above the field-mates' orbits round it)",
+                        f"a climb within the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g}"
+                        " m AMSL: a smaller separation_m, or launch them apart in time",
+                    )  # fmt: skip
+                out[k] = dataclasses.replace(out[k], climb=dataclasses.replace(sp, to_m=top))
+    for ks in falls.values():  # innermost first: an outer orbit reads the inner glides
+        ks.sort(key=lambda k: out[k].descent.orbit.radius_m)  # type: ignore[union-attr]
+        for i, k in enumerate(ks):
+            d = out[k].descent
+            assert d is not None
+            floor = d.orbit.to_m
+            for j in ks[:i]:
+                di = out[j].descent
+                assert di is not None
+                oi = di.orbit
+                if d.orbit.radius_m > oi.radius_m + 1e-6:
+                    run = math.sqrt(d.orbit.radius_m**2 - oi.radius_m**2)
+                    slope = (oi.to_m - out[j].landing_field_m) / di.glide_m
+                    floor = max(floor, oi.to_m - slope * run + sep)
+            if floor > d.orbit.to_m:
+                field = out[k].landing_field_m
+                if (floor - field) / d.glide_m > math.tan(t.max_pitch_rad) + 1e-12:
+                    raise ConfigError(
+                        where[k], f"a descent orbit raised to {floor:.0f} m AMSL, {sep:g} m above "
+                        "where a field-mate's glide crosses it",
+                        f"a glide within {_bound_text(t)}: a smaller separation_m, or land "
+                        "them apart in time",
+                    )  # fmt: skip
+                _warn_steep(where[k], "descent orbit's exit", floor - field, field, d.glide_m)
+                orbit = dataclasses.replace(d.orbit, to_m=floor)
+                out[k] = dataclasses.replace(out[k], descent=dataclasses.replace(d, orbit=orbit))
+    return out
 
 
 def landing_profile(
@@ -1502,6 +1611,7 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
     fl = flight(plan)
     speed = fl["transit_speed_mps"]
     route_speed = route_speed_mps(fl)
+    layered = bool(plan.get("altitude_layers"))
     t: Terrain | None = None
     out = []
     for k, u in enumerate(plan["uavs"]):
@@ -1513,20 +1623,31 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
         where = f"plan.uavs[{k}] (UAV {u['id']})"
         area = plan.get("operating_area_m")
         p = landing_profile(t, u, zones, where, speed, area, route_speed)
-        f = u.get("flight_time_s")  # (the greedy baseline's routes record none)
-        over = (
-            t.usable_endurance_s is not None and f is not None and f > t.usable_endurance_s + 1e-6
-        )
-        if not charge or over:  # the flight itself is over: the over-endurance check's
-            pass
-        elif p.descent is not None:
-            _check_orbit_time(t, p, float(u["flight_time_s"]), where)
-        elif p.climb is not None:
-            _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
+        if charge and not layered:  # with layers: once the orbits are kept apart, below
+            _charge_orbits(t, u, p, where)
         if memo is not None:
             memo[key] = (rec, u, zones, p)
         out.append(p)
+    if layered:  # field-mates' concentric orbits kept apart, then charged
+        t = t or from_record(rec)
+        out = separate_orbits(plan, t, out)
+        for k, (u, p) in enumerate(zip(plan["uavs"], out)):
+            if charge:
+                _charge_orbits(t, u, p, f"plan.uavs[{k}] (UAV {u['id']})")
     return out
+
+
+def _charge_orbits(t: Terrain, u: Any, p: Profile, where: str) -> None:
+    """Eq. 18 with UAV ``u``'s orbits (:func:`_check_orbit_time`, :func:`_check_spiral_time`),
+    unless its flight alone is beyond 0.85 T (the over-endurance check's)."""
+    f = u.get("flight_time_s")  # (the greedy baseline's routes record none)
+    over = t.usable_endurance_s is not None and f is not None and f > t.usable_endurance_s + 1e-6
+    if over:  # the flight itself is over: the over-endurance check's
+        return
+    if p.descent is not None:
+        _check_orbit_time(t, p, float(u["flight_time_s"]), where)
+    elif p.climb is not None:
+        _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
 
 
 def route_speed_mps(fl: dict[str, float]) -> float:

@@ -11,12 +11,14 @@ The fixtures are test_climb_spiral's and test_final_glide's plans over a flat 60
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.features import with_layers
 from poc_env.agents.mission.plan import check_plan, flight, write_plan
 from poc_env.agents.mission.terrain import (
     bilinear,
@@ -24,6 +26,7 @@ from poc_env.agents.mission.terrain import (
     orbit_time_s,
     plan_profiles,
     route_speed_mps,
+    tangent_exit,
     vertical_rates,
 )
 from poc_env.agents.planning.planner import make_plan
@@ -229,3 +232,81 @@ def test_export_names_the_missions_that_need_more_than_5_m_s(tmp_path, capsys, f
     export_plan(tmp_path / "fast.json", "geojson", out_dir=tmp_path / "b")
     assert "FW_T_CLMB_MAX" not in capsys.readouterr().out
 
+
+
+def _mates(plan: dict, same_route: bool = False) -> dict:
+    """``plan`` with both UAVs taking off at ``valley`` and landing at ``bowl`` (field-mates);
+    with ``same_route`` the second flies the first's route (one approach point: concentric
+    descent orbits)."""
+    start = [float(v) * 1e3 for v in VALLEY_KM]
+    bowl = [float(v) * 1e3 for v in BOWL_KM]
+    first = plan["uavs"][0]
+    uavs = [
+        {**u, "takeoff_m": start, "landing_m": bowl,
+         **({"waypoints_m": first["waypoints_m"], "flight_time_s": first["flight_time_s"]}
+            if same_route else {})}
+        for u in plan["uavs"]
+    ]  # fmt: skip
+    return {**plan, "uavs": uavs}
+
+
+def _crossing(inner, outer, target) -> tuple[float, float]:
+    """(the run from the inner orbit's tangent exit towards ``target`` to the outer circle,
+    the angle round the centre where it crosses it)."""
+    c = np.asarray(inner.center_m)
+    ex, _ = tangent_exit(c, inner.radius_m, target)
+    run = math.sqrt(outer.radius_m**2 - inner.radius_m**2)
+    x = ex + (np.asarray(target) - ex) / np.hypot(*(np.asarray(target) - ex)) * run
+    return run, math.atan2(x[1] - c[1], x[0] - c[0])
+
+
+def test_field_mates_climb_spirals_cross_a_layer_apart(tmp_path, flat_plan):
+    """test_final_glide's field-mates (a 1,800 m ring 2.5-4.5 km round ``valley``), exported
+    with ``separation_m`` 30: UAV 2's spiral is 30 m wider; UAV 1, leaving the inner one
+    towards its first waypoint, crosses UAV 2's circle. Before (measured on probe 13) it left
+    at its own top, within UAV 2's altitudes there. Now it tops out 30 m above UAV 2's top plus
+    what it may descend over the run to the crossing: at the crossing it is at least 30 m
+    above every altitude UAV 2 flies on its circle; the QGC loiter carries that top."""
+    plan = _mates(_ring(flat_plan, VALLEY_KM, 2.5, 4.5, VALLEY_M + 1200.0))
+    sep = 30.0
+    layered = with_layers(plan, sep)
+    t = from_record(plan["terrain"])
+    profs = plan_profiles(layered, charge=False)
+    alone = plan_profiles(plan, charge=False)
+    assert profs is not None and alone is not None
+    inner, outer = (p.climb for p in profs)
+    assert inner is not None and outer is not None
+    assert outer.radius_m == pytest.approx(inner.radius_m + sep)
+    down = math.tan(t.max_pitch_rad)  # no rates: eq. 19's
+    run, _ = _crossing(inner, outer, layered["uavs"][0]["waypoints_m"][0])
+    lowest = inner.to_m - down * run  # the inner UAV at the crossing, at worst
+    assert lowest >= outer.to_m + sep - 1e-6  # above the outer's every altitude (its top)
+    assert alone[0].climb.to_m < outer.to_m + sep  # type: ignore[union-attr]  # was not
+    assert profs[1].climb == outer  # the outer orbit unchanged (nothing outside it)
+    write_plan(plan, tmp_path / "plan.json")
+    export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q", separation_m=sep)
+    uid = plan["uavs"][0]["id"]
+    doc = json.loads((tmp_path / "q" / f"plan_uav{uid}.plan").read_text())
+    (loiter,) = [it for it in doc["mission"]["items"] if it["command"] == 31]
+    assert loiter["params"][6] == round(inner.to_m, 1)
+
+
+def test_field_mates_descent_orbits_cross_a_layer_apart(flat_plan):
+    """Both UAVs fly one route to ``bowl`` over the 2,100 m ring (one approach point: two
+    concentric descent orbits with ``separation_m`` 30). The inner UAV's glide from its exit
+    crosses the outer circle; the outer orbit now ends 30 m above that crossing, so the outer
+    UAV flies above it at every pass (its glide steeper by that, within eq. 19)."""
+    plan = _mates(_ring(flat_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0), same_route=True)
+    sep = 30.0
+    profs = plan_profiles(with_layers(plan, sep), charge=False)
+    alone = plan_profiles(plan, charge=False)
+    assert profs is not None and alone is not None
+    inner, outer = (p.descent for p in profs)
+    assert inner is not None and outer is not None
+    assert outer.orbit.radius_m == pytest.approx(inner.orbit.radius_m + sep)
+    field = profs[0].landing_field_m
+    run, _ = _crossing(inner.orbit, outer.orbit, np.asarray(BOWL_KM) * 1e3)
+    cross = inner.orbit.to_m - (inner.orbit.to_m - field) / inner.glide_m * run
+    assert outer.orbit.to_m >= cross + sep - 1e-6  # its lowest altitude, above the crossing
+    assert alone[1].descent.orbit.to_m < cross + sep  # type: ignore[union-attr]  # was not
+    assert (outer.orbit.to_m - field) / outer.glide_m <= math.tan(math.radians(15.0))

@@ -4,7 +4,9 @@ leg crosses an outer orbit, how far apart in altitude are the two paths there?
 For each pair of exported UAVs whose climb spirals (or descent orbits) share a centre, the
 inner one leaves its orbit at the tangent point towards its next point (the first waypoint;
 for a descent orbit, the landing field: PX4's NAV_LOITER_TO_ALT with heading required), and its
-straight leg meets the outer circle sqrt(R^2 - r^2) further on. The outer UAV passes that
+straight leg meets the outer circle sqrt(R^2 - r^2) further on, at its exit altitude give or
+take the climb or descent over that run (eq. 19's gradients, or the rates'; a descent orbit's
+exit: down its glide). The outer UAV passes that
 point once a turn, at the altitudes of its helix there (and at its last altitude on the level
 arc of a descent orbit, to its exit). The least vertical distance between the inner UAV's
 altitude at the crossing and any of those is what separates them whatever the timing: safe
@@ -27,18 +29,9 @@ from poc_env.agents.mission.terrain import (
     from_record,
     plan_profiles,
     route_speed_mps,
+    tangent_exit,
     vertical_angle,
 )
-
-
-def tangent_exit(c: np.ndarray, r: float, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The exit point of a clockwise orbit (centre ``c``, radius ``r``) towards ``target`` and
-    the unit direction flown from it (as terrain.descent_orbit places it)."""
-    d = float(np.hypot(*(target - c)))
-    u = (target - c) / d
-    ex = math.atan2(u[1], u[0]) + math.acos(min(1.0, r / d))
-    p = c + r * np.array([math.cos(ex), math.sin(ex)])
-    return p, (target - p) / np.hypot(*(target - p))
 
 
 def passes(o, theta: float, level: tuple[float, float] | None = None) -> list[float]:
@@ -69,6 +62,7 @@ def main() -> None:
     t = from_record(plan["terrain"])
     fl = flight(plan)
     up = math.tan(vertical_angle(t, route_speed_mps(fl), True))
+    down = math.tan(vertical_angle(t, route_speed_mps(fl), False))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         profs = plan_profiles(plan, charge=False)
@@ -82,10 +76,9 @@ def main() -> None:
             if kind == "climb" and p.climb is not None:  # round at its top to its exit too
                 o = p.climb
                 first = np.asarray(u["waypoints_m"][0], float)
-                ex, _ = tangent_exit(np.asarray(o.center_m), o.radius_m, first)
+                _, ex_rad = tangent_exit(o.center_m, o.radius_m, first)
                 end = o.start_rad - o.length_m / o.radius_m
-                c = o.center_m
-                lvl = (end, math.atan2(ex[1] - c[1], ex[0] - c[0]))
+                lvl = (end, ex_rad)
                 orbits.append((u, o, first, lvl))
             if kind == "descent" and p.descent is not None:
                 o = p.descent.orbit
@@ -99,12 +92,13 @@ def main() -> None:
                 if ua is ub or oa.center_m != ob.center_m or ob.radius_m <= oa.radius_m:
                     continue
                 c = np.asarray(oa.center_m)
-                ex, dirn = tangent_exit(c, oa.radius_m, target)
+                ex, _ = tangent_exit(c, oa.radius_m, target)
+                dirn = (target - ex) / np.hypot(*(target - ex))
                 run = math.sqrt(ob.radius_m**2 - oa.radius_m**2)
                 x = ex + dirn * run
                 theta = math.atan2(x[1] - c[1], x[0] - c[0])
-                if kind == "climb":  # climbing on, at most the straight climb's gradient
-                    z_lo, z_hi = oa.to_m, oa.to_m + up * run
+                if kind == "climb":  # on to its first waypoint: climbing or descending
+                    z_lo, z_hi = oa.to_m - down * run, oa.to_m + up * run
                 else:  # the glide from the exit: H down at the glide's slope
                     slope = (oa.to_m - t.field_elevation(target)) / math.dist(ex, target)
                     z_lo = z_hi = oa.to_m - slope * run
