@@ -1075,8 +1075,8 @@ def descent_orbit(
 
     The orbit (clockwise, radius :func:`orbit_radius`) descends at eq. 19's ``tan(beta_max)``
     per metre flown (or the aircraft's sink rate where it binds first, :func:`vertical_angle`:
-    a longer orbit, its time charged) to the glide's entry altitude ``H``, and the UAV leaves it at the tangent
-    point heading for the field: PX4 (navigator ``FeasibilityChecker::
+    a longer orbit, its time charged) to the glide's entry altitude ``H``, and the UAV leaves
+    it at the tangent point heading for the field: PX4 (navigator ``FeasibilityChecker::
     checkFixedWindLandApproach``) reads the glide from NAV_LOITER_TO_ALT to NAV_LAND as ``(H -
     field) / sqrt(d^2 - r^2)``, ``d`` the field's distance from the orbit's centre, which must
     exceed ``r``. ``H`` is the flat export's glide, :data:`~poc_env.agents.mission.plan.

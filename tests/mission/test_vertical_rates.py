@@ -233,7 +233,6 @@ def test_export_names_the_missions_that_need_more_than_5_m_s(tmp_path, capsys, f
     assert "FW_T_CLMB_MAX" not in capsys.readouterr().out
 
 
-
 def _mates(plan: dict, same_route: bool = False) -> dict:
     """``plan`` with both UAVs taking off at ``valley`` and landing at ``bowl`` (field-mates);
     with ``same_route`` the second flies the first's route (one approach point: concentric

@@ -7,7 +7,7 @@ PY=$SRC/.venv/bin/python
 T=tests/mission/test_vertical_rates.py
 run() {  # name, file, old, new, tests (-k expression)
   local name=$1 file=$2 old=$3 new=$4 k=$5 d=/tmp/i24-rates-breaks
-  rm -rf $d && mkdir -p $d && (cd $SRC && git ls-files -z | xargs -0 cp --parents -t $d) && cp -r $SRC/$T $d/$T
+  rm -rf $d && mkdir -p $d && (cd $SRC && git ls-files -z | xargs -0 cp -P --parents -t $d) && cp -r $SRC/$T $d/$T
   $PY - "$d/$file" "$old" "$new" <<'PY'
 import sys
 p, old, new = sys.argv[1:4]

@@ -66,8 +66,10 @@ def main() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         profs = plan_profiles(plan, charge=False)
-    print(f"{sys.argv[1]} separation {sep:g} m, rates "
-          f"{plan['terrain'].get('max_climb_rate_mps')}/{plan['terrain'].get('max_sink_rate_mps')}")
+    print(
+        f"{sys.argv[1]} separation {sep:g} m, rates "
+        f"{plan['terrain'].get('max_climb_rate_mps')}/{plan['terrain'].get('max_sink_rate_mps')}"
+    )
     for kind in ("climb", "descent"):
         orbits = []
         for u, p in zip(plan["uavs"], profs or ()):
@@ -103,10 +105,14 @@ def main() -> None:
                     slope = (oa.to_m - t.field_elevation(target)) / math.dist(ex, target)
                     z_lo = z_hi = oa.to_m - slope * run
                 alts = passes(ob, theta, lvl)
-                gap = min(
-                    (0.0 if z_lo <= h <= z_hi else min(abs(h - z_lo), abs(h - z_hi)))
-                    for h in alts
-                ) if alts else math.inf
+                gap = (
+                    min(
+                        (0.0 if z_lo <= h <= z_hi else min(abs(h - z_lo), abs(h - z_hi)))
+                        for h in alts
+                    )
+                    if alts
+                    else math.inf
+                )
                 print(
                     f"{kind}: UAV {ua['id']} (r {oa.radius_m:.1f} m, leaves at {oa.to_m:.0f} m) "
                     f"crosses UAV {ub['id']}'s orbit (R {ob.radius_m:.1f} m, {ob.from_m:.0f} -> "
