@@ -1169,7 +1169,8 @@ def separate_orbits(plan: Any, t: Terrain, profs: list[Profile]) -> list[Profile
     :func:`tangent_exit`) crosses every outer one ``sqrt(R^2 - r^2)`` further on, where the
     outer UAV passes once a turn at the altitudes of its helix (and at its last altitude on
     the way round to its own exit). Measured on probe 13 of results/audit/dayaudit at ``S`` =
-    30 m: the inner UAV crossed 2 m from the outer's top (results/mission/i24-rates). So:
+    30 m: the inner UAV crossed within the outer one's altitudes there, 0 m apart
+    (results/mission/i24-rates/README.md). So:
 
     - a climb spiral inside others tops out at least ``S`` above their highest altitude (their
       tops, themselves raised first, outermost first) plus what it may descend, at most

@@ -32,8 +32,8 @@ from poc_env.agents.mission.terrain import (
 from poc_env.agents.planning.planner import make_plan
 from poc_env.agents.testing.terrain import (
     VALLEY_M,
-    cell_centres,
     hill_across_first_leg,
+    ring_around,
     wall_scenario,
 )
 from poc_env.config import load_scenario
@@ -87,17 +87,6 @@ def _hill(plan: dict, height_m: float, from_m: float = 3e3) -> tuple[dict, int]:
     k = int(np.argmax(legs))
     rec = hill_across_first_leg(plan, k, from_m, from_m + 1e3, 500.0, height_m)
     return {**plan, "terrain": rec}, k
-
-
-def _ring(plan: dict, centre_km: tuple, r0_km: float, r1_km: float, height_m: float) -> dict:
-    """``plan`` with ground ``height_m`` in every cell ``r0_km``-``r1_km`` from ``centre_km``."""
-    rec = dict(plan["terrain"])
-    gx, gy = cell_centres(rec)
-    d = np.hypot(gx - centre_km[0] * 1e3, gy - centre_km[1] * 1e3)
-    on = (d >= r0_km * 1e3) & (d <= r1_km * 1e3)
-    for key in ("ground_m", "ground_max_m"):
-        rec[key] = np.where(on, height_m, np.asarray(rec[key])).tolist()
-    return {**plan, "terrain": rec}
 
 
 def _rates(plan: dict, k: int) -> dict:
@@ -157,7 +146,7 @@ def test_a_descent_orbit_is_charged_longer_as_the_sink_rate_falls(flat_plan):
     """test_final_glide's ring round bowl: the descent orbit's charged minutes grow as
     ``max_sink_rate_mps`` falls (eq. 19's 16.4 m/s, then 10, 5, 2 m/s), each descending at
     that rate."""
-    plan = _ring(flat_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0)
+    plan = ring_around(flat_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0)
     k = next(i for i, p in enumerate(plan_profiles(plan, charge=False)) if p.descent)  # type: ignore[union-attr, arg-type]
     times = []
     for sink in (None, 10.0, PX4, 2.0):
@@ -266,7 +255,7 @@ def test_field_mates_climb_spirals_cross_a_layer_apart(tmp_path, flat_plan):
     at its own top, within UAV 2's altitudes there. Now it tops out 30 m above UAV 2's top plus
     what it may descend over the run to the crossing: at the crossing it is at least 30 m
     above every altitude UAV 2 flies on its circle; the QGC loiter carries that top."""
-    plan = _mates(_ring(flat_plan, VALLEY_KM, 2.5, 4.5, VALLEY_M + 1200.0))
+    plan = _mates(ring_around(flat_plan, VALLEY_KM, 2.5, 4.5, VALLEY_M + 1200.0))
     sep = 30.0
     layered = with_layers(plan, sep)
     t = from_record(plan["terrain"])
@@ -295,7 +284,7 @@ def test_field_mates_descent_orbits_cross_a_layer_apart(flat_plan):
     concentric descent orbits with ``separation_m`` 30). The inner UAV's glide from its exit
     crosses the outer circle; the outer orbit now ends 30 m above that crossing, so the outer
     UAV flies above it at every pass (its glide steeper by that, within eq. 19)."""
-    plan = _mates(_ring(flat_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0), same_route=True)
+    plan = _mates(ring_around(flat_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0), same_route=True)
     sep = 30.0
     profs = plan_profiles(with_layers(plan, sep), charge=False)
     alone = plan_profiles(plan, charge=False)
