@@ -315,6 +315,8 @@ class MapConfig:
 _SPEED: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_SPEED_KMH}
 _RATE: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_RATE_DEG_S}
 _ALT: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_ALTITUDE_M}
+#: Largest ``uav.max_climb_rate_mps`` / ``max_sink_rate_mps`` (m/s): PX4 allows at most 15.
+MAX_VERTICAL_RATE_MPS = 100.0
 
 
 @dataclass(frozen=True)
@@ -346,6 +348,17 @@ class UAVConfig:
     #: search altitude (z of eq. 19) and the ceiling.
     cruise_altitude_m: float = _f("cruise_altitude_m", 1.0, default=1000.0, **_ALT)
     max_altitude_m: float = _f("max_altitude_m", 1.0, default=4000.0, **_ALT)
+    #: the aircraft's vertical rate limits (m/s) for its exported missions over terrain: the
+    #: most it climbs (PX4 ``FW_T_CLMB_MAX``, ArduPlane ``TECS_CLMB_MAX``; both default 5 m/s)
+    #: and sinks (``FW_T_SINK_MAX``, ``TECS_SINK_MAX``; 5 m/s). Null (the default): eq. 19's
+    #: pitch bound alone, as the environment flies. Read only by the mission's terrain profile
+    #: (:mod:`poc_env.agents.mission.terrain`), never by the environment's tasks.
+    max_climb_rate_mps: float | None = _f(
+        "max_climb_rate_mps", 1.0, default=None, lo=0.0, lo_open=True, hi=MAX_VERTICAL_RATE_MPS
+    )
+    max_sink_rate_mps: float | None = _f(
+        "max_sink_rate_mps", 1.0, default=None, lo=0.0, lo_open=True, hi=MAX_VERTICAL_RATE_MPS
+    )
 
     def __post_init__(self) -> None:
         _coerce(self)

@@ -140,7 +140,7 @@ def export_plan(
         if warning is not None:  # the other formats show it, and say so
             print(f"warning: {warning}")
         check_endurance(plan, flown, refuse=fmt == "qgc" and not allow_infeasible)
-        for line in shared_orbits(plan, flown):
+        for line in shared_orbits(plan, flown) + rate_warnings(plan, flown):
             print(f"warning: {line}")
         kept = {id(u) for u in flown}
         left = [f"plan.uavs[{k}] (UAV {u['id']})"
@@ -261,6 +261,61 @@ def shared_orbits(plan: Any, flown: list[Any]) -> list[str]:
         "--separation-m S to widen each UAV's orbit by its layer"
         for (what, x, y, r), ids in circles.items()
         if len(ids) > 1
+    ]
+
+
+def rate_warnings(plan: Any, flown: list[Any]) -> list[str]:
+    """One sentence per exported UAV (``flown``) of a plan with terrain whose mission needs a
+    climb or sink faster than PX4's and ArduPlane's default limit
+    (:data:`~poc_env.agents.mission.terrain.AUTOPILOT_DEFAULT_RATE_MPS`), for each of climb
+    and sink whose rate the scenario left unset (``uav.max_climb_rate_mps`` /
+    ``max_sink_rate_mps``: eq. 19's pitch alone bounds it): the phases and their rates
+    (:func:`~poc_env.agents.mission.terrain.vertical_rates`). Files unchanged; at most six
+    UAVs named, then a count."""
+    from poc_env.agents.mission.plan import flight
+    from poc_env.agents.mission.terrain import (
+        AUTOPILOT_DEFAULT_RATE_MPS,
+        from_record,
+        plan_profiles,
+        route_speed_mps,
+        vertical_rates,
+    )
+
+    rec = plan.get("terrain")
+    if rec is None:
+        return []
+    unset = {k for k in ("climb", "sink") if rec.get(f"max_{k}_rate_mps") is None}
+    if not unset:
+        return []
+    t = from_record(rec)
+    fl = flight(plan)
+    kept = {id(u) for u in flown}
+    slow = AUTOPILOT_DEFAULT_RATE_MPS
+    lines = []
+    for k, (u, p) in enumerate(zip(plan["uavs"], plan_profiles(plan) or ())):
+        if id(u) not in kept:
+            continue
+        fast = [
+            f"{kind} {rate:.1f} m/s on its {phase}" + (f" ({note})" if note else "")
+            for phase, kind, rate, note in vertical_rates(
+                t, p, fl["transit_speed_mps"], route_speed_mps(fl)
+            )
+            if kind in unset and rate > slow + 1e-9
+        ]
+        if fast:
+            lines.append(f"plan.uavs[{k}] (UAV {u['id']}): {'; '.join(fast)}")
+    if not lines:
+        return []
+    keys = " / ".join(f"uav.max_{k}_rate_mps" for k in ("climb", "sink") if k in unset)
+    more = [f"and {len(lines) - 6} more UAVs"] if len(lines) > 6 else []
+    return [
+        *lines[:6],
+        *more,
+        f"these missions need a vertical rate above PX4's and ArduPlane's default {slow:g} m/s "
+        "(FW_T_CLMB_MAX / FW_T_SINK_MAX, TECS_CLMB_MAX / TECS_SINK_MAX) and were planned at "
+        f"eq. 19's pitch bound alone: set {keys} to the aircraft's rates in the scenario and "
+        "plan again (the profile then climbs and sinks within them and the orbits' minutes are "
+        "charged at them)",
     ]
 
 

@@ -54,7 +54,9 @@ Optional fields of both schemas (a plan without them is read as before):
   clearance rules (:func:`poc_env.agents.mission.terrain.terrain_record`: ``origin_m``,
   ``cell_m``, ``ground_m`` and ``ground_max_m`` rows from the south in metres AMSL, ``fields``
   [{``name``, ``position_m``, ``elevation_m``}], ``min_clearance_m``, ``search_height_m``,
-  ``ceiling_m``, ``max_pitch_deg``, ``source``). With it every export flies AMSL altitudes
+  ``ceiling_m``, ``max_pitch_deg``, ``source``; optional ``max_climb_rate_mps`` and
+  ``max_sink_rate_mps``, the aircraft's vertical rates, recorded only when the scenario gives
+  them). With it every export flies AMSL altitudes
   that clear the ground (:func:`poc_env.agents.mission.terrain.profile`).
 
 Planners add fields of their own (``objective``, ``history``, ``x``, ``planner``, ...); they are
@@ -557,12 +559,15 @@ def _check_terrain(field: str, rec: Any) -> None:
     import numpy as np
 
     from poc_env import limits
+    from poc_env.config import MAX_VERTICAL_RATE_MPS
 
     keys = sorted(
         ["origin_m", "cell_m", "ground_m", "ground_max_m", "fields", "min_clearance_m",
          "search_height_m", "ceiling_m", "max_pitch_deg", "source"]
     )  # fmt: skip
-    optional = {"max_turn_rate_deg_s", "usable_endurance_s"}  # recorded since issue 24's F3
+    # recorded since issue 24's F3; the vertical rates since i24-rates (only when given)
+    optional = {"max_turn_rate_deg_s", "usable_endurance_s", "max_climb_rate_mps",
+                "max_sink_rate_mps"}  # fmt: skip
     if not isinstance(rec, dict) or sorted(set(rec) - optional) != keys:
         raise ConfigError(
             field,
@@ -579,6 +584,9 @@ def _check_terrain(field: str, rec: Any) -> None:
             f"{field}.usable_endurance_s", rec["usable_endurance_s"], limits.MIN_POSITIVE,
             limits.MAX_ENDURANCE_H * 3600.0,
         )  # fmt: skip
+    for key in ("max_climb_rate_mps", "max_sink_rate_mps"):  # PX4's FW_T_CLMB_MAX/SINK_MAX
+        if key in rec:
+            as_number(f"{field}.{key}", rec[key], 0.0, MAX_VERTICAL_RATE_MPS, lo_open=True)
     o = rec["origin_m"]
     if not isinstance(o, list) or len(o) != 2:
         raise ConfigError(f"{field}.origin_m", o, "[x, y] in metres")

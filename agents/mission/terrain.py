@@ -109,6 +109,10 @@ class Terrain:
     usable_endurance_s : float or None
         Eq. 18's 0.85 T, which a climb spiral's time is charged against (None: a plan recorded
         before it, not checked).
+    max_climb_mps, max_sink_mps : float or None
+        The aircraft's vertical rate limits (``uav.max_climb_rate_mps``,
+        ``uav.max_sink_rate_mps``: PX4's FW_T_CLMB_MAX / FW_T_SINK_MAX): with them every
+        altitude change is bounded by :func:`vertical_angle`; None: eq. 19's pitch alone.
     """
 
     origin_m: tuple[float, float]
@@ -123,6 +127,8 @@ class Terrain:
     source: str
     turn_rate_rad_s: float = math.radians(DEFAULT_TURN_RATE_DEG_S)
     usable_endurance_s: float | None = None
+    max_climb_mps: float | None = None
+    max_sink_mps: float | None = None
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -257,6 +263,8 @@ def load_terrain(sc: Any) -> Terrain | None:
         source=source,
         turn_rate_rad_s=float(sc.uav.max_turn_rate_rad_s),
         usable_endurance_s=float(sc.uav.usable_endurance_s),
+        max_climb_mps=sc.uav.max_climb_rate_mps,
+        max_sink_mps=sc.uav.max_sink_rate_mps,
     )
 
 
@@ -522,6 +530,8 @@ def terrain_record(t: Terrain) -> dict[str, Any]:
         "source": t.source,
         "max_turn_rate_deg_s": math.degrees(t.turn_rate_rad_s),
         **({} if t.usable_endurance_s is None else {"usable_endurance_s": t.usable_endurance_s}),
+        **({} if t.max_climb_mps is None else {"max_climb_rate_mps": t.max_climb_mps}),
+        **({} if t.max_sink_mps is None else {"max_sink_rate_mps": t.max_sink_mps}),
     }
 
 
@@ -551,7 +561,49 @@ def from_record(rec: dict[str, Any]) -> Terrain:
         usable_endurance_s=(
             None if rec.get("usable_endurance_s") is None else float(rec["usable_endurance_s"])
         ),
+        max_climb_mps=(
+            None if rec.get("max_climb_rate_mps") is None else float(rec["max_climb_rate_mps"])
+        ),
+        max_sink_mps=(
+            None if rec.get("max_sink_rate_mps") is None else float(rec["max_sink_rate_mps"])
+        ),
     )
+
+
+def vertical_angle(t: Terrain, speed_mps: float, climb: bool) -> float:
+    """The steepest climb (``climb``) or descent the aircraft flies at ``speed_mps``, as an
+    angle (rad): eq. 19's pitch bound ``beta_max``, or less where the aircraft's vertical rate
+    limit ``t.max_climb_mps`` / ``t.max_sink_mps`` (PX4's FW_T_CLMB_MAX / FW_T_SINK_MAX) binds
+    first, ``atan(rate / v)``. The one bound of every altitude change of a mission over
+    terrain: the profile's passes, the take-off climb, the climb spiral, the final glide and
+    the descent orbit, and their times. Without a limit, ``beta_max`` itself (eq. 19 alone)."""
+    rate = t.max_climb_mps if climb else t.max_sink_mps
+    if rate is None or math.tan(t.max_pitch_rad) * speed_mps <= rate:
+        return t.max_pitch_rad
+    return math.atan(rate / speed_mps)
+
+
+def _speed(speed_mps: float | None) -> float:
+    """``speed_mps``, or the paper's 220 km/h transit speed
+    (:data:`~poc_env.agents.mission.plan.DEFAULT_FLIGHT`) when None."""
+    from poc_env.agents.mission.plan import DEFAULT_FLIGHT
+
+    return float(DEFAULT_FLIGHT["transit_speed_mps"] if speed_mps is None else speed_mps)
+
+
+def _bound_text(t: Terrain) -> str:
+    """What bounds a mission's climbs and descents, for a refusal: eq. 19's pitch, and the
+    aircraft's rates where given."""
+    text = f"eq. 19's pitch bound uav.max_pitch_deg = {math.degrees(t.max_pitch_rad):g} deg"
+    rates = [
+        f"{key} = {v:g} m/s"
+        for key, v in (
+            ("uav.max_climb_rate_mps", t.max_climb_mps),
+            ("uav.max_sink_rate_mps", t.max_sink_mps),
+        )
+        if v is not None
+    ]
+    return text + (f" and the rates {', '.join(rates)}" if rates else "")
 
 
 # --------------------------------------------------------------------------- profiles
@@ -715,6 +767,7 @@ def profile(
     layer_m: float = 0.0,
     speed_mps: float | None = None,
     loiter: bool = False,
+    route_speed_mps: float | None = None,
 ) -> Profile:
     """The altitudes along ``path_xy`` (take-off field, waypoints, approach point) over ``t``.
 
@@ -726,7 +779,10 @@ def profile(
     spiral's radius and time (:func:`climb_spiral`). ``loiter``: the UAV descends on an orbit
     at the approach point to the final glide (:func:`descent_orbit`) instead of gliding
     straight from it: the profile ends at the approach point at its wanted altitude (no glide
-    cap).
+    cap). ``route_speed_mps``: the fastest speed flown along the legs (default ``speed_mps``):
+    with the aircraft's vertical rate limits, the legs' climbs and descents are bounded per
+    metre at it (:func:`vertical_angle`: a profile flyable at the fastest speed is flyable at
+    the slower ones), as are the straight take-off climb and the final glide.
 
     Raises
     ------
@@ -783,20 +839,22 @@ def profile(
                 "smaller separation_m, layer_by=field, or a higher ceiling if the UAV can",
             )  # fmt: skip
     dist = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
-    grad = math.tan(t.max_pitch_rad)
+    v_route = _speed(route_speed_mps if route_speed_mps is not None else speed_mps)
+    up = math.tan(vertical_angle(t, v_route, True))
+    down = math.tan(vertical_angle(t, v_route, False))
     z = base.copy()
-    for i in range(1, len(z)):  # eq. 19: |dz| <= tan(beta_max) per metre flown
-        z[i] = max(z[i], z[i - 1] - grad * (dist[i] - dist[i - 1]))
-    for i in range(len(z) - 2, -1, -1):
-        z[i] = max(z[i], z[i + 1] - grad * (dist[i + 1] - dist[i]))
+    for i in range(1, len(z)):  # eq. 19 (and the sink rate): dz >= -down per metre flown
+        z[i] = max(z[i], z[i - 1] - down * (dist[i] - dist[i - 1]))
+    for i in range(len(z) - 2, -1, -1):  # and the climb: dz <= up per metre flown
+        z[i] = max(z[i], z[i + 1] - up * (dist[i + 1] - dist[i]))
     descent = None
     if landing_xy is not None and loiter:
         land_xy = np.asarray(landing_xy, dtype=float)
         descent = descent_orbit(t, p, z, land_xy, where, speed_mps, layer_m)
     elif landing_xy is not None:
-        z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where)
+        z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where, down)
     glide_to = None if loiter else landing_xy
-    climb = _check_field_legs(t, p, z, dist, glide_to, where, speed_mps, layer_m)
+    climb = _check_field_legs(t, p, z, dist, glide_to, where, speed_mps, layer_m, up)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -820,6 +878,7 @@ def _check_field_legs(
     where: str,
     speed_mps: float | None = None,
     layer_m: float = 0.0,
+    up: float | None = None,
 ) -> Spiral | None:
     """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``);
     the climb spiral the take-off needs, if any.
@@ -837,7 +896,9 @@ def _check_field_legs(
     cell and a half away) is above a UAV on a sloping field by construction: each must stay
     above the ground itself, the DEM's bilinear resampling (the one the fields' elevations
     come from). Points near the field's own terrain cell (the 2 x 2 cells around them include
-    it, :meth:`Terrain.near_cells`) are not checked: the UAV stands on the field there.
+    it, :meth:`Terrain.near_cells`) are not checked: the UAV stands on the field there. ``up``:
+    the straight climbs' gradient (the profile's, :func:`vertical_angle` at the legs' speed;
+    default ``tan(beta_max)``).
 
     Raises
     ------
@@ -845,12 +906,12 @@ def _check_field_legs(
         ``where`` named, with the point, its ground, the distance from the field and the
         altitude flown there (a :class:`GlideError` for the final glide).
     """
-    grad = math.tan(t.max_pitch_rad)
+    grad = math.tan(t.max_pitch_rad) if up is None else up
     field = t.field_elevation(p[0])
     climb = np.minimum(z, field + grad * dist)
     spiral = None
     if _first_cut(t, p[0], p, climb) is not None:  # the straight climb meets the ground
-        spiral = climb_spiral(t, p, z, dist, where, speed_mps, layer_m)
+        spiral = climb_spiral(t, p, z, dist, where, speed_mps, layer_m, grad)
         straight = field + grad * dist  # the take-off to the orbit's first altitude, then on
         climb = np.where(
             straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist)
@@ -878,9 +939,9 @@ def _check_field_legs(
                 where, f"ground {ground:.0f} m AMSL at ({x / 1e3:.1f}, {y / 1e3:.1f}) km, "
                 f"{off[i] / 1e3:.1f} km from the {name} field (at {elev:.0f} m), flown at "
                 f"{alt[i]:.0f} m",
-                f"a {what} the field within eq. 19's pitch bound uav.max_pitch_deg = "
-                f"{math.degrees(t.max_pitch_rad):g} deg that stays above the ground (re-plan "
-                f"the first or last leg away from the rising ground, or another {name} field)",
+                f"a {what} the field within {_bound_text(t)} that stays above the ground "
+                f"(re-plan the first or last leg away from the rising ground, or another {name} "
+                "field)",
             )  # fmt: skip
     return spiral
 
@@ -889,11 +950,16 @@ def _first_cut(t: Terrain, at: Any, xy: np.ndarray, alt: np.ndarray) -> int | No
     """The first of the points ``xy`` flown at ``alt`` at or below the bilinear ground, outside
     the cells around the field ``at`` (:func:`_check_field_legs`); None if none is."""
     ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
+    cut = ~_own_cells(t, at, xy) & (alt <= ground)
+    return int(np.argmax(cut)) if cut.any() else None
+
+
+def _own_cells(t: Terrain, at: Any, xy: np.ndarray) -> np.ndarray:
+    """Which of the points ``xy`` read the terrain cell of the field ``at`` (the 2 x 2 cells
+    around them include it): where the UAV stands on the field, not checked."""
     i0, i1, j0, j1 = t.near_cells(xy)
     fi, _, fj, _ = (int(v[0]) for v in t.near_cells(np.asarray(at) + t.cell_m / 2.0))
-    own = ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
-    cut = ~own & (alt <= ground)
-    return int(np.argmax(cut)) if cut.any() else None
+    return ((i0 == fi) | (i1 == fi)) & ((j0 == fj) | (j1 == fj))
 
 
 def climb_spiral(
@@ -904,6 +970,7 @@ def climb_spiral(
     where: str,
     speed_mps: float | None = None,
     layer_m: float = 0.0,
+    up: float | None = None,
 ) -> Spiral:
     """The climb spiral over the take-off field ``p[0]`` for a mission whose straight climb
     meets the ground (:class:`Spiral`).
@@ -913,7 +980,10 @@ def climb_spiral(
     UAV given an altitude layer ``layer_m`` (:func:`~poc_env.agents.mission.features.
     with_layers`) orbits that much wider, so field-mates' orbits are at least the layers'
     separation apart (:func:`orbit_radius`); its
-    pitch bound ``tan(beta_max)`` bounds the climb per metre flown. The orbit (clockwise, from
+    pitch bound ``tan(beta_max)`` bounds the climb per metre flown, or the aircraft's climb
+    rate where it binds first (:func:`vertical_angle` at ``v``: more turns, a longer orbit);
+    ``up`` is the straight climb's gradient after it (the profile's; default the orbit's).
+    The orbit (clockwise, from
     the point towards the first waypoint) starts at the least altitude from which it keeps
     ``min_clearance_m`` over the ground under it (the bilinear ``ground_m``, read every
     :data:`ORBIT_SAMPLE_M` of its first turn; the later turns are higher over the same
@@ -934,10 +1004,10 @@ def climb_spiral(
     ConfigError
         ``where`` named: ``H`` above the UAV's ceiling.
     """
-    from poc_env.agents.mission.plan import DEFAULT_FLIGHT
-
-    v = float(DEFAULT_FLIGHT["transit_speed_mps"] if speed_mps is None else speed_mps)
-    grad = math.tan(t.max_pitch_rad)
+    v = _speed(speed_mps)
+    pitch = vertical_angle(t, v, True)
+    grad = math.tan(pitch)
+    on = grad if up is None else up
     field = t.field_elevation(p[0])
     r = orbit_radius(t, v, layer_m)
     ground = bilinear(t.ground_m, t.origin_m, t.cell_m, p)
@@ -949,7 +1019,7 @@ def climb_spiral(
     )
     under = bilinear(t.ground_m, t.origin_m, t.cell_m, ring)
     low = max(field, float(np.max(under - grad * arc))) + t.min_clearance_m
-    top = max(low, float(np.max(ground + t.min_clearance_m - grad * dist)))
+    top = max(low, float(np.max(ground + t.min_clearance_m - on * dist)))
     if top > t.ceiling_m + 1e-6:
         raise ConfigError(
             where, f"a climb spiral over the take-off field (at {field:.0f} m) to {top:.0f} m AMSL",
@@ -962,7 +1032,7 @@ def climb_spiral(
         from_m=low,
         to_m=top,
         speed_mps=v,
-        pitch_rad=t.max_pitch_rad,
+        pitch_rad=pitch,
         start_rad=start,
     )
     return sp
@@ -1004,8 +1074,9 @@ def descent_orbit(
     glide to the landing field ``land`` (:class:`Descent`): PX4's fixed-wing landing pattern.
 
     The orbit (clockwise, radius :func:`orbit_radius`) descends at eq. 19's ``tan(beta_max)``
-    per metre flown to the glide's entry altitude ``H``, and the UAV leaves it at the tangent
-    point heading for the field: PX4 (navigator ``FeasibilityChecker::
+    per metre flown (or the aircraft's sink rate where it binds first, :func:`vertical_angle`:
+    a longer orbit, its time charged) to the glide's entry altitude ``H``, and the UAV leaves
+    it at the tangent point heading for the field: PX4 (navigator ``FeasibilityChecker::
     checkFixedWindLandApproach``) reads the glide from NAV_LOITER_TO_ALT to NAV_LAND as ``(H -
     field) / sqrt(d^2 - r^2)``, ``d`` the field's distance from the orbit's centre, which must
     exceed ``r``. ``H`` is the flat export's glide, :data:`~poc_env.agents.mission.plan.
@@ -1021,15 +1092,12 @@ def descent_orbit(
         ``where`` named: the field within the orbit, the orbit's clearance above the ceiling or
         needing a glide steeper than ``tan(beta_max)``, or the glide meeting the ground.
     """
-    from poc_env.agents.mission.plan import DEFAULT_FLIGHT
-
-    v = float(DEFAULT_FLIGHT["transit_speed_mps"] if speed_mps is None else speed_mps)
-    grad = math.tan(t.max_pitch_rad)
+    v = _speed(speed_mps)
+    pitch = vertical_angle(t, v, False)  # the orbit's descent; the glide keeps beta_max
     c = np.asarray(p[-1], dtype=float)
     r = orbit_radius(t, v, layer_m)
     field = t.field_elevation(land)
     d = float(np.hypot(*(land - c)))
-    deg = math.degrees(t.max_pitch_rad)
     if d <= r:
         raise GlideError(
             where, f"a descent orbit of radius {r / 1e3:.2f} km {d / 1e3:.2f} km from the field",
@@ -1039,18 +1107,16 @@ def descent_orbit(
     need = float(np.max(bilinear(t.ground_m, t.origin_m, t.cell_m, _disc(c, r))))
     need += t.min_clearance_m
     top = max(field + LANDING_GLIDE * glide_m, need)
-    if top > t.ceiling_m + 1e-6 or (top - field) / glide_m > grad + 1e-12 or z[-1] < need - 1e-6:
+    steep = (top - field) / glide_m > math.tan(t.max_pitch_rad) + 1e-12  # the glide: FW_LND_ANG
+    if top > t.ceiling_m + 1e-6 or steep or z[-1] < need - 1e-6:
         raise GlideError(
             where, f"a descent orbit at ({c[0] / 1e3:.1f}, {c[1] / 1e3:.1f}) km over ground up "
             f"to {need - t.min_clearance_m:.0f} m AMSL, {glide_m / 1e3:.2f} km of glide from a "
             f"landing field at {field:.0f} m",
             f"an orbit keeping terrain.min_clearance_m = {t.min_clearance_m:g} m within the "
-            f"ceiling and a glide within eq. 19's pitch bound uav.max_pitch_deg = {deg:g} deg",
+            f"ceiling and a glide within {_bound_text(t)}",
         )  # fmt: skip
-    u = (land - c) / d
-    alpha = math.acos(r / d)  # clockwise: the exit is u turned alpha counter-clockwise
-    ex = math.atan2(u[1], u[0]) + alpha
-    exit_xy = c + r * np.array([math.cos(ex), math.sin(ex)])
+    exit_xy, ex = tangent_exit(c, r, land)
     s = np.linspace(0.0, 1.0, max(1, math.ceil(glide_m / (t.cell_m / 2.0))) + 1)
     line = exit_xy + (land - exit_xy) * s[:, None]
     i = _first_cut(t, land, line, top + (field - top) * s)
@@ -1070,7 +1136,7 @@ def descent_orbit(
         from_m=float(z[-1]),
         to_m=float(top),
         speed_mps=v,
-        pitch_rad=t.max_pitch_rad,
+        pitch_rad=pitch,
         start_rad=math.atan2(float(back[1]), float(back[0])),
     )
     return Descent(
@@ -1081,8 +1147,127 @@ def descent_orbit(
     )
 
 
+def tangent_exit(centre: Any, r: float, target: Any) -> tuple[np.ndarray, float]:
+    """Where a clockwise orbit of radius ``r`` round ``centre`` is left heading straight for
+    ``target`` (outside it): the tangent point (PX4's NAV_LOITER_TO_ALT with heading required)
+    and its angle round the centre (from east, counter-clockwise)."""
+    c = np.asarray(centre, dtype=float)
+    to = np.asarray(target, dtype=float)
+    d = float(np.hypot(*(to - c)))
+    u = (to - c) / d
+    alpha = math.acos(r / d)  # clockwise: the exit is u turned alpha counter-clockwise
+    ex = math.atan2(u[1], u[0]) + alpha
+    return c + r * np.array([math.cos(ex), math.sin(ex)]), ex
+
+
+def separate_orbits(plan: Any, t: Terrain, profs: list[Profile]) -> list[Profile]:
+    """Field-mates' concentric orbits kept apart where one's exit crosses another (i24-rates).
+
+    With altitude layers (``plan["altitude_layers"]``, separation ``S``), field-mates' climb
+    spirals (and descent orbits at one approach point) are concentric, ``S`` apart
+    (:func:`orbit_radius`), and the UAV leaving an inner orbit (at its tangent exit,
+    :func:`tangent_exit`) crosses every outer one ``sqrt(R^2 - r^2)`` further on, where the
+    outer UAV passes once a turn at the altitudes of its helix (and at its last altitude on
+    the way round to its own exit). Measured on probe 13 of results/audit/dayaudit at ``S`` =
+    30 m: the inner UAV crossed within the outer one's altitudes there, 0 m apart
+    (results/mission/i24-rates/README.md). So:
+
+    - a climb spiral inside others tops out at least ``S`` above their highest altitude (their
+      tops, themselves raised first, outermost first) plus what it may descend, at most
+      :func:`vertical_angle`'s sink gradient, over the run to the crossing: it crosses above
+      every altitude they fly there, whatever the timing (more turns: charged);
+    - a descent orbit outside others ends at least ``S`` above the altitude at which each inner
+      UAV's glide (from its exit to the field) crosses it: it flies above that crossing
+      throughout (a steeper glide from its exit, warned above the flat export's
+      :data:`~poc_env.agents.mission.plan.LANDING_GLIDE`).
+
+    Without layers, or with no concentric orbits, ``profs`` is returned as it is.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``plan.uavs[k]``: a raised spiral above the ceiling, or a raised descent orbit
+        whose glide would be steeper than eq. 19's pitch bound.
+    """
+    import dataclasses
+
+    layers = plan.get("altitude_layers")
+    if not layers or not profs:
+        return profs
+    sep = float(layers["separation_m"])
+    from poc_env.agents.mission.plan import flight
+
+    down = math.tan(vertical_angle(t, route_speed_mps(flight(plan)), False))
+    out = list(profs)
+    uavs = plan["uavs"]
+    where = [f"plan.uavs[{k}] (UAV {u['id']})" for k, u in enumerate(uavs)]
+    climbs: dict[tuple, list[int]] = {}
+    falls: dict[tuple, list[int]] = {}
+    for k, p in enumerate(out):
+        if not uavs[k]["waypoints_m"]:
+            continue
+        if p.climb is not None:
+            climbs.setdefault(p.climb.center_m, []).append(k)
+        if p.descent is not None:
+            falls.setdefault(p.descent.orbit.center_m, []).append(k)
+    for ks in climbs.values():  # outermost first: an inner spiral reads the raised tops
+        ks.sort(key=lambda k: -out[k].climb.radius_m)  # type: ignore[union-attr]
+        for i, k in enumerate(ks):
+            sp = out[k].climb
+            assert sp is not None
+            top = sp.to_m
+            for j in ks[:i]:
+                o = out[j].climb
+                assert o is not None
+                if o.radius_m > sp.radius_m + 1e-6:
+                    run = math.sqrt(o.radius_m**2 - sp.radius_m**2)
+                    top = max(top, o.to_m + sep + down * run)
+            if top > sp.to_m:
+                if top > t.ceiling_m + 1e-6:
+                    raise ConfigError(
+                        where[k], f"a climb spiral over the take-off field to {top:.0f} m AMSL "
+                        f"(separation {sep:g} m above the field-mates' orbits round it)",
+                        f"a climb within the UAV's ceiling uav.max_altitude_m = {t.ceiling_m:g}"
+                        " m AMSL: a smaller separation_m, or launch them apart in time",
+                    )  # fmt: skip
+                out[k] = dataclasses.replace(out[k], climb=dataclasses.replace(sp, to_m=top))
+    for ks in falls.values():  # innermost first: an outer orbit reads the inner glides
+        ks.sort(key=lambda k: out[k].descent.orbit.radius_m)  # type: ignore[union-attr]
+        for i, k in enumerate(ks):
+            d = out[k].descent
+            assert d is not None
+            floor = d.orbit.to_m
+            for j in ks[:i]:
+                di = out[j].descent
+                assert di is not None
+                oi = di.orbit
+                if d.orbit.radius_m > oi.radius_m + 1e-6:
+                    run = math.sqrt(d.orbit.radius_m**2 - oi.radius_m**2)
+                    slope = (oi.to_m - out[j].landing_field_m) / di.glide_m
+                    floor = max(floor, oi.to_m - slope * run + sep)
+            if floor > d.orbit.to_m:
+                field = out[k].landing_field_m
+                if (floor - field) / d.glide_m > math.tan(t.max_pitch_rad) + 1e-12:
+                    raise ConfigError(
+                        where[k], f"a descent orbit raised to {floor:.0f} m AMSL, {sep:g} m above "
+                        "where a field-mate's glide crosses it",
+                        f"a glide within {_bound_text(t)}: a smaller separation_m, or land "
+                        "them apart in time",
+                    )  # fmt: skip
+                _warn_steep(where[k], "descent orbit's exit", floor - field, field, d.glide_m)
+                orbit = dataclasses.replace(d.orbit, to_m=floor)
+                out[k] = dataclasses.replace(out[k], descent=dataclasses.replace(d, orbit=orbit))
+    return out
+
+
 def landing_profile(
-    t: Terrain, u: Any, zones: Any, where: str, speed_mps: float, area: Any = None
+    t: Terrain,
+    u: Any,
+    zones: Any,
+    where: str,
+    speed_mps: float,
+    area: Any = None,
+    route_speed_mps: float | None = None,
 ) -> Profile:
     """A UAV's :func:`profile` with the final glide it can fly (i24-glide; probe 13 of
     results/audit/dayaudit).
@@ -1115,7 +1300,9 @@ def landing_profile(
     def attempt(app: Any, loiter: bool, steep: bool) -> Profile:
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")  # the caller's filters decide when said below
-            prof = profile(t, [*path[:-1], app], where, land, layer, speed_mps, loiter)
+            prof = profile(
+                t, [*path[:-1], app], where, land, layer, speed_mps, loiter, route_speed_mps
+            )
         if not steep and any(issubclass(w.category, SteepGlideWarning) for w in said):
             raise GlideError(where, "a glide steeper than the flat export's", "a gentler one")
         for w in said:
@@ -1142,18 +1329,72 @@ def landing_profile(
         for loiter in ((True,) if app == path[-1] else (False, True))
         if fence is None or fence.covers(Point(app).buffer(r if loiter else 0.0))
     ]
+    other: ConfigError | None = None  # a side refused for something else than its landing
     for steep in (False, True):
         for app, loiter in tries:
             try:
                 return attempt(app, loiter, steep)
-            except ConfigError:  # this side does not fly (its last leg, its glide, its orbit)
+            except GlideError:  # this side does not fly (its glide, its orbit)
                 continue
+            except ConfigError as err:  # nor this one (its last leg, or the take-off)
+                other = other or err
+                continue
+    also = "" if other is None else f"; where the landing clears: {other.value}, {other.allowed}"
     raise ConfigError(
         where, first.value,
         f"{first.allowed}; no side of the landing field clears it either ({len(sides)} "
         "approach sides 15 deg apart tried, each with a straight glide and with a descent "
-        "orbit at the approach point)",
+        f"orbit at the approach point){also}",
     )  # fmt: skip
+
+
+#: PX4's and ArduPlane's default vertical rate limits (m/s): FW_T_CLMB_MAX and FW_T_SINK_MAX
+#: (fw_pos_control's TECS parameters), TECS_CLMB_MAX and TECS_SINK_MAX. An export of a plan
+#: whose scenario gives no ``uav.max_climb_rate_mps`` / ``max_sink_rate_mps`` says which of
+#: its missions need more (:func:`rate_warnings`).
+AUTOPILOT_DEFAULT_RATE_MPS = 5.0
+
+
+def vertical_rates(
+    t: Terrain, p: Profile, speed_mps: float, route_speed_mps: float
+) -> list[tuple[str, str, float, str]]:
+    """The vertical rates (m/s) the phases of the mission ``p`` need, as flown at its speeds
+    (``speed_mps`` on the orbits, ``route_speed_mps`` on the legs, as :func:`profile` bounds
+    them): (phase, ``climb`` or ``sink``, rate, a note), the fastest of each phase that has
+    one. The route's legs: the steepest climb and descent between the profile's points (the
+    exported waypoints' altitudes); the straight take-off climb: the least gradient that keeps
+    it above the ground (:func:`_check_field_legs`), or the climb spiral's (its minutes at
+    :data:`AUTOPILOT_DEFAULT_RATE_MPS` in the note); the descent orbit's sink (and its
+    minutes). Not the final glide: flown at the landing airspeed, bounded by PX4's
+    FW_LND_ANG (:class:`SteepGlideWarning`)."""
+    out: list[tuple[str, str, float, str]] = []
+    dz = np.diff(p.amsl_m)
+    ds = np.maximum(np.hypot(*np.diff(p.points_m, axis=0).T), 1e-9)
+    if len(dz):
+        out.append(("route legs", "climb", float(max(0.0, np.max(dz / ds))) * route_speed_mps, ""))
+        out.append(("route legs", "sink", float(max(0.0, np.max(-dz / ds))) * route_speed_mps, ""))
+    slow = AUTOPILOT_DEFAULT_RATE_MPS
+    for name, kind, o in (
+        ("take-off climb spiral", "climb", p.climb),
+        ("descent orbit", "sink", None if p.descent is None else p.descent.orbit),
+    ):
+        if o is not None:
+            rate = math.tan(o.pitch_rad) * o.speed_mps
+            height = abs(o.to_m - o.from_m)
+            note = (
+                f"{height:.0f} m in {o.time_s / 60:.1f} min charged, "
+                f"{height / min(rate, slow) / 60:.1f} min at {slow:g} m/s"
+            )
+            out.append((name, kind, rate, note))
+    if p.climb is None and len(p.points_m) > 1:  # the legs sampled every tenth of a cell
+        xy = _densify(p.points_m, t.cell_m / 10.0)
+        dist = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+        ground = bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
+        far = ~_own_cells(t, p.points_m[0], xy) & (dist > 0.0)
+        need = (ground[far] - p.field_m) / dist[far]
+        up = float(max(0.0, need.max())) if need.size else 0.0
+        out.append(("straight take-off climb", "climb", up * route_speed_mps, ""))
+    return out
 
 
 class SteepGlideWarning(UserWarning):
@@ -1173,6 +1414,7 @@ def _glide_cap(
     dist: np.ndarray,
     land: Any,
     where: str,
+    down: float | None = None,
 ) -> np.ndarray:
     """``z`` lowered so that the descent to the landing field ``land`` (on the ground) keeps
     eq. 19's ``tan(beta_max)`` and the final glide, straight from the approach point ``p[-1]``
@@ -1182,7 +1424,10 @@ def _glide_cap(
     :data:`~poc_env.agents.mission.plan.LANDING_GLIDE` (the flat export's 300 m over 4 km,
     which PX4's FW_LND_ANG accepts) up to ``tan(beta_max)`` that keeps the clearance. A ``g``
     above LANDING_GLIDE is warned (UserWarning, ``where`` named, the angle PX4's FW_LND_ANG
-    must allow).
+    must allow). ``down``: the descent's gradient to the approach point in place of
+    ``tan(beta_max)`` (the profile's, :func:`vertical_angle` with the aircraft's sink rate);
+    the final glide itself keeps ``tan(beta_max)``: it is flown at the landing airspeed, not
+    the route's, and PX4 bounds it by FW_LND_ANG (the flat export's 4.29 deg is under it).
 
     Raises
     ------
@@ -1190,20 +1435,21 @@ def _glide_cap(
         ``where`` named: the clearance needs more height than a glide at ``tan(beta_max)``
         allows.
     """
-    grad = math.tan(t.max_pitch_rad)
+    pitch = math.tan(t.max_pitch_rad)  # the final glide's own bound (PX4 checks FW_LND_ANG)
+    grad = pitch if down is None else down
     field = t.field_elevation(land)
     final = max(float(np.hypot(*(land - p[-1]))), 1e-9)
     to_go = dist[-1] - dist + final
     need = (req - field - grad * (dist[-1] - dist)) / final  # the least g each point allows
-    g = max(min(grad, LANDING_GLIDE), float(need.max()))
-    if g > grad + 1e-12:
-        i = int(np.argmax(need > grad + 1e-12))
+    g = max(min(pitch, LANDING_GLIDE), float(need.max()))
+    if g > pitch + 1e-12:
+        i = int(np.argmax(need > pitch + 1e-12))
         x, y = p[i]
         raise GlideError(
             where, f"ground {req[i] - t.min_clearance_m:.0f} m AMSL near ({x / 1e3:.1f}, "
             f"{y / 1e3:.1f}) km, {to_go[i] / 1e3:.1f} km before a landing field at {field:.0f} m",
-            "a glide to the landing field within eq. 19's pitch bound uav.max_pitch_deg = "
-            f"{math.degrees(t.max_pitch_rad):g} deg that keeps terrain.min_clearance_m = "
+            f"a glide to the landing field within {_bound_text(t)} that keeps "
+            "terrain.min_clearance_m = "
             f"{t.min_clearance_m:g} m (re-plan the last search leg or the landing field away "
             "from the high ground, or a UAV that can glide steeper)",
         )  # fmt: skip
@@ -1276,6 +1522,15 @@ def _simplify(dist: np.ndarray, z: np.ndarray, floor: np.ndarray, vertex: np.nda
         keep.append(j)
         i = j
     return keep
+
+
+def _densify(points: np.ndarray, step_m: float) -> np.ndarray:
+    """The polyline ``points`` sampled at most ``step_m`` apart (its vertices kept)."""
+    out = [points[:1]]
+    for a, b in itertools.pairwise(points):
+        n = max(1, math.ceil(float(np.hypot(*(b - a))) / step_m))
+        out.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
+    return np.concatenate(out)
 
 
 def clearance_violations(t: Terrain, prof: Profile, step_m: float | None = None) -> int:
@@ -1354,7 +1609,10 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
 
     memo = _PROFILES.get()
     zones = plan.get("no_fly_zones_m") or ()
-    speed = flight(plan)["transit_speed_mps"]
+    fl = flight(plan)
+    speed = fl["transit_speed_mps"]
+    route_speed = route_speed_mps(fl)
+    layered = bool(plan.get("altitude_layers"))
     t: Terrain | None = None
     out = []
     for k, u in enumerate(plan["uavs"]):
@@ -1364,21 +1622,39 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
             continue
         t = t or from_record(rec)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
-        p = landing_profile(t, u, zones, where, speed, plan.get("operating_area_m"))
-        f = u.get("flight_time_s")  # (the greedy baseline's routes record none)
-        over = (
-            t.usable_endurance_s is not None and f is not None and f > t.usable_endurance_s + 1e-6
-        )
-        if not charge or over:  # the flight itself is over: the over-endurance check's
-            pass
-        elif p.descent is not None:
-            _check_orbit_time(t, p, float(u["flight_time_s"]), where)
-        elif p.climb is not None:
-            _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
+        area = plan.get("operating_area_m")
+        p = landing_profile(t, u, zones, where, speed, area, route_speed)
+        if charge and not layered:  # with layers: once the orbits are kept apart, below
+            _charge_orbits(t, u, p, where)
         if memo is not None:
             memo[key] = (rec, u, zones, p)
         out.append(p)
+    if layered:  # field-mates' concentric orbits kept apart, then charged
+        t = t or from_record(rec)
+        out = separate_orbits(plan, t, out)
+        for k, (u, p) in enumerate(zip(plan["uavs"], out)):
+            if charge:
+                _charge_orbits(t, u, p, f"plan.uavs[{k}] (UAV {u['id']})")
     return out
+
+
+def _charge_orbits(t: Terrain, u: Any, p: Profile, where: str) -> None:
+    """Eq. 18 with UAV ``u``'s orbits (:func:`_check_orbit_time`, :func:`_check_spiral_time`),
+    unless its flight alone is beyond 0.85 T (the over-endurance check's)."""
+    f = u.get("flight_time_s")  # (the greedy baseline's routes record none)
+    over = t.usable_endurance_s is not None and f is not None and f > t.usable_endurance_s + 1e-6
+    if over:  # the flight itself is over: the over-endurance check's
+        return
+    if p.descent is not None:
+        _check_orbit_time(t, p, float(u["flight_time_s"]), where)
+    elif p.climb is not None:
+        _check_spiral_time(t, p.climb, float(u["flight_time_s"]), where)
+
+
+def route_speed_mps(fl: dict[str, float]) -> float:
+    """The fastest of a plan's ``flight`` speeds (transit out, search, cruise home): the speed
+    a profile's legs are bounded at (:func:`vertical_angle`)."""
+    return max(fl["transit_speed_mps"], fl["search_speed_mps"], fl["cruise_speed_mps"])
 
 
 def _check_spiral_time(t: Terrain, sp: Spiral, flight_s: float, where: str) -> None:

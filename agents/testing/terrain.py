@@ -3,8 +3,10 @@
 :func:`wall_scenario` is the scenario of tests/mission/test_altitude_layers.py and
 results/mission/i24-layers/zero_ab.py (tests/mission/test_terrain.py and
 results/audit/terrainleft/probes.py build the same one their own way).
-:func:`hill_across_first_leg` raises a plan's recorded ground across a UAV's take-off climb;
-:func:`cell_centres` gives a recorded grid's cell centres.
+:func:`hill_across_first_leg` raises a plan's recorded ground across a UAV's take-off climb,
+:func:`ring_around` in a ring round a point (tests/mission/test_final_glide.py,
+tests/mission/test_vertical_rates.py); :func:`cell_centres` gives a recorded grid's cell
+centres.
 """
 
 from __future__ import annotations
@@ -58,6 +60,20 @@ def hill_across_first_leg(
     for key in ("ground_m", "ground_max_m"):
         rec[key] = np.where(near < half_width_m, height_m, np.asarray(rec[key])).tolist()
     return rec
+
+
+def ring_around(
+    plan: dict[str, Any], centre_km: Any, r0_km: float, r1_km: float, height_m: float
+) -> dict[str, Any]:
+    """``plan`` with ground ``height_m`` (both layers of its terrain record) in every cell
+    whose centre lies ``r0_km``-``r1_km`` from ``centre_km``."""
+    rec = dict(plan["terrain"])
+    gx, gy = cell_centres(rec)
+    d = np.hypot(gx - centre_km[0] * 1e3, gy - centre_km[1] * 1e3)
+    on = (d >= r0_km * 1e3) & (d <= r1_km * 1e3)
+    for key in ("ground_m", "ground_max_m"):
+        rec[key] = np.where(on, height_m, np.asarray(rec[key])).tolist()
+    return {**plan, "terrain": rec}
 
 
 def cell_centres(rec: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:

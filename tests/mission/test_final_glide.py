@@ -33,7 +33,7 @@ from poc_env.agents.mission.terrain import (
     plan_profiles,
 )
 from poc_env.agents.planning.planner import make_plan
-from poc_env.agents.testing.terrain import VALLEY_M, cell_centres, wall_scenario
+from poc_env.agents.testing.terrain import VALLEY_M, ring_around, wall_scenario
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
@@ -54,25 +54,13 @@ def bowl_plan() -> dict:
     return make_plan(sc, planner="allocation", uavs=2, refine=0)
 
 
-def _ring(plan: dict, centre_km: tuple, r0_km: float, r1_km: float, height_m: float) -> dict:
-    """``plan`` with ground ``height_m`` (both layers) in every cell whose centre lies
-    ``r0_km``-``r1_km`` from ``centre_km``."""
-    rec = dict(plan["terrain"])
-    gx, gy = cell_centres(rec)
-    d = np.hypot(gx - centre_km[0] * 1e3, gy - centre_km[1] * 1e3)
-    on = (d >= r0_km * 1e3) & (d <= r1_km * 1e3)
-    for key in ("ground_m", "ground_max_m"):
-        rec[key] = np.where(on, height_m, np.asarray(rec[key])).tolist()
-    return {**plan, "terrain": rec}
-
-
 def test_a_glide_over_high_ground_lands_on_a_descent_orbit(tmp_path, bowl_plan):
     """Before (main at ab33f59) this plan was refused by every export ("a glide to the landing
     field within eq. 19's pitch bound ..."). Now each UAV descends on NAV_LOITER_TO_ALT at its
     approach point (DO_LAND_START, the approach waypoint, the orbit, NAV_LAND: PX4's landing
     pattern) and glides from the orbit's tangent exit at the flat export's slope; the orbit
     and the glide keep the ground, every mission point keeps the clearance."""
-    plan = _ring(bowl_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0)
+    plan = ring_around(bowl_plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0)
     write_plan(plan, tmp_path / "plan.json")
     loaded = load_plan(tmp_path / "plan.json")
     t = from_record(loaded["terrain"])
@@ -122,7 +110,7 @@ def test_a_glide_over_high_ground_lands_on_a_descent_orbit(tmp_path, bowl_plan):
 def test_no_side_of_the_field_clears_refused_naming_the_uav(tmp_path, bowl_plan):
     """High ground under every approach point and its orbit: every format refuses, naming the
     UAV and the sides tried; nothing is written."""
-    plan = _ring(bowl_plan, BOWL_KM, 3.0, 5.0, VALLEY_M + 1500.0)
+    plan = ring_around(bowl_plan, BOWL_KM, 3.0, 5.0, VALLEY_M + 1500.0)
     write_plan(plan, tmp_path / "plan.json")
     field = np.asarray(BOWL_KM) * 1e3
     k = next(k for k, u in enumerate(plan["uavs"]) if np.allclose(u["landing_m"], field))
@@ -141,7 +129,7 @@ def test_field_mates_orbits_are_kept_apart_by_their_layers(tmp_path, bowl_plan, 
     orbit one circle, and the export says so (a warning naming both); with ``--separation-m
     S`` UAV k' orbits ``k' x S`` wider, so every point of one orbit is at least S from every
     point of the other."""
-    plan = _ring(bowl_plan, VALLEY_KM, 2.5, 4.5, VALLEY_M + 1200.0)
+    plan = ring_around(bowl_plan, VALLEY_KM, 2.5, 4.5, VALLEY_M + 1200.0)
     start = [float(v) * 1e3 for v in VALLEY_KM]
     bowl = [float(v) * 1e3 for v in BOWL_KM]  # both land at bowl (the ring is on no glide)
     plan = {**plan, "uavs": [{**u, "takeoff_m": start, "landing_m": bowl} for u in plan["uavs"]]}
@@ -163,7 +151,7 @@ def test_field_mates_orbits_are_kept_apart_by_their_layers(tmp_path, bowl_plan, 
     assert radii["flat"][0] == radii["flat"][1]  # without layers: one circle, said
     ids = ", ".join(str(u["id"]) for u in plan["uavs"])
     assert f"warning: UAVs {ids} fly one climb spiral over the take-off field" in said["flat"]
-    assert "climb spiral" not in said["lay"]
+    assert "fly one climb spiral" not in said["lay"]  # (the rates warning names spirals too)
     assert abs(radii["lay"][1] - radii["lay"][0]) >= sep - 0.1
     gj = json.loads(next((tmp_path / "lay_gj").glob("*.geojson")).read_text())
     orbits = [f for f in gj["features"] if f["properties"]["kind"] == "climb_spiral"]
