@@ -10,7 +10,7 @@ OUT ?= out
 # MkDocs 2 notices its plugins print
 MKDOCS := NO_MKDOCS_2_WARNING=1 DISABLE_MKDOCS_2_WARNING=true $(VENV)/bin/mkdocs
 
-.PHONY: demo test test-slow wheel-check lint format bench figures docs clean
+.PHONY: demo test test-suite test-checks test-slow wheel-check lint format bench figures docs clean
 
 $(STAMP): pyproject.toml constraints.txt
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -32,9 +32,17 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
+	@# two lanes side by side: the suite on its two workers, and the single-threaded checks
+	@# (types, the strict docs build, the wheel install) that would otherwise leave a core idle
+	@# for about two minutes; each lane's output is printed whole when it ends
+	$(MAKE) --no-print-directory -j2 --output-sync=target test-suite test-checks
+
+test-suite: $(STAMP)
+	OMP_NUM_THREADS=1 $(PY) -m pytest -q -n 2 -m "not slow"
+
+test-checks: $(STAMP)
 	$(VENV)/bin/mypy
 	$(MKDOCS) build --strict
-	OMP_NUM_THREADS=1 $(PY) -m pytest -q -n 2 -m "not slow"
 	PYTHON=$(PY) .ci/wheel-check
 
 # the documentation site into site/ (pages from docs/, figures from results/, the API reference
