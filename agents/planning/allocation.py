@@ -162,6 +162,13 @@ REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
 
 
+def _rule_budget(opt):
+    return opt.nothing, 0.0, opt.nothing, "hours"
+
+
+HOME_RULE = _rule_budget
+
+
 class _Reordered:
     """A scenario whose UAVs are taken in ``order`` (take-off and landing positions
     permuted; every other attribute the scenario's): :func:`~poc_env.agents.planning.
@@ -906,6 +913,7 @@ def make_allocation_plan(
         return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
 
     nothing = opt.nothing * float(full_prior.sum())
+    sent_home: dict[int, dict[int, tuple[float, float]]] = {}  # by id(routes): k -> (POS, h)
 
     def _hours(rs) -> float:
         """The plan's total eq. 17 flight time (every UAV's route, take-off to landing)."""
@@ -937,28 +945,27 @@ def make_allocation_plan(
         return tied[int(np.argmin(hours))]
 
     def _home(trial, t_pieces, score: float | None):
-        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that find nothing
-        kept home (F1: no aircraft sent for nothing), pieces and POS updated. A UAV's own
-        marginal POS (what the plan finds less without it) is at most what it finds when swept
-        first-to-last or last-to-first (:func:`sampled_sweep`, eq. 14, a point credited to the
-        first path that finds it); the UAVs of either credit below :data:`NOTHING` of the
-        prior's mass are tried, longest flight first, and each kept home if the plan without it
-        (and the ones already kept home) still finds within :data:`NOTHING` of the mass of what
-        it found: the plan loses less than that in all. As it is with ``options.nothing`` 0."""
-        if opt.nothing == 0:
+        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that find too
+        little kept home (F1, G3), pieces and POS updated (:data:`HOME_RULE`)."""
+        per_uav, per_hour, budget, order = HOME_RULE(opt)
+        if per_uav == 0 and per_hour == 0:
             return trial, t_pieces, score
+        m_ = float(full_prior.sum())
+        per_uav, per_hour, budget = per_uav * m_, per_hour * m_, budget * m_
         paths = [[takeoff[k], *trial[k], landing[k]] if trial[k] else [] for k in range(n)]
+        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k]) / 3600
+                 for k in range(n) if trial[k]}  # fmt: skip
+        floor_ = {k: per_uav + per_hour * h for k, h in hours.items()}
         fwd = sampled_sweep(sc, grid, full_prior, paths)[0]
-        if all(f >= nothing for k, f in enumerate(fwd) if trial[k]):  # the common case
+        if all(fwd[k] >= f for k, f in floor_.items()):  # the common case
             rev = fwd
         else:
             rev = sampled_sweep(sc, grid, full_prior, paths[::-1])[0][::-1]
         own = [min(f, r) for f, r in zip(fwd, rev)]
-        tried = [k for k in range(n) if len(trial[k]) and own[k] < nothing]
-        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k])
-                 for k in tried}  # fmt: skip
+        tried = [k for k in floor_ if own[k] < floor_[k]]
         home: list[int] = []
-        total = float(sum(fwd))
+        why: dict[int, tuple[float, float]] = {}
+        now = total = float(sum(fwd))
         s_ = sc.sensor.samples_per_cell
         cut = sc.sensor.cutoff_sweep_widths * w
         base = np.ascontiguousarray(grid.refine(full_prior, s_))
@@ -967,18 +974,26 @@ def make_allocation_plan(
             if paths[j] and j not in tried:
                 sweep_track(base, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
                             grid.cell_m)  # fmt: skip
-        for k in sorted(tried, key=lambda k: -hours[k]):
+        if order == "hours":
+            seq = sorted(tried, key=lambda k: -hours[k])
+        else:
+            seq = sorted(tried, key=lambda k: (own[k] / hours[k], k))
+        for k in seq:
             left = base.copy()  # the plan without k and the ones already home
             for j in tried:
                 if j != k and j not in home:
                     sweep_track(left, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
                                 grid.cell_m)  # fmt: skip
-            if mass - float(left.sum()) >= total - nothing:
+            without = mass - float(left.sum())
+            if now - without < floor_[k] and without >= total - budget:
                 home.append(k)
+                why[k] = (now - without, hours[k])
+                now = without
         if not home:
             return trial, t_pieces, score
         kept = [[] if k in home else trial[k] for k in range(n)]
         k_pieces = [[] if k in home else list(p_) for k, p_ in enumerate(t_pieces)]
+        sent_home[id(kept)] = why
         return kept, k_pieces, None if score is None else _sampled_total(kept)
 
     def _flown(trial, t_pieces, score: float | None):
@@ -1080,6 +1095,7 @@ def make_allocation_plan(
     starts.sort(key=lambda t: -t[0])
     start = starts[0][1] if starts else "allocation"
     refined = bool(refine)
+    home_why: dict[int, tuple[float, float]] = {}  # the kept plan's UAVs sent home (_home)
 
     if starts:
         routes, pieces = starts[0][2], starts[0][3]
@@ -1087,6 +1103,7 @@ def make_allocation_plan(
             spacing = w
         if not refine:  # the start kept as it is, its idle UAVs filled
             routes, pieces, _ = _flown(routes, pieces, None)
+            home_why = sent_home.get(id(routes), {})
     ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
         sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
@@ -1141,6 +1158,7 @@ def make_allocation_plan(
             ranked.append((score, f_routes, f_pieces, name, False))
         # the best by the environment's model; on a tie, the least flying (F1)
         _, routes, pieces, start, refined = _pick(ranked, home=True)
+        home_why = sent_home.get(id(routes), {})
 
     def _polish(rs):
         """The polish stages in turn -- the polish, the second polish with the block moves too
@@ -1262,6 +1280,11 @@ def make_allocation_plan(
         [[takeoff[k], *routes[k], landing[k]] if routes[k] else [] for k in range(n)],
     )
     posc = float(sum(flown_pos))
+    home_rec = [  # the UAVs the rule kept home (G3): what each would add, in its hours
+        {"id": k + 1, "pos": float(m_), "hours": float(h_)}
+        for k, (m_, h_) in sorted(home_why.items())
+        if not routes[k]
+    ]
     x0, y0, x1, y1 = grid.bounds
     heading_k = takeoff_heading(grid.bounds, takeoff)
     uav_out = []
@@ -1327,6 +1350,7 @@ def make_allocation_plan(
                 **({"options": opt.changed()} if opt.changed() else {}),
                 **({"polish": polished} if polished is not None else {}),
                 **({"fleet": fleet_rec} if fleet_rec is not None else {}),
+                **({"home": home_rec} if home_rec else {}),
             },
         },
         "runtime_s": runtime,
