@@ -48,9 +48,10 @@
    refined and the plan keeps the best of them, refined or not, by the environment's model
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
    (``options.airspace_penalty``, off by default); ``start`` records which start and
-   ``refined`` whether the refined routes were kept. Each candidate's UAVs that add less than
-   :data:`NOTHING` of the prior's mass are kept home, and among the candidates within
-   :data:`NOTHING` of the best the one of least total flight time is kept (i24-smallfix, F1).
+   ``refined`` whether the refined routes were kept. Among the candidates within
+   :data:`NOTHING` of the best the one of least total flight time is kept (i24-smallfix, F1),
+   each with its UAVs that add less than :data:`GAIN_PER_HOUR` of the prior's mass per flight
+   hour kept home first (i24-gainhour, G3).
 7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
@@ -149,24 +150,23 @@ from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 #: of coverage layers (K) tried, the share of 0.85 T a route may fill, the refinement's passes
 #: and the starts refined. Kept as names for the callers that read them.
 LEVELS = PlanOptions.levels
-#: "Nothing", as a share of the prior's mass (``PlanOptions.nothing``; i24-smallfix, F1): a
-#: UAV whose route adds less than this to the plan's POS stays home, and candidate plans whose
-#: planned POS lie within it of the best are tied, the one of least total eq. 17 flight time
-#: kept; a plan loses at most twice this by them. 1e-4 of the mass: below the 4 decimals POS_C
-#: is reported at, and below what any flying UAV finds on the reference maps (``paper_6_2``
-#: 0.06, 64 UAVs on a 150 km map 0.003); 1e-6 left F1 as it was (the North UAV's 1.77 h route
-#: adds 3.2e-5 to the South UAV's 0.28 h one).
+#: "Nothing", as a share of the prior's mass (``PlanOptions.nothing``; i24-smallfix, F1):
+#: candidate plans whose planned POS lie within it of the best are tied, the one of least
+#: total eq. 17 flight time kept (each with its UAVs below :data:`GAIN_PER_HOUR` kept home
+#: first; until i24-gainhour it was also the plan's budget for them). 1e-4 of the mass: below
+#: the 4 decimals POS_C is reported at, and below what any flying UAV finds on the reference
+#: maps (``paper_6_2`` 0.06, 64 UAVs on a 150 km map 0.003).
 NOTHING = PlanOptions.nothing
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
-
-
-def _rule_budget(opt):
-    return opt.nothing, 0.0, opt.nothing, "hours"
-
-
-HOME_RULE = _rule_budget
+#: The floor a flying UAV must add, as a share of the prior's mass per eq. 17 flight hour
+#: (``PlanOptions.gain_per_hour``; i24-gainhour, G3): a UAV whose route adds less than this
+#: times its own flight hours to the plan's POS stays home (:func:`make_allocation_plan`'s
+#: ``_home``). 1e-4 per hour: on the 500 km scenario at 48 UAVs the three UAVs flying 7.7 h
+#: for 1.2e-4 in all (results/audit/dayaudit2) stay home, 3e-4 per hour lost 0.028 of flown
+#: POS_C there (results/plan_scale/i24-gainhour).
+GAIN_PER_HOUR = PlanOptions.gain_per_hour
 
 
 class _Reordered:
@@ -575,10 +575,10 @@ def plan_fleets(
 #: ones and every ``polish*`` field, so a polish option added later is kept without a change
 #: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
 #: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did); and ``nothing``
-#: (i24-smallfix: ``nothing=0`` flies every route in both plans).
+#: (i24-smallfix: ``nothing=0`` flies every route in both plans) and ``gain_per_hour``.
 _DEFAULT_KEPT = (
     "levels", "etas", "margin", "refine", "refine_starts", "greedy_start", "box_start",
-    "nothing",
+    "nothing", "gain_per_hour",
     *(f.name for f in dataclasses.fields(PlanOptions)
       if f.name.startswith("polish") and f.name != "polish_starts"),
 )  # fmt: skip
@@ -925,7 +925,8 @@ def make_allocation_plan(
         """The candidate kept among ``cands`` (``(score, routes, pieces, ...)``, in order of
         preference; score the sampled POS less the penalty): the candidates whose score lies
         within ``options.nothing`` (:data:`NOTHING`) of the prior's mass of the best are tied,
-        with ``home`` each has its UAVs that add nothing kept home (:func:`_home`; F1), and the
+        with ``home`` each has its UAVs that add too little for their hours kept home
+        (:func:`_home`; F1, G3), and the
         one of least total flight time (:func:`_hours`) is kept, the first of them on equal
         times (F1: a tie on POS_C is broken by the flying, not by the order). Without a tie,
         or with ``options.nothing`` 0, the first of the highest score, as before (kept home
@@ -945,27 +946,37 @@ def make_allocation_plan(
         return tied[int(np.argmin(hours))]
 
     def _home(trial, t_pieces, score: float | None):
-        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that find too
-        little kept home (F1, G3), pieces and POS updated (:data:`HOME_RULE`)."""
-        per_uav, per_hour, budget, order = HOME_RULE(opt)
-        if per_uav == 0 and per_hour == 0:
+        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that add too
+        little for their flight hours kept home (F1: no aircraft sent for nothing; G3: nor
+        for hours at next to nothing), pieces and POS updated; as it is with
+        ``options.gain_per_hour`` or ``options.nothing`` 0.
+
+        A UAV's floor is :data:`GAIN_PER_HOUR` of the prior's mass times its eq. 17 flight
+        hours. Its own marginal POS (what the plan finds less without it) is at most what it
+        finds when swept first-to-last or last-to-first (:func:`sampled_sweep`, eq. 14, a
+        point credited to the first path that finds it); the UAVs of either credit below their
+        floor are tried in order of that credit per flight hour, least first (the UAV's index
+        on equal ones), and each kept home if the plan without it (and the ones already kept
+        home) finds less than its floor below the plan with it. So each UAV kept home added
+        less than its floor to the plan it left, and the plan loses less than
+        ``gain_per_hour`` times the flight hours it saves. The UAVs kept home are recorded
+        with what each added and its hours (``sent_home``, plan.json's
+        ``optimizer.settings.home``)."""
+        if opt.nothing == 0 or opt.gain_per_hour == 0:
             return trial, t_pieces, score
-        m_ = float(full_prior.sum())
-        per_uav, per_hour, budget = per_uav * m_, per_hour * m_, budget * m_
+        rate = opt.gain_per_hour * float(full_prior.sum())  # POS per flight hour
         paths = [[takeoff[k], *trial[k], landing[k]] if trial[k] else [] for k in range(n)]
         hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k]) / 3600
                  for k in range(n) if trial[k]}  # fmt: skip
-        floor_ = {k: per_uav + per_hour * h for k, h in hours.items()}
         fwd = sampled_sweep(sc, grid, full_prior, paths)[0]
-        if all(fwd[k] >= f for k, f in floor_.items()):  # the common case
+        if all(fwd[k] >= rate * h for k, h in hours.items()):  # the common case
             rev = fwd
         else:
             rev = sampled_sweep(sc, grid, full_prior, paths[::-1])[0][::-1]
         own = [min(f, r) for f, r in zip(fwd, rev)]
-        tried = [k for k in floor_ if own[k] < floor_[k]]
-        home: list[int] = []
-        why: dict[int, tuple[float, float]] = {}
-        now = total = float(sum(fwd))
+        tried = [k for k, h in hours.items() if own[k] < rate * h]
+        home: dict[int, tuple[float, float]] = {}  # k -> (what it added, its hours)
+        now = float(sum(fwd))
         s_ = sc.sensor.samples_per_cell
         cut = sc.sensor.cutoff_sweep_widths * w
         base = np.ascontiguousarray(grid.refine(full_prior, s_))
@@ -974,26 +985,21 @@ def make_allocation_plan(
             if paths[j] and j not in tried:
                 sweep_track(base, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
                             grid.cell_m)  # fmt: skip
-        if order == "hours":
-            seq = sorted(tried, key=lambda k: -hours[k])
-        else:
-            seq = sorted(tried, key=lambda k: (own[k] / hours[k], k))
-        for k in seq:
+        for k in sorted(tried, key=lambda k: (own[k] / hours[k], k)):
             left = base.copy()  # the plan without k and the ones already home
             for j in tried:
                 if j != k and j not in home:
                     sweep_track(left, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
                                 grid.cell_m)  # fmt: skip
             without = mass - float(left.sum())
-            if now - without < floor_[k] and without >= total - budget:
-                home.append(k)
-                why[k] = (now - without, hours[k])
+            if now - without < rate * hours[k]:
+                home[k] = (now - without, hours[k])
                 now = without
         if not home:
             return trial, t_pieces, score
         kept = [[] if k in home else trial[k] for k in range(n)]
         k_pieces = [[] if k in home else list(p_) for k, p_ in enumerate(t_pieces)]
-        sent_home[id(kept)] = why
+        sent_home[id(kept)] = home
         return kept, k_pieces, None if score is None else _sampled_total(kept)
 
     def _flown(trial, t_pieces, score: float | None):
