@@ -1400,7 +1400,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="G",
         help="allocation planner: a UAV flies only if its route adds at least G of the prior's "
         "mass per flight hour to POS_C (its marginal POS over its eq. 17 hours); the others stay "
-        "home, least POS per hour first, each against the plan left by the ones before, so the "
+        "home, longest flight first, each against the plan left by the ones before, so the "
         "plan gives up less than G x the hours saved. Default 1e-4 (0.01 %% per aircraft-hour); "
         "0: every route flies; at most 0.01 (docs/PLANNER.md, 'Nothing to find')",
     )

@@ -955,9 +955,10 @@ def make_allocation_plan(
         hours. Its own marginal POS (what the plan finds less without it) is at most what it
         finds when swept first-to-last or last-to-first (:func:`sampled_sweep`, eq. 14, a
         point credited to the first path that finds it); the UAVs of either credit below their
-        floor are tried in order of that credit per flight hour, least first (the UAV's index
-        on equal ones), and each kept home if the plan without it (and the ones already kept
-        home) finds less than its floor below the plan with it. So each UAV kept home added
+        floor are tried longest flight first (the UAV's index on equal ones: the most aircraft
+        hours saved first; least POS per hour first sent home the 0.28 h UAV of the
+        one-sighting case and flew the 1.63 h one), and each kept home if the plan without it
+        (and the ones already kept home) finds less than its floor below the plan with it. So each UAV kept home added
         less than its floor to the plan it left, and the plan loses less than
         ``gain_per_hour`` times the flight hours it saves. The UAVs kept home are recorded
         with what each added and its hours (``sent_home``, plan.json's
@@ -985,7 +986,7 @@ def make_allocation_plan(
             if paths[j] and j not in tried:
                 sweep_track(base, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
                             grid.cell_m)  # fmt: skip
-        for k in sorted(tried, key=lambda k: (own[k] / hours[k], k)):
+        for k in sorted(tried, key=lambda k: (-hours[k], k)):  # the longest flight first
             left = base.copy()  # the plan without k and the ones already home
             for j in tried:
                 if j != k and j not in home:

@@ -1,12 +1,14 @@
 """i24-gainhour, G3: candidate stay-home rules planned and flown (a script, not a test).
 
-``python rules.py OUT.json CASES RULE [RULE ...]`` at the measurement commit (its
-``allocation.HOME_RULE`` seam; the final code keeps the chosen rule only). CASES: ``big24``,
+``python rules.py OUT.json CASES RULE [RULE ...]``: at the measurement commit 976da86 (its
+``allocation.HOME_RULE`` seam) every rule; after it (the final code keeps the chosen rule
+only) ``hourG`` and ``off``. CASES: ``big24``,
 ``big48`` (the 500 km scenario at ``/tmp/gainhour/big.yaml`` with ``with_uavs(N)``, flown once,
 seed 5000) or ``paper`` (``paper_6_2``'s validation priors 5000-5009, each flown with its own
 prior and seed). RULE: ``budget`` (main: 1e-4 of the mass a loss budget for the plan),
-``uav`` (a floor of 1e-4 per UAV, no budget), ``hourG`` (a floor of G per flight hour, no
-budget, least POS per hour tried first), ``off`` (``PlanOptions(nothing=0)``: every route).
+``uav`` (a floor of 1e-4 per UAV, no budget, longest flight tried first), ``hourG`` (a floor
+of G per flight hour, no budget; at 976da86 least POS per hour tried first, after it longest
+flight first), ``off`` (``PlanOptions(nothing=0)``: every route).
 Per case and rule: digest, planned and flown POS_C, UAVs flying, flight hours, no-fly and
 collision steps, the UAVs kept home by the rule; OUT.json rewritten after each.
 """
@@ -33,7 +35,15 @@ BIG = "/tmp/gainhour/big.yaml"
 
 
 def rule(name: str):
-    """(options, HOME_RULE) of a rule's name."""
+    """(options, HOME_RULE) of a rule's name: after the measurement commit (no seam) the
+    ``hourG`` rules are ``PlanOptions(gain_per_hour=G)`` (the final code: longest flight
+    first) and ``off`` ``PlanOptions(nothing=0)``."""
+    if not hasattr(al, "HOME_RULE"):
+        if name.startswith("hour"):
+            return PlanOptions(gain_per_hour=float(name[4:])), None
+        if name == "off":
+            return PlanOptions(nothing=0.0), None
+        raise SystemExit(f"{name}: only at the measurement commit 976da86")
     if name == "budget":
         return PlanOptions(), lambda o: (o.nothing, 0.0, o.nothing, "hours")
     if name == "off":
@@ -80,7 +90,9 @@ if __name__ == "__main__":
     recs = json.loads(out.read_text()) if out.exists() else {}
     for key, sc, prior, seed in cases(sys.argv[2]):
         for name in sys.argv[3:]:
-            opt, al.HOME_RULE = rule(name)
+            opt, seam = rule(name)
+            if seam is not None:
+                al.HOME_RULE = seam
             t = time.perf_counter()
             p = al.make_allocation_plan(sc, prior=prior, options=opt)
             plan_s = time.perf_counter() - t
