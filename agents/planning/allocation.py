@@ -958,9 +958,11 @@ def make_allocation_plan(
         floor are tried longest flight first (the UAV's index on equal ones: the most aircraft
         hours saved first; least POS per hour first sent home the 0.28 h UAV of the
         one-sighting case and flew the 1.63 h one), and each kept home if the plan without it
-        (and the ones already kept home) finds less than its floor below the plan with it. So each UAV kept home added
-        less than its floor to the plan it left, and the plan loses less than
-        ``gain_per_hour`` times the flight hours it saves. The UAVs kept home are recorded
+        (and the ones already kept home) finds less than its floor below the plan with it. So
+        each UAV kept home added less than its floor to the plan it left, and the plan loses
+        less than ``gain_per_hour`` times the flight hours it saves. A UAV whose credit both
+        ways is at least its floor is not tried (its marginal may be lower: on the 500 km
+        scenario none was, results/plan_scale/i24-gainhour). The UAVs kept home are recorded
         with what each added and its hours (``sent_home``, plan.json's
         ``optimizer.settings.home``)."""
         if opt.nothing == 0 or opt.gain_per_hour == 0:

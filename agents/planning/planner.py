@@ -384,9 +384,7 @@ def home_note(plan: dict[str, Any]) -> str | None:
     rule = [r for r in settings.get("home", []) if r["id"] in home]
     lines = [f"{head}:"]
     if rule:
-        each = ", ".join(
-            f"UAV {r['id']} {r['pos']:.1e} in {r['hours']:.2f} h" for r in rule
-        )
+        each = ", ".join(f"UAV {r['id']} {r['pos']:.1e} in {r['hours']:.2f} h" for r in rule)
         hours, pos = sum(r["hours"] for r in rule), sum(r["pos"] for r in rule)
         lines.append(
             f"  {who([r['id'] for r in rule])}: each would add less than {gain:g} of the "

@@ -105,7 +105,8 @@ def test_the_summary_names_the_uavs_that_stay_home_and_why():
     # i24-gainhour: the UAVs the floor kept home named with what each would add in its hours
     rec = plan["optimizer"]["settings"]["home"]
     assert rec and all(r["id"] in home for r in rec)
-    (why,) = [x for x in plan_table(plan).splitlines() if "per flight hour" in x and "add less" in x]
+    table = plan_table(plan).splitlines()
+    (why,) = [x for x in table if "per flight hour" in x and "add less" in x]
     for r in rec:
         assert f"UAV {r['id']} {r['pos']:.1e} in {r['hours']:.2f} h" in why
     assert "--gain-per-hour" in why and "flight hours saved" in why
@@ -134,15 +135,13 @@ def _marginals(sc, grid, prior, plan) -> dict[int, tuple[float, float]]:
         for u in plan["uavs"]
     ]
     total = sum(sampled_sweep(sc, grid, prior, paths)[0])
-    return {
-        k: (
-            total - sum(sampled_sweep(sc, grid, prior, [[] if j == k else q
-                                                         for j, q in enumerate(paths)])[0]),
-            plan["uavs"][k]["flight_time_s"] / 3600,
-        )  # fmt: skip
-        for k, p in enumerate(paths)
-        if p
-    }
+    out = {}
+    for k, p in enumerate(paths):
+        if p:
+            rest = [[] if j == k else q for j, q in enumerate(paths)]
+            without = sum(sampled_sweep(sc, grid, prior, rest)[0])
+            out[k] = (total - without, plan["uavs"][k]["flight_time_s"] / 3600)
+    return out
 
 
 def test_a_uav_below_its_floor_per_flight_hour_stays_home_and_one_above_flies():
@@ -173,7 +172,7 @@ def test_the_plan_gives_up_less_than_the_floor_times_the_hours_it_saves():
     less than ``nothing`` (the tie on POS) plus ``gain_per_hour`` times the flight hours of
     the UAVs it keeps home (each added less than its floor to the plan it left), and each
     recorded UAV added less than its floor."""
-    sc, grid, prior = _two_sightings()
+    sc, _, prior = _two_sightings()
     every = make_allocation_plan(sc, prior=prior, options=PlanOptions(gain_per_hour=0.0))
     assert "home" not in every["optimizer"]["settings"]
     for g in (1e-4, 3e-3):

@@ -11,22 +11,30 @@ from scipy import stats
 
 
 def row(key, r, b):
-    return (f"| {key} | {r['flying']} | {r['hours']:.1f} | {r['planned']:.6f} | "
-            f"{r['planned'] - b['planned']:+.1e} | {r['flown']:.6f} | {r['flown'] - b['flown']:+.1e} | "
-            f"{r['collision_steps']} | {len(r['home'])} |")  # fmt: skip
+    return (
+        f"| {key} | {r['flying']} | {r['hours']:.1f} | {r['planned']:.6f} | "
+        f"{r['planned'] - b['planned']:+.1e} | {r['flown']:.6f} | "
+        f"{r['flown'] - b['flown']:+.1e} | {r['collision_steps']} | {len(r['home'])} |"
+    )
 
 
-big = json.load(open(sys.argv[1]))
-print("| case:rule | flying | hours | planned | vs budget | flown | vs budget | collision | by rule |")
+with open(sys.argv[1]) as f:
+    big = json.load(f)
+print(
+    "| case:rule | flying | hours | planned | vs budget | flown | vs budget | collision | by rule |"
+)
 print("|---|---|---|---|---|---|---|---|---|")
 for key, r in big.items():
     b = big[key.rsplit(":", 1)[0] + ":budget"]
     print(row(key, r, b))
-paper = json.load(open(sys.argv[2]))
+with open(sys.argv[2]) as f:
+    paper = json.load(f)
 rules = sorted({k.rsplit(":", 1)[1] for k in paper})
 print()
-print("| rule | cases | plans equal to budget's | planned diff mean [95 % CI] | flown diff mean "
-      "[95 % CI] | flown W/T/L | hours diff |")
+print(
+    "| rule | cases | plans equal to budget's | planned diff mean [95 % CI] | flown diff mean "
+    "[95 % CI] | flown W/T/L | hours diff |"
+)
 print("|---|---|---|---|---|---|---|")
 for rule in rules:
     keys = [k for k in paper if k.endswith(":" + rule)]
@@ -46,5 +54,7 @@ for rule in rules:
         return f"{m:+.2e} [{m - h:+.2e}, {m + h:+.2e}]"
 
     wtl = (sum(x > 0 for x in d_fl), sum(x == 0 for x in d_fl), sum(x < 0 for x in d_fl))
-    print(f"| {rule} | {len(keys)} | {same} | {ci(d_pl)} | {ci(d_fl)} | {wtl[0]}/{wtl[1]}/{wtl[2]} "
-          f"| {statistics.mean(d_h):+.2f} |")
+    print(
+        f"| {rule} | {len(keys)} | {same} | {ci(d_pl)} | {ci(d_fl)} | {wtl[0]}/{wtl[1]}/{wtl[2]} "
+        f"| {statistics.mean(d_h):+.2f} |"
+    )
