@@ -1,7 +1,8 @@
 """i24-gainhour: the tables of README.md from rules.py's records (``python tables.py
-big.json paper.json``): per case and rule, UAVs flying, flight hours, planned and flown POS_C
-and their differences from main's rule (``budget``); for the ``paper_6_2`` priors the paired
-differences, Student's t 95 % interval and wins/ties/losses against ``budget``."""
+big.json paper.json final.json``; final.json's rows, the final code's, named ``final``):
+per case and rule, UAVs flying, flight hours, planned and flown POS_C and their differences
+from main's rule (``budget``); for the ``paper_6_2`` priors the paired differences, Student's
+t 95 % interval and wins/ties/losses against ``budget``."""
 
 import json
 import statistics
@@ -20,6 +21,11 @@ def row(key, r, b):
 
 with open(sys.argv[1]) as f:
     big = json.load(f)
+with open(sys.argv[2]) as f:
+    paper = json.load(f)
+with open(sys.argv[3]) as f:
+    for key, r in json.load(f).items():
+        (paper if key.startswith("paper") else big)[key.rsplit(":", 1)[0] + ":final"] = r
 print(
     "| case:rule | flying | hours | planned | vs budget | flown | vs budget | collision | by rule |"
 )
@@ -27,8 +33,6 @@ print("|---|---|---|---|---|---|---|---|---|")
 for key, r in big.items():
     b = big[key.rsplit(":", 1)[0] + ":budget"]
     print(row(key, r, b))
-with open(sys.argv[2]) as f:
-    paper = json.load(f)
 rules = sorted({k.rsplit(":", 1)[1] for k in paper})
 print()
 print(
