@@ -980,9 +980,10 @@ def make_allocation_plan(
         with it. So each UAV kept home added less than its floor to the plan it left, the plan
         loses less than ``gain_per_hour`` times the flight hours it saves, and every UAV that
         flies adds at least its floor to the candidate (a UAV's marginal only grows as others
-        stay home; the polish of ``standard`` and ``thorough`` moves routes after the pick). Until the measurement of i24-gainhour only the UAVs whose credit swept
-        first or last was below the floor were tried: on the 500 km scenario at 48 UAVs two
-        others flew below it (3.72 h for 4.3e-5, 2.78 h for 2.0e-4). The UAVs kept home are
+        stay home; the polish of ``standard`` and ``thorough`` moves routes after the pick).
+        Until the measurement of i24-gainhour only the UAVs whose credit swept first or last
+        was below the floor were tried: on the 500 km scenario at 48 UAVs two others flew
+        below it (3.72 h for 4.3e-5, 2.78 h for 2.0e-4). The UAVs kept home are
         recorded with what each added and its hours (``sent_home``, plan.json's
         ``optimizer.settings.home``)."""
         if opt.nothing == 0 or opt.gain_per_hour == 0:
