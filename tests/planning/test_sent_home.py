@@ -200,3 +200,31 @@ def test_bad_gain_per_hour_refused_naming_the_field(bad, tmp_path, capsys):
         err = capsys.readouterr().err
         assert f"gain_per_hour: got {bad!r}; allowed: a number in [0, 0.01]" in err, err
         assert not out.exists()
+
+
+def test_leave_one_out_is_each_path_left_out_in_turn():
+    """``_leave_one_out`` (the rule's every marginal POS, by halves) gives for each path the
+    mass left when all the others sweep, as leaving each path out of ``sampled_sweep`` does."""
+    from poc_env.agents.planning.allocation import _leave_one_out
+    from poc_env.theory.search_theory import sweep_track
+
+    sc, grid, prior = _two_sightings()
+    plan = make_allocation_plan(sc, prior=prior, options=PlanOptions(gain_per_hour=0.0))
+    paths = [
+        [u["takeoff_m"], *u["waypoints_m"], u["landing_m"]]
+        for u in plan["uavs"]
+        if u["waypoints_m"]
+    ]
+    assert len(paths) >= 3
+    s, w = sc.sensor.samples_per_cell, sc.sensor.sweep_width_m
+    base = np.ascontiguousarray(grid.refine(prior, s))
+
+    def sweep(belief, j):
+        cut = sc.sensor.cutoff_sweep_widths * w
+        sweep_track(belief, grid, s, np.asarray(paths[j]), w, sc.sensor.law, cut, grid.cell_m)
+
+    got = _leave_one_out(base.copy(), sweep, list(range(len(paths))))
+    for k in range(len(paths)):
+        rest = [[] if j == k else p for j, p in enumerate(paths)]
+        left = base.sum() - sum(sampled_sweep(sc, grid, prior, rest)[0])
+        assert got[k] == pytest.approx(left, abs=1e-12), k
