@@ -1,5 +1,7 @@
 """i24-gainhour: the tables of README.md from rules.py's records (``python tables.py
-big.json paper.json final.json``; final.json's rows, the final code's, named ``final``):
+big.json paper.json final.json final2.json``; final.json's rows named ``screened`` (the
+credit-screened rule at 905e5d1), final2.json's ``final`` (every marginal, c1134dd); more
+files (final2_alt.json) as ``final-RULE``):
 per case and rule, UAVs flying, flight hours, planned and flown POS_C and their differences
 from main's rule (``budget``); for the ``paper_6_2`` priors the paired differences, Student's
 t 95 % interval and wins/ties/losses against ``budget``."""
@@ -23,9 +25,16 @@ with open(sys.argv[1]) as f:
     big = json.load(f)
 with open(sys.argv[2]) as f:
     paper = json.load(f)
-with open(sys.argv[3]) as f:
-    for key, r in json.load(f).items():
-        (paper if key.startswith("paper") else big)[key.rsplit(":", 1)[0] + ":final"] = r
+for arg, name in (
+    (sys.argv[3], "screened"),
+    (sys.argv[4], "final"),
+    *[(a, "final-") for a in sys.argv[5:]],
+):
+    with open(arg) as f:
+        for key, r in json.load(f).items():
+            case, rule = key.rsplit(":", 1)
+            named = name + rule if name.endswith("-") else name
+            (paper if key.startswith("paper") else big)[case + ":" + named] = r
 print(
     "| case:rule | flying | hours | planned | vs budget | flown | vs budget | collision | by rule |"
 )
