@@ -15,7 +15,6 @@ collision steps, the UAVs kept home by the rule; OUT.json rewritten after each.
 
 import json
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -28,7 +27,7 @@ from poc_env.config import load_scenario
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[4] / "tests" / "planning"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[4] / "results/audit/i24-smallfix/scripts"))
-from effort_ab import _digest
+from ab_f1 import record
 from flyseeds import Saved
 
 BIG = "/tmp/gainhour/big.yaml"
@@ -95,22 +94,12 @@ if __name__ == "__main__":
                 al.HOME_RULE = seam
             t = time.perf_counter()
             p = al.make_allocation_plan(sc, prior=prior, options=opt)
-            plan_s = time.perf_counter() - t
+            rec = record(p, t)  # digest, posc, start, flying, hours, plan_s, load
             r = fly(sc, Saved(p), seed=seed, prior=prior)
-            rec = {
-                "digest": _digest(p),
-                "planned": p["posc"],
-                "flown": r.posc,
-                "flying": sum(1 for u in p["uavs"] if u["waypoints_m"]),
-                "hours": sum(u["flight_time_s"] for u in p["uavs"]) / 3600,
-                "nofly_steps": r.nofly_steps,
-                "collision_steps": r.collision_steps,
-                "landed": r.landed,
-                "home": p["optimizer"]["settings"].get("home", []),
-                "low": low(sc, prior, p),
-                "plan_s": plan_s,
-                "load": os.getloadavg()[0],
-            }
+            rec |= {"planned": rec.pop("posc"), "flown": r.posc, "nofly_steps": r.nofly_steps,
+                    "collision_steps": r.collision_steps, "landed": r.landed,
+                    "home": p["optimizer"]["settings"].get("home", []),
+                    "low": low(sc, prior, p)}  # fmt: skip
             recs[f"{key}:{name}"] = rec
             print(key, name, {k: v for k, v in rec.items() if k != "home"},
                   "home", [(h["id"], round(h["hours"], 2), f"{h['pos']:.1e}") for h in rec["home"]],
