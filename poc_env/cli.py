@@ -1402,7 +1402,7 @@ def build_parser() -> argparse.ArgumentParser:
         "mass per flight hour to POS_C (its marginal POS over its eq. 17 hours); the others stay "
         "home, longest flight first, each against the plan left by the ones before, so the "
         "plan gives up less than G x the hours saved. Default 1e-4 (0.01 %% per aircraft-hour); "
-        "0: every route flies; at most 0.01 (docs/PLANNER.md, 'Nothing to find')",
+        "0: every route flies; at most 0.01 (docs/PLANNER.md, 'A floor per flight hour')",
     )
     p.add_argument(
         "--fleet-sizes",

@@ -163,9 +163,9 @@ REFINE_STARTS = PlanOptions.refine_starts
 #: The floor a flying UAV must add, as a share of the prior's mass per eq. 17 flight hour
 #: (``PlanOptions.gain_per_hour``; i24-gainhour, G3): a UAV whose route adds less than this
 #: times its own flight hours to the plan's POS stays home (:func:`make_allocation_plan`'s
-#: ``_home``). 1e-4 per hour: on the 500 km scenario at 48 UAVs the three UAVs flying 7.7 h
-#: for 1.2e-4 in all (results/audit/dayaudit2) stay home, 3e-4 per hour lost 0.028 of flown
-#: POS_C there (results/plan_scale/i24-gainhour).
+#: ``_home``). 1e-4 per hour (0.01 % per aircraft-hour): on the 500 km scenario at 48 UAVs
+#: 19 UAVs fly 50.1 h where i24-smallfix's budget flew 24 for 64.9 h (flown POS_C -0.0012);
+#: 5e-5 and 3e-4 measured beside it (results/plan_scale/i24-gainhour).
 GAIN_PER_HOUR = PlanOptions.gain_per_hour
 
 
@@ -945,11 +945,11 @@ def make_allocation_plan(
         preference; score the sampled POS less the penalty): the candidates whose score lies
         within ``options.nothing`` (:data:`NOTHING`) of the prior's mass of the best are tied,
         with ``home`` each has its UAVs that add too little for their hours kept home
-        (:func:`_home`; F1, G3), and the
-        one of least total flight time (:func:`_hours`) is kept, the first of them on equal
-        times (F1: a tie on POS_C is broken by the flying, not by the order). Without a tie,
-        or with ``options.nothing`` 0, the first of the highest score, as before (kept home
-        too: only the tied are, so the candidates that lose cost no sweeps)."""
+        (:func:`_home`; F1, G3), and the one of least total flight time (:func:`_hours`) is
+        kept, the first of them on equal times (F1: a tie on POS_C is broken by the flying,
+        not by the order). Without a tie, or with ``options.nothing`` 0, the first of the
+        highest score, as before (kept home too: only the tied are, so the candidates that
+        lose cost no sweeps)."""
         top = max(c[0] for c in cands)
         tied = [c for c in cands if c[0] >= top - nothing]
         if opt.nothing == 0:

@@ -276,9 +276,11 @@ class PlanOptions:
     nothing: float = 1e-4
     #: the floor a flying UAV must add, as a share of the prior's mass **per eq. 17 flight
     #: hour** (i24-gainhour, G3): a UAV whose route adds less than this times its own flight
-    #: hours to the plan's POS stays home. UAVs are tried longest flight first, each
-    #: against the plan left by the ones before, so the plan loses less than this times the
-    #: flight hours it saves; 0: every route flies (docs/PLANNER.md, "Nothing to find").
+    #: hours to the plan's POS stays home. Every flying UAV's marginal POS is computed; those
+    #: below their floor are tried longest flight first, each against the plan left by the
+    #: ones before, so every UAV that flies adds its floor and the plan loses less than this
+    #: times the flight hours it saves; 0: every route flies (docs/PLANNER.md, "A floor per
+    #: flight hour").
     gain_per_hour: float = 1e-4
 
     def __post_init__(self) -> None:
