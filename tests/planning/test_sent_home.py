@@ -228,3 +228,17 @@ def test_leave_one_out_is_each_path_left_out_in_turn():
         rest = [[] if j == k else p for j, p in enumerate(paths)]
         left = base.sum() - sum(sampled_sweep(sc, grid, prior, rest)[0])
         assert got[k] == pytest.approx(left, abs=1e-12), k
+
+
+def test_with_a_polish_the_floor_holds_on_the_polished_plan():
+    """``standard`` polishes the picked plan: the floor is applied to the polished routes (not
+    to the candidates before it, where a UAV sent home lost its hours to the polish: 0.9329
+    against 0.9564 at 24 UAVs on the 500 km scenario), so every UAV of the polished plan adds
+    at least its floor and the ones kept home are recorded."""
+    sc, grid, prior = _two_sightings()
+    plan = make_allocation_plan(sc, prior=prior, options=PlanOptions.preset("standard"))
+    assert plan["optimizer"]["settings"]["polish"]["passes"] > 0
+    assert plan["optimizer"]["settings"]["home"]
+    g = PlanOptions.preset("standard").gain_per_hour
+    got = _marginals(sc, grid, prior, plan)
+    assert got and all(m >= g * h for m, h in got.values()), got
