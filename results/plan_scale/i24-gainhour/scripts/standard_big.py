@@ -1,6 +1,7 @@
 """i24-gainhour: ``--effort standard`` on the 500 km scenario at 24 UAVs (a script):
-``python standard_big.py OUT.json``: the standard plan with the floor (default) and with
-``gain_per_hour=0``; planned POS_C, UAVs flying, flight hours, the UAVs kept home, CPU s."""
+``python standard_big.py OUT.json [--fly]``: the standard plan with the floor (default) and
+with ``gain_per_hour=0``; planned POS_C, UAVs flying, flight hours, the UAVs kept home, CPU s;
+with ``--fly`` each flown once (seed 5000): flown POS_C, no-fly and collision steps."""
 
 import dataclasses
 import json
@@ -11,6 +12,7 @@ from pathlib import Path
 
 from poc_env.agents.planning.allocation import make_allocation_plan
 from poc_env.agents.planning.options import PlanOptions
+from poc_env.agents.testing.flights import fly
 from poc_env.config import load_scenario
 
 sc = load_scenario("/tmp/gainhour/big.yaml").with_uavs(24)
@@ -29,5 +31,14 @@ for name, g in (("standard", None), ("standard, gain_per_hour=0", 0.0)):
         "cpu_s": time.process_time() - c,
         "load": os.getloadavg()[0],
     }
-    print(name, recs[name], flush=True)
+    if "--fly" in sys.argv:
+        sys.path.insert(
+            0, str(Path(__file__).resolve().parents[4] / "results/audit/i24-smallfix/scripts")
+        )
+        from flyseeds import Saved
+
+        r = fly(sc, Saved(p), seed=5000)
+        recs[name] |= {"flown": r.posc, "nofly_steps": r.nofly_steps,
+                       "collision_steps": r.collision_steps, "landed": r.landed}  # fmt: skip
+    print(name, {k: v for k, v in recs[name].items() if k != "home"}, flush=True)
     Path(sys.argv[1]).write_text(json.dumps(recs, indent=1))
