@@ -698,6 +698,10 @@ def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("uavs", args.uavs, 1, 64)
     _check_int("popsize", args.popsize, 4, limits.POPSIZE_MAX)
     _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
+    if args.gain_per_hour is not None:  # refused before the planning, naming the option
+        from poc_env.agents.planning.planner import plan_options
+
+        plan_options(args.effort, args.gain_per_hour)
     _check_out("out", args.out, "file")
     _check_out("plot", args.plot, "file", ".png")
     check_distinct({"out": args.out, "plot": args.plot}, _inputs_of(args))
@@ -765,6 +769,7 @@ def _plan(
         speed=getattr(args, "speed", None),
         refine=getattr(args, "refine", None),
         effort=getattr(args, "effort", None),
+        gain_per_hour=getattr(args, "gain_per_hour", None),
     )
     _spill_bound(args, plan, sc, prior)
     print(plan_table(plan))
@@ -888,7 +893,7 @@ def _plan_fleet_sizes(args: argparse.Namespace) -> int:
     from poc_env.agents.mission.plan import map_source, with_scenario_file, write_plan
     from poc_env.agents.planning.allocation import REFINE, SPEED, plan_fleets
     from poc_env.agents.planning.geography import check_terrain, scenario_crs
-    from poc_env.agents.planning.options import PlanOptions
+    from poc_env.agents.planning.planner import plan_options
 
     sizes = fleet_sizes(args.fleet_sizes)
     how = "--fleet-sizes plans each size on the one before"
@@ -930,7 +935,7 @@ def _plan_fleet_sizes(args: argparse.Namespace) -> int:
         crs=crs,
         speed=SPEED if args.speed is None else args.speed,  # as make_plan plans one size
         refine=REFINE if args.refine is None else args.refine,
-        options=PlanOptions.preset(args.effort or "default"),
+        options=plan_options(args.effort, args.gain_per_hour),
     )
     for n, plan in zip(sizes, plans, strict=True):
         plan.update(check_terrain(plan, sc.with_uavs(n), prior))  # orbits fitted (i24-orbitfit)
@@ -1387,6 +1392,17 @@ def build_parser() -> argparse.ArgumentParser:
         "about a minute of one core at 160 x 160 cells and 24 UAVs, with a note when the budget "
         "stopped it) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min "
         "at 160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
+    )
+    p.add_argument(
+        "--gain-per-hour",
+        type=float,
+        default=None,
+        metavar="G",
+        help="allocation planner: a UAV flies only if its route adds at least G of the prior's "
+        "mass per flight hour to POS_C (its marginal POS over its eq. 17 hours); the others stay "
+        "home, longest flight first, each against the plan left by the ones before, so the "
+        "plan gives up less than G x the hours saved. Default 1e-4 (0.01 %% per aircraft-hour); "
+        "0: every route flies; at most 0.01 (docs/PLANNER.md, 'A floor per flight hour')",
     )
     p.add_argument(
         "--fleet-sizes",

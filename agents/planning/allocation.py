@@ -48,9 +48,10 @@
    refined and the plan keeps the best of them, refined or not, by the environment's model
    (:func:`sampled_sweep`) less the environment's violation penalty at the planned positions
    (``options.airspace_penalty``, off by default); ``start`` records which start and
-   ``refined`` whether the refined routes were kept. Each candidate's UAVs that add less than
-   :data:`NOTHING` of the prior's mass are kept home, and among the candidates within
-   :data:`NOTHING` of the best the one of least total flight time is kept (i24-smallfix, F1).
+   ``refined`` whether the refined routes were kept. Among the candidates within
+   :data:`NOTHING` of the best the one of least total flight time is kept (i24-smallfix, F1),
+   each with its UAVs that add less than :data:`GAIN_PER_HOUR` of the prior's mass per flight
+   hour kept home first (i24-gainhour, G3).
 7. **Polish** (``options.polish`` passes, off by default; i24-polish): the chosen routes are
    climbed by the environment's own sensor model (:func:`poc_env.agents.planning.polish.
    polish_routes`: waypoints moved, legs shifted sideways, slid, inserted or deleted while eq.
@@ -149,17 +150,23 @@ from poc_env.theory.search_theory import pod_from_coverage, sweep_track
 #: of coverage layers (K) tried, the share of 0.85 T a route may fill, the refinement's passes
 #: and the starts refined. Kept as names for the callers that read them.
 LEVELS = PlanOptions.levels
-#: "Nothing", as a share of the prior's mass (``PlanOptions.nothing``; i24-smallfix, F1): a
-#: UAV whose route adds less than this to the plan's POS stays home, and candidate plans whose
-#: planned POS lie within it of the best are tied, the one of least total eq. 17 flight time
-#: kept; a plan loses at most twice this by them. 1e-4 of the mass: below the 4 decimals POS_C
-#: is reported at, and below what any flying UAV finds on the reference maps (``paper_6_2``
-#: 0.06, 64 UAVs on a 150 km map 0.003); 1e-6 left F1 as it was (the North UAV's 1.77 h route
-#: adds 3.2e-5 to the South UAV's 0.28 h one).
+#: "Nothing", as a share of the prior's mass (``PlanOptions.nothing``; i24-smallfix, F1):
+#: candidate plans whose planned POS lie within it of the best are tied, the one of least
+#: total eq. 17 flight time kept (each with its UAVs below :data:`GAIN_PER_HOUR` kept home
+#: first; until i24-gainhour it was also the plan's budget for them). 1e-4 of the mass: below
+#: the 4 decimals POS_C is reported at, and below what any flying UAV finds on the reference
+#: maps (``paper_6_2`` 0.06, 64 UAVs on a 150 km map 0.003).
 NOTHING = PlanOptions.nothing
 MARGIN = PlanOptions.margin
 REFINE = PlanOptions.refine
 REFINE_STARTS = PlanOptions.refine_starts
+#: The floor a flying UAV must add, as a share of the prior's mass per eq. 17 flight hour
+#: (``PlanOptions.gain_per_hour``; i24-gainhour, G3): a UAV whose route adds less than this
+#: times its own flight hours to the plan's POS stays home (:func:`make_allocation_plan`'s
+#: ``_home``). 1e-4 per hour (0.01 % per aircraft-hour): on the 500 km scenario at 48 UAVs
+#: 19 UAVs fly 50.1 h where i24-smallfix's budget flew 24 for 64.9 h (flown POS_C -0.0012);
+#: 5e-5 and 3e-4 measured beside it (results/plan_scale/i24-gainhour).
+GAIN_PER_HOUR = PlanOptions.gain_per_hour
 
 
 class _Reordered:
@@ -432,6 +439,25 @@ def fit_lawnmowers(
     return rs
 
 
+def _leave_one_out(belief: np.ndarray, sweep, idx: list[int]) -> dict[int, float]:
+    """For each path ``k`` of ``idx``, the sum of ``belief`` once every other path of ``idx``
+    has swept it (``sweep(belief, j)`` updates it in place by eq. 14; ``belief`` is consumed).
+    Eq. 14 multiplies each sample point by each path's miss probability, so the order does not
+    matter: the halves of ``idx`` sweep a copy for each other in turn, down to one path each,
+    ``len(idx) log2 len(idx)`` sweeps where leaving each path out in turn takes
+    ``len(idx)**2`` (i24-gainhour: every flying UAV's exact marginal POS)."""
+    if len(idx) <= 1:
+        return {k: float(belief.sum()) for k in idx}
+    first, second = idx[: len(idx) // 2], idx[len(idx) // 2 :]
+    part = belief.copy()
+    for j in second:
+        sweep(part, j)
+    out = _leave_one_out(part, sweep, first)
+    for j in first:  # the original consumed by the second half
+        sweep(belief, j)
+    return out | _leave_one_out(belief, sweep, second)
+
+
 def _flight_time(wps, takeoff, landing, sc: Scenario, v: Speeds, heading0=None) -> float:
     """Eq. 17 time of a route (:func:`poc_env.agents.planning.refine.route_time`: out at ``v.out``,
     on the route at ``v.line``, home at ``v.home``, turns at the maximum turn rate)."""
@@ -568,10 +594,10 @@ def plan_fleets(
 #: ones and every ``polish*`` field, so a polish option added later is kept without a change
 #: here -- except ``polish_starts``: the default plan polishes its own chosen start only (as
 #: the recorded ``polish_starts=2`` runs of results/plan_scale/grade did); and ``nothing``
-#: (i24-smallfix: ``nothing=0`` flies every route in both plans).
+#: (i24-smallfix: ``nothing=0`` flies every route in both plans) and ``gain_per_hour``.
 _DEFAULT_KEPT = (
     "levels", "etas", "margin", "refine", "refine_starts", "greedy_start", "box_start",
-    "nothing",
+    "nothing", "gain_per_hour",
     *(f.name for f in dataclasses.fields(PlanOptions)
       if f.name.startswith("polish") and f.name != "polish_starts"),
 )  # fmt: skip
@@ -906,6 +932,7 @@ def make_allocation_plan(
         return float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
 
     nothing = opt.nothing * float(full_prior.sum())
+    sent_home: dict[int, dict[int, tuple[float, float]]] = {}  # by id(routes): k -> (POS, h)
 
     def _hours(rs) -> float:
         """The plan's total eq. 17 flight time (every UAV's route, take-off to landing)."""
@@ -917,11 +944,12 @@ def make_allocation_plan(
         """The candidate kept among ``cands`` (``(score, routes, pieces, ...)``, in order of
         preference; score the sampled POS less the penalty): the candidates whose score lies
         within ``options.nothing`` (:data:`NOTHING`) of the prior's mass of the best are tied,
-        with ``home`` each has its UAVs that add nothing kept home (:func:`_home`; F1), and the
-        one of least total flight time (:func:`_hours`) is kept, the first of them on equal
-        times (F1: a tie on POS_C is broken by the flying, not by the order). Without a tie,
-        or with ``options.nothing`` 0, the first of the highest score, as before (kept home
-        too: only the tied are, so the candidates that lose cost no sweeps)."""
+        with ``home`` each has its UAVs that add too little for their hours kept home
+        (:func:`_home`; F1, G3), and the one of least total flight time (:func:`_hours`) is
+        kept, the first of them on equal times (F1: a tie on POS_C is broken by the flying,
+        not by the order). Without a tie, or with ``options.nothing`` 0, the first of the
+        highest score, as before (kept home too: only the tied are, so the candidates that
+        lose cost no sweeps)."""
         top = max(c[0] for c in cands)
         tied = [c for c in cands if c[0] >= top - nothing]
         if opt.nothing == 0:
@@ -937,48 +965,66 @@ def make_allocation_plan(
         return tied[int(np.argmin(hours))]
 
     def _home(trial, t_pieces, score: float | None):
-        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that find nothing
-        kept home (F1: no aircraft sent for nothing), pieces and POS updated. A UAV's own
-        marginal POS (what the plan finds less without it) is at most what it finds when swept
-        first-to-last or last-to-first (:func:`sampled_sweep`, eq. 14, a point credited to the
-        first path that finds it); the UAVs of either credit below :data:`NOTHING` of the
-        prior's mass are tried, longest flight first, and each kept home if the plan without it
-        (and the ones already kept home) still finds within :data:`NOTHING` of the mass of what
-        it found: the plan loses less than that in all. As it is with ``options.nothing`` 0."""
-        if opt.nothing == 0:
+        """A candidate plan (as :func:`_with_fill` returns it) with the UAVs that add too
+        little for their flight hours kept home (F1: no aircraft sent for nothing; G3: nor
+        for hours at next to nothing), pieces and POS updated; as it is with
+        ``options.gain_per_hour`` or ``options.nothing`` 0.
+
+        A UAV's floor is :data:`GAIN_PER_HOUR` of the prior's mass times its eq. 17 flight
+        hours. Every flying UAV's marginal POS (what the plan finds less without it: the
+        sampled eq. 14 total, :func:`sampled_sweep`) is computed (:func:`_leave_one_out`); the
+        UAVs below their floor are tried longest flight first (the UAV's index on equal ones:
+        the most aircraft hours saved first; least POS per hour first sent home the 0.28 h
+        UAV of the one-sighting case and flew the 1.63 h one), and each kept home if the plan
+        without it (and the ones already kept home) finds less than its floor below the plan
+        with it. So each UAV kept home added less than its floor to the plan it left, the plan
+        loses less than ``gain_per_hour`` times the flight hours it saves, and every UAV that
+        flies adds at least its floor to the plan (a UAV's marginal only grows as others stay
+        home). With a polish (``standard``, ``thorough``) it is applied to the polished plan,
+        not to the candidates before it (a UAV sent home first lost its hours to the polish).
+        Until the measurement of i24-gainhour only the UAVs whose credit swept first or last
+        was below the floor were tried: on the 500 km scenario at 48 UAVs two others flew
+        below it (3.72 h for 4.3e-5, 2.78 h for 2.0e-4). The UAVs kept home are
+        recorded with what each added and its hours (``sent_home``, plan.json's
+        ``optimizer.settings.home``)."""
+        if opt.nothing == 0 or opt.gain_per_hour == 0:
             return trial, t_pieces, score
+        rate = opt.gain_per_hour * float(full_prior.sum())  # POS per flight hour
         paths = [[takeoff[k], *trial[k], landing[k]] if trial[k] else [] for k in range(n)]
-        fwd = sampled_sweep(sc, grid, full_prior, paths)[0]
-        if all(f >= nothing for k, f in enumerate(fwd) if trial[k]):  # the common case
-            rev = fwd
-        else:
-            rev = sampled_sweep(sc, grid, full_prior, paths[::-1])[0][::-1]
-        own = [min(f, r) for f, r in zip(fwd, rev)]
-        tried = [k for k in range(n) if len(trial[k]) and own[k] < nothing]
-        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k])
-                 for k in tried}  # fmt: skip
-        home: list[int] = []
-        total = float(sum(fwd))
+        hours = {k: _flight_time(trial[k], takeoff[k], landing[k], sc, v, heading0[k]) / 3600
+                 for k in range(n) if trial[k]}  # fmt: skip
+        now = float(sum(sampled_sweep(sc, grid, full_prior, paths)[0]))
         s_ = sc.sensor.samples_per_cell
         cut = sc.sensor.cutoff_sweep_widths * w
         base = np.ascontiguousarray(grid.refine(full_prior, s_))
         mass = float(base.sum())
+
+        def sweep(belief: np.ndarray, j: int) -> None:  # path j swept (eq. 14)
+            sweep_track(belief, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
+                        grid.cell_m)  # fmt: skip
+
+        left_out = _leave_one_out(base.copy(), sweep, list(hours))
+        tried = [k for k, h in hours.items() if now - (mass - left_out[k]) < rate * h]
+        home: dict[int, tuple[float, float]] = {}  # k -> (what it added, its hours)
+        if not tried:  # the common case: every UAV adds its floor
+            return trial, t_pieces, score
         for j in range(n):  # the routes never tried swept once (eq. 14, as sampled_sweep)
             if paths[j] and j not in tried:
-                sweep_track(base, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
-                            grid.cell_m)  # fmt: skip
-        for k in sorted(tried, key=lambda k: -hours[k]):
+                sweep(base, j)
+        for k in sorted(tried, key=lambda k: (-hours[k], k)):  # the longest flight first
             left = base.copy()  # the plan without k and the ones already home
             for j in tried:
                 if j != k and j not in home:
-                    sweep_track(left, grid, s_, np.asarray(paths[j], dtype=float), w, law, cut,
-                                grid.cell_m)  # fmt: skip
-            if mass - float(left.sum()) >= total - nothing:
-                home.append(k)
+                    sweep(left, j)
+            without = mass - float(left.sum())
+            if now - without < rate * hours[k]:
+                home[k] = (now - without, hours[k])
+                now = without
         if not home:
             return trial, t_pieces, score
         kept = [[] if k in home else trial[k] for k in range(n)]
         k_pieces = [[] if k in home else list(p_) for k, p_ in enumerate(t_pieces)]
+        sent_home[id(kept)] = home
         return kept, k_pieces, None if score is None else _sampled_total(kept)
 
     def _flown(trial, t_pieces, score: float | None):
@@ -1080,13 +1126,25 @@ def make_allocation_plan(
     starts.sort(key=lambda t: -t[0])
     start = starts[0][1] if starts else "allocation"
     refined = bool(refine)
+    home_why: dict[int, tuple[float, float]] = {}  # the kept plan's UAVs sent home (_home)
+    big = not opt.polish_here(grid.nx, grid.ny)  # above polish_max_cells a side
+    polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes or opt.regrade)
+    # the polish runs (not skipped below): the floor per flight hour is then applied to the
+    # polished plan, not before it (sent home first, a UAV's hours are lost to the polish:
+    # the 500 km scenario's 24-UAV ``standard`` plan 0.9329 against 0.9564 without the floor)
+    will_polish = (
+        polishing
+        and not (router.active and not opt.polish_zones)
+        and not (big and not opt.polish_big_work)
+    )
 
     if starts:
         routes, pieces = starts[0][2], starts[0][3]
         if starts[0][1] != "allocation":  # lawnmower lines, a line = two waypoints
             spacing = w
         if not refine:  # the start kept as it is, its idle UAVs filled
-            routes, pieces, _ = _flown(routes, pieces, None)
+            routes, pieces, _ = (_with_fill if will_polish else _flown)(routes, pieces, None)
+            home_why = sent_home.get(id(routes), {})
     ranked: list[tuple[float, list, list, str, bool]] = []  # every start scored, for the polish
     if starts and refine:
         sampled_of = {t[1]: _sampled_total(t[2]) for t in starts}
@@ -1140,7 +1198,8 @@ def make_allocation_plan(
             score -= _penalty(f_routes)
             ranked.append((score, f_routes, f_pieces, name, False))
         # the best by the environment's model; on a tie, the least flying (F1)
-        _, routes, pieces, start, refined = _pick(ranked, home=True)
+        _, routes, pieces, start, refined = _pick(ranked, home=not will_polish)
+        home_why = sent_home.get(id(routes), {})
 
     def _polish(rs):
         """The polish stages in turn -- the polish, the second polish with the block moves too
@@ -1216,8 +1275,6 @@ def make_allocation_plan(
         )
 
     polished: dict[str, Any] | None = None
-    big = not opt.polish_here(grid.nx, grid.ny)  # above polish_max_cells a side
-    polishing = bool(opt.polish or opt.polish_lines or opt.polish_boxes or opt.regrade)
     if polishing and router.active and not opt.polish_zones:  # eq. 20: zones not seen
         polished = {"passes": 0, "moves": 0, "skipped": "no-fly zones"}
     elif polishing and big and not opt.polish_big_work:  # the size rule (i24-fastpolish)
@@ -1240,6 +1297,8 @@ def make_allocation_plan(
         _, routes, pieces, start, refined, polished = _pick(polished_pool)
         if len(pool) > 1:
             polished = {**polished, "plans": len(pool)}
+        routes, pieces, _ = _home(routes, pieces, None)  # the floor on the polished routes
+        home_why = sent_home.get(id(routes), {})
     fleet_rec: dict[str, Any] | None = None
     if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
         f_routes = _fill(mapped)
@@ -1262,6 +1321,11 @@ def make_allocation_plan(
         [[takeoff[k], *routes[k], landing[k]] if routes[k] else [] for k in range(n)],
     )
     posc = float(sum(flown_pos))
+    home_rec = [  # the UAVs the rule kept home (G3): what each would add, in its hours
+        {"id": k + 1, "pos": float(m_), "hours": float(h_)}
+        for k, (m_, h_) in sorted(home_why.items())
+        if not routes[k]
+    ]
     x0, y0, x1, y1 = grid.bounds
     heading_k = takeoff_heading(grid.bounds, takeoff)
     uav_out = []
@@ -1327,6 +1391,7 @@ def make_allocation_plan(
                 **({"options": opt.changed()} if opt.changed() else {}),
                 **({"polish": polished} if polished is not None else {}),
                 **({"fleet": fleet_rec} if fleet_rec is not None else {}),
+                **({"home": home_rec} if home_rec else {}),
             },
         },
         "runtime_s": runtime,

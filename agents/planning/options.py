@@ -266,14 +266,22 @@ class PlanOptions:
     #: the keep-out area's outside (:meth:`~poc_env.sim.routing.ZoneRouter.reach_share`); 0.5:
     #: the sweep's half width, the eq. 10 model.
     zone_reach: float = 0.5
-    #: "nothing", as a share of the prior's mass (i24-smallfix, F1): UAVs whose routes add
-    #: less than this to the plan's POS stay home, longest flight first, as long as the plan
-    #: loses less than this **in all** (a budget for the plan, not a floor per UAV: on the
-    #: 500 km scenario at 48 UAVs six go home for 8.9e-5 and three fly on for 1.2e-4 together,
-    #: results/audit/dayaudit2), and among the candidate plans within it of the best planned
-    #: POS the one of least total flight time is kept; 0: neither (every route flown, the
-    #: first of the highest kept, as before).
+    #: "nothing", as a share of the prior's mass (i24-smallfix, F1): among the candidate plans
+    #: within it of the best planned POS the one of least total flight time is kept (each with
+    #: its UAVs below ``gain_per_hour`` kept home first); 0: neither that nor
+    #: ``gain_per_hour`` (every route flown, the first of the highest kept, as before F1).
+    #: Until i24-gainhour it was also a loss budget for the whole plan for the UAVs kept home
+    #: (on the 500 km scenario at 48 UAVs three flew 7.7 h for 1.2e-4 together,
+    #: results/audit/dayaudit2, G3); ``gain_per_hour`` is that rule now.
     nothing: float = 1e-4
+    #: the floor a flying UAV must add, as a share of the prior's mass **per eq. 17 flight
+    #: hour** (i24-gainhour, G3): a UAV whose route adds less than this times its own flight
+    #: hours to the plan's POS stays home. Every flying UAV's marginal POS is computed; those
+    #: below their floor are tried longest flight first, each against the plan left by the
+    #: ones before, so every UAV that flies adds its floor and the plan loses less than this
+    #: times the flight hours it saves; 0: every route flies (docs/PLANNER.md, "A floor per
+    #: flight hour").
+    gain_per_hour: float = 1e-4
 
     def __post_init__(self) -> None:
         _positive_tuple("levels", self.levels, integer=True, high=64)
@@ -320,6 +328,7 @@ class PlanOptions:
         _number("regrade", self.regrade, 0, 100, integer=True)
         _number("zone_reach", self.zone_reach, 0.0, 16.0, closed_low=False)
         _number("nothing", self.nothing, 0.0, 0.01)
+        _number("gain_per_hour", self.gain_per_hour, 0.0, 0.01)
         if self.regrade_at not in ("first", "between", "end"):
             raise ConfigError("options.regrade_at", self.regrade_at, '"first", "between" or "end"')
         _positive_tuple("polish_boxes_radii", self.polish_boxes_radii, high=64.0)

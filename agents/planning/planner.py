@@ -20,6 +20,7 @@ plan at the start of every episode and flies it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from pathlib import Path
@@ -37,6 +38,7 @@ from poc_env.agents.planning.geography import (
 )
 from poc_env.agents.planning.objective import PlanObjective
 from poc_env.agents.planning.optimizers import get_optimizer, preset_settings
+from poc_env.agents.planning.options import PlanOptions
 from poc_env.agents.planning.refine import route_time
 from poc_env.config import Scenario, load_scenario
 from poc_env.errors import ConfigError, as_int
@@ -73,6 +75,7 @@ def make_plan(
     speed: str | None = None,
     refine: int | None = None,
     effort: str | None = None,
+    gain_per_hour: float | None = None,
 ) -> dict[str, Any]:
     """Optimise the plan and return it as a schema-2 dict (see the module docstring).
 
@@ -81,8 +84,9 @@ def make_plan(
     optimal allocation; the optimiser arguments do not apply to it). ``speed`` (``max`` or
     ``paper``) and ``refine`` (passes of the waypoint refinement, 0 for straight lines only) are
     the allocation planner's (None: its defaults), and so is ``effort`` (``default`` or
-    ``thorough``, :meth:`poc_env.agents.planning.options.PlanOptions.preset`); the DE plan
-    refuses them.
+    ``thorough``, :meth:`poc_env.agents.planning.options.PlanOptions.preset`) and
+    ``gain_per_hour`` (``PlanOptions.gain_per_hour``, the least a flying UAV adds per flight
+    hour as a share of the prior's mass; 0: every route flies); the DE plan refuses them.
 
     ``preset`` (:func:`poc_env.agents.planning.optimizers.preset_settings`): ``paper`` runs the
     scenario's ``planner`` settings (the paper's), ``tuned`` the same budget with the measured
@@ -102,7 +106,6 @@ def make_plan(
     crs = scenario_crs(load_scenario(scenario), origin_deg, projection, zone)
     if planner == "allocation":
         from poc_env.agents.planning.allocation import REFINE, SPEED, make_allocation_plan
-        from poc_env.agents.planning.options import PlanOptions
 
         sc_a = load_scenario(scenario)
         return check_terrain(
@@ -115,12 +118,13 @@ def make_plan(
                 crs=crs,
                 speed=SPEED if speed is None else speed,
                 refine=REFINE if refine is None else refine,
-                options=PlanOptions.preset("default" if effort is None else effort),
+                options=plan_options(effort, gain_per_hour),
             ),
             sc_a,
             build_prior(sc_a.map) if prior is None else np.asarray(prior, dtype=float),
         )
-    for name, value in (("speed", speed), ("refine", refine), ("effort", effort)):
+    for name, value in (("speed", speed), ("refine", refine), ("effort", effort),
+                        ("gain_per_hour", gain_per_hour)):  # fmt: skip
         if value is not None:
             raise ConfigError(name, value, "only with planner allocation (leave it out for de)")
     sc = load_scenario(scenario)
@@ -323,11 +327,35 @@ def effort_skip_note(plan: dict[str, Any], effort: str | None) -> str | None:
     return f"note: --effort {effort} skipped its polish ({why}): {what}"
 
 
+def plan_options(effort: str | None = None, gain_per_hour: float | None = None) -> PlanOptions:
+    """The allocation planner's options of an effort level (None: ``default``;
+    :meth:`PlanOptions.preset`) with ``gain_per_hour`` (None: the level's), as ``plan`` asks.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``gain_per_hour`` (``plan --gain-per-hour``) unless it is a number in [0, 0.01].
+    """
+    opt = PlanOptions.preset("default" if effort is None else effort)
+    if gain_per_hour is None:
+        return opt
+    try:
+        return dataclasses.replace(opt, gain_per_hour=gain_per_hour)
+    except ConfigError as e:
+        raise ConfigError("gain_per_hour", gain_per_hour, f"{e.allowed} (a share of the prior's "
+                          "mass per flight hour; 0: every route flies)") from None  # fmt: skip
+
+
 def home_note(plan: dict[str, Any]) -> str | None:
-    """One line for ``plan``'s and ``replan``'s summary naming the UAVs that stay home (no
-    search route: empty ``waypoints_m``) and the allocation planner's rule for it, or None
-    when every UAV flies (i24-dayaudit2: their table rows read 0.00 h and ``ok yes``, and
-    only the export named them).
+    """The lines for ``plan``'s and ``replan``'s summary naming the UAVs that stay home (no
+    search route: empty ``waypoints_m``) and why, or None when every UAV flies (i24-dayaudit2:
+    their table rows read 0.00 h and ``ok yes``, and only the export named them).
+
+    The allocation planner's UAVs kept home by its floor per flight hour
+    (``PlanOptions.gain_per_hour``; i24-gainhour, G3; plan.json's
+    ``optimizer.settings.home``) are listed with what each would add and in how many hours,
+    and the hours saved for the POS given up in all; the others got no route from the
+    planner (none that adds its floor and keeps clear of the other routes).
 
     Parameters
     ----------
@@ -337,22 +365,41 @@ def home_note(plan: dict[str, Any]) -> str | None:
     Returns
     -------
     str or None
-        ``stay home: UAVs 2, 3 (2 of 3, no search route): ...``; None when no UAV is idle or
-        none flies (the plan's ``reason`` says why then).
+        ``stay home: UAVs 2, 3 (2 of 3, no search route): ...``, then a line per reason; None
+        when no UAV is idle or none flies (the plan's ``reason`` says why then).
     """
     uavs = plan["uavs"]
-    home = [str(u["id"]) for u in uavs if not u["waypoints_m"]]
+    home = [u["id"] for u in uavs if not u["waypoints_m"]]
     if not home or len(home) == len(uavs):
         return None
-    why = (
-        "no route the planner found for them both adds at least PlanOptions.nothing (1e-4 "
-        "of the prior's mass by default) to the plan's POS (F1: no UAV sent for nothing) "
-        "and keeps clear of the other routes (eq. 21, PlanOptions.fill_apart)"
-        if plan.get("planner") == "allocation"
-        else "the planner gave them no search route"
-    )
-    who = f"UAV{'s' if len(home) > 1 else ''} {', '.join(home)}"
-    return f"stay home: {who} ({len(home)} of {len(uavs)}, no search route): {why}"
+
+    def who(ids: list) -> str:
+        return f"UAV{'s' if len(ids) > 1 else ''} {', '.join(str(i) for i in ids)}"
+
+    head = f"stay home: {who(home)} ({len(home)} of {len(uavs)}, no search route)"
+    if plan.get("planner") != "allocation":
+        return f"{head}: the planner gave them no search route"
+    settings = plan.get("optimizer", {}).get("settings", {})
+    gain = settings.get("options", {}).get("gain_per_hour", PlanOptions.gain_per_hour)
+    rule = [r for r in settings.get("home", []) if r["id"] in home]
+    lines = [f"{head}:"]
+    if rule:
+        each = ", ".join(f"UAV {r['id']} {r['pos']:.1e} in {r['hours']:.2f} h" for r in rule)
+        hours, pos = sum(r["hours"] for r in rule), sum(r["pos"] for r in rule)
+        lines.append(
+            f"  {who([r['id'] for r in rule])}: each would add less than {gain:g} of the "
+            f"prior's mass per flight hour (--gain-per-hour, PlanOptions.gain_per_hour; 0: every "
+            f"route flies): {each}; {hours:.1f} flight hours saved for {pos:.1e} of POS_C in all"
+        )
+    others = [i for i in home if i not in {r["id"] for r in rule}]
+    if others:
+        off = gain == 0 or settings.get("options", {}).get("nothing", PlanOptions.nothing) == 0
+        adds = "" if off else f"adds at least {gain:g} of the prior's mass per flight hour and "
+        lines.append(
+            f"  {who(others) if rule else 'all'}: no route the planner found for them {adds}"
+            "keeps clear of the other routes (eq. 21, PlanOptions.fill_apart)"
+        )
+    return "\n".join(lines)
 
 
 def plan_table(plan: dict[str, Any]) -> str:
