@@ -769,6 +769,9 @@ def make_allocation_plan(
         )
         return [q.tolist()] if fits and len(arr) - lead > 2 else []
 
+    # the alternatives apart tries for a route (with zones in_lanes has tried them)
+    _alternative: Callable[[int, Any], list] | None = None if router.active else _reversed
+
     def _bearings(rs, todo) -> list[list[float]] | None:
         """Per UAV of ``todo`` the outbound bearings of its field-mates with a route in ``rs``
         (their first waypoint from the field), for the fill's fan-out (:func:`_spread`);
@@ -857,7 +860,7 @@ def make_allocation_plan(
                         out[k] = laid[j]
             if not opt.fill_apart:
                 break
-            out, where = apart(sc, out, v, todo, None if router.active else _reversed, FILL_WITHIN)
+            out, where = apart(sc, out, v, todo, _alternative, FILL_WITHIN)
             if not where:
                 break
             for at in where.values():  # the mass it met taken out of its next fill
@@ -1241,13 +1244,24 @@ def make_allocation_plan(
         if len(pool) > 1:
             polished = {**polished, "plans": len(pool)}
     fleet_rec: dict[str, Any] | None = None
+    half = (floor is None and opt.half_fleet and opt.fill_idle and n > 1 and any(routes)
+            and not all(routes))  # fmt: skip
+    if half:  # i24-chain: a fleet larger than its plan uses also tries half of it as a floor
+        floor = make_allocation_plan(
+            sc.with_uavs(n // 2), prior=full_prior, map_source=map_source, seed=seed,
+            speed=speed, crs=crs, options=opt,
+        )  # fmt: skip
+        mapped = _mapped(sc, floor)
     if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
+        if opt.fill_apart:  # i24-chain: the floor's routes kept by the fill's own clearance
+            mapped, _ = apart(sc, mapped, v, range(n), _alternative, FILL_WITHIN)
         f_routes = _fill(mapped)
         f_val = _sampled_total(f_routes) - _penalty(f_routes)
         own = _sampled_total(routes) - _penalty(routes) if any(routes) else 0.0
         kept = f_val > own
         fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),
-                     "kept": "floor" if kept else "own"}  # fmt: skip
+                     "kept": "floor" if kept else "own",
+                     **({"floor": "half_fleet"} if half else {})}  # fmt: skip
         if kept:
             routes, pieces, refined = f_routes, _lines_of(f_routes), True
             start = str(floor.get("start", "allocation"))

@@ -143,6 +143,11 @@ class PlanOptions:
     #: without it the filled routes added 210 planned conflict pair-steps and the flight 177
     #: collision steps (44 before the fill).
     fill_apart: bool = True
+    #: a plan that leaves a UAV without a route (the fleet larger than it uses) is compared
+    #: with the plan of half the fleet (planned alike, :meth:`~poc_env.config.Scenario.
+    #: with_uavs`) with the other UAVs filled, as :func:`~poc_env.agents.planning.allocation.
+    #: plan_fleets`' floor: the one of more planned POS kept (i24-chain).
+    half_fleet: bool = True
     #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
     #: their allocation assumes; the start keeps the one of most W x length per cell) ...
     relax_etas: tuple[float, ...] = (0.65, 0.75, 0.85, 0.95, 1.0)
@@ -329,9 +334,9 @@ class PlanOptions:
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "relax_start", "fill_idle", "fill_apart", "chain_early", "also_default", "part",
-                 "share_tables", "axis", "excursions", "sampled", "polish_grade",
-                 "polish_zones")  # fmt: skip
+                 "relax_start", "fill_idle", "fill_apart", "half_fleet", "chain_early",
+                 "also_default", "part", "share_tables", "axis", "excursions", "sampled",
+                 "polish_grade", "polish_zones")  # fmt: skip
         for name in flags:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"options.{name}", getattr(self, name), "true or false")
