@@ -966,8 +966,17 @@ def fleet_table(plans: list[dict]) -> str:
         )
     lines.append("-" * len(head))
     lines.append(
-        "each size planned on the one before (plan_fleets): POS_C never falls as the fleet grows"
+        "each size planned on the one before (plan_fleets): its routes kept where they keep "
+        "the fill's clearance, the UAVs added filled"
     )
+    fell = [str(len(b["uavs"])) for a, b in zip(plans, plans[1:]) if b["posc"] < a["posc"]]
+    if fell:  # i24-chain: a route of the smaller fleet in conflict is flown anew
+        from poc_env.agents.planning.allocation import FILL_WITHIN
+
+        lines.append(
+            f"POS_C falls at {', '.join(fell)} UAVs: routes of the smaller fleet within "
+            f"{FILL_WITHIN:g} d_s of another at planned times were given anew (eq. 21 first)"
+        )
     return "\n".join(lines)
 
 
@@ -1393,8 +1402,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="N[,N...]",
         help="compare fleet sizes (--planner allocation; not with --uavs): each size, in "
-        "increasing order, planned on the one before (plan_fleets), so POS_C never falls as "
-        "the fleet grows; one plan per size beside --out, named with _nN (plan_n6.json, "
+        "increasing order, planned on the one before (plan_fleets: its routes that keep the "
+        "fill's eq. 21 clearance kept, the UAVs added filled); one plan per size beside --out, named with _nN (plan_n6.json, "
         "plan_n12.json, ...: all written or none) and one table of POS_C, the rule-aware bound, "
         "UAVs without a route and time (docs/planning.md, 'Comparing fleet sizes')",
     )
