@@ -969,7 +969,7 @@ def fleet_table(plans: list[dict]) -> str:
         "each size planned on the one before (plan_fleets): its routes kept where they keep "
         "the fill's clearance, the UAVs added filled"
     )
-    fell = [str(len(b["uavs"])) for a, b in zip(plans, plans[1:]) if b["posc"] < a["posc"]]
+    fell = [str(len(b["uavs"])) for a, b in itertools.pairwise(plans) if b["posc"] < a["posc"]]
     if fell:  # i24-chain: a route of the smaller fleet in conflict is flown anew
         from poc_env.agents.planning.allocation import FILL_WITHIN
 
@@ -1403,9 +1403,10 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N[,N...]",
         help="compare fleet sizes (--planner allocation; not with --uavs): each size, in "
         "increasing order, planned on the one before (plan_fleets: its routes that keep the "
-        "fill's eq. 21 clearance kept, the UAVs added filled); one plan per size beside --out, named with _nN (plan_n6.json, "
-        "plan_n12.json, ...: all written or none) and one table of POS_C, the rule-aware bound, "
-        "UAVs without a route and time (docs/planning.md, 'Comparing fleet sizes')",
+        "fill's eq. 21 clearance kept, the UAVs added filled); one plan per size beside "
+        "--out, named with _nN (plan_n6.json, plan_n12.json, ...: all written or none) and "
+        "one table of POS_C, the rule-aware bound, UAVs without a route and time "
+        "(docs/planning.md, 'Comparing fleet sizes')",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

@@ -16,7 +16,8 @@ episode, seed 5000: deterministic here) -- flown POSC, collision UAV-steps in al
 the fields (results/plan_scale/i24-deconflict/repro.py's rule: farther than d_s / sin FAN_DEG
 from the UAV's take-off and landing fields), and of those, the UAV-steps of a *floor* UAV
 (one flying its route of the smaller fleet's plan) in collision with floor UAVs only
-(``floor_only``) against those where an added UAV (any other: given a new route) takes part (``with_added``).
+(``floor_only``) against those where an added UAV (any other: given a new route) takes
+part (``with_added``).
 """
 
 import json
