@@ -192,7 +192,6 @@ FILL_TRIES = 3
 #: and 14 fewer idle UAVs at 48 UAVs on the audit's 500 km scenario, but 22 and 136 flown
 #: collision steps away from the fields on two 40 x 40 cases where main flies 4 and 14.
 FILL_WITHIN = LANE
-CLEAN_OWN = __import__("os").environ.get("CLEAN_OWN") == "1"  # EXPERIMENT
 
 
 def _mask_near(keep: np.ndarray, grid: Grid, s: int, at: np.ndarray, radius: float) -> None:
@@ -1254,15 +1253,10 @@ def make_allocation_plan(
         )  # fmt: skip
         mapped = _mapped(sc, floor)
     if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
-        if opt.fill_apart:  # i24-chain: the floor's routes kept by the fill's own clearance
+        if opt.fill_apart:  # i24-chain: the floor's routes held to the fill's own clearance
             mapped, _ = apart(sc, mapped, v, range(n), _alternative, FILL_WITHIN)
         f_routes = _fill(mapped)
         f_val = _sampled_total(f_routes) - _penalty(f_routes)
-        if opt.fill_apart and CLEAN_OWN and any(routes):  # EXPERIMENT
-            o_routes, o_where = apart(sc, routes, v, range(n), _alternative, FILL_WITHIN)
-            if o_where:
-                routes = _fill(o_routes)
-                pieces, refined = _lines_of(routes), True
         own = _sampled_total(routes) - _penalty(routes) if any(routes) else 0.0
         kept = f_val > own
         fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),

@@ -244,16 +244,18 @@ def _conflict_steps(sc, plan) -> int:
 
 
 def test_a_chained_plan_keeps_the_fills_clearance():
-    """i24-chain: the 12-UAV default plan has two UAVs within ``FILL_WITHIN`` x d_s at planned
-    times (13 pair-steps: the starts' own routes are not parted). The 16-UAV plan chained on
-    it keeps its routes, but only those that keep the fill's clearance
-    (``deconflict.apart``, the fill's own check): the later UAV of the pair is given a new
-    route with the four added UAVs, and the plan has no conflict at that clearance (before
-    i24-chain the floor's routes were kept as they were, the pair's steps with them). It
-    still plans more than 12 UAVs here (0.9188 against 0.9182), not by construction once a
-    route is dropped."""
+    """i24-chain: the 12-UAV plan alone (``half_fleet`` off: as the default planned it before)
+    has two UAVs within ``FILL_WITHIN`` x d_s at planned times (13 pair-steps: the starts' own
+    routes are not parted). The 16-UAV plan with it as its floor keeps its routes, but only
+    those that keep the fill's clearance (``deconflict.apart``, the fill's own check): the
+    later UAV of the pair is given a new route with the four added UAVs, and the plan has no
+    conflict at that clearance (before i24-chain the floor's routes were kept as they were,
+    the pair's steps with them). It still plans more than the 12 here, not by construction
+    once a route is dropped."""
     sc, prior = mini(250, 6.25, 1)
-    small, big = plan_fleets(sc, [12, 16], prior=prior)
+    small = make_allocation_plan(sc.with_uavs(12), prior=prior,
+                                 options=PlanOptions(half_fleet=False))  # fmt: skip
+    big = make_allocation_plan(sc.with_uavs(16), prior=prior, floor=small)
     assert _conflict_steps(sc, small) > 0  # the premise: the floor's own routes conflict
     assert big["optimizer"]["settings"]["fleet"]["kept"] == "floor"
     assert _conflict_steps(sc, big) == 0
