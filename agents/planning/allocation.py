@@ -543,8 +543,9 @@ def plan_fleets(
     take-off/landing pairs, one from each group in turn, :meth:`~poc_env.config.Scenario.
     with_uavs`), in
     increasing order, each planned with the one before as its ``floor``
-    (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
-    float rounding; i24-fleet). ``each``: called with each plan as it is made (``plan
+    (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet (up to float rounding;
+    i24-fleet) wherever the floor's routes keep the fill's clearance; with ``fill_apart`` a
+    floor route that does not is flown anew, which can cost POS_C (i24-chain). ``each``: called with each plan as it is made (``plan
     --fleet-sizes``'s progress; i24-fleetcli). ``kw``: :func:`make_allocation_plan`'s other
     keywords."""
     sc = load_scenario(scenario)
@@ -637,8 +638,13 @@ def make_allocation_plan(
     prior for fewer UAVs (:func:`plan_fleets`; i24-fleet): its routes flown by UAVs of the
     same airfields here, the UAVs left over given coverage boxes on the mass those routes
     leave (``options.fill_idle``'s fill), kept instead of this plan if that plans more POS, so
-    the plan never plans less than ``floor`` (up to float rounding); ``optimizer.settings.
-    fleet`` records it.
+    the plan never plans less than ``floor`` (up to float rounding) -- with
+    ``options.fill_apart`` (default) only where ``floor``'s routes keep the fill's clearance:
+    they go through the fill's own check first (:func:`~poc_env.agents.planning.deconflict.
+    apart` at :data:`FILL_WITHIN`), a route that fails it flown anew by the fill (i24-chain);
+    ``optimizer.settings.fleet`` records it. Without ``floor``, a plan that leaves a UAV
+    without a route is compared so with the plan of half its fleet
+    (``options.half_fleet``; ``fleet.floor`` is then ``"half_fleet"``).
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
