@@ -969,7 +969,10 @@ def fleet_table(plans: list[dict]) -> str:
         "each size planned on the one before (plan_fleets): its routes kept where they keep "
         "the fill's clearance, the UAVs added filled"
     )
-    fell = [str(len(b["uavs"])) for a, b in itertools.pairwise(plans) if b["posc"] < a["posc"]]
+    tol = 1e-12  # float rounding is no fall
+    fell = [
+        str(len(b["uavs"])) for a, b in itertools.pairwise(plans) if b["posc"] < a["posc"] - tol
+    ]
     if fell:  # i24-chain: a route of the smaller fleet in conflict is flown anew
         from poc_env.agents.planning.allocation import FILL_WITHIN
 

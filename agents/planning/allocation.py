@@ -547,9 +547,9 @@ def plan_fleets(
     increasing order, each planned with the one before as its ``floor``
     (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet (up to float rounding;
     i24-fleet) wherever the floor's routes keep the fill's clearance; with ``fill_apart`` a
-    floor route that does not is flown anew, which can cost POS_C (i24-chain). ``each``: called with each plan as it is made (``plan
-    --fleet-sizes``'s progress; i24-fleetcli). ``kw``: :func:`make_allocation_plan`'s other
-    keywords."""
+    floor route that does not is flown anew, which can cost POS_C (i24-chain). ``each``:
+    called with each plan as it is made (``plan --fleet-sizes``'s progress; i24-fleetcli).
+    ``kw``: :func:`make_allocation_plan`'s other keywords."""
     sc = load_scenario(scenario)
     one = np.ndim(sizes) == 0  # a list's bad entry named by its index (i24-dayaudit)
     ns = sorted({
