@@ -971,8 +971,20 @@ def fleet_table(plans: list[dict]) -> str:
         )
     lines.append("-" * len(head))
     lines.append(
-        "each size planned on the one before (plan_fleets): POS_C never falls as the fleet grows"
+        "each size planned on the one before (plan_fleets): its routes kept where they keep "
+        "the fill's clearance, the UAVs added filled"
     )
+    tol = 1e-12  # float rounding is no fall
+    fell = [
+        str(len(b["uavs"])) for a, b in itertools.pairwise(plans) if b["posc"] < a["posc"] - tol
+    ]
+    if fell:  # i24-chain: a route of the smaller fleet in conflict is flown anew
+        from poc_env.agents.planning.allocation import FILL_WITHIN
+
+        lines.append(
+            f"POS_C falls at {', '.join(fell)} UAVs: routes of the smaller fleet within "
+            f"{FILL_WITHIN:g} d_s of another at planned times were given anew (eq. 21 first)"
+        )
     return "\n".join(lines)
 
 
@@ -1409,10 +1421,11 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="N[,N...]",
         help="compare fleet sizes (--planner allocation; not with --uavs): each size, in "
-        "increasing order, planned on the one before (plan_fleets), so POS_C never falls as "
-        "the fleet grows; one plan per size beside --out, named with _nN (plan_n6.json, "
-        "plan_n12.json, ...: all written or none) and one table of POS_C, the rule-aware bound, "
-        "UAVs without a route and time (docs/planning.md, 'Comparing fleet sizes')",
+        "increasing order, planned on the one before (plan_fleets: its routes that keep the "
+        "fill's eq. 21 clearance kept, the UAVs added filled); one plan per size beside "
+        "--out, named with _nN (plan_n6.json, plan_n12.json, ...: all written or none) and "
+        "one table of POS_C, the rule-aware bound, UAVs without a route and time "
+        "(docs/planning.md, 'Comparing fleet sizes')",
     )
     p.add_argument("--out", default="plan.json")
     p.add_argument("--plot", default=None, help="PNG of the plan (Fig. 21 analog)")

@@ -526,17 +526,19 @@ def violation_penalty(
     return rate * air.violations(pos, act)
 
 
-def _mapped(sc: Scenario, plan: dict[str, Any]) -> list[list[list[float]]]:
+def _mapped(sc: Scenario, plan: dict[str, Any], check: bool = True) -> list[list[list[float]]]:
     """The routes of ``plan`` (a plan of fewer UAVs, :func:`plan_fleets`) given to ``sc``'s
     UAVs of the same airfields (take-off and landing to the millimetre,
     :func:`~poc_env.theory.bound.field_key`), in fleet order; the UAVs left over get none.
     A plan with more UAVs of a field than ``sc`` has, or one that is not a plan
     (:func:`~poc_env.agents.mission.plan.check_plan`, its fields named ``floor...``), raises
-    :class:`ConfigError`."""
+    :class:`ConfigError`; ``check=False``: ``plan`` is the planner's own (``half_fleet``), not
+    checked (its POS may round above 1)."""
     from poc_env.agents.mission.plan import check_plan
 
     try:
-        check_plan(plan)
+        if check:
+            check_plan(plan)
     except ConfigError as e:  # i24-dayaudit: a str or {} floor raised AttributeError / KeyError
         field = "floor" + e.field[len("plan") :] if e.field.startswith("plan") else e.field
         raise ConfigError(field, e.value, e.allowed) from None
@@ -569,10 +571,11 @@ def plan_fleets(
     take-off/landing pairs, one from each group in turn, :meth:`~poc_env.config.Scenario.
     with_uavs`), in
     increasing order, each planned with the one before as its ``floor``
-    (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet by construction (up to
-    float rounding; i24-fleet). ``each``: called with each plan as it is made (``plan
-    --fleet-sizes``'s progress; i24-fleetcli). ``kw``: :func:`make_allocation_plan`'s other
-    keywords."""
+    (:func:`make_allocation_plan`): POS_C non-decreasing in the fleet (up to float rounding;
+    i24-fleet) wherever the floor's routes keep the fill's clearance; with ``fill_apart`` a
+    floor route that does not is flown anew, which can cost POS_C (i24-chain). ``each``:
+    called with each plan as it is made (``plan --fleet-sizes``'s progress; i24-fleetcli).
+    ``kw``: :func:`make_allocation_plan`'s other keywords."""
     sc = load_scenario(scenario)
     one = np.ndim(sizes) == 0  # a list's bad entry named by its index (i24-dayaudit)
     ns = sorted({
@@ -663,8 +666,13 @@ def make_allocation_plan(
     prior for fewer UAVs (:func:`plan_fleets`; i24-fleet): its routes flown by UAVs of the
     same airfields here, the UAVs left over given coverage boxes on the mass those routes
     leave (``options.fill_idle``'s fill), kept instead of this plan if that plans more POS, so
-    the plan never plans less than ``floor`` (up to float rounding); ``optimizer.settings.
-    fleet`` records it.
+    the plan never plans less than ``floor`` (up to float rounding) -- with
+    ``options.fill_apart`` (default) only where ``floor``'s routes keep the fill's clearance:
+    they go through the fill's own check first (:func:`~poc_env.agents.planning.deconflict.
+    apart` at :data:`FILL_WITHIN`), a route that fails it flown anew by the fill (i24-chain);
+    ``optimizer.settings.fleet`` records it. Without ``floor``, a plan that leaves a UAV
+    without a route is compared so with the plan of half its fleet
+    (``options.half_fleet``; ``fleet.floor`` is then ``"half_fleet"``).
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -795,6 +803,9 @@ def make_allocation_plan(
         )
         return [q.tolist()] if fits and len(arr) - lead > 2 else []
 
+    # the alternatives apart tries for a route (with zones in_lanes has tried them)
+    _alternative: Callable[[int, Any], list] | None = None if router.active else _reversed
+
     def _bearings(rs, todo) -> list[list[float]] | None:
         """Per UAV of ``todo`` the outbound bearings of its field-mates with a route in ``rs``
         (their first waypoint from the field), for the fill's fan-out (:func:`_spread`);
@@ -883,7 +894,7 @@ def make_allocation_plan(
                         out[k] = laid[j]
             if not opt.fill_apart:
                 break
-            out, where = apart(sc, out, v, todo, None if router.active else _reversed, FILL_WITHIN)
+            out, where = apart(sc, out, v, todo, _alternative, FILL_WITHIN)
             if not where:
                 break
             for at in where.values():  # the mass it met taken out of its next fill
@@ -1300,13 +1311,24 @@ def make_allocation_plan(
         routes, pieces, _ = _home(routes, pieces, None)  # the floor on the polished routes
         home_why = sent_home.get(id(routes), {})
     fleet_rec: dict[str, Any] | None = None
+    half = (floor is None and opt.half_fleet and opt.fill_idle and n > 1 and any(routes)
+            and not all(routes))  # fmt: skip
+    if half:  # i24-chain: a fleet larger than its plan uses also tries half of it as a floor
+        floor = make_allocation_plan(
+            sc.with_uavs(n // 2), prior=full_prior, map_source=map_source, seed=seed,
+            speed=speed, crs=crs, options=opt,
+        )  # fmt: skip
+        mapped = _mapped(sc, floor, check=False)
     if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
+        if opt.fill_apart:  # i24-chain: the floor's routes held to the fill's own clearance
+            mapped, _ = apart(sc, mapped, v, range(n), _alternative, FILL_WITHIN)
         f_routes = _fill(mapped)
         f_val = _sampled_total(f_routes) - _penalty(f_routes)
         own = _sampled_total(routes) - _penalty(routes) if any(routes) else 0.0
         kept = f_val > own
         fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),
-                     "kept": "floor" if kept else "own"}  # fmt: skip
+                     "kept": "floor" if kept else "own",
+                     **({"floor": "half_fleet"} if half else {})}  # fmt: skip
         if kept:
             routes, pieces, refined = f_routes, _lines_of(f_routes), True
             start = str(floor.get("start", "allocation"))

@@ -3,9 +3,11 @@ allocation plans of several fleet sizes, each planned on the one before (``plan_
 plan file per size, one table; bad size lists refused before anything is written.
 
 On ``small`` the default plan of 9 UAVs planned alone finds less than that of 8 (0.8862
-against 0.8871): a table of independent plans would fall there."""
+against 0.8871): a table of independent plans would fall there. Since i24-chain the chain keeps
+the 8 UAVs' routes only where they keep the fill's clearance (1.5 d_s at planned times); on
+this small map 17 pairs of them do not, the 9 UAVs' own plan (0.8862) is kept instead of what
+is left of them filled, and the table says that it falls."""
 
-import itertools
 import json
 import re
 
@@ -40,11 +42,13 @@ def fleet_run(tmp_path_factory):
     return folder, rows, buf.getvalue()
 
 
-def test_the_table_never_falls_and_each_size_has_its_plan_file(fleet_run):
+def test_the_table_says_where_it_falls_and_each_size_has_its_plan_file(fleet_run):
     folder, rows, text = fleet_run
     assert [int(r[0]) for r in rows] == list(SIZES)
-    posc = [float(r[1]) for r in rows]
-    assert all(b >= a for a, b in itertools.pairwise(posc)), text
+    posc = [json.loads((folder / f"plan_n{n}.json").read_text())["posc"] for n in SIZES]
+    fell = [str(n) for n, a, b in zip(SIZES[1:], posc[:-1], posc[1:], strict=True) if b < a]
+    assert fell == ["9"], text  # the premise (module docstring)
+    assert f"POS_C falls at {', '.join(fell)} UAVs: routes of the smaller fleet" in text
     # one file per size, nothing else (no plan.json itself)
     assert sorted(p.name for p in folder.iterdir()) == [f"plan_n{n}.json" for n in SIZES]
     for n, row in zip(SIZES, rows, strict=True):
