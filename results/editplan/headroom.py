@@ -40,6 +40,10 @@ def main(path: str) -> None:
     arg = [max(r["cands"], key=lambda k: r["cands"][k]["posc"]) for r in recs]
     m, h = t95(best - d)
     print(f"| best of K (oracle) | {m:+.4f} ± {h:.4f} | | | {len(CANDIDATES)} plans | |")
+    by_plan = np.array([max(r["cands"].values(), key=lambda c: c["planned"])["posc"] for r in recs])
+    m, h = t95(by_plan - d)
+    print(f"| the most planned POS of K (the planner at K times its cost) | {m:+.4f} ± {h:.4f} | "
+          f"| | {len(CANDIDATES)} plans | |")  # fmt: skip
     print("oracle's picks:", {k: arg.count(k) for k in CANDIDATES if arg.count(k)})
     print(f"default plan CPU s: median {np.median(dt):.2f}")
 
