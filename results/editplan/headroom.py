@@ -2,7 +2,7 @@
 flown POSC minus ``default``'s (Student's t 95 %, wins / ties / losses), violation steps and
 planning CPU time over ``default``'s (median ratio), and best-of-K (the oracle) minus default.
 
-``python results/editplan/headroom.py RECORDS.jsonl``
+``python results/editplan/headroom.py RECORDS.jsonl[,MORE.jsonl]``
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from poc_env.agents.policies.plan_choice import CANDIDATES  # noqa: E402
 
 
 def main(path: str) -> None:
-    recs = [json.loads(line) for line in open(path) if line.strip()]
+    recs = [json.loads(line) for p in path.split(",") for line in open(p) if line.strip()]
     d = np.array([r["cands"]["default"]["posc"] for r in recs])
     dt = np.array([r["cands"]["default"]["plan_s"] for r in recs])
     print(f"{len(recs)} priors ({recs[0]['seed']}-{recs[-1]['seed']}); default POSC {d.mean():.4f}")

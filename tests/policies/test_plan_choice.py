@@ -108,6 +108,10 @@ def test_bad_specs_are_refused(tmp_path):
     assert set(KINDS) | {"default"} == set(CANDIDATES)
 
 
+def test_the_paper62_chooser_is_shipped():
+    assert "plan_chooser_paper62" in shipped_choosers()  # else the test below runs on nothing
+
+
 @pytest.mark.parametrize("name", shipped_choosers())
 def test_shipped_chooser_loads_and_replays_its_card(name):
     """A shipped chooser loads by name, chooses on its card's replay prior what it chose when
