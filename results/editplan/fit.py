@@ -30,7 +30,8 @@ RIDGES = (0.001, 0.01, 0.1, 1.0, 10.0, 100.0)
 def load(paths: str) -> list[dict]:
     recs = []
     for p in paths.split(","):
-        recs += [json.loads(line) for line in open(p) if line.strip()]
+        with open(p) as f:
+            recs += [json.loads(line) for line in f if line.strip()]
     return recs
 
 
@@ -86,7 +87,8 @@ def main(train_paths: str, selection_path: str, out: str) -> None:
     for name, data in (("training", recs), ("selection", sel)):
         d = np.array([r["cands"]["default"]["posc"] for r in data])
         best = np.array([max(c["posc"] for c in r["cands"].values()) for r in data])
-        print(f"{name}: oracle best-of-K - default {t95(best - d)[0]:+.4f} +- {t95(best - d)[1]:.4f}")
+        m, h = t95(best - d)
+        print(f"{name}: oracle best-of-K - default {m:+.4f} +- {h:.4f}")
         for k in KINDS:
             gk = np.array([r["cands"][k]["posc"] for r in data]) - d
             m, h = t95(gk)
@@ -102,8 +104,10 @@ def main(train_paths: str, selection_path: str, out: str) -> None:
         mc, hc = t95(gains - constant)
         results.append({"expand": how, "ridge": ridge, "within": within, "cv_gain": m,
                         "cv_half": h, "vs_constant": mc, "vs_constant_half": hc})  # fmt: skip
-        print(f"cv {how:>8} ridge {ridge:<6} within {within!s:<5}: {m:+.4f} +- {h:.4f} "
-              f"(- the constant: {mc:+.4f} +- {hc:.4f})")
+        print(
+            f"cv {how:>8} ridge {ridge:<6} within {within!s:<5}: {m:+.4f} +- {h:.4f} "
+            f"(- the constant: {mc:+.4f} +- {hc:.4f})"
+        )
     best = max(results, key=lambda r: r["cv_gain"])
     x, y, g = table(recs)
     model = PlanChoiceModel.fit(

@@ -13,13 +13,16 @@ import sys
 import numpy as np
 
 sys.path.insert(0, "results/editplan")
-from fit import t95  # noqa: E402
+from fit import t95
 
-from poc_env.agents.policies.plan_choice import CANDIDATES  # noqa: E402
+from poc_env.agents.policies.plan_choice import CANDIDATES
 
 
 def main(path: str) -> None:
-    recs = [json.loads(line) for p in path.split(",") for line in open(p) if line.strip()]
+    recs = []
+    for p in path.split(","):
+        with open(p) as f:
+            recs += [json.loads(line) for line in f if line.strip()]
     d = np.array([r["cands"]["default"]["posc"] for r in recs])
     dt = np.array([r["cands"]["default"]["plan_s"] for r in recs])
     print(f"{len(recs)} priors ({recs[0]['seed']}-{recs[-1]['seed']}); default POSC {d.mean():.4f}")
