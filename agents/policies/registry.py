@@ -283,3 +283,12 @@ register(
     summary="spacetime_receding's re-planning decisions over wider candidates, made by a rule, "
     "a lookahead oracle or a learned chooser",
 )
+register(
+    "plan_choice",
+    "poc_env.agents.policies.plan_choice:from_spec",
+    argument="spec",
+    argument_help="default, a candidate of the allocation options (sampled, graded, ...) or a "
+    "chooser model (a .json path or a shipped name)",
+    summary="allocation_plan with the options a learned chooser picks from the prior at "
+    "take-off, among variants of about the default's planning cost",
+)
