@@ -1332,6 +1332,10 @@ def make_allocation_plan(
         if kept:
             routes, pieces, refined = f_routes, _lines_of(f_routes), True
             start = str(floor.get("start", "allocation"))
+            # the floor's own UAVs met their floor in its plan, but the UAVs the fill added
+            # to it did not go through the rule (G3): every flying UAV adds its floor
+            routes, pieces, _ = _home(routes, pieces, None)
+            home_why = sent_home.get(id(routes), {})
     moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too
