@@ -1322,20 +1322,28 @@ def make_allocation_plan(
     if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
         if opt.fill_apart:  # i24-chain: the floor's routes held to the fill's own clearance
             mapped, _ = apart(sc, mapped, v, range(n), _alternative, FILL_WITHIN)
+        # the floor's own UAVs met their floor in its plan, but the UAVs the fill adds to it
+        # go through the rule here (G3: every flying UAV adds its floor); the two plans fly
+        # different fleets, so their flight hours are priced at the floor's rate (an hour
+        # worth ``gain_per_hour`` of the mass: one UAV flying 0.8 h more for 0.001 of a
+        # sighting is not kept over the plan that sent that sighting's UAV home) and compared
+        # as the starts are (_pick: within ``nothing`` the one of fewer flight hours, F1), the
+        # fleet's own plan first
         f_routes = _fill(mapped)
-        f_val = _sampled_total(f_routes) - _penalty(f_routes)
-        own = _sampled_total(routes) - _penalty(routes) if any(routes) else 0.0
-        kept = f_val > own
+        f_routes, f_pieces, _ = _home(f_routes, _lines_of(f_routes), None)
+        f_why = sent_home.get(id(f_routes), {})
+        per_s = opt.gain_per_hour * float(full_prior.sum()) / 3600 if opt.nothing else 0.0
+        f_val = _sampled_total(f_routes) - _penalty(f_routes) - per_s * _hours(f_routes)
+        own = (_sampled_total(routes) - _penalty(routes) - per_s * _hours(routes)
+               if any(routes) else 0.0)  # fmt: skip
+        kept = _pick([(own, routes, pieces), (f_val, f_routes, f_pieces)])[1] is f_routes
         fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),
                      "kept": "floor" if kept else "own",
                      **({"floor": "half_fleet"} if half else {})}  # fmt: skip
         if kept:
-            routes, pieces, refined = f_routes, _lines_of(f_routes), True
+            routes, pieces, refined = f_routes, f_pieces, True
             start = str(floor.get("start", "allocation"))
-            # the floor's own UAVs met their floor in its plan, but the UAVs the fill added
-            # to it did not go through the rule (G3): every flying UAV adds its floor
-            routes, pieces, _ = _home(routes, pieces, None)
-            home_why = sent_home.get(id(routes), {})
+            home_why = f_why
     moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too

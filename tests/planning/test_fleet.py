@@ -146,8 +146,11 @@ def test_pos_c_never_falls_as_the_fleet_grows():
     assert plans[1]["posc"] >= plans[0]["posc"] - 1e-12
     assert plans[1]["optimizer"]["settings"]["fleet"]["floor_uavs"] == 12
     # without fill_apart (on by default: filled routes in eq. 21 conflict are dropped) the
-    # four more UAVs are all filled
-    free = plan_fleets(sc, [16, 12], prior=prior, options=PlanOptions(fill_apart=False))
+    # four more UAVs are all filled (and with the floor per flight hour off: it sends home
+    # filled UAVs that add too little for their hours, tests/planning/test_sent_home.py)
+    free = plan_fleets(
+        sc, [16, 12], prior=prior, options=PlanOptions(fill_apart=False, gain_per_hour=0)
+    )
     assert free[1]["posc"] >= free[0]["posc"] - 1e-12
     assert all(u["waypoints_m"] for u in free[1]["uavs"])
 
