@@ -205,9 +205,7 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 def cmd_policies(args: argparse.Namespace) -> int:
     """Every registered policy as ``evaluate --policies`` spells it, with what it does."""
-    from poc_env.agents.policies.registry import registered, spec
-    from poc_env.agents.rl.checkpoint import shipped_checkpoints
-    from poc_env.agents.rl.rllib import shipped_rllib
+    from poc_env.agents.policies.registry import registered, shipped, spec
 
     width = max(len(p) for p in registered())
     for spelling in registered():
@@ -216,10 +214,11 @@ def cmd_policies(args: argparse.Namespace) -> int:
         if s.argument is not None:
             what += f"; {spelling.partition(':')[2]}: {s.argument_help or s.argument}"
         print(f"{spelling:<{width}}  {what}")
-    shipped = [f"ppo:{n}" for n in shipped_checkpoints()]
-    shipped += [f"rllib:{n}" for n in shipped_rllib()]
-    print("\nshipped checkpoints (ppo: the rl extra flies them; rllib: the rllib extra):")
-    print("\n".join(f"  {n}" for n in shipped))
+    print(
+        "\nshipped checkpoints and chooser models (ppo: the rl extra flies them; rllib: the "
+        "rllib extra; plan_choice, receding_choice: none):"
+    )
+    print("\n".join(f"  {n}" for n in shipped()))
     return 0
 
 
