@@ -142,7 +142,8 @@ def _once_in_place(where: Path | None, then: Callable[[], object]) -> None:
 
 
 def _add_gain_per_hour(p: argparse.ArgumentParser) -> None:
-    """``--gain-per-hour`` (``plan``'s and ``replan``'s; checked by :func:`_check_gain_per_hour`)."""
+    """``--gain-per-hour``, ``plan``'s and ``replan``'s (checked by
+    :func:`_check_gain_per_hour`)."""
     p.add_argument(
         "--gain-per-hour",
         type=float,

@@ -204,7 +204,7 @@ def _folder() -> Any:
 
 def shipped_choosers() -> list[str]:
     """The names of the chooser models shipped in ``agents/checkpoints/plan_choosers/``: the
-    ``NAME``\ s of ``plan_choice:NAME``, a folder per policy as ``receding_choice:NAME``'s
+    names of ``plan_choice:NAME``, a folder per policy as ``receding_choice:NAME``'s
     ``choosers/`` (both are :class:`ChooserModel` JSON; a model of the other policy is refused
     by its features, and a shared folder would offer each policy the other's names)."""
     folder = _folder()

@@ -57,7 +57,7 @@ class PolicySpec:
     summary:
         One line on what the policy does (``poc-env policies``).
     shipped:
-        ``"module:function"`` of a function listing the ``VALUE``\ s shipped with the package
+        ``"module:function"`` of a function listing the values (``VALUE``) shipped with the package
         (checkpoints, chooser models: ``ppo:ppo_pilot_paper_6_2``), imported lazily by
         :meth:`shipped_values`; None for a policy that ships none.
     """
@@ -80,8 +80,8 @@ class PolicySpec:
         return _attribute(self.entry_point, f"policies[{self.name}].entry_point")
 
     def shipped_values(self) -> list[str]:
-        """The ``VALUE``\ s shipped with the package, listed by :attr:`shipped` (imported
-        now; none without it)."""
+        """The values (``VALUE``) shipped with the package, listed by :attr:`shipped`
+        (imported now; none without it)."""
         if self.shipped is None:
             return []
         return list(_attribute(self.shipped, f"policies[{self.name}].shipped")())
