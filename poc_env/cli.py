@@ -141,6 +141,31 @@ def _once_in_place(where: Path | None, then: Callable[[], object]) -> None:
     then()
 
 
+def _add_gain_per_hour(p: argparse.ArgumentParser) -> None:
+    """``--gain-per-hour``, ``plan``'s and ``replan``'s (checked by
+    :func:`_check_gain_per_hour`)."""
+    p.add_argument(
+        "--gain-per-hour",
+        type=float,
+        default=None,
+        metavar="G",
+        help="allocation planner: a UAV flies only if its route adds at least G of the prior's "
+        "mass per flight hour to POS_C (its marginal POS over its eq. 17 hours); the others stay "
+        "home, longest flight first, each against the plan left by the ones before, so the "
+        "plan gives up less than G x the hours saved. Default 1e-4 (0.01 %% per aircraft-hour); "
+        "0: every route flies; at most 0.01 (docs/PLANNER.md, 'A floor per flight hour')",
+    )
+
+
+def _check_gain_per_hour(args: argparse.Namespace) -> None:
+    """Refuse a bad ``--gain-per-hour`` (with ``--effort``'s options) before any planning,
+    naming the option (:func:`poc_env.agents.planning.planner.plan_options`)."""
+    if args.gain_per_hour is not None:
+        from poc_env.agents.planning.planner import plan_options
+
+        plan_options(args.effort, args.gain_per_hour)
+
+
 def _add_projection(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--projection",
@@ -181,9 +206,7 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 def cmd_policies(args: argparse.Namespace) -> int:
     """Every registered policy as ``evaluate --policies`` spells it, with what it does."""
-    from poc_env.agents.policies.registry import registered, spec
-    from poc_env.agents.rl.checkpoint import shipped_checkpoints
-    from poc_env.agents.rl.rllib import shipped_rllib
+    from poc_env.agents.policies.registry import registered, shipped, spec
 
     width = max(len(p) for p in registered())
     for spelling in registered():
@@ -192,10 +215,11 @@ def cmd_policies(args: argparse.Namespace) -> int:
         if s.argument is not None:
             what += f"; {spelling.partition(':')[2]}: {s.argument_help or s.argument}"
         print(f"{spelling:<{width}}  {what}")
-    shipped = [f"ppo:{n}" for n in shipped_checkpoints()]
-    shipped += [f"rllib:{n}" for n in shipped_rllib()]
-    print("\nshipped checkpoints (ppo: the rl extra flies them; rllib: the rllib extra):")
-    print("\n".join(f"  {n}" for n in shipped))
+    print(
+        "\nshipped checkpoints and chooser models (ppo: the rl extra flies them; rllib: the "
+        "rllib extra; plan_choice, receding_choice: none):"
+    )
+    print("\n".join(f"  {n}" for n in shipped()))
     return 0
 
 
@@ -688,6 +712,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
     from poc_env.agents.planning.replan import cli_main
 
     _check_int("seed", args.seed, 0, limits.MAX_SEED)
+    _check_gain_per_hour(args)  # before the sweep and the planning, as plan checks it
     _check_out("out", args.out, "file")
     check_distinct({"out": args.out}, _inputs_of(args))
     return cli_main(args)
@@ -698,10 +723,7 @@ def _check_plan_args(args: argparse.Namespace) -> None:
     _check_int("uavs", args.uavs, 1, 64)
     _check_int("popsize", args.popsize, 4, limits.POPSIZE_MAX)
     _check_int("maxiter", args.maxiter, 1, limits.MAXITER_MAX)
-    if args.gain_per_hour is not None:  # refused before the planning, naming the option
-        from poc_env.agents.planning.planner import plan_options
-
-        plan_options(args.effort, args.gain_per_hour)
+    _check_gain_per_hour(args)
     _check_out("out", args.out, "file")
     _check_out("plot", args.plot, "file", ".png")
     check_distinct({"out": args.out, "plot": args.plot}, _inputs_of(args))
@@ -1405,17 +1427,7 @@ def build_parser() -> argparse.ArgumentParser:
         "stopped it) or thorough (about 20 s on paper_6_2, minutes on 400-500 km maps: 12 min "
         "at 160 x 160 cells and 24 UAVs; more POS: docs/PLANNER.md, effort levels)",
     )
-    p.add_argument(
-        "--gain-per-hour",
-        type=float,
-        default=None,
-        metavar="G",
-        help="allocation planner: a UAV flies only if its route adds at least G of the prior's "
-        "mass per flight hour to POS_C (its marginal POS over its eq. 17 hours); the others stay "
-        "home, longest flight first, each against the plan left by the ones before, so the "
-        "plan gives up less than G x the hours saved. Default 1e-4 (0.01 %% per aircraft-hour); "
-        "0: every route flies; at most 0.01 (docs/PLANNER.md, 'A floor per flight hour')",
-    )
+    _add_gain_per_hour(p)
     p.add_argument(
         "--fleet-sizes",
         default=None,
@@ -1472,6 +1484,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="allocation planner: default, standard or thorough, as plan's --effort (the next "
         "sortie's; docs/PLANNER.md, effort levels)",
     )
+    _add_gain_per_hour(p)  # the next sortie's floor per flight hour, as plan's
     p.add_argument("--out", default="next_plan.json", help="the next sortie's plan.json")
     p.set_defaults(func=cmd_replan)
 

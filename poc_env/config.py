@@ -315,8 +315,7 @@ class MapConfig:
 _SPEED: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_SPEED_KMH}
 _RATE: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_RATE_DEG_S}
 _ALT: dict[str, Any] = {"lo": limits.MIN_POSITIVE, "hi": limits.MAX_ALTITUDE_M}
-#: Largest ``uav.max_climb_rate_mps`` / ``max_sink_rate_mps`` (m/s): PX4 allows at most 15.
-MAX_VERTICAL_RATE_MPS = 100.0
+_VERTICAL: dict[str, Any] = {"lo": 0.0, "lo_open": True, "hi": limits.MAX_VERTICAL_RATE_MPS}
 
 
 @dataclass(frozen=True)
@@ -353,12 +352,8 @@ class UAVConfig:
     #: and sinks (``FW_T_SINK_MAX``, ``TECS_SINK_MAX``; 5 m/s). Null (the default): eq. 19's
     #: pitch bound alone, as the environment flies. Read only by the mission's terrain profile
     #: (:mod:`poc_env.agents.mission.terrain`), never by the environment's tasks.
-    max_climb_rate_mps: float | None = _f(
-        "max_climb_rate_mps", 1.0, default=None, lo=0.0, lo_open=True, hi=MAX_VERTICAL_RATE_MPS
-    )
-    max_sink_rate_mps: float | None = _f(
-        "max_sink_rate_mps", 1.0, default=None, lo=0.0, lo_open=True, hi=MAX_VERTICAL_RATE_MPS
-    )
+    max_climb_rate_mps: float | None = _f("max_climb_rate_mps", 1.0, default=None, **_VERTICAL)
+    max_sink_rate_mps: float | None = _f("max_sink_rate_mps", 1.0, default=None, **_VERTICAL)
 
     def __post_init__(self) -> None:
         _coerce(self)

@@ -47,6 +47,9 @@ MAX_ACCEL_MPS2 = 100.0
 MAX_RATE_DEG_S = 360.0
 MAX_PITCH_DEG = 89.0
 MAX_ALTITUDE_M = 30_000.0
+#: Largest vertical rate, climb or sink (m/s; ``uav.max_climb_rate_mps``,
+#: ``uav.max_sink_rate_mps`` and a plan's terrain record): PX4 allows at most 15.
+MAX_VERTICAL_RATE_MPS = 100.0
 #: Widest sensor sweep and longest comms range / separation, km.
 MAX_SWEEP_WIDTH_KM = 200.0
 MAX_RANGE_KM = 20_000.0

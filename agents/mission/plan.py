@@ -559,7 +559,6 @@ def _check_terrain(field: str, rec: Any) -> None:
     import numpy as np
 
     from poc_env import limits
-    from poc_env.config import MAX_VERTICAL_RATE_MPS
 
     keys = sorted(
         ["origin_m", "cell_m", "ground_m", "ground_max_m", "fields", "min_clearance_m",
@@ -586,7 +585,7 @@ def _check_terrain(field: str, rec: Any) -> None:
         )  # fmt: skip
     for key in ("max_climb_rate_mps", "max_sink_rate_mps"):  # PX4's FW_T_CLMB_MAX/SINK_MAX
         if key in rec:
-            as_number(f"{field}.{key}", rec[key], 0.0, MAX_VERTICAL_RATE_MPS, lo_open=True)
+            as_number(f"{field}.{key}", rec[key], 0.0, limits.MAX_VERTICAL_RATE_MPS, lo_open=True)
     o = rec["origin_m"]
     if not isinstance(o, list) or len(o) != 2:
         raise ConfigError(f"{field}.origin_m", o, "[x, y] in metres")

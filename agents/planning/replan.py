@@ -549,6 +549,7 @@ def next_sortie(
     seed: int = 0,
     refine: int | None = None,
     effort: str | None = None,
+    gain_per_hour: float | None = None,
 ) -> dict[str, Any]:
     """The plan of the next sortie after ``plans`` (the sorties so far, in order: their routes,
     or the flown ``tracks`` of all of them when given) on ``prior``: eq. 14 along every flight
@@ -559,8 +560,9 @@ def next_sortie(
     cell) and ``cumulative_posc`` (their sum: eq. 14 over every flight, as sweeping them all
     from the prior). ``refine``: the allocation planner's refinement passes (``None``: its
     default); ``effort``: its effort level (``None``: the default;
-    :meth:`poc_env.agents.planning.options.PlanOptions.preset`), refused with ``planner="de"``
-    as ``plan`` refuses it."""
+    :meth:`poc_env.agents.planning.options.PlanOptions.preset`) and ``gain_per_hour`` its floor
+    per flight hour (``None``: the level's; ``PlanOptions.gain_per_hour``), each refused with
+    ``planner="de"`` as ``plan`` refuses it."""
     from poc_env.agents.planning.planner import make_plan
 
     names: list[str] = []
@@ -593,7 +595,7 @@ def next_sortie(
     # sample points' own belief (replan-audit: the Alps walkthrough's sortie 2 was scored
     # 0.1835 on the cells, 0.1463 on the points)
     nxt = make_plan(sc, prior=grid.coarsen(fine, s), planner=planner, seed=seed, refine=refine,
-                    effort=effort)  # fmt: skip
+                    effort=effort, gain_per_hour=gain_per_hour)  # fmt: skip
     gain = sweep_points(sc, fine, plan_paths(nxt))
     if frame is not None:
         nxt["crs"] = frame  # the scenario's (make_plan's), else the last plan's: the same map
@@ -706,7 +708,7 @@ def cli_main(args: Any) -> int:
         tracks = clip_tracks(sc, tracks, crs)  # the part inside counts; refusals in degrees
     nxt = next_sortie(
         sc, prior, plans, tracks, planner=args.planner, seed=args.seed,
-        effort=getattr(args, "effort", None),
+        effort=getattr(args, "effort", None), gain_per_hour=getattr(args, "gain_per_hour", None),
     )  # fmt: skip
     nxt["map_source"] = map_source(sc, map_file)  # export draws this prior, replan sweeps it
     if crs is not None:

@@ -203,8 +203,10 @@ def _folder() -> Any:
 
 
 def shipped_choosers() -> list[str]:
-    """The names of the chooser models shipped in ``agents/checkpoints/plan_choosers/`` (a
-    folder of their own: ``receding_choice`` loads every file of ``choosers/``)."""
+    """The names of the chooser models shipped in ``agents/checkpoints/plan_choosers/``: the
+    names of ``plan_choice:NAME``, a folder per policy as ``receding_choice:NAME``'s
+    ``choosers/`` (both are :class:`ChooserModel` JSON; a model of the other policy is refused
+    by its features, and a shared folder would offer each policy the other's names)."""
     folder = _folder()
     if not folder.is_dir():
         return []

@@ -56,6 +56,10 @@ class PolicySpec:
         What ``VALUE`` is, for error messages (``"a checkpoint path"``).
     summary:
         One line on what the policy does (``poc-env policies``).
+    shipped:
+        ``"module:function"`` of a function listing the values (``VALUE``) shipped with the package
+        (checkpoints, chooser models: ``ppo:ppo_pilot_paper_6_2``), imported lazily by
+        :meth:`shipped_values`; None for a policy that ships none.
     """
 
     name: str
@@ -64,6 +68,7 @@ class PolicySpec:
     argument: str | None = None
     argument_help: str = ""
     summary: str = field(default="", compare=False)  # words, not identity
+    shipped: str | None = None
 
     @property
     def spelling(self) -> str:
@@ -72,15 +77,14 @@ class PolicySpec:
 
     def load(self) -> Callable[..., Policy]:
         """The factory named by :attr:`entry_point` (imported now)."""
-        module, _, attr = self.entry_point.partition(":")
-        try:
-            return getattr(importlib.import_module(module), attr)
-        except (ModuleNotFoundError, AttributeError) as err:
-            if isinstance(err, ModuleNotFoundError) and err.name not in _parents(module):
-                raise  # a dependency of the module is missing, not the module itself
-            raise ConfigError(
-                f"policies[{self.name}].entry_point", self.entry_point, "an importable module:attr"
-            ) from None
+        return _attribute(self.entry_point, f"policies[{self.name}].entry_point")
+
+    def shipped_values(self) -> list[str]:
+        """The values (``VALUE``) shipped with the package, listed by :attr:`shipped`
+        (imported now; none without it)."""
+        if self.shipped is None:
+            return []
+        return list(_attribute(self.shipped, f"policies[{self.name}].shipped")())
 
     def make(self, value: str | None = None, **kwargs: Any) -> Policy:
         """A fresh policy: the factory called with :attr:`kwargs`, ``kwargs`` and ``value``."""
@@ -95,6 +99,18 @@ class PolicySpec:
                 "a factory returning a poc_env.agents.policies.base.Policy",
             )
         return policy
+
+
+def _attribute(entry_point: str, where: str) -> Any:
+    """The attribute ``entry_point`` (``"module:attr"``) names, imported now; a ConfigError
+    naming ``where`` if the module or attribute does not exist."""
+    module, _, attr = entry_point.partition(":")
+    try:
+        return getattr(importlib.import_module(module), attr)
+    except (ModuleNotFoundError, AttributeError) as err:
+        if isinstance(err, ModuleNotFoundError) and err.name not in _parents(module):
+            raise  # a dependency of the module is missing, not the module itself
+        raise ConfigError(where, entry_point, "an importable module:attr") from None
 
 
 def _parents(module: str) -> set[str]:
@@ -113,6 +129,7 @@ def register(
     argument: str | None = None,
     argument_help: str = "",
     summary: str = "",
+    shipped: str | None = None,
 ) -> PolicySpec:
     """Register a policy factory under ``name`` (see :class:`PolicySpec` for the parameters).
 
@@ -127,8 +144,13 @@ def register(
         raise ConfigError(f"policies[{name}].entry_point", entry_point, "'package.module:attr'")
     if argument is not None and not argument.isidentifier():
         raise ConfigError(f"policies[{name}].argument", argument, "a keyword argument name")
+    if shipped is not None and (argument is None or not _ENTRY_POINT.match(str(shipped))):
+        raise ConfigError(
+            f"policies[{name}].shipped", shipped, "'package.module:function' listing the "
+            "shipped values of a policy spelled name:VALUE (an argument), or None",
+        )  # fmt: skip
     frozen = MappingProxyType(dict(kwargs or {}))
-    spec = PolicySpec(name, entry_point, frozen, argument, argument_help, summary)
+    spec = PolicySpec(name, entry_point, frozen, argument, argument_help, summary, shipped)
     old = _REGISTRY.get(name)
     if old is not None and old != spec:
         raise ConfigError("name", name, f"a name not registered yet (taken by {old.entry_point})")
@@ -141,6 +163,16 @@ def registered() -> tuple[str, ...]:
     plain = sorted(s.spelling for s in _REGISTRY.values() if s.argument is None)
     valued = sorted(s.spelling for s in _REGISTRY.values() if s.argument is not None)
     return (*plain, *valued)
+
+
+def shipped() -> tuple[str, ...]:
+    """Every model shipped with the package as users spell it (``ppo:ppo_pilot_paper_6_2``,
+    ``plan_choice:plan_chooser_paper62``): each policy's :meth:`PolicySpec.shipped_values`,
+    by policy name, then value (``poc-env policies`` lists them)."""
+    return tuple(
+        f"{s.name}:{v}" for s in sorted(_REGISTRY.values(), key=lambda s: s.name)
+        for v in s.shipped_values()
+    )  # fmt: skip
 
 
 def spec(name: str) -> PolicySpec:
@@ -254,6 +286,7 @@ register(
     argument="path",
     argument_help="a checkpoint path (a .zip or a run folder)",
     summary="a stable-baselines3 PPO checkpoint (the rl extra)",
+    shipped="poc_env.agents.rl.checkpoint:shipped_checkpoints",
 )
 register(
     "rllib",
@@ -261,6 +294,7 @@ register(
     argument="path",
     argument_help="a run folder of poc-env train --engine rllib",
     summary="an RLlib multi-agent PPO checkpoint (the rllib extra)",
+    shipped="poc_env.agents.rl.rllib:shipped_rllib",
 )
 register(
     "spacetime_plan",
@@ -282,6 +316,7 @@ register(
     "minutes) or a chooser model (a .json path or a shipped name)",
     summary="spacetime_receding's re-planning decisions over wider candidates, made by a rule, "
     "a lookahead oracle or a learned chooser",
+    shipped="poc_env.agents.policies.replan_choice:shipped_choosers",
 )
 register(
     "plan_choice",
@@ -291,4 +326,5 @@ register(
     "chooser model (a .json path or a shipped name)",
     summary="allocation_plan with the options a learned chooser picks from the prior at "
     "take-off, among variants of about the default's planning cost",
+    shipped="poc_env.agents.policies.plan_choice:shipped_choosers",
 )

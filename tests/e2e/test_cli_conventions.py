@@ -24,7 +24,14 @@ def test_policies_lists_every_registered_policy_with_what_it_does(capsys):
     for spelling in registered():  # each spelling evaluate accepts, with its summary
         assert spelling in lines, spelling
         assert spec(spelling).summary and spec(spelling).summary in lines[spelling]
+    from poc_env.agents.policies import plan_choice, replan_choice
     from poc_env.agents.rl.checkpoint import shipped_checkpoints
 
     for name in shipped_checkpoints():  # the shipped checkpoints, spelled as evaluate takes them
         assert f"  ppo:{name}" in out
+    # i24-leftovers, item 2: and the shipped chooser models (they were missing)
+    choosers = {"plan_choice": plan_choice, "receding_choice": replan_choice}
+    for policy, module in choosers.items():
+        assert module.shipped_choosers(), policy  # else the loop below checks nothing
+        for name in module.shipped_choosers():
+            assert f"  {policy}:{name}" in out

@@ -298,3 +298,20 @@ def test_field_mates_descent_orbits_cross_a_layer_apart(flat_plan):
     assert outer.orbit.to_m >= cross + sep - 1e-6  # its lowest altitude, above the crossing
     assert alone[1].descent.orbit.to_m < cross + sep  # type: ignore[union-attr]  # was not
     assert (outer.orbit.to_m - field) / outer.glide_m <= math.tan(math.radians(15.0))
+
+
+def test_the_vertical_rate_limit_is_the_limits_modules_for_scenario_and_plan(flat_plan):
+    """i24-leftovers, item 4: the largest vertical rate is ``limits.MAX_VERTICAL_RATE_MPS``,
+    beside the other physical ranges (docs/inputs.md), and both the scenario's fields and a
+    plan's terrain record take it and refuse the next float above it."""
+    from poc_env import limits
+
+    top = limits.MAX_VERTICAL_RATE_MPS
+    above = math.nextafter(top, math.inf)
+    for key in ("max_climb_rate_mps", "max_sink_rate_mps"):
+        assert getattr(load_scenario("small", {f"uav.{key}": top}).uav, key) == top
+        check_plan({**flat_plan, "terrain": {**flat_plan["terrain"], key: top}})
+        with pytest.raises(ConfigError, match=rf"uav\.{key}"):
+            load_scenario("small", {f"uav.{key}": above})
+        with pytest.raises(ConfigError, match=rf"plan\.terrain\.{key}"):
+            check_plan({**flat_plan, "terrain": {**flat_plan["terrain"], key: above}})

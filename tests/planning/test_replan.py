@@ -875,3 +875,25 @@ def test_replan_takes_plan_s_effort(first, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "effort" in err and "standard" in err and "allocation" in err
     assert not bad.exists()
+
+
+def test_replan_takes_the_floor_per_flight_hour_as_plan_does(first, tmp_path, capsys):
+    """i24-leftovers, item 1: ``replan --gain-per-hour G`` plans the next sortie with the floor
+    G (recorded in the plan's options, as ``plan --gain-per-hour`` records it); a bad G is
+    refused naming the option before any planning, and so is G with the DE planner, nothing
+    written."""
+    _, p1 = first
+    out = tmp_path / "p2.json"
+    argv = ["replan", "--plan", str(p1), "--out", str(out)]
+    assert main([*argv, "--gain-per-hour", "0.005"]) == 0, capsys.readouterr().err
+    assert json.loads(out.read_text())["optimizer"]["settings"]["options"] == {
+        "gain_per_hour": 0.005
+    }
+    out.unlink()
+    assert main([*argv, "--gain-per-hour", "0.02"]) == 2
+    err = capsys.readouterr().err
+    assert "gain_per_hour: got 0.02; allowed: a number in [0, 0.01]" in err, err
+    assert main([*argv, "--gain-per-hour", "0", "--planner", "de"]) == 2
+    err = capsys.readouterr().err
+    assert "gain_per_hour" in err and "only with planner allocation" in err, err
+    assert not out.exists()

@@ -84,6 +84,31 @@ def test_register_checks_names_and_entry_points(scratch_registry):
         make_policy("not_a_policy")
 
 
+def test_shipped_lists_each_policys_shipped_values_as_evaluate_spells_them(scratch_registry):
+    """``shipped()`` (``poc-env policies``' list): each ``name:VALUE`` policy's shipped values,
+    from the function its ``shipped`` entry names; a chooser model listed loads by its
+    spelling. ``shipped`` is refused on a policy without an argument or when malformed."""
+    from poc_env.agents.policies import plan_choice, replan_choice
+
+    got = registry.shipped()
+    for policy, names in (
+        ("plan_choice", plan_choice.shipped_choosers()),
+        ("receding_choice", replan_choice.shipped_choosers()),
+    ):
+        assert names and {f"{policy}:{n}" for n in names} <= set(got), (policy, got)
+    for policy, module in (("plan_choice", plan_choice), ("receding_choice", replan_choice)):
+        assert make_policy(f"{policy}:{module.shipped_choosers()[0]}").chooser == "model"
+    register("listed", "poc_env.agents.policies.random:RandomPolicy", argument="seed",
+             shipped="poc_env.agents.policies.plan_choice:shipped_choosers")  # fmt: skip
+    assert {f"listed:{n}" for n in plan_choice.shipped_choosers()} <= set(registry.shipped())
+    with pytest.raises(ConfigError, match=r"policies\[plain\]\.shipped"):
+        register("plain", "poc_env.agents.policies.random:RandomPolicy",
+                 shipped="poc_env.agents.policies.plan_choice:shipped_choosers")  # fmt: skip
+    with pytest.raises(ConfigError, match=r"policies\[bad\]\.shipped"):
+        register("bad", "poc_env.agents.policies.random:RandomPolicy", argument="seed",
+                 shipped="no colon")  # fmt: skip
+
+
 def test_a_registered_policy_flies_in_evaluate_with_its_defaults(scratch_registry):
     """A new name is all evaluate needs; registered keywords are the policy's defaults."""
     register("mower", "poc_env.agents.policies.lawnmower:LawnmowerPolicy")
