@@ -311,6 +311,7 @@ def _policy(spec: str):
     head, variant = spec.split("@", 1)
     if head != "allocation_plan":
         raise SystemExit(f"{spec}: only allocation_plan@VARIANT is known")
+
     class Timed(AllocationPlanPolicy):
         """The allocation policy recording its planning CPU time (``cpu_s``; i24-sampled)."""
 
@@ -346,7 +347,6 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
     """``policies[0]`` flown on every seed, the others on the first ``check`` seeds only (to
     check they equal the stored ``records``, which then stand in for them)."""
     from poc_env.agents.benchmarks.plan_scale import _flown
-
     from poc_env.agents.planning.allocation import make_allocation_plan
 
     sc = load_scenario(name)
@@ -445,12 +445,16 @@ def among(recs: list[dict], line: float = 3.70) -> None:
         viol = [r.get("violations", float("nan")) for r in rs]
         ratio = [by[s, v]["cpu_s"] / by[s, ref]["cpu_s"] for s in seeds]
         over = [s for s, x in zip(seeds, ratio, strict=True) if x > line]
-        head = f"{v} (n {len(rs)}): flown/rule {a.mean():.4f} +- {ci95(a):.4f}, >= 0.90 " \
-            f"{(a >= 0.9).sum()}; violation steps mean {statistics.mean(viol):.2f} " \
+        head = (
+            f"{v} (n {len(rs)}): flown/rule {a.mean():.4f} +- {ci95(a):.4f}, >= 0.90 "
+            f"{(a >= 0.9).sum()}; violation steps mean {statistics.mean(viol):.2f} "
             f"(total {sum(viol)}); CPU median {statistics.median(r['cpu_s'] for r in rs):.2f} s"
+        )
         if v != ref:
-            head += f", CPU / {ref} median {statistics.median(ratio):.2f} (max " \
+            head += (
+                f", CPU / {ref} median {statistics.median(ratio):.2f} (max "
                 f"{max(ratio):.2f}), priors over {line}: {over or 'none'}"
+            )
         print(head)
         if v not in (ref, base):
             b = np.array([by[s, base]["posc"] / by[s, base]["rule_bound"] for s in seeds])
