@@ -46,9 +46,11 @@ def _line(name: str, value: float, note: str = "") -> None:
     print(f"{name:34s} {value:12.4g}  {note}".rstrip(), flush=True)
 
 
-def _flown(sc, policy, seed: int, prior: np.ndarray | None) -> tuple[float, dict]:
+def _flown(sc, policy, seed: int, prior: np.ndarray | None,
+           states: list | None = None) -> tuple[float, dict]:  # fmt: skip
     """POSC of ``policy`` (a registered name, or a policy object with ``reset`` and
-    ``predict``) flown on ``sc`` with ``prior`` (None: the scenario's), and its plan."""
+    ``predict``) flown on ``sc`` with ``prior`` (None: the scenario's), and its plan; the
+    flight's final ``sim_state`` is appended to ``states`` when given."""
     from poc_env.agents.experiments.evaluate import play
     from poc_env.agents.policies.registry import make_policy
     from poc_env.envs.parallel import UAVSearchParallelEnv
@@ -56,6 +58,8 @@ def _flown(sc, policy, seed: int, prior: np.ndarray | None) -> tuple[float, dict
     env = UAVSearchParallelEnv(scenario=sc)
     pol = make_policy(policy) if isinstance(policy, str) else policy
     play(env, pol, seed, prior)
+    if states is not None:
+        states.append(env.sim_state)
     return float(env.sim_state.posc[0]), getattr(pol, "plan", {})
 
 

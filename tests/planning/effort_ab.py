@@ -33,6 +33,9 @@
     on every seed, the others on the first ``CHECK`` seeds only, to check they equal the stored
     ``poc-env bench plan --scale`` records (results/plan_scale/*.json), which then stand in for
     them; the rule-aware bound is the stored one (recomputed and checked on those seeds).
+    Each record also has the plan's CPU time (``cpu_s``, after a warm-up plan of every
+    variant) and the flight's eq. 21 / 24 violation steps (``violations``); the variants flown
+    here are paired with each other too (:func:`among`; i24-sampled).
 ``violations MAP SEED[,SEED...] VARIANT [VARIANT...]``
     Flown violation steps and POSC per variant (``de``: ``de_plan``); on ``small`` as
     tests/policies/test_allocation.py flies it (``small 1 default q3 q3np de``).
@@ -308,7 +311,19 @@ def _policy(spec: str):
     head, variant = spec.split("@", 1)
     if head != "allocation_plan":
         raise SystemExit(f"{spec}: only allocation_plan@VARIANT is known")
-    pol = AllocationPlanPolicy()
+
+    class Timed(AllocationPlanPolicy):
+        """The allocation policy recording its planning CPU time (``cpu_s``; i24-sampled)."""
+
+        cpu_s = float("nan")
+
+        def make(self, env, prior, seed):  # type: ignore[no-untyped-def]
+            c0 = time.process_time()
+            out = super().make(env, prior, seed)
+            self.cpu_s = time.process_time() - c0
+            return out
+
+    pol = Timed()
     pol.options = _options(variant)
     return pol
 
@@ -332,10 +347,14 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
     """``policies[0]`` flown on every seed, the others on the first ``check`` seeds only (to
     check they equal the stored ``records``, which then stand in for them)."""
     from poc_env.agents.benchmarks.plan_scale import _flown
+    from poc_env.agents.planning.allocation import make_allocation_plan
 
     sc = load_scenario(name)
     old = stored(records)
     recs, done = resumed(out)
+    for pol in policies:  # warm-up (JIT, caches), so a plan's CPU time is the plan's own
+        if "@" in pol:
+            make_allocation_plan(sc, options=_options(pol.split("@", 1)[1]))
     for seed in range(seed0, seed1):
         prior = episode_prior(sc, seed)
         bound = None
@@ -348,11 +367,14 @@ def fly(name: str, seed0: int, seed1: int, policies: list[str], out: str, check:
                 if seed - seed0 < check and known:  # the stored bound is this prior's
                     assert abs(rule_bound(sc, prior).upper - bound) <= 1e-9 * bound, seed
             t0 = time.perf_counter()
-            posc, p = _flown(sc, _policy(pol), seed, prior)
+            who, states = _policy(pol), []
+            posc, p = _flown(sc, who, seed, prior, states)
             recs.append(
                 {"map": name, "seed": seed, "variant": pol, "posc": float(posc),
                  "planned_posc": float(p.get("posc", float("nan"))), "rule_bound": bound,
                  "start": p.get("start"), "plan_s": float(p.get("runtime_s", float("nan"))),
+                 "cpu_s": float(getattr(who, "cpu_s", float("nan"))),
+                 "violations": int(states[0].violations[0].sum()),
                  "episode_s": time.perf_counter() - t0, "load": os.getloadavg()[0]}
             )  # fmt: skip
             ref = old.get((seed, pol))
@@ -399,6 +421,51 @@ def paired(out: str, records: list[str]) -> None:
         lo, hi = min(r["load"] for r in rs), max(r["load"] for r in rs)
         print(f"{pol} planning time median {statistics.median(t):.1f} s (max {max(t):.1f}); "
               f"load {lo:.1f}-{hi:.1f}")  # fmt: skip
+    among(recs)
+
+
+def among(recs: list[dict], line: float = 3.70) -> None:
+    """The variants flown here paired with each other (i24-sampled): flown POSC over the
+    rule-aware bound against the second variant flown (the first is the CPU reference, e.g.
+    ``allocation_plan@default``), Student's t 95 % and wins / ties / losses; the eq. 21 / 24
+    violation steps per flight; the planning CPU over the first variant's on the same prior
+    (median, max, and the priors over ``line``: 2 s at the default's quiet 0.54 s, the rule
+    of docs/PLANNER.md "Speed and a new standard")."""
+    from poc_env.stats import ci95
+
+    order = list(dict.fromkeys(r["variant"] for r in recs))
+    if len(order) < 2:
+        return
+    by = {(r["seed"], r["variant"]): r for r in recs}
+    seeds = sorted({r["seed"] for r in recs if all((r["seed"], v) in by for v in order)})
+    ref, base = order[0], order[1]
+    for v in order:
+        rs = [by[s, v] for s in seeds]
+        a = np.array([r["posc"] / r["rule_bound"] for r in rs])
+        viol = [r.get("violations", float("nan")) for r in rs]
+        ratio = [by[s, v]["cpu_s"] / by[s, ref]["cpu_s"] for s in seeds]
+        over = [s for s, x in zip(seeds, ratio, strict=True) if x > line]
+        head = (
+            f"{v} (n {len(rs)}): flown/rule {a.mean():.4f} +- {ci95(a):.4f}, >= 0.90 "
+            f"{(a >= 0.9).sum()}; violation steps mean {statistics.mean(viol):.2f} "
+            f"(total {sum(viol)}); CPU median {statistics.median(r['cpu_s'] for r in rs):.2f} s"
+        )
+        if v != ref:
+            head += (
+                f", CPU / {ref} median {statistics.median(ratio):.2f} (max "
+                f"{max(ratio):.2f}), priors over {line}: {over or 'none'}"
+            )
+        print(head)
+        if v not in (ref, base):
+            b = np.array([by[s, base]["posc"] / by[s, base]["rule_bound"] for s in seeds])
+            d = a - b
+            dv = np.array(viol, float) - [by[s, base].get("violations", np.nan) for s in seeds]
+            print(f"  {v} - {base}: {d.mean():+.4f} +- {ci95(d):.4f} "
+                  f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}; min "
+                  f"{d.min():+.4f}; violation steps {dv.mean():+.2f} +- {ci95(dv):.2f} "
+                  f"(more on {(dv > 0).sum()}, fewer on {(dv < 0).sum()})")  # fmt: skip
+    lo, hi = min(r["load"] for r in recs), max(r["load"] for r in recs)
+    print(f"load {lo:.1f}-{hi:.1f}")
 
 
 def old_policies(old: dict) -> set[str]:

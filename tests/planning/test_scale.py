@@ -204,3 +204,22 @@ def test_compiled_box_search_bounds_only_columns_out_of_reach():
         return takeoff, landing, float(rng.uniform(2000.0, 5000.0))
 
     _exhaustive_box_search_agrees(rng, place, 10)
+
+
+def test_flown_hands_back_the_flights_final_state():
+    """``_flown(..., states)`` (i24-sampled: ``effort_ab.py fly`` records each flight's eq. 21 /
+    24 violation steps from it) appends the flight's own final state: the POSC it returns and
+    the violations of the same episode flown here."""
+    from poc_env.agents.benchmarks.plan_scale import _flown
+    from poc_env.agents.experiments.evaluate import episode_prior, play
+    from poc_env.envs.parallel import UAVSearchParallelEnv
+
+    sc = load_scenario("small")
+    prior = episode_prior(sc, 3)
+    states: list = []
+    posc, _ = _flown(sc, "greedy_rectangles", 3, prior, states)
+    assert len(states) == 1 and float(states[0].posc[0]) == posc
+    env = UAVSearchParallelEnv(scenario=sc)
+    play(env, make_policy("greedy_rectangles"), 3, prior)
+    assert np.array_equal(states[0].violations, env.sim_state.violations)
+    assert float(env.sim_state.posc[0]) == posc
