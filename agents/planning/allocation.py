@@ -1310,6 +1310,32 @@ def make_allocation_plan(
             polished = {**polished, "plans": len(pool)}
         routes, pieces, _ = _home(routes, pieces, None)  # the floor on the polished routes
         home_why = sent_home.get(id(routes), {})
+    own_rec: dict[str, Any] | None = None
+    if opt.own_apart and opt.fill_apart and n > 1 and any(routes):
+        # i24-ownclear: the plan's own routes through the fill's clearance where it costs less
+        # than the violations it removes (the reward's exchange rate, violation_penalty)
+        # two clear candidates: every route kept, each UAV in conflict flying the alternative
+        # of fewest conflicts (no search lost), and every route in conflict dropped and its
+        # UAV filled (the fill's own rule); each kept only if it gains, by POS less penalty
+        turned, _ = apart(sc, routes, v, range(n), _alternative, FILL_WITHIN, drop=False)
+        cleared, where = apart(sc, routes, v, range(n), _alternative, FILL_WITHIN)
+        if cleared != routes:
+            if where and opt.fill_idle:
+                cleared = _fill(cleared)
+            cleared, _, _ = _home(cleared, _lines_of(cleared), None)
+            cands = [("own", routes), ("turned", turned), ("cleared", cleared)]
+            vals = []
+            for name, rs in cands:
+                if name != "own" and rs == routes:
+                    continue
+                pen = violation_penalty(sc, rs, v, opt)
+                vals.append((_sampled_total(rs) - pen, name, rs, pen))
+            top = max(vals, key=lambda t: t[0])  # the first of the highest: own on ties
+            own_rec = {"kept": top[1], "dropped": len(where),
+                       "values": {t[1]: [t[0], t[3]] for t in vals}}  # fmt: skip
+            if top[1] != "own":
+                routes, pieces, refined = top[2], _lines_of(top[2]), True
+                home_why = sent_home.get(id(routes), {})
     fleet_rec: dict[str, Any] | None = None
     half = (floor is None and opt.half_fleet and opt.fill_idle and n > 1 and any(routes)
             and not all(routes))  # fmt: skip
@@ -1417,6 +1443,7 @@ def make_allocation_plan(
                 **({"options": opt.changed()} if opt.changed() else {}),
                 **({"polish": polished} if polished is not None else {}),
                 **({"fleet": fleet_rec} if fleet_rec is not None else {}),
+                **({"own_apart": own_rec} if own_rec is not None else {}),
                 **({"home": home_rec} if home_rec else {}),
             },
         },
