@@ -1314,27 +1314,22 @@ def make_allocation_plan(
     if opt.own_apart and opt.fill_apart and n > 1 and any(routes):
         # i24-ownclear: the plan's own routes through the fill's clearance where it costs less
         # than the violations it removes (the reward's exchange rate, violation_penalty)
-        # two clear candidates: every route kept, each UAV in conflict flying the alternative
-        # of fewest conflicts (no search lost), and every route in conflict dropped and its
-        # UAV filled (the fill's own rule); each kept only if it gains, by POS less penalty
-        turned, _ = apart(sc, routes, v, range(n), _alternative, FILL_WITHIN, drop=False)
+        # every route in conflict dropped (its box flown from the other end tried first on
+        # maps without zones) and its UAV filled: the fill's own rule (_fill, i24-stagger),
+        # the cleared plan kept if POS less the penalty does not fall (ties: the clear plan)
         cleared, where = apart(sc, routes, v, range(n), _alternative, FILL_WITHIN)
         if cleared != routes:
             if where and opt.fill_idle:
                 cleared = _fill(cleared)
             cleared, _, _ = _home(cleared, _lines_of(cleared), None)
-            cands = [("own", routes), ("turned", turned), ("cleared", cleared)]
-            vals = []
-            for name, rs in cands:
-                if name != "own" and rs == routes:
-                    continue
-                pen = violation_penalty(sc, rs, v, opt)
-                vals.append((_sampled_total(rs) - pen, name, rs, pen))
-            top = max(vals, key=lambda t: t[0])  # the first of the highest: own on ties
-            own_rec = {"kept": top[1], "dropped": len(where),
-                       "values": {t[1]: [t[0], t[3]] for t in vals}}  # fmt: skip
-            if top[1] != "own":
-                routes, pieces, refined = top[2], _lines_of(top[2]), True
+            o_pen = violation_penalty(sc, routes, v, opt)
+            c_pen = violation_penalty(sc, cleared, v, opt)
+            o_val, c_val = _sampled_total(routes), _sampled_total(cleared)
+            took = c_val - c_pen >= o_val - o_pen
+            own_rec = {"kept": "cleared" if took else "own", "dropped": len(where),
+                       "pos": [o_val, c_val], "penalty": [o_pen, c_pen]}  # fmt: skip
+            if took:
+                routes, pieces, refined = cleared, _lines_of(cleared), True
                 home_why = sent_home.get(id(routes), {})
     fleet_rec: dict[str, Any] | None = None
     half = (floor is None and opt.half_fleet and opt.fill_idle and n > 1 and any(routes)

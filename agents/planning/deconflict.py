@@ -17,8 +17,6 @@ them, do not change.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import shapely
 
@@ -219,13 +217,7 @@ def in_lanes(sc: Scenario, routes, v: Speeds, around) -> list[list[list[float]]]
 
 
 def apart(
-    sc: Scenario,
-    routes,
-    v: Speeds,
-    order,
-    alternatives=None,
-    within: float = LANE,
-    drop: bool = True,
+    sc: Scenario, routes, v: Speeds, order, alternatives=None, within: float = LANE
 ) -> tuple[list[list[list[float]]], dict[int, np.ndarray]]:
     """``routes`` with the UAVs of ``order`` (each with a route, the others' routes fixed)
     taken in turn, each kept only if its planned flight (:func:`planned_positions`) keeps eq.
@@ -234,10 +226,7 @@ def apart(
     ``alternatives(k, waypoints)``: other waypoint lists for UAV ``k``'s route (e.g. the same
     box entered from its other end), tried in turn before the UAV is dropped. Returns the
     routes (dropped UAVs without a route, kept ones as taken) and, per dropped UAV, its
-    planned positions ``(m, 2)`` in conflict (those of its route as given). ``drop=False``
-    (i24-ownclear): a UAV none of whose candidates is clear keeps the one of fewest conflict
-    steps (the first on ties: its route as given before its alternatives) and is not
-    reported."""
+    planned positions ``(m, 2)`` in conflict (those of its route as given)."""
     u = sc.uav
     takeoff = np.asarray(sc.takeoff_m, dtype=float).reshape(-1, 2)
     landing = np.asarray(sc.landing_m, dtype=float).reshape(-1, 2)
@@ -251,7 +240,6 @@ def apart(
         wps0 = out[k]
         cands = [wps0] + (list(alternatives(k, wps0)) if alternatives is not None else [])
         first = np.zeros((0, 2))
-        least: tuple[int, Any, np.ndarray, np.ndarray] | None = None
         for i, wps in enumerate(cands):
             path = np.vstack([takeoff[k], np.asarray(wps, dtype=float).reshape(-1, 2), landing[k]])
             pos[:, k], act[:, k] = track(path, v, u.max_turn_rate_rad_s, times, heading0[k])
@@ -261,13 +249,7 @@ def apart(
             if not hit.any():
                 out[k] = [list(map(float, q)) for q in wps]
                 break
-            if least is None or int(hit.sum()) < least[0]:
-                least = (int(hit.sum()), wps, pos[:, k].copy(), act[:, k].copy())
         else:
-            if not drop and least is not None:
-                out[k] = [list(map(float, q)) for q in least[1]]
-                pos[:, k], act[:, k] = least[2], least[3]
-                continue
             act[:, k] = False
             out[k] = []
             where[k] = first
