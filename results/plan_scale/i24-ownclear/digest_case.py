@@ -14,13 +14,13 @@ from poc_env.config import load_scenario
 from poc_env.theory.probability_map import build_prior
 
 sys.path.insert(0, "results/plan_scale/i24-chain")
-from chain import flown  # noqa: E402
+from chain import flown
 
 sc = load_scenario(sys.argv[1])
 prior = build_prior(sc.map)
 for on in (False, True):
     p = make_allocation_plan(sc, prior=prior, options=PlanOptions(own_apart=on))
+    f = {k: v for k, v in flown(sc, prior, p, set()).items() if not k.startswith("away_")}
     rec = {"scenario": sys.argv[1], "uavs": len(p["uavs"]), "own_apart": on, "posc": p["posc"],
-           "rule": p["optimizer"]["settings"].get("own_apart"),
-           **{k: v for k, v in flown(sc, prior, p, set()).items() if not k.startswith("away_")}}  # fmt: skip
+           "rule": p["optimizer"]["settings"].get("own_apart"), **f}  # fmt: skip
     print(json.dumps(rec), flush=True)

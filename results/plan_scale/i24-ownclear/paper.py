@@ -16,7 +16,7 @@ from poc_env.agents.planning.options import PlanOptions
 from poc_env.config import load_scenario
 
 sys.path.insert(0, "results/plan_scale/i24-chain")
-from chain import flown  # noqa: E402
+from chain import flown
 
 sc = load_scenario("paper_6_2")
 for seed in range(int(sys.argv[1]), int(sys.argv[2]) + 1):
