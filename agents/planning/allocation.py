@@ -1325,8 +1325,11 @@ def make_allocation_plan(
             o_pen = violation_penalty(sc, routes, v, opt)
             c_pen = violation_penalty(sc, cleared, v, opt)
             o_val, c_val = _sampled_total(routes), _sampled_total(cleared)
-            took = c_val - c_pen >= o_val - o_pen
+            # no aircraft grounded to clear the air: as many UAVs fly as in the own plan
+            flying = sum(map(bool, cleared)) >= sum(map(bool, routes))
+            took = flying and c_val - c_pen >= o_val - o_pen
             own_rec = {"kept": "cleared" if took else "own", "dropped": len(where),
+                       "flying": [sum(map(bool, routes)), sum(map(bool, cleared))],
                        "pos": [o_val, c_val], "penalty": [o_pen, c_pen]}  # fmt: skip
             if took:
                 routes, pieces, refined = cleared, _lines_of(cleared), True
