@@ -154,7 +154,9 @@ class PlanOptions:
     #: apart` at ``FILL_WITHIN``), the dropped UAVs filled, and the cleared plan is kept if its
     #: planned POS less the environment's violation penalty at the planned positions
     #: (:func:`~poc_env.agents.planning.allocation.violation_penalty`, the reward's exchange
-    #: rate) is at least the plan's own. Needs ``fill_apart``.
+    #: rate) is at least the plan's own and it flies as many UAVs (waived in the half fleet's
+    #: plan, whose idle UAVs the larger fleet's fill refills). Needs ``fill_apart``. On in
+    #: every preset (measured with the default; the ``standard`` digests are unchanged).
     own_apart: bool = True
     #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
     #: their allocation assumes; the start keeps the one of most W x length per cell) ...
