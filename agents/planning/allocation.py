@@ -649,6 +649,7 @@ def make_allocation_plan(
     refine_starts: int | None = None,
     options: PlanOptions | None = None,
     floor: dict[str, Any] | None = None,
+    _half: bool = False,
 ) -> dict[str, Any]:
     """The allocation plan of ``scenario`` on ``prior`` (see the module docstring); ``crs``
     (a :func:`poc_env.agents.mission.crs.make_crs` record) is recorded for exports.
@@ -673,6 +674,9 @@ def make_allocation_plan(
     ``optimizer.settings.fleet`` records it. Without ``floor``, a plan that leaves a UAV
     without a route is compared so with the plan of half its fleet
     (``options.half_fleet``; ``fleet.floor`` is then ``"half_fleet"``).
+
+    ``_half`` (internal): this is the half fleet's plan of a larger one (``half_fleet``), whose
+    idle UAVs that plan fills; ``own_apart`` may then leave UAVs idle (i24-ownclear).
 
     Deterministic (``seed`` is recorded only). Malformed input raises
     :class:`~poc_env.errors.ConfigError`; a plan that cannot search anything (no mass, no UAV
@@ -1310,13 +1314,38 @@ def make_allocation_plan(
             polished = {**polished, "plans": len(pool)}
         routes, pieces, _ = _home(routes, pieces, None)  # the floor on the polished routes
         home_why = sent_home.get(id(routes), {})
+    own_rec: dict[str, Any] | None = None
+    if opt.own_apart and opt.fill_apart and n > 1 and any(routes):
+        # i24-ownclear: the plan's own routes through the fill's clearance where it costs less
+        # than the violations it removes (the reward's exchange rate, violation_penalty)
+        # every route in conflict dropped (its box flown from the other end tried first on
+        # maps without zones) and its UAV filled: the fill's own rule (_fill, i24-stagger),
+        # the cleared plan kept if POS less the penalty does not fall (ties: the clear plan)
+        cleared, where = apart(sc, routes, v, range(n), _alternative, FILL_WITHIN)
+        if cleared != routes:
+            if where and opt.fill_idle:
+                cleared = _fill(cleared)
+            cleared, _, _ = _home(cleared, _lines_of(cleared), None)
+            o_pen = violation_penalty(sc, routes, v, opt)
+            c_pen = violation_penalty(sc, cleared, v, opt)
+            o_val, c_val = _sampled_total(routes), _sampled_total(cleared)
+            # no aircraft grounded to clear the air: as many UAVs fly as in the own plan (but
+            # in the half fleet's plan, whose idle UAVs the larger fleet's fill refills)
+            flying = _half or sum(map(bool, cleared)) >= sum(map(bool, routes))
+            took = flying and c_val - c_pen >= o_val - o_pen
+            own_rec = {"kept": "cleared" if took else "own", "dropped": len(where),
+                       "flying": [sum(map(bool, routes)), sum(map(bool, cleared))],
+                       "pos": [o_val, c_val], "penalty": [o_pen, c_pen]}  # fmt: skip
+            if took:
+                routes, pieces, refined = cleared, _lines_of(cleared), True
+                home_why = sent_home.get(id(routes), {})
     fleet_rec: dict[str, Any] | None = None
     half = (floor is None and opt.half_fleet and opt.fill_idle and n > 1 and any(routes)
             and not all(routes))  # fmt: skip
     if half:  # i24-chain: a fleet larger than its plan uses also tries half of it as a floor
         floor = make_allocation_plan(
             sc.with_uavs(n // 2), prior=full_prior, map_source=map_source, seed=seed,
-            speed=speed, crs=crs, options=opt,
+            speed=speed, crs=crs, options=opt, _half=True,
         )  # fmt: skip
         mapped = _mapped(sc, floor, check=False)
     if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
@@ -1425,6 +1454,7 @@ def make_allocation_plan(
                 **({"options": opt.changed()} if opt.changed() else {}),
                 **({"polish": polished} if polished is not None else {}),
                 **({"fleet": fleet_rec} if fleet_rec is not None else {}),
+                **({"own_apart": own_rec} if own_rec is not None else {}),
                 **({"home": home_rec} if home_rec else {}),
             },
         },

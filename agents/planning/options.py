@@ -149,6 +149,15 @@ class PlanOptions:
     #: plan_fleets`' floor: the one of more planned POS kept (i24-chain). Off in the
     #: ``standard`` and ``thorough`` presets (not measured there: it would polish a second plan).
     half_fleet: bool = True
+    #: the plan's own routes held to the fill's clearance where it costs little (i24-ownclear):
+    #: the routes go through the fill's check (:func:`~poc_env.agents.planning.deconflict.
+    #: apart` at ``FILL_WITHIN``), the dropped UAVs filled, and the cleared plan is kept if its
+    #: planned POS less the environment's violation penalty at the planned positions
+    #: (:func:`~poc_env.agents.planning.allocation.violation_penalty`, the reward's exchange
+    #: rate) is at least the plan's own and it flies as many UAVs (waived in the half fleet's
+    #: plan, whose idle UAVs the larger fleet's fill refills). Needs ``fill_apart``. On in
+    #: every preset (measured with the default; the ``standard`` digests are unchanged).
+    own_apart: bool = True
     #: the relaxation patches' effort scales ``eta`` (the share of pattern time on lines
     #: their allocation assumes; the start keeps the one of most W x length per cell) ...
     relax_etas: tuple[float, ...] = (0.65, 0.75, 0.85, 0.95, 1.0)
@@ -344,7 +353,8 @@ class PlanOptions:
         _number("penalty_separation", self.penalty_separation, 1.0, 10.0)
         _number("penalty_range", self.penalty_range, 0.1, 1.0)
         flags = ("refine_sampled", "airspace_penalty", "greedy_start", "box_start", "lazy",
-                 "relax_start", "fill_idle", "fill_apart", "half_fleet", "chain_early",
+                 "relax_start", "fill_idle", "fill_apart", "half_fleet", "own_apart",
+                 "chain_early",
                  "also_default", "part", "share_tables", "axis", "excursions", "sampled",
                  "polish_grade", "polish_zones")  # fmt: skip
         for name in flags:
