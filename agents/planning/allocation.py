@@ -1344,10 +1344,10 @@ def make_allocation_plan(
             and not all(routes))  # fmt: skip
     floors: list[tuple[dict[str, Any], list[list[list[float]]]]] = []  # (plan, its routes here)
     if half:  # i24-chain: a fleet larger than its plan uses also tries half of it as a floor,
-        # and (i24-monotone) three quarters of it, in the plan asked for only: 32 UAVs are
-        # compared with 24's plan, not only with 16's
+        # and (i24-monotone, from ``three_quarter_from`` UAVs) three quarters of it, in the
+        # plan asked for only: 32 UAVs are compared with 24's plan, not only with 16's
         sizes = [n // 2]
-        if opt.three_quarter_fleet and not _half and 3 * n // 4 > n // 2:
+        if 0 < opt.three_quarter_from <= n and not _half and 3 * n // 4 > n // 2:
             sizes.append(3 * n // 4)
         for m in sizes:
             f_plan = make_allocation_plan(
