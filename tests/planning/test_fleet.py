@@ -277,9 +277,9 @@ def test_a_fleet_larger_than_its_plan_uses_plans_no_less_than_half_of_it():
     that leaves a UAV without a route is compared with the default plan of half the fleet,
     its routes kept and the other UAVs filled (``plan_fleets``' floor): here that is kept
     (0.9193), so 32 UAVs plan no less than 16. (Since i24-monotone 32 UAVs are compared with
-    three quarters of the fleet, 24, too, and that is kept here: the test below.) By construction where the half fleet's plan
-    keeps the fill's clearance, as here (then no route of it is dropped and the fill only
-    adds)."""
+    three quarters of the fleet, 24, too, and that is kept here: the test below.) By
+    construction where the half fleet's plan keeps the fill's clearance, as here (then no
+    route of it is dropped and the fill only adds)."""
     sc, prior = mini(250, 6.25, 1)
     half = make_allocation_plan(sc.with_uavs(16), prior=prior)
     plan = make_allocation_plan(sc.with_uavs(32), prior=prior)
