@@ -673,7 +673,9 @@ def make_allocation_plan(
     apart` at :data:`FILL_WITHIN`), a route that fails it flown anew by the fill (i24-chain);
     ``optimizer.settings.fleet`` records it. Without ``floor``, a plan that leaves a UAV
     without a route is compared so with the plan of half its fleet
-    (``options.half_fleet``; ``fleet.floor`` is then ``"half_fleet"``).
+    (``options.half_fleet``; ``fleet.floor`` is then ``"half_fleet"``) and, from
+    ``options.three_quarter_from`` UAVs, with the plan of three quarters of it too (i24-monotone;
+    ``fleet.floors``, ``fleet.kept_uavs``).
 
     ``_half`` (internal): this is the half fleet's plan of a larger one (``half_fleet``), whose
     idle UAVs that plan fills; ``own_apart`` may then leave UAVs idle (i24-ownclear).
@@ -1342,37 +1344,66 @@ def make_allocation_plan(
     fleet_rec: dict[str, Any] | None = None
     half = (floor is None and opt.half_fleet and opt.fill_idle and n > 1 and any(routes)
             and not all(routes))  # fmt: skip
-    if half:  # i24-chain: a fleet larger than its plan uses also tries half of it as a floor
-        floor = make_allocation_plan(
-            sc.with_uavs(n // 2), prior=full_prior, map_source=map_source, seed=seed,
-            speed=speed, crs=crs, options=opt, _half=True,
-        )  # fmt: skip
-        mapped = _mapped(sc, floor, check=False)
-    if floor is not None and mapped is not None:  # i24-fleet: never below fewer UAVs' plan
-        if opt.fill_apart:  # i24-chain: the floor's routes held to the fill's own clearance
-            mapped, _ = apart(sc, mapped, v, range(n), _alternative, FILL_WITHIN)
+    floors: list[tuple[dict[str, Any], list[list[list[float]]]]] = []  # (plan, its routes here)
+    if half:  # i24-chain: a fleet larger than its plan uses also tries half of it as a floor,
+        # and (i24-monotone, from ``three_quarter_from`` UAVs) three quarters of it, in the
+        # plan asked for only: 32 UAVs are compared with 24's plan, not only with 16's
+        sizes = [n // 2]
+        if 0 < opt.three_quarter_from <= n and not _half and 3 * n // 4 > n // 2:
+            sizes.append(3 * n // 4)
+        for m in sizes:
+            f_plan = make_allocation_plan(
+                sc.with_uavs(m), prior=full_prior, map_source=map_source, seed=seed,
+                speed=speed, crs=crs, options=opt, _half=True,
+            )  # fmt: skip
+            floors.append((f_plan, _mapped(sc, f_plan, check=False)))
+    elif floor is not None and mapped is not None:
+        floors.append((floor, mapped))
+    if floors:  # i24-fleet: never below fewer UAVs' plan
         # the floor's own UAVs met their floor in its plan, but the UAVs the fill adds to it
         # go through the rule here (G3: every flying UAV adds its floor); the two plans fly
         # different fleets, so their flight hours are priced at the floor's rate (an hour
         # worth ``gain_per_hour`` of the mass: one UAV flying 0.8 h more for 0.001 of a
         # sighting is not kept over the plan that sent that sighting's UAV home) and compared
         # as the starts are (_pick: within ``nothing`` the one of fewer flight hours, F1), the
-        # fleet's own plan first
-        f_routes = _fill(mapped)
-        f_routes, f_pieces, _ = _home(f_routes, _lines_of(f_routes), None)
-        f_why = sent_home.get(id(f_routes), {})
+        # fleet's own plan first, then the floors in turn (half, three quarters)
         per_s = opt.gain_per_hour * float(full_prior.sum()) / 3600 if opt.nothing else 0.0
-        f_val = _sampled_total(f_routes) - _penalty(f_routes) - per_s * _hours(f_routes)
         own = (_sampled_total(routes) - _penalty(routes) - per_s * _hours(routes)
                if any(routes) else 0.0)  # fmt: skip
-        kept = _pick([(own, routes, pieces), (f_val, f_routes, f_pieces)])[1] is f_routes
-        fleet_rec = {"floor_uavs": len(floor["uavs"]), "floor_posc": float(floor["posc"]),
-                     "kept": "floor" if kept else "own",
-                     **({"floor": "half_fleet"} if half else {})}  # fmt: skip
-        if kept:
-            routes, pieces, refined = f_routes, f_pieces, True
-            start = str(floor.get("start", "allocation"))
-            home_why = f_why
+        cands: list[tuple] = [(own, routes, pieces)]
+        whys, dropped = [], []
+        for _, f_mapped in floors:
+            cut: dict[int, np.ndarray] = {}
+            if opt.fill_apart:  # i24-chain: the floor's routes held to the fill's own clearance
+                f_mapped, cut = apart(sc, f_mapped, v, range(n), _alternative, FILL_WITHIN)
+            dropped.append(len(cut))
+            f_routes = _fill(f_mapped)
+            f_routes, f_pieces, _ = _home(f_routes, _lines_of(f_routes), None)
+            whys.append(sent_home.get(id(f_routes), {}))
+            f_val = _sampled_total(f_routes) - _penalty(f_routes) - per_s * _hours(f_routes)
+            cands.append((f_val, f_routes, f_pieces))
+        got = _pick(cands)[1]
+        i_kept = next((i for i, c in enumerate(cands[1:]) if c[1] is got), None)
+        fleet_rec = {"floor_uavs": len(floors[0][0]["uavs"]),
+                     "floor_posc": float(floors[0][0]["posc"]),
+                     "kept": "own" if i_kept is None else "floor",
+                     **({"floor": "half_fleet"} if half else {}),
+                     # i24-monotone: the pick's criterion (planned POS less the penalty and
+                     # the hours at the floor's rate) and the UAVs flying of the own plan and
+                     # of each floor lifted; the floor routes the clearance dropped
+                     "value": [float(c[0]) for c in cands],
+                     "flying": [sum(map(bool, c[1])) for c in cands],
+                     "dropped": dropped}  # fmt: skip
+        if len(floors) > 1:  # i24-monotone: the floors tried, half and three quarters
+            fleet_rec["floors"] = [
+                {"uavs": len(f_plan["uavs"]), "posc": float(f_plan["posc"])} for f_plan, _ in floors
+            ]
+        if i_kept is not None:
+            fleet_rec["kept_uavs"] = len(floors[i_kept][0]["uavs"])
+        if i_kept is not None:
+            routes, pieces, refined = cands[1 + i_kept][1], cands[1 + i_kept][2], True
+            start = str(floors[i_kept][0].get("start", "allocation"))
+            home_why = whys[i_kept]
     moved = polished is not None and polished["moves"] > 0  # lines no longer in pairs
     # the planned POS by the environment's own detection model (sampled_sweep), not by W x
     # length per cell: eq. 10 per cell piles a line's effort into the cells it crosses (too

@@ -149,6 +149,14 @@ class PlanOptions:
     #: plan_fleets`' floor: the one of more planned POS kept (i24-chain). Off in the
     #: ``standard`` and ``thorough`` presets (not measured there: it would polish a second plan).
     half_fleet: bool = True
+    #: with ``half_fleet``, a plan of at least this many UAVs that leaves a UAV without a route
+    #: is also compared with the plan of three quarters of its fleet (planned alike, with
+    #: ``half_fleet`` only), its other UAVs filled (i24-monotone; 0: never). The half fleet
+    #: alone let 32 UAVs plan less than 24 on the audit's 500 km scenario (32's half is 16,
+    #: whose routes leave the fill nothing it flies clear of them; 24's is 12), 64 less than
+    #: 48. From 32: at 24 UAVs on 160 x 160 cells it would plan 18 more UAVs, about 1.8 times
+    #: the CPU, past issue 24's 10 s (results/plan_scale/i24-monotone).
+    three_quarter_from: int = 32
     #: the plan's own routes held to the fill's clearance where it costs little (i24-ownclear):
     #: the routes go through the fill's check (:func:`~poc_env.agents.planning.deconflict.
     #: apart` at ``FILL_WITHIN``), the dropped UAVs filled, and the cleared plan is kept if its
@@ -312,6 +320,7 @@ class PlanOptions:
         _number("max_cells", self.max_cells, 8, 400, integer=True)
         _number("rounds", self.rounds, 0, 20, integer=True)
         _number("fill_rounds", self.fill_rounds, 0, 20, integer=True)
+        _number("three_quarter_from", self.three_quarter_from, 0, 64, integer=True)
         _positive_tuple("chain", self.chain, high=0.95, empty=True)
         _number("chain_rounds", self.chain_rounds, 0, 20, integer=True)
         _positive_tuple("chain_spacings", self.chain_spacings, high=20.0, empty=True)
