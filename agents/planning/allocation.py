@@ -674,8 +674,8 @@ def make_allocation_plan(
     ``optimizer.settings.fleet`` records it. Without ``floor``, a plan that leaves a UAV
     without a route is compared so with the plan of half its fleet
     (``options.half_fleet``; ``fleet.floor`` is then ``"half_fleet"``) and, from
-    ``options.three_quarter_from`` UAVs, with the plan of three quarters of it too (i24-monotone;
-    ``fleet.floors``, ``fleet.kept_uavs``).
+    ``options.three_quarter_from`` UAVs (0, off, by default), with the plan of three quarters
+    of it too (i24-monotone; ``fleet.floors``, ``fleet.kept_uavs``).
 
     ``_half`` (internal): this is the half fleet's plan of a larger one (``half_fleet``), whose
     idle UAVs that plan fills; ``own_apart`` may then leave UAVs idle (i24-ownclear).

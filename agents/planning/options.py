@@ -155,8 +155,11 @@ class PlanOptions:
     #: alone let 32 UAVs plan less than 24 on the audit's 500 km scenario (32's half is 16,
     #: whose routes leave the fill nothing it flies clear of them; 24's is 12), 64 less than
     #: 48. From 32: at 24 UAVs on 160 x 160 cells it would plan 18 more UAVs, about 1.8 times
-    #: the CPU, past issue 24's 10 s (results/plan_scale/i24-monotone).
-    three_quarter_from: int = 32
+    #: the CPU, past issue 24's 10 s (results/plan_scale/i24-monotone). Off (0) by default:
+    #: at 32 UAVs the plan it keeps there flew 28 eq. 21 collision UAV-steps away from the
+    #: fields where the half fleet's flew none (safety before monotonicity, as i24-stagger);
+    #: ``PlanOptions(three_quarter_from=32)`` turns it on from 32 UAVs.
+    three_quarter_from: int = 0
     #: the plan's own routes held to the fill's clearance where it costs little (i24-ownclear):
     #: the routes go through the fill's check (:func:`~poc_env.agents.planning.deconflict.
     #: apart` at ``FILL_WITHIN``), the dropped UAVs filled, and the cleared plan is kept if its
