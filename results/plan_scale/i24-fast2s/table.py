@@ -3,7 +3,8 @@
 ``python results/plan_scale/i24-fast2s/table.py REF RECORDS.json...``: per variant, planned
 POS_C / rule-aware bound (2 x 2) and on the 8 x 8 lattice paired against variant ``REF``
 (Student's t 95 %, wins / ties / losses), and the CPU ratio to ``default`` on the same prior
-(median, max, priors over 3.70 = 2 s at the default's quiet 0.54 s).
+(median, max, priors over 3.70 = 2 s at the default's quiet 0.54 s), the default planned in
+the same run (the same process, in turn).
 """
 
 import json
@@ -16,7 +17,16 @@ from poc_env.stats import ci95
 
 
 def main(ref: str, paths: list[str]) -> None:
-    recs = [r for p in paths for r in json.load(open(p))]
+    recs, dflt = [], {}
+    for p in paths:  # each variant's CPU paired with the default planned in the same run
+        with open(p) as f:
+            got = json.load(f)
+        base = {r["seed"]: r["cpu_s"] for r in got if r["variant"] == "default"}
+        for r in got:
+            if r["variant"] != "default" or r["seed"] not in dflt:
+                recs.append(r)
+                dflt.setdefault(r["seed"], r)
+            r["ratio"] = r["cpu_s"] / base[r["seed"]]
     by = {(r["seed"], r["variant"]): r for r in recs}
     seeds = sorted({r["seed"] for r in recs})
     names = list(dict.fromkeys(r["variant"] for r in recs))
@@ -32,7 +42,7 @@ def main(ref: str, paths: list[str]) -> None:
             h = ci95(d) if len(d) > 1 else float("nan")
             w = f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}"
             row.append(f"{key[:4]} {x.mean():.4f} {d.mean():+.4f} +- {h:.4f} ({w})")
-        rat = [by[s, v]["cpu_s"] / by[s, "default"]["cpu_s"] for s in ss]
+        rat = [by[s, v]["ratio"] for s in ss]
         over = [s for s, q in zip(ss, rat) if q > 3.70]
         row.append(f"cpu ratio {statistics.median(rat):.2f} (max {max(rat):.2f}) over3.70 {over}")
         row.append(f"cpu med {statistics.median(by[s, v]['cpu_s'] for s in ss):.2f} s")
