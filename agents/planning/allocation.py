@@ -1288,8 +1288,11 @@ def make_allocation_plan(
             **({"router": router} if router.active and opt.polish_zones else {}),
             **({} if work is None else {"work": max(0, work)}),  # i24-bigpolish
             # i24-fast2s: candidates screened at a shorter cut-off, the best scored exactly
-            **({"screen": opt.polish_screen, "screen_cutoff": opt.polish_screen_cutoff}
-               if opt.polish_screen else {}),  # fmt: skip
+            **(
+                {"screen": opt.polish_screen, "screen_cutoff": opt.polish_screen_cutoff}
+                if opt.polish_screen
+                else {}
+            ),
         )
 
     polished: dict[str, Any] | None = None

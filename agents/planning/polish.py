@@ -208,11 +208,9 @@ class Exposure:
         cut, reach = self.cutoff_m, self.reach
         if cutoff_m is not None and cutoff_m < self.cutoff_m:
             cut = float(cutoff_m)
-            reach = self._reaches.get(cut)
-            if reach is None:
-                reach = self._reaches[cut] = float(
-                    _reach(self.grid, self.law, self.sweep_width_m, cut)
-                )
+            if cut not in self._reaches:
+                self._reaches[cut] = float(_reach(self.grid, self.law, self.sweep_width_m, cut))
+            reach = self._reaches[cut]
         oa, ob, _ = self.steps(old_a, old_b)
         na, nb, per_leg = self.steps(new_a, new_b)
         self.scored += len(na)

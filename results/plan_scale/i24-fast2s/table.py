@@ -38,7 +38,8 @@ def main(ref: str, paths: list[str]) -> None:
         row = [v, f"n {len(ss)}"]
         for key in ("planned_posc", "fine_posc"):
             x = np.array([by[s, v][key] / by[s, v]["rule_bound"] for s in ss])
-            d = np.array([x[i] - by[s, ref][key] / by[s, ref]["rule_bound"] for i, s in enumerate(ss)])
+            y = np.array([by[s, ref][key] / by[s, ref]["rule_bound"] for s in ss])
+            d = x - y
             h = ci95(d) if len(d) > 1 else float("nan")
             w = f"{(d > 1e-9).sum()}/{(abs(d) <= 1e-9).sum()}/{(d < -1e-9).sum()}"
             row.append(f"{key[:4]} {x.mean():.4f} {d.mean():+.4f} +- {h:.4f} ({w})")
