@@ -83,12 +83,12 @@ def test_a_leg_shift_moves_coincident_lines_apart():
     assert abs(a[0, 1] - b[0, 1]) >= sc.sensor.sweep_width_m - 1e-6
 
 
-def test_exposure_gain_equals_the_score_difference():
-    """One candidate's gain (exposure_gains) equals the change of the full score when the
-    legs are swapped in place."""
+def _exposure_with_legs(seed=3):
+    """The swarm's exposure on ``small`` with a random prior and 5 random legs: (exposure,
+    the legs' points, the generator, W)."""
     sc = load_scenario("small")
     grid, *_ = _setup(sc)
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(seed)
     prior = rng.random(grid.shape)
     s = sc.sensor.samples_per_cell
     w = sc.sensor.sweep_width_m
@@ -96,6 +96,13 @@ def test_exposure_gain_equals_the_score_difference():
                   grid.refine(prior, s))  # fmt: skip
     pts = rng.uniform(0, 40000, size=(6, 2))
     ex.add(pts[:-1], pts[1:])
+    return ex, pts, rng, w
+
+
+def test_exposure_gain_equals_the_score_difference():
+    """One candidate's gain (exposure_gains) equals the change of the full score when the
+    legs are swapped in place."""
+    ex, pts, _, _ = _exposure_with_legs()
     v0 = ex.pos()
     old = pts[1:4]
     new = np.array([pts[1], [20000.0, 21000.0], [9000.0, 30000.0], pts[3]])
@@ -459,20 +466,6 @@ def test_focus_tries_window_moves_only_near_the_last_pass_kept_moves():
     assert tried and all(any(a <= i <= b for a, b in changed.get(k, [])) for k, i in tried)
     n_free = sum(1 for t in free if t[1] == 2 and t[0] in ("grade", "block"))
     assert len(tried) < n_free
-
-
-def _exposure_with_legs(seed=3):
-    sc = load_scenario("small")
-    grid, *_ = _setup(sc)
-    rng = np.random.default_rng(seed)
-    prior = rng.random(grid.shape)
-    s = sc.sensor.samples_per_cell
-    w = sc.sensor.sweep_width_m
-    ex = Exposure(grid, s, w, sc.sensor.law, sc.sensor.cutoff_sweep_widths * w,
-                  grid.refine(prior, s))  # fmt: skip
-    pts = rng.uniform(0, 40000, size=(6, 2))
-    ex.add(pts[:-1], pts[1:])
-    return ex, pts, rng, w
 
 
 def test_screened_gains_score_the_screens_best_exactly():
