@@ -245,7 +245,8 @@ class PlanOptions:
     #: approximate gain) and only this many of the best of them exactly
     #: (:func:`~poc_env.agents.planning.polish.screened_gains`).
     polish_screen: int = 0
-    #: the screen's cut-off, in sweep widths (below the sensor's ``cutoff_sweep_widths``).
+    #: the screen's cut-off, in sweep widths (at or above the sensor's
+    #: ``cutoff_sweep_widths``: the sensor's own, the screen then ranks by the exact gains).
     polish_screen_cutoff: float = 2.0
     #: passes of a third polish after the polishes (0: none), with the box moves only (a
     #: route's box translated, stretched or turned as one, an airfield's group translated or

@@ -451,7 +451,8 @@ def polish_routes(
     ``screen`` (i24-fast2s; None: off, every candidate scored exactly): a waypoint's or a
     window's candidates are first scored with the cut-off ``screen_cutoff`` sweep widths
     (cheaper, approximate) and only the ``screen`` best of them exactly
-    (:func:`screened_gains`); the group moves are scored exactly."""
+    (:func:`screened_gains`); the group moves are scored exactly. With ``work`` the
+    screen's steps count as scored too."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
