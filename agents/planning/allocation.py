@@ -1289,6 +1289,12 @@ def make_allocation_plan(
             # i24-zonepolish: with zones, no candidate enters one (eq. 20; polish.zone_guard)
             **({"router": router} if router.active and opt.polish_zones else {}),
             **({} if work is None else {"work": max(0, work)}),  # i24-bigpolish
+            # i24-fast2s: candidates screened at a shorter cut-off, the best scored exactly
+            **(
+                {"screen": opt.polish_screen, "screen_cutoff": opt.polish_screen_cutoff}
+                if opt.polish_screen
+                else {}
+            ),
         )
 
     polished: dict[str, Any] | None = None

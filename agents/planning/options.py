@@ -251,6 +251,14 @@ class PlanOptions:
     polish_lines_windows: tuple[int, ...] = (2, 4, 6, 8)
     #: the block moves' radii, in sweep widths (empty: ``polish_lines_radii``; i24-cheapolish).
     polish_lines_block_radii: tuple[float, ...] = ()
+    #: the polish stages' screen (i24-fast2s; 0: off): a waypoint's or a window's candidates
+    #: scored first with the cut-off :attr:`polish_screen_cutoff` (fewer sample points: an
+    #: approximate gain) and only this many of the best of them exactly
+    #: (:func:`~poc_env.agents.planning.polish.screened_gains`).
+    polish_screen: int = 0
+    #: the screen's cut-off, in sweep widths (at or above the sensor's
+    #: ``cutoff_sweep_widths``: the sensor's own, the screen then ranks by the exact gains).
+    polish_screen_cutoff: float = 2.0
     #: passes of a third polish after the polishes (0: none), with the box moves only (a
     #: route's box translated, stretched or turned as one, an airfield's group translated or
     #: turned together: :data:`~poc_env.agents.planning.polish.BOX_KINDS`; i24-boxes).
@@ -349,6 +357,8 @@ class PlanOptions:
         _positive_tuple("polish_lines_block_radii", self.polish_lines_block_radii, high=8.0,
                         empty=True)  # fmt: skip
         _number("polish_boxes", self.polish_boxes, 0, 100, integer=True)
+        _number("polish_screen", self.polish_screen, 0, 10000, integer=True)
+        _number("polish_screen_cutoff", self.polish_screen_cutoff, 0.0, 100.0, closed_low=False)
         _number("polish_max_cells", self.polish_max_cells, 0, 100000, integer=True)
         _number("polish_big_work", self.polish_big_work, 0, 1e12, integer=True)
         _number("polish_big_lines", self.polish_big_lines, 0, 100, integer=True)

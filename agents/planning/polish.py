@@ -171,6 +171,7 @@ class Exposure:
         #: candidate steps scored by :meth:`gains` so far (the polish's work budget counts
         #: them: i24-bigpolish).
         self.scored = 0
+        self._reaches: dict[float, float] = {}  # a screen's cut-off -> its reach (i24-fast2s)
 
     def steps(self, a, b) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The legs ``a -> b`` (L, 2) cut into steps no longer than a cell, as
@@ -198,10 +199,18 @@ class Exposure:
         """The swarm's POS ``sum p (1 - exp(-E))``."""
         return float(np.sum(self.mass * -np.expm1(-self.expo)))
 
-    def gains(self, old_a, old_b, new_a, new_b, first) -> np.ndarray:
+    def gains(self, old_a, old_b, new_a, new_b, first, cutoff_m=None) -> np.ndarray:
         """Gain in POS of each candidate (its legs ``new_a[l] -> new_b[l]``, ``first[c] <= l <
-        first[c + 1]``) replacing the legs ``old_a -> old_b``."""
+        first[c + 1]``) replacing the legs ``old_a -> old_b``. ``cutoff_m`` (None: the
+        sensor's): a shorter cut-off for a cheaper, approximate score (i24-fast2s, the screen
+        of :func:`polish_routes`: the same kernel over the points within it of each step)."""
         out = np.empty(len(first) - 1)
+        cut, reach = self.cutoff_m, self.reach
+        if cutoff_m is not None and cutoff_m < self.cutoff_m:
+            cut = float(cutoff_m)
+            if cut not in self._reaches:
+                self._reaches[cut] = float(_reach(self.grid, self.law, self.sweep_width_m, cut))
+            reach = self._reaches[cut]
         oa, ob, _ = self.steps(old_a, old_b)
         na, nb, per_leg = self.steps(new_a, new_b)
         self.scored += len(na)
@@ -209,10 +218,53 @@ class Exposure:
         _sensing.exposure_gains(
             self.live, oa, ob, na, nb, cum[np.asarray(first, dtype=np.int64)],
             self.code,
-            self.sweep_width_m, self.cutoff_m, self.reach, self.grid.cell_m, self.h,
+            self.sweep_width_m, cut, reach, self.grid.cell_m, self.h,
             self._base, self._work, out,
         )  # fmt: skip
         return out
+
+
+def screened_gains(
+    ex: Exposure, old_a, old_b, starts, ends, first, top: int | None, cutoff_m: float
+) -> np.ndarray:
+    """The candidates' gains (:meth:`Exposure.gains`) as the screened polish uses them
+    (i24-fast2s): with ``top`` (None: every candidate scored exactly, as before) and more
+    candidates than ``top``, every candidate is first scored with the shorter cut-off
+    ``cutoff_m`` (the same kernel over fewer points: an approximate gain), and only the
+    ``top`` best of those are scored exactly; the others get ``-inf`` (never tried). A kept
+    move's gain is therefore always the exact one; what the screen can change is which
+    candidates are tried.
+
+    Parameters
+    ----------
+    ex:
+        The swarm's exposure.
+    old_a, old_b:
+        The legs the candidates replace, (L, 2) each.
+    starts, ends, first:
+        The candidates' legs (``first[c] <= l < first[c + 1]``: candidate ``c``'s).
+    top:
+        Candidates scored exactly after the screen, or None (no screen).
+    cutoff_m:
+        The screen's cut-off, metres.
+
+    Returns
+    -------
+    numpy.ndarray
+        (C,) gains: exact for the candidates kept by the screen, ``-inf`` for the others.
+    """
+    first = np.asarray(first, dtype=np.int64)
+    n_c = len(first) - 1
+    if top is None or n_c <= top:
+        return ex.gains(old_a, old_b, starts, ends, first)
+    rough = ex.gains(old_a, old_b, starts, ends, first, cutoff_m=cutoff_m)
+    keep = np.sort(np.argsort(-rough, kind="stable")[:top])
+    idx = np.concatenate([np.arange(first[c], first[c + 1]) for c in keep])
+    sub = np.zeros(len(keep) + 1, dtype=np.int64)
+    sub[1:] = np.cumsum(first[keep + 1] - first[keep])
+    out = np.full(n_c, -np.inf)
+    out[keep] = ex.gains(old_a, old_b, starts[idx], ends[idx], sub)
+    return out
 
 
 def zone_guard(router: Any) -> Callable[[np.ndarray, np.ndarray], bool] | None:
@@ -368,6 +420,8 @@ def polish_routes(
     focus: int | None = None,
     router: Any = None,
     work: int | None = None,
+    screen: int | None = None,
+    screen_cutoff: float = 2.0,
 ) -> tuple[list[list[list[float]]], float, dict]:
     """Polished waypoints per UAV, their planned POS and counts (module docstring).
     ``routes[k]``: UAV ``k``'s waypoints between ``takeoff[k]`` and ``landing[k]``; ``prior``
@@ -393,7 +447,12 @@ def polish_routes(
     many candidate steps (the candidates' legs cut into steps of at most a cell, as
     ``sampled_sweep`` flies them: the scoring kernel's work), checked before each set of
     candidates is scored -- a count, not a clock, so the result is reproducible; the stats
-    then hold ``"work"`` (the steps scored) and ``"spent"`` (True if the budget stopped it)."""
+    then hold ``"work"`` (the steps scored) and ``"spent"`` (True if the budget stopped it).
+    ``screen`` (i24-fast2s; None: off, every candidate scored exactly): a waypoint's or a
+    window's candidates are first scored with the cut-off ``screen_cutoff`` sweep widths
+    (cheaper, approximate) and only the ``screen`` best of them exactly
+    (:func:`screened_gains`); the group moves are scored exactly. With ``work`` the
+    screen's steps count as scored too."""
     if not isinstance(passes, int) or isinstance(passes, bool) or passes < 0:
         raise ConfigError("passes", passes, "an integer >= 0")
     rad = tuple(radii)
@@ -415,6 +474,11 @@ def polish_routes(
     if work is not None and (isinstance(work, bool) or not isinstance(work, int | np.integer)
                              or work < 0):  # fmt: skip
         raise ConfigError("work", work, "None or an integer >= 0 (candidate steps)")
+    if screen is not None and (isinstance(screen, bool) or not isinstance(screen, int | np.integer)
+                               or screen < 1):  # fmt: skip
+        raise ConfigError("screen", screen, "None or an integer >= 1 (candidates)")
+    if not np.isfinite(screen_cutoff) or screen_cutoff <= 0:
+        raise ConfigError("screen_cutoff", screen_cutoff, "a positive number (sweep widths)")
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):
         raise ConfigError("moves", moves, f"some of {', '.join(ALL_KINDS)}")
@@ -426,6 +490,7 @@ def polish_routes(
     n, w = len(paths), st.w
     value = ex.pos()
     zone_bad = zone_guard(router)
+    screen_cut = float(screen_cutoff) * w  # i24-fast2s: the screen's cut-off, metres
 
     tag: list = ["waypoint", 0, 0]  # for ``trace``: the kind, pass and window being chosen
     spent = [False]  # the work budget used up (i24-bigpolish): no more candidates scored
@@ -460,7 +525,7 @@ def polish_routes(
             ends = np.concatenate([q[1:] for q in seqs])
             pts = np.concatenate(seqs)
             off = first + np.arange(len(seqs) + 1, dtype=np.int64)
-        gain = ex.gains(old[:-1], old[1:], starts, ends, first)
+        gain = screened_gains(ex, old[:-1], old[1:], starts, ends, first, screen, screen_cut)
         order = np.argsort(-gain, kind="stable")
         ok = gain[order] > TOL  # the candidates tried: those before the first that gains no more
         n_ok = len(ok) if ok.all() else int(np.argmin(ok))

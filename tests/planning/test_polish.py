@@ -83,12 +83,12 @@ def test_a_leg_shift_moves_coincident_lines_apart():
     assert abs(a[0, 1] - b[0, 1]) >= sc.sensor.sweep_width_m - 1e-6
 
 
-def test_exposure_gain_equals_the_score_difference():
-    """One candidate's gain (exposure_gains) equals the change of the full score when the
-    legs are swapped in place."""
+def _exposure_with_legs(seed=3):
+    """The swarm's exposure on ``small`` with a random prior and 5 random legs: (exposure,
+    the legs' points, the generator, W)."""
     sc = load_scenario("small")
     grid, *_ = _setup(sc)
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(seed)
     prior = rng.random(grid.shape)
     s = sc.sensor.samples_per_cell
     w = sc.sensor.sweep_width_m
@@ -96,6 +96,13 @@ def test_exposure_gain_equals_the_score_difference():
                   grid.refine(prior, s))  # fmt: skip
     pts = rng.uniform(0, 40000, size=(6, 2))
     ex.add(pts[:-1], pts[1:])
+    return ex, pts, rng, w
+
+
+def test_exposure_gain_equals_the_score_difference():
+    """One candidate's gain (exposure_gains) equals the change of the full score when the
+    legs are swapped in place."""
+    ex, pts, _, _ = _exposure_with_legs()
     v0 = ex.pos()
     old = pts[1:4]
     new = np.array([pts[1], [20000.0, 21000.0], [9000.0, 30000.0], pts[3]])
@@ -459,3 +466,91 @@ def test_focus_tries_window_moves_only_near_the_last_pass_kept_moves():
     assert tried and all(any(a <= i <= b for a, b in changed.get(k, [])) for k, i in tried)
     n_free = sum(1 for t in free if t[1] == 2 and t[0] in ("grade", "block"))
     assert len(tried) < n_free
+
+
+def test_screened_gains_score_the_screens_best_exactly():
+    """``screened_gains`` (i24-fast2s): without a screen (or with as many places as
+    candidates) the exact gains; with ``top`` places, the ``top`` candidates best by the
+    shorter cut-off's gains get their exact gains (bit for bit) and every other ``-inf``."""
+    from poc_env.agents.planning.polish import screened_gains
+
+    ex, pts, rng, w = _exposure_with_legs()
+    old = pts[1:4]
+    moved = old[1][None, None] + rng.normal(0.0, 0.5 * w, size=(12, 1, 2))  # the waypoint moved
+    cands = np.concatenate(
+        [np.broadcast_to(old[0], (12, 1, 2)), moved, np.broadcast_to(old[2], (12, 1, 2))], axis=1
+    )
+    starts = cands[:, :-1].reshape(-1, 2)
+    ends = cands[:, 1:].reshape(-1, 2)
+    first = np.arange(13) * 2
+    exact = ex.gains(old[:-1], old[1:], starts, ends, first)
+    old_a, old_b = old[:-1], old[1:]
+    assert np.array_equal(screened_gains(ex, old_a, old_b, starts, ends, first, None, w), exact)
+    assert np.array_equal(screened_gains(ex, old_a, old_b, starts, ends, first, 12, w), exact)
+    rough = ex.gains(old_a, old_b, starts, ends, first, cutoff_m=w)
+    assert not np.array_equal(rough, exact)  # the screen's cut-off changes the scores
+    got = screened_gains(ex, old_a, old_b, starts, ends, first, 4, w)
+    best = set(np.argsort(-rough, kind="stable")[:4].tolist())
+    assert set(np.flatnonzero(np.isfinite(got)).tolist()) == best
+    assert all(got[c] == exact[c] for c in best)
+
+
+def test_a_screened_polish_never_lowers_planned_pos_and_keeps_routes_flyable():
+    """A screened polish (``screen``) keeps only moves of exact gain: its planned POS is the
+    environment's sweep of its routes and at least the routes' own, the routes fit; it
+    differs from the unscreened polish (fewer candidates scored exactly) and with a screen
+    at the sensor's own cut-off and room for every candidate it is the unscreened polish."""
+    from poc_env.agents.planning.polish import KINDS
+
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    kinds = (*KINDS, "block")
+    free = _polish(sc, routes, prior, moves=kinds)
+    full = _polish(sc, routes, prior, moves=kinds, screen=10_000,
+                   screen_cutoff=sc.sensor.cutoff_sweep_widths)  # fmt: skip
+    assert full[:2] == free[:2]
+    scr = _polish(sc, routes, prior, moves=kinds, screen=2, screen_cutoff=0.5)
+    assert scr[0] != free[0]
+    assert scr[1] == pytest.approx(_sampled(sc, scr[0], prior), rel=1e-9)
+    assert scr[1] > _sampled(sc, routes, prior)
+    speeds = plan_speeds(sc)
+    grid, takeoff, landing = _setup(sc)
+    heads = takeoff_heading(grid.bounds, takeoff)
+    for k, r in enumerate(scr[0]):
+        if r:
+            path = np.vstack([takeoff[k], r, landing[k]])
+            assert route_fits(path, speeds, sc.uav.max_turn_rate_rad_s,
+                              sc.uav.usable_endurance_s, reserve_s(sc), heads[k])  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [({"polish_screen": -1}, "options.polish_screen"),
+     ({"polish_screen": 2.5}, "options.polish_screen"),
+     ({"polish_screen_cutoff": 0.0}, "options.polish_screen_cutoff"),
+     ({"polish_screen_cutoff": float("nan")}, "options.polish_screen_cutoff")],
+)  # fmt: skip
+def test_polish_screen_options_are_checked(change, field):
+    with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
+        dataclasses.replace(PlanOptions(), **change)
+
+
+def test_polish_screen_arguments_are_checked_and_the_option_reaches_the_polish():
+    """``screen``/``screen_cutoff`` are checked (a ``ConfigError`` naming them), and
+    ``polish_screen`` reaches the planner's polish (its plan is the screened polish replayed)."""
+    sc = load_scenario("small")
+    prior = build_prior(sc.map)
+    for kw, field in (({"screen": 0}, "screen"), ({"screen": True}, "screen"),
+                      ({"screen": 4, "screen_cutoff": -1.0}, "screen_cutoff")):  # fmt: skip
+        with pytest.raises(ConfigError, match=field):
+            _polish(sc, [[], [], []], prior, **kw)
+    routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
+    from poc_env.agents.planning.polish import MOVES
+
+    want = _polish(sc, routes, prior, passes=1, moves=MOVES, screen=2, screen_cutoff=0.5)
+    plan = make_allocation_plan(
+        sc, options=PlanOptions(polish=1, polish_screen=2, polish_screen_cutoff=0.5)
+    )
+    assert [u["waypoints_m"] for u in plan["uavs"]] == want[0]
+    assert want[0] != _polish(sc, routes, prior, passes=1, moves=MOVES)[0]
