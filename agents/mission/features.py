@@ -18,12 +18,13 @@ from poc_env.agents.mission.plan import (
     APPROACH_HEIGHT_M,
     APPROACH_KIND,
     CLIMB_KIND,
+    DESCENT_KIND,
     Plan,
     approach_point,
     flight,
     route,
 )
-from poc_env.agents.mission.terrain import DESCENT_KIND, from_record, plan_profiles
+from poc_env.agents.mission.terrain import departure_heading_deg, from_record, plan_profiles
 from poc_env.crs import densify_ring
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
@@ -344,11 +345,18 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             ))  # fmt: skip
         sp = profs[k].climb if profs is not None else None
         if sp is not None:  # the climb spiral over the take-off field (terrain.climb_spiral)
+            xy, zs = sp.points()
+            extra = {}
+            if sp.depart_m > 0.0:  # a take-off on a heading of its own: drawn before the orbit
+                dxy, dz = sp.departure(profs[k].field_m)  # type: ignore[index]
+                xy, zs = np.concatenate([dxy, xy[1:]]), np.concatenate([dz, zs[1:]])
+                extra = {"departure_heading_deg": round(departure_heading_deg(sp), 1),
+                         "departure_km": round(sp.depart_m / 1e3, 3)}  # fmt: skip
             out.append(_orbit_line(
-                u, CLIMB_KIND, "climb spiral over the take-off field", *sp.points(), crs,
+                u, CLIMB_KIND, "climb spiral over the take-off field", xy, zs, crs,
                 radius_km=round(sp.radius_m / 1e3, 3), turns=round(sp.turns, 2),
                 from_m=round(sp.from_m, 1), to_m=round(sp.to_m, 1),
-                minutes=round(sp.time_s / 60.0, 1),
+                minutes=round(sp.time_s / 60.0, 1), **extra,
             ))  # fmt: skip
     for a in plan.get("airfields") or []:
         out.append(

@@ -144,6 +144,11 @@ APPROACH_KIND = "landing_approach"
 #: (:func:`poc_env.agents.mission.terrain.climb_spiral`): flown (KML draws it in the route's
 #: style, ``replan --tracks`` reads it as flown).
 CLIMB_KIND = "climb_spiral"
+#: The ``kind`` (GeoJSON property) of the descent orbit at the landing approach point drawn
+#: beside a route whose straight final glide meets the ground
+#: (:func:`poc_env.agents.mission.terrain.descent_orbit`): flown, like :data:`CLIMB_KIND`
+#: (the orbit kinds' one home, i24-missionfix; it was defined in the terrain module).
+DESCENT_KIND = "descent_orbit"
 
 
 class Rectangle(TypedDict):

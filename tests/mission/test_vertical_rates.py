@@ -211,7 +211,7 @@ def test_export_names_the_missions_that_need_more_than_5_m_s(tmp_path, capsys, f
     plan, k = _hill(flat_plan, 1200.0)
     write_plan(plan, tmp_path / "plan.json")
     export_plan(tmp_path / "plan.json", "geojson", out_dir=tmp_path / "a")
-    out = capsys.readouterr().out
+    out = capsys.readouterr().err
     u = plan["uavs"][k]
     line = next(s for s in out.splitlines() if f"plan.uavs[{k}] (UAV {u['id']})" in s)
     rate = _rates(plan, k)[("straight take-off climb", "climb")]
@@ -219,7 +219,7 @@ def test_export_names_the_missions_that_need_more_than_5_m_s(tmp_path, capsys, f
     assert "uav.max_climb_rate_mps" in out and "FW_T_CLMB_MAX" in out
     write_plan(_with_rates(plan, climb=30.0, sink=30.0), tmp_path / "fast.json")
     export_plan(tmp_path / "fast.json", "geojson", out_dir=tmp_path / "b")
-    assert "FW_T_CLMB_MAX" not in capsys.readouterr().out
+    assert "FW_T_CLMB_MAX" not in capsys.readouterr().err
 
 
 def _mates(plan: dict, same_route: bool = False) -> dict:

@@ -1,0 +1,154 @@
+"""Missions a planning officer can fly at real climb rates, and the mission leftovers
+(i24-missionfix).
+
+The fixture is test_vertical_rates' plan over a flat 600 m valley (an elevation grid in the
+scenario), its terrain record given a hill across UAV k's first leg 1.5-2.5 km from the field:
+at eq. 19's 15 deg the straight take-off climb clears it; at PX4's 5 m/s it meets it before
+the climb spiral's first altitude, so the take-off departs on a heading of its own.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from poc_env.agents.mission import terrain as terrain_mod
+from poc_env.agents.mission.crs import to_geographic
+from poc_env.agents.mission.export import export_plan
+from poc_env.agents.mission.formats.qgc import MAV_CMD_NAV_TAKEOFF
+from poc_env.agents.mission.plan import CLIMB_KIND, write_plan
+from poc_env.agents.mission.terrain import (
+    bilinear,
+    departure_heading_deg,
+    from_record,
+    plan_profiles,
+)
+from poc_env.agents.planning.geography import fit_orbits
+from poc_env.agents.planning.planner import make_plan
+from poc_env.agents.testing.terrain import VALLEY_M, hill_across_first_leg, wall_scenario
+from poc_env.config import load_scenario
+from poc_env.errors import ConfigError
+from poc_env.theory.probability_map import build_prior
+
+VALLEY_KM = (-10.0, 20.0)
+BOWL_KM = (70.0, 20.0)
+PX4 = 5.0  # FW_T_CLMB_MAX, FW_T_SINK_MAX defaults (m/s)
+
+
+def _valley(ring_m: float | None = None):
+    """valley -> bowl over a flat valley, 2 UAVs; with ``ring_m`` a ring of that height 6-8 km
+    round bowl (test_orbit_fit's)."""
+    x = -40 + np.arange(140) + 0.5
+    gx, gy = np.meshgrid(x, -30 + np.arange(100) + 0.5)
+    elev = np.full(gx.shape, VALLEY_M)
+    if ring_m is not None:
+        d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
+        elev = np.where((d >= 6.0) & (d <= 8.0), ring_m, elev)
+    return load_scenario(wall_scenario(
+        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
+                   {"name": "bowl", "position_km": list(BOWL_KM)}],
+        fleet=[{"takeoff": "valley", "landing": "bowl", "count": 2}],
+        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
+    ))  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def hill_plan() -> tuple[dict, int]:
+    """The flat valley's 2-UAV allocation plan with a 900 m hill (300 m above the field)
+    across the longest first leg, 1.5-2.5 km out."""
+    plan = make_plan(_valley(), planner="allocation", uavs=2, refine=0)
+    legs = [np.hypot(*np.subtract(u["waypoints_m"][0], u["takeoff_m"])) for u in plan["uavs"]]
+    k = int(np.argmax(legs))
+    rec = hill_across_first_leg(plan, k, 1500.0, 2500.0, 500.0, VALLEY_M + 300.0)
+    return {**plan, "terrain": rec}, k
+
+
+def _rates(plan: dict, climb: float, sink: float) -> dict:
+    """``plan`` whose terrain record carries the aircraft's rates."""
+    return {**plan, "terrain": {**plan["terrain"], "max_climb_rate_mps": climb,
+                                "max_sink_rate_mps": sink}}  # fmt: skip
+
+
+def test_a_take_off_that_meets_rising_ground_departs_on_a_heading_of_its_own(
+    hill_plan, tmp_path, capsys, monkeypatch
+):
+    """At 5 m/s the take-off climb towards the first waypoint meets the hill before the climb
+    spiral's first altitude (refused before: the day audit's probes 13 and 14 at PX4's
+    defaults). Now it climbs out on another heading, 15 deg steps from the route's, over level
+    ground, to the orbit's first altitude, above the ground all the way; the climb out and
+    back is charged; QGC's take-off item stands on that heading, GeoJSON draws it, and the
+    export says which heading to launch on (on stderr). At eq. 19 nothing changes."""
+    plan, k = hill_plan
+    assert plan_profiles(plan, charge=False)[k].climb is None  # type: ignore[index]  # eq. 19
+    px4 = _rates(plan, PX4, PX4)
+    t = from_record(px4["terrain"])
+    p = plan_profiles(px4, charge=False)[k]  # type: ignore[index]
+    sp = p.climb
+    assert sp is not None and sp.depart_m > 0.0
+    u = px4["uavs"][k]
+    route = math.atan2(*np.subtract(u["waypoints_m"][0], u["takeoff_m"])[::-1])
+    turned = math.remainder(sp.start_rad - route, 2.0 * math.pi)
+    assert abs(turned) >= math.radians(15.0) - 1e-9
+    assert math.degrees(turned) % 15.0 == pytest.approx(0.0, abs=1e-6) or math.degrees(
+        turned
+    ) % 15.0 == pytest.approx(15.0, abs=1e-6)
+    # the climb out, at the rate-bound gradient from the field, above the ground beyond the
+    # field's own cells, reaching the orbit's first altitude
+    up = math.tan(terrain_mod.vertical_angle(t, terrain_mod.route_speed_mps(px4["flight"]), True))
+    s = np.linspace(0.0, sp.depart_m, 200)
+    xy = np.asarray(sp.center_m) + s[:, None] * [math.cos(sp.start_rad), math.sin(sp.start_rad)]
+    far = s > 1.5 * t.cell_m * math.sqrt(2.0)
+    alt = p.field_m + up * s
+    assert np.all(alt[far] > bilinear(t.ground_m, t.origin_m, t.cell_m, xy[far]))
+    assert alt[-1] == pytest.approx(sp.from_m)
+    assert sp.time_s == pytest.approx((sp.length_m + 2.0 * sp.depart_m) / sp.speed_mps)
+    # without the departure, the mission is refused naming the take-off (as on main)
+    with monkeypatch.context() as m:
+        m.setattr(terrain_mod, "departure_spiral", lambda *a, **kw: None)
+        with pytest.raises(ConfigError, match="take-off climb"):
+            plan_profiles(px4, charge=False)
+    # the exports: QGC's take-off item on the heading, GeoJSON's spiral with its departure
+    write_plan(px4, tmp_path / "plan.json")
+    export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q")
+    said = capsys.readouterr()
+    assert f"plan.uavs[{k}] (UAV {u['id']}): its take-off climbs out on heading" in said.err
+    assert "warning" not in said.out
+    doc = json.loads((tmp_path / "q" / f"plan_uav{u['id']}.plan").read_text())
+    take = next(it for it in doc["mission"]["items"] if it["command"] == MAV_CMD_NAV_TAKEOFF)
+    lat, lon = to_geographic([list(sp.depart_xy)], px4["crs"])[0]
+    assert take["params"][4:7] == pytest.approx([lat, lon, round(sp.from_m, 1)], abs=1e-6)
+    export_plan(tmp_path / "plan.json", "geojson", out_dir=tmp_path / "g")
+    gj = json.loads(next((tmp_path / "g").glob("*.geojson")).read_text())
+    (line,) = [f for f in gj["features"] if f["properties"]["kind"] == CLIMB_KIND]
+    assert line["properties"]["departure_heading_deg"] == pytest.approx(
+        departure_heading_deg(sp), abs=0.05
+    )
+    lon0, lat0, z0 = line["geometry"]["coordinates"][0]
+    home = to_geographic([list(sp.center_m)], px4["crs"])[0]
+    assert (lat0, lon0) == pytest.approx(home, abs=1e-6) and z0 == pytest.approx(p.field_m)
+
+
+def test_fit_orbits_reads_the_terrain_record_once(monkeypatch):
+    """Leftover c: the orbit fit's trials (one per dropped waypoint, then the bisection) each
+    read the whole terrain grid from the plan's record again; now once, the same plan out.
+    The plan is test_orbit_fit's ring: planned in 2-D (the flat valley's routes), its descent
+    orbits do not fit until the routes are cut."""
+    sc = _valley(VALLEY_M + 2500.0)
+    ring = make_plan(sc, planner="allocation", uavs=2, refine=0)
+    flat = make_plan(_valley(), planner="allocation", uavs=2, refine=0)
+    assert ring.get("orbit_fit")  # the fit cut the ring's routes
+    reads = []
+    real = terrain_mod.from_record
+
+    def counted(rec):
+        reads.append(1)
+        return real(rec)
+
+    monkeypatch.setattr(terrain_mod, "from_record", counted)
+    uncut = {**flat, "terrain": ring["terrain"]}  # the routes before the fit, the ring's ground
+    fitted = fit_orbits(uncut, sc, build_prior(sc.map))
+    assert len(reads) == 1
+    assert fitted["uavs"] == ring["uavs"] and fitted["orbit_fit"] == ring["orbit_fit"]
