@@ -266,7 +266,13 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     take-off field on the ground, the :func:`~poc_env.agents.mission.terrain.profile` points
     (the climb over the field, the waypoints and the points the clearance needs, the landing
     approach point) at their AMSL altitudes (the layer in them), the landing field on the
-    ground.
+    ground. Where the UAV lands on a descent orbit (the profile's ``descent``), the route's
+    last leg is the glide it flies from the orbit's tangent exit (at the glide's altitude) to
+    the field, after the leg out from the approach point (the orbit's centre) to the exit,
+    which stands for the way out to the orbit (the orbit itself is its own line, read as
+    flown by ``replan --tracks``); before (i24-missionfix), the route ran straight from the
+    approach point to the field, where the aircraft flew the orbit and a glide 18 deg off
+    that line.
     """
     profs = plan_profiles(plan)
     out = []
@@ -276,8 +282,12 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
             out.append((pts, [ground, *[alt + layer_of(u)] * (len(pts) - 2), ground]))
             continue
         p = profs[k]
-        pts = [list(u["takeoff_m"]), *p.points_m.tolist(), list(u["landing_m"])]
-        out.append((pts, [p.field_m, *p.amsl_m.tolist(), p.landing_field_m]))
+        pts = [list(u["takeoff_m"]), *p.points_m.tolist()]
+        zs = [p.field_m, *p.amsl_m.tolist()]
+        if p.descent is not None:  # the glide flown from the orbit's exit, not from its centre
+            pts.append(list(p.descent.exit_m))
+            zs.append(float(p.descent.orbit.to_m))
+        out.append(([*pts, list(u["landing_m"])], [*zs, p.landing_field_m]))
     return out
 
 

@@ -152,3 +152,33 @@ def test_fit_orbits_reads_the_terrain_record_once(monkeypatch):
     fitted = fit_orbits(uncut, sc, build_prior(sc.map))
     assert len(reads) == 1
     assert fitted["uavs"] == ring["uavs"] and fitted["orbit_fit"] == ring["orbit_fit"]
+
+
+def test_tracks_read_from_an_export_glide_from_the_descent_orbit_exit(tmp_path):
+    """Leftover d: over a ring round the landing field the UAVs land on a descent orbit. The
+    route line GeoJSON and KML draw (and ``replan --tracks`` reads as flown) ran straight from
+    the approach point (the orbit's centre) to the field, where the aircraft flew the orbit
+    and then glided from its tangent exit; now the route's last leg is that glide."""
+    from poc_env.agents.planning.replan import read_tracks
+    from poc_env.agents.testing.terrain import ring_around
+
+    plan = make_plan(_valley(), planner="allocation", uavs=2, refine=0)
+    plan = ring_around(plan, BOWL_KM, 6.0, 8.0, VALLEY_M + 1500.0)
+    write_plan(plan, tmp_path / "plan.json")
+    profs = plan_profiles(plan)
+    assert profs is not None
+    landing = [(u, p) for u, p in zip(plan["uavs"], profs) if p.descent is not None]
+    assert landing
+    for fmt, suffix in (("geojson", "*.geojson"), ("kml", "*.kml")):
+        export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / fmt)
+        tracks = read_tracks(next((tmp_path / fmt).glob(suffix)), plan["crs"])
+        for u, p in landing:
+            d = p.descent
+            assert d is not None
+            (route,) = [  # the UAV's route: through its approach point, to the field
+                pts for _, pts in tracks
+                if len(pts) > 3 and np.allclose(pts[-1], u["landing_m"], atol=1.0)
+                and np.min(np.hypot(*(pts - np.asarray(d.orbit.center_m)).T)) < 1.0
+            ]  # fmt: skip
+            assert np.allclose(route[-3], d.orbit.center_m, atol=1.0), fmt
+            assert np.allclose(route[-2], d.exit_m, atol=1.0), fmt  # then the glide flown
