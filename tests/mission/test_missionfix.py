@@ -182,3 +182,37 @@ def test_tracks_read_from_an_export_glide_from_the_descent_orbit_exit(tmp_path):
             ]  # fmt: skip
             assert np.allclose(route[-3], d.orbit.center_m, atol=1.0), fmt
             assert np.allclose(route[-2], d.exit_m, atol=1.0), fmt  # then the glide flown
+
+
+def test_a_trimmed_de_plan_keeps_no_stale_rectangle_x_or_objective():
+    """Leftover e: a DE plan trimmed for its orbits kept each trimmed UAV's decision rectangle
+    and flown strip (drawn as its search by every export, though its last lines are no longer
+    flown) and the optimiser's ``x`` and ``objective`` of the untrimmed routes. Now the
+    trimmed UAV's search is the areas its kept lines sweep, and the untrimmed decision is
+    recorded in ``orbit_fit`` only. (The DE-like plan: test_orbit_fit's ring routes with a
+    DE plan's rectangle fields; a real DE plan there takes 20 s of CPU.)"""
+    from poc_env.agents.mission.plan import check_plan, search_rings
+
+    sc = _valley(VALLEY_M + 2500.0)
+    ring = make_plan(sc, planner="allocation", uavs=2, refine=0)
+    flat = make_plan(_valley(), planner="allocation", uavs=2, refine=0)
+    rect = {"center_m": [20e3, 20e3], "length_m": 10e3, "width_m": 5e3, "theta_deg": 0.0}
+    strip = {"center_m": [20e3, 20e3], "line_length_m": 9e3, "strip_width_m": 5e3,
+             "lines_theta_rad": 0.0, "rule": "lines"}  # fmt: skip
+    uavs = [{**{k: v for k, v in u.items() if k not in ("areas_m", "transit_waypoints")},
+             "rectangle": rect, "flown_rectangle": strip} for u in flat["uavs"]]  # fmt: skip
+    de = {**{k: v for k, v in flat.items() if k != "speeds_mps"}, "uavs": uavs,
+          "terrain": ring["terrain"], "x": [0.5] * 10, "objective": -flat["posc"]}  # fmt: skip
+    fitted = fit_orbits(de, sc, build_prior(sc.map))
+    fit = fitted["orbit_fit"]
+    assert fit["uavs"]  # trimmed
+    assert "x" not in fitted and "objective" not in fitted
+    assert fit["x_before"] == de["x"] and fit["objective_before"] == de["objective"]
+    for u in fitted["uavs"]:
+        if str(u["id"]) in fit["uavs"]:
+            assert u["rectangle"] is None and u["flown_rectangle"] is None
+            assert fit["uavs"][str(u["id"])]["rectangle_before"] == rect
+            assert u["areas_m"] and {k for k, _, _ in search_rings(u)} == {"search_area"}
+        else:
+            assert u["rectangle"] == rect
+    check_plan(fitted)
