@@ -306,6 +306,8 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
                    u.get("flown_rectangle")}  # fmt: skip
             u["rectangle"], u["flown_rectangle"] = None, None
             u["areas_m"] = u.get("areas_m") or []
+        if "pos_flown" in u:  # a survey's Table 4 figure, of the whole pattern
+            cut["pos_flown_before"] = u.pop("pos_flown")
         if "areas_m" in u:
             u["areas_m"] = _swept_areas(legs, u["spacing_m"]) if len(legs) else []
         u["feasible"] = bool(u["flight_time_s"] <= usable)

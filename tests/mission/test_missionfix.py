@@ -216,3 +216,45 @@ def test_a_trimmed_de_plan_keeps_no_stale_rectangle_x_or_objective():
         else:
             assert u["rectangle"] == rect
     check_plan(fitted)
+
+
+def test_survey_plan_out_leaves_time_for_the_descent_orbit(tmp_path):
+    """Leftover f: ``survey --plan-out`` wrote no plan when a UAV's pattern fitted 0.85 T
+    alone but not with its descent orbit (refused: "... min missing for the orbits"), where
+    ``plan`` trims the route (``fit_orbits``). Now the survey's plan is trimmed the same way
+    and exported. The endurance is set so that 0.85 T lies between the pattern's flight
+    (90.2 min) and flight + orbit (94.9 min)."""
+    import yaml
+
+    from poc_env.agents.mission.plan import load_plan
+    from poc_env.cli import main
+
+    x = -40 + np.arange(140) + 0.5
+    gx, gy = np.meshgrid(x, -30 + np.arange(100) + 0.5)
+    d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
+    elev = np.where((d >= 6.0) & (d <= 8.0), VALLEY_M + 2500.0, np.full(gx.shape, VALLEY_M))
+    sc = wall_scenario(
+        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
+                   {"name": "bowl", "position_km": list(BOWL_KM)}],
+        fleet=[{"takeoff": "valley", "landing": "bowl", "count": 1}],
+        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
+    )  # fmt: skip
+    sc["uav"] = {**sc["uav"], "endurance_h": 1.79}
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(sc))
+    regs = [{"id": 1, "kind": "polygon", "spacing_km": 5.0, "direction_deg": 90.0,
+             "vertices_km": [[0, 0], [20, 0], [20, 40], [0, 40]]}]  # fmt: skip
+    (tmp_path / "r.yaml").write_text(
+        yaml.safe_dump({"name": "strips", "scenario": "alps", "regions": regs})
+    )
+    out = tmp_path / "p.json"
+    argv = ["survey", "--scenario", str(tmp_path / "s.yaml"), "--regions",
+            str(tmp_path / "r.yaml"), "--plan-out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    plan = load_plan(out)
+    assert plan["orbit_fit"]["uavs"]["1"]["waypoints_after"] >= 1
+    usable = 0.85 * 1.79 * 3600.0
+    (u,) = plan["uavs"]
+    (p,) = plan_profiles(plan)  # type: ignore[misc]
+    assert p.descent is not None
+    assert u["flight_time_s"] + terrain_mod.orbit_time_s(p) <= usable + 1e-6
+    assert main(["export", str(out), "--format", "qgc", "--out", str(tmp_path / "q")]) == 0
