@@ -258,3 +258,40 @@ def test_survey_plan_out_leaves_time_for_the_descent_orbit(tmp_path):
     assert p.descent is not None
     assert u["flight_time_s"] + terrain_mod.orbit_time_s(p) <= usable + 1e-6
     assert main(["export", str(out), "--format", "qgc", "--out", str(tmp_path / "q")]) == 0
+
+
+def test_field_mates_on_one_approach_are_given_approaches_apart(tmp_path):
+    """Leftover g: the altitude layers stop at the landing approach (one glide slope per field:
+    two UAVs on one glide path are at one altitude over each point, whatever their layers), so
+    field-mates whose approach points coincided (the day audit's swall2 and s150land: 0.11
+    km apart) could meet on the approach. With layers, the later UAV's approach is now turned
+    round the field to the nearest side at least APPROACH_APART_M from its mate's; without
+    layers nothing changes."""
+    from poc_env.agents.mission.features import with_layers
+    from poc_env.agents.mission.formats.qgc import MAV_CMD_DO_LAND_START
+    from poc_env.agents.mission.plan import APPROACH_APART_M, approach_point
+
+    plan = make_plan(_valley(), planner="allocation", uavs=2, refine=0)
+    first = plan["uavs"][0]
+    bowl = [float(v) * 1e3 for v in BOWL_KM]
+    plan["uavs"] = [{**u, "landing_m": bowl, "waypoints_m": first["waypoints_m"],
+                     "flight_time_s": first["flight_time_s"]} for u in plan["uavs"]]  # fmt: skip
+    same = [approach_point(u) for u in plan["uavs"]]
+    assert np.allclose(same[0], same[1])  # one approach for both, as planned
+    assert with_layers(plan, 0.0) is plan
+    lay = with_layers(plan, 30.0)
+    apps = [approach_point(u) for u in lay["uavs"]]
+    assert np.allclose(apps[0], same[0])  # the first keeps its side
+    assert math.dist(apps[0], apps[1]) >= APPROACH_APART_M - 1e-6
+    assert math.dist(apps[1], bowl) == pytest.approx(4000.0)  # 4 km out, another side
+    write_plan(plan, tmp_path / "plan.json")
+    export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / "q", separation_m=30.0)
+    at = []
+    for u in plan["uavs"]:
+        items = json.loads((tmp_path / "q" / f"plan_uav{u['id']}.plan").read_text())["mission"][
+            "items"
+        ]
+        i = [it["command"] for it in items].index(MAV_CMD_DO_LAND_START)
+        at.append(items[i + 1]["params"][4:6])  # the approach waypoint (lat, lon)
+    want = to_geographic(apps, plan["crs"])
+    assert np.allclose(at, want, atol=1e-6)
