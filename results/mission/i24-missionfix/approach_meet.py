@@ -4,8 +4,7 @@
 approach each flies as exported with ``--separation-m S`` (layers by field): from its approach
 point (or its descent orbit's exit) down the final glide to the field, altitudes AMSL from the
 terrain profile. Prints per pair the distance between their approach points, their altitudes
-there, and the closest approach of the two glides farther than 1 km from the field at less
-than S vertically (where a layer would have kept them apart), if any."""
+there, and how far apart the two glides are 3, 2 and 1 km from the field."""
 
 import itertools
 import sys
@@ -38,20 +37,17 @@ for g, h in itertools.combinations(glides, 2):
     if g[1] != h[1]:
         continue
     pairs += 1
-    d_app = float(np.hypot(*(g[2] - h[2])))
-    dxy = np.hypot(*(g[4][:, None, :] - h[4][None, :, :]).transpose(2, 0, 1))
-    dz = np.abs(g[5][:, None] - h[5][None, :])
     field = np.asarray(g[1], float)
-    far = (np.hypot(*(g[4] - field).T)[:, None] > 1000.0) & (
-        np.hypot(*(h[4] - field).T)[None, :] > 1000.0
+    d_app = float(np.hypot(*(g[2] - h[2])))
+    out = []
+    for km in (3.0, 2.0, 1.0):  # where each glide is km from the field
+        i = int(np.argmin(np.abs(np.hypot(*(g[4] - field).T) - km * 1e3)))
+        j = int(np.argmin(np.abs(np.hypot(*(h[4] - field).T) - km * 1e3)))
+        dxy = float(np.hypot(*(g[4][i] - h[4][j])))
+        out.append(f"{km:g} km out {dxy:.0f} m apart, {abs(g[5][i] - h[5][j]):.0f} m vertically")
+    print(
+        f"UAVs {g[0]} and {h[0]} (layers {g[6]:g} / {h[6]:g} m) land at "
+        f"({field[0] / 1e3:.1f}, {field[1] / 1e3:.1f}) km: approach points {d_app / 1e3:.2f} km "
+        f"apart at {g[3]:.0f} / {h[3]:.0f} m AMSL; " + "; ".join(out)
     )
-    close = far & (dxy < 1000.0) & (dz < sep)
-    where = ""
-    if close.any():
-        i, j = np.unravel_index(np.argmin(np.where(close, dxy, np.inf)), dxy.shape)
-        where = (f"; within 1 km and < {sep:g} m vertically {np.hypot(*(g[4][i] - field)) / 1e3:.1f}"
-                 f" km from the field ({dxy[i, j]:.0f} m apart, {dz[i, j]:.0f} m vertically)")
-    print(f"UAVs {g[0]} and {h[0]} (layers {g[6]:g} / {h[6]:g} m) land at ({field[0] / 1e3:.1f}, "
-          f"{field[1] / 1e3:.1f}) km: approach points {d_app / 1e3:.2f} km apart at {g[3]:.0f} / "
-          f"{h[3]:.0f} m AMSL{where or '; never within 1 km at less than the separation (beyond 1 km from the field)'}")
 print(f"{sys.argv[1]}: {pairs} pairs of field-mates landing at one field")
