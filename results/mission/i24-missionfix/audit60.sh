@@ -2,7 +2,7 @@
 # i24-missionfix: the day audit's five DEM cases (s150, s150land, alps at a 6,000 m ceiling,
 # swall = probe 13, swall2 = probe 14), 4 formats x {no layers, --separation-m 30,
 # --separation-m 30 --layer-by fleet} = 60 exports, in three runs:
-#   main   : main's CLI, main's plan (rates unset)
+#   main   : main's CLI, main's plan (rates unset); the branch's plan (unset) compared as JSON
 #   branch : the branch's CLI, main's plan (rates unset): byte identity against main
 #   px4    : the branch's CLI, the branch's plan at PX4's defaults (5/5 m/s)
 # Usage: audit60.sh WORKDIR (inputs copied from /tmp/dayaudit, read only)
@@ -19,6 +19,13 @@ for c in $cases; do
   mkdir -p main px4 px4main
   [ -f "main/$name.json" ] || $M plan --scenario "$yaml" --planner allocation ${over:+--overrides $over} --quiet --out "main/$name.json" >"main/$name.plan.log" 2>&1
   echo "$name main plan rc=$?"
+  mkdir -p br
+  [ -f "br/$name.json" ] || $B plan --scenario "$yaml" --planner allocation ${over:+--overrides $over} --quiet --out "br/$name.json" >"br/$name.plan.log" 2>&1
+  /work/wt/i24-missionfix/.venv/bin/python -c "
+import json
+a, b = (json.load(open(f'{w}/$name.json')) for w in ('main', 'br'))
+for d in (a, b): d.pop('runtime_s', None)
+print('$name branch plan, rates unset (without runtime_s):', 'same as main' if a == b else 'DIFF')"
   [ -f "px4main/$name.json" ] || $M plan --scenario "$yaml" --planner allocation --overrides $over $RATES --quiet --out "px4main/$name.json" >"px4main/$name.plan.log" 2>&1
   echo "$name main's CLI at 5/5 rc=$? $(grep -o 'error: .\{0,160\}' px4main/$name.plan.log | head -1)"
   [ -f "px4/$name.json" ] || $B plan --scenario "$yaml" --planner allocation --overrides $over $RATES --quiet --out "px4/$name.json" >"px4/$name.plan.log" 2>&1
