@@ -28,31 +28,23 @@ from poc_env.agents.mission.terrain import (
 )
 from poc_env.agents.planning.geography import fit_orbits
 from poc_env.agents.planning.planner import make_plan
-from poc_env.agents.testing.terrain import VALLEY_M, hill_across_first_leg, wall_scenario
+from poc_env.agents.testing.terrain import (
+    BOWL_KM,
+    VALLEY_M,
+    hill_across_first_leg,
+    valley_to_bowl,
+)
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 from poc_env.theory.probability_map import build_prior
 
-VALLEY_KM = (-10.0, 20.0)
-BOWL_KM = (70.0, 20.0)
 PX4 = 5.0  # FW_T_CLMB_MAX, FW_T_SINK_MAX defaults (m/s)
 
 
 def _valley(ring_m: float | None = None):
     """valley -> bowl over a flat valley, 2 UAVs; with ``ring_m`` a ring of that height 6-8 km
     round bowl (test_orbit_fit's)."""
-    x = -40 + np.arange(140) + 0.5
-    gx, gy = np.meshgrid(x, -30 + np.arange(100) + 0.5)
-    elev = np.full(gx.shape, VALLEY_M)
-    if ring_m is not None:
-        d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
-        elev = np.where((d >= 6.0) & (d <= 8.0), ring_m, elev)
-    return load_scenario(wall_scenario(
-        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
-                   {"name": "bowl", "position_km": list(BOWL_KM)}],
-        fleet=[{"takeoff": "valley", "landing": "bowl", "count": 2}],
-        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
-    ))  # fmt: skip
+    return load_scenario(valley_to_bowl(ring_m))
 
 
 @pytest.fixture(scope="module")
@@ -229,16 +221,7 @@ def test_survey_plan_out_leaves_time_for_the_descent_orbit(tmp_path):
     from poc_env.agents.mission.plan import load_plan
     from poc_env.cli import main
 
-    x = -40 + np.arange(140) + 0.5
-    gx, gy = np.meshgrid(x, -30 + np.arange(100) + 0.5)
-    d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
-    elev = np.where((d >= 6.0) & (d <= 8.0), VALLEY_M + 2500.0, np.full(gx.shape, VALLEY_M))
-    sc = wall_scenario(
-        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
-                   {"name": "bowl", "position_km": list(BOWL_KM)}],
-        fleet=[{"takeoff": "valley", "landing": "bowl", "count": 1}],
-        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
-    )  # fmt: skip
+    sc = valley_to_bowl(VALLEY_M + 2500.0, count=1)
     sc["uav"] = {**sc["uav"], "endurance_h": 1.79}
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(sc))
     regs = [{"id": 1, "kind": "polygon", "spacing_km": 5.0, "direction_deg": 90.0,

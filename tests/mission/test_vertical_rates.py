@@ -31,34 +31,23 @@ from poc_env.agents.mission.terrain import (
 )
 from poc_env.agents.planning.planner import make_plan
 from poc_env.agents.testing.terrain import (
+    BOWL_KM,
+    VALLEY_KM,
     VALLEY_M,
     hill_across_first_leg,
     ring_around,
-    wall_scenario,
+    valley_to_bowl,
 )
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
-BOWL_KM = (70.0, 20.0)
-VALLEY_KM = (-10.0, 20.0)
 PX4 = 5.0  # FW_T_CLMB_MAX, FW_T_SINK_MAX defaults (m/s)
 
 
 def _valley(ring_m: float | None = None, **uav: float):
     """valley -> bowl over a flat valley, 2 UAVs; with ``ring_m`` a ring of that height 6-8 km
     round bowl (test_orbit_fit's); ``uav`` overrides the UAV's fields."""
-    x = -40 + np.arange(140) + 0.5
-    gx, gy = np.meshgrid(x, -30 + np.arange(100) + 0.5)
-    elev = np.full(gx.shape, VALLEY_M)
-    if ring_m is not None:
-        d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
-        elev = np.where((d >= 6.0) & (d <= 8.0), ring_m, elev)
-    sc = load_scenario(wall_scenario(
-        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
-                   {"name": "bowl", "position_km": list(BOWL_KM)}],
-        fleet=[{"takeoff": "valley", "landing": "bowl", "count": 2}],
-        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
-    ))  # fmt: skip
+    sc = load_scenario(valley_to_bowl(ring_m))
     return load_scenario(sc, {f"uav.{k}": v for k, v in uav.items()}) if uav else sc
 
 

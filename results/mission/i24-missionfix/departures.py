@@ -30,8 +30,10 @@ for u, p in zip(plan["uavs"], tm.plan_profiles(plan) or ()):
         g = tm.bilinear(t.ground_m, t.origin_m, t.cell_m, xy)
         alt = p.field_m + up * s
         gap = alt[far] - g[far]
-        print(f"UAV {u['id']} {name} heading {(90.0 - math.degrees(a)) % 360.0:.0f} deg (route "
-              f"{route:.0f}): {sp.depart_m / 1e3:.2f} km to {sp.from_m:.0f} m AMSL at "
-              f"{up * 100:.2f} % from the field at {p.field_m:.0f} m; least height above the "
-              f"ground beyond the field's cells {gap.min():.0f} m, highest ground "
-              f"{g[far].max():.0f} m")
+        print(
+            f"UAV {u['id']} {name} heading {(90.0 - math.degrees(a)) % 360.0:.0f} deg (route "
+            f"{route:.0f}): {sp.depart_m / 1e3:.2f} km to {sp.from_m:.0f} m AMSL at "
+            f"{up * 100:.2f} % from the field at {p.field_m:.0f} m; least height above the "
+            f"ground beyond the field's cells {gap.min():.0f} m, highest ground "
+            f"{g[far].max():.0f} m"
+        )

@@ -3,8 +3,9 @@
 
 import json
 import sys
+from pathlib import Path
 
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
+a, b = (json.loads(Path(p).read_text()) for p in sys.argv[1:3])
 for d in (a, b):
     d.pop("runtime_s", None)
 print(sys.argv[1], sys.argv[2], "same (without runtime_s)" if a == b else "DIFF")
