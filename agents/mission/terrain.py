@@ -1128,7 +1128,10 @@ def departure_spiral(
     best: tuple[float, Spiral] | None = None
     for k in steps:
         h = route + k * DEPARTURE_STEP_RAD
-        sp = climb_spiral(t, p, z, dist, where, speed_mps, layer_m, up, start_rad=h)
+        try:  # (its top above the ceiling: not this heading)
+            sp = climb_spiral(t, p, z, dist, where, speed_mps, layer_m, up, start_rad=h)
+        except ConfigError:
+            continue
         run = max(0.0, (sp.from_m - field) / up)
         s = np.linspace(0.0, run, max(1, math.ceil(run / (t.cell_m / 2.0))) + 1)
         xy = p[0] + s[:, None] * np.array([math.cos(h), math.sin(h)])
