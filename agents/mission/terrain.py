@@ -1110,7 +1110,7 @@ def departure_spiral(
     as every take-off climb, :func:`_check_field_legs`), inside the terrain grid, outside the
     no-fly zones and inside the operating area (``airspace`` = (zones, operating area polygon
     or None); the QGC fences). Of those, the one over the least rising ground (the highest
-    ground under it beyond the field's cells, above the field, to the metre) is taken, the
+    ground under it, the field's cells included, above the field, to the metre) is taken, the
     nearest the route's among equals: away from the terrain, not skimming it. Its length is
     the spiral's ``depart_m`` (charged twice, :attr:`Spiral.time_s`). None if no heading
     flies.
@@ -1143,9 +1143,8 @@ def departure_spiral(
             continue
         if _first_cut(t, p[0], xy, field + up * s) is not None:
             continue
-        away = ~_own_cells(t, p[0], xy)  # the ground rising under it, beyond the field's cells
-        rise = float(np.max(bilinear(t.ground_m, t.origin_m, t.cell_m, xy[away]))) - field
-        rise = max(0.0, round(rise)) if away.any() else 0.0
+        top = float(np.max(bilinear(t.ground_m, t.origin_m, t.cell_m, xy)))  # the ground under it
+        rise = max(0.0, round(top - field))
         if best is None or rise < best[0]:
             best = (rise, dataclasses.replace(sp, depart_m=float(run)))
         if rise == 0.0:  # level ground: the nearest such heading to the route's
