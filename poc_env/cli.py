@@ -29,6 +29,7 @@ from poc_env.errors import (
     as_int,
     has_extra,
     require_extra,
+    say_warning,
     skipped_for_extra,
 )
 from poc_env.helptext import examples, use_everywhere, walk
@@ -318,7 +319,7 @@ def _survey(args: argparse.Namespace, stage: Path | None, dest: Path | None) -> 
     from poc_env.agents.planning.planner import moving_target_warning
 
     if (warning := moving_target_warning(sc)) is not None:
-        print(f"warning: {warning}")
+        say_warning(warning)
     if stage is not None:
         figure = has_extra("plot")  # the tables still, the figure not
         if not figure:
@@ -858,7 +859,7 @@ def _plan_notes(args: argparse.Namespace, plans: list[tuple[str, dict]], sc) -> 
             print(f"{label}{skipped}")
     for warning in (moving_target_warning(sc), lattice_warning(sc)):
         if warning is not None:
-            print(f"warning: {warning}")
+            say_warning(warning)
 
 
 #: The most UAVs a fleet size of ``plan --fleet-sizes`` may have (``--uavs``'s and
@@ -1705,7 +1706,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     """A warning a command raises, as the command line says the rest: ``warning: <text>`` on
     stderr, without Python's file, line and source (``terrain.py:673: UserWarning: ...
     return [``)."""
-    print(f"warning: {message}", file=sys.stderr if file is None else file)
+    say_warning(message, file)
 
 
 def _field_of_path(args: argparse.Namespace, path: str) -> str:

@@ -76,6 +76,16 @@ EXTRA_MODULES = {
 }
 
 
+def say_warning(text: Any, file: Any = None) -> None:
+    """A warning for the user, one line ``warning: <text>`` on stderr (``file``: another
+    stream): the one channel every command's warnings take, those it prints and those raised
+    through :mod:`warnings` (the command line's ``showwarning``), so ``poc-env export ... >
+    log`` keeps the files' list on stdout and the warnings apart (i24-missionfix)."""
+    import sys
+
+    print(f"warning: {text}", file=sys.stderr if file is None else file)
+
+
 def has_extra(extra: str) -> bool:
     """True when every module of the optional group ``extra`` (:data:`EXTRA_MODULES`) can be
     imported (checked without importing it)."""

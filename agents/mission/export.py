@@ -28,7 +28,7 @@ from poc_env.agents.mission.formats.qgc import check_fences
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.plan import load_plan
 from poc_env.agents.mission.terrain import SteepGlideWarning, profiles_once
-from poc_env.errors import ConfigError, as_number
+from poc_env.errors import ConfigError, as_number, say_warning
 
 
 def export_plan(
@@ -138,16 +138,18 @@ def export_plan(
         if fmt == "qgc" and warning is not None:
             check_fences(plan, area)  # QGC refuses such a plan (the error itself, raised)
         if warning is not None:  # the other formats show it, and say so
-            print(f"warning: {warning}")
+            say_warning(warning)
         check_endurance(plan, flown, refuse=fmt == "qgc" and not allow_infeasible)
-        for line in shared_orbits(plan, flown) + rate_warnings(plan, flown):
-            print(f"warning: {line}")
+        for line in (
+            shared_orbits(plan, flown) + departures(plan, flown) + rate_warnings(plan, flown)
+        ):
+            say_warning(line)
         kept = {id(u) for u in flown}
         left = [f"plan.uavs[{k}] (UAV {u['id']})"
                 for k, u in enumerate(plan["uavs"]) if id(u) not in kept]  # fmt: skip
         if left:  # one line, however many (a 64-UAV plan printed 49 lines: i24-dayaudit)
             more = f" and {len(left) - 6} more" if len(left) > 6 else ""
-            print(f"warning: {', '.join(left[:6])}{more}: no search planned for "
+            say_warning(f"{', '.join(left[:6])}{more}: no search planned for "
                   f"{'it' if len(left) == 1 else 'them'} (no waypoints_m); left out of the "
                   "export")  # fmt: skip
         job = ExportJob(
@@ -261,6 +263,27 @@ def shared_orbits(plan: Any, flown: list[Any]) -> list[str]:
         "--separation-m S to widen each UAV's orbit by its layer"
         for (what, x, y, r), ids in circles.items()
         if len(ids) > 1
+    ]
+
+
+def departures(plan: Any, flown: list[Any]) -> list[str]:
+    """One sentence per exported UAV (``flown``) whose take-off climbs out on a heading of its
+    own, away from its first waypoint (the climb towards it meets the ground:
+    :func:`~poc_env.agents.mission.terrain.departure_spiral`): the heading to launch on (the
+    QGC take-off item stands on it; firmware that climbs out in the launch direction needs
+    the aircraft launched on it)."""
+    from poc_env.agents.mission.terrain import departure_heading_deg, plan_profiles
+
+    if plan.get("terrain") is None:
+        return []
+    kept = {id(u) for u in flown}
+    return [
+        f"plan.uavs[{k}] (UAV {u['id']}): its take-off climbs out on heading "
+        f"{departure_heading_deg(p.climb):.0f} deg (grid north) for {p.climb.depart_m / 1e3:.1f}"
+        f" km to {p.climb.from_m:.0f} m AMSL, then orbits the field up to {p.climb.to_m:.0f} m: "
+        "the climb towards its first waypoint meets the rising ground; launch on that heading"
+        for k, (u, p) in enumerate(zip(plan["uavs"], plan_profiles(plan) or ()))
+        if id(u) in kept and p.climb is not None and p.climb.depart_m > 0.0
     ]
 
 

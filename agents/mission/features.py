@@ -8,22 +8,26 @@ airfields, operating area and no-fly zones (:func:`overlays`).
 
 from __future__ import annotations
 
+import itertools
 from typing import Any, cast
 
 import numpy as np
 
 from poc_env.agents.mission.crs import to_geographic
 from poc_env.agents.mission.plan import (
+    APPROACH_APART_M,
     APPROACH_DISTANCE_M,
     APPROACH_HEIGHT_M,
     APPROACH_KIND,
     CLIMB_KIND,
+    DESCENT_KIND,
     Plan,
     approach_point,
+    approach_sides,
     flight,
     route,
 )
-from poc_env.agents.mission.terrain import DESCENT_KIND, from_record, plan_profiles
+from poc_env.agents.mission.terrain import departure_heading_deg, from_record, plan_profiles
 from poc_env.crs import densify_ring
 from poc_env.errors import ConfigError, as_number
 from poc_env.geometry import zone_label
@@ -113,15 +117,20 @@ def with_layers(plan: Plan, separation_m: float, layer_by: str = "field") -> Pla
     clearance and the ceiling), ``k'`` its index among the UAVs with a route of its take-off
     field (``layer_by="field"``) or of the whole plan (``"fleet"``). The take-off climb,
     transit, search and homeward legs fly the layer; the landing approach point keeps the
-    plan's approach height (the glide to the field is the landing's, one per field). The plan
+    plan's approach height (the glide to the field is the landing's, one per field), so
+    field-mates landing at one field are kept on approaches
+    :data:`~poc_env.agents.mission.plan.APPROACH_APART_M` apart instead (``approach_m``,
+    :func:`_approaches_apart`). The plan
     records ``altitude_layers`` (``separation_m``, ``layer_by``) for the formats' metadata.
-    ``separation_m = 0`` returns ``plan`` itself: every export as without layers. ``layer_m``
-    and ``altitude_layers`` are an export's own: a plan.json carrying them (written by hand,
-    or a plan exported in memory) has them dropped first, so only ``separation_m`` decides.
+    ``separation_m = 0`` returns ``plan`` itself: every export as without layers. ``layer_m``,
+    ``approach_m`` and ``altitude_layers`` are an export's own: a plan.json carrying them
+    (written by hand, or a plan exported in memory) has them dropped first, so only
+    ``separation_m`` decides.
     """
-    if "altitude_layers" in plan or any("layer_m" in u for u in plan["uavs"]):
+    own = ("layer_m", "approach_m")
+    if "altitude_layers" in plan or any(k in u for u in plan["uavs"] for k in own):
         kept = {k: v for k, v in plan.items() if k != "altitude_layers"}
-        plan = cast(Plan, {**kept, "uavs": [{k: v for k, v in u.items() if k != "layer_m"}
+        plan = cast(Plan, {**kept, "uavs": [{k: v for k, v in u.items() if k not in own}
                                             for u in plan["uavs"]]})  # fmt: skip
     if separation_m == 0:
         return plan
@@ -135,7 +144,39 @@ def with_layers(plan: Plan, separation_m: float, layer_by: str = "field") -> Pla
         count[key] = count.get(key, -1) + 1
         uavs.append({**u, "layer_m": count[key] * float(separation_m)})
     layers = {"separation_m": float(separation_m), "layer_by": layer_by}
-    return {**plan, "uavs": uavs, "altitude_layers": layers}
+    return {**plan, "uavs": _approaches_apart(uavs, plan.get("no_fly_zones_m")),
+            "altitude_layers": layers}  # fmt: skip
+
+
+def _apart(p: np.ndarray, others: list[np.ndarray]) -> bool:
+    """Whether ``p`` is at least :data:`~poc_env.agents.mission.plan.APPROACH_APART_M` from
+    every point of ``others``."""
+    return all(float(np.hypot(*(p - q))) >= APPROACH_APART_M - 1e-6 for q in others)
+
+
+def _approaches_apart(uavs: list[Any], zones: Any) -> list[Any]:
+    """Field-mates landing at one field with approach points closer than
+    :data:`~poc_env.agents.mission.plan.APPROACH_APART_M` (leftover g of i24-missionfix: on
+    the day audit's swall2 and s150land two UAVs glided down one path, 0.11 km apart at one
+    altitude, whatever their layers): each UAV in turn keeps its approach side if it is that
+    far from every earlier mate's, else takes the nearest side round the field
+    (:func:`~poc_env.agents.mission.plan.approach_sides`, clear of the ``zones``) that is,
+    recorded as its ``approach_m``. None that is: its own side, as before."""
+    taken: dict[tuple, list[np.ndarray]] = {}
+    out = []
+    for u in uavs:
+        if not u["waypoints_m"]:
+            out.append(u)
+            continue
+        mates = taken.setdefault(tuple(u["landing_m"]), [])
+        first = np.asarray(approach_point(u, zones))
+        sides = (np.asarray(p) for p in approach_sides(u, zones or ()))  # only if needed
+        pick = next((p for p in itertools.chain([first], sides) if _apart(p, mates)), first)
+        if pick is not first:
+            u = {**u, "approach_m": [float(v) for v in pick]}
+        mates.append(pick)
+        out.append(u)
+    return out
 
 
 def layer_of(u: Any) -> float:
@@ -265,7 +306,13 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
     take-off field on the ground, the :func:`~poc_env.agents.mission.terrain.profile` points
     (the climb over the field, the waypoints and the points the clearance needs, the landing
     approach point) at their AMSL altitudes (the layer in them), the landing field on the
-    ground.
+    ground. Where the UAV lands on a descent orbit (the profile's ``descent``), the route's
+    last leg is the glide it flies from the orbit's tangent exit (at the glide's altitude) to
+    the field, after the leg out from the approach point (the orbit's centre) to the exit,
+    which stands for the way out to the orbit (the orbit itself is its own line, read as
+    flown by ``replan --tracks``); before (i24-missionfix), the route ran straight from the
+    approach point to the field, where the aircraft flew the orbit and a glide 18 deg off
+    that line.
     """
     profs = plan_profiles(plan)
     out = []
@@ -275,8 +322,12 @@ def routes_3d(plan: Plan, alt: float, ground: float) -> list[tuple[list[list[flo
             out.append((pts, [ground, *[alt + layer_of(u)] * (len(pts) - 2), ground]))
             continue
         p = profs[k]
-        pts = [list(u["takeoff_m"]), *p.points_m.tolist(), list(u["landing_m"])]
-        out.append((pts, [p.field_m, *p.amsl_m.tolist(), p.landing_field_m]))
+        pts = [list(u["takeoff_m"]), *p.points_m.tolist()]
+        zs = [p.field_m, *p.amsl_m.tolist()]
+        if p.descent is not None:  # the glide flown from the orbit's exit, not from its centre
+            pts.append(list(p.descent.exit_m))
+            zs.append(float(p.descent.orbit.to_m))
+        out.append(([*pts, list(u["landing_m"])], [*zs, p.landing_field_m]))
     return out
 
 
@@ -344,11 +395,18 @@ def overlays(plan: Plan, crs: Any, alt: float, ground: float) -> list[dict[str, 
             ))  # fmt: skip
         sp = profs[k].climb if profs is not None else None
         if sp is not None:  # the climb spiral over the take-off field (terrain.climb_spiral)
+            xy, zs = sp.points()
+            extra = {}
+            if sp.depart_m > 0.0:  # a take-off on a heading of its own: drawn before the orbit
+                dxy, dz = sp.departure(profs[k].field_m)  # type: ignore[index]
+                xy, zs = np.concatenate([dxy, xy[1:]]), np.concatenate([dz, zs[1:]])
+                extra = {"departure_heading_deg": round(departure_heading_deg(sp), 1),
+                         "departure_km": round(sp.depart_m / 1e3, 3)}  # fmt: skip
             out.append(_orbit_line(
-                u, CLIMB_KIND, "climb spiral over the take-off field", *sp.points(), crs,
+                u, CLIMB_KIND, "climb spiral over the take-off field", xy, zs, crs,
                 radius_km=round(sp.radius_m / 1e3, 3), turns=round(sp.turns, 2),
                 from_m=round(sp.from_m, 1), to_m=round(sp.to_m, 1),
-                minutes=round(sp.time_s / 60.0, 1),
+                minutes=round(sp.time_s / 60.0, 1), **extra,
             ))  # fmt: skip
     for a in plan.get("airfields") or []:
         out.append(

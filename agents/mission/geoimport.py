@@ -44,7 +44,14 @@ from shapely.geometry.polygon import orient
 import poc_env.limits as limits
 from poc_env.agents.mission.crs import MAX_DISTANCE_KM, make_crs, parse_origin, to_local
 from poc_env.crs import EDGE_TOLERANCE_M, continuous_lon, densify_ring, geojson_crs_to_lonlat
-from poc_env.errors import ConfigError, GeometryError, as_number, check_name, require_extra
+from poc_env.errors import (
+    ConfigError,
+    GeometryError,
+    as_number,
+    check_name,
+    require_extra,
+    say_warning,
+)
 from poc_env.geometry import check_zones_leave_room, validate_polygon
 from poc_env.io import atomic_path
 
@@ -964,7 +971,7 @@ def cmd_scenario_import(args: argparse.Namespace) -> int:
             particle_motion=args.particle_motion,
         )
     for w in caught:
-        print(f"warning: {w.message}")
+        say_warning(w.message)
     rep = result["report"]
     ny, nx = rep["cells"]
     sc = result["scenario"]

@@ -136,6 +136,12 @@ APPROACH_HEIGHT_M = 300.0
 #: 5 deg) + 0.1 deg (navigator's FeasibilityChecker), so no export glides steeper unless a
 #: terrain clearance needs it (:func:`poc_env.agents.mission.terrain.profile` warns then).
 LANDING_GLIDE = APPROACH_HEIGHT_M / APPROACH_DISTANCE_M
+#: With altitude layers, field-mates landing at one field keep their approach points at least
+#: this far apart (metres; eq. 21's safe distance d_s of the paper's UAV): one glide path flown
+#: by two UAVs cannot be layered (a common glide slope puts both at one altitude over each
+#: point), so the later UAV's approach is turned round the field, 15 deg steps (1.04 km at
+#: :data:`APPROACH_DISTANCE_M`), nearest first (i24-missionfix).
+APPROACH_APART_M = 1000.0
 #: The ``kind`` (GeoJSON property, KML style id) of the landing approach drawn beside each
 #: route: not a second flight (``replan --tracks`` skips it, the route already flies to the field).
 APPROACH_KIND = "landing_approach"
@@ -144,6 +150,11 @@ APPROACH_KIND = "landing_approach"
 #: (:func:`poc_env.agents.mission.terrain.climb_spiral`): flown (KML draws it in the route's
 #: style, ``replan --tracks`` reads it as flown).
 CLIMB_KIND = "climb_spiral"
+#: The ``kind`` (GeoJSON property) of the descent orbit at the landing approach point drawn
+#: beside a route whose straight final glide meets the ground
+#: (:func:`poc_env.agents.mission.terrain.descent_orbit`): flown, like :data:`CLIMB_KIND`
+#: (the orbit kinds' one home, i24-missionfix; it was defined in the terrain module).
+DESCENT_KIND = "descent_orbit"
 
 
 class Rectangle(TypedDict):
@@ -188,6 +199,9 @@ class UavPlan(_UavRequired, total=False):
     #: set by an export only (:func:`poc_env.agents.mission.features.with_layers`): the UAV's
     #: altitude layer above the plan's altitude, metres
     layer_m: float
+    #: set by an export's layers only (with_layers): the landing approach point, local metres,
+    #: turned from the default side to keep field-mates' approaches apart
+    approach_m: list[float]
 
 
 class Airfield(TypedDict):
@@ -519,10 +533,11 @@ def approach_sides(u: UavPlan, zones: Any = (), *, turn: bool = True) -> Iterato
     """The approach waypoints :data:`APPROACH_DISTANCE_M` round the landing field a UAV may
     come in from, clear of the no-fly ``zones`` (:func:`approach_point`'s test): the side of
     the last search point first, then turned in 15 degree steps, nearest first (both ways, all
-    24 sides; only the first without ``turn``), generated one by one.
-    :func:`approach_point` takes the first; the terrain's final glide
-    (:func:`poc_env.agents.mission.terrain.landing_profile`) searches them for one whose glide
-    clears the ground."""
+    24 sides; only the first without ``turn``), generated one by one; a UAV given its side by
+    the export's layers (``approach_m``, :func:`~poc_env.agents.mission.features.with_layers`:
+    field-mates' approaches apart) that side first. :func:`approach_point` takes the first;
+    the terrain's final glide (:func:`poc_env.agents.mission.terrain.landing_profile`)
+    searches them for one whose glide clears the ground."""
     import numpy as np
 
     end = np.asarray(u["landing_m"], dtype=float)
@@ -531,6 +546,9 @@ def approach_sides(u: UavPlan, zones: Any = (), *, turn: bool = True) -> Iterato
     d = last - end
     first = math.atan2(d[1], d[0]) if float(np.hypot(*d)) > 1.0 else 0.0
     polys = _valid_polygons(zones)
+    given = u.get("approach_m")  # an export's side for field-mates (features.with_layers)
+    if given is not None:
+        yield [float(v) for v in given]
     for step in (0, *(s * k for k in range(1, 13) for s in (1, -1))) if turn else (0,):
         a = first + math.radians(15.0 * step)
         p = end + APPROACH_DISTANCE_M * np.array([math.cos(a), math.sin(a)])

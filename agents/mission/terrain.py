@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import dataclasses
 import itertools
 import math
 from collections.abc import Iterator
@@ -75,9 +76,6 @@ DEFAULT_TURN_RATE_DEG_S = 3.0
 SPIRAL_STEP_M = 100.0
 #: Arc between two points of a climb spiral's first turn where its ground is read (metres).
 ORBIT_SAMPLE_M = 10.0
-#: The ``kind`` (GeoJSON property) of the descent orbit at the landing approach point drawn
-#: beside a route whose straight final glide meets the ground (:func:`descent_orbit`).
-DESCENT_KIND = "descent_orbit"
 
 
 class GlideError(ConfigError):
@@ -628,7 +626,13 @@ class Spiral:
         The orbit's radius, its first and last altitude (AMSL), the speed flown on it and the
         pitch it climbs at.
     start_rad : float
-        The angle (from east, counter-clockwise) of its first point round the field.
+        The angle (from east, counter-clockwise) of its first point round the field: the
+        heading the take-off climbs out on to ``from_m``.
+    depart_m : float
+        The take-off climb's length (to ``from_m``) where it departs on a heading of its own,
+        away from the first waypoint (i24-missionfix: the straight climb towards it meets the
+        ground, :func:`departure_spiral`); 0 where it climbs out towards the first waypoint,
+        along the route (as before).
     """
 
     center_m: tuple[float, float]
@@ -638,6 +642,7 @@ class Spiral:
     speed_mps: float
     pitch_rad: float
     start_rad: float
+    depart_m: float = 0.0
 
     @property
     def length_m(self) -> float:
@@ -647,8 +652,29 @@ class Spiral:
 
     @property
     def time_s(self) -> float:
-        """The orbit's flight time, at ``speed_mps``: what the 2-D time model does not fly."""
-        return self.length_m / self.speed_mps
+        """The orbit's flight time, at ``speed_mps``: what the 2-D time model does not fly.
+        With a departure of its own (``depart_m``), also the climb out and the way back to the
+        field, charged as twice its length (the 2-D model flies the route from the field)."""
+        return (self.length_m + 2.0 * self.depart_m) / self.speed_mps
+
+    @property
+    def depart_xy(self) -> tuple[float, float]:
+        """Where the take-off climb reaches ``from_m``: ``depart_m`` out on ``start_rad``
+        (the field itself without a departure of its own)."""
+        c, d = self.center_m, self.depart_m
+        return (c[0] + d * math.cos(self.start_rad), c[1] + d * math.sin(self.start_rad))
+
+    def departure(self, field_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(xy, amsl)`` of the departure drawn before the orbit: the field (at its elevation
+        ``field_m``), the point the climb reaches ``from_m``, then the orbit's first point
+        (empty arrays without a departure of its own)."""
+        if self.depart_m <= 0.0:
+            return np.zeros((0, 2)), np.zeros(0)
+        a = self.start_rad
+        ring = (self.center_m[0] + self.radius_m * math.cos(a),
+                self.center_m[1] + self.radius_m * math.sin(a))  # fmt: skip
+        xy = np.array([self.center_m, self.depart_xy, ring], dtype=float)
+        return xy, np.array([field_m, self.from_m, self.from_m])
 
     @property
     def turns(self) -> float:
@@ -768,6 +794,7 @@ def profile(
     speed_mps: float | None = None,
     loiter: bool = False,
     route_speed_mps: float | None = None,
+    airspace: tuple = ((), None),
 ) -> Profile:
     """The altitudes along ``path_xy`` (take-off field, waypoints, approach point) over ``t``.
 
@@ -782,7 +809,9 @@ def profile(
     cap). ``route_speed_mps``: the fastest speed flown along the legs (default ``speed_mps``):
     with the aircraft's vertical rate limits, the legs' climbs and descents are bounded per
     metre at it (:func:`vertical_angle`: a profile flyable at the fastest speed is flyable at
-    the slower ones), as are the straight take-off climb and the final glide.
+    the slower ones), as are the straight take-off climb and the final glide. ``airspace``:
+    (no-fly zones, operating area polygon or None), where a take-off may depart on a heading
+    of its own (:func:`departure_spiral`).
 
     Raises
     ------
@@ -854,7 +883,7 @@ def profile(
     elif landing_xy is not None:
         z = _glide_cap(t, p, z, req, dist, np.asarray(landing_xy, dtype=float), where, down)
     glide_to = None if loiter else landing_xy
-    climb = _check_field_legs(t, p, z, dist, glide_to, where, speed_mps, layer_m, up)
+    climb = _check_field_legs(t, p, z, dist, glide_to, where, speed_mps, layer_m, up, airspace)
     keep = _simplify(dist, z, np.maximum(req, z - PROFILE_TOLERANCE_M), vertex)
     land = path[-1] if landing_xy is None else landing_xy
     return Profile(
@@ -879,6 +908,7 @@ def _check_field_legs(
     speed_mps: float | None = None,
     layer_m: float = 0.0,
     up: float | None = None,
+    airspace: tuple = ((), None),
 ) -> Spiral | None:
     """The take-off climb and the final glide: above the ground (the bilinear ``ground_m``);
     the climb spiral the take-off needs, if any.
@@ -916,6 +946,10 @@ def _check_field_legs(
         climb = np.where(
             straight < spiral.from_m, straight, np.minimum(z, spiral.to_m + grad * dist)
         )
+        if _first_cut(t, p[0], p, climb) is not None:  # even to the orbit: depart elsewhere
+            turned = departure_spiral(t, p, z, dist, where, speed_mps, layer_m, grad, airspace)
+            if turned is not None:  # its climb out checked there; the route from the top
+                spiral, climb = turned, np.minimum(z, turned.to_m + grad * dist)
     what = "take-off climb from"
     if spiral is not None:
         what = (
@@ -971,9 +1005,11 @@ def climb_spiral(
     speed_mps: float | None = None,
     layer_m: float = 0.0,
     up: float | None = None,
+    start_rad: float | None = None,
 ) -> Spiral:
     """The climb spiral over the take-off field ``p[0]`` for a mission whose straight climb
-    meets the ground (:class:`Spiral`).
+    meets the ground (:class:`Spiral`); ``start_rad``: the heading the take-off climbs out on
+    (default towards the first waypoint, :func:`departure_spiral` tries others).
 
     Eq. 19 in the horizontal plane bounds the turn rate, so the tightest orbit at the speed
     ``v`` (``speed_mps``, default the paper's 220 km/h) has the radius ``v / turn rate``, and a
@@ -1011,8 +1047,7 @@ def climb_spiral(
     field = t.field_elevation(p[0])
     r = orbit_radius(t, v, layer_m)
     ground = bilinear(t.ground_m, t.origin_m, t.cell_m, p)
-    ahead = p[np.argmax(dist > 0.0)] - p[0] if dist[-1] > 0.0 else np.array([1.0, 0.0])
-    start = math.atan2(float(ahead[1]), float(ahead[0]))
+    start = _route_heading(p, dist) if start_rad is None else start_rad
     arc = np.arange(0.0, 2.0 * math.pi * r, ORBIT_SAMPLE_M)  # one turn: the later ones are higher
     ring = np.column_stack(
         [p[0][0] + r * np.cos(start - arc / r), p[0][1] + r * np.sin(start - arc / r)]
@@ -1036,6 +1071,91 @@ def climb_spiral(
         start_rad=start,
     )
     return sp
+
+
+def _route_heading(p: np.ndarray, dist: np.ndarray) -> float:
+    """The heading (rad from east, counter-clockwise) from the field ``p[0]`` towards the
+    mission's first point away from it (east for a mission that goes nowhere)."""
+    ahead = p[np.argmax(dist > 0.0)] - p[0] if dist[-1] > 0.0 else np.array([1.0, 0.0])
+    return math.atan2(float(ahead[1]), float(ahead[0]))
+
+
+#: The take-off headings :func:`departure_spiral` tries: every 15 degrees (the landing's
+#: :func:`~poc_env.agents.mission.plan.approach_sides` step), nearest the route's first.
+DEPARTURE_STEP_RAD = math.pi / 12.0
+
+
+def departure_spiral(
+    t: Terrain,
+    p: np.ndarray,
+    z: np.ndarray,
+    dist: np.ndarray,
+    where: str,
+    speed_mps: float | None,
+    layer_m: float,
+    up: float,
+    airspace: tuple = ((), None),
+) -> Spiral | None:
+    """A climb spiral whose take-off climbs out on a heading of its own, for a mission whose
+    take-off climb towards its first waypoint meets the ground before the spiral's first
+    altitude (i24-missionfix: at PX4's 5 m/s climb the day audit's probes 13 and 14 were
+    refused so).
+
+    A pilot departs away from rising ground: the headings every
+    :data:`DEPARTURE_STEP_RAD` round the field are tried, nearest the route's first (+ before
+    -), each with its own :func:`climb_spiral` (the orbit starts where the departure line
+    crosses it, so its first altitude reads the ground from there). A heading flies if its
+    straight climb at ``up`` per metre from the field's elevation to the orbit's first
+    altitude stays above the ground (the bilinear ``ground_m``, outside the field's own cells,
+    as every take-off climb, :func:`_check_field_legs`), inside the terrain grid, outside the
+    no-fly zones and inside the operating area (``airspace`` = (zones, operating area polygon
+    or None); the QGC fences). Of those, the one over the least rising ground (the highest
+    ground under it, the field's cells included, above the field, to the metre) is taken, the
+    nearest the route's among equals: away from the terrain, not skimming it. Its length is
+    the spiral's ``depart_m`` (charged twice, :attr:`Spiral.time_s`). None if no heading
+    flies.
+    """
+    from shapely.geometry import LineString, Polygon
+
+    zones, area = airspace
+    polys = [Polygon(zn) for zn in zones or ()]
+    fence = Polygon(area).buffer(1.0) if area else None
+    x0, y0, x1, y1 = t.bounds
+    field = t.field_elevation(p[0])
+    route = _route_heading(p, dist)
+    n = round(2.0 * math.pi / DEPARTURE_STEP_RAD)
+    steps = [s * k for k in range(1, n // 2 + 1) for s in ((1, -1) if k < n // 2 else (1,))]
+    best: tuple[float, Spiral] | None = None
+    for k in steps:
+        h = route + k * DEPARTURE_STEP_RAD
+        try:  # (its top above the ceiling: not this heading)
+            sp = climb_spiral(t, p, z, dist, where, speed_mps, layer_m, up, start_rad=h)
+        except ConfigError:
+            continue
+        run = max(0.0, (sp.from_m - field) / up)
+        s = np.linspace(0.0, run, max(1, math.ceil(run / (t.cell_m / 2.0))) + 1)
+        xy = p[0] + s[:, None] * np.array([math.cos(h), math.sin(h)])
+        end = xy[-1]
+        if not (x0 <= end[0] <= x1 and y0 <= end[1] <= y1):
+            continue
+        line = LineString([tuple(p[0]), tuple(end)])
+        if any(line.intersects(zn) for zn in polys) or (fence and not fence.covers(line)):
+            continue
+        if _first_cut(t, p[0], xy, field + up * s) is not None:
+            continue
+        top = float(np.max(bilinear(t.ground_m, t.origin_m, t.cell_m, xy)))  # the ground under it
+        rise = max(0.0, round(top - field))
+        if best is None or rise < best[0]:
+            best = (rise, dataclasses.replace(sp, depart_m=float(run)))
+        if rise == 0.0:  # level ground: the nearest such heading to the route's
+            break
+    return None if best is None else best[1]
+
+
+def departure_heading_deg(sp: Spiral) -> float:
+    """The compass heading (degrees clockwise from grid north, the map's +y) of a climb
+    spiral's take-off climb (:attr:`Spiral.start_rad`)."""
+    return (90.0 - math.degrees(sp.start_rad)) % 360.0
 
 
 def orbit_radius(t: Terrain, speed_mps: float, layer_m: float = 0.0) -> float:
@@ -1189,8 +1309,6 @@ def separate_orbits(plan: Any, t: Terrain, profs: list[Profile]) -> list[Profile
         Naming ``plan.uavs[k]``: a raised spiral above the ceiling, or a raised descent orbit
         whose glide would be steeper than eq. 19's pitch bound.
     """
-    import dataclasses
-
     layers = plan.get("altitude_layers")
     if not layers or not profs:
         return profs
@@ -1301,8 +1419,9 @@ def landing_profile(
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")  # the caller's filters decide when said below
             prof = profile(
-                t, [*path[:-1], app], where, land, layer, speed_mps, loiter, route_speed_mps
-            )
+                t, [*path[:-1], app], where, land, layer, speed_mps, loiter, route_speed_mps,
+                (zones, area),
+            )  # fmt: skip
         if not steep and any(issubclass(w.category, SteepGlideWarning) for w in said):
             raise GlideError(where, "a glide steeper than the flat export's", "a gentler one")
         for w in said:
@@ -1555,7 +1674,8 @@ def mission_path(u: Any, zones: Any = ()) -> list[list[float]]:
 
 
 #: Within :func:`profiles_once`: (id of the terrain record, of the UAV, of the zones) ->
-#: (those three objects, kept alive so that their ids stay theirs, and the profile).
+#: (those three objects, kept alive so that their ids stay theirs, and the profile); and
+#: ("terrain", id of the record) -> (the record, its :class:`Terrain`).
 _PROFILES: contextvars.ContextVar[dict | None] = contextvars.ContextVar("_profiles", default=None)
 
 
@@ -1620,7 +1740,7 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
         if memo is not None and key in memo:
             out.append(memo[key][-1])
             continue
-        t = t or from_record(rec)
+        t = t or _record_terrain(rec, memo)
         where = f"plan.uavs[{k}] (UAV {u['id']})"
         area = plan.get("operating_area_m")
         p = landing_profile(t, u, zones, where, speed, area, route_speed)
@@ -1630,12 +1750,26 @@ def plan_profiles(plan: Any, charge: bool = True) -> list[Profile] | None:
             memo[key] = (rec, u, zones, p)
         out.append(p)
     if layered:  # field-mates' concentric orbits kept apart, then charged
-        t = t or from_record(rec)
+        t = t or _record_terrain(rec, memo)
         out = separate_orbits(plan, t, out)
         for k, (u, p) in enumerate(zip(plan["uavs"], out)):
             if charge:
                 _charge_orbits(t, u, p, f"plan.uavs[{k}] (UAV {u['id']})")
     return out
+
+
+def _record_terrain(rec: dict[str, Any], memo: dict | None) -> Terrain:
+    """The plan's terrain record as a :class:`Terrain`: read once within
+    :func:`profiles_once` (the orbit fit's trials call :func:`plan_profiles` once per dropped
+    waypoint, and each read the whole grid from the record again, i24-missionfix), else read
+    now."""
+    if memo is None:
+        return from_record(rec)
+    key = ("terrain", id(rec))
+    if key not in memo:
+        memo[key] = (rec, from_record(rec))  # rec kept alive, so that its id stays its own
+    t: Terrain = memo[key][-1]
+    return t
 
 
 def _charge_orbits(t: Terrain, u: Any, p: Profile, where: str) -> None:

@@ -181,8 +181,14 @@ def fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[st
     flight + orbits fit; then the plan's POS is scored again by the allocation planner's own
     scorer (:func:`poc_env.agents.planning.allocation.sampled_sweep`, eq. 14 along every
     flight path; the DE plan's POS of a trimmed plan too, since its rectangles are no longer
-    flown whole) and the trim recorded in ``orbit_fit``. Nothing changes (the same object is
-    returned) without terrain or when every UAV's orbits fit.
+    flown whole) and the trim recorded in ``orbit_fit``. A trimmed DE plan's metadata of the
+    untrimmed decision is moved there, not left stale (i24-missionfix): a trimmed UAV's
+    ``rectangle`` and ``flown_rectangle`` (``null`` in the plan; its search is drawn from the
+    ``areas_m`` its kept lines sweep, as an allocation plan's) and the plan's ``x`` and
+    ``objective`` (the optimiser's, of routes no longer flown; the allocation's ``objective``
+    is recomputed, ``-POS_C``). ``upper_bound`` (the bound of the untrimmed effort) is kept:
+    still an upper bound. Nothing changes (the same object is returned) without terrain or
+    when every UAV's orbits fit.
 
     Parameters
     ----------
@@ -292,11 +298,21 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
         legs = np.array([wps[i : i + 2] for i in range(lead, len(wps) - 1)]).reshape(-1, 2, 2)
         if "transit_waypoints" in u:
             u["transit_waypoints"] = lead
+        cut: dict[str, Any] = {}
+        if u.get("rectangle") is not None or u.get("flown_rectangle") is not None:
+            # a DE rectangle no longer flown whole: its lines kept are drawn as areas instead,
+            # the rectangles it had moved to orbit_fit (i24-missionfix: they were left stale)
+            cut = {"rectangle_before": u["rectangle"], "flown_rectangle_before":
+                   u.get("flown_rectangle")}  # fmt: skip
+            u["rectangle"], u["flown_rectangle"] = None, None
+            u["areas_m"] = u.get("areas_m") or []
+        if "pos_flown" in u:  # a survey's Table 4 figure, of the whole pattern
+            cut["pos_flown_before"] = u.pop("pos_flown")
         if "areas_m" in u:
             u["areas_m"] = _swept_areas(legs, u["spacing_m"]) if len(legs) else []
         u["feasible"] = bool(u["flight_time_s"] <= usable)
         dropped[str(u["id"])] = {"waypoints_before": n0, "waypoints_after": len(wps),
-                                 "last_leg_kept": lo}  # fmt: skip
+                                 "last_leg_kept": lo, **cut}  # fmt: skip
     if not dropped:
         return plan
     pos, found = sampled_sweep(
@@ -313,6 +329,10 @@ def _fit_orbits(plan: dict[str, Any], sc: Scenario, prior: np.ndarray) -> dict[s
     out["posc"] = float(sum(pos))
     if "objective" in out and plan.get("speeds_mps"):
         out["objective"] = -out["posc"]
+    elif "x" in out:  # a DE plan: its optimiser's x and objective are the untrimmed plan's
+        out["orbit_fit"]["x_before"] = out.pop("x")  # (no x flies the trimmed routes)
+        if "objective" in out:
+            out["orbit_fit"]["objective_before"] = out.pop("objective")
     return out
 
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from poc_env.config import Scenario
 from poc_env.crs import geojson_crs_to_lonlat
-from poc_env.errors import ConfigError
+from poc_env.errors import ConfigError, say_warning
 from poc_env.theory.probability_map import Grid
 from poc_env.theory.search_theory import sweep_track
 
@@ -141,8 +141,8 @@ def clip_tracks(
             check_paths(sc, [pts], [field], crs)  # raises: none of it inside
         total = float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
         kept = sum(float(np.sum(np.hypot(*np.diff(q, axis=0).T))) for q in parts)
-        print(
-            f"warning: {field}: {(total - kept) / 1e3:.1f} of {total / 1e3:.1f} km flown "
+        say_warning(
+            f"{field}: {(total - kept) / 1e3:.1f} of {total / 1e3:.1f} km flown "
             f"outside the operating area (up to {off.max() / 1e3:.1f} km from it); the "
             f"{len(parts)} stretch(es) inside are swept"
         )
@@ -727,7 +727,7 @@ def cli_main(args: Any) -> int:
         print(skipped_polish)
     for warning in (moving_target_warning(sc, replanned=True), lattice_warning(sc)):
         if warning is not None:
-            print(f"warning: {warning}")
+            say_warning(warning)
     print(sortie_text(nxt))
     write_plan(with_scenario_file(nxt, name), args.out)  # export finds the prior by it
     print(f"wrote {args.out}")

@@ -450,4 +450,5 @@ def survey_plan(
             **plan_geography(scenario, prior, crs),
         },
         scenario,
+        prior,  # orbits that do not fit: the patterns trimmed, as plan's (i24-missionfix)
     )

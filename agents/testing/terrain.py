@@ -38,6 +38,29 @@ def wall_scenario(**over: Any) -> dict[str, Any]:
     return {**data, **over}
 
 
+#: The two fields of :func:`valley_to_bowl` (km): ``valley`` and ``bowl``.
+VALLEY_KM, BOWL_KM = (-10.0, 20.0), (70.0, 20.0)
+
+
+def valley_to_bowl(ring_m: float | None = None, count: int = 2) -> dict[str, Any]:
+    """:func:`wall_scenario` flown from ``valley`` to ``bowl`` by ``count`` UAVs over a flat
+    valley (an elevation grid of 1 km cells from (-40, -30) km); with ``ring_m``, ground of
+    that height in a ring 6-8 km round ``bowl`` (tests/mission/test_orbit_fit.py,
+    test_vertical_rates.py, test_missionfix.py)."""
+    x = -40 + np.arange(140) + 0.5
+    gx, gy = np.meshgrid(x, -30 + np.arange(100) + 0.5)
+    elev = np.full(gx.shape, VALLEY_M)
+    if ring_m is not None:
+        d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
+        elev = np.where((d >= 6.0) & (d <= 8.0), ring_m, elev)
+    return wall_scenario(
+        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
+                   {"name": "bowl", "position_km": list(BOWL_KM)}],
+        fleet=[{"takeoff": "valley", "landing": "bowl", "count": count}],
+        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
+    )  # fmt: skip
+
+
 def hill_across_first_leg(
     plan: dict[str, Any], k: int, start_m: float, end_m: float, half_width_m: float, height_m: float
 ) -> dict[str, Any]:

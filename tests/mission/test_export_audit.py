@@ -174,7 +174,7 @@ def test_a_uav_without_a_search_route_is_left_out_and_named(tmp_path, capsys, fm
     _idle(plan["uavs"][1])
     write_plan(plan, tmp_path / "plan.json")
     files = export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / "o")
-    assert "warning: plan.uavs[1] (UAV 2): no search planned" in capsys.readouterr().out
+    assert "warning: plan.uavs[1] (UAV 2): no search planned" in capsys.readouterr().err
     text = "\n".join(f.read_text(encoding="utf-8") for f in files if f.suffix != ".png")
     if fmt == "qgc":
         assert sorted(f.name for f in files) == ["plan_uav1.plan", "plan_uav3.plan"]
@@ -196,7 +196,7 @@ def test_uavs_left_out_are_named_in_one_warning_line(tmp_path, capsys):
         _idle(u)
     write_plan(plan, tmp_path / "plan.json")
     export_plan(tmp_path / "plan.json", "geojson", out_dir=tmp_path / "o")
-    lines = [x for x in capsys.readouterr().out.splitlines() if "no search planned" in x]
+    lines = [x for x in capsys.readouterr().err.splitlines() if "no search planned" in x]
     assert lines == [
         "warning: plan.uavs[1] (UAV 2), plan.uavs[2] (UAV 3), plan.uavs[3] (UAV 4), "
         "plan.uavs[4] (UAV 5), plan.uavs[5] (UAV 6), plan.uavs[6] (UAV 7) and 3 more: no search "

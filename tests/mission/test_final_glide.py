@@ -25,9 +25,8 @@ from poc_env.agents.mission.formats.qgc import (
     MAV_CMD_NAV_LOITER_TO_ALT,
     validate_qgc,
 )
-from poc_env.agents.mission.plan import load_plan, write_plan
+from poc_env.agents.mission.plan import DESCENT_KIND, load_plan, write_plan
 from poc_env.agents.mission.terrain import (
-    DESCENT_KIND,
     bilinear,
     from_record,
     plan_profiles,
@@ -139,7 +138,7 @@ def test_field_mates_orbits_are_kept_apart_by_their_layers(tmp_path, bowl_plan, 
     for tag, opts in (("flat", {}), ("lay", {"separation_m": sep})):
         capsys.readouterr()
         export_plan(tmp_path / "plan.json", "qgc", out_dir=tmp_path / tag, **opts)
-        said[tag] = capsys.readouterr().out
+        said[tag] = capsys.readouterr().err
         export_plan(tmp_path / "plan.json", "geojson", out_dir=tmp_path / f"{tag}_gj", **opts)
         radii[tag] = []
         for u in plan["uavs"]:

@@ -17,29 +17,14 @@ from poc_env.agents.mission.plan import load_plan, write_plan
 from poc_env.agents.mission.terrain import orbit_time_s, plan_profiles
 from poc_env.agents.planning.allocation import sampled_sweep
 from poc_env.agents.planning.planner import make_plan
-from poc_env.agents.testing.terrain import VALLEY_M, wall_scenario
+from poc_env.agents.testing.terrain import VALLEY_M, valley_to_bowl
 from poc_env.config import load_scenario
 from poc_env.theory.probability_map import Grid, build_prior
-
-BOWL_KM = (70.0, 20.0)
-VALLEY_KM = (-10.0, 20.0)
 
 
 def _scenario(ring_m: float | None):
     """valley -> bowl, 2 UAVs; with ``ring_m`` a ring of that height 6-8 km round bowl."""
-    x = -40 + np.arange(140) + 0.5
-    y = -30 + np.arange(100) + 0.5
-    gx, gy = np.meshgrid(x, y)
-    d = np.hypot(gx - BOWL_KM[0], gy - BOWL_KM[1])
-    elev = np.full(gx.shape, VALLEY_M)
-    if ring_m is not None:
-        elev = np.where((d >= 6.0) & (d <= 8.0), ring_m, elev)
-    return load_scenario(wall_scenario(
-        airfields=[{"name": "valley", "position_km": list(VALLEY_KM)},
-                   {"name": "bowl", "position_km": list(BOWL_KM)}],
-        fleet=[{"takeoff": "valley", "landing": "bowl", "count": 2}],
-        terrain={"elevation_m": elev.tolist(), "cell_km": 1.0, "origin_km": [-40, -30]},
-    ))  # fmt: skip
+    return load_scenario(valley_to_bowl(ring_m))
 
 
 @pytest.fixture(scope="module")

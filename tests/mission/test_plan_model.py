@@ -44,7 +44,7 @@ def test_the_typed_model_names_every_checked_key():
     assert set(Plan.__required_keys__) == PLAN_KEYS
     assert set(UavPlan.__required_keys__) == UAV_KEYS
     # layer_m: set by an export only (features.with_layers), never by a planner
-    assert {"flown_rectangle", "areas_m", "layer_m"} == set(UavPlan.__optional_keys__)
+    assert {"flown_rectangle", "areas_m", "layer_m", "approach_m"} == set(UavPlan.__optional_keys__)
     assert {"crs", "flight", "bounds", "airfields"} <= set(Plan.__optional_keys__)
 
 

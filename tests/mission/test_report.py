@@ -385,14 +385,14 @@ def test_a_route_through_a_zone_is_flagged_by_every_viewing_format(small_plan, t
         export_plan(path, "qgc", out_dir=tmp_path / "q")
     for fmt in ("geojson", "kml", "html"):
         files = export_plan(path, fmt, out_dir=tmp_path / fmt)
-        out = capsys.readouterr().out
+        out = capsys.readouterr().err
         assert "warning: plan.uavs[0]: got 1; allowed: a mission outside no-fly zone 0 ('R-9')" in (
             out
         ), fmt
         if fmt == "html":
             assert "a mission outside no-fly zone 0 (&#39;R-9&#39;)" in files[0].read_text()
     export_plan(small_plan, "html", out_dir=tmp_path / "clean")
-    assert "warning" not in capsys.readouterr().out
+    assert "warning" not in capsys.readouterr().err
 
 
 def test_headless_browser_draws_routes_above_zones_and_areas(small_plan, tmp_path):

@@ -32,7 +32,7 @@ from poc_env.agents.mission.terrain import (
     qgc_clearance,
 )
 from poc_env.agents.planning.planner import make_plan
-from poc_env.agents.testing.terrain import hill_across_first_leg
+from poc_env.agents.testing.terrain import ring_around
 from poc_env.config import load_scenario
 from poc_env.errors import ConfigError
 
@@ -589,10 +589,16 @@ def test_take_off_climb_and_final_glide_stay_above_the_ground():
     steep_m = np.maximum(np.asarray(_slope(1000.0)), 0.0).tolist()  # sea level to the west
     steep = load_terrain(load_scenario(_scenario(None, terrain={
         "elevation_m": steep_m, "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
-    with pytest.raises(
+    sp = profile(steep, route, "UAV 3").climb  # since i24-missionfix: it departs off the route
+    assert sp is not None and sp.depart_m > 0.0 and abs(math.sin(sp.start_rad)) > 0.25
+    x, y = np.meshgrid(-40 + np.arange(120) + 0.5, -30 + np.arange(100) + 0.5)
+    pit_m = np.minimum(VALLEY_M + 1000.0 * np.hypot(x + 10.0, y - 20.0), 5000.0).tolist()
+    pit = load_terrain(load_scenario(_scenario(None, terrain={
+        "elevation_m": pit_m, "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
+    with pytest.raises(  # ground rising 1,000 m/km every way: no heading clears
         ConfigError, match=r"UAV 3: .* km from the take-off field.*climb \(to .*orbit"
     ):
-        profile(steep, route, "UAV 3")
+        profile(pit, route, "UAV 3")
     gentle = load_terrain(load_scenario(_scenario(None, terrain={
         "elevation_m": _slope(250.0), "cell_km": 1.0, "origin_km": [-40, -30]})))  # fmt: skip
     assert clearance_violations(gentle, profile(gentle, route, "UAV 3"), step_m=50.0) == 0
@@ -617,11 +623,12 @@ def test_export_refuses_a_take_off_climb_into_the_ground(tmp_path):
     plan = make_plan(sc, planner="allocation", uavs=2, refine=0)
     (k,) = [k for k, u in enumerate(plan["uavs"]) if u["waypoints_m"][0][1] < 15e3]  # south
     u = plan["uavs"][k]
-    # a 2,500 m hill across its first leg, 1.5-3.5 km from the field
-    steep = hill_across_first_leg(plan, k, 1.5e3, 3.5e3, 800.0, 2500.0)
-    write_plan({**plan, "terrain": steep}, tmp_path / "plan.json")
+    # a 2,500 m ring 1.5-3.5 km round the field (a hill across the first leg alone is flown
+    # since i24-missionfix: the take-off departs on another heading)
+    field_km = np.asarray(u["takeoff_m"]) / 1e3
+    write_plan(ring_around(plan, field_km, 1.5, 3.5, 2500.0), tmp_path / "plan.json")
     for fmt in ("qgc", "kml", "geojson", "html"):
-        with pytest.raises(ConfigError, match=rf"plan\.uavs\[{k}\] \(UAV {u['id']}\).*take-off"):
+        with pytest.raises(ConfigError, match=r"plan\.uavs\[\d\] \(UAV \w+\).*take-off"):
             export_plan(tmp_path / "plan.json", fmt, out_dir=tmp_path / fmt)
         assert not (tmp_path / fmt).exists()
 

@@ -34,8 +34,7 @@ from poc_env.agents.mission.features import (
 )
 from poc_env.agents.mission.job import ExportJob
 from poc_env.agents.mission.overlay import plan_prior, png_bytes, warp_prior
-from poc_env.agents.mission.plan import CLIMB_KIND, Plan, flight, search_rings
-from poc_env.agents.mission.terrain import DESCENT_KIND
+from poc_env.agents.mission.plan import CLIMB_KIND, DESCENT_KIND, Plan, flight, search_rings
 from poc_env.io import write_bytes_atomic, write_text_atomic
 
 #: altitude reference -> KML altitudeMode

@@ -122,7 +122,11 @@ def qgc_plan(
     home position are at the fields' DEM elevations. Where the straight climb meets the ground
     (the profile's ``climb`` spiral), the take-off climbs to the spiral's first altitude and
     NAV_LOITER_TO_ALT (31) at the field, clockwise at the spiral's radius, climbs to its last
-    before the transit. Where no straight final glide clears the ground (the profile's
+    before the transit; where that take-off departs on a heading of its own (the spiral's
+    ``depart_m``, :func:`poc_env.agents.mission.terrain.departure_spiral`), the take-off item
+    stands where its climb reaches the orbit's first altitude, on that heading (PX4's
+    fixed-wing mission take-off climbs out on the course from the launch point towards it).
+    Where no straight final glide clears the ground (the profile's
     ``descent``, :func:`poc_env.agents.mission.terrain.landing_profile`), the approach
     waypoint is followed by NAV_LOITER_TO_ALT at it down to the glide's entry altitude (PX4's
     fixed-wing landing pattern: DO_LAND_START, the orbit, NAV_LAND; its feasibility check
@@ -174,7 +178,10 @@ def _terrain_plan(
     z = [round(float(v), 1) for v in prof.amsl_m]
     sp = prof.climb
     up = z[0] if sp is None else round(float(sp.from_m), 1)
-    items = [_nav(MAV_CMD_NAV_TAKEOFF, *ll[0], up, ref, (15, 0, 0, None))]
+    at = ll[0]  # the take-off item: at the field, or where a departure of its own tops out
+    if sp is not None and sp.depart_m > 0.0:  # (PX4 climbs out on the course towards it)
+        at = to_geographic([list(sp.depart_xy)], crs)[0]
+    items = [_nav(MAV_CMD_NAV_TAKEOFF, *at, up, ref, (15, 0, 0, None))]
     items.append(_speed(cruise_speed_mps if transit_speed_mps is None else transit_speed_mps))
     if sp is not None:  # orbit the field up to where the straight climb clears the ground
         orbit = (1, round(float(sp.radius_m), 1), 0, 1)  # leave it heading for the next point

@@ -194,7 +194,7 @@ def _inline_css() -> str:
 
 
 def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
-    from poc_env.agents.mission.terrain import plan_profiles
+    from poc_env.agents.mission.terrain import departure_heading_deg, plan_profiles
 
     fl = flight(plan)
     profs = plan_profiles(plan)
@@ -214,6 +214,11 @@ def _table(plan: Plan, alt: float, altitude_ref: str) -> str:
                     f"{sp.turns:.1f} turns of {sp.radius_m / 1e3:.2f} km, {sp.time_s / 60:.1f} "
                     "min not in the flight time"
                 )
+                if sp.depart_m > 0.0:  # its take-off climbs out on a heading of its own
+                    alt_text += (
+                        f" (take-off on heading {departure_heading_deg(sp):.0f} deg, "
+                        f"{sp.depart_m / 1e3:.1f} km out, away from the rising ground)"
+                    )
             if p.descent is not None:  # no straight glide cleared: an orbit to the glide
                 o = p.descent.orbit
                 alt_text += (
