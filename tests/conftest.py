@@ -71,18 +71,3 @@ def _figures_in(expected: str, printed: str, tol: float = FIGURE_TOL) -> str | N
 def figures_in():
     """:func:`_figures_in`: a page's quoted figures against what its command printed."""
     return _figures_in
-
-
-@pytest.hookimpl(tryfirst=True)
-def pytest_sessionstart(session):
-    """Under ``pytest -n N`` on a fresh checkout, compile the numba kernels once in this process
-    before the workers start, instead of in every worker at once
-    (:mod:`poc_env.agents.testing.warm`)."""
-    config = session.config
-    workers = config.getoption("numprocesses", None)
-    if hasattr(config, "workerinput") or workers in (None, 0, 1):
-        return
-    from poc_env.agents.testing import warm
-
-    if warm.cold():
-        warm.main()

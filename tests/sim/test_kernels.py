@@ -1314,18 +1314,3 @@ def test_vectors_reuse_sines_only_of_the_same_headings():
     small = sim.initial(params, [np.random.default_rng(k) for k in range(100)])  # 300 UAVs
     check(small)
     check(st)
-
-
-def test_warm_up_reads_the_step_kernels_cache_index():
-    """``tests/conftest.py`` compiles the kernels once before the workers start when
-    :func:`~poc_env.agents.testing.warm.cold` says nothing is cached: once the step kernel has
-    run, its index file exists where ``step_index`` reads numba's record (if numba moved the
-    record, ``cold`` would be False for good and the warm-up would silently never run)."""
-    from poc_env.agents.testing import warm
-
-    env = poc_env.parallel_env("small")
-    env.reset(seed=0)
-    env.step({a: env.action_space(a).sample() * 0 for a in env.agents})
-    index = warm.step_index()
-    assert index is not None and index.exists()
-    assert not warm.cold()
