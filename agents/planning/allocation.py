@@ -1406,7 +1406,6 @@ def make_allocation_plan(
             ]
         if i_kept is not None:
             fleet_rec["kept_uavs"] = len(floors[i_kept][0]["uavs"])
-        if i_kept is not None:
             routes, pieces, refined = cands[1 + i_kept][1], cands[1 + i_kept][2], True
             start = str(floors[i_kept][0].get("start", "allocation"))
             home_why = whys[i_kept]

@@ -477,7 +477,9 @@ def polish_routes(
     if screen is not None and (isinstance(screen, bool) or not isinstance(screen, int | np.integer)
                                or screen < 1):  # fmt: skip
         raise ConfigError("screen", screen, "None or an integer >= 1 (candidates)")
-    if not np.isfinite(screen_cutoff) or screen_cutoff <= 0:
+    if (isinstance(screen_cutoff, bool)
+            or not isinstance(screen_cutoff, int | float | np.integer | np.floating)
+            or not np.isfinite(screen_cutoff) or screen_cutoff <= 0):  # fmt: skip
         raise ConfigError("screen_cutoff", screen_cutoff, "a positive number (sweep widths)")
     kinds = set(moves)
     if not kinds or not kinds <= set(ALL_KINDS):

@@ -542,7 +542,8 @@ def test_polish_screen_arguments_are_checked_and_the_option_reaches_the_polish()
     sc = load_scenario("small")
     prior = build_prior(sc.map)
     for kw, field in (({"screen": 0}, "screen"), ({"screen": True}, "screen"),
-                      ({"screen": 4, "screen_cutoff": -1.0}, "screen_cutoff")):  # fmt: skip
+                      ({"screen": 4, "screen_cutoff": -1.0}, "screen_cutoff"),
+                      ({"screen": 4, "screen_cutoff": "2"}, "screen_cutoff")):  # fmt: skip
         with pytest.raises(ConfigError, match=field):
             _polish(sc, [[], [], []], prior, **kw)
     routes = [u["waypoints_m"] for u in make_allocation_plan(sc)["uavs"]]
